@@ -1,0 +1,47 @@
+"""The Camera interface: open, grab a timestamped frame, properties, close."""
+from __future__ import annotations
+
+import abc
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Frame:
+    """One grabbed image: 8-bit grey (H, W) or BGR (H, W, 3), with its time."""
+
+    image: np.ndarray
+    time: float  # seconds, the camera's clock (simulated or monotonic)
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def size(self) -> tuple[int, int]:
+        h, w = self.image.shape[:2]
+        return (w, h)
+
+
+class Camera(abc.ABC):
+    """A source of frames. ``grab`` blocks until a new frame is available."""
+
+    @abc.abstractmethod
+    def open(self) -> None: ...
+    @abc.abstractmethod
+    def grab(self) -> Frame: ...
+    @abc.abstractmethod
+    def close(self) -> None: ...
+    @property
+    @abc.abstractmethod
+    def is_open(self) -> bool: ...
+
+    def properties(self) -> dict[str, Any]:
+        """What a session.json records about this camera."""
+        return {"driver": type(self).__name__}
+
+    def __enter__(self) -> "Camera":
+        self.open()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

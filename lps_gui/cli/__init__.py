@@ -1,0 +1,83 @@
+"""The ``lps`` command: one sub-command per module in this package.
+
+Arguments are parsed before any heavy import so ``--help`` is instant. Each
+command module defines ``HELP`` (one line), ``add_arguments(parser)`` and
+``run(args) -> int``. A user error prints one line and exits 2; a bug prints
+one line and leaves the traceback in the log file.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import logging
+import sys
+import tempfile
+from pathlib import Path
+
+COMMANDS = {
+    "demo": "lps_gui.cli.demo",
+    "simulate": "lps_gui.cli.simulate",
+    "detect": "lps_gui.cli.detect",
+    "intrinsics": "lps_gui.cli.intrinsics",
+    "estimate": "lps_gui.cli.estimate",
+    "report": "lps_gui.cli.report",
+    "capture": "lps_gui.cli.capture",
+    "emulate-grbl": "lps_gui.cli.emulate_grbl",
+}
+
+LOG_PATH = Path(tempfile.gettempdir()) / "lps-calib.log"
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from lps_gui import __version__
+
+    parser = argparse.ArgumentParser(
+        prog="lps",
+        description="Measure a linear positioning stage from a camera's images of a chessboard.",
+    )
+    parser.add_argument("--version", action="version", version=f"lps-calib {__version__}")
+    parser.add_argument("-v", "--verbose", action="store_true", help="log debug messages to stderr")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name, module_name in COMMANDS.items():
+        try:
+            module = importlib.import_module(module_name)
+        except ModuleNotFoundError as exc:
+            if exc.name != module_name:
+                raise
+            continue
+        p = sub.add_parser(name, help=module.HELP, description=module.HELP)
+        module.add_arguments(p)
+        p.set_defaults(_module=module)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    from lps_gui.errors import LpsError
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "command", None):
+        parser.print_help()
+        return 2
+    logging.basicConfig(
+        level=logging.DEBUG if args.verbose else logging.INFO,
+        format="%(asctime)s %(name)s %(levelname)s %(message)s",
+        handlers=[logging.FileHandler(LOG_PATH)] + ([logging.StreamHandler()] if args.verbose else []),
+    )
+    try:
+        return int(args._module.run(args) or 0)
+    except LpsError as exc:
+        logging.getLogger("lps").info("user error", exc_info=True)
+        print(f"lps {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"lps {args.command}: interrupted; what was finished is kept", file=sys.stderr)
+        return 130
+    except Exception as exc:  # a bug: one line here, the traceback in the log
+        logging.getLogger("lps").exception("unexpected failure")
+        print(f"lps {args.command}: internal error: {type(exc).__name__}: {exc} (traceback in {LOG_PATH})", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

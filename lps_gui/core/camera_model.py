@@ -1,0 +1,208 @@
+"""The camera model of SPEC section 2 (OpenCV's), with analytic Jacobians.
+
+Projection of camera-frame points ``x_cam`` through the pinhole with
+Brown-Conrady distortion ``(k1, k2, p1, p2, k3)``. Jacobians come back with
+respect to the camera-frame point (chain into any pose parametrization) and
+to the 9 intrinsics in :data:`INTRINSIC_NAMES` order, which is also the order
+of cv2.calibrateCameraExtended's standard deviations.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import NamedTuple
+
+import numpy as np
+
+from lps_gui.errors import InputError
+
+INTRINSIC_NAMES = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3")
+
+
+@dataclass(frozen=True)
+class CameraIntrinsics:
+    """Intrinsics of one camera; lengths in px, distortion unitless.
+
+    ``covariance`` (9x9, :data:`INTRINSIC_NAMES` order) is what the total
+    position uncertainty propagates; when only standard deviations are known
+    it is diagonal.
+    """
+
+    image_size: tuple[int, int]  # (width, height) px
+    camera_matrix: np.ndarray  # shape (3, 3)
+    dist: np.ndarray  # shape (5,): k1, k2, p1, p2, k3
+    covariance: np.ndarray | None = None  # shape (9, 9)
+    rms_px: float | None = None
+    n_views: int | None = None
+    extra: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        K = np.asarray(self.camera_matrix, dtype=float).reshape(3, 3)
+        d = np.zeros(5)
+        given = np.asarray(self.dist, dtype=float).ravel()
+        if given.size > 5 and np.any(given[5:] != 0):
+            raise InputError(
+                "intrinsics: only the 5-coefficient model (k1,k2,p1,p2,k3) is supported; "
+                "recalibrate without the rational/thin-prism terms"
+            )
+        d[: min(5, given.size)] = given[:5]
+        object.__setattr__(self, "camera_matrix", K)
+        object.__setattr__(self, "dist", d)
+        object.__setattr__(self, "image_size", (int(self.image_size[0]), int(self.image_size[1])))
+        if self.covariance is not None:
+            object.__setattr__(self, "covariance", np.asarray(self.covariance, dtype=float).reshape(9, 9))
+
+    @property
+    def fx(self) -> float:
+        return float(self.camera_matrix[0, 0])
+
+    @property
+    def fy(self) -> float:
+        return float(self.camera_matrix[1, 1])
+
+    @property
+    def cx(self) -> float:
+        return float(self.camera_matrix[0, 2])
+
+    @property
+    def cy(self) -> float:
+        return float(self.camera_matrix[1, 2])
+
+    def vector(self) -> np.ndarray:
+        """The 9 intrinsics in :data:`INTRINSIC_NAMES` order."""
+        return np.array([self.fx, self.fy, self.cx, self.cy, *self.dist])
+
+    def std(self) -> np.ndarray | None:
+        """Standard deviations in :data:`INTRINSIC_NAMES` order, if known."""
+        if self.covariance is None:
+            return None
+        return np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
+
+    def with_vector(self, v: np.ndarray) -> "CameraIntrinsics":
+        """A copy with the 9 intrinsics replaced (covariance kept)."""
+        v = np.asarray(v, dtype=float)
+        K = np.array([[v[0], 0.0, v[2]], [0.0, v[1], v[3]], [0.0, 0.0, 1.0]])
+        return replace(self, camera_matrix=K, dist=v[4:9].copy())
+
+    @classmethod
+    def from_values(
+        cls,
+        image_size: tuple[int, int],
+        fx: float,
+        fy: float,
+        cx: float,
+        cy: float,
+        dist: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0, 0.0),
+        std: np.ndarray | None = None,
+    ) -> "CameraIntrinsics":
+        K = np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
+        cov = None if std is None else np.diag(np.asarray(std, dtype=float) ** 2)
+        return cls(image_size=image_size, camera_matrix=K, dist=np.asarray(dist, float), covariance=cov)
+
+
+class Projection(NamedTuple):
+    """Projected pixels and, when asked for, their Jacobians."""
+
+    uv: np.ndarray  # shape (..., 2) px
+    d_uv_d_xcam: np.ndarray | None  # shape (..., 2, 3) px/mm
+    d_uv_d_intrinsics: np.ndarray | None  # shape (..., 2, 9)
+
+
+def project(
+    x_cam: np.ndarray,
+    intrinsics: CameraIntrinsics,
+    want_jacobian: bool = False,
+    want_intrinsics_jacobian: bool = False,
+) -> Projection:
+    """Project camera-frame points to pixels (SPEC section 2).
+
+    Parameters
+    ----------
+    x_cam : shape (..., 3), mm, camera frame (z forward)
+    intrinsics : the camera
+    want_jacobian : also return d uv / d x_cam, shape (..., 2, 3)
+    want_intrinsics_jacobian : also return d uv / d intrinsics, shape (..., 2, 9)
+    """
+    x_cam = np.asarray(x_cam, dtype=float)
+    fx, fy, cx, cy = intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy
+    k1, k2, p1, p2, k3 = intrinsics.dist
+    z = x_cam[..., 2]
+    inv_z = 1.0 / z
+    xp = x_cam[..., 0] * inv_z
+    yp = x_cam[..., 1] * inv_z
+    xx, yy, xy = xp * xp, yp * yp, xp * yp
+    r2 = xx + yy
+    radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
+    xd = xp * radial + 2.0 * p1 * xy + p2 * (r2 + 2.0 * xx)
+    yd = yp * radial + p1 * (r2 + 2.0 * yy) + 2.0 * p2 * xy
+    uv = np.stack([fx * xd + cx, fy * yd + cy], axis=-1)
+
+    d_x = d_i = None
+    if want_jacobian:
+        dr = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2)  # d radial / d r2
+        dxd_dxp = radial + 2.0 * xx * dr + 2.0 * p1 * yp + 6.0 * p2 * xp
+        dxd_dyp = 2.0 * xy * dr + 2.0 * p1 * xp + 2.0 * p2 * yp
+        dyd_dxp = 2.0 * xy * dr + 2.0 * p1 * xp + 2.0 * p2 * yp
+        dyd_dyp = radial + 2.0 * yy * dr + 6.0 * p1 * yp + 2.0 * p2 * xp
+        d_x = np.empty(x_cam.shape[:-1] + (2, 3))
+        d_x[..., 0, 0] = fx * dxd_dxp * inv_z
+        d_x[..., 0, 1] = fx * dxd_dyp * inv_z
+        d_x[..., 0, 2] = -fx * (dxd_dxp * xp + dxd_dyp * yp) * inv_z
+        d_x[..., 1, 0] = fy * dyd_dxp * inv_z
+        d_x[..., 1, 1] = fy * dyd_dyp * inv_z
+        d_x[..., 1, 2] = -fy * (dyd_dxp * xp + dyd_dyp * yp) * inv_z
+    if want_intrinsics_jacobian:
+        d_i = np.zeros(x_cam.shape[:-1] + (2, 9))
+        r4 = r2 * r2
+        d_i[..., 0, 0] = xd
+        d_i[..., 1, 1] = yd
+        d_i[..., 0, 2] = 1.0
+        d_i[..., 1, 3] = 1.0
+        d_i[..., 0, 4], d_i[..., 1, 4] = fx * xp * r2, fy * yp * r2
+        d_i[..., 0, 5], d_i[..., 1, 5] = fx * xp * r4, fy * yp * r4
+        d_i[..., 0, 6], d_i[..., 1, 6] = fx * 2.0 * xy, fy * (r2 + 2.0 * yy)
+        d_i[..., 0, 7], d_i[..., 1, 7] = fx * (r2 + 2.0 * xx), fy * 2.0 * xy
+        d_i[..., 0, 8], d_i[..., 1, 8] = fx * xp * r2 * r4, fy * yp * r2 * r4
+    return Projection(uv, d_x, d_i)
+
+
+def project_board(
+    R_cam_board: np.ndarray,
+    t_cam_board: np.ndarray,
+    points_board: np.ndarray,
+    intrinsics: CameraIntrinsics,
+) -> np.ndarray:
+    """Pixels of board points seen from one or many poses.
+
+    Parameters
+    ----------
+    R_cam_board : shape (..., 3, 3)
+    t_cam_board : shape (..., 3) mm
+    points_board : shape (N, 3) mm
+    Returns shape (..., N, 2) px.
+    """
+    x_cam = np.einsum("...ij,nj->...ni", R_cam_board, points_board) + np.asarray(t_cam_board)[..., None, :]
+    return project(x_cam, intrinsics).uv
+
+
+def pose_jacobian_rodrigues(
+    rvec: np.ndarray, tvec: np.ndarray, points_board: np.ndarray, intrinsics: CameraIntrinsics
+) -> tuple[np.ndarray, np.ndarray]:
+    """Pixels and d uv / d (rvec, tvec, fx, fy, cx, cy, dist) like cv2.projectPoints.
+
+    Returns uv shape (N, 2) and a Jacobian shape (N, 2, 15) with cv2's column
+    order, so cv2.projectPoints is a reference for tests. The Rodrigues
+    derivative comes from cv2.Rodrigues (3x9, row-major dR).
+    """
+    import cv2
+
+    R, dR_drvec = cv2.Rodrigues(np.asarray(rvec, dtype=float).reshape(3, 1))
+    dR_drvec = dR_drvec.reshape(3, 3, 3)  # [k, i, j] = d R_ij / d rvec_k
+    X = np.asarray(points_board, dtype=float)
+    x_cam = X @ R.T + np.asarray(tvec, dtype=float).ravel()
+    proj = project(x_cam, intrinsics, want_jacobian=True, want_intrinsics_jacobian=True)
+    dx_drvec = np.einsum("kij,nj->nik", dR_drvec, X)  # (N, 3, 3)
+    J = np.empty(X.shape[:-1] + (2, 15))
+    J[..., 0:3] = np.einsum("nab,nbk->nak", proj.d_uv_d_xcam, dx_drvec)
+    J[..., 3:6] = proj.d_uv_d_xcam
+    J[..., 6:15] = proj.d_uv_d_intrinsics
+    return proj.uv, J

@@ -1,0 +1,195 @@
+"""Synthetic LPS sessions with known truth (point level), and the rig presets.
+
+A :class:`SimulationSpec` is the whole description of a simulated experiment:
+rig, plan, corner noise, missing corners and injected outlier views. The
+image simulator renders the same spec; here we only project the corners.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from lps_gui.core.board import Board
+from lps_gui.core.camera_model import CameraIntrinsics, project_board
+from lps_gui.core.plan import Plan, PlannedStop
+from lps_gui.core.rig import Rig
+from lps_gui.core.rotation import exp_so3
+from lps_gui.core.stage_errors import ErrorProfile, StageErrorModel
+from lps_gui.errors import InputError
+
+
+@dataclass(frozen=True)
+class SimulationSpec:
+    """A simulated experiment; every random draw comes from ``seed``."""
+
+    name: str
+    rig: Rig
+    plan: Plan
+    noise_px: float = 0.1
+    noise_clip_px: float | None = None  # paper's synthetic case: |noise| < 1 px
+    missing_fraction: float = 0.0
+    replaced_views: tuple[int, ...] = ()  # images swapped for another position's
+    replaced_offset: int = 37  # ... the one this many captures away
+    bumped_views: tuple[int, ...] = ()  # camera knocked: rotated by bump_mrad
+    bump_mrad: float = 3.0
+    seed: int = 0
+
+
+@dataclass
+class SimulatedViews:
+    """What a point simulation produces."""
+
+    stops: list[PlannedStop]
+    corners_px: np.ndarray  # shape (K, N, 2), NaN where missing
+    R_cam_board: np.ndarray  # shape (K, 3, 3): true poses
+    t_cam_board: np.ndarray  # shape (K, 3)
+    truth: dict[str, Any] = field(default_factory=dict)
+
+
+def true_views(spec: SimulationSpec, rng: np.random.Generator) -> tuple[list[PlannedStop], np.ndarray, np.ndarray, dict]:
+    """True camera poses of every planned frame, and the truth record.
+
+    The carriage's true pose depends on the approach direction (backlash) and
+    draws repeatability noise once per stop.
+    """
+    stops = list(spec.plan.stops())
+    if not stops:
+        raise InputError("simulation: the plan has no targets")
+    target = np.array([s.target_mm for s in stops])
+    direction = np.array([1.0 if s.direction == "+" else -1.0 for s in stops])
+    pose = spec.rig.errors.true_pose(target, direction, rng)
+    R, t = spec.rig.camera_poses(pose)
+    K = len(stops)
+    for i in spec.bumped_views:
+        if not 0 <= i < K:
+            raise InputError(f"simulation: bumped view {i} is outside 0..{K - 1}")
+        axis = rng.normal(size=3)
+        axis[2] = abs(axis[2]) + 1.0  # mostly about the optical axis: not absorbable by a shift
+        axis /= np.linalg.norm(axis)
+        R[i] = exp_so3(axis * spec.bump_mrad * 1e-3) @ R[i]
+    s_true = pose.axis_mm - pose.axis_mm[0]
+    truth = {
+        "positions_mm": s_true.tolist(),
+        "axis_mm": pose.axis_mm.tolist(),
+        "straightness_um": pose.straightness_um.tolist(),
+        "angles_urad": pose.angles_urad.tolist(),
+        "replaced_views": list(spec.replaced_views),
+        "bumped_views": list(spec.bumped_views),
+        "R_cam_board": spec.rig.R_cam_board.tolist(),
+        "C0_board": spec.rig.C0_board.tolist(),
+        "u_board": spec.rig.u_board.tolist(),
+        "stage_errors": spec.rig.errors.to_dict(),
+        "noise_px": spec.noise_px,
+        "seed": spec.seed,
+    }
+    return stops, R, t, truth
+
+
+def simulate_views(spec: SimulationSpec) -> SimulatedViews:
+    """Project the board through every true pose, add noise, drop and swap views."""
+    rng = np.random.default_rng(spec.seed)
+    stops, R, t, truth = true_views(spec, rng)
+    X = spec.rig.board.object_points()
+    uv = project_board(R, t, X, spec.rig.intrinsics)  # shape (K, N, 2)
+    noise = rng.normal(0.0, spec.noise_px, size=uv.shape)
+    if spec.noise_clip_px is not None:
+        noise = np.clip(noise, -spec.noise_clip_px, spec.noise_clip_px)
+    corners = uv + noise
+    K = len(stops)
+    for i in spec.replaced_views:
+        if not 0 <= i < K:
+            raise InputError(f"simulation: replaced view {i} is outside 0..{K - 1}")
+        j = (i + spec.replaced_offset) % K
+        corners[i] = uv[j] + rng.normal(0.0, spec.noise_px, size=uv[j].shape)
+    w, h = spec.rig.intrinsics.image_size
+    outside = (corners[..., 0] < 0) | (corners[..., 0] > w - 1) | (corners[..., 1] < 0) | (corners[..., 1] > h - 1)
+    missing = outside | (rng.random(corners.shape[:2]) < spec.missing_fraction)
+    corners[missing] = np.nan
+    return SimulatedViews(stops, corners, R, t, truth)
+
+
+# ----------------------------------------------------------------------------- presets
+
+PAPER_INTRINSICS = CameraIntrinsics.from_values(
+    (1920, 1080),
+    fx=1396.0,  # 8.18 mm lens on 5.86 um pixels
+    fy=1396.0,
+    cx=951.59,
+    cy=551.08,
+    dist=(-0.169, 0.111, -0.0007, -0.00002, -0.02),
+)
+
+
+def paper_stage_errors() -> StageErrorModel:
+    """A realistic lead-screw stage, inside the paper's +-20 um accuracy spec."""
+    return StageErrorModel(
+        scale_ppm=25.0,
+        periodic_um=4.0,
+        pitch_mm=5.0,
+        backlash_um=6.0,
+        repeatability_um=1.0,
+        straightness_um=(ErrorProfile(poly=(0.0, 0.0, -40.0), amplitude=2.0, period_mm=97.0),
+                         ErrorProfile(poly=(0.0, 8.0), amplitude=1.5, period_mm=61.0)),
+        roll_urad=ErrorProfile(amplitude=15.0, period_mm=150.0),
+        pitch_urad=ErrorProfile(poly=(0.0, 30.0)),
+        yaw_urad=ErrorProfile(amplitude=10.0, period_mm=200.0, phase_rad=0.5),
+    )
+
+
+def paper_rig_spec(
+    seed: int = 0,
+    noise_px: float = 0.1,
+    errors: StageErrorModel | None = None,
+    plan: Plan | None = None,
+) -> SimulationSpec:
+    """The paper's rig: 1920x1080, 18x30 board, 400 stops 1 mm apart, 600 mm away."""
+    board = Board(cols=30, rows=18, square_mm=10.0)
+    plan = plan or Plan(start_mm=0.0, stop_mm=399.0, step_mm=1.0, directions="+", runs=1)
+    t = plan.targets()
+    rig = Rig.facing_board(board, PAPER_INTRINSICS, 600.0, (t[0], t[-1]), errors=errors)
+    return SimulationSpec("paper-rig", rig, plan, noise_px=noise_px, seed=seed)
+
+
+def paper_synthetic_spec(seed: int = 0) -> SimulationSpec:
+    """The paper's synthetic case: sine-wave step variation, |noise| < 1 px, no distortion."""
+    board = Board(cols=8, rows=4, square_mm=30.0)
+    intr = CameraIntrinsics.from_values((1920, 1080), 1396.0, 1396.0, 960.0, 540.0)
+    plan = Plan(start_mm=0.0, stop_mm=99.0, step_mm=1.0)
+    errors = StageErrorModel(periodic_um=50.0, pitch_mm=25.0)
+    rig = Rig.facing_board(board, intr, 600.0, (0.0, 99.0), errors=errors)
+    return SimulationSpec("paper-synthetic", rig, plan, noise_px=0.4, noise_clip_px=1.0, seed=seed)
+
+
+def small_spec(
+    seed: int = 0,
+    views: int = 30,
+    noise_px: float = 0.2,
+    directions: str = "+",
+    runs: int = 1,
+    errors: StageErrorModel | None = None,
+) -> SimulationSpec:
+    """A small, fast case for tests: 640x480, 9x6 board, 30 stops."""
+    board = Board(cols=9, rows=6, square_mm=20.0)
+    intr = CameraIntrinsics.from_values((640, 480), 600.0, 600.0, 322.0, 238.0, dist=(-0.12, 0.08, 0.0005, -0.0003, -0.01))
+    plan = Plan(start_mm=0.0, stop_mm=float(views - 1) * 2.0, step_mm=2.0, directions=directions, runs=runs)
+    errors = errors if errors is not None else StageErrorModel(periodic_um=5.0, pitch_mm=8.0, scale_ppm=100.0, backlash_um=4.0, repeatability_um=1.0)
+    t = plan.targets()
+    rig = Rig.facing_board(board, intr, 500.0, (t[0], t[-1]), errors=errors)
+    return SimulationSpec("small", rig, plan, noise_px=noise_px, seed=seed)
+
+
+PRESETS = {
+    "paper-rig": paper_rig_spec,
+    "paper-synthetic": paper_synthetic_spec,
+    "small": small_spec,
+}
+
+
+def preset(name: str, **overrides: Any) -> SimulationSpec:
+    """A named preset; keyword overrides replace fields of the spec."""
+    if name not in PRESETS:
+        raise InputError(f"simulation: unknown preset {name!r}; choose one of {', '.join(PRESETS)}")
+    spec = PRESETS[name]()
+    return replace(spec, **overrides) if overrides else spec

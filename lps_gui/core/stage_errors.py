@@ -1,0 +1,132 @@
+"""The true motion of a simulated stage: one error model shared by every simulator.
+
+The point simulator, the rendered-image simulator, the simulated stage and
+the GRBL emulator all ask this model where the carriage really is, so the
+truth a test compares against is one object. Error motions follow ISO 230-1
+vocabulary: positioning error along the axis (scale, lead-screw periodic
+error, backlash, repeatability), two straightness errors and three angular
+errors (roll, pitch, yaw).
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class ErrorProfile:
+    """A smooth error as a function of the commanded axis position x (mm).
+
+    value(x) = sum_k poly[k] * (x/1000)^k + amplitude * sin(2 pi x / period_mm + phase_rad)
+    in the profile's own unit (um for lengths, urad for angles); polynomial
+    in metres of travel so coefficients read as "um per m" and "um per m^2".
+    """
+
+    poly: tuple[float, ...] = ()
+    amplitude: float = 0.0
+    period_mm: float = 0.0
+    phase_rad: float = 0.0
+
+    def __call__(self, x_mm: np.ndarray) -> np.ndarray:
+        x = np.asarray(x_mm, dtype=float)
+        xm = x / 1000.0
+        out = np.zeros_like(x)
+        for k, c in enumerate(self.poly):
+            out = out + c * xm**k
+        if self.amplitude and self.period_mm:
+            out = out + self.amplitude * np.sin(2.0 * np.pi * x / self.period_mm + self.phase_rad)
+        return out
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any] | None) -> "ErrorProfile":
+        d = d or {}
+        return cls(
+            poly=tuple(float(c) for c in d.get("poly", ())),
+            amplitude=float(d.get("amplitude", 0.0)),
+            period_mm=float(d.get("period_mm", 0.0)),
+            phase_rad=float(d.get("phase_rad", 0.0)),
+        )
+
+
+@dataclass(frozen=True)
+class TruePose:
+    """Where the carriage really is, for K commanded positions."""
+
+    axis_mm: np.ndarray  # shape (K,): true position along the motion axis
+    straightness_um: np.ndarray  # shape (K, 2): along v1, v2 of the motion frame
+    angles_urad: np.ndarray  # shape (K, 3): roll (about u), pitch (v1), yaw (v2)
+
+
+@dataclass(frozen=True)
+class StageErrorModel:
+    """True-position error model of a lead-screw stage.
+
+    Positioning error e(x) = scale_ppm*1e-6*x + periodic_um*sin(2 pi x/pitch_mm + phase)
+    - backlash_um/2 * approach direction + N(0, repeatability_um): a target
+    approached moving up (+1) stops short by half the backlash, moving down
+    (-1) overshoots by half.
+    """
+
+    scale_ppm: float = 0.0
+    periodic_um: float = 0.0
+    pitch_mm: float = 5.0
+    periodic_phase_rad: float = 0.0
+    backlash_um: float = 0.0
+    repeatability_um: float = 0.0
+    straightness_um: tuple[ErrorProfile, ErrorProfile] = field(
+        default_factory=lambda: (ErrorProfile(), ErrorProfile())
+    )
+    roll_urad: ErrorProfile = field(default_factory=ErrorProfile)
+    pitch_urad: ErrorProfile = field(default_factory=ErrorProfile)
+    yaw_urad: ErrorProfile = field(default_factory=ErrorProfile)
+
+    def positioning_error_um(self, commanded_mm: np.ndarray, direction: np.ndarray) -> np.ndarray:
+        """Systematic positioning error (no noise), shape like ``commanded_mm``."""
+        x = np.asarray(commanded_mm, dtype=float)
+        d = np.broadcast_to(np.asarray(direction, dtype=float), x.shape)
+        e = self.scale_ppm * 1e-6 * x * 1000.0
+        if self.periodic_um and self.pitch_mm:
+            e = e + self.periodic_um * np.sin(2.0 * np.pi * x / self.pitch_mm + self.periodic_phase_rad)
+        return e - 0.5 * self.backlash_um * np.sign(d)
+
+    def true_pose(
+        self,
+        commanded_mm: np.ndarray,
+        direction: np.ndarray,
+        rng: np.random.Generator | None = None,
+    ) -> TruePose:
+        """True carriage pose for commanded positions reached moving in ``direction`` (+1/-1).
+
+        ``rng`` draws the repeatability noise; without it the pose is the
+        systematic one (what the stage would do on average).
+        """
+        x = np.atleast_1d(np.asarray(commanded_mm, dtype=float))
+        e_um = self.positioning_error_um(x, direction)
+        if rng is not None and self.repeatability_um > 0:
+            e_um = e_um + rng.normal(0.0, self.repeatability_um, size=x.shape)
+        straight = np.stack([p(x) for p in self.straightness_um], axis=-1)
+        angles = np.stack([self.roll_urad(x), self.pitch_urad(x), self.yaw_urad(x)], axis=-1)
+        return TruePose(axis_mm=x + e_um * 1e-3, straightness_um=straight, angles_urad=angles)
+
+    def to_dict(self) -> dict[str, Any]:
+        d = asdict(self)
+        d["straightness_um"] = [asdict(p) for p in self.straightness_um]
+        for key in ("roll_urad", "pitch_urad", "yaw_urad"):
+            d[key] = asdict(getattr(self, key))
+        for p in [*d["straightness_um"], d["roll_urad"], d["pitch_urad"], d["yaw_urad"]]:
+            p["poly"] = list(p["poly"])
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any] | None) -> "StageErrorModel":
+        d = dict(d or {})
+        straight = d.pop("straightness_um", None) or [{}, {}]
+        angles = {k: ErrorProfile.from_dict(d.pop(k, None)) for k in ("roll_urad", "pitch_urad", "yaw_urad")}
+        scalars = {k: float(v) for k, v in d.items() if k in cls.__dataclass_fields__}
+        return cls(
+            straightness_um=(ErrorProfile.from_dict(straight[0]), ErrorProfile.from_dict(straight[1])),
+            **angles,
+            **scalars,
+        )

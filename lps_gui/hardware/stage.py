@@ -1,0 +1,153 @@
+"""The Stage interface every driver implements (GRBL, simulated, future ones).
+
+Axis positions are in mm, feeds in mm/min. Drivers push events (alarms,
+errors, messages, state changes) to subscribers; subscribers never block the
+driver and the driver never knows who listens (models emit, views subscribe).
+"""
+from __future__ import annotations
+
+import abc
+import threading
+from dataclasses import dataclass, field
+from typing import Callable
+
+from lps_gui.errors import HardwareError
+
+AXES = ("X", "Y", "Z")
+
+
+@dataclass(frozen=True)
+class StageStatus:
+    """A snapshot of the controller (GRBL's status report, generalized)."""
+
+    state: str  # Idle, Run, Hold, Jog, Alarm, Door, Check, Home, Sleep, Disconnected
+    substate: int | None = None
+    machine_mm: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    work_mm: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    feed_mm_min: float = 0.0
+    spindle_rpm: float = 0.0
+    buffer: tuple[int, int] | None = None  # planner blocks free, RX bytes free
+    overrides: tuple[int, int, int] | None = None  # feed, rapid, spindle %
+    pins: str = ""
+    time: float = 0.0  # stage clock (simulated or monotonic) in s
+
+    @property
+    def idle(self) -> bool:
+        return self.state == "Idle"
+
+
+@dataclass(frozen=True)
+class StageEvent:
+    """Something the controller said on its own: alarm, error, message, state change."""
+
+    kind: str  # "alarm", "error", "message", "state", "disconnected", "connected"
+    code: int | None = None
+    text: str = ""
+
+
+@dataclass(frozen=True)
+class StageSetting:
+    """One controller setting ($N=value) with its meaning."""
+
+    number: int
+    value: float
+    name: str = ""
+    unit: str = ""
+    description: str = ""
+
+
+EventHandler = Callable[[StageEvent], None]
+
+
+@dataclass
+class EventSource:
+    """Fan out events to subscribers; a failing subscriber does not stop the driver."""
+
+    _handlers: list[EventHandler] = field(default_factory=list)
+    _lock: threading.Lock = field(default_factory=threading.Lock)
+
+    def subscribe(self, handler: EventHandler) -> Callable[[], None]:
+        with self._lock:
+            self._handlers.append(handler)
+
+        def unsubscribe() -> None:
+            with self._lock:
+                if handler in self._handlers:
+                    self._handlers.remove(handler)
+
+        return unsubscribe
+
+    def emit(self, event: StageEvent) -> None:
+        with self._lock:
+            handlers = list(self._handlers)
+        for h in handlers:
+            try:
+                h(event)
+            except Exception:  # a listener's bug must not kill the stage
+                import logging
+
+                logging.getLogger(__name__).exception("stage event handler failed")
+
+
+class Stage(abc.ABC):
+    """A motorized stage. Methods block until the controller acknowledged the command."""
+
+    axis: str = "X"  # the axis the LPS measurement moves along
+
+    def __init__(self) -> None:
+        self.events = EventSource()
+
+    # connection
+    @abc.abstractmethod
+    def connect(self) -> None: ...
+    @abc.abstractmethod
+    def disconnect(self) -> None: ...
+    @property
+    @abc.abstractmethod
+    def connected(self) -> bool: ...
+
+    # state
+    @abc.abstractmethod
+    def status(self) -> StageStatus: ...
+    @abc.abstractmethod
+    def home(self) -> None: ...
+    @abc.abstractmethod
+    def unlock(self) -> None: ...
+    @abc.abstractmethod
+    def soft_reset(self) -> None: ...
+    @abc.abstractmethod
+    def feed_hold(self) -> None: ...
+    @abc.abstractmethod
+    def resume(self) -> None: ...
+
+    # motion
+    @abc.abstractmethod
+    def move_to(self, position_mm: float, feed_mm_min: float, axis: str | None = None) -> None:
+        """Start an absolute move (machine-independent work coordinates)."""
+    @abc.abstractmethod
+    def jog(self, distance_mm: float, feed_mm_min: float, axis: str | None = None) -> None:
+        """Incremental jog; for continuous jogging send a long one and :meth:`jog_cancel`."""
+    @abc.abstractmethod
+    def jog_cancel(self) -> None: ...
+    @abc.abstractmethod
+    def wait_idle(self, timeout_s: float = 60.0) -> StageStatus:
+        """Block until the stage is Idle; raise HardwareError on alarm or timeout."""
+
+    # settings
+    @abc.abstractmethod
+    def read_settings(self) -> list[StageSetting]: ...
+    @abc.abstractmethod
+    def write_setting(self, number: int, value: float) -> None: ...
+
+    # conveniences shared by all drivers
+    def position_mm(self, axis: str | None = None) -> float:
+        st = self.status()
+        return st.work_mm[AXES.index(axis or self.axis)]
+
+    def describe(self) -> dict:
+        """What a session.json records about this stage."""
+        return {"driver": type(self).__name__, "axis": self.axis}
+
+    def require_connected(self) -> None:
+        if not self.connected:
+            raise HardwareError(f"{type(self).__name__}: not connected; connect the stage first")

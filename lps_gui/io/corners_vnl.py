@@ -1,0 +1,120 @@
+"""Corners in mrcal's vnlog format (SPEC 7): ``# filename x y level``.
+
+One row per corner, row-major (SPEC 2 order); a missing corner is ``- - -``
+(or level -1); a view whose board was not found is a single ``filename - - -``
+row, with the reason in a ``## failed <filename>: <reason>`` comment. Other
+``## key = value`` comments carry metadata (e.g. the hash of captures.jsonl).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from lps_gui.errors import InputError
+from lps_gui.io.atomic import write_text_atomic
+
+HEADER = "# filename x y level"
+
+
+@dataclass
+class CornerTable:
+    """Detected corners of many views."""
+
+    names: list[str]
+    corners_px: np.ndarray  # shape (K, N, 2), NaN where missing
+    failed: dict[str, str] = field(default_factory=dict)  # name -> reason
+    meta: dict[str, str] = field(default_factory=dict)
+
+    def index(self) -> dict[str, int]:
+        return {name: i for i, name in enumerate(self.names)}
+
+
+def format_corners_vnl(table: CornerTable) -> str:
+    lines = [HEADER]
+    for key, value in table.meta.items():
+        lines.append(f"## {key} = {value}")
+    for name, reason in table.failed.items():
+        lines.append(f"## failed {name}: {reason.replace(chr(10), ' ')}")
+    for name, corners in zip(table.names, table.corners_px):
+        if name in table.failed or not np.isfinite(corners).any():
+            lines.append(f"{name} - - -")
+            continue
+        for x, y in corners:
+            lines.append(f"{name} - - -" if not (np.isfinite(x) and np.isfinite(y)) else f"{name} {x:.4f} {y:.4f} 0")
+    return "\n".join(lines) + "\n"
+
+
+def write_corners_vnl(path: Path | str, table: CornerTable) -> None:
+    if any(" " in n for n in table.names):
+        raise InputError("corners.vnl: file names with spaces cannot be stored; rename the images")
+    write_text_atomic(path, format_corners_vnl(table))
+
+
+def read_corners_vnl(path: Path | str, n_corners: int) -> CornerTable:
+    """Read corners.vnl, checking every view against the board's corner count.
+
+    Raises InputError naming the file and the fix when the file is empty,
+    truncated, holds NaNs, or a view has another number of corners.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError(f"{path}: corners file not found; run `lps detect` first") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: cannot read corners ({exc}); delete it and run `lps detect` again") from exc
+    rows: dict[str, list[tuple[float, float]]] = {}
+    failed: dict[str, str] = {}
+    meta: dict[str, str] = {}
+    saw_header = False
+    for lineno, raw in enumerate(text.splitlines(), 1):
+        line = raw.strip()
+        if not line:
+            continue
+        if line.startswith("##"):
+            body = line[2:].strip()
+            if body.startswith("failed "):
+                name, _, reason = body[7:].partition(":")
+                failed[name.strip()] = reason.strip()
+            elif "=" in body:
+                k, _, v = body.partition("=")
+                meta[k.strip()] = v.strip()
+            continue
+        if line.startswith("#"):
+            saw_header = saw_header or line.split()[1:4] == ["filename", "x", "y"]
+            continue
+        fields = line.split()
+        if len(fields) < 3:
+            raise InputError(f"{path}: line {lineno} is truncated ({raw!r}); delete the file and run `lps detect` again")
+        name, xs, ys = fields[0], fields[1], fields[2]
+        level = fields[3] if len(fields) > 3 else "0"
+        if xs == "-" or ys == "-" or level in ("-", "-1"):
+            xy = (np.nan, np.nan)
+        else:
+            try:
+                xy = (float(xs), float(ys))
+            except ValueError:
+                raise InputError(f"{path}: line {lineno} has non-numeric x/y ({raw!r}); regenerate with `lps detect`") from None
+            if not (np.isfinite(xy[0]) and np.isfinite(xy[1])):
+                raise InputError(f"{path}: line {lineno} holds NaN/inf; write missing corners as '- - -' or re-run `lps detect`")
+        rows.setdefault(name, []).append(xy)
+    if not saw_header:
+        raise InputError(f"{path}: missing the '{HEADER}' header; this is not a corners.vnl file")
+    if not rows:
+        raise InputError(f"{path}: holds no corners; run `lps detect` on the session")
+    names = list(rows)
+    corners = np.full((len(names), n_corners, 2), np.nan)
+    for i, name in enumerate(names):
+        pts = rows[name]
+        if len(pts) == 1 and not np.isfinite(pts[0][0]):
+            failed.setdefault(name, "board not found")
+            continue
+        if len(pts) != n_corners:
+            raise InputError(
+                f"{path}: {name} has {len(pts)} corners but the board has {n_corners}; "
+                "check inner_corners in board.json or re-run `lps detect`"
+            )
+        corners[i] = pts
+    return CornerTable(names, corners, failed, meta)

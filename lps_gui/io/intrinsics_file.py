@@ -1,0 +1,134 @@
+"""intrinsics.json and OpenCV FileStorage YAML (SPEC 7).
+
+JSON: ``{"image_size": [w, h], "camera_matrix": 3x3, "dist": [k1,k2,p1,p2,k3],
+"std": {"fx": .., ...}, "rms_px": x, "n_views": n}``, optionally a full
+``"covariance"`` (9x9 in ``covariance_order``). YAML: OpenCV's
+``camera_matrix``, ``distortion_coefficients``, ``image_width``,
+``image_height``, plus our ``std_intrinsics`` when known.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
+from lps_gui.errors import InputError
+from lps_gui.io.atomic import write_text_atomic
+from lps_gui.io.jsonfile import read_json, write_json
+
+YAML_SUFFIXES = (".yaml", ".yml", ".xml")
+
+
+def intrinsics_from_dict(d: dict[str, Any], source: str = "intrinsics") -> CameraIntrinsics:
+    try:
+        K = np.asarray(d["camera_matrix"], dtype=float).reshape(3, 3)
+        dist = np.asarray(d.get("dist", [0.0] * 5), dtype=float).ravel()
+        size = tuple(int(v) for v in d["image_size"])
+    except (KeyError, TypeError, ValueError) as exc:
+        raise InputError(f"{source}: needs image_size [w, h], camera_matrix 3x3 and dist [k1,k2,p1,p2,k3] ({exc})") from exc
+    if not np.all(np.isfinite(K)) or not np.all(np.isfinite(dist)) or K[0, 0] <= 0 or K[1, 1] <= 0:
+        raise InputError(f"{source}: camera_matrix must be finite with positive focal lengths; recalibrate")
+    cov = None
+    if d.get("covariance") is not None:
+        order = tuple(d.get("covariance_order", INTRINSIC_NAMES))
+        if order != INTRINSIC_NAMES:
+            raise InputError(f"{source}: covariance_order must be {list(INTRINSIC_NAMES)}")
+        cov = np.asarray(d["covariance"], dtype=float).reshape(9, 9)
+    elif d.get("std"):
+        std = d["std"]
+        cov = np.diag([float(std.get(name, 0.0)) ** 2 for name in INTRINSIC_NAMES])
+    extra = {k: v for k, v in d.items() if k not in ("image_size", "camera_matrix", "dist", "std", "covariance", "covariance_order", "rms_px", "n_views")}
+    return CameraIntrinsics(
+        image_size=size,  # type: ignore[arg-type]
+        camera_matrix=K,
+        dist=dist,
+        covariance=cov,
+        rms_px=None if d.get("rms_px") is None else float(d["rms_px"]),
+        n_views=None if d.get("n_views") is None else int(d["n_views"]),
+        extra=extra,
+    )
+
+
+def intrinsics_to_dict(intr: CameraIntrinsics) -> dict[str, Any]:
+    d: dict[str, Any] = {
+        "image_size": list(intr.image_size),
+        "camera_matrix": intr.camera_matrix.tolist(),
+        "dist": intr.dist.tolist(),
+    }
+    std = intr.std()
+    if std is not None:
+        d["std"] = {name: float(v) for name, v in zip(INTRINSIC_NAMES, std)}
+        if np.count_nonzero(intr.covariance - np.diag(np.diag(intr.covariance))):
+            d["covariance_order"] = list(INTRINSIC_NAMES)
+            d["covariance"] = intr.covariance.tolist()
+    d["rms_px"] = intr.rms_px
+    d["n_views"] = intr.n_views
+    d.update(intr.extra)
+    return d
+
+
+def read_intrinsics(path: Path | str) -> CameraIntrinsics:
+    """Read intrinsics from JSON or OpenCV YAML/XML (chosen by suffix)."""
+    path = Path(path)
+    if path.suffix.lower() in YAML_SUFFIXES:
+        return _read_opencv_yaml(path)
+    return intrinsics_from_dict(read_json(path, "intrinsics file"), str(path))
+
+
+def write_intrinsics(path: Path | str, intr: CameraIntrinsics) -> None:
+    path = Path(path)
+    if path.suffix.lower() in YAML_SUFFIXES:
+        _write_opencv_yaml(path, intr)
+    else:
+        write_json(path, intrinsics_to_dict(intr))
+
+
+def _read_opencv_yaml(path: Path) -> CameraIntrinsics:
+    import cv2
+
+    if not path.exists():
+        raise InputError(f"{path}: intrinsics file not found; check the path")
+    try:
+        fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
+    except cv2.error as exc:
+        raise InputError(f"{path}: not an OpenCV FileStorage file ({str(exc).splitlines()[-1]})") from exc
+    try:
+        K = fs.getNode("camera_matrix").mat()
+        dist = fs.getNode("distortion_coefficients").mat()
+        w = fs.getNode("image_width").real()
+        h = fs.getNode("image_height").real()
+        std = fs.getNode("std_intrinsics").mat()
+        rms = fs.getNode("rms_px").real()
+    finally:
+        fs.release()
+    if K is None or dist is None:
+        raise InputError(f"{path}: needs camera_matrix and distortion_coefficients nodes (OpenCV calibration YAML)")
+    d: dict[str, Any] = {"image_size": [int(w), int(h)], "camera_matrix": K, "dist": dist.ravel()[:5]}
+    if std is not None:
+        d["std"] = dict(zip(INTRINSIC_NAMES, std.ravel().tolist()))
+    if rms:
+        d["rms_px"] = rms
+    return intrinsics_from_dict(d, str(path))
+
+
+def _write_opencv_yaml(path: Path, intr: CameraIntrinsics) -> None:
+    import tempfile
+
+    import cv2
+
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp_path = Path(tmp) / path.name
+        fs = cv2.FileStorage(str(tmp_path), cv2.FILE_STORAGE_WRITE)
+        fs.write("image_width", int(intr.image_size[0]))
+        fs.write("image_height", int(intr.image_size[1]))
+        fs.write("camera_matrix", intr.camera_matrix)
+        fs.write("distortion_coefficients", intr.dist.reshape(1, 5))
+        std = intr.std()
+        if std is not None:
+            fs.write("std_intrinsics", std.reshape(1, 9))
+        if intr.rms_px is not None:
+            fs.write("rms_px", float(intr.rms_px))
+        fs.release()
+        write_text_atomic(path, tmp_path.read_text())

@@ -1,0 +1,185 @@
+"""A capture session folder (SPEC 7): session.json, captures.jsonl, images/.
+
+Every image is written atomically before its line is appended and fsynced,
+so a crash loses nothing already listed, and :meth:`Session.remaining_stops`
+tells a resumed capture where to go on.
+"""
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any, Iterable
+
+from lps_gui.core.board import Board
+from lps_gui.core.camera_model import CameraIntrinsics
+from lps_gui.core.plan import Plan, PlannedStop
+from lps_gui.errors import InputError
+from lps_gui.io.atomic import append_line_durable, sha256_bytes, write_bytes_atomic
+from lps_gui.io.board_file import board_from_dict, board_to_dict
+from lps_gui.io.intrinsics_file import intrinsics_from_dict, intrinsics_to_dict, read_intrinsics
+from lps_gui.io.jsonfile import read_json, write_json
+
+FORMAT = "lps-session/1"
+SESSION_FILE = "session.json"
+CAPTURES_FILE = "captures.jsonl"
+CORNERS_FILE = "corners.vnl"
+IMAGES_DIR = "images"
+
+
+@dataclass(frozen=True)
+class CaptureRecord:
+    """One line of captures.jsonl."""
+
+    index: int
+    run: int
+    direction: str  # "+" or "-"
+    target_mm: float
+    reported_mm: float | None
+    file: str  # relative to the session folder
+    sha256: str | None
+    time: float  # unix seconds
+    frame: int = 0
+
+    def to_json(self) -> str:
+        return json.dumps(asdict(self), separators=(",", ":"))
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> "CaptureRecord":
+        return cls(
+            index=int(d["index"]),
+            run=int(d["run"]),
+            direction=str(d["direction"]),
+            target_mm=float(d["target_mm"]),
+            reported_mm=None if d.get("reported_mm") is None else float(d["reported_mm"]),
+            file=str(d["file"]),
+            sha256=d.get("sha256"),
+            time=float(d.get("time", 0.0)),
+            frame=int(d.get("frame", 0)),
+        )
+
+
+class Session:
+    """A session folder on disk; cheap to open, reads files on demand."""
+
+    def __init__(self, folder: Path | str, meta: dict[str, Any]):
+        self.folder = Path(folder)
+        self.meta = meta
+
+    # -------------------------------------------------------------- create/open
+    @classmethod
+    def create(
+        cls,
+        folder: Path | str,
+        board: Board,
+        plan: Plan,
+        intrinsics: CameraIntrinsics | str | None = None,
+        camera: dict[str, Any] | None = None,
+        stage: dict[str, Any] | None = None,
+        truth: dict[str, Any] | None = None,
+        extra: dict[str, Any] | None = None,
+    ) -> "Session":
+        """Write session.json into ``folder`` (created); refuse to overwrite a session."""
+        folder = Path(folder)
+        if (folder / SESSION_FILE).exists():
+            raise InputError(f"{folder}: already holds a session; use --resume or choose an empty folder")
+        (folder / IMAGES_DIR).mkdir(parents=True, exist_ok=True)
+        meta: dict[str, Any] = {
+            "format": FORMAT,
+            "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+            "board": board_to_dict(board),
+            "intrinsics": intrinsics_to_dict(intrinsics) if isinstance(intrinsics, CameraIntrinsics) else intrinsics,
+            "camera": camera or {},
+            "stage": stage or {},
+            "plan": plan.to_dict(),
+        }
+        if extra:
+            meta.update(extra)
+        if truth is not None:
+            meta["truth"] = truth
+        write_json(folder / SESSION_FILE, meta)
+        return cls(folder, meta)
+
+    @classmethod
+    def open(cls, folder: Path | str) -> "Session":
+        folder = Path(folder)
+        if not folder.is_dir():
+            raise InputError(f"{folder}: session folder not found; check the path")
+        meta = read_json(folder / SESSION_FILE, "session file")
+        if not isinstance(meta, dict) or meta.get("format") != FORMAT:
+            raise InputError(f"{folder / SESSION_FILE}: not an {FORMAT} session file")
+        return cls(folder, meta)
+
+    def save_meta(self) -> None:
+        write_json(self.folder / SESSION_FILE, self.meta)
+
+    # -------------------------------------------------------------- contents
+    def board(self) -> Board:
+        return board_from_dict(self.meta.get("board") or {}, str(self.folder / SESSION_FILE))
+
+    def plan(self) -> Plan:
+        return Plan.from_dict(self.meta.get("plan") or {})
+
+    def has_intrinsics(self) -> bool:
+        return bool(self.meta.get("intrinsics"))
+
+    def intrinsics(self) -> CameraIntrinsics:
+        """Embedded intrinsics, or read from a path relative to the session."""
+        value = self.meta.get("intrinsics")
+        if not value:
+            raise InputError(
+                f"{self.folder / SESSION_FILE}: has no intrinsics; pass --intrinsics FILE or run `lps intrinsics` first"
+            )
+        if isinstance(value, str):
+            path = Path(value)
+            return read_intrinsics(path if path.is_absolute() else self.folder / path)
+        return intrinsics_from_dict(value, str(self.folder / SESSION_FILE))
+
+    @property
+    def truth(self) -> dict[str, Any] | None:
+        return self.meta.get("truth")
+
+    @property
+    def captures_path(self) -> Path:
+        return self.folder / CAPTURES_FILE
+
+    @property
+    def corners_path(self) -> Path:
+        return self.folder / CORNERS_FILE
+
+    def records(self) -> list[CaptureRecord]:
+        """Every complete line of captures.jsonl (a torn last line is ignored)."""
+        path = self.captures_path
+        if not path.exists():
+            return []
+        out: list[CaptureRecord] = []
+        lines = path.read_text(encoding="utf-8").split("\n")
+        for n, line in enumerate(lines, 1):
+            if not line.strip():
+                continue
+            try:
+                out.append(CaptureRecord.from_dict(json.loads(line)))
+            except (json.JSONDecodeError, KeyError, ValueError, TypeError):
+                if n == len(lines):  # torn by a crash mid-append: not listed
+                    continue
+                raise InputError(f"{path}: line {n} is not a capture record; restore the file from a backup") from None
+        return out
+
+    def append(self, record: CaptureRecord) -> None:
+        append_line_durable(self.captures_path, record.to_json())
+
+    def write_image(self, name: str, data: bytes) -> tuple[str, str]:
+        """Store encoded image bytes atomically; returns (relative file, sha256)."""
+        rel = f"{IMAGES_DIR}/{name}"
+        write_bytes_atomic(self.folder / rel, data)
+        return rel, sha256_bytes(data)
+
+    def remaining_stops(self) -> list[PlannedStop]:
+        """Planned frames not yet listed in captures.jsonl, in capture order."""
+        done = {r.index for r in self.records()}
+        return [s for s in self.plan().stops() if s.index not in done]
+
+    def add_records(self, records: Iterable[CaptureRecord]) -> None:
+        for r in records:
+            self.append(r)

@@ -1,0 +1,4 @@
+"""Test-wide settings: Qt offscreen, seeded randomness is per test."""
+import os
+
+os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")

@@ -1,0 +1,66 @@
+"""The layer rules of SPEC section 8, enforced on every module's imports."""
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parent.parent / "lps_gui"
+QT_MODULES = ("PySide6", "pyqtgraph", "shiboken6")
+QT_ALLOWED = ("gui", "report")
+LAYER = {"core": 0, "io": 1, "hardware": 1, "camera": 1, "capture": 2, "pipeline": 2, "report": 2, "gui": 3, "cli": 3}
+
+
+def imports_of(path: Path) -> list[str]:
+    tree = ast.parse(path.read_text(), str(path))
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            out += [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            out.append(node.module)
+    return out
+
+
+def modules():
+    for path in sorted(PACKAGE.rglob("*.py")):
+        rel = path.relative_to(PACKAGE)
+        yield (rel.parts[0] if len(rel.parts) > 1 else None), path
+
+
+@pytest.mark.parametrize("layer,path", list(modules()), ids=lambda v: str(v) if isinstance(v, str) else None)
+def test_imports_respect_layers(layer, path):
+    for name in imports_of(path):
+        top = name.split(".")[0]
+        if top in QT_MODULES:
+            assert layer in QT_ALLOWED, f"{path}: Qt ({name}) outside lps_gui/gui and lps_gui/report"
+        if top == "serial":
+            assert layer in ("hardware", "cli", "gui"), f"{path}: pyserial outside lps_gui/hardware"
+        if name.startswith("lps_gui.") and layer in LAYER:
+            target = name.split(".")[1]
+            if target in LAYER:
+                assert not (LAYER[target] > LAYER[layer]), f"{path}: {layer} imports the upper layer {target} ({name})"
+                if LAYER[target] == LAYER[layer] and target != layer:
+                    assert (layer, target) in {("pipeline", "capture"), ("pipeline", "report")}, (
+                        f"{path}: {layer} imports the sibling layer {target}"
+                    )
+
+
+def test_everything_but_gui_imports_without_qt():
+    """Design card: only lps_gui/gui may need Qt at import time (report imports it lazily)."""
+    code = (
+        "import sys, importlib, pkgutil, lps_gui\n"
+        "class Block:\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name.split('.')[0] in ('PySide6','pyqtgraph','shiboken6'): raise ImportError('Qt blocked: '+name)\n"
+        "sys.meta_path.insert(0, Block())\n"
+        "for m in pkgutil.walk_packages(lps_gui.__path__, 'lps_gui.'):\n"
+        "    if m.name.startswith('lps_gui.gui'): continue\n"
+        "    importlib.import_module(m.name)\n"
+        "print('ok')\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=PACKAGE.parent)
+    assert out.returncode == 0 and "ok" in out.stdout, out.stderr

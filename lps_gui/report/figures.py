@@ -1,0 +1,366 @@
+"""Plot definitions as plain data, shared by the GUI (pyqtgraph) and the PDF (QPainter).
+
+A :class:`FigureSpec` says what to draw, never how: axis labels with units,
+series of (x, y) with a style and a colour, optional 2-sigma bands and marked
+outliers. :func:`figures_from_results` builds every figure of a report from a
+results dict (results.json content, see docs/ARCHITECTURE.md), so the screen
+and the paper show the same numbers. No Qt here.
+
+Truth (simulated sessions only) is drawn beside the measurement, dashed, when
+the session's ``truth`` record is given: measured straightness and angles are
+relative to the fitted line and mean orientation, so the truth is reduced the
+same way (linear trend / mean removed) before it is drawn.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import numpy as np
+
+# Colours that print and read in grey scale: blue / orange, black truth, red outliers.
+FORWARD_COLOR = "#1f5fa8"
+BACKWARD_COLOR = "#e07b00"
+TRUTH_COLOR = "#222222"
+OUTLIER_COLOR = "#d00000"
+COMPONENT_COLORS = ("#1f5fa8", "#2a9d3c", "#a8326e")
+
+STYLES = ("line", "markers", "line+markers")
+DIRECTION_NAMES = {"+": "forward", "-": "backward"}
+DIRECTION_ARROWS = {"+": "\u2191", "-": "\u2193"}
+
+
+@dataclass(frozen=True)
+class Series:
+    """One curve: ``y`` against ``x``; bands and outlier marks are optional.
+
+    ``band_low``/``band_high`` (same shape as ``y``) bound a shaded band,
+    typically mean +- 2 sigma. ``marked`` (bool, same shape) picks the points
+    drawn as outliers (a red cross). ``dashed`` draws the line dashed (truth).
+    """
+
+    x: np.ndarray  # shape (n,)
+    y: np.ndarray  # shape (n,)
+    label: str
+    style: str = "line"  # one of STYLES
+    color: str = FORWARD_COLOR
+    band_low: np.ndarray | None = None  # shape (n,)
+    band_high: np.ndarray | None = None  # shape (n,)
+    marked: np.ndarray | None = None  # shape (n,), bool
+    dashed: bool = False
+
+    def finite(self) -> "Series":
+        """The same series without points whose x or y is not finite."""
+        ok = np.isfinite(self.x) & np.isfinite(self.y)
+        if ok.all():
+            return self
+
+        def pick(a: np.ndarray | None) -> np.ndarray | None:
+            return None if a is None else a[ok]
+
+        return Series(self.x[ok], self.y[ok], self.label, self.style, self.color,
+                      pick(self.band_low), pick(self.band_high), pick(self.marked), self.dashed)
+
+
+@dataclass(frozen=True)
+class FigureSpec:
+    """One plot: stable ``key`` (for tests and the GUI's tab names), labels with units."""
+
+    key: str
+    title: str
+    x_label: str
+    y_label: str
+    series: list[Series] = field(default_factory=list)
+    notes: str = ""
+    x_log: bool = False
+
+    def is_empty(self) -> bool:
+        return not any(np.isfinite(s.y).any() for s in self.series)
+
+
+FIGURE_KEYS = ("positions", "deviation", "step", "straightness", "angles", "residuals", "spectrum")
+
+
+# ----------------------------------------------------------------------------- table access
+
+
+def position_columns(results: dict[str, Any]) -> dict[str, np.ndarray]:
+    """The per-position table of a results dict as arrays (NaN where absent).
+
+    Returns float arrays (shape (K,)) for every numeric column, ``direction``
+    as a str array, ``outlier`` as bool, sorted by capture index.
+    """
+    rows = sorted(results.get("positions") or [], key=lambda r: r.get("index", 0))
+    numeric = ("index", "run", "target_mm", "measured_mm", "deviation_um", "sigma_um", "sigma_total_um",
+               "rms_px", "n_corners", "straightness_um_1", "straightness_um_2", "straightness_sigma_um_1",
+               "straightness_sigma_um_2", "roll_urad", "pitch_urad", "yaw_urad", "roll_sigma_urad",
+               "pitch_sigma_urad", "yaw_sigma_urad")
+    cols: dict[str, np.ndarray] = {}
+    for name in numeric:
+        cols[name] = np.array([_num(r.get(name)) for r in rows], dtype=float)
+    cols["direction"] = np.array([str(r.get("direction", "+")) for r in rows], dtype=object)
+    cols["outlier"] = np.array([bool(r.get("outlier", False)) for r in rows], dtype=bool)
+    return cols
+
+
+def _num(v: Any) -> float:
+    try:
+        return float(v) if v is not None else np.nan
+    except (TypeError, ValueError):
+        return np.nan
+
+
+def directions_present(cols: dict[str, np.ndarray]) -> list[str]:
+    return [d for d in ("+", "-") if (cols["direction"] == d).any()]
+
+
+def per_target_stats(target_mm: np.ndarray, value: np.ndarray, keep: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Mean and sample std of ``value`` per distinct target (ISO 230-2 x̄_j, s_j).
+
+    Returns (targets shape (m,), mean (m,), std (m,) NaN with one run, count (m,)).
+    Only entries with ``keep`` true and a finite value count.
+    """
+    ok = keep & np.isfinite(value) & np.isfinite(target_mm)
+    targets = np.unique(np.round(target_mm[ok], 9))
+    if targets.size == 0:
+        empty = np.zeros(0)
+        return empty, empty, empty, empty
+    idx = np.searchsorted(targets, np.round(target_mm[ok], 9))
+    v = value[ok]
+    count = np.bincount(idx, minlength=targets.size).astype(float)
+    mean = np.bincount(idx, weights=v, minlength=targets.size) / count
+    sq = np.bincount(idx, weights=(v - mean[idx]) ** 2, minlength=targets.size)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        std = np.where(count > 1, np.sqrt(sq / np.maximum(count - 1, 1)), np.nan)
+    return targets, mean, std, count
+
+
+# ----------------------------------------------------------------------------- truth
+
+
+def truth_columns(results: dict[str, Any], truth: dict[str, Any] | None) -> dict[str, np.ndarray] | None:
+    """Truth per capture, reduced like the measurement; None for a real session.
+
+    ``truth`` is the session's truth record (``positions_mm`` relative to the
+    first capture, ``straightness_um`` (K, 2), ``angles_urad`` (K, 3)) indexed
+    by capture index. Returns arrays aligned with :func:`position_columns`:
+    ``deviation_um`` (zero at the first capture), ``straightness_um_1/2``
+    (linear trend removed), ``roll/pitch/yaw_urad`` (mean removed).
+    """
+    if not truth or "positions_mm" not in truth:
+        return None
+    cols = position_columns(results)
+    idx = cols["index"].astype(int)
+    s_true_mm = np.asarray(truth["positions_mm"], dtype=float)
+    if idx.size == 0 or idx.max() >= s_true_mm.size or idx.min() < 0:
+        return None
+    target = cols["target_mm"]
+    first = int(np.argmin(idx))
+    out: dict[str, np.ndarray] = {}
+    dev = (s_true_mm[idx] - (target - target[first])) * 1000.0
+    out["deviation_um"] = dev - dev[first]
+    axis_mm = s_true_mm[idx]
+    straight = np.asarray(truth.get("straightness_um") or np.zeros((s_true_mm.size, 2)), dtype=float)[idx]
+    design = np.stack([np.ones_like(axis_mm), axis_mm], axis=1)  # shape (K, 2)
+    coef, *_ = np.linalg.lstsq(design, straight, rcond=None)
+    resid = straight - design @ coef  # shape (K, 2): distance from the best line
+    out["straightness_um_1"], out["straightness_um_2"] = resid[:, 0], resid[:, 1]
+    angles = np.asarray(truth.get("angles_urad") or np.zeros((s_true_mm.size, 3)), dtype=float)[idx]
+    angles = angles - angles.mean(axis=0)
+    out["roll_urad"], out["pitch_urad"], out["yaw_urad"] = angles[:, 0], angles[:, 1], angles[:, 2]
+    return out
+
+
+# ----------------------------------------------------------------------------- figures
+
+
+def figures_from_results(results: dict[str, Any], truth: dict[str, Any] | None = None) -> list[FigureSpec]:
+    """Every report figure of a results dict, in report order (keys: :data:`FIGURE_KEYS`).
+
+    Parameters
+    ----------
+    results : dict
+        results.json content.
+    truth : dict, optional
+        The session's ``truth`` record (simulated sessions); drawn dashed beside
+        the measurement. Without it, ``results["truth"]`` is used when present.
+    """
+    cols = position_columns(results)
+    truth = truth if truth is not None else results.get("truth")
+    tcols = truth_columns(results, truth)
+    return [
+        positions_figure(cols),
+        deviation_figure(cols, tcols),
+        step_figure(cols, tcols),
+        straightness_figure(cols, tcols),
+        angles_figure(cols, tcols),
+        residuals_figure(cols),
+        spectrum_figure(results),
+    ]
+
+
+def _by_direction(cols: dict[str, np.ndarray]) -> list[tuple[str, np.ndarray]]:
+    return [(d, cols["direction"] == d) for d in directions_present(cols)]
+
+
+def _color(direction: str) -> str:
+    return FORWARD_COLOR if direction == "+" else BACKWARD_COLOR
+
+
+def _dir_label(direction: str) -> str:
+    return f"{DIRECTION_NAMES[direction]} {DIRECTION_ARROWS[direction]}"
+
+
+def positions_figure(cols: dict[str, np.ndarray]) -> FigureSpec:
+    """Measured position d_i against its target: the line every other plot magnifies."""
+    series = []
+    for d, sel in _by_direction(cols):
+        series.append(Series(cols["target_mm"][sel], cols["measured_mm"][sel], f"measured {_dir_label(d)}",
+                             "markers", _color(d), marked=cols["outlier"][sel]))
+    return FigureSpec("positions", "Measured position vs target", "target position [mm]", "measured position d_i [mm]",
+                      series)
+
+
+def deviation_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] | None) -> FigureSpec:
+    """Deviation vs target per direction, mean with a 2-sigma band.
+
+    With two or more runs the band is the ISO 230-2 x̄_j +- 2 s_j over runs;
+    with one run it is the measurement's own +-2 sigma per position.
+    """
+    series: list[Series] = []
+    notes = []
+    keep = ~cols["outlier"]
+    for d, sel in _by_direction(cols):
+        x, y = cols["target_mm"][sel], cols["deviation_um"][sel]
+        t, mean, std, count = per_target_stats(x, y, keep[sel])
+        if count.size and count.max() > 1:
+            series.append(Series(x, y, f"runs {_dir_label(d)}", "markers", _color(d), marked=cols["outlier"][sel]))
+            band = 2.0 * np.nan_to_num(std)
+            series.append(Series(t, mean, f"mean \u00b12s {_dir_label(d)}", "line", _color(d),
+                                 band_low=mean - band, band_high=mean + band))
+            notes.append(f"{_dir_label(d)}: band = mean \u00b1 2 s over {int(count.max())} runs")
+        else:
+            sig = 2.0 * np.nan_to_num(cols["sigma_um"][sel])
+            series.append(Series(x, y, f"deviation {_dir_label(d)}", "line+markers", _color(d),
+                                 band_low=y - sig, band_high=y + sig, marked=cols["outlier"][sel]))
+            notes.append(f"{_dir_label(d)}: band = \u00b12 sigma (measurement noise)")
+        if tcols is not None:
+            tt, tmean, _, _ = per_target_stats(x, tcols["deviation_um"][sel], np.ones(x.shape, bool))
+            series.append(_truth_series(tt, tmean, f"truth {_dir_label(d)}"))
+    return FigureSpec("deviation", "Positioning deviation vs target", "target position [mm]", "deviation [\u00b5m]",
+                      series, "; ".join(notes))
+
+
+def _truth_series(x: np.ndarray, y: np.ndarray, label: str, color: str = TRUTH_COLOR) -> Series:
+    order = np.argsort(x, kind="stable")
+    return Series(x[order], y[order], label, "line", color, dashed=True)
+
+
+def _runs(cols: dict[str, np.ndarray]) -> list[np.ndarray]:
+    """Index arrays of each (run, direction) in capture order."""
+    out = []
+    for run in np.unique(cols["run"][np.isfinite(cols["run"])]):
+        for d in ("+", "-"):
+            sel = np.flatnonzero((cols["run"] == run) & (cols["direction"] == d))
+            if sel.size > 1:
+                out.append(sel)
+    return out
+
+
+def step_deviation(cols: dict[str, np.ndarray], deviation_um: np.ndarray) -> list[tuple[str, np.ndarray, np.ndarray]]:
+    """Step deviation (measured step - commanded step, um) within each run, per direction.
+
+    Returns [(direction, mid-target mm shape (k,), step deviation um shape (k,))].
+    A step touching an outlier is NaN so it is not drawn.
+    """
+    out: dict[str, tuple[list, list]] = {}
+    for sel in _runs(cols):
+        d = cols["direction"][sel[0]]
+        step = np.diff(deviation_um[sel])
+        bad = cols["outlier"][sel][1:] | cols["outlier"][sel][:-1]
+        step = np.where(bad, np.nan, step)
+        mid = 0.5 * (cols["target_mm"][sel][1:] + cols["target_mm"][sel][:-1])
+        xs, ys = out.setdefault(d, ([], []))
+        xs.append(mid)
+        ys.append(step)
+    return [(d, np.concatenate(xs), np.concatenate(ys)) for d, (xs, ys) in out.items()]
+
+
+def step_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] | None) -> FigureSpec:
+    """How much each step differs from the commanded step: the lead-screw signature."""
+    series = []
+    truth_steps = dict((d, (x, y)) for d, x, y in step_deviation(cols, tcols["deviation_um"])) if tcols else {}
+    for d, x, y in step_deviation(cols, cols["deviation_um"]):
+        t, mean, _, count = per_target_stats(x, y, np.ones(x.shape, bool))
+        label = f"step {_dir_label(d)}" + (" (mean over runs)" if count.size and count.max() > 1 else "")
+        series.append(Series(t, mean, label, "markers" if t.size > 150 else "line+markers", _color(d)))
+        if d in truth_steps:
+            tx, ty = truth_steps[d]
+            tt, tmean, _, _ = per_target_stats(tx, ty, np.ones(tx.shape, bool))
+            series.append(_truth_series(tt, tmean, f"truth {_dir_label(d)}"))
+    return FigureSpec("step", "Step deviation", "target position (step midpoint) [mm]",
+                      "measured step \u2212 commanded step [\u00b5m]", series)
+
+
+def _component_series(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] | None, column: str,
+                      name: str, color: str) -> list[Series]:
+    """Per-target mean over runs of one column, forward as a line and backward as markers, plus truth."""
+    series = []
+    keep = ~cols["outlier"]
+    for d, sel in _by_direction(cols):
+        t, mean, _, _ = per_target_stats(cols["target_mm"][sel], cols[column][sel], keep[sel])
+        series.append(Series(t, mean, f"{name} {_dir_label(d)}", "line" if d == "+" else "markers", color))
+    if tcols is not None:
+        t, mean, _, _ = per_target_stats(cols["target_mm"], tcols[column], np.ones(keep.shape, bool))
+        series.append(_truth_series(t, mean, f"truth {name}", color))
+    return series
+
+
+def straightness_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] | None) -> FigureSpec:
+    """Distance of the camera centre from the fitted line, in the two perpendicular directions."""
+    series = []
+    for k in (1, 2):
+        series += _component_series(cols, tcols, f"straightness_um_{k}", f"v{k}", COMPONENT_COLORS[k - 1])
+    return FigureSpec("straightness", "Straightness (deviation from the fitted line)", "target position [mm]",
+                      "straightness [\u00b5m]", series,
+                      "v1: perpendicular closest to the image y axis; v2: along the viewing direction")
+
+
+def angles_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] | None) -> FigureSpec:
+    """Roll, pitch and yaw of the camera relative to its mean orientation."""
+    series = []
+    for k, name in enumerate(("roll", "pitch", "yaw")):
+        series += _component_series(cols, tcols, f"{name}_urad", name, COMPONENT_COLORS[k])
+    return FigureSpec("angles", "Angular error motions (roll, pitch, yaw)", "target position [mm]",
+                      "angle [\u00b5rad]", series, "roll about the motion axis u, pitch about v1, yaw about v2")
+
+
+def residuals_figure(cols: dict[str, np.ndarray]) -> FigureSpec:
+    """RMS reprojection residual of each view; flagged views marked."""
+    series = [Series(cols["index"], cols["rms_px"], "RMS residual", "markers", FORWARD_COLOR, marked=cols["outlier"])]
+    n_out = int(cols["outlier"].sum())
+    return FigureSpec("residuals", "RMS reprojection residual per view", "capture index", "RMS residual [px]", series,
+                      f"{n_out} view(s) flagged as outliers (red crosses)" if n_out else "no view flagged")
+
+
+def spectrum_figure(results: dict[str, Any]) -> FigureSpec:
+    """Amplitude spectrum of the deviation: a lead-screw pitch shows as a peak."""
+    single = ((results.get("figures") or {}).get("single_run") or {})
+    spec = single.get("spectrum") or {}
+    period = np.asarray(spec.get("period_mm") or [], dtype=float)
+    amp = np.asarray(spec.get("amplitude_um") or [], dtype=float)
+    order = np.argsort(period)
+    series = [Series(period[order], amp[order], "amplitude", "line+markers", FORWARD_COLOR)] if period.size else []
+    notes = ""
+    if single.get("periodic_period_mm"):
+        notes = (f"strongest period {float(single['periodic_period_mm']):.3g} mm, "
+                 f"amplitude {float(single.get('periodic_amplitude_um') or 0):.3g} \u00b5m")
+    return FigureSpec("spectrum", "Error spectrum of the deviation", "period [mm]", "amplitude [\u00b5m]", series,
+                      notes, x_log=True)
+
+
+def figure_by_key(figures: Sequence[FigureSpec], key: str) -> FigureSpec:
+    for f in figures:
+        if f.key == key:
+            return f
+    raise KeyError(key)

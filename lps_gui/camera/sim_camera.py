@@ -1,0 +1,103 @@
+"""A simulated camera: renders the board where the simulated stage really put the camera.
+
+The truth comes from ``pose_source`` (e.g. ``SimulatedStage.true_pose``), a
+callable returning the carriage's :class:`TruePose` (K=1) at the moment of the
+grab; the rig turns it into the camera pose and :class:`BoardRenderer` makes
+the image. Time comes from a :class:`Clock`, so captures under a SimClock
+never sleep for real.
+"""
+from __future__ import annotations
+
+from typing import Any, Callable
+
+import numpy as np
+
+from lps_gui.camera.base import Camera, Frame
+from lps_gui.camera.render import BoardRenderer, Lighting
+from lps_gui.core.clock import Clock, RealClock
+from lps_gui.core.rig import Rig
+from lps_gui.core.stage_errors import TruePose
+from lps_gui.errors import HardwareError
+
+LIGHTING_KEYS = tuple(Lighting.__dataclass_fields__)
+
+
+class SimulatedCamera(Camera):
+    """A :class:`Camera` whose frames are rendered images of the rig's board.
+
+    Parameters
+    ----------
+    rig : board, intrinsics and how the camera rides the stage.
+    pose_source : returns the carriage's true pose now (TruePose with K=1).
+    noise_grey : Gaussian noise sigma in grey levels.
+    seed : seeds the image noise; frames are reproducible in grab order.
+    clock : timestamps frames and spends ``exposure_s`` per grab.
+    render_options : ``margin_squares``, ``exposure_s`` and any
+        :class:`Lighting` field (``blur_px``, ``vignetting``, ``texture``...).
+    """
+
+    def __init__(
+        self,
+        rig: Rig,
+        pose_source: Callable[[], TruePose],
+        noise_grey: float = 2.0,
+        seed: int = 0,
+        clock: Clock | None = None,
+        **render_options: Any,
+    ) -> None:
+        self.rig = rig
+        self.pose_source = pose_source
+        self.noise_grey = float(noise_grey)
+        self.seed = int(seed)
+        self.clock = clock or RealClock()
+        opts = dict(render_options)
+        self.exposure_s = float(opts.pop("exposure_s", 0.0))
+        self.margin_squares = float(opts.pop("margin_squares", 1.0))
+        unknown = set(opts) - set(LIGHTING_KEYS)
+        if unknown:
+            raise TypeError(f"SimulatedCamera: unknown render options {sorted(unknown)}")
+        self.lighting = Lighting(**opts)
+        self._renderer: BoardRenderer | None = None
+        self._rng = np.random.default_rng(self.seed)
+        self._frame_no = 0
+        self._open = False
+
+    def open(self) -> None:
+        if self._renderer is None:  # the per-pixel rays take a moment: build once
+            self._renderer = BoardRenderer(
+                self.rig.board, self.rig.intrinsics, self.margin_squares, self.lighting, self.noise_grey
+            )
+        self._open = True
+
+    @property
+    def is_open(self) -> bool:
+        return self._open
+
+    def close(self) -> None:
+        self._open = False
+
+    def grab(self) -> Frame:
+        """Render the board at the stage's true pose now; 8-bit grey (H, W)."""
+        if not self._open or self._renderer is None:
+            raise HardwareError("simulated camera: grab before open(); open the camera first")
+        pose = self.pose_source()
+        R, t = self.rig.camera_poses(pose)
+        self.clock.sleep(self.exposure_s)
+        image = self._renderer.render(R[0], t[0], self._rng)
+        self._frame_no += 1
+        meta = {
+            "frame": self._frame_no,
+            "true_axis_mm": float(np.asarray(pose.axis_mm).ravel()[0]),
+        }
+        return Frame(image=image, time=self.clock.now(), meta=meta)
+
+    def properties(self) -> dict[str, Any]:
+        w, h = self.rig.intrinsics.image_size
+        return {
+            "driver": "SimulatedCamera",
+            "width": w,
+            "height": h,
+            "noise_grey": self.noise_grey,
+            "seed": self.seed,
+            "blur_px": self.lighting.blur_px,
+        }

@@ -107,6 +107,73 @@ class Projection(NamedTuple):
     d_uv_d_intrinsics: np.ndarray | None  # shape (..., 2, 9)
 
 
+class ProjectionParts(NamedTuple):
+    """Projection as separate contiguous component arrays (the solvers' fast path)."""
+
+    u: np.ndarray
+    v: np.ndarray
+    du: tuple[np.ndarray, np.ndarray, np.ndarray] | None  # d u / d (x, y, z)
+    dv: tuple[np.ndarray, np.ndarray, np.ndarray] | None  # d v / d (x, y, z)
+    xp: np.ndarray  # normalized undistorted coordinates, for intrinsics Jacobians
+    yp: np.ndarray
+    xd: np.ndarray  # normalized distorted coordinates
+    yd: np.ndarray
+
+
+def project_parts(
+    x: np.ndarray, y: np.ndarray, z: np.ndarray, intrinsics: CameraIntrinsics, want_jacobian: bool = False
+) -> ProjectionParts:
+    """Project camera-frame coordinates given as three arrays of any one shape.
+
+    Same model as :func:`project`; avoids packing so that each output is a
+    contiguous array (strided writes dominate the cost at K*N ~ 2e5 points).
+    """
+    fx, fy, cx, cy = intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy
+    k1, k2, p1, p2, k3 = intrinsics.dist
+    inv_z = 1.0 / z
+    xp = x * inv_z
+    yp = y * inv_z
+    xx, yy, xy = xp * xp, yp * yp, xp * yp
+    r2 = xx + yy
+    radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
+    xd = xp * radial + 2.0 * p1 * xy + p2 * (r2 + 2.0 * xx)
+    yd = yp * radial + p1 * (r2 + 2.0 * yy) + 2.0 * p2 * xy
+    u = fx * xd + cx
+    v = fy * yd + cy
+    du = dv = None
+    if want_jacobian:
+        dr = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2)  # d radial / d r2
+        cross = 2.0 * xy * dr + 2.0 * p1 * xp + 2.0 * p2 * yp  # d xd / d yp == d yd / d xp
+        dxd_dxp = radial + 2.0 * xx * dr + 2.0 * p1 * yp + 6.0 * p2 * xp
+        dyd_dyp = radial + 2.0 * yy * dr + 6.0 * p1 * yp + 2.0 * p2 * xp
+        fx_z, fy_z = fx * inv_z, fy * inv_z
+        du_dx, du_dy = fx_z * dxd_dxp, fx_z * cross
+        dv_dx, dv_dy = fy_z * cross, fy_z * dyd_dyp
+        du = (du_dx, du_dy, -(du_dx * xp + du_dy * yp))
+        dv = (dv_dx, dv_dy, -(dv_dx * xp + dv_dy * yp))
+    return ProjectionParts(u, v, du, dv, xp, yp, xd, yd)
+
+
+def intrinsics_jacobian(parts: ProjectionParts, intrinsics: CameraIntrinsics) -> np.ndarray:
+    """d uv / d intrinsics, shape (..., 2, 9), from the parts of a projection."""
+    fx, fy = intrinsics.fx, intrinsics.fy
+    xp, yp, xd, yd = parts.xp, parts.yp, parts.xd, parts.yd
+    xx, yy, xy = xp * xp, yp * yp, xp * yp
+    r2 = xx + yy
+    r4 = r2 * r2
+    d_i = np.zeros(xp.shape + (2, 9))
+    d_i[..., 0, 0] = xd
+    d_i[..., 1, 1] = yd
+    d_i[..., 0, 2] = 1.0
+    d_i[..., 1, 3] = 1.0
+    d_i[..., 0, 4], d_i[..., 1, 4] = fx * xp * r2, fy * yp * r2
+    d_i[..., 0, 5], d_i[..., 1, 5] = fx * xp * r4, fy * yp * r4
+    d_i[..., 0, 6], d_i[..., 1, 6] = fx * 2.0 * xy, fy * (r2 + 2.0 * yy)
+    d_i[..., 0, 7], d_i[..., 1, 7] = fx * (r2 + 2.0 * xx), fy * 2.0 * xy
+    d_i[..., 0, 8], d_i[..., 1, 8] = fx * xp * r2 * r4, fy * yp * r2 * r4
+    return d_i
+
+
 def project(
     x_cam: np.ndarray,
     intrinsics: CameraIntrinsics,
@@ -123,45 +190,12 @@ def project(
     want_intrinsics_jacobian : also return d uv / d intrinsics, shape (..., 2, 9)
     """
     x_cam = np.asarray(x_cam, dtype=float)
-    fx, fy, cx, cy = intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy
-    k1, k2, p1, p2, k3 = intrinsics.dist
-    z = x_cam[..., 2]
-    inv_z = 1.0 / z
-    xp = x_cam[..., 0] * inv_z
-    yp = x_cam[..., 1] * inv_z
-    xx, yy, xy = xp * xp, yp * yp, xp * yp
-    r2 = xx + yy
-    radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
-    xd = xp * radial + 2.0 * p1 * xy + p2 * (r2 + 2.0 * xx)
-    yd = yp * radial + p1 * (r2 + 2.0 * yy) + 2.0 * p2 * xy
-    uv = np.stack([fx * xd + cx, fy * yd + cy], axis=-1)
-
-    d_x = d_i = None
+    parts = project_parts(x_cam[..., 0], x_cam[..., 1], x_cam[..., 2], intrinsics, want_jacobian)
+    uv = np.stack([parts.u, parts.v], axis=-1)
+    d_x = None
     if want_jacobian:
-        dr = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2)  # d radial / d r2
-        dxd_dxp = radial + 2.0 * xx * dr + 2.0 * p1 * yp + 6.0 * p2 * xp
-        dxd_dyp = 2.0 * xy * dr + 2.0 * p1 * xp + 2.0 * p2 * yp
-        dyd_dxp = 2.0 * xy * dr + 2.0 * p1 * xp + 2.0 * p2 * yp
-        dyd_dyp = radial + 2.0 * yy * dr + 6.0 * p1 * yp + 2.0 * p2 * xp
-        d_x = np.empty(x_cam.shape[:-1] + (2, 3))
-        d_x[..., 0, 0] = fx * dxd_dxp * inv_z
-        d_x[..., 0, 1] = fx * dxd_dyp * inv_z
-        d_x[..., 0, 2] = -fx * (dxd_dxp * xp + dxd_dyp * yp) * inv_z
-        d_x[..., 1, 0] = fy * dyd_dxp * inv_z
-        d_x[..., 1, 1] = fy * dyd_dyp * inv_z
-        d_x[..., 1, 2] = -fy * (dyd_dxp * xp + dyd_dyp * yp) * inv_z
-    if want_intrinsics_jacobian:
-        d_i = np.zeros(x_cam.shape[:-1] + (2, 9))
-        r4 = r2 * r2
-        d_i[..., 0, 0] = xd
-        d_i[..., 1, 1] = yd
-        d_i[..., 0, 2] = 1.0
-        d_i[..., 1, 3] = 1.0
-        d_i[..., 0, 4], d_i[..., 1, 4] = fx * xp * r2, fy * yp * r2
-        d_i[..., 0, 5], d_i[..., 1, 5] = fx * xp * r4, fy * yp * r4
-        d_i[..., 0, 6], d_i[..., 1, 6] = fx * 2.0 * xy, fy * (r2 + 2.0 * yy)
-        d_i[..., 0, 7], d_i[..., 1, 7] = fx * (r2 + 2.0 * xx), fy * 2.0 * xy
-        d_i[..., 0, 8], d_i[..., 1, 8] = fx * xp * r2 * r4, fy * yp * r2 * r4
+        d_x = np.stack([np.stack(parts.du, axis=-1), np.stack(parts.dv, axis=-1)], axis=-2)
+    d_i = intrinsics_jacobian(parts, intrinsics) if want_intrinsics_jacobian else None
     return Projection(uv, d_x, d_i)
 
 

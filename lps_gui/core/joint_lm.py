@@ -1,0 +1,334 @@
+"""Joint Levenberg-Marquardt on the LPS model (SPEC 4.4): R, l0, n and every s_i at once.
+
+Each view's residuals depend on the shared parameters theta (rotation 3, l0 3,
+direction 2 on the sphere, and optionally the 9 intrinsics) plus its own
+position s_i: the Jacobian is an arrowhead. We never build it as one matrix;
+we accumulate the normal equations blockwise
+
+    H = [[A, B^T], [B, diag(D)]],  A: (p, p), B: (K, p), D: (K,)
+
+and eliminate the diagonal s-block by a Schur complement, so one iteration
+costs O(K N) and the linear solve is p x p. Residual weights come from the
+corner mask and, optionally, a Huber loss (iteratively reweighted).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from lps_gui.core.camera_model import CameraIntrinsics, intrinsics_jacobian, project_parts
+from lps_gui.core.lps_model import LpsLine, sphere_retract, sphere_tangent_basis
+from lps_gui.core.progress import CancelToken
+from lps_gui.core.rotation import exp_so3
+
+N_POSE_PARAMS = 8  # rotation 3, l0 3, direction 2
+
+
+@dataclass
+class LpsState:
+    """Current estimate of the LPS model; positions s_mm relative to the gauge view."""
+
+    R: np.ndarray  # shape (3, 3) R_cam_board
+    l0: np.ndarray  # shape (3,) mm
+    n: np.ndarray  # shape (3,) unit
+    s: np.ndarray  # shape (K,) mm
+    intrinsics: CameraIntrinsics
+
+    def line(self) -> LpsLine:
+        return LpsLine(self.R.copy(), self.l0.copy(), self.n.copy())
+
+    def copy(self) -> "LpsState":
+        return LpsState(self.R.copy(), self.l0.copy(), self.n.copy(), self.s.copy(), self.intrinsics)
+
+
+@dataclass
+class LmOptions:
+    """Settings of the joint solver."""
+
+    max_iterations: int = 50
+    robust: bool = False  # Huber loss on each corner's residual
+    huber_scale: float = 3.0  # in units of the robust residual scale (MAD)
+    estimate_intrinsics: bool = False  # self-calibration with the prior N(I0, Sigma_I)
+    fix_positions: bool = False  # hybrid step 3: only theta moves
+    relative_tolerance: float = 1e-9
+    initial_damping: float = 1e-4
+
+
+@dataclass
+class NormalEquations:
+    """Blocks of J^T W J and J^T W r at one linearization point."""
+
+    A: np.ndarray  # shape (p, p)
+    B: np.ndarray  # shape (K, p)
+    D: np.ndarray  # shape (K,)
+    g_theta: np.ndarray  # shape (p,)
+    g_s: np.ndarray  # shape (K,)
+    cost: float  # sum of robust costs (== SSR without robust loss)
+    ssr: float  # plain sum of squared residuals over used corners, px^2
+    n_obs: int  # number of scalar residuals used (2 per corner)
+    basis: np.ndarray = field(default_factory=lambda: np.zeros((3, 2)))  # tangent basis of n
+    weights: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # shape (K, N)
+
+
+@dataclass
+class LmResult:
+    state: LpsState
+    weights: np.ndarray  # shape (K, N) final weights (mask x robust)
+    equations: NormalEquations  # at the solution
+    iterations: int
+    converged: bool
+    cost_history: list[float]
+
+
+def residuals(state: LpsState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """Reprojection residuals uv - measured, shape (K, N, 2); zero where not seen."""
+    x, y, z = _camera_points(state, X)
+    parts = project_parts(x, y, z, state.intrinsics)
+    m = np.nan_to_num(corners)
+    r = np.empty(corners.shape)
+    r[..., 0] = np.where(mask, parts.u - m[..., 0], 0.0)
+    r[..., 1] = np.where(mask, parts.v - m[..., 1], 0.0)
+    return r
+
+
+def _camera_points(state: LpsState, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Camera-frame coordinates of every corner in every view, three arrays of shape (K, N)."""
+    RX = X @ state.R.T  # shape (N, 3)
+    t = state.l0[None, :] + state.s[:, None] * state.n[None, :]  # shape (K, 3)
+    return tuple(RX[None, :, i] + t[:, i, None] for i in range(3))  # type: ignore[return-value]
+
+
+def huber_threshold(r: np.ndarray, mask: np.ndarray, huber_scale: float) -> float:
+    """Huber threshold (px) on a corner's residual norm: ``huber_scale`` robust sigmas.
+
+    The residual norm of a 2-D Gaussian error is Rayleigh distributed; its
+    median is sigma * sqrt(2 ln 2), which turns the median into a sigma.
+    """
+    e = np.linalg.norm(r, axis=-1)[mask]
+    if e.size == 0:
+        return np.inf
+    return huber_scale * float(np.median(e)) / np.sqrt(2.0 * np.log(2.0)) + 1e-12
+
+
+def huber_weights(r: np.ndarray, mask: np.ndarray, c: float | None) -> np.ndarray:
+    """IRLS weights per corner, shape (K, N): 1 inside the threshold, c/e beyond."""
+    if c is None:
+        return mask.astype(float)
+    e = np.linalg.norm(r, axis=-1)
+    w = np.where(e <= c, 1.0, c / np.maximum(e, 1e-300))
+    return np.where(mask, w, 0.0)
+
+
+def robust_cost(r: np.ndarray, mask: np.ndarray, c: float | None) -> float:
+    """Sum of squared residuals, or of the Huber function of each corner's residual norm."""
+    e2 = np.sum(r * r, axis=-1)[mask]
+    if c is None:
+        return float(np.sum(e2))
+    e = np.sqrt(e2)
+    return float(np.sum(np.where(e <= c, e2, 2.0 * c * e - c * c)))
+
+
+def linearize(
+    state: LpsState,
+    X: np.ndarray,
+    corners: np.ndarray,
+    mask: np.ndarray,
+    huber_c: float | None = None,
+    with_intrinsics: bool = False,
+) -> tuple[NormalEquations, np.ndarray]:
+    """Normal-equation blocks at ``state``; returns them and the residuals (K, N, 2).
+
+    ``huber_c`` (px) turns on the Huber loss: its IRLS weights enter the blocks.
+    """
+    x, y, z = _camera_points(state, X)
+    parts = project_parts(x, y, z, state.intrinsics, want_jacobian=True)
+    m = np.nan_to_num(corners)
+    r = np.empty((2,) + mask.shape)  # residuals, component-major: shape (2, K, N)
+    r[0] = np.where(mask, parts.u - m[..., 0], 0.0)
+    r[1] = np.where(mask, parts.v - m[..., 1], 0.0)
+    # d r / d x_cam, shape (2, K, N) per coordinate
+    Px = np.stack([parts.du[0], parts.dv[0]])
+    Py = np.stack([parts.du[1], parts.dv[1]])
+    Pz = np.stack([parts.du[2], parts.dv[2]])
+
+    def P_dot(v: np.ndarray) -> np.ndarray:  # P @ v for a 3-vector, cheaper than matmul
+        return Px * v[0] + Py * v[1] + Pz * v[2]
+
+    RX = X @ state.R.T  # shape (N, 3)
+    basis = sphere_tangent_basis(state.n)
+    p = N_POSE_PARAMS + (9 if with_intrinsics else 0)
+    K, N = mask.shape
+    J = np.empty((p, 2, K, N))  # d r / d theta, parameter-major so each column is contiguous
+    a, b, c = RX[None, None, :, 0], RX[None, None, :, 1], RX[None, None, :, 2]
+    J[0] = b * Pz - c * Py  # RX x P_row: left-perturbed rotation
+    J[1] = c * Px - a * Pz
+    J[2] = a * Py - b * Px
+    J[3], J[4], J[5] = Px, Py, Pz
+    s_col = state.s[None, :, None]
+    J[6] = s_col * P_dot(basis[:, 0])
+    J[7] = s_col * P_dot(basis[:, 1])
+    if with_intrinsics:
+        J[8:17] = np.moveaxis(intrinsics_jacobian(parts, state.intrinsics), (-2, -1), (1, 0))
+    Js = P_dot(state.n)  # shape (2, K, N): d r / d s_i
+
+    r_kn2 = np.moveaxis(r, 0, -1)  # view (K, N, 2) for the weights
+    weights = huber_weights(r_kn2, mask, huber_c)
+    Jf = J.reshape(p, -1)
+    if huber_c is None and mask.all():  # the common case: no weighting copies
+        wJs, wr = Js, r
+        A = Jf @ Jf.T
+    else:
+        wJs, wr = weights[None] * Js, weights[None] * r
+        A = (Jf * np.broadcast_to(weights[None], r.shape).reshape(1, -1)) @ Jf.T
+    B = np.einsum("pckn,ckn->kp", J, wJs)
+    D = np.einsum("ckn,ckn->k", wJs, Js)
+    g_s = np.einsum("ckn,ckn->k", wJs, r)
+    g_theta = Jf @ wr.reshape(-1)
+    r = r_kn2
+    e2 = np.sum(r * r, axis=-1)
+    eq = NormalEquations(
+        A=A,
+        B=B,
+        D=D,
+        g_theta=g_theta,
+        g_s=g_s,
+        cost=robust_cost(r, mask, huber_c),
+        ssr=float(np.sum(e2[mask])),
+        n_obs=int(2 * mask.sum()),
+        basis=basis,
+        weights=weights,
+    )
+    return eq, r
+
+
+def solve_arrowhead(
+    eq: NormalEquations,
+    free_s: np.ndarray,
+    damping: float = 0.0,
+    prior_A: np.ndarray | None = None,
+    prior_g: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Newton / LM step by Schur complement on the diagonal s-block.
+
+    Solves (H + damping * diag(H)) [d_theta; d_s] = -[g_theta; g_s] with the
+    positions not in ``free_s`` held fixed. Returns d_theta (p,), d_s (K,).
+    """
+    A = eq.A + (prior_A if prior_A is not None else 0.0)
+    g = eq.g_theta + (prior_g if prior_g is not None else 0.0)
+    A = A + damping * np.diag(np.diag(A))
+    D = eq.D * (1.0 + damping)
+    free = free_s & (D > 0)
+    Dinv = np.where(free, 1.0 / np.where(free, D, 1.0), 0.0)
+    Bf = eq.B * Dinv[:, None]  # shape (K, p): w_i = B_i / D_i
+    S = A - eq.B.T @ Bf
+    rhs = g - Bf.T @ eq.g_s
+    d_theta = -_solve_spd(S, rhs)
+    d_s = np.where(free, -(eq.g_s + eq.B @ d_theta) * Dinv, 0.0)
+    return d_theta, d_s
+
+
+def _solve_spd(S: np.ndarray, b: np.ndarray) -> np.ndarray:
+    try:
+        c, low = _cho_factor(S)
+        from scipy.linalg import cho_solve
+
+        return cho_solve((c, low), b)
+    except np.linalg.LinAlgError:
+        return np.linalg.lstsq(S, b, rcond=None)[0]
+
+
+def _cho_factor(S: np.ndarray):
+    from scipy.linalg import cho_factor
+
+    return cho_factor(S, lower=True, check_finite=False)
+
+
+def apply_step(state: LpsState, d_theta: np.ndarray, d_s: np.ndarray, basis: np.ndarray) -> LpsState:
+    """Move the state by a step of :func:`solve_arrowhead`."""
+    R = exp_so3(d_theta[0:3]) @ state.R
+    l0 = state.l0 + d_theta[3:6]
+    n = sphere_retract(state.n, d_theta[6:8], basis)
+    intr = state.intrinsics
+    if d_theta.size > N_POSE_PARAMS:
+        intr = intr.with_vector(intr.vector() + d_theta[8:17])
+    return LpsState(R, l0, n, state.s + d_s, intr)
+
+
+def solve_joint(
+    state: LpsState,
+    X: np.ndarray,
+    corners: np.ndarray,
+    mask: np.ndarray,
+    free_s: np.ndarray,
+    options: LmOptions | None = None,
+    cancel: CancelToken | None = None,
+    intrinsics_prior: tuple[np.ndarray, np.ndarray] | None = None,
+) -> LmResult:
+    """Minimize the reprojection error of the LPS model (paper Eq. 4) by LM.
+
+    Parameters
+    ----------
+    state : initial estimate (positions of fixed views stay as given)
+    X : board points, shape (N, 3) mm
+    corners : measured corners, shape (K, N, 2) px (NaN where missing)
+    mask : which corners to use, shape (K, N) bool (excluded views all False)
+    free_s : which positions to estimate, shape (K,) bool (gauge view False)
+    intrinsics_prior : (I0 (9,), Sigma_I (9, 9)) when options.estimate_intrinsics
+    """
+    opt = options or LmOptions()
+    with_intr = opt.estimate_intrinsics
+    prior_A = prior_g = None
+    if with_intr:
+        if intrinsics_prior is None:
+            raise ValueError("self-calibration needs an intrinsics prior (I0, covariance)")
+        I0, cov_I = intrinsics_prior
+        info_I = np.linalg.inv(cov_I)
+        prior_A = np.zeros((17, 17))
+        prior_A[8:, 8:] = info_I
+    free = free_s.copy() if not opt.fix_positions else np.zeros_like(free_s)
+    huber_c = huber_threshold(residuals(state, X, corners, mask), mask, opt.huber_scale) if opt.robust else None
+    eq, _ = linearize(state, X, corners, mask, huber_c, with_intr)
+
+    def prior_terms(st: LpsState) -> tuple[float, np.ndarray | None]:
+        if not with_intr:
+            return 0.0, None
+        dI = st.intrinsics.vector() - I0
+        g = np.zeros(17)
+        g[8:] = info_I @ dI
+        return float(dI @ info_I @ dI), g
+
+    prior_cost, prior_g = prior_terms(state)
+    cost = eq.cost + prior_cost
+    history = [cost]
+    lam = opt.initial_damping
+    converged = False
+    it = 0
+    for it in range(1, opt.max_iterations + 1):
+        if cancel is not None:
+            cancel.check("estimation")
+        d_theta, d_s = solve_arrowhead(eq, free, lam, prior_A, prior_g)
+        trial = apply_step(state, d_theta, d_s, eq.basis)
+        trial_prior, trial_prior_g = prior_terms(trial)
+        trial_cost = robust_cost(residuals(trial, X, corners, mask), mask, huber_c) + trial_prior
+        if trial_cost <= cost:
+            improvement = (cost - trial_cost) / max(cost, 1e-300)
+            state = trial
+            eq, r = linearize(state, X, corners, mask, huber_c, with_intr)
+            prior_g = trial_prior_g
+            cost = eq.cost + trial_prior
+            history.append(cost)
+            lam = max(lam / 10.0, 1e-12)
+            if improvement < opt.relative_tolerance:
+                converged = True
+                break
+        else:
+            lam *= 10.0
+            if lam > 1e10:  # no descent direction left: at the minimum to machine precision
+                converged = True
+                break
+    return LmResult(state, eq.weights, eq, it, converged, history)
+
+
+def with_positions(state: LpsState, s: np.ndarray) -> LpsState:
+    return replace(state.copy(), s=np.asarray(s, dtype=float).copy())

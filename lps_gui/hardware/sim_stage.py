@@ -1,0 +1,494 @@
+"""A simulated stage: motion in simulated time, soft limits, homing, and a true-position error model.
+
+Motion follows trapezoidal profiles (``hardware/motion.py``) evaluated at the
+clock's time, so with a :class:`~lps_gui.core.clock.SimClock` a 500 mm move
+"takes" 10 s but :meth:`SimulatedStage.wait_idle` returns at once by
+advancing the clock. Where the carriage *really* is comes from the one
+:class:`~lps_gui.core.stage_errors.StageErrorModel` every simulator shares
+(backlash of the last approach direction, one repeatability draw per
+completed move, straightness and angular errors); the simulated camera
+renders from :meth:`SimulatedStage.true_pose`.
+
+Rules mirror GRBL 1.1 (the GRBL emulator runs on top of this class): codes
+come from ``grbl/codes.py``; settings are GRBL's ``$N`` numbers; a soft-limit
+violation of a move is ALARM:2, of a jog error:15; G-code in Alarm or Jog is
+error:9; a reset during motion is ALARM:3.
+"""
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+
+from lps_gui.core.clock import Clock, SimClock
+from lps_gui.core.stage_errors import StageErrorModel, TruePose
+from lps_gui.errors import HardwareError
+from lps_gui.hardware.grbl.codes import SETTINGS, GrblError, setting_info
+from lps_gui.hardware.motion import Profile, stop_from, trapezoid
+from lps_gui.hardware.stage import AXES, Stage, StageEvent, StageSetting, StageStatus
+
+PLANNER_BLOCKS = 15  # GRBL: 16-block ring buffer, one always empty (reports Bf:15 when idle)
+RX_BUFFER_BYTES = 128
+
+
+class SimulatedStage(Stage):
+    """A plain-Python stage implementing :class:`Stage` in simulated (or real) time.
+
+    Parameters
+    ----------
+    errors : true-position error model (zero errors when None).
+    seed : seeds the repeatability draws (one per completed move of ``axis``).
+    travel_mm : (min, max) soft-limit range of every axis in work coordinates (mm).
+    max_rate_mm_min, accel_mm_s2 : velocity and acceleration limits (GRBL $11x, $12x).
+    clock : time source; a fresh SimClock when None (tests never sleep).
+    axis : the axis the LPS measurement moves along.
+    homing_required : start in Alarm like GRBL with $22=1 and the homing lock.
+    soft_limits : GRBL $20.
+    """
+
+    def __init__(
+        self,
+        errors: StageErrorModel | None = None,
+        seed: int = 0,
+        travel_mm: tuple[float, float] = (-5.0, 500.0),
+        max_rate_mm_min: float = 3000.0,
+        accel_mm_s2: float = 200.0,
+        clock: Clock | None = None,
+        axis: str = "X",
+        homing_required: bool = False,
+        soft_limits: bool = True,
+        start_mm: float = 0.0,
+    ) -> None:
+        super().__init__()
+        if axis not in AXES:
+            raise ValueError(f"axis must be one of {AXES}")
+        self.axis = axis
+        self.errors = errors or StageErrorModel()
+        self.seed = seed
+        self.travel_mm = (float(travel_mm[0]), float(travel_mm[1]))
+        self.clock: Clock = clock if clock is not None else SimClock()
+        self.settings: dict[int, float] = {n: float(s.default) for n, s in SETTINGS.items()}
+        for i in range(3):
+            self.settings[110 + i] = float(max_rate_mm_min)
+            self.settings[120 + i] = float(accel_mm_s2)
+            self.settings[130 + i] = self.travel_mm[1] - self.travel_mm[0]
+        self.settings.update({20: float(soft_limits), 22: 1.0, 23: 7.0, 24: 100.0, 25: float(max_rate_mm_min), 27: 1.0})
+        self._rng = np.random.default_rng(seed)
+        self._lock = threading.RLock()
+        self._pos_mm = np.zeros(3)
+        self._pos_mm[AXES.index(axis)] = start_mm
+        self._queue: list[Profile] = []  # planned motion, back to back in time
+        self._stopping: Profile | None = None  # deceleration of a hold or jog cancel
+        self._held: list[tuple[int, str, float, float]] = []  # (axis, kind, target, feed) to resume
+        self._hold = False
+        self._homing = False
+        self.homed = False
+        self._alarm: int | None = 0 if homing_required else None  # 0: GRBL's homing lock, no code
+        self._last_dir = 1
+        self._noise_um = 0.0
+        self._connected = False
+        self._vanish_at: float | None = None
+        self._vanished = False
+        self._last_state = ""
+
+    # ------------------------------------------------------------------ settings
+    def _ax(self, axis: str | None) -> int:
+        name = (axis or self.axis).upper()
+        if name not in AXES:
+            raise GrblError("error", 20, f"axis {name!r}")
+        return AXES.index(name)
+
+    def max_rate_mm_min(self, axis: int) -> float:
+        return self.settings[110 + axis]
+
+    def accel_mm_s2(self, axis: int) -> float:
+        return self.settings[120 + axis]
+
+    @property
+    def soft_limits(self) -> bool:
+        return bool(self.settings[20])
+
+    @property
+    def homing_enabled(self) -> bool:
+        return bool(self.settings[22])
+
+    def home_position_mm(self) -> float:
+        """Where homing leaves the carriage: the low switch plus the pull-off ($27)."""
+        return self.travel_mm[0] + self.settings[27]
+
+    # ------------------------------------------------------------------ connection
+    def connect(self) -> None:
+        with self._lock:
+            if self._vanished:
+                self._vanished = False
+                self._vanish_at = None
+            self._connected = True
+        self.events.emit(StageEvent("connected", text="simulated stage connected"))
+
+    def disconnect(self) -> None:
+        with self._lock:
+            self._connected = False
+        self.events.emit(StageEvent("disconnected", text="simulated stage disconnected"))
+
+    @property
+    def connected(self) -> bool:
+        with self._lock:
+            self._check_vanish(raise_=False)
+            return self._connected
+
+    def disconnect_fault(self, at_time_s: float | None = None) -> None:
+        """Simulate a vanished port now, or when the stage clock reaches ``at_time_s``.
+
+        Motion stops where it was at that time; every call then raises
+        HardwareError until :meth:`connect` is called again (the reconnect).
+        """
+        with self._lock:
+            self._vanish_at = self.clock.now() if at_time_s is None else float(at_time_s)
+
+    def _check_vanish(self, raise_: bool = True) -> None:
+        if self._vanish_at is not None and not self._vanished and self.clock.now() >= self._vanish_at:
+            self._freeze(self._vanish_at)
+            self._vanished = True
+            self._connected = False
+            self.events.emit(StageEvent("disconnected", text="simulated stage: port vanished"))
+        if raise_ and self._vanished:
+            raise HardwareError("simulated stage: the port vanished (simulated fault); reconnect the stage and resume")
+
+    def require_connected(self) -> None:
+        with self._lock:
+            self._check_vanish()
+        super().require_connected()
+
+    # ------------------------------------------------------------------ time evolution
+    def _freeze(self, t: float) -> None:
+        """Stop all motion abruptly at time ``t`` (reset, vanished port)."""
+        self._update(t)
+        for p in ([self._stopping] if self._stopping else []) + self._queue[:1]:
+            self._pos_mm[p.axis] = p.at(t)[0]
+        self._queue.clear()
+        self._stopping = None
+        self._held.clear()
+        self._homing = False
+
+    def _complete(self, p: Profile) -> None:
+        self._pos_mm[p.axis] = p.end_mm
+        if p.axis == AXES.index(self.axis) and p.direction != 0:
+            self._last_dir = p.direction
+            rep = self.errors.repeatability_um
+            self._noise_um = float(self._rng.normal(0.0, rep)) if rep > 0 else 0.0
+
+    def _update(self, t: float | None = None) -> None:
+        """Retire motion finished by time ``t`` and emit a state event on change."""
+        t = self.clock.now() if t is None else t
+        if self._stopping is not None and t >= self._stopping.t_end:
+            self._complete(self._stopping)
+            self._stopping = None
+        while self._queue and t >= self._queue[0].t_end:
+            self._complete(self._queue.pop(0))
+        if self._homing and not self._queue:
+            self._homing = False
+            self.homed = True
+        state, _ = self._state(t)
+        if state != self._last_state:
+            self._last_state = state
+            self.events.emit(StageEvent("state", text=state))
+
+    def _state(self, t: float) -> tuple[str, int | None]:
+        if self._alarm is not None:
+            return "Alarm", None
+        if self._hold:
+            return "Hold", (1 if self._stopping is not None else 0)
+        if self._stopping is not None:
+            return self._stopping.kind, None
+        if self._queue:
+            return self._queue[0].kind, None
+        return "Idle", None
+
+    def _active(self, t: float) -> Profile | None:
+        return self._stopping if self._stopping is not None else (self._queue[0] if self._queue else None)
+
+    def _positions(self, t: float) -> tuple[np.ndarray, float]:
+        pos = self._pos_mm.copy()
+        p = self._active(t)
+        if p is None or (self._hold and self._stopping is None):
+            return pos, 0.0
+        x, v = p.at(t)
+        pos[p.axis] = x
+        return pos, abs(v) * 60.0
+
+    def planner_free(self) -> int:
+        """Free planner blocks (GRBL's ``Bf`` first value)."""
+        with self._lock:
+            self._update()
+            return PLANNER_BLOCKS - len(self._queue) - len(self._held)
+
+    def next_event_s(self) -> float | None:
+        """Clock time of the next state change in motion (for waiting), None when resting."""
+        with self._lock:
+            p = self._active(self.clock.now())
+            return None if p is None else (p.t_end if p is self._stopping else self._queue[0].t_end)
+
+    # ------------------------------------------------------------------ status
+    def status(self) -> StageStatus:
+        with self._lock:
+            self.require_connected()
+            t = self.clock.now()
+            self._update(t)
+            state, sub = self._state(t)
+            pos, feed = self._positions(t)
+            free = PLANNER_BLOCKS - len(self._queue) - len(self._held)
+            return StageStatus(
+                state=state, substate=sub, machine_mm=tuple(pos), work_mm=tuple(pos),
+                feed_mm_min=feed, buffer=(free, RX_BUFFER_BYTES), overrides=(100, 100, 100), time=t,
+            )
+
+    def true_pose(self) -> TruePose:
+        """Where the carriage really is now (K=1), from the shared error model.
+
+        Backlash follows the direction of the last approach; the repeatability
+        draw of the last completed move is added to the axis position.
+        """
+        with self._lock:
+            t = self.clock.now()
+            self._update(t)
+            pos, _ = self._positions(t)
+            i = AXES.index(self.axis)
+            p = self._active(t)
+            direction = p.direction if p is not None and p.direction else self._last_dir
+            pose = self.errors.true_pose(np.array([pos[i]]), np.array([float(direction)]))
+            return TruePose(
+                axis_mm=pose.axis_mm + 1e-3 * self._noise_um,
+                straightness_um=pose.straightness_um,
+                angles_urad=pose.angles_urad,
+            )
+
+    def describe(self) -> dict:
+        return {
+            **super().describe(),
+            "travel_mm": list(self.travel_mm),
+            "max_rate_mm_min": self.max_rate_mm_min(AXES.index(self.axis)),
+            "accel_mm_s2": self.accel_mm_s2(AXES.index(self.axis)),
+            "seed": self.seed,
+            "errors": self.errors.to_dict(),
+        }
+
+    # ------------------------------------------------------------------ alarms and locks
+    def _raise_alarm(self, code: int, context: str) -> GrblError:
+        self._freeze(self.clock.now())
+        self._alarm = code
+        self.events.emit(StageEvent("alarm", code=code, text=GrblError("alarm", code).args[0]))
+        return GrblError("alarm", code, context)
+
+    def trigger_alarm(self, code: int) -> None:
+        """Raise ``ALARM:code`` now (fault injection: hard limit mid-move...)."""
+        with self._lock:
+            self._raise_alarm(code, "simulated stage")
+
+    @property
+    def alarm_code(self) -> int | None:
+        """The active alarm (0 = homing lock at start-up), None when not in Alarm."""
+        return self._alarm
+
+    def _require_gcode_ok(self) -> None:
+        state, _ = self._state(self.clock.now())
+        if state in ("Alarm", "Jog"):
+            raise GrblError("error", 9, f"stage in {state}")
+
+    def unlock(self) -> None:
+        with self._lock:
+            self.require_connected()
+            self._update()
+            if self._alarm is not None:
+                self._alarm = None
+                self.events.emit(StageEvent("message", text="Caution: Unlocked"))
+                self._update()
+
+    def soft_reset(self) -> None:
+        """Stop at once; a reset during motion or homing raises ALARM:3 / ALARM:6 like GRBL."""
+        with self._lock:
+            self.require_connected()
+            t = self.clock.now()
+            self._update(t)
+            moving = self._active(t) is not None
+            homing = self._homing
+            self._freeze(t)
+            self._hold = False
+            if homing:
+                self._raise_alarm(6, "reset during homing")
+            elif moving:
+                self._raise_alarm(3, "reset during motion")
+            self._update(t)
+
+    # ------------------------------------------------------------------ motion
+    def _plan(self, axis: int, kind: str, target_mm: float, feed_mm_min: float) -> None:
+        t = self.clock.now()
+        if self._queue:
+            last = self._queue[-1]
+            t0, x0 = last.t_end, (last.end_mm if last.axis == axis else self._pos_mm[axis])
+        else:
+            t0, x0 = t, self._pos_mm[axis]
+        feed = min(feed_mm_min, self.max_rate_mm_min(axis))
+        self._queue.append(trapezoid(axis, kind, t0, float(x0), float(target_mm), feed, self.accel_mm_s2(axis)))
+
+    def _in_travel(self, target_mm: float) -> bool:
+        return self.travel_mm[0] <= target_mm <= self.travel_mm[1]
+
+    def _wait_planner(self) -> None:
+        while self.planner_free() <= 0:
+            nxt = self.next_event_s()
+            self.clock.sleep(max((nxt or 0.0) - self.clock.now(), 1e-3))
+
+    def move_to(self, position_mm: float, feed_mm_min: float, axis: str | None = None) -> None:
+        with self._lock:
+            self.require_connected()
+            self._update()
+            i = self._ax(axis)
+            self._require_gcode_ok()
+            if not feed_mm_min or feed_mm_min <= 0:
+                raise GrblError("error", 22, f"move to {position_mm} mm")
+            if self.soft_limits and not self._in_travel(position_mm):
+                raise self._raise_alarm(
+                    2, f"move to {position_mm:.3f} mm is outside the travel {self.travel_mm[0]:g}..{self.travel_mm[1]:g} mm"
+                )
+            self._wait_planner()
+            if self._hold:
+                self._held.append((i, "Run", float(position_mm), float(feed_mm_min)))
+            else:
+                self._plan(i, "Run", float(position_mm), float(feed_mm_min))
+            self._update()
+
+    def jog(self, distance_mm: float, feed_mm_min: float, axis: str | None = None) -> None:
+        with self._lock:
+            self.require_connected()
+            self._update()
+            i = self._ax(axis)
+            state, _ = self._state(self.clock.now())
+            if state not in ("Idle", "Jog"):
+                raise GrblError("error", 8, f"jog in {state}")
+            if not feed_mm_min or feed_mm_min <= 0:
+                raise GrblError("error", 22, "jog")
+            start = self._queue[-1].end_mm if self._queue and self._queue[-1].axis == i else self._pos_mm[i]
+            target = float(start + distance_mm)
+            if self.soft_limits and not self._in_travel(target):
+                raise GrblError("error", 15, f"jog to {target:.3f} mm")
+            self._wait_planner()
+            self._plan(i, "Jog", target, float(feed_mm_min))
+            self._update()
+
+    def _decelerate(self) -> list[Profile]:
+        """Start a controlled stop of the active profile; return the motion it cut short."""
+        t = self.clock.now()
+        cut = list(self._queue)
+        if self._queue:
+            self._stopping = stop_from(self._queue[0], t, self.accel_mm_s2(self._queue[0].axis))
+            self._queue.clear()
+        return cut
+
+    def jog_cancel(self) -> None:
+        with self._lock:
+            self.require_connected()
+            self._update()
+            if self._queue and self._queue[0].kind == "Jog":
+                self._decelerate()
+                self._update()
+
+    def feed_hold(self) -> None:
+        with self._lock:
+            self.require_connected()
+            self._update()
+            state, _ = self._state(self.clock.now())
+            if state == "Jog":
+                self._decelerate()
+            elif state in ("Run", "Idle"):
+                cut = self._decelerate()
+                self._held = [(p.axis, p.kind, p.end_mm, p.feed_mm_min) for p in cut] + self._held
+                self._hold = True
+            self._update()
+
+    def resume(self) -> None:
+        with self._lock:
+            self.require_connected()
+            self._update()
+            if self._hold and self._stopping is None:  # GRBL resumes only a completed hold
+                self._hold = False
+                held, self._held = self._held, []
+                for axis, kind, target, feed in held:
+                    self._plan(axis, kind, target, feed)
+                self._update()
+
+    def start_home(self) -> None:
+        """Begin homing (seek the low switch, pull off, locate slowly, pull off) without waiting."""
+        with self._lock:
+            self.require_connected()
+            self._update()
+            if not self.homing_enabled:
+                raise GrblError("error", 5, "home")
+            state, _ = self._state(self.clock.now())
+            if state not in ("Idle", "Alarm"):
+                raise GrblError("error", 8, f"home in {state}")
+            self._alarm = None
+            i = AXES.index(self.axis)
+            switch, pulloff = self.travel_mm[0], self.settings[27]
+            seek, locate = self.settings[25], self.settings[24]
+            self._plan(i, "Home", switch, seek)
+            self._plan(i, "Home", switch + pulloff, seek)
+            self._plan(i, "Home", switch, locate)
+            self._plan(i, "Home", switch + pulloff, seek)
+            self._homing = True
+            self.homed = False
+            self._update()
+
+    def home(self) -> None:
+        self.start_home()
+        self.wait_idle(timeout_s=3600.0)
+
+    def wait_idle(self, timeout_s: float = 60.0) -> StageStatus:
+        """Advance (or sleep) the clock until Idle; HardwareError on alarm or after ``timeout_s``."""
+        deadline = self.clock.now() + timeout_s
+        simulated = isinstance(self.clock, SimClock)
+        while True:
+            st = self.status()
+            if st.state == "Idle":
+                return st
+            if st.state == "Alarm":
+                if self._alarm:
+                    raise GrblError("alarm", self._alarm, "while waiting for the stage")
+                raise HardwareError("simulated stage: locked in Alarm; home ($H) or unlock ($X) it first")
+            now = self.clock.now()
+            if now >= deadline:
+                raise HardwareError(
+                    f"simulated stage: still {st.state} after {timeout_s:g} s; resume a hold (~) or reset the stage"
+                )
+            nxt = self.next_event_s()
+            dt = (nxt - now) if nxt is not None else deadline - now
+            if not simulated:
+                dt = min(dt, 0.05)
+            self.clock.sleep(min(max(dt, 1e-6), deadline - now))
+
+    # ------------------------------------------------------------------ settings
+    def read_settings(self) -> list[StageSetting]:
+        with self._lock:
+            self.require_connected()
+            return [
+                StageSetting(n, v, setting_info(n).name, setting_info(n).unit, setting_info(n).description)
+                for n, v in sorted(self.settings.items())
+            ]
+
+    def write_setting(self, number: int, value: float) -> None:
+        with self._lock:
+            self.require_connected()
+            self._update()
+            state, _ = self._state(self.clock.now())
+            if state not in ("Idle", "Alarm"):
+                raise GrblError("error", 8, f"${number}={value:g}")
+            if number not in SETTINGS:
+                raise GrblError("error", 3, f"${number}={value:g}")
+            if value < 0:
+                raise GrblError("error", 4, f"${number}={value:g}")
+            if number == 0 and value < 3:
+                raise GrblError("error", 6, f"${number}={value:g}")
+            if number == 20 and value and not self.homing_enabled:
+                raise GrblError("error", 10, f"${number}={value:g}")
+            self.settings[number] = float(value)
+            if number == 130 + AXES.index(self.axis):
+                self.travel_mm = (self.travel_mm[0], self.travel_mm[0] + float(value))

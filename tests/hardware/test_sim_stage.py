@@ -1,0 +1,213 @@
+"""SimulatedStage: motion in simulated time, limits, homing, holds, and truth from the shared error model."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from lps_gui.core.clock import SimClock
+from lps_gui.core.stage_errors import ErrorProfile, StageErrorModel
+from lps_gui.errors import HardwareError
+from lps_gui.hardware.grbl.codes import GrblError
+from lps_gui.hardware.motion import duration_s, trapezoid
+from lps_gui.hardware.sim_stage import SimulatedStage
+
+
+def make(**kw) -> SimulatedStage:
+    st = SimulatedStage(**kw)
+    st.connect()
+    return st
+
+
+def test_trapezoid_respects_rate_and_acceleration():
+    p = trapezoid(0, "Run", 0.0, 0.0, 100.0, 3000.0, 200.0)  # 50 mm/s, 200 mm/s^2
+    # ramp 0.25 s over 6.25 mm each end, cruise 87.5 mm at 50 mm/s = 1.75 s
+    assert p.t_end == pytest.approx(0.25 + 1.75 + 0.25)
+    t = np.linspace(0, p.t_end, 401)
+    xv = np.array([p.at(ti) for ti in t])
+    assert np.all(np.diff(xv[:, 0]) >= -1e-12)
+    assert np.max(np.abs(xv[:, 1])) <= 50.0 + 1e-9
+    assert np.max(np.abs(np.diff(xv[:, 1]) / np.diff(t))) <= 200.0 * (1 + 1e-6)
+    assert p.at(p.t_end + 1)[0] == 100.0
+    short = duration_s(1.0, 3000.0, 200.0)  # triangle: 2*sqrt(d/a)
+    assert short == pytest.approx(2 * np.sqrt(1.0 / 200.0))
+
+
+def test_move_takes_simulated_time_and_no_real_time():
+    clock = SimClock()
+    st = make(clock=clock)
+    st.move_to(100.0, 3000.0)
+    assert st.status().state == "Run"
+    st2 = st.wait_idle()
+    assert st2.state == "Idle"
+    assert st2.work_mm[0] == pytest.approx(100.0)
+    assert clock.now() == pytest.approx(2.25)
+
+
+def test_status_mid_move_interpolates_and_reports_feed():
+    clock = SimClock()
+    st = make(clock=clock)
+    st.move_to(100.0, 3000.0)
+    clock.advance(1.0)  # 6.25 mm ramp + 0.75 s at 50 mm/s
+    s = st.status()
+    assert s.work_mm[0] == pytest.approx(6.25 + 37.5)
+    assert s.feed_mm_min == pytest.approx(3000.0)
+    assert s.buffer == (14, 128)
+
+
+def test_queued_moves_run_back_to_back():
+    st = make()
+    for x in (10.0, 20.0, 5.0):
+        st.move_to(x, 1200.0)
+    assert st.status().buffer[0] == 12
+    assert st.wait_idle().work_mm[0] == pytest.approx(5.0)
+
+
+def test_true_pose_has_backlash_of_approach_direction_and_repeatability():
+    err = StageErrorModel(backlash_um=10.0, scale_ppm=100.0, straightness_um=(ErrorProfile(poly=(1.0,)), ErrorProfile()))
+    st = make(errors=err)
+    st.move_to(50.0, 3000.0)
+    st.wait_idle()
+    up = st.true_pose()
+    st.move_to(60.0, 3000.0)
+    st.move_to(50.0, 3000.0)
+    st.wait_idle()
+    down = st.true_pose()
+    # scale 100 ppm at 50 mm = 5 um; backlash: -5 um moving up, +5 um moving down
+    assert up.axis_mm[0] == pytest.approx(50.0 + 0.005 - 0.005)
+    assert down.axis_mm[0] == pytest.approx(50.0 + 0.005 + 0.005)
+    assert up.straightness_um.shape == (1, 2) and up.angles_urad.shape == (1, 3)
+    assert up.straightness_um[0, 0] == pytest.approx(1.0)
+
+
+def test_repeatability_draw_once_per_move_and_seeded():
+    err = StageErrorModel(repeatability_um=2.0)
+    def run(seed):
+        st = make(errors=err, seed=seed)
+        out = []
+        for x in (10.0, 20.0, 30.0, 40.0):
+            st.move_to(x, 3000.0)
+            st.wait_idle()
+            a, b = st.true_pose().axis_mm[0], st.true_pose().axis_mm[0]
+            assert a == b  # no new draw without a move
+            out.append(a - x)
+        return np.array(out) * 1e3
+    r0, r0b, r1 = run(0), run(0), run(1)
+    assert np.array_equal(r0, r0b) and not np.array_equal(r0, r1)
+    assert np.all(np.abs(r0) < 5 * 2.0) and np.ptp(r0) > 0
+
+
+def test_soft_limit_move_alarms_jog_errors():
+    st = make(travel_mm=(0.0, 100.0))
+    with pytest.raises(GrblError, match="error:15 Travel exceeded") as e:
+        st.jog(150.0, 1000.0)
+    assert e.value.code == 15 and st.status().state == "Idle"
+    alarms = []
+    st.events.subscribe(lambda ev: ev.kind == "alarm" and alarms.append(ev.code))
+    with pytest.raises(GrblError, match="ALARM:2 Soft limit"):
+        st.move_to(120.0, 1000.0)
+    assert st.status().state == "Alarm" and alarms == [2]
+    with pytest.raises(GrblError, match="error:9"):
+        st.move_to(10.0, 1000.0)
+    st.unlock()
+    st.move_to(10.0, 1000.0)
+    assert st.wait_idle().work_mm[0] == pytest.approx(10.0)
+
+
+def test_homing_lock_and_homing():
+    st = make(homing_required=True, travel_mm=(-5.0, 100.0), start_mm=50.0)
+    assert st.status().state == "Alarm"
+    with pytest.raises(HardwareError, match="home"):
+        st.wait_idle()
+    st.start_home()
+    assert st.status().state == "Home"
+    with pytest.raises(GrblError, match="error:8"):
+        st.start_home()  # $H while homing is not idle
+    st.wait_idle()
+    st.move_to(30.0, 3000.0)
+    st.wait_idle()
+    st.home()
+    s = st.status()
+    assert s.state == "Idle" and st.homed
+    assert s.work_mm[0] == pytest.approx(st.home_position_mm()) == pytest.approx(-4.0)
+
+
+def test_feed_hold_resume_and_jog_cancel():
+    clock = SimClock()
+    st = make(clock=clock)
+    st.move_to(100.0, 3000.0)
+    clock.advance(1.0)
+    st.feed_hold()
+    assert (st.status().state, st.status().substate) == ("Hold", 1)
+    clock.advance(0.3)  # 50 mm/s stops in 0.25 s
+    s = st.status()
+    assert (s.state, s.substate) == ("Hold", 0)
+    assert s.work_mm[0] == pytest.approx(43.75 + 50 * 0.25 / 2)
+    st.resume()
+    assert st.wait_idle().work_mm[0] == pytest.approx(100.0)
+    st.jog(200.0, 3000.0)
+    clock.advance(1.0)
+    assert st.status().state == "Jog"
+    st.jog_cancel()
+    s = st.wait_idle()
+    assert 100.0 < s.work_mm[0] < 160.0
+
+
+def test_reset_during_motion_is_alarm_3():
+    clock = SimClock()
+    st = make(clock=clock)
+    st.move_to(100.0, 3000.0)
+    clock.advance(0.5)
+    st.soft_reset()
+    assert st.status().state == "Alarm"
+    with pytest.raises(GrblError, match="ALARM:3"):
+        st.wait_idle()
+
+
+def test_wait_idle_times_out_in_hold():
+    st = make()
+    st.move_to(100.0, 3000.0)
+    st.feed_hold()
+    with pytest.raises(HardwareError, match="still Hold after 5 s"):
+        st.wait_idle(timeout_s=5.0)
+
+
+def test_vanished_port_raises_until_reconnect():
+    clock = SimClock()
+    st = make(clock=clock)
+    st.move_to(100.0, 3000.0)
+    st.disconnect_fault(at_time_s=1.0)
+    with pytest.raises(HardwareError, match="port vanished"):
+        st.wait_idle()
+    assert not st.connected
+    with pytest.raises(HardwareError, match="reconnect"):
+        st.status()
+    st.connect()
+    s = st.status()
+    assert s.state == "Idle" and s.work_mm[0] == pytest.approx(43.75)
+    st.move_to(100.0, 3000.0)
+    assert st.wait_idle().work_mm[0] == pytest.approx(100.0)
+
+
+def test_not_connected_is_clear():
+    st = SimulatedStage()
+    with pytest.raises(HardwareError, match="connect the stage first"):
+        st.move_to(1.0, 100.0)
+
+
+def test_settings_read_write_rules():
+    st = make()
+    names = {s.number: s for s in st.read_settings()}
+    assert names[110].value == 3000.0 and names[110].unit == "mm/min"
+    st.write_setting(110, 1200.0)
+    st.move_to(100.0, 3000.0)  # capped at $110
+    assert st.status().feed_mm_min <= 1200.0
+    st.wait_idle()
+    with pytest.raises(GrblError, match="error:3"):
+        st.write_setting(99, 1.0)
+    with pytest.raises(GrblError, match="error:4"):
+        st.write_setting(110, -1.0)
+    st.write_setting(22, 0)
+    with pytest.raises(GrblError, match="error:10"):
+        st.write_setting(20, 1)
+    with pytest.raises(GrblError, match="error:5"):
+        st.home()

@@ -1,0 +1,210 @@
+"""A top-to-bottom page flow on a QPdfWriter: headings, key-value tables, text, figures, images.
+
+Blocks are placed at a cursor and move to a new A4 page when they do not fit;
+every page gets the same footer. Qt is imported inside functions only.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Sequence
+
+from lps_gui.report.figures import FigureSpec
+from lps_gui.report.plot_painter import font, paint_figure
+
+RESOLUTION_DPI = 600
+MARGIN_MM = 15.0
+FOOTER_MM = 8.0
+
+
+def ensure_gui_app() -> Any:
+    """A QGuiApplication for fonts and painting; offscreen when there is no display."""
+    from PySide6.QtCore import QCoreApplication
+    from PySide6.QtGui import QGuiApplication
+
+    app = QCoreApplication.instance()
+    if app is None:
+        if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
+            os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+        app = QGuiApplication(["lps-report"])
+    return app
+
+
+@dataclass
+class PageLog:
+    """What went on which page (tests check the page plan against the PDF)."""
+
+    pages: list[list[str]] = field(default_factory=lambda: [[]])
+
+    def add(self, what: str) -> None:
+        self.pages[-1].append(what)
+
+
+class PdfFlow:
+    """Paint blocks down A4 pages; ``y`` is the cursor in device units."""
+
+    def __init__(self, path: Path, title: str, footer: str):
+        from PySide6.QtCore import QMarginsF
+        from PySide6.QtGui import QPageLayout, QPageSize, QPainter, QPdfWriter
+
+        self.writer = QPdfWriter(str(path))
+        self.writer.setResolution(RESOLUTION_DPI)
+        self.writer.setTitle(title)
+        self.writer.setCreator("lps-calib")
+        self.writer.setPageLayout(QPageLayout(QPageSize(QPageSize.PageSizeId.A4), QPageLayout.Orientation.Portrait,
+                                              QMarginsF(0, 0, 0, 0), QPageLayout.Unit.Millimeter))
+        self.mm = RESOLUTION_DPI / 25.4
+        self.page_w = 210.0 * self.mm
+        self.page_h = 297.0 * self.mm
+        self.left = MARGIN_MM * self.mm
+        self.width = self.page_w - 2 * MARGIN_MM * self.mm
+        self.bottom = self.page_h - (MARGIN_MM + FOOTER_MM) * self.mm
+        self.footer = footer
+        self.painter = QPainter()
+        if not self.painter.begin(self.writer):
+            from lps_gui.errors import InputError
+
+            raise InputError(f"{path}: cannot write the PDF here; check the folder exists and is writable")
+        self.page = 1
+        self.log = PageLog()
+        self.y = MARGIN_MM * self.mm
+        self._footer()
+
+    # ---------------------------------------------------------------- pages
+    def new_page(self) -> None:
+        self.writer.newPage()
+        self.page += 1
+        self.log.pages.append([])
+        self.y = MARGIN_MM * self.mm
+        self._footer()
+
+    def ensure(self, height_mm: float) -> None:
+        """Start a new page unless ``height_mm`` fits below the cursor."""
+        if self.y + height_mm * self.mm > self.bottom + 1e-6:
+            self.new_page()
+
+    def finish(self) -> int:
+        self.painter.end()
+        return self.page
+
+    def _footer(self) -> None:
+        from PySide6.QtCore import QRectF, Qt
+        from PySide6.QtGui import QColor
+
+        p = self.painter
+        p.save()
+        p.setFont(font(7.0))
+        p.setPen(QColor("#555555"))
+        r = QRectF(self.left, self.page_h - (MARGIN_MM + 4) * self.mm, self.width, 5 * self.mm)
+        p.drawLine(r.topLeft(), r.topRight())
+        p.drawText(r, int(Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignVCenter), self.footer)
+        p.drawText(r, int(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter), f"page {self.page}")
+        p.restore()
+
+    # ---------------------------------------------------------------- blocks
+    def heading(self, text: str, size_pt: float = 12.0) -> None:
+        from PySide6.QtCore import QRectF, Qt
+        from PySide6.QtGui import QColor
+
+        h = size_pt * 0.55 + 2.5
+        self.ensure(h + 12)  # never a heading alone at the foot of a page
+        self.log.add(text)
+        p = self.painter
+        p.setFont(font(size_pt, bold=True))
+        p.setPen(QColor("#000000"))
+        p.drawText(QRectF(self.left, self.y, self.width, h * self.mm),
+                   int(Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignBottom), text)
+        self.y += (h + 1.5) * self.mm
+
+    def paragraph(self, text: str, size_pt: float = 8.5, color: str = "#000000") -> None:
+        """Word-wrapped text across the page width."""
+        from PySide6.QtCore import QRectF, Qt
+        from PySide6.QtGui import QColor
+
+        p = self.painter
+        p.setFont(font(size_pt))
+        flags = int(Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignTop | Qt.TextFlag.TextWordWrap)
+        bound = p.boundingRect(QRectF(self.left, 0, self.width, 1e6), flags, text)
+        self.ensure(bound.height() / self.mm + 1.5)
+        p.setPen(QColor(color))
+        p.drawText(QRectF(self.left, self.y, self.width, bound.height()), flags, text)
+        self.y += bound.height() + 1.5 * self.mm
+
+    def table(self, header: Sequence[str] | None, rows: Sequence[Sequence[str]], widths_mm: Sequence[float],
+              size_pt: float = 8.0, row_mm: float = 4.2, align_right_from: int = 1,
+              colors: Sequence[str | None] | None = None, x_mm: float = 0.0,
+              align_left: Sequence[int] = ()) -> None:
+        """A ruled table; pages break between rows and repeat the header.
+
+        Columns from ``align_right_from`` on are right-aligned (numbers), except
+        those in ``align_left``; a header cell may hold a line break.
+        """
+        from PySide6.QtCore import QLineF, QRectF, Qt
+        from PySide6.QtGui import QColor, QPen
+
+        p = self.painter
+        mm = self.mm
+        total_w = sum(widths_mm) * mm
+        x_left = self.left + x_mm * mm
+
+        header_lines = max((c.count("\n") + 1 for c in header), default=1) if header else 0
+
+        def draw_row(cells: Sequence[str], bold: bool, color: str | None, lines: int = 1) -> None:
+            p.setFont(font(size_pt, bold=bold))
+            x = x_left
+            for i, (cell, w) in enumerate(zip(cells, widths_mm)):
+                right = i >= align_right_from and i not in align_left
+                align = Qt.AlignmentFlag.AlignRight if right else Qt.AlignmentFlag.AlignLeft
+                p.setPen(QColor(color or "#000000"))
+                p.drawText(QRectF(x + 1 * mm, self.y, w * mm - 2 * mm, lines * row_mm * mm),
+                           int(align | Qt.AlignmentFlag.AlignVCenter), cell)
+                x += w * mm
+            self.y += lines * row_mm * mm
+
+        def draw_header() -> None:
+            if header is None:
+                return
+            p.fillRect(QRectF(x_left, self.y, total_w, header_lines * row_mm * mm), QColor("#e8e8e8"))
+            draw_row(header, True, None, header_lines)
+            p.setPen(QPen(QColor("#000000"), 0.2 * mm))
+            p.drawLine(QLineF(x_left, self.y, x_left + total_w, self.y))
+
+        self.ensure(row_mm * (header_lines + 1) + 1)
+        draw_header()
+        for n, row in enumerate(rows):
+            if self.y + row_mm * mm > self.bottom:
+                self.new_page()
+                draw_header()
+            if n % 2 == 1:
+                p.fillRect(QRectF(x_left, self.y, total_w, row_mm * mm), QColor("#f6f6f6"))
+            draw_row(row, False, colors[n] if colors else None)
+        p.setPen(QPen(QColor("#000000"), 0.2 * mm))
+        p.drawLine(QLineF(x_left, self.y, x_left + total_w, self.y))
+        self.y += 2.0 * mm
+
+    def figure(self, spec: FigureSpec, height_mm: float) -> None:
+        from PySide6.QtCore import QRectF
+
+        self.ensure(height_mm)
+        self.log.add(f"figure:{spec.key}")
+        paint_figure(self.painter, QRectF(self.left, self.y, self.width, height_mm * self.mm), spec, self.mm)
+        self.y += (height_mm + 3.0) * self.mm
+
+    def image(self, image: Any, x_mm: float, width_mm: float, caption: str) -> float:
+        """Draw a QImage at the cursor (keeps the aspect ratio); returns its height in mm (caption included)."""
+        from PySide6.QtCore import QRectF, Qt
+        from PySide6.QtGui import QColor
+
+        h_mm = width_mm * image.height() / max(image.width(), 1)
+        target = QRectF(self.left + x_mm * self.mm, self.y, width_mm * self.mm, h_mm * self.mm)
+        self.painter.drawImage(target, image)
+        self.painter.setPen(QColor("#000000"))
+        self.painter.drawRect(target)
+        self.painter.setFont(font(7.0))
+        self.painter.drawText(QRectF(target.left(), target.bottom() + 0.5 * self.mm, target.width(), 4 * self.mm),
+                              int(Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignTop), caption)
+        return h_mm + 5.0
+
+    def space(self, mm: float) -> None:
+        self.y += mm * self.mm

@@ -1,0 +1,366 @@
+"""The text of a report as rows of plain data: title block, figures, pass/fail, limits.
+
+The PDF paints these rows and the tests compare them with results.json, so
+every number printed has exactly one source. No Qt here.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import numpy as np
+
+from lps_gui.report.figures import position_columns
+
+INTRINSIC_ORDER = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3")
+DASH = "\u2014"
+
+
+@dataclass(frozen=True)
+class Row:
+    """One line of a summary table; ``value`` is None when the data do not allow it."""
+
+    name: str
+    value: float | None
+    unit: str = ""
+    note: str = ""
+    digits: int = 3  # significant digits when printed
+
+    def text(self) -> str:
+        """The value as printed: ``digits`` significant digits, a dash when absent."""
+        return fmt(self.value, self.digits)
+
+
+@dataclass(frozen=True)
+class SpecCheck:
+    """One criterion of the stage specification against its measured figure."""
+
+    name: str
+    measured: float | None
+    limit: float
+    unit: str
+    passed: bool | None  # None: not measured by this session
+    note: str = ""
+
+
+def fmt(value: float | None, digits: int = 3) -> str:
+    """A number with ``digits`` significant digits (no exponent for usual sizes); a dash for None/NaN."""
+    if value is None or not isinstance(value, (int, float, np.floating, np.integer)) or not math.isfinite(value):
+        return DASH
+    v = float(value)
+    if v == 0:
+        return "0"
+    mag = int(math.floor(math.log10(abs(v))))
+    if mag >= 6 or mag < -4:
+        return f"{v:.{digits - 1}e}"
+    decimals = max(0, digits - 1 - mag)
+    return f"{v:.{decimals}f}"
+
+
+# ----------------------------------------------------------------------------- title block
+
+
+def title_rows(session_meta: dict[str, Any], results: dict[str, Any], version: str) -> list[tuple[str, str]]:
+    """(label, text) pairs of the title block: who, what, with which equipment and software."""
+    camera = session_meta.get("camera") or {}
+    stage = session_meta.get("stage") or {}
+    board = results.get("board") or session_meta.get("board") or {}
+    corners = board.get("inner_corners") or ["?", "?"]
+    sha = ((results.get("inputs") or {}).get("sha256") or {})
+    session_hash = sha.get("session.json") or sha.get("session") or ""
+    truth = session_meta.get("truth")
+    rig = session_meta.get("rig") or stage.get("rig") or (f"simulated ({truth.get('preset', 'simulator')})" if truth else DASH)
+    intr = results.get("intrinsics") or {}
+    size = intr.get("image_size") or camera.get("image_size")
+    return [
+        ("Date", str(results.get("created") or session_meta.get("created") or DASH)),
+        ("Session", str((results.get("inputs") or {}).get("session") or DASH)),
+        ("Rig", str(rig)),
+        ("Stage", _describe(stage, ("name", "model", "kind", "type"), DASH)),
+        ("Controller", _describe(stage, ("controller", "driver", "port"), DASH)),
+        ("Camera", _describe(camera, ("name", "model", "kind", "source"), DASH)
+         + (f", {size[0]}\u00d7{size[1]} px" if size else "")),
+        ("Lens", _describe(camera, ("lens", "focal_length_mm"), DASH)),
+        ("Board", f"chessboard {corners[0]}\u00d7{corners[1]} inner corners, square {fmt(board.get('square_mm'), 4)} mm"),
+        ("Software", f"lps-calib {version}"),
+        ("Session hash", f"sha256 {session_hash[:16]}\u2026" if session_hash else DASH),
+    ]
+
+
+def _describe(d: dict[str, Any], keys: Sequence[str], default: str) -> str:
+    parts = [str(d[k]) for k in keys if d.get(k) not in (None, "", {})]
+    return ", ".join(parts) if parts else default
+
+
+def intrinsics_rows(results: dict[str, Any]) -> list[tuple[str, str, str]]:
+    """(name, value, std) of the 9 intrinsics; std a dash when the file has none."""
+    intr = results.get("intrinsics") or {}
+    K = np.asarray(intr.get("camera_matrix") or np.eye(3), dtype=float)
+    dist = list(intr.get("dist") or []) + [0.0] * 5
+    values = {"fx": K[0, 0], "fy": K[1, 1], "cx": K[0, 2], "cy": K[1, 2], "k1": dist[0], "k2": dist[1],
+              "p1": dist[2], "p2": dist[3], "k3": dist[4]}
+    std = intr.get("std") or {}
+    out = []
+    for name in INTRINSIC_ORDER:
+        unit = " px" if name in ("fx", "fy", "cx", "cy") else ""
+        out.append((name, (f"{values[name]:.3f}" if unit else fmt(values[name], 4)) + unit, fmt(_num(std.get(name)), 2) + (unit if _num(std.get(name)) is not None else "")))
+    return out
+
+
+def method_rows(results: dict[str, Any]) -> list[tuple[str, str]]:
+    """Method, its settings and the fit statistics, as (label, text)."""
+    p = results.get("parameters") or {}
+    rows = [("Method", str(results.get("method") or DASH))]
+    for k, v in (results.get("settings") or {}).items():
+        rows.append((f"  {k}", str(v)))
+    rows += [
+        ("Views used / total", f"{p.get('n_used', DASH)} / {p.get('n_views', DASH)}"),
+        ("Observations, dof", f"{p.get('n_observations', DASH)}, {p.get('dof', DASH)}"),
+        ("RMS residual", f"{fmt(_num(p.get('rms_px')))} px (noise \u03c3 {fmt(_num(p.get('sigma_px')))} px)"),
+        ("Iterations", f"{p.get('iterations', DASH)} ({'converged' if p.get('converged') else 'NOT converged'})"),
+        ("Intrinsics from", str((results.get("inputs") or {}).get("intrinsics_source") or DASH)),
+    ]
+    return rows
+
+
+def _num(v: Any) -> float | None:
+    try:
+        f = float(v)
+    except (TypeError, ValueError):
+        return None
+    return f if math.isfinite(f) else None
+
+
+# ----------------------------------------------------------------------------- figures
+
+
+ISO_NAMES = {
+    "A": ("Accuracy A", "\u00b5m"), "R": ("Repeatability R", "\u00b5m"), "E": ("Systematic deviation E", "\u00b5m"),
+    "B": ("Reversal error B", "\u00b5m"), "M": ("Mean deviation range M", "\u00b5m"),
+}
+
+
+def iso_rows(iso: dict[str, Any] | None) -> list[Row]:
+    """ISO 230-2 figures of results.json flattened to rows (per direction where given).
+
+    Accepts nested dicts (``{"forward": {"E_um": ...}, "A_um": ...}``) and
+    reads keys by their first letter (A, R, E, B, M) with an optional ``_um``.
+    """
+    if not iso:
+        return []
+    rows: list[Row] = []
+
+    def walk(d: dict[str, Any], prefix: str) -> None:
+        for key, value in d.items():
+            if isinstance(value, dict):
+                walk(value, f"{prefix}{_direction_word(key)}: ")
+            elif isinstance(value, (int, float)) and not isinstance(value, bool):
+                rows.append(Row(prefix + _iso_label(key), float(value), "\u00b5m" if key.endswith("_um") else ""))
+
+    walk(iso, "")
+    return rows
+
+
+def _iso_label(key: str) -> str:
+    """``"E_up_um"`` -> ``"Systematic deviation E (up)"``; unknown keys keep their words."""
+    words = (key[:-3] if key.endswith("_um") else key).split("_")
+    if words[0] in ISO_NAMES:
+        name = ISO_NAMES[words[0]][0]
+        return f"{name} ({' '.join(words[1:])})" if len(words) > 1 else name
+    return " ".join(words)
+
+
+def _direction_word(key: str) -> str:
+    return {"+": "forward \u2191", "-": "backward \u2193", "up": "forward \u2191", "down": "backward \u2193",
+            "forward": "forward \u2191", "backward": "backward \u2193", "bidirectional": "both directions"}.get(key, key)
+
+
+def summary_rows(results: dict[str, Any]) -> list[Row]:
+    """The summary figures of SPEC 5 as printed in the report, in report order.
+
+    Single-run figures come from ``results["figures"]["single_run"]``, ISO
+    230-2 figures from ``results["figures"]["iso230_2"]`` (absent with one run),
+    maxima of straightness and angles from the per-position table without
+    outliers.
+    """
+    figs = results.get("figures") or {}
+    single = figs.get("single_run") or {}
+    rows = [
+        Row("Mean step", _num(single.get("mean_step_mm")), "mm", digits=7),
+        Row("Step std", _num(single.get("step_std_um")), "\u00b5m"),
+        Row("Max |deviation|", _num(single.get("max_abs_deviation_um")), "\u00b5m"),
+        Row("Scale error", _num(single.get("scale_ppm")), "ppm"),
+        Row("Periodic error amplitude", _num(single.get("periodic_amplitude_um")), "\u00b5m"),
+        Row("Periodic error period", _num(single.get("periodic_period_mm")), "mm"),
+    ]
+    rows += iso_rows(figs.get("iso230_2"))
+    rows += extremes_rows(results)
+    truth = results.get("truth_comparison") or {}
+    for key, value in truth.items():
+        if _num(value) is not None:
+            unit = "\u00b5m" if key.endswith("_um") else ("ppm" if key.endswith("_ppm") else "")
+            rows.append(Row(f"Truth: {key.removesuffix('_um').removesuffix('_ppm').replace('_', ' ')}", _num(value), unit))
+    return rows
+
+
+def extremes_rows(results: dict[str, Any]) -> list[Row]:
+    """Peak-to-valley straightness per direction v1/v2 and max |roll|, |pitch|, |yaw| (outliers excluded)."""
+    cols = position_columns(results)
+    keep = ~cols["outlier"]
+    rows = []
+    for k in (1, 2):
+        v = cols[f"straightness_um_{k}"][keep]
+        v = v[np.isfinite(v)]
+        rows.append(Row(f"Max straightness v{k} (peak-to-valley)", float(v.max() - v.min()) if v.size else None, "\u00b5m"))
+    for name in ("roll", "pitch", "yaw"):
+        v = np.abs(cols[f"{name}_urad"][keep])
+        v = v[np.isfinite(v)]
+        rows.append(Row(f"Max |{name}|", float(v.max()) if v.size else None, "\u00b5rad"))
+    return rows
+
+
+# ----------------------------------------------------------------------------- specification
+
+
+def spec_checks(results: dict[str, Any], spec: dict[str, Any] | None) -> list[SpecCheck]:
+    """Pass/fail of the stage specification (session.json ``stage_spec``).
+
+    Uses ``lps_gui.core.iso230.check_specification`` when that module exists;
+    otherwise reads the spec as the paper's table: accuracy +-accuracy_um
+    against the largest |mean deviation +- 2 s| (or |deviation| with one run),
+    repeatability +-repeatability_um against R/2 (needs two runs), straight-line
+    accuracy against the peak-to-valley straightness.
+    """
+    if not spec:
+        return []
+    try:
+        from lps_gui.core.iso230 import check_specification  # type: ignore[attr-defined]
+    except ImportError:
+        check_specification = None
+    if check_specification is not None:
+        try:
+            return [_as_check(c) for c in check_specification(results.get("figures") or {}, spec)]
+        except (TypeError, KeyError, AttributeError, ValueError):
+            pass  # a different figures shape than expected: fall back to our reading
+    return _fallback_checks(results, spec)
+
+
+def _as_check(c: Any) -> SpecCheck:
+    if isinstance(c, SpecCheck):
+        return c
+    get = c.get if isinstance(c, dict) else (lambda k, default=None: getattr(c, k, default))
+    passed = get("passed", get("ok", None))
+    return SpecCheck(str(get("name", "")), _num(get("measured", get("value", None))), float(get("limit", math.nan)),
+                     str(get("unit", "\u00b5m")), None if passed is None else bool(passed), str(get("note", "") or ""))
+
+
+def _fallback_checks(results: dict[str, Any], spec: dict[str, Any]) -> list[SpecCheck]:
+    from lps_gui.report.figures import per_target_stats
+
+    cols = position_columns(results)
+    keep = ~cols["outlier"]
+    out: list[SpecCheck] = []
+    if _num(spec.get("accuracy_um")) is not None:
+        envelope = []
+        for d in ("+", "-"):
+            sel = cols["direction"] == d
+            _, mean, std, _ = per_target_stats(cols["target_mm"][sel], cols["deviation_um"][sel], keep[sel])
+            if mean.size:
+                s2 = 2.0 * np.nan_to_num(std)
+                envelope += [np.abs(mean + s2), np.abs(mean - s2)]
+        worst = float(np.max(np.concatenate(envelope))) if envelope else None
+        lim = float(spec["accuracy_um"])
+        out.append(SpecCheck("Positional accuracy", worst, lim, "\u00b5m", None if worst is None else worst <= lim,
+                             "max |mean \u00b1 2s| over targets and directions vs \u00b1limit"))
+    if _num(spec.get("repeatability_um")) is not None:
+        iso = (results.get("figures") or {}).get("iso230_2") or {}
+        R = _num(iso.get("R_um", iso.get("R")))
+        lim = float(spec["repeatability_um"])
+        if R is None:
+            out.append(SpecCheck("Repeatability", None, lim, "\u00b5m", None, "needs two or more runs per direction"))
+        else:
+            out.append(SpecCheck("Repeatability", R / 2.0, lim, "\u00b5m", R / 2.0 <= lim, "R/2 (ISO 230-2) vs \u00b1limit"))
+    if _num(spec.get("straightness_um")) is not None:
+        ptv = [r.value for r in extremes_rows(results)[:2] if r.value is not None]
+        worst = max(ptv) if ptv else None
+        lim = float(spec["straightness_um"])
+        out.append(SpecCheck("Straight-line accuracy", worst, lim, "\u00b5m", None if worst is None else worst <= lim,
+                             "largest peak-to-valley straightness (v1, v2)"))
+    return out
+
+
+# ----------------------------------------------------------------------------- limits
+
+
+def limits_notes(results: dict[str, Any]) -> list[str]:
+    """What limits the result, in words a metrologist signs: board scale, intrinsics, noise."""
+    board = results.get("board") or {}
+    cols = position_columns(results)
+    sig = cols["sigma_um"][np.isfinite(cols["sigma_um"])]
+    tot = cols["sigma_total_um"][np.isfinite(cols["sigma_total_um"])]
+    notes = [
+        "Board scale: every length is measured in units of the board's square size "
+        f"({fmt(_num(board.get('square_mm')), 4)} mm as given). An error in the printed square size is a pure "
+        "scale error: a square 0.1 % too large makes every position and the scale error 1000 ppm too large, "
+        "and leaves the shape of the deviation curve, the straightness and the angles unchanged. Measure the "
+        "board with a calibrated instrument to remove it.",
+    ]
+    if sig.size:
+        text = (f"Uncertainty per position: noise alone gives a median \u03c3 of {fmt(float(np.median(sig)), 2)} \u00b5m")
+        if tot.size:
+            text += (f"; with the propagated intrinsics uncertainty the median total \u03c3 is "
+                     f"{fmt(float(np.median(tot)), 2)} \u00b5m. The difference is what better intrinsics "
+                     "(more varied calibration views) would gain.")
+        else:
+            text += "; the intrinsics uncertainty was not propagated (no intrinsics covariance given)."
+        notes.append(text)
+    notes.append("Deviations are relative to the first capture (offset zero there); the positions are the "
+                 "camera centre's travel along the fitted line, not the carriage's encoder reading.")
+    return notes
+
+
+def outlier_rows(results: dict[str, Any]) -> list[dict[str, Any]]:
+    """Flagged views: index, file, reason, RMS residual; flags without a position row are kept too."""
+    by_index = {int(r.get("index", -1)): r for r in results.get("positions") or []}
+    rows = {}
+    for r in by_index.values():
+        if r.get("outlier"):
+            rows[int(r["index"])] = {"index": int(r["index"]), "file": r.get("file") or "",
+                                     "reason": r.get("outlier_reason") or "flagged", "rms_px": _num(r.get("rms_px"))}
+    for f in results.get("flags") or []:
+        i = int(f.get("index", -1))
+        pos = by_index.get(i, {})
+        entry = rows.setdefault(i, {"index": i, "file": pos.get("file") or "", "reason": "",
+                                    "rms_px": _num(pos.get("rms_px"))})
+        msg = f.get("message") or f.get("kind") or ""
+        entry["reason"] = msg if not entry["reason"] or entry["reason"] in ("flagged", f.get("kind")) else entry["reason"]
+    return [rows[k] for k in sorted(rows)]
+
+
+POSITION_TABLE_COLUMNS = (
+    ("index", "#", 0), ("run", "run", 0), ("direction", "dir", None), ("target_mm", "target\n[mm]", 3),
+    ("measured_mm", "measured\n[mm]", 4), ("deviation_um", "deviation\n[\u00b5m]", 2),
+    ("sigma_um", "\u03c3\n[\u00b5m]", 2), ("rms_px", "rms\n[px]", 3), ("straightness_um_1", "str. v1\n[\u00b5m]", 2),
+    ("straightness_um_2", "str. v2\n[\u00b5m]", 2), ("roll_urad", "roll\n[\u00b5rad]", 1),
+    ("pitch_urad", "pitch\n[\u00b5rad]", 1), ("yaw_urad", "yaw\n[\u00b5rad]", 1), ("outlier", "outlier", None),
+)
+
+
+def position_table(results: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
+    """Header and text rows of the per-position table (fixed decimals per column)."""
+    header = [h for _, h, _ in POSITION_TABLE_COLUMNS]
+    body = []
+    for r in sorted(results.get("positions") or [], key=lambda r: r.get("index", 0)):
+        row = []
+        for key, _, decimals in POSITION_TABLE_COLUMNS:
+            v = r.get(key)
+            if key == "outlier":
+                row.append("yes" if v else "")
+            elif decimals is None:
+                row.append(str(v if v is not None else DASH))
+            else:
+                f = _num(v)
+                row.append(DASH if f is None else f"{f:.{decimals}f}")
+        body.append(row)
+    return header, body

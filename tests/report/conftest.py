@@ -1,0 +1,69 @@
+"""A results dict built from simulator truth plus known noise, shaped like results.json.
+
+The report is tested against numbers we put in, so the estimator need not run
+(and a report bug cannot hide behind an estimator bug).
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from lps_gui.core.plan import Plan
+from lps_gui.core.simulate import small_spec, true_views
+
+
+def make_results(runs: int = 2, directions: str = "both", views: int = 12, seed: int = 3) -> tuple[dict, dict]:
+    """(results dict, session truth) for a small bidirectional simulated session."""
+    spec = small_spec(seed=seed, views=views, directions=directions, runs=runs)
+    rng = np.random.default_rng(seed)
+    stops, _R, _t, truth = true_views(spec, rng)
+    s_true = np.asarray(truth["positions_mm"])
+    noise_um = rng.normal(0.0, 0.5, size=s_true.size)
+    target = np.array([s.target_mm for s in stops])
+    straight = np.asarray(truth["straightness_um"])
+    angles = np.asarray(truth["angles_urad"])
+    positions = []
+    for i, s in enumerate(stops):
+        measured = s_true[i] + noise_um[i] * 1e-3 + target[0]
+        positions.append({
+            "index": s.index, "run": s.run, "direction": s.direction, "target_mm": s.target_mm,
+            "measured_mm": measured, "deviation_um": (measured - s.target_mm) * 1000.0,
+            "sigma_um": 0.5, "sigma_total_um": 0.8, "rms_px": 0.2 + 0.01 * (i % 3), "n_corners": 54,
+            "outlier": i == 5, "outlier_reason": "reprojection" if i == 5 else "",
+            "straightness_um_1": straight[i, 0], "straightness_um_2": straight[i, 1],
+            "straightness_sigma_um_1": 0.3, "straightness_sigma_um_2": 0.9,
+            "roll_urad": angles[i, 0], "pitch_urad": angles[i, 1], "yaw_urad": angles[i, 2],
+            "roll_sigma_urad": 2.0, "pitch_sigma_urad": 3.0, "yaw_sigma_urad": 3.0,
+            "file": f"images/{i:05d}.png",
+        })
+    period = np.array([24.0, 12.0, 8.0, 6.0])
+    results = {
+        "format": "lps-results/1",
+        "software": {"name": "lps-calib", "version": "test"},
+        "created": "2026-11-23T10:00:00+0000",
+        "method": "joint",
+        "settings": {"robust": False, "outlier_k": 5.0},
+        "inputs": {"session": "sim", "sha256": {"session.json": "ab" * 32}, "intrinsics_source": "session"},
+        "board": {"type": "chessboard", "inner_corners": [9, 6], "square_mm": 20.0},
+        "intrinsics": {"image_size": [640, 480], "camera_matrix": [[600, 0, 322], [0, 600, 238], [0, 0, 1]],
+                       "dist": [-0.12, 0.08, 0.0005, -0.0003, -0.01],
+                       "std": {"fx": 0.5, "fy": 0.5, "cx": 0.4, "cy": 0.4, "k1": 0.001}},
+        "parameters": {"sigma_px": 0.2, "rms_px": 0.21, "n_views": len(stops), "n_used": len(stops) - 1,
+                       "n_observations": 54 * len(stops), "dof": 1000, "iterations": 6, "converged": True},
+        "positions": positions,
+        "figures": {
+            "single_run": {"mean_step_mm": 2.0001, "step_std_um": 3.2, "max_abs_deviation_um": 12.5,
+                           "scale_ppm": 101.0, "periodic_amplitude_um": 4.8, "periodic_period_mm": 8.0,
+                           "spectrum": {"period_mm": period.tolist(), "amplitude_um": [0.5, 0.7, 4.8, 0.3]}},
+            "iso230_2": None,
+        },
+        "flags": [{"index": 5, "kind": "reprojection", "message": "view 5: RMS 2.1 px > 5 robust sigma"}],
+        "timings_s": {"total": 1.0},
+        "truth_comparison": {"position_rms_error_um": 0.5},
+    }
+    return results, truth
+
+
+@pytest.fixture
+def results_and_truth():
+    return make_results()

@@ -1,0 +1,257 @@
+"""Chessboard corners in one image, and tracked through an LPS session.
+
+Full detection runs cv2.findChessboardCornersSB (on a half-size image when
+the frame is large: 4x cheaper, same topology) and refines every corner with
+cv2.cornerSubPix at full resolution. Between neighbouring frames of an LPS
+session the board only shifts by a few pixels, so :class:`ChessboardTracker`
+predicts the corners from the previous frame (shift measured by phase
+correlation on a quarter-size image), refines them with cornerSubPix and
+verifies the result (corner moved little, grid still regular, image still
+sharp), falling back to full detection when verification fails. Tracking
+keeps the corner order, so views never flip by 180 degrees; full detections
+are oriented with SPEC section 2 (board +x to image right) or, when a
+prediction exists, to agree with it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from lps_gui.core.board import Board
+
+SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 40, 1e-3)
+
+
+@dataclass(frozen=True)
+class DetectionOptions:
+    """Knobs of detection; the defaults suit 640x480 to 4K frames."""
+
+    sb_max_width: int = 1280  # run findChessboardCornersSB at half size above this width
+    track: bool = True  # predict from the previous frame instead of full detection
+    max_move_frac: float = 0.45  # refined corner may move this fraction of the window from prediction
+    grid_tol_frac: float = 0.12  # second difference of the grid, fraction of a square
+    min_sharpness_ratio: float = 0.5  # sharpness relative to the last full detection
+
+
+@dataclass
+class Detection:
+    """What detection found in one image."""
+
+    corners_px: np.ndarray | None  # shape (N, 2) SPEC order, or None
+    method: str  # "track", "full" or "failed"
+    reason: str = ""  # why it failed, or why tracking fell back
+    sharpness: float = float("nan")
+
+
+def sharpness(image: np.ndarray) -> float:
+    """Focus figure: variance of the Laplacian of the half-size image (grey levels^2).
+
+    Larger is sharper; compare frames of one scene (it scales with contrast),
+    e.g. to focus a camera in the GUI or to notice a frame taken while moving.
+    """
+    grey = _grey(image)
+    small = cv2.resize(grey, (grey.shape[1] // 2, grey.shape[0] // 2), interpolation=cv2.INTER_AREA)
+    lap = cv2.Laplacian(small, cv2.CV_32F)
+    return float(lap.var())
+
+
+def _grey(image: np.ndarray) -> np.ndarray:
+    if image.ndim == 3:
+        return cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
+    return image
+
+
+def square_px(corners_px: np.ndarray, board: Board) -> float:
+    """Median distance between horizontally neighbouring corners, px."""
+    grid = corners_px.reshape(board.rows, board.cols, 2)
+    return float(np.median(np.linalg.norm(np.diff(grid, axis=1), axis=-1)))
+
+
+def subpix_half_window(corners_px: np.ndarray, board: Board) -> int:
+    """cornerSubPix half window: ~30 % of a square, so no neighbouring corner enters it."""
+    return int(np.clip(round(0.3 * square_px(corners_px, board)), 2, 10))
+
+
+def refine(image: np.ndarray, corners_px: np.ndarray, half_window: int) -> np.ndarray:
+    """cornerSubPix on every corner, shape (N, 2) -> (N, 2) float64."""
+    pts = np.ascontiguousarray(corners_px, dtype=np.float32).reshape(-1, 1, 2)
+    out = cv2.cornerSubPix(image, pts, (half_window, half_window), (-1, -1), SUBPIX_CRITERIA)
+    return out.reshape(-1, 2).astype(np.float64)
+
+
+def orient(corners_px: np.ndarray, board: Board, reference_px: np.ndarray | None = None) -> np.ndarray:
+    """Put detected corners in SPEC 2 order.
+
+    Without a reference, board +x (along a row) points to image right and the
+    grid is right-handed in image coordinates (u right, v down), as when the
+    camera faces the printed side. With a reference (a prediction), the
+    candidate ordering closest to it wins, so tracked views never flip.
+    """
+    grid = corners_px.reshape(board.rows, board.cols, 2)
+    candidates = [grid, grid[::-1, ::-1]]
+    if board.rows == board.cols:
+        candidates += [np.swapaxes(grid, 0, 1)[:, ::-1], np.swapaxes(grid, 0, 1)[::-1, :]]
+    if reference_px is not None:
+        ref = reference_px.reshape(board.rows, board.cols, 2)
+        best = min(candidates, key=lambda g: float(np.nanmean(np.sum((g - ref) ** 2, axis=-1))))
+        return best.reshape(-1, 2)
+    for g in candidates:
+        along_x = (g[:, -1] - g[:, 0]).mean(axis=0)
+        along_y = (g[-1, :] - g[0, :]).mean(axis=0)
+        if along_x[0] > 0 and along_x[0] * along_y[1] - along_x[1] * along_y[0] > 0:
+            return g.reshape(-1, 2)
+    g = grid if (grid[:, -1] - grid[:, 0]).mean(axis=0)[0] > 0 else grid[::-1, ::-1]
+    return g[::-1].reshape(-1, 2)  # mirrored order: re-walk the rows to make it right-handed
+
+
+def grid_irregularity(corners_px: np.ndarray, board: Board) -> float:
+    """Largest second difference along rows and columns, in squares.
+
+    Perspective and lens distortion bend the grid smoothly (a few % of a
+    square); a corner refined onto the wrong feature breaks it by tens of %.
+    """
+    grid = corners_px.reshape(board.rows, board.cols, 2)
+    worst = 0.0
+    if board.cols >= 3:
+        worst = max(worst, float(np.max(np.linalg.norm(grid[:, 2:] - 2 * grid[:, 1:-1] + grid[:, :-2], axis=-1))))
+    if board.rows >= 3:
+        worst = max(worst, float(np.max(np.linalg.norm(grid[2:] - 2 * grid[1:-1] + grid[:-2], axis=-1))))
+    return worst / max(square_px(corners_px, board), 1e-9)
+
+
+def find_chessboard_sb(image: np.ndarray, board: Board, sb_max_width: int = 1280) -> np.ndarray | None:
+    """findChessboardCornersSB, at half size for large frames; (N, 2) px unrefined, or None."""
+    pattern = (board.cols, board.rows)
+    if image.shape[1] > sb_max_width:
+        small = cv2.resize(image, (image.shape[1] // 2, image.shape[0] // 2), interpolation=cv2.INTER_AREA)
+        ok, corners = cv2.findChessboardCornersSB(small, pattern)
+        if ok:
+            return corners.reshape(-1, 2).astype(np.float64) * 2.0 + 0.5  # small pixel i covers 2i, 2i+1
+    ok, corners = cv2.findChessboardCornersSB(image, pattern)
+    return corners.reshape(-1, 2).astype(np.float64) if ok else None
+
+
+def why_not_found(image: np.ndarray, board: Board) -> str:
+    """A reason for a failed detection; names a visible board of another size when there is one.
+
+    findChessboardCornersSB with CALIB_CB_LARGER grows a small seed pattern
+    to what it can see (not always the whole board), so a size is only
+    claimed when it exceeds the expected one along some axis.
+    """
+    small = image
+    if image.shape[1] > 1280:
+        small = cv2.resize(image, (image.shape[1] // 2, image.shape[0] // 2), interpolation=cv2.INTER_AREA)
+    try:
+        ok, _, meta = cv2.findChessboardCornersSBWithMeta(small, (3, 3), cv2.CALIB_CB_LARGER)
+    except cv2.error:
+        ok, meta = False, None
+    expected = sorted((board.cols, board.rows))
+    if ok and meta is not None:
+        seen = sorted(meta.shape[:2])
+        if seen[0] > expected[0] or seen[1] > expected[1]:
+            return (
+                f"board not found: a board with at least {seen[1]}x{seen[0]} inner corners is visible but "
+                f"{board.cols}x{board.rows} was expected; check inner_corners in board.json"
+            )
+    return f"board not found ({board.cols}x{board.rows} inner corners): out of view, too blurred, or wrong board.json"
+
+
+def detect_chessboard(
+    image: np.ndarray,
+    board: Board,
+    reference_px: np.ndarray | None = None,
+    sb_max_width: int = 1280,
+) -> np.ndarray | None:
+    """Full detection of ``board`` in ``image``: corners (N, 2) px in SPEC order, or None.
+
+    For the GUI preview and as the fallback of tracking. ``reference_px``
+    (N, 2), e.g. the previous view's corners, fixes the orientation.
+    """
+    grey = _grey(image)
+    found = find_chessboard_sb(grey, board, sb_max_width)
+    if found is None:
+        return None
+    found = orient(found, board, reference_px)
+    return refine(grey, found, subpix_half_window(found, board))
+
+
+class ChessboardTracker:
+    """Detects the board in a sequence of frames, tracking it from frame to frame.
+
+    Call :meth:`detect` with the frames in capture order. Keeps only the
+    previous frame's corners and a quarter-size copy of its image.
+    """
+
+    def __init__(self, board: Board, options: DetectionOptions | None = None) -> None:
+        self.board = board
+        self.options = options or DetectionOptions()
+        self._prev_px: np.ndarray | None = None  # shape (N, 2)
+        self._prev_small: np.ndarray | None = None  # quarter-size float32 image
+        self._window = None
+        self._ref_sharpness: float | None = None
+        self._half_window = 5
+        self.n_tracked = 0
+        self.n_full = 0
+
+    def reset(self) -> None:
+        self._prev_px = None
+        self._prev_small = None
+
+    def _small(self, image: np.ndarray) -> np.ndarray:
+        h, w = image.shape
+        small = cv2.resize(image, (w // 4, h // 4), interpolation=cv2.INTER_AREA).astype(np.float32)
+        if self._window is None or self._window.shape != small.shape:
+            self._window = cv2.createHanningWindow(small.shape[::-1], cv2.CV_32F)
+        return small
+
+    def _predict(self, small: np.ndarray) -> np.ndarray | None:
+        if self._prev_px is None or self._prev_small is None or self._prev_small.shape != small.shape:
+            return None
+        (dx, dy), response = cv2.phaseCorrelate(self._prev_small, small, self._window)
+        if not (np.isfinite(dx) and np.isfinite(dy)):
+            return None
+        return self._prev_px + 4.0 * np.array([dx, dy])
+
+    def _verify(self, image: np.ndarray, predicted: np.ndarray, refined: np.ndarray, sharp: float) -> str:
+        """Empty string when the tracked corners are trustworthy, else the reason."""
+        opt = self.options
+        h, w = image.shape
+        hw = self._half_window
+        if np.any(predicted < hw + 1) or np.any(predicted[:, 0] > w - hw - 2) or np.any(predicted[:, 1] > h - hw - 2):
+            return "corners near the image border"
+        move = np.linalg.norm(refined - predicted, axis=-1)
+        if float(move.max()) > opt.max_move_frac * (2 * hw + 1):
+            return "a corner moved too far from its prediction"
+        if grid_irregularity(refined, self.board) > opt.grid_tol_frac:
+            return "corner grid irregular"
+        if self._ref_sharpness and sharp < opt.min_sharpness_ratio * self._ref_sharpness:
+            return "image blurred compared with the last full detection"
+        return ""
+
+    def detect(self, image: np.ndarray) -> Detection:
+        """Corners of the board in the next frame (N, 2) SPEC order, or a failure reason."""
+        grey = _grey(image)
+        small = self._small(grey)
+        sharp = float(cv2.Laplacian(small, cv2.CV_32F).var())
+        predicted = self._predict(small) if self.options.track else None
+        reason = ""
+        if predicted is not None:
+            refined = refine(grey, predicted, self._half_window)
+            reason = self._verify(grey, predicted, refined, sharp)
+            if not reason:
+                self._prev_px, self._prev_small = refined, small
+                self.n_tracked += 1
+                return Detection(refined, "track", "", sharp)
+        found = find_chessboard_sb(grey, self.board, self.options.sb_max_width)
+        if found is None:
+            self.reset()
+            return Detection(None, "failed", why_not_found(grey, self.board), sharp)
+        found = orient(found, self.board, predicted if predicted is not None else None)
+        self._half_window = subpix_half_window(found, self.board)
+        refined = refine(grey, found, self._half_window)
+        self._prev_px, self._prev_small = refined, small
+        self._ref_sharpness = sharp
+        self.n_full += 1
+        return Detection(refined, "full", reason, sharp)

@@ -1,0 +1,261 @@
+"""Detect the board in every image of a session (or a list of images), in parallel.
+
+Images are split into contiguous chunks; each worker process tracks the
+board through its chunk (:class:`ChessboardTracker`: one full detection,
+then cheap predicted + refined corners), reading one image at a time, so
+memory stays flat however long the session. Finished chunks stream back in
+order of completion and drive the progress bar. A bad view (missing,
+unreadable, truncated or changed image, wrong size, board not found) is
+listed with its reason and the run goes on.
+
+``detect_session`` writes ``corners.vnl`` atomically, keyed by the sha256 of
+captures.jsonl: a re-run detects only the views not yet in it.
+"""
+from __future__ import annotations
+
+import logging
+import multiprocessing
+import os
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from lps_gui.core.board import Board
+from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
+from lps_gui.errors import Cancelled, InputError
+from lps_gui.io.atomic import sha256_file
+from lps_gui.io.corners_vnl import CornerTable, read_corners_vnl, write_corners_vnl
+from lps_gui.io.session import Session
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class ViewJob:
+    """One image to detect: its name in the table, where it is, what it should hash to."""
+
+    name: str
+    path: str
+    sha256: str | None = None
+
+
+@dataclass
+class ViewResult:
+    name: str
+    corners_px: np.ndarray | None  # shape (N, 2) float32, SPEC order
+    method: str  # "track", "full", "failed"
+    reason: str = ""
+
+
+def load_grey(path: str, sha256: str | None = None, image_size: tuple[int, int] | None = None) -> tuple[np.ndarray | None, str]:
+    """Decode an image file to 8-bit grey, or explain in one line why not."""
+    import hashlib
+
+    import cv2
+
+    try:
+        data = Path(path).read_bytes()
+    except FileNotFoundError:
+        return None, "image file missing"
+    except OSError as exc:
+        return None, f"image unreadable ({exc.strerror})"
+    if sha256 is not None and hashlib.sha256(data).hexdigest() != sha256:
+        return None, "image changed since capture (sha256 differs from captures.jsonl)"
+    image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_GRAYSCALE) if data else None
+    if image is None:
+        return None, "image unreadable or truncated"
+    if image_size is not None and (image.shape[1], image.shape[0]) != tuple(image_size):
+        return None, f"image is {image.shape[1]}x{image.shape[0]} but the camera is {image_size[0]}x{image_size[1]}"
+    return image, ""
+
+
+def process_context() -> "multiprocessing.context.BaseContext":
+    """fork when this process runs a single thread (fast, works from any script), else spawn.
+
+    Forking a process that runs other threads (a GUI, a capture worker) can
+    deadlock on locks held by those threads; spawn is safe there.
+    """
+    import threading
+
+    if threading.active_count() == 1 and "fork" in multiprocessing.get_all_start_methods():
+        return multiprocessing.get_context("fork")
+    return multiprocessing.get_context("spawn")
+
+
+def _init_worker() -> None:
+    import cv2
+
+    cv2.setNumThreads(1)  # one process per core already
+
+
+def detect_chunk(jobs: Sequence[ViewJob], board: Board, image_size: tuple[int, int] | None = None) -> list[ViewResult]:
+    """Track the board through ``jobs`` (capture order); runs in a worker process."""
+    from lps_gui.camera.charuco import detect_charuco
+    from lps_gui.camera.detection import ChessboardTracker
+
+    tracker = ChessboardTracker(board)
+    out: list[ViewResult] = []
+    for job in jobs:
+        image, reason = load_grey(job.path, job.sha256, image_size)
+        if image is None:
+            tracker.reset()
+            out.append(ViewResult(job.name, None, "failed", reason))
+            continue
+        if board.type == "charuco":
+            corners, reason = detect_charuco(image, board)
+            out.append(ViewResult(job.name, corners, "charuco" if corners is not None else "failed", reason))
+            continue
+        det = tracker.detect(image)
+        corners = None if det.corners_px is None else det.corners_px.astype(np.float32)
+        out.append(ViewResult(job.name, corners, det.method, det.reason if corners is None else ""))
+    return out
+
+
+def _chunks(jobs: list[ViewJob], workers: int) -> list[list[ViewJob]]:
+    """Contiguous chunks: long enough to amortize a full detection, enough to balance cores."""
+    size = int(np.clip(np.ceil(len(jobs) / (4 * workers)), 8, 64))
+    return [jobs[i : i + size] for i in range(0, len(jobs), size)]
+
+
+def run_detection(
+    jobs: list[ViewJob],
+    board: Board,
+    progress: ProgressFn = no_progress,
+    cancel: CancelToken | None = None,
+    workers: int | None = None,
+    image_size: tuple[int, int] | None = None,
+) -> dict[str, ViewResult]:
+    """Detect every job, in parallel when it pays; returns results by name.
+
+    On cancel, raises :class:`Cancelled` carrying the finished results as
+    ``exc.partial`` so the caller can keep them.
+    """
+    workers = max(1, int(workers or os.cpu_count() or 1))
+    chunks = _chunks(jobs, workers)
+    total = len(jobs)
+    results: dict[str, ViewResult] = {}
+    counts = {"track": 0, "full": 0, "failed": 0, "charuco": 0}
+
+    def take(chunk_results: list[ViewResult]) -> None:
+        for r in chunk_results:
+            results[r.name] = r
+            counts[r.method] = counts.get(r.method, 0) + 1
+        msg = f"tracked {counts['track']}, full {counts['full'] + counts['charuco']}, failed {counts['failed']}"
+        progress(len(results), total, msg)
+
+    def check_cancel() -> None:
+        if cancel is not None and cancel.cancelled:
+            exc = Cancelled("detection cancelled; corners of the finished images are kept")
+            exc.partial = results  # type: ignore[attr-defined]
+            raise exc
+
+    progress(0, total, "detecting")
+    if workers == 1 or len(chunks) == 1:
+        for chunk in chunks:
+            check_cancel()
+            take(detect_chunk(chunk, board, image_size))
+        return results
+    ctx = process_context()
+    with ProcessPoolExecutor(max_workers=min(workers, len(chunks)), mp_context=ctx, initializer=_init_worker) as pool:
+        pending: set[Future] = {pool.submit(detect_chunk, c, board, image_size) for c in chunks}
+        try:
+            while pending:
+                done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+                for fut in done:
+                    take(fut.result())
+                check_cancel()
+        except BaseException:
+            for fut in pending:
+                fut.cancel()
+            raise
+    return results
+
+
+def _table(names: list[str], results: dict[str, ViewResult], n_corners: int, meta: dict[str, str]) -> CornerTable:
+    corners = np.full((len(names), n_corners, 2), np.nan)
+    failed: dict[str, str] = {}
+    for i, name in enumerate(names):
+        r = results.get(name)
+        if r is None:
+            continue
+        if r.corners_px is None:
+            failed[name] = r.reason or "board not found"
+        else:
+            corners[i] = r.corners_px
+    return CornerTable(names, corners, failed, meta)
+
+
+def detect_images(
+    paths: list[Path],
+    board: Board,
+    progress: ProgressFn = no_progress,
+    cancel: CancelToken | None = None,
+    workers: int | None = None,
+) -> CornerTable:
+    """Detect ``board`` in images given by path (in this order); names are the paths as given."""
+    if not paths:
+        raise InputError("detect: no images given; pass image files or a session folder")
+    jobs = [ViewJob(str(p), str(p)) for p in paths]
+    results = run_detection(jobs, board, progress, cancel, workers)
+    return _table([j.name for j in jobs], results, board.n_corners, {"board": _board_key(board)})
+
+
+def _board_key(board: Board) -> str:
+    return f"{board.type}:{board.cols}x{board.rows}:{board.square_mm:g}"
+
+
+def detect_session(
+    session_dir: Path,
+    progress: ProgressFn = no_progress,
+    cancel: CancelToken | None = None,
+    workers: int | None = None,
+    force: bool = False,
+) -> CornerTable:
+    """Detect every capture of a session and write ``corners.vnl`` (atomically).
+
+    Views already in corners.vnl with corners are kept (failed ones are
+    retried) unless ``force``; if captures.jsonl is unchanged since the last
+    run nothing is detected. Rows use captures.jsonl's ``file`` names.
+    Cancelling writes what was finished, then raises :class:`Cancelled`.
+    """
+    session = Session.open(session_dir)
+    board = session.board()
+    records = session.records()
+    if not records:
+        raise InputError(f"{session.captures_path}: no captures listed; capture or simulate images first")
+    captures_sha = sha256_file(session.captures_path)
+    names = [r.file for r in records]
+    image_size = session.intrinsics().image_size if session.has_intrinsics() else None
+    meta = {"captures_sha256": captures_sha, "board": _board_key(board)}
+    kept: dict[str, ViewResult] = {}
+    if not force and session.corners_path.exists():
+        try:
+            old = read_corners_vnl(session.corners_path, board.n_corners)
+        except InputError as exc:
+            log.warning("ignoring unusable %s: %s", session.corners_path, exc)
+        else:
+            if old.meta.get("board", meta["board"]) == meta["board"]:
+                for name, corners in zip(old.names, old.corners_px):
+                    if name not in old.failed and np.isfinite(corners).any():
+                        kept[name] = ViewResult(name, corners, "kept")
+                if old.meta.get("captures_sha256") == captures_sha and all(n in kept or n in old.failed for n in names):
+                    progress(len(names), len(names), "corners.vnl is up to date")
+                    return old
+    jobs = [ViewJob(r.file, str(session.folder / r.file), r.sha256) for r in records if r.file not in kept]
+    results = dict(kept)
+    try:
+        if jobs:
+            results.update(run_detection(jobs, board, progress, cancel, workers, image_size))
+    except Cancelled as exc:
+        results.update(getattr(exc, "partial", {}))
+        table = _table(names, results, board.n_corners, {**meta, "captures_sha256": "partial"})
+        table.names = [n for n in names if n in results]
+        table.corners_px = table.corners_px[[i for i, n in enumerate(names) if n in results]]
+        write_corners_vnl(session.corners_path, table)
+        raise
+    table = _table(names, results, board.n_corners, meta)
+    write_corners_vnl(session.corners_path, table)
+    return table

@@ -91,12 +91,14 @@ def _init_worker() -> None:
     cv2.setNumThreads(1)  # one process per core already
 
 
-def detect_chunk(jobs: Sequence[ViewJob], board: Board, image_size: tuple[int, int] | None = None) -> list[ViewResult]:
+def detect_chunk(
+    jobs: Sequence[ViewJob], board: Board, image_size: tuple[int, int] | None = None, track: bool = True
+) -> list[ViewResult]:
     """Track the board through ``jobs`` (capture order); runs in a worker process."""
     from lps_gui.camera.charuco import detect_charuco
-    from lps_gui.camera.detection import ChessboardTracker
+    from lps_gui.camera.detection import ChessboardTracker, DetectionOptions
 
-    tracker = ChessboardTracker(board)
+    tracker = ChessboardTracker(board, DetectionOptions(track=track))
     out: list[ViewResult] = []
     for job in jobs:
         image, reason = load_grey(job.path, job.sha256, image_size)
@@ -127,6 +129,7 @@ def run_detection(
     cancel: CancelToken | None = None,
     workers: int | None = None,
     image_size: tuple[int, int] | None = None,
+    track: bool = True,
 ) -> dict[str, ViewResult]:
     """Detect every job, in parallel when it pays; returns results by name.
 
@@ -156,11 +159,11 @@ def run_detection(
     if workers == 1 or len(chunks) == 1:
         for chunk in chunks:
             check_cancel()
-            take(detect_chunk(chunk, board, image_size))
+            take(detect_chunk(chunk, board, image_size, track))
         return results
     ctx = process_context()
     with ProcessPoolExecutor(max_workers=min(workers, len(chunks)), mp_context=ctx, initializer=_init_worker) as pool:
-        pending: set[Future] = {pool.submit(detect_chunk, c, board, image_size) for c in chunks}
+        pending: set[Future] = {pool.submit(detect_chunk, c, board, image_size, track) for c in chunks}
         try:
             while pending:
                 done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
@@ -194,12 +197,17 @@ def detect_images(
     progress: ProgressFn = no_progress,
     cancel: CancelToken | None = None,
     workers: int | None = None,
+    track: bool = True,
 ) -> CornerTable:
-    """Detect ``board`` in images given by path (in this order); names are the paths as given."""
+    """Detect ``board`` in images given by path (in this order); names are the paths as given.
+
+    ``track=False`` detects every image from scratch (unrelated views, e.g.
+    an intrinsics set); tracking only pays in an LPS sequence.
+    """
     if not paths:
         raise InputError("detect: no images given; pass image files or a session folder")
     jobs = [ViewJob(str(p), str(p)) for p in paths]
-    results = run_detection(jobs, board, progress, cancel, workers)
+    results = run_detection(jobs, board, progress, cancel, workers, track=track)
     return _table([j.name for j in jobs], results, board.n_corners, {"board": _board_key(board)})
 
 

@@ -1,0 +1,56 @@
+"""`lps detect SESSION|IMAGES...`: find the board's corners in every image, write corners.vnl."""
+from __future__ import annotations
+
+import argparse
+import sys
+
+HELP = "detect the board's corners in a session (writes corners.vnl) or in images"
+
+EXIT_SOME_FAILED = 3
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("inputs", nargs="+", metavar="SESSION|IMAGE", help="a session folder, or image files/folders")
+    parser.add_argument("--board", help="board.json (required for images; a session has its own)")
+    parser.add_argument("--out", help="corners file for images (default: corners.vnl here)")
+    parser.add_argument("--workers", type=int, default=None, help="processes (default: one per core)")
+    parser.add_argument("--force", action="store_true", help="detect every view again, ignoring corners.vnl")
+    parser.add_argument("--no-track", action="store_true", help="detect every image from scratch (unrelated views)")
+
+
+def run(args: argparse.Namespace) -> int:
+    import time
+    from pathlib import Path
+
+    from lps_gui.cli.progress_bar import ProgressBar
+    from lps_gui.errors import InputError
+    from lps_gui.io.session import SESSION_FILE
+
+    inputs = [Path(p) for p in args.inputs]
+    bar = ProgressBar("detect")
+    t0 = time.monotonic()
+    if len(inputs) == 1 and (inputs[0] / SESSION_FILE).exists():
+        from lps_gui.pipeline.detect import detect_session
+
+        table = detect_session(inputs[0], bar, workers=args.workers, force=args.force)
+        out = inputs[0] / "corners.vnl"
+    else:
+        from lps_gui.io.board_file import read_board
+        from lps_gui.io.corners_vnl import write_corners_vnl
+        from lps_gui.pipeline.detect import detect_images
+        from lps_gui.pipeline.intrinsics import expand_image_paths
+
+        if not args.board:
+            raise InputError("detect: images need --board board.json (or pass a session folder)")
+        board = read_board(args.board)
+        paths = expand_image_paths(inputs)
+        table = detect_images(paths, board, bar, workers=args.workers, track=not args.no_track)
+        out = Path(args.out or "corners.vnl")
+        write_corners_vnl(out, table)
+    elapsed = time.monotonic() - t0
+    n = len(table.names)
+    ok = n - len(table.failed)
+    for name, reason in table.failed.items():
+        print(f"failed: {name}: {reason}", file=sys.stderr)
+    print(f"{ok}/{n} views detected in {elapsed:.1f} s ({n / max(elapsed, 1e-9):.0f} images/s); corners in {out}")
+    return EXIT_SOME_FAILED if table.failed else 0

@@ -1,0 +1,179 @@
+"""Intrinsics from varied-pose board views (SPEC 6), with what tells whether to trust them.
+
+cv2.calibrateCameraExtended gives the 9 intrinsics and each one's standard
+deviation (in :data:`INTRINSIC_NAMES` order, which is also our covariance
+order), and a per-view RMS. On top: how well the corners cover the image (a
+coarse grid of counts), views whose removal lowers the error markedly, and
+warnings when coverage is poor or the views are too alike (then the focal
+length trades off against the distance and is undetermined, the paper's
+reason to calibrate intrinsics apart from the LPS run).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
+from lps_gui.errors import DegenerateGeometryError, InputError
+
+MIN_VIEWS = 3
+MIN_CORNERS_PER_VIEW = 6
+CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-12)
+
+
+@dataclass
+class IntrinsicsCalibration:
+    """Result of :func:`calibrate_intrinsics`; views are indexed as given."""
+
+    intrinsics: CameraIntrinsics  # covariance = diag(std^2), INTRINSIC_NAMES order
+    std: np.ndarray  # shape (9,), INTRINSIC_NAMES order
+    rms_px: float
+    per_view_rms_px: np.ndarray  # shape (V,), NaN for views not used
+    coverage: np.ndarray  # shape (grid_rows, grid_cols): corners per image cell
+    flagged_views: list[int]
+    warnings: list[str]
+    used_views: list[int]
+    rvecs: np.ndarray  # shape (V, 3), NaN for views not used
+    tvecs: np.ndarray  # shape (V, 3) mm
+    view_names: list[str] = field(default_factory=list)
+
+    def coverage_fraction(self) -> float:
+        return float(np.mean(self.coverage > 0))
+
+    def summary(self) -> str:
+        """Human-readable lines: each parameter with its std, error figures, flags, warnings."""
+        lines = [f"{name:>3} = {v:12.6g} +- {s:.3g}" for name, v, s in zip(INTRINSIC_NAMES, self.intrinsics.vector(), self.std)]
+        lines.append(f"rms = {self.rms_px:.4f} px over {len(self.used_views)} views; coverage {100 * self.coverage_fraction():.0f} % of the image grid")
+        for i in self.flagged_views:
+            name = self.view_names[i] if i < len(self.view_names) else f"view {i}"
+            lines.append(f"flagged: {name} (rms {self.per_view_rms_px[i]:.3f} px): removing it lowers the error markedly")
+        lines += [f"warning: {w}" for w in self.warnings]
+        return "\n".join(lines)
+
+
+def _calibrate(objs: list[np.ndarray], imgs: list[np.ndarray], image_size: tuple[int, int], flags: int):
+    try:
+        return cv2.calibrateCameraExtended(objs, imgs, tuple(image_size), None, None, flags=flags, criteria=CRITERIA)
+    except cv2.error as exc:
+        raise DegenerateGeometryError(
+            f"intrinsics: OpenCV calibration failed ({str(exc).strip().splitlines()[-1]}); add views at varied tilts"
+        ) from exc
+
+
+def coverage_grid(points_px: np.ndarray, image_size: tuple[int, int], grid: tuple[int, int] = (8, 6)) -> np.ndarray:
+    """Corner counts per cell of a (cols x rows) grid over the image, shape (rows, cols)."""
+    w, h = image_size
+    pts = points_px[np.all(np.isfinite(points_px), axis=-1)]
+    counts, _, _ = np.histogram2d(pts[:, 1], pts[:, 0], bins=(grid[1], grid[0]), range=((0, h), (0, w)))
+    return counts.astype(int)
+
+
+def _tilt_spread_deg(rvecs: np.ndarray) -> float:
+    """Largest angle between the board normals of any two views, degrees."""
+    normals = np.array([cv2.Rodrigues(r.reshape(3, 1))[0][:, 2] for r in rvecs])
+    cosines = np.clip(normals @ normals.T, -1.0, 1.0)
+    return float(np.degrees(np.arccos(cosines.min())))
+
+
+def calibrate_intrinsics(
+    object_points: np.ndarray,
+    image_points: list[np.ndarray],
+    image_size: tuple[int, int],
+    flags: int = 0,
+    grid: tuple[int, int] = (8, 6),
+    flag_k: float = 5.0,
+) -> IntrinsicsCalibration:
+    """Calibrate a camera from board views.
+
+    Parameters
+    ----------
+    object_points : shape (N, 3) mm, board corners (SPEC 2 order)
+    image_points : V arrays of shape (N, 2) px, NaN where a corner is missing
+    image_size : (width, height) px
+    flags : cv2.CALIB_* flags (e.g. cv2.CALIB_FIX_K3)
+    grid : coverage grid (cols, rows)
+    flag_k : a view is a candidate outlier when its RMS exceeds the median
+        by ``flag_k`` robust sigmas; it is flagged when dropping it lowers
+        the overall RMS by more than 10 %.
+    """
+    X = np.asarray(object_points, dtype=np.float32).reshape(-1, 3)
+    objs, imgs, used, warnings = [], [], [], []
+    for k, uv in enumerate(image_points):
+        uv = np.asarray(uv, dtype=float).reshape(-1, 2)
+        if uv.shape[0] != X.shape[0]:
+            raise InputError(f"intrinsics: view {k} has {uv.shape[0]} corners but the board has {X.shape[0]}")
+        ok = np.all(np.isfinite(uv), axis=-1)
+        if ok.sum() < MIN_CORNERS_PER_VIEW:
+            continue
+        objs.append(X[ok])
+        imgs.append(uv[ok].astype(np.float32).reshape(-1, 1, 2))
+        used.append(k)
+    V = len(image_points)
+    if len(used) < MIN_VIEWS:
+        raise DegenerateGeometryError(
+            f"intrinsics: {len(used)} usable views (of {V}); need at least {MIN_VIEWS}, better 15-30 at varied tilts"
+        )
+    rms, K, dist, rvecs, tvecs, std_int, _, per_view = _calibrate(objs, imgs, image_size, flags)
+    std = np.asarray(std_int, dtype=float).ravel()[:9]
+    per_view_rms = np.full(V, np.nan)
+    per_view_rms[used] = np.asarray(per_view).ravel()
+    r_all = np.full((V, 3), np.nan)
+    t_all = np.full((V, 3), np.nan)
+    r_all[used] = np.array([r.ravel() for r in rvecs])
+    t_all[used] = np.array([t.ravel() for t in tvecs])
+
+    flagged = _flag_views(objs, imgs, used, per_view_rms, image_size, flags, float(rms), flag_k)
+    coverage = coverage_grid(np.concatenate([i.reshape(-1, 2) for i in imgs]), image_size, grid)
+    warnings += _warnings(coverage, r_all[used], std, K, len(used))
+    intr = CameraIntrinsics(
+        image_size=image_size,
+        camera_matrix=K,
+        dist=np.asarray(dist).ravel()[:5],
+        covariance=np.diag(std**2),
+        rms_px=float(rms),
+        n_views=len(used),
+    )
+    return IntrinsicsCalibration(intr, std, float(rms), per_view_rms, coverage, flagged, warnings, used, r_all, t_all)
+
+
+def _flag_views(objs, imgs, used, per_view_rms, image_size, flags, rms, flag_k) -> list[int]:
+    """Views far above the typical per-view error whose removal lowers the total RMS > 10 %."""
+    vals = per_view_rms[used]
+    med = float(np.median(vals))
+    mad = 1.4826 * float(np.median(np.abs(vals - med)))
+    limit = med + flag_k * max(mad, 0.1 * med)
+    flagged = []
+    if len(used) <= MIN_VIEWS:
+        return flagged
+    for j, k in enumerate(used):
+        if per_view_rms[k] <= limit:
+            continue
+        rest = [i for i in range(len(used)) if i != j]
+        rms_without = _calibrate([objs[i] for i in rest], [imgs[i] for i in rest], image_size, flags)[0]
+        if rms_without < 0.9 * rms:
+            flagged.append(k)
+    return flagged
+
+
+def _warnings(coverage: np.ndarray, rvecs: np.ndarray, std: np.ndarray, K: np.ndarray, n_used: int) -> list[str]:
+    out = []
+    frac = float(np.mean(coverage > 0))
+    border = np.concatenate([coverage[0], coverage[-1], coverage[1:-1, 0], coverage[1:-1, -1]])
+    if frac < 0.75 or np.mean(border > 0) < 0.5:
+        out.append(
+            f"corners cover {100 * frac:.0f} % of the image grid ({100 * np.mean(border > 0):.0f} % of its border cells); "
+            "add views with the board near the edges and corners, or distortion is extrapolated"
+        )
+    spread = _tilt_spread_deg(rvecs)
+    if spread < 20.0:
+        out.append(
+            f"the views are too similar (board normals within {spread:.0f} deg); the focal length is poorly "
+            "determined: tilt the board 20-45 deg in different directions"
+        )
+    if std[0] > 0.01 * K[0, 0] or std[1] > 0.01 * K[1, 1]:
+        out.append(f"focal length uncertain: fx +- {std[0]:.1f} px ({100 * std[0] / K[0, 0]:.1f} %); add more varied views")
+    if n_used < 10:
+        out.append(f"only {n_used} views; 15-30 give reliable distortion coefficients")
+    return out

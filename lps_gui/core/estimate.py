@@ -1,0 +1,488 @@
+"""From corners to positions with error bars: the estimation procedure of SPEC 4.
+
+Methods: ``joint`` (default, SPEC 4.4), ``hybrid`` (the paper, SPEC 4.3),
+``pnp`` (per-view baseline, Eq. 3) and ``calibrate`` (Eq. 2, intrinsics and
+all poses free: reference only). Every method reports positions relative to
+the first usable capture, per-position sigma from noise alone and total sigma
+including the intrinsics covariance, outlier views (flagged, excluded from
+the solve, their own position still reported), and 6-DOF error motions.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from lps_gui.core.allocator import tune_allocator
+from lps_gui.core.hybrid import HybridOptions, initial_line, solve_hybrid, view_costs
+from lps_gui.core.joint_lm import LmOptions, LpsState, linearize, solve_joint
+from lps_gui.core.observations import Observations
+from lps_gui.core.outliers import position_outliers, reprojection_outliers
+from lps_gui.core.pnp import solve_pnp
+from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
+from lps_gui.core.rotation import chordal_mean, skew
+from lps_gui.core.six_dof import SixDof, refine_view_poses, six_dof_motion
+from lps_gui.core.uncertainty import (
+    ArrowheadInverse,
+    arrowhead_inverse,
+    intrinsics_sensitivity,
+    noise_variance,
+    propagated_variance,
+)
+from lps_gui.errors import DegenerateGeometryError, InputError
+
+METHODS = ("joint", "hybrid", "pnp", "calibrate")
+INIT_VIEWS = 24  # per-view PnP on this many spread views initializes the joint LM
+
+
+@dataclass
+class EstimateOptions:
+    """What to estimate and how; every field lands in results.json."""
+
+    method: str = "joint"
+    robust: bool = False  # Huber loss in the joint LM
+    outlier_k: float = 5.0  # robust sigmas for an outlier view
+    detect_outliers: bool = True
+    max_outlier_rounds: int = 4
+    self_calibrate: bool = False  # intrinsics free with their covariance as prior (SPEC 4.6)
+    six_dof: bool = True
+    hybrid: HybridOptions = field(default_factory=HybridOptions)
+
+    def __post_init__(self) -> None:
+        if self.method not in METHODS:
+            raise InputError(f"method {self.method!r} is unknown; choose one of {', '.join(METHODS)}")
+        if self.outlier_k <= 0:
+            raise InputError("outlier_k must be positive (robust sigmas, default 5)")
+
+    def to_dict(self) -> dict[str, Any]:
+        from dataclasses import asdict
+
+        return asdict(self)
+
+
+@dataclass
+class LpsEstimate:
+    """Everything the estimator found; ``pipeline.estimate`` turns it into results.json."""
+
+    method: str
+    options: EstimateOptions
+    state: LpsState  # positions s relative to the reference view
+    reference_view: int
+    usable: np.ndarray  # shape (K,) bool: board seen
+    used: np.ndarray  # shape (K,) bool: in the final solve
+    outlier: np.ndarray  # shape (K,) bool
+    outlier_reason: list[str]
+    sigma_px: float  # a-posteriori noise of one corner coordinate
+    sigma_s_mm: np.ndarray  # shape (K,) from noise
+    sigma_total_mm: np.ndarray  # shape (K,) noise + intrinsics
+    step_sigma_mm: np.ndarray  # shape (K,): sigma of s_i - s_prev (same run, direction); NaN for the first
+    rms_px: np.ndarray  # shape (K,) per-view RMS reprojection error under the model
+    n_corners: np.ndarray  # shape (K,)
+    parameter_sigmas: dict[str, Any]
+    iterations: int
+    converged: bool
+    n_observations: int
+    dof: int
+    six_dof: SixDof | None
+    flags: list[dict[str, Any]]
+    timings_s: dict[str, float]
+    inverse: ArrowheadInverse | None = None
+
+    @property
+    def positions_mm(self) -> np.ndarray:
+        return self.state.s
+
+    def deviation_um(self, target_mm: np.ndarray) -> np.ndarray:
+        """measured - (target - target of the reference), um; zero at the reference."""
+        t = np.asarray(target_mm, dtype=float)
+        return 1e3 * (self.state.s - (t - t[self.reference_view]))
+
+
+def estimate(
+    obs: Observations,
+    options: EstimateOptions | None = None,
+    progress: ProgressFn = no_progress,
+    cancel: CancelToken | None = None,
+) -> LpsEstimate:
+    """Estimate the LPS model and every position from the observed corners."""
+    tune_allocator()
+    opt = options or EstimateOptions()
+    obs.validate()
+    timings: dict[str, float] = {}
+    t_start = time.perf_counter()
+    X = obs.board.object_points()
+    usable = obs.usable_views()
+    mask_all = obs.mask() & usable[:, None]
+    ref = int(np.flatnonzero(usable)[0])
+    progress(0, 4, "initializing")
+
+    if opt.method in ("pnp", "calibrate"):
+        return _estimate_per_view(obs, opt, usable, ref, X, progress, cancel, timings, t_start)
+
+    state = _initial_state(obs, usable, ref, X, full_pnp=opt.method == "hybrid")
+    timings["init"] = time.perf_counter() - t_start
+    excluded = ~usable
+    outlier = np.zeros(obs.K, dtype=bool)
+    reasons = [""] * obs.K
+    flags: list[dict[str, Any]] = []
+    for round_no in range(opt.max_outlier_rounds + 1):
+        if cancel is not None:
+            cancel.check("estimation")
+        used = usable & ~outlier
+        mask = mask_all & used[:, None]
+        t0 = time.perf_counter()
+        state, lm_iterations, converged = _solve(state, obs, X, mask, used, ref, opt, progress, cancel)
+        timings["solve"] = timings.get("solve", 0.0) + time.perf_counter() - t0
+        if not opt.detect_outliers:
+            break
+        state.s[~used & usable] = _positions_alone(state, X, obs.corners_px, mask_all, ~used & usable)
+        rms = _view_rms(state, X, obs.corners_px, mask_all)
+        eq, _ = linearize(state, X, obs.corners_px, mask)
+        sigma2 = noise_variance(eq.ssr, eq.n_obs, 8 + int(used.sum()) - 1)
+        inv = arrowhead_inverse(eq.A, eq.B, eq.D, used & (np.arange(obs.K) != ref))
+        sigma_um = 1e3 * np.sqrt(sigma2 * inv.var_s())
+        dev = 1e3 * (state.s - (obs.target_mm - obs.target_mm[ref]))
+        bumped = reprojection_outliers(rms, used, opt.outlier_k)
+        groups = obs.run * 2 + (obs.direction > 0)
+        moved, resid = position_outliers(dev, obs.target_mm, groups, used & ~bumped, sigma_um, opt.outlier_k)
+        new = (bumped | moved) & ~outlier
+        if not new.any():
+            break
+        for i in np.flatnonzero(new):
+            if bumped[i]:
+                reasons[i] = f"reprojection RMS {rms[i]:.3f} px against a median of {np.median(rms[used]):.3f} px (camera bumped?)"
+                kind = "reprojection"
+            else:
+                reasons[i] = f"position {resid[i]:+.1f} um off the local trend of its run (image replaced?)"
+                kind = "position"
+            flags.append({"index": int(obs.index[i]), "kind": kind, "message": reasons[i], "round": round_no + 1})
+        outlier |= new
+        if ref in np.flatnonzero(outlier):
+            ref = int(np.flatnonzero(usable & ~outlier)[0])
+        if (usable & ~outlier).sum() < 3:
+            raise DegenerateGeometryError(f"{obs.source}: fewer than 3 views are left after removing outliers; check the capture")
+
+    used = usable & ~outlier
+    mask = mask_all & used[:, None]
+    others = usable & ~used
+    if others.any():
+        state.s[others] = _positions_alone(state, X, obs.corners_px, mask_all, others)
+    state = _regauge(state, ref)
+    progress(3, 4, "uncertainty")
+    est = _finish(obs, opt, state, ref, usable, used, outlier, reasons, flags, X, mask, mask_all, lm_iterations, converged, timings)
+    timings["total"] = time.perf_counter() - t_start
+    progress(4, 4, "done")
+    return est
+
+
+# ----------------------------------------------------------------------------- steps
+
+def _spread_views(usable: np.ndarray, target_mm: np.ndarray, n: int) -> np.ndarray:
+    """Up to n usable views spread evenly over the targets (always both ends)."""
+    idx = np.flatnonzero(usable)
+    if idx.size <= n:
+        return idx
+    order = idx[np.argsort(target_mm[idx], kind="stable")]
+    return np.unique(order[np.linspace(0, order.size - 1, n).round().astype(int)])
+
+
+def _initial_state(obs: Observations, usable: np.ndarray, ref: int, X: np.ndarray, full_pnp: bool) -> LpsState:
+    """Eq. 5 initialization: per-view PnP (on all views for hybrid, on a spread subset for joint)."""
+    views = np.flatnonzero(usable) if full_pnp else _spread_views(usable, obs.target_mm, INIT_VIEWS)
+    R, t, ok = solve_pnp(X, obs.corners_px[views], obs.intrinsics)
+    views, R, t = views[ok], R[ok], t[ok]
+    if views.size < 2 or np.ptp(obs.target_mm[views]) <= 0:
+        raise DegenerateGeometryError(
+            f"{obs.source}: the board's pose could be found in {views.size} views only; check intrinsics and board size"
+        )
+    init = initial_line(R, t, obs.target_mm[views], obs.intrinsics)
+    s_all = obs.target_mm - obs.target_mm[ref]
+    l0 = np.mean(t - s_all[views, None] * init.n[None, :], axis=0)
+    return LpsState(init.R, l0, init.n, s_all.astype(float), obs.intrinsics)
+
+
+def _solve(
+    state: LpsState,
+    obs: Observations,
+    X: np.ndarray,
+    mask: np.ndarray,
+    used: np.ndarray,
+    ref: int,
+    opt: EstimateOptions,
+    progress: ProgressFn,
+    cancel: CancelToken | None,
+) -> tuple[LpsState, int, bool]:
+    free = used.copy()
+    free[ref] = False
+    if opt.method == "hybrid":
+        res = solve_hybrid(state, X, obs.corners_px, mask, used, opt.hybrid, progress, cancel)
+        return _regauge(res.state, ref), res.rounds, res.converged
+    prior = None
+    if opt.self_calibrate:
+        if obs.intrinsics.covariance is None:
+            raise InputError("self-calibration needs the intrinsics' std or covariance in intrinsics.json")
+        prior = (obs.intrinsics.vector(), obs.intrinsics.covariance + 1e-18 * np.eye(9))
+    lm = solve_joint(
+        state,
+        X,
+        obs.corners_px,
+        mask,
+        free,
+        LmOptions(robust=opt.robust, estimate_intrinsics=opt.self_calibrate),
+        cancel,
+        intrinsics_prior=prior,
+    )
+    progress(2, 4, f"joint LM: {lm.iterations} iterations")
+    return lm.state, lm.iterations, lm.converged
+
+
+def _regauge(state: LpsState, ref: int) -> LpsState:
+    """Shift positions so the reference view sits at s = 0 (l0 absorbs the shift)."""
+    shift = state.s[ref]
+    return LpsState(state.R, state.l0 + shift * state.n, state.n, state.s - shift, state.intrinsics)
+
+
+def _positions_alone(
+    state: LpsState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray, views: np.ndarray, iterations: int = 8
+) -> np.ndarray:
+    """Each selected view's own best position with the shared parameters fixed (1-D Gauss-Newton)."""
+    idx = np.flatnonzero(views)
+    if idx.size == 0:
+        return state.s[idx]
+    sub = _views_of(state, idx)
+    for _ in range(iterations):
+        eq, _ = linearize(sub, X, corners[idx], mask[idx])
+        step = np.where(eq.D > 0, -eq.g_s / np.where(eq.D > 0, eq.D, 1.0), 0.0)
+        sub.s = sub.s + step
+        if np.max(np.abs(step)) < 1e-9:
+            break
+    return sub.s
+
+
+def _views_of(state: LpsState, idx: np.ndarray) -> LpsState:
+    """The same line and rotation with only the positions of views ``idx``."""
+    return LpsState(state.R, state.l0, state.n, state.s[idx].copy(), state.intrinsics)
+
+
+def _view_rms(state: LpsState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    n = mask.sum(axis=1)
+    cost = view_costs(state, X, corners, mask)
+    return np.where(n > 0, np.sqrt(cost / np.maximum(2 * n, 1)), np.nan)
+
+
+def _step_pairs(obs: Observations) -> tuple[np.ndarray, np.ndarray]:
+    """(previous, current) capture pairs inside each run and direction, in capture order."""
+    prev, cur = [], []
+    last: dict[tuple[int, float], int] = {}
+    for i in range(obs.K):
+        key = (int(obs.run[i]), float(obs.direction[i]))
+        if key in last:
+            prev.append(last[key])
+            cur.append(i)
+        last[key] = i
+    return np.array(prev, dtype=int), np.array(cur, dtype=int)
+
+
+def _finish(
+    obs: Observations,
+    opt: EstimateOptions,
+    state: LpsState,
+    ref: int,
+    usable: np.ndarray,
+    used: np.ndarray,
+    outlier: np.ndarray,
+    reasons: list[str],
+    flags: list[dict[str, Any]],
+    X: np.ndarray,
+    mask: np.ndarray,
+    mask_all: np.ndarray,
+    iterations: int,
+    converged: bool,
+    timings: dict[str, float],
+) -> LpsEstimate:
+    t0 = time.perf_counter()
+    free = used.copy()
+    free[ref] = False
+    have_cov = obs.intrinsics.covariance is not None
+    eq, _ = linearize(state, X, obs.corners_px, mask, with_intrinsics=have_cov or opt.self_calibrate)
+    p_pose = 8
+    A, B = eq.A, eq.B
+    if opt.self_calibrate:
+        A = A.copy()
+        A[8:, 8:] += np.linalg.inv(obs.intrinsics.covariance + 1e-18 * np.eye(9))
+        n_params = 17 + int(free.sum())
+    else:
+        A, B = A[:p_pose, :p_pose], B[:, :p_pose]
+        n_params = p_pose + int(free.sum())
+    sigma2 = noise_variance(eq.ssr, eq.n_obs, n_params)
+    inv = arrowhead_inverse(A, B, eq.D, free)
+    var_s = sigma2 * inv.var_s()
+    var_total = var_s.copy()
+    if have_cov and not opt.self_calibrate:
+        _, G_s = intrinsics_sensitivity(inv, eq.A[:p_pose, p_pose:], eq.B[:, p_pose:])
+        var_total = var_s + propagated_variance(G_s, obs.intrinsics.covariance)
+    # positions of views outside the solve: their own 1-D sigma (noise only)
+    alone = usable & ~used
+    if alone.any():
+        eq_o, _ = linearize(_views_of(state, np.flatnonzero(alone)), X, obs.corners_px[alone], mask_all[alone])
+        var_o = sigma2 / np.maximum(eq_o.D, 1e-300)
+        var_s[alone] = var_o
+        var_total[alone] = var_o
+    var_s[~usable] = np.nan
+    var_total[~usable] = np.nan
+    prev, cur = _step_pairs(obs)
+    step_sigma = np.full(obs.K, np.nan)
+    both = used[prev] & used[cur]
+    if both.any():
+        step_sigma[cur[both]] = np.sqrt(sigma2 * inv.var_difference(prev[both], cur[both]))
+    cov_theta = sigma2 * inv.S_inv
+    param_sigmas = {
+        "rvec_sigma_rad": np.sqrt(np.diag(cov_theta)[0:3]).tolist(),
+        "l0_sigma_mm": np.sqrt(np.diag(cov_theta)[3:6]).tolist(),
+        "n_sigma_rad": np.sqrt(np.diag(cov_theta)[6:8]).tolist(),
+    }
+    if opt.self_calibrate:
+        param_sigmas["intrinsics_sigma"] = np.sqrt(np.diag(cov_theta)[8:17]).tolist()
+    timings["uncertainty"] = time.perf_counter() - t0
+
+    rms = _view_rms(state, X, obs.corners_px, mask_all)
+    six = None
+    if opt.six_dof:
+        t1 = time.perf_counter()
+        six = _six_dof(state, obs, X, mask_all, usable, used, sigma2)
+        timings["six_dof"] = time.perf_counter() - t1
+    return LpsEstimate(
+        method=opt.method,
+        options=opt,
+        state=state,
+        reference_view=ref,
+        usable=usable,
+        used=used,
+        outlier=outlier,
+        outlier_reason=reasons,
+        sigma_px=float(np.sqrt(sigma2)),
+        sigma_s_mm=np.sqrt(var_s),
+        sigma_total_mm=np.sqrt(var_total),
+        step_sigma_mm=step_sigma,
+        rms_px=rms,
+        n_corners=mask_all.sum(axis=1),
+        parameter_sigmas=param_sigmas,
+        iterations=iterations,
+        converged=converged,
+        n_observations=eq.n_obs,
+        dof=eq.n_obs - n_params,
+        six_dof=six,
+        flags=flags,
+        timings_s=timings,
+        inverse=inv,
+    )
+
+
+def _six_dof(
+    state: LpsState, obs: Observations, X: np.ndarray, mask_all: np.ndarray, usable: np.ndarray, used: np.ndarray, sigma2: float
+) -> SixDof:
+    """Per-view poses started from the common model, then straightness and angles."""
+    K = obs.K
+    t_model = state.line().translations(state.s)
+    t_model[~usable] = state.l0
+    poses = refine_view_poses(np.broadcast_to(state.R, (K, 3, 3)), t_model, X, obs.corners_px, mask_all, state.intrinsics)
+    six = six_dof_motion(poses, state.R, used, sigma2)
+    for arr in (six.straightness_um, six.straightness_sigma_um, six.angles_urad, six.angles_sigma_urad):
+        arr[~usable] = np.nan
+    return six
+
+
+def _estimate_per_view(
+    obs: Observations,
+    opt: EstimateOptions,
+    usable: np.ndarray,
+    ref: int,
+    X: np.ndarray,
+    progress: ProgressFn,
+    cancel: CancelToken | None,
+    timings: dict[str, float],
+    t_start: float,
+) -> LpsEstimate:
+    """Eq. 3 (``pnp``) or Eq. 2 (``calibrate``): independent poses, positions along their PCA line."""
+    intr = obs.intrinsics
+    idx = np.flatnonzero(usable)
+    if opt.method == "calibrate":
+        intr = _calibrate_all(obs, idx, X)
+    R, t, ok = solve_pnp(X, obs.corners_px, intr)
+    usable = usable & ok
+    mask_all = obs.mask() & usable[:, None]
+    if cancel is not None:
+        cancel.check("estimation")
+    poses = refine_view_poses(R, t, X, obs.corners_px, mask_all, intr)
+    C = -np.einsum("kji,kj->ki", poses.R, poses.t)
+    Cv = C[usable]
+    centre = Cv.mean(axis=0)
+    u = np.linalg.svd(Cv - centre, full_matrices=False)[2][0]
+    if np.dot((Cv - centre) @ u, obs.target_mm[usable] - obs.target_mm[usable].mean()) < 0:
+        u = -u
+    s = (C - C[ref]) @ u
+    n_obs = int(2 * mask_all.sum())
+    n_params = 6 * int(usable.sum())
+    sigma2 = noise_variance(float(poses.ssr[usable].sum()), n_obs, n_params)
+    Rt = np.transpose(poses.R, (0, 2, 1))
+    dC = np.concatenate([-Rt @ skew(poses.t), -Rt], axis=2)  # shape (K, 3, 6)
+    ju = np.einsum("i,kib->kb", u, dC)
+    var_c = sigma2 * np.einsum("ka,kab,kb->k", ju, poses.cov_unit, ju)
+    var_s = var_c + var_c[ref]
+    var_s[ref] = 0.0
+    var_s[~usable] = np.nan
+    R_common = chordal_mean(poses.R[usable])
+    l0 = -R_common @ C[ref]
+    n = -R_common @ u
+    state = LpsState(R_common, l0, n, np.where(usable, s, np.nan), intr)
+    rms = np.where(usable, np.sqrt(poses.ssr / np.maximum(2 * mask_all.sum(axis=1), 1)), np.nan)
+    six = six_dof_motion(poses, R_common, usable, sigma2) if opt.six_dof else None
+    prev, cur = _step_pairs(obs)
+    step_sigma = np.full(obs.K, np.nan)
+    step_sigma[cur] = np.sqrt(var_c[prev] + var_c[cur])
+    timings["total"] = time.perf_counter() - t_start
+    progress(4, 4, "done")
+    return LpsEstimate(
+        method=opt.method,
+        options=opt,
+        state=state,
+        reference_view=ref,
+        usable=usable,
+        used=usable.copy(),
+        outlier=np.zeros(obs.K, dtype=bool),
+        outlier_reason=[""] * obs.K,
+        sigma_px=float(np.sqrt(sigma2)),
+        sigma_s_mm=np.sqrt(var_s),
+        sigma_total_mm=np.sqrt(var_s),
+        step_sigma_mm=step_sigma,
+        rms_px=rms,
+        n_corners=mask_all.sum(axis=1),
+        parameter_sigmas={},
+        iterations=1,
+        converged=True,
+        n_observations=n_obs,
+        dof=n_obs - n_params,
+        six_dof=six,
+        flags=[],
+        timings_s=timings,
+    )
+
+
+def _calibrate_all(obs: Observations, idx: np.ndarray, X: np.ndarray):
+    """Eq. 2: cv2.calibrateCamera on every view, started from the given intrinsics."""
+    import cv2
+
+    objs, imgs = [], []
+    for i in idx:
+        seen = np.all(np.isfinite(obs.corners_px[i]), axis=-1)
+        objs.append(X[seen].astype(np.float32))
+        imgs.append(obs.corners_px[i, seen].astype(np.float32))
+    intr = obs.intrinsics
+    _, K, dist, _, _ = cv2.calibrateCamera(
+        objs, imgs, intr.image_size, intr.camera_matrix.copy(), intr.dist.copy(), flags=cv2.CALIB_USE_INTRINSIC_GUESS
+    )
+    from dataclasses import replace
+
+    return replace(intr, camera_matrix=K, dist=dist.ravel()[:5])

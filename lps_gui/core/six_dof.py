@@ -1,0 +1,94 @@
+"""6-DOF per position (SPEC 4.5): straightness and angular error motions.
+
+Each view's pose is refined on its own (fixed intrinsics), all views at once:
+the per-view normal equations are 6x6 and solved batched. The camera centres
+C_i = -R_i^T t_i give straightness as their distance from a least-squares
+line in the two perpendicular directions (v1, v2) of the motion frame; the
+rotation of R_i against the common R, expressed in (u, v1, v2), gives roll,
+pitch and yaw. Sigmas come from each view's 6x6 covariance.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from lps_gui.core.camera_model import CameraIntrinsics, project_parts
+from lps_gui.core.lps_model import motion_frame
+from lps_gui.core.rotation import exp_so3, log_so3, skew
+
+
+@dataclass
+class ViewPoses:
+    R: np.ndarray  # shape (K, 3, 3) R_cam_board
+    t: np.ndarray  # shape (K, 3) mm
+    cov_unit: np.ndarray  # shape (K, 6, 6): (w, t) covariance per unit noise variance
+    ssr: np.ndarray  # shape (K,) px^2
+
+
+@dataclass
+class SixDof:
+    straightness_um: np.ndarray  # shape (K, 2): along v1, v2
+    straightness_sigma_um: np.ndarray  # shape (K, 2)
+    angles_urad: np.ndarray  # shape (K, 3): roll (u), pitch (v1), yaw (v2)
+    angles_sigma_urad: np.ndarray  # shape (K, 3)
+    frame: np.ndarray  # shape (3, 3): (u, v1, v2) columns, board frame
+
+
+def refine_view_poses(
+    R0: np.ndarray,
+    t0: np.ndarray,
+    X: np.ndarray,
+    corners: np.ndarray,
+    mask: np.ndarray,
+    intrinsics: CameraIntrinsics,
+    iterations: int = 6,
+) -> ViewPoses:
+    """Batched Gauss-Newton on every view's pose (left-perturbed rotation, translation)."""
+    R, t = R0.copy(), t0.copy()
+    mu, mv = np.nan_to_num(corners[..., 0]), np.nan_to_num(corners[..., 1])
+    w = mask.astype(float)
+    for it in range(iterations + 1):
+        RX = np.einsum("kij,nj->kni", R, X)  # shape (K, N, 3)
+        x, y, z = (RX[..., i] + t[:, None, i] for i in range(3))
+        parts = project_parts(x, y, z, intrinsics, want_jacobian=True)
+        r = np.stack([(parts.u - mu) * w, (parts.v - mv) * w])  # shape (2, K, N)
+        P = np.stack([np.stack(parts.du), np.stack(parts.dv)])  # shape (2, 3, K, N)
+        a, b, c = RX[..., 0], RX[..., 1], RX[..., 2]
+        Jrot = np.stack(
+            [b * P[:, 2] - c * P[:, 1], c * P[:, 0] - a * P[:, 2], a * P[:, 1] - b * P[:, 0]], axis=1
+        )  # shape (2, 3, K, N)
+        J = np.concatenate([Jrot, P], axis=1) * w  # shape (2, 6, K, N)
+        H = np.einsum("cpkn,cqkn->kpq", J, J)
+        g = np.einsum("cpkn,ckn->kp", J, r)
+        if it == iterations:
+            break
+        delta = -np.linalg.solve(H + 1e-12 * np.eye(6), g[..., None])[..., 0]
+        R = np.einsum("kij,kjl->kil", exp_so3(delta[:, :3]), R)
+        t = t + delta[:, 3:]
+    ssr = np.einsum("ckn,ckn->k", r, r)
+    return ViewPoses(R, t, np.linalg.inv(H + 1e-12 * np.eye(6)), ssr)
+
+
+def six_dof_motion(poses: ViewPoses, R_common: np.ndarray, valid: np.ndarray, sigma2_px: float) -> SixDof:
+    """Straightness and angular errors of every view, relative to the valid views' line and R."""
+    C = -np.einsum("kji,kj->ki", poses.R, poses.t)  # camera centres, board frame, shape (K, 3)
+    Cv = C[valid]
+    centre = Cv.mean(axis=0)
+    u = np.linalg.svd(Cv - centre, full_matrices=False)[2][0]
+    frame = motion_frame(R_common, u)
+    if np.dot(frame[:, 0], Cv[-1] - Cv[0]) < 0:  # keep u along the capture order
+        frame = motion_frame(R_common, -u)
+    F_perp = frame[:, 1:]  # shape (3, 2)
+    straight_um = 1e3 * (C - centre) @ F_perp
+    # dC/dw = -R^T [t]x, dC/dt = -R^T
+    Rt = np.transpose(poses.R, (0, 2, 1))
+    dC = np.concatenate([-Rt @ skew(poses.t), -Rt], axis=2)  # shape (K, 3, 6)
+    Js = np.einsum("ia,kib->kab", F_perp, dC)  # shape (K, 2, 6)
+    cov = sigma2_px * poses.cov_unit
+    straight_sigma_um = 1e3 * np.sqrt(np.einsum("kab,kbc,kac->ka", Js, cov, Js))
+    Q = np.einsum("kji,jl->kil", poses.R, R_common)  # R_i^T R
+    angles_urad = 1e6 * log_so3(Q) @ frame
+    Ja = -np.einsum("ia,kji->kaj", frame, poses.R)  # d angles / d w = -F^T R_i^T, shape (K, 3, 3)
+    angles_sigma_urad = 1e6 * np.sqrt(np.einsum("kab,kbc,kac->ka", Ja, cov[:, :3, :3], Ja))
+    return SixDof(straight_um, straight_sigma_um, angles_urad, angles_sigma_urad, frame)

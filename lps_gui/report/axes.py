@@ -72,7 +72,7 @@ def tick_label(value: float, ticks: np.ndarray) -> str:
     """A tick's text with as many decimals as the tick spacing needs."""
     if ticks.size > 1:
         step = float(np.min(np.diff(ticks)))
-        decimals = max(0, -math.floor(math.log10(step) + 1e-9)) if step > 0 else 0
+        decimals = next((d for d in range(8) if abs(step * 10**d - round(step * 10**d)) < 1e-6 * step * 10**d), 8)
     else:
         decimals = 2
     if abs(value) >= 1e5 or (value != 0 and abs(value) < 1e-4):

@@ -339,7 +339,7 @@ def residuals_figure(cols: dict[str, np.ndarray]) -> FigureSpec:
     """RMS reprojection residual of each view; flagged views marked."""
     series = [Series(cols["index"], cols["rms_px"], "RMS residual", "markers", FORWARD_COLOR, marked=cols["outlier"])]
     n_out = int(cols["outlier"].sum())
-    return FigureSpec("residuals", "RMS reprojection residual per view", "capture index", "RMS residual [px]", series,
+    return FigureSpec("residuals", "RMS reprojection residual per view", "capture index [#]", "RMS residual [px]", series,
                       f"{n_out} view(s) flagged as outliers (red crosses)" if n_out else "no view flagged")
 
 

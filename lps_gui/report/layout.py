@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from lps_gui.report.figures import FigureSpec
+from lps_gui.report.none_refs import NoneRefGuard
 from lps_gui.report.plot_painter import font, paint_figure
 
 RESOLUTION_DPI = 600
@@ -66,6 +67,7 @@ class PdfFlow:
             from lps_gui.errors import InputError
 
             raise InputError(f"{path}: cannot write the PDF here; check the folder exists and is writable")
+        self.none_guard = NoneRefGuard().__enter__()
         self.page = 1
         self.log = PageLog()
         self.y = MARGIN_MM * self.mm
@@ -73,6 +75,7 @@ class PdfFlow:
 
     # ---------------------------------------------------------------- pages
     def new_page(self) -> None:
+        self.none_guard.topup()
         self.writer.newPage()
         self.page += 1
         self.log.pages.append([])
@@ -86,7 +89,14 @@ class PdfFlow:
 
     def finish(self) -> int:
         self.painter.end()
+        self.none_guard.topup()
         return self.page
+
+    def abort(self) -> None:
+        """End painting after a failure (the caller deletes the partial file)."""
+        if self.painter.isActive():
+            self.painter.end()
+        self.none_guard.topup()
 
     def _footer(self) -> None:
         from PySide6.QtCore import QRectF, Qt
@@ -176,6 +186,8 @@ class PdfFlow:
             if self.y + row_mm * mm > self.bottom:
                 self.new_page()
                 draw_header()
+            elif n % 50 == 49:
+                self.none_guard.topup()
             if n % 2 == 1:
                 p.fillRect(QRectF(x_left, self.y, total_w, row_mm * mm), QColor("#f6f6f6"))
             draw_row(row, False, colors[n] if colors else None)
@@ -189,6 +201,7 @@ class PdfFlow:
         self.ensure(height_mm)
         self.log.add(f"figure:{spec.key}")
         paint_figure(self.painter, QRectF(self.left, self.y, self.width, height_mm * self.mm), spec, self.mm)
+        self.none_guard.topup()
         self.y += (height_mm + 3.0) * self.mm
 
     def image(self, image: Any, x_mm: float, width_mm: float, caption: str) -> float:

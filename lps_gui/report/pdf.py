@@ -117,7 +117,7 @@ def render_report(session_dir: Path, results: dict | None = None, out: Path | No
         flow.table(header, rows, widths, size_pt=6.3, row_mm=3.35, align_right_from=0, colors=colors)
         n_pages = flow.finish()
     except BaseException:
-        flow.painter.end() if flow.painter.isActive() else None
+        flow.abort()
         tmp.unlink(missing_ok=True)
         raise
     tmp.replace(out)  # a half-painted report never takes the place of a good one

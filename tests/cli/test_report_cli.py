@@ -1,0 +1,27 @@
+"""`lps report`: one-line error without results, a PDF with them."""
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from lps_gui.cli import main
+from tests.report.conftest import make_results
+
+
+def test_report_without_results_tells_to_estimate(tmp_path, capsys):
+    (tmp_path / "s").mkdir()
+    assert main(["report", str(tmp_path / "s")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "lps estimate" in err and len(err.splitlines()) == 1
+
+
+@pytest.mark.gui
+def test_report_writes_the_pdf(tmp_path, capsys):
+    folder = tmp_path / "s"
+    folder.mkdir()
+    results, _ = make_results()
+    (folder / "results.json").write_text(json.dumps(results))
+    assert main(["report", str(folder), "--out", str(tmp_path / "x.pdf")]) == 0
+    assert (tmp_path / "x.pdf").read_bytes().startswith(b"%PDF")
+    assert str(tmp_path / "x.pdf") in capsys.readouterr().out

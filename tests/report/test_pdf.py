@@ -1,0 +1,116 @@
+"""The PDF opens, has the planned pages, and prints the numbers of results.json."""
+from __future__ import annotations
+
+import json
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from lps_gui.errors import InputError
+from lps_gui.report.pdf import render_report, write_report
+from lps_gui.report.summary import summary_rows
+from tests.report.conftest import make_results
+
+pytestmark = pytest.mark.gui
+
+
+def _session(tmp_path: Path, results: dict, truth: dict | None, spec: dict | None = None) -> Path:
+    folder = tmp_path / "session"
+    folder.mkdir()
+    meta = {"format": "lps-session/1", "camera": {"name": "simulated"}, "stage": {"name": "sim"}}
+    if truth:
+        meta["truth"] = truth
+    if spec:
+        meta["stage_spec"] = spec
+    (folder / "session.json").write_text(json.dumps(meta))
+    (folder / "results.json").write_text(json.dumps(results))
+    return folder
+
+
+def _pdf_pages(path: Path) -> int:
+    data = path.read_bytes()
+    assert data.startswith(b"%PDF-"), "not a PDF"
+    assert data.rstrip().endswith(b"%%EOF")
+    return len(re.findall(rb"/Type\s*/Page(?!s)", data))
+
+
+def test_pdf_has_the_planned_pages_and_opens(tmp_path):
+    results, truth = make_results()
+    folder = _session(tmp_path, results, truth, {"accuracy_um": 20, "repeatability_um": 5, "straightness_um": 38})
+    info = render_report(folder)
+    assert info.path == folder / "report.pdf"
+    assert _pdf_pages(info.path) == info.n_pages == len(info.pages) == 5
+    assert info.pages[0][0].startswith("Linear positioning stage")
+    assert "Stage specification" in info.pages[0]
+    figs = [w for page in info.pages for w in page if w.startswith("figure:")]
+    assert figs == ["figure:positions", "figure:deviation", "figure:step", "figure:straightness", "figure:angles",
+                    "figure:residuals", "figure:spectrum"]
+    assert info.pages[-1] == ["Per-position results"]
+    if shutil.which("pdftoppm"):
+        subprocess.run(["pdftoppm", "-r", "10", "-png", str(info.path), str(tmp_path / "p")], check=True)
+        assert len(list(tmp_path.glob("p-*.png"))) == info.n_pages
+
+
+def test_long_table_is_paged(tmp_path):
+    results, truth = make_results(runs=2, views=60)  # 240 rows
+    info = render_report(_session(tmp_path, results, truth), out=tmp_path / "r.pdf")
+    table_pages = [p for p in info.pages if p == [] or p == ["Per-position results"]]
+    assert len(table_pages) >= 3
+    assert _pdf_pages(tmp_path / "r.pdf") == info.n_pages
+
+
+@pytest.mark.skipif(shutil.which("pdftotext") is None, reason="poppler's pdftotext not installed")
+def test_printed_summary_numbers_come_from_results(tmp_path):
+    results, truth = make_results()
+    results["figures"]["single_run"]["scale_ppm"] = 123.456
+    results["figures"]["single_run"]["periodic_period_mm"] = 7.77
+    folder = _session(tmp_path, results, truth)
+    path = write_report(folder)
+    text = subprocess.run(["pdftotext", "-layout", "-f", "1", "-l", "1", str(path), "-"], capture_output=True,
+                          text=True, check=True).stdout
+    for row in summary_rows(results):
+        line = next((ln for ln in text.splitlines() if ln.strip().startswith(row.name)), None)
+        assert line is not None, row.name
+        assert row.text() in line, (row.name, line)
+    assert "123" in text and "7.77" in text
+
+
+def test_thumbnails_of_outlier_views_are_embedded_when_images_exist(tmp_path):
+    results, truth = make_results()
+    folder = _session(tmp_path, results, truth)
+    no_images = write_report(folder, out=tmp_path / "a.pdf").read_bytes()
+    assert b"/Subtype /Image" not in no_images and b"/Subtype/Image" not in no_images
+    import cv2
+
+    (folder / "images").mkdir()
+    img = np.full((120, 160), 200, np.uint8)
+    img[40:80, 60:100] = 20
+    cv2.imwrite(str(folder / "images" / "00005.png"), img)
+    with_images = write_report(folder, out=tmp_path / "b.pdf").read_bytes()
+    assert re.search(rb"/Subtype\s*/Image", with_images)
+
+
+def test_missing_results_is_one_line_error(tmp_path):
+    folder = tmp_path / "s"
+    folder.mkdir()
+    with pytest.raises(InputError, match="run `lps estimate"):
+        write_report(folder)
+    (folder / "results.json").write_text("{}")
+    with pytest.raises(InputError, match="not an lps results file"):
+        write_report(folder)
+
+
+def test_failed_render_keeps_the_previous_report(tmp_path):
+    results, truth = make_results()
+    folder = _session(tmp_path, results, truth)
+    good = write_report(folder)
+    before = good.read_bytes()
+    results["positions"] = "broken"
+    with pytest.raises(Exception):
+        write_report(folder, results)
+    assert good.read_bytes() == before
+    assert not list(folder.glob(".report.pdf*"))

@@ -1,0 +1,307 @@
+"""Capture panel: plan editor with estimated duration, session folder, start/pause/resume/abort, resume a session.
+
+The work is :class:`lps_gui.capture.engine.CaptureEngine` (what ``lps
+capture`` runs) in a worker thread. Every image is on disk and listed in
+captures.jsonl before the next move, so abort or a lost stage never loses
+what was captured, and "Resume session…" continues at the first missing stop.
+"""
+from __future__ import annotations
+
+import logging
+import time
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+from PySide6.QtCore import QSettings, Signal
+from PySide6.QtWidgets import (
+    QComboBox, QFileDialog, QFormLayout, QGroupBox, QHBoxLayout, QLabel, QProgressBar, QPushButton,
+    QSpinBox, QVBoxLayout, QWidget,
+)
+
+from lps_gui.core.board import Board
+from lps_gui.core.plan import Plan
+from lps_gui.errors import InputError
+from lps_gui.gui.services import lookup
+from lps_gui.gui.widgets import double_spin, PathPicker
+from lps_gui.gui.workers import Job, one_line
+
+log = logging.getLogger(__name__)
+
+FRAME_TIME_S = 0.1  # grab + encode + fsync per frame, a typical figure for the estimate
+PLAN_FIELDS = ("start_mm", "stop_mm", "step_mm", "directions", "runs", "overshoot_mm", "settle_s",
+               "frames_per_stop", "feed_mm_min")
+
+
+def plan_duration_s(plan: Plan, frame_s: float = FRAME_TIME_S) -> float:
+    """Rough duration of a plan: travel at feed (incl. overshoot approaches), settling and frames.
+
+    Acceleration is ignored, so short steps take somewhat longer in reality.
+    """
+    t_mm = plan.targets()
+    travel_mm = 0.0
+    for _run in range(plan.runs):
+        for d in plan.run_directions():
+            ordered = t_mm if d == "+" else t_mm[::-1]
+            travel_mm += 2.0 * plan.overshoot_mm + float(np.abs(np.diff(ordered)).sum())
+    stops = plan.n_frames() // plan.frames_per_stop
+    return travel_mm / (plan.feed_mm_min / 60.0) + stops * plan.settle_s + plan.n_frames() * frame_s
+
+
+def fmt_duration(seconds: float) -> str:
+    s = int(round(seconds))
+    return f"{s // 3600} h {s % 3600 // 60:02d} min" if s >= 3600 else (f"{s // 60} min {s % 60:02d} s" if s >= 60 else f"{s} s")
+
+
+class CapturePanel(QWidget):
+    """Edit a plan and run it on the connected stage and camera."""
+
+    run_requested = Signal(object)  # Job (or the exception that prevented it) for the main window
+    session_done = Signal(object)  # Path of the session folder written
+
+    def __init__(self, stage_ctl: Any, camera_panel: Any, board: Callable[[], Board],
+                 start_dir: Callable[[], str] | None = None, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.stage_ctl = stage_ctl
+        self.camera_panel = camera_panel
+        self.board = board
+        self.start_dir = start_dir or (lambda: "")
+        self.engine: Any = None
+        self.job: Job | None = None
+        self.session_dir: Path | None = None
+        self._t0 = 0.0
+
+        self.start_mm = double_spin(-10000, 10000, 0.0, 3, " mm")
+        self.stop_mm = double_spin(-10000, 10000, 58.0, 3, " mm")
+        self.step_mm = double_spin(0.001, 10000, 2.0, 3, " mm")
+        self.directions = QComboBox()
+        for label, key in (("forward ↑", "+"), ("backward ↓", "-"), ("both (ISO 230-2)", "both")):
+            self.directions.addItem(label, key)
+        self.runs = QSpinBox()
+        self.runs.setRange(1, 100)
+        self.overshoot_mm = double_spin(0.0, 100.0, 1.0, 3, " mm")
+        self.settle_s = double_spin(0.0, 60.0, 0.2, 2, " s")
+        self.frames_per_stop = QSpinBox()
+        self.frames_per_stop.setRange(1, 100)
+        self.feed_mm_min = double_spin(1.0, 20000.0, 600.0, 0, " mm/min")
+        plan_box = QGroupBox("Plan")
+        f = QFormLayout(plan_box)
+        f.addRow("Start", self.start_mm)
+        f.addRow("Stop", self.stop_mm)
+        f.addRow("Step", self.step_mm)
+        f.addRow("Directions", self.directions)
+        f.addRow("Runs", self.runs)
+        f.addRow("Overshoot", self.overshoot_mm)
+        f.addRow("Settle", self.settle_s)
+        f.addRow("Frames per stop", self.frames_per_stop)
+        f.addRow("Feed", self.feed_mm_min)
+        self.summary = QLabel()
+        f.addRow("", self.summary)
+
+        self.folder = PathPicker("new, empty folder for the session", folder=True, start_dir=self.start_dir)
+        sess = QGroupBox("Session")
+        sl = QVBoxLayout(sess)
+        sl.addWidget(self.folder)
+        self.resume_session_btn = QPushButton("Resume session…")
+        self.resume_session_btn.setToolTip("Continue an interrupted session at the first stop not captured")
+        sl.addWidget(self.resume_session_btn)
+
+        self.start_btn = QPushButton("Start")
+        self.pause_btn = QPushButton("Pause")
+        self.resume_btn = QPushButton("Resume")
+        self.abort_btn = QPushButton("Abort")
+        row = QHBoxLayout()
+        for b in (self.start_btn, self.pause_btn, self.resume_btn, self.abort_btn):
+            row.addWidget(b)
+        self.progress = QProgressBar()
+        self.eta = QLabel("idle")
+
+        lay = QVBoxLayout(self)
+        lay.setContentsMargins(6, 6, 6, 6)
+        lay.addWidget(plan_box)
+        lay.addWidget(sess)
+        lay.addLayout(row)
+        lay.addWidget(self.progress)
+        lay.addWidget(self.eta)
+        lay.addStretch(1)
+
+        for w in (self.start_mm, self.stop_mm, self.step_mm, self.overshoot_mm, self.settle_s, self.feed_mm_min):
+            w.valueChanged.connect(self.update_summary)
+        for w in (self.runs, self.frames_per_stop):
+            w.valueChanged.connect(self.update_summary)
+        self.directions.currentIndexChanged.connect(self.update_summary)
+        self.start_btn.clicked.connect(self.start)
+        self.pause_btn.clicked.connect(self.pause)
+        self.resume_btn.clicked.connect(self.resume)
+        self.abort_btn.clicked.connect(self.abort)
+        self.resume_session_btn.clicked.connect(self.resume_session_dialog)
+        self._set_running(False)
+        self.update_summary()
+
+    # ------------------------------------------------------------------ plan
+    def plan(self) -> Plan:
+        return Plan(start_mm=self.start_mm.value(), stop_mm=self.stop_mm.value(), step_mm=self.step_mm.value(),
+                    directions=str(self.directions.currentData()), runs=self.runs.value(),
+                    overshoot_mm=self.overshoot_mm.value(), settle_s=self.settle_s.value(),
+                    frames_per_stop=self.frames_per_stop.value(), feed_mm_min=self.feed_mm_min.value())
+
+    def set_plan(self, plan: Plan) -> None:
+        self.start_mm.setValue(plan.start_mm)
+        self.stop_mm.setValue(plan.stop_mm)
+        self.step_mm.setValue(plan.step_mm)
+        self.directions.setCurrentIndex(max(0, self.directions.findData(plan.directions)))
+        self.runs.setValue(plan.runs)
+        self.overshoot_mm.setValue(plan.overshoot_mm)
+        self.settle_s.setValue(plan.settle_s)
+        self.frames_per_stop.setValue(plan.frames_per_stop)
+        self.feed_mm_min.setValue(plan.feed_mm_min)
+
+    def update_summary(self) -> None:
+        try:
+            plan = self.plan()
+        except InputError as exc:
+            self.summary.setText(f"<span style='color:#b00020'>{one_line(exc)}</span>")
+            self.start_btn.setEnabled(False)
+            return
+        self.summary.setText(f"{len(plan.targets())} targets, {plan.n_frames()} frames, "
+                             f"about {fmt_duration(plan_duration_s(plan))}")
+        self.start_btn.setEnabled(self.job is None)
+
+    # ------------------------------------------------------------------ running
+    def start(self) -> None:
+        """Create the session in the chosen folder and capture the plan."""
+        try:
+            from lps_gui.io.session import Session
+
+            folder = self.folder.path()
+            if folder is None:
+                raise InputError("capture: choose a folder for the new session")
+            stage, camera = self._rig()
+            session = Session.create(folder, self.board(), self.plan(), camera=camera.properties(),
+                                     stage=stage.describe())
+        except Exception as exc:
+            self.run_requested.emit(exc)
+            return
+        self._run(session, stage, camera)
+
+    def resume_session_dialog(self) -> None:
+        folder = QFileDialog.getExistingDirectory(self, "Resume an interrupted session", self.start_dir())
+        if folder:
+            self.resume_session(Path(folder))
+
+    def resume_session(self, folder: Path) -> None:
+        """Continue ``folder`` at the first planned stop not listed in captures.jsonl."""
+        try:
+            from lps_gui.io.session import Session
+
+            session = Session.open(folder)
+            remaining = session.remaining_stops()
+            if not remaining:
+                raise InputError(f"{folder}: every planned stop is captured already; estimate it instead")
+            self.set_plan(session.plan())
+            self.folder.set_text(str(folder))
+            stage, camera = self._rig()
+        except Exception as exc:
+            self.run_requested.emit(exc)
+            return
+        log.info("capture: resuming %s, %d frames to go", folder, len(remaining))
+        self._run(session, stage, camera)
+
+    def _rig(self) -> tuple[Any, Any]:
+        from lps_gui.errors import HardwareError
+
+        stage = self.stage_ctl.stage
+        if stage is None:
+            raise HardwareError("capture: no stage connected; connect one in the Stage panel")
+        camera = self.camera_panel.camera or self.camera_panel.sim_camera
+        if camera is None:
+            raise HardwareError("capture: no camera; start the preview of a camera in the Camera panel")
+        if not camera.is_open:
+            camera.open()
+        return stage, camera
+
+    def _run(self, session: Any, stage: Any, camera: Any) -> None:
+        try:
+            engine_cls = lookup("lps_gui.capture.engine", "CaptureEngine")
+            self.engine = engine_cls(stage, camera, session)
+        except Exception as exc:
+            self.run_requested.emit(exc)
+            return
+        self.session_dir = Path(session.folder)
+        self.camera_panel.pause(True)
+        job = Job(f"capture {self.session_dir.name}", self.engine.run)
+        job.progress.connect(self._on_progress)
+        job.succeeded.connect(lambda _r: self.session_done.emit(self.session_dir))
+        job.cancelled.connect(lambda msg: self.eta.setText(msg))
+        job.failed.connect(lambda msg, _tb: self.eta.setText(f"stopped: {msg}; captured frames are kept"))
+        job.finished.connect(self._on_finished)
+        self.job = job
+        self._t0 = time.monotonic()
+        self._set_running(True)
+        self.eta.setText("starting…")
+        self.run_requested.emit(job)
+
+    def pause(self) -> None:
+        if self.engine is not None:
+            self.engine.pause()
+            self.eta.setText("paused")
+            self.pause_btn.setEnabled(False)
+            self.resume_btn.setEnabled(True)
+
+    def resume(self) -> None:
+        if self.engine is not None:
+            self.engine.resume()
+            self.pause_btn.setEnabled(True)
+            self.resume_btn.setEnabled(False)
+
+    def abort(self) -> None:
+        if self.engine is not None and hasattr(self.engine, "abort"):
+            self.engine.abort()
+        if self.job is not None:
+            self.job.cancel()
+
+    def stage_lost(self, message: str) -> None:
+        """The stage vanished: stop the capture; what is on disk stays."""
+        if self.job is not None:
+            self.abort()
+            self.eta.setText(f"stage lost: {message}; captured frames are kept, resume later")
+
+    def _on_progress(self, done: int, total: int, message: str) -> None:
+        self.progress.setMaximum(max(total, 1))
+        self.progress.setValue(done)
+        elapsed = time.monotonic() - self._t0
+        eta = elapsed / done * (total - done) if done else float("nan")
+        self.eta.setText(f"{done}/{total} frames" + (f", {fmt_duration(eta)} left" if done else "")
+                         + (f" — {message}" if message else ""))
+
+    def _on_finished(self) -> None:
+        self.job = None
+        self.engine = None
+        self.camera_panel.pause(False)
+        self._set_running(False)
+
+    def _set_running(self, on: bool) -> None:
+        self.start_btn.setEnabled(not on)
+        self.resume_session_btn.setEnabled(not on)
+        self.pause_btn.setEnabled(on)
+        self.resume_btn.setEnabled(False)
+        self.abort_btn.setEnabled(on)
+
+    # ------------------------------------------------------------------ settings
+    def save(self, s: QSettings) -> None:
+        for k, v in self.plan().to_dict().items():
+            if k in PLAN_FIELDS:
+                s.setValue(f"plan/{k}", v)
+
+    def restore(self, s: QSettings) -> None:
+        d = {k: s.value(f"plan/{k}") for k in PLAN_FIELDS if s.value(f"plan/{k}") is not None}
+        if not d:
+            return
+        try:
+            cur = self.plan().to_dict()
+            for k, v in d.items():
+                cur[k] = type(cur[k])(v) if not isinstance(cur[k], str) else str(v)
+            self.set_plan(Plan.from_dict(cur))
+        except (InputError, ValueError, TypeError):
+            log.info("capture: stored plan ignored (invalid)")
+

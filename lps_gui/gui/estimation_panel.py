@@ -1,0 +1,193 @@
+"""Estimation panel: pick a session and intrinsics, a method and its options, run it off the GUI thread.
+
+The work is :func:`lps_gui.pipeline.estimate.estimate_session`, the same
+function ``lps estimate`` runs; it writes results.json and the CSVs into the
+session (or the chosen output folder) and returns the results dict.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from PySide6.QtCore import Signal
+from PySide6.QtWidgets import (
+    QCheckBox, QComboBox, QFormLayout, QGroupBox, QHBoxLayout, QLabel, QProgressBar, QPushButton,
+    QVBoxLayout, QWidget,
+)
+
+from lps_gui.gui.services import lookup
+from lps_gui.gui.widgets import double_spin, PathPicker, ValueTable, fmt
+from lps_gui.gui.workers import Job
+
+METHODS = (("Joint LM (all positions at once)", "joint"), ("Hybrid (paper: PnP + LM + grid search)", "hybrid"),
+           ("Per-view PnP", "pnp"))
+
+
+def parameter_rows(results: dict[str, Any]) -> list[tuple[str, str, str, str]]:
+    """(name, value, sigma, unit) rows summarizing a results dict."""
+    p = results.get("parameters") or {}
+    rows: list[tuple[str, str, str, str]] = [("method", str(results.get("method", "")), "", "")]
+    for name, key, sig, unit in (
+        ("noise sigma (a posteriori)", "sigma_px", None, "px"),
+        ("RMS reprojection", "rms_px", None, "px"),
+        ("views used / total", None, None, ""),
+        ("observations", "n_observations", None, ""),
+        ("iterations", "iterations", None, ""),
+    ):
+        if key is None:
+            rows.append((name, f"{p.get('n_used', '—')} / {p.get('n_views', '—')}", "", unit))
+        else:
+            rows.append((name, fmt(p.get(key)), fmt(p.get(sig)) if sig else "", unit))
+    for i, ax in enumerate("xyz"):
+        l0 = p.get("l0_cam_mm") or [None] * 3
+        l0s = p.get("l0_sigma_mm") or [None] * 3
+        rows.append((f"l0 {ax}", fmt(l0[i], 7), fmt(l0s[i], 2), "mm"))
+    for i, ax in enumerate("xyz"):
+        n = p.get("n_cam") or [None] * 3
+        rows.append((f"n {ax}", fmt(n[i], 7), "", ""))
+    rv = p.get("rvec_rad") or [None] * 3
+    rvs = p.get("rvec_sigma_rad") or [None] * 3
+    for i, ax in enumerate("xyz"):
+        rows.append((f"rotation {ax}", fmt(rv[i], 7), fmt(rvs[i], 2), "rad"))
+    single = ((results.get("figures") or {}).get("single_run") or {})
+    for name, key, unit in (("mean step", "mean_step_mm", "mm"), ("step std", "step_std_um", "µm"),
+                            ("max |deviation|", "max_abs_deviation_um", "µm"), ("scale error", "scale_ppm", "ppm")):
+        if key in single:
+            rows.append((name, fmt(single.get(key)), "", unit))
+    truth = results.get("truth_comparison") or {}
+    if "position_rms_error_um" in truth:
+        rows.append(("position error vs truth (RMS)", fmt(truth["position_rms_error_um"]), "", "µm"))
+    return rows
+
+
+class EstimationPanel(QWidget):
+    """Run the estimator on a session; results go to the Results panel."""
+
+    run_requested = Signal(object)  # Job, started by the main window
+    results_ready = Signal(object, object)  # results dict, session folder Path
+
+    def __init__(self, start_dir=None, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.session = PathPicker("session folder (holds session.json)", folder=True, start_dir=start_dir)
+        self.intrinsics = PathPicker("empty: use the session's intrinsics", folder=False,
+                                     filter="Intrinsics (*.json *.yaml *.yml *.xml)", start_dir=start_dir)
+        self.method = QComboBox()
+        for label, key in METHODS:
+            self.method.addItem(label, key)
+        self.robust = QCheckBox("robust (flag and re-solve without outlier views)")
+        self.robust.setChecked(True)
+        self.outlier_k = double_spin(2.0, 20.0, 5.0, 1, " σ")
+        self.grid_window = double_spin(0.01, 50.0, 2.0, 3, " mm")
+        self.grid_resolution = double_spin(0.0001, 1.0, 0.001, 4, " mm")
+        self.threshold_px = double_spin(0.1, 100.0, 5.0, 1, " px")
+
+        inputs = QGroupBox("Inputs")
+        f = QFormLayout(inputs)
+        f.addRow("Session", self.session)
+        f.addRow("Intrinsics", self.intrinsics)
+        opts = QGroupBox("Method")
+        o = QFormLayout(opts)
+        o.addRow("Method", self.method)
+        o.addRow("", self.robust)
+        o.addRow("Outlier threshold k", self.outlier_k)
+        o.addRow("Grid window (hybrid)", self.grid_window)
+        o.addRow("Grid resolution (hybrid)", self.grid_resolution)
+        o.addRow("Reprojection threshold", self.threshold_px)
+
+        self.run_btn = QPushButton("Estimate")
+        self.cancel_btn = QPushButton("Cancel")
+        self.cancel_btn.setEnabled(False)
+        self.progress = QProgressBar()
+        self.progress.setFormat("%p%")
+        self.message = QLabel("idle")
+        row = QHBoxLayout()
+        row.addWidget(self.run_btn)
+        row.addWidget(self.cancel_btn)
+        row.addWidget(self.progress, 1)
+
+        self.table = ValueTable(["Parameter", "Value", "σ", "Unit"])
+        lay = QVBoxLayout(self)
+        lay.setContentsMargins(6, 6, 6, 6)
+        lay.addWidget(inputs)
+        lay.addWidget(opts)
+        lay.addLayout(row)
+        lay.addWidget(self.message)
+        lay.addWidget(self.table, 1)
+
+        self.job: Job | None = None
+        self.last_results: dict[str, Any] | None = None
+        self.method.currentIndexChanged.connect(self._method_changed)
+        self.run_btn.clicked.connect(self.start)
+        self.cancel_btn.clicked.connect(self.cancel)
+        self._method_changed()
+
+    def _method_changed(self) -> None:
+        hybrid = self.method.currentData() == "hybrid"
+        self.grid_window.setEnabled(hybrid)
+        self.grid_resolution.setEnabled(hybrid)
+
+    def options(self) -> dict[str, Any]:
+        opts: dict[str, Any] = {"robust": self.robust.isChecked(), "outlier_k": self.outlier_k.value(),
+                                "threshold_px": self.threshold_px.value()}
+        if self.method.currentData() == "hybrid":
+            opts.update(grid_window_mm=self.grid_window.value(), grid_resolution_mm=self.grid_resolution.value())
+        return opts
+
+    def make_job(self) -> Job:
+        """The estimation of the chosen session as a Job (not started)."""
+        estimate_session = lookup("lps_gui.pipeline.estimate", "estimate_session")
+        session = self.session.path()
+        if session is None:
+            from lps_gui.errors import InputError
+
+            raise InputError("estimation: choose a session folder first")
+        return Job(f"estimate {session.name}", estimate_session, session, method=str(self.method.currentData()),
+                   options=self.options(), intrinsics_path=self.intrinsics.path())
+
+    def start(self) -> None:
+        """Ask the main window to run the estimation (it owns job bookkeeping and error boxes)."""
+        try:
+            job = self.make_job()
+        except Exception as exc:
+            from lps_gui.gui.workers import one_line
+
+            self.message.setText(one_line(exc))
+            self.run_requested.emit(exc)
+            return
+        self.job = job
+        session = self.session.path()
+        job.progress.connect(self._on_progress)
+        job.succeeded.connect(lambda res: self._on_done(res, session))
+        job.failed.connect(lambda msg, _tb: self.message.setText(f"failed: {msg}"))
+        job.cancelled.connect(lambda msg: self.message.setText(msg))
+        job.finished.connect(self._on_finished)
+        self.run_btn.setEnabled(False)
+        self.cancel_btn.setEnabled(True)
+        self.progress.setValue(0)
+        self.message.setText("running…")
+        self.run_requested.emit(job)
+
+    def cancel(self) -> None:
+        if self.job is not None:
+            self.job.cancel()
+
+    def _on_progress(self, done: int, total: int, message: str) -> None:
+        self.progress.setMaximum(max(total, 1))
+        self.progress.setValue(done)
+        if message:
+            self.message.setText(message)
+
+    def _on_done(self, results: dict[str, Any], session: Path | None) -> None:
+        self.show_results(results)
+        self.message.setText("done")
+        self.results_ready.emit(results, session)
+
+    def show_results(self, results: dict[str, Any]) -> None:
+        self.last_results = results
+        self.table.set_rows(parameter_rows(results))
+
+    def _on_finished(self) -> None:
+        self.run_btn.setEnabled(True)
+        self.cancel_btn.setEnabled(False)
+        self.job = None
+

@@ -1,0 +1,415 @@
+"""The main window: dockable panels, menus, status bar, jobs and remembered settings.
+
+Panels never run long work themselves: they hand a :class:`Job` to
+:meth:`MainWindow.run_job`, which shows its progress in the status bar,
+offers Cancel, and turns a failure into a message box with the one-line
+cause (the traceback goes to the log panel). Layout, last folders, port and
+options are kept in QSettings.
+"""
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+from typing import Any, Callable
+
+from PySide6.QtCore import QSettings, Qt, QTimer
+from PySide6.QtGui import QAction, QCloseEvent, QKeySequence
+from PySide6.QtWidgets import (
+    QDockWidget, QFileDialog, QLabel, QMainWindow, QMessageBox, QProgressBar, QPushButton, QWidget,
+)
+
+from lps_gui import __version__
+from lps_gui.core.board import Board
+from lps_gui.gui.camera_panel import CameraPanel
+from lps_gui.gui.capture_panel import CapturePanel
+from lps_gui.gui.estimation_panel import EstimationPanel
+from lps_gui.gui.intrinsics_panel import IntrinsicsPanel
+from lps_gui.gui.log_panel import LogPanel
+from lps_gui.gui.results_panel import ResultsPanel
+from lps_gui.gui.services import lookup
+from lps_gui.gui.stage_controller import StageController
+from lps_gui.gui.stage_panel import StagePanel
+from lps_gui.gui.workers import Job, one_line
+from lps_gui.hardware.stage import StageStatus
+
+log = logging.getLogger("lps_gui.gui")
+
+ORGANIZATION = "lps-calib"
+APPLICATION = "lps-gui"
+LAYOUT_VERSION = 1
+
+
+class MainWindow(QMainWindow):
+    """The operator's window over stage, camera, intrinsics, capture, estimation and results."""
+
+    def __init__(self, settings: QSettings | None = None, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.settings = settings or QSettings(ORGANIZATION, APPLICATION)
+        self.setWindowTitle(f"lps-calib {__version__} — linear positioning system calibration")
+        self.setDockNestingEnabled(True)
+        self.jobs: list[Job] = []
+        self.last_error: tuple[str, str] | None = None
+        self._error_box: QMessageBox | None = None
+
+        # --- panels
+        self.log_panel = LogPanel()
+        self.log_panel.attach()
+        logging.getLogger("lps_gui").setLevel(logging.INFO)
+        self.stage_ctl = StageController(self)
+        self.stage_panel = StagePanel(self.stage_ctl)
+        self.intrinsics_panel = IntrinsicsPanel(start_dir=self.last_folder)
+        self.camera_panel = CameraPanel(board=self.intrinsics_panel.board)
+        self.capture_panel = CapturePanel(self.stage_ctl, self.camera_panel, board=self.intrinsics_panel.board,
+                                          start_dir=self.last_folder)
+        self.estimation_panel = EstimationPanel(start_dir=self.last_folder)
+        self.results_panel = ResultsPanel()
+
+        self.docks: dict[str, QDockWidget] = {}
+        for name, title, widget in (
+            ("stage", "Stage", self.stage_panel), ("camera", "Camera", self.camera_panel),
+            ("intrinsics", "Intrinsics", self.intrinsics_panel), ("capture", "Capture", self.capture_panel),
+            ("estimation", "Estimation", self.estimation_panel), ("results", "Results", self.results_panel),
+            ("log", "Log", self.log_panel),
+        ):
+            dock = QDockWidget(title, self)
+            dock.setObjectName(f"dock_{name}")
+            dock.setWidget(widget)
+            self.docks[name] = dock
+        self.default_layout()
+
+        # --- status bar
+        sb = self.statusBar()
+        self.status_conn = QLabel("Stage: not connected")
+        self.status_state = QLabel("—")
+        self.status_pos = QLabel("X — mm")
+        self.status_job = QLabel("idle")
+        self.status_progress = QProgressBar()
+        self.status_progress.setMaximumWidth(220)
+        self.status_progress.setVisible(False)
+        self.status_cancel = QPushButton("Cancel")
+        self.status_cancel.setVisible(False)
+        self.status_cancel.clicked.connect(self.cancel_jobs)
+        for w in (self.status_conn, self.status_state, self.status_pos):
+            sb.addWidget(w)
+        sb.addPermanentWidget(self.status_job)
+        sb.addPermanentWidget(self.status_progress)
+        sb.addPermanentWidget(self.status_cancel)
+
+        self._build_menus()
+        self._wire()
+        self.restore_settings()
+        log.info("lps-gui %s ready", __version__)
+
+    # ------------------------------------------------------------------ layout
+    def default_layout(self) -> None:
+        """Left: stage / capture / estimation / intrinsics tabs; right: results beside camera and log."""
+        d = self.docks
+        for dock in d.values():
+            dock.setFloating(False)
+            dock.show()
+        self.addDockWidget(Qt.DockWidgetArea.LeftDockWidgetArea, d["stage"])
+        for name in ("capture", "estimation", "intrinsics"):
+            self.tabifyDockWidget(d["stage"], d[name])
+        self.addDockWidget(Qt.DockWidgetArea.RightDockWidgetArea, d["results"])
+        self.splitDockWidget(d["results"], d["camera"], Qt.Orientation.Horizontal)
+        self.splitDockWidget(d["camera"], d["log"], Qt.Orientation.Vertical)
+        d["stage"].raise_()
+        self.resizeDocks([d["stage"], d["results"], d["camera"]], [430, 760, 400], Qt.Orientation.Horizontal)
+        self.resizeDocks([d["camera"], d["log"]], [600, 250], Qt.Orientation.Vertical)
+
+    def show_panel(self, name: str) -> None:
+        dock = self.docks[name]
+        dock.show()
+        dock.raise_()
+
+    def _build_menus(self) -> None:
+        mb = self.menuBar()
+        m = mb.addMenu("&File")
+        self.open_session_action = self._action(m, "Open session…", self.open_session_dialog, QKeySequence.StandardKey.Open)
+        m.addSeparator()
+        self._action(m, "Export PDF report…", lambda: self.export("pdf"))
+        self._action(m, "Export CSV…", lambda: self.export("csv"))
+        self._action(m, "Save screenshot…", self.screenshot_dialog)
+        m.addSeparator()
+        self._action(m, "Quit", self.close, QKeySequence.StandardKey.Quit)
+
+        m = mb.addMenu("&Stage")
+        self._action(m, "Connect / disconnect", self.stage_panel.toggle_connection)
+        self._action(m, "Home", lambda: self.stage_ctl.call("home", "home"))
+        self._action(m, "Unlock", lambda: self.stage_ctl.call("unlock", "unlock"))
+        self._action(m, "Feed hold", lambda: self.stage_ctl.call("feed hold", "feed_hold"))
+        self._action(m, "Resume", lambda: self.stage_ctl.call("resume", "resume"))
+        self._action(m, "Stop jog", self.stage_panel.stop)
+
+        m = mb.addMenu("&Run")
+        self._action(m, "Calibrate intrinsics", self.intrinsics_panel.start)
+        self._action(m, "Start capture", self.capture_panel.start)
+        self._action(m, "Estimate", self.estimation_panel.start, QKeySequence("Ctrl+R"))
+        self._action(m, "Cancel running work", self.cancel_jobs, QKeySequence("Ctrl+."))
+
+        m = mb.addMenu("&View")
+        for dock in self.docks.values():
+            m.addAction(dock.toggleViewAction())
+        m.addSeparator()
+        self._action(m, "Reset layout", self.default_layout)
+
+        m = mb.addMenu("&Help")
+        self._action(m, "About lps-calib", self.about)
+
+    def _action(self, menu: Any, text: str, slot: Callable[[], Any], shortcut: Any = None) -> QAction:
+        a = QAction(text, self)
+        if shortcut is not None:
+            a.setShortcut(shortcut)
+        a.triggered.connect(lambda _=False: slot())
+        menu.addAction(a)
+        return a
+
+    def _wire(self) -> None:
+        ctl = self.stage_ctl
+        ctl.status_changed.connect(self._on_status)
+        ctl.connection_changed.connect(self._on_connection)
+        ctl.link_lost.connect(self._on_link_lost)
+        ctl.command_failed.connect(self._on_command_failed)
+        ctl.event_received.connect(self._on_stage_event)
+        self.stage_panel.camera_offered.connect(self.camera_panel.set_sim_camera)
+        self.camera_panel.failed.connect(self.show_error)
+        for panel in (self.estimation_panel, self.capture_panel, self.intrinsics_panel):
+            panel.run_requested.connect(self._panel_job)
+        self.estimation_panel.results_ready.connect(self._on_results)
+        self.capture_panel.session_done.connect(self._on_capture_done)
+        self.results_panel.export_requested.connect(self.export)
+
+    # ------------------------------------------------------------------ stage status
+    def _on_status(self, st: StageStatus) -> None:
+        self.status_state.setText(f"State: {st.state}")
+        x, y, z = st.work_mm
+        self.status_pos.setText(f"X {x:.3f}  Y {y:.3f}  Z {z:.3f} mm")
+
+    def _on_connection(self, connected: bool, description: str) -> None:
+        if connected:
+            self.status_conn.setText(f"Stage: {description}")
+            self.settings.setValue("stage/source", self.stage_panel.source.currentData())
+            self.settings.setValue("stage/baud", self.stage_panel.baud.currentData())
+        else:
+            self.status_conn.setText("Stage: not connected")
+            self.status_state.setText("—")
+            self.status_pos.setText("X — mm")
+            self.camera_panel.set_sim_camera(None)
+
+    def _on_link_lost(self, message: str) -> None:
+        was = self.stage_ctl.connected
+        self.stage_ctl.detach(message)
+        self.stage_panel.connect_failed()
+        self.capture_panel.stage_lost(message)
+        if was:
+            self.show_error("Stage connection lost", message)
+
+    def _on_command_failed(self, what: str, message: str) -> None:
+        if what == "status":
+            return  # reported through link_lost
+        if what == "connect":
+            self.show_error("Stage not connected", message)
+        else:
+            self.statusBar().showMessage(f"stage {what}: {message}", 8000)
+
+    def _on_stage_event(self, event: Any) -> None:
+        text = f"stage {event.kind}" + (f" {event.code}" if event.code is not None else "") + (f": {event.text}" if event.text else "")
+        (log.warning if event.kind in ("alarm", "error") else log.info)(text)
+        if event.kind == "alarm":
+            self.statusBar().showMessage(text, 10000)
+
+    # ------------------------------------------------------------------ jobs
+    def _panel_job(self, job: Any) -> None:
+        if isinstance(job, Job):
+            self.run_job(job)
+        elif isinstance(job, BaseException):  # the panel could not even prepare its work
+            self.show_error("Cannot start", one_line(job))
+
+    def run_job(self, job: Job, on_success: Callable[[Any], None] | None = None) -> Job:
+        """Start ``job`` in its thread with status-bar progress, cancel and error reporting."""
+        self.jobs.append(job)
+        job.progress.connect(self._on_job_progress)
+        job.failed.connect(lambda msg, tb, name=job.name: self._on_job_failed(name, msg, tb))
+        job.cancelled.connect(lambda msg, name=job.name: log.info("%s: %s", name, msg))
+        if on_success is not None:
+            job.succeeded.connect(on_success)
+        job.finished.connect(lambda j=job: self._on_job_finished(j))
+        self.status_job.setText(job.name)
+        self.status_progress.setRange(0, 0)
+        self.status_progress.setVisible(True)
+        self.status_cancel.setVisible(True)
+        job.start()
+        return job
+
+    def _on_job_progress(self, done: int, total: int, message: str) -> None:
+        self.status_progress.setRange(0, max(total, 1))
+        self.status_progress.setValue(done)
+        if message:
+            self.status_job.setText(message[:60])
+
+    def _on_job_failed(self, name: str, message: str, tb: str) -> None:
+        log.error("%s failed: %s\n%s", name, message, tb.rstrip())
+        self.show_error(f"{name.split(' ')[0].capitalize()} failed", message)
+
+    def _on_job_finished(self, job: Job) -> None:
+        if job in self.jobs:
+            self.jobs.remove(job)
+        if not self.jobs:
+            self.status_job.setText("cancelled" if job.token.cancelled else ("failed" if job.error else "done"))
+            self.status_progress.setVisible(False)
+            self.status_cancel.setVisible(False)
+        job.deleteLater()
+
+    def cancel_jobs(self) -> None:
+        for job in list(self.jobs):
+            job.cancel()
+
+    def show_error(self, title: str, message: str) -> None:
+        """A non-blocking message box with the one-line cause; data stay as they are."""
+        self.last_error = (title, message)
+        log.error("%s: %s", title, message)
+        if self._error_box is not None:
+            self._error_box.close()
+        box = QMessageBox(QMessageBox.Icon.Warning, title, message, QMessageBox.StandardButton.Ok, self)
+        box.setWindowModality(Qt.WindowModality.WindowModal)
+        box.open()
+        self._error_box = box
+
+    # ------------------------------------------------------------------ results and sessions
+    def _on_results(self, results: dict, session_dir: Path | None) -> None:
+        out = session_dir
+        self.results_panel.set_results(results, session_dir, out)
+        self.show_panel("results")
+        if session_dir:
+            self.remember_folder(session_dir)
+
+    def _on_capture_done(self, session_dir: Path) -> None:
+        self.estimation_panel.session.set_text(str(session_dir))
+        self.remember_folder(session_dir)
+
+    def open_session_dialog(self) -> None:
+        folder = QFileDialog.getExistingDirectory(self, "Open a session folder", self.last_folder())
+        if folder:
+            self.open_session(Path(folder))
+
+    def open_session(self, folder: Path) -> bool:
+        """Select ``folder`` for estimation and show its results.json if it has one."""
+        folder = Path(folder)
+        self.estimation_panel.session.set_text(str(folder))
+        self.remember_folder(folder)
+        results_path = folder / "results.json"
+        if not results_path.exists():
+            self.show_panel("estimation")
+            return False
+        try:
+            results = lookup("lps_gui.io.results_file", "read_results")(results_path)
+        except Exception as exc:
+            self.show_error("Results not loaded", one_line(exc))
+            return False
+        self.estimation_panel.show_results(results)
+        self.results_panel.set_results(results, folder, folder)
+        self.show_panel("results")
+        return True
+
+    def export(self, kind: str) -> None:
+        if self.results_panel.results is None:
+            self.show_error("Nothing to export", "export: no results yet; run an estimation or open a session first")
+            return
+        start = str(self.results_panel.session_dir or self.last_folder())
+        if kind == "pdf":
+            path, _ = QFileDialog.getSaveFileName(self, "Export PDF report", str(Path(start) / "report.pdf"), "PDF (*.pdf)")
+            if path:
+                self.export_pdf(Path(path))
+        else:
+            folder = QFileDialog.getExistingDirectory(self, "Export CSV into folder", start)
+            if folder:
+                self.export_csv(Path(folder))
+
+    def export_pdf(self, path: Path) -> Job | None:
+        """Write the PDF report in a worker thread."""
+        try:
+            write_report = lookup("lps_gui.report.pdf", "write_report")
+        except Exception as exc:
+            self.show_error("PDF export unavailable", one_line(exc))
+            return None
+        panel = self.results_panel
+        job = Job(f"report {path.name}", write_report, panel.session_dir or path.parent, panel.results, path)
+        return self.run_job(job, lambda p: log.info("report written to %s", p))
+
+    def export_csv(self, folder: Path) -> list[Path]:
+        try:
+            files = self.results_panel.export_csv(folder)
+        except Exception as exc:
+            self.show_error("CSV export failed", one_line(exc))
+            return []
+        log.info("CSV written: %s", ", ".join(str(f) for f in files))
+        return files
+
+    def screenshot_dialog(self) -> None:
+        path, _ = QFileDialog.getSaveFileName(self, "Save screenshot", str(Path(self.last_folder()) / "lps-gui.png"), "PNG (*.png)")
+        if path:
+            self.grab().save(path)
+
+    def about(self) -> None:
+        QMessageBox.about(self, "About lps-calib",
+                          f"lps-calib {__version__}\nMeasures how accurately a linear positioning system moves a "
+                          "camera, from the camera's own images of a fixed chessboard.")
+
+    # ------------------------------------------------------------------ settings
+    def last_folder(self) -> str:
+        return str(self.settings.value("folders/last", str(Path.home())))
+
+    def remember_folder(self, folder: Path) -> None:
+        self.settings.setValue("folders/last", str(Path(folder)))
+
+    def restore_settings(self) -> None:
+        s = self.settings
+        geometry = s.value("window/geometry")
+        if geometry is not None:
+            self.restoreGeometry(geometry)
+        else:
+            self.resize(1600, 1000)
+        state = s.value("window/state")
+        if state is not None:
+            self.restoreState(state, LAYOUT_VERSION)
+        source = s.value("stage/source")
+        if source:
+            self.stage_panel.select_source(str(source))  # the simulated stage is the default otherwise
+        baud = s.value("stage/baud")
+        if baud is not None:
+            i = self.stage_panel.baud.findData(int(baud))
+            if i >= 0:
+                self.stage_panel.baud.setCurrentIndex(i)
+        self.capture_panel.restore(s)
+        method = s.value("estimation/method")
+        if method:
+            i = self.estimation_panel.method.findData(str(method))
+            if i >= 0:
+                self.estimation_panel.method.setCurrentIndex(i)
+
+    def save_settings(self) -> None:
+        s = self.settings
+        s.setValue("window/geometry", self.saveGeometry())
+        s.setValue("window/state", self.saveState(LAYOUT_VERSION))
+        s.setValue("estimation/method", self.estimation_panel.method.currentData())
+        self.capture_panel.save(s)
+        s.sync()
+
+    def shutdown(self) -> None:
+        """Stop previews, jobs and the stage thread (used by close and by tests)."""
+        self.camera_panel.stop()
+        self.cancel_jobs()
+        for job in list(self.jobs):
+            job.wait(10000)
+        self.stage_ctl.shutdown()
+        self.log_panel.detach()
+
+    def closeEvent(self, event: QCloseEvent) -> None:
+        self.save_settings()
+        self.shutdown()
+        super().closeEvent(event)
+
+
+def board_default() -> Board:
+    """The board of the simulated rig (preset ``small``): 9x6 inner corners, 20 mm squares."""
+    return Board(cols=9, rows=6, square_mm=20.0)

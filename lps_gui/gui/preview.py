@@ -1,0 +1,113 @@
+"""Live preview frames grabbed on a background thread.
+
+``Camera.grab`` blocks until a frame exists and chessboard detection takes
+tens of milliseconds, so both run on a plain worker thread that keeps only
+the newest result; the GUI picks it up from a timer and never waits.
+"""
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from lps_gui.camera.base import Camera
+from lps_gui.core.board import Board
+from lps_gui.gui.services import Unavailable, lookup
+from lps_gui.gui.workers import one_line
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class PreviewResult:
+    """The newest frame with what was found in it."""
+
+    number: int
+    image: np.ndarray  # shape (H, W) or (H, W, 3), uint8
+    corners_px: np.ndarray | None  # shape (N, 2) or None when no board was found
+    sharpness: float | None  # higher is sharper; None when unavailable
+    fps: float
+    detection_available: bool
+
+
+class PreviewGrabber:
+    """Grab, detect and measure sharpness in a loop until :meth:`stop`.
+
+    Parameters
+    ----------
+    camera : an open camera.
+    board : returns the board to look for (the operator may change it live).
+    max_fps : the loop never runs faster (saves a shared CPU).
+    on_error : called once (from the worker thread) with a one-line message if grabbing fails.
+    """
+
+    def __init__(self, camera: Camera, board: Callable[[], Board], max_fps: float = 15.0,
+                 on_error: Callable[[str], None] | None = None) -> None:
+        self.camera = camera
+        self.board = board
+        self.period_s = 1.0 / max_fps
+        self.on_error = on_error
+        self._lock = threading.Lock()
+        self._latest: PreviewResult | None = None
+        self._stop = threading.Event()
+        self._paused = threading.Event()
+        self._thread = threading.Thread(target=self._loop, name="camera-preview", daemon=True)
+        try:
+            self._detect = lookup("lps_gui.camera.detection", "detect_chessboard")
+            self._sharpness = lookup("lps_gui.camera.detection", "sharpness")
+        except Unavailable:
+            self._detect = self._sharpness = None
+
+    def start(self) -> "PreviewGrabber":
+        self._thread.start()
+        return self
+
+    def stop(self, timeout_s: float = 2.0) -> None:
+        self._stop.set()
+        self._thread.join(timeout_s)
+
+    def pause(self, on: bool) -> None:
+        """Stop grabbing while someone else (the capture engine) owns the camera."""
+        (self._paused.set if on else self._paused.clear)()
+
+    def latest(self) -> PreviewResult | None:
+        with self._lock:
+            return self._latest
+
+    def _loop(self) -> None:
+        n = 0
+        t_prev = time.monotonic()
+        fps = 0.0
+        while not self._stop.is_set():
+            t0 = time.monotonic()
+            if self._paused.is_set():
+                self._stop.wait(self.period_s)
+                continue
+            try:
+                frame = self.camera.grab()
+            except Exception as exc:  # a vanished camera ends the preview, reported once
+                log.error("camera preview stopped: %s", one_line(exc), exc_info=exc)
+                if self.on_error:
+                    self.on_error(one_line(exc))
+                return
+            image = frame.image
+            corners = sharp = None
+            if self._detect is not None:
+                try:
+                    corners = self._detect(image, self.board())
+                    sharp = float(self._sharpness(image))
+                except Exception:  # detection trouble must not stop the live picture
+                    log.debug("preview detection failed", exc_info=True)
+            n += 1
+            now = time.monotonic()
+            dt = now - t_prev
+            t_prev = now
+            fps = 1.0 / dt if fps == 0.0 and dt > 0 else 0.8 * fps + 0.2 * (1.0 / max(dt, 1e-6))
+            with self._lock:
+                self._latest = PreviewResult(n, image, None if corners is None else np.asarray(corners),
+                                             sharp, fps, self._detect is not None)
+            self._stop.wait(max(0.0, self.period_s - (time.monotonic() - t0)))

@@ -1,0 +1,218 @@
+"""Results panel: the report's figures drawn live, tables, the clicked view, export.
+
+Figures come from :func:`lps_gui.report.figures.figures_from_results` (the
+same definitions the PDF paints) and tables from ``lps_gui.report.summary``,
+so the screen and the paper show the same numbers.
+"""
+from __future__ import annotations
+
+import logging
+import shutil
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pyqtgraph as pg
+from PySide6.QtCore import Qt, Signal
+from PySide6.QtWidgets import (
+    QHBoxLayout, QLabel, QPushButton, QSplitter, QTabWidget, QVBoxLayout, QWidget,
+)
+
+from lps_gui.gui.plot_adapter import DrawnFigure, draw_figure
+from lps_gui.gui.services import lookup
+from lps_gui.gui.view_detail import ViewDetail
+from lps_gui.gui.widgets import ValueTable
+from lps_gui.report.figures import figures_from_results, position_columns
+
+log = logging.getLogger(__name__)
+
+CSV_FILES = ("positions.csv", "summary.csv")
+CLICKABLE = {"positions": ("target_mm", "measured_mm"), "deviation": ("target_mm", "deviation_um"),
+             "residuals": ("index", "rms_px")}
+
+
+class ResultsPanel(QWidget):
+    """Plots, ISO 230-2 and position tables of one estimation; export to PDF and CSV."""
+
+    export_requested = Signal(str)  # "pdf" or "csv"; the main window asks for a path and runs it
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.results: dict[str, Any] | None = None
+        self.session_dir: Path | None = None
+        self.results_dir: Path | None = None
+        self.drawn: dict[str, DrawnFigure] = {}
+        self._corners: Any = None
+
+        self.header = QLabel("No results yet: run an estimation or open a session with results.json.")
+        self.header.setWordWrap(True)
+        self.pdf_btn = QPushButton("Export PDF…")
+        self.csv_btn = QPushButton("Export CSV…")
+        for b in (self.pdf_btn, self.csv_btn):
+            b.setEnabled(False)
+        top = QHBoxLayout()
+        top.addWidget(self.header, 1)
+        top.addWidget(self.pdf_btn)
+        top.addWidget(self.csv_btn)
+
+        self.tabs = QTabWidget()
+        self.tabs.setDocumentMode(True)
+        self.plots: dict[str, pg.PlotWidget] = {}
+        self.iso_table = ValueTable(["Figure", "Value", "Unit"])
+        self.position_table = ValueTable([""])
+        self.detail = ViewDetail()
+        split = QSplitter(Qt.Orientation.Horizontal)
+        split.addWidget(self.tabs)
+        split.addWidget(self.detail)
+        split.setStretchFactor(0, 3)
+        split.setStretchFactor(1, 2)
+        lay = QVBoxLayout(self)
+        lay.setContentsMargins(6, 6, 6, 6)
+        lay.addLayout(top)
+        lay.addWidget(split, 1)
+        self.pdf_btn.clicked.connect(lambda: self.export_requested.emit("pdf"))
+        self.csv_btn.clicked.connect(lambda: self.export_requested.emit("csv"))
+
+    # ------------------------------------------------------------------ showing
+    def set_results(self, results: dict[str, Any], session_dir: Path | None = None,
+                    results_dir: Path | None = None) -> None:
+        """Draw every figure of ``results``; ``session_dir`` gives images, corners and truth."""
+        self.results = results
+        self.session_dir = Path(session_dir) if session_dir else None
+        self.results_dir = Path(results_dir) if results_dir else self.session_dir
+        self._corners = None
+        truth = self._session_truth()
+        figures = figures_from_results(results, truth)
+        current = self.tabs.currentIndex()
+        self.tabs.clear()
+        self.drawn.clear()
+        for fig in figures:
+            plot = self.plots.get(fig.key) or pg.PlotWidget(background="w")
+            self.plots[fig.key] = plot
+            drawn = draw_figure(plot.getPlotItem(), fig)
+            self.drawn[fig.key] = drawn
+            for item in drawn.items + drawn.outliers:
+                item.sigPointsClicked.connect(lambda _item, points, _ev, key=fig.key: self._clicked(key, points))
+            self.tabs.addTab(plot, fig.title.split(" (")[0] if len(fig.title) > 28 else fig.title)
+            self.tabs.setTabToolTip(self.tabs.count() - 1, fig.notes or fig.title)
+        self._fill_tables(results)
+        self.tabs.addTab(self.iso_table, "Accuracy figures")
+        self.tabs.addTab(self.position_table, "Positions")
+        self.tabs.setCurrentIndex(max(0, min(current, self.tabs.count() - 1)))
+        p = results.get("parameters") or {}
+        cols = position_columns(results)
+        n_out = int(cols["outlier"].sum())
+        single = ((results.get("figures") or {}).get("single_run") or {})
+        maxdev = single.get("max_abs_deviation_um")
+        self.header.setText(
+            f"<b>{results.get('method', '?')}</b> on {self.session_dir.name if self.session_dir else 'results'}: "
+            f"{len(cols['index'])} positions, {p.get('n_used', '?')} used, {n_out} outlier view(s); "
+            f"RMS {_f(p.get('rms_px'))} px"
+            + (f"; max |deviation| {_f(maxdev)} µm" if maxdev is not None else ""))
+        for b in (self.pdf_btn, self.csv_btn):
+            b.setEnabled(True)
+
+    def _session_truth(self) -> dict[str, Any] | None:
+        if self.session_dir is None:
+            return None
+        try:
+            from lps_gui.io.session import Session
+
+            return Session.open(self.session_dir).truth
+        except Exception:  # a results file without its session still plots
+            return None
+
+    def _fill_tables(self, results: dict[str, Any]) -> None:
+        try:
+            summary_rows = lookup("lps_gui.report.summary", "summary_rows")
+            position_table = lookup("lps_gui.report.summary", "position_table")
+        except Exception as exc:  # the report module is not there: show the raw figures
+            log.warning("results: summary tables unavailable (%s)", exc)
+            single = ((results.get("figures") or {}).get("single_run") or {})
+            self.iso_table.set_rows([(k, _f(v), "") for k, v in single.items() if not isinstance(v, (dict, list))])
+            return
+        self.iso_table.set_rows([(r.name, r.text(), r.unit) for r in summary_rows(results)])
+        header, body = position_table(results)
+        self.position_table.setColumnCount(len(header))
+        self.position_table.setHorizontalHeaderLabels([h.replace("\n", " ") for h in header])
+        self.position_table.set_rows(body)
+
+    # ------------------------------------------------------------------ clicking a point
+    def _clicked(self, key: str, points: Any) -> None:
+        if not len(points) or key not in CLICKABLE or self.results is None:
+            return
+        pos = points[0].pos()
+        self.show_view_at(key, float(pos.x()), float(pos.y()))
+
+    def show_view_at(self, key: str, x: float, y: float) -> int | None:
+        """Show the capture nearest to the plotted point (x, y) of figure ``key``; its index."""
+        assert self.results is not None
+        cols = position_columns(self.results)
+        cx, cy = (cols[c] for c in CLICKABLE[key])
+        sx = np.nanstd(cx) or 1.0
+        sy = np.nanstd(cy) or 1.0
+        d = np.hypot((cx - x) / sx, (cy - y) / sy)
+        if not np.isfinite(d).any():
+            return None
+        i = int(np.nanargmin(d))
+        return self.show_view(int(cols["index"][i]))
+
+    def show_view(self, index: int) -> int | None:
+        """Show capture ``index`` with its residual vectors."""
+        assert self.results is not None
+        rows = [r for r in self.results.get("positions") or [] if int(r.get("index", -1)) == index]
+        if not rows:
+            return None
+        row = rows[0]
+        detected, X = self._detected(row)
+        self.detail.show_view(self.session_dir, self.results, row, detected, X)
+        return index
+
+    def _detected(self, row: dict[str, Any]) -> tuple[np.ndarray | None, np.ndarray | None]:
+        if self.session_dir is None:
+            return None, None
+        try:
+            from lps_gui.io.corners_vnl import read_corners_vnl
+            from lps_gui.io.session import Session
+
+            session = Session.open(self.session_dir)
+            board = session.board()
+            if self._corners is None:
+                self._corners = read_corners_vnl(session.corners_path, board.n_corners)
+            table = self._corners
+            name = str(row.get("file", ""))
+            idx = table.index()
+            i = idx.get(name, idx.get(Path(name).name))
+            if i is None:
+                return None, None
+            return table.corners_px[i], board.object_points()
+        except Exception as exc:  # no corners file: the view shows the image alone
+            log.info("results: no corners for view %s (%s)", row.get("index"), exc)
+            return None, None
+
+    # ------------------------------------------------------------------ export
+    def export_csv(self, folder: Path) -> list[Path]:
+        """Copy positions.csv and summary.csv written by the estimation into ``folder``."""
+        from lps_gui.errors import InputError
+
+        if self.results_dir is None:
+            raise InputError("export: no results to export; run an estimation first")
+        folder = Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        out = []
+        for name in CSV_FILES:
+            src = self.results_dir / name
+            if not src.exists():
+                raise InputError(f"{src}: not found; run the estimation again to write the CSV files")
+            dst = folder / name
+            if src.resolve() != dst.resolve():
+                shutil.copyfile(src, dst)
+            out.append(dst)
+        return out
+
+
+def _f(v: Any) -> str:
+    try:
+        return f"{float(v):.3g}"
+    except (TypeError, ValueError):
+        return "?"

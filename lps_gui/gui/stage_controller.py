@@ -1,0 +1,174 @@
+"""The GUI's handle on a Stage: one command thread, status polling, events as signals.
+
+Stage methods block until the controller acknowledges (a serial round trip),
+so every call runs on one dedicated worker thread, in order; the GUI thread
+only submits and receives signals. A status poll runs several times a second
+while connected. A HardwareError from any call (port vanished, alarm) is
+reported once and, if the link is gone, turns the controller to
+"Disconnected" without touching anything already captured.
+"""
+from __future__ import annotations
+
+import logging
+from concurrent.futures import Future, ThreadPoolExecutor
+from typing import Any, Callable
+
+from PySide6.QtCore import QObject, QTimer, Signal
+
+from lps_gui.errors import HardwareError
+from lps_gui.gui.workers import one_line
+from lps_gui.hardware.stage import Stage, StageEvent, StageStatus
+
+log = logging.getLogger(__name__)
+
+POLL_INTERVAL_MS = 200  # 5 readout updates per second
+
+
+class StageController(QObject):
+    """Owns the connected stage (if any) and serializes every call to it."""
+
+    status_changed = Signal(object)  # StageStatus
+    event_received = Signal(object)  # StageEvent
+    connection_changed = Signal(bool, str)  # connected, description
+    command_failed = Signal(str, str)  # what, one-line cause
+    settings_read = Signal(object)  # list[StageSetting]
+    link_lost = Signal(str)  # the stage stopped answering; the GUI drops the connection
+    opened = Signal(object, object, str)  # stage, extra (e.g. its simulated camera), description
+    _opened_in_thread = Signal(object, object, str)
+
+    def __init__(self, parent: QObject | None = None) -> None:
+        super().__init__(parent)
+        self.stage: Stage | None = None
+        self.description = ""
+        self.last_status: StageStatus | None = None
+        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="stage")
+        self._poll_pending = False
+        self._unsubscribe: Callable[[], None] | None = None
+        self._timer = QTimer(self)
+        self._timer.setInterval(POLL_INTERVAL_MS)
+        self._timer.timeout.connect(self.poll)
+        self._opened_in_thread.connect(self._on_opened)
+
+    # ------------------------------------------------------------------ connection
+    @property
+    def connected(self) -> bool:
+        return self.stage is not None
+
+    def open(self, factory: Callable[[], tuple[Stage, Any]], description: str) -> Future:
+        """Build and connect a stage on the stage thread, then start polling.
+
+        ``factory`` returns ``(stage, extra)``; ``extra`` (e.g. the simulated
+        camera that follows a simulated stage) is passed on by :attr:`opened`.
+        Opening a port or building a simulated rig may take a moment, so the
+        GUI thread never runs it.
+        """
+        if self.stage is not None:
+            self.detach()
+
+        def go() -> tuple[Stage, Any]:
+            stage, extra = factory()
+            stage.connect()
+            return stage, extra
+
+        fut = self._submit("connect", go)
+        fut.add_done_callback(lambda f: None if f.exception() else self._opened_in_thread.emit(*f.result(), description))
+        return fut
+
+    def _on_opened(self, stage: Stage, extra: Any, description: str) -> None:  # GUI thread
+        self.stage = stage
+        self.description = description
+        self._unsubscribe = stage.events.subscribe(self.event_received.emit)
+        log.info("stage: connected to %s", description)
+        self._timer.start()
+        self.connection_changed.emit(True, description)
+        self.opened.emit(stage, extra, description)
+        self.poll()
+
+    def detach(self, reason: str = "") -> None:
+        """Disconnect (best effort) and forget the stage."""
+        stage, self.stage = self.stage, None
+        self._timer.stop()
+        if self._unsubscribe:
+            self._unsubscribe()
+            self._unsubscribe = None
+        if stage is not None:
+            def go() -> None:
+                try:
+                    stage.disconnect()
+                except Exception:  # already gone: nothing more to do
+                    log.debug("disconnect failed", exc_info=True)
+
+            self._pool.submit(go)
+        self.last_status = None
+        if stage is not None:
+            log.info("stage: disconnected%s", f" ({reason})" if reason else "")
+            self.connection_changed.emit(False, reason)
+
+    def shutdown(self) -> None:
+        self.detach("closed")
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+    # ------------------------------------------------------------------ commands
+    def call(self, what: str, method: str, *args: Any) -> Future | None:
+        """Run ``stage.method(*args)`` on the stage thread; failures become ``command_failed``."""
+        if self.stage is None:
+            self.command_failed.emit(what, "stage: not connected; connect the stage first")
+            return None
+        stage = self.stage
+        log.info("stage: %s", what)
+        return self._submit(what, lambda: getattr(stage, method)(*args))
+
+    def read_settings(self) -> None:
+        if self.stage is None:
+            return
+        stage = self.stage
+        fut = self._submit("read settings", stage.read_settings)
+        fut.add_done_callback(lambda f: None if f.exception() else self.settings_read.emit(f.result()))
+
+    def write_setting(self, number: int, value: float) -> Future | None:
+        return self.call(f"write ${number}={value:g}", "write_setting", number, value)
+
+    def poll(self) -> None:
+        """Ask for a status report unless one is still on its way."""
+        if self.stage is None or self._poll_pending:
+            return
+        self._poll_pending = True
+        stage = self.stage
+
+        def go() -> StageStatus:
+            return stage.status()
+
+        fut = self._submit("status", go)
+        fut.add_done_callback(self._on_polled)
+
+    def _on_polled(self, fut: Future) -> None:  # stage thread
+        self._poll_pending = False
+        if fut.exception() is None:
+            st = fut.result()
+            self.last_status = st
+            self.status_changed.emit(st)
+
+    # ------------------------------------------------------------------ plumbing
+    def _submit(self, what: str, fn: Callable[[], Any]) -> Future:
+        fut = self._pool.submit(fn)
+        fut.add_done_callback(lambda f: self._check(what, f))
+        return fut
+
+    def _check(self, what: str, fut: Future) -> None:  # stage thread: only emit signals
+        exc = fut.exception()
+        if exc is None:
+            return
+        msg = one_line(exc)
+        log.error("stage: %s failed: %s", what, msg, exc_info=exc)
+        self.command_failed.emit(what, msg)
+        stage = self.stage
+        gone = what in ("status", "connect") or stage is None or not _still_connected(stage)
+        if gone and isinstance(exc, (HardwareError, OSError)):
+            self.link_lost.emit(msg)
+
+
+def _still_connected(stage: Stage) -> bool:
+    try:
+        return bool(stage.connected)
+    except Exception:
+        return False

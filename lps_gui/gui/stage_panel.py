@@ -1,0 +1,296 @@
+"""Stage panel: connection, digital readout, jogging, machine commands, $$ settings.
+
+Every stage call goes through :class:`StageController` (one stage thread);
+this widget only submits commands and shows what the controller reports.
+"""
+from __future__ import annotations
+
+import math
+
+from PySide6.QtCore import Qt, Signal
+from PySide6.QtGui import QFont, QKeySequence, QShortcut
+from PySide6.QtWidgets import (
+    QAbstractItemView, QComboBox, QDoubleSpinBox, QGridLayout, QGroupBox, QHBoxLayout, QHeaderView, QLabel,
+    QMessageBox, QPushButton, QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget,
+)
+
+from lps_gui.gui.sources import BAUD_RATES, SIM, open_stage_source, stage_choices
+from lps_gui.gui.stage_controller import StageController
+from lps_gui.hardware.stage import AXES, StageSetting, StageStatus
+
+JOG_STEPS_MM = (0.01, 0.1, 1.0, 10.0, 50.0)
+STATE_COLORS = {"Idle": "#2a9d3c", "Run": "#1f5fa8", "Jog": "#1f5fa8", "Home": "#1f5fa8", "Hold": "#e07b00",
+                "Alarm": "#d00000", "Door": "#d00000", "Disconnected": "#777777"}
+JOG_KEYS = {  # key -> (axis, sign): arrows move X/Y, Page Up/Down move Z
+    Qt.Key.Key_Right: ("X", +1), Qt.Key.Key_Left: ("X", -1), Qt.Key.Key_Up: ("Y", +1),
+    Qt.Key.Key_Down: ("Y", -1), Qt.Key.Key_PageUp: ("Z", +1), Qt.Key.Key_PageDown: ("Z", -1),
+}
+
+
+class StagePanel(QWidget):
+    """Connect a stage, watch its position, move it."""
+
+    camera_offered = Signal(object)  # the simulated camera that rides the simulated stage, or None
+
+    def __init__(self, controller: StageController, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.controller = controller
+        self._settings: list[StageSetting] = []
+
+        # --- connection
+        self.source = QComboBox()
+        self.source.setMinimumContentsLength(18)
+        self.refresh_btn = QPushButton("Refresh")
+        self.refresh_btn.setToolTip("List serial ports again")
+        self.baud = QComboBox()
+        for b in BAUD_RATES:
+            self.baud.addItem(f"{b} baud", b)
+        self.connect_btn = QPushButton("Connect")
+        self.connect_btn.setDefault(True)
+        conn = QGroupBox("Connection")
+        g = QGridLayout(conn)
+        g.addWidget(QLabel("Source"), 0, 0)
+        g.addWidget(self.source, 0, 1)
+        g.addWidget(self.refresh_btn, 0, 2)
+        g.addWidget(QLabel("Speed"), 1, 0)
+        g.addWidget(self.baud, 1, 1)
+        g.addWidget(self.connect_btn, 1, 2)
+
+        # --- digital readout
+        dro = QGroupBox("Position (work coordinates)")
+        dg = QGridLayout(dro)
+        big = QFont()
+        big.setPointSize(16)
+        big.setBold(True)
+        big.setStyleHint(QFont.StyleHint.Monospace)
+        self.readout: dict[str, QLabel] = {}
+        for i, ax in enumerate(AXES):
+            name = QLabel(ax)
+            name.setFont(big)
+            val = QLabel("---")
+            val.setFont(big)
+            val.setAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
+            val.setMinimumWidth(140)
+            dg.addWidget(name, i, 0)
+            dg.addWidget(val, i, 1)
+            dg.addWidget(QLabel("mm"), i, 2)
+            self.readout[ax] = val
+        self.state_label = QLabel("Disconnected")
+        self.state_label.setAlignment(Qt.AlignmentFlag.AlignCenter)
+        self.state_label.setMinimumWidth(110)
+        self.feed_label = QLabel("feed 0 mm/min")
+        dg.addWidget(self.state_label, 0, 3)
+        dg.addWidget(self.feed_label, 1, 3)
+        self._show_state("Disconnected")
+
+        # --- jogging
+        jog = QGroupBox("Jog (arrow keys X/Y, Page Up/Down Z)")
+        jg = QGridLayout(jog)
+        self.jog_buttons: dict[tuple[str, int], QPushButton] = {}
+        for r, ax in enumerate(AXES):
+            for c, sign in enumerate((-1, +1)):
+                b = QPushButton(f"{ax}{'−' if sign < 0 else '+'}")
+                b.clicked.connect(lambda _=False, a=ax, s=sign: self.jog(a, s))
+                jg.addWidget(b, r, c)
+                self.jog_buttons[(ax, sign)] = b
+        self.step = QComboBox()
+        for s in JOG_STEPS_MM:
+            self.step.addItem(f"{s:g} mm", s)
+        self.step.setCurrentIndex(2)
+        self.feed = QDoubleSpinBox()
+        self.feed.setRange(1.0, 20000.0)
+        self.feed.setDecimals(0)
+        self.feed.setValue(600.0)
+        self.feed.setSuffix(" mm/min")
+        jg.addWidget(QLabel("Step"), 0, 2)
+        jg.addWidget(self.step, 0, 3)
+        jg.addWidget(QLabel("Feed"), 1, 2)
+        jg.addWidget(self.feed, 1, 3)
+
+        # --- machine commands
+        cmds = QHBoxLayout()
+        self.home_btn = QPushButton("Home")
+        self.unlock_btn = QPushButton("Unlock")
+        self.hold_btn = QPushButton("Feed hold")
+        self.resume_btn = QPushButton("Resume")
+        self.stop_btn = QPushButton("Stop")
+        self.stop_btn.setStyleSheet("QPushButton { color: #b00020; font-weight: bold; }")
+        self.stop_btn.setToolTip("Cancel the jog and reset the controller (Esc)")
+        for b in (self.home_btn, self.unlock_btn, self.hold_btn, self.resume_btn, self.stop_btn):
+            cmds.addWidget(b)
+        self.home_btn.clicked.connect(lambda: self.controller.call("home", "home"))
+        self.unlock_btn.clicked.connect(lambda: self.controller.call("unlock", "unlock"))
+        self.hold_btn.clicked.connect(lambda: self.controller.call("feed hold", "feed_hold"))
+        self.resume_btn.clicked.connect(lambda: self.controller.call("resume", "resume"))
+        self.stop_btn.clicked.connect(self.stop)
+
+        # --- settings
+        sett = QGroupBox("Controller settings ($$)")
+        sl = QVBoxLayout(sett)
+        self.settings_table = QTableWidget(0, 4)
+        self.settings_table.setHorizontalHeaderLabels(["$", "Setting", "Value", "Unit"])
+        self.settings_table.verticalHeader().setVisible(False)
+        self.settings_table.setSelectionBehavior(QAbstractItemView.SelectionBehavior.SelectRows)
+        hh = self.settings_table.horizontalHeader()
+        hh.setSectionResizeMode(1, QHeaderView.ResizeMode.Stretch)
+        for col in (0, 2, 3):
+            hh.setSectionResizeMode(col, QHeaderView.ResizeMode.ResizeToContents)
+        row = QHBoxLayout()
+        self.read_settings_btn = QPushButton("Read $$")
+        self.write_settings_btn = QPushButton("Write changes")
+        row.addWidget(self.read_settings_btn)
+        row.addWidget(self.write_settings_btn)
+        row.addStretch(1)
+        sl.addWidget(self.settings_table)
+        sl.addLayout(row)
+        self.read_settings_btn.clicked.connect(self.controller.read_settings)
+        self.write_settings_btn.clicked.connect(self.write_settings)
+
+        lay = QVBoxLayout(self)
+        lay.setContentsMargins(6, 6, 6, 6)
+        lay.addWidget(conn)
+        lay.addWidget(dro)
+        lay.addWidget(jog)
+        lay.addLayout(cmds)
+        lay.addWidget(sett, 1)
+
+        self.refresh_btn.clicked.connect(self.refresh_sources)
+        self.connect_btn.clicked.connect(self.toggle_connection)
+        controller.status_changed.connect(self.show_status)
+        controller.connection_changed.connect(self._on_connection)
+        controller.settings_read.connect(self.show_settings)
+        controller.opened.connect(lambda _stage, extra, _d: self.camera_offered.emit(extra))
+        self._shortcuts = []
+        for key, (ax, sign) in JOG_KEYS.items():
+            sc = QShortcut(QKeySequence(key), self, context=Qt.ShortcutContext.WidgetWithChildrenShortcut)
+            sc.activated.connect(lambda a=ax, s=sign: self.jog(a, s))
+            self._shortcuts.append(sc)
+        esc = QShortcut(QKeySequence(Qt.Key.Key_Escape), self, context=Qt.ShortcutContext.WidgetWithChildrenShortcut)
+        esc.activated.connect(self.stop)
+        self._shortcuts.append(esc)
+        self.refresh_sources()
+        self._set_enabled(False)
+
+    # ------------------------------------------------------------------ connection
+    def refresh_sources(self) -> None:
+        current = self.source.currentData()
+        self.source.clear()
+        for label, src in stage_choices():
+            self.source.addItem(label, src)
+        i = self.source.findData(current)
+        self.source.setCurrentIndex(max(i, 0))
+
+    def select_source(self, source: str) -> None:
+        i = self.source.findData(source)
+        if i < 0 and source.startswith("grbl:"):
+            self.source.addItem(source.split(":", 1)[1], source)
+            i = self.source.count() - 1
+        self.source.setCurrentIndex(max(i, 0))
+
+    def toggle_connection(self) -> None:
+        if self.controller.connected:
+            self.controller.detach("disconnected by the operator")
+        else:
+            self.connect_source()
+
+    def connect_source(self) -> None:
+        src = self.source.currentData() or SIM
+        baud = int(self.baud.currentData() or 115200)
+        self.connect_btn.setEnabled(False)
+        self.connect_btn.setText("Connecting…")
+        self.controller.open(lambda: open_stage_source(src, baud), self.source.currentText())
+
+    def _on_connection(self, connected: bool, description: str) -> None:
+        self.connect_btn.setEnabled(True)
+        self.connect_btn.setText("Disconnect" if connected else "Connect")
+        self.source.setEnabled(not connected)
+        self.baud.setEnabled(not connected)
+        self._set_enabled(connected)
+        if connected:
+            self.controller.read_settings()
+        else:
+            self._show_state("Disconnected")
+            for v in self.readout.values():
+                v.setText("---")
+
+    def connect_failed(self) -> None:
+        """The controller could not open the source: offer Connect again."""
+        self._on_connection(False, "")
+
+    def _set_enabled(self, on: bool) -> None:
+        for b in list(self.jog_buttons.values()) + [self.home_btn, self.unlock_btn, self.hold_btn, self.resume_btn,
+                                                    self.stop_btn, self.read_settings_btn, self.write_settings_btn]:
+            b.setEnabled(on)
+
+    # ------------------------------------------------------------------ readout
+    def show_status(self, st: StageStatus) -> None:
+        for ax, v in zip(AXES, st.work_mm):
+            self.readout[ax].setText(f"{v:10.3f}")
+        self._show_state(st.state)
+        self.feed_label.setText(f"feed {st.feed_mm_min:.0f} mm/min")
+
+    def _show_state(self, state: str) -> None:
+        color = STATE_COLORS.get(state, "#555555")
+        self.state_label.setText(state)
+        self.state_label.setStyleSheet(
+            f"QLabel {{ background: {color}; color: white; border-radius: 4px; padding: 4px 8px; font-weight: bold; }}")
+
+    # ------------------------------------------------------------------ motion
+    def jog(self, axis: str, sign: int) -> None:
+        if not self.controller.connected:
+            return
+        step_mm = float(self.step.currentData())
+        self.controller.call(f"jog {axis} {sign * step_mm:+g} mm", "jog", sign * step_mm, self.feed.value(), axis)
+
+    def stop(self) -> None:
+        self.controller.call("jog cancel", "jog_cancel")
+
+    # ------------------------------------------------------------------ settings
+    def show_settings(self, settings: list[StageSetting]) -> None:
+        self._settings = list(settings)
+        t = self.settings_table
+        t.setRowCount(len(settings))
+        for r, s in enumerate(settings):
+            for c, text in enumerate((f"${s.number}", s.name, f"{s.value:g}", s.unit)):
+                item = QTableWidgetItem(text)
+                if c != 2:
+                    item.setFlags(item.flags() & ~Qt.ItemFlag.ItemIsEditable)
+                if s.description:
+                    item.setToolTip(s.description)
+                t.setItem(r, c, item)
+
+    def pending_settings(self) -> tuple[list[tuple[int, float]], list[str]]:
+        """Edited values as (number, value), and one line per value that fails validation."""
+        changes, errors = [], []
+        for r, s in enumerate(self._settings):
+            item = self.settings_table.item(r, 2)
+            text = item.text().strip() if item else ""
+            try:
+                value = float(text)
+            except ValueError:
+                errors.append(f"${s.number} ({s.name}): {text!r} is not a number")
+                continue
+            if not math.isfinite(value) or value < 0:
+                errors.append(f"${s.number} ({s.name}): must be a finite value ≥ 0")
+            elif _is_integer_setting(s) and value != int(value):
+                errors.append(f"${s.number} ({s.name}): must be a whole number")
+            elif value != s.value:
+                changes.append((s.number, value))
+        return changes, errors
+
+    def write_settings(self) -> None:
+        changes, errors = self.pending_settings()
+        if errors:
+            box = QMessageBox(QMessageBox.Icon.Warning, "Settings not written", "\n".join(errors), parent=self)
+            box.open()
+            self._last_box = box
+            return
+        for number, value in changes:
+            self.controller.write_setting(number, value)
+        if changes:
+            self.controller.read_settings()
+
+
+def _is_integer_setting(s: StageSetting) -> bool:
+    unit = (s.unit or "").lower()
+    return unit in ("mask", "boolean", "bool", "") and float(s.value).is_integer() and "mm" not in unit

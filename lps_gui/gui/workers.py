@@ -1,0 +1,152 @@
+"""Run blocking long work off the GUI thread.
+
+A :class:`Job` wraps any function written for the CLI, i.e. one taking
+``progress(done, total, message)`` and ``cancel`` (a :class:`CancelToken`),
+in a QThread. The worker only emits signals; the slots that receive them run
+in the GUI thread and are the only code touching widgets. Progress is
+throttled so a fast loop cannot flood the event queue.
+"""
+from __future__ import annotations
+
+import inspect
+import logging
+import time
+import traceback
+from typing import Any, Callable
+
+from PySide6.QtCore import QObject, QThread, Signal
+
+from lps_gui.core.progress import CancelToken
+from lps_gui.errors import Cancelled, LpsError
+
+log = logging.getLogger(__name__)
+
+PROGRESS_INTERVAL_S = 0.05  # at most ~20 progress signals per second
+
+
+def one_line(exc: BaseException) -> str:
+    """The message a user sees: the first line of an LpsError, or the type and text of a bug."""
+    text = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+    if isinstance(exc, LpsError):
+        return text or type(exc).__name__
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+def _parameters(fn: Callable[..., Any]) -> set[str] | None:
+    """Names ``fn`` accepts, or None when it takes ``**kwargs`` (or cannot be inspected)."""
+    try:
+        params = inspect.signature(fn).parameters
+    except (TypeError, ValueError):
+        return None
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values()):
+        return None
+    return set(params)
+
+
+class _Thread(QThread):
+    """The thread body; all results leave through the owning Job's signals."""
+
+    def __init__(self, job: "Job") -> None:
+        super().__init__()
+        self._job = job
+
+    def run(self) -> None:  # runs in the worker thread
+        self._job._run_in_thread()
+
+
+class Job(QObject):
+    """A blocking ``fn(*args, progress=..., cancel=..., **kwargs)`` in a worker thread.
+
+    Signals
+    -------
+    progress(done, total, message)
+        Throttled progress; the last report always gets through.
+    succeeded(result)
+        The function returned.
+    failed(message, traceback)
+        It raised; ``message`` is one line for a message box.
+    cancelled(message)
+        It raised :class:`Cancelled` after :meth:`cancel`.
+    finished()
+        Always, last.
+    """
+
+    progress = Signal(int, int, str)
+    succeeded = Signal(object)
+    failed = Signal(str, str)
+    cancelled = Signal(str)
+    finished = Signal()
+
+    def __init__(
+        self,
+        name: str,
+        fn: Callable[..., Any],
+        *args: Any,
+        pass_progress: bool = True,
+        parent: QObject | None = None,
+        **kwargs: Any,
+    ) -> None:
+        super().__init__(parent)
+        self.name = name
+        self.token = CancelToken()
+        self._fn = fn
+        self._args = args
+        self._kwargs = kwargs
+        self._pass_progress = pass_progress
+        self._last_emit = 0.0
+        self._thread = _Thread(self)
+        self._thread.finished.connect(self._on_thread_finished)
+        self.result: Any = None
+        self.error: str | None = None
+        self.started_at = 0.0
+
+    # ------------------------------------------------------------------ control (GUI thread)
+    def start(self) -> "Job":
+        self.started_at = time.monotonic()
+        log.info("%s: started", self.name)
+        self._thread.start()
+        return self
+
+    def cancel(self) -> None:
+        """Ask the work to stop at its next check; results so far are kept by the work itself."""
+        if not self.token.cancelled:
+            log.info("%s: cancel requested", self.name)
+        self.token.cancel()
+
+    def is_running(self) -> bool:
+        return self._thread.isRunning()
+
+    def wait(self, timeout_ms: int = 30000) -> bool:
+        return self._thread.wait(timeout_ms)
+
+    # ------------------------------------------------------------------ worker thread
+    def _progress(self, done: int, total: int, message: str = "") -> None:
+        now = time.monotonic()
+        if now - self._last_emit >= PROGRESS_INTERVAL_S or (total and done >= total):
+            self._last_emit = now
+            self.progress.emit(int(done), int(total), str(message))
+
+    def _run_in_thread(self) -> None:
+        try:
+            kwargs = dict(self._kwargs)
+            if self._pass_progress:
+                accepted = _parameters(self._fn)
+                if accepted is None or "progress" in accepted:
+                    kwargs["progress"] = self._progress
+                if accepted is None or "cancel" in accepted:
+                    kwargs["cancel"] = self.token
+            result = self._fn(*self._args, **kwargs)
+        except Cancelled as exc:
+            self.error = one_line(exc)
+            self.cancelled.emit(self.error)
+        except Exception as exc:  # every failure reaches the user as one line, the log gets the rest
+            self.error = one_line(exc)
+            tb = traceback.format_exc()
+            self.failed.emit(self.error, tb)
+        else:
+            self.result = result
+            self.succeeded.emit(result)
+
+    def _on_thread_finished(self) -> None:  # GUI thread
+        log.info("%s: finished in %.2f s", self.name, time.monotonic() - self.started_at)
+        self.finished.emit()

@@ -217,10 +217,7 @@ class ChessboardTracker:
     def _verify(self, image: np.ndarray, predicted: np.ndarray, refined: np.ndarray, sharp: float) -> str:
         """Empty string when the tracked corners are trustworthy, else the reason."""
         opt = self.options
-        h, w = image.shape
         hw = self._half_window
-        if np.any(predicted < hw + 1) or np.any(predicted[:, 0] > w - hw - 2) or np.any(predicted[:, 1] > h - hw - 2):
-            return "corners near the image border"
         move = np.linalg.norm(refined - predicted, axis=-1)
         if float(move.max()) > opt.max_move_frac * (2 * hw + 1):
             return "a corner moved too far from its prediction"
@@ -230,6 +227,11 @@ class ChessboardTracker:
             return "image blurred compared with the last full detection"
         return ""
 
+    def _inside(self, image: np.ndarray, predicted: np.ndarray) -> bool:
+        h, w = image.shape
+        m = self._half_window + 2
+        return bool(np.all(predicted >= m) and np.all(predicted[:, 0] < w - m) and np.all(predicted[:, 1] < h - m))
+
     def detect(self, image: np.ndarray) -> Detection:
         """Corners of the board in the next frame (N, 2) SPEC order, or a failure reason."""
         grey = _grey(image)
@@ -237,7 +239,9 @@ class ChessboardTracker:
         sharp = float(cv2.Laplacian(small, cv2.CV_32F).var())
         predicted = self._predict(small) if self.options.track else None
         reason = ""
-        if predicted is not None:
+        if predicted is not None and not self._inside(grey, predicted):
+            reason = "corners near the image border"
+        elif predicted is not None:
             refined = refine(grey, predicted, self._half_window)
             reason = self._verify(grey, predicted, refined, sharp)
             if not reason:

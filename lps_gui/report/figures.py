@@ -78,6 +78,7 @@ class FigureSpec:
         return not any(np.isfinite(s.y).any() for s in self.series)
 
 
+TRUTH_KEYS = ("deviation_um", "straightness_um_1", "straightness_um_2", "roll_urad", "pitch_urad", "yaw_urad")
 FIGURE_KEYS = ("positions", "deviation", "step", "straightness", "angles", "residuals", "spectrum")
 
 
@@ -141,12 +142,17 @@ def per_target_stats(target_mm: np.ndarray, value: np.ndarray, keep: np.ndarray)
 def truth_columns(results: dict[str, Any], truth: dict[str, Any] | None) -> dict[str, np.ndarray] | None:
     """Truth per capture, reduced like the measurement; None for a real session.
 
-    ``truth`` is the session's truth record (``positions_mm`` relative to the
+    The estimator puts truth beside each position (``truth_deviation_um``,
+    ``truth_straightness_um_1`` ..., already reduced); those are used first.
+    Otherwise ``truth`` is the session's truth record (``positions_mm`` relative to the
     first capture, ``straightness_um`` (K, 2), ``angles_urad`` (K, 3)) indexed
     by capture index. Returns arrays aligned with :func:`position_columns`:
     ``deviation_um`` (zero at the first capture), ``straightness_um_1/2``
     (linear trend removed), ``roll/pitch/yaw_urad`` (mean removed).
     """
+    rows = sorted(results.get("positions") or [], key=lambda r: r.get("index", 0))
+    if rows and any(r.get("truth_deviation_um") is not None for r in rows):
+        return {key: np.array([_num(r.get(f"truth_{key}")) for r in rows], dtype=float) for key in TRUTH_KEYS}
     if not truth or "positions_mm" not in truth:
         return None
     cols = position_columns(results)

@@ -85,3 +85,13 @@ def test_spectrum_comes_from_the_results_figures():
     assert s.x.tolist() == sorted(results["figures"]["single_run"]["spectrum"]["period_mm"])
     assert s.y[s.x.tolist().index(8.0)] == 4.8
     assert spec.x_log
+
+
+def test_truth_beside_each_position_wins_over_the_session_record():
+    results, truth = make_results()
+    for i, r in enumerate(results["positions"]):
+        r.update({"truth_deviation_um": float(i), "truth_straightness_um_1": 1.0, "truth_straightness_um_2": 2.0,
+                  "truth_roll_urad": 3.0, "truth_pitch_urad": 4.0, "truth_yaw_urad": None})
+    t = truth_columns(results, truth)
+    assert t["deviation_um"].tolist() == list(range(len(results["positions"])))
+    assert np.all(t["roll_urad"] == 3.0) and np.all(np.isnan(t["yaw_urad"]))

@@ -222,6 +222,19 @@ class SimulatedStage(Stage):
             self._update()
             return PLANNER_BLOCKS - len(self._queue) - len(self._held)
 
+    def planned_mm(self, axis: int) -> float:
+        """Where ``axis`` will rest once all planned (or held) motion is done (for G91 targets)."""
+        with self._lock:
+            for a, _, target, _ in reversed(self._held):
+                if a == axis:
+                    return target
+            for p in reversed(self._queue):
+                if p.axis == axis:
+                    return p.end_mm
+            if self._stopping is not None and self._stopping.axis == axis:
+                return self._stopping.end_mm
+            return float(self._pos_mm[axis])
+
     def next_event_s(self) -> float | None:
         """Clock time of the next state change in motion (for waiting), None when resting."""
         with self._lock:
@@ -276,7 +289,8 @@ class SimulatedStage(Stage):
     def _raise_alarm(self, code: int, context: str) -> GrblError:
         self._freeze(self.clock.now())
         self._alarm = code
-        self.events.emit(StageEvent("alarm", code=code, text=GrblError("alarm", code).args[0]))
+        if code:  # 0 is the silent homing lock
+            self.events.emit(StageEvent("alarm", code=code, text=GrblError("alarm", code).args[0]))
         return GrblError("alarm", code, context)
 
     def trigger_alarm(self, code: int) -> None:
@@ -321,14 +335,12 @@ class SimulatedStage(Stage):
 
     # ------------------------------------------------------------------ motion
     def _plan(self, axis: int, kind: str, target_mm: float, feed_mm_min: float) -> None:
-        t = self.clock.now()
-        if self._queue:
-            last = self._queue[-1]
-            t0, x0 = last.t_end, (last.end_mm if last.axis == axis else self._pos_mm[axis])
-        else:
-            t0, x0 = t, self._pos_mm[axis]
+        ends = [self.clock.now()] + [p.t_end for p in self._queue[-1:]]
+        if self._stopping is not None:
+            ends.append(self._stopping.t_end)
         feed = min(feed_mm_min, self.max_rate_mm_min(axis))
-        self._queue.append(trapezoid(axis, kind, t0, float(x0), float(target_mm), feed, self.accel_mm_s2(axis)))
+        x0 = self.planned_mm(axis)
+        self._queue.append(trapezoid(axis, kind, max(ends), x0, float(target_mm), feed, self.accel_mm_s2(axis)))
 
     def _in_travel(self, target_mm: float) -> bool:
         return self.travel_mm[0] <= target_mm <= self.travel_mm[1]
@@ -367,7 +379,7 @@ class SimulatedStage(Stage):
                 raise GrblError("error", 8, f"jog in {state}")
             if not feed_mm_min or feed_mm_min <= 0:
                 raise GrblError("error", 22, "jog")
-            start = self._queue[-1].end_mm if self._queue and self._queue[-1].axis == i else self._pos_mm[i]
+            start = self.planned_mm(i)
             target = float(start + distance_mm)
             if self.soft_limits and not self._in_travel(target):
                 raise GrblError("error", 15, f"jog to {target:.3f} mm")

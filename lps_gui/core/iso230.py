@@ -1,0 +1,511 @@
+"""Accuracy figures of SPEC section 5 (ISO 230-2 style) as pure math.
+
+Deviations x = measured - target (um) of captures grouped by target P_j,
+approach direction (up "+" / down "-") and run feed three sets of figures:
+
+* :func:`bidirectional_figures` -- ISO 230-2 figures across runs: systematic
+  deviation E, mean reversal B, range of mean bidirectional deviation M,
+  repeatability R and accuracy A, per direction and bidirectional.
+* :func:`single_run_figures` -- one run (or all data): mean step, step std,
+  max |deviation|, linear scale error (ppm) and the periodic error (spectrum of
+  the detrended deviations; a lead-screw pitch shows as the peak).
+* :func:`figures_for_session` -- both, as JSON-ready dicts for results.json.
+
+:func:`check_specification` compares them with a stage's data sheet.
+No I/O, no Qt: numpy and scipy only.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, fields
+from typing import Any
+
+import numpy as np
+
+from lps_gui.core.iso230_spectrum import Spectrum, deviation_spectrum
+from lps_gui.errors import InputError
+
+TARGET_TOL_MM = 1e-6  # targets closer than this are one target P_j
+ISO_RUNS = 5  # ISO 230-2 asks for 5 runs per direction
+
+
+def _num(v: Any) -> float | None:
+    """A finite float, or None (JSON has no NaN)."""
+    if v is None:
+        return None
+    v = float(v)
+    return v if np.isfinite(v) else None
+
+
+def _json(v: Any) -> Any:
+    """Dataclass field value -> JSON-ready value (arrays to lists, NaN to None)."""
+    if isinstance(v, np.ndarray):
+        if v.dtype.kind in "iub":
+            return v.astype(int).tolist()
+        return [None if not np.isfinite(e) else float(e) for e in v.astype(float)]
+    if hasattr(v, "to_dict"):
+        return v.to_dict()
+    if isinstance(v, (list, tuple)):
+        return [_json(e) for e in v]
+    if isinstance(v, (float, np.floating)):
+        return _num(v)
+    if isinstance(v, (np.integer,)):
+        return int(v)
+    return v
+
+
+class _ToDict:
+    def to_dict(self) -> dict[str, Any]:
+        """Fields as JSON-ready values: lists of floats, None for undefined."""
+        return {f.name: _json(getattr(self, f.name)) for f in fields(self)}  # type: ignore[arg-type]
+
+
+# ----------------------------------------------------------------------------- input normalisation
+
+
+def direction_signs(direction: Any) -> np.ndarray:
+    """Directions ``"+"/"-"`` (also "up"/"down", "forward"/"backward") or +-1 -> int array of +1/-1."""
+    d = np.asarray(direction)
+    if d.dtype.kind in "iuf":
+        sign = np.sign(d.astype(float))
+        if np.any(sign == 0) or not np.all(np.isfinite(sign)):
+            raise InputError("direction: use +1/-1 (or '+'/'-') for every capture; found 0 or NaN")
+        return sign.astype(int)
+    words = {"+": 1, "up": 1, "forward": 1, "+1": 1, "1": 1, "-": -1, "down": -1, "backward": -1, "-1": -1}
+    out = np.array([words.get(str(e).strip().lower(), 0) for e in d.ravel()], dtype=int).reshape(d.shape)
+    if np.any(out == 0):
+        bad = d.ravel()[np.flatnonzero(out.ravel() == 0)[0]]
+        raise InputError(f"direction: {bad!r} is not '+' or '-'; give '+'/'-' or +1/-1 per capture")
+    return out
+
+
+def _arrays(target_mm: Any, deviation_um: Any, valid: Any, **others: Any) -> dict[str, np.ndarray]:
+    """Check that every per-capture array has shape (K,); valid defaults to all True, NaN is invalid."""
+    t = np.asarray(target_mm, dtype=float).ravel()
+    x = np.asarray(deviation_um, dtype=float).ravel()
+    out = {"target_mm": t, "deviation_um": x}
+    for name, v in others.items():
+        if v is not None:
+            out[name] = np.asarray(v).ravel()
+    ok = np.ones(t.shape, bool) if valid is None else np.asarray(valid, dtype=bool).ravel()
+    out["valid"] = ok
+    for name, v in out.items():
+        if v.shape != t.shape:
+            raise InputError(f"accuracy figures: {name} has {v.size} values but target_mm has {t.size}; "
+                             "give one value per capture")
+    out["valid"] = ok & np.isfinite(t) & np.isfinite(x)
+    return out
+
+
+def _target_index(target_mm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Targets matched within TARGET_TOL_MM: (unique targets (m,) ascending, index (K,) into them)."""
+    key = np.round(target_mm / TARGET_TOL_MM).astype(np.int64)
+    _, first, inv = np.unique(key, return_index=True, return_inverse=True)
+    return target_mm[first], inv.ravel()
+
+
+# ----------------------------------------------------------------------------- ISO 230-2 bidirectional
+
+
+@dataclass
+class TargetTable(_ToDict):
+    """Per-target statistics of SPEC 5 (arrays of shape (m,), NaN where undefined)."""
+
+    target_mm: np.ndarray
+    n_up: np.ndarray  # runs approaching P_j upward
+    n_down: np.ndarray
+    mean_up_um: np.ndarray  # x̄_j↑: mean deviation over runs
+    mean_down_um: np.ndarray
+    std_up_um: np.ndarray  # s_j↑ (ddof=1), needs 2 runs
+    std_down_um: np.ndarray
+    reversal_um: np.ndarray  # B_j = x̄_j↑ - x̄_j↓
+    R_up_um: np.ndarray  # R_j↑ = 4 s_j↑
+    R_down_um: np.ndarray
+    R_um: np.ndarray  # R_j = max(2 s_j↑ + 2 s_j↓ + |B_j|, R_j↑, R_j↓)
+
+
+@dataclass
+class Iso230Figures(_ToDict):
+    """ISO 230-2 figures of SPEC 5 (um); None where the runs do not define them (see ``notes``)."""
+
+    n_targets: int
+    n_runs_up: int
+    n_runs_down: int
+    E_up_um: float | None  # systematic deviation ↑: max x̄↑ - min x̄↑
+    E_down_um: float | None
+    E_um: float | None  # bidirectional systematic deviation: over both directions
+    M_um: float | None  # range of mean bidirectional deviation (x̄↑ + x̄↓)/2
+    B_um: float | None  # reversal error: max |B_j|
+    B_mean_um: float | None  # mean reversal error: mean of B_j
+    R_up_um: float | None  # unidirectional repeatability ↑: max R_j↑
+    R_down_um: float | None
+    R_um: float | None  # bidirectional repeatability: max R_j
+    A_up_um: float | None  # accuracy ↑: max(x̄↑ + 2s↑) - min(x̄↑ - 2s↑)
+    A_down_um: float | None
+    A_um: float | None  # bidirectional accuracy over both directions
+    per_target: TargetTable
+    notes: list[str] = field(default_factory=list)
+
+
+def _span(*arrays: np.ndarray) -> float | None:
+    """max - min over the finite values of all arrays, None if none is finite."""
+    v = np.concatenate([np.ravel(a) for a in arrays])
+    v = v[np.isfinite(v)]
+    return float(v.max() - v.min()) if v.size else None
+
+
+def _band(mean: list[np.ndarray], std: list[np.ndarray]) -> float | None:
+    """max(x̄ + 2s) - min(x̄ - 2s) over targets where s is defined (the accuracy A)."""
+    hi = np.concatenate([m + 2 * s for m, s in zip(mean, std)])
+    lo = np.concatenate([m - 2 * s for m, s in zip(mean, std)])
+    ok = np.isfinite(hi) & np.isfinite(lo)
+    return float(hi[ok].max() - lo[ok].min()) if ok.any() else None
+
+
+def _nanmax(a: np.ndarray) -> float | None:
+    a = a[np.isfinite(a)]
+    return float(a.max()) if a.size else None
+
+
+def _direction_stats(approach_target: np.ndarray, approach_dev: np.ndarray, m: int
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(n, mean, std ddof=1) per target over the approaches (runs) of one direction; shapes (m,)."""
+    n = np.bincount(approach_target, minlength=m).astype(float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = np.bincount(approach_target, approach_dev, minlength=m) / n
+        ss = np.bincount(approach_target, (approach_dev - mean[approach_target]) ** 2, minlength=m)
+        std = np.sqrt(ss / (n - 1.0))
+    std[n < 2] = np.nan
+    return n.astype(int), mean, std
+
+
+def bidirectional_figures(target_mm: np.ndarray, direction: np.ndarray, run: np.ndarray,
+                          deviation_um: np.ndarray, valid: np.ndarray | None = None) -> Iso230Figures | None:
+    """ISO 230-2 positioning figures (SPEC section 5) from captures of several runs.
+
+    Parameters
+    ----------
+    target_mm : shape (K,), target P_j of each capture; targets within 1e-6 mm are one target.
+    direction : shape (K,), approach direction, "+"/"-" or +1/-1.
+    run : shape (K,), run id; several frames of one run at one target are averaged into one approach.
+    deviation_um : shape (K,), x = measured - target.
+    valid : shape (K,) bool or None; False (outliers) and NaN deviations are left out.
+
+    Returns
+    -------
+    Iso230Figures, or None when no valid capture is left. Figures the data do not
+    define (std with one run per direction; B, M, bidirectional R and A with one
+    direction) are None, and ``notes`` says why.
+    """
+    a = _arrays(target_mm, deviation_um, valid, run=run)
+    ok = a["valid"]
+    if not ok.any():
+        return None
+    sign = direction_signs(direction).ravel()
+    if sign.shape != ok.shape:
+        raise InputError(f"accuracy figures: direction has {sign.size} values but target_mm has {ok.size}")
+    t, x, r, sign = a["target_mm"][ok], a["deviation_um"][ok], a["run"][ok], sign[ok]
+    targets, j = _target_index(t)
+    m = targets.size
+    # one approach = (target, direction, run): average its frames first
+    _, run_id = np.unique(r, return_inverse=True)
+    appr_key = (j * 2 + (sign > 0)) * (run_id.max() + 1) + run_id.ravel()
+    keys, inv, cnt = np.unique(appr_key, return_inverse=True, return_counts=True)
+    appr_dev = np.bincount(inv.ravel(), x) / cnt
+    appr_dir_up = ((keys // (run_id.max() + 1)) % 2).astype(bool)
+    appr_target = keys // (run_id.max() + 1) // 2
+
+    n_up, mean_up, std_up = _direction_stats(appr_target[appr_dir_up], appr_dev[appr_dir_up], m)
+    n_dn, mean_dn, std_dn = _direction_stats(appr_target[~appr_dir_up], appr_dev[~appr_dir_up], m)
+    reversal = mean_up - mean_dn  # NaN unless both directions
+    R_up_j, R_dn_j = 4 * std_up, 4 * std_dn
+    R_j = np.fmax(np.fmax(2 * std_up + 2 * std_dn + np.abs(reversal), R_up_j), R_dn_j)
+    R_j[~(np.isfinite(std_up) & np.isfinite(std_dn) & np.isfinite(reversal))] = np.nan
+    table = TargetTable(targets, n_up, n_dn, mean_up, mean_dn, std_up, std_dn, reversal, R_up_j, R_dn_j, R_j)
+
+    runs_up = int(np.unique(r[sign > 0]).size)
+    runs_dn = int(np.unique(r[sign < 0]).size)
+    both = np.isfinite(reversal)
+    fig = Iso230Figures(
+        n_targets=int(m), n_runs_up=runs_up, n_runs_down=runs_dn,
+        E_up_um=_span(mean_up), E_down_um=_span(mean_dn), E_um=_span(mean_up, mean_dn),
+        M_um=_span(((mean_up + mean_dn) / 2)[both]),
+        B_um=_nanmax(np.abs(reversal)), B_mean_um=float(reversal[both].mean()) if both.any() else None,
+        R_up_um=_nanmax(R_up_j), R_down_um=_nanmax(R_dn_j), R_um=_nanmax(R_j),
+        A_up_um=_band([mean_up], [std_up]), A_down_um=_band([mean_dn], [std_dn]),
+        A_um=_band([mean_up, mean_dn], [std_up, std_dn]) if (np.isfinite(std_up).any()
+                                                              and np.isfinite(std_dn).any()) else None,
+        per_target=table, notes=_iso_notes(table, runs_up, runs_dn, int((~ok).sum())))
+    return fig
+
+
+def _iso_notes(tab: TargetTable, runs_up: int, runs_dn: int, n_invalid: int) -> list[str]:
+    """Why some figures are missing or indicative, in words for the report."""
+    notes = []
+    if n_invalid:
+        notes.append(f"{n_invalid} capture(s) left out as invalid (outliers or no position).")
+    if runs_up == 0 or runs_dn == 0:
+        have = "upward (+)" if runs_up else "downward (-)"
+        notes.append(f"Only {have} approaches: reversal B, mean range M and bidirectional R and A are undefined.")
+    for name, runs, std in (("upward", runs_up, tab.std_up_um), ("downward", runs_dn, tab.std_down_um)):
+        if runs == 1:
+            notes.append(f"One {name} run only: its standard deviation (n-1 = 0) and so R and A are undefined.")
+        elif runs > 1 and not np.isfinite(std).all():
+            k = int((~np.isfinite(std)).sum())
+            notes.append(f"{k} target(s) reached by fewer than 2 {name} runs are left out of {name} R and A.")
+    if 0 < min(runs_up or ISO_RUNS, runs_dn or ISO_RUNS) < ISO_RUNS:
+        notes.append(f"ISO 230-2 asks for {ISO_RUNS} runs per direction; with fewer the figures are indicative.")
+    return notes
+
+
+# ----------------------------------------------------------------------------- single run
+
+
+@dataclass
+class RunFigures(_ToDict):
+    """Single-run figures of SPEC 5 (one run, or all valid captures with one offset per group)."""
+
+    n_captures: int  # valid captures used
+    mean_step_mm: float | None  # mean distance between measured positions of adjacent targets
+    step_std_um: float | None  # std (ddof=1) of those steps
+    max_abs_deviation_um: float | None  # max |x|
+    deviation_span_um: float | None  # max x - min x
+    scale_ppm: float | None  # slope of the least-squares line x(P), in um/m
+    scale_sigma_ppm: float | None  # its standard uncertainty
+    periodic_amplitude_um: float | None  # sine amplitude of the spectrum's peak (detrended x)
+    periodic_period_mm: float | None  # period of that peak (a lead-screw pitch)
+    spectrum: Spectrum | None
+    notes: list[str] = field(default_factory=list)
+
+
+def _steps_mm(t: np.ndarray, measured: np.ndarray, ok: np.ndarray, group: np.ndarray) -> np.ndarray:
+    """Steps between measured positions of adjacent targets within each group (mm).
+
+    The target grid of a group includes invalid captures, so an outlier leaves
+    a hole instead of a double step; frames at one target are averaged.
+    """
+    steps = []
+    for g in np.unique(group):
+        sel = group == g
+        targets, j = _target_index(t[sel])
+        n = np.bincount(j[ok[sel]], minlength=targets.size)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            pos = np.bincount(j[ok[sel]], measured[sel][ok[sel]], minlength=targets.size) / n
+        steps.append(np.diff(pos))
+    s = np.concatenate(steps) if steps else np.empty(0)
+    return s[np.isfinite(s)]
+
+
+def _scale_fit(t: np.ndarray, x: np.ndarray, w: np.ndarray | None, group: np.ndarray
+               ) -> tuple[np.ndarray, float | None, float | None]:
+    """Least-squares x = offset_g + b (t - t_mean): (residual (n,), b in um/mm, sigma of b).
+
+    Weighted by 1/sigma^2 when given; the slope sigma is then the formal one
+    scaled up by sqrt(chi2/dof) when the scatter exceeds the sigmas (Birge ratio).
+    """
+    _, g = np.unique(group, return_inverse=True)
+    n_g = int(g.max()) + 1
+    design = np.zeros((t.size, 1 + n_g))  # shape (n, 1 + groups)
+    design[:, 0] = t - t.mean()
+    design[np.arange(t.size), 1 + g.ravel()] = 1.0
+    sw = np.ones_like(t) if w is None else np.sqrt(w)
+    coef, *_ = np.linalg.lstsq(design * sw[:, None], x * sw, rcond=None)
+    resid = x - design @ coef
+    dof = t.size - design.shape[1]
+    normal = (design * sw[:, None] ** 2).T @ design
+    if np.linalg.matrix_rank(normal) < design.shape[1]:
+        return resid, None, None
+    cov = np.linalg.inv(normal)
+    if dof <= 0:
+        return resid, float(coef[0]), None
+    chi2_red = float(np.sum(sw**2 * resid**2) / dof)
+    var = cov[0, 0] * (chi2_red if w is None else max(1.0, chi2_red))
+    return resid, float(coef[0]), float(np.sqrt(var))
+
+
+def single_run_figures(target_mm: np.ndarray, deviation_um: np.ndarray, valid: np.ndarray | None = None,
+                       sigma_um: np.ndarray | None = None, *, group: np.ndarray | None = None) -> RunFigures:
+    """Single-run figures of SPEC section 5 from deviations x = measured - target.
+
+    Parameters
+    ----------
+    target_mm, deviation_um : shape (K,).
+    valid : shape (K,) bool or None; outliers (False) and NaN deviations are left out.
+    sigma_um : shape (K,) or None; 1-sigma of each deviation, weights the scale fit by 1/sigma^2.
+    group : shape (K,) or None; runs/directions when several are pooled: steps are taken
+        within a group and the scale line gets one offset per group (removes backlash).
+
+    Returns
+    -------
+    RunFigures: mean step (mm) and step std (um) between adjacent targets, max |x|, span of x,
+    scale error (ppm, slope of the least-squares line of x against target) with its sigma, and
+    the periodic error: the peak of the spectrum of the detrended x (period mm, sine amplitude
+    um), with the spectrum for plotting. Figures the data cannot give are None (see ``notes``).
+    """
+    a = _arrays(target_mm, deviation_um, valid, sigma_um=sigma_um, group=group)
+    ok, t_all, x_all = a["valid"], a["target_mm"], a["deviation_um"]
+    grp_all = a.get("group", np.zeros(t_all.shape, int))
+    notes: list[str] = []
+    n_bad = int((~ok).sum())
+    if n_bad:
+        notes.append(f"{n_bad} capture(s) left out as invalid (outliers or no position).")
+    t, x, grp = t_all[ok], x_all[ok], grp_all[ok]
+    w = None
+    if sigma_um is not None:
+        s = a["sigma_um"].astype(float)[ok]
+        if not np.all(np.isfinite(s) & (s > 0)):
+            raise InputError("sigma_um must be positive and finite for every valid capture")
+        w = 1.0 / s**2
+    if t.size == 0:
+        return RunFigures(0, None, None, None, None, None, None, None, None, None, notes + ["No valid capture."])
+
+    steps = _steps_mm(t_all, t_all + x_all * 1e-3, ok, grp_all)
+    mean_step = float(steps.mean()) if steps.size else None
+    step_std = float(steps.std(ddof=1) * 1e3) if steps.size > 1 else None
+    if steps.size == 0:
+        notes.append("No two adjacent targets with valid captures: no step figures.")
+
+    scale = scale_sigma = None
+    resid = x - x.mean()
+    if np.ptp(t) > 0:
+        resid, b, sb = _scale_fit(t, x, w, grp)
+        scale = None if b is None else b * 1e3  # um/mm -> ppm
+        scale_sigma = None if sb is None else sb * 1e3
+    else:
+        notes.append("All valid captures at one target: no scale error.")
+
+    spec = deviation_spectrum(t, resid, w)
+    if spec is None:
+        notes.append("Fewer than 4 valid targets: no periodic error.")
+    return RunFigures(
+        n_captures=int(t.size), mean_step_mm=mean_step, step_std_um=step_std,
+        max_abs_deviation_um=float(np.abs(x).max()), deviation_span_um=float(np.ptp(x)),
+        scale_ppm=scale, scale_sigma_ppm=scale_sigma,
+        periodic_amplitude_um=None if spec is None else spec.peak_amplitude_um,
+        periodic_period_mm=None if spec is None else spec.peak_period_mm,
+        spectrum=spec, notes=notes)
+
+
+# ----------------------------------------------------------------------------- a whole session
+
+
+def figures_for_session(target_mm: np.ndarray, direction: np.ndarray, run: np.ndarray,
+                        deviation_um: np.ndarray, valid: np.ndarray | None = None,
+                        sigma_um: np.ndarray | None = None) -> dict[str, Any]:
+    """All SPEC 5 figures of a session as JSON-ready dicts (results.json ``figures``).
+
+    Returns
+    -------
+    dict with ``"single_run"`` (:func:`single_run_figures` of all valid captures, one
+    offset per run and direction), ``"per_run"`` (list of ``{"run", "direction",
+    "figures"}`` per run and direction) and ``"iso230_2"`` (:func:`bidirectional_figures`
+    as a dict when at least 2 runs in one direction or both directions exist, else None).
+    """
+    a = _arrays(target_mm, deviation_um, valid, run=run)
+    sign = direction_signs(direction).ravel()
+    if sign.shape != a["valid"].shape:
+        raise InputError(f"accuracy figures: direction has {sign.size} values but target_mm has {sign.size}")
+    r = a["run"]
+    pairs, group = np.unique(np.stack([r.astype(str), sign.astype(str)], axis=1), axis=0, return_inverse=True)
+    sig = None if sigma_um is None else np.asarray(sigma_um, dtype=float).ravel()
+    single = single_run_figures(a["target_mm"], a["deviation_um"], a["valid"], sig, group=group.ravel())
+    order = sorted(range(len(pairs)), key=lambda i: (_run_sort_key(r[group.ravel() == i][0]), -int(pairs[i][1])))
+    per_run = []
+    for i in order:
+        sel = group.ravel() == i
+        figs = single_run_figures(a["target_mm"][sel], a["deviation_um"][sel], a["valid"][sel],
+                                  None if sig is None else sig[sel])
+        run_value = r[sel][0]
+        per_run.append({"run": _json(run_value.item() if hasattr(run_value, "item") else run_value),
+                        "direction": "+" if int(pairs[i][1]) > 0 else "-", "figures": figs.to_dict()})
+    ok = a["valid"]
+    runs_per_dir = [np.unique(r[ok & (sign == s)]).size for s in (1, -1)]
+    iso = None
+    if max(runs_per_dir) >= 2 or min(runs_per_dir) >= 1:
+        fig = bidirectional_figures(a["target_mm"], sign, r, a["deviation_um"], ok)
+        iso = None if fig is None else fig.to_dict()
+    return {"single_run": single.to_dict(), "per_run": per_run, "iso230_2": iso}
+
+
+def _run_sort_key(v: Any) -> tuple[int, Any]:
+    try:
+        return (0, float(v))
+    except (TypeError, ValueError):
+        return (1, str(v))
+
+
+# ----------------------------------------------------------------------------- specification
+
+
+def check_specification(figures: dict[str, Any], spec: dict[str, Any]) -> list[dict[str, Any]]:
+    """Pass/fail of a stage data sheet (the paper's Table 1) against SPEC 5 figures.
+
+    ``spec`` keys (each optional): ``accuracy_um``, ``repeatability_um``,
+    ``straightness_um``, and ``limits``: ``"plus_minus"`` (default: the data sheet
+    reads "Accuracy +-20 um") or ``"band"`` (limits are full widths).
+
+    Choices, since the deviation's zero (the first capture) is arbitrary:
+
+    * accuracy: the ISO band A (bidirectional, else the wider unidirectional A;
+      with one run per direction, the span max x - min x of all valid deviations);
+      against a +- limit we compare the half band A/2 (the band centred).
+    * repeatability: R (bidirectional, else the larger of R↑, R↓); R/2 against a
+      +- limit. Undefined with one run per direction (``passed`` None).
+    * straight-line accuracy: ``figures["straightness_um_max"]`` (largest
+      peak-to-valley straightness, given by the estimator) against the limit as a
+      full width in both modes (the data sheet gives it without +-).
+
+    Returns
+    -------
+    list of ``{"name", "measured", "limit", "unit", "passed", "note"}`` rows; ``passed`` is
+    None when the session does not measure the figure.
+    """
+    mode = str(spec.get("limits", "plus_minus"))
+    if mode not in ("plus_minus", "band"):
+        raise InputError(f"stage spec: limits must be 'plus_minus' or 'band', got {mode!r}")
+    half = 0.5 if mode == "plus_minus" else 1.0
+    versus = " / 2 vs \u00b1limit" if half < 1 else " vs band limit"
+    iso = figures.get("iso230_2") or {}
+    single = figures.get("single_run") or {}
+    rows = []
+
+    def limit(key: str) -> float | None:
+        if spec.get(key) is None:
+            return None
+        try:
+            return float(spec[key])
+        except (TypeError, ValueError):
+            raise InputError(f"stage spec: {key} must be a number in um, got {spec[key]!r}") from None
+
+    def row(name: str, measured: float | None, lim: float, note: str) -> dict[str, Any]:
+        return {"name": name, "measured": measured, "limit": lim, "unit": "\u00b5m",
+                "passed": None if measured is None else bool(measured <= lim), "note": note}
+
+    lim = limit("accuracy_um")
+    if lim is not None:
+        uni = [v for v in (_num(iso.get("A_up_um")), _num(iso.get("A_down_um"))) if v is not None]
+        if _num(iso.get("A_um")) is not None:
+            value, what = _num(iso["A_um"]), "ISO 230-2 accuracy A"
+        elif uni:
+            value, what = max(uni), "ISO 230-2 unidirectional accuracy A"
+        else:
+            value, what = _num(single.get("deviation_span_um")), "deviation span max x - min x (one run)"
+        rows.append(row("Positional accuracy", None if value is None else value * half, lim,
+                        what + versus))
+    lim = limit("repeatability_um")
+    if lim is not None:
+        uni = [v for v in (_num(iso.get("R_up_um")), _num(iso.get("R_down_um"))) if v is not None]
+        value = _num(iso.get("R_um"))
+        what = "ISO 230-2 bidirectional repeatability R"
+        if value is None and uni:
+            value, what = max(uni), "ISO 230-2 unidirectional repeatability R"
+        note = (what + versus if value is not None
+                else "needs two or more runs per direction")
+        rows.append(row("Repeatability", None if value is None else value * half, lim, note))
+    lim = limit("straightness_um")
+    if lim is not None:
+        value = figures.get("straightness_um_max")
+        value = _num(np.max(value)) if value is not None and np.size(value) else None
+        rows.append(row("Straight-line accuracy", value, lim,
+                        "largest peak-to-valley straightness vs limit" if value is not None
+                        else "no straightness figures in these results"))
+    return rows

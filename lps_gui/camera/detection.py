@@ -194,6 +194,7 @@ class ChessboardTracker:
         self._half_window = 5
         self.n_tracked = 0
         self.n_full = 0
+        self._last_failure: str | None = None
 
     def reset(self) -> None:
         self._prev_px = None
@@ -251,7 +252,10 @@ class ChessboardTracker:
         found = find_chessboard_sb(grey, self.board, self.options.sb_max_width)
         if found is None:
             self.reset()
-            return Detection(None, "failed", why_not_found(grey, self.board), sharp)
+            if self._last_failure is None:  # diagnosing costs another SB run: once per failing stretch
+                self._last_failure = why_not_found(grey, self.board)
+            return Detection(None, "failed", self._last_failure, sharp)
+        self._last_failure = None
         found = orient(found, self.board, predicted if predicted is not None else None)
         self._half_window = subpix_half_window(found, self.board)
         refined = refine(grey, found, self._half_window)

@@ -29,8 +29,8 @@ class IntrinsicsCalibration:
 
     intrinsics: CameraIntrinsics  # covariance = diag(std^2), INTRINSIC_NAMES order
     std: np.ndarray  # shape (9,), INTRINSIC_NAMES order
-    rms_px: float
-    per_view_rms_px: np.ndarray  # shape (V,), NaN for views not used
+    rms_px: float  # RMS length of the 2-D reprojection error (OpenCV's figure; sqrt(2) x per-axis sigma)
+    per_view_rms_px: np.ndarray  # shape (V,), same measure per view, NaN for views not used
     coverage: np.ndarray  # shape (grid_rows, grid_cols): corners per image cell
     flagged_views: list[int]
     warnings: list[str]

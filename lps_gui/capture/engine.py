@@ -1,0 +1,367 @@
+"""The capture engine: run a session's plan against a Stage and a Camera, losing nothing.
+
+For every planned frame not yet listed in captures.jsonl (in
+:meth:`Plan.stops` order) the engine moves, waits until the stage is idle,
+settles, grabs, writes the image atomically and only then appends its line
+(SPEC 7), so a crash, a kill or a vanished port never leaves a listed frame
+missing on disk, and a later :meth:`CaptureEngine.run` continues at the
+first frame not listed.
+
+ISO 230-2: each target is approached from its run's own direction. Within a
+run the targets come in that direction anyway; at the start of a run, and
+whenever the engine does not know where the stage came from (first stop of a
+call, after a pause or an error), it first goes to the overshoot position
+beyond the target so the last move is in the run's direction.
+
+Deterministic simulators: before the move onto a stop the engine calls
+``stage.seed_capture(key)`` and before each grab ``camera.seed_capture(index)``
+when these optional hooks exist, so a simulated session resumed after a kill
+draws the same repeatability and image noise as an uninterrupted one.
+"""
+from __future__ import annotations
+
+import threading
+import time
+from typing import Any, Callable
+
+import numpy as np
+
+from lps_gui.camera.base import Camera
+from lps_gui.capture import events as ev
+from lps_gui.capture.events import CaptureEvent, CaptureListener, CaptureProgress, CaptureSummary
+from lps_gui.capture.truth import append_truth, finalize_truth
+from lps_gui.core.clock import Clock, RealClock
+from lps_gui.core.plan import PlannedStop
+from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
+from lps_gui.errors import HardwareError, InputError
+from lps_gui.hardware.stage import Stage
+from lps_gui.io.atomic import check_writable
+from lps_gui.io.session import IMAGES_DIR, CaptureRecord, Session
+
+TruthSource = Callable[[], dict[str, Any]]
+
+
+class _Stop(Exception):
+    """Internal: abort or cancel requested."""
+
+
+def encode_image(image: np.ndarray, ext: str) -> bytes:
+    """Encode an 8-bit frame losslessly as ``ext`` (".png", ".tif", ".bmp"...)."""
+    import cv2
+
+    params = [cv2.IMWRITE_PNG_COMPRESSION, 1] if ext.lower() == ".png" else []
+    ok, buf = cv2.imencode(ext, image, params)
+    if not ok:
+        raise InputError(f"capture: cannot encode images as {ext!r}; use .png")
+    return buf.tobytes()
+
+
+def image_name(index: int, ext: str) -> str:
+    """File name of capture ``index`` inside images/ (sorts in capture order)."""
+    return f"{index:06d}{ext}"
+
+
+def bytes_per_frame(camera: Camera) -> int:
+    """Upper bound of one stored frame: the raw size (PNG only shrinks it); 8 MB when unknown."""
+    props = camera.properties()
+    w, h = props.get("width"), props.get("height")
+    if w and h:
+        return int(w) * int(h) * int(props.get("channels", 1)) + 4096
+    return 8 << 20
+
+
+class CaptureEngine:
+    """Runs the plan of ``session`` against ``stage`` and ``camera``.
+
+    Parameters
+    ----------
+    stage : a connected :class:`Stage`.
+    camera : a :class:`Camera` (opened by :meth:`run` when needed).
+    session : the session folder; its plan says what to capture.
+    clock : settle time and ETA; the stage's clock when it has one, else real time.
+    encode : image file extension, lossless (".png" default).
+    truth_source : for a simulated rig, returns the true pose at the grab as
+        a JSON-able dict; appended to truth.jsonl and folded into
+        session.json's ``truth`` when the capture completes.
+    move_timeout_s : minimum time a move may take before it is an error.
+
+    :meth:`pause`, :meth:`resume`, :meth:`abort` and :meth:`progress` are
+    safe to call from any thread while :meth:`run` blocks in another.
+    """
+
+    def __init__(
+        self,
+        stage: Stage,
+        camera: Camera,
+        session: Session,
+        clock: Clock | None = None,
+        encode: str = ".png",
+        *,
+        truth_source: TruthSource | None = None,
+        move_timeout_s: float = 60.0,
+    ) -> None:
+        self.stage = stage
+        self.camera = camera
+        self.session = session
+        self.clock: Clock = clock or getattr(stage, "clock", None) or RealClock()
+        self.encode = encode if encode.startswith(".") else "." + encode
+        self.truth_source = truth_source
+        self.move_timeout_s = float(move_timeout_s)
+        self._plan = session.plan()
+        self._total = self._plan.n_frames()
+        self._lock = threading.Lock()
+        self._wake = threading.Condition(self._lock)
+        self._pause_req = False
+        self._abort_req = False
+        self._state = ev.IDLE
+        self._error: str | None = None
+        self._done = len({r.index for r in session.records()})
+        self._current: PlannedStop | None = None
+        self._message = ""
+        self._eta_s: float | None = None
+        self._listeners: list[CaptureListener] = []
+        self._last_move: tuple[int, str, float] | None = None  # (run, direction, target) last approached
+        self._reported_mm: float | None = None
+        self._active = False
+
+    # ------------------------------------------------------------------ control (any thread)
+    def pause(self) -> None:
+        """Stop after the frame being taken; :meth:`resume` continues (the next stop is re-approached)."""
+        with self._lock:
+            self._pause_req = True
+            self._wake.notify_all()
+
+    def resume(self) -> None:
+        """Continue a user pause. After an error pause :meth:`run` has returned: call it again."""
+        with self._lock:
+            self._pause_req = False
+            self._wake.notify_all()
+
+    def abort(self) -> None:
+        """Stop after the frame being taken; everything listed stays on disk."""
+        with self._lock:
+            self._abort_req = True
+            self._wake.notify_all()
+
+    @property
+    def state(self) -> str:
+        with self._lock:
+            return self._state
+
+    @property
+    def error(self) -> str | None:
+        with self._lock:
+            return self._error
+
+    def progress(self) -> CaptureProgress:
+        """A consistent snapshot for a GUI timer or a status line."""
+        with self._lock:
+            cur = self._current
+            return CaptureProgress(
+                state=self._state,
+                done=self._done,
+                total=self._total,
+                eta_s=self._eta_s,
+                index=None if cur is None else cur.index,
+                target_mm=None if cur is None else cur.target_mm,
+                message=self._message,
+                error=self._error,
+            )
+
+    def subscribe(self, listener: CaptureListener) -> Callable[[], None]:
+        """Call ``listener(event)`` on the engine's thread for every :class:`CaptureEvent`."""
+        with self._lock:
+            self._listeners.append(listener)
+
+        def unsubscribe() -> None:
+            with self._lock:
+                if listener in self._listeners:
+                    self._listeners.remove(listener)
+
+        return unsubscribe
+
+    # ------------------------------------------------------------------ run
+    def run(self, progress: ProgressFn = no_progress, cancel: CancelToken | None = None) -> CaptureSummary:
+        """Capture every planned frame not yet listed; block until done, aborted or paused by an error.
+
+        Raises InputError before any move when the session folder cannot
+        take the images (unwritable, not enough free space). A HardwareError
+        (port vanished, alarm, timeout) or a write failure mid-run returns a
+        summary in state "paused" with the error; reconnect and call
+        :meth:`run` again to continue.
+        """
+        with self._lock:
+            if self._active:
+                raise InputError("capture: already running; pause, resume or abort it instead")
+            self._active = True
+            self._state, self._error, self._abort_req, self._pause_req = ev.RUNNING, None, False, False
+            self._last_move = None
+        t0 = self.clock.now()
+        captured = 0
+        try:
+            remaining = self.session.remaining_stops()
+            self._set(done=self._total - len(remaining))
+            if remaining:
+                check_writable(self.session.folder / IMAGES_DIR, len(remaining) * bytes_per_frame(self.camera))
+            self._emit(CaptureEvent("started", f"{len(remaining)} of {self._total} frames to capture"))
+            if remaining and not self.camera.is_open:
+                self.camera.open()
+            progress(self._total - len(remaining), self._total, "starting")
+            for stop in remaining:
+                self._checkpoint(cancel)
+                self._set(current=stop)
+                if self._last_move != (stop.run, stop.direction, stop.target_mm):
+                    self._go_to(stop)
+                self._take(stop)
+                captured += 1
+                eta = (self.clock.now() - t0) / captured * (self._total - self._done - 1)
+                self._set(done=self._done + 1, eta=eta, message=f"frame {stop.index} at {stop.target_mm:g} mm")
+                progress(self._done, self._total, self._message)
+        except _Stop as exc:
+            self._finish(ev.ABORTED, str(exc))
+        except HardwareError as exc:
+            self._fail(str(exc))
+        except OSError as exc:  # disk full or folder gone mid-run: nothing listed is lost
+            self._fail(f"{self.session.folder}: cannot write ({exc.strerror or exc}); free space or fix the folder, then resume")
+        except InputError as exc:  # unwritable folder, full disk, bad encoding: before any harm
+            with self._lock:
+                self._state, self._error = (ev.IDLE if captured == 0 else ev.PAUSED), str(exc)
+            raise
+        except BaseException:  # KeyboardInterrupt or a bug: listed frames are safe on disk
+            with self._lock:
+                self._state = ev.PAUSED
+            raise
+        else:
+            if self.truth_source is not None:
+                finalize_truth(self.session)
+            self._finish(ev.DONE, f"capture complete: {self._total} frames")
+        finally:
+            with self._lock:
+                self._active = False
+        return CaptureSummary(
+            state=self.state,
+            captured=captured,
+            listed=len({r.index for r in self.session.records()}),
+            total=self._total,
+            elapsed_s=self.clock.now() - t0,
+            folder=str(self.session.folder),
+            error=self.error,
+        )
+
+    # ------------------------------------------------------------------ steps
+    def _go_to(self, stop: PlannedStop) -> None:
+        """Move onto ``stop``'s target from its own direction, wait, settle, read the position."""
+        plan, feed = self._plan, self._plan.feed_mm_min
+        sign = 1.0 if stop.direction == "+" else -1.0
+        last = self._last_move
+        continues_run = (
+            last is not None
+            and last[:2] == (stop.run, stop.direction)
+            and (stop.target_mm - last[2]) * sign > 0
+        )
+        self._last_move = None
+        if not continues_run and plan.overshoot_mm > 0:
+            start = plan.approach_start_mm(stop.direction, stop.target_mm)
+            self._emit(CaptureEvent("approach", f"approach from {start:g} mm", stop.index))
+            self._move(start, feed)
+        _hook(self.stage, stop.index - stop.frame)
+        self._emit(CaptureEvent("move", f"move to {stop.target_mm:g} mm", stop.index))
+        self._move(stop.target_mm, feed)
+        self.clock.sleep(plan.settle_s)
+        self._reported_mm = float(self.stage.position_mm())
+        self._last_move = (stop.run, stop.direction, stop.target_mm)
+
+    def _move(self, target_mm: float, feed_mm_min: float) -> None:
+        here = self.stage.position_mm()
+        self.stage.move_to(target_mm, feed_mm_min)
+        at_feed_s = abs(target_mm - here) / max(feed_mm_min / 60.0, 1e-9)
+        self.stage.wait_idle(timeout_s=max(self.move_timeout_s, 3.0 * at_feed_s + 10.0))
+
+    def _take(self, stop: PlannedStop) -> None:
+        """Grab, write the image atomically, then list it (truth line first, capture line last)."""
+        _hook(self.camera, stop.index)
+        frame = self.camera.grab()
+        data = encode_image(frame.image, self.encode)
+        rel, sha = self.session.write_image(image_name(stop.index, self.encode), data)
+        if self.truth_source is not None:
+            append_truth(self.session, stop.index, self.truth_source())
+        record = CaptureRecord(
+            index=stop.index,
+            run=stop.run,
+            direction=stop.direction,
+            target_mm=stop.target_mm,
+            reported_mm=self._reported_mm,
+            file=rel,
+            sha256=sha,
+            time=time.time(),
+            frame=stop.frame,
+        )
+        self.session.append(record)
+        self._emit(CaptureEvent("frame", rel, stop.index, record.__dict__.copy()))
+
+    def _checkpoint(self, cancel: CancelToken | None) -> None:
+        """Between frames: honour abort, cancel and pause (waiting here until resumed)."""
+        with self._lock:
+            paused = False
+            while True:
+                if self._abort_req or (cancel is not None and cancel.cancelled):
+                    raise _Stop("capture aborted; every listed frame is kept, resume to continue")
+                if not self._pause_req:
+                    break
+                if not paused:
+                    paused, self._state, self._message = True, ev.PAUSED, "paused"
+                    self._last_move = None  # the operator may jog: re-approach afterwards
+                    self._lock.release()
+                    try:
+                        self._emit(CaptureEvent("paused", "capture paused"))
+                    finally:
+                        self._lock.acquire()
+                    continue
+                self._wake.wait(timeout=0.2)  # real time: waits for a person (or a cancel token)
+            if paused:
+                self._state, self._message = ev.RUNNING, "resumed"
+        if paused:
+            self._emit(CaptureEvent("resumed", "capture resumed"))
+
+    # ------------------------------------------------------------------ bookkeeping
+    def _set(self, done: int | None = None, eta: float | None = None, current: PlannedStop | None = None, message: str | None = None) -> None:
+        with self._lock:
+            if done is not None:
+                self._done = done
+            if eta is not None:
+                self._eta_s = eta
+            if current is not None:
+                self._current = current
+            if message is not None:
+                self._message = message
+
+    def _fail(self, message: str) -> None:
+        with self._lock:
+            self._state, self._error, self._message = ev.PAUSED, message, message
+            self._last_move = None
+        self._emit(CaptureEvent("error", message))
+
+    def _finish(self, state: str, message: str) -> None:
+        with self._lock:
+            self._state, self._message = state, message
+            if state == ev.DONE:
+                self._eta_s = 0.0
+        self._emit(CaptureEvent(state, message))
+
+    def _emit(self, event: CaptureEvent) -> None:
+        with self._lock:
+            listeners = list(self._listeners)
+        for fn in listeners:
+            try:
+                fn(event)
+            except Exception:  # a listener's bug must not stop the capture
+                import logging
+
+                logging.getLogger(__name__).exception("capture event listener failed")
+
+
+def _hook(device: object, key: int) -> None:
+    """Call the optional deterministic-simulation hook ``seed_capture(key)``."""
+    fn = getattr(device, "seed_capture", None)
+    if callable(fn):
+        fn(int(key))

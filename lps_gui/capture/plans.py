@@ -1,0 +1,69 @@
+"""Plan files and plan options: the ``--plan plan.json`` file and the ``--start/--stop/...`` switches.
+
+A plan file holds the fields of :class:`~lps_gui.core.plan.Plan` at the top
+level or under ``"plan"`` (so a session.json is a valid plan file too):
+``{"start_mm": 0, "stop_mm": 38, "step_mm": 2, "directions": "both", "runs": 2,
+"overshoot_mm": 1, "settle_s": 0.2, "frames_per_stop": 1, "feed_mm_min": 600}``
+or ``"targets_mm": [...]`` instead of start/stop/step.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from lps_gui.core.plan import Plan
+from lps_gui.errors import InputError
+from lps_gui.io.jsonfile import read_json, write_json
+
+
+def read_plan(path: Path | str) -> Plan:
+    """Read a plan file (fields at the top level or under "plan")."""
+    d = read_json(path, "plan file")
+    if isinstance(d, dict) and isinstance(d.get("plan"), dict):
+        d = d["plan"]
+    if not isinstance(d, dict):
+        raise InputError(f"{path}: a plan file is a JSON object with start_mm, stop_mm, step_mm...")
+    try:
+        return Plan.from_dict(d)
+    except InputError as exc:
+        raise InputError(f"{path}: {exc}") from exc
+
+
+def write_plan(path: Path | str, plan: Plan) -> None:
+    write_json(path, plan.to_dict())
+
+
+def plan_with(base: Plan | None, **fields: Any) -> Plan:
+    """``base`` (or the default Plan) with every field given as not None replaced.
+
+    Giving ``start_mm``/``stop_mm``/``step_mm`` drops explicit targets of
+    the base; giving ``targets_mm`` replaces them.
+    """
+    given = {k: v for k, v in fields.items() if v is not None}
+    unknown = set(given) - set(Plan.__dataclass_fields__)
+    if unknown:
+        raise InputError(f"plan: unknown fields {sorted(unknown)}")
+    if "targets_mm" in given:
+        given["targets_mm"] = tuple(float(t) for t in given["targets_mm"])
+    elif {"start_mm", "stop_mm", "step_mm"} & set(given):
+        given["targets_mm"] = None
+    return replace(base or Plan(), **given)
+
+
+def parse_targets(text: str) -> tuple[float, ...]:
+    """``"0,1.5,3"`` -> (0.0, 1.5, 3.0) for ``--targets``."""
+    try:
+        return tuple(float(t) for t in text.replace(";", ",").split(",") if t.strip())
+    except ValueError:
+        raise InputError(f"--targets {text!r}: give comma-separated positions in mm, e.g. 0,1.5,3") from None
+
+
+def describe_plan(plan: Plan) -> str:
+    """One line for logs and the CLI: targets, directions, runs, frames."""
+    t = plan.targets()
+    dirs = {"+": "forward", "-": "backward", "both": "forward and backward"}[plan.directions]
+    return (
+        f"{len(t)} targets {t[0]:g}..{t[-1]:g} mm, {dirs}, {plan.runs} run(s), "
+        f"{plan.frames_per_stop} frame(s) per stop: {plan.n_frames()} frames"
+    )

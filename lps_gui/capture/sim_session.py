@@ -1,0 +1,63 @@
+"""Capture sessions on the simulated rig: start one with its truth, or reopen one to resume.
+
+session.json of a simulated capture records the rig (:func:`rig_truth`), so
+``lps capture --resume`` rebuilds the same stage error model, mount and
+camera and goes on as if nothing happened; per-capture truth goes to
+truth.jsonl and, once complete, into session.json (see ``capture/truth.py``).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from lps_gui.capture.engine import CaptureEngine
+from lps_gui.capture.simulated_rig import RigCamera, RigStage, make_simulated_rig, rig_truth, spec_from_truth
+from lps_gui.capture.truth import pose_truth
+from lps_gui.core.camera_model import CameraIntrinsics
+from lps_gui.core.clock import Clock
+from lps_gui.core.simulate import SimulationSpec
+from lps_gui.errors import InputError
+from lps_gui.io.atomic import check_writable
+from lps_gui.io.session import Session
+
+
+def create_simulated_session(
+    folder: Path | str,
+    spec: SimulationSpec,
+    clock: Clock | None = None,
+    noise_grey: float = 2.0,
+    intrinsics: CameraIntrinsics | str | None = None,
+    **options: Any,
+) -> tuple[Session, RigStage, RigCamera]:
+    """Create a session for ``spec`` and its rig (stage not yet connected).
+
+    ``intrinsics`` default to the rig's true intrinsics (a simulation knows
+    them); pass calibrated ones to test the effect of calibration error.
+    """
+    check_writable(folder)
+    stage, camera = make_simulated_rig(spec, clock=clock, noise_grey=noise_grey, **options)
+    session = Session.create(
+        folder,
+        board=spec.rig.board,
+        plan=spec.plan,
+        intrinsics=intrinsics if intrinsics is not None else spec.rig.intrinsics,
+        camera=camera.properties(),
+        stage=stage.describe(),
+        truth=rig_truth(spec, camera),
+    )
+    return session, stage, camera
+
+
+def reopen_simulated_rig(session: Session, clock: Clock | None = None) -> tuple[RigStage, RigCamera]:
+    """Rebuild the simulated rig a session was captured with (for ``--resume``)."""
+    truth = session.truth
+    if not truth or not truth.get("simulated"):
+        raise InputError(f"{session.folder}: not captured on the simulated rig; resume it with --stage and --camera")
+    spec = spec_from_truth(truth, session.plan(), str(session.folder / "session.json"))
+    cam = truth.get("camera") or {}
+    return make_simulated_rig(spec, clock=clock, noise_grey=float(cam.get("noise_grey", 2.0)), blur_px=float(cam.get("blur_px", 1.2)))
+
+
+def simulated_engine(session: Session, stage: RigStage, camera: RigCamera, encode: str = ".png") -> CaptureEngine:
+    """A :class:`CaptureEngine` that also records the stage's true pose of every frame."""
+    return CaptureEngine(stage, camera, session, encode=encode, truth_source=lambda: pose_truth(stage.true_pose()))

@@ -1,0 +1,199 @@
+"""`lps capture`: run a capture plan on a stage and a camera into a session folder; resume after any stop.
+
+Examples::
+
+    lps capture --out run1                                   # simulated rig, preset "small"
+    lps capture --preset paper-rig --directions both --runs 2 --out run2
+    lps capture --stage grbl:/dev/ttyUSB0 --camera 0 --plan plan.json \\
+                --board board.json --intrinsics intrinsics.json --out run3
+    lps capture --resume run3 [--stage grbl:/dev/ttyUSB0 --camera 0]
+"""
+from __future__ import annotations
+
+import argparse
+
+HELP = "capture a session: move the stage through a plan and store an image per stop (resumable)"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--stage", default=None, help="sim | emulator | grbl:PORT (default sim)")
+    p.add_argument("--camera", default=None, help="sim | N (device index) | DIR (replay a folder) | FILE | URL (default sim)")
+    p.add_argument("--out", metavar="SESSION", help="new session folder")
+    p.add_argument("--resume", metavar="SESSION", help="continue this session at the first frame not listed")
+    g = p.add_argument_group("plan (a --plan file, switches override its fields)")
+    g.add_argument("--plan", metavar="FILE", help="plan JSON (fields of the plan, or a session.json)")
+    g.add_argument("--start", type=float, dest="start_mm", help="first target, mm")
+    g.add_argument("--stop", type=float, dest="stop_mm", help="last target, mm")
+    g.add_argument("--step", type=float, dest="step_mm", help="target spacing, mm")
+    g.add_argument("--targets", help="explicit targets, comma separated mm")
+    g.add_argument("--directions", choices=("+", "-", "both"), help="approach direction(s) of the runs")
+    g.add_argument("--runs", type=int, help="number of runs (per direction)")
+    g.add_argument("--overshoot", type=float, dest="overshoot_mm", help="overshoot before a run's first target, mm")
+    g.add_argument("--settle", type=float, dest="settle_s", help="wait after each move, s")
+    g.add_argument("--frames", type=int, dest="frames_per_stop", help="frames per stop")
+    g.add_argument("--feed", type=float, dest="feed_mm_min", help="feed of the moves, mm/min")
+    s = p.add_argument_group("set-up")
+    s.add_argument("--board", metavar="FILE", help="board.json (required with a real camera)")
+    s.add_argument("--intrinsics", metavar="FILE", help="intrinsics (JSON or OpenCV YAML), embedded into session.json")
+    s.add_argument("--preset", default="small", help="simulated rig: small | paper-rig | paper-synthetic (default small)")
+    s.add_argument("--seed", type=int, default=0, help="simulated rig: seed of all noise")
+    s.add_argument("--noise-grey", type=float, default=2.0, help="simulated camera: noise sigma, grey levels")
+    s.add_argument("--real-time", action="store_true", help="simulated rig: move and settle in real time (default: simulated time)")
+    s.add_argument("--encode", default=".png", help="image format (lossless): .png (default), .tif, .bmp")
+
+
+def run(args: argparse.Namespace) -> int:
+    import sys
+
+    from lps_gui.cli.progress_bar import ProgressBar
+    from lps_gui.errors import InputError
+
+    if bool(args.out) == bool(args.resume):
+        raise InputError("give either --out SESSION (new capture) or --resume SESSION")
+    session, stage, camera, engine = _resume(args) if args.resume else _start(args)
+    try:
+        print(f"capturing into {session.folder}: {_describe(session)}", file=sys.stderr)
+        summary = engine.run(progress=ProgressBar("capture"))
+    finally:
+        _close(stage, camera)
+    if summary.state == "done":
+        print(f"{summary.folder}: {summary.listed}/{summary.total} frames listed ({summary.captured} now)")
+        return 0
+    print(
+        f"lps capture: {summary.state}: {summary.error or 'stopped'}; {summary.listed}/{summary.total} frames kept, "
+        f"continue with `lps capture --resume {summary.folder}`",
+        file=sys.stderr,
+    )
+    return 3
+
+
+def _describe(session) -> str:
+    from lps_gui.capture.plans import describe_plan
+
+    return describe_plan(session.plan())
+
+
+def _plan(args: argparse.Namespace, base=None):
+    from lps_gui.capture.plans import parse_targets, plan_with, read_plan
+
+    if args.plan:
+        base = read_plan(args.plan)
+    fields = {k: getattr(args, k) for k in ("start_mm", "stop_mm", "step_mm", "directions", "runs", "overshoot_mm", "settle_s", "frames_per_stop", "feed_mm_min")}
+    if args.targets:
+        fields["targets_mm"] = parse_targets(args.targets)
+    if base is None and not any(fields[k] is not None for k in ("start_mm", "stop_mm", "step_mm", "targets_mm") if k in fields):
+        from lps_gui.errors import InputError
+
+        raise InputError("no plan: give --plan FILE or --start/--stop/--step (or --targets)")
+    return plan_with(base, **fields)
+
+
+def _start(args: argparse.Namespace):
+    from lps_gui.capture.engine import CaptureEngine
+    from lps_gui.errors import InputError
+    from lps_gui.io.session import Session
+
+    stage_spec, camera_spec = args.stage or "sim", args.camera or "sim"
+    intr = _read_intrinsics(args.intrinsics)
+    if camera_spec == "sim":
+        from lps_gui.capture.simulated_rig import spec_for_plan
+        from lps_gui.capture.sim_session import create_simulated_session, simulated_engine
+        from lps_gui.core.simulate import preset
+
+        if args.board:
+            raise InputError("--board: the simulated rig's board comes from --preset; drop --board")
+        base = preset(args.preset).plan
+        spec = spec_for_plan(args.preset, _plan(args, base), seed=args.seed)
+        session, stage, camera = create_simulated_session(args.out, spec, clock=_clock(args), noise_grey=args.noise_grey, intrinsics=intr)
+        stage = _bind_stage(stage_spec, stage)
+        return session, stage, camera, simulated_engine(session, stage, camera, args.encode)
+    if not args.board:
+        raise InputError("--board FILE is required with a real camera (see SPEC 7 for board.json)")
+    from lps_gui.io.board_file import read_board
+
+    board, plan = read_board(args.board), _plan(args)
+    stage, camera = _open_devices(stage_spec, camera_spec)
+    try:
+        session = Session.create(
+            args.out, board, plan, intr,
+            camera={**camera.properties(), "spec": camera_spec},
+            stage={**stage.describe(), "spec": stage_spec},
+        )
+    except BaseException:
+        _close(stage, camera)
+        raise
+    return session, stage, camera, CaptureEngine(stage, camera, session, encode=args.encode)
+
+
+def _resume(args: argparse.Namespace):
+    from lps_gui.capture.engine import CaptureEngine
+    from lps_gui.io.session import Session
+
+    session = Session.open(args.resume)
+    truth = session.truth or {}
+    if truth.get("simulated") and (args.camera or "sim") == "sim":
+        from lps_gui.capture.sim_session import reopen_simulated_rig, simulated_engine
+
+        stage, camera = reopen_simulated_rig(session, clock=_clock(args))
+        stage = _bind_stage(args.stage or "sim", stage)
+        return session, stage, camera, simulated_engine(session, stage, camera, args.encode)
+    stage_spec = args.stage or (session.meta.get("stage") or {}).get("spec")
+    camera_spec = args.camera or (session.meta.get("camera") or {}).get("spec")
+    if not stage_spec or not camera_spec:
+        from lps_gui.errors import InputError
+
+        raise InputError(f"{session.folder}: say which devices to resume with: --stage ... --camera ...")
+    stage, camera = _open_devices(stage_spec, camera_spec)
+    return session, stage, camera, CaptureEngine(stage, camera, session, encode=args.encode)
+
+
+def _open_devices(stage_spec: str, camera_spec: str):
+    from lps_gui.camera import open_camera
+    from lps_gui.errors import InputError
+    from lps_gui.hardware import open_stage
+
+    if camera_spec == "sim":
+        raise InputError("--camera sim follows only the simulated rig; use --stage sim or emulator")
+    stage = open_stage(stage_spec)
+    try:
+        camera = open_camera(camera_spec)
+    except BaseException:
+        stage.disconnect()
+        raise
+    return stage, camera
+
+
+def _bind_stage(stage_spec: str, rig_stage):
+    """Connect the simulated rig's stage directly ("sim") or through the GRBL emulator ("emulator")."""
+    from lps_gui.errors import InputError
+
+    if stage_spec == "sim":
+        rig_stage.connect()
+        return rig_stage
+    if stage_spec == "emulator":
+        from lps_gui.capture.emulated_rig import emulated_rig_stage
+
+        return emulated_rig_stage(rig_stage)
+    raise InputError(f"--stage {stage_spec}: the simulated camera rides only --stage sim or emulator")
+
+
+def _clock(args: argparse.Namespace):
+    from lps_gui.core.clock import RealClock, SimClock
+
+    return RealClock() if args.real_time else SimClock()
+
+
+def _read_intrinsics(path: str | None):
+    if not path:
+        return None
+    from lps_gui.io.intrinsics_file import read_intrinsics
+
+    return read_intrinsics(path)
+
+
+def _close(stage, camera) -> None:
+    for fn in (camera.close, stage.disconnect):
+        try:
+            fn()
+        except Exception:  # closing a vanished device must not hide the capture's own result
+            pass

@@ -220,11 +220,12 @@ def project_board(
 
 def pose_jacobian_rodrigues(
     rvec: np.ndarray, tvec: np.ndarray, points_board: np.ndarray, intrinsics: CameraIntrinsics
-) -> tuple[np.ndarray, np.ndarray]:
-    """Pixels and d uv / d (rvec, tvec, fx, fy, cx, cy, dist) like cv2.projectPoints.
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Pixels and their Jacobians in cv2.projectPoints' parametrization.
 
-    Returns uv shape (N, 2) and a Jacobian shape (N, 2, 15) with cv2's column
-    order, so cv2.projectPoints is a reference for tests. The Rodrigues
+    Returns uv shape (N, 2); d uv / d (rvec, tvec, fx, fy, cx, cy, dist) shape
+    (N, 2, 15) in cv2's column order, so cv2.projectPoints is a reference for
+    tests; and d uv / d board point, shape (N, 2, 3). The Rodrigues
     derivative comes from cv2.Rodrigues (3x9, row-major dR).
     """
     import cv2
@@ -239,4 +240,4 @@ def pose_jacobian_rodrigues(
     J[..., 0:3] = np.einsum("nab,nbk->nak", proj.d_uv_d_xcam, dx_drvec)
     J[..., 3:6] = proj.d_uv_d_xcam
     J[..., 6:15] = proj.d_uv_d_intrinsics
-    return proj.uv, J
+    return proj.uv, J, proj.d_uv_d_xcam @ R

@@ -351,7 +351,7 @@ def _finish(
     six = None
     if opt.six_dof:
         t1 = time.perf_counter()
-        six = _six_dof(state, obs, X, mask_all, usable, used, sigma2)
+        six = _six_dof(state, obs, X, mask_all, usable, used)
         timings["six_dof"] = time.perf_counter() - t1
     return LpsEstimate(
         method=opt.method,
@@ -381,13 +381,20 @@ def _finish(
 
 
 def _six_dof(
-    state: LpsState, obs: Observations, X: np.ndarray, mask_all: np.ndarray, usable: np.ndarray, used: np.ndarray, sigma2: float
+    state: LpsState, obs: Observations, X: np.ndarray, mask_all: np.ndarray, usable: np.ndarray, used: np.ndarray
 ) -> SixDof:
-    """Per-view poses started from the common model, then straightness and angles."""
+    """Per-view poses started from the common model, then straightness and angles.
+
+    The noise is the pooled residual of the per-view fits, not the joint
+    fit's: angular error motions that the common rotation cannot follow
+    inflate the latter, never the former.
+    """
     K = obs.K
     t_model = state.line().translations(state.s)
     t_model[~usable] = state.l0
     poses = refine_view_poses(np.broadcast_to(state.R, (K, 3, 3)), t_model, X, obs.corners_px, mask_all, state.intrinsics)
+    n_obs = int(2 * mask_all[used].sum())
+    sigma2 = noise_variance(float(poses.ssr[used].sum()), n_obs, 6 * int(used.sum()))
     six = six_dof_motion(poses, state.R, used, sigma2)
     for arr in (six.straightness_um, six.straightness_sigma_um, six.angles_urad, six.angles_sigma_urad):
         arr[~usable] = np.nan

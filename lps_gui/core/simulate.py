@@ -193,3 +193,19 @@ def preset(name: str, **overrides: Any) -> SimulationSpec:
         raise InputError(f"simulation: unknown preset {name!r}; choose one of {', '.join(PRESETS)}")
     spec = PRESETS[name]()
     return replace(spec, **overrides) if overrides else spec
+
+
+def observations_of(spec: SimulationSpec, views: SimulatedViews, intrinsics: CameraIntrinsics | None = None):
+    """The estimator's input for simulated views (intrinsics default to the truth)."""
+    from lps_gui.core.observations import Observations
+
+    return Observations(
+        board=spec.rig.board,
+        intrinsics=intrinsics or spec.rig.intrinsics,
+        corners_px=views.corners_px,
+        target_mm=[s.target_mm for s in views.stops],
+        direction=[1.0 if s.direction == "+" else -1.0 for s in views.stops],
+        run=[s.run for s in views.stops],
+        index=[s.index for s in views.stops],
+        source=f"simulation {spec.name}",
+    )

@@ -1,0 +1,158 @@
+"""The GRBL emulator over a real pty, spoken to byte by byte with pyserial (what GRBL 1.1h would answer)."""
+from __future__ import annotations
+
+import time
+
+import pytest
+import serial
+
+from lps_gui.hardware.grbl.emulator import BANNER, GrblEmulator
+from lps_gui.hardware.sim_stage import SimulatedStage
+
+
+class Port:
+    """Raw pyserial access to the emulator: send bytes, read lines until a predicate holds."""
+
+    def __init__(self, path: str) -> None:
+        self.ser = serial.Serial(path, 115200, timeout=0.02)
+        self.ser.reset_input_buffer()
+        self.buf = b""
+
+    def ask(self, data: bytes, until: str = "ok", timeout_s: float = 1.0) -> list[str]:
+        self.ser.write(data)
+        return self.lines(until, timeout_s)
+
+    def lines(self, until: str, timeout_s: float = 1.0) -> list[str]:
+        out: list[str] = []
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            self.buf += self.ser.read(256)
+            while b"\r\n" in self.buf:
+                raw, self.buf = self.buf.split(b"\r\n", 1)
+                out.append(raw.decode("latin-1"))
+                if out[-1].startswith(until) or (until == "ok" and out[-1].startswith("error:")):
+                    return out
+        raise AssertionError(f"no {until!r} within {timeout_s} s; got {out}")
+
+    def close(self) -> None:
+        self.ser.close()
+
+
+@pytest.fixture
+def emu():
+    with GrblEmulator(SimulatedStage(travel_mm=(0.0, 100.0), start_mm=10.0), time_scale=50.0) as e:
+        port = Port(e.path)
+        yield e, port
+        port.close()
+
+
+def test_reset_prints_banner_then_build_info_and_help(emu):
+    e, port = emu
+    assert port.ask(b"\x18", until="Grbl") == ["", "Grbl 1.1h ['$' for help]"]
+    assert BANNER == "\r\nGrbl 1.1h ['$' for help]\r\n"
+    assert port.ask(b"$I\n") == ["[VER:1.1h.20190830:]", "[OPT:V,15,128]", "ok"]
+    assert port.ask(b"$\n") == ["[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X $H ~ ! ? ctrl-x]", "ok"]
+    assert port.ask(b"$G\n") == ["[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]", "ok"]
+    assert port.ask(b"$I=rig 1\n") == ["ok"]
+    assert port.ask(b"$I\n")[0] == "[VER:1.1h.20190830:RIG1]"  # GRBL upper-cases and strips spaces
+
+
+def test_settings_listing_order_and_format(emu):
+    _, port = emu
+    lines = port.ask(b"$$\n")
+    numbers = [int(ln[1:].split("=")[0]) for ln in lines[:-1]]
+    assert numbers == [0, 1, 2, 3, 4, 5, 6, 10, 11, 12, 13, 20, 21, 22, 23, 24, 25, 26, 27, 30, 31, 32,
+                       100, 101, 102, 110, 111, 112, 120, 121, 122, 130, 131, 132]
+    assert "$10=1" in lines and "$11=0.010" in lines and "$130=100.000" in lines
+    assert port.ask(b"$110=1200\n") == ["ok"]
+    assert "$110=1200.000" in port.ask(b"$$\n")
+    assert port.ask(b"$999=1\n") == ["error:3"]
+    assert port.ask(b"$110=-5\n") == ["error:4"]
+    assert port.ask(b"$0=2\n") == ["error:6"]
+    assert port.ask(b"$100=100000\n") == ["error:12"]
+    assert port.ask(b"$Q\n") == ["error:3"]
+
+
+def test_status_report_fields_follow_mask_and_refresh_counters(emu):
+    e, port = emu
+    port.ask(b"\x18", until="Grbl")
+    first = port.ask(b"?", until="<")[-1]
+    assert first == "<Idle|MPos:-90.000,-100.000,-100.000|FS:0,0|WCO:-100.000,-100.000,-100.000>"
+    assert port.ask(b"?", until="<")[-1] == "<Idle|MPos:-90.000,-100.000,-100.000|FS:0,0|Ov:100,100,100>"
+    assert port.ask(b"?", until="<")[-1] == "<Idle|MPos:-90.000,-100.000,-100.000|FS:0,0>"
+    port.ask(b"$10=2\n")  # WPos and buffer state
+    assert port.ask(b"?", until="<")[-1] == "<Idle|WPos:10.000,0.000,0.000|Bf:15,128|FS:0,0>"
+
+
+def test_motion_states_and_error_codes(emu):
+    e, port = emu
+    assert port.ask(b"G1 X50\n") == ["error:22"]  # no feed rate yet
+    assert port.ask(b"G1 X50 F600\n") == ["ok"]
+    assert port.ask(b"?", until="<")[-1].startswith("<Run|")
+    assert port.ask(b"G4 P0\n", timeout_s=2.0) == ["ok"]  # waits for the move to end
+    assert port.ask(b"?", until="<")[-1].startswith("<Idle|MPos:-50.000")
+    port.ser.write(b"G91 G0 X-5\nG4 P0\n")
+    assert port.lines("ok") == ["ok"] and port.lines("ok") == ["ok"]
+    assert e.stage.status().work_mm[0] == pytest.approx(45.0)
+    assert port.ask(b"G2 X1 Y1 R1\n") == ["error:20"]
+    assert port.ask(b"G0 G1 X1\n") == ["error:21"]
+    assert port.ask(b"(comment only)\n") == ["ok"]
+    assert port.ask(b"G1 X" + b"1" * 90 + b"\n") == ["error:11"]
+
+
+def test_jog_rules_and_cancel(emu):
+    e, port = emu
+    assert port.ask(b"$J=G91 X500 F1000\n") == ["error:15"]
+    assert port.ask(b"$J=G91 X5\n") == ["error:22"]
+    assert port.ask(b"$J=X5 F100 S3\n") == ["error:36"]
+    assert port.ask(b"$J=G91 X80 F600\n") == ["ok"]
+    assert port.ask(b"?", until="<")[-1].startswith("<Jog|")
+    assert port.ask(b"G1 X1 F100\n") == ["error:9"]  # G-code locked while jogging
+    assert port.ask(b"$H\n") == ["error:8"]
+    port.ser.write(b"\x85")
+    deadline = time.monotonic() + 1.0
+    while e.stage.status().state != "Idle" and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert e.stage.status().state == "Idle" and 10.0 < e.stage.status().work_mm[0] < 90.0
+
+
+def test_soft_limit_alarm_is_critical_until_reset_then_locked(emu):
+    e, port = emu
+    assert port.ask(b"G0 X500\n", until="[MSG") == ["ALARM:2", "[MSG:Reset to continue]"]
+    port.ser.write(b"?$I\n")
+    with pytest.raises(AssertionError, match=r"got \[\]"):
+        port.lines(until="<", timeout_s=0.2)  # '?' and lines are ignored in a critical alarm
+    reply = port.ask(b"\x18", until="[MSG")
+    assert reply[-2:] == ["Grbl 1.1h ['$' for help]", "[MSG:'$H'|'$X' to unlock]"]
+    assert port.ask(b"G0 X1\n") == ["error:9"]
+    assert port.ask(b"$X\n") == ["[MSG:Caution: Unlocked]", "ok"]
+    assert port.ask(b"?", until="<")[-1].startswith("<Idle|")
+
+
+def test_homing_and_reset_during_motion(emu):
+    e, port = emu
+    assert port.ask(b"$H\n", timeout_s=2.0) == ["ok"]
+    assert e.stage.homed and e.stage.status().work_mm[0] == pytest.approx(1.0)
+    port.ask(b"G1 X90 F300\n")
+    reply = port.ask(b"\x18", until="[MSG")
+    assert reply[0] == "ALARM:3" and reply[-1] == "[MSG:'$H'|'$X' to unlock]"
+
+
+def test_rx_buffer_overflow_is_detected_when_host_ignores_counting(emu):
+    e, port = emu
+    port.ask(b"$110=60\n")  # slow moves keep the planner full
+    lines = b"".join(f"G1 X{20 + i}.000 F60\n".encode() for i in range(30))  # 30 * 15 bytes
+    port.ser.write(lines)
+    time.sleep(0.3)
+    assert e.rx_overflow_bytes > 0
+
+
+def test_check_mode_and_sleep(emu):
+    e, port = emu
+    assert port.ask(b"$C\n") == ["[MSG:Enabled]", "ok"]
+    assert port.ask(b"G0 X50\n") == ["ok"]
+    assert port.ask(b"?", until="<")[-1].startswith("<Check|MPos:-90.000")
+    assert port.ask(b"$C\n", until="Grbl") == ["[MSG:Disabled]", "ok", "", "Grbl 1.1h ['$' for help]"]
+    assert port.ask(b"$SLP\n") == ["[MSG:Sleeping]", "ok"]
+    assert port.ask(b"?", until="<")[-1].startswith("<Sleep|")
+    assert port.ask(b"\x18", until="[MSG")[-1] == "[MSG:'$H'|'$X' to unlock]"

@@ -16,47 +16,19 @@ No I/O, no Qt: numpy and scipy only.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from lps_gui.core.iso230_spectrum import Spectrum, deviation_spectrum
+from lps_gui.core.iso230_run import (TARGET_TOL_MM, JsonDataclass, RunFigures, capture_arrays, finite_or_none,
+                                     json_value, single_run_figures, target_index)
 from lps_gui.errors import InputError
 
-TARGET_TOL_MM = 1e-6  # targets closer than this are one target P_j
+__all__ = ["TARGET_TOL_MM", "Iso230Figures", "RunFigures", "TargetTable", "bidirectional_figures",
+           "check_specification", "direction_signs", "figures_for_session", "single_run_figures"]
+
 ISO_RUNS = 5  # ISO 230-2 asks for 5 runs per direction
-
-
-def _num(v: Any) -> float | None:
-    """A finite float, or None (JSON has no NaN)."""
-    if v is None:
-        return None
-    v = float(v)
-    return v if np.isfinite(v) else None
-
-
-def _json(v: Any) -> Any:
-    """Dataclass field value -> JSON-ready value (arrays to lists, NaN to None)."""
-    if isinstance(v, np.ndarray):
-        if v.dtype.kind in "iub":
-            return v.astype(int).tolist()
-        return [None if not np.isfinite(e) else float(e) for e in v.astype(float)]
-    if hasattr(v, "to_dict"):
-        return v.to_dict()
-    if isinstance(v, (list, tuple)):
-        return [_json(e) for e in v]
-    if isinstance(v, (float, np.floating)):
-        return _num(v)
-    if isinstance(v, (np.integer,)):
-        return int(v)
-    return v
-
-
-class _ToDict:
-    def to_dict(self) -> dict[str, Any]:
-        """Fields as JSON-ready values: lists of floats, None for undefined."""
-        return {f.name: _json(getattr(self, f.name)) for f in fields(self)}  # type: ignore[arg-type]
 
 
 # ----------------------------------------------------------------------------- input normalisation
@@ -78,36 +50,11 @@ def direction_signs(direction: Any) -> np.ndarray:
     return out
 
 
-def _arrays(target_mm: Any, deviation_um: Any, valid: Any, **others: Any) -> dict[str, np.ndarray]:
-    """Check that every per-capture array has shape (K,); valid defaults to all True, NaN is invalid."""
-    t = np.asarray(target_mm, dtype=float).ravel()
-    x = np.asarray(deviation_um, dtype=float).ravel()
-    out = {"target_mm": t, "deviation_um": x}
-    for name, v in others.items():
-        if v is not None:
-            out[name] = np.asarray(v).ravel()
-    ok = np.ones(t.shape, bool) if valid is None else np.asarray(valid, dtype=bool).ravel()
-    out["valid"] = ok
-    for name, v in out.items():
-        if v.shape != t.shape:
-            raise InputError(f"accuracy figures: {name} has {v.size} values but target_mm has {t.size}; "
-                             "give one value per capture")
-    out["valid"] = ok & np.isfinite(t) & np.isfinite(x)
-    return out
-
-
-def _target_index(target_mm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Targets matched within TARGET_TOL_MM: (unique targets (m,) ascending, index (K,) into them)."""
-    key = np.round(target_mm / TARGET_TOL_MM).astype(np.int64)
-    _, first, inv = np.unique(key, return_index=True, return_inverse=True)
-    return target_mm[first], inv.ravel()
-
-
 # ----------------------------------------------------------------------------- ISO 230-2 bidirectional
 
 
 @dataclass
-class TargetTable(_ToDict):
+class TargetTable(JsonDataclass):
     """Per-target statistics of SPEC 5 (arrays of shape (m,), NaN where undefined)."""
 
     target_mm: np.ndarray
@@ -124,7 +71,7 @@ class TargetTable(_ToDict):
 
 
 @dataclass
-class Iso230Figures(_ToDict):
+class Iso230Figures(JsonDataclass):
     """ISO 230-2 figures of SPEC 5 (um); None where the runs do not define them (see ``notes``)."""
 
     n_targets: int
@@ -196,7 +143,7 @@ def bidirectional_figures(target_mm: np.ndarray, direction: np.ndarray, run: np.
     define (std with one run per direction; B, M, bidirectional R and A with one
     direction) are None, and ``notes`` says why.
     """
-    a = _arrays(target_mm, deviation_um, valid, run=run)
+    a = capture_arrays(target_mm, deviation_um, valid, run=run)
     ok = a["valid"]
     if not ok.any():
         return None
@@ -204,7 +151,7 @@ def bidirectional_figures(target_mm: np.ndarray, direction: np.ndarray, run: np.
     if sign.shape != ok.shape:
         raise InputError(f"accuracy figures: direction has {sign.size} values but target_mm has {ok.size}")
     t, x, r, sign = a["target_mm"][ok], a["deviation_um"][ok], a["run"][ok], sign[ok]
-    targets, j = _target_index(t)
+    targets, j = target_index(t)
     m = targets.size
     # one approach = (target, direction, run): average its frames first
     _, run_id = np.unique(r, return_inverse=True)
@@ -257,134 +204,6 @@ def _iso_notes(tab: TargetTable, runs_up: int, runs_dn: int, n_invalid: int) -> 
     return notes
 
 
-# ----------------------------------------------------------------------------- single run
-
-
-@dataclass
-class RunFigures(_ToDict):
-    """Single-run figures of SPEC 5 (one run, or all valid captures with one offset per group)."""
-
-    n_captures: int  # valid captures used
-    mean_step_mm: float | None  # mean distance between measured positions of adjacent targets
-    step_std_um: float | None  # std (ddof=1) of those steps
-    max_abs_deviation_um: float | None  # max |x|
-    deviation_span_um: float | None  # max x - min x
-    scale_ppm: float | None  # slope of the least-squares line x(P), in um/m
-    scale_sigma_ppm: float | None  # its standard uncertainty
-    periodic_amplitude_um: float | None  # sine amplitude of the spectrum's peak (detrended x)
-    periodic_period_mm: float | None  # period of that peak (a lead-screw pitch)
-    spectrum: Spectrum | None
-    notes: list[str] = field(default_factory=list)
-
-
-def _steps_mm(t: np.ndarray, measured: np.ndarray, ok: np.ndarray, group: np.ndarray) -> np.ndarray:
-    """Steps between measured positions of adjacent targets within each group (mm).
-
-    The target grid of a group includes invalid captures, so an outlier leaves
-    a hole instead of a double step; frames at one target are averaged.
-    """
-    steps = []
-    for g in np.unique(group):
-        sel = group == g
-        targets, j = _target_index(t[sel])
-        n = np.bincount(j[ok[sel]], minlength=targets.size)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            pos = np.bincount(j[ok[sel]], measured[sel][ok[sel]], minlength=targets.size) / n
-        steps.append(np.diff(pos))
-    s = np.concatenate(steps) if steps else np.empty(0)
-    return s[np.isfinite(s)]
-
-
-def _scale_fit(t: np.ndarray, x: np.ndarray, w: np.ndarray | None, group: np.ndarray
-               ) -> tuple[np.ndarray, float | None, float | None]:
-    """Least-squares x = offset_g + b (t - t_mean): (residual (n,), b in um/mm, sigma of b).
-
-    Weighted by 1/sigma^2 when given; the slope sigma is then the formal one
-    scaled up by sqrt(chi2/dof) when the scatter exceeds the sigmas (Birge ratio).
-    """
-    _, g = np.unique(group, return_inverse=True)
-    n_g = int(g.max()) + 1
-    design = np.zeros((t.size, 1 + n_g))  # shape (n, 1 + groups)
-    design[:, 0] = t - t.mean()
-    design[np.arange(t.size), 1 + g.ravel()] = 1.0
-    sw = np.ones_like(t) if w is None else np.sqrt(w)
-    coef, *_ = np.linalg.lstsq(design * sw[:, None], x * sw, rcond=None)
-    resid = x - design @ coef
-    dof = t.size - design.shape[1]
-    normal = (design * sw[:, None] ** 2).T @ design
-    if np.linalg.matrix_rank(normal) < design.shape[1]:
-        return resid, None, None
-    cov = np.linalg.inv(normal)
-    if dof <= 0:
-        return resid, float(coef[0]), None
-    chi2_red = float(np.sum(sw**2 * resid**2) / dof)
-    var = cov[0, 0] * (chi2_red if w is None else max(1.0, chi2_red))
-    return resid, float(coef[0]), float(np.sqrt(var))
-
-
-def single_run_figures(target_mm: np.ndarray, deviation_um: np.ndarray, valid: np.ndarray | None = None,
-                       sigma_um: np.ndarray | None = None, *, group: np.ndarray | None = None) -> RunFigures:
-    """Single-run figures of SPEC section 5 from deviations x = measured - target.
-
-    Parameters
-    ----------
-    target_mm, deviation_um : shape (K,).
-    valid : shape (K,) bool or None; outliers (False) and NaN deviations are left out.
-    sigma_um : shape (K,) or None; 1-sigma of each deviation, weights the scale fit by 1/sigma^2.
-    group : shape (K,) or None; runs/directions when several are pooled: steps are taken
-        within a group and the scale line gets one offset per group (removes backlash).
-
-    Returns
-    -------
-    RunFigures: mean step (mm) and step std (um) between adjacent targets, max |x|, span of x,
-    scale error (ppm, slope of the least-squares line of x against target) with its sigma, and
-    the periodic error: the peak of the spectrum of the detrended x (period mm, sine amplitude
-    um), with the spectrum for plotting. Figures the data cannot give are None (see ``notes``).
-    """
-    a = _arrays(target_mm, deviation_um, valid, sigma_um=sigma_um, group=group)
-    ok, t_all, x_all = a["valid"], a["target_mm"], a["deviation_um"]
-    grp_all = a.get("group", np.zeros(t_all.shape, int))
-    notes: list[str] = []
-    n_bad = int((~ok).sum())
-    if n_bad:
-        notes.append(f"{n_bad} capture(s) left out as invalid (outliers or no position).")
-    t, x, grp = t_all[ok], x_all[ok], grp_all[ok]
-    w = None
-    if sigma_um is not None:
-        s = a["sigma_um"].astype(float)[ok]
-        if not np.all(np.isfinite(s) & (s > 0)):
-            raise InputError("sigma_um must be positive and finite for every valid capture")
-        w = 1.0 / s**2
-    if t.size == 0:
-        return RunFigures(0, None, None, None, None, None, None, None, None, None, notes + ["No valid capture."])
-
-    steps = _steps_mm(t_all, t_all + x_all * 1e-3, ok, grp_all)
-    mean_step = float(steps.mean()) if steps.size else None
-    step_std = float(steps.std(ddof=1) * 1e3) if steps.size > 1 else None
-    if steps.size == 0:
-        notes.append("No two adjacent targets with valid captures: no step figures.")
-
-    scale = scale_sigma = None
-    resid = x - x.mean()
-    if np.ptp(t) > 0:
-        resid, b, sb = _scale_fit(t, x, w, grp)
-        scale = None if b is None else b * 1e3  # um/mm -> ppm
-        scale_sigma = None if sb is None else sb * 1e3
-    else:
-        notes.append("All valid captures at one target: no scale error.")
-
-    spec = deviation_spectrum(t, resid, w)
-    if spec is None:
-        notes.append("Fewer than 4 valid targets: no periodic error.")
-    return RunFigures(
-        n_captures=int(t.size), mean_step_mm=mean_step, step_std_um=step_std,
-        max_abs_deviation_um=float(np.abs(x).max()), deviation_span_um=float(np.ptp(x)),
-        scale_ppm=scale, scale_sigma_ppm=scale_sigma,
-        periodic_amplitude_um=None if spec is None else spec.peak_amplitude_um,
-        periodic_period_mm=None if spec is None else spec.peak_period_mm,
-        spectrum=spec, notes=notes)
-
-
 # ----------------------------------------------------------------------------- a whole session
 
 
@@ -400,7 +219,7 @@ def figures_for_session(target_mm: np.ndarray, direction: np.ndarray, run: np.nd
     "figures"}`` per run and direction) and ``"iso230_2"`` (:func:`bidirectional_figures`
     as a dict when at least 2 runs in one direction or both directions exist, else None).
     """
-    a = _arrays(target_mm, deviation_um, valid, run=run)
+    a = capture_arrays(target_mm, deviation_um, valid, run=run)
     sign = direction_signs(direction).ravel()
     if sign.shape != a["valid"].shape:
         raise InputError(f"accuracy figures: direction has {sign.size} values but target_mm has {sign.size}")
@@ -415,7 +234,7 @@ def figures_for_session(target_mm: np.ndarray, direction: np.ndarray, run: np.nd
         figs = single_run_figures(a["target_mm"][sel], a["deviation_um"][sel], a["valid"][sel],
                                   None if sig is None else sig[sel])
         run_value = r[sel][0]
-        per_run.append({"run": _json(run_value.item() if hasattr(run_value, "item") else run_value),
+        per_run.append({"run": json_value(run_value.item() if hasattr(run_value, "item") else run_value),
                         "direction": "+" if int(pairs[i][1]) > 0 else "-", "figures": figs.to_dict()})
     ok = a["valid"]
     runs_per_dir = [np.unique(r[ok & (sign == s)]).size for s in (1, -1)]
@@ -482,19 +301,19 @@ def check_specification(figures: dict[str, Any], spec: dict[str, Any]) -> list[d
 
     lim = limit("accuracy_um")
     if lim is not None:
-        uni = [v for v in (_num(iso.get("A_up_um")), _num(iso.get("A_down_um"))) if v is not None]
-        if _num(iso.get("A_um")) is not None:
-            value, what = _num(iso["A_um"]), "ISO 230-2 accuracy A"
+        uni = [v for v in (finite_or_none(iso.get("A_up_um")), finite_or_none(iso.get("A_down_um"))) if v is not None]
+        if finite_or_none(iso.get("A_um")) is not None:
+            value, what = finite_or_none(iso["A_um"]), "ISO 230-2 accuracy A"
         elif uni:
             value, what = max(uni), "ISO 230-2 unidirectional accuracy A"
         else:
-            value, what = _num(single.get("deviation_span_um")), "deviation span max x - min x (one run)"
+            value, what = finite_or_none(single.get("deviation_span_um")), "deviation span max x - min x (one run)"
         rows.append(row("Positional accuracy", None if value is None else value * half, lim,
                         what + versus))
     lim = limit("repeatability_um")
     if lim is not None:
-        uni = [v for v in (_num(iso.get("R_up_um")), _num(iso.get("R_down_um"))) if v is not None]
-        value = _num(iso.get("R_um"))
+        uni = [v for v in (finite_or_none(iso.get("R_up_um")), finite_or_none(iso.get("R_down_um"))) if v is not None]
+        value = finite_or_none(iso.get("R_um"))
         what = "ISO 230-2 bidirectional repeatability R"
         if value is None and uni:
             value, what = max(uni), "ISO 230-2 unidirectional repeatability R"
@@ -504,7 +323,7 @@ def check_specification(figures: dict[str, Any], spec: dict[str, Any]) -> list[d
     lim = limit("straightness_um")
     if lim is not None:
         value = figures.get("straightness_um_max")
-        value = _num(np.max(value)) if value is not None and np.size(value) else None
+        value = finite_or_none(np.max(value)) if value is not None and np.size(value) else None
         rows.append(row("Straight-line accuracy", value, lim,
                         "largest peak-to-valley straightness vs limit" if value is not None
                         else "no straightness figures in these results"))

@@ -81,7 +81,9 @@ def deviation_spectrum(x_mm: np.ndarray, y_um: np.ndarray, weights: np.ndarray |
         freq = k / (n * step)
         method = "fft"
     else:
-        f_lo, f_hi = 1.0 / travel_mm, 0.5 / float(np.median(np.diff(distinct)))
+        # Stop 1/travel short of the grid's Nyquist frequency: on a gappy regular grid the sine
+        # column of the fit vanishes there and its amplitude is noise divided by almost zero.
+        f_lo, f_hi = 1.0 / travel_mm, 0.5 / float(np.median(np.diff(distinct))) - 1.0 / travel_mm
         nf = int(min(MAX_FREQUENCIES, max(2, np.floor((f_hi - f_lo) * OVERSAMPLE * travel_mm) + 1)))
         freq = np.linspace(f_lo, f_hi, nf)
         amp = sine_amplitude_um(xs, ys, freq, ws)

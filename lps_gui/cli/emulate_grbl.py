@@ -1,0 +1,75 @@
+"""``lps emulate-grbl``: a GRBL 1.1 controller on a pseudo-terminal, over the simulated stage.
+
+Prints the pty path on the first line of stdout (connect any GRBL sender to
+it, e.g. ``lps capture --stage grbl:/dev/pts/5``), then serves until Ctrl-C.
+Fault switches inject what goes wrong with real hardware.
+"""
+from __future__ import annotations
+
+import argparse
+
+HELP = "serve a GRBL 1.1 emulator on a pseudo-terminal (prints its path) until Ctrl-C"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--time-scale", type=float, default=1.0, help="simulated seconds per real second (default 1: GRBL's own timing)")
+    parser.add_argument("--travel", type=float, nargs=2, default=(-5.0, 500.0), metavar=("MIN_MM", "MAX_MM"), help="soft-limit travel in work coordinates")
+    parser.add_argument("--max-rate", type=float, default=3000.0, help="max rate $110 in mm/min")
+    parser.add_argument("--accel", type=float, default=200.0, help="acceleration $120 in mm/s^2")
+    parser.add_argument("--start", type=float, default=0.0, help="carriage position at power-up (mm)")
+    parser.add_argument("--homing-required", action="store_true", help="start locked in Alarm until $H or $X (GRBL with $22=1)")
+    parser.add_argument("--errors", choices=("none", "paper"), default="none", help="true-position error model of the carriage")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the repeatability draws")
+    faults = parser.add_argument_group("fault injection")
+    faults.add_argument("--drop-after-lines", type=int, metavar="N", help="close the port after N received lines (vanished USB cable)")
+    faults.add_argument("--alarm-mid-move", type=int, metavar="CODE", help="raise ALARM:CODE half-way through the first move (1 = hard limit)")
+    faults.add_argument("--error-every", type=int, default=0, metavar="N", help="answer every Nth command with an error instead of executing it")
+    faults.add_argument("--error-code", type=int, default=20, metavar="CODE", help="the error code of --error-every (default 20)")
+    faults.add_argument("--reply-delay", type=float, default=0.0, metavar="S", help="delay every reply by S seconds (slow replies)")
+    faults.add_argument("--garbage-every", type=int, default=0, metavar="N", help="send a line of garbage bytes before every Nth message")
+
+
+def run(args: argparse.Namespace) -> int:
+    import sys
+    import threading
+
+    from lps_gui.errors import InputError
+    from lps_gui.hardware.grbl.emulator import Faults, GrblEmulator
+    from lps_gui.hardware.sim_stage import SimulatedStage
+
+    lo, hi = args.travel
+    if not lo < hi:
+        raise InputError(f"--travel {lo:g} {hi:g}: MIN_MM must be below MAX_MM")
+    if args.time_scale <= 0:
+        raise InputError(f"--time-scale {args.time_scale:g}: must be positive")
+    errors = None
+    if args.errors == "paper":
+        from lps_gui.core.simulate import paper_stage_errors
+
+        errors = paper_stage_errors()
+    stage = SimulatedStage(
+        errors=errors, seed=args.seed, travel_mm=(lo, hi), max_rate_mm_min=args.max_rate,
+        accel_mm_s2=args.accel, homing_required=args.homing_required, start_mm=args.start,
+    )
+    faults = Faults(
+        drop_after_lines=args.drop_after_lines, alarm_mid_move=args.alarm_mid_move, error_every=args.error_every,
+        error_code=args.error_code, reply_delay_s=args.reply_delay, garbage_every=args.garbage_every,
+    )
+    emu = GrblEmulator(stage, faults=faults, time_scale=args.time_scale)
+    path = emu.start()
+    print(path, flush=True)
+    print(f"GRBL 1.1h emulator on {path} (115200 baud, any rate works on a pty); Ctrl-C to stop", file=sys.stderr, flush=True)
+    stop = threading.Event()
+    try:
+        while not stop.wait(0.2):
+            if emu.dropped:
+                print("emulator: connection dropped (fault injection); stopping", file=sys.stderr)
+                break
+            if not emu._running:  # noqa: SLF001 - the serving thread died: its error is in the log
+                print("emulator: stopped unexpectedly (see the log)", file=sys.stderr)
+                return 1
+    except KeyboardInterrupt:
+        print("emulator: stopped", file=sys.stderr)
+    finally:
+        emu.stop()
+    return 0

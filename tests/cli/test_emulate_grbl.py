@@ -1,0 +1,61 @@
+"""``lps emulate-grbl``: prints a pty path a GrblStage can drive, stops cleanly on Ctrl-C."""
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+
+import pytest
+
+from lps_gui.errors import HardwareError
+from lps_gui.hardware.grbl.driver import GrblStage
+
+
+LPS = [sys.executable, "-c", "import sys; from lps_gui.cli import main; sys.exit(main(sys.argv[1:]))"]
+
+
+def _serve(*extra: str) -> subprocess.Popen:
+    return subprocess.Popen(
+        [*LPS, "emulate-grbl", "--time-scale", "50", "--travel", "0", "100", *extra],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+
+
+def test_emulate_grbl_serves_a_pty_until_ctrl_c():
+    proc = _serve("--homing-required")
+    try:
+        path = proc.stdout.readline().strip()
+        assert path.startswith("/dev/")
+        stage = GrblStage(path, timeout_s=2.0, poll_interval_s=0.01)
+        stage.connect()
+        assert stage.status().state == "Alarm"
+        stage.home()
+        stage.move_to(25.0, 3000.0)
+        assert stage.wait_idle(timeout_s=3.0).work_mm[0] == pytest.approx(25.0)
+        stage.disconnect()
+    finally:
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=5)
+    assert proc.returncode == 0, err
+    assert "emulator: stopped" in err
+
+
+def test_emulate_grbl_fault_switch_drops_the_connection():
+    proc = _serve("--drop-after-lines", "3")
+    try:
+        path = proc.stdout.readline().strip()
+        stage = GrblStage(path, timeout_s=2.0)
+        stage.connect()
+        with pytest.raises(HardwareError, match="port vanished"):
+            stage.move_to(5.0, 600.0)
+        out, err = proc.communicate(timeout=5)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0 and "connection dropped" in err
+
+
+def test_emulate_grbl_rejects_bad_travel():
+    res = subprocess.run([*LPS, "emulate-grbl", "--travel", "5", "1"],
+                         capture_output=True, text=True, timeout=30)
+    assert res.returncode == 2 and "MIN_MM must be below MAX_MM" in res.stderr

@@ -104,7 +104,8 @@ class CameraPanel(QWidget):
         self.source.clear()
         for label, spec in camera_choices(camera is not None):
             self.source.addItem(label, spec)
-        i = self.source.findData(current)
+        # the camera riding the simulated stage is the natural choice as soon as it exists
+        i = self.source.findData(CAMERA_FOLLOWS_STAGE if camera is not None else current)
         self.source.setCurrentIndex(max(i, 0))
 
     def toggle(self) -> None:

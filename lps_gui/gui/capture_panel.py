@@ -33,6 +33,18 @@ PLAN_FIELDS = ("start_mm", "stop_mm", "step_mm", "directions", "runs", "overshoo
                "frames_per_stop", "feed_mm_min")
 
 
+def is_simulated_rig(stage: Any, camera: Any) -> bool:
+    """Whether ``camera`` renders what ``stage`` (a simulated rig) really does: truth can be recorded."""
+    return getattr(camera, "pose_source", None) == getattr(stage, "true_pose", object()) and hasattr(stage, "seed_capture")
+
+
+def sim_spec() -> Any:
+    from lps_gui.core.simulate import preset
+    from lps_gui.gui.sources import SIM_PRESET
+
+    return preset(SIM_PRESET)
+
+
 def plan_duration_s(plan: Plan, frame_s: float = FRAME_TIME_S) -> float:
     """Rough duration of a plan: travel at feed (incl. overshoot approaches), settling and frames.
 
@@ -57,7 +69,9 @@ class CapturePanel(QWidget):
     """Edit a plan and run it on the connected stage and camera."""
 
     run_requested = Signal(object)  # Job (or the exception that prevented it) for the main window
-    session_done = Signal(object)  # Path of the session folder written
+    session_done = Signal(object)  # Path of a session folder captured completely
+    failed = Signal(str, str)  # title, one-line cause (the capture stopped; frames are kept)
+    board_changed = Signal(object)  # Board
 
     def __init__(self, stage_ctl: Any, camera_panel: Any, board: Callable[[], Board],
                  start_dir: Callable[[], str] | None = None, parent: QWidget | None = None) -> None:
@@ -70,6 +84,7 @@ class CapturePanel(QWidget):
         self.job: Job | None = None
         self.session_dir: Path | None = None
         self._t0 = 0.0
+        self._abort_early = False
 
         self.start_mm = double_spin(-10000, 10000, 0.0, 3, " mm")
         self.stop_mm = double_spin(-10000, 10000, 58.0, 3, " mm")
@@ -169,20 +184,33 @@ class CapturePanel(QWidget):
 
     # ------------------------------------------------------------------ running
     def start(self) -> None:
-        """Create the session in the chosen folder and capture the plan."""
+        """Create the session in the chosen folder and capture the plan (both off the GUI thread)."""
         try:
-            from lps_gui.io.session import Session
-
             folder = self.folder.path()
             if folder is None:
                 raise InputError("capture: choose a folder for the new session")
             stage, camera = self._rig()
-            session = Session.create(folder, self.board(), self.plan(), camera=camera.properties(),
-                                     stage=stage.describe())
+            plan = self.plan()
         except Exception as exc:
             self.run_requested.emit(exc)
             return
-        self._run(session, stage, camera)
+        simulated = is_simulated_rig(stage, camera)
+        if simulated:
+            self.set_board(sim_spec().rig.board)
+        board = self.board()
+
+        def create() -> Any:
+            from lps_gui.io.session import Session
+
+            if simulated:
+                from lps_gui.capture.simulated_rig import rig_truth
+
+                spec = sim_spec()
+                return Session.create(folder, spec.rig.board, plan, intrinsics=spec.rig.intrinsics,
+                                      camera=camera.properties(), stage=stage.describe(), truth=rig_truth(spec, camera))
+            return Session.create(folder, board, plan, camera=camera.properties(), stage=stage.describe())
+
+        self._run(folder, create, stage, camera)
 
     def resume_session_dialog(self) -> None:
         folder = QFileDialog.getExistingDirectory(self, "Resume an interrupted session", self.start_dir())
@@ -205,7 +233,7 @@ class CapturePanel(QWidget):
             self.run_requested.emit(exc)
             return
         log.info("capture: resuming %s, %d frames to go", folder, len(remaining))
-        self._run(session, stage, camera)
+        self._run(Path(folder), lambda: session, stage, camera)
 
     def _rig(self) -> tuple[Any, Any]:
         from lps_gui.errors import HardwareError
@@ -220,18 +248,26 @@ class CapturePanel(QWidget):
             camera.open()
         return stage, camera
 
-    def _run(self, session: Any, stage: Any, camera: Any) -> None:
-        try:
-            engine_cls = lookup("lps_gui.capture.engine", "CaptureEngine")
-            self.engine = engine_cls(stage, camera, session)
-        except Exception as exc:
-            self.run_requested.emit(exc)
-            return
-        self.session_dir = Path(session.folder)
+    def _run(self, folder: Path, make_session: Callable[[], Any], stage: Any, camera: Any) -> None:
+        """Run the capture in a worker: make the session (file writes), build the engine, run it."""
+        self.session_dir = Path(folder)
         self.camera_panel.pause(True)
-        job = Job(f"capture {self.session_dir.name}", self.engine.run)
+
+        def work(progress: Any, cancel: Any) -> Any:
+            session = make_session()
+            if is_simulated_rig(stage, camera) and (session.truth or {}).get("simulated"):
+                engine = lookup("lps_gui.capture.sim_session", "simulated_engine")(session, stage, camera)
+            else:
+                engine = lookup("lps_gui.capture.engine", "CaptureEngine")(stage, camera, session)
+            self.engine = engine  # pause/abort from the GUI thread are thread-safe engine calls
+            if self._abort_early:
+                engine.abort()
+            return engine.run(progress, cancel)
+
+        self._abort_early = False
+        job = Job(f"capture {self.session_dir.name}", work)
         job.progress.connect(self._on_progress)
-        job.succeeded.connect(lambda _r: self.session_done.emit(self.session_dir))
+        job.succeeded.connect(self._on_summary)
         job.cancelled.connect(lambda msg: self.eta.setText(msg))
         job.failed.connect(lambda msg, _tb: self.eta.setText(f"stopped: {msg}; captured frames are kept"))
         job.finished.connect(self._on_finished)
@@ -240,6 +276,23 @@ class CapturePanel(QWidget):
         self._set_running(True)
         self.eta.setText("starting…")
         self.run_requested.emit(job)
+
+    def _on_summary(self, summary: Any) -> None:
+        """The engine returned: complete, aborted, or stopped by an error (frames kept in every case)."""
+        state = getattr(summary, "state", "done")
+        if state == "done":
+            self.eta.setText(f"complete: {summary.listed} frames in {self.session_dir}")
+            self.session_done.emit(self.session_dir)
+        elif state == "aborted":
+            self.eta.setText(f"aborted: {summary.listed} of {summary.total} frames kept; resume later")
+        else:
+            message = summary.error or "capture stopped"
+            self.eta.setText(f"stopped: {message}")
+            self.failed.emit("Capture stopped", message)
+
+    def set_board(self, board: Board) -> None:
+        """Hook for the main window: the board the simulated rig really has."""
+        self.board_changed.emit(board)
 
     def pause(self) -> None:
         if self.engine is not None:
@@ -255,7 +308,8 @@ class CapturePanel(QWidget):
             self.resume_btn.setEnabled(False)
 
     def abort(self) -> None:
-        if self.engine is not None and hasattr(self.engine, "abort"):
+        self._abort_early = True
+        if self.engine is not None:
             self.engine.abort()
         if self.job is not None:
             self.job.cancel()

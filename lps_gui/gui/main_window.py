@@ -20,6 +20,7 @@ from PySide6.QtWidgets import (
 
 from lps_gui import __version__
 from lps_gui.core.board import Board
+from lps_gui.core.clock import Clock
 from lps_gui.gui.camera_panel import CameraPanel
 from lps_gui.gui.capture_panel import CapturePanel
 from lps_gui.gui.estimation_panel import EstimationPanel
@@ -42,7 +43,8 @@ LAYOUT_VERSION = 1
 class MainWindow(QMainWindow):
     """The operator's window over stage, camera, intrinsics, capture, estimation and results."""
 
-    def __init__(self, settings: QSettings | None = None, parent: QWidget | None = None) -> None:
+    def __init__(self, settings: QSettings | None = None, sim_clock: Clock | None = None,
+                 parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.settings = settings or QSettings(ORGANIZATION, APPLICATION)
         self.setWindowTitle(f"lps-calib {__version__} — linear positioning system calibration")
@@ -56,7 +58,7 @@ class MainWindow(QMainWindow):
         self.log_panel.attach()
         logging.getLogger("lps_gui").setLevel(logging.INFO)
         self.stage_ctl = StageController(self)
-        self.stage_panel = StagePanel(self.stage_ctl)
+        self.stage_panel = StagePanel(self.stage_ctl, clock=sim_clock)
         self.intrinsics_panel = IntrinsicsPanel(start_dir=self.last_folder)
         self.camera_panel = CameraPanel(board=self.intrinsics_panel.board)
         self.capture_panel = CapturePanel(self.stage_ctl, self.camera_panel, board=self.intrinsics_panel.board,
@@ -177,6 +179,8 @@ class MainWindow(QMainWindow):
             panel.run_requested.connect(self._panel_job)
         self.estimation_panel.results_ready.connect(self._on_results)
         self.capture_panel.session_done.connect(self._on_capture_done)
+        self.capture_panel.failed.connect(self.show_error)
+        self.capture_panel.board_changed.connect(self.intrinsics_panel.set_board)
         self.results_panel.export_requested.connect(self.export)
 
     # ------------------------------------------------------------------ stage status
@@ -214,7 +218,9 @@ class MainWindow(QMainWindow):
 
     def _on_stage_event(self, event: Any) -> None:
         text = f"stage {event.kind}" + (f" {event.code}" if event.code is not None else "") + (f": {event.text}" if event.text else "")
-        (log.warning if event.kind in ("alarm", "error") else log.info)(text)
+        level = logging.WARNING if event.kind in ("alarm", "error") else (
+            logging.DEBUG if event.kind == "state" else logging.INFO)
+        log.log(level, text)
         if event.kind == "alarm":
             self.statusBar().showMessage(text, 10000)
 

@@ -13,9 +13,9 @@ import inspect
 from typing import Any
 
 from lps_gui.camera.base import Camera
-from lps_gui.core.clock import RealClock
+from lps_gui.core.clock import Clock, RealClock
 from lps_gui.errors import InputError
-from lps_gui.gui.services import lookup
+from lps_gui.gui.services import Unavailable, lookup
 from lps_gui.hardware.stage import Stage
 
 SIM = "sim"
@@ -39,31 +39,45 @@ def stage_choices() -> list[tuple[str, str]]:
     return out
 
 
-def _with_clock(fn: Any, *args: Any, **kwargs: Any) -> Any:
-    """Call ``fn`` with a real-time clock when it accepts one (motion visible on screen)."""
+def _accepts(fn: Any, name: str) -> bool:
     try:
-        params = inspect.signature(fn).parameters
+        return name in inspect.signature(fn).parameters
     except (TypeError, ValueError):
-        params = {}
-    if "clock" in params:
-        kwargs["clock"] = RealClock()
-    return fn(*args, **kwargs)
+        return False
 
 
-def open_stage_source(source: str, baud: int = 115200) -> tuple[Stage, Camera | None]:
-    """Build (not yet connect) the stage for ``source``; the simulated rig also yields its camera."""
-    if source == SIM:
-        preset = lookup("lps_gui.core.simulate", "preset")
+def simulated_rig(clock: Clock | None = None) -> tuple[Stage, Camera]:
+    """The simulated stage and the camera riding it, on ``clock`` (real time by default).
+
+    Uses the capture layer's rig builder when present; otherwise composes the
+    same two real parts (SimulatedStage with the preset's error model, and a
+    SimulatedCamera rendering at the stage's true pose).
+    """
+    from lps_gui.core.simulate import preset
+
+    clock = clock or RealClock()
+    spec = preset(SIM_PRESET)
+    try:
         make_rig = lookup("lps_gui.capture.simulated_rig", "make_simulated_rig")
-        stage, camera = _with_clock(make_rig, preset(SIM_PRESET))
-        return stage, camera
+    except Unavailable:
+        make_rig = None
+    if make_rig is not None:
+        return make_rig(spec, clock=clock) if _accepts(make_rig, "clock") else make_rig(spec)
+    stage_cls = lookup("lps_gui.hardware.sim_stage", "SimulatedStage")
+    camera_cls = lookup("lps_gui.camera.sim_camera", "SimulatedCamera")
+    stage = stage_cls(errors=spec.rig.errors, seed=spec.seed, clock=clock)
+    return stage, camera_cls(spec.rig, pose_source=stage.true_pose, seed=spec.seed, clock=clock)
+
+
+def open_stage_source(source: str, baud: int = 115200, clock: Clock | None = None) -> tuple[Stage, Camera | None]:
+    """Build the stage for ``source``; the simulated rig also yields its camera."""
+    if source == SIM:
+        return simulated_rig(clock)
     open_stage = lookup("lps_gui.hardware", "open_stage")
     if source == EMULATOR:
         return open_stage(EMULATOR), None
     if source.startswith("grbl:"):
-        if baud != 115200 and "baud" in inspect.signature(open_stage).parameters:
-            return open_stage(source, baud=baud), None
-        return open_stage(source), None
+        return (open_stage(source, baudrate=baud) if baud != 115200 else open_stage(source)), None
     raise InputError(f"stage source {source!r} is unknown; choose one from the list")
 
 

@@ -14,6 +14,7 @@ from PySide6.QtWidgets import (
     QMessageBox, QPushButton, QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget,
 )
 
+from lps_gui.core.clock import Clock
 from lps_gui.gui.sources import BAUD_RATES, SIM, open_stage_source, stage_choices
 from lps_gui.gui.stage_controller import StageController
 from lps_gui.hardware.stage import AXES, StageSetting, StageStatus
@@ -32,9 +33,10 @@ class StagePanel(QWidget):
 
     camera_offered = Signal(object)  # the simulated camera that rides the simulated stage, or None
 
-    def __init__(self, controller: StageController, parent: QWidget | None = None) -> None:
+    def __init__(self, controller: StageController, clock: Clock | None = None, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.controller = controller
+        self.clock = clock  # for the simulated rig; None: real time
         self._settings: list[StageSetting] = []
 
         # --- connection
@@ -198,7 +200,8 @@ class StagePanel(QWidget):
         baud = int(self.baud.currentData() or 115200)
         self.connect_btn.setEnabled(False)
         self.connect_btn.setText("Connecting…")
-        self.controller.open(lambda: open_stage_source(src, baud), self.source.currentText())
+        clock = self.clock
+        self.controller.open(lambda: open_stage_source(src, baud, clock), self.source.currentText())
 
     def _on_connection(self, connected: bool, description: str) -> None:
         self.connect_btn.setEnabled(True)

@@ -1,0 +1,81 @@
+"""GUI test fixtures: a main window with throw-away settings, and an event-loop gap meter."""
+from __future__ import annotations
+
+import time
+
+import pytest
+from PySide6.QtCore import QSettings, QTimer
+
+from lps_gui.core.clock import RealClock
+
+
+@pytest.fixture
+def settings(tmp_path):
+    """QSettings in a temporary INI file: tests never touch the user's settings."""
+    s = QSettings(str(tmp_path / "lps-gui-test.ini"), QSettings.Format.IniFormat)
+    yield s
+    s.sync()
+
+
+@pytest.fixture
+def make_window(qtbot, settings):
+    """Factory for main windows (the simulated rig on real time unless a clock is given)."""
+    from lps_gui.gui.main_window import MainWindow
+
+    made = []
+
+    def make(sim_clock=None, settings_=None):
+        w = MainWindow(settings_ or settings, sim_clock=sim_clock or RealClock())
+        qtbot.addWidget(w)
+        w.resize(1400, 900)
+        w.show()
+        made.append(w)
+        return w
+
+    yield make
+    for w in made:
+        w.shutdown()
+
+
+@pytest.fixture
+def window(make_window):
+    return make_window()
+
+
+class GapMeter:
+    """Longest time between ticks of a 5 ms QTimer: how long the event loop was blocked."""
+
+    def __init__(self) -> None:
+        self.timer = QTimer()
+        self.timer.setInterval(5)
+        self.timer.timeout.connect(self._tick)
+        self.last = 0.0
+        self.max_gap_s = 0.0
+        self.ticks = 0
+
+    def _tick(self) -> None:
+        now = time.perf_counter()
+        if self.ticks:
+            self.max_gap_s = max(self.max_gap_s, now - self.last)
+        self.last = now
+        self.ticks += 1
+
+    def __enter__(self) -> "GapMeter":
+        self.last = time.perf_counter()
+        self.timer.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.timer.stop()
+
+
+@pytest.fixture
+def gap_meter():
+    return GapMeter
+
+
+def connect_sim(qtbot, window) -> None:
+    """Connect the default source (the simulated rig) and wait for the first status report."""
+    assert window.stage_panel.source.currentData() == "sim"
+    window.stage_panel.connect_btn.click()
+    qtbot.waitUntil(lambda: window.stage_ctl.connected and window.stage_ctl.last_status is not None, timeout=10000)

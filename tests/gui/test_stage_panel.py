@@ -1,0 +1,83 @@
+"""Stage panel on the simulated rig: connect, jog with the readout following, port vanishing, settings."""
+from __future__ import annotations
+
+import pytest
+from PySide6.QtCore import Qt
+
+from lps_gui.hardware.stage import StageSetting
+from tests.gui.conftest import connect_sim
+
+pytestmark = pytest.mark.gui
+
+
+def readout_mm(window, axis="X") -> float:
+    return float(window.stage_panel.readout[axis].text())
+
+
+def test_connect_jog_and_see_the_readout_change(qtbot, window):
+    connect_sim(qtbot, window)
+    panel = window.stage_panel
+    assert panel.connect_btn.text() == "Disconnect"
+    assert "Simulated" in window.status_conn.text()
+    qtbot.waitUntil(lambda: panel.readout["X"].text().strip() != "---", timeout=5000)
+    x0 = readout_mm(window)
+    panel.step.setCurrentIndex(panel.step.findData(10.0))
+    panel.feed.setValue(3000.0)
+    panel.jog_buttons[("X", +1)].click()
+    # the readout follows the carriage (several updates a second) and ends 10 mm further
+    qtbot.waitUntil(lambda: abs(readout_mm(window) - (x0 + 10.0)) < 1e-6 and panel.state_label.text() == "Idle",
+                    timeout=10000)
+    assert "X 10.000" in window.status_pos.text() or f"X {x0 + 10:.3f}" in window.status_pos.text()
+    # keyboard jogging: Left arrow moves X back by one step
+    panel.jog_buttons[("X", -1)].setFocus()
+    qtbot.keyClick(panel.jog_buttons[("X", -1)], Qt.Key.Key_Left)
+    qtbot.waitUntil(lambda: abs(readout_mm(window) - x0) < 1e-6, timeout=10000)
+
+
+def test_port_vanishes_while_connected(qtbot, window):
+    connect_sim(qtbot, window)
+    stage = window.stage_ctl.stage
+    stage.disconnect_fault()  # the simulated port disappears now
+    qtbot.waitUntil(lambda: not window.stage_ctl.connected, timeout=5000)
+    assert window.last_error is not None
+    title, message = window.last_error
+    assert title == "Stage connection lost"
+    assert "vanished" in message and "\n" not in message
+    assert window.stage_panel.connect_btn.text() == "Connect"
+    assert window.stage_panel.state_label.text() == "Disconnected"
+    assert "not connected" in window.status_conn.text()
+    # the operator reconnects: a fresh simulated rig comes up
+    connect_sim(qtbot, window)
+
+
+def test_settings_table_validates_before_writing(qtbot, window):
+    panel = window.stage_panel
+    panel.show_settings([StageSetting(110, 3000.0, "X max rate", "mm/min"), StageSetting(3, 0.0, "direction invert", "mask")])
+    assert panel.settings_table.item(0, 1).text() == "X max rate"
+    assert panel.settings_table.item(0, 3).text() == "mm/min"
+    panel.settings_table.item(0, 2).setText("fast")
+    panel.settings_table.item(1, 2).setText("1.5")
+    changes, errors = panel.pending_settings()
+    assert changes == [] and len(errors) == 2
+    assert "$110" in errors[0] and "not a number" in errors[0]
+    assert "$3" in errors[1] and "whole number" in errors[1]
+    panel.settings_table.item(0, 2).setText("2500")
+    panel.settings_table.item(1, 2).setText("1")
+    changes, errors = panel.pending_settings()
+    assert errors == [] and changes == [(110, 2500.0), (3, 1.0)]
+
+
+def test_settings_are_read_from_the_connected_stage_and_written(qtbot, window):
+    connect_sim(qtbot, window)
+    panel = window.stage_panel
+    qtbot.waitUntil(lambda: panel.settings_table.rowCount() > 5, timeout=5000)
+    rows = {panel.settings_table.item(r, 0).text(): r for r in range(panel.settings_table.rowCount())}
+    r = rows["$110"]
+    assert panel.settings_table.item(r, 3).text()  # a unit is shown
+    panel.settings_table.item(r, 2).setText("2400")
+    panel.write_settings_btn.click()
+    stage = window.stage_ctl.stage
+    qtbot.waitUntil(lambda: {s.number: s.value for s in stage.read_settings()}[110] == 2400.0, timeout=5000)
+    # the table is read back after writing and shows the controller's value
+    qtbot.waitUntil(lambda: panel._settings and {s.number: s.value for s in panel._settings}[110] == 2400.0,
+                    timeout=5000)

@@ -1,0 +1,72 @@
+"""Jobs run blocking work in a thread, report progress, cancel, and turn errors into one line."""
+from __future__ import annotations
+
+import threading
+
+import pytest
+
+from lps_gui.errors import InputError
+from lps_gui.gui.workers import Job, one_line
+
+pytestmark = pytest.mark.gui
+
+
+def counting(n, progress, cancel, gate=None):
+    """Count to n, checking cancel at every step; waits on ``gate`` (an Event) first."""
+    if gate is not None:
+        gate.wait(5.0)
+    for i in range(n):
+        cancel.check("counting")
+        progress(i + 1, n, f"step {i + 1}")
+    return threading.current_thread().name
+
+
+def test_job_runs_off_the_gui_thread_and_reports_progress(qtbot):
+    job = Job("count", counting, 200)
+    seen = []
+    job.progress.connect(lambda d, t, m: seen.append((d, t, threading.current_thread() is threading.main_thread())))
+    with qtbot.waitSignal(job.finished, timeout=5000):
+        with qtbot.waitSignal(job.succeeded, timeout=5000) as got:
+            job.start()
+    assert got.args[0] != threading.main_thread().name  # the work ran in another thread
+    assert seen and seen[-1][:2] == (200, 200)  # the last report always arrives
+    assert all(on_main for *_, on_main in seen)  # ... delivered to the GUI thread
+    assert len(seen) < 200  # throttled
+
+
+def test_cancel_stops_the_work(qtbot):
+    gate = threading.Event()
+    job = Job("count", counting, 10**9, gate=gate)
+    with qtbot.waitSignal(job.cancelled, timeout=5000) as got:
+        job.start()
+        job.cancel()
+        gate.set()
+    assert "cancelled" in got.args[0]
+    assert job.result is None
+    job.wait()
+
+
+def test_failure_is_one_line(qtbot):
+    def broken(progress, cancel):
+        raise InputError("session.json: not an lps-session/1 session file")
+
+    job = Job("broken", broken)
+    with qtbot.waitSignal(job.failed, timeout=5000) as got:
+        job.start()
+    message, tb = got.args
+    assert message == "session.json: not an lps-session/1 session file"
+    assert "Traceback" in tb
+    assert one_line(ValueError("bad\nsecond line")) == "ValueError: bad"
+    job.wait()
+
+
+def test_functions_without_cancel_get_only_what_they_accept(qtbot):
+    def only_progress(x, progress):
+        progress(1, 1)
+        return x * 2
+
+    job = Job("p", only_progress, 21)
+    with qtbot.waitSignal(job.succeeded, timeout=5000) as got:
+        job.start()
+    assert got.args[0] == 42
+    job.wait()

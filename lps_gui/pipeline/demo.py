@@ -13,7 +13,7 @@ import importlib
 import logging
 import shutil
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
@@ -201,10 +201,10 @@ def capture_step(folder: Path, spec: SimulationSpec, intrinsics: CameraIntrinsic
 
     Returns (session, holds images, message, status).
     """
-    make_rig = available("lps_gui.capture.simulated_rig", "make_simulated_rig")
-    engine = available("lps_gui.capture.engine", "CaptureEngine") if make_rig is not None else None
-    if make_rig is not None and engine is not None:
-        return _capture_with_engine(folder, spec, intrinsics, progress, cancel, make_rig, engine)
+    create = available("lps_gui.capture.sim_session", "create_simulated_session")
+    engine = available("lps_gui.capture.sim_session", "simulated_engine") if create is not None else None
+    if create is not None and engine is not None:
+        return _capture_with_engine(folder, spec, intrinsics, progress, cancel, create, engine)
     render = available("lps_gui.pipeline.simulate_images", "simulate_image_session")
     n = spec.plan.n_frames()
     if render is not None:
@@ -221,35 +221,23 @@ def capture_step(folder: Path, spec: SimulationSpec, intrinsics: CameraIntrinsic
 
 
 def _capture_with_engine(folder: Path, spec: SimulationSpec, intrinsics: CameraIntrinsics, progress: ProgressFn,
-                         cancel: CancelToken | None, make_rig: Any, engine_cls: Any) -> tuple[Session, bool, str, str]:
-    """Drive the simulated stage and camera through the real capture engine."""
-    rig = make_rig(spec)
-    stage, camera = (rig.stage, rig.camera) if hasattr(rig, "stage") else rig[:2]
-    session = Session.create(folder, spec.rig.board, spec.plan, intrinsics=intrinsics,
-                             camera=_call(camera, "describe", "properties"), stage=_call(stage, "describe"),
-                             truth=_rig_truth(rig, spec), extra={"simulation": {"name": spec.name, "seed": spec.seed,
-                                                                               "level": "capture-engine"}})
-    engine_cls(stage, camera, session).run(progress, cancel)
-    n = len(session.records())
-    return session, True, f"captured {n} frames through the capture engine on the simulated rig ({folder})", "done"
-
-
-def _call(obj: Any, *names: str) -> dict[str, Any]:
-    for name in names:
-        fn = getattr(obj, name, None)
-        if callable(fn):
+                         cancel: CancelToken | None, create: Any, engine: Any) -> tuple[Session, bool, str, str]:
+    """Drive the simulated stage (simulated time) and camera through the real capture engine."""
+    session, stage, camera = create(folder, spec, intrinsics=intrinsics)
+    stage.connect()
+    try:
+        summary = engine(session, stage, camera).run(progress, cancel)
+    finally:
+        for close in (camera.close, stage.disconnect):
             try:
-                value = fn()
-            except Exception:  # a description is decoration; never fail the capture for it
-                continue
-            if isinstance(value, dict):
-                return value
-    return {}
-
-
-def _rig_truth(rig: Any, spec: SimulationSpec) -> dict[str, Any] | None:
-    truth = getattr(rig, "truth", None)
-    return truth() if callable(truth) else truth
+                close()
+            except Exception:  # closing a simulated device must not hide the capture's own result
+                log.debug("closing the simulated rig", exc_info=True)
+    if summary.error or summary.listed < summary.total:
+        raise InputError(f"capture stopped after {summary.listed}/{summary.total} frames: {summary.error or summary.state}; "
+                         f"the frames are kept in {folder}")
+    session = Session.open(folder)  # the engine folded the per-capture truth into session.json
+    return session, True, f"captured {summary.listed} frames through the capture engine on the simulated rig ({folder})", "done"
 
 
 def _point_session(spec: SimulationSpec, folder: Path, intrinsics: CameraIntrinsics) -> Session:

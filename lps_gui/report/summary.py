@@ -142,23 +142,29 @@ ISO_NAMES = {
 
 
 def iso_rows(iso: dict[str, Any] | None) -> list[Row]:
-    """ISO 230-2 figures of results.json flattened to rows (per direction where given).
+    """ISO 230-2 figures of results.json (``core.iso230.Iso230Figures`` as a dict) as rows.
 
-    Accepts nested dicts (``{"forward": {"E_um": ...}, "A_um": ...}``) and
-    reads keys by their first letter (A, R, E, B, M) with an optional ``_um``.
+    Order A, R, E, B, M; each bidirectional, then forward and backward.
+    Per-target tables and run counts are left to the plots and the table;
+    numeric keys we do not know are printed with their own words.
     """
     if not iso:
         return []
     rows: list[Row] = []
-
-    def walk(d: dict[str, Any], prefix: str) -> None:
-        for key, value in d.items():
-            if isinstance(value, dict):
-                walk(value, f"{prefix}{_direction_word(key)}: ")
-            elif isinstance(value, (int, float)) and not isinstance(value, bool):
-                rows.append(Row(prefix + _iso_label(key), float(value), "\u00b5m" if key.endswith("_um") else ""))
-
-    walk(iso, "")
+    seen = set()
+    for letter in ("A", "R", "E", "B", "M"):
+        name = ISO_NAMES[letter][0]
+        for suffix, words in (("", "bidirectional"), ("_up", "forward \u2191"), ("_down", "backward \u2193"),
+                              ("_mean", "mean")):
+            key = f"{letter}{suffix}_um"
+            if key in iso:
+                seen.add(key)
+                if _num(iso[key]) is not None:
+                    rows.append(Row(f"ISO 230-2 {name} ({words})", _num(iso[key]), "\u00b5m"))
+    for key, value in iso.items():
+        if key in seen or key.startswith("n_") or isinstance(value, (dict, list, bool)) or _num(value) is None:
+            continue
+        rows.append(Row(f"ISO 230-2 {_iso_label(key)}", _num(value), "\u00b5m" if key.endswith("_um") else ""))
     return rows
 
 
@@ -169,11 +175,6 @@ def _iso_label(key: str) -> str:
         name = ISO_NAMES[words[0]][0]
         return f"{name} ({' '.join(words[1:])})" if len(words) > 1 else name
     return " ".join(words)
-
-
-def _direction_word(key: str) -> str:
-    return {"+": "forward \u2191", "-": "backward \u2193", "up": "forward \u2191", "down": "backward \u2193",
-            "forward": "forward \u2191", "backward": "backward \u2193", "bidirectional": "both directions"}.get(key, key)
 
 
 def summary_rows(results: dict[str, Any]) -> list[Row]:
@@ -224,70 +225,22 @@ def extremes_rows(results: dict[str, Any]) -> list[Row]:
 
 
 def spec_checks(results: dict[str, Any], spec: dict[str, Any] | None) -> list[SpecCheck]:
-    """Pass/fail of the stage specification (session.json ``stage_spec``).
+    """Pass/fail of the stage specification (session.json ``stage_spec``), by ``core.iso230.check_specification``.
 
-    Uses ``lps_gui.core.iso230.check_specification`` when that module exists;
-    otherwise reads the spec as the paper's table: accuracy +-accuracy_um
-    against the largest |mean deviation +- 2 s| (or |deviation| with one run),
-    repeatability +-repeatability_um against R/2 (needs two runs), straight-line
-    accuracy against the peak-to-valley straightness.
+    One source of truth for how a data sheet is read (+-limits against half
+    bands, straightness as a full width); here only its rows are typed.
     """
     if not spec:
         return []
-    try:
-        from lps_gui.core.iso230 import check_specification  # type: ignore[attr-defined]
-    except ImportError:
-        check_specification = None
-    if check_specification is not None:
-        try:
-            return [_as_check(c) for c in check_specification(results.get("figures") or {}, spec)]
-        except (TypeError, KeyError, AttributeError, ValueError):
-            pass  # a different figures shape than expected: fall back to our reading
-    return _fallback_checks(results, spec)
+    from lps_gui.core.iso230 import check_specification
+
+    return [_as_check(c) for c in check_specification(results.get("figures") or {}, spec)]
 
 
-def _as_check(c: Any) -> SpecCheck:
-    if isinstance(c, SpecCheck):
-        return c
-    get = c.get if isinstance(c, dict) else (lambda k, default=None: getattr(c, k, default))
-    passed = get("passed", get("ok", None))
-    return SpecCheck(str(get("name", "")), _num(get("measured", get("value", None))), float(get("limit", math.nan)),
-                     str(get("unit", "\u00b5m")), None if passed is None else bool(passed), str(get("note", "") or ""))
-
-
-def _fallback_checks(results: dict[str, Any], spec: dict[str, Any]) -> list[SpecCheck]:
-    from lps_gui.report.figures import per_target_stats
-
-    cols = position_columns(results)
-    keep = ~cols["outlier"]
-    out: list[SpecCheck] = []
-    if _num(spec.get("accuracy_um")) is not None:
-        envelope = []
-        for d in ("+", "-"):
-            sel = cols["direction"] == d
-            _, mean, std, _ = per_target_stats(cols["target_mm"][sel], cols["deviation_um"][sel], keep[sel])
-            if mean.size:
-                s2 = 2.0 * np.nan_to_num(std)
-                envelope += [np.abs(mean + s2), np.abs(mean - s2)]
-        worst = float(np.max(np.concatenate(envelope))) if envelope else None
-        lim = float(spec["accuracy_um"])
-        out.append(SpecCheck("Positional accuracy", worst, lim, "\u00b5m", None if worst is None else worst <= lim,
-                             "max |mean \u00b1 2s| over targets and directions vs \u00b1limit"))
-    if _num(spec.get("repeatability_um")) is not None:
-        iso = (results.get("figures") or {}).get("iso230_2") or {}
-        R = _num(iso.get("R_um", iso.get("R")))
-        lim = float(spec["repeatability_um"])
-        if R is None:
-            out.append(SpecCheck("Repeatability", None, lim, "\u00b5m", None, "needs two or more runs per direction"))
-        else:
-            out.append(SpecCheck("Repeatability", R / 2.0, lim, "\u00b5m", R / 2.0 <= lim, "R/2 (ISO 230-2) vs \u00b1limit"))
-    if _num(spec.get("straightness_um")) is not None:
-        ptv = [r.value for r in extremes_rows(results)[:2] if r.value is not None]
-        worst = max(ptv) if ptv else None
-        lim = float(spec["straightness_um"])
-        out.append(SpecCheck("Straight-line accuracy", worst, lim, "\u00b5m", None if worst is None else worst <= lim,
-                             "largest peak-to-valley straightness (v1, v2)"))
-    return out
+def _as_check(c: dict[str, Any]) -> SpecCheck:
+    passed = c.get("passed")
+    return SpecCheck(str(c.get("name", "")), _num(c.get("measured")), float(c.get("limit", math.nan)),
+                     str(c.get("unit") or "\u00b5m"), None if passed is None else bool(passed), str(c.get("note") or ""))
 
 
 # ----------------------------------------------------------------------------- limits

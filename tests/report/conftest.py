@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.core.plan import Plan
+from lps_gui.core.iso230 import figures_for_session
 from lps_gui.core.simulate import small_spec, true_views
 
 
@@ -36,7 +36,12 @@ def make_results(runs: int = 2, directions: str = "both", views: int = 12, seed:
             "roll_sigma_urad": 2.0, "pitch_sigma_urad": 3.0, "yaw_sigma_urad": 3.0,
             "file": f"images/{i:05d}.png",
         })
-    period = np.array([24.0, 12.0, 8.0, 6.0])
+    dev = np.array([p["deviation_um"] for p in positions])
+    outlier = np.array([p["outlier"] for p in positions])
+    direction = np.array([1 if s.direction == "+" else -1 for s in stops])
+    run = np.array([s.run for s in stops])
+    figures = figures_for_session(target, direction, run, dev, valid=~outlier, sigma_um=np.full(dev.shape, 0.5))
+    figures["straightness_um_max"] = float(np.ptp(straight[~outlier], axis=0).max())
     results = {
         "format": "lps-results/1",
         "software": {"name": "lps-calib", "version": "test"},
@@ -51,12 +56,7 @@ def make_results(runs: int = 2, directions: str = "both", views: int = 12, seed:
         "parameters": {"sigma_px": 0.2, "rms_px": 0.21, "n_views": len(stops), "n_used": len(stops) - 1,
                        "n_observations": 54 * len(stops), "dof": 1000, "iterations": 6, "converged": True},
         "positions": positions,
-        "figures": {
-            "single_run": {"mean_step_mm": 2.0001, "step_std_um": 3.2, "max_abs_deviation_um": 12.5,
-                           "scale_ppm": 101.0, "periodic_amplitude_um": 4.8, "periodic_period_mm": 8.0,
-                           "spectrum": {"period_mm": period.tolist(), "amplitude_um": [0.5, 0.7, 4.8, 0.3]}},
-            "iso230_2": None,
-        },
+        "figures": figures,
         "flags": [{"index": 5, "kind": "reprojection", "message": "view 5: RMS 2.1 px > 5 robust sigma"}],
         "timings_s": {"total": 1.0},
         "truth_comparison": {"position_rms_error_um": 0.5},

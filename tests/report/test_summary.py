@@ -15,9 +15,12 @@ def test_summary_rows_print_the_results_figures():
     rows = {r.name: r for r in summary_rows(results)}
     single = results["figures"]["single_run"]
     assert rows["Scale error"].value == single["scale_ppm"] and rows["Scale error"].unit == "ppm"
-    assert rows["Mean step"].value == single["mean_step_mm"] and rows["Mean step"].text() == "2.000100"
+    assert rows["Mean step"].value == single["mean_step_mm"] and rows["Mean step"].text() == f"{single['mean_step_mm']:.6f}"
     assert rows["Periodic error period"].value == single["periodic_period_mm"]
     assert rows["Truth: position rms error"].value == 0.5
+    iso = results["figures"]["iso230_2"]
+    assert rows["ISO 230-2 Accuracy A (bidirectional)"].value == iso["A_um"]
+    assert rows["ISO 230-2 Repeatability R (backward \u2193)"].value == iso["R_down_um"]
 
 
 def test_extremes_are_peak_to_valley_and_max_abs_without_outliers():
@@ -32,32 +35,28 @@ def test_extremes_are_peak_to_valley_and_max_abs_without_outliers():
     assert rows["Max |yaw|"] == n - 2
 
 
-def test_iso_rows_flatten_per_direction():
-    rows = iso_rows({"forward": {"E_um": 3.0}, "A_um": 12.0, "R_up_um": 2.0})
-    names = {r.name: r.value for r in rows}
-    assert names == {"forward \u2191: Systematic deviation E": 3.0, "Accuracy A": 12.0, "Repeatability R (up)": 2.0}
+def test_iso_rows_in_A_R_E_B_M_order_per_direction():
+    iso = {"n_targets": 12, "E_up_um": 3.0, "E_um": 4.0, "A_um": 12.0, "A_down_um": None, "R_up_um": 2.0,
+           "B_mean_um": 1.5, "per_target": {"R_um": [1.0]}, "notes": ["x"], "Q_um": 7.0}
+    rows = [(r.name, r.value) for r in iso_rows(iso)]
+    assert rows == [("ISO 230-2 Accuracy A (bidirectional)", 12.0), ("ISO 230-2 Repeatability R (forward \u2191)", 2.0),
+                    ("ISO 230-2 Systematic deviation E (bidirectional)", 4.0),
+                    ("ISO 230-2 Systematic deviation E (forward \u2191)", 3.0),
+                    ("ISO 230-2 Reversal error B (mean)", 1.5), ("ISO 230-2 Q", 7.0)]
     assert iso_rows(None) == []
 
 
 def test_spec_checks_pass_and_fail_against_the_limits():
     results, _ = make_results()
-    checks = {c.name: c for c in spec_checks(results, SPEC)}
-    acc = checks["Positional accuracy"]
-    assert acc.measured is not None and acc.passed == (acc.measured <= 20)
-    tight = {c.name: c for c in spec_checks(results, {"accuracy_um": 0.01, "straightness_um": -1})}
-    assert tight["Positional accuracy"].passed is False
-    assert tight["Straight-line accuracy"].passed is False
+    iso = results["figures"]["iso230_2"]
+    checks = spec_checks(results, SPEC)
+    assert [c.name for c in checks][:1] and all(c.passed is not None for c in checks)
+    acc = checks[0]
+    assert np.isclose(acc.measured, iso["A_um"] / 2) and acc.passed == (iso["A_um"] / 2 <= 20)
+    results["figures"]["straightness_um_max"] = 3.0
+    tight = spec_checks(results, {"accuracy_um": 0.01, "straightness_um": 1.0})
+    assert [c.passed for c in tight] == [False, False]
     assert spec_checks(results, None) == []
-
-
-def test_accuracy_check_uses_the_two_sigma_envelope():
-    results, _ = make_results(runs=2)
-    for r in results["positions"]:
-        r["deviation_um"] = 0.0
-        r["outlier"] = False
-    results["positions"][0]["deviation_um"] = 10.0  # target 0 forward: runs 10 and 0 -> mean 5, s 7.07
-    acc = next(c for c in spec_checks(results, {"accuracy_um": 20}))
-    assert np.isclose(acc.measured, 5.0 + 2 * np.std([10.0, 0.0], ddof=1))
 
 
 def test_fmt_significant_digits_and_dash():

@@ -188,3 +188,10 @@ def test_open_stage_specs():
 
     with pytest.raises(InputError, match="sim \\| emulator \\| grbl:PORT"):
         open_stage("usb")
+
+
+def test_stage_vanishing_under_the_emulator_drops_the_port(rig):
+    emu, stage, _ = rig
+    emu.stage.disconnect_fault()
+    with pytest.raises(HardwareError, match="port vanished"):
+        stage.wait_idle(timeout_s=2.0)

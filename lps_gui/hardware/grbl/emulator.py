@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 from lps_gui.core.clock import SimClock
+from lps_gui.errors import HardwareError
 from lps_gui.hardware.grbl import codes
 from lps_gui.hardware.grbl.codes import GrblError, format_setting
 from lps_gui.hardware.grbl.gcode import Block, CodeError, clean_line, parse_block
@@ -223,12 +224,18 @@ class GrblEmulator:
         try:
             while self._running:
                 self._step()
+        except HardwareError as exc:  # the stage under us vanished (SimulatedStage.disconnect_fault)
+            log.info("GRBL emulator: stage gone (%s); dropping the port", exc)
+            self.dropped = True
+            self._running = False
+            self._close()
         except Exception:  # an emulator bug must show in the log, not hang the client
             log.exception("GRBL emulator stopped")
             self._running = False
 
     def _step(self) -> None:
-        r, _, _ = select.select([self._master], [], [], 0.002)
+        busy = self._pending is not None or self._out or self.stage.next_event_s() is not None
+        r, _, _ = select.select([self._master], [], [], 0.002 if busy else 0.02)
         if r:
             try:
                 data = os.read(self._master, 4096)

@@ -65,6 +65,8 @@ def read_corners_vnl(path: Path | str, n_corners: int) -> CornerTable:
         raise InputError(f"{path}: corners file not found; run `lps detect` first") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"{path}: cannot read corners ({exc}); delete it and run `lps detect` again") from exc
+    if not text.strip():
+        raise InputError(f"{path}: is empty; delete it and run `lps detect` on the session")
     rows: dict[str, list[tuple[float, float]]] = {}
     failed: dict[str, str] = {}
     meta: dict[str, str] = {}
@@ -101,7 +103,7 @@ def read_corners_vnl(path: Path | str, n_corners: int) -> CornerTable:
                 raise InputError(f"{path}: line {lineno} holds NaN/inf; write missing corners as '- - -' or re-run `lps detect`")
         rows.setdefault(name, []).append(xy)
     if not saw_header:
-        raise InputError(f"{path}: missing the '{HEADER}' header; this is not a corners.vnl file")
+        raise InputError(f"{path}: missing the '{HEADER}' header; not a corners file, regenerate it with `lps detect`")
     if not rows:
         raise InputError(f"{path}: holds no corners; run `lps detect` on the session")
     names = list(rows)

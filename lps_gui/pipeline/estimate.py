@@ -40,7 +40,8 @@ def make_options(method: str = "joint", options: dict[str, Any] | EstimateOption
     if isinstance(options, EstimateOptions):
         return replace(options, method=method)
     opts = dict(options or {})
-    hybrid = {HYBRID_KEYS[k]: opts.pop(k) for k in list(opts) if k in HYBRID_KEYS and opts[k] is not None}
+    given = {k: opts.pop(k) for k in list(opts) if k in HYBRID_KEYS}
+    hybrid = {HYBRID_KEYS[k]: v for k, v in given.items() if v is not None}
     unknown = set(opts) - set(EstimateOptions.__dataclass_fields__)
     if unknown:
         raise InputError(f"unknown estimation option(s): {', '.join(sorted(unknown))}")
@@ -145,7 +146,11 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate, intrins
         positions.append(row)
 
     valid = est.used & np.isfinite(dev_um)
-    figures = figures_for_session(obs.target_mm, obs.direction, obs.run, dev_um, valid=valid, sigma_um=1e3 * est.sigma_s_mm)
+    # the reference capture has sigma 0 by definition of the gauge; weight it like a typical one
+    sigma_um = 1e3 * est.sigma_s_mm
+    positive = valid & (sigma_um > 0)
+    sigma_um = np.where(valid & ~(sigma_um > 0), np.median(sigma_um[positive]) if positive.any() else 1.0, sigma_um)
+    figures = figures_for_session(obs.target_mm, obs.direction, obs.run, dev_um, valid=valid, sigma_um=sigma_um)
     if six is not None and valid.any():
         figures["straightness_um_max"] = _f(np.nanmax(np.ptp(six.straightness_um[valid], axis=0)))
         figures["straightness_span_um"] = [_f(v) for v in np.ptp(six.straightness_um[valid], axis=0)]

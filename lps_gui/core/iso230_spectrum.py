@@ -17,7 +17,8 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 from scipy.signal import lombscargle
 
-OVERSAMPLE = 4  # Lomb-Scargle frequency step = 1 / (OVERSAMPLE * travel)
+OVERSAMPLE = 2  # Lomb-Scargle frequency step = 1 / (OVERSAMPLE * travel); the peak is refined anyway
+MAX_FFT_WEIGHT_RATIO = 4.0  # a uniform grid with weights within this ratio takes the FFT
 MAX_FREQUENCIES = 4096  # cap on the Lomb-Scargle grid (cost O(K * F))
 MIN_CYCLES = 2.0  # the peak must repeat at least this often within the travel
 
@@ -46,10 +47,14 @@ def sine_amplitude_um(x_mm: np.ndarray, y_um: np.ndarray, freq_per_mm: np.ndarra
     return np.atleast_1d(np.abs(z))
 
 
-def _uniform(x_sorted: np.ndarray, weights: np.ndarray | None) -> float | None:
-    """The grid step (mm) if x is equally spaced without repeats and unweighted, else None."""
+def _uniform(x_sorted: np.ndarray, weights: np.ndarray) -> float | None:
+    """The grid step (mm) if x is equally spaced and the weights nearly equal, else None.
+
+    Weights within a factor MAX_FFT_WEIGHT_RATIO (sigmas within a factor 2) change
+    a sine's amplitude negligibly, so such a grid takes the (unweighted) FFT.
+    """
     d = np.diff(x_sorted)
-    if weights is not None and np.ptp(weights) > 1e-12 * np.max(weights):
+    if np.max(weights) > MAX_FFT_WEIGHT_RATIO * np.min(weights):
         return None
     step = float(np.median(d))
     if step <= 0 or np.max(np.abs(d - step)) > 1e-6 * step:
@@ -57,18 +62,31 @@ def _uniform(x_sorted: np.ndarray, weights: np.ndarray | None) -> float | None:
     return step
 
 
+def _collapse_repeats(x_mm: np.ndarray, y_um: np.ndarray, weights: np.ndarray | None
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Weighted mean of y at each distinct x (within 1e-6 mm), ascending; weights summed.
+
+    A least-squares sine fit to repeats equals the fit to their weighted means
+    with summed weights, so pooled runs cost no more than one run.
+    """
+    w = np.ones(np.shape(x_mm)) if weights is None else np.asarray(weights, float)
+    key = np.round(np.asarray(x_mm, float) / 1e-6).astype(np.int64)
+    _, first, inv = np.unique(key, return_index=True, return_inverse=True)
+    inv = inv.ravel()
+    w_sum = np.bincount(inv, w)
+    return np.asarray(x_mm, float)[first], np.bincount(inv, w * np.asarray(y_um, float)) / w_sum, w_sum
+
+
 def deviation_spectrum(x_mm: np.ndarray, y_um: np.ndarray, weights: np.ndarray | None = None) -> Spectrum | None:
     """Amplitude spectrum of detrended deviations ``y_um`` (shape (K,)) at positions ``x_mm``.
 
-    ``weights`` (1/sigma^2, shape (K,)) weight the Lomb-Scargle fit; a weighted
-    or non-uniform grid uses Lomb-Scargle, a uniform one the FFT. Returns None
-    with fewer than 4 distinct positions.
+    Repeated positions are merged into their weighted mean first. ``weights``
+    (1/sigma^2, shape (K,)) weight the Lomb-Scargle fit; a uniform grid with
+    nearly equal weights takes the FFT, any other the Lomb-Scargle periodogram.
+    Returns None with fewer than 4 distinct positions.
     """
-    order = np.argsort(x_mm, kind="stable")
-    xs, ys = np.asarray(x_mm, float)[order], np.asarray(y_um, float)[order]
-    ws = None if weights is None else np.asarray(weights, float)[order]
-    distinct = np.unique(np.round(xs, 6))
-    if distinct.size < 4:
+    xs, ys, ws = _collapse_repeats(x_mm, y_um, weights)
+    if xs.size < 4:
         return None
     travel_mm = float(xs[-1] - xs[0])
     step = _uniform(xs, ws)
@@ -83,7 +101,8 @@ def deviation_spectrum(x_mm: np.ndarray, y_um: np.ndarray, weights: np.ndarray |
     else:
         # Stop 1/travel short of the grid's Nyquist frequency: on a gappy regular grid the sine
         # column of the fit vanishes there and its amplitude is noise divided by almost zero.
-        f_lo, f_hi = 1.0 / travel_mm, 0.5 / float(np.median(np.diff(distinct))) - 1.0 / travel_mm
+        f_lo = 1.0 / travel_mm
+        f_hi = max(0.5 / float(np.median(np.diff(xs))) - 1.0 / travel_mm, 2.0 * f_lo)
         nf = int(min(MAX_FREQUENCIES, max(2, np.floor((f_hi - f_lo) * OVERSAMPLE * travel_mm) + 1)))
         freq = np.linspace(f_lo, f_hi, nf)
         amp = sine_amplitude_um(xs, ys, freq, ws)

@@ -275,3 +275,14 @@ def test_check_specification_with_one_run_uses_the_deviation_span():
     assert by["Straight-line accuracy"]["passed"] is None
     with pytest.raises(InputError, match="accuracy_um"):
         check_specification(figures, {"accuracy_um": "twenty"})
+
+
+def test_repeated_positions_are_merged_into_their_mean():
+    """Two runs over one grid: the pooled spectrum is the spectrum of the per-target means (FFT)."""
+    rng = np.random.default_rng(9)
+    t = np.arange(200.0)
+    a, b = rng.normal(0, 1, 200), rng.normal(0, 1, 200)
+    pooled = deviation_spectrum(np.r_[t, t[::-1]], np.r_[a, b[::-1]])
+    mean = deviation_spectrum(t, (a + b) / 2)
+    assert pooled.method == mean.method == "fft"
+    np.testing.assert_allclose(pooled.amplitude_um, mean.amplitude_um, atol=1e-12)

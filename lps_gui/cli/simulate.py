@@ -19,6 +19,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     mode.add_argument("--points", action="store_true", help="corners only (corners.vnl), no images: fast")
     mode.add_argument("--intrinsics-set", action="store_true", help="varied-pose views for intrinsics calibration")
     p.add_argument("--preset", default="small", help="paper-rig | paper-synthetic | small (default small)")
+    p.add_argument("--rig", help="rig description JSON (board, intrinsics, camera pose, stage errors, plan, noise, outliers)")
+    p.add_argument("--write-rig", action="store_true", help="write the preset's rig description to OUT (a .json file) and stop")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--noise-px", type=float, help="corner noise sigma, px (points mode)")
     p.add_argument("--views", type=int, default=20, help="views of an intrinsics set (default 20)")
@@ -35,7 +37,13 @@ def build_spec(args: argparse.Namespace):
 
     from lps_gui.core.simulate import preset
 
-    spec = preset(args.preset, seed=args.seed)
+    if args.rig:
+        from lps_gui.core.simulate import spec_from_dict
+        from lps_gui.io.jsonfile import read_json
+
+        spec = spec_from_dict(read_json(args.rig, "rig description"), args.rig)
+    else:
+        spec = preset(args.preset, seed=args.seed)
     plan = spec.plan
     if args.directions:
         plan = replace(plan, directions=args.directions)
@@ -43,8 +51,15 @@ def build_spec(args: argparse.Namespace):
         plan = replace(plan, runs=args.runs)
     if args.stops:
         plan = replace(plan, stop_mm=plan.start_mm + (args.stops - 1) * plan.step_mm)
-    overrides = {"plan": plan, "replaced_views": tuple(args.replaced), "bumped_views": tuple(args.bumped),
-                 "missing_fraction": args.missing_fraction}
+    overrides = {"plan": plan}
+    if args.replaced or not args.rig:
+        overrides["replaced_views"] = tuple(args.replaced)
+    if args.bumped or not args.rig:
+        overrides["bumped_views"] = tuple(args.bumped)
+    if args.missing_fraction or not args.rig:
+        overrides["missing_fraction"] = args.missing_fraction
+    if args.rig and args.seed:
+        overrides["seed"] = args.seed
     if args.noise_px is not None:
         overrides["noise_px"] = args.noise_px
     return replace(spec, **overrides)
@@ -57,6 +72,13 @@ def run(args: argparse.Namespace) -> int:
 
     out = Path(args.out)
     spec = build_spec(args)
+    if args.write_rig:
+        from lps_gui.core.simulate import spec_to_dict
+        from lps_gui.io.jsonfile import write_json
+
+        write_json(out, spec_to_dict(spec))
+        print(f"wrote the rig description of preset {spec.name} to {out}; edit it and pass --rig {out}")
+        return 0
     if args.intrinsics_set:
         from lps_gui.pipeline.simulate_images import simulate_intrinsics_set
 

@@ -209,3 +209,66 @@ def observations_of(spec: SimulationSpec, views: SimulatedViews, intrinsics: Cam
         index=[s.index for s in views.stops],
         source=f"simulation {spec.name}",
     )
+
+
+# ----------------------------------------------------------------------------- rig descriptions
+
+def spec_to_dict(spec: SimulationSpec, distance_mm: float | None = None) -> dict[str, Any]:
+    """A JSON-ready rig description of ``spec`` (what ``lps simulate --rig`` reads)."""
+    from lps_gui.core.rotation import log_so3
+
+    rig = spec.rig
+    intr = rig.intrinsics
+    return {
+        "name": spec.name,
+        "board": {"type": rig.board.type, "inner_corners": [rig.board.cols, rig.board.rows], "square_mm": rig.board.square_mm},
+        "intrinsics": {"image_size": list(intr.image_size), "fx": intr.fx, "fy": intr.fy, "cx": intr.cx, "cy": intr.cy,
+                       "dist": intr.dist.tolist()},
+        "camera_pose": {"rvec_cam_board": log_so3(rig.R_cam_board).tolist(), "C0_board_mm": rig.C0_board.tolist(),
+                        "u_board": rig.u_board.tolist()},
+        "stage_errors": rig.errors.to_dict(),
+        "plan": spec.plan.to_dict(),
+        "noise_px": spec.noise_px,
+        "noise_clip_px": spec.noise_clip_px,
+        "missing_fraction": spec.missing_fraction,
+        "replaced_views": list(spec.replaced_views),
+        "bumped_views": list(spec.bumped_views),
+        "bump_mrad": spec.bump_mrad,
+        "seed": spec.seed,
+    }
+
+
+def spec_from_dict(d: dict[str, Any], source: str = "rig description") -> SimulationSpec:
+    """Inverse of :func:`spec_to_dict`; a camera pose may instead be given as
+    ``{"distance_mm": D, "tilt_deg": [..], "axis_misalignment_deg": [..]}``."""
+    try:
+        b = d["board"]
+        board = Board(cols=int(b["inner_corners"][0]), rows=int(b["inner_corners"][1]), square_mm=float(b["square_mm"]),
+                      type=b.get("type", "chessboard"))
+        i = d["intrinsics"]
+        intr = CameraIntrinsics.from_values(tuple(i["image_size"]), i["fx"], i["fy"], i["cx"], i["cy"], tuple(i.get("dist", [0] * 5)))
+        plan = Plan.from_dict(d.get("plan", {}))
+        errors = StageErrorModel.from_dict(d.get("stage_errors"))
+        pose = d.get("camera_pose", {"distance_mm": 600.0})
+        if "distance_mm" in pose:
+            t = plan.targets()
+            rig = Rig.facing_board(board, intr, float(pose["distance_mm"]), (t[0], t[-1]), errors,
+                                   tuple(pose.get("tilt_deg", (2.0, -3.0, 1.0))), tuple(pose.get("axis_misalignment_deg", (0.5, -0.3))))
+        else:
+            u = np.asarray(pose["u_board"], dtype=float)
+            rig = Rig(board, intr, exp_so3(np.asarray(pose["rvec_cam_board"], dtype=float)),
+                      np.asarray(pose["C0_board_mm"], dtype=float), u / np.linalg.norm(u), errors)
+        return SimulationSpec(
+            name=str(d.get("name", "custom")),
+            rig=rig,
+            plan=plan,
+            noise_px=float(d.get("noise_px", 0.1)),
+            noise_clip_px=d.get("noise_clip_px"),
+            missing_fraction=float(d.get("missing_fraction", 0.0)),
+            replaced_views=tuple(int(v) for v in d.get("replaced_views", ())),
+            bumped_views=tuple(int(v) for v in d.get("bumped_views", ())),
+            bump_mrad=float(d.get("bump_mrad", 3.0)),
+            seed=int(d.get("seed", 0)),
+        )
+    except (KeyError, TypeError, ValueError, IndexError) as exc:
+        raise InputError(f"{source}: {type(exc).__name__} {exc}; start from `lps simulate --write-rig rig.json`") from exc

@@ -1,21 +1,12 @@
-"""A GRBL 1.1 controller on a pseudo-terminal, driving a :class:`SimulatedStage`.
+"""A GRBL 1.1 controller on a pseudo-terminal: :class:`GrblFirmware` served over a pty.
 
-It answers the way GRBL 1.1h does (report.c, protocol.c, system.c): banner
-and homing-lock message after every reset, ``$I``, ``$$``, ``$x=val``, ``$H``,
-``$X``, ``$J=``, ``$G``, ``$#``, ``$N``, ``$C``, ``$SLP``, ``$RST=``, G0/G1/G4 with
-G90/G91/G20/G21/G53, real-time ``?`` ``!`` ``~`` 0x18 0x85, status reports
-per ``$10`` with GRBL's WCO/Ov refresh counters, a 128-byte RX buffer that
-drops overflowing bytes, a 15-block planner that makes lines wait, critical
-alarms that ignore everything but a reset. Machine coordinates are GRBL's
-homed machine space (0 at the top, negative travel); the work offset G54 is
-set so that work coordinates equal the simulated stage's own coordinates.
-
-Simulated time runs ``time_scale`` times faster than real time (tests use
-~50x; ``lps emulate-grbl`` defaults to 1x, GRBL's own timing).
-
-:class:`Faults` switches inject what goes wrong with real hardware: a dropped
-connection, an alarm in the middle of a move, error replies, slow replies
-and garbage bytes; tests flip them while the emulator runs.
+The pty is raw and non-blocking; a thread reads bytes into the firmware,
+advances the simulated stage's clock ``time_scale`` times faster than real
+time (tests use ~50x; ``lps emulate-grbl`` defaults to 1x, GRBL's own timing)
+and writes what the firmware says. :class:`Faults` switches inject what goes
+wrong with real hardware: a dropped connection, an alarm in the middle of a
+move, error replies, slow replies and garbage bytes; tests flip them while
+the emulator runs.
 """
 from __future__ import annotations
 
@@ -25,52 +16,23 @@ import select
 import threading
 import time
 import tty
-from dataclasses import dataclass
-from typing import Callable
 
 from lps_gui.core.clock import SimClock
 from lps_gui.errors import HardwareError
-from lps_gui.hardware.grbl import codes
-from lps_gui.hardware.grbl.codes import GrblError, format_setting
-from lps_gui.hardware.grbl.gcode import Block, CodeError, clean_line, parse_block
-from lps_gui.hardware.grbl.protocol import MM_PER_INCH, StatusReport, format_axes, format_status
-from lps_gui.hardware.sim_stage import PLANNER_BLOCKS, RX_BUFFER_BYTES, SimulatedStage
-from lps_gui.hardware.stage import AXES
+from lps_gui.hardware.grbl.firmware import BANNER, Faults, GrblFirmware
+from lps_gui.hardware.sim_stage import SimulatedStage
 
 log = logging.getLogger(__name__)
 
-VERSION, BUILD, OPTIONS = "1.1h", "20190830", "V"
-BANNER = f"\r\nGrbl {VERSION} ['$' for help]\r\n"
-HELP = "[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X $H ~ ! ? ctrl-x]"
-RT_STATUS, RT_HOLD, RT_RESUME, RT_RESET, RT_JOG_CANCEL = 0x3F, 0x21, 0x7E, 0x18, 0x85
-BUSY = ("Run", "Hold", "Jog", "Home", "Door")
-WCO_BUSY, WCO_IDLE, OVR_BUSY, OVR_IDLE = 30, 10, 20, 10  # config.h refresh counts
 GARBAGE = b"\x00\xff\xfe#%\x07garbage\x1b[0m"
-
-
-@dataclass
-class Faults:
-    """Fault-injection switches (read by the emulator thread on every step; flip them any time).
-
-    drop_after_lines : close the port after this many received lines (None: never).
-    alarm_mid_move : raise ALARM:<code> half-way through the next move or jog, once (None: never).
-    error_every : answer every Nth command line with ``error:<error_code>`` instead of executing it.
-    reply_delay_s : delay everything the emulator sends by this many real seconds.
-    garbage_every : send a line of garbage bytes before every Nth message.
-    """
-
-    drop_after_lines: int | None = None
-    alarm_mid_move: int | None = None
-    error_every: int = 0
-    error_code: int = 20
-    reply_delay_s: float = 0.0
-    garbage_every: int = 0
+__all__ = ["BANNER", "Faults", "GrblEmulator", "emulated_grbl_stage"]
 
 
 class GrblEmulator:
     """GRBL 1.1 on a pty. ``start()`` returns the device path a serial client opens.
 
     Use as a context manager in tests: ``with GrblEmulator(...) as emu: GrblStage(emu.path)``.
+    ``firmware`` holds GRBL's state; ``stage`` is the simulated stage that moves.
     """
 
     def __init__(self, stage: SimulatedStage | None = None, faults: Faults | None = None, time_scale: float = 1.0) -> None:
@@ -78,18 +40,22 @@ class GrblEmulator:
         self.faults = faults or Faults()
         self.time_scale = float(time_scale)
         self.path = ""
-        self.rx_overflow_bytes = 0  # bytes dropped because the host overran the 128-byte RX buffer
-        self.lines_received = 0
+        self.dropped = False
+        self.firmware = GrblFirmware(self.stage, self.faults, send=self._send, on_drop=self._drop_now)
         self._master = self._slave = -1
         self._thread: threading.Thread | None = None
         self._running = False
-        self._initial_settings = dict(self.stage.settings)
-        self._build_user = ""
         self._out: list[tuple[float, bytes]] = []
         self._n_out = 0
-        self._n_cmd = 0
-        self.dropped = False
-        self._reset_state()
+
+    @property
+    def rx_overflow_bytes(self) -> int:
+        """Bytes GRBL dropped because the host overran its RX buffer (0 for a correct host)."""
+        return self.firmware.rx_overflow_bytes
+
+    @property
+    def lines_received(self) -> int:
+        return self.firmware.lines_received
 
     # ------------------------------------------------------------------ lifecycle
     def start(self) -> str:
@@ -102,7 +68,7 @@ class GrblEmulator:
             self.stage.connect()
         self._running = True
         self._last_real = time.monotonic()
-        self._welcome()
+        self.firmware._welcome()  # noqa: SLF001 - power-up prints what a reset prints
         self._flush_out()
         self._thread = threading.Thread(target=self._serve, name="grbl-emulator", daemon=True)
         self._thread.start()
@@ -110,16 +76,19 @@ class GrblEmulator:
 
     def stop(self) -> None:
         self._running = False
-        if self._thread is not None:
+        if self._thread is not None and threading.current_thread() is not self._thread:
             self._thread.join(timeout=2.0)
         self._close()
 
     def drop(self) -> None:
         """Vanish like an unplugged USB cable: close both ends of the pty."""
         self.dropped = True
+        self.stop()
+
+    def _drop_now(self) -> None:
+        """Drop from inside the serving thread (fault injection)."""
+        self.dropped = True
         self._running = False
-        if self._thread is not None and threading.current_thread() is not self._thread:
-            self._thread.join(timeout=2.0)
         self._close()
 
     def _close(self) -> None:
@@ -140,12 +109,13 @@ class GrblEmulator:
 
     # ------------------------------------------------------------------ output
     def _send(self, text: str) -> None:
+        """Queue a message (CR LF added) with the slow-reply delay and garbage faults applied."""
         f = self.faults
         self._n_out += 1
         data = b""
         if f.garbage_every and self._n_out % f.garbage_every == 0:
             data += GARBAGE + b"\r\n"
-        data += (text + ("\r\n" if not text.endswith("\r\n") else "")).encode("ascii")
+        data += (text if text.endswith("\r\n") else text + "\r\n").encode("ascii")
         due = time.monotonic() + f.reply_delay_s
         if self._out:
             due = max(due, self._out[-1][0])
@@ -153,7 +123,7 @@ class GrblEmulator:
 
     def _flush_out(self) -> None:
         now = time.monotonic()
-        while self._out and self._out[0][0] <= now:
+        while self._out and self._out[0][0] <= now and self._master >= 0:
             _, data = self._out.pop(0)
             try:
                 os.write(self._master, data)
@@ -162,63 +132,6 @@ class GrblEmulator:
             except OSError:
                 return
 
-    # ------------------------------------------------------------------ state
-    def _reset_state(self) -> None:
-        self._rx = bytearray()
-        self._modal = {"motion": 0.0, "distance": 90.0, "units": 21.0, "feed": 0.0}
-        self._wco_counter = 0
-        self._ovr_counter = 0
-        self._critical = False
-        self._pending: Callable[[], bool] | None = None
-        self._check = False
-        self._sleep = False
-
-    def _welcome(self) -> None:
-        self._send(BANNER)
-        if self.stage.alarm_code is not None:
-            self._send("[MSG:'$H'|'$X' to unlock]")
-
-    def _wco(self) -> tuple[float, float, float]:
-        """G54 offset: machine 0 sits at the top of the travel, work = the stage's coordinates."""
-        return (-self.stage.travel_mm[1],) * 3  # type: ignore[return-value]
-
-    def _status_line(self) -> str:
-        st = self.stage.status()
-        state, sub = st.state, st.substate
-        if self._sleep:
-            state, sub = "Sleep", None
-        elif self._check and state == "Idle":
-            state = "Check"
-        wco = self._wco()
-        mask = int(self.stage.settings[10])
-        work = st.work_mm
-        busy = state in BUSY
-        show_wco = self._wco_counter == 0
-        if show_wco:
-            self._wco_counter = (WCO_BUSY if busy else WCO_IDLE) - 1
-            if self._ovr_counter == 0:
-                self._ovr_counter = 1
-        else:
-            self._wco_counter -= 1
-        show_ovr = self._ovr_counter == 0
-        if show_ovr:
-            self._ovr_counter = (OVR_BUSY if busy else OVR_IDLE) - 1
-        else:
-            self._ovr_counter -= 1
-        report = StatusReport(
-            state=state,
-            substate=sub,
-            mpos=tuple(w + o for w, o in zip(work, wco)) if mask & codes.STATUS_MASK_MPOS else None,
-            wpos=None if mask & codes.STATUS_MASK_MPOS else tuple(work),
-            wco=wco if show_wco else None,
-            buffer=(st.buffer[0], RX_BUFFER_BYTES - len(self._rx)) if mask & codes.STATUS_MASK_BUFFER else None,
-            feed=st.feed_mm_min,
-            spindle=0.0,
-            pins="X" if self._critical and self.stage.alarm_code == 1 else "",
-            overrides=(100, 100, 100) if show_ovr else None,
-        )
-        return format_status(report, inches=bool(self.stage.settings[13]))
-
     # ------------------------------------------------------------------ serving loop
     def _serve(self) -> None:
         try:
@@ -226,330 +139,28 @@ class GrblEmulator:
                 self._step()
         except HardwareError as exc:  # the stage under us vanished (SimulatedStage.disconnect_fault)
             log.info("GRBL emulator: stage gone (%s); dropping the port", exc)
-            self.dropped = True
-            self._running = False
-            self._close()
+            self._drop_now()
         except Exception:  # an emulator bug must show in the log, not hang the client
             log.exception("GRBL emulator stopped")
             self._running = False
 
     def _step(self) -> None:
-        busy = self._pending is not None or self._out or self.stage.next_event_s() is not None
+        busy = self.firmware.busy or bool(self._out)
         r, _, _ = select.select([self._master], [], [], 0.002 if busy else 0.02)
         if r:
             try:
                 data = os.read(self._master, 4096)
-            except (BlockingIOError, InterruptedError):
-                data = b""
-            except OSError:
+            except OSError:  # EAGAIN, EINTR, or the pty closing under us
                 data = b""
             for b in data:
-                self._receive(b)
+                self.firmware.receive(b)
         now = time.monotonic()
         if isinstance(self.stage.clock, SimClock):
             self.stage.clock.advance((now - self._last_real) * self.time_scale)
         self._last_real = now
-        self._check_mid_move_alarm()
-        if self._pending is not None and not self._critical and self._pending():
-            self._pending = None
-        while self._pending is None and not self._critical and self._running and b"\n" in self._rx.replace(b"\r", b"\n"):
-            self._next_line()
+        if self._running:
+            self.firmware.poll()
         self._flush_out()
-
-    def _receive(self, b: int) -> None:
-        """GRBL's serial ISR: real-time bytes act at once, the rest goes to the RX buffer."""
-        if b == RT_RESET:
-            self._soft_reset()
-        elif b == RT_STATUS:
-            if not self._critical and self.stage.status().state != "Home":
-                self._send(self._status_line())
-        elif b == RT_HOLD:
-            if not self._critical and self.stage.status().state != "Home":
-                self.stage.feed_hold()
-        elif b == RT_RESUME:
-            if not self._critical:
-                self.stage.resume()
-        elif b == RT_JOG_CANCEL:
-            if not self._critical:
-                self.stage.jog_cancel()
-        elif b >= 0x80:
-            pass  # other real-time commands (overrides, door) have no effect here
-        elif len(self._rx) >= RX_BUFFER_BYTES - 1:
-            self.rx_overflow_bytes += 1  # GRBL drops the byte: the host broke character counting
-        else:
-            self._rx.append(b)
-
-    def _soft_reset(self) -> None:
-        """Ctrl-X: stop at once (ALARM:3 in motion, ALARM:6 while homing), flush RX, banner again."""
-        before = self.stage.alarm_code
-        self.stage.soft_reset()
-        if self.stage.alarm_code != before and self.stage.alarm_code:
-            self._send(f"ALARM:{self.stage.alarm_code}")
-        if self._sleep and self.stage.alarm_code is None:
-            self.stage.trigger_alarm(0)  # GRBL wakes from sleep into the alarm lock
-        self._reset_state()
-        self._welcome()
-
-    def _check_mid_move_alarm(self) -> None:
-        code = self.faults.alarm_mid_move
-        if code is None:
-            return
-        st = self.stage
-        with st._lock:  # noqa: SLF001 - same package, needs the active profile
-            t = st.clock.now()
-            p = st._active(t)  # noqa: SLF001
-            fire = p is not None and p.kind in ("Run", "Jog") and t >= 0.5 * (p.t0 + p.t_end)
-        if fire:
-            self.faults.alarm_mid_move = None
-            self._alarm(code)
-
-    def _alarm(self, code: int) -> None:
-        if self.stage.alarm_code != code:
-            self.stage.trigger_alarm(code)
-        self._pending = None
-        self._send(f"ALARM:{code}")
-        if code in (1, 2):  # critical: ignore everything until a reset
-            self._critical = True
-            self._send("[MSG:Reset to continue]")
-
-    def _next_line(self) -> None:
-        buf = self._rx.replace(b"\r", b"\n")
-        end = buf.index(b"\n")
-        raw = self._rx[:end].decode("latin-1")
-        del self._rx[: end + 1]
-        self.lines_received += 1
-        f = self.faults
-        if f.drop_after_lines is not None and self.lines_received >= f.drop_after_lines:
-            log.info("emulator: dropping the connection (fault injection)")
-            self._running = False
-            self.dropped = True
-            self._close()
-            return
-        line, overflow = clean_line(raw)
-        if overflow:
-            self._send("error:11")
-            return
-        if line:
-            self._n_cmd += 1
-            if f.error_every and self._n_cmd % f.error_every == 0:
-                self._send(f"error:{f.error_code}")
-                return
-        try:
-            self._execute(line)
-        except CodeError as e:
-            self._send(f"error:{e.code}")
-        except GrblError as e:
-            if e.kind == "alarm":
-                self._alarm(e.code)
-            else:
-                self._send(f"error:{e.code}")
-
-    # ------------------------------------------------------------------ commands
-    def _execute(self, line: str) -> None:
-        state = self.stage.status().state
-        if not line:
-            self._send("ok")
-        elif line[0] == "$":
-            self._system(line, state)
-        elif state in ("Alarm", "Jog") or self._sleep:
-            raise CodeError(9)
-        else:
-            self._gcode(parse_block(line))
-
-    def _system(self, line: str, state: str) -> None:  # noqa: C901 - one branch per $ command, like system.c
-        cmd = line[1:]
-        if cmd == "":
-            self._send(HELP)
-        elif cmd.startswith("J"):
-            if state not in ("Idle", "Jog"):
-                raise CodeError(8)
-            if not cmd.startswith("J="):
-                raise CodeError(3)
-            self._jog(parse_block(cmd[2:], jog=True))
-            return  # the jog answers once it is planned
-        elif cmd[:1] in ("$", "G", "C", "X"):
-            if len(cmd) != 1:
-                raise CodeError(3)
-            if cmd == "$":
-                if state in ("Run", "Hold"):
-                    raise CodeError(8)
-                for n in sorted(self.stage.settings):
-                    self._send(format_setting(n, self.stage.settings[n]))
-            elif cmd == "G":
-                m = self._modal
-                self._send(f"[GC:G{int(m['motion'])} G54 G17 G{int(m['units'])} G{int(m['distance'])} G94 M5 M9 T0 F{m['feed']:.0f} S0]")
-            elif cmd == "C":
-                if self._check:
-                    self._check = False
-                    self._send("[MSG:Disabled]")
-                    self._send("ok")
-                    self._soft_reset()
-                    return
-                if state != "Idle":
-                    raise CodeError(8)
-                self._check = True
-                self._send("[MSG:Enabled]")
-            elif cmd == "X":
-                if state == "Alarm":
-                    self.stage.unlock()
-                    self._send("[MSG:Caution: Unlocked]")
-        else:
-            if state not in ("Idle", "Alarm"):
-                raise CodeError(8)
-            self._system_idle(cmd)
-            return
-        self._send("ok")
-
-    def _system_idle(self, cmd: str) -> None:
-        """``$`` commands allowed only in Idle or Alarm ($#, $H, $SLP, $I, $RST, $N, $x=val)."""
-        if cmd == "#":
-            wco = self._wco()
-            for name in ("G54",):
-                self._send(f"[{name}:{format_axes(wco)}]")
-            for name in ("G55", "G56", "G57", "G58", "G59", "G28", "G30", "G92"):
-                self._send(f"[{name}:0.000,0.000,0.000]")
-            self._send("[TLO:0.000]")
-            self._send("[PRB:0.000,0.000,0.000:0]")
-        elif cmd == "H":
-            self.stage.start_home()  # raises error:5 when $22=0
-            self._pending = self._homing_done
-            return
-        elif cmd == "SLP":
-            self.stage.soft_reset()
-            self._sleep = True
-            self._send("[MSG:Sleeping]")
-        elif cmd == "I":
-            self._send(f"[VER:{VERSION}.{BUILD}:{self._build_user}]")
-            self._send(f"[OPT:{OPTIONS},{PLANNER_BLOCKS},{RX_BUFFER_BYTES}]")
-        elif cmd.startswith("I="):
-            if len(cmd) - 2 > 79 - 1:
-                raise CodeError(14)
-            self._build_user = cmd[2:]
-        elif cmd.startswith("RST="):
-            if cmd not in ("RST=$", "RST=#", "RST=*"):
-                raise CodeError(3)
-            if cmd != "RST=#":
-                self.stage.settings.update(self._initial_settings)
-            self._send("[MSG:Restoring defaults]")
-            self._send("ok")
-            self._soft_reset()
-            return
-        elif cmd == "N":
-            self._send("$N0=")
-            self._send("$N1=")
-        elif cmd[:1].isdigit():
-            name, eq, value = cmd.partition("=")
-            if not eq:
-                raise CodeError(3)
-            try:
-                number, val = int(float(name)), float(value)
-            except ValueError:
-                raise CodeError(2) from None
-            if number > 255:
-                raise CodeError(3)
-            if 100 <= number <= 112 and self._step_rate_hz(number, val) > 30000:
-                raise CodeError(12)
-            self.stage.write_setting(number, val)
-        else:
-            raise CodeError(3)
-        self._send("ok")
-
-    def _step_rate_hz(self, number: int, value: float) -> float:
-        axis = number % 10
-        steps = value if number < 110 else self.stage.settings[100 + axis]
-        rate = value if number >= 110 else self.stage.settings[110 + axis]
-        return steps * rate / 60.0
-
-    def _homing_done(self) -> bool:
-        if self.stage.status().state == "Home":
-            return False
-        self._send("ok")
-        return True
-
-    # ------------------------------------------------------------------ G-code
-    def _targets(self, block: Block, distance: float) -> dict[int, float]:
-        """Work-coordinate targets (mm) for the axis words of ``block``."""
-        scale = MM_PER_INCH if block.g.get("units", self._modal["units"]) == 20.0 else 1.0
-        out = {}
-        for letter, value in block.axes.items():
-            i = AXES.index(letter)
-            v = value * scale
-            if block.g.get("non_modal") == 53.0:
-                out[i] = v - self._wco()[i]
-            elif distance == 91.0:
-                out[i] = self.stage.planned_mm(i) + v
-            else:
-                out[i] = v
-        return out
-
-    def _gcode(self, block: Block) -> None:
-        m = self._modal
-        for key in ("distance", "units"):
-            if key in block.g:
-                m[key] = block.g[key]
-        if "motion" in block.g:
-            m["motion"] = block.g["motion"]
-        if "F" in block.words:
-            m["feed"] = block.words["F"] * (MM_PER_INCH if m["units"] == 20.0 else 1.0)
-        if block.g.get("non_modal") == 4.0:
-            self._dwell(block.words["P"])
-            return
-        targets = self._targets(block, m["distance"])
-        if targets and m["motion"] == 1.0 and m["feed"] <= 0:
-            raise CodeError(22)
-        if block.m.get("stop") in (2, 30):
-            self._send("[MSG:Pgm End]")
-        if not targets or self._check:
-            self._send("ok")
-            return
-        feed = float("inf") if m["motion"] == 0.0 else m["feed"]  # G0: each axis' max rate
-        self._plan_motion([(a, lambda a=a, t=t: self.stage.move_to(t, feed, AXES[a])) for a, t in targets.items()])
-
-    def _plan_motion(self, moves: list[tuple[int, Callable[[], None]]]) -> None:
-        """Plan one block per axis; with the planner full the line waits (and RX fills), like GRBL."""
-
-        def plan() -> bool:
-            try:
-                while moves and self.stage.planner_free() > 0:
-                    moves.pop(0)[1]()
-            except GrblError as e:
-                self._alarm(e.code) if e.kind == "alarm" else self._send(f"error:{e.code}")
-                return True
-            if moves:
-                return False
-            self._send("ok")
-            return True
-
-        if not plan():
-            self._pending = plan
-
-    def _dwell(self, seconds: float) -> None:
-        """G4: wait for the planner to empty, then dwell (simulated seconds), then ``ok``."""
-        end: list[float] = []
-
-        def done() -> bool:
-            if self.stage.status().state != "Idle" and not self._check:
-                return False
-            if not end:
-                end.append(self.stage.clock.now() + seconds)
-            if self.stage.clock.now() < end[0]:
-                return False
-            self._send("ok")
-            return True
-
-        if not done():
-            self._pending = done
-
-    def _jog(self, block: Block) -> None:
-        distance = block.g.get("distance", self._modal["distance"])
-        targets = self._targets(block, distance)
-        feed = block.words["F"] * (MM_PER_INCH if block.g.get("units", self._modal["units"]) == 20.0 else 1.0)
-        for axis, target in targets.items():
-            if self.stage.soft_limits and not self.stage.travel_mm[0] <= target <= self.stage.travel_mm[1]:
-                raise CodeError(15)
-        self._plan_motion(
-            [(a, lambda a=a, t=t: self.stage.jog(t - self.stage.planned_mm(a), feed, AXES[a])) for a, t in targets.items()]
-        )
 
 
 def emulated_grbl_stage(time_scale: float = 1.0, faults: Faults | None = None, **stage_options):

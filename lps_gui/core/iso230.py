@@ -50,6 +50,15 @@ def direction_signs(direction: Any) -> np.ndarray:
     return out
 
 
+def _session_arrays(target_mm: Any, direction: Any, run: Any, deviation_um: Any, valid: Any
+                    ) -> dict[str, np.ndarray]:
+    """Per-capture arrays of shape (K,) with ``sign`` (+1/-1) and ``run`` (all 0 when None)."""
+    a = capture_arrays(target_mm, deviation_um, valid, run=np.zeros(np.size(target_mm), int) if run is None else run,
+                       direction=direction_signs(direction))
+    a["sign"] = a.pop("direction").astype(int)
+    return a
+
+
 # ----------------------------------------------------------------------------- ISO 230-2 bidirectional
 
 
@@ -143,14 +152,11 @@ def bidirectional_figures(target_mm: np.ndarray, direction: np.ndarray, run: np.
     define (std with one run per direction; B, M, bidirectional R and A with one
     direction) are None, and ``notes`` says why.
     """
-    a = capture_arrays(target_mm, deviation_um, valid, run=run)
+    a = _session_arrays(target_mm, direction, run, deviation_um, valid)
     ok = a["valid"]
     if not ok.any():
         return None
-    sign = direction_signs(direction).ravel()
-    if sign.shape != ok.shape:
-        raise InputError(f"accuracy figures: direction has {sign.size} values but target_mm has {ok.size}")
-    t, x, r, sign = a["target_mm"][ok], a["deviation_um"][ok], a["run"][ok], sign[ok]
+    t, x, r, sign = a["target_mm"][ok], a["deviation_um"][ok], a["run"][ok], a["sign"][ok]
     targets, j = target_index(t)
     m = targets.size
     # one approach = (target, direction, run): average its frames first
@@ -219,11 +225,8 @@ def figures_for_session(target_mm: np.ndarray, direction: np.ndarray, run: np.nd
     "figures"}`` per run and direction) and ``"iso230_2"`` (:func:`bidirectional_figures`
     as a dict when at least 2 runs in one direction or both directions exist, else None).
     """
-    a = capture_arrays(target_mm, deviation_um, valid, run=run)
-    sign = direction_signs(direction).ravel()
-    if sign.shape != a["valid"].shape:
-        raise InputError(f"accuracy figures: direction has {sign.size} values but target_mm has {sign.size}")
-    r = a["run"]
+    a = _session_arrays(target_mm, direction, run, deviation_um, valid)
+    r, sign = a["run"], a["sign"]
     pairs, group = np.unique(np.stack([r.astype(str), sign.astype(str)], axis=1), axis=0, return_inverse=True)
     sig = None if sigma_um is None else np.asarray(sigma_um, dtype=float).ravel()
     single = single_run_figures(a["target_mm"], a["deviation_um"], a["valid"], sig, group=group.ravel())
@@ -255,6 +258,16 @@ def _run_sort_key(v: Any) -> tuple[int, Any]:
 # ----------------------------------------------------------------------------- specification
 
 
+def _bi_or_uni(iso: dict[str, Any], letter: str, word: str) -> tuple[float | None, str]:
+    """The bidirectional ISO figure ``letter``, else the larger unidirectional one, with its name."""
+    value = finite_or_none(iso.get(f"{letter}_um"))
+    if value is not None:
+        return value, f"ISO 230-2 bidirectional {word} {letter}"
+    uni = [v for v in (finite_or_none(iso.get(f"{letter}_up_um")), finite_or_none(iso.get(f"{letter}_down_um")))
+           if v is not None]
+    return (max(uni), f"ISO 230-2 unidirectional {word} {letter}") if uni else (None, "")
+
+
 def check_specification(figures: dict[str, Any], spec: dict[str, Any]) -> list[dict[str, Any]]:
     """Pass/fail of a stage data sheet (the paper's Table 1) against SPEC 5 figures.
 
@@ -265,7 +278,8 @@ def check_specification(figures: dict[str, Any], spec: dict[str, Any]) -> list[d
     Choices, since the deviation's zero (the first capture) is arbitrary:
 
     * accuracy: the ISO band A (bidirectional, else the wider unidirectional A;
-      with one run per direction, the span max x - min x of all valid deviations);
+      with one run per direction, the span max x - min x of all valid deviations,
+      or 2 max |x| for results that carry no span);
       against a +- limit we compare the half band A/2 (the band centred).
     * repeatability: R (bidirectional, else the larger of R↑, R↓); R/2 against a
       +- limit. Undefined with one run per direction (``passed`` None).
@@ -301,29 +315,23 @@ def check_specification(figures: dict[str, Any], spec: dict[str, Any]) -> list[d
 
     lim = limit("accuracy_um")
     if lim is not None:
-        uni = [v for v in (finite_or_none(iso.get("A_up_um")), finite_or_none(iso.get("A_down_um"))) if v is not None]
-        if finite_or_none(iso.get("A_um")) is not None:
-            value, what = finite_or_none(iso["A_um"]), "ISO 230-2 accuracy A"
-        elif uni:
-            value, what = max(uni), "ISO 230-2 unidirectional accuracy A"
-        else:
+        value, what = _bi_or_uni(iso, "A", "accuracy")
+        if value is None:
             value, what = finite_or_none(single.get("deviation_span_um")), "deviation span max x - min x (one run)"
+        if value is None and finite_or_none(single.get("max_abs_deviation_um")) is not None:
+            value, what = 2.0 * float(single["max_abs_deviation_um"]), "2 max |x| (one run, no span given)"
         rows.append(row("Positional accuracy", None if value is None else value * half, lim,
-                        what + versus))
+                        what + versus if value is not None else "no accuracy figures in these results"))
     lim = limit("repeatability_um")
     if lim is not None:
-        uni = [v for v in (finite_or_none(iso.get("R_up_um")), finite_or_none(iso.get("R_down_um"))) if v is not None]
-        value = finite_or_none(iso.get("R_um"))
-        what = "ISO 230-2 bidirectional repeatability R"
-        if value is None and uni:
-            value, what = max(uni), "ISO 230-2 unidirectional repeatability R"
-        note = (what + versus if value is not None
-                else "needs two or more runs per direction")
-        rows.append(row("Repeatability", None if value is None else value * half, lim, note))
+        value, what = _bi_or_uni(iso, "R", "repeatability")
+        rows.append(row("Repeatability", None if value is None else value * half, lim,
+                        what + versus if value is not None else "needs two or more runs per direction"))
     lim = limit("straightness_um")
     if lim is not None:
-        value = figures.get("straightness_um_max")
-        value = finite_or_none(np.max(value)) if value is not None and np.size(value) else None
+        spans = [finite_or_none(v) for v in np.ravel(np.asarray(figures.get("straightness_um_max"), dtype=object))]
+        spans = [v for v in spans if v is not None]
+        value = max(spans) if spans else None
         rows.append(row("Straight-line accuracy", value, lim,
                         "largest peak-to-valley straightness vs limit" if value is not None
                         else "no straightness figures in these results"))

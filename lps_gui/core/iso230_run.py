@@ -45,10 +45,11 @@ def json_value(v: Any) -> Any:
 
 
 class JsonDataclass:
+    """Mixin for the figure dataclasses: ``to_dict()`` gives what results.json stores."""
+
     def to_dict(self) -> dict[str, Any]:
         """Fields as JSON-ready values: lists of floats, None for undefined."""
         return {f.name: json_value(getattr(self, f.name)) for f in fields(self)}  # type: ignore[arg-type]
-
 
 
 # ----------------------------------------------------------------------------- input checks

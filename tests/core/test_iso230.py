@@ -125,6 +125,8 @@ def test_bad_input_is_a_one_line_input_error():
         direction_signs([1, 0])
     with pytest.raises(InputError, match="deviation_um has 2 values"):
         bidirectional_figures([0.0, 1.0, 2.0], ["+"] * 3, [1] * 3, [0.0, 1.0])
+    with pytest.raises(InputError, match="direction has 2 values"):
+        figures_for_session([0.0, 1.0, 2.0], ["+"] * 2, [1] * 3, [0.0, 1.0, 2.0])
     with pytest.raises(InputError, match="sigma_um"):
         single_run_figures([0.0, 1.0, 2.0], [0.0, 1.0, 2.0], sigma_um=[1.0, 0.0, 1.0])
 
@@ -273,6 +275,8 @@ def test_check_specification_with_one_run_uses_the_deviation_span():
     assert by["Positional accuracy"]["passed"] is False
     assert by["Repeatability"]["passed"] is None and by["Repeatability"]["measured"] is None
     assert by["Straight-line accuracy"]["passed"] is None
+    del figures["single_run"]["deviation_span_um"]  # results written without the span: 2 max|x| / 2
+    assert check_specification(figures, {"accuracy_um": 6})[0]["measured"] == pytest.approx(5.0)
     with pytest.raises(InputError, match="accuracy_um"):
         check_specification(figures, {"accuracy_um": "twenty"})
 

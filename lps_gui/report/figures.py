@@ -309,13 +309,24 @@ def step_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] | None
 
 
 def _component_series(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] | None, column: str,
-                      name: str, color: str) -> list[Series]:
-    """Per-target mean over runs of one column, forward as a line and backward as markers, plus truth."""
+                      sigma_column: str, name: str, color: str) -> list[Series]:
+    """Per-target mean over runs of one column, forward as a line and backward as markers, plus truth.
+
+    The forward line carries a +-2 sigma band: the per-view sigma of the mean
+    over runs, sqrt(mean sigma^2 / n).
+    """
     series = []
     keep = ~cols["outlier"]
     for d, sel in _by_direction(cols):
-        t, mean, _, _ = per_target_stats(cols["target_mm"][sel], cols[column][sel], keep[sel])
-        series.append(Series(t, mean, f"{name} {_dir_label(d)}", "line" if d == "+" else "markers", color))
+        t, mean, _, count = per_target_stats(cols["target_mm"][sel], cols[column][sel], keep[sel])
+        lo = hi = None
+        if d == "+" and np.isfinite(cols[sigma_column][sel]).any():
+            _, var, _, _ = per_target_stats(cols["target_mm"][sel], cols[sigma_column][sel] ** 2,
+                                            keep[sel] & np.isfinite(cols[column][sel]))
+            band = 2.0 * np.sqrt(var / np.maximum(count, 1)) if var.shape == mean.shape else np.zeros_like(mean)
+            lo, hi = mean - band, mean + band
+        series.append(Series(t, mean, f"{name} {_dir_label(d)}", "line" if d == "+" else "markers", color,
+                             band_low=lo, band_high=hi))
     if tcols is not None:
         t, mean, _, _ = per_target_stats(cols["target_mm"], tcols[column], np.ones(keep.shape, bool))
         series.append(_truth_series(t, mean, f"truth {name}", color))
@@ -326,19 +337,22 @@ def straightness_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray
     """Distance of the camera centre from the fitted line, in the two perpendicular directions."""
     series = []
     for k in (1, 2):
-        series += _component_series(cols, tcols, f"straightness_um_{k}", f"v{k}", COMPONENT_COLORS[k - 1])
+        series += _component_series(cols, tcols, f"straightness_um_{k}", f"straightness_sigma_um_{k}", f"v{k}",
+                                    COMPONENT_COLORS[k - 1])
     return FigureSpec("straightness", "Straightness (deviation from the fitted line)", "target position [mm]",
                       "straightness [\u00b5m]", series,
-                      "v1: perpendicular closest to the image y axis; v2: along the viewing direction")
+                      "v1: perpendicular closest to the image y axis; v2: along the viewing direction; "
+                      "band: \u00b12\u03c3 forward")
 
 
 def angles_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] | None) -> FigureSpec:
     """Roll, pitch and yaw of the camera relative to its mean orientation."""
     series = []
     for k, name in enumerate(("roll", "pitch", "yaw")):
-        series += _component_series(cols, tcols, f"{name}_urad", name, COMPONENT_COLORS[k])
+        series += _component_series(cols, tcols, f"{name}_urad", f"{name}_sigma_urad", name, COMPONENT_COLORS[k])
     return FigureSpec("angles", "Angular error motions (roll, pitch, yaw)", "target position [mm]",
-                      "angle [\u00b5rad]", series, "roll about the motion axis u, pitch about v1, yaw about v2")
+                      "angle [\u00b5rad]", series,
+                      "roll about the motion axis u, pitch about v1, yaw about v2; band: \u00b12\u03c3 forward")
 
 
 def residuals_figure(cols: dict[str, np.ndarray]) -> FigureSpec:

@@ -93,10 +93,15 @@ def render_report(session_dir: Path, results: dict | None = None, out: Path | No
     name = (results.get("inputs") or {}).get("session") or session_dir.name
     flow = PdfFlow(tmp, f"LPS measurement report: {name}",
                    f"lps-calib {__version__} \u00b7 {name} \u00b7 {results.get('created', '')}")
-    steps = ("front page", "plots", "outliers", "limits", "table")
+    steps = ("front pages", "plots", "outliers", "table")
     try:
-        progress(0, len(steps), "front page")
+        progress(0, len(steps), "front pages")
         _front_page(flow, meta, results, __version__)
+        flow.new_page()
+        _method_page(flow, results)
+        flow.heading("What limits this result", 11)
+        for note in S.limits_notes(results):
+            flow.paragraph(note)
         progress(1, len(steps), "plots")
         flow.new_page()
         flow.heading("Plots")
@@ -104,11 +109,7 @@ def render_report(session_dir: Path, results: dict | None = None, out: Path | No
             flow.figure(spec, FIGURE_HEIGHT_MM)
         progress(2, len(steps), "outliers")
         _outliers(flow, session_dir, results)
-        progress(3, len(steps), "limits")
-        flow.heading("What limits this result", 11)
-        for note in S.limits_notes(results):
-            flow.paragraph(note)
-        progress(4, len(steps), "table")
+        progress(3, len(steps), "table")
         flow.new_page()
         flow.heading("Per-position results")
         header, rows = S.position_table(results)
@@ -150,14 +151,20 @@ def _front_page(flow: Any, meta: dict[str, Any], results: dict[str, Any], versio
                        "{\"accuracy_um\": 20, \"repeatability_um\": 5, \"straightness_um\": 38}); no verdict given.",
                        color="#555555")
 
-    flow.heading("Method", 11)
+
+
+def _method_page(flow: Any, results: dict[str, Any]) -> None:
+    """Method and its settings beside the intrinsics used (with their std)."""
+    method = [[k, v] for k, v in S.method_rows(results)]
+    intr = [list(r) for r in S.intrinsics_rows(results)]
+    row_mm = 3.9
+    flow.heading("Method and camera", 11)
+    flow.ensure(row_mm * (max(len(method), len(intr) + 1) + 1))
     top = flow.y
-    flow.table(None, [[k, v] for k, v in S.method_rows(results)], [34, 56], size_pt=7.5, row_mm=3.9,
-               align_right_from=9)
+    flow.table(None, method, [30, 70], size_pt=7.5, row_mm=row_mm, align_right_from=9)
     below_method = flow.y
     flow.y = top
-    flow.table(["intrinsic", "value", "std"], [list(r) for r in S.intrinsics_rows(results)], [18, 34, 22],
-               size_pt=7.5, row_mm=3.9, x_mm=100)
+    flow.table(["intrinsic", "value", "std"], intr, [16, 30, 24], size_pt=7.5, row_mm=row_mm, x_mm=110)
     flow.y = max(flow.y, below_method)
 
 

@@ -13,6 +13,13 @@ import numpy as np
 
 from lps_gui.report.figures import position_columns
 
+METHOD_NAMES = {"joint": "joint LM (all positions, orientation and line at once)",
+                "hybrid": "paper's hybrid algorithm (LM + per-view grid search)",
+                "pnp": "per-view PnP (baseline)", "calibrate": "full calibration (reference only)"}
+TRUTH_NAMES = {"position_rms_error_um": ("Truth: position error RMS", "\u00b5m"),
+               "position_max_abs_error_um": ("Truth: position error max |e|", "\u00b5m"),
+               "mean_sigma_um": ("Truth: mean position \u03c3 (noise)", "\u00b5m"),
+               "z_mean_square": ("Truth: mean (error/\u03c3)\u00b2", "")}
 INTRINSIC_ORDER = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3")
 DASH = "\u2014"
 
@@ -73,18 +80,21 @@ def title_rows(session_meta: dict[str, Any], results: dict[str, Any], version: s
     rig = session_meta.get("rig") or stage.get("rig") or (f"simulated ({truth.get('preset', 'simulator')})" if truth else DASH)
     intr = results.get("intrinsics") or {}
     size = intr.get("image_size") or camera.get("image_size")
+    fx = (np.asarray(intr.get("camera_matrix") or np.zeros((3, 3)), dtype=float))[0, 0]
+    lens = _describe(camera, ("lens", "focal_length_mm"), "")
     return [
         ("Date", str(results.get("created") or session_meta.get("created") or DASH)),
         ("Session", str((results.get("inputs") or {}).get("session") or DASH)),
         ("Rig", str(rig)),
-        ("Stage", _describe(stage, ("name", "model", "kind", "type"), DASH)),
-        ("Controller", _describe(stage, ("controller", "driver", "port"), DASH)),
-        ("Camera", _describe(camera, ("name", "model", "kind", "source"), DASH)
+        ("Stage", _describe(stage, ("name", "model", "driver", "kind"), DASH)
+         + (f", axis {stage['axis']}" if stage.get("axis") else "")),
+        ("Controller", _describe(stage, ("controller", "firmware", "port"), "simulated (no controller)" if truth else DASH)),
+        ("Camera", _describe(camera, ("name", "model", "driver", "device", "source"), DASH)
          + (f", {size[0]}\u00d7{size[1]} px" if size else "")),
-        ("Lens", _describe(camera, ("lens", "focal_length_mm"), DASH)),
+        ("Lens", lens or (f"not recorded; focal length {fx:.1f} px from the intrinsics" if fx else DASH)),
         ("Board", f"chessboard {corners[0]}\u00d7{corners[1]} inner corners, square {fmt(board.get('square_mm'), 4)} mm"),
         ("Software", f"lps-calib {version}"),
-        ("Session hash", f"sha256 {session_hash[:16]}\u2026" if session_hash else DASH),
+        ("Session hash", f"sha256 {session_hash[:16]}\u2026 (session.json)" if session_hash else DASH),
     ]
 
 
@@ -111,9 +121,13 @@ def intrinsics_rows(results: dict[str, Any]) -> list[tuple[str, str, str]]:
 def method_rows(results: dict[str, Any]) -> list[tuple[str, str]]:
     """Method, its settings and the fit statistics, as (label, text)."""
     p = results.get("parameters") or {}
-    rows = [("Method", str(results.get("method") or DASH))]
+    method = str(results.get("method") or DASH)
+    rows = [("Method", METHOD_NAMES.get(method, method))]
     for k, v in (results.get("settings") or {}).items():
-        rows.append((f"  {k}", str(v)))
+        if k == "method" or (isinstance(v, dict) and k != method):
+            continue  # the method is above; another method's options do not apply
+        text = ", ".join(f"{a}={b}" for a, b in v.items()) if isinstance(v, dict) else str(v)
+        rows.append((f"  {k.replace('_', ' ')}", text if len(text) < 60 else text[:57] + "\u2026"))
     rows += [
         ("Views used / total", f"{p.get('n_used', DASH)} / {p.get('n_views', DASH)}"),
         ("Observations, dof", f"{p.get('n_observations', DASH)}, {p.get('dof', DASH)}"),
@@ -199,9 +213,10 @@ def summary_rows(results: dict[str, Any]) -> list[Row]:
     rows += extremes_rows(results)
     truth = results.get("truth_comparison") or {}
     for key, value in truth.items():
-        if _num(value) is not None:
-            unit = "\u00b5m" if key.endswith("_um") else ("ppm" if key.endswith("_ppm") else "")
-            rows.append(Row(f"Truth: {key.removesuffix('_um').removesuffix('_ppm').replace('_', ' ')}", _num(value), unit))
+        if _num(value) is not None and not isinstance(value, bool):
+            default = (f"Truth: {key.removesuffix('_um').replace('_', ' ')}", "\u00b5m" if key.endswith("_um") else "")
+            name, unit = TRUTH_NAMES.get(key, default)
+            rows.append(Row(name, _num(value), unit))
     return rows
 
 
@@ -268,6 +283,17 @@ def limits_notes(results: dict[str, Any]) -> list[str]:
         else:
             text += "; the intrinsics uncertainty was not propagated (no intrinsics covariance given)."
         notes.append(text)
+    six = {k: cols[k][np.isfinite(cols[k])] for k in ("straightness_sigma_um_1", "straightness_sigma_um_2",
+                                                      "roll_sigma_urad", "pitch_sigma_urad", "yaw_sigma_urad")}
+    if all(v.size for v in six.values()):
+        med = {k: fmt(float(np.median(v)), 2) for k, v in six.items()}
+        notes.append(
+            "Straightness and angles come from each view's own pose, which is far less certain than its position "
+            f"along the line: median 1\u03c3 is {med['straightness_sigma_um_1']} \u00b5m (v1) and "
+            f"{med['straightness_sigma_um_2']} \u00b5m (v2); roll {med['roll_sigma_urad']}, pitch "
+            f"{med['pitch_sigma_urad']}, yaw {med['yaw_sigma_urad']} \u00b5rad. A peak-to-valley over many views "
+            "grows with this noise (about 5-6\u03c3 for a few hundred views), so judge a straightness limit "
+            "against the plotted \u00b12\u03c3 bands, or average more frames per stop.")
     notes.append("Deviations are relative to the first capture (offset zero there); the positions are the "
                  "camera centre's travel along the fitted line, not the carriage's encoder reading.")
     return notes

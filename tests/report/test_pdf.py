@@ -43,9 +43,10 @@ def test_pdf_has_the_planned_pages_and_opens(tmp_path):
     folder = _session(tmp_path, results, truth, {"accuracy_um": 20, "repeatability_um": 5, "straightness_um": 38})
     info = render_report(folder)
     assert info.path == folder / "report.pdf"
-    assert _pdf_pages(info.path) == info.n_pages == len(info.pages) == 5
-    assert info.pages[0][0].startswith("Linear positioning stage")
-    assert "Stage specification" in info.pages[0]
+    # front page, method page, three pages of plots (the last with outliers), one table page
+    assert _pdf_pages(info.path) == info.n_pages == len(info.pages) == 6
+    assert info.pages[0] == ["Linear positioning stage \u2014 measurement report", "Summary figures", "Stage specification"]
+    assert info.pages[1] == ["Method and camera", "What limits this result"]
     figs = [w for page in info.pages for w in page if w.startswith("figure:")]
     assert figs == ["figure:positions", "figure:deviation", "figure:step", "figure:straightness", "figure:angles",
                     "figure:residuals", "figure:spectrum"]

@@ -17,7 +17,7 @@ def test_summary_rows_print_the_results_figures():
     assert rows["Scale error"].value == single["scale_ppm"] and rows["Scale error"].unit == "ppm"
     assert rows["Mean step"].value == single["mean_step_mm"] and rows["Mean step"].text() == f"{single['mean_step_mm']:.6f}"
     assert rows["Periodic error period"].value == single["periodic_period_mm"]
-    assert rows["Truth: position rms error"].value == 0.5
+    assert rows["Truth: position error RMS"].value == 0.5
     iso = results["figures"]["iso230_2"]
     assert rows["ISO 230-2 Accuracy A (bidirectional)"].value == iso["A_um"]
     assert rows["ISO 230-2 Repeatability R (backward \u2193)"].value == iso["R_down_um"]

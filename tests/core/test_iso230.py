@@ -290,3 +290,33 @@ def test_repeated_positions_are_merged_into_their_mean():
     mean = deviation_spectrum(t, (a + b) / 2)
     assert pooled.method == mean.method == "fft"
     np.testing.assert_allclose(pooled.amplitude_um, mean.amplitude_um, atol=1e-12)
+
+
+def test_session_figures_recover_the_stage_error_model():
+    """Closed loop on the simulator's truth: scale, lead-screw pitch, backlash and repeatability."""
+    from lps_gui.core.plan import Plan
+    from lps_gui.core.stage_errors import StageErrorModel
+
+    model = StageErrorModel(scale_ppm=60.0, periodic_um=2.5, pitch_mm=4.0, periodic_phase_rad=0.3,
+                            backlash_um=8.0, repeatability_um=0.4)
+    stops = list(Plan(start_mm=0.0, stop_mm=200.0, step_mm=1.0, directions="both", runs=5).stops())
+    target = np.array([s.target_mm for s in stops])
+    direction = np.array([s.direction for s in stops])
+    run = np.array([s.run for s in stops])
+    true_mm = model.true_pose(target, np.where(direction == "+", 1.0, -1.0), np.random.default_rng(21)).axis_mm
+    deviation_um = (true_mm - target) * 1e3
+    deviation_um -= deviation_um[0]  # SPEC 5: offset zero at the first capture
+    out = figures_for_session(target, direction, run, deviation_um)
+    single, iso = out["single_run"], out["iso230_2"]
+    assert single["scale_ppm"] == pytest.approx(60.0, abs=1.0)
+    assert single["periodic_period_mm"] == pytest.approx(4.0, rel=0.01)
+    assert single["periodic_amplitude_um"] == pytest.approx(2.5, rel=0.05)
+    assert single["mean_step_mm"] == pytest.approx(1.0 + 60e-6, abs=2e-5)
+    assert iso["n_runs_up"] == iso["n_runs_down"] == 5
+    assert iso["B_mean_um"] == pytest.approx(-8.0, abs=0.2)  # up stops short by b/2, down overshoots by b/2
+    std = np.r_[iso["per_target"]["std_up_um"], iso["per_target"]["std_down_um"]]
+    assert np.sqrt(np.mean(std**2)) == pytest.approx(0.4, rel=0.1)  # pooled s: the model's repeatability
+    # systematic deviation E: the scale line over 200 mm plus the ripple plus the backlash, within noise
+    e_truth = np.ptp(np.r_[model.positioning_error_um(target, 1.0), model.positioning_error_um(target, -1.0)])
+    assert iso["E_um"] == pytest.approx(e_truth, abs=5 * 0.4 / np.sqrt(5))
+    assert len(out["per_run"]) == 10

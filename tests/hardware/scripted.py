@@ -87,6 +87,6 @@ def expected_protocol(pairs: list[tuple[bytes, bytes]], connect: bool = True, **
     try:
         yield stage, fake
     finally:
-        stage._shutdown()
+        stage.link.close()
     assert not fake.errors, fake.errors
     assert not fake.pairs, f"unused script pairs: {fake.pairs}"

@@ -1,13 +1,15 @@
 """GrblStage against scripted (sent, reply) pairs: every command's exact bytes and its answer handling."""
 from __future__ import annotations
 
+import threading
+import time
+
 import pytest
 
 from lps_gui.errors import HardwareError
 from lps_gui.hardware.grbl.codes import GrblError
-from tests.hardware.scripted import BANNER, CONNECT, IDLE, ScriptedSerial, expected_protocol
-
 from lps_gui.hardware.grbl.driver import GrblStage
+from tests.hardware.scripted import BANNER, CONNECT, IDLE, ScriptedSerial, expected_protocol
 
 
 def test_connect_reads_banner_build_info_settings_and_status():
@@ -15,7 +17,7 @@ def test_connect_reads_banner_build_info_settings_and_status():
         assert stage.version == "1.1h"
         assert stage.build_info.planner_blocks == 15 and stage.build_info.rx_buffer_bytes == 128
         assert stage.settings[110] == 3000.0
-        st = stage._status
+        st = stage._status  # the report read during connect (no further "?" is scripted)
         assert st.machine_mm == (-500.0, 0.0, 0.0) and st.work_mm == (0.0, 0.0, 0.0)
         assert stage.describe()["version"] == "1.1h"
 
@@ -123,7 +125,7 @@ def test_silent_controller_times_out_with_a_clear_message():
     with expected_protocol([(b"G90 G21 G1 X1 F600\n", b"")], timeout_s=0.2) as (stage, _):
         with pytest.raises(HardwareError, match=r"no reply to 'G90 G21 G1 X1 F600' within 0.2 s"):
             stage.move_to(1.0, 600.0)
-        stage._pending.clear()
+        stage.link.fail_pending(None)
 
 
 def test_no_banner_means_wrong_port_or_baud():
@@ -139,24 +141,20 @@ def test_character_counting_keeps_unanswered_bytes_within_rx_buffer():
     fake = ScriptedSerial(CONNECT + [(f"{ln}\n".encode(), b"") for ln in lines])
     stage = GrblStage(fake, timeout_s=1.0)
     stage.connect()
-    import threading
-
     t = threading.Thread(target=stage.stream, args=(lines,))
     t.start()
-    import time
-
     deadline = time.monotonic() + 1.0
     while len(fake.written) < len(CONNECT) + 7 and time.monotonic() < deadline:
         time.sleep(0.005)
     time.sleep(0.05)
     assert len(fake.written) == len(CONNECT) + 7  # 7 * 17 = 119 <= 127 < 8 * 17
-    assert stage._rx_used == 7 * 17
+    assert stage.link.rx_used == 7 * 17
     for _ in range(12):
         fake.push(b"ok\r\n")
         time.sleep(0.01)
     t.join(2.0)
-    assert not t.is_alive() and stage._rx_used == 0 and not fake.pairs
-    stage._shutdown()
+    assert not t.is_alive() and stage.link.rx_used == 0 and not fake.pairs
+    stage.link.close()
 
 
 def test_unopenable_port_is_a_clear_error():

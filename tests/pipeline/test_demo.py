@@ -87,3 +87,36 @@ def test_capture_falls_back_and_says_so(tmp_path, monkeypatch):
 def test_available_tells_absent_pieces_from_broken_ones():
     assert demo.available("lps_gui.no_such_module", "x") is None
     assert demo.available("lps_gui.core.plan", "Plan") is not None
+
+
+def _hide(monkeypatch, *modules):
+    real = demo.available
+    monkeypatch.setattr(demo, "available", lambda module, name: None if module in modules else real(module, name))
+
+
+@pytest.mark.gui
+def test_point_level_demo_runs_to_the_report_and_says_what_it_skipped(tmp_path, monkeypatch):
+    """Without the image pipeline and the capture engine the demo still ends in a report, and says so."""
+    _hide(monkeypatch, "lps_gui.capture.sim_session", "lps_gui.pipeline.simulate_images", "lps_gui.pipeline.intrinsics")
+    lines = []
+    res = demo.run_demo(tmp_path / "out", quick=True, say=lines.append)
+    status = {s.name: s.status for s in res.steps}
+    assert status == {"intrinsics": "skipped", "capture": "fallback", "detect": "skipped", "estimate": "done",
+                      "report": "done"}
+    assert any("point-level" in line for line in lines) and any("image pipeline not installed" in line for line in lines)
+    assert res.report_pdf.read_bytes().startswith(b"%PDF")
+    assert {p.name for p in res.csvs} == {"positions.csv", "summary.csv"}
+    assert len(res.summary) == 5
+    # point-level corners with 0.2 px noise: the positions match the simulator's truth within a few sigma
+    te = demo.truth_errors(res.results, Session.open(res.session_dir).truth)
+    assert te["rms_um"] < 4 * te["median_sigma_um"] + 1.0
+
+
+@pytest.mark.slow
+def test_quick_demo_end_to_end_through_images(tmp_path):
+    """`lps demo --quick`: intrinsics set, capture engine, detection, estimate, report; the truth check holds."""
+    res = demo.run_demo(tmp_path / "out", quick=True)
+    assert [s.status for s in res.steps] == ["done"] * 5, res.steps
+    assert res.report_pdf.exists() and (res.out_dir / "intrinsics.json").exists()
+    te = demo.truth_errors(res.results, Session.open(res.session_dir).truth)
+    assert te["rms_um"] < 4 * te["median_sigma_um"] + 1.0

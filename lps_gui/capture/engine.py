@@ -29,7 +29,7 @@ import numpy as np
 from lps_gui.camera.base import Camera
 from lps_gui.capture import events as ev
 from lps_gui.capture.events import CaptureEvent, CaptureListener, CaptureProgress, CaptureSummary
-from lps_gui.capture.truth import append_truth, finalize_truth
+from lps_gui.capture.truth import append_truth, finalize_truth, prune_truth
 from lps_gui.core.clock import Clock, RealClock
 from lps_gui.core.plan import PlannedStop
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
@@ -203,6 +203,8 @@ class CaptureEngine:
             self._set(done=self._total - len(remaining))
             if remaining:
                 check_writable(self.session.folder / IMAGES_DIR, len(remaining) * bytes_per_frame(self.camera))
+            if self.truth_source is not None:
+                prune_truth(self.session)
             self._emit(CaptureEvent("started", f"{len(remaining)} of {self._total} frames to capture"))
             if remaining and not self.camera.is_open:
                 self.camera.open()

@@ -4,7 +4,7 @@ The simulated stage knows where the carriage really was at each grab. The
 engine appends that to ``truth.jsonl`` (durably, before the capture's own
 line, so every listed frame has its truth) and, once the plan is complete,
 folds it into session.json in the layout of :func:`core.simulate.true_views`
-(``axis_mm``, ``positions_mm`` relative to the first capture,
+(``index``, ``axis_mm``, ``positions_mm`` relative to the first capture,
 ``straightness_um`` (K, 2), ``angles_urad`` (K, 3), in capture-index order).
 A resumed capture may append a line twice for one index; the last one wins.
 """
@@ -14,7 +14,7 @@ import json
 from typing import Any
 
 from lps_gui.core.stage_errors import TruePose
-from lps_gui.io.atomic import append_line_durable
+from lps_gui.io.atomic import append_line_durable, write_text_atomic
 from lps_gui.io.session import Session
 
 TRUTH_FILE = "truth.jsonl"
@@ -50,6 +50,24 @@ def read_truth(session: Session) -> dict[int, dict[str, Any]]:
     return out
 
 
+def prune_truth(session: Session) -> None:
+    """Keep only the truth lines of listed captures (once each): run before a capture (re)starts.
+
+    A crash between a frame's truth line and its capture line leaves a line
+    for a frame that is not listed (or a torn one); the resumed capture
+    takes that frame again, so without pruning its index would appear twice.
+    """
+    path = session.folder / TRUTH_FILE
+    if not path.exists():
+        return
+    listed = {r.index for r in session.records()}
+    per_index = read_truth(session)
+    keep = [per_index[i] for i in sorted(per_index) if i in listed]
+    text = "".join(json.dumps(d, separators=(",", ":")) + "\n" for d in keep)
+    if text != path.read_text(encoding="utf-8"):
+        write_text_atomic(path, text)
+
+
 def finalize_truth(session: Session) -> None:
     """Write the per-capture truth of every listed capture into session.json's ``truth``."""
     per_index = read_truth(session)
@@ -61,7 +79,7 @@ def finalize_truth(session: Session) -> None:
     truth = dict(session.meta.get("truth") or {})
     truth.update(
         {
-            "indices": indices,
+            "index": indices,
             "axis_mm": axis,
             "positions_mm": [a - axis[0] for a in axis],
             "straightness_um": [list(r["straightness_um"]) for r in rows],

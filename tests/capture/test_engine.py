@@ -36,7 +36,7 @@ def test_bidirectional_two_runs_of_20_targets(reference_capture):
     np.testing.assert_allclose([r.reported_mm for r in records], [s.target_mm for s in expected], atol=1e-9)
     # truth: true position = target + systematic error (backlash of the run's direction) + repeatability
     truth = Session.open(session.folder).truth
-    assert truth["indices"] == list(range(80))
+    assert truth["index"] == list(range(80))
     errors = stage.errors
     target = np.array([r.target_mm for r in records])
     sign = np.array([1.0 if r.direction == "+" else -1.0 for r in records])

@@ -1,6 +1,7 @@
 """Nothing is lost: SIGKILL a capture process mid-run, resume with `lps capture --resume`, compare."""
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -48,3 +49,5 @@ def test_sigkill_mid_run_then_resume_equals_uninterrupted(tmp_path, reference_ca
     assert records_without_time(resumed) == records_without_time(ref)
     assert image_bytes(resumed) == image_bytes(ref)
     assert resumed.truth["axis_mm"] == Session.open(ref.folder).truth["axis_mm"]
+    sidecar = [json.loads(line)["index"] for line in (folder / "truth.jsonl").read_text().splitlines()]
+    assert sidecar == list(range(80))  # one truth line per listed frame, none twice

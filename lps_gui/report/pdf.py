@@ -177,7 +177,7 @@ def _outliers(flow: Any, session_dir: Path, results: dict[str, Any]) -> None:
         return
     flow.table(["#", "file", "RMS [px]", "reason"],
                [[str(r["index"]), r["file"], S.fmt(r["rms_px"]), r["reason"]] for r in rows],
-               [10, 45, 16, 109], size_pt=7.5, align_right_from=2)
+               [10, 45, 16, 109], size_pt=7.5, align_right_from=2, align_left=(3,))
     images = [(r, _thumbnail(session_dir / r["file"])) for r in rows[:MAX_THUMBNAILS] if r["file"]]
     images = [(r, im) for r, im in images if im is not None]
     if not images:
@@ -189,6 +189,7 @@ def _outliers(flow: Any, session_dir: Path, results: dict[str, Any]) -> None:
         chunk = images[start:start + 3]
         h = max(width_mm * im.height() / max(im.width(), 1) for _, im in chunk) + 6.0
         flow.ensure(h)
+        flow.log.add("thumbnails")
         heights = [flow.image(im, k * (width_mm + gap_mm), width_mm, f"view {r['index']}: {Path(r['file']).name}")
                    for k, (r, im) in enumerate(chunk)]
         flow.space(max(heights) + 2.0)

@@ -119,6 +119,14 @@ def test_lps_version_prints_the_pyproject_version():
     assert out.stdout.strip() == f"lps-calib {pyproject_version()}"
 
 
+def test_no_module_hard_codes_the_version():
+    """One source: modules must read lps_gui.__version__, never repeat the number."""
+    literal = re.compile(r"""["']""" + re.escape(pyproject_version()) + r"""["']""")
+    offenders = [str(p.relative_to(ROOT)) for p in sorted((ROOT / "lps_gui").rglob("*.py"))
+                 if literal.search(p.read_text(encoding="utf-8"))]
+    assert not offenders, f"version literal in {offenders}; use lps_gui.__version__"
+
+
 def _gui_available() -> bool:
     return (ROOT / "lps_gui" / "gui" / "app.py").is_file()
 
@@ -139,8 +147,13 @@ def test_bundle_builds_and_both_programs_run_offscreen(tmp_path):
     assert version.stdout.strip() == f"lps-calib {pyproject_version()}"
     for size_px in resources.APP_ICON_SIZES_PX:
         assert png_size_px(BUNDLE_DIR / "_internal" / "resources" / resources.app_icon_name(size_px))[0] == size_px
-    platforms = {p.name for p in (BUNDLE_DIR / "_internal" / "PySide6" / "Qt" / "plugins" / "platforms").iterdir()}
-    assert platforms == {"libqoffscreen.so", "libqxcb.so"}
+    qt_dir = BUNDLE_DIR / "_internal" / "PySide6" / "Qt"
+    assert {p.name for p in (qt_dir / "plugins" / "platforms").iterdir()} == {"libqoffscreen.so", "libqxcb.so"}
+    if shutil.which("ldd"):  # everything the X11 plugin links must resolve
+        lib_path = os.pathsep.join([str(BUNDLE_DIR / "_internal"), str(qt_dir / "lib")])
+        ldd = subprocess.run(["ldd", str(qt_dir / "plugins" / "platforms" / "libqxcb.so")], capture_output=True,
+                             text=True, env=dict(env, LD_LIBRARY_PATH=lib_path))
+        assert "not found" not in ldd.stdout, ldd.stdout
 
     if not _gui_available():
         pytest.skip("lps_gui/gui/app.py is not written yet: the bundle's lps-gui was not exercised")

@@ -23,12 +23,13 @@ import numpy as np
 from lps_gui.core.clock import Clock, SimClock
 from lps_gui.core.stage_errors import StageErrorModel, TruePose
 from lps_gui.errors import HardwareError
-from lps_gui.hardware.grbl.codes import SETTINGS, GrblError, setting_info
-from lps_gui.hardware.motion import Profile, stop_from, trapezoid
+from lps_gui.hardware.grbl.codes import SETTINGS, GrblError, check_setting, setting_info
+from lps_gui.hardware.motion import Profile
+from lps_gui.hardware.planner import PLANNER_BLOCKS, HeldMove, MotionPlanner
 from lps_gui.hardware.stage import AXES, Stage, StageEvent, StageSetting, StageStatus
 
-PLANNER_BLOCKS = 15  # GRBL: 16-block ring buffer, one always empty (reports Bf:15 when idle)
 RX_BUFFER_BYTES = 128
+__all__ = ["PLANNER_BLOCKS", "RX_BUFFER_BYTES", "SimulatedStage"]
 
 
 class SimulatedStage(Stage):
@@ -75,12 +76,9 @@ class SimulatedStage(Stage):
         self.settings.update({20: float(soft_limits), 22: 1.0, 23: 7.0, 24: 100.0, 25: float(max_rate_mm_min), 27: 1.0})
         self._rng = np.random.default_rng(seed)
         self._lock = threading.RLock()
-        self._pos_mm = np.zeros(3)
-        self._pos_mm[AXES.index(axis)] = start_mm
-        self._queue: list[Profile] = []  # planned motion, back to back in time
-        self._stopping: Profile | None = None  # deceleration of a hold or jog cancel
-        self._held: list[tuple[int, str, float, float]] = []  # (axis, kind, target, feed) to resume
-        self._hold = False
+        pos_mm = np.zeros(3)
+        pos_mm[AXES.index(axis)] = start_mm
+        self._motion = MotionPlanner(pos_mm)
         self._homing = False
         self.homed = False
         self._alarm: int | None = 0 if homing_required else None  # 0: GRBL's homing lock, no code
@@ -161,17 +159,13 @@ class SimulatedStage(Stage):
 
     # ------------------------------------------------------------------ time evolution
     def _freeze(self, t: float) -> None:
-        """Stop all motion abruptly at time ``t`` (reset, vanished port)."""
+        """Stop all motion abruptly at time ``t`` (reset, alarm, vanished port)."""
         self._update(t)
-        for p in ([self._stopping] if self._stopping else []) + self._queue[:1]:
-            self._pos_mm[p.axis] = p.at(t)[0]
-        self._queue.clear()
-        self._stopping = None
-        self._held.clear()
+        self._motion.freeze(t)
         self._homing = False
 
     def _complete(self, p: Profile) -> None:
-        self._pos_mm[p.axis] = p.end_mm
+        """A move ended: its direction sets the backlash side, and it gets its repeatability draw."""
         if p.axis == AXES.index(self.axis) and p.direction != 0:
             self._last_dir = p.direction
             rep = self.errors.repeatability_um
@@ -180,66 +174,44 @@ class SimulatedStage(Stage):
     def _update(self, t: float | None = None) -> None:
         """Retire motion finished by time ``t`` and emit a state event on change."""
         t = self.clock.now() if t is None else t
-        if self._stopping is not None and t >= self._stopping.t_end:
-            self._complete(self._stopping)
-            self._stopping = None
-        while self._queue and t >= self._queue[0].t_end:
-            self._complete(self._queue.pop(0))
-        if self._homing and not self._queue:
+        for p in self._motion.update(t):
+            self._complete(p)
+        if self._homing and not self._motion.queue:
             self._homing = False
             self.homed = True
-        state, _ = self._state(t)
+        state, _ = self._state()
         if state != self._last_state:
             self._last_state = state
             self.events.emit(StageEvent("state", text=state))
 
-    def _state(self, t: float) -> tuple[str, int | None]:
-        if self._alarm is not None:
-            return "Alarm", None
-        if self._hold:
-            return "Hold", (1 if self._stopping is not None else 0)
-        if self._stopping is not None:
-            return self._stopping.kind, None
-        if self._queue:
-            return self._queue[0].kind, None
-        return "Idle", None
-
-    def _active(self, t: float) -> Profile | None:
-        return self._stopping if self._stopping is not None else (self._queue[0] if self._queue else None)
-
-    def _positions(self, t: float) -> tuple[np.ndarray, float]:
-        pos = self._pos_mm.copy()
-        p = self._active(t)
-        if p is None or (self._hold and self._stopping is None):
-            return pos, 0.0
-        x, v = p.at(t)
-        pos[p.axis] = x
-        return pos, abs(v) * 60.0
+    def _state(self) -> tuple[str, int | None]:
+        return ("Alarm", None) if self._alarm is not None else self._motion.state()
 
     def planner_free(self) -> int:
         """Free planner blocks (GRBL's ``Bf`` first value)."""
         with self._lock:
             self._update()
-            return PLANNER_BLOCKS - len(self._queue) - len(self._held)
+            return self._motion.free
 
     def planned_mm(self, axis: int) -> float:
         """Where ``axis`` will rest once all planned (or held) motion is done (for G91 targets)."""
         with self._lock:
-            for a, _, target, _ in reversed(self._held):
-                if a == axis:
-                    return target
-            for p in reversed(self._queue):
-                if p.axis == axis:
-                    return p.end_mm
-            if self._stopping is not None and self._stopping.axis == axis:
-                return self._stopping.end_mm
-            return float(self._pos_mm[axis])
+            return self._motion.planned_mm(axis)
+
+    def motion_progress(self) -> tuple[str, float] | None:
+        """(kind, fraction of its duration done) of the profile moving now, None when resting."""
+        with self._lock:
+            t = self.clock.now()
+            self._update(t)
+            p = self._motion.active()
+            if p is None or p.t_end <= p.t0:
+                return None
+            return p.kind, (t - p.t0) / (p.t_end - p.t0)
 
     def next_event_s(self) -> float | None:
         """Clock time of the next state change in motion (for waiting), None when resting."""
         with self._lock:
-            p = self._active(self.clock.now())
-            return None if p is None else (p.t_end if p is self._stopping else self._queue[0].t_end)
+            return self._motion.next_event_s()
 
     # ------------------------------------------------------------------ status
     def status(self) -> StageStatus:
@@ -247,9 +219,9 @@ class SimulatedStage(Stage):
             self.require_connected()
             t = self.clock.now()
             self._update(t)
-            state, sub = self._state(t)
-            pos, feed = self._positions(t)
-            free = PLANNER_BLOCKS - len(self._queue) - len(self._held)
+            state, sub = self._state()
+            pos, feed = self._motion.positions(t)
+            free = self._motion.free
             return StageStatus(
                 state=state, substate=sub, machine_mm=tuple(pos), work_mm=tuple(pos),
                 feed_mm_min=feed, buffer=(free, RX_BUFFER_BYTES), overrides=(100, 100, 100), time=t,
@@ -264,9 +236,9 @@ class SimulatedStage(Stage):
         with self._lock:
             t = self.clock.now()
             self._update(t)
-            pos, _ = self._positions(t)
+            pos, _ = self._motion.positions(t)
             i = AXES.index(self.axis)
-            p = self._active(t)
+            p = self._motion.active()
             direction = p.direction if p is not None and p.direction else self._last_dir
             pose = self.errors.true_pose(np.array([pos[i]]), np.array([float(direction)]))
             return TruePose(
@@ -304,7 +276,7 @@ class SimulatedStage(Stage):
         return self._alarm
 
     def _require_gcode_ok(self) -> None:
-        state, _ = self._state(self.clock.now())
+        state, _ = self._state()
         if state in ("Alarm", "Jog"):
             raise GrblError("error", 9, f"stage in {state}")
 
@@ -323,10 +295,9 @@ class SimulatedStage(Stage):
             self.require_connected()
             t = self.clock.now()
             self._update(t)
-            moving = self._active(t) is not None
+            moving = self._motion.active() is not None
             homing = self._homing
             self._freeze(t)
-            self._hold = False
             if homing:
                 self._raise_alarm(6, "reset during homing")
             elif moving:
@@ -334,13 +305,12 @@ class SimulatedStage(Stage):
             self._update(t)
 
     # ------------------------------------------------------------------ motion
+    def _accel(self, axis: int) -> float:
+        return self.accel_mm_s2(axis)
+
     def _plan(self, axis: int, kind: str, target_mm: float, feed_mm_min: float) -> None:
-        ends = [self.clock.now()] + [p.t_end for p in self._queue[-1:]]
-        if self._stopping is not None:
-            ends.append(self._stopping.t_end)
         feed = min(feed_mm_min, self.max_rate_mm_min(axis))
-        x0 = self.planned_mm(axis)
-        self._queue.append(trapezoid(axis, kind, max(ends), x0, float(target_mm), feed, self.accel_mm_s2(axis)))
+        self._motion.plan(self.clock.now(), axis, kind, target_mm, feed, self.accel_mm_s2(axis))
 
     def _in_travel(self, target_mm: float) -> bool:
         return self.travel_mm[0] <= target_mm <= self.travel_mm[1]
@@ -363,8 +333,8 @@ class SimulatedStage(Stage):
                     2, f"move to {position_mm:.3f} mm is outside the travel {self.travel_mm[0]:g}..{self.travel_mm[1]:g} mm"
                 )
             self._wait_planner()
-            if self._hold:
-                self._held.append((i, "Run", float(position_mm), float(feed_mm_min)))
+            if self._motion.hold:
+                self._motion.held.append(HeldMove(i, "Run", float(position_mm), float(feed_mm_min)))
             else:
                 self._plan(i, "Run", float(position_mm), float(feed_mm_min))
             self._update()
@@ -374,7 +344,7 @@ class SimulatedStage(Stage):
             self.require_connected()
             self._update()
             i = self._ax(axis)
-            state, _ = self._state(self.clock.now())
+            state, _ = self._state()
             if state not in ("Idle", "Jog"):
                 raise GrblError("error", 8, f"jog in {state}")
             if not feed_mm_min or feed_mm_min <= 0:
@@ -387,45 +357,31 @@ class SimulatedStage(Stage):
             self._plan(i, "Jog", target, float(feed_mm_min))
             self._update()
 
-    def _decelerate(self) -> list[Profile]:
-        """Start a controlled stop of the active profile; return the motion it cut short."""
-        t = self.clock.now()
-        cut = list(self._queue)
-        if self._queue:
-            self._stopping = stop_from(self._queue[0], t, self.accel_mm_s2(self._queue[0].axis))
-            self._queue.clear()
-        return cut
-
     def jog_cancel(self) -> None:
         with self._lock:
             self.require_connected()
             self._update()
-            if self._queue and self._queue[0].kind == "Jog":
-                self._decelerate()
+            p = self._motion.active()
+            if p is not None and p.kind == "Jog" and self._motion.stopping is None:
+                self._motion.decelerate(self.clock.now(), self._accel)
                 self._update()
 
     def feed_hold(self) -> None:
         with self._lock:
             self.require_connected()
             self._update()
-            state, _ = self._state(self.clock.now())
-            if state == "Jog":
-                self._decelerate()
+            state, _ = self._state()
+            if state == "Jog":  # a hold cancels a jog (flushes it)
+                self._motion.decelerate(self.clock.now(), self._accel)
             elif state in ("Run", "Idle"):
-                cut = self._decelerate()
-                self._held = [(p.axis, p.kind, p.end_mm, p.feed_mm_min) for p in cut] + self._held
-                self._hold = True
+                self._motion.feed_hold(self.clock.now(), self._accel)
             self._update()
 
     def resume(self) -> None:
         with self._lock:
             self.require_connected()
             self._update()
-            if self._hold and self._stopping is None:  # GRBL resumes only a completed hold
-                self._hold = False
-                held, self._held = self._held, []
-                for axis, kind, target, feed in held:
-                    self._plan(axis, kind, target, feed)
+            if self._motion.resume(self.clock.now(), self._accel):
                 self._update()
 
     def start_home(self) -> None:
@@ -435,7 +391,7 @@ class SimulatedStage(Stage):
             self._update()
             if not self.homing_enabled:
                 raise GrblError("error", 5, "home")
-            state, _ = self._state(self.clock.now())
+            state, _ = self._state()
             if state not in ("Idle", "Alarm"):
                 raise GrblError("error", 8, f"home in {state}")
             self._alarm = None
@@ -490,17 +446,10 @@ class SimulatedStage(Stage):
         with self._lock:
             self.require_connected()
             self._update()
-            state, _ = self._state(self.clock.now())
+            state, _ = self._state()
             if state not in ("Idle", "Alarm"):
                 raise GrblError("error", 8, f"${number}={value:g}")
-            if number not in SETTINGS:
-                raise GrblError("error", 3, f"${number}={value:g}")
-            if value < 0:
-                raise GrblError("error", 4, f"${number}={value:g}")
-            if number == 0 and value < 3:
-                raise GrblError("error", 6, f"${number}={value:g}")
-            if number == 20 and value and not self.homing_enabled:
-                raise GrblError("error", 10, f"${number}={value:g}")
+            check_setting(self.settings, number, value)
             self.settings[number] = float(value)
             if number == 130 + AXES.index(self.axis):
                 self.travel_mm = (self.travel_mm[0], self.travel_mm[0] + float(value))

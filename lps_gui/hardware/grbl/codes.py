@@ -140,6 +140,32 @@ def format_setting(number: int, value: float) -> str:
     return f"${number}={int(round(value))}" if number in INTEGER_SETTINGS else f"${number}={value:.3f}"
 
 
+MAX_STEP_RATE_HZ = 30000  # config.h MAX_STEP_RATE_HZ: $100 x $110 beyond it is error:12
+
+
+def check_setting(settings: dict[int, float], number: int, value: float) -> None:
+    """Raise GrblError like ``settings_store_global_setting`` would for ``$number=value``.
+
+    Unknown number: error:3; negative: error:4; ``$0`` < 3 us: error:6; a step
+    rate beyond 30 kHz: error:12; soft limits without homing: error:10.
+    """
+    context = f"${number}={value:g}"
+    if number not in SETTINGS:
+        raise GrblError("error", 3, context)
+    if value < 0:
+        raise GrblError("error", 4, context)
+    if number == 0 and value < 3:
+        raise GrblError("error", 6, context)
+    if 100 <= number <= 112:
+        axis = number % 10
+        steps = value if number < 110 else settings.get(100 + axis, 0.0)
+        rate = value if number >= 110 else settings.get(110 + axis, 0.0)
+        if steps * rate / 60.0 > MAX_STEP_RATE_HZ:
+            raise GrblError("error", 12, context)
+    if number == 20 and value and not settings.get(22):
+        raise GrblError("error", 10, context)
+
+
 class GrblError(HardwareError):
     """GRBL answered ``error:N`` or raised ``ALARM:N``; ``kind`` and ``code`` say which."""
 

@@ -188,11 +188,8 @@ class GrblFirmware:
         code = self.faults.alarm_mid_move
         if code is None:
             return
-        st = self.stage
-        with st._lock:  # noqa: SLF001 - same package, needs the active profile
-            t = st.clock.now()
-            p = st._active(t)  # noqa: SLF001
-            fire = p is not None and p.kind in ("Run", "Jog") and t >= 0.5 * (p.t0 + p.t_end)
+        progress = self.stage.motion_progress()
+        fire = progress is not None and progress[0] in ("Run", "Jog") and progress[1] >= 0.5
         if fire:
             self.faults.alarm_mid_move = None
             self._alarm(code)
@@ -340,18 +337,10 @@ class GrblFirmware:
                 raise CodeError(2) from None
             if number > 255:
                 raise CodeError(3)
-            if 100 <= number <= 112 and self._step_rate_hz(number, val) > 30000:
-                raise CodeError(12)
             self.stage.write_setting(number, val)
         else:
             raise CodeError(3)
         self._send("ok")
-
-    def _step_rate_hz(self, number: int, value: float) -> float:
-        axis = number % 10
-        steps = value if number < 110 else self.stage.settings[100 + axis]
-        rate = value if number >= 110 else self.stage.settings[110 + axis]
-        return steps * rate / 60.0
 
     def _homing_done(self) -> bool:
         if self.stage.status().state == "Home":

@@ -112,8 +112,7 @@ def render_report(session_dir: Path, results: dict | None = None, out: Path | No
         progress(3, len(steps), "table")
         flow.new_page()
         flow.heading("Per-position results")
-        header, rows = S.position_table(results)
-        widths = [10, 8, 7, 14, 16, 15, 10, 11, 14, 14, 14, 14, 14, 11]
+        header, rows, widths = S.position_table(results)
         colors = ["#c00000" if r[-1] else None for r in rows]
         flow.table(header, rows, widths, size_pt=6.3, row_mm=3.35, align_right_from=0, colors=colors)
         n_pages = flow.finish()

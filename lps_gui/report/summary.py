@@ -317,22 +317,30 @@ def outlier_rows(results: dict[str, Any]) -> list[dict[str, Any]]:
     return [rows[k] for k in sorted(rows)]
 
 
-POSITION_TABLE_COLUMNS = (
-    ("index", "#", 0), ("run", "run", 0), ("direction", "dir", None), ("target_mm", "target\n[mm]", 3),
-    ("measured_mm", "measured\n[mm]", 4), ("deviation_um", "deviation\n[\u00b5m]", 2),
-    ("sigma_um", "\u03c3\n[\u00b5m]", 2), ("rms_px", "rms\n[px]", 3), ("straightness_um_1", "str. v1\n[\u00b5m]", 2),
-    ("straightness_um_2", "str. v2\n[\u00b5m]", 2), ("roll_urad", "roll\n[\u00b5rad]", 1),
-    ("pitch_urad", "pitch\n[\u00b5rad]", 1), ("yaw_urad", "yaw\n[\u00b5rad]", 1), ("outlier", "outlier", None),
+POSITION_TABLE_COLUMNS = (  # (key, header, decimals or None for text, width in mm)
+    ("index", "#", 0, 9), ("run", "run", 0, 7), ("direction", "dir", None, 6), ("target_mm", "target\n[mm]", 3, 13),
+    ("measured_mm", "measured\n[mm]", 4, 15), ("deviation_um", "deviation\n[\u00b5m]", 2, 14),
+    ("truth_deviation_um", "truth dev.\n[\u00b5m]", 2, 14),
+    ("sigma_um", "\u03c3\n[\u00b5m]", 2, 10), ("rms_px", "rms\n[px]", 3, 10),
+    ("straightness_um_1", "str. v1\n[\u00b5m]", 2, 13), ("straightness_um_2", "str. v2\n[\u00b5m]", 2, 13),
+    ("roll_urad", "roll\n[\u00b5rad]", 1, 13), ("pitch_urad", "pitch\n[\u00b5rad]", 1, 13),
+    ("yaw_urad", "yaw\n[\u00b5rad]", 1, 13), ("outlier", "outlier", None, 11),
 )
 
 
-def position_table(results: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
-    """Header and text rows of the per-position table (fixed decimals per column)."""
-    header = [h for _, h, _ in POSITION_TABLE_COLUMNS]
+def position_table(results: dict[str, Any]) -> tuple[list[str], list[list[str]], list[float]]:
+    """Header, text rows and column widths (mm) of the per-position table (fixed decimals per column).
+
+    The truth column appears only for simulated sessions (results carry ``truth_deviation_um``).
+    """
+    positions = sorted(results.get("positions") or [], key=lambda r: r.get("index", 0))
+    has_truth = any(r.get("truth_deviation_um") is not None for r in positions)
+    columns = [c for c in POSITION_TABLE_COLUMNS if has_truth or c[0] != "truth_deviation_um"]
+    header = [c[1] for c in columns]
     body = []
-    for r in sorted(results.get("positions") or [], key=lambda r: r.get("index", 0)):
+    for r in positions:
         row = []
-        for key, _, decimals in POSITION_TABLE_COLUMNS:
+        for key, _, decimals, _ in columns:
             v = r.get(key)
             if key == "outlier":
                 row.append("yes" if v else "")
@@ -342,4 +350,4 @@ def position_table(results: dict[str, Any]) -> tuple[list[str], list[list[str]]]
                 f = _num(v)
                 row.append(DASH if f is None else f"{f:.{decimals}f}")
         body.append(row)
-    return header, body
+    return header, body, [float(c[3]) for c in columns]

@@ -66,8 +66,13 @@ def test_fmt_significant_digits_and_dash():
 
 def test_position_table_has_one_row_per_position_in_index_order():
     results, _ = make_results()
-    header, rows = position_table(results)
-    assert len(rows) == len(results["positions"]) and len(header) == len(rows[0])
+    header, rows, widths = position_table(results)
+    assert len(rows) == len(results["positions"]) and len(header) == len(rows[0]) == len(widths)
+    assert sum(widths) <= 180  # A4 minus margins
+    assert not any("truth" in h for h in header)
+    results["positions"][3]["truth_deviation_um"] = 1.234
+    header, rows, widths = position_table(results)
+    assert rows[3][header.index("truth dev.\n[\u00b5m]")] == "1.23" and sum(widths) <= 180
     assert rows[5][-1] == "yes" and rows[4][-1] == ""
     dev_col = header.index("deviation\n[\u00b5m]")
     assert float(rows[3][dev_col]) == round(results["positions"][3]["deviation_um"], 2)

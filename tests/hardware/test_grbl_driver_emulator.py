@@ -7,7 +7,7 @@ import pytest
 
 from lps_gui.core.stage_errors import StageErrorModel
 from lps_gui.errors import HardwareError
-from lps_gui.hardware import open_stage
+from lps_gui.hardware import list_serial_ports, open_stage
 from lps_gui.hardware.grbl.codes import GrblError
 from lps_gui.hardware.grbl.driver import GrblStage
 from lps_gui.hardware.grbl.emulator import Faults, GrblEmulator
@@ -188,6 +188,22 @@ def test_open_stage_specs():
 
     with pytest.raises(InputError, match="sim \\| emulator \\| grbl:PORT"):
         open_stage("usb")
+    with pytest.raises(HardwareError, match="cannot open port '/dev/no-such-tty'"):
+        open_stage("grbl:/dev/no-such-tty")
+    assert all(isinstance(p, str) for p in list_serial_ports())
+
+
+def test_check_mode_waits_without_motion_and_sleep_is_reported(rig):
+    emu, stage, _ = rig
+    stage.unlock()
+    stage.command("$C")
+    stage.command("G0 X50")
+    st = stage.wait_idle(timeout_s=1.0)
+    assert st.state == "Check" and st.work_mm[0] == pytest.approx(10.0)
+    stage.command("$C")  # leaves check mode with a reset (banner)
+    stage.command("$SLP")
+    with pytest.raises(HardwareError, match="asleep"):
+        stage.wait_idle(timeout_s=1.0)
 
 
 def test_stage_vanishing_under_the_emulator_drops_the_port(rig):

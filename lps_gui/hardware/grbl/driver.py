@@ -289,7 +289,9 @@ class GrblStage(Stage):
                 if self._alarm_code is not None:
                     continue
                 raise HardwareError(f"GRBL on {self.port_name}: locked in Alarm; home ($H) or unlock ($X) first")
-            if st.state == "Idle" and not self.link.in_flight:
+            if st.state == "Sleep":
+                raise HardwareError(f"GRBL on {self.port_name}: the controller is asleep ($SLP); reset it, then home or unlock")
+            if st.state in ("Idle", "Check") and not self.link.in_flight:  # Check: $C mode, nothing moves
                 idle_reports += 1
                 if idle_reports >= 2 or (st.buffer is not None and st.buffer[0] >= blocks):
                     return st

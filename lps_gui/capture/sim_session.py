@@ -17,6 +17,7 @@ from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.clock import Clock
 from lps_gui.core.simulate import SimulationSpec
 from lps_gui.errors import InputError
+from lps_gui.hardware.stage import Stage
 from lps_gui.io.atomic import check_writable
 from lps_gui.io.session import Session
 
@@ -58,6 +59,9 @@ def reopen_simulated_rig(session: Session, clock: Clock | None = None) -> tuple[
     return make_simulated_rig(spec, clock=clock, noise_grey=float(cam.get("noise_grey", 2.0)), blur_px=float(cam.get("blur_px", 1.2)))
 
 
-def simulated_engine(session: Session, stage: RigStage, camera: RigCamera, encode: str = ".png") -> CaptureEngine:
-    """A :class:`CaptureEngine` that also records the stage's true pose of every frame."""
-    return CaptureEngine(stage, camera, session, encode=encode, truth_source=lambda: pose_truth(stage.true_pose()))
+def simulated_engine(session: Session, stage: Stage, camera: RigCamera, encode: str = ".png") -> CaptureEngine:
+    """A :class:`CaptureEngine` that also records the true pose of every frame (the pose the camera renders).
+
+    ``stage`` is the rig's stage or a driver in front of it (the GRBL emulator).
+    """
+    return CaptureEngine(stage, camera, session, encode=encode, truth_source=lambda: pose_truth(camera.pose_source()))

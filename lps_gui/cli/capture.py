@@ -39,6 +39,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     s.add_argument("--seed", type=int, default=0, help="simulated rig: seed of all noise")
     s.add_argument("--noise-grey", type=float, default=2.0, help="simulated camera: noise sigma, grey levels")
     s.add_argument("--real-time", action="store_true", help="simulated rig: move and settle in real time (default: simulated time)")
+    s.add_argument("--time-scale", type=float, default=1.0, help="--stage emulator: simulated time runs this many times faster than real")
     s.add_argument("--encode", default=".png", help="image format (lossless): .png (default), .tif, .bmp")
 
 
@@ -105,7 +106,10 @@ def _start(args: argparse.Namespace):
         base = preset(args.preset).plan
         spec = spec_for_plan(args.preset, _plan(args, base), seed=args.seed)
         session, stage, camera = create_simulated_session(args.out, spec, clock=_clock(args), noise_grey=args.noise_grey, intrinsics=intr)
-        stage = _bind_stage(stage_spec, stage)
+        stage = _bind_stage(stage_spec, stage, args.time_scale)
+        session.meta["stage"] = {**stage.describe(), "spec": stage_spec}
+        session.meta["camera"] = {**camera.properties(), "spec": "sim"}
+        session.save_meta()
         return session, stage, camera, simulated_engine(session, stage, camera, args.encode)
     if not args.board:
         raise InputError("--board FILE is required with a real camera (see SPEC 7 for board.json)")
@@ -135,7 +139,7 @@ def _resume(args: argparse.Namespace):
         from lps_gui.capture.sim_session import reopen_simulated_rig, simulated_engine
 
         stage, camera = reopen_simulated_rig(session, clock=_clock(args))
-        stage = _bind_stage(args.stage or "sim", stage)
+        stage = _bind_stage(args.stage or "sim", stage, args.time_scale)
         return session, stage, camera, simulated_engine(session, stage, camera, args.encode)
     stage_spec = args.stage or (session.meta.get("stage") or {}).get("spec")
     camera_spec = args.camera or (session.meta.get("camera") or {}).get("spec")
@@ -163,7 +167,7 @@ def _open_devices(stage_spec: str, camera_spec: str):
     return stage, camera
 
 
-def _bind_stage(stage_spec: str, rig_stage):
+def _bind_stage(stage_spec: str, rig_stage, time_scale: float = 1.0):
     """Connect the simulated rig's stage directly ("sim") or through the GRBL emulator ("emulator")."""
     from lps_gui.errors import InputError
 
@@ -173,7 +177,7 @@ def _bind_stage(stage_spec: str, rig_stage):
     if stage_spec == "emulator":
         from lps_gui.capture.emulated_rig import emulated_rig_stage
 
-        return emulated_rig_stage(rig_stage)
+        return emulated_rig_stage(rig_stage, time_scale=time_scale)
     raise InputError(f"--stage {stage_spec}: the simulated camera rides only --stage sim or emulator")
 
 

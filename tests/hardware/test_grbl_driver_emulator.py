@@ -57,7 +57,7 @@ def test_home_move_and_wait_match_the_simulated_truth(rig):
 def test_jog_and_cancel(rig):
     emu, stage, _ = rig
     stage.unlock()
-    stage.jog(80.0, 600.0)  # 8 simulated s = 160 ms real
+    stage.jog(80.0, 300.0)  # 16 simulated s = 320 ms real
     time.sleep(0.03)
     assert stage.status().state == "Jog"
     stage.jog_cancel()
@@ -70,7 +70,7 @@ def test_jog_and_cancel(rig):
 def test_feed_hold_and_resume(rig):
     emu, stage, _ = rig
     stage.unlock()
-    stage.move_to(90.0, 600.0)
+    stage.move_to(90.0, 300.0)
     time.sleep(0.02)
     stage.feed_hold()
     deadline = time.monotonic() + 1.0

@@ -87,7 +87,7 @@ def test_status_report_fields_follow_mask_and_refresh_counters(emu):
 def test_motion_states_and_error_codes(emu):
     e, port = emu
     assert port.ask(b"G1 X50\n") == ["error:22"]  # no feed rate yet
-    assert port.ask(b"G1 X50 F600\n") == ["ok"]
+    assert port.ask(b"G1 X50 F300\n") == ["ok"]  # 8 simulated s = 160 ms real
     assert port.ask(b"?", until="<")[-1].startswith("<Run|")
     assert port.ask(b"G4 P0\n", timeout_s=2.0) == ["ok"]  # waits for the move to end
     assert port.ask(b"?", until="<")[-1].startswith("<Idle|MPos:-50.000")
@@ -105,7 +105,7 @@ def test_jog_rules_and_cancel(emu):
     assert port.ask(b"$J=G91 X500 F1000\n") == ["error:15"]
     assert port.ask(b"$J=G91 X5\n") == ["error:22"]
     assert port.ask(b"$J=X5 F100 S3\n") == ["error:36"]
-    assert port.ask(b"$J=G91 X80 F600\n") == ["ok"]
+    assert port.ask(b"$J=G91 X80 F300\n") == ["ok"]  # 16 simulated s = 320 ms real
     assert port.ask(b"?", until="<")[-1].startswith("<Jog|")
     assert port.ask(b"G1 X1 F100\n") == ["error:9"]  # G-code locked while jogging
     assert port.ask(b"$H\n") == ["error:8"]

@@ -17,6 +17,8 @@ error:9; a reset during motion is ALARM:3.
 from __future__ import annotations
 
 import threading
+from contextlib import contextmanager
+from typing import Iterator
 
 import numpy as np
 
@@ -157,6 +159,15 @@ class SimulatedStage(Stage):
             self._check_vanish()
         super().require_connected()
 
+    @contextmanager
+    def _command(self) -> Iterator[float]:
+        """Every command: under the lock, connected, motion brought up to the clock's time ``t``."""
+        with self._lock:
+            self.require_connected()
+            t = self.clock.now()
+            self._update(t)
+            yield t
+
     # ------------------------------------------------------------------ time evolution
     def _freeze(self, t: float) -> None:
         """Stop all motion abruptly at time ``t`` (reset, alarm, vanished port)."""
@@ -215,10 +226,7 @@ class SimulatedStage(Stage):
 
     # ------------------------------------------------------------------ status
     def status(self) -> StageStatus:
-        with self._lock:
-            self.require_connected()
-            t = self.clock.now()
-            self._update(t)
+        with self._command() as t:
             state, sub = self._state()
             pos, feed = self._motion.positions(t)
             free = self._motion.free
@@ -281,9 +289,7 @@ class SimulatedStage(Stage):
             raise GrblError("error", 9, f"stage in {state}")
 
     def unlock(self) -> None:
-        with self._lock:
-            self.require_connected()
-            self._update()
+        with self._command():
             if self._alarm is not None:
                 self._alarm = None
                 self.events.emit(StageEvent("message", text="Caution: Unlocked"))
@@ -291,10 +297,7 @@ class SimulatedStage(Stage):
 
     def soft_reset(self) -> None:
         """Stop at once; a reset during motion or homing raises ALARM:3 / ALARM:6 like GRBL."""
-        with self._lock:
-            self.require_connected()
-            t = self.clock.now()
-            self._update(t)
+        with self._command() as t:
             moving = self._motion.active() is not None
             homing = self._homing
             self._freeze(t)
@@ -321,9 +324,7 @@ class SimulatedStage(Stage):
             self.clock.sleep(max((nxt or 0.0) - self.clock.now(), 1e-3))
 
     def move_to(self, position_mm: float, feed_mm_min: float, axis: str | None = None) -> None:
-        with self._lock:
-            self.require_connected()
-            self._update()
+        with self._command():
             i = self._ax(axis)
             self._require_gcode_ok()
             if not feed_mm_min or feed_mm_min <= 0:
@@ -340,9 +341,7 @@ class SimulatedStage(Stage):
             self._update()
 
     def jog(self, distance_mm: float, feed_mm_min: float, axis: str | None = None) -> None:
-        with self._lock:
-            self.require_connected()
-            self._update()
+        with self._command():
             i = self._ax(axis)
             state, _ = self._state()
             if state not in ("Idle", "Jog"):
@@ -358,18 +357,14 @@ class SimulatedStage(Stage):
             self._update()
 
     def jog_cancel(self) -> None:
-        with self._lock:
-            self.require_connected()
-            self._update()
+        with self._command():
             p = self._motion.active()
             if p is not None and p.kind == "Jog" and self._motion.stopping is None:
                 self._motion.decelerate(self.clock.now(), self._accel)
                 self._update()
 
     def feed_hold(self) -> None:
-        with self._lock:
-            self.require_connected()
-            self._update()
+        with self._command():
             state, _ = self._state()
             if state == "Jog":  # a hold cancels a jog (flushes it)
                 self._motion.decelerate(self.clock.now(), self._accel)
@@ -378,17 +373,13 @@ class SimulatedStage(Stage):
             self._update()
 
     def resume(self) -> None:
-        with self._lock:
-            self.require_connected()
-            self._update()
+        with self._command():
             if self._motion.resume(self.clock.now(), self._accel):
                 self._update()
 
     def start_home(self) -> None:
         """Begin homing (seek the low switch, pull off, locate slowly, pull off) without waiting."""
-        with self._lock:
-            self.require_connected()
-            self._update()
+        with self._command():
             if not self.homing_enabled:
                 raise GrblError("error", 5, "home")
             state, _ = self._state()
@@ -443,9 +434,7 @@ class SimulatedStage(Stage):
             ]
 
     def write_setting(self, number: int, value: float) -> None:
-        with self._lock:
-            self.require_connected()
-            self._update()
+        with self._command():
             state, _ = self._state()
             if state not in ("Idle", "Alarm"):
                 raise GrblError("error", 8, f"${number}={value:g}")

@@ -1,0 +1,94 @@
+"""One Stage contract, two implementations: the simulated stage and GRBL (driver + emulator over a pty).
+
+Capture, GUI and CLI call only the Stage interface, so the same sequence of
+calls must mean the same thing whichever stage is underneath.
+"""
+from __future__ import annotations
+
+import pytest
+
+from lps_gui.errors import HardwareError
+from lps_gui.hardware.grbl.codes import GrblError
+from lps_gui.hardware.grbl.driver import GrblStage
+from lps_gui.hardware.grbl.emulator import GrblEmulator
+from lps_gui.hardware.sim_stage import SimulatedStage
+from lps_gui.hardware.stage import Stage, StageEvent
+
+TRAVEL = (0.0, 100.0)
+
+
+@pytest.fixture(params=["sim", "grbl-emulator"])
+def stage(request):
+    if request.param == "sim":
+        st = SimulatedStage(travel_mm=TRAVEL, start_mm=10.0)
+        st.connect()
+        yield st
+        st.disconnect()
+        return
+    with GrblEmulator(SimulatedStage(travel_mm=TRAVEL, start_mm=10.0), time_scale=50.0) as emu:
+        st = GrblStage(emu.path, timeout_s=1.0, poll_interval_s=0.01)
+        st.connect()
+        yield st
+        st.disconnect()
+
+
+def test_move_and_wait(stage: Stage):
+    stage.move_to(42.5, 3000.0)
+    st = stage.wait_idle(timeout_s=30.0)
+    assert st.idle and st.work_mm[0] == pytest.approx(42.5)
+    assert stage.position_mm() == pytest.approx(42.5)
+
+
+def test_queued_moves_end_at_the_last(stage: Stage):
+    for x in (20.0, 30.0, 25.0):
+        stage.move_to(x, 3000.0)
+    assert stage.wait_idle(timeout_s=30.0).work_mm[0] == pytest.approx(25.0)
+
+
+def test_jog_cancel_stops_between_start_and_target(stage: Stage):
+    stage.jog(50.0, 300.0)
+    stage.jog_cancel()
+    x = stage.wait_idle(timeout_s=30.0).work_mm[0]
+    assert 10.0 <= x < 60.0
+
+
+def test_hold_then_resume_reaches_the_target(stage: Stage):
+    stage.move_to(80.0, 300.0)
+    stage.feed_hold()
+    with pytest.raises(HardwareError, match="Hold"):
+        stage.wait_idle(timeout_s=0.3)
+    stage.resume()
+    assert stage.wait_idle(timeout_s=30.0).work_mm[0] == pytest.approx(80.0)
+
+
+def test_soft_limit_alarm_then_reset_and_unlock(stage: Stage):
+    events: list[StageEvent] = []
+    stage.events.subscribe(events.append)
+    with pytest.raises(GrblError, match="ALARM:2 Soft limit") as e:
+        stage.move_to(150.0, 600.0)
+    assert e.value.kind == "alarm" and e.value.code == 2
+    assert stage.status().state == "Alarm"
+    assert [ev.code for ev in events if ev.kind == "alarm"] == [2]
+    stage.soft_reset()
+    stage.unlock()
+    assert stage.status().state == "Idle"
+
+
+def test_jog_beyond_travel_is_error_15_without_alarm(stage: Stage):
+    with pytest.raises(GrblError, match="error:15 Travel exceeded") as e:
+        stage.jog(500.0, 600.0)
+    assert e.value.kind == "error" and stage.status().state == "Idle"
+
+
+def test_settings_have_names_units_and_write_back(stage: Stage):
+    settings = {s.number: s for s in stage.read_settings()}
+    assert settings[130].value == pytest.approx(100.0) and settings[130].unit == "millimeters"
+    stage.write_setting(110, 1500.0)
+    assert {s.number: s.value for s in stage.read_settings()}[110] == 1500.0
+    with pytest.raises(GrblError, match="error:3"):
+        stage.write_setting(99, 1.0)
+
+
+def test_home_goes_to_low_switch_plus_pull_off(stage: Stage):
+    stage.home()
+    assert stage.wait_idle(timeout_s=30.0).work_mm[0] == pytest.approx(TRAVEL[0] + 1.0)

@@ -232,7 +232,7 @@ class GrblStage(Stage):
             n = self._status_seq
             self.realtime(RT_STATUS)
             self.link.wait_for(lambda: self._status_seq > n or self._critical, self.timeout_s,
-                           f"no status report within {self.timeout_s:g} s; check the cable or reset the controller")
+                               f"no status report within {self.timeout_s:g} s; check the cable or reset the controller")
         return self._status if not self._critical else self.status()
 
     def home(self) -> None:
@@ -275,8 +275,8 @@ class GrblStage(Stage):
         """Poll ``?`` until Idle with nothing in flight; alarms and timeouts raise.
 
         GRBL may report Idle for a moment after acknowledging a move (before the
-        cycle starts), so Idle counts once motion was seen, the planner reports
-        empty, or two reports in a row agree.
+        cycle starts), so Idle counts when the planner reports empty (``Bf``, with
+        ``$10`` bit 1) or two reports in a row agree.
         """
         deadline = time.monotonic() + timeout_s
         idle_reports = 0

@@ -68,7 +68,7 @@ class GrblEmulator:
             self.stage.connect()
         self._running = True
         self._last_real = time.monotonic()
-        self.firmware._welcome()  # noqa: SLF001 - power-up prints what a reset prints
+        self.firmware.welcome()  # power-up prints what a reset prints
         self._flush_out()
         self._thread = threading.Thread(target=self._serve, name="grbl-emulator", daemon=True)
         self._thread.start()

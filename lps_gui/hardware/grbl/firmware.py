@@ -102,7 +102,8 @@ class GrblFirmware:
         self._check = False
         self._sleep = False
 
-    def _welcome(self) -> None:
+    def welcome(self) -> None:
+        """What GRBL prints at power-up and after every reset."""
         self._send(BANNER)
         if self.stage.alarm_code is not None:
             self._send("[MSG:'$H'|'$X' to unlock]")
@@ -148,8 +149,7 @@ class GrblFirmware:
         )
         return format_status(report, inches=bool(self.stage.settings[13]))
 
-    # ------------------------------------------------------------------ serving loop
-
+    # ------------------------------------------------------------------ serial ISR and real-time bytes
     def receive(self, b: int) -> None:
         """GRBL's serial ISR: real-time bytes act at once, the rest goes to the RX buffer."""
         if b == RT_RESET:
@@ -182,7 +182,7 @@ class GrblFirmware:
         if self._sleep and self.stage.alarm_code is None:
             self.stage.trigger_alarm(0)  # GRBL wakes from sleep into the alarm lock
         self._reset_state()
-        self._welcome()
+        self.welcome()
 
     def _check_mid_move_alarm(self) -> None:
         code = self.faults.alarm_mid_move

@@ -304,10 +304,12 @@ class GrblFirmware:
             self.stage.start_home()  # raises error:5 when $22=0
             self._pending = self._homing_done
             return
-        elif cmd == "SLP":
+        elif cmd == "SLP":  # the line's ok comes first; the sleep runs at the next real-time check
             self.stage.soft_reset()
             self._sleep = True
+            self._send("ok")
             self._send("[MSG:Sleeping]")
+            return
         elif cmd == "I":
             self._send(f"[VER:{VERSION}.{BUILD}:{self._build_user}]")
             self._send(f"[OPT:{OPTIONS},{PLANNER_BLOCKS},{RX_BUFFER_BYTES}]")

@@ -34,7 +34,7 @@ from lps_gui.core.clock import Clock, RealClock
 from lps_gui.core.plan import PlannedStop
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import HardwareError, InputError
-from lps_gui.hardware.stage import Stage
+from lps_gui.hardware.stage import EventSource, Stage
 from lps_gui.io.atomic import check_writable
 from lps_gui.io.session import IMAGES_DIR, CaptureRecord, Session
 
@@ -119,7 +119,7 @@ class CaptureEngine:
         self._current: PlannedStop | None = None
         self._message = ""
         self._eta_s: float | None = None
-        self._listeners: list[CaptureListener] = []
+        self._events = EventSource()
         self._last_move: tuple[int, str, float] | None = None  # (run, direction, target) last approached
         self._reported_mm: float | None = None
         self._active = False
@@ -169,16 +169,8 @@ class CaptureEngine:
             )
 
     def subscribe(self, listener: CaptureListener) -> Callable[[], None]:
-        """Call ``listener(event)`` on the engine's thread for every :class:`CaptureEvent`."""
-        with self._lock:
-            self._listeners.append(listener)
-
-        def unsubscribe() -> None:
-            with self._lock:
-                if listener in self._listeners:
-                    self._listeners.remove(listener)
-
-        return unsubscribe
+        """Call ``listener(event)`` on the engine's thread for every :class:`CaptureEvent`; returns an unsubscribe."""
+        return self._events.subscribe(listener)  # type: ignore[arg-type]  # a fan-out of any event type
 
     # ------------------------------------------------------------------ run
     def run(self, progress: ProgressFn = no_progress, cancel: CancelToken | None = None) -> CaptureSummary:
@@ -351,15 +343,7 @@ class CaptureEngine:
         self._emit(CaptureEvent(state, message))
 
     def _emit(self, event: CaptureEvent) -> None:
-        with self._lock:
-            listeners = list(self._listeners)
-        for fn in listeners:
-            try:
-                fn(event)
-            except Exception:  # a listener's bug must not stop the capture
-                import logging
-
-                logging.getLogger(__name__).exception("capture event listener failed")
+        self._events.emit(event)  # type: ignore[arg-type]  # a failing listener is logged, never stops the capture
 
 
 def _hook(device: object, key: int) -> None:

@@ -120,3 +120,27 @@ def test_quick_demo_end_to_end_through_images(tmp_path):
     assert res.report_pdf.exists() and (res.out_dir / "intrinsics.json").exists()
     te = demo.truth_errors(res.results, Session.open(res.session_dir).truth)
     assert te["rms_um"] < 4 * te["median_sigma_um"] + 1.0
+
+
+@pytest.mark.gui
+def test_lps_demo_prints_paths_summary_and_what_it_skipped(tmp_path, monkeypatch, capsys):
+    from lps_gui.cli import main
+
+    _hide(monkeypatch, "lps_gui.capture.sim_session", "lps_gui.pipeline.simulate_images", "lps_gui.pipeline.intrinsics")
+    assert main(["demo", "--quick", "--out", str(tmp_path / "d")]) == 0
+    out = capsys.readouterr().out
+    assert f"report:  {tmp_path / 'd' / 'session' / 'report.pdf'}" in out
+    assert "csv:     " in out and "error against truth: position RMS" in out
+    assert "not the full chain: intrinsics: skipped" in out
+    summary = [line for line in out.splitlines() if line.startswith("  ")]
+    assert len(summary) == 5
+
+
+def test_lps_demo_refuses_a_foreign_folder(tmp_path, capsys):
+    from lps_gui.cli import main
+
+    (tmp_path / "notes.txt").write_text("mine")
+    assert main(["demo", "--quick", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "not made by `lps demo`" in err and len(err.splitlines()) == 1
+    assert (tmp_path / "notes.txt").read_text() == "mine"

@@ -30,6 +30,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    import signal
     import sys
     import threading
 
@@ -60,14 +61,20 @@ def run(args: argparse.Namespace) -> int:
     print(path, flush=True)
     print(f"GRBL 1.1h emulator on {path} (115200 baud, any rate works on a pty); Ctrl-C to stop", file=sys.stderr, flush=True)
     stop = threading.Event()
+    try:  # SIGTERM (a service manager, `kill`) stops as cleanly as Ctrl-C
+        signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    except ValueError:  # not the main thread (tests calling run() directly)
+        pass
     try:
         while not stop.wait(0.2):
             if emu.dropped:
                 print("emulator: connection dropped (fault injection); stopping", file=sys.stderr)
                 break
-            if not emu._running:  # noqa: SLF001 - the serving thread died: its error is in the log
+            if not emu.running:  # the serving thread died: its error is in the log
                 print("emulator: stopped unexpectedly (see the log)", file=sys.stderr)
                 return 1
+        else:
+            print("emulator: stopped", file=sys.stderr)
     except KeyboardInterrupt:
         print("emulator: stopped", file=sys.stderr)
     finally:

@@ -55,6 +55,16 @@ def test_emulate_grbl_fault_switch_drops_the_connection():
     assert proc.returncode == 0 and "connection dropped" in err
 
 
+def test_emulate_grbl_stops_cleanly_on_sigterm():
+    proc = _serve()
+    try:
+        assert proc.stdout.readline().startswith("/dev/")
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        out, err = proc.communicate(timeout=5)
+    assert proc.returncode == 0 and "emulator: stopped" in err
+
+
 def test_emulate_grbl_rejects_bad_travel():
     res = subprocess.run([*LPS, "emulate-grbl", "--travel", "5", "1"],
                          capture_output=True, text=True, timeout=30)

@@ -183,7 +183,7 @@ def test_open_stage_specs():
         assert emulated.wait_idle(timeout_s=2.0).work_mm[0] == pytest.approx(5.0)
     finally:
         emulated.disconnect()
-    assert not emulated.emulator._running
+    assert not emulated.emulator.running
     from lps_gui.errors import InputError
 
     with pytest.raises(InputError, match="sim \\| emulator \\| grbl:PORT"):

@@ -54,6 +54,11 @@ class GrblEmulator:
         return self.firmware.rx_overflow_bytes
 
     @property
+    def running(self) -> bool:
+        """The serving thread is up (False after stop, a drop, or a crash logged as an error)."""
+        return self._running
+
+    @property
     def lines_received(self) -> int:
         return self.firmware.lines_received
 

@@ -121,6 +121,14 @@ def test_garbage_and_stray_lines_are_skipped():
         assert stage.garbage_lines == 1
 
 
+def test_endless_noise_without_line_ends_is_dropped_not_hoarded():
+    fake = ScriptedSerial([(b"\x18", b"\xaa" * 2000)])  # e.g. a wrong baud rate
+    stage = GrblStage(fake, timeout_s=0.2)
+    with pytest.raises(HardwareError, match="at 115200 baud"):
+        stage.connect()
+    assert stage.garbage_lines >= 1
+
+
 def test_silent_controller_times_out_with_a_clear_message():
     with expected_protocol([(b"G90 G21 G1 X1 F600\n", b"")], timeout_s=0.2) as (stage, _):
         with pytest.raises(HardwareError, match=r"no reply to 'G90 G21 G1 X1 F600' within 0.2 s"):

@@ -130,6 +130,10 @@ class GrblLink:
                     self.vanished(exc)
                 return
             buf += data
+            if len(buf) > 4 * MAX_LINE_BYTES and b"\n" not in buf and b"\r" not in buf:
+                self.garbage_lines += 1  # no line end for a long while: noise or a wrong baud rate
+                log.warning("GRBL: %d bytes without a line end dropped", len(buf))
+                buf.clear()
             while True:
                 ends = [k for k in (buf.find(b"\n"), buf.find(b"\r")) if k >= 0]
                 if not ends:

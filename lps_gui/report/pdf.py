@@ -39,14 +39,13 @@ class ReportInfo:
 
 def load_results(session_dir: Path) -> dict[str, Any]:
     """results.json of a session, or a one-line error telling the user to estimate first."""
-    path = Path(session_dir) / RESULTS_FILE
+    from lps_gui.io.results_file import read_results
+
     if not Path(session_dir).is_dir():
         raise InputError(f"{session_dir}: session folder not found; check the path")
-    if not path.exists():
-        raise InputError(f"{path}: no results yet; run `lps estimate {session_dir}` first")
-    results = read_json(path, "results file")
-    if not isinstance(results, dict) or "positions" not in results:
-        raise InputError(f"{path}: not an lps results file; run `lps estimate {session_dir}` again")
+    results = read_results(Path(session_dir) / RESULTS_FILE)
+    if not isinstance(results.get("positions"), list):
+        raise InputError(f"{Path(session_dir) / RESULTS_FILE}: has no per-position table; re-run `lps estimate`")
     return results
 
 

@@ -101,7 +101,10 @@ def test_missing_results_is_one_line_error(tmp_path):
     with pytest.raises(InputError, match="run `lps estimate"):
         write_report(folder)
     (folder / "results.json").write_text("{}")
-    with pytest.raises(InputError, match="not an lps results file"):
+    with pytest.raises(InputError, match="not an lps-results/1 file"):
+        write_report(folder)
+    (folder / "results.json").write_text('{"format": "lps-results/1"}')
+    with pytest.raises(InputError, match="no per-position table"):
         write_report(folder)
 
 

@@ -144,3 +144,21 @@ def test_lps_demo_refuses_a_foreign_folder(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert "not made by `lps demo`" in err and len(err.splitlines()) == 1
     assert (tmp_path / "notes.txt").read_text() == "mine"
+
+
+@pytest.mark.slow
+def test_full_demo_on_the_paper_rig(tmp_path):
+    """`make demo`'s run: every step through images; the stage's lead-screw pitch and the truth are recovered."""
+    import time
+
+    t0 = time.monotonic()
+    res = demo.run_demo(tmp_path / "out", quick=False)
+    elapsed = time.monotonic() - t0
+    assert [s.status for s in res.steps] == ["done"] * 5, res.steps
+    single = res.results["figures"]["single_run"]
+    spec = demo.demo_spec(quick=False)
+    assert abs(single["periodic_period_mm"] - spec.rig.errors.pitch_mm) < 0.2
+    assert abs(single["periodic_amplitude_um"] - spec.rig.errors.periodic_um) < 1.5
+    te = demo.truth_errors(res.results, Session.open(res.session_dir).truth)
+    assert te["rms_um"] < 3.0
+    assert elapsed < 300, f"demo took {elapsed:.0f} s (budget 5 minutes on 2 cores)"

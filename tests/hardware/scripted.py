@@ -10,6 +10,8 @@ import threading
 from contextlib import contextmanager
 from typing import Iterator
 
+import serial
+
 from lps_gui.hardware.grbl.driver import GrblStage
 
 BANNER = b"\r\nGrbl 1.1h ['$' for help]\r\n"
@@ -32,6 +34,7 @@ class ScriptedSerial:
         self.is_open = True
         self._rx = bytearray()
         self._cond = threading.Condition()
+        self.broken = False
 
     def open(self) -> None:
         self.is_open = True
@@ -54,6 +57,8 @@ class ScriptedSerial:
             self._cond.notify_all()
 
     def write(self, data: bytes) -> int:
+        if self.broken:
+            raise serial.SerialException("write failed: [Errno 5] Input/output error")
         with self._cond:
             self.written.append(data)
             if not self.pairs:
@@ -68,7 +73,13 @@ class ScriptedSerial:
             self._cond.notify_all()
         return len(data)
 
+    def fail(self) -> None:
+        """Make the port vanish: reads and writes raise like an unplugged USB adapter."""
+        self.broken = True
+
     def read(self, n: int = 1) -> bytes:
+        if self.broken:
+            raise serial.SerialException("device reports readiness to read but returned no data")
         with self._cond:
             if not self._rx:
                 self._cond.wait(0.02)

@@ -165,6 +165,26 @@ def test_character_counting_keeps_unanswered_bytes_within_rx_buffer():
     stage.link.close()
 
 
+def test_vanished_port_fails_fast_and_reconnect_starts_over():
+    fake = ScriptedSerial(CONNECT)
+    stage = GrblStage(fake, timeout_s=1.0)
+    events = []
+    stage.events.subscribe(events.append)
+    stage.connect()
+    fake.fail()
+    t0 = time.monotonic()
+    with pytest.raises(HardwareError, match="port vanished.*reconnect the stage and resume"):
+        stage.status()
+    assert time.monotonic() - t0 < 0.5 and not stage.connected
+    assert any(e.kind == "disconnected" for e in events)
+    fake.broken = False
+    fake.pairs = list(CONNECT)
+    stage.connect()
+    assert stage.connected and not fake.pairs
+    stage.link.close()
+    assert not fake.errors
+
+
 def test_unopenable_port_is_a_clear_error():
     with pytest.raises(HardwareError, match="cannot open port '/dev/does-not-exist'"):
         GrblStage("/dev/does-not-exist").connect()

@@ -319,9 +319,12 @@ class SimulatedStage(Stage):
         return self.travel_mm[0] <= target_mm <= self.travel_mm[1]
 
     def _wait_planner(self) -> None:
+        """Block (in clock time) until a planner block frees, like a GRBL line waiting for space."""
         while self.planner_free() <= 0:
             nxt = self.next_event_s()
-            self.clock.sleep(max((nxt or 0.0) - self.clock.now(), 1e-3))
+            if nxt is None:  # nothing moves that could free a block (a hold with a full planner)
+                raise HardwareError("simulated stage: planner full while held; resume (~) or reset first")
+            self.clock.sleep(max(nxt - self.clock.now(), 1e-6))
 
     def move_to(self, position_mm: float, feed_mm_min: float, axis: str | None = None) -> None:
         with self._command():

@@ -211,3 +211,17 @@ def test_settings_read_write_rules():
         st.write_setting(20, 1)
     with pytest.raises(GrblError, match="error:5"):
         st.home()
+
+
+def test_full_planner_waits_in_clock_time_and_never_spins_in_a_hold():
+    clock = SimClock()
+    st = make(clock=clock)
+    for i in range(16):  # one more than the 15 blocks: the 16th waits for the first to finish
+        st.move_to(10.0 + i, 3000.0)
+    assert clock.now() > 0.0 and st.status().buffer[0] == 0
+    st.feed_hold()
+    clock.advance(1.0)
+    with pytest.raises(HardwareError, match="planner full while held"):
+        st.move_to(50.0, 3000.0)
+    st.resume()
+    assert st.wait_idle().work_mm[0] == pytest.approx(25.0)

@@ -121,6 +121,8 @@ def run_demo(
     def step(name: str, status: str, message: str, t0: float) -> None:
         res.steps.append(DemoStep(name, status, message, time.monotonic() - t0))
         say(f"{name}: {message}" + (f" ({time.monotonic() - t0:.1f} s)" if status != "skipped" else ""))
+        if cancel is not None:
+            cancel.check("demo")
 
     t0 = time.monotonic()
     intrinsics, message, status = calibrate_step(out, spec, quick, bar("intrinsics"), cancel, seed)
@@ -161,7 +163,7 @@ def run_demo(
     res.report_pdf = write_report(session.folder, results, progress=bar("report"))
     res.csvs = [session.folder / n for n in ("positions.csv", "summary.csv") if (session.folder / n).exists()]
     step("report", "done", f"{res.report_pdf}", t0)
-    res.summary = summary_lines(results, session.truth, intrinsics, spec)
+    res.summary = summary_lines(results, session.truth, spec)
     return res
 
 
@@ -277,8 +279,7 @@ def truth_errors(results: dict[str, Any], truth: dict[str, Any] | None) -> dict[
             "median_sigma_um": float(np.nanmedian(cols["sigma_um"][ok]))}
 
 
-def summary_lines(results: dict[str, Any], truth: dict[str, Any] | None, intrinsics: CameraIntrinsics,
-                  spec: SimulationSpec) -> list[str]:
+def summary_lines(results: dict[str, Any], truth: dict[str, Any] | None, spec: SimulationSpec) -> list[str]:
     """Five lines a newcomer reads first: what was measured, the stage figures, the verdict, the truth check."""
     from lps_gui.report.summary import extremes_rows, fmt, spec_checks
 

@@ -51,7 +51,7 @@ def test_truth_errors_measure_the_noise_put_in():
 def test_summary_is_five_lines_with_the_truth_check():
     results, truth = make_results(runs=2)
     spec = demo.demo_spec(quick=True)
-    lines = demo.summary_lines(results, truth, spec.rig.intrinsics, spec)
+    lines = demo.summary_lines(results, truth, spec)
     assert len(lines) == 5
     assert lines[-1].startswith("error against truth: position RMS")
     assert "PASS" in lines[3] or "FAIL" in lines[3]
@@ -82,6 +82,18 @@ def test_capture_falls_back_and_says_so(tmp_path, monkeypatch):
                                                              lambda *a: None, None)
     assert not has_images and status == "fallback" and "point-level" in message
     assert session.corners_path.exists()
+
+
+def test_cancel_stops_the_demo_after_the_running_step(tmp_path, monkeypatch):
+    from lps_gui.core.progress import CancelToken
+    from lps_gui.errors import Cancelled
+
+    _hide(monkeypatch, "lps_gui.pipeline.simulate_images", "lps_gui.pipeline.intrinsics")
+    token = CancelToken()
+    token.cancel()
+    with pytest.raises(Cancelled):
+        demo.run_demo(tmp_path / "out", quick=True, cancel=token)
+    assert (tmp_path / "out" / demo.MARKER).exists()
 
 
 def test_available_tells_absent_pieces_from_broken_ones():

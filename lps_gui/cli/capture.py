@@ -109,6 +109,8 @@ def _start(args: argparse.Namespace):
         stage = _bind_stage(stage_spec, stage, args.time_scale)
         session.meta["stage"] = {**stage.describe(), "spec": stage_spec}
         session.meta["camera"] = {**camera.properties(), "spec": "sim"}
+        if args.intrinsics:
+            session.meta["intrinsics_source"] = str(args.intrinsics)
         session.save_meta()
         return session, stage, camera, simulated_engine(session, stage, camera, args.encode)
     if not args.board:
@@ -122,6 +124,7 @@ def _start(args: argparse.Namespace):
             args.out, board, plan, intr,
             camera={**camera.properties(), "spec": camera_spec},
             stage={**stage.describe(), "spec": stage_spec},
+            extra={"intrinsics_source": str(args.intrinsics)} if args.intrinsics else None,
         )
     except BaseException:
         _close(stage, camera)

@@ -152,6 +152,7 @@ def test_check_mode_and_sleep(emu):
     assert port.ask(b"$C\n") == ["[MSG:Enabled]", "ok"]
     assert port.ask(b"G0 X50\n") == ["ok"]
     assert port.ask(b"?", until="<")[-1].startswith("<Check|MPos:-90.000")
+    assert port.ask(b"$J=G91 X1 F100\n") == ["error:8"]  # jogging needs Idle or Jog, not Check
     assert port.ask(b"$C\n", until="Grbl") == ["[MSG:Disabled]", "ok", "", "Grbl 1.1h ['$' for help]"]
     assert port.ask(b"$SLP\n") == ["ok"] and port.lines("[MSG") == ["[MSG:Sleeping]"]
     assert port.ask(b"?", until="<")[-1].startswith("<Sleep|")

@@ -114,11 +114,8 @@ class GrblFirmware:
 
     def _status_line(self) -> str:
         st = self.stage.status()
-        state, sub = st.state, st.substate
-        if self._sleep:
-            state, sub = "Sleep", None
-        elif self._check and state == "Idle":
-            state = "Check"
+        state = self._state()
+        sub = st.substate if state == st.state else None
         wco = self._wco()
         mask = int(self.stage.settings[10])
         work = st.work_mm
@@ -235,13 +232,20 @@ class GrblFirmware:
                 self._send(f"error:{e.code}")
 
     # ------------------------------------------------------------------ commands
-    def _execute(self, line: str) -> None:
+    def _state(self) -> str:
+        """GRBL's state: the stage's motion state, overlaid by check mode and sleep."""
         state = self.stage.status().state
+        if self._sleep:
+            return "Sleep"
+        return "Check" if self._check and state == "Idle" else state
+
+    def _execute(self, line: str) -> None:
+        state = self._state()
         if not line:
             self._send("ok")
         elif line[0] == "$":
             self._system(line, state)
-        elif state in ("Alarm", "Jog") or self._sleep:
+        elif state in ("Alarm", "Jog", "Sleep"):
             raise CodeError(9)
         else:
             self._gcode(parse_block(line))

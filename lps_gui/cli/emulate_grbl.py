@@ -56,16 +56,16 @@ def run(args: argparse.Namespace) -> int:
         drop_after_lines=args.drop_after_lines, alarm_mid_move=args.alarm_mid_move, error_every=args.error_every,
         error_code=args.error_code, reply_delay_s=args.reply_delay, garbage_every=args.garbage_every,
     )
-    emu = GrblEmulator(stage, faults=faults, time_scale=args.time_scale)
-    path = emu.start()
-    print(path, flush=True)
-    print(f"GRBL 1.1h emulator on {path} (115200 baud, any rate works on a pty); Ctrl-C to stop", file=sys.stderr, flush=True)
     stop = threading.Event()
-    try:  # SIGTERM (a service manager, `kill`) stops as cleanly as Ctrl-C
+    try:  # SIGTERM (a service manager, `kill`) stops as cleanly as Ctrl-C; set before the path is announced
         signal.signal(signal.SIGTERM, lambda *_: stop.set())
     except ValueError:  # not the main thread (tests calling run() directly)
         pass
+    emu = GrblEmulator(stage, faults=faults, time_scale=args.time_scale)
     try:
+        path = emu.start()
+        print(path, flush=True)
+        print(f"GRBL 1.1h emulator on {path} (115200 baud, any rate works on a pty); Ctrl-C to stop", file=sys.stderr, flush=True)
         while not stop.wait(0.2):
             if emu.dropped:
                 print("emulator: connection dropped (fault injection); stopping", file=sys.stderr)

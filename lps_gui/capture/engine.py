@@ -31,7 +31,7 @@ from lps_gui.capture import events as ev
 from lps_gui.capture.events import CaptureEvent, CaptureListener, CaptureProgress, CaptureSummary
 from lps_gui.capture.truth import append_truth, finalize_truth, prune_truth
 from lps_gui.core.clock import Clock, RealClock
-from lps_gui.core.plan import PlannedStop
+from lps_gui.core.plan import Plan, PlannedStop
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import HardwareError, InputError
 from lps_gui.hardware.stage import EventSource, Stage
@@ -59,6 +59,24 @@ def encode_image(image: np.ndarray, ext: str) -> bytes:
 def image_name(index: int, ext: str) -> str:
     """File name of capture ``index`` inside images/ (sorts in capture order)."""
     return f"{index:06d}{ext}"
+
+
+def check_plan_in_travel(plan: Plan, stage: Stage) -> None:
+    """InputError before any move when a target or overshoot lies outside the stage's known travel.
+
+    Only stages that publish ``travel_mm`` (the simulated one) can be checked
+    here; on GRBL, soft limits ($20) raise an alarm at the offending move.
+    """
+    travel = getattr(stage, "travel_mm", None)
+    if travel is None:
+        return
+    t = plan.targets()
+    lo, hi = float(t[0]) - plan.overshoot_mm, float(t[-1]) + plan.overshoot_mm
+    if lo < travel[0] or hi > travel[1]:
+        raise InputError(
+            f"plan: moves from {lo:g} to {hi:g} mm (targets and overshoot) but the stage travels "
+            f"{travel[0]:g}..{travel[1]:g} mm; shorten the plan or the overshoot"
+        )
 
 
 def bytes_per_frame(camera: Camera) -> int:
@@ -195,6 +213,7 @@ class CaptureEngine:
             self._set(done=self._total - len(remaining))
             if remaining:
                 check_writable(self.session.folder / IMAGES_DIR, len(remaining) * bytes_per_frame(self.camera))
+                check_plan_in_travel(self._plan, self.stage)
             if self.truth_source is not None:
                 prune_truth(self.session)
             self._emit(CaptureEvent("started", f"{len(remaining)} of {self._total} frames to capture"))

@@ -82,7 +82,7 @@ def intrinsics_plan(n_views: int = 15) -> list[PoseGoal]:
     return goals
 
 
-def goal_pose(goal: PoseGoal, board: Board, intrinsics: CameraIntrinsics, fill: float = 0.8) -> tuple[np.ndarray, np.ndarray]:
+def goal_pose(goal: PoseGoal, board: Board, intrinsics: CameraIntrinsics, fill: float = 0.7) -> tuple[np.ndarray, np.ndarray]:
     """A board pose (R_cam_board (3, 3), t_cam_board (3,) mm) that satisfies ``goal``.
 
     The board centre sits on the ray through the region's centre, tilted as

@@ -7,6 +7,7 @@ Examples::
     lps capture --stage grbl:/dev/ttyUSB0 --camera 0 --plan plan.json \\
                 --board board.json --intrinsics intrinsics.json --out run3
     lps capture --resume run3 [--stage grbl:/dev/ttyUSB0 --camera 0]
+    lps capture --intrinsics-views 15 --camera 0 --board board.json --out intr   # hand-held board, guided
 """
 from __future__ import annotations
 
@@ -32,6 +33,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--settle", type=float, dest="settle_s", help="wait after each move, s")
     g.add_argument("--frames", type=int, dest="frames_per_stop", help="frames per stop")
     g.add_argument("--feed", type=float, dest="feed_mm_min", help="feed of the moves, mm/min")
+    g.add_argument("--intrinsics-views", type=int, metavar="N", help="guided intrinsics mode: N varied views of a hand-held board into --out (no stage)")
     s = p.add_argument_group("set-up")
     s.add_argument("--board", metavar="FILE", help="board.json (required with a real camera)")
     s.add_argument("--intrinsics", metavar="FILE", help="intrinsics (JSON or OpenCV YAML), embedded into session.json")
@@ -49,6 +51,10 @@ def run(args: argparse.Namespace) -> int:
     from lps_gui.cli.progress_bar import ProgressBar
     from lps_gui.errors import InputError
 
+    if args.intrinsics_views:
+        if not args.out:
+            raise InputError("--intrinsics-views: give --out FOLDER for the images")
+        return _intrinsics_mode(args)
     if bool(args.out) == bool(args.resume):
         raise InputError("give either --out SESSION (new capture) or --resume SESSION")
     session, stage, camera, engine = _resume(args) if args.resume else _start(args)
@@ -66,6 +72,64 @@ def run(args: argparse.Namespace) -> int:
         file=sys.stderr,
     )
     return 3
+
+
+def _intrinsics_mode(args: argparse.Namespace) -> int:
+    """Guide the operator through varied poses of a hand-held board; Enter takes, s skips, f forces, q quits."""
+    import sys
+    from pathlib import Path
+
+    from lps_gui.capture.intrinsics_plan import IntrinsicsCapture, intrinsics_plan
+    from lps_gui.errors import InputError
+    from lps_gui.io.board_file import read_board, write_board
+
+    goals = intrinsics_plan(args.intrinsics_views)
+    simulated = (args.camera or "sim") == "sim"
+    if simulated:
+        from lps_gui.capture.handheld_sim import HandHeldBoardCamera
+        from lps_gui.core.simulate import preset
+
+        rig = preset(args.preset).rig
+        board = rig.board
+        holder: dict = {}
+        camera = HandHeldBoardCamera(board, rig.intrinsics, lambda: holder["cap"].current(), noise_grey=args.noise_grey, seed=args.seed)
+        camera.open()
+    else:
+        if not args.board:
+            raise InputError("--board FILE is required with a real camera (see SPEC 7 for board.json)")
+        from lps_gui.camera import open_camera
+
+        board = read_board(args.board)
+        camera = open_camera(args.camera)
+    try:
+        cap = IntrinsicsCapture(camera, args.out, board, goals)
+        if simulated:
+            holder["cap"] = cap
+        write_board(Path(args.out) / "board.json", board)
+        while (goal := cap.current()) is not None:
+            print(f"[{goals.index(goal) + 1}/{len(goals)}] {goal.instruction}", file=sys.stderr)
+            force = False
+            if not simulated:
+                print("  Enter: take, s: skip, f: take even if off target, q: quit", file=sys.stderr)
+                answer = sys.stdin.readline()
+                if answer == "" or answer.strip().lower() == "q":
+                    break
+                if answer.strip().lower() == "s":
+                    cap.skip()
+                    continue
+                force = answer.strip().lower() == "f"
+            result = cap.take(force=force)
+            print(f"  {result.message}", file=sys.stderr)
+            if simulated and cap.current() == goal:  # the simulated hand missed: move on
+                cap.skip()
+    finally:
+        camera.close()
+    taken = sum(1 for d in cap.taken.values() if d.get("file"))
+    if not cap.done:
+        print(f"lps capture: stopped with {taken} views in {args.out}; run the same command again to continue", file=sys.stderr)
+        return 3
+    print(f"{args.out}: {taken} views; next: lps intrinsics {args.out} --board {Path(args.out) / 'board.json'}")
+    return 0
 
 
 def _describe(session) -> str:

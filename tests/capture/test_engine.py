@@ -111,6 +111,14 @@ def test_full_disk_fails_before_the_first_move(tmp_path, monkeypatch):
     assert stage.clock.now() == 0.0 and session.records() == []
 
 
+def test_plan_outside_the_travel_fails_before_the_first_move(tmp_path):
+    session, stage, camera, engine = start_capture(tmp_path / "s", plan=Plan(start_mm=0.0, stop_mm=8.0, step_mm=2.0))
+    stage.travel_mm = (0.0, 100.0)  # the first overshoot (-1 mm) is beyond the low limit
+    with pytest.raises(InputError, match="stage travels 0..100 mm"):
+        engine.run()
+    assert stage.clock.now() == 0.0 and session.records() == []
+
+
 def test_disk_failure_mid_run_pauses_and_keeps_everything(tmp_path):
     plan = Plan(start_mm=0.0, stop_mm=8.0, step_mm=2.0, settle_s=0.0)
     session, stage, camera, engine = start_capture(tmp_path / "s", plan=plan)

@@ -142,3 +142,31 @@ def test_sigkill_of_lps_capture_then_resume_equals_uninterrupted(tmp_path):
     for r in session.records():
         assert sha256_file(session.folder / r.file) == r.sha256
     assert session.truth["axis_mm"] == Session.open(ref).truth["axis_mm"]
+
+
+def test_guided_intrinsics_mode_on_the_simulated_hand_held_board(tmp_path, capsys):
+    out = tmp_path / "intr"
+    assert lps_main(["capture", "--intrinsics-views", "6", "--out", str(out)]) == 0
+    lines = [json.loads(line) for line in (out / "intrinsics_captures.jsonl").read_text().splitlines()]
+    assert len(lines) == 6 and all(d["ok"] for d in lines)
+    assert all(sha256_file(out / d["file"]) == d["sha256"] for d in lines)
+    assert json.loads((out / "board.json").read_text())["inner_corners"] == [9, 6]
+    assert f"lps intrinsics {out}" in capsys.readouterr().out
+
+
+def test_guided_intrinsics_mode_with_a_real_camera_takes_skips_and_quits(tmp_path, capsys, monkeypatch):
+    import io
+
+    sim = tmp_path / "sim"
+    assert lps_main(["capture", "--intrinsics-views", "6", "--out", str(sim)]) == 0
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    for p in sorted(sim.glob("intr_*.png")):
+        (frames / p.name).write_bytes(p.read_bytes())
+    out = tmp_path / "real"
+    monkeypatch.setattr(sys, "stdin", io.StringIO("\n\ns\nq\n"))
+    args = ["capture", "--intrinsics-views", "6", "--camera", str(frames), "--board", str(sim / "board.json"), "--out", str(out)]
+    assert lps_main(args) == 3
+    lines = [json.loads(line) for line in (out / "intrinsics_captures.jsonl").read_text().splitlines()]
+    assert [bool(d["file"]) for d in lines] == [True, True, False]
+    assert "run the same command again" in capsys.readouterr().err

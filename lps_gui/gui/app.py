@@ -28,7 +28,7 @@ def make_app(argv: list[str] | None = None):  # -> QApplication
 
     from lps_gui.gui.main_window import APPLICATION, ORGANIZATION
 
-    pg.setConfigOptions(imageAxisOrder="row-major", antialias=True)
+    pg.setConfigOptions(imageAxisOrder="row-major", antialias=False)
     app = QApplication.instance() or QApplication(argv or [sys.argv[0]])
     app.setOrganizationName(ORGANIZATION)
     app.setApplicationName(APPLICATION)
@@ -45,6 +45,22 @@ def make_settings(path: Path | None):  # -> QSettings
     return QSettings(ORGANIZATION, APPLICATION)
 
 
+def settle(widget, timeout_s: float = 30.0) -> None:
+    """Process events until deferred drawing (results figures) is done and the layout is final."""
+    import time
+
+    from PySide6.QtWidgets import QApplication
+
+    end = time.monotonic() + timeout_s
+    results = getattr(getattr(widget, "window", lambda: None)(), "results_panel", None)
+    while time.monotonic() < end:
+        QApplication.processEvents()
+        if results is None or not results.drawing:
+            break
+    for _ in range(5):
+        QApplication.processEvents()
+
+
 def render_to_png(window, path: Path, size: tuple[int, int] | None = None) -> Path:
     """Lay out ``window`` at ``size``, let it paint, and save what it shows."""
     from PySide6.QtWidgets import QApplication
@@ -52,8 +68,7 @@ def render_to_png(window, path: Path, size: tuple[int, int] | None = None) -> Pa
     if size:
         window.resize(*size)
     window.show()
-    for _ in range(5):
-        QApplication.processEvents()
+    settle(window)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     if not window.grab().save(str(path)):

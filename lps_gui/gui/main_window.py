@@ -27,7 +27,7 @@ from lps_gui.gui.estimation_panel import EstimationPanel
 from lps_gui.gui.intrinsics_panel import IntrinsicsPanel
 from lps_gui.gui.log_panel import LogPanel
 from lps_gui.gui.results_panel import ResultsPanel
-from lps_gui.gui.services import lookup
+from lps_gui.gui.services import lookup, preload_backends
 from lps_gui.gui.stage_controller import StageController
 from lps_gui.gui.stage_panel import StagePanel
 from lps_gui.gui.workers import Job, one_line
@@ -100,6 +100,9 @@ class MainWindow(QMainWindow):
         self._build_menus()
         self._wire()
         self.restore_settings()
+        missing = preload_backends()
+        if missing:
+            log.info("not available yet in this build: %s", ", ".join(missing))
         log.info("lps-gui %s ready", __version__)
 
     # ------------------------------------------------------------------ layout

@@ -6,6 +6,7 @@ screen and the report cannot disagree; this module only maps styles.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 import pyqtgraph as pg
@@ -69,20 +70,36 @@ def draw_series(plot: pg.PlotItem, s: Series, drawn: DrawnFigure) -> None:
         drawn.outliers.append(cross)
 
 
+def figure_steps(plot: pg.PlotItem, fig: FigureSpec) -> tuple[DrawnFigure, list[Callable[[], None]]]:
+    """Drawing ``fig`` into ``plot`` as small steps (set-up, one per series, finish).
+
+    Each step takes a few milliseconds, so a caller can run them in separate
+    event-loop turns and the window never freezes while results come up.
+    """
+    drawn = DrawnFigure(fig)
+
+    def setup() -> None:
+        plot.disableAutoRange()  # no range update per added item
+        if plot.legend is not None:
+            plot.legend.clear()  # first: removing items one by one would resize the legend each time
+        plot.clear()
+        if plot.legend is None:
+            plot.addLegend(offset=(-10, 10), labelTextSize="8pt")
+        plot.setTitle(fig.title)
+        plot.setLabel("bottom", fig.x_label)
+        plot.setLabel("left", fig.y_label)
+        plot.showGrid(x=True, y=True, alpha=0.25)
+        plot.setLogMode(x=fig.x_log, y=False)
+
+    steps: list[Callable[[], None]] = [setup]
+    steps += [lambda s=s: draw_series(plot, s, drawn) for s in fig.series]
+    steps.append(plot.enableAutoRange)
+    return drawn, steps
+
+
 def draw_figure(plot: pg.PlotItem, fig: FigureSpec) -> DrawnFigure:
     """Replace ``plot``'s contents by ``fig``: title, axis labels with units, legend, series."""
-    plot.clear()
-    if plot.legend is not None:
-        plot.legend.clear()
-    else:
-        plot.addLegend(offset=(-10, 10), labelTextSize="8pt")
-    plot.setTitle(fig.title)
-    plot.setLabel("bottom", fig.x_label)
-    plot.setLabel("left", fig.y_label)
-    plot.showGrid(x=True, y=True, alpha=0.25)
-    plot.setLogMode(x=fig.x_log, y=False)
-    drawn = DrawnFigure(fig)
-    for s in fig.series:
-        draw_series(plot, s, drawn)
-    plot.enableAutoRange()
+    drawn, steps = figure_steps(plot, fig)
+    for step in steps:
+        step()
     return drawn

@@ -8,17 +8,18 @@ from __future__ import annotations
 
 import logging
 import shutil
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pyqtgraph as pg
-from PySide6.QtCore import Qt, Signal
+from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtWidgets import (
     QHBoxLayout, QLabel, QPushButton, QSplitter, QTabWidget, QVBoxLayout, QWidget,
 )
 
-from lps_gui.gui.plot_adapter import DrawnFigure, draw_figure
+from lps_gui.gui.plot_adapter import DrawnFigure, figure_steps
 from lps_gui.gui.services import lookup
 from lps_gui.gui.view_detail import ViewDetail
 from lps_gui.gui.widgets import ValueTable
@@ -35,6 +36,7 @@ class ResultsPanel(QWidget):
     """Plots, ISO 230-2 and position tables of one estimation; export to PDF and CSV."""
 
     export_requested = Signal(str)  # "pdf" or "csv"; the main window asks for a path and runs it
+    drawing_done = Signal()  # every figure and table of the latest results is drawn
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -43,6 +45,9 @@ class ResultsPanel(QWidget):
         self.results_dir: Path | None = None
         self.drawn: dict[str, DrawnFigure] = {}
         self._corners: Any = None
+        self._queue: list[Any] = []
+        self._tab_keys: list[str] = []
+        self._generation = 0
 
         self.header = QLabel("No results yet: run an estimation or open a session with results.json.")
         self.header.setWordWrap(True)
@@ -70,35 +75,88 @@ class ResultsPanel(QWidget):
         lay.setContentsMargins(6, 6, 6, 6)
         lay.addLayout(top)
         lay.addWidget(split, 1)
+        empty = figures_from_results({})
+        self._build_tabs(empty)
+        for fig in empty:  # titles and axis labels from the start: the operator sees what will come
+            for step in figure_steps(self.plots[fig.key].getPlotItem(), replace(fig, series=[]))[1]:
+                step()
         self.pdf_btn.clicked.connect(lambda: self.export_requested.emit("pdf"))
         self.csv_btn.clicked.connect(lambda: self.export_requested.emit("csv"))
 
     # ------------------------------------------------------------------ showing
     def set_results(self, results: dict[str, Any], session_dir: Path | None = None,
                     results_dir: Path | None = None) -> None:
-        """Draw every figure of ``results``; ``session_dir`` gives images, corners and truth."""
+        """Show ``results``: header at once, then one figure per event-loop turn.
+
+        Drawing a figure takes tens of milliseconds; drawing them in separate
+        turns keeps the window responsive (:attr:`drawing_done` when all are up).
+        ``session_dir`` gives images, corners and truth.
+        """
         self.results = results
         self.session_dir = Path(session_dir) if session_dir else None
         self.results_dir = Path(results_dir) if results_dir else self.session_dir
         self._corners = None
-        truth = self._session_truth()
-        figures = figures_from_results(results, truth)
-        current = self.tabs.currentIndex()
-        self.tabs.clear()
+        figures = figures_from_results(results, self._session_truth())
+        self._build_tabs(figures)
+        for i, fig in enumerate(figures):
+            self.tabs.setTabToolTip(i, fig.notes or fig.title)
         self.drawn.clear()
+        self._header(results)
+        for b in (self.pdf_btn, self.csv_btn):
+            b.setEnabled(True)
+        # the visible figure first, then the others, then the tables
+        order = sorted(range(len(figures)), key=lambda i: i != self.tabs.currentIndex())
+        self._queue = []
+        for i in order:
+            self._queue += self._draw_steps(figures[i])
+        self._queue.append(lambda: self._fill_tables(results))
+        self._generation += 1
+        generation = self._generation
+        QTimer.singleShot(0, lambda: self._drain(generation))
+
+    def _drain(self, generation: int) -> None:
+        if generation != self._generation:
+            return  # newer results replaced these
+        if self._queue:
+            step = self._queue.pop(0)
+            try:
+                step()
+            except Exception:  # one broken figure or table must not stop the others
+                log.exception("results: drawing step failed")
+        if self._queue:
+            QTimer.singleShot(0, lambda: self._drain(generation))
+        else:
+            self.drawing_done.emit()
+
+    @property
+    def drawing(self) -> bool:
+        return bool(self._queue)
+
+    def _build_tabs(self, figures: list[Any]) -> None:
+        """One plot per figure key, built once (later results reuse them: no relayout, no new widgets)."""
+        keys = [f.key for f in figures]
+        if keys == self._tab_keys:
+            return
+        self.tabs.clear()
         for fig in figures:
             plot = self.plots.get(fig.key) or pg.PlotWidget(background="w")
             self.plots[fig.key] = plot
-            drawn = draw_figure(plot.getPlotItem(), fig)
+            self.tabs.addTab(plot, fig.title.split(" (")[0] if len(fig.title) > 28 else fig.title)
+        self.tabs.addTab(self.iso_table, "Accuracy figures")
+        self.tabs.addTab(self.position_table, "Positions")
+        self._tab_keys = keys
+
+    def _draw_steps(self, fig: Any) -> list[Any]:
+        drawn, steps = figure_steps(self.plots[fig.key].getPlotItem(), fig)
+
+        def done() -> None:
             self.drawn[fig.key] = drawn
             for item in drawn.items + drawn.outliers:
                 item.sigPointsClicked.connect(lambda _item, points, _ev, key=fig.key: self._clicked(key, points))
-            self.tabs.addTab(plot, fig.title.split(" (")[0] if len(fig.title) > 28 else fig.title)
-            self.tabs.setTabToolTip(self.tabs.count() - 1, fig.notes or fig.title)
-        self._fill_tables(results)
-        self.tabs.addTab(self.iso_table, "Accuracy figures")
-        self.tabs.addTab(self.position_table, "Positions")
-        self.tabs.setCurrentIndex(max(0, min(current, self.tabs.count() - 1)))
+
+        return steps + [done]
+
+    def _header(self, results: dict[str, Any]) -> None:
         p = results.get("parameters") or {}
         cols = position_columns(results)
         n_out = int(cols["outlier"].sum())
@@ -109,8 +167,6 @@ class ResultsPanel(QWidget):
             f"{len(cols['index'])} positions, {p.get('n_used', '?')} used, {n_out} outlier view(s); "
             f"RMS {_f(p.get('rms_px'))} px"
             + (f"; max |deviation| {_f(maxdev)} µm" if maxdev is not None else ""))
-        for b in (self.pdf_btn, self.csv_btn):
-            b.setEnabled(True)
 
     def _session_truth(self) -> dict[str, Any] | None:
         if self.session_dir is None:
@@ -132,7 +188,7 @@ class ResultsPanel(QWidget):
             self.iso_table.set_rows([(k, _f(v), "") for k, v in single.items() if not isinstance(v, (dict, list))])
             return
         self.iso_table.set_rows([(r.name, r.text(), r.unit) for r in summary_rows(results)])
-        header, body = position_table(results)
+        header, body = position_table(results)[:2]
         self.position_table.setColumnCount(len(header))
         self.position_table.setHorizontalHeaderLabels([h.replace("\n", " ") for h in header])
         self.position_table.set_rows(body)

@@ -39,3 +39,26 @@ def available(module: str, attr: str) -> bool:
     except Unavailable:
         return False
     return True
+
+
+# Modules the long jobs import lazily. Importing a compiled extension holds the
+# GIL for tens of milliseconds; done in a worker thread mid-job it would freeze
+# the window, so the GUI imports them once at start-up instead.
+BACKEND_MODULES = (
+    "lps_gui.pipeline.estimate", "lps_gui.core.estimate", "lps_gui.core.iso230", "lps_gui.io.results_file",
+    "lps_gui.pipeline.intrinsics", "lps_gui.pipeline.detect", "lps_gui.camera.detection",
+    "lps_gui.capture.engine", "lps_gui.capture.sim_session", "lps_gui.report.summary",
+    "scipy.signal", "scipy.optimize", "scipy.stats", "scipy.interpolate", "scipy.ndimage", "scipy.sparse.linalg",
+    "cv2",
+)
+
+
+def preload_backends() -> list[str]:
+    """Import the back-end modules that exist; returns the ones missing (logged, not fatal)."""
+    missing = []
+    for name in BACKEND_MODULES:
+        try:
+            importlib.import_module(name)
+        except ImportError:
+            missing.append(name)
+    return missing

@@ -67,13 +67,22 @@ class ValueTable(QTableWidget):
         hh.setStretchLastSection(True)
 
     def set_rows(self, rows: Sequence[Sequence[str]]) -> None:
-        self.setRowCount(len(rows))
-        for r, row in enumerate(rows):
-            for c, text in enumerate(row):
-                item = QTableWidgetItem(str(text))
-                if c > 0:
-                    item.setTextAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
-                self.setItem(r, c, item)
+        """Replace the contents; columns are sized once at the end (per-cell sizing is slow)."""
+        hh = self.horizontalHeader()
+        hh.setSectionResizeMode(QHeaderView.ResizeMode.Interactive)
+        self.setUpdatesEnabled(False)
+        try:
+            self.setRowCount(len(rows))
+            for r, row in enumerate(rows):
+                for c, text in enumerate(row):
+                    item = QTableWidgetItem(str(text))
+                    if c > 0:
+                        item.setTextAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
+                    self.setItem(r, c, item)
+            self.resizeColumnsToContents()
+            hh.setStretchLastSection(True)
+        finally:
+            self.setUpdatesEnabled(True)
 
     def cell(self, row: int, col: int) -> str:
         item = self.item(row, col)

@@ -50,18 +50,24 @@ class GapMeter:
         self.timer.setInterval(5)
         self.timer.timeout.connect(self._tick)
         self.last = 0.0
+        self.last_cpu = 0.0
         self.max_gap_s = 0.0
+        self.max_gap_cpu_s = 0.0
         self.ticks = 0
 
     def _tick(self) -> None:
         now = time.perf_counter()
-        if self.ticks:
-            self.max_gap_s = max(self.max_gap_s, now - self.last)
+        cpu = time.thread_time()
+        if self.ticks and now - self.last > self.max_gap_s:
+            self.max_gap_s = now - self.last
+            self.max_gap_cpu_s = cpu - self.last_cpu  # GUI-thread CPU spent inside the longest gap
         self.last = now
+        self.last_cpu = cpu
         self.ticks += 1
 
     def __enter__(self) -> "GapMeter":
         self.last = time.perf_counter()
+        self.last_cpu = time.thread_time()
         self.timer.start()
         return self
 

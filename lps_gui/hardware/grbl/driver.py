@@ -37,6 +37,7 @@ from lps_gui.hardware.grbl.protocol import (
 from lps_gui.hardware.stage import Stage, StageEvent, StageSetting, StageStatus
 
 RT_STATUS, RT_HOLD, RT_RESUME, RT_RESET, RT_JOG_CANCEL = b"?", b"!", b"~", b"\x18", b"\x85"
+RESETS_AFTER_OK = ("[MSG:Disabled]", "[MSG:Restoring defaults]")  # system.c: mc_reset() after these
 __all__ = ["ControllerReset", "GrblStage"]
 
 
@@ -206,8 +207,16 @@ class GrblStage(Stage):
         return self.link.send(line, timeout_s)
 
     def command(self, line: str, timeout_s: float | None = None) -> list[str]:
-        """Send one line and wait for its ``ok`` (send-response); return the lines it printed."""
-        return self.link.wait_reply(self.send(line, timeout_s), timeout_s)
+        """Send one line and wait for its ``ok`` (send-response); return the lines it printed.
+
+        Leaving check mode (``$C``) and ``$RST=`` make GRBL reset right after its
+        ``ok``; then this also waits for the banner, so the next line is not lost.
+        """
+        n = self._banners
+        lines = self.link.wait_reply(self.send(line, timeout_s), timeout_s)
+        if any(ln in RESETS_AFTER_OK for ln in lines):
+            self.link.wait_for(lambda: self._banners > n, self.timeout_s, f"no banner after {line!r} within {self.timeout_s:g} s")
+        return lines
 
     def stream(self, lines: list[str], timeout_s: float | None = None) -> None:
         """Stream G-code with character counting; wait for every ``ok``; raise on the first error."""

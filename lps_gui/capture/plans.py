@@ -12,6 +12,8 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from lps_gui.core.plan import Plan
 from lps_gui.errors import InputError
 from lps_gui.io.jsonfile import read_json, write_json
@@ -67,3 +69,21 @@ def describe_plan(plan: Plan) -> str:
         f"{len(t)} targets {t[0]:g}..{t[-1]:g} mm, {dirs}, {plan.runs} run(s), "
         f"{plan.frames_per_stop} frame(s) per stop: {plan.n_frames()} frames"
     )
+
+
+def plan_duration_s(plan: Plan, accel_mm_s2: float = 200.0, grab_s: float = 0.05, start_mm: float = 0.0) -> float:
+    """Rough time a plan takes on a stage (s): moves at the plan's feed with ``accel_mm_s2``, settles, grabs.
+
+    For the estimate shown before a capture starts; the engine's running
+    ETA replaces it once frames come in.
+    """
+    from lps_gui.hardware.motion import duration_s
+
+    positions = [start_mm]
+    for direction in plan.run_directions():
+        ordered = plan.targets() if direction == "+" else plan.targets()[::-1]
+        positions += [plan.approach_start_mm(direction, float(ordered[0])), *map(float, ordered)]
+    moves = np.abs(np.diff(positions))
+    one_pass = sum(duration_s(d, plan.feed_mm_min, accel_mm_s2) for d in moves)
+    n_stops = len(plan.targets()) * len(plan.run_directions())
+    return plan.runs * (one_pass + n_stops * (plan.settle_s + plan.frames_per_stop * grab_s))

@@ -133,9 +133,10 @@ def _intrinsics_mode(args: argparse.Namespace) -> int:
 
 
 def _describe(session) -> str:
-    from lps_gui.capture.plans import describe_plan
+    from lps_gui.capture.plans import describe_plan, plan_duration_s
 
-    return describe_plan(session.plan())
+    plan = session.plan()
+    return f"{describe_plan(plan)}, about {plan_duration_s(plan) / 60:.1f} min of stage time"
 
 
 def _plan(args: argparse.Namespace, base=None):

@@ -133,6 +133,8 @@ def _front_page(flow: Any, meta: dict[str, Any], results: dict[str, Any], versio
     flow.heading("Summary figures", 11)
     rows = S.summary_rows(results)
     flow.table(["figure", "value", "unit"], [[r.name, r.text(), r.unit] for r in rows], [80, 30, 16])
+    for note in S.figure_notes(results):
+        flow.paragraph(note, size_pt=7.5, color="#555555")
 
     checks = S.spec_checks(results, meta.get("stage_spec") or results.get("stage_spec"))
     flow.heading("Stage specification", 11)

@@ -220,6 +220,17 @@ def summary_rows(results: dict[str, Any]) -> list[Row]:
     return rows
 
 
+def figure_notes(results: dict[str, Any]) -> list[str]:
+    """The caveats the figures carry (e.g. ISO 230-2 asks for 5 runs), each once."""
+    figs = results.get("figures") or {}
+    notes: list[str] = []
+    for part in (figs.get("single_run") or {}, figs.get("iso230_2") or {}):
+        for note in part.get("notes") or []:
+            if str(note) not in notes:
+                notes.append(str(note))
+    return notes
+
+
 def extremes_rows(results: dict[str, Any]) -> list[Row]:
     """Peak-to-valley straightness per direction v1/v2 and max |roll|, |pitch|, |yaw| (outliers excluded)."""
     cols = position_columns(results)

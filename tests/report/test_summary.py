@@ -94,3 +94,12 @@ def test_outlier_rows_merge_positions_and_flags():
     rows = outlier_rows(results)
     assert [r["index"] for r in rows] == [5]
     assert "RMS 2.1 px" in rows[0]["reason"] and rows[0]["file"] == "images/00005.png"
+
+
+def test_figure_notes_are_collected_once():
+    from lps_gui.report.summary import figure_notes
+
+    results, _ = make_results()
+    results["figures"]["single_run"]["notes"] = ["a", "b"]
+    results["figures"]["iso230_2"]["notes"] = ["b", "c"]
+    assert figure_notes(results) == ["a", "b", "c"]

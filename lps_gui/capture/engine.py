@@ -212,13 +212,13 @@ class CaptureEngine:
             remaining = self.session.remaining_stops()
             self._set(done=self._total - len(remaining))
             if remaining:
+                if not self.camera.is_open:  # first: its frame size bounds the disk space needed
+                    self.camera.open()
                 check_writable(self.session.folder / IMAGES_DIR, len(remaining) * bytes_per_frame(self.camera))
                 check_plan_in_travel(self._plan, self.stage)
             if self.truth_source is not None:
                 prune_truth(self.session)
             self._emit(CaptureEvent("started", f"{len(remaining)} of {self._total} frames to capture"))
-            if remaining and not self.camera.is_open:
-                self.camera.open()
             progress(self._total - len(remaining), self._total, "starting")
             for stop in remaining:
                 self._checkpoint(cancel)

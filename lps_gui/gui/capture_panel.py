@@ -12,7 +12,6 @@ import time
 from pathlib import Path
 from typing import Any, Callable
 
-import numpy as np
 from PySide6.QtCore import QSettings, Signal
 from PySide6.QtWidgets import (
     QComboBox, QFileDialog, QFormLayout, QGroupBox, QHBoxLayout, QLabel, QProgressBar, QPushButton,
@@ -20,6 +19,7 @@ from PySide6.QtWidgets import (
 )
 
 from lps_gui.core.board import Board
+from lps_gui.capture.plans import plan_duration_s
 from lps_gui.core.plan import Plan
 from lps_gui.errors import InputError
 from lps_gui.gui.services import lookup
@@ -28,7 +28,6 @@ from lps_gui.gui.workers import Job, one_line
 
 log = logging.getLogger(__name__)
 
-FRAME_TIME_S = 0.1  # grab + encode + fsync per frame, a typical figure for the estimate
 PLAN_FIELDS = ("start_mm", "stop_mm", "step_mm", "directions", "runs", "overshoot_mm", "settle_s",
                "frames_per_stop", "feed_mm_min")
 
@@ -43,21 +42,6 @@ def sim_spec() -> Any:
     from lps_gui.gui.sources import SIM_PRESET
 
     return preset(SIM_PRESET)
-
-
-def plan_duration_s(plan: Plan, frame_s: float = FRAME_TIME_S) -> float:
-    """Rough duration of a plan: travel at feed (incl. overshoot approaches), settling and frames.
-
-    Acceleration is ignored, so short steps take somewhat longer in reality.
-    """
-    t_mm = plan.targets()
-    travel_mm = 0.0
-    for _run in range(plan.runs):
-        for d in plan.run_directions():
-            ordered = t_mm if d == "+" else t_mm[::-1]
-            travel_mm += 2.0 * plan.overshoot_mm + float(np.abs(np.diff(ordered)).sum())
-    stops = plan.n_frames() // plan.frames_per_stop
-    return travel_mm / (plan.feed_mm_min / 60.0) + stops * plan.settle_s + plan.n_frames() * frame_s
 
 
 def fmt_duration(seconds: float) -> str:

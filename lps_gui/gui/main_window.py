@@ -119,7 +119,7 @@ class MainWindow(QMainWindow):
         self.splitDockWidget(d["results"], d["camera"], Qt.Orientation.Horizontal)
         self.splitDockWidget(d["camera"], d["log"], Qt.Orientation.Vertical)
         d["stage"].raise_()
-        self.resizeDocks([d["stage"], d["results"], d["camera"]], [430, 760, 400], Qt.Orientation.Horizontal)
+        self.resizeDocks([d["stage"], d["results"], d["camera"]], [420, 840, 340], Qt.Orientation.Horizontal)
         self.resizeDocks([d["camera"], d["log"]], [600, 250], Qt.Orientation.Vertical)
 
     def show_panel(self, name: str) -> None:

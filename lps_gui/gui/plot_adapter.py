@@ -26,6 +26,7 @@ class DrawnFigure:
     items: list[pg.PlotDataItem] = field(default_factory=list)  # one per series, in series order
     outliers: list[pg.PlotDataItem] = field(default_factory=list)
     bands: list[pg.FillBetweenItem] = field(default_factory=list)
+    inlier_y: list[np.ndarray] = field(default_factory=list)  # values that set the y range
 
     def point_count(self, label_prefix: str = "") -> int:
         """Finite points in the series whose label starts with ``label_prefix``."""
@@ -45,10 +46,14 @@ def _rgba(color: str, alpha: int) -> tuple[int, int, int, int]:
 def draw_series(plot: pg.PlotItem, s: Series, drawn: DrawnFigure) -> None:
     """Add one series (band first, then curve, then outlier crosses) to ``plot``."""
     s = s.finite()
+    keep = ~np.asarray(s.marked, bool) if s.marked is not None else np.ones(s.y.shape, bool)
+    drawn.inlier_y.append(s.y[keep])
+    if s.band_low is not None and s.band_high is not None:
+        drawn.inlier_y += [s.band_low[keep], s.band_high[keep]]
     if s.band_low is not None and s.band_high is not None and s.x.size > 1:
         order = np.argsort(s.x, kind="stable")
-        lo = pg.PlotDataItem(s.x[order], s.band_low[order], pen=None)
-        hi = pg.PlotDataItem(s.x[order], s.band_high[order], pen=None)
+        lo = pg.PlotCurveItem(s.x[order], s.band_low[order])  # curves (not PlotDataItem): the fill needs a path
+        hi = pg.PlotCurveItem(s.x[order], s.band_high[order])
         band = pg.FillBetweenItem(lo, hi, brush=pg.mkBrush(_rgba(s.color, BAND_ALPHA)))
         plot.addItem(band)
         drawn.bands.append(band)
@@ -84,8 +89,10 @@ def figure_steps(plot: pg.PlotItem, fig: FigureSpec) -> tuple[DrawnFigure, list[
             plot.legend.clear()  # first: removing items one by one would resize the legend each time
         plot.clear()
         if plot.legend is None:
-            plot.addLegend(offset=(-10, 10), labelTextSize="8pt")
-        plot.setTitle(fig.title)
+            plot.addLegend(offset=(10, 10), labelTextSize="8pt", labelTextColor="#202020",
+                           brush=pg.mkBrush(255, 255, 255, 200), pen=pg.mkPen("#b0b0b0"))
+        plot.legend.setColumnCount(2 if len(fig.series) > 3 else 1)  # wide and short: hides less data
+        plot.setTitle(fig.title, color="#202020", size="11pt")
         plot.setLabel("bottom", fig.x_label)
         plot.setLabel("left", fig.y_label)
         plot.showGrid(x=True, y=True, alpha=0.25)
@@ -93,8 +100,30 @@ def figure_steps(plot: pg.PlotItem, fig: FigureSpec) -> tuple[DrawnFigure, list[
 
     steps: list[Callable[[], None]] = [setup]
     steps += [lambda s=s: draw_series(plot, s, drawn) for s in fig.series]
-    steps.append(plot.enableAutoRange)
+    steps.append(lambda: fit_range(plot, drawn))
     return drawn, steps
+
+
+def fit_range(plot: pg.PlotItem, drawn: DrawnFigure, pad_fraction: float = 0.08) -> None:
+    """Auto range, except that outliers do not set the y range: they sit at its edge.
+
+    A replaced image can be off by centimetres while the stage errors are
+    micrometres; scaling the axis to the outlier would flatten every curve.
+    """
+    plot.enableAutoRange()
+    if not drawn.outliers:
+        return
+    y = np.concatenate([v[np.isfinite(v)] for v in drawn.inlier_y] + [np.zeros(0)])
+    if y.size == 0:
+        return
+    lo, hi = float(y.min()), float(y.max())
+    pad = pad_fraction * (hi - lo) or 1.0
+    for cross in drawn.outliers:
+        x, yo = cross.getData()
+        if yo is not None and len(yo):
+            cross.setData(x, np.clip(yo, lo - 0.5 * pad, hi + 0.5 * pad))
+    plot.enableAutoRange(axis="x")
+    plot.setYRange(lo - pad, hi + pad, padding=0.0)
 
 
 def draw_figure(plot: pg.PlotItem, fig: FigureSpec) -> DrawnFigure:

@@ -28,6 +28,8 @@ from lps_gui.report.figures import figures_from_results, position_columns
 log = logging.getLogger(__name__)
 
 CSV_FILES = ("positions.csv", "summary.csv")
+TAB_NAMES = {"positions": "Positions", "deviation": "Deviation", "step": "Steps", "straightness": "Straightness",
+             "angles": "Roll/pitch/yaw", "residuals": "Residuals", "spectrum": "Spectrum"}
 CLICKABLE = {"positions": ("target_mm", "measured_mm"), "deviation": ("target_mm", "deviation_um"),
              "residuals": ("index", "rms_px")}
 
@@ -63,14 +65,15 @@ class ResultsPanel(QWidget):
         self.tabs = QTabWidget()
         self.tabs.setDocumentMode(True)
         self.plots: dict[str, pg.PlotWidget] = {}
-        self.iso_table = ValueTable(["Figure", "Value", "Unit"])
-        self.position_table = ValueTable([""])
+        self.iso_table = ValueTable(["Figure", "Value", "Unit"], numeric=(1,))
+        self.position_table = ValueTable([""], numeric=range(1, 30))
         self.detail = ViewDetail()
         split = QSplitter(Qt.Orientation.Horizontal)
         split.addWidget(self.tabs)
         split.addWidget(self.detail)
         split.setStretchFactor(0, 3)
         split.setStretchFactor(1, 2)
+        split.setSizes([600, 300])
         lay = QVBoxLayout(self)
         lay.setContentsMargins(6, 6, 6, 6)
         lay.addLayout(top)
@@ -141,9 +144,9 @@ class ResultsPanel(QWidget):
         for fig in figures:
             plot = self.plots.get(fig.key) or pg.PlotWidget(background="w")
             self.plots[fig.key] = plot
-            self.tabs.addTab(plot, fig.title.split(" (")[0] if len(fig.title) > 28 else fig.title)
+            self.tabs.addTab(plot, TAB_NAMES.get(fig.key, fig.title))
         self.tabs.addTab(self.iso_table, "Accuracy figures")
-        self.tabs.addTab(self.position_table, "Positions")
+        self.tabs.addTab(self.position_table, "Table")
         self._tab_keys = keys
 
     def _draw_steps(self, fig: Any) -> list[Any]:
@@ -166,7 +169,8 @@ class ResultsPanel(QWidget):
             f"<b>{results.get('method', '?')}</b> on {self.session_dir.name if self.session_dir else 'results'}: "
             f"{len(cols['index'])} positions, {p.get('n_used', '?')} used, {n_out} outlier view(s); "
             f"RMS {_f(p.get('rms_px'))} px"
-            + (f"; max |deviation| {_f(maxdev)} µm" if maxdev is not None else ""))
+            + (f"; peak deviation {_f(maxdev)} µm" if maxdev is not None else "")
+            + ("<br><i>outliers beyond an axis are drawn at its edge</i>" if n_out else ""))
 
     def _session_truth(self) -> dict[str, Any] | None:
         if self.session_dir is None:

@@ -99,6 +99,10 @@ def make_screenshots(out_dir: Path) -> list[Path]:
                 window.show_panel(name)
                 wait_until(lambda: False, 0.2)
                 written.append(render_to_png(window.docks[name], out_dir / f"{name}.png"))
+            rp = window.results_panel
+            for key in ("deviation",):
+                rp.tabs.setCurrentWidget(rp.plots[key])
+                written.append(render_to_png(window.docks["results"], out_dir / f"results-{key}.png"))
             window.show_panel("stage")
         finally:
             window.shutdown()

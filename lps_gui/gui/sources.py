@@ -85,7 +85,7 @@ def camera_choices(sim_available: bool) -> list[tuple[str, str]]:
     """(label, spec) pairs for the camera panel."""
     out = []
     if sim_available:
-        out.append(("Simulated camera (follows the simulated stage)", CAMERA_FOLLOWS_STAGE))
+        out.append(("Simulated camera (on the stage)", CAMERA_FOLLOWS_STAGE))
     out += [("Camera device 0", "0"), ("Camera device 1", "1")]
     return out
 

@@ -13,6 +13,7 @@ from typing import Any
 import cv2
 import numpy as np
 import pyqtgraph as pg
+from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QLabel, QVBoxLayout, QWidget
 
 from lps_gui.core.camera_model import project_board
@@ -81,6 +82,8 @@ class ViewDetail(QWidget):
         self.corners = pg.ScatterPlotItem(size=5, pen=pg.mkPen("#00e000"), brush=None)
         self.box.addItem(self.corners)
         self.arrows = pg.PlotCurveItem(pen=pg.mkPen("#ff4040", width=1.5), connect="pairs")
+        self.sensor = pg.PlotCurveItem(pen=pg.mkPen("#808080", width=1, style=Qt.PenStyle.DashLine))
+        self.box.addItem(self.sensor)
         self.box.addItem(self.arrows)
         lay = QVBoxLayout(self)
         lay.setContentsMargins(0, 0, 0, 0)
@@ -101,12 +104,18 @@ class ViewDetail(QWidget):
             path = Path(session_dir) / str(row["file"])
             if path.exists():
                 image = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
+        self.sensor.setData([], [])
         if image is not None:
             self.image.setImage(image, autoLevels=False, levels=(0, 255))
             self.box.setRange(xRange=(0, image.shape[1]), yRange=(0, image.shape[0]), padding=0.0)
         else:
             self.image.clear()
             text += "  (image not in the session)"
+            size = (results.get("intrinsics") or {}).get("image_size")
+            if size:  # show where the corners sit on the sensor
+                w, h = float(size[0]), float(size[1])
+                self.sensor.setData([0, w, w, 0, 0], [0, 0, h, h, 0])
+                self.box.setRange(xRange=(0, w), yRange=(0, h), padding=0.02)
         if detected_px is not None and object_points is not None:
             ok = np.isfinite(detected_px).all(axis=1)
             self.corners.setData(detected_px[ok, 0], detected_px[ok, 1])
@@ -116,8 +125,6 @@ class ViewDetail(QWidget):
                 pairs = np.stack([res.detected_px[ok], tips[ok]], axis=1).reshape(-1, 2)  # shape (2M, 2)
                 self.arrows.setData(pairs[:, 0], pairs[:, 1], connect="pairs")
                 text += f"\nresiduals ×{ARROW_GAIN:g} (red), recomputed RMS {res.rms_px:.3f} px"
-                if image is None:
-                    self.box.autoRange()
             else:
                 self.arrows.setData([], [])
         else:

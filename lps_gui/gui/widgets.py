@@ -56,8 +56,9 @@ class PathPicker(QWidget):
 class ValueTable(QTableWidget):
     """A read-only table of rows of text, sized to its contents."""
 
-    def __init__(self, headers: Sequence[str], parent: QWidget | None = None) -> None:
+    def __init__(self, headers: Sequence[str], numeric: Sequence[int] = (1, 2), parent: QWidget | None = None) -> None:
         super().__init__(0, len(headers), parent)
+        self.numeric = set(numeric)  # right-aligned columns
         self.setHorizontalHeaderLabels(list(headers))
         self.verticalHeader().setVisible(False)
         self.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
@@ -76,7 +77,7 @@ class ValueTable(QTableWidget):
             for r, row in enumerate(rows):
                 for c, text in enumerate(row):
                     item = QTableWidgetItem(str(text))
-                    if c > 0:
+                    if c in self.numeric:
                         item.setTextAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
                     self.setItem(r, c, item)
             self.resizeColumnsToContents()
@@ -99,6 +100,8 @@ def fmt(value: object, digits: int = 4) -> str:
         return str(value)
     if v != v:
         return "—"
+    if v.is_integer() and abs(v) < 1e9:
+        return str(int(v))
     return f"{v:.{digits}g}"
 
 

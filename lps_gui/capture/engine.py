@@ -138,7 +138,7 @@ class CaptureEngine:
         self._message = ""
         self._eta_s: float | None = None
         self._events = EventSource()
-        self._last_move: tuple[int, str, float] | None = None  # (run, direction, target) last approached
+        self._last_move: tuple[int, str, float, int] | None = None  # (run, direction, target, stop's first index)
         self._reported_mm: float | None = None
         self._active = False
 
@@ -223,8 +223,8 @@ class CaptureEngine:
             for stop in remaining:
                 self._checkpoint(cancel)
                 self._set(current=stop)
-                if self._last_move != (stop.run, stop.direction, stop.target_mm):
-                    self._go_to(stop)
+                if self._last_move is None or self._last_move[3] != stop.index - stop.frame:
+                    self._go_to(stop)  # a new stop (its frames share one move)
                 self._take(stop)
                 captured += 1
                 eta = (self.clock.now() - t0) / captured * (self._total - self._done - 1)
@@ -282,7 +282,7 @@ class CaptureEngine:
         self._move(stop.target_mm, feed)
         self.clock.sleep(plan.settle_s)
         self._reported_mm = float(self.stage.position_mm())
-        self._last_move = (stop.run, stop.direction, stop.target_mm)
+        self._last_move = (stop.run, stop.direction, stop.target_mm, stop.index - stop.frame)
 
     def _move(self, target_mm: float, feed_mm_min: float) -> None:
         here = self.stage.position_mm()

@@ -197,3 +197,12 @@ def test_cancel_token_stops_and_progress_callback_counts(tmp_path):
     summary = engine.run(progress=progress, cancel=token)
     assert summary.state == "aborted" and summary.listed == 3
     assert seen[0] == (0, 5) and seen[-1] == (3, 5)
+
+
+def test_a_repeated_target_is_approached_again_from_its_own_side(tmp_path):
+    plan = Plan(targets_mm=(0.0, 2.0, 2.0, 4.0), frames_per_stop=2, settle_s=0.0)
+    session, stage, camera, engine = start_capture(tmp_path / "s", plan=plan)
+    kinds = []
+    engine.subscribe(lambda e: kinds.append((e.kind, e.index)) if e.kind in ("approach", "move") else None)
+    assert engine.run().state == "done"
+    assert kinds == [("approach", 0), ("move", 0), ("move", 2), ("approach", 4), ("move", 4), ("move", 6)]

@@ -81,3 +81,25 @@ def test_settings_are_read_from_the_connected_stage_and_written(qtbot, window):
     # the table is read back after writing and shows the controller's value
     qtbot.waitUntil(lambda: panel._settings and {s.number: s.value for s in panel._settings}[110] == 2400.0,
                     timeout=5000)
+
+
+def test_grbl_emulator_over_a_pty_and_the_cable_pulled(qtbot, window):
+    """The real GRBL driver over a pseudo-terminal: jog, then the port disappears mid-session."""
+    pytest.importorskip("lps_gui.hardware.grbl.emulator")
+    panel = window.stage_panel
+    panel.select_source("emulator")
+    assert panel.source.currentData() == "emulator"
+    panel.connect_btn.click()
+    qtbot.waitUntil(lambda: window.stage_ctl.connected and window.stage_ctl.last_status is not None, timeout=15000)
+    assert window.camera_panel.sim_camera is None  # no simulated camera rides a GRBL controller
+    qtbot.waitUntil(lambda: panel.readout["X"].text().strip() != "---", timeout=5000)
+    x0 = readout_mm(window)
+    panel.step.setCurrentIndex(panel.step.findData(1.0))
+    panel.feed.setValue(3000.0)
+    panel.jog_buttons[("X", +1)].click()
+    qtbot.waitUntil(lambda: abs(readout_mm(window) - (x0 + 1.0)) < 1e-3, timeout=10000)
+    window.stage_ctl.stage.emulator.drop()  # the USB cable is pulled
+    qtbot.waitUntil(lambda: not window.stage_ctl.connected, timeout=10000)
+    title, message = window.last_error
+    assert title == "Stage connection lost" and "\n" not in message
+    assert panel.connect_btn.text() == "Connect" and panel.connect_btn.isEnabled()

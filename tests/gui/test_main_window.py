@@ -1,0 +1,62 @@
+"""The main window: docks and menus, remembered settings, missing back ends, screenshot CLI."""
+from __future__ import annotations
+
+import pytest
+
+from lps_gui.core.plan import Plan
+from lps_gui.gui.services import Unavailable, lookup
+
+pytestmark = pytest.mark.gui
+
+
+def test_panels_menus_and_defaults(window):
+    assert set(window.docks) == {"stage", "camera", "intrinsics", "capture", "estimation", "results", "log"}
+    menus = [a.text() for a in window.menuBar().actions()]
+    assert menus == ["&File", "&Stage", "&Run", "&View", "&Help"]
+    assert window.stage_panel.source.currentData() == "sim"  # the simulated rig on first start
+    assert "not connected" in window.status_conn.text()
+    # every figure has its tab (titles and axis labels with units) before any result exists
+    rp = window.results_panel
+    assert set(rp.plots) >= {"positions", "deviation", "step", "straightness", "angles", "residuals"}
+    assert "[mm]" in rp.plots["positions"].getPlotItem().getAxis("bottom").labelText
+
+
+def test_settings_are_remembered(make_window, settings):
+    w1 = make_window()
+    w1.capture_panel.set_plan(Plan(start_mm=5.0, stop_mm=25.0, step_mm=5.0, directions="both", runs=3))
+    w1.estimation_panel.method.setCurrentIndex(w1.estimation_panel.method.findData("hybrid"))
+    w1.stage_panel.select_source("emulator")
+    w1.settings.setValue("stage/source", "emulator")
+    w1.remember_folder("/tmp/somewhere")
+    w1.docks["log"].hide()
+    w1.save_settings()
+    w2 = make_window(settings_=settings)
+    plan = w2.capture_panel.plan()
+    assert (plan.start_mm, plan.stop_mm, plan.step_mm, plan.directions, plan.runs) == (5.0, 25.0, 5.0, "both", 3)
+    assert w2.estimation_panel.method.currentData() == "hybrid"
+    assert w2.stage_panel.source.currentData() == "emulator"
+    assert w2.last_folder() == "/tmp/somewhere"
+    assert w2.docks["log"].isHidden()
+
+
+def test_a_missing_back_end_is_named_not_crashed():
+    with pytest.raises(Unavailable, match=r"lps_gui\.pipeline\.nothing_here is not available yet"):
+        lookup("lps_gui.pipeline.nothing_here", "run")
+    with pytest.raises(Unavailable, match="no_such_function"):
+        lookup("lps_gui.core.plan", "no_such_function")
+
+
+def test_estimate_without_a_session_says_what_to_do(qtbot, window):
+    window.estimation_panel.run_btn.click()
+    assert window.last_error == ("Cannot start", "estimation: choose a session folder first")
+
+
+def test_screenshot_cli_renders_offscreen(tmp_path):
+    from PySide6.QtGui import QImage
+
+    from lps_gui.gui.app import main
+
+    png = tmp_path / "w.png"
+    assert main(["--screenshot", str(png), "--size", "1200x800", "--settings", str(tmp_path / "s.ini")]) == 0
+    img = QImage(str(png))
+    assert (img.width(), img.height()) == (1200, 800)

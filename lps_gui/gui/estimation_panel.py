@@ -74,12 +74,15 @@ class EstimationPanel(QWidget):
         self.method = QComboBox()
         for label, key in METHODS:
             self.method.addItem(label, key)
-        self.robust = QCheckBox("robust (flag and re-solve without outlier views)")
-        self.robust.setChecked(True)
+        self.robust = QCheckBox("robust loss (Huber) on corner residuals")
+        self.detect_outliers = QCheckBox("flag outlier views and re-solve without them")
+        self.detect_outliers.setChecked(True)
+        self.self_calibrate = QCheckBox("refine intrinsics (prior: their covariance)")
         self.outlier_k = double_spin(2.0, 20.0, 5.0, 1, " σ")
-        self.grid_window = double_spin(0.01, 50.0, 2.0, 3, " mm")
-        self.grid_resolution = double_spin(0.0001, 1.0, 0.001, 4, " mm")
-        self.threshold_px = double_spin(0.1, 100.0, 5.0, 1, " px")
+        self.grid_window = double_spin(0.001, 50.0, 0.5, 3, " mm")
+        self.grid_resolution = double_spin(0.00001, 1.0, 0.0001, 5, " mm")
+        self.threshold_px = double_spin(0.0, 100.0, 0.0, 2, " px")
+        self.threshold_px.setSpecialValueText("until no improvement")
 
         inputs = QGroupBox("Inputs")
         f = QFormLayout(inputs)
@@ -89,10 +92,12 @@ class EstimationPanel(QWidget):
         o = QFormLayout(opts)
         o.addRow("Method", self.method)
         o.addRow("", self.robust)
+        o.addRow("", self.detect_outliers)
+        o.addRow("", self.self_calibrate)
         o.addRow("Outlier threshold k", self.outlier_k)
-        o.addRow("Grid window (hybrid)", self.grid_window)
+        o.addRow("Grid half-width (hybrid)", self.grid_window)
         o.addRow("Grid resolution (hybrid)", self.grid_resolution)
-        o.addRow("Reprojection threshold", self.threshold_px)
+        o.addRow("Stop at RMS (hybrid)", self.threshold_px)
 
         self.run_btn = QPushButton("Estimate")
         self.cancel_btn = QPushButton("Cancel")
@@ -123,14 +128,17 @@ class EstimationPanel(QWidget):
 
     def _method_changed(self) -> None:
         hybrid = self.method.currentData() == "hybrid"
-        self.grid_window.setEnabled(hybrid)
-        self.grid_resolution.setEnabled(hybrid)
+        for w in (self.grid_window, self.grid_resolution, self.threshold_px):
+            w.setEnabled(hybrid)
 
     def options(self) -> dict[str, Any]:
+        """The options dict of :func:`estimate_session` (hybrid keys only for the hybrid method)."""
         opts: dict[str, Any] = {"robust": self.robust.isChecked(), "outlier_k": self.outlier_k.value(),
-                                "threshold_px": self.threshold_px.value()}
+                                "detect_outliers": self.detect_outliers.isChecked(),
+                                "self_calibrate": self.self_calibrate.isChecked()}
         if self.method.currentData() == "hybrid":
-            opts.update(grid_window_mm=self.grid_window.value(), grid_resolution_mm=self.grid_resolution.value())
+            opts.update(grid_window_mm=self.grid_window.value(), grid_resolution_mm=self.grid_resolution.value(),
+                        threshold_px=self.threshold_px.value() or None)
         return opts
 
     def make_job(self) -> Job:

@@ -246,7 +246,12 @@ class StagePanel(QWidget):
         self.controller.call(f"jog {axis} {sign * step_mm:+g} mm", "jog", sign * step_mm, self.feed.value(), axis)
 
     def stop(self) -> None:
-        self.controller.call("jog cancel", "jog_cancel")
+        """Stop motion now: cancel a jog; a programmed move is held (Resume continues it)."""
+        st = self.controller.last_status
+        if st is not None and st.state == "Run":
+            self.controller.call("feed hold", "feed_hold")
+        else:
+            self.controller.call("jog cancel", "jog_cancel")
 
     # ------------------------------------------------------------------ settings
     def show_settings(self, settings: list[StageSetting]) -> None:

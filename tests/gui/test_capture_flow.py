@@ -60,6 +60,12 @@ def test_abort_keeps_frames_and_resume_completes(qtbot, make_window, tmp_path):
     job = cap.job
     assert job is not None
     qtbot.waitUntil(lambda: len(records(folder)) >= 2, timeout=30000)
+    cap.pause_btn.click()  # takes effect after the frame being taken
+    qtbot.waitUntil(lambda: cap.engine is not None and cap.engine.state == "paused", timeout=10000)
+    n_paused = len(records(folder))
+    assert cap.resume_btn.isEnabled() and not cap.pause_btn.isEnabled()
+    cap.resume_btn.click()
+    qtbot.waitUntil(lambda: len(records(folder)) > n_paused, timeout=10000)
     with qtbot.waitSignal(job.finished, timeout=30000):
         cap.abort_btn.click()
     kept = records(folder)

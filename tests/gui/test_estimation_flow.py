@@ -125,6 +125,22 @@ def test_broken_session_shows_the_cause_and_keeps_data(qtbot, window, session_di
     qtbot.waitUntil(lambda: panel.run_btn.isEnabled(), timeout=5000)
 
 
+def test_hybrid_method_with_its_options(qtbot, window, session_dir, tmp_path):
+    import shutil
+
+    folder = tmp_path / "hyb"
+    shutil.copytree(session_dir, folder, ignore=shutil.ignore_patterns("results.json", "*.csv", "report.pdf"))
+    panel = window.estimation_panel
+    panel.method.setCurrentIndex(panel.method.findData("hybrid"))
+    assert panel.grid_window.isEnabled()
+    opts = panel.options()
+    assert opts["grid_window_mm"] == 0.5 and opts["threshold_px"] is None
+    run_estimation(qtbot, window, folder)
+    res = window.results_panel.results
+    assert res["method"] == "hybrid" and len(res["positions"]) == 120
+    assert window.last_error is None
+
+
 def test_open_session_with_results_and_screenshot(qtbot, window, session_dir, tmp_path):
     from lps_gui.gui.app import main
 

@@ -60,6 +60,43 @@ def parameter_rows(results: dict[str, Any]) -> list[tuple[str, str, str, str]]:
     return rows
 
 
+PARALLEL_DETECTION_MIN_VIEWS = 60  # below this, starting detection processes costs more than it saves
+
+
+def corners_needed(session_dir: Path) -> bool:
+    """Whether captured images still lack corners (corners.vnl absent or older than captures.jsonl)."""
+    from lps_gui.io.session import Session
+
+    session = Session.open(session_dir)
+    corners = session.corners_path
+    records = session.records()
+    if not records:
+        return False  # estimation says what is missing
+    if not corners.exists():
+        return any((session.folder / r.file).exists() for r in records)
+    return corners.stat().st_mtime < session.captures_path.stat().st_mtime and any(
+        (session.folder / r.file).exists() for r in records)
+
+
+def detect_and_estimate(session_dir: Path, method: str, options: dict[str, Any], intrinsics_path: Path | None,
+                        progress: Any, cancel: Any) -> dict[str, Any]:
+    """What the Estimate button runs: detect corners where images lack them, then estimate.
+
+    Detection is incremental (views already in corners.vnl are kept), so a
+    resumed capture only detects its new frames.
+    """
+    if corners_needed(session_dir):
+        from lps_gui.io.session import Session
+
+        detect_session = lookup("lps_gui.pipeline.detect", "detect_session")
+        n = len(Session.open(session_dir).records())
+        detect_session(session_dir, progress=progress, cancel=cancel,
+                       workers=None if n >= PARALLEL_DETECTION_MIN_VIEWS else 1)
+    estimate_session = lookup("lps_gui.pipeline.estimate", "estimate_session")
+    return estimate_session(session_dir, method=method, options=options, intrinsics_path=intrinsics_path,
+                            progress=progress, cancel=cancel)
+
+
 class EstimationPanel(QWidget):
     """Run the estimator on a session; results go to the Results panel."""
 
@@ -143,14 +180,14 @@ class EstimationPanel(QWidget):
 
     def make_job(self) -> Job:
         """The estimation of the chosen session as a Job (not started)."""
-        estimate_session = lookup("lps_gui.pipeline.estimate", "estimate_session")
+        lookup("lps_gui.pipeline.estimate", "estimate_session")  # say now if the estimator is missing
         session = self.session.path()
         if session is None:
             from lps_gui.errors import InputError
 
             raise InputError("estimation: choose a session folder first")
-        return Job(f"estimate {session.name}", estimate_session, session, method=str(self.method.currentData()),
-                   options=self.options(), intrinsics_path=self.intrinsics.path())
+        return Job(f"estimate {session.name}", detect_and_estimate, session, str(self.method.currentData()),
+                   self.options(), self.intrinsics.path())
 
     def start(self) -> None:
         """Ask the main window to run the estimation (it owns job bookkeeping and error boxes)."""

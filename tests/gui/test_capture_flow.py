@@ -78,3 +78,33 @@ def test_abort_keeps_frames_and_resume_completes(qtbot, make_window, tmp_path):
     recs = records(folder)
     assert sorted(r["index"] for r in recs) == list(range(21))
     assert recs[: len(kept)] == kept  # nothing captured before was rewritten
+
+
+def test_capture_then_detect_and_estimate(qtbot, make_window, tmp_path):
+    """The operator's whole run on the simulated rig: capture 12 stops, estimate, plots hold 12 points."""
+    window = make_window(sim_clock=SimClock())
+    start_preview(qtbot, window)
+    cap = window.capture_panel
+    cap.set_plan(Plan(start_mm=0.0, stop_mm=22.0, step_mm=2.0, settle_s=0.2))
+    folder = tmp_path / "run3"
+    cap.folder.set_text(str(folder))
+    with qtbot.waitSignal(cap.session_done, timeout=60000):
+        cap.start_btn.click()
+    qtbot.waitUntil(lambda: cap.start_btn.isEnabled(), timeout=5000)
+    est = window.estimation_panel
+    assert est.session.text() == str(folder)
+    with qtbot.waitSignal(est.results_ready, timeout=60000):
+        est.run_btn.click()
+    qtbot.waitUntil(lambda: not window.results_panel.drawing and est.run_btn.isEnabled(), timeout=10000)
+    assert (folder / "corners.vnl").exists() and (folder / "results.json").exists()
+    rp = window.results_panel
+    assert rp.drawn["positions"].point_count("measured") == 12
+    assert rp.drawn["residuals"].point_count("RMS") == 12
+    # against the simulator's truth (recorded per frame during the capture): the position error is
+    # consistent with the uncertainty the estimate reports
+    truth = rp.results.get("truth_comparison") or {}
+    assert truth.get("position_rms_error_um") is not None
+    assert truth["position_rms_error_um"] < 3.0 * truth["mean_sigma_um"]
+    # clicking a view shows its captured image with the residual vectors
+    assert rp.show_view(5) == 5
+    assert rp.detail.image.image is not None and rp.detail.image.image.shape == (480, 640)

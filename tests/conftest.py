@@ -1,4 +1,18 @@
-"""Test-wide settings: Qt offscreen, seeded randomness is per test."""
+"""Test-wide settings: Qt offscreen, one QApplication for the whole session.
+
+The report paints with a QGuiApplication when none exists; widgets need a
+QApplication. Creating the QApplication first, once, lets PDF tests and GUI
+tests share one process in any order.
+"""
 import os
 
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+
+
+def pytest_configure(config):
+    try:
+        from PySide6.QtWidgets import QApplication
+    except ImportError:  # a Qt-less environment still runs the non-GUI tests
+        return
+    if QApplication.instance() is None:
+        config._lps_qapp = QApplication(["lps-tests"])

@@ -88,7 +88,26 @@ class LpsEstimate:
     six_dof: SixDof | None
     flags: list[dict[str, Any]]
     timings_s: dict[str, float]
-    inverse: ArrowheadInverse | None = None
+    inverse: ArrowheadInverse | None = None  # of the final solve, in units of sigma_px^2
+    intrinsics_gradient: np.ndarray | None = None  # shape (K, 9): d s / d intrinsics
+
+    def linear_functional_sigma(self, a: np.ndarray) -> tuple[float, float]:
+        """Sigma (mm) of sum_i a_i s_i from noise alone and in total (with intrinsics).
+
+        Uses the full covariance, so correlations between positions (a common
+        distance or direction error is a scale error of every position) count.
+        """
+        a = np.where(self.used, np.asarray(a, dtype=float), 0.0)
+        if self.inverse is None:
+            var = float(np.sum((a * self.sigma_s_mm) ** 2))
+            return np.sqrt(var), np.sqrt(var)
+        wa = self.inverse.W.T @ a
+        var = self.sigma_px**2 * float(np.sum(a * a * self.inverse.D_inv) + wa @ self.inverse.S_inv @ wa)
+        total = var
+        if self.intrinsics_gradient is not None and self.state.intrinsics.covariance is not None:
+            ga = self.intrinsics_gradient.T @ a
+            total += float(ga @ self.state.intrinsics.covariance @ ga)
+        return float(np.sqrt(var)), float(np.sqrt(total))
 
     @property
     def positions_mm(self) -> np.ndarray:
@@ -320,6 +339,7 @@ def _finish(
     inv = arrowhead_inverse(A, B, eq.D, free)
     var_s = sigma2 * inv.var_s()
     var_total = var_s.copy()
+    G_s = None
     if have_cov and not opt.self_calibrate:
         _, G_s = intrinsics_sensitivity(inv, eq.A[:p_pose, p_pose:], eq.B[:, p_pose:])
         var_total = var_s + propagated_variance(G_s, obs.intrinsics.covariance)
@@ -377,6 +397,7 @@ def _finish(
         flags=flags,
         timings_s=timings,
         inverse=inv,
+        intrinsics_gradient=G_s,
     )
 
 

@@ -151,6 +151,9 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate, intrins
     positive = valid & (sigma_um > 0)
     sigma_um = np.where(valid & ~(sigma_um > 0), np.median(sigma_um[positive]) if positive.any() else 1.0, sigma_um)
     figures = figures_for_session(obs.target_mm, obs.direction, obs.run, dev_um, valid=valid, sigma_um=sigma_um)
+    single = figures.get("single_run")
+    if single is not None and valid.sum() >= 3:
+        single.update(scale_with_uncertainty(obs, est, valid))
     if six is not None and valid.any():
         figures["straightness_um_max"] = _f(np.nanmax(np.ptp(six.straightness_um[valid], axis=0)))
         figures["straightness_span_um"] = [_f(v) for v in np.ptp(six.straightness_um[valid], axis=0)]
@@ -205,6 +208,28 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate, intrins
         results["truth_comparison"] = truth_comparison(obs, est, truth, positions)
     results["summary"] = summary_rows(results)
     return results
+
+
+def scale_with_uncertainty(obs: Observations, est: LpsEstimate, valid: np.ndarray) -> dict[str, Any]:
+    """Linear scale error (ppm) and its sigma from the full covariance.
+
+    Least-squares slope of the deviations against the target with one offset
+    per run and direction (backlash is not scale). Its sigma counts the
+    correlations between positions (from the board distance and direction)
+    and, in total, the intrinsics: a focal-length error is a pure scale error.
+    """
+    groups = obs.run * 2 + (obs.direction > 0)
+    cols = [obs.target_mm * valid] + [((groups == g) & valid).astype(float) for g in np.unique(groups[valid])]
+    design = np.stack(cols, axis=1)[valid]
+    slope_row = np.zeros(obs.K)
+    slope_row[valid] = np.linalg.pinv(design)[0]  # slope = slope_row @ deviation
+    dev_mm = est.state.s - (obs.target_mm - obs.target_mm[est.reference_view])
+    sigma_noise, sigma_total = est.linear_functional_sigma(slope_row)
+    return {
+        "scale_ppm": _f(1e6 * slope_row @ np.where(valid, dev_mm, 0.0)),
+        "scale_sigma_ppm": _f(1e6 * sigma_noise),
+        "scale_sigma_total_ppm": _f(1e6 * sigma_total),
+    }
 
 
 def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, np.ndarray], positions: list[dict]) -> dict[str, Any]:

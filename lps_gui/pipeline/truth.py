@@ -22,7 +22,12 @@ def session_truth(session: Session) -> dict[str, Any] | None:
     meta = session.meta.get("truth") or {}
     sidecar = session.folder / TRUTH_SIDECAR
     if sidecar.exists():
-        lines = [json.loads(l) for l in sidecar.read_text().splitlines() if l.strip().startswith("{")]
+        lines = []
+        for text in sidecar.read_text().splitlines():
+            try:
+                lines.append(json.loads(text))
+            except json.JSONDecodeError:  # torn by a crash mid-append: that frame is not listed either
+                continue
         if lines:
             out: dict[str, Any] = {
                 "index": np.array([l["index"] for l in lines], dtype=int),

@@ -23,7 +23,7 @@ from lps_gui.capture.plans import plan_duration_s
 from lps_gui.core.plan import Plan
 from lps_gui.errors import InputError
 from lps_gui.gui.services import lookup
-from lps_gui.gui.widgets import double_spin, PathPicker
+from lps_gui.gui.widgets import PathPicker, add_rows, double_spin
 from lps_gui.gui.workers import Job, one_line
 
 log = logging.getLogger(__name__)
@@ -84,18 +84,12 @@ class CapturePanel(QWidget):
         self.frames_per_stop.setRange(1, 100)
         self.feed_mm_min = double_spin(1.0, 20000.0, 600.0, 0, " mm/min")
         plan_box = QGroupBox("Plan")
-        f = QFormLayout(plan_box)
-        f.addRow("Start", self.start_mm)
-        f.addRow("Stop", self.stop_mm)
-        f.addRow("Step", self.step_mm)
-        f.addRow("Directions", self.directions)
-        f.addRow("Runs", self.runs)
-        f.addRow("Overshoot", self.overshoot_mm)
-        f.addRow("Settle", self.settle_s)
-        f.addRow("Frames per stop", self.frames_per_stop)
-        f.addRow("Feed", self.feed_mm_min)
         self.summary = QLabel()
-        f.addRow("", self.summary)
+        add_rows(QFormLayout(plan_box), [
+            ("Start", self.start_mm), ("Stop", self.stop_mm), ("Step", self.step_mm),
+            ("Directions", self.directions), ("Runs", self.runs), ("Overshoot", self.overshoot_mm),
+            ("Settle", self.settle_s), ("Frames per stop", self.frames_per_stop), ("Feed", self.feed_mm_min),
+            ("", self.summary)])
 
         self.folder = PathPicker("new, empty folder for the session", folder=True, start_dir=self.start_dir)
         sess = QGroupBox("Session")

@@ -16,7 +16,7 @@ from PySide6.QtWidgets import (
 )
 
 from lps_gui.gui.services import lookup
-from lps_gui.gui.widgets import double_spin, PathPicker, ValueTable, fmt
+from lps_gui.gui.widgets import PathPicker, ValueTable, add_rows, double_spin, fmt
 from lps_gui.gui.workers import Job
 
 METHODS = (("Joint LM (all positions at once)", "joint"), ("Hybrid (paper: PnP + LM + grid search)", "hybrid"),
@@ -122,19 +122,12 @@ class EstimationPanel(QWidget):
         self.threshold_px.setSpecialValueText("until no improvement")
 
         inputs = QGroupBox("Inputs")
-        f = QFormLayout(inputs)
-        f.addRow("Session", self.session)
-        f.addRow("Intrinsics", self.intrinsics)
+        add_rows(QFormLayout(inputs), [("Session", self.session), ("Intrinsics", self.intrinsics)])
         opts = QGroupBox("Method")
-        o = QFormLayout(opts)
-        o.addRow("Method", self.method)
-        o.addRow("", self.robust)
-        o.addRow("", self.detect_outliers)
-        o.addRow("", self.self_calibrate)
-        o.addRow("Outlier threshold k", self.outlier_k)
-        o.addRow("Grid half-width (hybrid)", self.grid_window)
-        o.addRow("Grid resolution (hybrid)", self.grid_resolution)
-        o.addRow("Stop at RMS (hybrid)", self.threshold_px)
+        add_rows(QFormLayout(opts), [
+            ("Method", self.method), ("", self.robust), ("", self.detect_outliers), ("", self.self_calibrate),
+            ("Outlier threshold k", self.outlier_k), ("Grid half-width (hybrid)", self.grid_window),
+            ("Grid resolution (hybrid)", self.grid_resolution), ("Stop at RMS (hybrid)", self.threshold_px)])
 
         self.run_btn = QPushButton("Estimate")
         self.cancel_btn = QPushButton("Cancel")

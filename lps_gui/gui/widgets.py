@@ -6,7 +6,7 @@ from typing import Callable, Sequence
 
 from PySide6.QtCore import Qt, Signal
 from PySide6.QtWidgets import (
-    QDoubleSpinBox, QFileDialog, QHBoxLayout, QHeaderView, QLineEdit, QPushButton, QTableWidget, QTableWidgetItem, QWidget,
+    QDoubleSpinBox, QFileDialog, QFormLayout, QHBoxLayout, QHeaderView, QLineEdit, QPushButton, QTableWidget, QTableWidgetItem, QWidget,
 )
 
 
@@ -113,3 +113,9 @@ def double_spin(lo: float, hi: float, value: float, decimals: int, suffix: str) 
     s.setValue(value)
     s.setSuffix(suffix)
     return s
+
+
+def add_rows(form: QFormLayout, rows: Sequence[tuple[str, QWidget]]) -> None:
+    """Fill a form layout with (label, widget) rows."""
+    for label, widget in rows:
+        form.addRow(label, widget)

@@ -16,11 +16,16 @@ pytestmark = pytest.mark.gui
 SMALL_PLAN = Plan(start_mm=0.0, stop_mm=8.0, step_mm=2.0, directions="+", runs=1, settle_s=0.5, overshoot_mm=1.0)
 
 
-def start_preview(qtbot, window):
+def capture_window(qtbot, make_window, plan, folder):
+    """A window on the simulated rig (simulated time), previewing, with ``plan`` and ``folder`` set."""
+    window = make_window(sim_clock=SimClock())  # settle and moves take simulated time
     connect_sim(qtbot, window)
     cam = window.camera_panel
     qtbot.waitUntil(lambda: cam.sim_camera is not None, timeout=5000)
     assert cam.start()
+    window.capture_panel.set_plan(plan)
+    window.capture_panel.folder.set_text(str(folder))
+    return window, window.capture_panel
 
 
 def records(folder):
@@ -29,13 +34,9 @@ def records(folder):
 
 
 def test_capture_small_plan_responsive(qtbot, make_window, tmp_path, gap_meter):
-    window = make_window(sim_clock=SimClock())  # settle and moves take simulated time
-    start_preview(qtbot, window)
-    cap = window.capture_panel
-    cap.set_plan(SMALL_PLAN)
-    assert "5 targets, 5 frames" in cap.summary.text()
     folder = tmp_path / "run1"
-    cap.folder.set_text(str(folder))
+    window, cap = capture_window(qtbot, make_window, SMALL_PLAN, folder)
+    assert "5 targets, 5 frames" in cap.summary.text()
     with gap_meter() as meter:
         with qtbot.waitSignal(cap.session_done, timeout=60000) as done:
             cap.start_btn.click()
@@ -50,12 +51,8 @@ def test_capture_small_plan_responsive(qtbot, make_window, tmp_path, gap_meter):
 
 
 def test_abort_keeps_frames_and_resume_completes(qtbot, make_window, tmp_path):
-    window = make_window(sim_clock=SimClock())
-    start_preview(qtbot, window)
-    cap = window.capture_panel
-    cap.set_plan(Plan(start_mm=0.0, stop_mm=40.0, step_mm=2.0, settle_s=0.5))
     folder = tmp_path / "run2"
-    cap.folder.set_text(str(folder))
+    window, cap = capture_window(qtbot, make_window, Plan(start_mm=0.0, stop_mm=40.0, step_mm=2.0, settle_s=0.5), folder)
     cap.start_btn.click()
     job = cap.job
     assert job is not None
@@ -82,12 +79,8 @@ def test_abort_keeps_frames_and_resume_completes(qtbot, make_window, tmp_path):
 
 def test_capture_then_detect_and_estimate(qtbot, make_window, tmp_path):
     """The operator's whole run on the simulated rig: capture 12 stops, estimate, plots hold 12 points."""
-    window = make_window(sim_clock=SimClock())
-    start_preview(qtbot, window)
-    cap = window.capture_panel
-    cap.set_plan(Plan(start_mm=0.0, stop_mm=22.0, step_mm=2.0, settle_s=0.2))
     folder = tmp_path / "run3"
-    cap.folder.set_text(str(folder))
+    window, cap = capture_window(qtbot, make_window, Plan(start_mm=0.0, stop_mm=22.0, step_mm=2.0, settle_s=0.2), folder)
     with qtbot.waitSignal(cap.session_done, timeout=60000):
         cap.start_btn.click()
     qtbot.waitUntil(lambda: cap.start_btn.isEnabled(), timeout=5000)

@@ -11,7 +11,6 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from lps_gui.report.figures import FigureSpec
-from lps_gui.report.none_refs import NoneRefGuard
 from lps_gui.report.plot_painter import font, paint_figure
 
 RESOLUTION_DPI = 600
@@ -67,7 +66,6 @@ class PdfFlow:
             from lps_gui.errors import InputError
 
             raise InputError(f"{path}: cannot write the PDF here; check the folder exists and is writable")
-        self.none_guard = NoneRefGuard().__enter__()
         self.page = 1
         self.log = PageLog()
         self.y = MARGIN_MM * self.mm
@@ -75,7 +73,6 @@ class PdfFlow:
 
     # ---------------------------------------------------------------- pages
     def new_page(self) -> None:
-        self.none_guard.topup()
         self.writer.newPage()
         self.page += 1
         self.log.pages.append([])
@@ -89,14 +86,12 @@ class PdfFlow:
 
     def finish(self) -> int:
         self.painter.end()
-        self.none_guard.topup()
         return self.page
 
     def abort(self) -> None:
         """End painting after a failure (the caller deletes the partial file)."""
         if self.painter.isActive():
             self.painter.end()
-        self.none_guard.topup()
 
     def _footer(self) -> None:
         from PySide6.QtCore import QRectF, Qt
@@ -187,8 +182,7 @@ class PdfFlow:
                 self.new_page()
                 draw_header()
             elif n % 50 == 49:
-                self.none_guard.topup()
-            if n % 2 == 1:
+                    if n % 2 == 1:
                 p.fillRect(QRectF(x_left, self.y, total_w, row_mm * mm), QColor("#f6f6f6"))
             draw_row(row, False, colors[n] if colors else None)
         p.setPen(QPen(QColor("#000000"), 0.2 * mm))
@@ -201,7 +195,6 @@ class PdfFlow:
         self.ensure(height_mm)
         self.log.add(f"figure:{spec.key}")
         paint_figure(self.painter, QRectF(self.left, self.y, self.width, height_mm * self.mm), spec, self.mm)
-        self.none_guard.topup()
         self.y += (height_mm + 3.0) * self.mm
 
     def image(self, image: Any, x_mm: float, width_mm: float, caption: str) -> float:

@@ -1,26 +1,32 @@
-"""Painting must not eat Python's references to None (PySide6 6.12 on Python 3.11)."""
+"""Painting must not eat Python's references to None.
+
+PySide6 6.12.0 returns None from void C++ methods without taking a reference;
+on Python < 3.12 every QPainter call then drops one, and a long report or an
+hour of live plots aborts the interpreter (none_dealloc). pyproject pins
+PySide6 below 6.12; these tests fail if a release with the bug comes back.
+"""
 from __future__ import annotations
 
-import ctypes
 import sys
 
 import pytest
 
-from lps_gui.report.none_refs import NoneRefGuard
 from tests.report.conftest import make_results
 
 
-@pytest.mark.skipif(sys.version_info >= (3, 12), reason="None is immortal from Python 3.12 on")
-def test_guard_pays_back_lost_references():
-    decref = ctypes.pythonapi.Py_DecRef
-    decref.argtypes = [ctypes.py_object]
-    with NoneRefGuard(prefund=2000) as guard:
-        base = sys.getrefcount(None)
-        for _ in range(1000):  # what 1000 void PySide6 calls do
-            decref(None)
-        assert sys.getrefcount(None) < base - 900
-        guard.topup()
-        assert sys.getrefcount(None) >= base - 5  # the frame's own bookkeeping may differ by one or two
+@pytest.mark.gui
+def test_void_painter_calls_keep_none_alive():
+    from PySide6.QtGui import QImage, QPainter, QPen
+
+    image = QImage(8, 8, QImage.Format_RGB32)
+    painter = QPainter(image)
+    pen = QPen()
+    before = sys.getrefcount(None)
+    for _ in range(2000):
+        painter.setPen(pen)
+    after = sys.getrefcount(None)
+    painter.end()
+    assert after >= before - 50, f"PySide6 lost {before - after} references to None in 2000 calls"
 
 
 @pytest.mark.gui

@@ -15,16 +15,16 @@ from typing import Any, Callable
 from PySide6.QtCore import QSettings, Qt, QTimer
 from PySide6.QtGui import QAction, QCloseEvent, QKeySequence
 from PySide6.QtWidgets import (
-    QDockWidget, QFileDialog, QLabel, QMainWindow, QMessageBox, QProgressBar, QPushButton, QWidget,
+    QDockWidget, QFileDialog, QLabel, QMainWindow, QMessageBox, QWidget,
 )
 
 from lps_gui import __version__
-from lps_gui.core.board import Board
 from lps_gui.core.clock import Clock
 from lps_gui.gui.camera_panel import CameraPanel
 from lps_gui.gui.capture_panel import CapturePanel
 from lps_gui.gui.estimation_panel import EstimationPanel
 from lps_gui.gui.intrinsics_panel import IntrinsicsPanel
+from lps_gui.gui.job_runner import JobRunner
 from lps_gui.gui.log_panel import LogPanel
 from lps_gui.gui.results_panel import ResultsPanel
 from lps_gui.gui.services import lookup, preload_backends
@@ -49,9 +49,6 @@ class MainWindow(QMainWindow):
         self.settings = settings or QSettings(ORGANIZATION, APPLICATION)
         self.setWindowTitle(f"lps-calib {__version__} — linear positioning system calibration")
         self.setDockNestingEnabled(True)
-        self.jobs: list[Job] = []
-        self.last_error: tuple[str, str] | None = None
-        self._error_box: QMessageBox | None = None
 
         # --- panels
         self.log_panel = LogPanel()
@@ -84,18 +81,9 @@ class MainWindow(QMainWindow):
         self.status_conn = QLabel("Stage: not connected")
         self.status_state = QLabel("—")
         self.status_pos = QLabel("X — mm")
-        self.status_job = QLabel("idle")
-        self.status_progress = QProgressBar()
-        self.status_progress.setMaximumWidth(220)
-        self.status_progress.setVisible(False)
-        self.status_cancel = QPushButton("Cancel")
-        self.status_cancel.setVisible(False)
-        self.status_cancel.clicked.connect(self.cancel_jobs)
         for w in (self.status_conn, self.status_state, self.status_pos):
             sb.addWidget(w)
-        sb.addPermanentWidget(self.status_job)
-        sb.addPermanentWidget(self.status_progress)
-        sb.addPermanentWidget(self.status_cancel)
+        self.runner = JobRunner(self, sb)
 
         self._build_menus()
         self._wire()
@@ -235,54 +223,21 @@ class MainWindow(QMainWindow):
             self.show_error("Cannot start", one_line(job))
 
     def run_job(self, job: Job, on_success: Callable[[Any], None] | None = None) -> Job:
-        """Start ``job`` in its thread with status-bar progress, cancel and error reporting."""
-        self.jobs.append(job)
-        job.progress.connect(self._on_job_progress)
-        job.failed.connect(lambda msg, tb, name=job.name: self._on_job_failed(name, msg, tb))
-        job.cancelled.connect(lambda msg, name=job.name: log.info("%s: %s", name, msg))
-        if on_success is not None:
-            job.succeeded.connect(on_success)
-        job.finished.connect(lambda j=job: self._on_job_finished(j))
-        self.status_job.setText(job.name)
-        self.status_progress.setRange(0, 0)
-        self.status_progress.setVisible(True)
-        self.status_cancel.setVisible(True)
-        job.start()
-        return job
+        return self.runner.run(job, on_success)
 
-    def _on_job_progress(self, done: int, total: int, message: str) -> None:
-        self.status_progress.setRange(0, max(total, 1))
-        self.status_progress.setValue(done)
-        if message:
-            self.status_job.setText(message[:60])
+    @property
+    def jobs(self) -> list[Job]:
+        return self.runner.jobs
 
-    def _on_job_failed(self, name: str, message: str, tb: str) -> None:
-        log.error("%s failed: %s\n%s", name, message, tb.rstrip())
-        self.show_error(f"{name.split(' ')[0].capitalize()} failed", message)
-
-    def _on_job_finished(self, job: Job) -> None:
-        if job in self.jobs:
-            self.jobs.remove(job)
-        if not self.jobs:
-            self.status_job.setText("cancelled" if job.token.cancelled else ("failed" if job.error else "done"))
-            self.status_progress.setVisible(False)
-            self.status_cancel.setVisible(False)
-        job.deleteLater()
+    @property
+    def last_error(self) -> tuple[str, str] | None:
+        return self.runner.last_error
 
     def cancel_jobs(self) -> None:
-        for job in list(self.jobs):
-            job.cancel()
+        self.runner.cancel_all()
 
     def show_error(self, title: str, message: str) -> None:
-        """A non-blocking message box with the one-line cause; data stay as they are."""
-        self.last_error = (title, message)
-        log.error("%s: %s", title, message)
-        if self._error_box is not None:
-            self._error_box.close()
-        box = QMessageBox(QMessageBox.Icon.Warning, title, message, QMessageBox.StandardButton.Ok, self)
-        box.setWindowModality(Qt.WindowModality.WindowModal)
-        box.open()
-        self._error_box = box
+        self.runner.show_error(title, message)
 
     # ------------------------------------------------------------------ results and sessions
     def _on_results(self, results: dict, session_dir: Path | None) -> None:
@@ -408,8 +363,7 @@ class MainWindow(QMainWindow):
         """Stop previews, jobs and the stage thread (used by close and by tests)."""
         self.camera_panel.stop()
         self.cancel_jobs()
-        for job in list(self.jobs):
-            job.wait(10000)
+        self.runner.wait_all()
         self.stage_ctl.shutdown()
         self.log_panel.detach()
 
@@ -418,7 +372,3 @@ class MainWindow(QMainWindow):
         self.shutdown()
         super().closeEvent(event)
 
-
-def board_default() -> Board:
-    """The board of the simulated rig (preset ``small``): 9x6 inner corners, 20 mm squares."""
-    return Board(cols=9, rows=6, square_mm=20.0)

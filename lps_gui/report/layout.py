@@ -181,8 +181,7 @@ class PdfFlow:
             if self.y + row_mm * mm > self.bottom:
                 self.new_page()
                 draw_header()
-            elif n % 50 == 49:
-                    if n % 2 == 1:
+            if n % 2 == 1:
                 p.fillRect(QRectF(x_left, self.y, total_w, row_mm * mm), QColor("#f6f6f6"))
             draw_row(row, False, colors[n] if colors else None)
         p.setPen(QPen(QColor("#000000"), 0.2 * mm))

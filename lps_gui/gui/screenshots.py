@@ -94,15 +94,17 @@ def make_screenshots(out_dir: Path) -> list[Path]:
             window.show()
             prepare(window, work)
             window.show_panel("stage")
+            rp = window.results_panel
+            rp.tabs.setCurrentWidget(rp.plots["deviation"])
             written = [render_to_png(window, out_dir / "main.png")]
             for name in PANELS:
                 window.show_panel(name)
+                if name == "results":  # the outlier view, found from the residual plot
+                    rp.tabs.setCurrentWidget(rp.plots["residuals"])
                 wait_until(lambda: False, 0.2)
                 written.append(render_to_png(window.docks[name], out_dir / f"{name}.png"))
-            rp = window.results_panel
-            for key in ("deviation",):
-                rp.tabs.setCurrentWidget(rp.plots[key])
-                written.append(render_to_png(window.docks["results"], out_dir / f"results-{key}.png"))
+            rp.tabs.setCurrentWidget(rp.plots["deviation"])
+            written.append(render_to_png(window.docks["results"], out_dir / "results-deviation.png"))
             window.show_panel("stage")
         finally:
             window.shutdown()

@@ -85,6 +85,24 @@ def test_estimate_plots_click_and_export(qtbot, window, session_dir, tmp_path, g
     assert (out / "report.pdf").read_bytes()[:5] == b"%PDF-"
 
 
+def test_clicking_a_plotted_point_opens_its_view(qtbot, window, session_dir):
+    from PySide6.QtCore import QPointF, Qt
+
+    if not (session_dir / "results.json").exists():
+        run_estimation(qtbot, window, session_dir)
+    assert window.open_session(session_dir)
+    qtbot.waitUntil(lambda: not window.results_panel.drawing, timeout=10000)
+    rp = window.results_panel
+    plot = rp.plots["residuals"]
+    rp.tabs.setCurrentWidget(plot)
+    qtbot.waitUntil(lambda: plot.isVisible(), timeout=5000)
+    row = [r for r in rp.results["positions"] if r["index"] == 40][0]
+    scene_pt = plot.getPlotItem().vb.mapViewToScene(QPointF(40.0, row["rms_px"]))
+    qtbot.mouseClick(plot.viewport(), Qt.MouseButton.LeftButton, pos=plot.mapFromScene(scene_pt))
+    qtbot.waitUntil(lambda: rp.detail.shown_index == 40, timeout=5000)
+    assert rp.detail.title.text().startswith("view 40")
+
+
 def test_cancel_leaves_no_results(qtbot, window, session_dir, tmp_path):
     import shutil
 

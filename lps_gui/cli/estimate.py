@@ -69,4 +69,9 @@ def format_summary(results: dict) -> str:
             f"against truth: position RMS error {tc['position_rms_error_um']:.2f} um (max {tc['position_max_abs_error_um']:.2f} um), "
             f"mean reported sigma {tc['mean_sigma_um']:.2f} um"
         )
+    if tc and tc.get("board_plane_rms_error_um") is not None:
+        lines.append(
+            f"against truth at the board plane (what a constant-orientation model sees; Abbe term RMS {tc['abbe_rms_um']:.2f} um): "
+            f"RMS error {tc['board_plane_rms_error_um']:.2f} um, mean (error/sigma)^2 {tc['board_plane_z_mean_square']:.2f}"
+        )
     return "\n".join(lines)

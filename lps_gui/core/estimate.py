@@ -17,7 +17,7 @@ import numpy as np
 
 from lps_gui.core.allocator import tune_allocator
 from lps_gui.core.hybrid import HybridOptions, initial_line, solve_hybrid, view_costs
-from lps_gui.core.joint_lm import LmOptions, LpsState, linearize, solve_joint
+from lps_gui.core.joint_lm import LmOptions, LpsState, linearize, solve_joint, solve_positions_only
 from lps_gui.core.observations import Observations
 from lps_gui.core.outliers import position_outliers, reprojection_outliers
 from lps_gui.core.pnp import solve_pnp
@@ -263,21 +263,10 @@ def _regauge(state: LpsState, ref: int) -> LpsState:
     return LpsState(state.R, state.l0 + shift * state.n, state.n, state.s - shift, state.intrinsics)
 
 
-def _positions_alone(
-    state: LpsState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray, views: np.ndarray, iterations: int = 8
-) -> np.ndarray:
-    """Each selected view's own best position with the shared parameters fixed (1-D Gauss-Newton)."""
+def _positions_alone(state: LpsState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray, views: np.ndarray) -> np.ndarray:
+    """Each selected view's own best position with the shared parameters fixed."""
     idx = np.flatnonzero(views)
-    if idx.size == 0:
-        return state.s[idx]
-    sub = _views_of(state, idx)
-    for _ in range(iterations):
-        eq, _ = linearize(sub, X, corners[idx], mask[idx])
-        step = np.where(eq.D > 0, -eq.g_s / np.where(eq.D > 0, eq.D, 1.0), 0.0)
-        sub.s = sub.s + step
-        if np.max(np.abs(step)) < 1e-9:
-            break
-    return sub.s
+    return solve_positions_only(_views_of(state, idx), X, corners[idx], mask[idx])
 
 
 def _views_of(state: LpsState, idx: np.ndarray) -> LpsState:

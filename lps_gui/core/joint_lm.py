@@ -332,3 +332,23 @@ def solve_joint(
 
 def with_positions(state: LpsState, s: np.ndarray) -> LpsState:
     return replace(state.copy(), s=np.asarray(s, dtype=float).copy())
+
+
+def solve_positions_only(
+    state: LpsState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray, iterations: int = 8
+) -> np.ndarray:
+    """Each view's own best position with R, l0, n fixed (1-D Gauss-Newton per view).
+
+    ``state.s`` holds the starting positions of exactly the views in
+    ``corners`` (shape (k, N, 2)); returns their positions, shape (k,).
+    """
+    sub = state.copy()
+    if sub.s.size == 0:
+        return sub.s
+    for _ in range(iterations):
+        eq, _ = linearize(sub, X, corners, mask)
+        step = np.where(eq.D > 0, -eq.g_s / np.where(eq.D > 0, eq.D, 1.0), 0.0)
+        sub.s = sub.s + step
+        if np.max(np.abs(step)) < 1e-10:
+            break
+    return sub.s

@@ -16,7 +16,7 @@ from lps_gui.core.camera_model import CameraIntrinsics, project_board
 from lps_gui.core.plan import Plan, PlannedStop
 from lps_gui.core.rig import Rig
 from lps_gui.core.rotation import exp_so3
-from lps_gui.core.stage_errors import ErrorProfile, StageErrorModel
+from lps_gui.core.stage_errors import ErrorProfile, StageErrorModel, TruePose
 from lps_gui.errors import InputError
 
 
@@ -81,6 +81,10 @@ def true_views(spec: SimulationSpec, rng: np.random.Generator) -> tuple[list[Pla
         "C0_board": spec.rig.C0_board.tolist(),
         "u_board": spec.rig.u_board.tolist(),
         "stage_errors": spec.rig.errors.to_dict(),
+        "board": {"type": spec.rig.board.type, "inner_corners": [spec.rig.board.cols, spec.rig.board.rows],
+                  "square_mm": spec.rig.board.square_mm},
+        "intrinsics": {"image_size": list(spec.rig.intrinsics.image_size),
+                       "camera_matrix": spec.rig.intrinsics.camera_matrix.tolist(), "dist": spec.rig.intrinsics.dist.tolist()},
         "noise_px": spec.noise_px,
         "seed": spec.seed,
     }
@@ -272,3 +276,23 @@ def spec_from_dict(d: dict[str, Any], source: str = "rig description") -> Simula
         )
     except (KeyError, TypeError, ValueError, IndexError) as exc:
         raise InputError(f"{source}: {type(exc).__name__} {exc}; start from `lps simulate --write-rig rig.json`") from exc
+
+
+def board_plane_positions(rig: Rig, pose: TruePose) -> np.ndarray:
+    """Where a constant-orientation model puts each true pose (mm along the axis).
+
+    The LPS model holds the camera's orientation constant, so a carriage
+    rotation about an axis perpendicular to the motion shifts the image like
+    a translation of (board distance x angle): the model measures the
+    displacement at the board plane, an Abbe offset equal to the distance.
+    This is that displacement, from noise-free projections of the true poses
+    and the rig's nominal line; it equals ``pose.axis_mm`` without angular errors.
+    """
+    from lps_gui.core.joint_lm import LpsState, solve_positions_only
+
+    R, t = rig.camera_poses(pose)
+    X = rig.board.object_points()
+    uv = project_board(R, t, X, rig.intrinsics)
+    state = LpsState(rig.R_cam_board, -rig.R_cam_board @ rig.C0_board, -rig.R_cam_board @ rig.u_board,
+                     np.asarray(pose.axis_mm, dtype=float).copy(), rig.intrinsics)
+    return solve_positions_only(state, X, uv, np.ones(uv.shape[:2], dtype=bool), iterations=12)

@@ -265,7 +265,7 @@ def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, np.nd
                 row[f"truth_{key}_urad"] = _f(angles[rows[k], j])
     injected = sorted(set(truth.get("replaced_views", [])) | set(truth.get("bumped_views", [])))
     flagged = sorted(int(i) for i in obs.index[est.outlier])
-    return {
+    out = {
         "position_rms_error_um": _f(np.sqrt(np.mean(err_um[ok] ** 2))),
         "position_max_abs_error_um": _f(np.max(np.abs(err_um[ok]))),
         "mean_sigma_um": _f(np.nanmean(1e3 * est.sigma_s_mm[ok])),
@@ -273,6 +273,20 @@ def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, np.nd
         "injected_outliers": injected,
         "flagged_outliers": flagged,
     }
+    if "plane_mm" in truth:
+        # what the constant-orientation model can see: displacement at the board plane (Abbe offset = distance)
+        plane = np.where(have, truth["plane_mm"][np.maximum(rows, 0)], np.nan)
+        plane_err_um = 1e3 * (est.state.s - (plane - plane[est.reference_view]))
+        others = ok & (np.arange(obs.K) != est.reference_view)
+        zp = plane_err_um[others] / np.maximum(1e3 * est.sigma_s_mm[others], 1e-12)
+        out["board_plane_rms_error_um"] = _f(np.sqrt(np.mean(plane_err_um[ok] ** 2)))
+        out["board_plane_max_abs_error_um"] = _f(np.max(np.abs(plane_err_um[ok])))
+        out["board_plane_z_mean_square"] = _f(np.mean(zp**2)) if zp.size else None
+        out["abbe_rms_um"] = _f(1e3 * np.sqrt(np.mean(((plane - axis) - (plane - axis)[est.reference_view])[ok] ** 2)))
+        for k, row in enumerate(positions):
+            if have[k]:
+                row["truth_plane_deviation_um"] = _f(1e3 * (plane[k] - plane[est.reference_view] - nominal[k]))
+    return out
 
 
 def _detrended(
@@ -317,5 +331,8 @@ def summary_rows(results: dict[str, Any]) -> list[tuple[str, Any, str]]:
     if tc.get("position_rms_error_um") is not None:
         rows.append(("truth_position_rms_error", tc["position_rms_error_um"], "um"))
         rows.append(("truth_position_max_abs_error", tc["position_max_abs_error_um"], "um"))
+    if tc.get("board_plane_rms_error_um") is not None:
+        rows.append(("truth_board_plane_rms_error", tc["board_plane_rms_error_um"], "um"))
+        rows.append(("truth_abbe_term_rms", tc["abbe_rms_um"], "um"))
     rows.append(("software_version", results["software"]["version"], ""))
     return rows

@@ -33,6 +33,7 @@ class CameraPanel(QWidget):
 
     failed = Signal(str, str)  # title, one-line cause
     _grab_failed = Signal(str)
+    _opened = Signal(object)
 
     def __init__(self, board: Callable[[], Board], parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -91,6 +92,7 @@ class CameraPanel(QWidget):
         self.timer.timeout.connect(self.refresh)
         self.open_btn.clicked.connect(self.toggle)
         self._grab_failed.connect(self._on_grab_failed)
+        self._opened.connect(self._on_opened)
         self.set_sim_camera(None)
         self._set_detect("no frame", "#777777")
 
@@ -115,21 +117,20 @@ class CameraPanel(QWidget):
             self.start()
 
     def start(self) -> bool:
-        """Open the chosen source and start the preview; False (and a message) if it cannot."""
-        spec = self.source.currentData()
-        try:
-            if spec == CAMERA_FOLLOWS_STAGE and self.sim_camera is not None:
-                cam = self.sim_camera
-            else:
-                cam = open_camera_source(str(spec))
-            if not cam.is_open:
-                cam.open()
-        except Exception as exc:
-            log.error("camera: %s", one_line(exc), exc_info=exc)
-            self.failed.emit("Camera not opened", one_line(exc))
+        """Start the preview of the chosen source; the camera opens on the preview thread.
+
+        Returns False when the preview already runs. A source that cannot be
+        opened is reported through :attr:`failed` (one line) and the panel
+        returns to its idle state.
+        """
+        if self.grabber is not None:
             return False
-        self.camera = cam
-        self.grabber = PreviewGrabber(cam, self.board, on_error=self._grab_failed.emit).start()
+        spec = self.source.currentData()
+        sim = self.sim_camera if spec == CAMERA_FOLLOWS_STAGE else None
+        source = sim if sim is not None else (lambda: open_camera_source(str(spec)))
+        self._shown = 0
+        self.grabber = PreviewGrabber(source, self.board, on_error=self._grab_failed.emit,
+                                      on_open=self._opened.emit).start()
         self.timer.start()
         self.open_btn.setText("Stop preview")
         self.source.setEnabled(False)
@@ -137,10 +138,16 @@ class CameraPanel(QWidget):
         log.info("camera: preview of %s", self.source.currentText())
         return True
 
-    def stop(self) -> None:
+    def _on_opened(self, camera: Camera) -> None:
         if self.grabber is not None:
-            self.grabber.stop()
-            self.grabber = None
+            self.camera = camera
+
+    def stop(self) -> None:
+        grabber, self.grabber = self.grabber, None
+        if grabber is not None:
+            grabber.stop()
+            if self.camera is None and grabber.camera is not None:
+                self.camera = grabber.camera
         self.timer.stop()
         if self.camera is not None and self.camera is not self.sim_camera:
             self.camera.close()
@@ -154,9 +161,11 @@ class CameraPanel(QWidget):
             self.grabber.pause(on)
 
     def _on_grab_failed(self, message: str) -> None:
+        opened = self.camera is not None
         self.stop()
-        self._set_detect("camera lost", "#d00000")
-        self.failed.emit("Camera preview stopped", message)
+        self.placeholder.setVisible(True)
+        self._set_detect("camera lost" if opened else "not opened", "#d00000")
+        self.failed.emit("Camera preview stopped" if opened else "Camera not opened", message)
 
     # ------------------------------------------------------------------ painting (GUI thread)
     def refresh(self) -> None:

@@ -222,9 +222,7 @@ class CapturePanel(QWidget):
         camera = self.camera_panel.camera or self.camera_panel.sim_camera
         if camera is None:
             raise HardwareError("capture: no camera; start the preview of a camera in the Camera panel")
-        if not camera.is_open:
-            camera.open()
-        return stage, camera
+        return stage, camera  # the engine opens it on its thread when needed
 
     def _run(self, folder: Path, make_session: Callable[[], Any], stage: Any, camera: Any) -> None:
         """Run the capture in a worker: make the session (file writes), build the engine, run it."""

@@ -39,15 +39,19 @@ class PreviewGrabber:
 
     Parameters
     ----------
-    camera : an open camera.
+    camera : a camera, or a function returning one; opened on the preview thread
+        (opening a device or building the simulated renderer takes a moment).
     board : returns the board to look for (the operator may change it live).
     max_fps : the loop never runs faster (saves a shared CPU).
     on_error : called once (from the worker thread) with a one-line message if grabbing fails.
     """
 
-    def __init__(self, camera: Camera, board: Callable[[], Board], max_fps: float = 15.0,
-                 on_error: Callable[[str], None] | None = None) -> None:
-        self.camera = camera
+    def __init__(self, camera: Camera | Callable[[], Camera], board: Callable[[], Board], max_fps: float = 15.0,
+                 on_error: Callable[[str], None] | None = None,
+                 on_open: Callable[[Camera], None] | None = None) -> None:
+        self._source = camera
+        self.camera: Camera | None = None
+        self.on_open = on_open
         self.board = board
         self.period_s = 1.0 / max_fps
         self.on_error = on_error
@@ -78,7 +82,24 @@ class PreviewGrabber:
         with self._lock:
             return self._latest
 
+    def _open(self) -> bool:
+        try:
+            cam = self._source if isinstance(self._source, Camera) else self._source()
+            if not cam.is_open:
+                cam.open()
+        except Exception as exc:  # no such device, busy, unplugged: one line to the operator
+            log.error("camera not opened: %s", one_line(exc), exc_info=exc)
+            if self.on_error:
+                self.on_error(one_line(exc))
+            return False
+        self.camera = cam
+        if self.on_open:
+            self.on_open(cam)
+        return True
+
     def _loop(self) -> None:
+        if not self._open():
+            return
         n = 0
         t_prev = time.monotonic()
         fps = 0.0

@@ -29,3 +29,16 @@ def test_preview_shows_the_simulated_board_without_blocking(qtbot, window, gap_m
     cam.stop()
     assert cam.grabber is None
     assert meter.max_gap_s < 0.25, f"event loop blocked {meter.max_gap_s * 1000:.0f} ms while previewing"
+
+
+def test_a_camera_that_cannot_open_is_reported(qtbot, window):
+    cam = window.camera_panel
+    cam.source.setCurrentIndex(cam.source.findData("7"))  # no such device here
+    if cam.source.currentData() != "7":
+        cam.source.addItem("Camera device 7", "7")
+        cam.source.setCurrentIndex(cam.source.count() - 1)
+    assert cam.start()  # returns at once: the device opens on the preview thread
+    qtbot.waitUntil(lambda: window.last_error is not None, timeout=10000)
+    title, message = window.last_error
+    assert title == "Camera not opened" and "camera device 7" in message and "\n" not in message
+    qtbot.waitUntil(lambda: cam.grabber is None and cam.open_btn.text() == "Start preview", timeout=5000)

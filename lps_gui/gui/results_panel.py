@@ -23,6 +23,7 @@ from lps_gui.gui.plot_adapter import DrawnFigure, figure_steps
 from lps_gui.gui.services import lookup
 from lps_gui.gui.view_detail import ViewDetail
 from lps_gui.gui.widgets import ValueTable
+from lps_gui.gui.workers import Job
 from lps_gui.report.figures import figures_from_results, position_columns
 
 log = logging.getLogger(__name__)
@@ -46,7 +47,9 @@ class ResultsPanel(QWidget):
         self.session_dir: Path | None = None
         self.results_dir: Path | None = None
         self.drawn: dict[str, DrawnFigure] = {}
-        self._corners: Any = None
+        self._corners: Any = None  # (CornerTable, object points), a reason string, or None: not read yet
+        self._corners_job: Job | None = None
+        self._pending_view: int | None = None
         self._queue: list[Any] = []
         self._tab_keys: list[str] = []
         self._generation = 0
@@ -218,37 +221,53 @@ class ResultsPanel(QWidget):
         return self.show_view(int(cols["index"][i]))
 
     def show_view(self, index: int) -> int | None:
-        """Show capture ``index`` with its residual vectors."""
+        """Show capture ``index`` with its residual vectors.
+
+        The session's corners are read once, on a worker thread (corners.vnl
+        of a long session has hundreds of thousands of lines); the view
+        fills in when they arrive.
+        """
         assert self.results is not None
         rows = [r for r in self.results.get("positions") or [] if int(r.get("index", -1)) == index]
         if not rows:
             return None
         row = rows[0]
+        if self._corners is None and self.session_dir is not None:
+            self.detail.show_view(self.session_dir, self.results, row, None, None)
+            self._pending_view = index
+            if self._corners_job is None:
+                self._corners_job = Job("read corners", load_corners, self.session_dir, pass_progress=False)
+                folder = self.session_dir
+                self._corners_job.succeeded.connect(lambda res, d=folder: self._corners_loaded(res, d))
+                self._corners_job.failed.connect(lambda msg, _tb, d=folder: self._corners_loaded(msg, d))
+                self._corners_job.finished.connect(self._corners_job_done)
+                self._corners_job.start()
+            return index
         detected, X = self._detected(row)
         self.detail.show_view(self.session_dir, self.results, row, detected, X)
         return index
 
-    def _detected(self, row: dict[str, Any]) -> tuple[np.ndarray | None, np.ndarray | None]:
-        if self.session_dir is None:
-            return None, None
-        try:
-            from lps_gui.io.corners_vnl import read_corners_vnl
-            from lps_gui.io.session import Session
+    def _corners_loaded(self, loaded: Any, folder: Path) -> None:
+        if folder != self.session_dir:
+            return  # another session is on screen now
+        self._corners = loaded  # (CornerTable, object points) or the one-line reason there are none
+        if isinstance(loaded, str):
+            log.info("results: no corners to show (%s)", loaded)
+        if self._pending_view is not None and self.results is not None:
+            index, self._pending_view = self._pending_view, None
+            self.show_view(index)
 
-            session = Session.open(self.session_dir)
-            board = session.board()
-            if self._corners is None:
-                self._corners = read_corners_vnl(session.corners_path, board.n_corners)
-            table = self._corners
-            name = str(row.get("file", ""))
-            idx = table.index()
-            i = idx.get(name, idx.get(Path(name).name))
-            if i is None:
-                return None, None
-            return table.corners_px[i], board.object_points()
-        except Exception as exc:  # no corners file: the view shows the image alone
-            log.info("results: no corners for view %s (%s)", row.get("index"), exc)
+    def _corners_job_done(self) -> None:
+        self._corners_job = None
+
+    def _detected(self, row: dict[str, Any]) -> tuple[np.ndarray | None, np.ndarray | None]:
+        if not isinstance(self._corners, tuple):
             return None, None
+        table, X = self._corners
+        name = str(row.get("file", ""))
+        idx = table.index()
+        i = idx.get(name, idx.get(Path(name).name))
+        return (None, None) if i is None else (table.corners_px[i], X)
 
     # ------------------------------------------------------------------ export
     def export_csv(self, folder: Path) -> list[Path]:
@@ -269,6 +288,16 @@ class ResultsPanel(QWidget):
                 shutil.copyfile(src, dst)
             out.append(dst)
         return out
+
+
+def load_corners(session_dir: Path) -> tuple[Any, np.ndarray]:
+    """The session's corner table and board points (shape (N, 3) mm), for the view detail."""
+    from lps_gui.io.corners_vnl import read_corners_vnl
+    from lps_gui.io.session import Session
+
+    session = Session.open(session_dir)
+    board = session.board()
+    return read_corners_vnl(session.corners_path, board.n_corners), board.object_points()
 
 
 def _f(v: Any) -> str:

@@ -101,3 +101,6 @@ def test_capture_then_detect_and_estimate(qtbot, make_window, tmp_path):
     # clicking a view shows its captured image with the residual vectors
     assert rp.show_view(5) == 5
     assert rp.detail.image.image is not None and rp.detail.image.image.shape == (480, 640)
+    qtbot.waitUntil(lambda: "recomputed RMS" in rp.detail.title.text(), timeout=10000)
+    x, _ = rp.detail.arrows.getData()
+    assert len(x) == 2 * 54

@@ -70,8 +70,11 @@ def test_estimate_plots_click_and_export(qtbot, window, session_dir, tmp_path, g
     rms = [r["rms_px"] for r in rp.results["positions"] if r["index"] == REPLACED_VIEW][0]
     assert rp.show_view_at("residuals", REPLACED_VIEW, rms) == REPLACED_VIEW
     assert "OUTLIER" in rp.detail.title.text()
+    # the corners are read on a worker thread; the residual vectors appear when they arrive
+    qtbot.waitUntil(lambda: rp.detail.arrows.getData()[0] is not None and len(rp.detail.arrows.getData()[0]) > 0,
+                    timeout=10000)
     ax, _ = rp.detail.arrows.getData()
-    assert ax is not None and len(ax) == 2 * 54  # one vector per corner of the 9x6 board
+    assert len(ax) == 2 * 54  # one vector per corner of the 9x6 board
 
     # export: CSV copies, PDF in a worker
     out = tmp_path / "export"

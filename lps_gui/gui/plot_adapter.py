@@ -95,6 +95,8 @@ def figure_steps(plot: pg.PlotItem, fig: FigureSpec) -> tuple[DrawnFigure, list[
         plot.setTitle(fig.title, color="#202020", size="11pt")
         plot.setLabel("bottom", fig.x_label)
         plot.setLabel("left", fig.y_label)
+        for axis in ("bottom", "left"):
+            plot.getAxis(axis).enableAutoSIPrefix(False)  # the unit is in the label: no hidden "(x0.001)"
         plot.showGrid(x=True, y=True, alpha=0.25)
         plot.setLogMode(x=fig.x_log, y=False)
 

@@ -17,6 +17,7 @@ import logging
 import multiprocessing
 import os
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
@@ -73,15 +74,14 @@ def load_grey(path: str, sha256: str | None = None, image_size: tuple[int, int] 
 
 
 def process_context() -> "multiprocessing.context.BaseContext":
-    """fork when this process runs a single thread (fast, works from any script), else spawn.
+    """Worker processes are spawned, never forked.
 
-    Forking a process that runs other threads (a GUI, a capture worker) can
-    deadlock on locks held by those threads; spawn is safe there.
+    A forked child inherits OpenCV's thread pool in whatever state the
+    parent's threads left it (and a GUI's threads' locks): the child then
+    hangs in its first cv2.setNumThreads or parallel call. Spawned workers
+    start clean; the price is ~0.5 s of start-up, and a calling script needs
+    the usual ``if __name__ == "__main__":`` guard.
     """
-    import threading
-
-    if threading.active_count() == 1 and "fork" in multiprocessing.get_all_start_methods():
-        return multiprocessing.get_context("fork")
     return multiprocessing.get_context("spawn")
 
 
@@ -161,19 +161,27 @@ def run_detection(
             check_cancel()
             take(detect_chunk(chunk, board, image_size, track))
         return results
-    ctx = process_context()
-    with ProcessPoolExecutor(max_workers=min(workers, len(chunks)), mp_context=ctx, initializer=_init_worker) as pool:
-        pending: set[Future] = {pool.submit(detect_chunk, c, board, image_size, track) for c in chunks}
-        try:
-            while pending:
-                done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
-                for fut in done:
-                    take(fut.result())
+    finished: set[int] = set()
+    try:
+        with ProcessPoolExecutor(max_workers=min(workers, len(chunks)), mp_context=process_context(), initializer=_init_worker) as pool:
+            pending: dict[Future, int] = {pool.submit(detect_chunk, c, board, image_size, track): i for i, c in enumerate(chunks)}
+            try:
+                while pending:
+                    done, _ = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+                    for fut in done:
+                        take(fut.result())
+                        finished.add(pending.pop(fut))
+                    check_cancel()
+            except BaseException:
+                for fut in pending:
+                    fut.cancel()
+                raise
+    except BrokenProcessPool:  # e.g. a calling script without the __main__ guard
+        log.warning("worker processes failed to start; detecting in this process")
+        for i, chunk in enumerate(chunks):
+            if i not in finished:
                 check_cancel()
-        except BaseException:
-            for fut in pending:
-                fut.cancel()
-            raise
+                take(detect_chunk(chunk, board, image_size, track))
     return results
 
 

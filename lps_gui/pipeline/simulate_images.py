@@ -9,6 +9,7 @@ capture order, with a bounded number of frames in flight.
 """
 from __future__ import annotations
 
+import logging
 import os
 import time
 from concurrent.futures import Future, ProcessPoolExecutor
@@ -83,20 +84,30 @@ def _render_stream(
         for c in chunks:
             yield from render_encoded(board, intrinsics, lighting, noise_grey, c, image_ext)
         return
+    from concurrent.futures.process import BrokenProcessPool
+
     from lps_gui.pipeline.detect import process_context
 
-    with ProcessPoolExecutor(max_workers=workers, mp_context=process_context()) as pool:
-        queue: list[Future] = []
-        next_chunk = 0
-        try:
-            while queue or next_chunk < len(chunks):
-                while next_chunk < len(chunks) and len(queue) < 2 * workers:
-                    queue.append(pool.submit(render_encoded, board, intrinsics, lighting, noise_grey, chunks[next_chunk], image_ext))
-                    next_chunk += 1
-                yield from queue.pop(0).result()
-        finally:
-            for f in queue:
-                f.cancel()
+    next_out = 0  # first chunk not yet yielded
+    try:
+        with ProcessPoolExecutor(max_workers=workers, mp_context=process_context()) as pool:
+            queue: list[Future] = []
+            next_chunk = 0
+            try:
+                while queue or next_chunk < len(chunks):
+                    while next_chunk < len(chunks) and len(queue) < 2 * workers:
+                        queue.append(pool.submit(render_encoded, board, intrinsics, lighting, noise_grey, chunks[next_chunk], image_ext))
+                        next_chunk += 1
+                    frames = queue.pop(0).result()
+                    next_out += 1
+                    yield from frames
+            finally:
+                for f in queue:
+                    f.cancel()
+    except BrokenProcessPool:  # e.g. a calling script without the __main__ guard: render here
+        logging.getLogger(__name__).warning("worker processes failed to start; rendering in this process")
+        for c in chunks[next_out:]:
+            yield from render_encoded(board, intrinsics, lighting, noise_grey, c, image_ext)
 
 
 def simulate_image_session(

@@ -285,7 +285,10 @@ def check_specification(figures: dict[str, Any], spec: dict[str, Any]) -> list[d
       +- limit. Undefined with one run per direction (``passed`` None).
     * straight-line accuracy: ``figures["straightness_um_max"]`` (largest
       peak-to-valley straightness, given by the estimator) against the limit as a
-      full width in both modes (the data sheet gives it without +-).
+      full width in both modes (the data sheet gives it without +-). Noise only
+      inflates a peak-to-valley, so a pass stands; a fail while the per-view
+      noise alone spans the limit (4 x ``figures["straightness_sigma_um"]``)
+      is "not resolved" (``passed`` None), not a verdict on the stage.
 
     Returns
     -------
@@ -332,7 +335,13 @@ def check_specification(figures: dict[str, Any], spec: dict[str, Any]) -> list[d
         spans = [finite_or_none(v) for v in np.ravel(np.asarray(figures.get("straightness_um_max"), dtype=object))]
         spans = [v for v in spans if v is not None]
         value = max(spans) if spans else None
-        rows.append(row("Straight-line accuracy", value, lim,
-                        "largest peak-to-valley straightness vs limit" if value is not None
-                        else "no straightness figures in these results"))
+        r = row("Straight-line accuracy", value, lim,
+                "largest peak-to-valley straightness vs limit" if value is not None
+                else "no straightness figures in these results")
+        noise = finite_or_none(figures.get("straightness_sigma_um"))
+        if r["passed"] is False and noise is not None and 4.0 * noise >= lim:
+            r["passed"] = None
+            r["note"] = (f"not resolved: per-view straightness sigma {noise:.1f} \u00b5m, noise alone spans "
+                         f"~{4 * noise:.0f} \u00b5m; a larger board, a closer camera or more corners resolve it")
+        rows.append(r)
     return rows

@@ -157,6 +157,7 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate, intrins
     if six is not None and valid.any():
         figures["straightness_um_max"] = _f(np.nanmax(np.ptp(six.straightness_um[valid], axis=0)))
         figures["straightness_span_um"] = [_f(v) for v in np.ptp(six.straightness_um[valid], axis=0)]
+        figures["straightness_sigma_um"] = _f(np.nanmax(np.nanmedian(six.straightness_sigma_um[valid], axis=0)))
         figures["angles_span_urad"] = dict(zip(("roll", "pitch", "yaw"), (_f(v) for v in np.ptp(six.angles_urad[valid], axis=0))))
 
     line = est.state.line()

@@ -291,8 +291,12 @@ def summary_lines(results: dict[str, Any], truth: dict[str, Any] | None, spec: S
     checks = spec_checks(results, PAPER_SPEC)
     verdict = ", ".join(f"{c.name} {'PASS' if c.passed else ('FAIL' if c.passed is False else 'n/a')}" for c in checks)
     te = truth_errors(results, truth)
+    tc = results.get("truth_comparison") or {}
     truth_line = ("error against truth: " + (f"position RMS {te['rms_um']:.2f} \u00b5m, max {te['max_um']:.2f} \u00b5m "
                                              f"(median 1-sigma {te['median_sigma_um']:.2f} \u00b5m)" if te else "no truth"))
+    if te and tc.get("board_plane_rms_error_um") is not None:
+        truth_line += (f"; at the board plane RMS {tc['board_plane_rms_error_um']:.2f} \u00b5m "
+                       f"(camera-centre error includes the Abbe term distance x pitch/yaw, RMS {tc['abbe_rms_um']:.2f} \u00b5m)")
     return [
         f"views: {p.get('n_views', '?')} ({len(plan.targets())} targets x {len(plan.run_directions())} directions "
         f"x {plan.runs} runs), {n_out} flagged outlier(s); RMS residual {fmt(p.get('rms_px'))} px",

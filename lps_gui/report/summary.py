@@ -19,7 +19,11 @@ METHOD_NAMES = {"joint": "joint LM (all positions, orientation and line at once)
 TRUTH_NAMES = {"position_rms_error_um": ("Truth: position error RMS", "\u00b5m"),
                "position_max_abs_error_um": ("Truth: position error max |e|", "\u00b5m"),
                "mean_sigma_um": ("Truth: mean position \u03c3 (noise)", "\u00b5m"),
-               "z_mean_square": ("Truth: mean (error/\u03c3)\u00b2", "")}
+               "z_mean_square": ("Truth: mean (error/\u03c3)\u00b2", ""),
+               "board_plane_rms_error_um": ("Truth at the board plane: position error RMS", "\u00b5m"),
+               "board_plane_max_abs_error_um": ("Truth at the board plane: position error max |e|", "\u00b5m"),
+               "board_plane_z_mean_square": ("Truth at the board plane: mean (error/\u03c3)\u00b2", ""),
+               "abbe_rms_um": ("Truth: Abbe term (board plane - camera centre) RMS", "\u00b5m")}
 INTRINSIC_ORDER = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3")
 DASH = "\u2014"
 
@@ -206,6 +210,8 @@ def summary_rows(results: dict[str, Any]) -> list[Row]:
         Row("Step std", _num(single.get("step_std_um")), "\u00b5m"),
         Row("Max |deviation|", _num(single.get("max_abs_deviation_um")), "\u00b5m"),
         Row("Scale error", _num(single.get("scale_ppm")), "ppm"),
+        Row("Scale error \u03c3 (noise, correlations included)", _num(single.get("scale_sigma_ppm")), "ppm"),
+        Row("Scale error \u03c3 (total, with intrinsics)", _num(single.get("scale_sigma_total_ppm")), "ppm"),
         Row("Periodic error amplitude", _num(single.get("periodic_amplitude_um")), "\u00b5m"),
         Row("Periodic error period", _num(single.get("periodic_period_mm")), "mm"),
     ]
@@ -305,8 +311,14 @@ def limits_notes(results: dict[str, Any]) -> list[str]:
             f"{med['pitch_sigma_urad']}, yaw {med['yaw_sigma_urad']} \u00b5rad. A peak-to-valley over many views "
             "grows with this noise (about 5-6\u03c3 for a few hundred views), so judge a straightness limit "
             "against the plotted \u00b12\u03c3 bands, or average more frames per stop.")
-    notes.append("Deviations are relative to the first capture (offset zero there); the positions are the "
-                 "camera centre's travel along the fitted line, not the carriage's encoder reading.")
+    notes.append(
+        "Abbe offset: the model holds the camera's orientation constant, so a pitch or yaw of the carriage "
+        "about an axis across the motion shifts the image like a translation of (board distance x angle). "
+        "The positions are therefore the displacement seen at the board plane, with an Abbe offset equal to the "
+        "camera-board distance: 10 \u00b5rad at 600 mm is 6 \u00b5m. The per-view angles above show whether "
+        "it matters; a shorter distance reduces it, as a laser interferometer's beam near the tool point does.")
+    notes.append("Deviations are relative to the first capture (offset zero there), not to the carriage's "
+                 "encoder reading; the first capture's own noise is part of every other position's \u03c3.")
     return notes
 
 

@@ -7,6 +7,7 @@ row, with the reason in a ``## failed <filename>: <reason>`` comment. Other
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -41,8 +42,8 @@ def format_corners_vnl(table: CornerTable) -> str:
         if name in table.failed or not np.isfinite(corners).any():
             lines.append(f"{name} - - -")
             continue
-        for x, y in corners:
-            lines.append(f"{name} - - -" if not (np.isfinite(x) and np.isfinite(y)) else f"{name} {x:.4f} {y:.4f} 0")
+        for x, y in corners.tolist():  # Python floats format ~3x faster than numpy scalars
+            lines.append(f"{name} - - -" if not (math.isfinite(x) and math.isfinite(y)) else f"{name} {x:.4f} {y:.4f} 0")
     return "\n".join(lines) + "\n"
 
 

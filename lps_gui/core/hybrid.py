@@ -36,6 +36,7 @@ class HybridOptions:
     threshold_rms_px: float | None = None  # T, as an RMS reprojection error; None: run until no improvement
     max_rounds: int = 30
     relative_improvement: float = 1e-9
+    adaptive_window: bool = True  # later rounds search +-4x the previous round's largest move (>= 10 steps)
 
 
 @dataclass
@@ -144,14 +145,19 @@ def solve_hybrid(
     lm = None
     converged = False
     rounds = 0
+    window = opt.window_mm
     for rounds in range(1, opt.max_rounds + 1):
         if cancel is not None:
             cancel.check("hybrid estimation")
         lm = solve_joint(state, X, corners, mask, free, lm_opt, cancel)  # step 3
         state = lm.state
+        before = state.s.copy()
         state.s = grid_search_positions(  # step 4
-            state, X, corners, mask, views, opt.window_mm, opt.resolution_mm, opt.grid_points
+            state, X, corners, mask, views, window, opt.resolution_mm, opt.grid_points
         )
+        if opt.adaptive_window:
+            moved = float(np.max(np.abs(state.s - before)[views], initial=0.0))
+            window = float(np.clip(4.0 * moved, 10.0 * opt.resolution_mm, opt.window_mm))
         rms = float(np.sqrt(np.sum(view_costs(state, X, corners, mask)[views]) / n_obs))
         progress(rounds, opt.max_rounds, f"hybrid round {rounds}: RMS {rms:.4f} px")
         improving = not history or rms < history[-1] * (1.0 - opt.relative_improvement)

@@ -164,8 +164,12 @@ def run_detection(
     finished: set[int] = set()
     try:
         with ProcessPoolExecutor(max_workers=min(workers, len(chunks)), mp_context=process_context(), initializer=_init_worker) as pool:
-            pending: dict[Future, int] = {pool.submit(detect_chunk, c, board, image_size, track): i for i, c in enumerate(chunks)}
+            pending: dict[Future, int] = {
+                pool.submit(detect_chunk, c, board, image_size, track): i for i, c in enumerate(chunks) if i > 0
+            }
             try:
+                take(detect_chunk(chunks[0], board, image_size, track))  # while the workers start up
+                finished.add(0)
                 while pending:
                     done, _ = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
                     for fut in done:
@@ -244,7 +248,12 @@ def detect_session(
         raise InputError(f"{session.captures_path}: no captures listed; capture or simulate images first")
     captures_sha = sha256_file(session.captures_path)
     names = [r.file for r in records]
-    image_size = session.intrinsics().image_size if session.has_intrinsics() else None
+    image_size = None  # checked against every image when the session knows its camera
+    if session.has_intrinsics():
+        try:
+            image_size = session.intrinsics().image_size
+        except InputError as exc:  # detection does not need intrinsics: go on without the size check
+            log.warning("%s", exc)
     meta = {"captures_sha256": captures_sha, "board": _board_key(board)}
     kept: dict[str, ViewResult] = {}
     if not force and session.corners_path.exists():

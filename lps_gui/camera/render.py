@@ -36,6 +36,7 @@ class Lighting:
     blur_px: float = 1.2  # Gaussian optics + defocus sigma (0 = none); real lenses are never sharper than ~1 px
     texture: float = 0.0  # relative amplitude of the paper texture (0 = none)
     shot_gain: float = 0.0  # shot-noise variance per grey level (0 = none)
+    antialias: bool = True  # False: point-sample each pixel centre (for comparison only: biased)
 
 
 def _undistorted_rays(intrinsics: CameraIntrinsics) -> tuple[np.ndarray, ...]:
@@ -148,6 +149,8 @@ class BoardRenderer:
         a11 = (G[1, 1] - by * G[2, 1]) * inv_w
         wx = np.abs(a00 * self._j00 + a01 * self._j10) + np.abs(a00 * self._j01 + a01 * self._j11)
         wy = np.abs(a10 * self._j00 + a11 * self._j10) + np.abs(a10 * self._j01 + a11 * self._j11)
+        if not self.lighting.antialias:
+            wx[:], wy[:] = 1e-4, 1e-4
         np.maximum(wx, 1e-4, out=wx)
         np.maximum(wy, 1e-4, out=wy)
         # squares span [-1, cols] x [-1, rows]; square [0,1)x[0,1) is black

@@ -95,3 +95,26 @@ def test_simulated_camera_renders_the_pose_source(views):
     Rk, tk = spec.rig.camera_poses(pose)
     truth_uv = project_board(Rk[0], tk[0], spec.rig.board.object_points(), spec.rig.intrinsics)
     assert _subpix_rms(frame.image, truth_uv) < 0.03
+
+
+def test_simulated_camera_follows_the_simulated_stage(views):
+    """Moved by the simulated stage, the rendered board shifts as the rig's true pose says."""
+    from lps_gui.camera.detection import detect_chessboard
+    from lps_gui.hardware.sim_stage import SimulatedStage
+
+    spec, _, _ = views
+    clock = SimClock()
+    stage = SimulatedStage(errors=spec.rig.errors, clock=clock)
+    stage.connect()
+    cam = SimulatedCamera(spec.rig, stage.true_pose, noise_grey=2.0, clock=clock)
+    X = spec.rig.board.object_points()
+    with cam:
+        for target in (4.0, 10.0):
+            stage.move_to(target, 600.0)
+            stage.wait_idle()
+            frame = cam.grab()
+            R, t = spec.rig.camera_poses(stage.true_pose())
+            truth = project_board(R[0], t[0], X, spec.rig.intrinsics)
+            found = detect_chessboard(frame.image, spec.rig.board)
+            assert np.sqrt(np.mean(np.sum((found - truth) ** 2, axis=1))) < 0.06
+    assert clock.now() > 0.5  # the moves took simulated time, not real time

@@ -33,6 +33,7 @@ class DetectionOptions:
     max_move_frac: float = 0.45  # refined corner may move this fraction of the window from prediction
     grid_tol_frac: float = 0.12  # second difference of the grid, fraction of a square
     min_sharpness_ratio: float = 0.5  # sharpness relative to the last full detection
+    homography_tol_frac: float = 0.05  # frame-to-frame homography residual, fraction of a square
 
 
 @dataclass
@@ -119,6 +120,34 @@ def grid_irregularity(corners_px: np.ndarray, board: Board) -> float:
     if board.rows >= 3:
         worst = max(worst, float(np.max(np.linalg.norm(grid[2:] - 2 * grid[1:-1] + grid[:-2], axis=-1))))
     return worst / max(square_px(corners_px, board), 1e-9)
+
+
+def _axes(corners_px: np.ndarray, board: Board) -> tuple[np.ndarray, np.ndarray]:
+    g = corners_px.reshape(board.rows, board.cols, 2)
+    return (g[:, -1] - g[:, 0]).mean(axis=0), (g[-1, :] - g[0, :]).mean(axis=0)
+
+
+def same_ordering(a_px: np.ndarray, b_px: np.ndarray, board: Board) -> bool:
+    """Do two views' corner grids run the same way (board +x alike, same handedness)?"""
+    ax, ay = _axes(a_px, board)
+    bx, by = _axes(b_px, board)
+    cross_a = ax[0] * ay[1] - ax[1] * ay[0]
+    cross_b = bx[0] * by[1] - bx[1] * by[0]
+    return bool(ax @ bx > 0 and ay @ by > 0 and cross_a * cross_b > 0)
+
+
+def frame_homography_residual(prev_px: np.ndarray, now_px: np.ndarray) -> float:
+    """Largest distance (px) of a corner from the least-squares homography prev -> now.
+
+    Between neighbouring LPS frames the corners move by a near-homography
+    (a shift, slightly varied by distortion): residuals sit at the noise level
+    (~0.1 px), a corner refined onto the wrong feature stands out by pixels.
+    """
+    H, _ = cv2.findHomography(prev_px.astype(np.float64), now_px.astype(np.float64), 0)
+    if H is None:
+        return float("inf")
+    mapped = cv2.perspectiveTransform(prev_px.reshape(-1, 1, 2).astype(np.float64), H).reshape(-1, 2)
+    return float(np.max(np.linalg.norm(mapped - now_px, axis=-1)))
 
 
 def find_chessboard_sb(image: np.ndarray, board: Board, sb_max_width: int = 1280) -> np.ndarray | None:
@@ -224,6 +253,11 @@ class ChessboardTracker:
             return "a corner moved too far from its prediction"
         if grid_irregularity(refined, self.board) > opt.grid_tol_frac:
             return "corner grid irregular"
+        if self._prev_px is not None:
+            if not same_ordering(self._prev_px, refined, self.board):
+                return "corner ordering changed"
+            if frame_homography_residual(self._prev_px, refined) > max(0.5, opt.homography_tol_frac * square_px(refined, self.board)):
+                return "corners do not follow a homography from the previous frame"
         if self._ref_sharpness and sharp < opt.min_sharpness_ratio * self._ref_sharpness:
             return "image blurred compared with the last full detection"
         return ""

@@ -107,3 +107,15 @@ def test_grid_irregularity_catches_a_misplaced_corner(scene):
 def test_sharpness_drops_with_blur(scene):
     _, images, _ = scene
     assert sharpness(cv2.GaussianBlur(images[0], (0, 0), 3.0)) < 0.5 * sharpness(images[0])
+
+
+def test_frame_homography_residual_and_ordering(scene):
+    from lps_gui.camera.detection import frame_homography_residual, same_ordering
+
+    board, _, truth = scene
+    assert frame_homography_residual(truth[0], truth[1]) < 0.1  # neighbouring LPS frames
+    bad = truth[1].copy()
+    bad[20] += [6.0, 0.0]
+    assert frame_homography_residual(truth[0], bad) > 3.0
+    assert same_ordering(truth[0], truth[1], board)
+    assert not same_ordering(truth[0], truth[1][::-1], board)

@@ -10,6 +10,7 @@ EXIT_SOME_FAILED = 3
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.epilog = "exit status: 0 every view detected, 3 some views failed (listed on stderr and in corners.vnl), 2 bad input"
     parser.add_argument("inputs", nargs="+", metavar="SESSION|IMAGE", help="a session folder, or image files/folders")
     parser.add_argument("--board", help="board.json (required for images; a session has its own)")
     parser.add_argument("--out", help="corners file for images (default: corners.vnl here)")

@@ -10,6 +10,7 @@ EXIT_SOME_FAILED = 3
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.epilog = "exit status: 0 calibrated from every image, 3 some images unusable (listed), 2 bad input"
     parser.add_argument("images", nargs="+", help="image files or folders of images")
     parser.add_argument("--board", required=True, help="board.json")
     parser.add_argument("--out", default="intrinsics.json", help="intrinsics JSON to write (default: intrinsics.json)")

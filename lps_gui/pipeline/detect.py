@@ -281,6 +281,9 @@ def detect_session(
         table.corners_px = table.corners_px[[i for i, n in enumerate(names) if n in results]]
         write_corners_vnl(session.corners_path, table)
         raise
+    methods = [r.method for r in results.values()]
+    labels = {"track": "tracked", "full": "full", "charuco": "charuco", "kept": "kept", "failed": "failed"}
+    meta["detection"] = ", ".join(f"{label} {methods.count(m)}" for m, label in labels.items() if m == "track" or m in methods)
     table = _table(names, results, board.n_corners, meta)
     write_corners_vnl(session.corners_path, table)
     return table

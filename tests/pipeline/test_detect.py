@@ -150,3 +150,18 @@ def test_detect_images_cli_needs_a_board(session, tmp_path, capsys):
 def test_no_images_is_an_input_error():
     with pytest.raises(InputError):
         detect_images([], SPEC.rig.board)
+
+
+def test_tracking_survives_replaced_and_bumped_views_and_reversals(tmp_path):
+    from dataclasses import replace
+
+    spec = replace(small_spec(views=8, directions="both"), replaced_views=(4,), replaced_offset=6, bumped_views=(10,))
+    simulate_image_session(spec, tmp_path / "s", workers=1)
+    table = detect_session(tmp_path / "s", workers=1)
+    _, R, t, _ = true_views(spec, np.random.default_rng(spec.seed))
+    truth = project_board(R, t, spec.rig.board.object_points(), spec.rig.intrinsics)
+    shown = np.arange(16)
+    shown[4] = 10  # view 4 holds view 10's image
+    assert not table.failed
+    assert rms(table.corners_px, truth[shown]) < 0.05
+    assert table.meta["detection"].startswith("tracked ")

@@ -27,7 +27,7 @@ CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-12)
 class IntrinsicsCalibration:
     """Result of :func:`calibrate_intrinsics`; views are indexed as given."""
 
-    intrinsics: CameraIntrinsics  # covariance = diag(std^2), INTRINSIC_NAMES order
+    intrinsics: CameraIntrinsics  # full 9x9 covariance (INTRINSIC_NAMES order), diag = std^2
     std: np.ndarray  # shape (9,), INTRINSIC_NAMES order
     rms_px: float  # RMS length of the 2-D reprojection error (OpenCV's figure; sqrt(2) x per-axis sigma)
     per_view_rms_px: np.ndarray  # shape (V,), same measure per view, NaN for views not used
@@ -127,15 +127,60 @@ def calibrate_intrinsics(
     flagged = _flag_views(objs, imgs, used, per_view_rms, image_size, flags, float(rms), flag_k)
     coverage = coverage_grid(np.concatenate([i.reshape(-1, 2) for i in imgs]), image_size, grid)
     warnings += _warnings(coverage, r_all[used], std, K, len(used))
+    dist5 = np.asarray(dist, dtype=float).ravel()[:5]
+    cov = full_covariance(objs, imgs, CameraIntrinsics(image_size, K, dist5), rvecs, tvecs, free=std > 0)
+    if cov is None or not np.allclose(np.sqrt(np.clip(np.diag(cov), 0, None)), std, rtol=0.1, atol=1e-12):
+        cov = np.diag(std**2)  # keep OpenCV's figures when our Jacobian disagrees with them
     intr = CameraIntrinsics(
         image_size=image_size,
         camera_matrix=K,
-        dist=np.asarray(dist).ravel()[:5],
-        covariance=np.diag(std**2),
+        dist=dist5,
+        covariance=cov,
         rms_px=float(rms),
         n_views=len(used),
     )
     return IntrinsicsCalibration(intr, std, float(rms), per_view_rms, coverage, flagged, warnings, used, r_all, t_all)
+
+
+def full_covariance(
+    objs: list[np.ndarray],
+    imgs: list[np.ndarray],
+    intrinsics: CameraIntrinsics,
+    rvecs: list[np.ndarray],
+    tvecs: list[np.ndarray],
+    free: np.ndarray,
+) -> np.ndarray | None:
+    """9x9 covariance of the intrinsics (INTRINSIC_NAMES order) with their correlations.
+
+    OpenCV returns standard deviations only, but fx/fy and k1/k2/k3 are
+    strongly correlated, which matters when the estimator propagates them.
+    Gauss-Newton at the solution: per-view 6x6 pose blocks are eliminated by
+    Schur complement; sigma^2 = SSR / (2N - p) as in OpenCV. Fixed
+    parameters (``free`` False) get zero rows and columns.
+    """
+    from lps_gui.core.camera_model import pose_jacobian_rodrigues
+
+    idx = np.flatnonzero(free)
+    info = np.zeros((idx.size, idx.size))
+    ssr, n_obs = 0.0, 0
+    for X, uv_obs, r, t in zip(objs, imgs, rvecs, tvecs):
+        uv, J = pose_jacobian_rodrigues(np.ravel(r), np.ravel(t), X.astype(float), intrinsics)[:2]
+        ssr += float(np.sum((uv - uv_obs.reshape(-1, 2)) ** 2))
+        n_obs += 2 * uv.shape[0]
+        Jp = J[..., :6].reshape(-1, 6)
+        Ji = J[..., 6:][..., idx].reshape(-1, idx.size)
+        A, B = Jp.T @ Jp, Jp.T @ Ji
+        info += Ji.T @ Ji - B.T @ np.linalg.solve(A, B)
+    dof = n_obs - idx.size - 6 * len(objs)
+    if dof <= 0:
+        return None
+    try:
+        cov_free = np.linalg.inv(info) * ssr / dof
+    except np.linalg.LinAlgError:
+        return None
+    cov = np.zeros((9, 9))
+    cov[np.ix_(idx, idx)] = 0.5 * (cov_free + cov_free.T)
+    return cov
 
 
 def _flag_views(objs, imgs, used, per_view_rms, image_size, flags, rms, flag_k) -> list[int]:

@@ -82,3 +82,18 @@ def test_coverage_grid_counts_cells():
     pts = np.array([[10.0, 10.0], [630.0, 470.0], [np.nan, 1.0]])
     grid = coverage_grid(pts, (640, 480), (8, 6))
     assert grid.sum() == 2 and grid[0, 0] == 1 and grid[-1, -1] == 1
+
+
+def test_full_covariance_matches_opencv_std_and_keeps_correlations():
+    import cv2
+
+    rng = np.random.default_rng(5)
+    uv = views(15, rng) + rng.normal(0, NOISE_PX, (15, BOARD.n_corners, 2))
+    cal = calibrate_intrinsics(BOARD.object_points(), list(uv), INTR.image_size)
+    cov = cal.intrinsics.covariance
+    assert np.allclose(np.sqrt(np.diag(cov)), cal.std, rtol=0.02)
+    corr_k1_k2 = cov[4, 5] / np.sqrt(cov[4, 4] * cov[5, 5])
+    assert corr_k1_k2 < -0.8  # radial terms trade off: a diagonal covariance would hide it
+    fixed = calibrate_intrinsics(BOARD.object_points(), list(uv), INTR.image_size, flags=cv2.CALIB_FIX_K3)
+    assert fixed.std[8] == 0 and np.all(fixed.intrinsics.covariance[8] == 0)
+    assert fixed.intrinsics.dist[4] == 0

@@ -53,5 +53,6 @@ def run(args: argparse.Namespace) -> int:
     ok = n - len(table.failed)
     for name, reason in table.failed.items():
         print(f"failed: {name}: {reason}", file=sys.stderr)
-    print(f"{ok}/{n} views detected in {elapsed:.1f} s ({n / max(elapsed, 1e-9):.0f} images/s); corners in {out}")
+    how = f" ({table.meta['detection']})" if table.meta.get("detection") else ""
+    print(f"{ok}/{n} views detected{how} in {elapsed:.1f} s ({n / max(elapsed, 1e-9):.0f} images/s); corners in {out}")
     return EXIT_SOME_FAILED if table.failed else 0

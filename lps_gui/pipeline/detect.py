@@ -268,6 +268,7 @@ def detect_session(
                         kept[name] = ViewResult(name, corners, "kept")
                 if old.meta.get("captures_sha256") == captures_sha and all(n in kept or n in old.failed for n in names):
                     progress(len(names), len(names), "corners.vnl is up to date")
+                    old.meta["up_to_date"] = "yes"  # for the caller; not written
                     return old
     jobs = [ViewJob(r.file, str(session.folder / r.file), r.sha256) for r in records if r.file not in kept]
     results = dict(kept)

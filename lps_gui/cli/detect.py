@@ -48,14 +48,14 @@ def run(args: argparse.Namespace) -> int:
         table = detect_images(paths, board, bar, workers=args.workers, track=not args.no_track)
         out = Path(args.out or "corners.vnl")
         write_corners_vnl(out, table)
+    for name, reason in table.failed.items():
+        print(f"failed: {name}: {reason}", file=sys.stderr)
     if table.meta.get("up_to_date"):
         print(f"{out} is up to date ({len(table.names)} views, {len(table.failed)} failed); use --force to detect again")
         return EXIT_SOME_FAILED if table.failed else 0
     elapsed = time.monotonic() - t0
     n = len(table.names)
     ok = n - len(table.failed)
-    for name, reason in table.failed.items():
-        print(f"failed: {name}: {reason}", file=sys.stderr)
     how = f" ({table.meta['detection']})" if table.meta.get("detection") else ""
     print(f"{ok}/{n} views detected{how} in {elapsed:.1f} s ({n / max(elapsed, 1e-9):.0f} images/s); corners in {out}")
     return EXIT_SOME_FAILED if table.failed else 0

@@ -236,9 +236,10 @@ def detect_session(
 ) -> CornerTable:
     """Detect every capture of a session and write ``corners.vnl`` (atomically).
 
-    Views already in corners.vnl with corners are kept (failed ones are
-    retried) unless ``force``; if captures.jsonl is unchanged since the last
-    run nothing is detected. Rows use captures.jsonl's ``file`` names.
+    If captures.jsonl is unchanged since the last run and every view is in
+    corners.vnl, nothing is detected. Otherwise views with corners are kept
+    and the others (new, or failed before) are detected; ``force`` redoes
+    all. Rows use captures.jsonl's ``file`` names.
     Cancelling writes what was finished, then raises :class:`Cancelled`.
     """
     session = Session.open(session_dir)

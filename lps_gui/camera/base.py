@@ -23,17 +23,25 @@ class Frame:
 
 
 class Camera(abc.ABC):
-    """A source of frames. ``grab`` blocks until a new frame is available."""
+    """A source of frames. ``grab`` blocks until a new frame is available.
+
+    ``open`` sets ``_open``; sources that hold a device override ``close``
+    and ``is_open`` to release and query it.
+    """
+
+    _open: bool = False
 
     @abc.abstractmethod
     def open(self) -> None: ...
     @abc.abstractmethod
     def grab(self) -> Frame: ...
-    @abc.abstractmethod
-    def close(self) -> None: ...
+
+    def close(self) -> None:
+        self._open = False
+
     @property
-    @abc.abstractmethod
-    def is_open(self) -> bool: ...
+    def is_open(self) -> bool:
+        return self._open
 
     def properties(self) -> dict[str, Any]:
         """What a session.json records about this camera."""

@@ -72,13 +72,6 @@ class FolderReplayCamera(Camera):
         self._next = 0
         self._open = True
 
-    @property
-    def is_open(self) -> bool:
-        return self._open
-
-    def close(self) -> None:
-        self._open = False
-
     def __len__(self) -> int:
         return len(self.files)
 

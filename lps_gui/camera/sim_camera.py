@@ -69,13 +69,6 @@ class SimulatedCamera(Camera):
             )
         self._open = True
 
-    @property
-    def is_open(self) -> bool:
-        return self._open
-
-    def close(self) -> None:
-        self._open = False
-
     def grab(self) -> Frame:
         """Render the board at the stage's true pose now; 8-bit grey (H, W)."""
         if not self._open or self._renderer is None:

@@ -24,7 +24,7 @@ from lps_gui.gui.workers import one_line
 
 log = logging.getLogger(__name__)
 
-REFRESH_MS = 50  # the GUI looks for a new frame 20 times a second
+REFRESH_MS = 33  # the GUI looks for a new frame 30 times a second
 SHARPNESS_FULL_SCALE = 2000.0  # Laplacian-variance figure shown as a full bar
 
 

@@ -30,7 +30,7 @@ from lps_gui.gui.results_panel import ResultsPanel
 from lps_gui.gui.services import lookup, preload_backends
 from lps_gui.gui.stage_controller import StageController
 from lps_gui.gui.stage_panel import StagePanel
-from lps_gui.gui.workers import Job, one_line
+from lps_gui.gui.workers import Job, one_line, stop_all_jobs
 from lps_gui.hardware.stage import StageStatus
 
 log = logging.getLogger("lps_gui.gui")
@@ -364,6 +364,7 @@ class MainWindow(QMainWindow):
         self.camera_panel.stop()
         self.cancel_jobs()
         self.runner.wait_all()
+        stop_all_jobs()  # panel-internal jobs too (thumbnails, corner reading): none outlives the window
         self.stage_ctl.shutdown()
         self.log_panel.detach()
 

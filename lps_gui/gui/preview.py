@@ -21,6 +21,8 @@ from lps_gui.gui.workers import one_line
 
 log = logging.getLogger(__name__)
 
+DETECT_HZ = 8.0  # board detection and focus figure at most this often; frames flow at the camera's rate
+
 
 @dataclass(frozen=True)
 class PreviewResult:
@@ -42,11 +44,11 @@ class PreviewGrabber:
     camera : a camera, or a function returning one; opened on the preview thread
         (opening a device or building the simulated renderer takes a moment).
     board : returns the board to look for (the operator may change it live).
-    max_fps : the loop never runs faster (saves a shared CPU).
+    max_fps : the loop never runs faster; below it, frames come at the camera's own rate.
     on_error : called once (from the worker thread) with a one-line message if grabbing fails.
     """
 
-    def __init__(self, camera: Camera | Callable[[], Camera], board: Callable[[], Board], max_fps: float = 15.0,
+    def __init__(self, camera: Camera | Callable[[], Camera], board: Callable[[], Board], max_fps: float = 30.0,
                  on_error: Callable[[str], None] | None = None,
                  on_open: Callable[[Camera], None] | None = None) -> None:
         self._source = camera
@@ -54,6 +56,7 @@ class PreviewGrabber:
         self.on_open = on_open
         self.board = board
         self.period_s = 1.0 / max_fps
+        self.detect_period_s = 1.0 / DETECT_HZ
         self.on_error = on_error
         self._lock = threading.Lock()
         self._latest: PreviewResult | None = None
@@ -102,6 +105,8 @@ class PreviewGrabber:
             return
         n = 0
         t_prev = time.monotonic()
+        t_detect = -1e9
+        corners = sharp = None  # the last detection, shown until the next one
         fps = 0.0
         while not self._stop.is_set():
             t0 = time.monotonic()
@@ -116,13 +121,14 @@ class PreviewGrabber:
                     self.on_error(one_line(exc))
                 return
             image = frame.image
-            corners = sharp = None
-            if self._detect is not None:
+            if self._detect is not None and t0 - t_detect >= self.detect_period_s:
+                t_detect = t0
                 try:
                     corners = self._detect(image, self.board())
                     sharp = float(self._sharpness(image))
                 except Exception:  # detection trouble must not stop the live picture
                     log.debug("preview detection failed", exc_info=True)
+                    corners = sharp = None
             n += 1
             now = time.monotonic()
             dt = now - t_prev

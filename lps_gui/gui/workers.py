@@ -81,6 +81,22 @@ def _parameters(fn: Callable[..., Any]) -> set[str] | None:
     return set(params)
 
 
+_RUNNING: set["Job"] = set()  # strong references: a running job is never garbage-collected with its thread
+
+
+def running_jobs() -> list["Job"]:
+    """Jobs started and not yet reported finished (GUI thread bookkeeping)."""
+    return list(_RUNNING)
+
+
+def stop_all_jobs(timeout_ms: int = 10000) -> bool:
+    """Cancel every running job and wait for its thread; True if all ended (used at shutdown)."""
+    jobs = running_jobs()
+    for job in jobs:
+        job.cancel()
+    return all(job.wait(timeout_ms) for job in jobs)
+
+
 class _Thread(QThread):
     """The thread body; all results leave through the owning Job's signals."""
 
@@ -143,6 +159,7 @@ class Job(QObject):
         self.started_at = time.monotonic()
         log.info("%s: started", self.name)
         _job_started()
+        _RUNNING.add(self)
         self._thread.start()
         return self
 
@@ -189,5 +206,6 @@ class Job(QObject):
 
     def _on_thread_finished(self) -> None:  # GUI thread
         _job_ended()
+        _RUNNING.discard(self)
         log.info("%s: finished in %.2f s", self.name, time.monotonic() - self.started_at)
         self.finished.emit()

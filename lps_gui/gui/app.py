@@ -83,7 +83,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.screenshot is not None:
         os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
     app = make_app()
-    from lps_gui.errors import LpsError
+    from lps_gui.errors import InputError, LpsError
     from lps_gui.gui.main_window import MainWindow
 
     settings = make_settings(args.settings)
@@ -97,7 +97,11 @@ def main(argv: list[str] | None = None) -> int:
     window = MainWindow(settings)
     try:
         if args.session is not None:
+            if not args.session.is_dir():
+                raise InputError(f"{args.session}: session folder not found; check the path")
             window.open_session(args.session)
+            if args.screenshot is not None and window.last_error is not None:
+                raise InputError(window.last_error[1])
         if args.screenshot is not None:
             w, h = (int(v) for v in args.size.lower().split("x"))
             out = render_to_png(window, args.screenshot, (w, h))

@@ -60,3 +60,13 @@ def test_screenshot_cli_renders_offscreen(tmp_path):
     assert main(["--screenshot", str(png), "--size", "1200x800", "--settings", str(tmp_path / "s.ini")]) == 0
     img = QImage(str(png))
     assert (img.width(), img.height()) == (1200, 800)
+
+
+def test_screenshot_of_a_missing_session_fails_with_one_line(tmp_path, capsys):
+    from lps_gui.gui.app import main
+
+    assert main(["--screenshot", str(tmp_path / "w.png"), "--session", str(tmp_path / "nowhere"),
+                 "--settings", str(tmp_path / "s.ini")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"lps-gui: {tmp_path / 'nowhere'}: session folder not found; check the path"]
+    assert not (tmp_path / "w.png").exists()

@@ -22,7 +22,7 @@ from PySide6.QtWidgets import (
 from lps_gui.gui.plot_adapter import DrawnFigure, figure_steps
 from lps_gui.gui.services import lookup
 from lps_gui.gui.view_detail import ViewDetail
-from lps_gui.gui.widgets import ValueTable
+from lps_gui.gui.widgets import TextTable, ValueTable
 from lps_gui.gui.workers import Job
 from lps_gui.report.figures import figures_from_results, position_columns
 
@@ -51,6 +51,7 @@ class ResultsPanel(QWidget):
         self._corners_job: Job | None = None
         self._pending_view: int | None = None
         self._queue: list[Any] = []
+        self._pending_table = False
         self._tab_keys: list[str] = []
         self._generation = 0
 
@@ -69,7 +70,7 @@ class ResultsPanel(QWidget):
         self.tabs.setDocumentMode(True)
         self.plots: dict[str, pg.PlotWidget] = {}
         self.iso_table = ValueTable(["Figure", "Value", "Unit"], numeric=(1,))
-        self.position_table = ValueTable([""], numeric=range(1, 30))
+        self.position_table = TextTable(numeric=range(1, 30))
         self.detail = ViewDetail()
         split = QSplitter(Qt.Orientation.Horizontal)
         split.addWidget(self.tabs)
@@ -115,7 +116,7 @@ class ResultsPanel(QWidget):
         self._queue = []
         for i in order:
             self._queue += self._draw_steps(figures[i])
-        self._queue.append(lambda: self._fill_tables(results))
+        self._queue += [lambda: self._fill_tables(results), lambda: self._fill_positions(results)]
         self._generation += 1
         generation = self._generation
         QTimer.singleShot(0, lambda: self._drain(generation))
@@ -136,7 +137,7 @@ class ResultsPanel(QWidget):
 
     @property
     def drawing(self) -> bool:
-        return bool(self._queue)
+        return bool(self._queue) or self._pending_table
 
     def _build_tabs(self, figures: list[Any]) -> None:
         """One plot per figure key, built once (later results reuse them: no relayout, no new widgets)."""
@@ -188,17 +189,29 @@ class ResultsPanel(QWidget):
     def _fill_tables(self, results: dict[str, Any]) -> None:
         try:
             summary_rows = lookup("lps_gui.report.summary", "summary_rows")
-            position_table = lookup("lps_gui.report.summary", "position_table")
         except Exception as exc:  # the report module is not there: show the raw figures
             log.warning("results: summary tables unavailable (%s)", exc)
             single = ((results.get("figures") or {}).get("single_run") or {})
             self.iso_table.set_rows([(k, _f(v), "") for k, v in single.items() if not isinstance(v, (dict, list))])
             return
         self.iso_table.set_rows([(r.name, r.text(), r.unit) for r in summary_rows(results)])
-        header, body = position_table(results)[:2]
-        self.position_table.setColumnCount(len(header))
-        self.position_table.setHorizontalHeaderLabels([h.replace("\n", " ") for h in header])
-        self.position_table.set_rows(body)
+
+    def _fill_positions(self, results: dict[str, Any]) -> None:
+        """Format the per-position table on a worker thread (hundreds of rows), then show it."""
+        try:
+            position_table = lookup("lps_gui.report.summary", "position_table")
+        except Exception:  # reported by _fill_tables
+            return
+        self._pending_table = True
+        job = Job("format positions", lambda: position_table(results)[:2], pass_progress=False)
+        job.succeeded.connect(lambda table, r=results: self._show_positions(table, r))
+        job.finished.connect(lambda: setattr(self, "_pending_table", False))
+        job.start()
+
+    def _show_positions(self, table: tuple[list[str], list[list[str]]], results: dict[str, Any]) -> None:
+        if results is self.results:
+            header, body = table
+            self.position_table.set_rows([h.replace("\n", " ") for h in header], body)
 
     # ------------------------------------------------------------------ clicking a point
     def _clicked(self, key: str, points: Any) -> None:

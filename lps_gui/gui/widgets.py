@@ -4,9 +4,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Callable, Sequence
 
-from PySide6.QtCore import Qt, Signal
+from PySide6.QtCore import QAbstractTableModel, QModelIndex, Qt, Signal
 from PySide6.QtWidgets import (
-    QDoubleSpinBox, QFileDialog, QFormLayout, QHBoxLayout, QHeaderView, QLineEdit, QPushButton, QTableWidget, QTableWidgetItem, QWidget,
+    QDoubleSpinBox, QFileDialog, QFormLayout, QTableView, QHBoxLayout, QHeaderView, QLineEdit, QPushButton, QTableWidget, QTableWidgetItem, QWidget,
 )
 
 
@@ -119,3 +119,57 @@ def add_rows(form: QFormLayout, rows: Sequence[tuple[str, QWidget]]) -> None:
     """Fill a form layout with (label, widget) rows."""
     for label, widget in rows:
         form.addRow(label, widget)
+
+
+class TextTableModel(QAbstractTableModel):
+    """Rows of text served on demand: a long table costs nothing until it is scrolled to."""
+
+    def __init__(self, numeric: Sequence[int] = ()) -> None:
+        super().__init__()
+        self.header: list[str] = []
+        self.rows: list[Sequence[str]] = []
+        self.numeric = set(numeric)
+
+    def set_rows(self, header: Sequence[str], rows: Sequence[Sequence[str]]) -> None:
+        self.beginResetModel()
+        self.header, self.rows = list(header), list(rows)
+        self.endResetModel()
+
+    def rowCount(self, parent: QModelIndex = QModelIndex()) -> int:  # noqa: B008 (Qt signature)
+        return 0 if parent.isValid() else len(self.rows)
+
+    def columnCount(self, parent: QModelIndex = QModelIndex()) -> int:  # noqa: B008
+        return 0 if parent.isValid() else len(self.header)
+
+    def data(self, index: QModelIndex, role: int = Qt.ItemDataRole.DisplayRole) -> object:
+        if role == Qt.ItemDataRole.DisplayRole:
+            return str(self.rows[index.row()][index.column()])
+        if role == Qt.ItemDataRole.TextAlignmentRole and index.column() in self.numeric:
+            return int(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
+        return None
+
+    def headerData(self, section: int, orientation: Qt.Orientation, role: int = Qt.ItemDataRole.DisplayRole) -> object:
+        if role == Qt.ItemDataRole.DisplayRole and orientation == Qt.Orientation.Horizontal:
+            return self.header[section] if section < len(self.header) else None
+        return None
+
+
+class TextTable(QTableView):
+    """A read-only view of a :class:`TextTableModel` (the per-position table of a long session)."""
+
+    def __init__(self, numeric: Sequence[int] = (), parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.model_ = TextTableModel(numeric)
+        self.setModel(self.model_)
+        self.verticalHeader().setVisible(False)
+        self.setAlternatingRowColors(True)
+        self.horizontalHeader().setStretchLastSection(True)
+        self.horizontalHeader().setResizeContentsPrecision(40)  # size columns from 40 rows, not all
+
+    def set_rows(self, header: Sequence[str], rows: Sequence[Sequence[str]]) -> None:
+        self.model_.set_rows(header, rows)
+        for c in range(len(header)):  # width from the header and the first rows only: cheap for any length
+            self.resizeColumnToContents(c)
+
+    def rowCount(self) -> int:
+        return self.model_.rowCount()

@@ -91,7 +91,7 @@ class CapturePanel(QWidget):
             ("Settle", self.settle_s), ("Frames per stop", self.frames_per_stop), ("Feed", self.feed_mm_min),
             ("", self.summary)])
 
-        self.folder = PathPicker("new, empty folder for the session", folder=True, start_dir=self.start_dir)
+        self.folder = PathPicker("empty: a new dated folder beside the last one", folder=True, start_dir=self.start_dir)
         sess = QGroupBox("Session")
         sl = QVBoxLayout(sess)
         sl.addWidget(self.folder)
@@ -165,8 +165,12 @@ class CapturePanel(QWidget):
         """Create the session in the chosen folder and capture the plan (both off the GUI thread)."""
         try:
             folder = self.folder.path()
-            if folder is None:
-                raise InputError("capture: choose a folder for the new session")
+            if folder is None:  # a fresh, dated folder beside the last one used
+                base = Path(self.start_dir() or Path.home())
+                if (base / "session.json").exists():
+                    base = base.parent
+                folder = base / time.strftime("session-%Y%m%d-%H%M%S")
+                self.folder.set_text(str(folder))
             stage, camera = self._rig()
             plan = self.plan()
         except Exception as exc:

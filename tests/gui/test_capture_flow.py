@@ -104,3 +104,18 @@ def test_capture_then_detect_and_estimate(qtbot, make_window, tmp_path):
     qtbot.waitUntil(lambda: "recomputed RMS" in rp.detail.title.text(), timeout=10000)
     x, _ = rp.detail.arrows.getData()
     assert len(x) == 2 * 54
+
+
+def test_empty_folder_gets_a_dated_session_beside_the_last_one(qtbot, make_window, tmp_path):
+    last = tmp_path / "old-session"
+    last.mkdir()
+    (last / "session.json").write_text("{}")
+    window, cap = capture_window(qtbot, make_window, SMALL_PLAN, "")
+    window.remember_folder(last)
+    cap.folder.set_text("")
+    with qtbot.waitSignal(cap.session_done, timeout=60000) as done:
+        cap.start_btn.click()
+    folder = done.args[0]
+    assert folder.parent == tmp_path and folder.name.startswith("session-")
+    assert len(records(folder)) == 5
+    qtbot.waitUntil(lambda: cap.start_btn.isEnabled(), timeout=5000)

@@ -58,8 +58,10 @@ class CapturePanel(QWidget):
     board_changed = Signal(object)  # Board
 
     def __init__(self, stage_ctl: Any, camera_panel: Any, board: Callable[[], Board],
-                 start_dir: Callable[[], str] | None = None, parent: QWidget | None = None) -> None:
+                 start_dir: Callable[[], str] | None = None, intrinsics: Callable[[], Any] | None = None,
+                 parent: QWidget | None = None) -> None:
         super().__init__(parent)
+        self.intrinsics = intrinsics or (lambda: None)  # the Intrinsics panel's calibration, embedded in new sessions
         self.stage_ctl = stage_ctl
         self.camera_panel = camera_panel
         self.board = board
@@ -180,6 +182,7 @@ class CapturePanel(QWidget):
         if simulated:
             self.set_board(sim_spec().rig.board)
         board = self.board()
+        intrinsics = self.intrinsics()
 
         def create() -> Any:
             from lps_gui.io.session import Session
@@ -190,7 +193,8 @@ class CapturePanel(QWidget):
                 spec = sim_spec()
                 return Session.create(folder, spec.rig.board, plan, intrinsics=spec.rig.intrinsics,
                                       camera=camera.properties(), stage=stage.describe(), truth=rig_truth(spec, camera))
-            return Session.create(folder, board, plan, camera=camera.properties(), stage=stage.describe())
+            return Session.create(folder, board, plan, intrinsics=intrinsics, camera=camera.properties(),
+                                  stage=stage.describe())
 
         self._run(folder, create, stage, camera)
 

@@ -53,6 +53,7 @@ class IntrinsicsPanel(QWidget):
 
     run_requested = Signal(object)  # a Job for the main window to run, or the exception that stopped it
     intrinsics_changed = Signal(object)  # CameraIntrinsics
+    saved = Signal(object)  # Path of the intrinsics file just written
 
     def __init__(self, start_dir: Callable[[], str] | None = None, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -274,6 +275,7 @@ class IntrinsicsPanel(QWidget):
             write_intrinsics(path, self.intrinsics)
             self.message.setText(f"saved {path.name}")
             log.info("intrinsics saved to %s", path)
+            self.saved.emit(path)
         except Exception as exc:
             log.error("intrinsics not saved: %s", one_line(exc))
             self.run_requested.emit(exc)

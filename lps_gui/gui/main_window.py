@@ -59,7 +59,8 @@ class MainWindow(QMainWindow):
         self.intrinsics_panel = IntrinsicsPanel(start_dir=self.last_folder)
         self.camera_panel = CameraPanel(board=self.intrinsics_panel.board)
         self.capture_panel = CapturePanel(self.stage_ctl, self.camera_panel, board=self.intrinsics_panel.board,
-                                          start_dir=self.last_folder)
+                                          start_dir=self.last_folder,
+                                          intrinsics=lambda: self.intrinsics_panel.intrinsics)
         self.estimation_panel = EstimationPanel(start_dir=self.last_folder)
         self.results_panel = ResultsPanel()
 
@@ -169,6 +170,7 @@ class MainWindow(QMainWindow):
         for panel in (self.estimation_panel, self.capture_panel, self.intrinsics_panel):
             panel.run_requested.connect(self._panel_job)
         self.estimation_panel.results_ready.connect(self._on_results)
+        self.intrinsics_panel.saved.connect(lambda p: self.estimation_panel.intrinsics.set_text(str(p)))
         self.capture_panel.session_done.connect(self._on_capture_done)
         self.capture_panel.failed.connect(self.show_error)
         self.capture_panel.board_changed.connect(self.intrinsics_panel.set_board)

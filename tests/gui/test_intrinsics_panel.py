@@ -46,6 +46,8 @@ def test_calibrate_show_save_and_load(qtbot, window, image_set, tmp_path):
     for name in ("cam.json", "cam.yaml"):
         panel.save(tmp_path / name)
         assert (tmp_path / name).exists()
+    # the saved file is what the next estimation uses
+    assert window.estimation_panel.intrinsics.text() == str(tmp_path / "cam.yaml")
     panel.set_intrinsics(rig.intrinsics)  # something else on screen
     panel.load(tmp_path / "cam.yaml")
     assert np.allclose(panel.intrinsics.vector(), intr.vector(), rtol=1e-6)

@@ -20,7 +20,6 @@ from lps_gui.camera.base import Camera
 from lps_gui.core.board import Board
 from lps_gui.gui.preview import PreviewGrabber
 from lps_gui.gui.sources import CAMERA_FOLLOWS_STAGE, camera_choices, open_camera_source
-from lps_gui.gui.workers import one_line
 
 log = logging.getLogger(__name__)
 

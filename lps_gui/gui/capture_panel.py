@@ -23,7 +23,7 @@ from lps_gui.capture.plans import plan_duration_s
 from lps_gui.core.plan import Plan
 from lps_gui.errors import InputError
 from lps_gui.gui.services import lookup
-from lps_gui.gui.widgets import PathPicker, add_rows, double_spin
+from lps_gui.gui.widgets import PathPicker, add_rows, double_spin, stack
 from lps_gui.gui.workers import Job, one_line
 
 log = logging.getLogger(__name__)
@@ -111,14 +111,7 @@ class CapturePanel(QWidget):
         self.progress = QProgressBar()
         self.eta = QLabel("idle")
 
-        lay = QVBoxLayout(self)
-        lay.setContentsMargins(6, 6, 6, 6)
-        lay.addWidget(plan_box)
-        lay.addWidget(sess)
-        lay.addLayout(row)
-        lay.addWidget(self.progress)
-        lay.addWidget(self.eta)
-        lay.addStretch(1)
+        stack(self, [plan_box, sess, row, self.progress, self.eta]).addStretch(1)
 
         for w in (self.start_mm, self.stop_mm, self.step_mm, self.overshoot_mm, self.settle_s, self.feed_mm_min):
             w.valueChanged.connect(self.update_summary)

@@ -12,11 +12,11 @@ from typing import Any
 from PySide6.QtCore import Signal
 from PySide6.QtWidgets import (
     QCheckBox, QComboBox, QFormLayout, QGroupBox, QHBoxLayout, QLabel, QProgressBar, QPushButton,
-    QVBoxLayout, QWidget,
+    QWidget,
 )
 
 from lps_gui.gui.services import lookup
-from lps_gui.gui.widgets import PathPicker, ValueTable, add_rows, double_spin, fmt
+from lps_gui.gui.widgets import PathPicker, ValueTable, add_rows, double_spin, fmt, stack
 from lps_gui.gui.workers import Job
 
 METHODS = (("Joint LM (all positions at once)", "joint"), ("Hybrid (paper: PnP + LM + grid search)", "hybrid"),
@@ -141,13 +141,7 @@ class EstimationPanel(QWidget):
         row.addWidget(self.progress, 1)
 
         self.table = ValueTable(["Parameter", "Value", "σ", "Unit"])
-        lay = QVBoxLayout(self)
-        lay.setContentsMargins(6, 6, 6, 6)
-        lay.addWidget(inputs)
-        lay.addWidget(opts)
-        lay.addLayout(row)
-        lay.addWidget(self.message)
-        lay.addWidget(self.table, 1)
+        stack(self, [inputs, opts, row, self.message, (self.table, 1)])
 
         self.job: Job | None = None
         self.last_results: dict[str, Any] | None = None

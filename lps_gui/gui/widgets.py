@@ -6,7 +6,7 @@ from typing import Callable, Sequence
 
 from PySide6.QtCore import QAbstractTableModel, QModelIndex, Qt, Signal
 from PySide6.QtWidgets import (
-    QDoubleSpinBox, QFileDialog, QFormLayout, QTableView, QHBoxLayout, QHeaderView, QLineEdit, QPushButton, QTableWidget, QTableWidgetItem, QWidget,
+    QDoubleSpinBox, QFileDialog, QFormLayout, QLayout, QTableView, QVBoxLayout, QHBoxLayout, QHeaderView, QLineEdit, QPushButton, QTableWidget, QTableWidgetItem, QWidget,
 )
 
 
@@ -173,3 +173,17 @@ class TextTable(QTableView):
 
     def rowCount(self) -> int:
         return self.model_.rowCount()
+
+
+def stack(owner: QWidget, items: Sequence[QWidget | QLayout | tuple[QWidget, int]], margin: int = 6) -> QVBoxLayout:
+    """Lay ``items`` out top to bottom in ``owner``; a (widget, stretch) pair takes the spare height."""
+    lay = QVBoxLayout(owner)
+    lay.setContentsMargins(margin, margin, margin, margin)
+    for item in items:
+        if isinstance(item, tuple):
+            lay.addWidget(*item)
+        elif isinstance(item, QLayout):
+            lay.addLayout(item)
+        else:
+            lay.addWidget(item)
+    return lay

@@ -10,22 +10,21 @@ the solve, their own position still reported), and 6-DOF error motions.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from lps_gui.core.allocator import tune_allocator
-from lps_gui.core.hybrid import HybridOptions, initial_line, solve_hybrid, view_costs
+from lps_gui.core.estimate_types import METHODS, EstimateOptions, LpsEstimate, step_pairs
+from lps_gui.core.hybrid import initial_line, solve_hybrid, view_costs
 from lps_gui.core.joint_lm import LmOptions, LpsState, linearize, solve_joint, solve_positions_only
 from lps_gui.core.observations import Observations
 from lps_gui.core.outliers import position_outliers, reprojection_outliers
+from lps_gui.core.per_view import estimate_per_view
 from lps_gui.core.pnp import solve_pnp
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
-from lps_gui.core.rotation import chordal_mean, skew
 from lps_gui.core.six_dof import SixDof, refine_view_poses, six_dof_motion
 from lps_gui.core.uncertainty import (
-    ArrowheadInverse,
     arrowhead_inverse,
     intrinsics_sensitivity,
     noise_variance,
@@ -33,90 +32,9 @@ from lps_gui.core.uncertainty import (
 )
 from lps_gui.errors import DegenerateGeometryError, InputError
 
-METHODS = ("joint", "hybrid", "pnp", "calibrate")
+__all__ = ["METHODS", "EstimateOptions", "LpsEstimate", "estimate"]
+
 INIT_VIEWS = 24  # per-view PnP on this many spread views initializes the joint LM
-
-
-@dataclass
-class EstimateOptions:
-    """What to estimate and how; every field lands in results.json."""
-
-    method: str = "joint"
-    robust: bool = False  # Huber loss in the joint LM
-    outlier_k: float = 5.0  # robust sigmas for an outlier view
-    detect_outliers: bool = True
-    max_outlier_rounds: int = 4
-    self_calibrate: bool = False  # intrinsics free with their covariance as prior (SPEC 4.6)
-    six_dof: bool = True
-    hybrid: HybridOptions = field(default_factory=HybridOptions)
-
-    def __post_init__(self) -> None:
-        if self.method not in METHODS:
-            raise InputError(f"method {self.method!r} is unknown; choose one of {', '.join(METHODS)}")
-        if self.outlier_k <= 0:
-            raise InputError("outlier_k must be positive (robust sigmas, default 5)")
-
-    def to_dict(self) -> dict[str, Any]:
-        from dataclasses import asdict
-
-        return asdict(self)
-
-
-@dataclass
-class LpsEstimate:
-    """Everything the estimator found; ``pipeline.estimate`` turns it into results.json."""
-
-    method: str
-    options: EstimateOptions
-    state: LpsState  # positions s relative to the reference view
-    reference_view: int
-    usable: np.ndarray  # shape (K,) bool: board seen
-    used: np.ndarray  # shape (K,) bool: in the final solve
-    outlier: np.ndarray  # shape (K,) bool
-    outlier_reason: list[str]
-    sigma_px: float  # a-posteriori noise of one corner coordinate
-    sigma_s_mm: np.ndarray  # shape (K,) from noise
-    sigma_total_mm: np.ndarray  # shape (K,) noise + intrinsics
-    step_sigma_mm: np.ndarray  # shape (K,): sigma of s_i - s_prev (same run, direction); NaN for the first
-    rms_px: np.ndarray  # shape (K,) per-view RMS reprojection error under the model
-    n_corners: np.ndarray  # shape (K,)
-    parameter_sigmas: dict[str, Any]
-    iterations: int
-    converged: bool
-    n_observations: int
-    dof: int
-    six_dof: SixDof | None
-    flags: list[dict[str, Any]]
-    timings_s: dict[str, float]
-    inverse: ArrowheadInverse | None = None  # of the final solve, in units of sigma_px^2
-    intrinsics_gradient: np.ndarray | None = None  # shape (K, 9): d s / d intrinsics
-
-    def linear_functional_sigma(self, a: np.ndarray) -> tuple[float, float]:
-        """Sigma (mm) of sum_i a_i s_i from noise alone and in total (with intrinsics).
-
-        Uses the full covariance, so correlations between positions (a common
-        distance or direction error is a scale error of every position) count.
-        """
-        a = np.where(self.used, np.asarray(a, dtype=float), 0.0)
-        if self.inverse is None:
-            var = float(np.sum((a * self.sigma_s_mm) ** 2))
-            return np.sqrt(var), np.sqrt(var)
-        wa = self.inverse.W.T @ a
-        var = self.sigma_px**2 * float(np.sum(a * a * self.inverse.D_inv) + wa @ self.inverse.S_inv @ wa)
-        total = var
-        if self.intrinsics_gradient is not None and self.state.intrinsics.covariance is not None:
-            ga = self.intrinsics_gradient.T @ a
-            total += float(ga @ self.state.intrinsics.covariance @ ga)
-        return float(np.sqrt(var)), float(np.sqrt(total))
-
-    @property
-    def positions_mm(self) -> np.ndarray:
-        return self.state.s
-
-    def deviation_um(self, target_mm: np.ndarray) -> np.ndarray:
-        """measured - (target - target of the reference), um; zero at the reference."""
-        t = np.asarray(target_mm, dtype=float)
-        return 1e3 * (self.state.s - (t - t[self.reference_view]))
 
 
 def estimate(
@@ -138,11 +56,10 @@ def estimate(
     progress(0, 4, "initializing")
 
     if opt.method in ("pnp", "calibrate"):
-        return _estimate_per_view(obs, opt, usable, ref, X, progress, cancel, timings, t_start)
+        return estimate_per_view(obs, opt, usable, ref, X, progress, cancel, timings, t_start)
 
     state = _initial_state(obs, usable, ref, X, full_pnp=opt.method == "hybrid")
     timings["init"] = time.perf_counter() - t_start
-    excluded = ~usable
     outlier = np.zeros(obs.K, dtype=bool)
     reasons = [""] * obs.K
     flags: list[dict[str, Any]] = []
@@ -280,19 +197,6 @@ def _view_rms(state: LpsState, X: np.ndarray, corners: np.ndarray, mask: np.ndar
     return np.where(n > 0, np.sqrt(cost / np.maximum(2 * n, 1)), np.nan)
 
 
-def _step_pairs(obs: Observations) -> tuple[np.ndarray, np.ndarray]:
-    """(previous, current) capture pairs inside each run and direction, in capture order."""
-    prev, cur = [], []
-    last: dict[tuple[int, float], int] = {}
-    for i in range(obs.K):
-        key = (int(obs.run[i]), float(obs.direction[i]))
-        if key in last:
-            prev.append(last[key])
-            cur.append(i)
-        last[key] = i
-    return np.array(prev, dtype=int), np.array(cur, dtype=int)
-
-
 def _finish(
     obs: Observations,
     opt: EstimateOptions,
@@ -341,7 +245,7 @@ def _finish(
         var_total[alone] = var_o
     var_s[~usable] = np.nan
     var_total[~usable] = np.nan
-    prev, cur = _step_pairs(obs)
+    prev, cur = step_pairs(obs.run, obs.direction)
     step_sigma = np.full(obs.K, np.nan)
     both = used[prev] & used[cur]
     if both.any():
@@ -411,95 +315,3 @@ def _six_dof(
     return six
 
 
-def _estimate_per_view(
-    obs: Observations,
-    opt: EstimateOptions,
-    usable: np.ndarray,
-    ref: int,
-    X: np.ndarray,
-    progress: ProgressFn,
-    cancel: CancelToken | None,
-    timings: dict[str, float],
-    t_start: float,
-) -> LpsEstimate:
-    """Eq. 3 (``pnp``) or Eq. 2 (``calibrate``): independent poses, positions along their PCA line."""
-    intr = obs.intrinsics
-    idx = np.flatnonzero(usable)
-    if opt.method == "calibrate":
-        intr = _calibrate_all(obs, idx, X)
-    R, t, ok = solve_pnp(X, obs.corners_px, intr)
-    usable = usable & ok
-    mask_all = obs.mask() & usable[:, None]
-    if cancel is not None:
-        cancel.check("estimation")
-    poses = refine_view_poses(R, t, X, obs.corners_px, mask_all, intr)
-    C = -np.einsum("kji,kj->ki", poses.R, poses.t)
-    Cv = C[usable]
-    centre = Cv.mean(axis=0)
-    u = np.linalg.svd(Cv - centre, full_matrices=False)[2][0]
-    if np.dot((Cv - centre) @ u, obs.target_mm[usable] - obs.target_mm[usable].mean()) < 0:
-        u = -u
-    s = (C - C[ref]) @ u
-    n_obs = int(2 * mask_all.sum())
-    n_params = 6 * int(usable.sum())
-    sigma2 = noise_variance(float(poses.ssr[usable].sum()), n_obs, n_params)
-    Rt = np.transpose(poses.R, (0, 2, 1))
-    dC = np.concatenate([-Rt @ skew(poses.t), -Rt], axis=2)  # shape (K, 3, 6)
-    ju = np.einsum("i,kib->kb", u, dC)
-    var_c = sigma2 * np.einsum("ka,kab,kb->k", ju, poses.cov_unit, ju)
-    var_s = var_c + var_c[ref]
-    var_s[ref] = 0.0
-    var_s[~usable] = np.nan
-    R_common = chordal_mean(poses.R[usable])
-    l0 = -R_common @ C[ref]
-    n = -R_common @ u
-    state = LpsState(R_common, l0, n, np.where(usable, s, np.nan), intr)
-    rms = np.where(usable, np.sqrt(poses.ssr / np.maximum(2 * mask_all.sum(axis=1), 1)), np.nan)
-    six = six_dof_motion(poses, R_common, usable, sigma2) if opt.six_dof else None
-    prev, cur = _step_pairs(obs)
-    step_sigma = np.full(obs.K, np.nan)
-    step_sigma[cur] = np.sqrt(var_c[prev] + var_c[cur])
-    timings["total"] = time.perf_counter() - t_start
-    progress(4, 4, "done")
-    return LpsEstimate(
-        method=opt.method,
-        options=opt,
-        state=state,
-        reference_view=ref,
-        usable=usable,
-        used=usable.copy(),
-        outlier=np.zeros(obs.K, dtype=bool),
-        outlier_reason=[""] * obs.K,
-        sigma_px=float(np.sqrt(sigma2)),
-        sigma_s_mm=np.sqrt(var_s),
-        sigma_total_mm=np.sqrt(var_s),
-        step_sigma_mm=step_sigma,
-        rms_px=rms,
-        n_corners=mask_all.sum(axis=1),
-        parameter_sigmas={},
-        iterations=1,
-        converged=True,
-        n_observations=n_obs,
-        dof=n_obs - n_params,
-        six_dof=six,
-        flags=[],
-        timings_s=timings,
-    )
-
-
-def _calibrate_all(obs: Observations, idx: np.ndarray, X: np.ndarray):
-    """Eq. 2: cv2.calibrateCamera on every view, started from the given intrinsics."""
-    import cv2
-
-    objs, imgs = [], []
-    for i in idx:
-        seen = np.all(np.isfinite(obs.corners_px[i]), axis=-1)
-        objs.append(X[seen].astype(np.float32))
-        imgs.append(obs.corners_px[i, seen].astype(np.float32))
-    intr = obs.intrinsics
-    _, K, dist, _, _ = cv2.calibrateCamera(
-        objs, imgs, intr.image_size, intr.camera_matrix.copy(), intr.dist.copy(), flags=cv2.CALIB_USE_INTRINSIC_GUESS
-    )
-    from dataclasses import replace
-
-    return replace(intr, camera_matrix=K, dist=dist.ravel()[:5])

@@ -32,7 +32,20 @@ def make_app(argv: list[str] | None = None):  # -> QApplication
     app = QApplication.instance() or QApplication(argv or [sys.argv[0]])
     app.setOrganizationName(ORGANIZATION)
     app.setApplicationName(APPLICATION)
+    app.setWindowIcon(app_icon())
     return app
+
+
+def app_icon():  # -> QIcon
+    """The application icon with every raster size, so each desktop picks a crisp one."""
+    from PySide6.QtGui import QIcon
+
+    from lps_gui.resources import app_icon_paths
+
+    icon = QIcon()
+    for path in app_icon_paths():
+        icon.addFile(str(path))
+    return icon
 
 
 def make_settings(path: Path | None):  # -> QSettings

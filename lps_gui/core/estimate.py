@@ -73,7 +73,6 @@ def estimate(
         timings["solve"] = timings.get("solve", 0.0) + time.perf_counter() - t0
         if not opt.detect_outliers:
             break
-        state.s[~used & usable] = _positions_alone(state, X, obs.corners_px, mask_all, ~used & usable)
         rms = _view_rms(state, X, obs.corners_px, mask_all)
         eq, _ = linearize(state, X, obs.corners_px, mask)
         sigma2 = noise_variance(eq.ssr, eq.n_obs, 8 + int(used.sum()) - 1)

@@ -87,10 +87,6 @@ class LpsEstimate:
             total += float(ga @ self.state.intrinsics.covariance @ ga)
         return float(np.sqrt(var)), float(np.sqrt(total))
 
-    @property
-    def positions_mm(self) -> np.ndarray:
-        return self.state.s
-
     def deviation_um(self, target_mm: np.ndarray) -> np.ndarray:
         """measured - (target - target of the reference), um; zero at the reference."""
         t = np.asarray(target_mm, dtype=float)

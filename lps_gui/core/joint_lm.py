@@ -13,7 +13,7 @@ corner mask and, optionally, a Huber loss (iteratively reweighted).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -328,10 +328,6 @@ def solve_joint(
                 converged = True
                 break
     return LmResult(state, eq.weights, eq, it, converged, history)
-
-
-def with_positions(state: LpsState, s: np.ndarray) -> LpsState:
-    return replace(state.copy(), s=np.asarray(s, dtype=float).copy())
 
 
 def solve_positions_only(

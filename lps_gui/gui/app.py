@@ -76,8 +76,6 @@ def settle(widget, timeout_s: float = 30.0) -> None:
 
 def render_to_png(window, path: Path, size: tuple[int, int] | None = None) -> Path:
     """Lay out ``window`` at ``size``, let it paint, and save what it shows."""
-    from PySide6.QtWidgets import QApplication
-
     if size:
         window.resize(*size)
     window.show()

@@ -17,7 +17,7 @@ from PySide6.QtCore import QObject, QTimer, Signal
 
 from lps_gui.errors import HardwareError
 from lps_gui.gui.workers import one_line
-from lps_gui.hardware.stage import Stage, StageEvent, StageStatus
+from lps_gui.hardware.stage import Stage, StageStatus
 
 log = logging.getLogger(__name__)
 

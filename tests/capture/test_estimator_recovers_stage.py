@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from lps_gui.io.session import Session
-from tests.capture.helpers import PLAN20, start_capture
+from tests.capture.helpers import start_capture
 
 pytestmark = pytest.mark.skipif(
     importlib.util.find_spec("lps_gui.pipeline.estimate") is None or importlib.util.find_spec("lps_gui.pipeline.detect") is None,

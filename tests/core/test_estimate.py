@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 from lps_gui.core.estimate import EstimateOptions, estimate
-from lps_gui.core.hybrid import HybridOptions
 from lps_gui.core.joint_lm import LpsState, linearize
 from lps_gui.core.simulate import observations_of, paper_rig_spec, simulate_views, small_spec
 from lps_gui.core.stage_errors import StageErrorModel

@@ -5,11 +5,9 @@ import json
 
 import pytest
 
-pytest.importorskip("lps_gui.capture.engine")
-
-from lps_gui.core.clock import SimClock  # noqa: E402
-from lps_gui.core.plan import Plan  # noqa: E402
-from tests.gui.conftest import connect_sim  # noqa: E402
+from lps_gui.core.clock import SimClock
+from lps_gui.core.plan import Plan
+from tests.gui.conftest import connect_sim
 
 pytestmark = pytest.mark.gui
 

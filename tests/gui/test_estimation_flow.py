@@ -6,11 +6,8 @@ from pathlib import Path
 
 import pytest
 
-pytest.importorskip("lps_gui.pipeline.estimate")
-pytest.importorskip("lps_gui.pipeline.simulate_points")
-
-from lps_gui.core.simulate import preset  # noqa: E402
-from lps_gui.pipeline.simulate_points import simulate_point_session  # noqa: E402
+from lps_gui.core.simulate import preset
+from lps_gui.sim.points import simulate_point_session
 
 pytestmark = pytest.mark.gui
 
@@ -81,7 +78,6 @@ def test_estimate_plots_click_and_export(qtbot, window, session_dir, tmp_path, g
     files = window.export_csv(out)
     assert [f.name for f in files] == ["positions.csv", "summary.csv"]
     assert len((out / "positions.csv").read_text().strip().splitlines()) == K + 1
-    pytest.importorskip("lps_gui.report.pdf")
     job = window.export_pdf(out / "report.pdf")
     with qtbot.waitSignal(job.finished, timeout=60000):
         pass

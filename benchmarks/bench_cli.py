@@ -145,7 +145,6 @@ def _pool_rate(fn, tasks, workers: int, n: int) -> float:
 
 
 def bench_detect(root: Path, n_images: int, workers: int) -> None:
-    from lps_gui.io.board_file import read_board
     from lps_gui.io.session import Session
 
     folder = root / f"rendered-{n_images}"
@@ -155,8 +154,9 @@ def bench_detect(root: Path, n_images: int, workers: int) -> None:
         subprocess.run(LPS + ["simulate", "--preset", "paper-rig", "--stops", str(n_images), str(folder)],
                        check=True, stdout=subprocess.DEVNULL)
         print(f"rendered {n_images} images in {time.perf_counter() - t0:.0f} s -> {folder}")
-    paths = [str(folder / r.file) for r in Session.open(folder).records()]
-    board = read_board(folder / "board.json")
+    session = Session.open(folder)
+    paths = [str(folder / r.file) for r in session.records()]
+    board = session.board()
     chunks = [paths[i::workers] for i in range(workers)]
     _pool_rate(_decode, chunks, workers, len(paths))  # warm the page cache
     decode = _pool_rate(_decode, chunks, workers, len(paths))

@@ -23,6 +23,7 @@ COMMANDS = {
     "report": "lps_gui.cli.report",
     "capture": "lps_gui.cli.capture",
     "emulate-grbl": "lps_gui.cli.emulate_grbl",
+    "plan-rig": "lps_gui.cli.plan_rig",
 }
 
 LOG_PATH = Path(tempfile.gettempdir()) / "lps-calib.log"

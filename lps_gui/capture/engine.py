@@ -22,14 +22,13 @@ from __future__ import annotations
 
 import threading
 import time
-from typing import Any, Callable
+from typing import Any, Callable, Protocol
 
 import numpy as np
 
 from lps_gui.camera.base import Camera
 from lps_gui.capture import events as ev
 from lps_gui.capture.events import CaptureEvent, CaptureListener, CaptureProgress, CaptureSummary
-from lps_gui.capture.truth import append_truth, finalize_truth, prune_truth
 from lps_gui.core.clock import Clock, RealClock
 from lps_gui.core.plan import Plan, PlannedStop
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
@@ -38,7 +37,12 @@ from lps_gui.hardware.stage import EventSource, Stage
 from lps_gui.io.atomic import check_writable
 from lps_gui.io.session import IMAGES_DIR, CaptureRecord, Session
 
-TruthSource = Callable[[], dict[str, Any]]
+class TruthRecorder(Protocol):
+    """What a simulated rig records beside the frames (``lps_gui.sim.truth.TruthRecorder``)."""
+
+    def prune(self, session: Session) -> None: ...  # before a (re)start: keep the truth of listed frames only
+    def record(self, session: Session, index: int) -> None: ...  # durably, before the frame's capture line
+    def finalize(self, session: Session) -> None: ...  # the plan is complete
 
 
 class _Stop(Exception):
@@ -98,9 +102,8 @@ class CaptureEngine:
     session : the session folder; its plan says what to capture.
     clock : settle time and ETA; the stage's clock when it has one, else real time.
     encode : image file extension, lossless (".png" default).
-    truth_source : for a simulated rig, returns the true pose at the grab as
-        a JSON-able dict; appended to truth.jsonl and folded into
-        session.json's ``truth`` when the capture completes.
+    truth_recorder : for a simulated rig, records the true pose at each grab
+        (see :mod:`lps_gui.sim.truth`); the engine only says when.
     move_timeout_s : minimum time a move may take before it is an error.
 
     :meth:`pause`, :meth:`resume`, :meth:`abort` and :meth:`progress` are
@@ -115,7 +118,7 @@ class CaptureEngine:
         clock: Clock | None = None,
         encode: str = ".png",
         *,
-        truth_source: TruthSource | None = None,
+        truth_recorder: TruthRecorder | None = None,
         move_timeout_s: float = 60.0,
     ) -> None:
         self.stage = stage
@@ -123,7 +126,7 @@ class CaptureEngine:
         self.session = session
         self.clock: Clock = clock or getattr(stage, "clock", None) or RealClock()
         self.encode = encode if encode.startswith(".") else "." + encode
-        self.truth_source = truth_source
+        self.truth_recorder = truth_recorder
         self.move_timeout_s = float(move_timeout_s)
         self._plan = session.plan()
         self._total = self._plan.n_frames()
@@ -216,8 +219,8 @@ class CaptureEngine:
                     self.camera.open()
                 check_writable(self.session.folder / IMAGES_DIR, len(remaining) * bytes_per_frame(self.camera))
                 check_plan_in_travel(self._plan, self.stage)
-            if self.truth_source is not None:
-                prune_truth(self.session)
+            if self.truth_recorder is not None:
+                self.truth_recorder.prune(self.session)
             self._emit(CaptureEvent("started", f"{len(remaining)} of {self._total} frames to capture"))
             progress(self._total - len(remaining), self._total, "starting")
             for stop in remaining:
@@ -245,8 +248,8 @@ class CaptureEngine:
                 self._state = ev.PAUSED
             raise
         else:
-            if self.truth_source is not None:
-                finalize_truth(self.session)
+            if self.truth_recorder is not None:
+                self.truth_recorder.finalize(self.session)
             self._finish(ev.DONE, f"capture complete: {self._total} frames")
         finally:
             with self._lock:
@@ -296,8 +299,8 @@ class CaptureEngine:
         frame = self.camera.grab()
         data = encode_image(frame.image, self.encode)
         rel, sha = self.session.write_image(image_name(stop.index, self.encode), data)
-        if self.truth_source is not None:
-            append_truth(self.session, stop.index, self.truth_source())
+        if self.truth_recorder is not None:
+            self.truth_recorder.record(self.session, stop.index)
         record = CaptureRecord(
             index=stop.index,
             run=stop.run,

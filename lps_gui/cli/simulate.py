@@ -80,19 +80,19 @@ def run(args: argparse.Namespace) -> int:
         print(f"wrote the rig description of preset {spec.name} to {out}; edit it and pass --rig {out}")
         return 0
     if args.intrinsics_set:
-        from lps_gui.pipeline.simulate_images import simulate_intrinsics_set
+        from lps_gui.sim.images import simulate_intrinsics_set
 
         paths = simulate_intrinsics_set(out, spec.rig.board, spec.rig.intrinsics, n_views=args.views, seed=args.seed,
                                         progress=ProgressBar("render"))
         print(f"wrote {len(paths)} calibration views to {out}")
         return 0
     if args.points:
-        from lps_gui.pipeline.simulate_points import simulate_point_session
+        from lps_gui.sim.points import simulate_point_session
 
         session = simulate_point_session(spec, out)
         print(f"wrote point-level session ({spec.plan.n_frames()} views, preset {spec.name}) to {session.folder}")
         return 0
-    from lps_gui.pipeline.simulate_images import simulate_image_session
+    from lps_gui.sim.images import simulate_image_session
 
     session = simulate_image_session(spec, out, progress=ProgressBar("render"))
     print(f"wrote rendered session ({spec.plan.n_frames()} images, preset {spec.name}) to {session.folder}")

@@ -14,7 +14,6 @@ captures.jsonl: a re-run detects only the views not yet in it.
 from __future__ import annotations
 
 import logging
-import multiprocessing
 import os
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -24,6 +23,7 @@ from typing import Sequence
 
 import numpy as np
 
+from lps_gui.camera.processes import process_context
 from lps_gui.core.board import Board
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import Cancelled, InputError
@@ -71,18 +71,6 @@ def load_grey(path: str, sha256: str | None = None, image_size: tuple[int, int] 
     if image_size is not None and (image.shape[1], image.shape[0]) != tuple(image_size):
         return None, f"image is {image.shape[1]}x{image.shape[0]} but the camera is {image_size[0]}x{image_size[1]}"
     return image, ""
-
-
-def process_context() -> "multiprocessing.context.BaseContext":
-    """Worker processes are spawned, never forked.
-
-    A forked child inherits OpenCV's thread pool in whatever state the
-    parent's threads left it (and a GUI's threads' locks): the child then
-    hangs in its first cv2.setNumThreads or parallel call. Spawned workers
-    start clean; the price is ~0.5 s of start-up, and a calling script needs
-    the usual ``if __name__ == "__main__":`` guard.
-    """
-    return multiprocessing.get_context("spawn")
 
 
 def _init_worker() -> None:

@@ -29,7 +29,7 @@ from lps_gui.io.corners_vnl import read_corners_vnl
 from lps_gui.io.intrinsics_file import intrinsics_to_dict, read_intrinsics
 from lps_gui.io.results_file import FORMAT, write_results
 from lps_gui.io.session import SESSION_FILE, Session
-from lps_gui.pipeline.truth import session_truth
+from lps_gui.sim.truth import session_truth, truth_comparison  # truth_comparison re-exported for callers
 
 HYBRID_KEYS = {"grid_window_mm": "window_mm", "grid_resolution_mm": "resolution_mm", "grid_points": "grid_points",
                "threshold_px": "threshold_rms_px", "max_rounds": "max_rounds"}
@@ -231,75 +231,6 @@ def scale_with_uncertainty(obs: Observations, est: LpsEstimate, valid: np.ndarra
         "scale_sigma_ppm": _f(1e6 * sigma_noise),
         "scale_sigma_total_ppm": _f(1e6 * sigma_total),
     }
-
-
-def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, np.ndarray], positions: list[dict]) -> dict[str, Any]:
-    """Errors against the simulator's truth; also puts truth beside each position for plots."""
-    by_index = {int(i): k for k, i in enumerate(truth["index"])}
-    rows = np.array([by_index.get(int(i), -1) for i in obs.index])
-    have = rows >= 0
-    if not have[est.reference_view]:
-        return {"note": "truth does not cover the reference capture"}
-    axis = np.where(have, truth["axis_mm"][rows], np.nan)
-    s_true = axis - axis[est.reference_view]
-    err_um = 1e3 * (est.state.s - s_true)
-    ok = est.used & have
-    z = err_um[ok] / np.maximum(1e3 * est.sigma_s_mm[ok], 1e-12)
-    z = z[np.isfinite(z) & (np.arange(obs.K)[ok] != est.reference_view)]
-    nominal = obs.target_mm - obs.target_mm[est.reference_view]
-    true_dev = 1e3 * (s_true - nominal)
-    # the estimate's straightness is relative to a least-squares line and its
-    # angles to the common rotation: put truth in the same reference
-    straight = _detrended(truth.get("straightness_um"), rows, have, ok, obs.target_mm)
-    angles = truth.get("angles_urad")
-    if angles is not None:
-        angles = angles - np.mean(angles[rows[ok]], axis=0)
-    for k, row in enumerate(positions):
-        if not have[k]:
-            continue
-        row["truth_deviation_um"] = _f(true_dev[k])
-        if straight is not None:
-            row["truth_straightness_um_1"] = _f(straight[k, 0])
-            row["truth_straightness_um_2"] = _f(straight[k, 1])
-        if angles is not None:
-            for j, key in enumerate(("roll", "pitch", "yaw")):
-                row[f"truth_{key}_urad"] = _f(angles[rows[k], j])
-    injected = sorted(set(truth.get("replaced_views", [])) | set(truth.get("bumped_views", [])))
-    flagged = sorted(int(i) for i in obs.index[est.outlier])
-    out = {
-        "position_rms_error_um": _f(np.sqrt(np.mean(err_um[ok] ** 2))),
-        "position_max_abs_error_um": _f(np.max(np.abs(err_um[ok]))),
-        "mean_sigma_um": _f(np.nanmean(1e3 * est.sigma_s_mm[ok])),
-        "z_mean_square": _f(np.mean(z**2)) if z.size else None,
-        "injected_outliers": injected,
-        "flagged_outliers": flagged,
-    }
-    if "plane_mm" in truth:
-        # what the constant-orientation model can see: displacement at the board plane (Abbe offset = distance)
-        plane = np.where(have, truth["plane_mm"][np.maximum(rows, 0)], np.nan)
-        plane_err_um = 1e3 * (est.state.s - (plane - plane[est.reference_view]))
-        others = ok & (np.arange(obs.K) != est.reference_view)
-        zp = plane_err_um[others] / np.maximum(1e3 * est.sigma_s_mm[others], 1e-12)
-        out["board_plane_rms_error_um"] = _f(np.sqrt(np.mean(plane_err_um[ok] ** 2)))
-        out["board_plane_max_abs_error_um"] = _f(np.max(np.abs(plane_err_um[ok])))
-        out["board_plane_z_mean_square"] = _f(np.mean(zp**2)) if zp.size else None
-        out["abbe_rms_um"] = _f(1e3 * np.sqrt(np.mean(((plane - axis) - (plane - axis)[est.reference_view])[ok] ** 2)))
-        for k, row in enumerate(positions):
-            if have[k]:
-                row["truth_plane_deviation_um"] = _f(1e3 * (plane[k] - plane[est.reference_view] - nominal[k]))
-    return out
-
-
-def _detrended(
-    straight: np.ndarray | None, rows: np.ndarray, have: np.ndarray, ok: np.ndarray, target_mm: np.ndarray
-) -> np.ndarray | None:
-    """Truth straightness per view (K, 2) minus its least-squares line over the used views."""
-    if straight is None:
-        return None
-    per_view = np.where(have[:, None], straight[np.maximum(rows, 0)], np.nan)
-    A = np.stack([np.ones(ok.sum()), target_mm[ok]], axis=1)
-    coef = np.linalg.lstsq(A, per_view[ok], rcond=None)[0]
-    return per_view - np.stack([np.ones_like(target_mm), target_mm], axis=1) @ coef
 
 
 def summary_rows(results: dict[str, Any]) -> list[tuple[str, Any, str]]:

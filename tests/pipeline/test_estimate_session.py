@@ -8,7 +8,7 @@ from lps_gui.cli import main
 from lps_gui.core.simulate import small_spec
 from lps_gui.io.results_file import read_results
 from lps_gui.pipeline.estimate import estimate_session
-from lps_gui.pipeline.simulate_points import simulate_point_session
+from lps_gui.sim.points import simulate_point_session
 
 
 @pytest.fixture()

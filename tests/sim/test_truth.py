@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import json
 
-from lps_gui.capture.truth import TRUTH_FILE, append_truth, finalize_truth, prune_truth, read_truth
+from lps_gui.sim.truth import TRUTH_FILE, append_truth, finalize_truth, prune_truth, read_truth
 from lps_gui.core.plan import Plan
 from lps_gui.io.session import CaptureRecord, Session
 from tests.capture.helpers import tiny_spec

@@ -50,8 +50,11 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     from lps_gui.errors import LpsError
 
+    from lps_gui.allocator import tune_allocator
+
     parser = build_parser()
     args = parser.parse_args(argv)
+    tune_allocator()
     if not getattr(args, "command", None):
         parser.print_help()
         return 2

@@ -229,19 +229,12 @@ def solve_arrowhead(
 
 
 def _solve_spd(S: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Solve the small reduced system by Cholesky (numpy: scipy.linalg's import costs more than the solve)."""
     try:
-        c, low = _cho_factor(S)
-        from scipy.linalg import cho_solve
-
-        return cho_solve((c, low), b)
+        L = np.linalg.cholesky(S)
     except np.linalg.LinAlgError:
         return np.linalg.lstsq(S, b, rcond=None)[0]
-
-
-def _cho_factor(S: np.ndarray):
-    from scipy.linalg import cho_factor
-
-    return cho_factor(S, lower=True, check_finite=False)
+    return np.linalg.solve(L.T, np.linalg.solve(L, b))
 
 
 def apply_step(state: LpsState, d_theta: np.ndarray, d_s: np.ndarray, basis: np.ndarray) -> LpsState:

@@ -7,7 +7,7 @@ on the simulated rig, the demo, the GUI) gets its session.json from
 records the rig itself (:func:`lps_gui.sim.rig.rig_truth`), so
 ``lps capture --resume`` rebuilds the same stage error model, mount and
 camera and goes on as if nothing happened; per-capture truth goes to
-truth.jsonl and, once complete, into session.json (:mod:`lps_gui.sim.truth`).
+a sidecar and, once complete, into session.json (:mod:`lps_gui.sim.truth`).
 """
 from __future__ import annotations
 

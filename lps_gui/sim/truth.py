@@ -46,6 +46,7 @@ from lps_gui.core.stage_errors import StageErrorModel, TruePose
 from lps_gui.io.atomic import append_line_durable, write_text_atomic
 from lps_gui.io.board_file import board_from_dict
 from lps_gui.io.intrinsics_file import intrinsics_from_dict
+from lps_gui.io.results_file import json_float as _f
 from lps_gui.io.session import Session
 
 TRUTH_FILE = "truth.jsonl"
@@ -264,12 +265,6 @@ def true_deviation_um(true_mm: np.ndarray, target_mm: np.ndarray, reference: int
 def centred(values: np.ndarray, compared: np.ndarray) -> np.ndarray:
     """``values`` (K, P) minus their mean over the compared views (angles: relative to the common rotation)."""
     return values - np.mean(values[compared], axis=0)
-
-
-def _f(x: Any) -> float | None:
-    """JSON float: NaN and inf become null."""
-    x = float(x)
-    return x if np.isfinite(x) else None
 
 
 def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any], positions: list[dict]) -> dict[str, Any]:

@@ -118,6 +118,26 @@ class PlanarPlan:
     def n_frames(self) -> int:
         return len(self.targets()) * len(self.run_directions()) * self.runs * self.frames_per_stop
 
+    def arrival_indices(self) -> dict[int, tuple[int, int]]:
+        """Per frame, for each axis, the first frame of the pass since which that axis has held its target.
+
+        An axis that does not move between stops stays where it arrived: the
+        simulated gantry keys each axis' repeatability draw on this index, so
+        a resumed capture (which re-approaches both axes) reproduces it.
+        """
+        out: dict[int, tuple[int, int]] = {}
+        first = [0, 0]
+        prev: PlanarStop | None = None
+        for s in self.stops():
+            for a in range(2):
+                same_pass = prev is not None and (prev.run, prev.direction) == (s.run, s.direction)
+                if not (same_pass and abs(prev.target_mm[a] - s.target_mm[a]) <= MOVE_TOL_MM
+                        and prev.approach[a] == s.approach[a]):
+                    first[a] = s.index
+            out[s.index] = (first[0], first[1])
+            prev = s
+        return out
+
     def approach_start_mm(self, ordered_targets: np.ndarray, default_sign: int) -> np.ndarray:
         """Where to go before a pass so its first target is approached as the pass continues."""
         first = approach_directions(ordered_targets, default_sign)[0]

@@ -196,7 +196,11 @@ class SimulatedStage(Stage):
         if self.planar_errors is not None and p.axis in (0, 1) and p.direction != 0:
             self._axis_dir[p.axis] = p.direction
             rep = (self.planar_errors.x, self.planar_errors.y)[p.axis].repeatability_um
-            self._axis_noise_um[p.axis] = float(self._rng.normal(0.0, rep)) if rep > 0 else 0.0
+            self._axis_noise_um[p.axis] = float(self._axis_rng(p.axis).normal(0.0, rep)) if rep > 0 else 0.0
+
+    def _axis_rng(self, axis: int) -> np.random.Generator:
+        """The generator of an XY axis' repeatability draw (a seeded rig draws the same value per stop)."""
+        return self._rng
 
     def _update(self, t: float | None = None) -> None:
         """Retire motion finished by time ``t`` and emit a state event on change."""

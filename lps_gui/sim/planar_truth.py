@@ -17,12 +17,17 @@ from lps_gui.core.planar_estimate import PlanarEstimate, PlanarObservations, pla
 from lps_gui.core.planar_figures import axis_geometry
 from lps_gui.core.planar_estimate import affine_motion
 from lps_gui.io.session import Session
-from lps_gui.sim.truth import reduce_truth, true_deviation_um
+from lps_gui.sim.truth import read_truth, reduce_truth, true_deviation_um
 
 
 def planar_session_truth(session: Session) -> dict[str, Any] | None:
     """Arrays index (K,), plane_mm (K, 2), board_plane_mm (K, 2), or None for a real session."""
-    meta = session.meta.get("truth") or {}
+    meta = dict(session.meta.get("truth") or {})
+    per_index = read_truth(session)  # a capture on the simulated gantry: newer than session.json while incomplete
+    if per_index and all("plane_mm" in r for r in per_index.values()):
+        rows = [per_index[i] for i in sorted(per_index)]
+        meta.update(index=[r["index"] for r in rows], plane_mm=[r["plane_mm"] for r in rows],
+                    board_plane_mm=[r["board_plane_mm"] for r in rows])
     if meta.get("plane_mm") is None:
         return None
     K = len(meta["plane_mm"])

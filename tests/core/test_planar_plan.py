@@ -59,3 +59,23 @@ def test_round_trip_through_dict():
     assert PlanarPlan.from_dict(t.to_dict()).targets().tolist() == [[0, 0], [5, 0], [0, 5]]
     with pytest.raises(InputError, match=r"targets_mm\[1\]"):
         PlanarPlan.from_dict({"targets_mm": [[0, 0], [1, "a"], [2, 2]]})
+
+
+def test_arrival_indices_follow_each_axis():
+    plan = PlanarPlan(start_mm=(0, 0), stop_mm=(20, 10), step_mm=(10, 10))
+    arr = plan.arrival_indices()
+    # row 1: x moves every stop, y holds from stop 0; row 2 starts at stop 3 (y moved there)
+    assert [arr[i] for i in range(6)] == [(0, 0), (1, 0), (2, 0), (3, 3), (4, 3), (5, 3)]
+
+
+def test_axis_moves_overshoot_only_where_an_axis_would_arrive_from_the_wrong_side():
+    from lps_gui.capture.planar_moves import axis_moves
+    from lps_gui.core.planar_plan import PlanarStop
+
+    stop = PlanarStop(0, 1, "+", (10.0, 5.0), 0, (1, -1))
+    sides = [None, None]
+    moves = axis_moves((0.0, 0.0), sides, stop, overshoot_mm=1.0)
+    # X comes up from 0: straight there; Y must arrive from above: overshoot to 6 first
+    assert moves == [("X", 10.0), ("Y", 6.0), ("Y", 5.0)] and sides == [1, -1]
+    assert axis_moves((10.0, 5.0), sides, stop, 1.0) == []  # there already, from the right sides
+    assert axis_moves((10.0, 5.0), [None, -1], stop, 1.0) == [("X", 9.0), ("X", 10.0)]  # side unknown after a pause

@@ -30,7 +30,9 @@ from lps_gui.camera.base import Camera
 from lps_gui.capture import events as ev
 from lps_gui.capture.events import CaptureEvent, CaptureListener, CaptureProgress, CaptureSummary
 from lps_gui.core.clock import Clock, RealClock
+from lps_gui.capture.planar_moves import check_planar_plan_in_travel, format_target, go_to_planar
 from lps_gui.core.plan import Plan, PlannedStop
+from lps_gui.core.planar_plan import PlanarPlan, PlanarStop
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import HardwareError, InputError
 from lps_gui.hardware.stage import EventSource, Stage
@@ -142,7 +144,9 @@ class CaptureEngine:
         self._eta_s: float | None = None
         self._events = EventSource()
         self._last_move: tuple[int, str, float, int] | None = None  # (run, direction, target, stop's first index)
-        self._reported_mm: float | None = None
+        self._reported_mm: float | tuple[float, float] | None = None
+        self._axis_sides: list[int | None] = [None, None]  # planar: side of each axis' last approach
+        self._arrivals: dict[int, tuple[int, int]] | None = None  # planar: see PlanarPlan.arrival_indices
         self._active = False
 
     # ------------------------------------------------------------------ control (any thread)
@@ -209,6 +213,7 @@ class CaptureEngine:
             self._active = True
             self._state, self._error, self._abort_req, self._pause_req = ev.RUNNING, None, False, False
             self._last_move = None
+            self._axis_sides = [None, None]
         t0 = self.clock.now()
         captured = 0
         try:
@@ -218,7 +223,10 @@ class CaptureEngine:
                 if not self.camera.is_open:  # first: its frame size bounds the disk space needed
                     self.camera.open()
                 check_writable(self.session.folder / IMAGES_DIR, len(remaining) * bytes_per_frame(self.camera))
-                check_plan_in_travel(self._plan, self.stage)
+                if isinstance(self._plan, PlanarPlan):
+                    check_planar_plan_in_travel(self._plan, self.stage)
+                else:
+                    check_plan_in_travel(self._plan, self.stage)
             if self.truth_recorder is not None:
                 self.truth_recorder.prune(self.session)
             self._emit(CaptureEvent("started", f"{len(remaining)} of {self._total} frames to capture"))
@@ -231,7 +239,7 @@ class CaptureEngine:
                 self._take(stop)
                 captured += 1
                 eta = (self.clock.now() - t0) / captured * (self._total - self._done - 1)
-                self._set(done=self._done + 1, eta=eta, message=f"frame {stop.index} at {stop.target_mm:g} mm")
+                self._set(done=self._done + 1, eta=eta, message=f"frame {stop.index} at {format_target(stop.target_mm)}")
                 progress(self._done, self._total, self._message)
         except _Stop as exc:
             self._finish(ev.ABORTED, str(exc))
@@ -265,8 +273,22 @@ class CaptureEngine:
         )
 
     # ------------------------------------------------------------------ steps
-    def _go_to(self, stop: PlannedStop) -> None:
+    def _go_to(self, stop: PlannedStop | PlanarStop) -> None:
         """Move onto ``stop``'s target from its own direction, wait, settle, read the position."""
+        if isinstance(stop, PlanarStop):
+            self._last_move = None
+            _hook(self.stage, stop.index - stop.frame)
+            seed_axes = getattr(self.stage, "seed_axes", None)
+            if seed_axes is not None:  # the deterministic simulation's per-axis draws
+                if self._arrivals is None:
+                    self._arrivals = self._plan.arrival_indices()
+                seed_axes(*self._arrivals[stop.index])
+            self._emit(CaptureEvent("move", f"move to {format_target(stop.target_mm)}", stop.index))
+            self._reported_mm = go_to_planar(self.stage, stop, self._plan, self._axis_sides, self._move)
+            self.clock.sleep(self._plan.settle_s)
+            self._reported_mm = (float(self.stage.position_mm("X")), float(self.stage.position_mm("Y")))
+            self._last_move = (stop.run, stop.direction, stop.target_mm, stop.index - stop.frame)
+            return
         plan, feed = self._plan, self._plan.feed_mm_min
         sign = 1.0 if stop.direction == "+" else -1.0
         last = self._last_move
@@ -287,9 +309,9 @@ class CaptureEngine:
         self._reported_mm = float(self.stage.position_mm())
         self._last_move = (stop.run, stop.direction, stop.target_mm, stop.index - stop.frame)
 
-    def _move(self, target_mm: float, feed_mm_min: float) -> None:
-        here = self.stage.position_mm()
-        self.stage.move_to(target_mm, feed_mm_min)
+    def _move(self, target_mm: float, feed_mm_min: float, axis: str | None = None) -> None:
+        here = self.stage.position_mm(axis)
+        self.stage.move_to(target_mm, feed_mm_min, axis)
         at_feed_s = abs(target_mm - here) / max(feed_mm_min / 60.0, 1e-9)
         self.stage.wait_idle(timeout_s=max(self.move_timeout_s, 3.0 * at_feed_s + 10.0))
 
@@ -327,6 +349,7 @@ class CaptureEngine:
                 if not paused:
                     paused, self._state, self._message = True, ev.PAUSED, "paused"
                     self._last_move = None  # the operator may jog: re-approach afterwards
+                    self._axis_sides = [None, None]
                     self._lock.release()
                     try:
                         self._emit(CaptureEvent("paused", "capture paused"))

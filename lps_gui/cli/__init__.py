@@ -13,7 +13,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from lps_gui.cli import capture, demo, detect, emulate_grbl, estimate, intrinsics, report, simulate
+from lps_gui.cli import capture, demo, detect, emulate_grbl, estimate, intrinsics, plan_rig, report, simulate
 
 COMMANDS = {
     "demo": demo,
@@ -24,6 +24,7 @@ COMMANDS = {
     "report": report,
     "capture": capture,
     "emulate-grbl": emulate_grbl,
+    "plan-rig": plan_rig,
 }
 
 LOG_PATH = Path(tempfile.gettempdir()) / "lps-calib.log"

@@ -41,6 +41,21 @@ POSITION_COLUMNS = (
     "pitch_urad",
     "yaw_urad",
 )
+PLANAR_POSITION_COLUMNS = (  # SPEC 10
+    "index",
+    "run",
+    "direction",
+    "target_x_mm",
+    "target_y_mm",
+    "measured_x_mm",
+    "measured_y_mm",
+    "deviation_x_um",
+    "deviation_y_um",
+    "sigma_x_um",
+    "sigma_y_um",
+    "rms_px",
+    "outlier",
+)
 
 
 def json_float(x: Any) -> float | None:
@@ -231,12 +246,18 @@ def _fmt(value: Any) -> str:
     return str(value)
 
 
+def position_columns(results: dict[str, Any]) -> tuple[str, ...]:
+    """The positions.csv columns: SPEC 7 for a line, SPEC 10 for a planar session."""
+    return PLANAR_POSITION_COLUMNS if len(results.get("axes") or ["X"]) == 2 else POSITION_COLUMNS
+
+
 def positions_csv(results: dict[str, Any]) -> str:
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(POSITION_COLUMNS)
+    columns = position_columns(results)
+    w.writerow(columns)
     for row in results["positions"]:
-        w.writerow([_fmt(row.get(c)) for c in POSITION_COLUMNS])
+        w.writerow([_fmt(row.get(c)) for c in columns])
     return buf.getvalue()
 
 

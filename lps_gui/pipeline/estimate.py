@@ -91,8 +91,19 @@ def estimate_session(
     """
     t0 = time.perf_counter()
     session = Session.open(session_dir)
-    opt = make_options(method, options)
     intr = read_intrinsics(intrinsics_path) if intrinsics_path else None
+    if session.planar:  # SPEC 10: its own model, figures and CSV columns
+        from lps_gui.pipeline.estimate_planar import estimate_planar_session
+
+        opts = options.to_dict() if isinstance(options, EstimateOptions) else options
+        results = estimate_planar_session(session, method, opts, intr, str(intrinsics_path or "session.json"),
+                                          progress, cancel)
+        results["timings_s"]["pipeline_total"] = time.perf_counter() - t0
+        if cancel is not None:
+            cancel.check("estimation")
+        write_results(Path(out_dir) if out_dir else session.folder, results)
+        return results
+    opt = make_options(method, options)
     obs = observations_from_session(session, intr)
     est = estimate(obs, opt, progress, cancel)
     results = build_results(session, obs, est, intrinsics_source=str(intrinsics_path or "session.json"))

@@ -192,6 +192,10 @@ def figures_from_results(results: dict[str, Any], truth: dict[str, Any] | None =
         The session's ``truth`` record (simulated sessions); drawn dashed beside
         the measurement. Without it, ``results["truth"]`` is used when present.
     """
+    if len(results.get("axes") or ["X"]) == 2:  # a planar session (SPEC 10)
+        from lps_gui.report.planar_figures import planar_figures_from_results
+
+        return planar_figures_from_results(results)
     cols = position_columns(results)
     truth = truth if truth is not None else results.get("truth")
     tcols = truth_columns(results, truth)

@@ -43,6 +43,18 @@ class RigStage(SimulatedStage):
         with self._lock:
             self._rng = np.random.default_rng([self.seed, int(key), _STAGE_STREAM])
 
+    def seed_axes(self, key_x: int, key_y: int) -> None:
+        """Key each XY axis' repeatability draw on the frame it arrived at (PlanarPlan.arrival_indices)."""
+        with self._lock:
+            self._axis_keys = (int(key_x), int(key_y))
+
+    def _axis_rng(self, axis: int) -> np.random.Generator:
+        """An XY axis draws one value per arrival, however many moves reach it (a resume adds overshoots)."""
+        keys = getattr(self, "_axis_keys", None)
+        if keys is None:
+            return self._rng
+        return np.random.default_rng([self.seed, keys[axis], _STAGE_STREAM, 1 + axis])
+
 
 class RigCamera(SimulatedCamera):
     """A :class:`SimulatedCamera` whose image noise is seeded by the capture index."""

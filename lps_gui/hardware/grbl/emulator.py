@@ -195,6 +195,11 @@ def emulated_grbl_stage(time_scale: float = 1.0, faults: Faults | None = None, s
             if hook is not None:
                 hook(key)
 
+        def seed_axes(self, key_x: int, key_y: int) -> None:
+            hook = getattr(served, "seed_axes", None)
+            if hook is not None:
+                hook(key_x, key_y)
+
         def disconnect(self) -> None:
             try:
                 super().disconnect()

@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import resource
 import shutil
 import subprocess
 import sys
@@ -51,23 +50,30 @@ def plan_args(k: int) -> list[str]:
     raise SystemExit(f"--sizes: {k} views is neither <= 400 nor a multiple of 400")
 
 
-def _children_cpu() -> float:
-    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return usage.ru_utime + usage.ru_stime
+# A small launcher forks and execs the command and reports the child's rusage: a child forked straight
+# from this (large) process would count this process's pages in its peak RSS.
+LAUNCHER = """
+import os, sys
+pid = os.fork()
+if pid == 0:
+    os.execv(sys.argv[2], sys.argv[2:])
+_, status, ru = os.wait4(pid, 0)
+with open(sys.argv[1], "w") as f:
+    f.write(f"{os.waitstatus_to_exitcode(status)} {ru.ru_maxrss} {ru.ru_utime + ru.ru_stime}")
+"""
 
 
 def run_child(cmd: list[str]) -> tuple[float, float, float]:
     """Wall time (s), peak RSS (MB) and CPU time (s, user + system, its worker processes included) of a child."""
-    cpu0 = _children_cpu()
-    t0 = time.perf_counter()
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-    _, status, usage = os.wait4(proc.pid, 0)
-    wall = time.perf_counter() - t0
-    proc.returncode = os.waitstatus_to_exitcode(status)
-    err = proc.stderr.read().decode(errors="replace") if proc.stderr else ""
-    if proc.returncode not in (0, 3):
-        raise SystemExit(f"{' '.join(cmd[3:])} failed ({proc.returncode}): {err.strip().splitlines()[-1:]}")
-    return wall, usage.ru_maxrss / 1024.0, _children_cpu() - cpu0
+    with tempfile.NamedTemporaryFile("r", suffix=".rusage") as report:
+        t0 = time.perf_counter()
+        proc = subprocess.run([sys.executable, "-S", "-c", LAUNCHER, report.name, *cmd],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        wall = time.perf_counter() - t0
+        code, maxrss_kb, cpu = report.read().split()
+    if proc.returncode != 0 or int(code) not in (0, 3):
+        raise SystemExit(f"{' '.join(cmd[3:])} failed ({code}): {proc.stderr.decode(errors='replace').strip().splitlines()[-1:]}")
+    return wall, int(maxrss_kb) / 1024.0, float(cpu)
 
 
 def load() -> str:

@@ -36,6 +36,7 @@ BANNER = f"\r\nGrbl {VERSION} ['$' for help]\r\n"
 HELP = "[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X $H ~ ! ? ctrl-x]"
 RT_STATUS, RT_HOLD, RT_RESUME, RT_RESET, RT_JOG_CANCEL = 0x3F, 0x21, 0x7E, 0x18, 0x85
 BUSY = ("Run", "Hold", "Jog", "Home", "Door")
+ALARM_REPORT_DELAY_S = 0.5  # report.c report_alarm_message(): delay_ms(500) after ALARM:N
 WCO_BUSY, WCO_IDLE, OVR_BUSY, OVR_IDLE = 30, 10, 20, 10  # config.h refresh counts
 
 
@@ -89,7 +90,7 @@ class GrblFirmware:
     @property
     def busy(self) -> bool:
         """Something waits on time (a line, a move): poll often."""
-        return self._pending is not None or self.stage.next_event_s() is not None
+        return self._pending is not None or self._abort_at is not None or self.stage.next_event_s() is not None
 
     @property
     def options(self) -> str:
@@ -105,6 +106,10 @@ class GrblFirmware:
         answered until ``~`` (only ``?``, ``~``, ``!`` and Ctrl-X act).
         """
         self._check_mid_move_alarm()
+        if self._abort_at is not None:
+            if self.stage.clock.now() < self._abort_at:
+                return
+            self._finish_abort()
         if self._critical or self.halted or self._held():
             return
         if self._pending is not None and self._pending():
@@ -129,6 +134,7 @@ class GrblFirmware:
         self._critical = False
         self._ok_on_reset = False  # a line was executing when a critical alarm hit: its ok follows the reset
         self._status_in_homing = False  # a '?' during homing is answered when the cycle ends
+        self._abort_at: float | None = None  # an alarm's self-reset is due (after report.c's 500 ms delay)
         self._pending: Callable[[], bool] | None = None
         self._check = False
         self._sleep = False
@@ -188,7 +194,9 @@ class GrblFirmware:
         if b == RT_RESET:
             self._soft_reset()
         elif b == RT_STATUS:
-            if self.stage.status().state == "Home":
+            if self._abort_at is not None:
+                pass  # the flag is set, then cleared by the reset (main.c): this '?' is lost
+            elif self.stage.status().state == "Home":
                 self._status_in_homing = True  # flag kept; limits_go_home() never reports
             elif not self._critical:
                 self._send(self._status_line())
@@ -243,7 +251,8 @@ class GrblFirmware:
         Every alarm but the probe ones comes with mc_reset() (limits.c, motion_control.c):
         hard/soft limit (1, 2) are critical, everything but a reset is ignored and the
         line's ``ok`` follows the user's reset; the others (3, 6-10) abort at once:
-        ``ALARM:N``, the executing line's ``ok``, the banner and the unlock message.
+        ``ALARM:N``, 500 ms (report.c) in which a ``?`` is lost, the executing line's
+        ``ok``, the banner and the unlock message.
         """
         if self.stage.alarm_code != code:
             self.stage.trigger_alarm(code)
@@ -254,10 +263,15 @@ class GrblFirmware:
             self._ok_on_reset = line_open
             self._send("[MSG:Reset to continue]")
         elif code not in (4, 5):  # probe failures alone do not reset
-            if line_open:
-                self._send("ok")
-            self._reset_state()
-            self.welcome()
+            self._ok_on_reset = line_open
+            self._abort_at = self.stage.clock.now() + ALARM_REPORT_DELAY_S
+
+    def _finish_abort(self) -> None:
+        """The self-reset after an alarm: the executing line's ``ok``, then main() starts again."""
+        if self._ok_on_reset:
+            self._send("ok")
+        self._reset_state()
+        self.welcome()
 
     def _next_line(self) -> None:
         buf = self._rx.replace(b"\r", b"\n")

@@ -185,7 +185,7 @@ class MainWindow(QMainWindow):
     def _on_connection(self, connected: bool, description: str) -> None:
         if connected:
             self.status_conn.setText(f"Stage: {description}")
-            self.settings.setValue("stage/source", self.stage_panel.source.currentData())
+            self.settings.setValue("stage/source", self.stage_panel.current_source())
             self.settings.setValue("stage/baud", self.stage_panel.baud.currentData())
         else:
             self.status_conn.setText("Stage: not connected")

@@ -2,20 +2,24 @@
 
 Every stage call goes through :class:`StageController` (one stage thread);
 this widget only submits commands and shows what the controller reports.
+Keyboard jog is never a side effect of typing: the arrow keys move the stage
+only while the jog area has focus, or with the "Keyboard jog" box ticked (and
+never while a number, list or text field has focus, where they edit).
 """
 from __future__ import annotations
 
 import math
 
-from PySide6.QtCore import Qt, Signal
-from PySide6.QtGui import QFont, QKeySequence, QShortcut
+from PySide6.QtCore import QEvent, QObject, Qt, Signal
+from PySide6.QtGui import QFont, QKeyEvent, QKeySequence, QShortcut
 from PySide6.QtWidgets import (
-    QAbstractItemView, QComboBox, QDoubleSpinBox, QGridLayout, QGroupBox, QHBoxLayout, QHeaderView, QLabel,
-    QMessageBox, QPushButton, QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget,
+    QAbstractItemView, QAbstractSpinBox, QApplication, QCheckBox, QComboBox, QDoubleSpinBox, QGridLayout, QGroupBox,
+    QHBoxLayout, QHeaderView, QLabel, QLineEdit, QMessageBox, QPushButton, QTableWidget, QTableWidgetItem, QVBoxLayout,
+    QWidget,
 )
 
 from lps_gui.core.clock import Clock
-from lps_gui.gui.sources import BAUD_RATES, SIM, open_stage_source, stage_choices
+from lps_gui.gui.sources import BAUD_RATES, SIM, open_stage_source, source_from_text, stage_choices
 from lps_gui.gui.stage_controller import StageController
 from lps_gui.hardware.stage import AXES, StageSetting, StageStatus
 
@@ -42,6 +46,9 @@ class StagePanel(QWidget):
         # --- connection
         self.source = QComboBox()
         self.source.setMinimumContentsLength(18)
+        self.source.setEditable(True)  # an external emulator's /dev/pts/N, a port not listed
+        self.source.setInsertPolicy(QComboBox.InsertPolicy.NoInsert)
+        self.source.setToolTip("Pick a source, or type a port: /dev/pts/5, /dev/serial/by-id/..., COM3, grbl:PORT")
         self.refresh_btn = QPushButton("Refresh")
         self.refresh_btn.setToolTip("List serial ports again")
         self.baud = QComboBox()
@@ -77,6 +84,10 @@ class StagePanel(QWidget):
             dg.addWidget(val, i, 1)
             dg.addWidget(QLabel("mm"), i, 2)
             self.readout[ax] = val
+        self.machine_label = QLabel("")
+        self.machine_label.setStyleSheet("QLabel { color: #555555; }")
+        self.machine_label.setToolTip("Machine coordinates (GRBL's homed space) and the work offset")
+        dg.addWidget(self.machine_label, len(AXES), 0, 1, 4)
         self.state_label = QLabel("Disconnected")
         self.state_label.setAlignment(Qt.AlignmentFlag.AlignCenter)
         self.state_label.setMinimumWidth(110)
@@ -86,7 +97,9 @@ class StagePanel(QWidget):
         self._show_state("Disconnected")
 
         # --- jogging
-        jog = QGroupBox("Jog (arrow keys X/Y, Page Up/Down Z)")
+        jog = QGroupBox("Jog (click here, then arrow keys X/Y, Page Up/Down Z)")
+        jog.setFocusPolicy(Qt.FocusPolicy.StrongFocus)  # a click on the area gives it the keys
+        self.jog_area = jog
         jg = QGridLayout(jog)
         self.jog_buttons: dict[tuple[str, int], QPushButton] = {}
         for r, ax in enumerate(AXES):
@@ -108,6 +121,12 @@ class StagePanel(QWidget):
         jg.addWidget(self.step, 0, 3)
         jg.addWidget(QLabel("Feed"), 1, 2)
         jg.addWidget(self.feed, 1, 3)
+        self.keyboard_jog = QCheckBox("Keyboard jog")
+        self.keyboard_jog.setToolTip("Arrow keys and Page Up/Down jog while the stage panel has focus "
+                                     "(number and list fields keep their keys)")
+        self.keyboard_state = QLabel()
+        jg.addWidget(self.keyboard_jog, 2, 2)
+        jg.addWidget(self.keyboard_state, 2, 3)
 
         # --- machine commands
         cmds = QHBoxLayout()
@@ -120,7 +139,7 @@ class StagePanel(QWidget):
         self.stop_btn.setToolTip("Cancel the jog and reset the controller (Esc)")
         for b in (self.home_btn, self.unlock_btn, self.hold_btn, self.resume_btn, self.stop_btn):
             cmds.addWidget(b)
-        self.home_btn.clicked.connect(lambda: self.controller.call("home", "home"))
+        self.home_btn.clicked.connect(self.home)
         self.unlock_btn.clicked.connect(lambda: self.controller.call("unlock", "unlock"))
         self.hold_btn.clicked.connect(lambda: self.controller.call("feed hold", "feed_hold"))
         self.resume_btn.clicked.connect(lambda: self.controller.call("resume", "resume"))
@@ -163,17 +182,68 @@ class StagePanel(QWidget):
         controller.settings_read.connect(self.show_settings)
         controller.opened.connect(lambda _stage, extra, _d: self.camera_offered.emit(extra))
         self._shortcuts = []
-        for key, (ax, sign) in JOG_KEYS.items():
-            sc = QShortcut(QKeySequence(key), self, context=Qt.ShortcutContext.WidgetWithChildrenShortcut)
-            sc.activated.connect(lambda a=ax, s=sign: self.jog(a, s))
-            self._shortcuts.append(sc)
+        self._lock_box: QMessageBox | None = None
+        self._lock_asked = False
+        for w in [self, *self.findChildren(QWidget)]:
+            w.installEventFilter(self)  # jog keys decided in one place: eventFilter()
+        self.keyboard_jog.toggled.connect(lambda _on: self._show_keyboard_state())
+        app = QApplication.instance()
+        if app is not None:
+            app.focusChanged.connect(self._on_focus_changed)  # a method: disconnected with the panel
+        self._show_keyboard_state()
         esc = QShortcut(QKeySequence(Qt.Key.Key_Escape), self, context=Qt.ShortcutContext.WidgetWithChildrenShortcut)
         esc.activated.connect(self.stop)
         self._shortcuts.append(esc)
         self.refresh_sources()
         self._set_enabled(False)
 
+    # ------------------------------------------------------------------ keyboard jog
+    def _in_jog_area(self, w: QWidget | None) -> bool:
+        while w is not None:
+            if w is self.jog_area:
+                return True
+            w = w.parentWidget()
+        return False
+
+    def keyboard_jog_active(self, w: QWidget | None = None) -> bool:
+        """Would a jog key pressed in ``w`` (default: the focus widget) move the stage?"""
+        w = w if w is not None else QApplication.focusWidget()
+        if w is None or not (w is self or self.isAncestorOf(w)):
+            return False
+        if isinstance(w, (QAbstractSpinBox, QComboBox, QLineEdit, QAbstractItemView)) or isinstance(
+                w.parentWidget(), (QAbstractSpinBox, QComboBox)):
+            return False  # the key edits the field
+        return self._in_jog_area(w) or self.keyboard_jog.isChecked()
+
+    def eventFilter(self, obj: QObject, event: QEvent) -> bool:
+        if event.type() == QEvent.Type.KeyPress and isinstance(obj, QWidget):
+            key_event: QKeyEvent = event  # type: ignore[assignment]
+            move = JOG_KEYS.get(Qt.Key(key_event.key()))
+            if move is not None and key_event.modifiers() == Qt.KeyboardModifier.NoModifier and self.keyboard_jog_active(obj):
+                if not key_event.isAutoRepeat():  # one step per press: a held key must not queue a run of jogs
+                    self.jog(*move)
+                return True
+        return super().eventFilter(obj, event)
+
+    def _on_focus_changed(self, _old: QWidget | None, _new: QWidget | None) -> None:
+        self._show_keyboard_state()
+
+    def _show_keyboard_state(self) -> None:
+        on = self.keyboard_jog_active()
+        self.keyboard_state.setText("keys jog: ON" if on else "keys jog: off")
+        self.keyboard_state.setStyleSheet(
+            "QLabel { color: white; background: #1f5fa8; border-radius: 3px; padding: 1px 6px; font-weight: bold; }"
+            if on else "QLabel { color: #777777; }")
+
     # ------------------------------------------------------------------ connection
+    def current_source(self) -> str | None:
+        """The chosen source: a listed entry, or what was typed (``/dev/pts/5`` -> ``grbl:/dev/pts/5``)."""
+        text = self.source.currentText().strip()
+        i = self.source.findText(text)
+        if i >= 0:
+            return self.source.itemData(i)
+        return source_from_text(text)
+
     def refresh_sources(self) -> None:
         current = self.source.currentData()
         self.source.clear()
@@ -188,6 +258,7 @@ class StagePanel(QWidget):
             self.source.addItem(source.split(":", 1)[1], source)
             i = self.source.count() - 1
         self.source.setCurrentIndex(max(i, 0))
+        self.source.setEditText(self.source.itemText(max(i, 0)))
 
     def toggle_connection(self) -> None:
         if self.controller.connected:
@@ -196,7 +267,11 @@ class StagePanel(QWidget):
             self.connect_source()
 
     def connect_source(self) -> None:
-        src = self.source.currentData() or SIM
+        src = self.current_source()
+        if src is None:
+            self.controller.command_failed.emit(
+                "connect", f"stage source {self.source.currentText()!r} not understood; pick one or type a port such as /dev/ttyUSB0")
+            return
         baud = int(self.baud.currentData() or 115200)
         self.connect_btn.setEnabled(False)
         self.connect_btn.setText("Connecting…")
@@ -209,6 +284,7 @@ class StagePanel(QWidget):
         self.source.setEnabled(not connected)
         self.baud.setEnabled(not connected)
         self._set_enabled(connected)
+        self._lock_asked = False
         if connected:
             self.controller.read_settings()
         else:
@@ -229,8 +305,28 @@ class StagePanel(QWidget):
     def show_status(self, st: StageStatus) -> None:
         for ax, v in zip(AXES, st.work_mm):
             self.readout[ax].setText(f"{v:10.3f}")
+        offset = [w - m for w, m in zip(st.work_mm, st.machine_mm)]
+        self.machine_label.setText("machine " + "  ".join(f"{ax} {v:.3f}" for ax, v in zip(AXES, st.machine_mm))
+                                   + ("   offset " + " ".join(f"{v:+.3f}" for v in offset) if any(offset) else ""))
         self._show_state(st.state)
         self.feed_label.setText(f"feed {st.feed_mm_min:.0f} mm/min")
+        if st.state == "Alarm" and not self._lock_asked:
+            self._lock_asked = True
+            self._ask_home_or_unlock()
+
+    def _ask_home_or_unlock(self) -> None:
+        """A stage in Alarm (GRBL powers up so with homing enabled) moves only after $H or $X: ask which."""
+        box = QMessageBox(QMessageBox.Icon.Question, "Stage locked",
+                          "The stage is locked in Alarm (a GRBL with homing enabled starts so, and after an alarm).\n"
+                          "Home it ($H: drives to the limit switch) or unlock it ($X: keeps the position it believes)?",
+                          parent=self)
+        home = box.addButton("Home", QMessageBox.ButtonRole.AcceptRole)
+        unlock = box.addButton("Unlock", QMessageBox.ButtonRole.ActionRole)
+        box.addButton("Not now", QMessageBox.ButtonRole.RejectRole)
+        home.clicked.connect(self.home)
+        unlock.clicked.connect(lambda: self.controller.call("unlock", "unlock"))
+        box.open()
+        self._lock_box = box
 
     def _show_state(self, state: str) -> None:
         color = STATE_COLORS.get(state, "#555555")
@@ -239,6 +335,11 @@ class StagePanel(QWidget):
             f"QLabel {{ background: {color}; color: white; border-radius: 4px; padding: 4px 8px; font-weight: bold; }}")
 
     # ------------------------------------------------------------------ motion
+    def home(self) -> None:
+        """``$H``: shown as Home at once (the cycle may run for a minute); the controller logs its end."""
+        if self.controller.call("home", "home") is not None:
+            self._show_state("Home")
+
     def jog(self, axis: str, sign: int) -> None:
         if not self.controller.connected:
             return

@@ -135,6 +135,16 @@ class StageController(QObject):
         except Exception:  # noqa: BLE001 - the end is still worth logging
             log.info("stage: homing finished")
 
+    def call_now(self, what: str, method: str, *args: Any) -> Future | None:
+        """Like :meth:`call` for real-time commands (jog cancel, feed hold): not queued behind other calls."""
+        if self.stage is None:
+            return None
+        stage = self.stage
+        log.info("stage: %s", what)
+        fut = self._status_pool.submit(lambda: getattr(stage, method)(*args))
+        fut.add_done_callback(lambda f: self._check(what, f))
+        return fut
+
     def read_settings(self) -> None:
         if self.stage is None:
             return

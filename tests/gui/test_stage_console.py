@@ -122,3 +122,63 @@ def test_typed_pty_of_an_external_grbl_connects_asks_home_or_unlock_and_shows_ho
     qtbot.waitUntil(lambda: any("homing finished" in r.getMessage() for r in caplog.records), timeout=5000)
     assert external_grbl.stage.homed
     assert "machine X -99.000" in panel.machine_label.text()
+
+
+def test_console_sends_lines_keeps_history_and_shows_replies(qtbot, window, external_grbl):
+    panel = window.stage_panel
+    panel.source.setEditText(external_grbl.path)
+    panel.connect_btn.click()
+    qtbot.waitUntil(lambda: window.stage_ctl.connected and panel.console.line.isEnabled(), timeout=10000)
+    console = panel.console
+    for line in ("$X", "$I"):
+        console.line.setText(line)
+        qtbot.keyClick(console.line, Qt.Key.Key_Return)
+    qtbot.waitUntil(lambda: "[VER:1.1h" in console.transcript.toPlainText(), timeout=5000)
+    text = console.transcript.toPlainText()
+    assert "> $X" in text and "[MSG:Caution: Unlocked]" in text and "[OPT:V,15,128]" in text
+    qtbot.keyClick(console.line, Qt.Key.Key_Up)  # history, not a jog
+    assert console.line.text() == "$I"
+    qtbot.keyClick(console.line, Qt.Key.Key_Up)
+    assert console.line.text() == "$X"
+    qtbot.keyClick(console.line, Qt.Key.Key_Down)
+    qtbot.keyClick(console.line, Qt.Key.Key_Down)
+    assert console.line.text() == ""
+    console.line.setText("G0 X999")  # beyond the travel: the alarm comes back as one line
+    console.send()
+    qtbot.waitUntil(lambda: "ALARM:2" in console.transcript.toPlainText(), timeout=5000)
+    assert "travel X 100 mm" in panel.travel_label.text() and "soft limits ON" in panel.travel_label.text()
+    panel.reset_btn.click()  # the alarm needs a reset; then unlock and go to a position
+    qtbot.waitUntil(lambda: window.stage_ctl.last_status.state == "Alarm" and not window.stage_ctl.stage._critical,
+                    timeout=5000)
+    window.stage_ctl.call("unlock", "unlock")
+    panel.goto_axis.setCurrentIndex(panel.goto_axis.findData("X"))
+    panel.goto_target.setValue(42.5)
+    panel.feed.setValue(3000.0)
+    qtbot.waitUntil(lambda: window.stage_ctl.last_status.state == "Idle", timeout=5000)
+    panel.goto_btn.click()
+    qtbot.waitUntil(lambda: abs(float(panel.readout["X"].text()) - 42.5) < 1e-6, timeout=10000)
+
+
+def test_console_is_disabled_for_the_simulated_stage_and_axes_can_be_hidden(qtbot, window):
+    connect_sim(qtbot, window)
+    panel = window.stage_panel
+    assert not panel.console.line.isEnabled() and "no G-code console" in panel.console.line.placeholderText()
+    panel.axes.setCurrentIndex(panel.axes.findData("X"))
+    assert panel.readout["X"].isVisible() and not panel.readout["Y"].isVisible()
+    assert not panel.jog_buttons[("Z", +1)].isVisible()
+
+
+def test_press_and_hold_jogs_until_released(qtbot, window):
+    connect_sim(qtbot, window)
+    panel = window.stage_panel
+    panel.step.setCurrentIndex(panel.step.findData(0.0))
+    panel.feed.setValue(1200.0)  # 20 mm/s
+    x0 = _position(window)[0]
+    button = panel.jog_buttons[("X", +1)]
+    qtbot.mousePress(button, Qt.MouseButton.LeftButton)
+    qtbot.waitUntil(lambda: _position(window)[0] > x0 + 3.0, timeout=10000)  # keeps going while held
+    qtbot.mouseRelease(button, Qt.MouseButton.LeftButton)
+    qtbot.waitUntil(lambda: window.stage_ctl.stage.status().state == "Idle", timeout=5000)
+    stopped = _position(window)[0]
+    qtbot.wait(400)
+    assert _position(window)[0] == stopped  # released: no queued jog runs on

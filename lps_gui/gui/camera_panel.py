@@ -162,6 +162,9 @@ class CameraPanel(QWidget):
     def _on_grab_failed(self, message: str) -> None:
         opened = self.camera is not None
         self.stop()
+        self.image.clear()  # no frozen last frame that looks live
+        self.overlay.setData([], [])
+        self.first_corner.setData([], [])
         self.placeholder.setVisible(True)
         self._set_detect("camera lost" if opened else "not opened", "#d00000")
         self.failed.emit("Camera preview stopped" if opened else "Camera not opened", message)

@@ -166,10 +166,15 @@ class StagePanel(QWidget):
         self.goto_btn = QPushButton("Go to")
         self.goto_btn.setToolTip("Move to this work coordinate at the jog feed")
         self.goto_btn.clicked.connect(self.go_to)
+        self.zero_btn = QPushButton("Zero")
+        self.zero_btn.setEnabled(False)
+        self.zero_btn.setToolTip("Set the work zero of this axis here (G10 L20 P1: the G54 offset; GRBL only)")
+        self.zero_btn.clicked.connect(self.zero)
         goto.addWidget(QLabel("Go to"))
         goto.addWidget(self.goto_axis)
         goto.addWidget(self.goto_target, 1)
         goto.addWidget(self.goto_btn)
+        goto.addWidget(self.zero_btn)
         goto.addWidget(QLabel("Axes"))
         goto.addWidget(self.axes)
 
@@ -338,6 +343,8 @@ class StagePanel(QWidget):
         self.source.setEnabled(not connected)
         self.baud.setEnabled(not connected)
         self._set_enabled(connected)
+        stage = self.controller.stage
+        self.zero_btn.setEnabled(connected and callable(getattr(stage, "set_work_zero", None)))
         self._lock_asked = False
         if connected:
             self.controller.read_settings()
@@ -438,6 +445,10 @@ class StagePanel(QWidget):
         self._hold_axis = None
         self._hold_timer.stop()
         self.controller.call_now("jog cancel", "jog_cancel")
+
+    def zero(self) -> None:
+        axis = self.goto_axis.currentData()
+        self.controller.call(f"zero {axis} (work offset)", "set_work_zero", axis)
 
     def go_to(self) -> None:
         axis = self.goto_axis.currentData()

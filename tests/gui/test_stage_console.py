@@ -157,12 +157,18 @@ def test_console_sends_lines_keeps_history_and_shows_replies(qtbot, window, exte
     qtbot.waitUntil(lambda: window.stage_ctl.last_status.state == "Idle", timeout=5000)
     panel.goto_btn.click()
     qtbot.waitUntil(lambda: abs(float(panel.readout["X"].text()) - 42.5) < 1e-6, timeout=10000)
+    assert panel.zero_btn.isEnabled()
+    panel.zero_btn.click()  # the work zero moves here; the machine position does not
+    qtbot.waitUntil(lambda: abs(float(panel.readout["X"].text())) < 1e-6, timeout=10000)
+    assert "offset" in panel.machine_label.text()
+    assert external_grbl.stage.status().work_mm[0] == pytest.approx(42.5)
 
 
 def test_console_is_disabled_for_the_simulated_stage_and_axes_can_be_hidden(qtbot, window):
     connect_sim(qtbot, window)
     panel = window.stage_panel
     assert not panel.console.line.isEnabled() and "no G-code console" in panel.console.line.placeholderText()
+    assert not panel.zero_btn.isEnabled()  # the simulated stage has no work offsets
     panel.axes.setCurrentIndex(panel.axes.findData("X"))
     assert panel.readout["X"].isVisible() and not panel.readout["Y"].isVisible()
     assert not panel.jog_buttons[("Z", +1)].isVisible()

@@ -140,3 +140,16 @@ def test_lines_in_flight_wait_through_a_hold_longer_than_the_timeout():
     finally:
         stage.disconnect()
         emu.stop()
+
+
+def test_set_work_zero_shifts_work_coordinates_not_machine(stock):
+    emu, stage = stock
+    stage.unlock()
+    stage.move_to(30.0, 3000.0)
+    before = stage.wait_idle(timeout_s=2.0)
+    stage.set_work_zero("X")
+    st = stage.status()
+    assert st.work_mm[0] == pytest.approx(0.0) and st.machine_mm[0] == pytest.approx(before.machine_mm[0])
+    stage.move_to(5.0, 3000.0)
+    assert stage.wait_idle(timeout_s=2.0).work_mm[0] == pytest.approx(5.0)
+    assert emu.stage.status().work_mm[0] == pytest.approx(35.0)  # the carriage is 5 mm past the new zero

@@ -241,3 +241,19 @@ def test_idle_feed_hold_also_holds_back_lines(stock):
         port.lines(until="ok", timeout_s=0.2)
     port.ser.write(b"~")
     assert port.lines(until="ok") == ["ok"]
+
+
+def test_g10_l20_sets_the_work_offset_reported_as_wco_and_kept_over_a_reset(stock):
+    e, port = stock
+    port.ask(b"$X\n")
+    assert port.ask(b"G0 X30\n") == ["ok"]
+    time.sleep(0.1)
+    assert port.ask(b"G10 L20 P1 X0\n") == ["ok"]
+    report = port.ask(b"?", until="<")[-1]
+    assert "MPos:-70.000" in report and "WCO:-70.000,-100.000,-100.000" in report  # sent at once after the change
+    assert port.ask(b"G0 X5\n") == ["ok"]  # work 5 = stage 35
+    time.sleep(0.2)
+    assert e.stage.status().work_mm[0] == pytest.approx(35.0)
+    assert port.ask(b"G10 L2 P1 X-100\n") == ["ok"]  # back to the power-up offset
+    assert port.ask(b"G10 L20 X0\n") == ["error:28"] and port.ask(b"G10 L20 P2 X0\n") == ["error:20"]
+    assert port.ask(b"G0 L2 X1\n") == ["error:36"]

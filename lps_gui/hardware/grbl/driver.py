@@ -345,6 +345,13 @@ class GrblStage(Stage):
     def jog_cancel(self) -> None:
         self.realtime(RT_JOG_CANCEL)
 
+    def set_work_zero(self, axis: str | None = None, value_mm: float = 0.0) -> None:
+        """Make the current position read ``value_mm`` on ``axis`` (``G10 L20 P1``: the G54 offset, kept in EEPROM).
+
+        GRBL reports the new WCO in the next status report, so :meth:`status` stays right.
+        """
+        self.command(f"G10 L20 P1 {(axis or self.axis).upper()}{value_mm:.3f}")
+
     def wait_idle(self, timeout_s: float = 60.0) -> StageStatus:
         """Poll ``?`` until Idle with nothing in flight; alarms and timeouts raise.
 

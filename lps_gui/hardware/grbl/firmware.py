@@ -85,6 +85,7 @@ class GrblFirmware:
         self._n_cmd = 0
         self._build_user = ""
         self._initial_settings = dict(stage.settings)
+        self._user = [0.0, 0.0, 0.0]  # G54 shift set by G10 (EEPROM in GRBL: survives resets)
         self._reset_state()
 
     @property
@@ -150,9 +151,13 @@ class GrblFirmware:
         if self.stage.alarm_code is not None:
             self._send("[MSG:'$H'|'$X' to unlock]")
 
-    def _wco(self) -> tuple[float, float, float]:
-        """G54 offset: machine 0 sits at the top of the travel, work = the stage's coordinates."""
+    def _base(self) -> tuple[float, float, float]:
+        """Machine 0 sits at the top of the travel: machine = stage coordinate + base."""
         return (-self.stage.travel_mm[1],) * 3  # type: ignore[return-value]
+
+    def _wco(self) -> tuple[float, float, float]:
+        """G54 offset: the base (work = the stage's coordinates) plus what G10 set since (``_user``)."""
+        return tuple(b + u for b, u in zip(self._base(), self._user))  # type: ignore[return-value]
 
     def _status_line(self) -> str:
         st = self.stage.status()
@@ -160,7 +165,7 @@ class GrblFirmware:
         sub = st.substate if state == st.state else None
         wco = self._wco()
         mask = int(self.stage.settings[10])
-        work = st.work_mm
+        work = tuple(s - u for s, u in zip(st.work_mm, self._user))
         busy = state in BUSY
         show_wco = self._wco_counter == 0
         if show_wco:
@@ -399,6 +404,8 @@ class GrblFirmware:
                 raise CodeError(3)
             if cmd != "RST=#":
                 self.stage.settings.update(self._initial_settings)
+            if cmd != "RST=$":
+                self._user = [0.0, 0.0, 0.0]
             self._send("[MSG:Restoring defaults]")
             self._send("ok")
             self._soft_reset()
@@ -430,11 +437,13 @@ class GrblFirmware:
         """
         code = self.faults.fail_homing
         progress = self.stage.motion_progress()
-        if code and progress is not None and progress[0] == "Home" and progress[1] >= 0.5:
+        done = self.stage.status().state != "Home"  # a slow poll may find the cycle over: it fails all the same
+        if code and (done or (progress is not None and progress[0] == "Home" and progress[1] >= 0.5)):
             self._status_in_homing = False  # the reset clears the pending report
+            self.stage.homed = False
             self._alarm(int(code), line_open=True)
             return True
-        if self.stage.status().state == "Home":
+        if not done:
             return False
         if self._status_in_homing:
             self._status_in_homing = False
@@ -451,11 +460,11 @@ class GrblFirmware:
             i = AXES.index(letter)
             v = value * scale
             if block.g.get("non_modal") == 53.0:
-                out[i] = v - self._wco()[i]
+                out[i] = v - self._base()[i]
             elif distance == 91.0:
                 out[i] = self.stage.planned_mm(i) + v
             else:
-                out[i] = v
+                out[i] = v + self._user[i]
         return out
 
     def _gcode(self, block: Block) -> None:
@@ -469,6 +478,9 @@ class GrblFirmware:
             m["feed"] = block.words["F"] * (MM_PER_INCH if m["units"] == 20.0 else 1.0)
         if block.g.get("non_modal") == 4.0:
             self._dwell(block.words["P"])
+            return
+        if block.g.get("non_modal") == 10.0:
+            self._set_offset(block)
             return
         targets = self._targets(block, m["distance"])
         if targets and m["motion"] == 1.0 and m["feed"] <= 0:
@@ -498,6 +510,23 @@ class GrblFirmware:
 
         if not plan():
             self._pending = plan
+
+    def _set_offset(self, block: Block) -> None:
+        """G10 L2 P1 (offset = the values) / G10 L20 P1 (the current position becomes the values), G54 only.
+
+        gcode.c: G10 waits for the planner (protocol_buffer_synchronize via the
+        coordinate-change path) and GRBL reports the new WCO at once.
+        """
+        scale = MM_PER_INCH if block.g.get("units", self._modal["units"]) == 20.0 else 1.0
+        for letter, value in block.axes.items():
+            i = AXES.index(letter)
+            v = value * scale
+            if block.words["L"] == 20:
+                self._user[i] = self.stage.planned_mm(i) - v
+            else:
+                self._user[i] = v - self._base()[i]
+        self._wco_counter = 0
+        self._send("ok")
 
     def _dwell(self, seconds: float) -> None:
         """G4: wait for the planner to empty, then dwell (simulated seconds), then ``ok``."""

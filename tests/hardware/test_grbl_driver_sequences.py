@@ -8,6 +8,7 @@ answered only after ``~``, and a critical alarm needs a reset, not ``$X``.
 """
 from __future__ import annotations
 
+import contextlib
 import threading
 import time
 
@@ -20,29 +21,31 @@ from lps_gui.hardware.grbl.emulator import GrblEmulator
 from lps_gui.hardware.sim_stage import SimulatedStage
 
 
+@contextlib.contextmanager
 def _rig(time_scale: float, timeout_s: float = 1.0):
+    """Stock GRBL 1.1h (homing lock, $22=1) on a pty and a connected driver."""
     emu = GrblEmulator(SimulatedStage(travel_mm=(0.0, 100.0), start_mm=10.0), time_scale=time_scale, homing_init_lock=True)
     emu.start()
     stage = GrblStage(emu.path, timeout_s=timeout_s, poll_interval_s=0.01)
-    stage.connect()
-    return emu, stage
+    try:
+        stage.connect()
+        yield emu, stage
+    finally:
+        stage.disconnect()
+        emu.stop()
 
 
 @pytest.fixture
 def stock():
-    emu, stage = _rig(50.0)
-    yield emu, stage
-    stage.disconnect()
-    emu.stop()
+    with _rig(50.0) as rig:
+        yield rig
 
 
 @pytest.fixture
 def stock_real_time():
     """GRBL's own timing (homing, report.c's 500 ms after an alarm) on a short travel."""
-    emu, stage = _rig(1.0)
-    yield emu, stage
-    stage.disconnect()
-    emu.stop()
+    with _rig(1.0) as rig:
+        yield rig
 
 
 def test_power_up_alarm_is_reported_as_locked(stock):
@@ -115,8 +118,7 @@ def test_a_line_during_a_feed_hold_is_refused_not_a_cable_fault(stock):
 
 
 def test_lines_in_flight_wait_through_a_hold_longer_than_the_timeout():
-    emu, stage = _rig(50.0, timeout_s=0.3)
-    try:
+    with _rig(50.0, timeout_s=0.3) as (emu, stage):
         stage.unlock()
         stage.write_setting(110, 600.0)
         errors: list[BaseException] = []
@@ -137,9 +139,6 @@ def test_lines_in_flight_wait_through_a_hold_longer_than_the_timeout():
         worker.join(timeout=10.0)
         assert not worker.is_alive() and not errors, errors
         assert stage.wait_idle(timeout_s=10.0).work_mm[0] == pytest.approx(20 + 29 % 5)
-    finally:
-        stage.disconnect()
-        emu.stop()
 
 
 def test_set_work_zero_shifts_work_coordinates_not_machine(stock):

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from lps_gui.core.allocator import tune_allocator
+from lps_gui.core.constant_orientation import board_plane_from_model
 from lps_gui.core.estimate_types import METHODS, EstimateOptions, LpsEstimate, step_pairs
 from lps_gui.core.hybrid import initial_line, solve_hybrid, view_costs
 from lps_gui.core.joint_lm import LmOptions, LpsState, linearize, solve_joint, solve_positions_only
@@ -265,6 +266,12 @@ def _finish(
         t1 = time.perf_counter()
         six = _six_dof(state, obs, X, mask_all, usable, used)
         timings["six_dof"] = time.perf_counter() - t1
+    board_plane = None
+    if opt.six_dof:
+        t1 = time.perf_counter()
+        board_plane = board_plane_from_model(state.R, state.line().translations(state.s), state.line().u_board, X,
+                                             obs.corners_px, mask_all, state.intrinsics, state.s, usable, used)
+        timings["board_plane"] = time.perf_counter() - t1
     return LpsEstimate(
         method=opt.method,
         options=opt,
@@ -290,6 +297,7 @@ def _finish(
         timings_s=timings,
         inverse=inv,
         intrinsics_gradient=G_s,
+        board_plane=board_plane,
     )
 
 

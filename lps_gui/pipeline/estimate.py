@@ -29,6 +29,8 @@ from lps_gui.io.corners_vnl import read_corners_vnl
 from lps_gui.io.intrinsics_file import intrinsics_to_dict, read_intrinsics
 from lps_gui.io.results_file import FORMAT, write_results
 from lps_gui.io.session import SESSION_FILE, Session
+from lps_gui.pipeline.board_plane_results import (position_fields, straightness_figures, straightness_summary_rows,
+                                                  truth_errors)
 from lps_gui.pipeline.truth import session_truth
 
 HYBRID_KEYS = {"grid_window_mm": "window_mm", "grid_resolution_mm": "resolution_mm", "grid_points": "grid_points",
@@ -136,10 +138,8 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate, intrins
             "used": bool(est.used[i]),
             "file": obs.names[i],
         }
+        row.update(position_fields(est, i))  # straightness at the board plane (SPEC 11), image rotation
         if six is not None:
-            for j, key in enumerate(("straightness_um_1", "straightness_um_2")):
-                row[key] = _f(six.straightness_um[i, j])
-                row[key.replace("um_", "sigma_um_")] = _f(six.straightness_sigma_um[i, j])
             for j, key in enumerate(("roll", "pitch", "yaw")):
                 row[f"{key}_urad"] = _f(six.angles_urad[i, j])
                 row[f"{key}_sigma_urad"] = _f(six.angles_sigma_urad[i, j])
@@ -154,10 +154,9 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate, intrins
     single = figures.get("single_run")
     if single is not None and valid.sum() >= 3:
         single.update(scale_with_uncertainty(obs, est, valid))
+    if valid.any():
+        figures.update(straightness_figures(obs.target_mm, est, valid))
     if six is not None and valid.any():
-        figures["straightness_um_max"] = _f(np.nanmax(np.ptp(six.straightness_um[valid], axis=0)))
-        figures["straightness_span_um"] = [_f(v) for v in np.ptp(six.straightness_um[valid], axis=0)]
-        figures["straightness_sigma_um"] = _f(np.nanmax(np.nanmedian(six.straightness_sigma_um[valid], axis=0)))
         figures["angles_span_urad"] = dict(zip(("roll", "pitch", "yaw"), (_f(v) for v in np.ptp(six.angles_urad[valid], axis=0))))
 
     line = est.state.line()
@@ -250,7 +249,7 @@ def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, np.nd
     true_dev = 1e3 * (s_true - nominal)
     # the estimate's straightness is relative to a least-squares line and its
     # angles to the common rotation: put truth in the same reference
-    straight = _detrended(truth.get("straightness_um"), rows, have, ok, obs.target_mm)
+    straight = _detrended(truth.get("plane_straightness_um", truth.get("straightness_um")), rows, have, ok, obs.target_mm)
     angles = truth.get("angles_urad")
     if angles is not None:
         angles = angles - np.mean(angles[rows[ok]], axis=0)
@@ -274,6 +273,13 @@ def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, np.nd
         "injected_outliers": injected,
         "flagged_outliers": flagged,
     }
+    rotation = truth.get("image_rotation_urad")
+    rotation = None if rotation is None else np.where(have, rotation[np.maximum(rows, 0)], np.nan)
+    out.update(truth_errors(est, straight, rotation, ok))
+    if rotation is not None:
+        for k, row in enumerate(positions):
+            if have[k] and ok.any():
+                row["truth_image_rotation_urad"] = _f(rotation[k] - np.nanmean(rotation[ok]))
     if "plane_mm" in truth:
         # what the constant-orientation model can see: displacement at the board plane (Abbe offset = distance)
         plane = np.where(have, truth["plane_mm"][np.maximum(rows, 0)], np.nan)
@@ -323,7 +329,9 @@ def summary_rows(results: dict[str, Any]) -> list[tuple[str, Any, str]]:
     for key in ("A_um", "R_um", "E_um", "B_um", "M_um", "A_up_um", "A_down_um", "R_up_um", "R_down_um", "E_up_um", "E_down_um"):
         if iso.get(key) is not None:
             rows.append((f"iso230_2_{key[:-3]}", iso[key], "um"))
-    if fig.get("straightness_span_um"):
+    if isinstance(fig.get("straightness"), dict):
+        rows += straightness_summary_rows(fig)
+    elif fig.get("straightness_span_um"):
         rows.append(("straightness_span_1", fig["straightness_span_um"][0], "um"))
         rows.append(("straightness_span_2", fig["straightness_span_um"][1], "um"))
     for name, value in (fig.get("angles_span_urad") or {}).items():

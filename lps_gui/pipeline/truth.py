@@ -21,19 +21,21 @@ def session_truth(session: Session) -> dict[str, Any] | None:
     """Arrays index (K,), axis_mm (K,), straightness_um (K, 2), angles_urad (K, 3), or None.
 
     With the rig's geometry recorded, also ``plane_mm`` (K,): the positions a
-    constant-orientation model sees (see core.simulate.board_plane_positions).
+    constant-orientation model sees (see core.simulate.board_plane_positions),
+    ``plane_straightness_um`` (K, 2) and ``image_rotation_urad`` (K,) (see
+    core.simulate.board_plane_straightness).
     """
     out = _per_capture_truth(session)
     if out is not None:
         plane = _board_plane(session, out)
         if plane is not None:
-            out["plane_mm"] = plane
+            out["plane_mm"], out["plane_straightness_um"], out["image_rotation_urad"] = plane
     return out
 
 
-def _board_plane(session: Session, truth: dict[str, Any]) -> np.ndarray | None:
+def _board_plane(session: Session, truth: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     from lps_gui.core.rig import Rig
-    from lps_gui.core.simulate import board_plane_positions
+    from lps_gui.core.simulate import board_plane_positions, board_plane_straightness
     from lps_gui.core.stage_errors import StageErrorModel, TruePose
     from lps_gui.io.board_file import board_from_dict
     from lps_gui.io.intrinsics_file import intrinsics_from_dict
@@ -47,7 +49,7 @@ def _board_plane(session: Session, truth: dict[str, Any]) -> np.ndarray | None:
     rig = Rig(board, intr, np.asarray(meta["R_cam_board"], float), np.asarray(meta["C0_board"], float),
               np.asarray(meta["u_board"], float), StageErrorModel())
     pose = TruePose(truth["axis_mm"], truth.get("straightness_um", np.zeros((K, 2))), truth.get("angles_urad", np.zeros((K, 3))))
-    return board_plane_positions(rig, pose)
+    return (board_plane_positions(rig, pose), *board_plane_straightness(rig, pose))
 
 
 def _per_capture_truth(session: Session) -> dict[str, Any] | None:

@@ -18,9 +18,13 @@ from typing import Any
 
 import numpy as np
 from scipy.special import ndtri
+from scipy.stats import chi2 as _chi2
+
+chi2_sf = _chi2.sf
 
 ISO_RUNS_PER_DIRECTION = 5
 NOISE_K = 3.0  # a p-v is a finding only when 3 sd above what noise alone gives
+PROFILE_P_VALUE = 1e-3  # ... and its profile is not flat at this significance
 
 
 def expected_max_normal(n: int) -> float:
@@ -93,7 +97,9 @@ def profile_span(values: np.ndarray, sigma: np.ndarray, target: np.ndarray, vali
     """P-v of the per-target means of ``values`` (all runs and directions averaged).
 
     Averaging the captures of one target divides their independent noise by
-    sqrt(n); the p-v is then judged against the noise p-v of that many targets.
+    sqrt(n). Resolved: the per-target means differ from zero (they are already
+    off a least-squares line) at p < 0.001 by a chi-square test, and the p-v
+    exceeds the noise p-v of that many targets (and the limit, if given).
     """
     v = np.asarray(values, float)
     s = np.asarray(sigma, float)
@@ -108,7 +114,11 @@ def profile_span(values: np.ndarray, sigma: np.ndarray, target: np.ndarray, vali
     span = float(np.ptp(mean))
     sig = float(np.median(sig_mean))
     noise = noise_peak_to_valley(float(np.sqrt(np.mean(sig_mean**2))), m)
-    return ProfileSpan(span, sig, noise, int(m), is_resolved(span, noise, limit))
+    # a profile is a finding when it is significantly not flat (chi-square of the per-target means
+    # against their sigma, two dof taken by the reference line), not merely when its range is large
+    chi2 = float(np.sum((mean / np.maximum(sig_mean, 1e-300)) ** 2))
+    significant = m > 2 and float(chi2_sf(chi2, m - 2)) < PROFILE_P_VALUE
+    return ProfileSpan(span, sig, noise, int(m), significant and is_resolved(span, noise, limit))
 
 
 def runs_per_direction(figures: dict[str, Any]) -> int:
@@ -130,7 +140,8 @@ def straightness_verdict(figures: dict[str, Any], limit: float) -> dict[str, Any
     Uses ``figures["straightness"]`` (per-target p-v of each direction with its
     noise p-v). Noise only inflates a p-v, so p-v <= limit passes; a p-v above
     the limit by more than its noise p-v fails; in between, or when the noise
-    p-v alone reaches the limit, the figure is not resolved (``passed`` None).
+    p-v alone reaches the limit, the limit is not resolved (``passed`` None).
+    A span flat within noise still passes: the data resolve that it is below.
     A resolved failure in one direction fails even if the other is not resolved.
     """
     st = figures.get("straightness")
@@ -144,20 +155,19 @@ def straightness_verdict(figures: dict[str, Any], limit: float) -> dict[str, Any
             notes.append(f"{k} not measured")
             continue
         spans.append(float(span))
-        if not is_resolved(span, noise, limit):
-            verdicts.append(False if span - noise > limit else None)
-            notes.append(f"{k} {_short(span, 3)} \u00b5m " + (f"above the limit beyond its noise p-v {_short(noise, 2)} \u00b5m"
-                                                              if verdicts[-1] is False else
-                                                              f"not resolved (noise alone spans {_short(noise, 2)} \u00b5m)"))
+        head = f"{k} {_short(span, 3)} \u00b5m (noise p-v {_short(noise, 2)}{'' if st[k].get('resolved') else ', flat within noise'})"
+        if span - noise > limit:
+            verdicts.append(False)
+            notes.append(f"{head} above the limit beyond its noise")
+        elif noise >= limit:
+            verdicts.append(None)
+            notes.append(f"{k} not resolved: noise alone spans {_short(noise, 2)} \u00b5m")
         elif span <= limit:
             verdicts.append(True)
-            notes.append(f"{k} {_short(span, 3)} \u00b5m (noise p-v {_short(noise, 2)})")
-        elif span - noise > limit:
-            verdicts.append(False)
-            notes.append(f"{k} {_short(span, 3)} \u00b5m > limit beyond its noise p-v {_short(noise, 2)} \u00b5m")
+            notes.append(head)
         else:
             verdicts.append(None)
-            notes.append(f"{k} {_short(span, 3)} \u00b5m within its noise p-v {_short(noise, 2)} \u00b5m of the limit")
+            notes.append(f"{head} within its noise of the limit")
     passed = False if False in verdicts else (True if all(v is True for v in verdicts) else None)
     m = st["v1"].get("n_targets")
     basis = str(st.get("basis", ""))

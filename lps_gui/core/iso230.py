@@ -356,5 +356,5 @@ def check_specification(figures: dict[str, Any], spec: dict[str, Any]) -> list[d
     for r in rows:
         r["indicative"] = indicative
         if indicative and r["passed"] is not None:
-            r["note"] += f" (indicative: fewer than {ISO_RUNS_PER_DIRECTION} runs per direction)"
+            r["note"] += f"; indicative: fewer than {ISO_RUNS_PER_DIRECTION} runs per direction"
     return rows

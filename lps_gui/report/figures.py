@@ -339,7 +339,7 @@ def straightness_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray
     for k in (1, 2):
         series += _component_series(cols, tcols, f"straightness_um_{k}", f"straightness_sigma_um_{k}", f"v{k}",
                                     COMPONENT_COLORS[k - 1])
-    return FigureSpec("straightness", "Straightness (deviation from the fitted line)", "target position [mm]",
+    return FigureSpec("straightness", "Straightness at the board plane (deviation from the fitted line)", "target position [mm]",
                       "straightness [\u00b5m]", series,
                       "v1: perpendicular closest to the image y axis; v2: along the viewing direction; "
                       "band: \u00b12\u03c3 forward")

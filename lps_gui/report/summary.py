@@ -23,7 +23,13 @@ TRUTH_NAMES = {"position_rms_error_um": ("Truth: position error RMS", "\u00b5m")
                "board_plane_rms_error_um": ("Truth at the board plane: position error RMS", "\u00b5m"),
                "board_plane_max_abs_error_um": ("Truth at the board plane: position error max |e|", "\u00b5m"),
                "board_plane_z_mean_square": ("Truth at the board plane: mean (error/\u03c3)\u00b2", ""),
-               "abbe_rms_um": ("Truth: Abbe term (board plane - camera centre) RMS", "\u00b5m")}
+               "abbe_rms_um": ("Truth: Abbe term (board plane - camera centre) RMS", "\u00b5m"),
+               "straightness_rms_error_um_1": ("Truth: straightness v1 error RMS (board plane)", "\u00b5m"),
+               "straightness_rms_error_um_2": ("Truth: straightness v2 error RMS (board plane)", "\u00b5m"),
+               "straightness_z_mean_square_1": ("Truth: straightness v1 mean (error/\u03c3)\u00b2", ""),
+               "straightness_z_mean_square_2": ("Truth: straightness v2 mean (error/\u03c3)\u00b2", ""),
+               "image_rotation_rms_error_urad": ("Truth: image rotation error RMS", "\u00b5rad"),
+               "image_rotation_z_mean_square": ("Truth: image rotation mean (error/\u03c3)\u00b2", "")}
 INTRINSIC_ORDER = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3")
 DASH = "\u2014"
 

@@ -261,14 +261,12 @@ def _finish(
     timings["uncertainty"] = time.perf_counter() - t0
 
     rms = _view_rms(state, X, obs.corners_px, mask_all)
-    six = None
+    six = board_plane = None
     if opt.six_dof:
         t1 = time.perf_counter()
         six = _six_dof(state, obs, X, mask_all, usable, used)
         timings["six_dof"] = time.perf_counter() - t1
-    board_plane = None
-    if opt.six_dof:
-        t1 = time.perf_counter()
+        t1 = time.perf_counter()  # straightness at the board plane and image rotation (SPEC 11)
         board_plane = board_plane_from_model(state.R, state.line().translations(state.s), state.line().u_board, X,
                                              obs.corners_px, mask_all, state.intrinsics, state.s, usable, used)
         timings["board_plane"] = time.perf_counter() - t1

@@ -188,7 +188,22 @@ class ResultsPanel(QWidget):
     def _fill_tables(self, results: dict[str, Any]) -> None:
         from lps_gui.report.summary import summary_rows
 
-        self.iso_table.set_rows([(r.name, r.text(), r.unit) for r in summary_rows(results)])
+        rows = summary_rows(results)
+        self.iso_table.set_rows([(r.name, r.text(), r.unit) for r in rows])
+        self._grey_unresolved(rows)
+
+    def _grey_unresolved(self, rows: list[Any]) -> None:
+        """A figure the data do not resolve reads "not resolved (σ X)" in grey, never as a finding."""
+        from PySide6.QtGui import QBrush, QColor
+
+        grey = QBrush(QColor("#888888"))
+        for i, r in enumerate(rows):
+            if getattr(r, "unresolved", ""):
+                for c in range(self.iso_table.columnCount()):
+                    item = self.iso_table.item(i, c)
+                    if item is not None:
+                        item.setForeground(grey)
+                        item.setToolTip(r.unresolved)
 
     def _fill_positions(self, results: dict[str, Any]) -> None:
         """Format the per-position table on a worker thread (hundreds of rows), then show it."""

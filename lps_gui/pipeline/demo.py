@@ -217,9 +217,9 @@ def summary_lines(results: dict[str, Any], spec: SimulationSpec) -> list[str]:
     single = (results.get("figures") or {}).get("single_run") or {}
     n_out = sum(1 for r in results.get("positions") or [] if r.get("outlier"))
     plan = spec.plan
-    ext = {r.name: r.value for r in extremes_rows(results)}
+    ext = {r.name: r.text() if r.unresolved or r.value is None else f"{r.text()} {r.unit}" for r in extremes_rows(results)}
     checks = spec_checks(results, PAPER_SPEC)
-    verdict = ", ".join(f"{c.name} {'PASS' if c.passed else ('FAIL' if c.passed is False else 'n/a')}" for c in checks)
+    verdict = ", ".join(f"{c.name} {c.verdict()}" for c in checks)
     te = truth_errors(results)
     tc = results.get("truth_comparison") or {}
     truth_line = ("error against truth: " + (f"position RMS {te['rms_um']:.2f} \u00b5m, max {te['max_um']:.2f} \u00b5m "
@@ -232,9 +232,10 @@ def summary_lines(results: dict[str, Any], spec: SimulationSpec) -> list[str]:
         f"x {plan.runs} runs), {n_out} flagged outlier(s); RMS residual {fmt(p.get('rms_px'))} px",
         f"positioning: scale {fmt(single.get('scale_ppm'))} ppm, periodic {fmt(single.get('periodic_amplitude_um'))} \u00b5m "
         f"at {fmt(single.get('periodic_period_mm'))} mm, mean step {fmt(single.get('mean_step_mm'), 6)} mm",
-        f"straightness p-v {fmt(ext.get('Max straightness v1 (peak-to-valley)'))} / "
-        f"{fmt(ext.get('Max straightness v2 (peak-to-valley)'))} \u00b5m; max |roll| {fmt(ext.get('Max |roll|'))}, "
-        f"|pitch| {fmt(ext.get('Max |pitch|'))}, |yaw| {fmt(ext.get('Max |yaw|'))} \u00b5rad",
+        f"straightness p-v (board plane) v1 {ext.get('Max straightness v1 (peak-to-valley)', '-')}, "
+        f"v2 {ext.get('Max straightness v2 (peak-to-valley)', '-')}; image rotation p-v "
+        f"{ext.get('Image rotation (peak-to-valley)', '-')}; max |roll| {ext.get('Max |roll|', '-')}, "
+        f"|pitch| {ext.get('Max |pitch|', '-')}, |yaw| {ext.get('Max |yaw|', '-')}",
         f"paper's spec (\u00b120 \u00b5m, \u00b15 \u00b5m, 38 \u00b5m): {verdict}",
         truth_line,
     ]

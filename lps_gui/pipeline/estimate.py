@@ -29,6 +29,7 @@ from lps_gui.io.intrinsics_file import intrinsics_to_dict, read_intrinsics
 from lps_gui.io.results_file import assemble_results, summary_rows, write_results  # noqa: F401 (summary_rows re-exported)
 from lps_gui.io.results_file import json_float as _f
 from lps_gui.io.session import SESSION_FILE, Session
+from lps_gui.pipeline.board_plane_results import position_fields, straightness_figures
 from lps_gui.sim.truth import session_truth, truth_comparison  # truth_comparison re-exported for callers
 
 HYBRID_KEYS = {"grid_window_mm": "window_mm", "grid_resolution_mm": "resolution_mm", "grid_points": "grid_points",
@@ -159,10 +160,8 @@ def position_rows(obs: Observations, est: LpsEstimate) -> list[dict[str, Any]]:
             "used": bool(est.used[i]),
             "file": obs.names[i],
         }
+        row.update(position_fields(est, i))  # straightness at the board plane (SPEC 11), image rotation
         if six is not None:
-            for j, key in enumerate(("straightness_um_1", "straightness_um_2")):
-                row[key] = _f(six.straightness_um[i, j])
-                row[key.replace("um_", "sigma_um_")] = _f(six.straightness_sigma_um[i, j])
             for j, key in enumerate(("roll", "pitch", "yaw")):
                 row[f"{key}_urad"] = _f(six.angles_urad[i, j])
                 row[f"{key}_sigma_urad"] = _f(six.angles_sigma_urad[i, j])
@@ -185,10 +184,9 @@ def session_figures(obs: Observations, est: LpsEstimate) -> dict[str, Any]:
     single = figures.get("single_run")
     if single is not None and valid.sum() >= 3:
         single.update(scale_with_uncertainty(obs, est, valid, sigma_um))
+    if valid.any():
+        figures.update(straightness_figures(obs.target_mm, est, valid))
     if six is not None and valid.any():
-        figures["straightness_um_max"] = _f(np.nanmax(np.ptp(six.straightness_um[valid], axis=0)))
-        figures["straightness_span_um"] = [_f(v) for v in np.ptp(six.straightness_um[valid], axis=0)]
-        figures["straightness_sigma_um"] = _f(np.nanmax(np.nanmedian(six.straightness_sigma_um[valid], axis=0)))
         figures["angles_span_urad"] = dict(zip(("roll", "pitch", "yaw"), (_f(v) for v in np.ptp(six.angles_urad[valid], axis=0))))
     return figures
 

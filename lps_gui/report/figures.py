@@ -25,6 +25,7 @@ FORWARD_COLOR = "#1f5fa8"
 BACKWARD_COLOR = "#e07b00"
 TRUTH_COLOR = "#222222"
 OUTLIER_COLOR = "#d00000"
+IMAGE_ROTATION_COLOR = "#111111"
 COMPONENT_COLORS = ("#1f5fa8", "#2a9d3c", "#a8326e")
 
 STYLES = ("line", "markers", "line+markers")
@@ -80,7 +81,8 @@ class FigureSpec:
         return not any(np.isfinite(s.y).any() for s in self.series)
 
 
-TRUTH_KEYS = ("deviation_um", "straightness_um_1", "straightness_um_2", "roll_urad", "pitch_urad", "yaw_urad")
+TRUTH_KEYS = ("deviation_um", "straightness_um_1", "straightness_um_2", "roll_urad", "pitch_urad", "yaw_urad",
+              "image_rotation_urad")
 FIGURE_KEYS = ("positions", "deviation", "step", "straightness", "angles", "residuals", "spectrum")
 
 
@@ -97,7 +99,7 @@ def position_columns(results: dict[str, Any]) -> dict[str, np.ndarray]:
     numeric = ("index", "run", "target_mm", "measured_mm", "deviation_um", "sigma_um", "sigma_total_um",
                "rms_px", "n_corners", "straightness_um_1", "straightness_um_2", "straightness_sigma_um_1",
                "straightness_sigma_um_2", "roll_urad", "pitch_urad", "yaw_urad", "roll_sigma_urad",
-               "pitch_sigma_urad", "yaw_sigma_urad")
+               "pitch_sigma_urad", "yaw_sigma_urad", "image_rotation_urad", "image_rotation_sigma_urad")
     cols: dict[str, np.ndarray] = {}
     for name in numeric:
         cols[name] = np.array([_num(r.get(name)) for r in rows], dtype=float)
@@ -332,7 +334,7 @@ def _component_series(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] 
             lo, hi = mean - band, mean + band
         series.append(Series(t, mean, f"{name} {_dir_label(d)}", "line" if d == "+" else "markers", color,
                              band_low=lo, band_high=hi))
-    if tcols is not None:
+    if tcols is not None and column in tcols:
         t, mean, _, _ = per_target_stats(cols["target_mm"], tcols[column], np.ones(keep.shape, bool))
         series.append(_truth_series(t, mean, f"truth {name}", color))
     return series
@@ -344,7 +346,7 @@ def straightness_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray
     for k in (1, 2):
         series += _component_series(cols, tcols, f"straightness_um_{k}", f"straightness_sigma_um_{k}", f"v{k}",
                                     COMPONENT_COLORS[k - 1])
-    return FigureSpec("straightness", "Straightness (deviation from the fitted line)", "target position [mm]",
+    return FigureSpec("straightness", "Straightness at the board plane (deviation from the fitted line)", "target position [mm]",
                       "straightness [\u00b5m]", series,
                       "v1: perpendicular closest to the image y axis; v2: along the viewing direction; "
                       "band: \u00b12\u03c3 forward")
@@ -355,9 +357,13 @@ def angles_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] | No
     series = []
     for k, name in enumerate(("roll", "pitch", "yaw")):
         series += _component_series(cols, tcols, f"{name}_urad", f"{name}_sigma_urad", name, COMPONENT_COLORS[k])
-    return FigureSpec("angles", "Angular error motions (roll, pitch, yaw)", "target position [mm]",
-                      "angle [\u00b5rad]", series,
-                      "roll about the motion axis u, pitch about v1, yaw about v2; band: \u00b12\u03c3 forward")
+    note = "roll about the motion axis u, pitch about v1, yaw about v2; band: \u00b12\u03c3 forward"
+    if np.isfinite(cols["image_rotation_urad"]).any():  # constant-orientation fit (SPEC 11): resolved per view
+        series += _component_series(cols, tcols, "image_rotation_urad", "image_rotation_sigma_urad",
+                                    "image rotation", IMAGE_ROTATION_COLOR)
+        note = "per-view poses: roll about u, pitch about v1, yaw about v2; image rotation: about the optical axis; band \u00b12\u03c3 fwd"
+    return FigureSpec("angles", "Angular error motions (roll, pitch, yaw) and image rotation", "target position [mm]",
+                      "angle [\u00b5rad]", series, note)
 
 
 def residuals_figure(cols: dict[str, np.ndarray]) -> FigureSpec:

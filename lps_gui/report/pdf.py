@@ -141,7 +141,8 @@ def _front_page(flow: Any, meta: dict[str, Any], results: dict[str, Any], versio
 
     flow.heading("Summary figures", 11)
     rows = S.summary_rows(results)
-    flow.table(["figure", "value", "unit"], [[r.name, r.text(), r.unit] for r in rows], [80, 30, 16])
+    flow.table(["figure", "value", "unit"], [[r.name, r.text(), r.unit] for r in rows], [80, 40, 16],
+               colors=["#888888" if r.unresolved else None for r in rows])
     for note in S.figure_notes(results):
         flow.paragraph(note, size_pt=7.5, color="#555555")
 
@@ -150,11 +151,12 @@ def _front_page(flow: Any, meta: dict[str, Any], results: dict[str, Any], versio
     if checks:
         cells, colors = [], []
         for c in checks:
-            verdict = "PASS" if c.passed else ("FAIL" if c.passed is False else "not measured")
-            cells.append([c.name, S.fmt(c.measured), f"{S.fmt(c.limit)} {c.unit}", verdict, c.note])
-            colors.append("#007a1f" if c.passed else ("#c00000" if c.passed is False else "#555555"))
-        flow.table(["criterion", "measured", "limit", "verdict", "how it is judged"], cells, [36, 18, 20, 24, 82],
-                   colors=colors, align_right_from=1, align_left=(4,))
+            cells.append([c.name, S.fmt(c.measured), f"{S.fmt(c.limit)} {c.unit}", c.verdict()])
+            colors.append(c.color())
+        flow.table(["criterion", "measured", "limit", "verdict"], cells, [40, 20, 22, 40],
+                   colors=colors, align_right_from=1)
+        for c in checks:  # how each is judged, in full (a table cell would clip it)
+            flow.paragraph(f"{c.name}: {c.note}", size_pt=7.5, color="#555555")
     else:
         flow.paragraph("No stage specification in session.json (key \"stage_spec\", e.g. "
                        "{\"accuracy_um\": 20, \"repeatability_um\": 5, \"straightness_um\": 38}); no verdict given.",

@@ -30,6 +30,7 @@ from lps_gui.io.intrinsics_file import intrinsics_to_dict, read_intrinsics
 from lps_gui.io.results_file import FORMAT, write_results
 from lps_gui.io.session import SESSION_FILE, Session
 from lps_gui.pipeline.truth import session_truth
+from lps_gui.pipeline.uncertainty import add_uncertainty, session_board
 
 HYBRID_KEYS = {"grid_window_mm": "window_mm", "grid_resolution_mm": "resolution_mm", "grid_points": "grid_points",
                "threshold_px": "threshold_rms_px", "max_rounds": "max_rounds"}
@@ -50,7 +51,7 @@ def make_options(method: str = "joint", options: dict[str, Any] | EstimateOption
 
 def observations_from_session(session: Session, intrinsics: CameraIntrinsics | None = None) -> Observations:
     """Match every line of captures.jsonl to its corners in corners.vnl."""
-    board = session.board()
+    board = session_board(session)  # square size at the board's temperature (environment)
     intr = intrinsics or session.intrinsics()
     records = session.records()
     if not records:
@@ -207,6 +208,7 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate, intrins
     truth = session_truth(session)
     if truth is not None:
         results["truth_comparison"] = truth_comparison(obs, est, truth, positions)
+    add_uncertainty(results, session)
     results["summary"] = summary_rows(results)
     return results
 

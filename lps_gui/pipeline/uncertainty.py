@@ -1,0 +1,71 @@
+"""Environment and uncertainty of a session's results (results.json ``environment``, ``uncertainty``).
+
+Two hooks for :mod:`lps_gui.pipeline.estimate`: :func:`session_board`
+gives the board at the measurement temperature (the thermal correction of
+the length scale, :mod:`lps_gui.core.environment`), and
+:func:`add_uncertainty` adds the environment record, the GUM budget
+(:mod:`lps_gui.core.uncertainty_budget`) and U (k = 2) of every headline
+figure to a finished results dict. The budget is built from results.json
+alone, so it does not depend on how the estimate is assembled.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from lps_gui.core.board import Board
+from lps_gui.core.environment import Environment, corrected_board, thermal_record
+from lps_gui.core.uncertainty_budget import BudgetInputs, budget_rows, combine, figure_uncertainties
+from lps_gui.io.session import SESSION_FILE, Session
+
+
+def session_environment(session: Session) -> Environment:
+    """session.json ``environment`` parsed (empty when absent)."""
+    return Environment.from_dict(session.meta.get("environment"), f"{session.folder / SESSION_FILE}: environment")
+
+
+def session_board(session: Session) -> Board:
+    """The session's board with its square size corrected to the board's temperature."""
+    return corrected_board(session.board(), session_environment(session))
+
+
+def _column(positions: list[dict[str, Any]], key: str) -> np.ndarray:
+    return np.array([np.nan if r.get(key) is None else float(r[key]) for r in positions], dtype=float)
+
+
+def budget_inputs(results: dict[str, Any], square_mm: float) -> BudgetInputs:
+    """BudgetInputs from results.json: used views' sigmas, travel, board distance, pitch/yaw."""
+    used = [r for r in results.get("positions") or [] if r.get("used") and r.get("deviation_um") is not None]
+    targets = _column(used, "target_mm")
+    travel = float(np.nanmax(targets) - np.nanmin(targets)) if targets.size else 0.0
+    p = results.get("parameters") or {}
+    l0 = p.get("l0_cam_mm")
+    tilt = np.stack([_column(used, "pitch_urad"), _column(used, "yaw_urad")], axis=1) if used else None
+    tilt_sig = np.stack([_column(used, "pitch_sigma_urad"), _column(used, "yaw_sigma_urad")], axis=1) if used else None
+    if tilt is not None and not np.isfinite(tilt).any():
+        tilt = tilt_sig = None
+    return BudgetInputs(
+        travel_mm=travel, square_mm=square_mm, sigma_px=float(p.get("sigma_px") or 0.0),
+        sigma_um=_column(used, "sigma_um"), sigma_total_um=_column(used, "sigma_total_um"),
+        board_distance_mm=float(np.linalg.norm(l0)) if l0 is not None else None,
+        tilt_urad=tilt, tilt_sigma_urad=tilt_sig)
+
+
+def add_uncertainty(results: dict[str, Any], session: Session) -> dict[str, Any]:
+    """Add ``environment`` and ``uncertainty`` to results (in place; also returned).
+
+    ``board.square_mm`` stays the nominal (20 C) size; the size used is in
+    ``environment.square_mm_used``.
+    """
+    env = session_environment(session)
+    nominal = session.board()
+    results["environment"] = thermal_record(nominal, env)
+    if isinstance(results.get("board"), dict):
+        results["board"]["square_mm"] = nominal.square_mm
+    x = budget_inputs(results, nominal.square_mm)
+    unc = combine(budget_rows(x, env))
+    unc["travel_mm"] = x.travel_mm
+    unc["figures_k2"] = figure_uncertainties(unc, results.get("figures") or {}, x.travel_mm)
+    results["uncertainty"] = unc
+    return results

@@ -32,6 +32,7 @@ from lps_gui.core.environment import Environment
 
 COVERAGE_FACTOR = 2.0
 NOISE_SOURCES = ("corner noise", "reference view noise")
+TILT_DEGREE = 3  # a carriage's pitch and yaw along the travel: smooth, a cubic follows it
 
 
 @dataclass(frozen=True)
@@ -59,6 +60,7 @@ class BudgetInputs:
     board_distance_mm: float | None = None
     tilt_urad: np.ndarray | None = None  # (n, 2) pitch and yaw per used view
     tilt_sigma_urad: np.ndarray | None = None  # (n, 2) their 1-sigma
+    target_mm: np.ndarray | None = None  # (n,) targets of the used views (for the smooth tilt curve)
 
 
 def _rms(v: np.ndarray) -> float:
@@ -119,14 +121,38 @@ def _abbe_row(x: BudgetInputs) -> BudgetRow:
     """Abbe term: camera-board distance times the tilt spread that is not per-view noise."""
     if x.board_distance_mm is None or x.tilt_urad is None or x.tilt_sigma_urad is None or not len(x.tilt_urad):
         return BudgetRow("Abbe offset", "B", None, "\u00b5rad", None, None, "no per-view angles; not in U")
-    tilt = np.asarray(x.tilt_urad, float)
-    sig = np.asarray(x.tilt_sigma_urad, float)
-    spread = np.nanvar(tilt, axis=0) - np.nanmedian(sig, axis=0) ** 2  # variance beyond the noise
-    angle = float(np.sqrt(np.sum(np.clip(spread, 0, None))))
+    angle = smooth_tilt_spread_urad(np.asarray(x.tilt_urad, float), np.asarray(x.tilt_sigma_urad, float),
+                                    None if x.target_mm is None else np.asarray(x.target_mm, float))
     c = x.board_distance_mm * 1e-3  # um per urad
     return BudgetRow("Abbe offset", "B", angle, "\u00b5rad", c, c * angle,
-                     f"pitch and yaw spread beyond noise x {x.board_distance_mm:.0f} mm board distance "
+                     f"smooth pitch and yaw spread beyond noise x {x.board_distance_mm:.0f} mm board distance "
                      "(positions are at the board plane)")
+
+
+def smooth_tilt_spread_urad(tilt: np.ndarray, sigma: np.ndarray, target_mm: np.ndarray | None,
+                            degree: int = TILT_DEGREE) -> float:
+    """RMS spread of pitch and yaw along the travel that is not per-view noise (urad).
+
+    Per-view angles are noisy (tens of urad) while a carriage tilts smoothly:
+    a polynomial of ``degree`` in the target is fitted to each angle, and the
+    noise's share of the fitted curve's variance (sigma^2 (degree + 1) / n)
+    is subtracted. Without targets, the raw variance minus sigma^2 is used.
+    """
+    ok = np.all(np.isfinite(tilt), axis=1)
+    tilt, sigma = tilt[ok], sigma[ok]
+    n = tilt.shape[0]
+    noise = np.nanmedian(sigma, axis=0) ** 2 if sigma.size else np.zeros(tilt.shape[1])
+    if target_mm is not None and n > degree + 2 and np.ptp(target_mm[ok]) > 0:
+        t = target_mm[ok]
+        u = (t - t.mean()) / np.ptp(t)
+        A = np.vander(u, degree + 1)
+        fit = A @ np.linalg.lstsq(A, tilt, rcond=None)[0]
+        spread = np.var(fit, axis=0) - noise * (degree + 1) / n
+    elif n > 1:
+        spread = np.var(tilt, axis=0) - noise
+    else:
+        return 0.0
+    return float(np.sqrt(np.sum(np.clip(spread, 0.0, None))))
 
 
 def _finite(v: float) -> float | None:

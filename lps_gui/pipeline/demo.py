@@ -30,6 +30,12 @@ log = logging.getLogger(__name__)
 
 MARKER = ".lps-demo"  # a folder the demo made and may clear on the next run
 PAPER_SPEC = {"accuracy_um": 20.0, "repeatability_um": 5.0, "straightness_um": 38.0}  # the paper's stage table
+# the simulated board is exact at 20 C; the stage is a little warm (steel screw), as in a lab
+DEMO_ENVIRONMENT = {"board_temperature_c": 20.0, "board_cte_ppm_per_k": 23.0, "square_mm_uncertainty_um": 0.1,
+                    "stage_temperature_c": 20.5, "stage_cte_ppm_per_k": 11.5,
+                    "notes": "simulated rig; board on aluminium composite, values as a lab would record them"}
+DEMO_IDENTIFICATION = {"operator": "lps demo", "customer": "demonstration (simulated rig)",
+                       "stage_model": "paper's lead-screw stage (simulated)", "location": "simulator"}
 BarFactory = Callable[[str], ProgressFn]
 
 
@@ -133,6 +139,8 @@ def run_demo(
     step("capture", status, message, t0)
     res.session_dir = session.folder
     session.meta["stage_spec"] = dict(PAPER_SPEC)
+    session.meta.setdefault("environment", dict(DEMO_ENVIRONMENT))
+    session.meta.setdefault("identification", dict(DEMO_IDENTIFICATION))
     session.save_meta()
 
     t0 = time.monotonic()

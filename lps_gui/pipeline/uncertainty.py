@@ -36,7 +36,8 @@ def _column(positions: list[dict[str, Any]], key: str) -> np.ndarray:
 
 def budget_inputs(results: dict[str, Any], square_mm: float) -> BudgetInputs:
     """BudgetInputs from results.json: used views' sigmas, travel, board distance, pitch/yaw."""
-    used = [r for r in results.get("positions") or [] if r.get("used") and r.get("deviation_um") is not None]
+    used = [r for r in results.get("positions") or []
+            if r.get("used", not r.get("outlier")) and r.get("deviation_um") is not None]
     targets = _column(used, "target_mm")
     travel = float(np.nanmax(targets) - np.nanmin(targets)) if targets.size else 0.0
     p = results.get("parameters") or {}
@@ -49,7 +50,7 @@ def budget_inputs(results: dict[str, Any], square_mm: float) -> BudgetInputs:
         travel_mm=travel, square_mm=square_mm, sigma_px=float(p.get("sigma_px") or 0.0),
         sigma_um=_column(used, "sigma_um"), sigma_total_um=_column(used, "sigma_total_um"),
         board_distance_mm=float(np.linalg.norm(l0)) if l0 is not None else None,
-        tilt_urad=tilt, tilt_sigma_urad=tilt_sig)
+        tilt_urad=tilt, tilt_sigma_urad=tilt_sig, target_mm=targets)
 
 
 def add_uncertainty(results: dict[str, Any], session: Session) -> dict[str, Any]:
@@ -63,9 +64,14 @@ def add_uncertainty(results: dict[str, Any], session: Session) -> dict[str, Any]
     results["environment"] = thermal_record(nominal, env)
     if isinstance(results.get("board"), dict):
         results["board"]["square_mm"] = nominal.square_mm
-    x = budget_inputs(results, nominal.square_mm)
+    results["uncertainty"] = uncertainty_of(results, env, nominal.square_mm)
+    return results
+
+
+def uncertainty_of(results: dict[str, Any], env: Environment, square_mm: float) -> dict[str, Any]:
+    """results.json ``uncertainty`` of a results dict: budget, U (k = 2), U per headline figure."""
+    x = budget_inputs(results, square_mm)
     unc = combine(budget_rows(x, env))
     unc["travel_mm"] = x.travel_mm
     unc["figures_k2"] = figure_uncertainties(unc, results.get("figures") or {}, x.travel_mm)
-    results["uncertainty"] = unc
-    return results
+    return unc

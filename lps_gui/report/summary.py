@@ -6,7 +6,8 @@ every number printed has exactly one source. No Qt here.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import re
+from dataclasses import dataclass, replace
 from typing import Any, Sequence
 
 import numpy as np
@@ -18,7 +19,7 @@ METHOD_NAMES = {"joint": "joint LM (all positions, orientation and line at once)
                 "pnp": "per-view PnP (baseline)", "calibrate": "full calibration (reference only)"}
 TRUTH_NAMES = {"position_rms_error_um": ("Truth: position error RMS", "\u00b5m"),
                "position_max_abs_error_um": ("Truth: position error max |e|", "\u00b5m"),
-               "mean_sigma_um": ("Truth: mean position \u03c3 (noise)", "\u00b5m"),
+               "mean_sigma_um": ("Truth: mean position 1\u03c3 (noise only)", "\u00b5m"),
                "z_mean_square": ("Truth: mean (error/\u03c3)\u00b2", ""),
                "board_plane_rms_error_um": ("Truth at the board plane: position error RMS", "\u00b5m"),
                "board_plane_max_abs_error_um": ("Truth at the board plane: position error max |e|", "\u00b5m"),
@@ -26,6 +27,7 @@ TRUTH_NAMES = {"position_rms_error_um": ("Truth: position error RMS", "\u00b5m")
                "abbe_rms_um": ("Truth: Abbe term (board plane - camera centre) RMS", "\u00b5m")}
 INTRINSIC_ORDER = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3")
 DASH = "\u2014"
+ZERO_BELOW = 1e-9  # |values| below this print as 0 (no unit of the report resolves them)
 
 
 @dataclass(frozen=True)
@@ -37,10 +39,16 @@ class Row:
     unit: str = ""
     note: str = ""
     digits: int = 3  # significant digits when printed
+    key: str = ""  # the figure's key in results.json (for its U)
+    u_k2: float | None = None  # expanded uncertainty (k = 2) in ``unit``, None when not assessed
 
     def text(self) -> str:
         """The value as printed: ``digits`` significant digits, a dash when absent."""
         return fmt(self.value, self.digits)
+
+    def u_text(self) -> str:
+        """U (k = 2) as printed ("± 0.52"), empty when not assessed."""
+        return "" if self.u_k2 is None else f"± {fmt(self.u_k2, 2)}"
 
 
 @dataclass(frozen=True)
@@ -60,8 +68,8 @@ def fmt(value: float | None, digits: int = 3) -> str:
     if value is None or not isinstance(value, (int, float, np.floating, np.integer)) or not math.isfinite(value):
         return DASH
     v = float(value)
-    if v == 0:
-        return "0"
+    if abs(v) < ZERO_BELOW:
+        return "0"  # rounding noise of a difference (e.g. an Abbe term of 6e-12 um) reads as what it is
     mag = int(math.floor(math.log10(abs(v))))
     if mag >= 6 or mag < -4:
         return f"{v:.{digits - 1}e}"
@@ -73,9 +81,15 @@ def fmt(value: float | None, digits: int = 3) -> str:
 
 
 def title_rows(session_meta: dict[str, Any], results: dict[str, Any], version: str) -> list[tuple[str, str]]:
-    """(label, text) pairs of the title block: who, what, with which equipment and software."""
+    """(label, text) pairs of the identification block: who, what, with which equipment and software.
+
+    ``session_meta["identification"]`` holds what the operator typed (operator,
+    customer, stage_model, stage_serial, controller_serial, location); a
+    driver's class name ("RigStage") is printed as words ("simulated stage").
+    """
     camera = session_meta.get("camera") or {}
     stage = session_meta.get("stage") or {}
+    ident = session_meta.get("identification") or {}
     board = results.get("board") or session_meta.get("board") or {}
     corners = board.get("inner_corners") or ["?", "?"]
     sha = ((results.get("inputs") or {}).get("sha256") or {})
@@ -84,26 +98,57 @@ def title_rows(session_meta: dict[str, Any], results: dict[str, Any], version: s
     rig = session_meta.get("rig") or stage.get("rig") or (f"simulated ({truth.get('preset', 'simulator')})" if truth else DASH)
     intr = results.get("intrinsics") or {}
     size = intr.get("image_size") or camera.get("image_size")
+    if not size and camera.get("width") and camera.get("height"):
+        size = [camera["width"], camera["height"]]
     fx = (np.asarray(intr.get("camera_matrix") or np.zeros((3, 3)), dtype=float))[0, 0]
     lens = _describe(camera, ("lens", "focal_length_mm"), "")
+    stage_text = _describe({**stage, "model": ident.get("stage_model") or stage.get("model")},
+                           ("name", "model", "driver", "kind"), DASH)
+    if ident.get("stage_serial"):
+        stage_text += f", serial {ident['stage_serial']}"
+    if stage.get("axis"):
+        stage_text += f", axis {stage['axis']}"
+    controller = _describe(stage, ("controller", "firmware", "port"), "simulated (no controller)" if truth else DASH)
+    if ident.get("controller_serial"):
+        controller += f", serial {ident['controller_serial']}"
+    board_text = f"chessboard {corners[0]}\u00d7{corners[1]} inner corners, square {fmt(board.get('square_mm'), 4)} mm at 20 \u00b0C"
+    u_sq = (results.get("environment") or {}).get("square_mm_uncertainty_um")
+    if u_sq is not None:
+        board_text += f", u = {fmt(_num(u_sq), 2)} \u00b5m"
     return [
         ("Date", str(results.get("created") or session_meta.get("created") or DASH)),
+        ("Customer", str(ident.get("customer") or "not recorded")),
+        ("Operator", str(ident.get("operator") or "not recorded")),
+        ("Location", str(ident.get("location") or "not recorded")),
         ("Session", str((results.get("inputs") or {}).get("session") or DASH)),
         ("Rig", str(rig)),
-        ("Stage", _describe(stage, ("name", "model", "driver", "kind"), DASH)
-         + (f", axis {stage['axis']}" if stage.get("axis") else "")),
-        ("Controller", _describe(stage, ("controller", "firmware", "port"), "simulated (no controller)" if truth else DASH)),
+        ("Stage", stage_text),
+        ("Controller", controller),
         ("Camera", _describe(camera, ("name", "model", "driver", "device", "source"), DASH)
          + (f", {size[0]}\u00d7{size[1]} px" if size else "")),
         ("Lens", lens or (f"not recorded; focal length {fx:.1f} px from the intrinsics" if fx else DASH)),
-        ("Board", f"chessboard {corners[0]}\u00d7{corners[1]} inner corners, square {fmt(board.get('square_mm'), 4)} mm"),
+        ("Board", board_text),
         ("Software", f"lps-calib {version}"),
         ("Session hash", f"sha256 {session_hash[:16]}\u2026 (session.json)" if session_hash else DASH),
     ]
 
 
+CLASS_WORDS = {"RigStage": "simulated stage", "SimStage": "simulated stage", "SimulatedCamera": "simulated camera",
+               "SimCamera": "simulated camera"}
+
+
+def _words(value: Any) -> str:
+    """A driver's class name as words: "RigStage" -> "simulated stage", "GrblStage" -> "grbl stage"."""
+    text = str(value)
+    if text in CLASS_WORDS:
+        return CLASS_WORDS[text]
+    if re.fullmatch(r"(?:[A-Z][a-z0-9]+){2,}", text):
+        return " ".join(w.lower() for w in re.findall(r"[A-Z][a-z0-9]+", text))
+    return text
+
+
 def _describe(d: dict[str, Any], keys: Sequence[str], default: str) -> str:
-    parts = [str(d[k]) for k in keys if d.get(k) not in (None, "", {})]
+    parts = [_words(d[k]) for k in keys if d.get(k) not in (None, "", {})]
     return ", ".join(parts) if parts else default
 
 
@@ -178,7 +223,7 @@ def iso_rows(iso: dict[str, Any] | None) -> list[Row]:
             if key in iso:
                 seen.add(key)
                 if _num(iso[key]) is not None:
-                    rows.append(Row(f"ISO 230-2 {name} ({words})", _num(iso[key]), "\u00b5m"))
+                    rows.append(Row(f"ISO 230-2 {name} ({words})", _num(iso[key]), "\u00b5m", key=key))
     for key, value in iso.items():
         if key in seen or key.startswith("n_") or isinstance(value, (dict, list, bool)) or _num(value) is None:
             continue
@@ -205,18 +250,36 @@ def summary_rows(results: dict[str, Any]) -> list[Row]:
     """
     figs = results.get("figures") or {}
     single = figs.get("single_run") or {}
+    u = (results.get("uncertainty") or {}).get("figures_k2") or {}
     rows = [
-        Row("Mean step", _num(single.get("mean_step_mm")), "mm", digits=7),
-        Row("Step std", _num(single.get("step_std_um")), "\u00b5m"),
-        Row("Max |deviation|", _num(single.get("max_abs_deviation_um")), "\u00b5m"),
-        Row("Scale error", _num(single.get("scale_ppm")), "ppm"),
-        Row("Scale error \u03c3 (noise, correlations included)", _num(single.get("scale_sigma_ppm")), "ppm"),
-        Row("Scale error \u03c3 (total, with intrinsics)", _num(single.get("scale_sigma_total_ppm")), "ppm"),
+        Row("Mean step", _num(single.get("mean_step_mm")), "mm", digits=7, u_k2=_mean_step_u_mm(results)),
+        Row("Step std", _num(single.get("step_std_um")), "\u00b5m", u_k2=_num(u.get("step_std_um"))),
+        Row("Max |deviation|", _num(single.get("max_abs_deviation_um")), "\u00b5m",
+            u_k2=_num(u.get("max_abs_deviation_um"))),
+        Row("Scale error", _num(single.get("scale_ppm")), "ppm", u_k2=_num(u.get("scale_ppm"))),
+        Row("Scale error 1\u03c3 (noise only, correlations included)", _num(single.get("scale_sigma_ppm")), "ppm"),
+        Row("Scale error 1\u03c3 (noise and intrinsics)", _num(single.get("scale_sigma_total_ppm")), "ppm"),
         Row("Periodic error amplitude", _num(single.get("periodic_amplitude_um")), "\u00b5m"),
         Row("Periodic error period", _num(single.get("periodic_period_mm")), "mm"),
     ]
-    rows += iso_rows(figs.get("iso230_2"))
+    rows += [replace(r, u_k2=_num(u.get(r.key))) if r.key else r for r in iso_rows(figs.get("iso230_2"))]
     rows += extremes_rows(results)
+    return rows
+
+
+def _mean_step_u_mm(results: dict[str, Any]) -> float | None:
+    """U of the mean step: U over the travel divided by the number of steps (in mm)."""
+    unc = results.get("uncertainty") or {}
+    n = ((results.get("figures") or {}).get("iso230_2") or {}).get("n_targets")
+    if n is None:
+        n = len({round(float(r["target_mm"]), 6) for r in results.get("positions") or [] if r.get("target_mm") is not None})
+    U = _num(unc.get("expanded_k2_um"))
+    return None if U is None or not n or n < 2 else 1e-3 * U / (n - 1)
+
+
+def truth_rows(results: dict[str, Any]) -> list[Row]:
+    """The simulator's truth comparison (simulated sessions only): printed on its own page, labelled."""
+    rows: list[Row] = []
     truth = results.get("truth_comparison") or {}
     for key, value in truth.items():
         if _num(value) is not None and not isinstance(value, bool):
@@ -343,8 +406,8 @@ def outlier_rows(results: dict[str, Any]) -> list[dict[str, Any]]:
 POSITION_TABLE_COLUMNS = (  # (key, header, decimals or None for text, width in mm)
     ("index", "#", 0, 9), ("run", "run", 0, 7), ("direction", "dir", None, 6), ("target_mm", "target\n[mm]", 3, 13),
     ("measured_mm", "measured\n[mm]", 4, 15), ("deviation_um", "deviation\n[\u00b5m]", 2, 14),
-    ("truth_deviation_um", "truth dev.\n[\u00b5m]", 2, 14),
-    ("sigma_um", "\u03c3\n[\u00b5m]", 2, 10), ("rms_px", "rms\n[px]", 3, 10),
+    ("truth_deviation_um", "truth dev.\n[\u00b5m]", 2, 16),
+    ("sigma_um", "1\u03c3 noise\n[\u00b5m]", 2, 13), ("rms_px", "rms\n[px]", 3, 10),
     ("straightness_um_1", "str. v1\n[\u00b5m]", 2, 13), ("straightness_um_2", "str. v2\n[\u00b5m]", 2, 13),
     ("roll_urad", "roll\n[\u00b5rad]", 1, 13), ("pitch_urad", "pitch\n[\u00b5rad]", 1, 13),
     ("yaw_urad", "yaw\n[\u00b5rad]", 1, 13), ("outlier", "outlier", None, 11),

@@ -43,6 +43,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     s.add_argument("--real-time", action="store_true", help="simulated rig: move and settle in real time (default: simulated time)")
     s.add_argument("--time-scale", type=float, default=1.0, help="--stage emulator: simulated time runs this many times faster than real")
     s.add_argument("--encode", default=".png", help="image format (lossless): .png (default), .tif, .bmp")
+    from lps_gui.cli.capture_setup import add_setup_arguments
+
+    add_setup_arguments(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -57,7 +60,11 @@ def run(args: argparse.Namespace) -> int:
         return _intrinsics_mode(args)
     if bool(args.out) == bool(args.resume):
         raise InputError("give either --out SESSION (new capture) or --resume SESSION")
+    from lps_gui.cli.capture_setup import apply_setup, setup_meta
+
+    extra = setup_meta(args)  # --spec, environment, identification: checked before any device opens
     session, stage, camera, engine = _resume(args) if args.resume else _start(args)
+    apply_setup(session, extra)
     try:
         print(f"capturing into {session.folder}: {_describe(session)}", file=sys.stderr)
         summary = engine.run(progress=ProgressBar("capture"))
@@ -147,6 +154,9 @@ def _plan(args: argparse.Namespace, base=None):
     fields = {k: getattr(args, k) for k in ("start_mm", "stop_mm", "step_mm", "directions", "runs", "overshoot_mm", "settle_s", "frames_per_stop", "feed_mm_min")}
     if args.targets:
         fields["targets_mm"] = parse_targets(args.targets)
+    from lps_gui.cli.capture_setup import iso_plan_fields
+
+    fields.update(iso_plan_fields(args, base))
     if base is None and not any(fields[k] is not None for k in ("start_mm", "stop_mm", "step_mm", "targets_mm") if k in fields):
         from lps_gui.errors import InputError
 

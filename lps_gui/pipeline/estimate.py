@@ -28,6 +28,7 @@ from lps_gui.io.board_file import board_to_dict
 from lps_gui.io.corners_vnl import read_corners_vnl
 from lps_gui.io.intrinsics_file import intrinsics_to_dict, read_intrinsics
 from lps_gui.io.results_file import FORMAT, write_results
+from lps_gui.io.results_history import keep_previous, record_latest
 from lps_gui.io.session import SESSION_FILE, Session
 from lps_gui.pipeline.truth import session_truth
 from lps_gui.pipeline.uncertainty import add_uncertainty, session_board
@@ -100,7 +101,11 @@ def estimate_session(
     results["timings_s"]["pipeline_total"] = time.perf_counter() - t0
     if cancel is not None:
         cancel.check("estimation")
+    if out_dir is None:
+        keep_previous(session.folder)  # re-estimating never loses a result (results/<time>-<method>/)
     write_results(Path(out_dir) if out_dir else session.folder, results)
+    if out_dir is None:
+        record_latest(session.folder, results)
     return results
 
 

@@ -289,15 +289,16 @@ def truth_errors(results: dict[str, Any], truth: dict[str, Any] | None) -> dict[
 
 def summary_lines(results: dict[str, Any], truth: dict[str, Any] | None, spec: SimulationSpec) -> list[str]:
     """Five lines a newcomer reads first: what was measured, the stage figures, the verdict, the truth check."""
-    from lps_gui.report.summary import extremes_rows, fmt, spec_checks
+    from lps_gui.report.summary import extremes_rows, fmt
+    from lps_gui.report.verdict import verdicts
 
     p = results.get("parameters") or {}
     single = (results.get("figures") or {}).get("single_run") or {}
     n_out = sum(1 for r in results.get("positions") or [] if r.get("outlier"))
     plan = spec.plan
     ext = {r.name: r.value for r in extremes_rows(results)}
-    checks = spec_checks(results, PAPER_SPEC)
-    verdict = ", ".join(f"{c.name} {'PASS' if c.passed else ('FAIL' if c.passed is False else 'n/a')}" for c in checks)
+    verdict = ", ".join(f"{v.name} {v.verdict}" for v in verdicts(results, PAPER_SPEC))
+    U = (results.get("uncertainty") or {}).get("expanded_k2_um")
     te = truth_errors(results, truth)
     tc = results.get("truth_comparison") or {}
     truth_line = ("error against truth: " + (f"position RMS {te['rms_um']:.2f} \u00b5m, max {te['max_um']:.2f} \u00b5m "
@@ -313,6 +314,7 @@ def summary_lines(results: dict[str, Any], truth: dict[str, Any] | None, spec: S
         f"straightness p-v {fmt(ext.get('Max straightness v1 (peak-to-valley)'))} / "
         f"{fmt(ext.get('Max straightness v2 (peak-to-valley)'))} \u00b5m; max |roll| {fmt(ext.get('Max |roll|'))}, "
         f"|pitch| {fmt(ext.get('Max |pitch|'))}, |yaw| {fmt(ext.get('Max |yaw|'))} \u00b5rad",
-        f"paper's spec (\u00b120 \u00b5m, \u00b15 \u00b5m, 38 \u00b5m): {verdict}",
+        f"paper's spec (\u00b120 \u00b5m, \u00b15 \u00b5m, 38 \u00b5m): {verdict}"
+        + (f"; U (k = 2) {fmt(U, 2)} \u00b5m over the travel" if U is not None else ""),
         truth_line,
     ]

@@ -247,7 +247,7 @@ def _method_page(flow: Any, results: dict[str, Any]) -> None:
     flow.table(None, method, [30, 70], size_pt=7.5, row_mm=row_mm, align_right_from=9)
     below_method = flow.y
     flow.y = top
-    flow.table(["intrinsic", "value", "std"], intr, [16, 30, 24], size_pt=7.5, row_mm=row_mm, x_mm=110)
+    flow.table(["intrinsic", "value", "1\u03c3"], intr, [16, 30, 24], size_pt=7.5, row_mm=row_mm, x_mm=110)
     flow.y = max(flow.y, below_method)
 
 

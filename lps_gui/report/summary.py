@@ -352,7 +352,9 @@ def limits_notes(results: dict[str, Any]) -> list[str]:
         f"({fmt(_num(board.get('square_mm')), 4)} mm as given). An error in the printed square size is a pure "
         "scale error: a square 0.1 % too large makes every position and the scale error 1000 ppm too large, "
         "and leaves the shape of the deviation curve, the straightness and the angles unchanged. Measure the "
-        "board with a calibrated instrument to remove it.",
+        "board with a calibrated instrument to remove it; its certified uncertainty (environment "
+        "square_mm_uncertainty_um) and its temperature enter the uncertainty budget, and a board away from "
+        "20 \u00b0C is corrected with its expansion coefficient.",
     ]
     if sig.size:
         text = (f"Uncertainty per position: noise alone gives a median \u03c3 of {fmt(float(np.median(sig)), 2)} \u00b5m")

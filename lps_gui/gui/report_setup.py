@@ -9,8 +9,10 @@ from __future__ import annotations
 
 from typing import Any
 
-from PySide6.QtCore import QSettings, Signal
-from PySide6.QtWidgets import QComboBox, QDoubleSpinBox, QFormLayout, QGroupBox, QLineEdit, QWidget
+from PySide6.QtCore import QSettings, Qt, Signal
+from PySide6.QtWidgets import (
+    QComboBox, QDoubleSpinBox, QFormLayout, QGroupBox, QLabel, QLineEdit, QToolButton, QVBoxLayout, QWidget,
+)
 
 from lps_gui.core.environment import Environment
 from lps_gui.core.presets import SPEC_PRESETS
@@ -45,12 +47,26 @@ def spin_value(s: QDoubleSpinBox) -> float | None:
 
 
 class ReportSetupBox(QGroupBox):
-    """Specification, environment and identification of the next session."""
+    """Specification, environment and identification of the next session; folded to one line until opened."""
 
     changed = Signal()
 
     def __init__(self, parent: QWidget | None = None) -> None:
-        super().__init__("Specification, environment, identification (for the report)", parent)
+        super().__init__("For the report", parent)
+        self.toggle = QToolButton()
+        self.toggle.setCheckable(True)
+        self.toggle.setText("Specification, environment, identification \u25b8")
+        self.toggle.setToolButtonStyle(Qt.ToolButtonStyle.ToolButtonTextOnly)
+        self.brief = QLabel()
+        self.brief.setWordWrap(True)
+        self.fields = QWidget()
+        outer = QVBoxLayout(self)
+        outer.setContentsMargins(6, 6, 6, 6)
+        outer.addWidget(self.toggle)
+        outer.addWidget(self.brief)
+        outer.addWidget(self.fields)
+        self.fields.setVisible(False)  # folded: the panel keeps its height on small screens
+        self.toggle.toggled.connect(self.unfold)
         self.preset = QComboBox()
         self.preset.addItem("custom", "")
         for key in SPEC_PRESETS:
@@ -65,13 +81,41 @@ class ReportSetupBox(QGroupBox):
         rows += [(label, self.env[key]) for key, label, *_ in ENV_FIELDS]
         rows += [("Environment notes", self.notes)]
         rows += [(label, self.ident[key]) for key, label in ID_FIELDS]
-        add_rows(QFormLayout(self), rows)
+        form = QFormLayout(self.fields)
+        form.setContentsMargins(0, 0, 0, 0)
+        add_rows(form, rows)
         self.preset.currentIndexChanged.connect(self._apply_preset)
         for w in (*self.spec.values(), *self.env.values()):
             w.valueChanged.connect(self.changed)
         for key, w in self.spec.items():
             w.valueChanged.connect(lambda _v, key=key: self._edited(key))
+        for w in (self.notes, *self.ident.values()):
+            w.textChanged.connect(self.changed)
+        self.changed.connect(self._update_brief)
+        self._update_brief()
 
+    def unfold(self, on: bool) -> None:
+        self.fields.setVisible(on)
+        self.toggle.setText("Specification, environment, identification " + ("\u25be" if on else "\u25b8"))
+
+    def _update_brief(self) -> None:
+        """One line of what the next session will record."""
+        try:
+            meta = self.meta()
+        except Exception as exc:  # an impossible value: say so where it is seen
+            self.brief.setText(f"<span style='color:#b00020'>{exc}</span>")
+            return
+        spec = meta.get("stage_spec") or {}
+        preset = self.preset.currentData()
+        parts = [PRESET_LABELS.get(preset, preset) if preset else
+                 (", ".join(f"{k.removesuffix('_um')} {v:g} \u00b5m" for k, v in spec.items()) or "no specification")]
+        env = meta.get("environment") or {}
+        parts.append(f"board {env['board_temperature_c']:g} \u00b0C" if "board_temperature_c" in env
+                     else "board temperature not recorded")
+        ident = meta.get("identification") or {}
+        if ident.get("operator"):
+            parts.append(f"operator {ident['operator']}")
+        self.brief.setText("; ".join(parts))
     def _apply_preset(self) -> None:
         key = self.preset.currentData()
         if not key:
@@ -91,6 +135,7 @@ class ReportSetupBox(QGroupBox):
 
     def select_preset(self, key: str) -> None:
         self.preset.setCurrentIndex(max(0, self.preset.findData(key)))
+        self._update_brief()
 
     def meta(self) -> dict[str, Any]:
         """session.json entries: only what was given; the environment is checked like session.json's."""

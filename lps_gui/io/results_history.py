@@ -75,7 +75,8 @@ def history(session_dir: Path | str) -> list[dict[str, Any]]:
     if (base / LATEST_FILE).is_file():
         latest = (read_json(base / LATEST_FILE, "results history") or {}).get("latest")
     out = []
-    for d in sorted(p for p in base.glob("*") if (p / RESULTS_FILE).is_file()):
+    sets = [p for p in base.glob("*") if (p / RESULTS_FILE).is_file()]
+    for d in sorted(sets, key=lambda p: ((p / RESULTS_FILE).stat().st_mtime, p.name)):  # copies keep the mtime
         meta = read_json(d / RESULTS_FILE, "results file")
         out.append({"name": d.name, "path": d, "created": meta.get("created"), "method": meta.get("method"),
                     "latest": d.name == latest})

@@ -176,8 +176,14 @@ def combine(rows: list[BudgetRow], k: float = COVERAGE_FACTOR) -> dict[str, Any]
     }
 
 
-def figure_uncertainties(unc: dict[str, Any], figures: dict[str, Any], travel_mm: float) -> dict[str, float | None]:
-    """U (k = 2) of each headline figure, keyed like the figures (um, ppm for the scale)."""
+def figure_uncertainties(unc: dict[str, Any], figures: dict[str, Any], travel_mm: float,
+                         n_views: int = 0) -> dict[str, float | None]:
+    """U (k = 2) of each headline figure, keyed like the figures (um, ppm for the scale).
+
+    The periodic amplitude is a sinusoid fitted to ``n_views`` noisy positions:
+    its 1-sigma is the per-view noise times sqrt(2 / n) (the reference view's
+    noise is a common offset, the scale terms a trend: neither enters).
+    """
     k = float(unc.get("coverage_factor") or COVERAGE_FACTOR)
     U = unc.get("expanded_k2_um")
     u_noise = unc.get("noise_standard_um")
@@ -186,7 +192,7 @@ def figure_uncertainties(unc: dict[str, Any], figures: dict[str, Any], travel_mm
     for key in ("A_um", "A_up_um", "A_down_um", "E_um", "E_up_um", "E_down_um", "M_um", "max_abs_deviation_um",
                 "deviation_span_um", "position_um"):
         out[key] = U
-    for key in ("R_um", "R_up_um", "R_down_um", "B_um", "step_std_um"):
+    for key in ("R_um", "R_up_um", "R_down_um", "B_um", "B_mean_um", "step_std_um"):
         out[key] = at_target
     single = figures.get("single_run") or {}
     scale_u = single.get("scale_sigma_total_ppm")
@@ -195,6 +201,8 @@ def figure_uncertainties(unc: dict[str, Any], figures: dict[str, Any], travel_mm
                        if r["contribution_um"] is not None and r["source"] not in NOISE_SOURCES + ("intrinsics", "Abbe offset")]
         rel = [1e3 * c / travel_mm for c in scale_terms]  # um over L -> ppm
         out["scale_ppm"] = k * math.sqrt(float(scale_u) ** 2 + sum(r * r for r in rel))
+    out["periodic_amplitude_um"] = (None if u_noise is None or n_views < 3
+                                    else k * (u_noise / math.sqrt(2.0)) * math.sqrt(2.0 / n_views))  # per-view part
     s = figures.get("straightness_sigma_um")
     out["straightness_um_max"] = None if s is None else k * float(s)
     return out

@@ -73,5 +73,5 @@ def uncertainty_of(results: dict[str, Any], env: Environment, square_mm: float) 
     x = budget_inputs(results, square_mm)
     unc = combine(budget_rows(x, env))
     unc["travel_mm"] = x.travel_mm
-    unc["figures_k2"] = figure_uncertainties(unc, results.get("figures") or {}, x.travel_mm)
+    unc["figures_k2"] = figure_uncertainties(unc, results.get("figures") or {}, x.travel_mm, n_views=x.sigma_um.size)
     return unc

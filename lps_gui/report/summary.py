@@ -259,11 +259,12 @@ def summary_rows(results: dict[str, Any]) -> list[Row]:
         Row("Scale error", _num(single.get("scale_ppm")), "ppm", u_k2=_num(u.get("scale_ppm"))),
         Row("Scale error 1\u03c3 (noise only, correlations included)", _num(single.get("scale_sigma_ppm")), "ppm"),
         Row("Scale error 1\u03c3 (noise and intrinsics)", _num(single.get("scale_sigma_total_ppm")), "ppm"),
-        Row("Periodic error amplitude", _num(single.get("periodic_amplitude_um")), "\u00b5m"),
+        Row("Periodic error amplitude", _num(single.get("periodic_amplitude_um")), "\u00b5m",
+            u_k2=_num(u.get("periodic_amplitude_um"))),
         Row("Periodic error period", _num(single.get("periodic_period_mm")), "mm"),
     ]
     rows += [replace(r, u_k2=_num(u.get(r.key))) if r.key else r for r in iso_rows(figs.get("iso230_2"))]
-    rows += extremes_rows(results)
+    rows += extremes_rows(results, u)
     return rows
 
 
@@ -300,19 +301,32 @@ def figure_notes(results: dict[str, Any]) -> list[str]:
     return notes
 
 
-def extremes_rows(results: dict[str, Any]) -> list[Row]:
-    """Peak-to-valley straightness per direction v1/v2 and max |roll|, |pitch|, |yaw| (outliers excluded)."""
+def extremes_rows(results: dict[str, Any], u_k2: dict[str, Any] | None = None) -> list[Row]:
+    """Peak-to-valley straightness per direction v1/v2 and max |roll|, |pitch|, |yaw| (outliers excluded).
+
+    With ``u_k2`` (results ``uncertainty.figures_k2``) each row carries a U: 2 x the median per-view
+    1-sigma of that component, twice for a peak-to-valley (two views).
+    """
     cols = position_columns(results)
     keep = ~cols["outlier"]
     rows = []
+
+    def u_of(column: str, views: int) -> float | None:
+        if u_k2 is None:
+            return None
+        s = cols[column][keep]
+        s = s[np.isfinite(s)]
+        return float(2.0 * np.sqrt(views) * np.median(s)) if s.size else None
+
     for k in (1, 2):
         v = cols[f"straightness_um_{k}"][keep]
         v = v[np.isfinite(v)]
-        rows.append(Row(f"Max straightness v{k} (peak-to-valley)", float(v.max() - v.min()) if v.size else None, "\u00b5m"))
+        rows.append(Row(f"Max straightness v{k} (peak-to-valley)", float(v.max() - v.min()) if v.size else None, "\u00b5m",
+                        u_k2=u_of(f"straightness_sigma_um_{k}", 2)))
     for name in ("roll", "pitch", "yaw"):
         v = np.abs(cols[f"{name}_urad"][keep])
         v = v[np.isfinite(v)]
-        rows.append(Row(f"Max |{name}|", float(v.max()) if v.size else None, "\u00b5rad"))
+        rows.append(Row(f"Max |{name}|", float(v.max()) if v.size else None, "\u00b5rad", u_k2=u_of(f"{name}_sigma_urad", 1)))
     return rows
 
 

@@ -71,3 +71,19 @@ def test_tilt_within_noise_gives_no_abbe_term_and_missing_sources_are_listed():
     assert rows["Abbe offset"].contribution_um < 600e-3 * 2.0  # the noise alone is not an Abbe error
     unc = combine(list(rows.values()))
     assert {"board square size", "board temperature", "stage temperature"} <= set(unc["not_in_u"])
+
+
+def test_periodic_amplitude_uncertainty_matches_a_monte_carlo_fit():
+    """U of a fitted sinusoid's amplitude from noise: check sqrt(2/n) against simulated fits."""
+    rng = np.random.default_rng(7)
+    n, sigma = 100, 0.5
+    x = np.linspace(0, 100, n)
+    A = np.stack([np.sin(2 * np.pi * x / 5), np.cos(2 * np.pi * x / 5)], axis=1)
+    amps = []
+    for _ in range(400):
+        y = 3.0 * np.sin(2 * np.pi * x / 5) + rng.normal(0, sigma, n)
+        c = np.linalg.lstsq(A, y, rcond=None)[0]
+        amps.append(np.hypot(*c))
+    unc = {"coverage_factor": 2.0, "expanded_k2_um": 1.0, "noise_standard_um": sigma * math.sqrt(2)}
+    U = figure_uncertainties(unc, {}, 100.0, n_views=n)["periodic_amplitude_um"]
+    assert U / 2 == pytest.approx(np.std(amps), rel=0.15)

@@ -57,7 +57,7 @@ class BudgetInputs:
     sigma_px: float
     sigma_um: np.ndarray  # noise-only 1-sigma per used view (relative to the reference)
     sigma_total_um: np.ndarray  # with the intrinsics' covariance
-    board_distance_mm: float | None = None
+    abbe_lever_mm: tuple[float, float] | None = None  # camera -> board centre along v2 (pitch's lever), along v1 (yaw's)
     tilt_urad: np.ndarray | None = None  # (n, 2) pitch and yaw per used view
     tilt_sigma_urad: np.ndarray | None = None  # (n, 2) their 1-sigma
     target_mm: np.ndarray | None = None  # (n,) targets of the used views (for the smooth tilt curve)
@@ -118,20 +118,28 @@ def budget_rows(x: BudgetInputs, env: Environment) -> list[BudgetRow]:
 
 
 def _abbe_row(x: BudgetInputs) -> BudgetRow:
-    """Abbe term: camera-board distance times the tilt spread that is not per-view noise."""
-    if x.board_distance_mm is None or x.tilt_urad is None or x.tilt_sigma_urad is None or not len(x.tilt_urad):
+    """Abbe term: the tilt along the travel that is not per-view noise, times its lever arm.
+
+    A rotation w = pitch v1 + yaw v2 moves the board point r = d v2 + h v1 (seen
+    from the camera) along the motion u by (w x r) . u = pitch d - yaw h: pitch
+    acts over the board distance d, yaw over the board's sideways offset h.
+    """
+    if x.abbe_lever_mm is None or x.tilt_urad is None or x.tilt_sigma_urad is None or not len(x.tilt_urad):
         return BudgetRow("Abbe offset", "B", None, "\u00b5rad", None, None, "no per-view angles; not in U")
-    angle = smooth_tilt_spread_urad(np.asarray(x.tilt_urad, float), np.asarray(x.tilt_sigma_urad, float),
-                                    None if x.target_mm is None else np.asarray(x.target_mm, float))
-    c = x.board_distance_mm * 1e-3  # um per urad
-    return BudgetRow("Abbe offset", "B", angle, "\u00b5rad", c, c * angle,
-                     f"smooth pitch and yaw spread beyond noise x {x.board_distance_mm:.0f} mm board distance "
-                     "(positions are at the board plane)")
+    spread = smooth_tilt_spread_urad(np.asarray(x.tilt_urad, float), np.asarray(x.tilt_sigma_urad, float),
+                                     None if x.target_mm is None else np.asarray(x.target_mm, float))
+    lever = np.abs(np.asarray(x.abbe_lever_mm, float))
+    contribution = float(np.sqrt(np.sum((1e-3 * lever * spread) ** 2)))  # um
+    angle = float(np.sqrt(np.sum(spread**2)))
+    c = contribution / angle if angle > 0 else float(lever[0]) * 1e-3
+    return BudgetRow("Abbe offset", "B", angle, "\u00b5rad", c, contribution,
+                     f"smooth pitch {spread[0]:.1f} \u00b5rad x {lever[0]:.0f} mm, yaw {spread[1]:.1f} \u00b5rad x "
+                     f"{lever[1]:.0f} mm (beyond per-view noise; positions are at the board plane)")
 
 
 def smooth_tilt_spread_urad(tilt: np.ndarray, sigma: np.ndarray, target_mm: np.ndarray | None,
-                            degree: int = TILT_DEGREE) -> float:
-    """RMS spread of pitch and yaw along the travel that is not per-view noise (urad).
+                            degree: int = TILT_DEGREE) -> np.ndarray:
+    """RMS spread of pitch and of yaw along the travel that is not per-view noise (urad), shape (2,).
 
     Per-view angles are noisy (tens of urad) while a carriage tilts smoothly:
     a polynomial of ``degree`` in the target is fitted to each angle, and the
@@ -151,8 +159,8 @@ def smooth_tilt_spread_urad(tilt: np.ndarray, sigma: np.ndarray, target_mm: np.n
     elif n > 1:
         spread = np.var(tilt, axis=0) - noise
     else:
-        return 0.0
-    return float(np.sqrt(np.sum(np.clip(spread, 0.0, None))))
+        return np.zeros(tilt.shape[1])
+    return np.sqrt(np.clip(spread, 0.0, None))
 
 
 def _finite(v: float) -> float | None:

@@ -41,7 +41,6 @@ def budget_inputs(results: dict[str, Any], square_mm: float) -> BudgetInputs:
     targets = _column(used, "target_mm")
     travel = float(np.nanmax(targets) - np.nanmin(targets)) if targets.size else 0.0
     p = results.get("parameters") or {}
-    l0 = p.get("l0_cam_mm")
     tilt = np.stack([_column(used, "pitch_urad"), _column(used, "yaw_urad")], axis=1) if used else None
     tilt_sig = np.stack([_column(used, "pitch_sigma_urad"), _column(used, "yaw_sigma_urad")], axis=1) if used else None
     if tilt is not None and not np.isfinite(tilt).any():
@@ -49,8 +48,29 @@ def budget_inputs(results: dict[str, Any], square_mm: float) -> BudgetInputs:
     return BudgetInputs(
         travel_mm=travel, square_mm=square_mm, sigma_px=float(p.get("sigma_px") or 0.0),
         sigma_um=_column(used, "sigma_um"), sigma_total_um=_column(used, "sigma_total_um"),
-        board_distance_mm=float(np.linalg.norm(l0)) if l0 is not None else None,
+        abbe_lever_mm=abbe_lever_mm(results),
         tilt_urad=tilt, tilt_sigma_urad=tilt_sig, target_mm=targets)
+
+
+def abbe_lever_mm(results: dict[str, Any]) -> tuple[float, float] | None:
+    """(d, h): camera -> board centre along v2 (the lever of pitch) and along v1 (of yaw), mm.
+
+    From the fitted line (results ``parameters``: R_cam_board, l0_cam_mm, u_board) and the board's size.
+    """
+    from lps_gui.core.lps_model import motion_frame
+
+    p = results.get("parameters") or {}
+    board = results.get("board") or {}
+    try:
+        R = np.asarray(p["R_cam_board"], float)
+        l0 = np.asarray(p["l0_cam_mm"], float)
+        frame = motion_frame(R, np.asarray(p["u_board"], float))
+        cols, rows = board.get("inner_corners") or (2, 2)
+        centre = 0.5 * float(board.get("square_mm") or 0.0) * np.array([cols - 1, rows - 1, 0.0])
+    except (KeyError, TypeError, ValueError):
+        return None
+    r = centre + R.T @ l0  # board centre minus camera centre, in the board frame
+    return float(abs(r @ frame[:, 2])), float(abs(r @ frame[:, 1]))
 
 
 def add_uncertainty(results: dict[str, Any], session: Session) -> dict[str, Any]:

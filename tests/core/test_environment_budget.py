@@ -32,7 +32,7 @@ def _inputs(**kw):
     n = 40
     rng = np.random.default_rng(1)
     base = dict(travel_mm=100.0, square_mm=10.0, sigma_px=0.1, sigma_um=np.full(n, 0.6), sigma_total_um=np.full(n, 1.0),
-                board_distance_mm=600.0, tilt_urad=rng.normal(0, 5, (n, 2)), tilt_sigma_urad=np.full((n, 2), 5.0))
+                abbe_lever_mm=(600.0, 50.0), tilt_urad=rng.normal(0, 5, (n, 2)), tilt_sigma_urad=np.full((n, 2), 5.0))
     base.update(kw)
     return BudgetInputs(**base)
 
@@ -69,6 +69,14 @@ def test_tilt_within_noise_gives_no_abbe_term_and_missing_sources_are_listed():
                                                      sigma_um=np.full(n, 0.6), sigma_total_um=np.full(n, 1.0)),
                                              Environment())}
     assert rows["Abbe offset"].contribution_um < 600e-3 * 2.0  # the noise alone is not an Abbe error
+    # a real pitch of 10 urad amplitude along the travel is found through the noise, over the board distance
+    t = np.linspace(0, 100, n)
+    pitch = 10.0 * np.sin(2 * np.pi * t / 200.0)  # smooth, RMS 7.07 urad
+    tilt = np.stack([pitch + rng.normal(0, 5, n), rng.normal(0, 5, n)], axis=1)
+    abbe = {r.source: r for r in budget_rows(_inputs(tilt_urad=tilt, tilt_sigma_urad=np.full((n, 2), 5.0), target_mm=t,
+                                                     sigma_um=np.full(n, 0.6), sigma_total_um=np.full(n, 1.0)),
+                                             Environment())}["Abbe offset"]
+    assert abbe.contribution_um == pytest.approx(0.6 * np.std(pitch), rel=0.25)
     unc = combine(list(rows.values()))
     assert {"board square size", "board temperature", "stage temperature"} <= set(unc["not_in_u"])
 

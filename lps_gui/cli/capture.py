@@ -172,8 +172,8 @@ def _start(args: argparse.Namespace):
     stage_spec, camera_spec = args.stage or "sim", args.camera or "sim"
     intr = _read_intrinsics(args.intrinsics)
     if camera_spec == "sim":
-        from lps_gui.capture.simulated_rig import spec_for_plan
-        from lps_gui.capture.sim_session import create_simulated_session, simulated_engine
+        from lps_gui.sim.rig import spec_for_plan
+        from lps_gui.sim.session import create_simulated_session, simulated_engine
         from lps_gui.core.simulate import preset
 
         if args.board:
@@ -214,7 +214,7 @@ def _resume(args: argparse.Namespace):
     session = Session.open(args.resume)
     truth = session.truth or {}
     if truth.get("simulated") and (args.camera or "sim") == "sim":
-        from lps_gui.capture.sim_session import reopen_simulated_rig, simulated_engine
+        from lps_gui.sim.session import reopen_simulated_rig, simulated_engine
 
         stage, camera = reopen_simulated_rig(session, clock=_clock(args))
         stage = _bind_stage(args.stage or "sim", stage, args.time_scale)
@@ -253,7 +253,7 @@ def _bind_stage(stage_spec: str, rig_stage, time_scale: float = 1.0):
         rig_stage.connect()
         return rig_stage
     if stage_spec == "emulator":
-        from lps_gui.capture.emulated_rig import emulated_rig_stage
+        from lps_gui.sim.emulated import emulated_rig_stage
 
         return emulated_rig_stage(rig_stage, time_scale=time_scale)
     raise InputError(f"--stage {stage_spec}: the simulated camera rides only --stage sim or emulator")

@@ -129,6 +129,9 @@ def robust_cost(r: np.ndarray, mask: np.ndarray, c: float | None) -> float:
     return float(np.sum(np.where(e <= c, e2, 2.0 * c * e - c * c)))
 
 
+LINEARIZE_BLOCK = 64  # views per pass: the (p, 2, views, N) Jacobian stays ~35 MB at N = 540, p = 17
+
+
 def linearize(
     state: LpsState,
     X: np.ndarray,
@@ -140,7 +143,43 @@ def linearize(
     """Normal-equation blocks at ``state``; returns them and the residuals (K, N, 2).
 
     ``huber_c`` (px) turns on the Huber loss: its IRLS weights enter the blocks.
+    Views enter the sums independently, so they are linearized LINEARIZE_BLOCK
+    at a time: the Jacobian of 1600 views would be 0.1-0.25 GB, and its
+    allocation and page faults cost more than the arithmetic.
     """
+    K = mask.shape[0]
+    if K <= LINEARIZE_BLOCK:
+        return _linearize_views(state, X, corners, mask, huber_c, with_intrinsics)
+    parts = []
+    for lo in range(0, K, LINEARIZE_BLOCK):
+        b = slice(lo, lo + LINEARIZE_BLOCK)
+        sub = LpsState(state.R, state.l0, state.n, state.s[b], state.intrinsics)
+        parts.append(_linearize_views(sub, X, corners[b], mask[b], huber_c, with_intrinsics))
+    eqs = [e for e, _ in parts]
+    eq = NormalEquations(
+        A=sum(e.A for e in eqs),
+        B=np.concatenate([e.B for e in eqs]),
+        D=np.concatenate([e.D for e in eqs]),
+        g_theta=sum(e.g_theta for e in eqs),
+        g_s=np.concatenate([e.g_s for e in eqs]),
+        cost=float(sum(e.cost for e in eqs)),
+        ssr=float(sum(e.ssr for e in eqs)),
+        n_obs=sum(e.n_obs for e in eqs),
+        basis=eqs[0].basis,
+        weights=np.concatenate([e.weights for e in eqs]),
+    )
+    return eq, np.concatenate([r for _, r in parts])
+
+
+def _linearize_views(
+    state: LpsState,
+    X: np.ndarray,
+    corners: np.ndarray,
+    mask: np.ndarray,
+    huber_c: float | None,
+    with_intrinsics: bool,
+) -> tuple[NormalEquations, np.ndarray]:
+    """:func:`linearize` on a few views at once."""
     x, y, z = _camera_points(state, X)
     parts = project_parts(x, y, z, state.intrinsics, want_jacobian=True)
     m = np.nan_to_num(corners)
@@ -229,19 +268,12 @@ def solve_arrowhead(
 
 
 def _solve_spd(S: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Solve the small reduced system by Cholesky (numpy: scipy.linalg's import costs more than the solve)."""
     try:
-        c, low = _cho_factor(S)
-        from scipy.linalg import cho_solve
-
-        return cho_solve((c, low), b)
+        L = np.linalg.cholesky(S)
     except np.linalg.LinAlgError:
         return np.linalg.lstsq(S, b, rcond=None)[0]
-
-
-def _cho_factor(S: np.ndarray):
-    from scipy.linalg import cho_factor
-
-    return cho_factor(S, lower=True, check_finite=False)
+    return np.linalg.solve(L.T, np.linalg.solve(L, b))
 
 
 def apply_step(state: LpsState, d_theta: np.ndarray, d_s: np.ndarray, basis: np.ndarray) -> LpsState:

@@ -27,7 +27,7 @@ from lps_gui.gui.intrinsics_panel import IntrinsicsPanel
 from lps_gui.gui.job_runner import JobRunner
 from lps_gui.gui.log_panel import LogPanel
 from lps_gui.gui.results_panel import ResultsPanel
-from lps_gui.gui.services import lookup, preload_backends
+from lps_gui.gui.services import preload_backends
 from lps_gui.gui.stage_controller import StageController
 from lps_gui.gui.stage_panel import StagePanel
 from lps_gui.gui.workers import Job, one_line, stop_all_jobs
@@ -89,9 +89,7 @@ class MainWindow(QMainWindow):
         self._build_menus()
         self._wire()
         self.restore_settings()
-        missing = preload_backends()
-        if missing:
-            log.info("not available yet in this build: %s", ", ".join(missing))
+        preload_backends()
         log.info("lps-gui %s ready", __version__)
 
     # ------------------------------------------------------------------ layout
@@ -268,7 +266,9 @@ class MainWindow(QMainWindow):
             self.show_panel("estimation")
             return False
         try:
-            results = lookup("lps_gui.io.results_file", "read_results")(results_path)
+            from lps_gui.io.results_file import read_results
+
+            results = read_results(results_path)
         except Exception as exc:
             self.show_error("Results not loaded", one_line(exc))
             return False
@@ -293,11 +293,8 @@ class MainWindow(QMainWindow):
 
     def export_pdf(self, path: Path) -> Job | None:
         """Write the PDF report in a worker thread."""
-        try:
-            write_report = lookup("lps_gui.report.pdf", "write_report")
-        except Exception as exc:
-            self.show_error("PDF export unavailable", one_line(exc))
-            return None
+        from lps_gui.report.pdf import write_report
+
         panel = self.results_panel
         job = Job(f"report {path.name}", write_report, panel.session_dir or path.parent, panel.results, path)
         return self.run_job(job, lambda p: (log.info("report written to %s", p), panel.set_report(Path(p))))

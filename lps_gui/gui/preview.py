@@ -16,7 +16,7 @@ import numpy as np
 
 from lps_gui.camera.base import Camera
 from lps_gui.core.board import Board
-from lps_gui.gui.services import Unavailable, lookup
+from lps_gui.camera.detection import detect_chessboard, sharpness
 from lps_gui.gui.workers import one_line
 
 log = logging.getLogger(__name__)
@@ -63,11 +63,8 @@ class PreviewGrabber:
         self._stop = threading.Event()
         self._paused = threading.Event()
         self._thread = threading.Thread(target=self._loop, name="camera-preview", daemon=True)
-        try:
-            self._detect = lookup("lps_gui.camera.detection", "detect_chessboard")
-            self._sharpness = lookup("lps_gui.camera.detection", "sharpness")
-        except Unavailable:
-            self._detect = self._sharpness = None
+        self._detect = detect_chessboard
+        self._sharpness = sharpness
 
     def start(self) -> "PreviewGrabber":
         self._thread.start()

@@ -95,6 +95,15 @@ def render_report(session_dir: Path, results: dict | None = None, out: Path | No
                    f"lps-calib {__version__} \u00b7 {name} \u00b7 {results.get('created', '')}")
     steps = ("front pages", "plots", "outliers", "table")
     try:
+        if len(results.get("axes") or ["X"]) == 2:  # a planar session (SPEC 10)
+            from lps_gui.report.planar_report import paint_planar_report
+
+            progress(0, len(steps), "planar report")
+            paint_planar_report(flow, meta, results, S.title_rows(meta, results, __version__), FIGURE_HEIGHT_MM)
+            n_pages = flow.finish()
+            tmp.replace(out)
+            progress(len(steps), len(steps), f"wrote {out}")
+            return ReportInfo(out, n_pages, flow.log.pages)
         progress(0, len(steps), "front pages")
         _front_page(flow, meta, results, __version__)
         flow.new_page()

@@ -12,19 +12,13 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from lps_gui.io.results_file import SummaryFigure, extreme_figures, iso_figures, summary_figures
+from lps_gui.io.results_file import finite_number as _num
 from lps_gui.report.figures import position_columns
 
 METHOD_NAMES = {"joint": "joint LM (all positions, orientation and line at once)",
                 "hybrid": "paper's hybrid algorithm (LM + per-view grid search)",
                 "pnp": "per-view PnP (baseline)", "calibrate": "full calibration (reference only)"}
-TRUTH_NAMES = {"position_rms_error_um": ("Truth: position error RMS", "\u00b5m"),
-               "position_max_abs_error_um": ("Truth: position error max |e|", "\u00b5m"),
-               "mean_sigma_um": ("Truth: mean position 1\u03c3 (noise only)", "\u00b5m"),
-               "z_mean_square": ("Truth: mean (error/\u03c3)\u00b2", ""),
-               "board_plane_rms_error_um": ("Truth at the board plane: position error RMS", "\u00b5m"),
-               "board_plane_max_abs_error_um": ("Truth at the board plane: position error max |e|", "\u00b5m"),
-               "board_plane_z_mean_square": ("Truth at the board plane: mean (error/\u03c3)\u00b2", ""),
-               "abbe_rms_um": ("Truth: Abbe term (board plane - camera centre) RMS", "\u00b5m")}
 INTRINSIC_ORDER = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3")
 DASH = "\u2014"
 ZERO_BELOW = 1e-9  # |values| below this print as 0 (no unit of the report resolves them)
@@ -187,85 +181,75 @@ def method_rows(results: dict[str, Any]) -> list[tuple[str, str]]:
     return rows
 
 
-def _num(v: Any) -> float | None:
-    try:
-        f = float(v)
-    except (TypeError, ValueError):
-        return None
-    return f if math.isfinite(f) else None
-
-
 # ----------------------------------------------------------------------------- figures
 
 
-ISO_NAMES = {
-    "A": ("Accuracy A", "\u00b5m"), "R": ("Repeatability R", "\u00b5m"), "E": ("Systematic deviation E", "\u00b5m"),
-    "B": ("Reversal error B", "\u00b5m"), "M": ("Mean deviation range M", "\u00b5m"),
-}
+ONE_SIGMA_LABELS = {"scale_sigma": "Scale error 1\u03c3 (noise only, correlations included)",
+                    "scale_sigma_total": "Scale error 1\u03c3 (noise and intrinsics)",
+                    "truth_mean_sigma": "Truth: mean position 1\u03c3 (noise only)",
+                    "truth_median_sigma": "Truth: median position 1\u03c3 (noise only)"}
+
+
+def _row(f: SummaryFigure) -> Row:
+    return Row(ONE_SIGMA_LABELS.get(f.key, f.label or f.key), f.value, f.unit, digits=f.digits, key=f.key)
 
 
 def iso_rows(iso: dict[str, Any] | None) -> list[Row]:
     """ISO 230-2 figures of results.json (``core.iso230.Iso230Figures`` as a dict) as rows.
 
-    Order A, R, E, B, M; each bidirectional, then forward and backward.
-    Per-target tables and run counts are left to the plots and the table;
-    numeric keys we do not know are printed with their own words.
+    Order A, R, E, B, M; each bidirectional, then forward and backward
+    (:func:`lps_gui.io.results_file.iso_figures`). Per-target tables and run
+    counts are left to the plots and the table; numeric keys we do not know
+    are printed with their own words.
     """
-    if not iso:
-        return []
-    rows: list[Row] = []
-    seen = set()
-    for letter in ("A", "R", "E", "B", "M"):
-        name = ISO_NAMES[letter][0]
-        for suffix, words in (("", "bidirectional"), ("_up", "forward \u2191"), ("_down", "backward \u2193"),
-                              ("_mean", "mean")):
-            key = f"{letter}{suffix}_um"
-            if key in iso:
-                seen.add(key)
-                if _num(iso[key]) is not None:
-                    rows.append(Row(f"ISO 230-2 {name} ({words})", _num(iso[key]), "\u00b5m", key=key))
-    for key, value in iso.items():
-        if key in seen or key.startswith("n_") or isinstance(value, (dict, list, bool)) or _num(value) is None:
-            continue
-        rows.append(Row(f"ISO 230-2 {_iso_label(key)}", _num(value), "\u00b5m" if key.endswith("_um") else ""))
-    return rows
-
-
-def _iso_label(key: str) -> str:
-    """``"E_up_um"`` -> ``"Systematic deviation E (up)"``; unknown keys keep their words."""
-    words = (key[:-3] if key.endswith("_um") else key).split("_")
-    if words[0] in ISO_NAMES:
-        name = ISO_NAMES[words[0]][0]
-        return f"{name} ({' '.join(words[1:])})" if len(words) > 1 else name
-    return " ".join(words)
+    return [_row(f) for f in iso_figures(iso)]
 
 
 def summary_rows(results: dict[str, Any]) -> list[Row]:
     """The summary figures of SPEC 5 as printed in the report, in report order.
 
-    Single-run figures come from ``results["figures"]["single_run"]``, ISO
-    230-2 figures from ``results["figures"]["iso230_2"]`` (absent with one run),
-    maxima of straightness and angles from the per-position table without
-    outliers.
+    The figures of :func:`lps_gui.io.results_file.summary_figures` (the same
+    builder as summary.csv) that have a report label: single-run figures,
+    ISO 230-2 figures (absent with one run), maxima of straightness and
+    angles over the positions not flagged; the truth comparison is :func:`truth_rows`, on its own page.
     """
-    figs = results.get("figures") or {}
-    single = figs.get("single_run") or {}
-    u = (results.get("uncertainty") or {}).get("figures_k2") or {}
-    rows = [
-        Row("Mean step", _num(single.get("mean_step_mm")), "mm", digits=7, u_k2=_mean_step_u_mm(results)),
-        Row("Step std", _num(single.get("step_std_um")), "\u00b5m", u_k2=_num(u.get("step_std_um"))),
-        Row("Max |deviation|", _num(single.get("max_abs_deviation_um")), "\u00b5m",
-            u_k2=_num(u.get("max_abs_deviation_um"))),
-        Row("Scale error", _num(single.get("scale_ppm")), "ppm", u_k2=_num(u.get("scale_ppm"))),
-        Row("Scale error 1\u03c3 (noise only, correlations included)", _num(single.get("scale_sigma_ppm")), "ppm"),
-        Row("Scale error 1\u03c3 (noise and intrinsics)", _num(single.get("scale_sigma_total_ppm")), "ppm"),
-        Row("Periodic error amplitude", _num(single.get("periodic_amplitude_um")), "\u00b5m",
-            u_k2=_num(u.get("periodic_amplitude_um"))),
-        Row("Periodic error period", _num(single.get("periodic_period_mm")), "mm"),
-    ]
-    rows += [replace(r, u_k2=_num(u.get(r.key))) if r.key else r for r in iso_rows(figs.get("iso230_2"))]
-    rows += extremes_rows(results, u)
-    return rows
+    return [_with_u(results, _row(f)) for f in summary_figures(results)
+            if f.label is not None and not f.key.startswith("truth_")]
+
+
+def truth_rows(results: dict[str, Any]) -> list[Row]:
+    """The simulator's truth comparison (simulated sessions only): printed on its own page, labelled."""
+    return [_row(f) for f in summary_figures(results) if f.label is not None and f.key.startswith("truth_")]
+
+
+U_KEYS = {"step_std": "step_std_um", "max_abs_deviation": "max_abs_deviation_um", "scale": "scale_ppm",
+          "periodic_amplitude": "periodic_amplitude_um"}  # summary figure -> results uncertainty.figures_k2
+
+
+def _with_u(results: dict[str, Any], row: Row) -> Row:
+    """The row with its U (k = 2) from results ``uncertainty`` (None where not assessed)."""
+    unc = results.get("uncertainty") or {}
+    u = unc.get("figures_k2") or {}
+    if not unc:
+        return row
+    key = row.key
+    if key == "mean_step":
+        value = _mean_step_u_mm(results)
+    elif key.startswith("iso230_2_"):
+        value = _num(u.get(key.removeprefix("iso230_2_") + "_um"))
+    elif key.startswith("straightness_span_"):
+        value = _median_sigma_u(results, f"straightness_sigma_um_{key[-1]}", views=2)
+    elif key.startswith("max_abs_") and key != "max_abs_deviation":
+        value = _median_sigma_u(results, f"{key.removeprefix('max_abs_')}_sigma_urad", views=1)
+    else:
+        value = _num(u.get(U_KEYS.get(key, "")))
+    return replace(row, u_k2=value)
+
+
+def _median_sigma_u(results: dict[str, Any], column: str, views: int) -> float | None:
+    """2 x the median per-view 1-sigma of ``column`` (x sqrt 2 for a peak-to-valley of two views)."""
+    s = [v for v in (_num(r.get(column)) for r in results.get("positions") or [] if not r.get("outlier")) if v is not None]
+    return float(2.0 * math.sqrt(views) * np.median(s)) if s else None
 
 
 def _mean_step_u_mm(results: dict[str, Any]) -> float | None:
@@ -276,18 +260,6 @@ def _mean_step_u_mm(results: dict[str, Any]) -> float | None:
         n = len({round(float(r["target_mm"]), 6) for r in results.get("positions") or [] if r.get("target_mm") is not None})
     U = _num(unc.get("expanded_k2_um"))
     return None if U is None or not n or n < 2 else 1e-3 * U / (n - 1)
-
-
-def truth_rows(results: dict[str, Any]) -> list[Row]:
-    """The simulator's truth comparison (simulated sessions only): printed on its own page, labelled."""
-    rows: list[Row] = []
-    truth = results.get("truth_comparison") or {}
-    for key, value in truth.items():
-        if _num(value) is not None and not isinstance(value, bool):
-            default = (f"Truth: {key.removesuffix('_um').replace('_', ' ')}", "\u00b5m" if key.endswith("_um") else "")
-            name, unit = TRUTH_NAMES.get(key, default)
-            rows.append(Row(name, _num(value), unit))
-    return rows
 
 
 def figure_notes(results: dict[str, Any]) -> list[str]:
@@ -301,33 +273,9 @@ def figure_notes(results: dict[str, Any]) -> list[str]:
     return notes
 
 
-def extremes_rows(results: dict[str, Any], u_k2: dict[str, Any] | None = None) -> list[Row]:
-    """Peak-to-valley straightness per direction v1/v2 and max |roll|, |pitch|, |yaw| (outliers excluded).
-
-    With ``u_k2`` (results ``uncertainty.figures_k2``) each row carries a U: 2 x the median per-view
-    1-sigma of that component, twice for a peak-to-valley (two views).
-    """
-    cols = position_columns(results)
-    keep = ~cols["outlier"]
-    rows = []
-
-    def u_of(column: str, views: int) -> float | None:
-        if u_k2 is None:
-            return None
-        s = cols[column][keep]
-        s = s[np.isfinite(s)]
-        return float(2.0 * np.sqrt(views) * np.median(s)) if s.size else None
-
-    for k in (1, 2):
-        v = cols[f"straightness_um_{k}"][keep]
-        v = v[np.isfinite(v)]
-        rows.append(Row(f"Max straightness v{k} (peak-to-valley)", float(v.max() - v.min()) if v.size else None, "\u00b5m",
-                        u_k2=u_of(f"straightness_sigma_um_{k}", 2)))
-    for name in ("roll", "pitch", "yaw"):
-        v = np.abs(cols[f"{name}_urad"][keep])
-        v = v[np.isfinite(v)]
-        rows.append(Row(f"Max |{name}|", float(v.max()) if v.size else None, "\u00b5rad", u_k2=u_of(f"{name}_sigma_urad", 1)))
-    return rows
+def extremes_rows(results: dict[str, Any]) -> list[Row]:
+    """Peak-to-valley straightness per direction v1/v2 and max |roll|, |pitch|, |yaw| (outliers excluded)."""
+    return [_row(f) for f in extreme_figures(results)]
 
 
 # ----------------------------------------------------------------------------- specification

@@ -6,7 +6,7 @@ from lps_gui.cli import main
 from lps_gui.core.simulate import small_spec
 from lps_gui.io.results_history import history, stale_report_message
 from lps_gui.pipeline.estimate import estimate_session
-from lps_gui.pipeline.simulate_points import simulate_point_session
+from lps_gui.sim.points import simulate_point_session
 
 
 def test_two_estimates_are_both_kept_and_the_latest_is_recorded(tmp_path, capsys):

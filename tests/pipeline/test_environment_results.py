@@ -6,7 +6,7 @@ import pytest
 
 from lps_gui.core.simulate import small_spec
 from lps_gui.pipeline.estimate import estimate_session
-from lps_gui.pipeline.simulate_points import simulate_point_session
+from lps_gui.sim.points import simulate_point_session
 
 
 @pytest.fixture(scope="module")

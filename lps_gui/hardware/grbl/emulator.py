@@ -168,21 +168,37 @@ class GrblEmulator:
         self._flush_out()
 
 
-def emulated_grbl_stage(time_scale: float = 1.0, faults: Faults | None = None, **stage_options):
+def emulated_grbl_stage(time_scale: float = 1.0, faults: Faults | None = None, simulated: SimulatedStage | None = None,
+                        **stage_options):
     """A :class:`GrblStage` connected to a fresh emulator (``open_stage("emulator")``).
 
-    ``stage_options`` go to the :class:`SimulatedStage` under the emulator
-    (``clock`` is replaced: the emulator owns simulated time). The emulator
-    stops when the returned stage disconnects.
+    The emulator serves ``simulated`` (e.g. the simulated rig's stage, whose
+    true pose a simulated camera renders), else a new :class:`SimulatedStage`
+    built from ``stage_options`` (``clock`` is replaced: the emulator owns
+    simulated time). The returned stage forwards the capture engine's
+    ``seed_capture`` hook to the simulated stage when it has one, and stops
+    the emulator when it disconnects.
     """
     from lps_gui.hardware.grbl.driver import GrblStage
 
     stage_options.pop("clock", None)
-    emu = GrblEmulator(SimulatedStage(**stage_options), faults=faults, time_scale=time_scale)
+    served = simulated if simulated is not None else SimulatedStage(**stage_options)
+    emu = GrblEmulator(served, faults=faults, time_scale=time_scale)
     path = emu.start()
 
     class EmulatedGrblStage(GrblStage):
         emulator = emu
+        simulated = served
+
+        def seed_capture(self, key: int) -> None:
+            hook = getattr(served, "seed_capture", None)
+            if hook is not None:
+                hook(key)
+
+        def seed_axes(self, key_x: int, key_y: int) -> None:
+            hook = getattr(served, "seed_axes", None)
+            if hook is not None:
+                hook(key_x, key_y)
 
         def disconnect(self) -> None:
             try:
@@ -190,10 +206,13 @@ def emulated_grbl_stage(time_scale: float = 1.0, faults: Faults | None = None, *
             finally:
                 emu.stop()
 
+        def describe(self) -> dict:
+            return {**super().describe(), "emulated": served.describe()}
+
     stage = EmulatedGrblStage(path)
     try:
         stage.connect()
-    except Exception:
+    except BaseException:
         emu.stop()
         raise
     return stage

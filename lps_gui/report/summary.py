@@ -41,8 +41,14 @@ class Row:
         return fmt(self.value, self.digits)
 
     def u_text(self) -> str:
-        """U (k = 2) as printed ("± 0.52"), empty when not assessed."""
-        return "" if self.u_k2 is None else f"± {fmt(self.u_k2, 2)}"
+        """U (k = 2) as printed ("\u00b1 0.52"; with the value's decimals when it is far smaller), empty when not assessed."""
+        if self.u_k2 is None:
+            return ""
+        text = fmt(self.u_k2, 2)
+        value = self.text()
+        if "e" in text and "." in value:  # e.g. a mean step 2.000054 mm +- 0.000086 mm, not 8.6e-05
+            text = f"{self.u_k2:.{len(value.split('.')[1])}f}"
+        return f"\u00b1 {text}"
 
 
 @dataclass(frozen=True)

@@ -46,6 +46,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     lock = s.add_mutually_exclusive_group()
     lock.add_argument("--home", action="store_true", help="a stage locked in Alarm (GRBL powers up so with homing on) is homed ($H) first")
     lock.add_argument("--unlock", action="store_true", help="a stage locked in Alarm is unlocked ($X) first, without homing")
+    from lps_gui.cli.capture_setup import add_setup_arguments
+
+    add_setup_arguments(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -60,7 +63,11 @@ def run(args: argparse.Namespace) -> int:
         return _intrinsics_mode(args)
     if bool(args.out) == bool(args.resume):
         raise InputError("give either --out SESSION (new capture) or --resume SESSION")
+    from lps_gui.cli.capture_setup import apply_setup, setup_meta
+
+    extra = setup_meta(args)  # --spec, environment, identification: checked before any device opens
     session, stage, camera, engine = _resume(args) if args.resume else _start(args)
+    apply_setup(session, extra)
     try:
         print(f"capturing into {session.folder}: {_describe(session)}", file=sys.stderr)
         summary = engine.run(progress=ProgressBar("capture"))
@@ -150,6 +157,9 @@ def _plan(args: argparse.Namespace, base=None):
     fields = {k: getattr(args, k) for k in ("start_mm", "stop_mm", "step_mm", "directions", "runs", "overshoot_mm", "settle_s", "frames_per_stop", "feed_mm_min")}
     if args.targets:
         fields["targets_mm"] = parse_targets(args.targets)
+    from lps_gui.cli.capture_setup import iso_plan_fields
+
+    fields.update(iso_plan_fields(args, base))
     if base is None and not any(fields[k] is not None for k in ("start_mm", "stop_mm", "step_mm", "targets_mm") if k in fields):
         from lps_gui.errors import InputError
 

@@ -298,7 +298,7 @@ class MainWindow(QMainWindow):
 
         panel = self.results_panel
         job = Job(f"report {path.name}", write_report, panel.session_dir or path.parent, panel.results, path)
-        return self.run_job(job, lambda p: log.info("report written to %s", p))
+        return self.run_job(job, lambda p: (log.info("report written to %s", p), panel.set_report(Path(p))))
 
     def export_csv(self, folder: Path) -> list[Path]:
         try:

@@ -28,8 +28,10 @@ from lps_gui.io.corners_vnl import read_corners_vnl
 from lps_gui.io.intrinsics_file import intrinsics_to_dict, read_intrinsics
 from lps_gui.io.results_file import assemble_results, summary_rows, write_results  # noqa: F401 (summary_rows re-exported)
 from lps_gui.io.results_file import json_float as _f
+from lps_gui.io.results_history import keep_previous, record_latest
 from lps_gui.io.session import SESSION_FILE, Session
 from lps_gui.pipeline.board_plane_results import position_fields, straightness_figures
+from lps_gui.pipeline.uncertainty import add_uncertainty, session_board
 from lps_gui.sim.truth import session_truth, truth_comparison  # truth_comparison re-exported for callers
 
 HYBRID_KEYS = {"grid_window_mm": "window_mm", "grid_resolution_mm": "resolution_mm", "grid_points": "grid_points",
@@ -51,7 +53,7 @@ def make_options(method: str = "joint", options: dict[str, Any] | EstimateOption
 
 def observations_from_session(session: Session, intrinsics: CameraIntrinsics | None = None) -> Observations:
     """Match every line of captures.jsonl to its corners in corners.vnl."""
-    board = session.board()
+    board = session_board(session)  # square size at the board's temperature (environment)
     intr = intrinsics or session.intrinsics()
     records = session.records()
     if not records:
@@ -102,7 +104,7 @@ def estimate_session(
         results["timings_s"]["pipeline_total"] = time.perf_counter() - t0
         if cancel is not None:
             cancel.check("estimation")
-        write_results(Path(out_dir) if out_dir else session.folder, results)
+        _write_keeping_history(session, out_dir, results)
         return results
     opt = make_options(method, options)
     obs = observations_from_session(session, intr)
@@ -111,8 +113,17 @@ def estimate_session(
     results["timings_s"]["pipeline_total"] = time.perf_counter() - t0
     if cancel is not None:
         cancel.check("estimation")
-    write_results(Path(out_dir) if out_dir else session.folder, results)
+    _write_keeping_history(session, out_dir, results)
     return results
+
+
+def _write_keeping_history(session: Session, out_dir: Path | str | None, results: dict[str, Any]) -> None:
+    """Write the result set; into the session folder, the previous set is kept (results/<time>-<method>/)."""
+    if out_dir is None:
+        keep_previous(session.folder)
+    write_results(Path(out_dir) if out_dir else session.folder, results)
+    if out_dir is None:
+        record_latest(session.folder, results)
 
 
 # ----------------------------------------------------------------------------- results
@@ -121,7 +132,7 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate, intrins
     """The results.json document: its parts computed here, assembled by :func:`lps_gui.io.results_file.assemble_results`."""
     positions = position_rows(obs, est)
     truth = session_truth(session)
-    return assemble_results(
+    results = assemble_results(
         method=est.method,
         settings=est.options.to_dict(),
         inputs=session_inputs(session, intrinsics_source),
@@ -135,6 +146,7 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate, intrins
         timings_s=dict(est.timings_s),
         truth_comparison=truth_comparison(obs, est, truth, positions) if truth is not None else None,
     )
+    return add_uncertainty(results, session)  # environment, GUM budget, U (k = 2) per figure
 
 
 def position_rows(obs: Observations, est: LpsEstimate) -> list[dict[str, Any]]:

@@ -24,6 +24,8 @@ from lps_gui.sim.truth import centred, residual_from_line, true_deviation_um
 FORWARD_COLOR = "#1f5fa8"
 BACKWARD_COLOR = "#e07b00"
 TRUTH_COLOR = "#222222"
+TRUTH_COLORS = {"+": "#0d2747", "-": "#6b3500"}  # truth per direction: dark shades of the measured colours
+SPEC_COLOR = "#c00000"
 OUTLIER_COLOR = "#d00000"
 IMAGE_ROTATION_COLOR = "#111111"
 COMPONENT_COLORS = ("#1f5fa8", "#2a9d3c", "#a8326e")
@@ -259,7 +261,7 @@ def deviation_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] |
             notes.append(f"{_dir_label(d)}: band = \u00b12 sigma (measurement noise)")
         if tcols is not None:
             tt, tmean, _, _ = per_target_stats(x, tcols["deviation_um"][sel], np.ones(x.shape, bool))
-            series.append(_truth_series(tt, tmean, f"truth {_dir_label(d)}"))
+            series.append(_truth_series(tt, tmean, f"truth {_dir_label(d)}", TRUTH_COLORS[d]))
     return FigureSpec("deviation", "Positioning deviation vs target", "target position [mm]", "deviation [\u00b5m]",
                       series, "; ".join(notes))
 
@@ -310,7 +312,7 @@ def step_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] | None
         if d in truth_steps:
             tx, ty = truth_steps[d]
             tt, tmean, _, _ = per_target_stats(tx, ty, np.ones(tx.shape, bool))
-            series.append(_truth_series(tt, tmean, f"truth {_dir_label(d)}"))
+            series.append(_truth_series(tt, tmean, f"truth {_dir_label(d)}", TRUTH_COLORS[d]))
     return FigureSpec("step", "Step deviation", "target position (step midpoint) [mm]",
                       "measured step \u2212 commanded step [\u00b5m]", series)
 
@@ -395,3 +397,29 @@ def figure_by_key(figures: Sequence[FigureSpec], key: str) -> FigureSpec:
         if f.key == key:
             return f
     raise KeyError(key)
+
+
+def with_spec_band(figure: FigureSpec, limit_um: float, plus_minus: bool = True) -> FigureSpec:
+    """The deviation figure with the accuracy limit drawn as two dashed red lines.
+
+    The deviation's zero (the first capture) is arbitrary, so the band is
+    centred on the measured band (mean +- 2 s, or the deviations), as the
+    verdict compares A/2 with a +- limit; a ``"band"`` limit is a full width.
+    """
+    measured = [s for s in figure.series if not s.dashed]
+    lows = [s.band_low if s.band_low is not None else s.y for s in measured]
+    highs = [s.band_high if s.band_high is not None else s.y for s in measured]
+    lo = np.concatenate([np.ravel(a) for a in lows]) if lows else np.array([])
+    hi = np.concatenate([np.ravel(a) for a in highs]) if highs else np.array([])
+    lo, hi = lo[np.isfinite(lo)], hi[np.isfinite(hi)]
+    xs = np.concatenate([np.ravel(s.x) for s in measured]) if measured else np.array([])
+    xs = xs[np.isfinite(xs)]
+    if not (lo.size and hi.size and xs.size and np.isfinite(limit_um)):
+        return figure
+    centre = 0.5 * (float(hi.max()) + float(lo.min()))
+    half = float(limit_um) if plus_minus else 0.5 * float(limit_um)
+    x0, x1 = float(xs.min()), float(xs.max())
+    band = Series(np.array([x0, x1, np.nan, x0, x1]), np.array([centre + half] * 2 + [np.nan] + [centre - half] * 2),
+                  f"accuracy limit \u00b1{half:g} \u00b5m (centred on the band)", "line", SPEC_COLOR, dashed=True)
+    return FigureSpec(figure.key, figure.title, figure.x_label, figure.y_label, [*figure.series, band],
+                      figure.notes, figure.x_log)

@@ -6,7 +6,8 @@ every number printed has exactly one source. No Qt here.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import re
+from dataclasses import dataclass, replace
 from typing import Any, Sequence
 
 import numpy as np
@@ -20,6 +21,7 @@ METHOD_NAMES = {"joint": "joint LM (all positions, orientation and line at once)
                 "pnp": "per-view PnP (baseline)", "calibrate": "full calibration (reference only)"}
 INTRINSIC_ORDER = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3")
 DASH = "\u2014"
+ZERO_BELOW = 1e-9  # |values| below this print as 0 (no unit of the report resolves them)
 
 
 @dataclass(frozen=True)
@@ -32,10 +34,22 @@ class Row:
     note: str = ""
     digits: int = 3  # significant digits when printed
     unresolved: str = ""  # "not resolved (σ X)": printed instead of a value, greyed (core.resolution)
+    key: str = ""  # the figure's key in results.json (for its U)
+    u_k2: float | None = None  # expanded uncertainty (k = 2) in ``unit``, None when not assessed
 
     def text(self) -> str:
         """The value as printed: ``digits`` significant digits, a dash when absent."""
         return self.unresolved or fmt(self.value, self.digits)
+
+    def u_text(self) -> str:
+        """U (k = 2) as printed ("\u00b1 0.52"; with the value's decimals when it is far smaller), empty when not assessed."""
+        if self.u_k2 is None:
+            return ""
+        text = fmt(self.u_k2, 2)
+        value = self.text()
+        if "e" in text and "." in value:  # e.g. a mean step 2.000054 mm +- 0.000086 mm, not 8.6e-05
+            text = f"{self.u_k2:.{len(value.split('.')[1])}f}"
+        return f"\u00b1 {text}"
 
 
 @dataclass(frozen=True)
@@ -71,8 +85,8 @@ def fmt(value: float | None, digits: int = 3) -> str:
     if value is None or not isinstance(value, (int, float, np.floating, np.integer)) or not math.isfinite(value):
         return DASH
     v = float(value)
-    if v == 0:
-        return "0"
+    if abs(v) < ZERO_BELOW:
+        return "0"  # rounding noise of a difference (e.g. an Abbe term of 6e-12 um) reads as what it is
     mag = int(math.floor(math.log10(abs(v))))
     if mag >= 6 or mag < -4:
         return f"{v:.{digits - 1}e}"
@@ -84,9 +98,15 @@ def fmt(value: float | None, digits: int = 3) -> str:
 
 
 def title_rows(session_meta: dict[str, Any], results: dict[str, Any], version: str) -> list[tuple[str, str]]:
-    """(label, text) pairs of the title block: who, what, with which equipment and software."""
+    """(label, text) pairs of the identification block: who, what, with which equipment and software.
+
+    ``session_meta["identification"]`` holds what the operator typed (operator,
+    customer, stage_model, stage_serial, controller_serial, location); a
+    driver's class name ("RigStage") is printed as words ("simulated stage").
+    """
     camera = session_meta.get("camera") or {}
     stage = session_meta.get("stage") or {}
+    ident = session_meta.get("identification") or {}
     board = results.get("board") or session_meta.get("board") or {}
     corners = board.get("inner_corners") or ["?", "?"]
     sha = ((results.get("inputs") or {}).get("sha256") or {})
@@ -95,26 +115,57 @@ def title_rows(session_meta: dict[str, Any], results: dict[str, Any], version: s
     rig = session_meta.get("rig") or stage.get("rig") or (f"simulated ({truth.get('preset', 'simulator')})" if truth else DASH)
     intr = results.get("intrinsics") or {}
     size = intr.get("image_size") or camera.get("image_size")
+    if not size and camera.get("width") and camera.get("height"):
+        size = [camera["width"], camera["height"]]
     fx = (np.asarray(intr.get("camera_matrix") or np.zeros((3, 3)), dtype=float))[0, 0]
     lens = _describe(camera, ("lens", "focal_length_mm"), "")
+    stage_text = _describe({**stage, "model": ident.get("stage_model") or stage.get("model")},
+                           ("name", "model", "driver", "kind"), DASH)
+    if ident.get("stage_serial"):
+        stage_text += f", serial {ident['stage_serial']}"
+    if stage.get("axis"):
+        stage_text += f", axis {stage['axis']}"
+    controller = _describe(stage, ("controller", "firmware", "port"), "simulated (no controller)" if truth else DASH)
+    if ident.get("controller_serial"):
+        controller += f", serial {ident['controller_serial']}"
+    board_text = f"chessboard {corners[0]}\u00d7{corners[1]} inner corners, square {fmt(board.get('square_mm'), 4)} mm at 20 \u00b0C"
+    u_sq = (results.get("environment") or {}).get("square_mm_uncertainty_um")
+    if u_sq is not None:
+        board_text += f", u = {fmt(_num(u_sq), 2)} \u00b5m"
     return [
         ("Date", str(results.get("created") or session_meta.get("created") or DASH)),
+        ("Customer", str(ident.get("customer") or "not recorded")),
+        ("Operator", str(ident.get("operator") or "not recorded")),
+        ("Location", str(ident.get("location") or "not recorded")),
         ("Session", str((results.get("inputs") or {}).get("session") or DASH)),
         ("Rig", str(rig)),
-        ("Stage", _describe(stage, ("name", "model", "driver", "kind"), DASH)
-         + (f", axis {stage['axis']}" if stage.get("axis") else "")),
-        ("Controller", _describe(stage, ("controller", "firmware", "port"), "simulated (no controller)" if truth else DASH)),
+        ("Stage", stage_text),
+        ("Controller", controller),
         ("Camera", _describe(camera, ("name", "model", "driver", "device", "source"), DASH)
          + (f", {size[0]}\u00d7{size[1]} px" if size else "")),
         ("Lens", lens or (f"not recorded; focal length {fx:.1f} px from the intrinsics" if fx else DASH)),
-        ("Board", f"chessboard {corners[0]}\u00d7{corners[1]} inner corners, square {fmt(board.get('square_mm'), 4)} mm"),
+        ("Board", board_text),
         ("Software", f"lps-calib {version}"),
         ("Session hash", f"sha256 {session_hash[:16]}\u2026 (session.json)" if session_hash else DASH),
     ]
 
 
+CLASS_WORDS = {"RigStage": "simulated stage", "SimStage": "simulated stage", "SimulatedCamera": "simulated camera",
+               "SimCamera": "simulated camera"}
+
+
+def _words(value: Any) -> str:
+    """A driver's class name as words: "RigStage" -> "simulated stage", "GrblStage" -> "grbl stage"."""
+    text = str(value)
+    if text in CLASS_WORDS:
+        return CLASS_WORDS[text]
+    if re.fullmatch(r"(?:[A-Z][a-z0-9]+){2,}", text):
+        return " ".join(w.lower() for w in re.findall(r"[A-Z][a-z0-9]+", text))
+    return text
+
+
 def _describe(d: dict[str, Any], keys: Sequence[str], default: str) -> str:
-    parts = [str(d[k]) for k in keys if d.get(k) not in (None, "", {})]
+    parts = [_words(d[k]) for k in keys if d.get(k) not in (None, "", {})]
     return ", ".join(parts) if parts else default
 
 
@@ -156,8 +207,15 @@ def method_rows(results: dict[str, Any]) -> list[tuple[str, str]]:
 # ----------------------------------------------------------------------------- figures
 
 
+ONE_SIGMA_LABELS = {"scale_sigma": "Scale error 1\u03c3 (noise only, correlations included)",
+                    "scale_sigma_total": "Scale error 1\u03c3 (noise and intrinsics)",
+                    "truth_mean_sigma": "Truth: mean position 1\u03c3 (noise only)",
+                    "truth_median_sigma": "Truth: median position 1\u03c3 (noise only)"}
+
+
 def _row(f: SummaryFigure) -> Row:
-    return Row(f.label or f.key, f.value, f.unit, digits=f.digits, unresolved=f.unresolved)
+    return Row(ONE_SIGMA_LABELS.get(f.key, f.label or f.key), f.value, f.unit, digits=f.digits, key=f.key,
+               unresolved=f.unresolved)
 
 
 def iso_rows(iso: dict[str, Any] | None) -> list[Row]:
@@ -177,9 +235,55 @@ def summary_rows(results: dict[str, Any]) -> list[Row]:
     The figures of :func:`lps_gui.io.results_file.summary_figures` (the same
     builder as summary.csv) that have a report label: single-run figures,
     ISO 230-2 figures (absent with one run), maxima of straightness and
-    angles over the positions not flagged, and the truth comparison.
+    angles over the positions not flagged; the truth comparison is :func:`truth_rows`, on its own page.
     """
-    return [_row(f) for f in summary_figures(results) if f.label is not None]
+    return [_with_u(results, _row(f)) for f in summary_figures(results)
+            if f.label is not None and not f.key.startswith("truth_")]
+
+
+def truth_rows(results: dict[str, Any]) -> list[Row]:
+    """The simulator's truth comparison (simulated sessions only): printed on its own page, labelled."""
+    return [_row(f) for f in summary_figures(results) if f.label is not None and f.key.startswith("truth_")]
+
+
+U_KEYS = {"step_std": "step_std_um", "max_abs_deviation": "max_abs_deviation_um", "scale": "scale_ppm",
+          "periodic_amplitude": "periodic_amplitude_um"}  # summary figure -> results uncertainty.figures_k2
+
+
+def _with_u(results: dict[str, Any], row: Row) -> Row:
+    """The row with its U (k = 2) from results ``uncertainty`` (None where not assessed)."""
+    unc = results.get("uncertainty") or {}
+    u = unc.get("figures_k2") or {}
+    if not unc:
+        return row
+    key = row.key
+    if key == "mean_step":
+        value = _mean_step_u_mm(results)
+    elif key.startswith("iso230_2_"):
+        value = _num(u.get(key.removeprefix("iso230_2_") + "_um"))
+    elif key.startswith("straightness_span_"):
+        value = _median_sigma_u(results, f"straightness_sigma_um_{key[-1]}", views=2)
+    elif key.startswith("max_abs_") and key != "max_abs_deviation":
+        value = _median_sigma_u(results, f"{key.removeprefix('max_abs_')}_sigma_urad", views=1)
+    else:
+        value = _num(u.get(U_KEYS.get(key, "")))
+    return replace(row, u_k2=value)
+
+
+def _median_sigma_u(results: dict[str, Any], column: str, views: int) -> float | None:
+    """2 x the median per-view 1-sigma of ``column`` (x sqrt 2 for a peak-to-valley of two views)."""
+    s = [v for v in (_num(r.get(column)) for r in results.get("positions") or [] if not r.get("outlier")) if v is not None]
+    return float(2.0 * math.sqrt(views) * np.median(s)) if s else None
+
+
+def _mean_step_u_mm(results: dict[str, Any]) -> float | None:
+    """U of the mean step: U over the travel divided by the number of steps (in mm)."""
+    unc = results.get("uncertainty") or {}
+    n = ((results.get("figures") or {}).get("iso230_2") or {}).get("n_targets")
+    if n is None:
+        n = len({round(float(r["target_mm"]), 6) for r in results.get("positions") or [] if r.get("target_mm") is not None})
+    U = _num(unc.get("expanded_k2_um"))
+    return None if U is None or not n or n < 2 else 1e-3 * U / (n - 1)
 
 
 def figure_notes(results: dict[str, Any]) -> list[str]:
@@ -235,7 +339,9 @@ def limits_notes(results: dict[str, Any]) -> list[str]:
         f"({fmt(_num(board.get('square_mm')), 4)} mm as given). An error in the printed square size is a pure "
         "scale error: a square 0.1 % too large makes every position and the scale error 1000 ppm too large, "
         "and leaves the shape of the deviation curve, the straightness and the angles unchanged. Measure the "
-        "board with a calibrated instrument to remove it.",
+        "board with a calibrated instrument to remove it; its certified uncertainty (environment "
+        "square_mm_uncertainty_um) and its temperature enter the uncertainty budget, and a board away from "
+        "20 \u00b0C is corrected with its expansion coefficient.",
     ]
     if sig.size:
         text = (f"Uncertainty per position: noise alone gives a median \u03c3 of {fmt(float(np.median(sig)), 2)} \u00b5m")
@@ -312,8 +418,8 @@ def outlier_rows(results: dict[str, Any]) -> list[dict[str, Any]]:
 POSITION_TABLE_COLUMNS = (  # (key, header, decimals or None for text, width in mm)
     ("index", "#", 0, 9), ("run", "run", 0, 7), ("direction", "dir", None, 6), ("target_mm", "target\n[mm]", 3, 13),
     ("measured_mm", "measured\n[mm]", 4, 15), ("deviation_um", "deviation\n[\u00b5m]", 2, 14),
-    ("truth_deviation_um", "truth dev.\n[\u00b5m]", 2, 14),
-    ("sigma_um", "\u03c3\n[\u00b5m]", 2, 10), ("rms_px", "rms\n[px]", 3, 10),
+    ("truth_deviation_um", "truth dev.\n[\u00b5m]", 2, 16),
+    ("sigma_um", "1\u03c3 noise\n[\u00b5m]", 2, 13), ("rms_px", "rms\n[px]", 3, 10),
     ("straightness_um_1", "str. v1\n[\u00b5m]", 2, 13), ("straightness_um_2", "str. v2\n[\u00b5m]", 2, 13),
     ("roll_urad", "roll\n[\u00b5rad]", 1, 13), ("pitch_urad", "pitch\n[\u00b5rad]", 1, 13),
     ("yaw_urad", "yaw\n[\u00b5rad]", 1, 13), ("outlier", "outlier", None, 11),

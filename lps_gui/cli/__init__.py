@@ -23,6 +23,8 @@ COMMANDS = {
     "report": "lps_gui.cli.report",
     "capture": "lps_gui.cli.capture",
     "emulate-grbl": "lps_gui.cli.emulate_grbl",
+    "compensate": "lps_gui.cli.compensate",
+    "export": "lps_gui.cli.export",
 }
 
 LOG_PATH = Path(tempfile.gettempdir()) / "lps-calib.log"

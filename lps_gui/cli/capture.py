@@ -43,6 +43,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     s.add_argument("--real-time", action="store_true", help="simulated rig: move and settle in real time (default: simulated time)")
     s.add_argument("--time-scale", type=float, default=1.0, help="--stage emulator: simulated time runs this many times faster than real")
     s.add_argument("--encode", default=".png", help="image format (lossless): .png (default), .tif, .bmp")
+    s.add_argument("--compensation", metavar="FILE", help="command each target through this table's inverse (lps compensate --format csv|linuxcnc|linuxcnc-offsets)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -59,6 +60,9 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("give either --out SESSION (new capture) or --resume SESSION")
     session, stage, camera, engine = _resume(args) if args.resume else _start(args)
     try:
+        from lps_gui.capture.compensated import apply_compensation
+
+        apply_compensation(engine, session, args.compensation)
         print(f"capturing into {session.folder}: {_describe(session)}", file=sys.stderr)
         summary = engine.run(progress=ProgressBar("capture"))
     finally:

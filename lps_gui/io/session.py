@@ -41,9 +41,13 @@ class CaptureRecord:
     sha256: str | None
     time: float  # unix seconds
     frame: int = 0
+    commanded_mm: float | None = None  # sent to the stage through a compensation table; absent without one
 
     def to_json(self) -> str:
-        return json.dumps(asdict(self), separators=(",", ":"))
+        d = asdict(self)
+        if d["commanded_mm"] is None:
+            del d["commanded_mm"]
+        return json.dumps(d, separators=(",", ":"))
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> "CaptureRecord":
@@ -57,6 +61,7 @@ class CaptureRecord:
             sha256=d.get("sha256"),
             time=float(d.get("time", 0.0)),
             frame=int(d.get("frame", 0)),
+            commanded_mm=None if d.get("commanded_mm") is None else float(d["commanded_mm"]),
         )
 
 

@@ -25,6 +25,7 @@ COMMANDS = {
     "emulate-grbl": "lps_gui.cli.emulate_grbl",
     "compensate": "lps_gui.cli.compensate",
     "export": "lps_gui.cli.export",
+    "compare": "lps_gui.cli.compare",
 }
 
 LOG_PATH = Path(tempfile.gettempdir()) / "lps-calib.log"

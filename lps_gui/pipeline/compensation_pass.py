@@ -10,14 +10,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
-
 import numpy as np
 
-from lps_gui.core.iso230 import figures_for_session
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import InputError
 from lps_gui.io.session import Session
+from lps_gui.report.compare import session_E_um, true_E_um
 
 TABLE_FILE = "compensation.csv"
 
@@ -47,29 +45,6 @@ class PassResult:
             f"  (true at the board plane {self.plane_E_after_um:.2f} um)",
             f"improvement {self.improvement:.1f}x; table entry sigma {self.entry_sigma_um:.2f} um",
         ]
-
-
-def true_E_um(results: dict[str, Any]) -> float:
-    """E (ISO 230-2) of the simulator's true deviations from the nominal targets, um."""
-    return _E(results, "truth_deviation_um")
-
-
-def measured_E_um(results: dict[str, Any]) -> float:
-    return _E(results, "deviation_um")
-
-
-def _E(results: dict[str, Any], key: str) -> float:
-    rows = [r for r in results.get("positions", []) if r.get(key) is not None]
-    if not rows:
-        raise InputError(f"results.json has no {key}; estimate a simulated session")
-    t = np.array([r["target_mm"] for r in rows])
-    d = np.array([1.0 if r["direction"] == "+" else -1.0 for r in rows])
-    run = np.array([r["run"] for r in rows])
-    dev = np.array([r[key] for r in rows], dtype=float)
-    iso = figures_for_session(t, d, run, dev)["iso230_2"]
-    if not iso or iso.get("E_um") is None:
-        raise InputError("E needs both directions or two runs; capture a bidirectional session")
-    return float(iso["E_um"])
 
 
 def compensation_pass(
@@ -116,9 +91,9 @@ def compensation_pass(
         after_dir=session.folder,
         true_E_before_um=true_E_um(results_before),
         true_E_after_um=true_E_um(results_after),
-        measured_E_before_um=measured_E_um(results_before),
-        measured_E_after_um=measured_E_um(results_after),
+        measured_E_before_um=session_E_um(results_before),
+        measured_E_after_um=session_E_um(results_after),
         entry_sigma_um=float(np.median(sig)),
-        plane_E_before_um=_E(results_before, "truth_plane_deviation_um"),
-        plane_E_after_um=_E(results_after, "truth_plane_deviation_um"),
+        plane_E_before_um=session_E_um(results_before, "truth_plane_deviation_um"),
+        plane_E_after_um=session_E_um(results_after, "truth_plane_deviation_um"),
     )

@@ -19,7 +19,7 @@ NOISE_PX = 0.023  # what detection on the rendered paper-rig images reaches (sig
 ERRORS = StageErrorModel(scale_ppm=80.0, periodic_um=6.0, pitch_mm=5.0, periodic_phase_rad=0.7, backlash_um=12.0)
 
 
-def bidirectional_spec(seed: int = 3, errors: StageErrorModel = ERRORS, runs: int = 2):
+def bidirectional_spec(seed: int = 3, errors: StageErrorModel = ERRORS, runs: int = 1):
     plan = Plan(start_mm=0.0, stop_mm=40.0, step_mm=1.0, directions="both", runs=runs, overshoot_mm=2.0)
     return replace(paper_rig_spec(seed=seed, errors=errors, plan=plan), noise_px=NOISE_PX)
 
@@ -50,7 +50,7 @@ def test_linuxcnc_entries_within_sigma_of_truth(estimated, tmp_path):
     near = x <= 10  # where the noise dominates the (correlated) intrinsics term: sigma is honest, not inflated
     z2 = np.mean((np.r_[diff[:41][near], diff[41:][near]] - offset) ** 2 / np.r_[sig[1][near], sig[-1][near]] ** 2)
     assert 0.4 < z2 < 1.6, z2
-    assert 0.1 < np.median(sigma[:10]) < 0.6  # small against the 6-12 um errors
+    assert 0.1 < np.median(sigma[:10]) < 1.0  # small against the 6-12 um errors
     assert table.backlash_um() == pytest.approx(12.0, abs=1.0)
     assert any(line.startswith("$160=0.01") for line in lines) and any(line.startswith("M425 F1 X0.01") for line in lines)
 
@@ -94,3 +94,20 @@ def test_session_without_results_is_a_one_line_error(tmp_path):
         compensate_session(tmp_path / "s", "linuxcnc", tmp_path / "x.comp")
     with pytest.raises(InputError, match="not found"):
         compensate_session(tmp_path / "nope", "linuxcnc", tmp_path / "x.comp")
+
+
+def test_several_runs_carry_the_repeatability_into_sigma(tmp_path):
+    """3 runs with 1 um repeatability: the pooled run scatter enters each entry's sigma (mean of 3 runs)."""
+    errors = replace(ERRORS, repeatability_um=1.0)
+    simulate_point_session(bidirectional_spec(seed=3, runs=3, errors=errors), tmp_path / "s")
+    table = table_from_results(estimate_session(tmp_path / "s"))
+    x = table.nominal_mm
+    diff = np.r_[table.offset_um(1) - errors.positioning_error_um(x, np.ones_like(x)),
+                 table.offset_um(-1) - errors.positioning_error_um(x, -np.ones_like(x))]
+    sig = np.r_[table.sigma_plus_um, table.sigma_minus_um]
+    w = 1 / sig**2
+    err = diff - np.sum(w * diff) / np.sum(w)
+    near = np.r_[x <= 10, x <= 10]
+    assert 0.3 < np.mean(err[near] ** 2 / sig[near] ** 2) < 2.0
+    assert np.mean(np.abs(err) <= 2 * sig + 0.5) >= 0.95
+    assert np.median(sig[near]) > 1.0 / np.sqrt(3) * 0.8  # at least the repeatability of a 3-run mean

@@ -82,3 +82,25 @@ def test_compensated_recapture_reduces_true_E_5x(tmp_path):
     # down to the noise of the measurement where the camera measures (the board plane, README "Abbe offset")
     assert res.plane_E_after_um < 6 * res.entry_sigma_um
     assert res.measured_E_after_um < 6 * res.entry_sigma_um
+
+
+def test_grbl_sender_corrects_through_the_emulator(tmp_path):
+    """GRBL has no compensation: the engine sends the corrected targets over the real GRBL protocol."""
+    from lps_gui.capture.emulated_rig import emulated_rig_stage
+    from tests.capture.helpers import tiny_spec
+
+    plan = Plan(start_mm=0.0, stop_mm=4.0, step_mm=2.0, directions="both", overshoot_mm=1.0, settle_s=0.0, feed_mm_min=1200.0)
+    x = np.linspace(-2.0, 6.0, 5)
+    table = CompensationTable(x, x + 0.004, x + 0.002, np.zeros(5), np.zeros(5), True)
+    session, rig_stage, camera = create_simulated_session(tmp_path / "emulated", tiny_spec(plan))
+    stage = emulated_rig_stage(rig_stage, time_scale=50.0)
+    try:
+        engine = simulated_engine(session, stage, camera)
+        apply_compensation(engine, session, write_table(tmp_path / "t.csv", table, "csv"))
+        assert engine.run().state == "done"
+    finally:
+        stage.disconnect()
+    recs = session.records()
+    want = [r.target_mm - (0.004 if r.direction == "+" else 0.002) for r in recs]
+    assert [r.commanded_mm for r in recs] == pytest.approx(want, abs=1e-6)
+    assert [r.reported_mm for r in recs] == pytest.approx(want, abs=2e-3)  # GRBL reports where it was sent (3 decimals)

@@ -58,6 +58,10 @@ def run(args: argparse.Namespace) -> int:
         return _intrinsics_mode(args)
     if bool(args.out) == bool(args.resume):
         raise InputError("give either --out SESSION (new capture) or --resume SESSION")
+    if args.compensation:
+        from lps_gui.io.compensation_file import read_table
+
+        read_table(args.compensation)  # a bad table fails before a session is created
     session, stage, camera, engine = _resume(args) if args.resume else _start(args)
     try:
         from lps_gui.capture.compensated import apply_compensation

@@ -49,6 +49,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     from lps_gui.cli.capture_setup import add_setup_arguments
 
     add_setup_arguments(p)
+    s.add_argument("--compensation", metavar="FILE", help="command each target through this table's inverse (lps compensate --format csv|linuxcnc|linuxcnc-offsets)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -66,9 +67,16 @@ def run(args: argparse.Namespace) -> int:
     from lps_gui.cli.capture_setup import apply_setup, setup_meta
 
     extra = setup_meta(args)  # --spec, environment, identification: checked before any device opens
+    if args.compensation:
+        from lps_gui.io.compensation_file import read_table
+
+        read_table(args.compensation)  # a bad table fails before a session is created
     session, stage, camera, engine = _resume(args) if args.resume else _start(args)
     apply_setup(session, extra)
     try:
+        from lps_gui.capture.compensated import apply_compensation
+
+        apply_compensation(engine, session, args.compensation)
         print(f"capturing into {session.folder}: {_describe(session)}", file=sys.stderr)
         summary = engine.run(progress=ProgressBar("capture"))
     finally:

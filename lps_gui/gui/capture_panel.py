@@ -124,6 +124,10 @@ class CapturePanel(QWidget):
         sess = QGroupBox("Session")
         sl = QVBoxLayout(sess)
         sl.addWidget(self.folder)
+        self.compensation = PathPicker("optional: compensation table (CSV, LinuxCNC)", folder=False,
+                                       filter="Compensation tables (*.csv *.comp *.txt);;All files (*)", start_dir=self.start_dir)
+        self.compensation.setToolTip("Command each target through this table's inverse so the true position lands on the nominal")
+        sl.addWidget(self.compensation)
         self.resume_session_btn = QPushButton("Resume session…")
         self.resume_session_btn.setToolTip("Continue an interrupted session at the first stop not captured")
         sl.addWidget(self.resume_session_btn)
@@ -293,6 +297,7 @@ class CapturePanel(QWidget):
         """Run the capture in a worker: make the session (file writes), build the engine, run it."""
         self.session_dir = Path(folder)
         self.camera_panel.pause(True)
+        table_path = self.compensation.path()  # read on the GUI thread
 
         def work(progress: Any, cancel: Any) -> Any:
             session = make_session()
@@ -303,6 +308,9 @@ class CapturePanel(QWidget):
                 engine = simulated_engine(session, stage, camera)
             else:
                 engine = CaptureEngine(stage, camera, session)
+            from lps_gui.capture.compensated import apply_compensation
+
+            apply_compensation(engine, session, table_path)  # a table, or the session's own on resume
             self.engine = engine  # pause/abort from the GUI thread are thread-safe engine calls
             if self._abort_early:
                 engine.abort()

@@ -155,13 +155,13 @@ def run_demo(
     res.csvs = [session.folder / n for n in ("positions.csv", "summary.csv") if (session.folder / n).exists()]
     step("report", "done", f"{res.report_pdf}", t0)
     res.summary = summary_lines(results, spec)
-    if has_images:  # close the loop: compensate, re-capture, re-measure (pipeline/compensation_pass.py)
-        from lps_gui.pipeline.compensation_pass import compensation_pass
+    # close the loop: compensate, re-capture, re-measure (pipeline/compensation_pass.py)
+    from lps_gui.pipeline.compensation_pass import compensation_pass
 
-        t0 = time.monotonic()
-        cp = compensation_pass(session.folder, out / "session-compensated", bar("compensated capture"), cancel)
-        step("compensate", "done", "; ".join(cp.lines()), t0)
-        res.summary += cp.lines()
+    t0 = time.monotonic()
+    cp = compensation_pass(session.folder, out / "session-compensated", bar("compensated capture"), cancel)
+    step("compensate", "done", "; ".join(cp.lines()), t0)
+    res.summary += cp.lines()
     return res
 
 

@@ -9,7 +9,7 @@ import pytest
 from lps_gui.capture.compensated import apply_compensation
 from lps_gui.sim.session import create_simulated_session, simulated_engine
 from lps_gui.sim.rig import spec_for_plan
-from lps_gui.capture.truth import read_truth
+from lps_gui.sim.truth import read_truth
 from lps_gui.core.compensation import CompensationTable
 from lps_gui.core.plan import Plan
 from lps_gui.core.simulate import preset

@@ -10,6 +10,14 @@ from lps_gui.errors import InputError
 BOARD_TYPES = ("chessboard", "charuco")
 
 
+def parabolic_warp_basis(xy_mm: np.ndarray, size_mm: tuple[float, float]) -> np.ndarray:
+    """(1 - x^2, 1 - y^2) with x, y scaled so a grid of ``size_mm`` (from the origin) spans [-1, 1]; shape (..., 2)."""
+    xy = np.asarray(xy_mm, dtype=float)
+    xn = 2.0 * xy[..., 0] / size_mm[0] - 1.0
+    yn = 2.0 * xy[..., 1] / size_mm[1] - 1.0
+    return np.stack([1.0 - xn * xn, 1.0 - yn * yn], axis=-1)
+
+
 @dataclass(frozen=True)
 class Board:
     """A planar board; ``inner_corners`` is (cols, rows), OpenCV patternSize order.
@@ -72,11 +80,7 @@ class Board:
         x, y are the point's coordinates scaled so the inner-corner grid
         spans [-1, 1] (mrcal's calobject_warp convention).
         """
-        w, h = self.size_mm
-        xy = np.asarray(xy_mm, dtype=float)
-        xn = 2.0 * xy[..., 0] / w - 1.0
-        yn = 2.0 * xy[..., 1] / h - 1.0
-        return np.stack([1.0 - xn * xn, 1.0 - yn * yn], axis=-1)
+        return parabolic_warp_basis(xy_mm, self.size_mm)
 
     def warp_z(self, xy_mm: np.ndarray) -> np.ndarray:
         """Out-of-plane offset z (mm) of the board surface at board points (..., >=2) mm."""

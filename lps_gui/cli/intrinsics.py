@@ -16,6 +16,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", default="intrinsics.json", help="intrinsics JSON to write (default: intrinsics.json)")
     parser.add_argument("--yaml", help="also write OpenCV FileStorage YAML here")
     parser.add_argument("--fix-k3", action="store_true", help="hold k3 at 0 (narrow fields of view)")
+    parser.add_argument("--warp", choices=("auto", "on", "off"), default="auto",
+                        help="estimate the board's bow with the intrinsics (auto: unless the views cannot separate it; on: fail then)")
+    parser.add_argument("--cross-validate", action="store_true",
+                        help="also calibrate the even and the odd images apart and compare the two projections")
     parser.add_argument("--workers", type=int, default=None, help="processes (default: one per core)")
 
 
@@ -27,15 +31,17 @@ def run(args: argparse.Namespace) -> int:
     from lps_gui.cli.progress_bar import ProgressBar
     from lps_gui.io.board_file import read_board
     from lps_gui.io.intrinsics_file import write_intrinsics
-    from lps_gui.pipeline.intrinsics import calibrate_images
+    from lps_gui.pipeline.intrinsics import calibrate_images, cross_validate_calibration
 
     board = read_board(args.board)
     flags = cv2.CALIB_FIX_K3 if args.fix_k3 else 0
-    cal = calibrate_images([Path(p) for p in args.images], board, ProgressBar("intrinsics"), workers=args.workers, flags=flags)
+    cal = calibrate_images([Path(p) for p in args.images], board, ProgressBar("intrinsics"), workers=args.workers, flags=flags, warp=args.warp)
     write_intrinsics(args.out, cal.intrinsics)
     if args.yaml:
         write_intrinsics(args.yaml, cal.intrinsics)
     print(cal.summary())
+    if args.cross_validate:
+        print(cross_validate_calibration(cal, board, flags=flags, warp=args.warp).summary())
     print(f"wrote {args.out}" + (f" and {args.yaml}" if args.yaml else ""))
     failed = [w for w in cal.warnings if any(w.startswith(n + ":") for n in cal.view_names)]
     if failed:

@@ -47,6 +47,11 @@ class IntrinsicsCalibration:
     residuals_px: list[np.ndarray] = field(default_factory=list)  # per view (N, 2) observed - projected, NaN where not seen
     image_points: list[np.ndarray] = field(default_factory=list)  # per view (N, 2) px as given
 
+    def coverage_on(self, grid: tuple[int, int]) -> np.ndarray:
+        """Corner counts of the used views on another (cols, rows) grid."""
+        pts = [self.image_points[k] for k in self.used_views]
+        return coverage_grid(np.concatenate(pts), self.intrinsics.image_size, grid)
+
     def coverage_fraction(self) -> float:
         return float(np.mean(self.coverage > 0))
 

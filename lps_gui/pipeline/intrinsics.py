@@ -8,6 +8,7 @@ import numpy as np
 from lps_gui.core.board import Board
 from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.intrinsics_calibration import IntrinsicsCalibration, calibrate_intrinsics
+from lps_gui.core.intrinsics_crossval import CrossValidation, cross_validate
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import InputError
 from lps_gui.io.corners_vnl import CornerTable
@@ -63,6 +64,11 @@ def calibrate_images(
     cal.warnings += [f"{name}: {reason}" for name, reason in table.failed.items()]
     cal.intrinsics = _with_report(cal)
     return cal
+
+
+def cross_validate_calibration(cal: IntrinsicsCalibration, board: Board, flags: int = 0, warp: str = "auto") -> CrossValidation:
+    """Calibrate the even and the odd views of ``cal`` apart (same corners) and compare their projections."""
+    return cross_validate(board.flat_points(), cal.image_points, cal.intrinsics.image_size, flags=flags, warp=warp)
 
 
 def _with_report(cal: IntrinsicsCalibration) -> CameraIntrinsics:

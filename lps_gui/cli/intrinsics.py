@@ -15,6 +15,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--board", required=True, help="board.json")
     parser.add_argument("--out", default="intrinsics.json", help="intrinsics JSON to write (default: intrinsics.json)")
     parser.add_argument("--yaml", help="also write OpenCV FileStorage YAML here")
+    parser.add_argument("--cameramodel", help="also write an mrcal .cameramodel here")
+    parser.add_argument("--lensmodel", choices=("opencv5", "opencv8"), default="opencv5",
+                        help="mrcal lens model of --cameramodel (opencv8 with k4..k6 = 0; default opencv5)")
     parser.add_argument("--fix-k3", action="store_true", help="hold k3 at 0 (narrow fields of view)")
     parser.add_argument("--warp", choices=("auto", "on", "off"), default="auto",
                         help="estimate the board's bow with the intrinsics (auto: unless the views cannot separate it; on: fail then)")
@@ -39,10 +42,14 @@ def run(args: argparse.Namespace) -> int:
     write_intrinsics(args.out, cal.intrinsics)
     if args.yaml:
         write_intrinsics(args.yaml, cal.intrinsics)
+    if args.cameramodel:
+        from lps_gui.io.cameramodel_file import write_cameramodel
+
+        write_cameramodel(args.cameramodel, cal.intrinsics, "LENSMODEL_" + args.lensmodel.upper())
     print(cal.summary())
     if args.cross_validate:
         print(cross_validate_calibration(cal, board, flags=flags, warp=args.warp).summary())
-    print(f"wrote {args.out}" + (f" and {args.yaml}" if args.yaml else ""))
+    print("wrote " + ", ".join(str(p) for p in (args.out, args.yaml, args.cameramodel) if p))
     failed = [w for w in cal.warnings if any(w.startswith(n + ":") for n in cal.view_names)]
     if failed:
         print(f"{len(failed)} image(s) not used; see the lines above", file=sys.stderr)

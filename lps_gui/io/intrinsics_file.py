@@ -7,7 +7,8 @@ estimated the board's bow ``"board_warp_mm": [bow_x, bow_y]`` with
 ``"board_warp_sigma_mm"`` (see :class:`Board`; the LPS estimate then uses the
 bowed board, :func:`apply_board_warp`). YAML: OpenCV's
 ``camera_matrix``, ``distortion_coefficients``, ``image_width``,
-``image_height``, plus our ``std_intrinsics`` when known.
+``image_height``, plus our ``std_intrinsics`` when known. ``.cameramodel``: mrcal's format
+(:mod:`lps_gui.io.cameramodel_file`).
 """
 from __future__ import annotations
 
@@ -20,6 +21,8 @@ from lps_gui.core.board import Board
 from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_text_atomic
+from lps_gui.io.cameramodel_file import SUFFIX as CAMERAMODEL_SUFFIX
+from lps_gui.io.cameramodel_file import read_cameramodel, write_cameramodel
 from lps_gui.io.jsonfile import read_json, write_json
 
 YAML_SUFFIXES = (".yaml", ".yml", ".xml")
@@ -87,8 +90,10 @@ def apply_board_warp(board: Board, intr: CameraIntrinsics | None) -> Board:
 
 
 def read_intrinsics(path: Path | str) -> CameraIntrinsics:
-    """Read intrinsics from JSON or OpenCV YAML/XML (chosen by suffix)."""
+    """Read intrinsics from JSON, OpenCV YAML/XML or mrcal .cameramodel (chosen by suffix)."""
     path = Path(path)
+    if path.suffix.lower() == CAMERAMODEL_SUFFIX:
+        return read_cameramodel(path)
     if path.suffix.lower() in YAML_SUFFIXES:
         return _read_opencv_yaml(path)
     return intrinsics_from_dict(read_json(path, "intrinsics file"), str(path))
@@ -96,7 +101,9 @@ def read_intrinsics(path: Path | str) -> CameraIntrinsics:
 
 def write_intrinsics(path: Path | str, intr: CameraIntrinsics) -> None:
     path = Path(path)
-    if path.suffix.lower() in YAML_SUFFIXES:
+    if path.suffix.lower() == CAMERAMODEL_SUFFIX:
+        write_cameramodel(path, intr)
+    elif path.suffix.lower() in YAML_SUFFIXES:
         _write_opencv_yaml(path, intr)
     else:
         write_json(path, intrinsics_to_dict(intr))

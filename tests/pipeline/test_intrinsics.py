@@ -51,8 +51,11 @@ def test_cli_json_carries_the_board_warp_and_the_yaml_is_unchanged(image_set, tm
     folder, _ = image_set
     out, yaml = tmp_path / "intr.json", tmp_path / "intr.yaml"
     code = lps_main(["intrinsics", str(folder), "--board", str(folder / "board.json"), "--out", str(out),
-                     "--yaml", str(yaml), "--workers", "1", "--cross-validate"])
+                     "--yaml", str(yaml), "--workers", "1", "--cross-validate",
+                     "--cameramodel", str(tmp_path / "cam.cameramodel"), "--lensmodel", "opencv8"])
     assert code == 0
+    assert np.allclose(read_intrinsics(tmp_path / "cam.cameramodel").vector(), read_intrinsics(out).vector())
+    assert "LENSMODEL_OPENCV8" in (tmp_path / "cam.cameramodel").read_text()
     text = capsys.readouterr().out
     assert "board bow =" in text and "cross-validation: 10 even views against 10 odd views" in text
     assert "\nconsistent: the two halves differ by" in text

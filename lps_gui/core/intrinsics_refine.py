@@ -8,7 +8,7 @@ OpenCV solution with the analytic Jacobian of :mod:`camera_model` (poses in
 cv2's Rodrigues parametrization), the two warp columns being d uv / d z times
 the parabolas. The covariance is ``sigma^2 (J^T J)^-1`` over the free
 parameters. Corners whose residual is far beyond the robust noise level are
-dropped one round at a time and listed (view, corner, residual).
+dropped, the worst of each view per round, and listed (view, corner, residual).
 
 The warp is refused (:class:`WarpNotSeparableError`) when the views cannot
 tell it from the other parameters: its multiple correlation with them is
@@ -29,7 +29,7 @@ from lps_gui.errors import DegenerateGeometryError
 # a corner is an outlier when |residual| exceeds this many robust per-axis sigmas
 # (|r|^2 / sigma^2 is chi-square with 2 dof: P(> 4.8^2) = 1e-5, ~0.01 false rejections per 1000 corners)
 OUTLIER_K = 4.8
-MAX_OUTLIER_ROUNDS = 5
+MAX_OUTLIER_ROUNDS = 30
 MIN_CORNERS_PER_VIEW = 6
 # the warp is refused when 1 - R^2 of it against all other parameters falls below this (multiple correlation > 0.99);
 # a line-only LPS session gives ~0.004, varied views tilted by only 3 deg ~0.03, 20-35 deg ~0.15
@@ -168,7 +168,7 @@ def _view_residuals(head, poses, X_views, uv_views, free, base, size_mm, estimat
 
 
 def _outliers(head, poses, X_views, uv_views, keep, active, free, base, size_mm, estimate_warp) -> list[tuple[int, int, float]]:
-    """(view, position, |r|) of kept corners beyond OUTLIER_K robust sigmas."""
+    """(view, position, |r|) of the worst kept corner of each view, when beyond OUTLIER_K robust sigmas."""
     res = _view_residuals(head, poses[active], [X_views[k] for k in active], [uv_views[k] for k in active],
                           free, base, size_mm, estimate_warp)
     r2 = np.concatenate([np.sum(r[keep[k]] ** 2, axis=1) for r, k in zip(res, active)])
@@ -176,9 +176,11 @@ def _outliers(head, poses, X_views, uv_views, keep, active, free, base, size_mm,
     limit = OUTLIER_K * sigma
     out = []
     for r, k in zip(res, active):
-        norm = np.linalg.norm(r, axis=1)
-        for j in np.flatnonzero(keep[k] & (norm > limit)):
-            out.append((k, int(j), float(norm[j])))
+        # only the worst corner of a view goes per round: one bad corner pulls the pose, and with it its neighbours
+        norm = np.where(keep[k], np.linalg.norm(r, axis=1), 0.0)
+        j = int(np.argmax(norm))
+        if norm[j] > limit:
+            out.append((k, j, float(norm[j])))
     return out
 
 

@@ -23,6 +23,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="estimate the board's bow with the intrinsics (auto: unless the views cannot separate it; on: fail then)")
     parser.add_argument("--cross-validate", action="store_true",
                         help="also calibrate the even and the odd images apart and compare the two projections")
+    parser.add_argument("--report", help="also write the intrinsics report (PDF with residual, uncertainty and coverage maps) here")
     parser.add_argument("--workers", type=int, default=None, help="processes (default: one per core)")
 
 
@@ -47,9 +48,14 @@ def run(args: argparse.Namespace) -> int:
 
         write_cameramodel(args.cameramodel, cal.intrinsics, "LENSMODEL_" + args.lensmodel.upper())
     print(cal.summary())
-    if args.cross_validate:
-        print(cross_validate_calibration(cal, board, flags=flags, warp=args.warp).summary())
-    print("wrote " + ", ".join(str(p) for p in (args.out, args.yaml, args.cameramodel) if p))
+    crossval = cross_validate_calibration(cal, board, flags=flags, warp=args.warp) if args.cross_validate else None
+    if crossval is not None:
+        print(crossval.summary())
+    if args.report:
+        from lps_gui.report.intrinsics_report import write_intrinsics_report
+
+        write_intrinsics_report(cal, args.report, crossval, title=Path(args.out).name)
+    print("wrote " + ", ".join(str(p) for p in (args.out, args.yaml, args.cameramodel, args.report) if p))
     failed = [w for w in cal.warnings if any(w.startswith(n + ":") for n in cal.view_names)]
     if failed:
         print(f"{len(failed)} image(s) not used; see the lines above", file=sys.stderr)

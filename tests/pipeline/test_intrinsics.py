@@ -52,8 +52,10 @@ def test_cli_json_carries_the_board_warp_and_the_yaml_is_unchanged(image_set, tm
     out, yaml = tmp_path / "intr.json", tmp_path / "intr.yaml"
     code = lps_main(["intrinsics", str(folder), "--board", str(folder / "board.json"), "--out", str(out),
                      "--yaml", str(yaml), "--workers", "1", "--cross-validate",
-                     "--cameramodel", str(tmp_path / "cam.cameramodel"), "--lensmodel", "opencv8"])
+                     "--cameramodel", str(tmp_path / "cam.cameramodel"), "--lensmodel", "opencv8",
+                     "--report", str(tmp_path / "intr.pdf")])
     assert code == 0
+    assert (tmp_path / "intr.pdf").read_bytes().startswith(b"%PDF")
     assert np.allclose(read_intrinsics(tmp_path / "cam.cameramodel").vector(), read_intrinsics(out).vector())
     assert "LENSMODEL_OPENCV8" in (tmp_path / "cam.cameramodel").read_text()
     text = capsys.readouterr().out

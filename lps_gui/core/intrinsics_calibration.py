@@ -203,47 +203,6 @@ def calibrate_intrinsics(
                                  image_points=[np.asarray(u, float).reshape(-1, 2) for u in image_points])
 
 
-def full_covariance(
-    objs: list[np.ndarray],
-    imgs: list[np.ndarray],
-    intrinsics: CameraIntrinsics,
-    rvecs: list[np.ndarray],
-    tvecs: list[np.ndarray],
-    free: np.ndarray,
-) -> np.ndarray | None:
-    """9x9 covariance of the intrinsics (INTRINSIC_NAMES order) with their correlations.
-
-    OpenCV returns standard deviations only, but fx/fy and k1/k2/k3 are
-    strongly correlated, which matters when the estimator propagates them.
-    Gauss-Newton at the solution: per-view 6x6 pose blocks are eliminated by
-    Schur complement; sigma^2 = SSR / (2N - p) as in OpenCV. Fixed
-    parameters (``free`` False) get zero rows and columns.
-    """
-    from lps_gui.core.camera_model import pose_jacobian_rodrigues
-
-    idx = np.flatnonzero(free)
-    info = np.zeros((idx.size, idx.size))
-    ssr, n_obs = 0.0, 0
-    for X, uv_obs, r, t in zip(objs, imgs, rvecs, tvecs):
-        uv, J = pose_jacobian_rodrigues(np.ravel(r), np.ravel(t), X.astype(float), intrinsics)[:2]
-        ssr += float(np.sum((uv - uv_obs.reshape(-1, 2)) ** 2))
-        n_obs += 2 * uv.shape[0]
-        Jp = J[..., :6].reshape(-1, 6)
-        Ji = J[..., 6:][..., idx].reshape(-1, idx.size)
-        A, B = Jp.T @ Jp, Jp.T @ Ji
-        info += Ji.T @ Ji - B.T @ np.linalg.solve(A, B)
-    dof = n_obs - idx.size - 6 * len(objs)
-    if dof <= 0:
-        return None
-    try:
-        cov_free = np.linalg.inv(info) * ssr / dof
-    except np.linalg.LinAlgError:
-        return None
-    cov = np.zeros((9, 9))
-    cov[np.ix_(idx, idx)] = 0.5 * (cov_free + cov_free.T)
-    return cov
-
-
 def _flag_views(objs, imgs, used, per_view_rms, image_size, flags, rms, flag_k) -> list[int]:
     """Views far above the typical per-view error whose removal lowers the total RMS > 10 %."""
     vals = per_view_rms[used]

@@ -135,3 +135,25 @@ def test_rendered_bowed_board_matches_projection():
     c = detect_chessboard(BoardRenderer(board, INTR).render(R, t), board)
     assert np.abs(c - project_board(R, t, board.object_points(), INTR)).max() < 0.1
     assert np.abs(project_board(R, t, board.flat_points(), INTR) - project_board(R, t, board.object_points(), INTR)).max() > 2
+
+
+def test_lps_estimate_with_the_bowed_board_is_back_at_the_noise():
+    """An LPS run of a bowed board: the flat model leaves structure in the residuals and errors in the positions."""
+    from dataclasses import replace
+
+    from lps_gui.core.estimate import EstimateOptions, estimate
+    from lps_gui.core.simulate import observations_of, simulate_views
+
+    spec = small_spec(seed=1, noise_px=0.05)
+    bowed = replace(spec.rig.board, warp_mm=(2.0, 1.0))
+    spec = replace(spec, rig=replace(spec.rig, board=bowed))
+    views = simulate_views(spec)
+    s_true = np.asarray(views.truth["positions_mm"])
+    out = {}
+    for name, board in (("flat", replace(bowed, warp_mm=None)), ("bowed", bowed)):
+        est = estimate(replace(observations_of(spec, views), board=board), EstimateOptions())
+        err = (est.state.s - est.state.s[0]) - (s_true - s_true[0])
+        out[name] = (float(np.sqrt(np.mean(err**2))), est.sigma_px)
+    assert out["bowed"][1] == pytest.approx(0.05, rel=0.1)  # residuals back at the corner noise
+    assert out["flat"][1] > 1.5 * out["bowed"][1]
+    assert out["flat"][0] > 2 * out["bowed"][0], out

@@ -232,7 +232,7 @@ class IntrinsicsPanel(QWidget):
     def _finished(self) -> None:
         self.job = None
         self.calib_btn.setEnabled(True)
-        self.crossval_btn.setEnabled(self.calibration is not None and hasattr(self.calibration, "image_points"))
+        self.crossval_btn.setEnabled(bool(getattr(self.calibration, "image_points", None)))
         self.cancel_btn.setEnabled(False)
 
     def start_cross_validation(self) -> None:
@@ -273,6 +273,7 @@ class IntrinsicsPanel(QWidget):
             item.setText(text)
             item.setForeground(QBrush(QColor("#d00000" if bad else "#000000")))
         self._show_pictures(calib)
+        self.crossval_btn.setEnabled(self.job is None and bool(getattr(calib, "image_points", None)))
         warnings = list(getattr(calib, "warnings", None) or [])
         self.message.setText(
             f"RMS {fmt(calib.intrinsics.rms_px)} px over {rms.size} views; {len(flagged)} flagged; "

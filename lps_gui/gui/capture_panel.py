@@ -8,6 +8,7 @@ what was captured, and "Resume session…" continues at the first missing stop.
 from __future__ import annotations
 
 import logging
+from dataclasses import replace
 import time
 from pathlib import Path
 from typing import Any, Callable
@@ -22,7 +23,6 @@ from lps_gui.core.board import Board
 from lps_gui.capture.plans import plan_duration_s
 from lps_gui.core.plan import Plan
 from lps_gui.errors import InputError
-from lps_gui.gui.services import lookup
 from lps_gui.gui.widgets import PathPicker, add_rows, double_spin, stack
 from lps_gui.gui.workers import Job, one_line
 
@@ -181,11 +181,9 @@ class CapturePanel(QWidget):
             from lps_gui.io.session import Session
 
             if simulated:
-                from lps_gui.capture.simulated_rig import rig_truth
+                from lps_gui.sim.session import start_rig_session
 
-                spec = sim_spec()
-                return Session.create(folder, spec.rig.board, plan, intrinsics=spec.rig.intrinsics,
-                                      camera=camera.properties(), stage=stage.describe(), truth=rig_truth(spec, camera))
+                return start_rig_session(folder, replace(sim_spec(), plan=plan), stage, camera)
             return Session.create(folder, board, plan, intrinsics=intrinsics, camera=camera.properties(),
                                   stage=stage.describe())
 
@@ -232,10 +230,13 @@ class CapturePanel(QWidget):
 
         def work(progress: Any, cancel: Any) -> Any:
             session = make_session()
+            from lps_gui.capture.engine import CaptureEngine
+            from lps_gui.sim.session import simulated_engine
+
             if is_simulated_rig(stage, camera) and (session.truth or {}).get("simulated"):
-                engine = lookup("lps_gui.capture.sim_session", "simulated_engine")(session, stage, camera)
+                engine = simulated_engine(session, stage, camera)
             else:
-                engine = lookup("lps_gui.capture.engine", "CaptureEngine")(stage, camera, session)
+                engine = CaptureEngine(stage, camera, session)
             self.engine = engine  # pause/abort from the GUI thread are thread-safe engine calls
             if self._abort_early:
                 engine.abort()

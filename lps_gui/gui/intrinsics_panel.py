@@ -25,7 +25,6 @@ from PySide6.QtWidgets import (
 
 from lps_gui.core.board import Board
 from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
-from lps_gui.gui.services import lookup
 from lps_gui.gui.widgets import ValueTable, fmt
 from lps_gui.gui.workers import Job, one_line
 
@@ -208,11 +207,8 @@ class IntrinsicsPanel(QWidget):
 
     # ------------------------------------------------------------------ calibration
     def start(self) -> None:
-        try:
-            calibrate = lookup("lps_gui.pipeline.intrinsics", "calibrate_images")
-        except Exception as exc:
-            self.run_requested.emit(exc)
-            return
+        from lps_gui.pipeline.intrinsics import calibrate_images as calibrate
+
         if not self.paths:
             from lps_gui.errors import InputError
 

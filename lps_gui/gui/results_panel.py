@@ -20,7 +20,6 @@ from PySide6.QtWidgets import (
 )
 
 from lps_gui.gui.plot_adapter import DrawnFigure, figure_steps
-from lps_gui.gui.services import lookup
 from lps_gui.gui.view_detail import ViewDetail
 from lps_gui.gui.widgets import TextTable, ValueTable
 from lps_gui.gui.workers import Job
@@ -187,21 +186,29 @@ class ResultsPanel(QWidget):
             return None
 
     def _fill_tables(self, results: dict[str, Any]) -> None:
-        try:
-            summary_rows = lookup("lps_gui.report.summary", "summary_rows")
-        except Exception as exc:  # the report module is not there: show the raw figures
-            log.warning("results: summary tables unavailable (%s)", exc)
-            single = ((results.get("figures") or {}).get("single_run") or {})
-            self.iso_table.set_rows([(k, _f(v), "") for k, v in single.items() if not isinstance(v, (dict, list))])
-            return
-        self.iso_table.set_rows([(r.name, r.text(), r.unit) for r in summary_rows(results)])
+        from lps_gui.report.summary import summary_rows
+
+        rows = summary_rows(results)
+        self.iso_table.set_rows([(r.name, r.text(), r.unit) for r in rows])
+        self._grey_unresolved(rows)
+
+    def _grey_unresolved(self, rows: list[Any]) -> None:
+        """A figure the data do not resolve reads "not resolved (σ X)" in grey, never as a finding."""
+        from PySide6.QtGui import QBrush, QColor
+
+        grey = QBrush(QColor("#888888"))
+        for i, r in enumerate(rows):
+            if getattr(r, "unresolved", ""):
+                for c in range(self.iso_table.columnCount()):
+                    item = self.iso_table.item(i, c)
+                    if item is not None:
+                        item.setForeground(grey)
+                        item.setToolTip(r.unresolved)
 
     def _fill_positions(self, results: dict[str, Any]) -> None:
         """Format the per-position table on a worker thread (hundreds of rows), then show it."""
-        try:
-            position_table = lookup("lps_gui.report.summary", "position_table")
-        except Exception:  # reported by _fill_tables
-            return
+        from lps_gui.report.summary import position_table
+
         self._pending_table = True
         job = Job("format positions", lambda: position_table(results)[:2], pass_progress=False)
         job.succeeded.connect(lambda table, r=results: self._show_positions(table, r))

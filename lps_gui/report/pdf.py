@@ -94,6 +94,15 @@ def render_report(session_dir: Path, results: dict | None = None, out: Path | No
                    f"lps-calib {__version__} \u00b7 {name} \u00b7 {results.get('created', '')}")
     steps = ("front pages", "plots", "outliers", "table")
     try:
+        if len(results.get("axes") or ["X"]) == 2:  # a planar session (SPEC 10)
+            from lps_gui.report.planar_report import paint_planar_report
+
+            progress(0, len(steps), "planar report")
+            paint_planar_report(flow, meta, results, S.title_rows(meta, results, __version__), FIGURE_HEIGHT_MM)
+            n_pages = flow.finish()
+            tmp.replace(out)
+            progress(len(steps), len(steps), f"wrote {out}")
+            return ReportInfo(out, n_pages, flow.log.pages)
         progress(0, len(steps), "front pages")
         _front_page(flow, meta, results, __version__)
         flow.new_page()
@@ -132,7 +141,8 @@ def _front_page(flow: Any, meta: dict[str, Any], results: dict[str, Any], versio
 
     flow.heading("Summary figures", 11)
     rows = S.summary_rows(results)
-    flow.table(["figure", "value", "unit"], [[r.name, r.text(), r.unit] for r in rows], [80, 30, 16])
+    flow.table(["figure", "value", "unit"], [[r.name, r.text(), r.unit] for r in rows], [80, 40, 16],
+               colors=["#888888" if r.unresolved else None for r in rows])
     for note in S.figure_notes(results):
         flow.paragraph(note, size_pt=7.5, color="#555555")
 
@@ -141,11 +151,12 @@ def _front_page(flow: Any, meta: dict[str, Any], results: dict[str, Any], versio
     if checks:
         cells, colors = [], []
         for c in checks:
-            verdict = "PASS" if c.passed else ("FAIL" if c.passed is False else "not measured")
-            cells.append([c.name, S.fmt(c.measured), f"{S.fmt(c.limit)} {c.unit}", verdict, c.note])
-            colors.append("#007a1f" if c.passed else ("#c00000" if c.passed is False else "#555555"))
-        flow.table(["criterion", "measured", "limit", "verdict", "how it is judged"], cells, [36, 18, 20, 24, 82],
-                   colors=colors, align_right_from=1, align_left=(4,))
+            cells.append([c.name, S.fmt(c.measured), f"{S.fmt(c.limit)} {c.unit}", c.verdict()])
+            colors.append(c.color())
+        flow.table(["criterion", "measured", "limit", "verdict"], cells, [40, 20, 22, 40],
+                   colors=colors, align_right_from=1)
+        for c in checks:  # how each is judged, in full (a table cell would clip it)
+            flow.paragraph(f"{c.name}: {c.note}", size_pt=7.5, color="#555555")
     else:
         flow.paragraph("No stage specification in session.json (key \"stage_spec\", e.g. "
                        "{\"accuracy_um\": 20, \"repeatability_um\": 5, \"straightness_um\": 38}); no verdict given.",

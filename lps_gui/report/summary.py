@@ -11,19 +11,13 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from lps_gui.io.results_file import SummaryFigure, extreme_figures, iso_figures, summary_figures
+from lps_gui.io.results_file import finite_number as _num
 from lps_gui.report.figures import position_columns
 
 METHOD_NAMES = {"joint": "joint LM (all positions, orientation and line at once)",
                 "hybrid": "paper's hybrid algorithm (LM + per-view grid search)",
                 "pnp": "per-view PnP (baseline)", "calibrate": "full calibration (reference only)"}
-TRUTH_NAMES = {"position_rms_error_um": ("Truth: position error RMS", "\u00b5m"),
-               "position_max_abs_error_um": ("Truth: position error max |e|", "\u00b5m"),
-               "mean_sigma_um": ("Truth: mean position \u03c3 (noise)", "\u00b5m"),
-               "z_mean_square": ("Truth: mean (error/\u03c3)\u00b2", ""),
-               "board_plane_rms_error_um": ("Truth at the board plane: position error RMS", "\u00b5m"),
-               "board_plane_max_abs_error_um": ("Truth at the board plane: position error max |e|", "\u00b5m"),
-               "board_plane_z_mean_square": ("Truth at the board plane: mean (error/\u03c3)\u00b2", ""),
-               "abbe_rms_um": ("Truth: Abbe term (board plane - camera centre) RMS", "\u00b5m")}
 INTRINSIC_ORDER = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3")
 DASH = "\u2014"
 
@@ -37,10 +31,11 @@ class Row:
     unit: str = ""
     note: str = ""
     digits: int = 3  # significant digits when printed
+    unresolved: str = ""  # "not resolved (σ X)": printed instead of a value, greyed (core.resolution)
 
     def text(self) -> str:
         """The value as printed: ``digits`` significant digits, a dash when absent."""
-        return fmt(self.value, self.digits)
+        return self.unresolved or fmt(self.value, self.digits)
 
 
 @dataclass(frozen=True)
@@ -53,6 +48,22 @@ class SpecCheck:
     unit: str
     passed: bool | None  # None: not measured by this session
     note: str = ""
+    indicative: bool = False  # fewer runs than ISO 230-2 asks: a verdict to read, not a FAIL
+
+    def verdict(self) -> str:
+        """PASS / FAIL / not resolved, "(indicative)" when fewer than 5 runs per direction back it."""
+        if self.passed is None:
+            return "not resolved" if self.measured is not None else "not measured"
+        word = "PASS" if self.passed else ("above limit" if self.indicative else "FAIL")
+        return f"{word} (indicative)" if self.indicative else word
+
+    def color(self) -> str:
+        """Green pass, red fail; grey when not resolved; muted (never red) when indicative."""
+        if self.passed is None:
+            return "#555555"
+        if self.indicative:
+            return "#4f7a5a" if self.passed else "#8a6d00"
+        return "#007a1f" if self.passed else "#c00000"
 
 
 def fmt(value: float | None, digits: int = 3) -> str:
@@ -142,88 +153,33 @@ def method_rows(results: dict[str, Any]) -> list[tuple[str, str]]:
     return rows
 
 
-def _num(v: Any) -> float | None:
-    try:
-        f = float(v)
-    except (TypeError, ValueError):
-        return None
-    return f if math.isfinite(f) else None
-
-
 # ----------------------------------------------------------------------------- figures
 
 
-ISO_NAMES = {
-    "A": ("Accuracy A", "\u00b5m"), "R": ("Repeatability R", "\u00b5m"), "E": ("Systematic deviation E", "\u00b5m"),
-    "B": ("Reversal error B", "\u00b5m"), "M": ("Mean deviation range M", "\u00b5m"),
-}
+def _row(f: SummaryFigure) -> Row:
+    return Row(f.label or f.key, f.value, f.unit, digits=f.digits, unresolved=f.unresolved)
 
 
 def iso_rows(iso: dict[str, Any] | None) -> list[Row]:
     """ISO 230-2 figures of results.json (``core.iso230.Iso230Figures`` as a dict) as rows.
 
-    Order A, R, E, B, M; each bidirectional, then forward and backward.
-    Per-target tables and run counts are left to the plots and the table;
-    numeric keys we do not know are printed with their own words.
+    Order A, R, E, B, M; each bidirectional, then forward and backward
+    (:func:`lps_gui.io.results_file.iso_figures`). Per-target tables and run
+    counts are left to the plots and the table; numeric keys we do not know
+    are printed with their own words.
     """
-    if not iso:
-        return []
-    rows: list[Row] = []
-    seen = set()
-    for letter in ("A", "R", "E", "B", "M"):
-        name = ISO_NAMES[letter][0]
-        for suffix, words in (("", "bidirectional"), ("_up", "forward \u2191"), ("_down", "backward \u2193"),
-                              ("_mean", "mean")):
-            key = f"{letter}{suffix}_um"
-            if key in iso:
-                seen.add(key)
-                if _num(iso[key]) is not None:
-                    rows.append(Row(f"ISO 230-2 {name} ({words})", _num(iso[key]), "\u00b5m"))
-    for key, value in iso.items():
-        if key in seen or key.startswith("n_") or isinstance(value, (dict, list, bool)) or _num(value) is None:
-            continue
-        rows.append(Row(f"ISO 230-2 {_iso_label(key)}", _num(value), "\u00b5m" if key.endswith("_um") else ""))
-    return rows
-
-
-def _iso_label(key: str) -> str:
-    """``"E_up_um"`` -> ``"Systematic deviation E (up)"``; unknown keys keep their words."""
-    words = (key[:-3] if key.endswith("_um") else key).split("_")
-    if words[0] in ISO_NAMES:
-        name = ISO_NAMES[words[0]][0]
-        return f"{name} ({' '.join(words[1:])})" if len(words) > 1 else name
-    return " ".join(words)
+    return [_row(f) for f in iso_figures(iso)]
 
 
 def summary_rows(results: dict[str, Any]) -> list[Row]:
     """The summary figures of SPEC 5 as printed in the report, in report order.
 
-    Single-run figures come from ``results["figures"]["single_run"]``, ISO
-    230-2 figures from ``results["figures"]["iso230_2"]`` (absent with one run),
-    maxima of straightness and angles from the per-position table without
-    outliers.
+    The figures of :func:`lps_gui.io.results_file.summary_figures` (the same
+    builder as summary.csv) that have a report label: single-run figures,
+    ISO 230-2 figures (absent with one run), maxima of straightness and
+    angles over the positions not flagged, and the truth comparison.
     """
-    figs = results.get("figures") or {}
-    single = figs.get("single_run") or {}
-    rows = [
-        Row("Mean step", _num(single.get("mean_step_mm")), "mm", digits=7),
-        Row("Step std", _num(single.get("step_std_um")), "\u00b5m"),
-        Row("Max |deviation|", _num(single.get("max_abs_deviation_um")), "\u00b5m"),
-        Row("Scale error", _num(single.get("scale_ppm")), "ppm"),
-        Row("Scale error \u03c3 (noise, correlations included)", _num(single.get("scale_sigma_ppm")), "ppm"),
-        Row("Scale error \u03c3 (total, with intrinsics)", _num(single.get("scale_sigma_total_ppm")), "ppm"),
-        Row("Periodic error amplitude", _num(single.get("periodic_amplitude_um")), "\u00b5m"),
-        Row("Periodic error period", _num(single.get("periodic_period_mm")), "mm"),
-    ]
-    rows += iso_rows(figs.get("iso230_2"))
-    rows += extremes_rows(results)
-    truth = results.get("truth_comparison") or {}
-    for key, value in truth.items():
-        if _num(value) is not None and not isinstance(value, bool):
-            default = (f"Truth: {key.removesuffix('_um').replace('_', ' ')}", "\u00b5m" if key.endswith("_um") else "")
-            name, unit = TRUTH_NAMES.get(key, default)
-            rows.append(Row(name, _num(value), unit))
-    return rows
+    return [_row(f) for f in summary_figures(results) if f.label is not None]
 
 
 def figure_notes(results: dict[str, Any]) -> list[str]:
@@ -239,18 +195,7 @@ def figure_notes(results: dict[str, Any]) -> list[str]:
 
 def extremes_rows(results: dict[str, Any]) -> list[Row]:
     """Peak-to-valley straightness per direction v1/v2 and max |roll|, |pitch|, |yaw| (outliers excluded)."""
-    cols = position_columns(results)
-    keep = ~cols["outlier"]
-    rows = []
-    for k in (1, 2):
-        v = cols[f"straightness_um_{k}"][keep]
-        v = v[np.isfinite(v)]
-        rows.append(Row(f"Max straightness v{k} (peak-to-valley)", float(v.max() - v.min()) if v.size else None, "\u00b5m"))
-    for name in ("roll", "pitch", "yaw"):
-        v = np.abs(cols[f"{name}_urad"][keep])
-        v = v[np.isfinite(v)]
-        rows.append(Row(f"Max |{name}|", float(v.max()) if v.size else None, "\u00b5rad"))
-    return rows
+    return [_row(f) for f in extreme_figures(results)]
 
 
 # ----------------------------------------------------------------------------- specification
@@ -272,7 +217,8 @@ def spec_checks(results: dict[str, Any], spec: dict[str, Any] | None) -> list[Sp
 def _as_check(c: dict[str, Any]) -> SpecCheck:
     passed = c.get("passed")
     return SpecCheck(str(c.get("name", "")), _num(c.get("measured")), float(c.get("limit", math.nan)),
-                     str(c.get("unit") or "\u00b5m"), None if passed is None else bool(passed), str(c.get("note") or ""))
+                     str(c.get("unit") or "\u00b5m"), None if passed is None else bool(passed), str(c.get("note") or ""),
+                     bool(c.get("indicative", False)))
 
 
 # ----------------------------------------------------------------------------- limits
@@ -300,17 +246,7 @@ def limits_notes(results: dict[str, Any]) -> list[str]:
         else:
             text += "; the intrinsics uncertainty was not propagated (no intrinsics covariance given)."
         notes.append(text)
-    six = {k: cols[k][np.isfinite(cols[k])] for k in ("straightness_sigma_um_1", "straightness_sigma_um_2",
-                                                      "roll_sigma_urad", "pitch_sigma_urad", "yaw_sigma_urad")}
-    if all(v.size for v in six.values()):
-        med = {k: fmt(float(np.median(v)), 2) for k, v in six.items()}
-        notes.append(
-            "Straightness and angles come from each view's own pose, which is far less certain than its position "
-            f"along the line: median 1\u03c3 is {med['straightness_sigma_um_1']} \u00b5m (v1) and "
-            f"{med['straightness_sigma_um_2']} \u00b5m (v2); roll {med['roll_sigma_urad']}, pitch "
-            f"{med['pitch_sigma_urad']}, yaw {med['yaw_sigma_urad']} \u00b5rad. A peak-to-valley over many views "
-            "grows with this noise (about 5-6\u03c3 for a few hundred views), so judge a straightness limit "
-            "against the plotted \u00b12\u03c3 bands, or average more frames per stop.")
+    notes += straightness_notes(results, cols)
     notes.append(
         "Abbe offset: the model holds the camera's orientation constant, so a pitch or yaw of the carriage "
         "about an axis across the motion shifts the image like a translation of (board distance x angle). "
@@ -320,6 +256,39 @@ def limits_notes(results: dict[str, Any]) -> list[str]:
     notes.append("Deviations are relative to the first capture (offset zero there), not to the carriage's "
                  "encoder reading; the first capture's own noise is part of every other position's \u03c3.")
     return notes
+
+
+def straightness_notes(results: dict[str, Any], cols: dict[str, np.ndarray]) -> list[str]:
+    """What one planar board resolves (SPEC 11): straightness and image rotation yes, the tilts hardly."""
+    med = {k: fmt(float(np.median(v[np.isfinite(v)])), 2) if np.isfinite(v).any() else DASH
+           for k, v in ((k, cols.get(k, np.array([np.nan]))) for k in (
+               "straightness_sigma_um_1", "straightness_sigma_um_2", "roll_sigma_urad", "pitch_sigma_urad",
+               "yaw_sigma_urad"))}
+    rot = np.array([_num(r.get("image_rotation_sigma_urad")) or np.nan for r in results.get("positions") or []], float)
+    rot_med = fmt(float(np.median(rot[np.isfinite(rot)])), 2) if np.isfinite(rot).any() else DASH
+    st = (results.get("figures") or {}).get("straightness") or {}
+    if "constant orientation" not in str(st.get("basis", "")):
+        return ["Straightness and angles come from each view's own pose, which is far less certain than its "
+                f"position along the line: median 1\u03c3 is {med['straightness_sigma_um_1']} \u00b5m (v1) and "
+                f"{med['straightness_sigma_um_2']} \u00b5m (v2). Figures that noise alone could produce are shown "
+                "as \"not resolved\"."]
+    return [
+        "Straightness is the displacement of the line of sight at the board plane (the same Abbe convention as "
+        "the positions), per view with the common orientation, off a least-squares line: median 1\u03c3 "
+        f"{med['straightness_sigma_um_1']} \u00b5m in the board plane across the motion (v1) and "
+        f"{med['straightness_sigma_um_2']} \u00b5m along the viewing direction (v2), which the board shows only "
+        f"through its image scale. Image rotation (about the optical axis) has a median 1\u03c3 of {rot_med} "
+        "\u00b5rad per view. Peak-to-valley figures are taken over the targets (runs and directions averaged) and "
+        "are findings only above what noise alone would span (shown beside them); otherwise they read \"not "
+        "resolved\". The \u03c3 counts the corner noise; a corner detector's bias that repeats at the same pose is "
+        "not in it.",
+        "Tilts: a tilt of the camera about an axis parallel to the board shifts the image like a translation of "
+        "(distance x angle), so one planar board separates roll and pitch from straightness only through weak "
+        f"perspective: per-view 1\u03c3 roll {med['roll_sigma_urad']}, pitch {med['pitch_sigma_urad']}, yaw "
+        f"{med['yaw_sigma_urad']} \u00b5rad, shown as \"not resolved\" where noise alone reaches the figure. Their "
+        "effect at the board plane is inside the straightness and positions (Abbe offset). A second board at "
+        "another distance in the same view would separate them; this version does not support a two-depth target.",
+    ]
 
 
 def outlier_rows(results: dict[str, Any]) -> list[dict[str, Any]]:

@@ -4,7 +4,8 @@ One :class:`~lps_gui.core.simulate.SimulationSpec` describes it; the stage
 carries the spec's :class:`StageErrorModel`, the camera renders the board
 through :meth:`SimulatedStage.true_pose`, both run on one clock (a
 :class:`SimClock` unless told otherwise). The CLI, the GUI and the demo use
-:func:`make_simulated_rig`.
+:func:`make_simulated_rig`; the stage error model and the rig geometry it
+binds are pure models in ``core/stage_errors.py`` and ``core/rig.py``.
 
 Both devices implement the capture engine's optional ``seed_capture(key)``
 hook: the stage's repeatability draw for a stop and the camera's image noise
@@ -29,6 +30,7 @@ from lps_gui.errors import InputError
 from lps_gui.hardware.sim_stage import SimulatedStage
 from lps_gui.io.board_file import board_from_dict, board_to_dict
 from lps_gui.io.intrinsics_file import intrinsics_from_dict, intrinsics_to_dict
+from lps_gui.sim.truth import TRUTH_FILE
 
 _STAGE_STREAM, _CAMERA_STREAM = 0, 1  # independent noise streams per capture
 
@@ -40,6 +42,18 @@ class RigStage(SimulatedStage):
         """Seed the draw of the next completed move (the move onto stop ``key``)."""
         with self._lock:
             self._rng = np.random.default_rng([self.seed, int(key), _STAGE_STREAM])
+
+    def seed_axes(self, key_x: int, key_y: int) -> None:
+        """Key each XY axis' repeatability draw on the frame it arrived at (PlanarPlan.arrival_indices)."""
+        with self._lock:
+            self._axis_keys = (int(key_x), int(key_y))
+
+    def _axis_rng(self, axis: int) -> np.random.Generator:
+        """An XY axis draws one value per arrival, however many moves reach it (a resume adds overshoots)."""
+        keys = getattr(self, "_axis_keys", None)
+        if keys is None:
+            return self._rng
+        return np.random.default_rng([self.seed, keys[axis], _STAGE_STREAM, 1 + axis])
 
 
 class RigCamera(SimulatedCamera):
@@ -120,7 +134,7 @@ def rig_truth(spec: SimulationSpec, camera: SimulatedCamera) -> dict[str, Any]:
         "board": board_to_dict(spec.rig.board),
         "intrinsics": intrinsics_to_dict(spec.rig.intrinsics),
         "camera": {"noise_grey": camera.noise_grey, "blur_px": camera.lighting.blur_px},
-        "per_capture": "truth.jsonl",
+        "per_capture": TRUTH_FILE,
     }
 
 

@@ -6,6 +6,9 @@ every temporary page-faults its memory back in: measured 5x slower on the
 joint LM's linearization at K=400, N=540. Raising the mmap and trim
 thresholds (what MALLOC_MMAP_THRESHOLD_ does from the environment) keeps
 them in the heap. No effect off glibc.
+
+A process-wide setting, so the entry points call it (``lps``, ``lps-gui``,
+the test session, the benchmarks), never the math in ``core``.
 """
 from __future__ import annotations
 

@@ -1,8 +1,8 @@
 """The simulated rig through the real GRBL driver and the pty emulator gives the same session as the direct one."""
 from __future__ import annotations
 
-from lps_gui.capture.emulated_rig import emulated_rig_stage
-from lps_gui.capture.sim_session import create_simulated_session, simulated_engine
+from lps_gui.sim.emulated import emulated_rig_stage
+from lps_gui.sim.session import create_simulated_session, simulated_engine
 from lps_gui.core.plan import Plan
 from lps_gui.io.session import Session
 from tests.capture.helpers import assert_listed_frames_intact, image_bytes, records_without_time, start_capture, tiny_spec

@@ -19,6 +19,7 @@ from typing import Any, Iterator, Sequence
 
 import numpy as np
 
+from lps_gui.camera.processes import process_context
 from lps_gui.camera.render import BoardRenderer, Lighting
 from lps_gui.core.board import Board
 from lps_gui.core.camera_model import CameraIntrinsics, project_board
@@ -31,6 +32,7 @@ from lps_gui.io.board_file import write_board
 from lps_gui.io.intrinsics_file import write_intrinsics
 from lps_gui.io.jsonfile import write_json
 from lps_gui.io.session import CaptureRecord, Session
+from lps_gui.sim.session import write_simulated_session
 
 _RENDERERS: dict[Any, BoardRenderer] = {}
 
@@ -86,8 +88,6 @@ def _render_stream(
         return
     from concurrent.futures.process import BrokenProcessPool
 
-    from lps_gui.pipeline.detect import process_context
-
     next_out = 0  # first chunk not yet yielded
     try:
         with ProcessPoolExecutor(max_workers=workers, mp_context=process_context()) as pool:
@@ -142,16 +142,12 @@ def simulate_image_session(
         src[i] = (i + spec.replaced_offset) % K
     truth = {**truth, "image_noise_grey": noise_grey, "lighting": asdict(lighting), "renderer": "exact-area"}
     rig = spec.rig
-    session = Session.create(
-        out,
-        rig.board,
-        spec.plan,
-        intrinsics=intrinsics or rig.intrinsics,
+    session = write_simulated_session(
+        out, spec, "images", intrinsics=intrinsics or rig.intrinsics,
         camera={"driver": "SimulatedCamera", "width": rig.intrinsics.image_size[0], "height": rig.intrinsics.image_size[1],
                 "noise_grey": noise_grey, "blur_px": lighting.blur_px},
         stage={"driver": "SimulatedStage", "errors": rig.errors.to_dict()},
         truth=truth,
-        extra={"simulation": {"name": spec.name, "seed": spec.seed, "level": "images"}},
     )
     poses = [(R[j], t[j], spec.seed * 100003 + i) for i, j in enumerate(src)]
     workers = max(1, int(workers or os.cpu_count() or 1))

@@ -17,7 +17,7 @@ from lps_gui.io.board_file import read_board
 from lps_gui.io.intrinsics_file import read_intrinsics
 from lps_gui.io.jsonfile import read_json
 from lps_gui.io.session import Session
-from lps_gui.pipeline.simulate_images import simulate_image_session, simulate_intrinsics_set
+from lps_gui.sim.images import simulate_image_session, simulate_intrinsics_set
 
 
 def test_session_truth_equals_point_simulator_and_images_show_it(tmp_path):

@@ -18,6 +18,7 @@ from lps_gui.io.board_file import write_board
 from lps_gui.io.corners_vnl import CornerTable, write_corners_vnl
 from lps_gui.io.intrinsics_file import write_intrinsics
 from lps_gui.io.session import CaptureRecord, Session
+from lps_gui.sim.session import write_simulated_session
 
 # 1-sigma of a good 20-view calibration (relative for focal lengths)
 TYPICAL_CALIBRATION_STD = {"fx": 3e-4, "fy": 3e-4, "cx": 0.3, "cy": 0.3, "k1": 1e-3, "k2": 4e-3, "p1": 5e-5, "p2": 5e-5, "k3": 8e-3}
@@ -37,15 +38,11 @@ def simulate_point_session(spec: SimulationSpec, out: Path | str) -> Session:
     intr = CameraIntrinsics(true.image_size, true.camera_matrix, true.dist, covariance=np.diag(typical_std(true) ** 2))
     truth = dict(views.truth)
     truth["index"] = [s.index for s in views.stops]
-    session = Session.create(
-        out,
-        board=spec.rig.board,
-        plan=spec.plan,
-        intrinsics=intr,
+    session = write_simulated_session(
+        out, spec, "points", intrinsics=intr,
         camera={"driver": "simulated (points)", "image_size": list(true.image_size)},
         stage={"driver": "simulated", "errors": spec.rig.errors.to_dict()},
-        truth=truth,
-        extra={"simulation": {"preset": spec.name, "seed": spec.seed, "noise_px": spec.noise_px, "level": "points"}},
+        truth=truth, noise_px=spec.noise_px,
     )
     write_board(out / "board.json", spec.rig.board)
     write_intrinsics(out / "intrinsics.json", intr)

@@ -13,7 +13,7 @@ import math
 from PySide6.QtCore import QEvent, QObject, Qt, QTimer, Signal
 from PySide6.QtGui import QFont, QKeyEvent, QKeySequence, QShortcut
 from PySide6.QtWidgets import (
-    QAbstractItemView, QAbstractSpinBox, QApplication, QCheckBox, QComboBox, QDoubleSpinBox, QGridLayout, QGroupBox,
+    QAbstractButton, QAbstractItemView, QAbstractSpinBox, QApplication, QCheckBox, QComboBox, QDoubleSpinBox, QGridLayout, QGroupBox,
     QHBoxLayout, QHeaderView, QLabel, QLineEdit, QMessageBox, QPushButton, QTableWidget, QTableWidgetItem, QTabWidget,
     QVBoxLayout, QWidget,
 )
@@ -243,8 +243,8 @@ class StagePanel(QWidget):
         self._shortcuts = []
         self._lock_box: QMessageBox | None = None
         self._lock_asked = False
-        for w in [self, *self.findChildren(QWidget)]:
-            w.installEventFilter(self)  # jog keys decided in one place: eventFilter()
+        for b in self.findChildren(QAbstractButton):  # buttons take arrows for focus moves: decide first
+            b.installEventFilter(self)
         self.keyboard_jog.toggled.connect(lambda _on: self._show_keyboard_state())
         app = QApplication.instance()
         if app is not None:
@@ -274,14 +274,32 @@ class StagePanel(QWidget):
             return False  # the key edits the field
         return self._in_jog_area(w) or self.keyboard_jog.isChecked()
 
+    def _jog_key(self, event: QKeyEvent) -> bool:
+        """Jog for a jog key if keyboard jog is active for the focus widget; True when the key was used."""
+        move = JOG_KEYS.get(Qt.Key(event.key()))
+        if move is None or event.modifiers() not in (Qt.KeyboardModifier.NoModifier, Qt.KeyboardModifier.KeypadModifier):
+            return False
+        if not self.keyboard_jog_active():
+            return False
+        if not event.isAutoRepeat():  # one step per press: a held key must not queue a run of jogs
+            self.jog(*move)
+        return True
+
+    def keyPressEvent(self, event: QKeyEvent) -> None:
+        """Keys the focus widget ignored (the jog area, labels) end here; fields use theirs and never do.
+
+        Only the buttons carry an event filter (they take arrows for focus moves):
+        a Python filter on every widget would run for every paint event and
+        compete for the GIL with the workers.
+        """
+        if self._jog_key(event):
+            event.accept()
+            return
+        super().keyPressEvent(event)
+
     def eventFilter(self, obj: QObject, event: QEvent) -> bool:
-        if event.type() == QEvent.Type.KeyPress and isinstance(obj, QWidget):
-            key_event: QKeyEvent = event  # type: ignore[assignment]
-            move = JOG_KEYS.get(Qt.Key(key_event.key()))
-            if move is not None and key_event.modifiers() == Qt.KeyboardModifier.NoModifier and self.keyboard_jog_active(obj):
-                if not key_event.isAutoRepeat():  # one step per press: a held key must not queue a run of jogs
-                    self.jog(*move)
-                return True
+        if event.type() == QEvent.Type.KeyPress and self._jog_key(event):  # type: ignore[arg-type]
+            return True
         return super().eventFilter(obj, event)
 
     def _on_focus_changed(self, _old: QWidget | None, _new: QWidget | None) -> None:

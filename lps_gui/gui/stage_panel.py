@@ -9,6 +9,7 @@ never while a number, list or text field has focus, where they edit).
 from __future__ import annotations
 
 import math
+import time
 
 from PySide6.QtCore import QEvent, QObject, Qt, QTimer, Signal
 from PySide6.QtGui import QFont, QKeyEvent, QKeySequence, QShortcut
@@ -27,6 +28,7 @@ from lps_gui.hardware.stage import AXES, StageSetting, StageStatus
 JOG_STEPS_MM = (0.01, 0.1, 1.0, 10.0, 50.0)
 CONTINUOUS = 0.0  # the "hold" step: jog while the button is pressed
 HOLD_JOG_PERIOD_MS = 100  # GRBL's joystick rule: short jogs of v*dt queued while held, jog cancel on release
+MACHINE_REFRESH_S = 0.5
 AXIS_SETS = (("XYZ", "X Y Z"), ("X", "X only"), ("XY", "X Y"))
 STATE_COLORS = {"Idle": "#2a9d3c", "Run": "#1f5fa8", "Jog": "#1f5fa8", "Home": "#1f5fa8", "Hold": "#e07b00",
                 "Alarm": "#d00000", "Door": "#d00000", "Disconnected": "#777777"}
@@ -79,6 +81,7 @@ class StagePanel(QWidget):
         self.readout: dict[str, QLabel] = {}
         self._axis_widgets: dict[str, list[QWidget]] = {ax: [] for ax in AXES}
         self._axes_shown = "".join(AXES)
+        self._machine_shown_at = 0.0
         for i, ax in enumerate(AXES):
             name = QLabel(ax)
             name.setFont(big)
@@ -385,10 +388,7 @@ class StagePanel(QWidget):
     def show_status(self, st: StageStatus) -> None:
         for ax, v in zip(AXES, st.work_mm):
             self.readout[ax].setText(f"{v:10.3f}")
-        shown = [i for i, ax in enumerate(AXES) if ax in self._axes_shown]
-        offset = [st.work_mm[i] - st.machine_mm[i] for i in shown]
-        self.machine_label.setText("machine " + "  ".join(f"{AXES[i]} {st.machine_mm[i]:.3f}" for i in shown)
-                                   + ("   offset " + " ".join(f"{v:+.3f}" for v in offset) if any(offset) else ""))
+        self._show_machine(st)
         self._show_state(st.state)
         self.feed_label.setText(f"feed {st.feed_mm_min:.0f} mm/min")
         if st.state == "Alarm" and not self._lock_asked:
@@ -396,6 +396,20 @@ class StagePanel(QWidget):
             self._ask_home_or_unlock()
         elif st.state != "Alarm":
             self._lock_asked = False  # a later alarm asks again
+
+    def _show_machine(self, st: StageStatus) -> None:
+        """Machine position and offset, at most twice a second while moving: a changed label re-lays out the
+        whole window, which at the poll rate starved the GUI thread during a capture."""
+        now = time.monotonic()
+        if st.state in ("Run", "Jog", "Home") and now - self._machine_shown_at < MACHINE_REFRESH_S:
+            return
+        shown = [i for i, ax in enumerate(AXES) if ax in self._axes_shown]
+        offset = [st.work_mm[i] - st.machine_mm[i] for i in shown]
+        text = ("machine " + "  ".join(f"{AXES[i]} {st.machine_mm[i]:.3f}" for i in shown)
+                + ("   offset " + " ".join(f"{v:+.3f}" for v in offset) if any(offset) else ""))
+        if text != self.machine_label.text():
+            self.machine_label.setText(text)
+            self._machine_shown_at = now
 
     def _ask_home_or_unlock(self) -> None:
         """A stage in Alarm (GRBL powers up so with homing enabled) moves only after $H or $X: ask which."""

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from lps_gui.core.iso230 import ISO_RUNS
+from lps_gui.core.resolution import runs_per_direction
 from lps_gui.report.summary import SpecCheck, spec_checks
 
 PASS_COLOR, FAIL_COLOR, INDICATIVE_COLOR, GREY = "#007a1f", "#c00000", "#a05a00", "#555555"
@@ -38,13 +39,6 @@ class Verdict:
     note: str
 
 
-def runs_per_direction(results: dict[str, Any]) -> int:
-    """The fewest runs of a direction that was measured (1 without ISO figures)."""
-    iso = (results.get("figures") or {}).get("iso230_2") or {}
-    runs = [int(n) for n in (iso.get("n_runs_up") or 0, iso.get("n_runs_down") or 0) if n]
-    return min(runs) if runs else 1
-
-
 def _decide(c: SpecCheck, u: float | None) -> str:
     if c.passed is None or c.measured is None:
         return "not resolved" if c.note.lower().startswith("not resolved") or c.measured is not None else "not measured"
@@ -63,7 +57,7 @@ def verdicts(results: dict[str, Any], spec: dict[str, Any] | None) -> list[Verdi
         return []
     figures_k2 = (results.get("uncertainty") or {}).get("figures_k2") or {}
     half = 0.5 if str(spec.get("limits", "plus_minus")) == "plus_minus" else 1.0
-    runs = runs_per_direction(results)
+    runs = runs_per_direction(results.get("figures") or {})
     out = []
     for c in spec_checks(results, spec):
         key, run_statistic = CHECK_FIGURES.get(c.name, (None, False))
@@ -71,7 +65,7 @@ def verdicts(results: dict[str, Any], spec: dict[str, Any] | None) -> list[Verdi
         if u is not None and run_statistic:
             u = float(u) * half  # the figure is compared as a half band against a +- limit
         word = _decide(c, u)
-        indicative = run_statistic and runs < ISO_RUNS and word in ("PASS", "FAIL")
+        indicative = c.indicative and word in ("PASS", "FAIL")  # core.iso230: a run statistic from < 5 runs
         color = {"PASS": PASS_COLOR, "FAIL": FAIL_COLOR}.get(word, GREY)
         note = c.note
         if word == "not resolved" and c.passed is not None:

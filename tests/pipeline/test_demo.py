@@ -67,11 +67,14 @@ def test_cancel_stops_the_demo_after_the_running_step(tmp_path):
     assert (tmp_path / "out" / demo.MARKER).exists()
 
 
+DEMO_STEPS = ("intrinsics", "capture", "detect", "estimate", "report", "compensate")
+
+
 @pytest.mark.slow
 def test_quick_demo_end_to_end_through_images(tmp_path):
     """`lps demo --quick`: intrinsics set, capture engine, detection, estimate, report; the truth check holds."""
     res = demo.run_demo(tmp_path / "out", quick=True)
-    assert [s.status for s in res.steps] == ["done"] * 5, res.steps
+    assert [(s.name, s.status) for s in res.steps] == [(n, "done") for n in DEMO_STEPS], res.steps
     assert res.report_pdf.exists() and (res.out_dir / "intrinsics.json").exists()
     te = demo.truth_errors(res.results)
     assert te["rms_um"] < 4 * te["median_sigma_um"] + 1.0
@@ -79,20 +82,21 @@ def test_quick_demo_end_to_end_through_images(tmp_path):
 
 @pytest.mark.slow
 def test_lps_demo_prints_the_truth_comparison_of_results_json(tmp_path, capsys):
-    """`lps demo --quick`: paths, five summary lines, and the truth error exactly as results.json has it."""
+    """`lps demo --quick`: paths, the summary lines, and the truth error exactly as results.json has it."""
     from lps_gui.cli import main
 
     assert main(["demo", "--quick", "--out", str(tmp_path / "d")]) == 0
     out = capsys.readouterr().out
     assert f"report:  {tmp_path / 'd' / 'session' / 'report.pdf'}" in out and "csv:     " in out
     assert "not the full chain" not in out
-    summary = [line for line in out.splitlines() if line.startswith("  ")]
-    assert len(summary) == 5
+    summary = [line for line in out.splitlines() if line.startswith("  ") and not line.startswith("    ")]
+    truth_line = [line for line in summary if line.startswith("  error against truth")]
+    assert len(summary) == 8 and len(truth_line) == 1  # 5 measurement lines, then the compensation pass
     tc = json.loads((tmp_path / "d" / "session" / "results.json").read_text())["truth_comparison"]
-    printed = re.search(r"position RMS ([-\d.]+) \u00b5m, max ([-\d.]+) \u00b5m \(median 1-sigma ([-\d.]+)", summary[-1])
+    printed = re.search(r"position RMS ([-\d.]+) \u00b5m, max ([-\d.]+) \u00b5m \(median 1-sigma ([-\d.]+)", truth_line[0])
     assert printed.groups() == (f"{tc['position_rms_error_um']:.2f}", f"{tc['position_max_abs_error_um']:.2f}",
                                 f"{tc['median_sigma_um']:.2f}")
-    plane = re.search(r"at the board plane RMS ([-\d.]+) \u00b5m", summary[-1])
+    plane = re.search(r"at the board plane RMS ([-\d.]+) \u00b5m", truth_line[0])
     assert plane.group(1) == f"{tc['board_plane_rms_error_um']:.2f}"
 
 
@@ -114,7 +118,7 @@ def test_full_demo_on_the_paper_rig(tmp_path):
     t0 = time.monotonic()
     res = demo.run_demo(tmp_path / "out", quick=False)
     elapsed = time.monotonic() - t0
-    assert [s.status for s in res.steps] == ["done"] * 5, res.steps
+    assert [(s.name, s.status) for s in res.steps] == [(n, "done") for n in DEMO_STEPS], res.steps
     single = res.results["figures"]["single_run"]
     spec = demo.demo_spec(quick=False)
     assert abs(single["periodic_period_mm"] - spec.rig.errors.pitch_mm) < 0.2

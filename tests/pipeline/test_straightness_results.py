@@ -44,7 +44,7 @@ def test_five_bidirectional_runs_give_all_three_spec_rows_a_verdict(tmp_path):
 def test_fewer_runs_are_indicative_and_unresolved_figures_are_not_findings(tmp_path):
     results = _session(tmp_path, runs=1, directions="+")
     checks = spec_checks(results, PAPER_SPEC)
-    assert all(c.indicative for c in checks)
+    assert all(c.indicative == (c.name in ("Positional accuracy", "Repeatability")) for c in checks)
     assert all("FAIL" not in c.verdict() for c in checks)
     rows = {r.name: r for r in extremes_rows(results)}
     # one run: v2 per-view sigma ~13 um over 21 targets cannot resolve the paper rig's few-um v2 straightness

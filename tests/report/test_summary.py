@@ -137,7 +137,7 @@ def test_verdict_decision_rule_and_indicative_runs():
     below = verdicts(results, {"accuracy_um": a_half - U / 4})[0]
     assert below.verdict == "not resolved"
     # with 5 runs per direction the same figures give a full verdict
-    iso["n_runs_up"] = iso["n_runs_down"] = 5
+    results["figures"]["per_run"] = [{"run": r, "direction": d} for r in range(1, 6) for d in "+-"]
     assert verdicts(results, {"accuracy_um": a_half + U})[0].verdict == "PASS"
     fail = verdicts(results, {"accuracy_um": (a_half - U / 2) / 2})[0]
     assert fail.verdict == "FAIL" and fail.color == "#c00000"

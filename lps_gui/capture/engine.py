@@ -37,6 +37,7 @@ from lps_gui.errors import HardwareError, InputError
 from lps_gui.hardware.stage import EventSource, Stage
 from lps_gui.io.atomic import check_writable
 from lps_gui.io.session import IMAGES_DIR, CaptureRecord, Session
+from lps_gui.io.session_lock import SessionLock
 
 TruthSource = Callable[[], dict[str, Any]]
 
@@ -79,6 +80,18 @@ def check_plan_in_travel(plan: Plan, stage: Stage) -> None:
         )
 
 
+POSITION_TOLERANCE_MM = 0.01  # GRBL reports its step count: any real miss is a lost move, not noise
+
+
+def check_reached(target_mm: float, reported_mm: float, tolerance_mm: float = POSITION_TOLERANCE_MM) -> None:
+    """HardwareError when the stage reports a position off the target by more than ``tolerance_mm``."""
+    if not abs(reported_mm - target_mm) <= tolerance_mm:  # also catches NaN
+        raise HardwareError(
+            f"stage: reports {reported_mm:.4f} mm after the move to {target_mm:.4f} mm ({1e3 * (reported_mm - target_mm):+.1f} um, "
+            f"tolerance {1e3 * tolerance_mm:.0f} um); check for a limit, a stall or lost steps, then resume"
+        )
+
+
 def bytes_per_frame(camera: Camera) -> int:
     """Upper bound of one stored frame: the raw size (PNG only shrinks it); 8 MB when unknown."""
     props = camera.properties()
@@ -102,6 +115,9 @@ class CaptureEngine:
         a JSON-able dict; appended to truth.jsonl and folded into
         session.json's ``truth`` when the capture completes.
     move_timeout_s : minimum time a move may take before it is an error.
+    position_tolerance_mm : the stage's reported position after a move must
+        be this close to the target, or the capture pauses with an error
+        (a stage that stopped short must not be listed as the target).
 
     :meth:`pause`, :meth:`resume`, :meth:`abort` and :meth:`progress` are
     safe to call from any thread while :meth:`run` blocks in another.
@@ -117,6 +133,7 @@ class CaptureEngine:
         *,
         truth_source: TruthSource | None = None,
         move_timeout_s: float = 60.0,
+        position_tolerance_mm: float = POSITION_TOLERANCE_MM,
     ) -> None:
         self.stage = stage
         self.camera = camera
@@ -125,6 +142,7 @@ class CaptureEngine:
         self.encode = encode if encode.startswith(".") else "." + encode
         self.truth_source = truth_source
         self.move_timeout_s = float(move_timeout_s)
+        self.position_tolerance_mm = float(position_tolerance_mm)
         self._plan = session.plan()
         self._total = self._plan.n_frames()
         self._lock = threading.Lock()
@@ -208,7 +226,9 @@ class CaptureEngine:
             self._last_move = None
         t0 = self.clock.now()
         captured = 0
+        lock = SessionLock(self.session.folder)
         try:
+            lock.__enter__()  # one writer per session: a second capture or resume is told who holds it
             remaining = self.session.remaining_stops()
             self._set(done=self._total - len(remaining))
             if remaining:
@@ -249,6 +269,7 @@ class CaptureEngine:
                 finalize_truth(self.session)
             self._finish(ev.DONE, f"capture complete: {self._total} frames")
         finally:
+            lock.__exit__(None, None, None)
             with self._lock:
                 self._active = False
         return CaptureSummary(
@@ -282,6 +303,7 @@ class CaptureEngine:
         self._move(stop.target_mm, feed)
         self.clock.sleep(plan.settle_s)
         self._reported_mm = float(self.stage.position_mm())
+        check_reached(stop.target_mm, self._reported_mm, self.position_tolerance_mm)
         self._last_move = (stop.run, stop.direction, stop.target_mm, stop.index - stop.frame)
 
     def _move(self, target_mm: float, feed_mm_min: float) -> None:

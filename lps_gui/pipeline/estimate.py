@@ -9,6 +9,7 @@ written, so a failure leaves the session as it was.
 from __future__ import annotations
 
 import time
+from contextlib import nullcontext
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -29,6 +30,8 @@ from lps_gui.io.corners_vnl import read_corners_vnl
 from lps_gui.io.intrinsics_file import intrinsics_to_dict, read_intrinsics
 from lps_gui.io.results_file import FORMAT, write_results
 from lps_gui.io.session import SESSION_FILE, Session
+from lps_gui.io.session_lock import SessionLock
+from lps_gui.pipeline.session_checks import check_corners_current, check_view_geometry
 from lps_gui.pipeline.truth import session_truth
 
 HYBRID_KEYS = {"grid_window_mm": "window_mm", "grid_resolution_mm": "resolution_mm", "grid_points": "grid_points",
@@ -56,6 +59,7 @@ def observations_from_session(session: Session, intrinsics: CameraIntrinsics | N
     if not records:
         raise InputError(f"{session.captures_path}: no captures listed; capture or simulate a session first")
     table = read_corners_vnl(session.corners_path, board.n_corners)
+    check_corners_current(session, table, records)
     rows = table.index()
     missing = [r.file for r in records if r.file not in rows]
     if missing:
@@ -63,6 +67,7 @@ def observations_from_session(session: Session, intrinsics: CameraIntrinsics | N
             f"{session.corners_path}: {len(missing)} captured image(s) have no corners (first: {missing[0]}); run `lps detect {session.folder}`"
         )
     corners = table.corners_px[[rows[r.file] for r in records]]
+    check_view_geometry(corners, [r.file for r in records], session.corners_path)
     return Observations(
         board=board,
         intrinsics=intr,
@@ -99,7 +104,8 @@ def estimate_session(
     results["timings_s"]["pipeline_total"] = time.perf_counter() - t0
     if cancel is not None:
         cancel.check("estimation")
-    write_results(Path(out_dir) if out_dir else session.folder, results)
+    with SessionLock(session.folder) if not out_dir else nullcontext():
+        write_results(Path(out_dir) if out_dir else session.folder, results)
     return results
 
 

@@ -201,7 +201,15 @@ def _thumbnail(path: Path) -> Any:
     from PySide6.QtCore import Qt
     from PySide6.QtGui import QImage
 
-    if not path.is_file():
+    from lps_gui.core.image_header import check_image_header
+
+    if not path.is_file() or path.is_symlink():
+        return None
+    try:
+        with open(path, "rb") as f:
+            check_image_header(f.read(1 << 16), str(path))
+    except (OSError, InputError) as exc:
+        log.info("report: no thumbnail of %s: %s", path, exc)
         return None
     image = QImage(str(path))
     if image.isNull():

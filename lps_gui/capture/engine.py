@@ -80,6 +80,7 @@ def check_plan_in_travel(plan: Plan, stage: Stage) -> None:
         )
 
 
+LOSSLESS = (".png", ".tif", ".tiff", ".bmp", ".pgm", ".ppm")
 POSITION_TOLERANCE_MM = 0.01  # GRBL reports its step count: any real miss is a lost move, not noise
 
 
@@ -140,6 +141,9 @@ class CaptureEngine:
         self.session = session
         self.clock: Clock = clock or getattr(stage, "clock", None) or RealClock()
         self.encode = encode if encode.startswith(".") else "." + encode
+        if self.encode.lower() not in LOSSLESS:
+            raise InputError(f"--encode {encode}: not a lossless format; use one of {', '.join(LOSSLESS)} "
+                             "(lossy compression moves corners)")
         self.truth_source = truth_source
         self.move_timeout_s = float(move_timeout_s)
         self.position_tolerance_mm = float(position_tolerance_mm)

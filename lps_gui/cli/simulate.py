@@ -61,6 +61,10 @@ def build_spec(args: argparse.Namespace):
     if args.rig and args.seed:
         overrides["seed"] = args.seed
     if args.noise_px is not None:
+        if not args.noise_px >= 0:
+            from lps_gui.errors import InputError
+
+            raise InputError(f"--noise-px {args.noise_px}: give a noise sigma of 0 px or more")
         overrides["noise_px"] = args.noise_px
     return replace(spec, **overrides)
 

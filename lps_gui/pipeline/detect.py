@@ -73,8 +73,11 @@ def load_grey(path: str, sha256: str | None = None, image_size: tuple[int, int] 
         if sha256 is not None and hashlib.sha256(data).hexdigest() != sha256:
             return None, "image changed since capture (sha256 differs from captures.jsonl)"
         image = decode_image(data, path)
-    except InputError as exc:
-        return None, str(exc)
+    except InputError as exc:  # the caller names the view: drop the path the message starts with
+        reason = str(exc)
+        for prefix in (str(Path(session or "") / path), path):
+            reason = reason.removeprefix(prefix + ": ")
+        return None, reason
     if image is None:
         return None, "image unreadable or truncated"
     if image_size is not None and (image.shape[1], image.shape[0]) != tuple(image_size):

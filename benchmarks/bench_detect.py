@@ -29,8 +29,9 @@ from lps_gui.core.camera_model import project_board
 from lps_gui.core.plan import Plan
 from lps_gui.core.simulate import paper_rig_spec, true_views
 from lps_gui.io.session import SESSION_FILE, Session
-from lps_gui.pipeline.detect import detect_session, process_context
-from lps_gui.pipeline.simulate_images import simulate_image_session
+from lps_gui.camera.processes import process_context
+from lps_gui.pipeline.detect import detect_session
+from lps_gui.sim.images import simulate_image_session
 
 
 def _decode(paths: list[str]) -> int:

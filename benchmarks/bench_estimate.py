@@ -17,6 +17,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from lps_gui.allocator import tune_allocator
 from lps_gui.core.estimate import EstimateOptions, estimate
 from lps_gui.core.simulate import observations_of, paper_rig_spec, simulate_views
 from lps_gui.core.stage_errors import StageErrorModel
@@ -48,6 +49,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--skip-calibrate", action="store_true", help="skip cv2.calibrateCamera (slow)")
     args = ap.parse_args()
+    tune_allocator()
 
     spec, views, obs = paper_case(400)
     K, N = obs.K, obs.N

@@ -10,6 +10,9 @@ os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 
 
 def pytest_configure(config):
+    from lps_gui.allocator import tune_allocator
+
+    tune_allocator()  # what the entry points do (lps, lps-gui): the estimator's temporaries stay in the heap
     try:
         from PySide6.QtWidgets import QApplication
     except ImportError:  # a Qt-less environment still runs the non-GUI tests

@@ -11,7 +11,10 @@ import pytest
 PACKAGE = Path(__file__).resolve().parent.parent / "lps_gui"
 QT_MODULES = ("PySide6", "pyqtgraph", "shiboken6")
 QT_ALLOWED = ("gui", "report")
-LAYER = {"core": 0, "io": 1, "hardware": 1, "camera": 1, "capture": 2, "pipeline": 2, "report": 2, "gui": 3, "cli": 3}
+LAYER = {"core": 0, "io": 1, "hardware": 1, "camera": 1, "capture": 2, "sim": 2, "pipeline": 2, "report": 2, "gui": 3, "cli": 3}
+# sideways imports allowed within layer 2: the simulated rig drives the capture engine; pipeline runs
+# capture, simulation and report (the demo); the report draws truth through the one truth reduction
+SIBLINGS = {("pipeline", "capture"), ("pipeline", "report"), ("pipeline", "sim"), ("sim", "capture"), ("report", "sim")}
 
 
 def imports_of(path: Path) -> list[str]:
@@ -44,7 +47,7 @@ def test_imports_respect_layers(layer, path):
             if target in LAYER:
                 assert not (LAYER[target] > LAYER[layer]), f"{path}: {layer} imports the upper layer {target} ({name})"
                 if LAYER[target] == LAYER[layer] and target != layer:
-                    assert (layer, target) in {("pipeline", "capture"), ("pipeline", "report")}, (
+                    assert (layer, target) in SIBLINGS, (
                         f"{path}: {layer} imports the sibling layer {target}"
                     )
 
@@ -64,3 +67,29 @@ def test_everything_but_gui_imports_without_qt():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=PACKAGE.parent)
     assert out.returncode == 0 and "ok" in out.stdout, out.stderr
+
+
+STRING_IMPORTS = ("import_module", "__import__", "find_spec", "import_string")
+
+
+@pytest.mark.parametrize("layer,path", list(modules()), ids=lambda v: str(v) if isinstance(v, str) else None)
+def test_no_string_imports(layer, path):
+    """Every import is an import statement, so the rules above see it (a string import would hide a layer breach)."""
+    tree = ast.parse(path.read_text(), str(path))
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Call):
+            f = node.func
+            name = f.attr if isinstance(f, ast.Attribute) else f.id if isinstance(f, ast.Name) else ""
+            assert name not in STRING_IMPORTS, f"{path}:{node.lineno}: {name}() imports by string; use an import statement"
+
+
+def test_the_rules_catch_a_breach(tmp_path):
+    """The checks above can fail: a core module importing the sim layer, and a string import."""
+    bad = tmp_path / "bad.py"
+    bad.write_text("import importlib\nfrom lps_gui.sim.truth import reduce_truth\nimportlib.import_module('lps_gui.gui')\n")
+    with pytest.raises(AssertionError, match="upper layer sim"):
+        test_imports_respect_layers("core", bad)
+    with pytest.raises(AssertionError, match="imports by string"):
+        test_no_string_imports("core", bad)
+    with pytest.raises(AssertionError, match="upper layer sim"):
+        test_imports_respect_layers("hardware", bad)

@@ -98,7 +98,7 @@ def digest(folder: Path, skip: tuple[str, ...] = ()) -> dict[str, str]:
 
 def point_session(tmp: Path, name: str = "s") -> Path:
     from lps_gui.core.simulate import small_spec
-    from lps_gui.pipeline.simulate_points import simulate_point_session
+    from lps_gui.sim.points import simulate_point_session
 
     simulate_point_session(small_spec(seed=3, views=10, directions="+", runs=1), tmp / name)
     return tmp / name
@@ -497,45 +497,41 @@ def _(tmp: Path) -> Outcome:
 
 
 # ------------------------------------------------------------------ faults
-@case("fault", "report on a full disk", "exit 2, old report.pdf kept", fast=False)
-def _(tmp: Path) -> Outcome:
-    with Tmpfs(tmp / "disk", "1m") as fs:
+def full_disk(tmp: Path, size: str, keep: int, make: Callable[[Path], Path], command: Callable[[Path], tuple],
+              needle: str) -> Outcome:
+    """Make a session on a small tmpfs, fill the disk, run ``command(session)``: one error line, every file unchanged."""
+    with Tmpfs(tmp / "disk", size) as fs:
         if fs is None:
             return SKIP
-        s = point_session(fs.folder)
-        lps("estimate", s)
+        s = make(fs.folder)
+        before = digest(s)
+        fs.fill(keep=keep)
+        code, _, err = lps(*command(s))
+        out = clean_error(code, err, needle=needle)
+        return Outcome(out.ok and digest(s) == before, out.result)
+
+
+def estimated_session(folder: Path, with_report: bool = False) -> Path:
+    s = point_session(folder)
+    lps("estimate", s)
+    if with_report:
         (s / "report.pdf").write_bytes(b"%PDF-1.4 old\n%%EOF\n")
-        fs.fill()
-        code, _, err = lps("report", s)
-        out = clean_error(code, err, needle="report.pdf")
-        return Outcome(out.ok and (s / "report.pdf").read_bytes() == b"%PDF-1.4 old\n%%EOF\n", out.result)
+    return s
+
+
+@case("fault", "report on a full disk", "exit 2, old report.pdf kept", fast=False)
+def _(tmp: Path) -> Outcome:
+    return full_disk(tmp, "1m", 8192, lambda f: estimated_session(f, True), lambda s: ("report", s), "report.pdf")
 
 
 @case("fault", "estimate on a full disk", "exit 2, old results set kept")
 def _(tmp: Path) -> Outcome:
-    with Tmpfs(tmp / "disk", "2m") as fs:
-        if fs is None:
-            return SKIP
-        s = point_session(fs.folder)
-        lps("estimate", s)
-        before = digest(s)
-        fs.fill(keep=4096)
-        code, _, err = lps("estimate", s, "--method", "pnp")
-        out = clean_error(code, err, needle="space")
-        return Outcome(out.ok and digest(s) == before, out.result)
+    return full_disk(tmp, "2m", 4096, estimated_session, lambda s: ("estimate", s, "--method", "pnp"), "space")
 
 
 @case("fault", "detect on a full disk", "exit 2, captures kept")
 def _(tmp: Path) -> Outcome:
-    with Tmpfs(tmp / "disk", "4m") as fs:
-        if fs is None:
-            return SKIP
-        s = imaged_session(fs.folder)
-        before = digest(s)
-        fs.fill(keep=2048)
-        code, _, err = lps("detect", s, "--workers", "1")
-        out = clean_error(code, err, needle="space")
-        return Outcome(out.ok and digest(s) == before, out.result)
+    return full_disk(tmp, "4m", 2048, imaged_session, lambda s: ("detect", s, "--workers", "1"), "space")
 
 
 @case("fault", "simulate on a full disk", "exit 2, one line", fast=False)

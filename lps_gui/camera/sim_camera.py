@@ -80,7 +80,7 @@ class SimulatedCamera(Camera):
         self._frame_no += 1
         meta = {
             "frame": self._frame_no,
-            "true_axis_mm": float(np.asarray(pose.axis_mm).ravel()[0]),
+            "true_axis_mm": float(np.asarray(getattr(pose, "axis_mm", getattr(pose, "plane_mm", np.nan))).ravel()[0]),
         }
         return Frame(image=image, time=self.clock.now(), meta=meta)
 

@@ -22,16 +22,17 @@ from __future__ import annotations
 
 import threading
 import time
-from typing import Any, Callable
+from typing import Any, Callable, Protocol
 
 import numpy as np
 
 from lps_gui.camera.base import Camera
 from lps_gui.capture import events as ev
 from lps_gui.capture.events import CaptureEvent, CaptureListener, CaptureProgress, CaptureSummary
-from lps_gui.capture.truth import append_truth, finalize_truth, prune_truth
 from lps_gui.core.clock import Clock, RealClock
+from lps_gui.capture.planar_moves import check_planar_plan_in_travel, format_target, go_to_planar
 from lps_gui.core.plan import Plan, PlannedStop
+from lps_gui.core.planar_plan import PlanarPlan, PlanarStop
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import HardwareError, InputError
 from lps_gui.hardware.stage import EventSource, Stage
@@ -39,7 +40,12 @@ from lps_gui.io.atomic import check_writable
 from lps_gui.io.session import IMAGES_DIR, CaptureRecord, Session
 from lps_gui.io.session_lock import SessionLock
 
-TruthSource = Callable[[], dict[str, Any]]
+class TruthRecorder(Protocol):
+    """What a simulated rig records beside the frames (``lps_gui.sim.truth.TruthRecorder``)."""
+
+    def prune(self, session: Session) -> None: ...  # before a (re)start: keep the truth of listed frames only
+    def record(self, session: Session, index: int) -> None: ...  # durably, before the frame's capture line
+    def finalize(self, session: Session) -> None: ...  # the plan is complete
 
 
 class _Stop(Exception):
@@ -112,13 +118,16 @@ class CaptureEngine:
     session : the session folder; its plan says what to capture.
     clock : settle time and ETA; the stage's clock when it has one, else real time.
     encode : image file extension, lossless (".png" default).
-    truth_source : for a simulated rig, returns the true pose at the grab as
-        a JSON-able dict; appended to truth.jsonl and folded into
-        session.json's ``truth`` when the capture completes.
+    truth_recorder : for a simulated rig, records the true pose at each grab
+        (see :mod:`lps_gui.sim.truth`); the engine only says when.
     move_timeout_s : minimum time a move may take before it is an error.
+    command_of : ``(nominal_mm, direction) -> commanded_mm``, a compensation
+        table's inverse (``CompensationTable.command_mm``): the stage is sent
+        there so the true position lands on the nominal; captures.jsonl then
+        records ``commanded_mm``. None: command the targets as planned.
     position_tolerance_mm : the stage's reported position after a move must
-        be this close to the target, or the capture pauses with an error
-        (a stage that stopped short must not be listed as the target).
+        be this close to the position commanded, or the capture pauses with an
+        error (a stage that stopped short must not be listed as the target).
 
     :meth:`pause`, :meth:`resume`, :meth:`abort` and :meth:`progress` are
     safe to call from any thread while :meth:`run` blocks in another.
@@ -132,8 +141,9 @@ class CaptureEngine:
         clock: Clock | None = None,
         encode: str = ".png",
         *,
-        truth_source: TruthSource | None = None,
+        truth_recorder: TruthRecorder | None = None,
         move_timeout_s: float = 60.0,
+        command_of: Callable[[float, int], float] | None = None,
         position_tolerance_mm: float = POSITION_TOLERANCE_MM,
     ) -> None:
         self.stage = stage
@@ -144,8 +154,10 @@ class CaptureEngine:
         if self.encode.lower() not in LOSSLESS:
             raise InputError(f"--encode {encode}: not a lossless format; use one of {', '.join(LOSSLESS)} "
                              "(lossy compression moves corners)")
-        self.truth_source = truth_source
+        self.truth_recorder = truth_recorder
         self.move_timeout_s = float(move_timeout_s)
+        self.command_of = command_of
+        self._commanded_mm: float | None = None
         self.position_tolerance_mm = float(position_tolerance_mm)
         self._plan = session.plan()
         self._total = self._plan.n_frames()
@@ -161,7 +173,9 @@ class CaptureEngine:
         self._eta_s: float | None = None
         self._events = EventSource()
         self._last_move: tuple[int, str, float, int] | None = None  # (run, direction, target, stop's first index)
-        self._reported_mm: float | None = None
+        self._reported_mm: float | tuple[float, float] | None = None
+        self._axis_sides: list[int | None] = [None, None]  # planar: side of each axis' last approach
+        self._arrivals: dict[int, tuple[int, int]] | None = None  # planar: see PlanarPlan.arrival_indices
         self._active = False
 
     # ------------------------------------------------------------------ control (any thread)
@@ -228,6 +242,7 @@ class CaptureEngine:
             self._active = True
             self._state, self._error, self._abort_req, self._pause_req = ev.RUNNING, None, False, False
             self._last_move = None
+            self._axis_sides = [None, None]
         t0 = self.clock.now()
         captured = 0
         lock = SessionLock(self.session.folder)
@@ -239,9 +254,12 @@ class CaptureEngine:
                 if not self.camera.is_open:  # first: its frame size bounds the disk space needed
                     self.camera.open()
                 check_writable(self.session.folder / IMAGES_DIR, len(remaining) * bytes_per_frame(self.camera))
-                check_plan_in_travel(self._plan, self.stage)
-            if self.truth_source is not None:
-                prune_truth(self.session)
+                if isinstance(self._plan, PlanarPlan):
+                    check_planar_plan_in_travel(self._plan, self.stage)
+                else:
+                    check_plan_in_travel(self._plan, self.stage)
+            if self.truth_recorder is not None:
+                self.truth_recorder.prune(self.session)
             self._emit(CaptureEvent("started", f"{len(remaining)} of {self._total} frames to capture"))
             progress(self._total - len(remaining), self._total, "starting")
             for stop in remaining:
@@ -252,7 +270,7 @@ class CaptureEngine:
                 self._take(stop)
                 captured += 1
                 eta = (self.clock.now() - t0) / captured * (self._total - self._done - 1)
-                self._set(done=self._done + 1, eta=eta, message=f"frame {stop.index} at {stop.target_mm:g} mm")
+                self._set(done=self._done + 1, eta=eta, message=f"frame {stop.index} at {format_target(stop.target_mm)}")
                 progress(self._done, self._total, self._message)
         except _Stop as exc:
             self._finish(ev.ABORTED, str(exc))
@@ -269,8 +287,8 @@ class CaptureEngine:
                 self._state = ev.PAUSED
             raise
         else:
-            if self.truth_source is not None:
-                finalize_truth(self.session)
+            if self.truth_recorder is not None:
+                self.truth_recorder.finalize(self.session)
             self._finish(ev.DONE, f"capture complete: {self._total} frames")
         finally:
             lock.__exit__(None, None, None)
@@ -287,8 +305,24 @@ class CaptureEngine:
         )
 
     # ------------------------------------------------------------------ steps
-    def _go_to(self, stop: PlannedStop) -> None:
+    def _go_to(self, stop: PlannedStop | PlanarStop) -> None:
         """Move onto ``stop``'s target from its own direction, wait, settle, read the position."""
+        if isinstance(stop, PlanarStop):
+            self._last_move = None
+            _hook(self.stage, stop.index - stop.frame)
+            seed_axes = getattr(self.stage, "seed_axes", None)
+            if seed_axes is not None:  # the deterministic simulation's per-axis draws
+                if self._arrivals is None:
+                    self._arrivals = self._plan.arrival_indices()
+                seed_axes(*self._arrivals[stop.index])
+            self._emit(CaptureEvent("move", f"move to {format_target(stop.target_mm)}", stop.index))
+            self._reported_mm = go_to_planar(self.stage, stop, self._plan, self._axis_sides, self._move)
+            self.clock.sleep(self._plan.settle_s)
+            self._reported_mm = (float(self.stage.position_mm("X")), float(self.stage.position_mm("Y")))
+            for want, got in zip(stop.target_mm, self._reported_mm):
+                check_reached(float(want), got, self.position_tolerance_mm)
+            self._last_move = (stop.run, stop.direction, stop.target_mm, stop.index - stop.frame)
+            return
         plan, feed = self._plan, self._plan.feed_mm_min
         sign = 1.0 if stop.direction == "+" else -1.0
         last = self._last_move
@@ -304,15 +338,17 @@ class CaptureEngine:
             self._move(start, feed)
         _hook(self.stage, stop.index - stop.frame)
         self._emit(CaptureEvent("move", f"move to {stop.target_mm:g} mm", stop.index))
-        self._move(stop.target_mm, feed)
+        self._commanded_mm = None if self.command_of is None else float(self.command_of(stop.target_mm, int(sign)))
+        self._move(stop.target_mm if self._commanded_mm is None else self._commanded_mm, feed)
         self.clock.sleep(plan.settle_s)
         self._reported_mm = float(self.stage.position_mm())
-        check_reached(stop.target_mm, self._reported_mm, self.position_tolerance_mm)
+        commanded = stop.target_mm if self._commanded_mm is None else self._commanded_mm
+        check_reached(commanded, self._reported_mm, self.position_tolerance_mm)
         self._last_move = (stop.run, stop.direction, stop.target_mm, stop.index - stop.frame)
 
-    def _move(self, target_mm: float, feed_mm_min: float) -> None:
-        here = self.stage.position_mm()
-        self.stage.move_to(target_mm, feed_mm_min)
+    def _move(self, target_mm: float, feed_mm_min: float, axis: str | None = None) -> None:
+        here = self.stage.position_mm(axis)
+        self.stage.move_to(target_mm, feed_mm_min, axis)
         at_feed_s = abs(target_mm - here) / max(feed_mm_min / 60.0, 1e-9)
         self.stage.wait_idle(timeout_s=max(self.move_timeout_s, 3.0 * at_feed_s + 10.0))
 
@@ -322,8 +358,8 @@ class CaptureEngine:
         frame = self.camera.grab()
         data = encode_image(frame.image, self.encode)
         rel, sha = self.session.write_image(image_name(stop.index, self.encode), data)
-        if self.truth_source is not None:
-            append_truth(self.session, stop.index, self.truth_source())
+        if self.truth_recorder is not None:
+            self.truth_recorder.record(self.session, stop.index)
         record = CaptureRecord(
             index=stop.index,
             run=stop.run,
@@ -334,6 +370,7 @@ class CaptureEngine:
             sha256=sha,
             time=time.time(),
             frame=stop.frame,
+            commanded_mm=self._commanded_mm,
         )
         self.session.append(record)
         self._emit(CaptureEvent("frame", rel, stop.index, record.__dict__.copy()))
@@ -350,6 +387,7 @@ class CaptureEngine:
                 if not paused:
                     paused, self._state, self._message = True, ev.PAUSED, "paused"
                     self._last_move = None  # the operator may jog: re-approach afterwards
+                    self._axis_sides = [None, None]
                     self._lock.release()
                     try:
                         self._emit(CaptureEvent("paused", "capture paused"))

@@ -1,26 +1,32 @@
 """The ``lps`` command: one sub-command per module in this package.
 
-Arguments are parsed before any heavy import so ``--help`` is instant. Each
-command module defines ``HELP`` (one line), ``add_arguments(parser)`` and
+Command modules import only argparse at module level (heavy imports live in
+their ``run``), so ``--help`` is instant. Each command module defines ``HELP`` (one line), ``add_arguments(parser)`` and
 ``run(args) -> int``. A user error prints one line and exits 2; a bug prints
 one line and leaves the traceback in the log file.
 """
 from __future__ import annotations
 
 import argparse
-import importlib
 import logging
 import sys
 
+from lps_gui.cli import (capture, compare, compensate, demo, detect, emulate_grbl, estimate, export, intrinsics, plan_rig,
+                     report, simulate)
+
 COMMANDS = {
-    "demo": "lps_gui.cli.demo",
-    "simulate": "lps_gui.cli.simulate",
-    "detect": "lps_gui.cli.detect",
-    "intrinsics": "lps_gui.cli.intrinsics",
-    "estimate": "lps_gui.cli.estimate",
-    "report": "lps_gui.cli.report",
-    "capture": "lps_gui.cli.capture",
-    "emulate-grbl": "lps_gui.cli.emulate_grbl",
+    "demo": demo,
+    "simulate": simulate,
+    "detect": detect,
+    "intrinsics": intrinsics,
+    "estimate": estimate,
+    "report": report,
+    "capture": capture,
+    "emulate-grbl": emulate_grbl,
+    "plan-rig": plan_rig,
+    "compensate": compensate,
+    "export": export,
+    "compare": compare,
 }
 
 
@@ -34,13 +40,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"lps-calib {__version__}")
     parser.add_argument("-v", "--verbose", action="store_true", help="log debug messages to stderr")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name, module_name in COMMANDS.items():
-        try:
-            module = importlib.import_module(module_name)
-        except ModuleNotFoundError as exc:
-            if exc.name != module_name:
-                raise
-            continue
+    for name, module in COMMANDS.items():
         p = sub.add_parser(name, help=module.HELP, description=module.HELP)
         module.add_arguments(p)
         p.set_defaults(_module=module)
@@ -50,8 +50,11 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     from lps_gui.errors import LpsError
 
+    from lps_gui.allocator import tune_allocator
+
     parser = build_parser()
     args = parser.parse_args(argv)
+    tune_allocator()
     if not getattr(args, "command", None):
         parser.print_help()
         return 2

@@ -59,6 +59,10 @@ def run(args: argparse.Namespace) -> int:
         if lock is not None:
             lock.__exit__(None, None, None)
     print(format_summary(results))
+    from lps_gui.io.results_history import stale_report_message
+
+    if (stale := stale_report_message(args.session)) and not args.out:
+        print(stale, file=sys.stderr)
     doubts = result_doubts(results)
     for doubt in doubts:
         print(f"lps estimate: warning: {doubt}", file=sys.stderr)
@@ -70,8 +74,41 @@ def _g(value: object, spec: str) -> str:
     return format(value, spec) if isinstance(value, (int, float)) else "n/a"
 
 
+def format_planar_summary(results: dict) -> str:
+    """The first lines of a planar session: squareness, per-axis scale, straightness, truth."""
+    p, pl = results["parameters"], results["figures"]["planar"]
+    lines = [
+        f"method {results['method']} (planar X,Y): {p['n_used']}/{p['n_views']} views used, {p['n_outliers']} outlier(s), "
+        f"corner noise {p['sigma_px']:.3f} px, {results['timings_s'].get('total', 0.0):.2f} s",
+        f"squareness {pl['squareness_urad']:+.1f} +- {pl['squareness_sigma_urad']:.1f} urad "
+        f"({pl['squareness_um_per_m']:+.1f} um/m), scale X {pl['scale_x_ppm']:+.1f} +- {pl['scale_x_sigma_ppm']:.1f} ppm, "
+        f"Y {pl['scale_y_ppm']:+.1f} +- {pl['scale_y_sigma_ppm']:.1f} ppm (1 sigma)",
+    ]
+    sig = [(r["sigma_x_um"], r["sigma_y_um"]) for r in results["positions"] if r["used"] and r["sigma_x_um"]]
+    if sig:
+        sx, sy = sorted(s[0] for s in sig), sorted(s[1] for s in sig)
+        lines.append(f"position sigma median x {sx[len(sx) // 2]:.2f} um, y {sy[len(sy) // 2]:.2f} um (1 sigma, noise only)")
+    for axis, other in (("X", "Y"), ("Y", "X")):
+        a = pl["per_axis"].get(axis)
+        if a:
+            iso = (a.get("iso230_2") or {}).get("iso230_2") or {}
+            extra = "".join(f", {k[:-3]} {iso[k]:.2f} um" for k in ("A_um", "R_um", "E_um") if iso.get(k) is not None)
+            lines.append(f"{axis}: {a['lines']} line(s), straightness along {other} up to {a['straightness_um_max']:.2f} um{extra}")
+    for f in results["flags"]:
+        lines.append(f"outlier view {f['index']}: {f['message']}")
+    tc = results.get("truth_comparison") or {}
+    if tc.get("per_coordinate_rms_error_um"):
+        ex, ey = tc["per_coordinate_rms_error_um"]
+        lines.append(f"against truth ({tc['reference']}): RMS error x {ex:.2f} um, y {ey:.2f} um, mean reported sigma "
+                     f"{tc['mean_sigma_um']:.2f} um; squareness error {tc['squareness_error_urad']:+.1f} urad "
+                     f"({tc['squareness_z']:+.1f} sigma)")
+    return "\n".join(lines)
+
+
 def format_summary(results: dict) -> str:
     """A few lines a person reads first: what was measured and how well."""
+    if len(results.get("axes") or ["X"]) == 2:
+        return format_planar_summary(results)
     p, fig = results["parameters"], results["figures"]
     single = fig.get("single_run") or {}
     lines = [

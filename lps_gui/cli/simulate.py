@@ -18,7 +18,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     mode = p.add_mutually_exclusive_group()
     mode.add_argument("--points", action="store_true", help="corners only (corners.vnl), no images: fast")
     mode.add_argument("--intrinsics-set", action="store_true", help="varied-pose views for intrinsics calibration")
-    p.add_argument("--preset", default="small", help="paper-rig | paper-synthetic | small (default small)")
+    p.add_argument("--preset", default=None,
+                   help="paper-rig | paper-synthetic | small (default small); with --planar: paper-planar | small-planar")
+    p.add_argument("--planar", action="store_true",
+                   help="an XY gantry (SPEC 10): a grid over both axes; with --points (default preset paper-planar)")
+    p.add_argument("--grid", help="planar grid X0,Y0:X1,Y1:DX,DY in mm (default the preset's 15 x 9 at 10 mm)")
+    p.add_argument("--squareness-urad", type=float, help="planar: the gantry's squareness error (default 150)")
     p.add_argument("--rig", help="rig description JSON (board, intrinsics, camera pose, stage errors, plan, noise, outliers)")
     p.add_argument("--write-rig", action="store_true", help="write the preset's rig description to OUT (a .json file) and stop")
     p.add_argument("--seed", type=int, default=0)
@@ -43,7 +48,7 @@ def build_spec(args: argparse.Namespace):
 
         spec = spec_from_dict(read_json(args.rig, "rig description"), args.rig)
     else:
-        spec = preset(args.preset, seed=args.seed)
+        spec = preset(args.preset or "small", seed=args.seed)
     plan = spec.plan
     if args.directions:
         plan = replace(plan, directions=args.directions)
@@ -75,6 +80,8 @@ def run(args: argparse.Namespace) -> int:
     from lps_gui.cli.progress_bar import ProgressBar
 
     out = Path(args.out)
+    if args.planar:
+        return _run_planar(args, out)
     spec = build_spec(args)
     if args.write_rig:
         from lps_gui.core.simulate import spec_to_dict
@@ -84,20 +91,70 @@ def run(args: argparse.Namespace) -> int:
         print(f"wrote the rig description of preset {spec.name} to {out}; edit it and pass --rig {out}")
         return 0
     if args.intrinsics_set:
-        from lps_gui.pipeline.simulate_images import simulate_intrinsics_set
+        from lps_gui.sim.images import simulate_intrinsics_set
 
         paths = simulate_intrinsics_set(out, spec.rig.board, spec.rig.intrinsics, n_views=args.views, seed=args.seed,
                                         progress=ProgressBar("render"))
         print(f"wrote {len(paths)} calibration views to {out}")
         return 0
     if args.points:
-        from lps_gui.pipeline.simulate_points import simulate_point_session
+        from lps_gui.sim.points import simulate_point_session
 
         session = simulate_point_session(spec, out)
         print(f"wrote point-level session ({spec.plan.n_frames()} views, preset {spec.name}) to {session.folder}")
         return 0
-    from lps_gui.pipeline.simulate_images import simulate_image_session
+    from lps_gui.sim.images import simulate_image_session
 
     session = simulate_image_session(spec, out, progress=ProgressBar("render"))
     print(f"wrote rendered session ({spec.plan.n_frames()} images, preset {spec.name}) to {session.folder}")
+    return 0
+
+
+def build_planar_spec(args: argparse.Namespace):
+    """The planar preset with the command line's overrides."""
+    from dataclasses import replace
+
+    from lps_gui.core.planar_plan import PlanarPlan
+    from lps_gui.core.planar_simulate import paper_planar_errors, planar_preset
+    from lps_gui.errors import InputError
+
+    spec = planar_preset(args.preset or "paper-planar", seed=args.seed)
+    plan = spec.plan
+    if args.grid:
+        try:
+            (x0, y0), (x1, y1), (dx, dy) = (tuple(float(v) for v in part.split(",")) for part in args.grid.split(":"))
+        except ValueError:
+            raise InputError(f"simulate: --grid {args.grid!r} is not X0,Y0:X1,Y1:DX,DY (mm)") from None
+        plan = PlanarPlan(start_mm=(x0, y0), stop_mm=(x1, y1), step_mm=(dx, dy))
+    if args.directions:
+        plan = replace(plan, directions=args.directions)
+    if args.runs:
+        plan = replace(plan, runs=args.runs)
+    overrides = {"plan": plan, "replaced_views": tuple(args.replaced), "bumped_views": tuple(args.bumped),
+                 "missing_fraction": args.missing_fraction}
+    if args.noise_px is not None:
+        overrides["noise_px"] = args.noise_px
+    if args.squareness_urad is not None:
+        overrides["rig"] = replace(spec.rig, errors=replace(spec.rig.errors, squareness_urad=args.squareness_urad))
+    elif spec.name == "paper-planar":
+        overrides["rig"] = replace(spec.rig, errors=paper_planar_errors())
+    if args.grid:  # re-centre the camera on the new grid
+        from lps_gui.core.planar_simulate import PLANAR_PRESETS
+
+        base = PLANAR_PRESETS[spec.name](seed=args.seed, plan=plan, errors=overrides.get("rig", spec.rig).errors)
+        overrides["rig"] = base.rig
+    return replace(spec, **overrides)
+
+
+def _run_planar(args: argparse.Namespace, out) -> int:
+    from lps_gui.errors import InputError
+
+    if not args.points:
+        raise InputError("simulate --planar: only --points sessions yet; rendered planar images come from "
+                         "`lps capture` on the simulated gantry")
+    spec = build_planar_spec(args)
+    from lps_gui.sim.planar_points import simulate_planar_point_session
+
+    session = simulate_planar_point_session(spec, out)
+    print(f"wrote planar point-level session ({spec.plan.n_frames()} views on X,Y, preset {spec.name}) to {session.folder}")
     return 0

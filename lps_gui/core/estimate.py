@@ -10,14 +10,16 @@ the solve, their own position still reported), and 6-DOF error motions.
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from lps_gui.core.allocator import tune_allocator
+from lps_gui.core.camera_model import INTRINSIC_NAMES
+from lps_gui.core.constant_orientation import board_plane_from_model
 from lps_gui.core.estimate_types import METHODS, EstimateOptions, LpsEstimate, step_pairs
 from lps_gui.core.hybrid import initial_line, solve_hybrid, view_costs
-from lps_gui.core.joint_lm import LmOptions, LpsState, linearize, solve_joint, solve_positions_only
+from lps_gui.core.joint_lm import N_POSE_PARAMS, LmOptions, LpsState, linearize, solve_joint, solve_positions_only
 from lps_gui.core.observations import Observations
 from lps_gui.core.outliers import position_outliers, reprojection_outliers
 from lps_gui.core.per_view import estimate_per_view
@@ -35,6 +37,33 @@ from lps_gui.errors import DegenerateGeometryError, InputError
 __all__ = ["METHODS", "EstimateOptions", "LpsEstimate", "estimate"]
 
 INIT_VIEWS = 24  # per-view PnP on this many spread views initializes the joint LM
+N_INTRINSICS = len(INTRINSIC_NAMES)  # 9, after the pose parameters when self-calibrating
+MIN_VIEWS_LEFT = 3  # fewer views than this after removing outliers do not determine a line
+PRIOR_JITTER = 1e-18  # keeps an intrinsics covariance with exact zeros invertible
+
+
+@dataclass
+class _Solution:
+    """Where the solve and the outlier rounds ended: what the uncertainty step starts from."""
+
+    state: LpsState
+    ref: int  # the gauge view (s = 0): first usable view not flagged
+    usable: np.ndarray  # (K,) board found
+    outlier: np.ndarray  # (K,) flagged
+    reasons: list[str]
+    flags: list[dict[str, Any]] = field(default_factory=list)
+    iterations: int = 0
+    converged: bool = False
+
+    @property
+    def used(self) -> np.ndarray:
+        return self.usable & ~self.outlier
+
+    def free(self) -> np.ndarray:
+        """Positions the solve moves: used views but the gauge view."""
+        free = self.used.copy()
+        free[self.ref] = False
+        return free
 
 
 def estimate(
@@ -44,7 +73,6 @@ def estimate(
     cancel: CancelToken | None = None,
 ) -> LpsEstimate:
     """Estimate the LPS model and every position from the observed corners."""
-    tune_allocator()
     opt = options or EstimateOptions()
     obs.validate()
     timings: dict[str, float] = {}
@@ -60,53 +88,23 @@ def estimate(
 
     state = _initial_state(obs, usable, ref, X, full_pnp=opt.method == "hybrid")
     timings["init"] = time.perf_counter() - t_start
-    outlier = np.zeros(obs.K, dtype=bool)
-    reasons = [""] * obs.K
-    flags: list[dict[str, Any]] = []
+    sol = _Solution(state, ref, usable, np.zeros(obs.K, dtype=bool), [""] * obs.K)
     for round_no in range(opt.max_outlier_rounds + 1):
         if cancel is not None:
             cancel.check("estimation")
-        used = usable & ~outlier
-        mask = mask_all & used[:, None]
         t0 = time.perf_counter()
-        state, lm_iterations, converged = _solve(state, obs, X, mask, used, ref, opt, progress, cancel)
+        sol.state, sol.iterations, sol.converged = _solve(sol.state, obs, X, mask_all & sol.used[:, None], sol.used, sol.ref,
+                                                          opt, progress, cancel)
         timings["solve"] = timings.get("solve", 0.0) + time.perf_counter() - t0
-        if not opt.detect_outliers:
+        if not opt.detect_outliers or not _outlier_round(sol, obs, X, mask_all, opt.outlier_k, round_no + 1):
             break
-        rms = _view_rms(state, X, obs.corners_px, mask_all)
-        eq, _ = linearize(state, X, obs.corners_px, mask)
-        sigma2 = noise_variance(eq.ssr, eq.n_obs, 8 + int(used.sum()) - 1)
-        inv = arrowhead_inverse(eq.A, eq.B, eq.D, used & (np.arange(obs.K) != ref))
-        sigma_um = 1e3 * np.sqrt(sigma2 * inv.var_s())
-        dev = 1e3 * (state.s - (obs.target_mm - obs.target_mm[ref]))
-        bumped = reprojection_outliers(rms, used, opt.outlier_k)
-        groups = obs.run * 2 + (obs.direction > 0)
-        moved, resid = position_outliers(dev, obs.target_mm, groups, used & ~bumped, sigma_um, opt.outlier_k)
-        new = (bumped | moved) & ~outlier
-        if not new.any():
-            break
-        for i in np.flatnonzero(new):
-            if bumped[i]:
-                reasons[i] = f"reprojection RMS {rms[i]:.3f} px against a median of {np.median(rms[used]):.3f} px (camera bumped?)"
-                kind = "reprojection"
-            else:
-                reasons[i] = f"position {resid[i]:+.1f} um off the local trend of its run (image replaced?)"
-                kind = "position"
-            flags.append({"index": int(obs.index[i]), "kind": kind, "message": reasons[i], "round": round_no + 1})
-        outlier |= new
-        if ref in np.flatnonzero(outlier):
-            ref = int(np.flatnonzero(usable & ~outlier)[0])
-        if (usable & ~outlier).sum() < 3:
-            raise DegenerateGeometryError(f"{obs.source}: fewer than 3 views are left after removing outliers; check the capture")
 
-    used = usable & ~outlier
-    mask = mask_all & used[:, None]
-    others = usable & ~used
+    others = usable & ~sol.used
     if others.any():
-        state.s[others] = _positions_alone(state, X, obs.corners_px, mask_all, others)
-    state = _regauge(state, ref)
+        sol.state.s[others] = _positions_alone(sol.state, X, obs.corners_px, mask_all, others)
+    sol.state = _regauge(sol.state, sol.ref)
     progress(3, 4, "uncertainty")
-    est = _finish(obs, opt, state, ref, usable, used, outlier, reasons, flags, X, mask, mask_all, lm_iterations, converged, timings)
+    est = _finish(obs, opt, sol, X, mask_all, timings)
     timings["total"] = time.perf_counter() - t_start
     progress(4, 4, "done")
     return est
@@ -158,7 +156,7 @@ def _solve(
     if opt.self_calibrate:
         if obs.intrinsics.covariance is None:
             raise InputError("self-calibration needs the intrinsics' std or covariance in intrinsics.json")
-        prior = (obs.intrinsics.vector(), obs.intrinsics.covariance + 1e-18 * np.eye(9))
+        prior = (obs.intrinsics.vector(), obs.intrinsics.covariance + PRIOR_JITTER * np.eye(N_INTRINSICS))
     lm = solve_joint(
         state,
         X,
@@ -196,49 +194,85 @@ def _view_rms(state: LpsState, X: np.ndarray, corners: np.ndarray, mask: np.ndar
     return np.where(n > 0, np.sqrt(cost / np.maximum(2 * n, 1)), np.nan)
 
 
-def _finish(
-    obs: Observations,
-    opt: EstimateOptions,
-    state: LpsState,
-    ref: int,
-    usable: np.ndarray,
-    used: np.ndarray,
-    outlier: np.ndarray,
-    reasons: list[str],
-    flags: list[dict[str, Any]],
-    X: np.ndarray,
-    mask: np.ndarray,
-    mask_all: np.ndarray,
-    iterations: int,
-    converged: bool,
-    timings: dict[str, float],
-) -> LpsEstimate:
-    t0 = time.perf_counter()
-    free = used.copy()
-    free[ref] = False
+def _outlier_round(sol: _Solution, obs: Observations, X: np.ndarray, mask_all: np.ndarray, k: float, round_no: int) -> bool:
+    """Judge the used views once (SPEC 4): flag bumped cameras and replaced images; True if any is new.
+
+    A bumped camera does not fit the common rotation (its RMS stands out); a
+    replaced image fits but its position leaves its run's local trend, judged
+    against each position's own sigma.
+    """
+    used = sol.used
+    mask = mask_all & used[:, None]
+    rms = _view_rms(sol.state, X, obs.corners_px, mask_all)
+    eq, _ = linearize(sol.state, X, obs.corners_px, mask)
+    sigma2 = noise_variance(eq.ssr, eq.n_obs, N_POSE_PARAMS + int(used.sum()) - 1)
+    inv = arrowhead_inverse(eq.A, eq.B, eq.D, sol.free())
+    sigma_um = 1e3 * np.sqrt(sigma2 * inv.var_s())
+    dev = 1e3 * (sol.state.s - (obs.target_mm - obs.target_mm[sol.ref]))
+    bumped = reprojection_outliers(rms, used, k)
+    groups = obs.run * 2 + (obs.direction > 0)
+    moved, resid = position_outliers(dev, obs.target_mm, groups, used & ~bumped, sigma_um, k)
+    new = (bumped | moved) & ~sol.outlier
+    for i in np.flatnonzero(new):
+        if bumped[i]:
+            sol.reasons[i] = f"reprojection RMS {rms[i]:.3f} px against a median of {np.median(rms[used]):.3f} px (camera bumped?)"
+            kind = "reprojection"
+        else:
+            sol.reasons[i] = f"position {resid[i]:+.1f} um off the local trend of its run (image replaced?)"
+            kind = "position"
+        sol.flags.append({"index": int(obs.index[i]), "kind": kind, "message": sol.reasons[i], "round": round_no})
+    if not new.any():
+        return False
+    sol.outlier |= new
+    if sol.outlier[sol.ref]:
+        sol.ref = int(np.flatnonzero(sol.used)[0])
+    if sol.used.sum() < MIN_VIEWS_LEFT:
+        raise DegenerateGeometryError(f"{obs.source}: fewer than {MIN_VIEWS_LEFT} views are left after removing outliers; check the capture")
+    return True
+
+
+@dataclass
+class _Uncertainty:
+    """Covariances of the solution (SPEC 4, "Uncertainty")."""
+
+    sigma2: float  # a-posteriori noise variance, px^2
+    var_s: np.ndarray  # (K,) mm^2, noise only
+    var_total: np.ndarray  # (K,) mm^2, with the intrinsics' covariance
+    step_sigma: np.ndarray  # (K,) mm, of each step to the previous capture of its run
+    parameter_sigmas: dict[str, list[float]]
+    inverse: Any  # ArrowheadInverse
+    intrinsics_gradient: np.ndarray | None  # d s / d intrinsics, (K, 9)
+    n_obs: int
+    n_params: int
+
+
+def _uncertainty(obs: Observations, opt: EstimateOptions, sol: _Solution, X: np.ndarray, mask_all: np.ndarray) -> _Uncertainty:
+    """Cov = sigma^2 H^-1 by the arrowhead inverse; intrinsics propagated; excluded views on their own."""
+    used, usable, free = sol.used, sol.usable, sol.free()
+    mask = mask_all & used[:, None]
     have_cov = obs.intrinsics.covariance is not None
-    eq, _ = linearize(state, X, obs.corners_px, mask, with_intrinsics=have_cov or opt.self_calibrate)
-    p_pose = 8
+    eq, _ = linearize(sol.state, X, obs.corners_px, mask, with_intrinsics=have_cov or opt.self_calibrate)
+    p = N_POSE_PARAMS
     A, B = eq.A, eq.B
     if opt.self_calibrate:
         A = A.copy()
-        A[8:, 8:] += np.linalg.inv(obs.intrinsics.covariance + 1e-18 * np.eye(9))
-        n_params = 17 + int(free.sum())
+        A[p:, p:] += np.linalg.inv(obs.intrinsics.covariance + PRIOR_JITTER * np.eye(N_INTRINSICS))
+        n_params = p + N_INTRINSICS + int(free.sum())
     else:
-        A, B = A[:p_pose, :p_pose], B[:, :p_pose]
-        n_params = p_pose + int(free.sum())
+        A, B = A[:p, :p], B[:, :p]
+        n_params = p + int(free.sum())
     sigma2 = noise_variance(eq.ssr, eq.n_obs, n_params)
     inv = arrowhead_inverse(A, B, eq.D, free)
     var_s = sigma2 * inv.var_s()
     var_total = var_s.copy()
     G_s = None
     if have_cov and not opt.self_calibrate:
-        _, G_s = intrinsics_sensitivity(inv, eq.A[:p_pose, p_pose:], eq.B[:, p_pose:])
+        _, G_s = intrinsics_sensitivity(inv, eq.A[:p, p:], eq.B[:, p:])
         var_total = var_s + propagated_variance(G_s, obs.intrinsics.covariance)
     # positions of views outside the solve: their own 1-D sigma (noise only)
     alone = usable & ~used
     if alone.any():
-        eq_o, _ = linearize(_views_of(state, np.flatnonzero(alone)), X, obs.corners_px[alone], mask_all[alone])
+        eq_o, _ = linearize(_views_of(sol.state, np.flatnonzero(alone)), X, obs.corners_px[alone], mask_all[alone])
         var_o = sigma2 / np.maximum(eq_o.D, 1e-300)
         var_s[alone] = var_o
         var_total[alone] = var_o
@@ -249,47 +283,56 @@ def _finish(
     both = used[prev] & used[cur]
     if both.any():
         step_sigma[cur[both]] = np.sqrt(sigma2 * inv.var_difference(prev[both], cur[both]))
-    cov_theta = sigma2 * inv.S_inv
-    param_sigmas = {
-        "rvec_sigma_rad": np.sqrt(np.diag(cov_theta)[0:3]).tolist(),
-        "l0_sigma_mm": np.sqrt(np.diag(cov_theta)[3:6]).tolist(),
-        "n_sigma_rad": np.sqrt(np.diag(cov_theta)[6:8]).tolist(),
-    }
+    sd = np.sqrt(np.diag(sigma2 * inv.S_inv))
+    param_sigmas = {"rvec_sigma_rad": sd[0:3].tolist(), "l0_sigma_mm": sd[3:6].tolist(), "n_sigma_rad": sd[6:p].tolist()}
     if opt.self_calibrate:
-        param_sigmas["intrinsics_sigma"] = np.sqrt(np.diag(cov_theta)[8:17]).tolist()
-    timings["uncertainty"] = time.perf_counter() - t0
+        param_sigmas["intrinsics_sigma"] = sd[p : p + N_INTRINSICS].tolist()
+    return _Uncertainty(sigma2, var_s, var_total, step_sigma, param_sigmas, inv, G_s, eq.n_obs, n_params)
 
-    rms = _view_rms(state, X, obs.corners_px, mask_all)
-    six = None
+
+
+def _finish(obs: Observations, opt: EstimateOptions, sol: _Solution, X: np.ndarray, mask_all: np.ndarray,
+            timings: dict[str, float]) -> LpsEstimate:
+    """Uncertainty, per-view RMS, 6-DOF motions and board-plane straightness of the solution, as an :class:`LpsEstimate`."""
+    t0 = time.perf_counter()
+    unc = _uncertainty(obs, opt, sol, X, mask_all)
+    timings["uncertainty"] = time.perf_counter() - t0
+    six = board_plane = None
     if opt.six_dof:
         t1 = time.perf_counter()
-        six = _six_dof(state, obs, X, mask_all, usable, used)
+        six = _six_dof(sol.state, obs, X, mask_all, sol.usable, sol.used)
         timings["six_dof"] = time.perf_counter() - t1
+        t1 = time.perf_counter()  # straightness at the board plane and image rotation (SPEC 11)
+        state = sol.state
+        board_plane = board_plane_from_model(state.R, state.line().translations(state.s), state.line().u_board, X,
+                                             obs.corners_px, mask_all, state.intrinsics, state.s, sol.usable, sol.used)
+        timings["board_plane"] = time.perf_counter() - t1
     return LpsEstimate(
         method=opt.method,
         options=opt,
-        state=state,
-        reference_view=ref,
-        usable=usable,
-        used=used,
-        outlier=outlier,
-        outlier_reason=reasons,
-        sigma_px=float(np.sqrt(sigma2)),
-        sigma_s_mm=np.sqrt(var_s),
-        sigma_total_mm=np.sqrt(var_total),
-        step_sigma_mm=step_sigma,
-        rms_px=rms,
+        state=sol.state,
+        reference_view=sol.ref,
+        usable=sol.usable,
+        used=sol.used,
+        outlier=sol.outlier,
+        outlier_reason=sol.reasons,
+        sigma_px=float(np.sqrt(unc.sigma2)),
+        sigma_s_mm=np.sqrt(unc.var_s),
+        sigma_total_mm=np.sqrt(unc.var_total),
+        step_sigma_mm=unc.step_sigma,
+        rms_px=_view_rms(sol.state, X, obs.corners_px, mask_all),
         n_corners=mask_all.sum(axis=1),
-        parameter_sigmas=param_sigmas,
-        iterations=iterations,
-        converged=converged,
-        n_observations=eq.n_obs,
-        dof=eq.n_obs - n_params,
+        parameter_sigmas=unc.parameter_sigmas,
+        iterations=sol.iterations,
+        converged=sol.converged,
+        n_observations=unc.n_obs,
+        dof=unc.n_obs - unc.n_params,
         six_dof=six,
-        flags=flags,
+        flags=sol.flags,
         timings_s=timings,
-        inverse=inv,
-        intrinsics_gradient=G_s,
+        inverse=unc.inverse,
+        intrinsics_gradient=unc.intrinsics_gradient,
+        board_plane=board_plane,
     )
 
 

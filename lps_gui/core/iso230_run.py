@@ -118,31 +118,52 @@ def _steps_mm(t: np.ndarray, measured: np.ndarray, ok: np.ndarray, group: np.nda
     return s[np.isfinite(s)]
 
 
+def _scale_design(t: np.ndarray, group: np.ndarray) -> np.ndarray:
+    """Columns (t - t_mean, one indicator per group): shape (n, 1 + groups)."""
+    _, g = np.unique(group, return_inverse=True)
+    design = np.zeros((t.size, 1 + int(g.max()) + 1))
+    design[:, 0] = t - t.mean()
+    design[np.arange(t.size), 1 + g.ravel()] = 1.0
+    return design
+
+
+def scale_functional(t: np.ndarray, group: np.ndarray, w: np.ndarray | None = None) -> np.ndarray | None:
+    """The row ``a`` (n,) with slope ``b = a @ x`` of the scale fit x = offset_g + b (t - t_mean).
+
+    Weighted by ``w`` (1/sigma^2) when given. The slope is linear in the
+    deviations, so a caller holding their full covariance C gets the slope's
+    sigma as sqrt(a C a^T) (correlations included); None when the groups and
+    targets do not determine a slope.
+    """
+    design = _scale_design(t, group)
+    sw = np.ones_like(t) if w is None else np.sqrt(w)
+    if np.linalg.matrix_rank(design * sw[:, None]) < design.shape[1]:
+        return None
+    return np.linalg.pinv(design * sw[:, None])[0] * sw
+
+
 def _scale_fit(t: np.ndarray, x: np.ndarray, w: np.ndarray | None, group: np.ndarray
                ) -> tuple[np.ndarray, float | None, float | None]:
     """Least-squares x = offset_g + b (t - t_mean): (residual (n,), b in um/mm, sigma of b).
 
     Weighted by 1/sigma^2 when given; the slope sigma is then the formal one
-    scaled up by sqrt(chi2/dof) when the scatter exceeds the sigmas (Birge ratio).
+    (independent deviations) scaled up by sqrt(chi2/dof) when the scatter
+    exceeds the sigmas (Birge ratio). The estimator replaces it with the
+    sigma from the full covariance of the positions (same row, :func:`scale_functional`).
     """
-    _, g = np.unique(group, return_inverse=True)
-    n_g = int(g.max()) + 1
-    design = np.zeros((t.size, 1 + n_g))  # shape (n, 1 + groups)
-    design[:, 0] = t - t.mean()
-    design[np.arange(t.size), 1 + g.ravel()] = 1.0
+    design = _scale_design(t, group)
     sw = np.ones_like(t) if w is None else np.sqrt(w)
     coef, *_ = np.linalg.lstsq(design * sw[:, None], x * sw, rcond=None)
     resid = x - design @ coef
-    dof = t.size - design.shape[1]
-    normal = (design * sw[:, None] ** 2).T @ design
-    if np.linalg.matrix_rank(normal) < design.shape[1]:
+    row = scale_functional(t, group, w)
+    if row is None:
         return resid, None, None
-    cov = np.linalg.inv(normal)
+    dof = t.size - design.shape[1]
     if dof <= 0:
-        return resid, float(coef[0]), None
+        return resid, float(row @ x), None
     chi2_red = float(np.sum(sw**2 * resid**2) / dof)
-    var = cov[0, 0] * (chi2_red if w is None else max(1.0, chi2_red))
-    return resid, float(coef[0]), float(np.sqrt(var))
+    var = float(np.sum(row**2 / (sw**2))) * (chi2_red if w is None else max(1.0, chi2_red))
+    return resid, float(row @ x), float(np.sqrt(var))
 
 
 def single_run_figures(target_mm: np.ndarray, deviation_um: np.ndarray, valid: np.ndarray | None = None,

@@ -3,10 +3,12 @@
 A lead screw repeats its error every turn, so the deviation of a stage from
 its scale line carries a sine at the screw pitch. On a uniform target grid we
 take the FFT; on any other grid (missing targets, outliers left out, several
-runs pooled) the generalized Lomb-Scargle periodogram of scipy, which is the
-least-squares sine fit at each frequency. The peak is then refined by a 1-D
-search of that least-squares fit, so its amplitude does not suffer the FFT's
-scalloping loss when the pitch falls between bins. Pure math, no I/O.
+runs pooled) the generalized Lomb-Scargle periodogram, which is the weighted
+least-squares sine fit with a floating mean at each frequency (batched 3x3
+normal equations in numpy; the same numbers as scipy.signal.lombscargle, whose
+import alone costs more than a whole small estimate). The peak is then refined
+by zooming a grid of that least-squares fit, so its amplitude does not suffer
+the FFT's scalloping loss when the pitch falls between bins. Pure math, no I/O.
 """
 from __future__ import annotations
 
@@ -14,13 +16,14 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy.optimize import minimize_scalar
-from scipy.signal import lombscargle
 
 OVERSAMPLE = 2  # Lomb-Scargle frequency step = 1 / (OVERSAMPLE * travel); the peak is refined anyway
 MAX_FFT_WEIGHT_RATIO = 4.0  # a uniform grid with weights within this ratio takes the FFT
 MAX_FREQUENCIES = 4096  # cap on the Lomb-Scargle grid (cost O(K * F))
 MIN_CYCLES = 2.0  # the peak must repeat at least this often within the travel
+ZOOM_POINTS = 17  # frequencies per zoom step of the peak refinement
+ZOOM_TOL = 1e-6  # refine the peak frequency to this fraction of 1/travel
+LS_BLOCK = 1 << 20  # frequencies x samples evaluated at once (memory cap)
 
 
 @dataclass
@@ -42,9 +45,40 @@ class Spectrum:
 def sine_amplitude_um(x_mm: np.ndarray, y_um: np.ndarray, freq_per_mm: np.ndarray,
                       weights: np.ndarray | None = None) -> np.ndarray:
     """Least-squares sine amplitude of y at each frequency (cycles/mm), with a floating mean; shape (F,)."""
-    w = np.atleast_1d(np.asarray(freq_per_mm, dtype=float)) * 2.0 * np.pi
-    z = lombscargle(x_mm, y_um, w, normalize="amplitude", floating_mean=True, weights=weights)
-    return np.atleast_1d(np.abs(z))
+    x = np.asarray(x_mm, float)
+    y = np.asarray(y_um, float)
+    w = np.ones_like(x) if weights is None else np.asarray(weights, float)
+    w = w / w.sum()
+    omega = np.atleast_1d(np.asarray(freq_per_mm, dtype=float)) * 2.0 * np.pi
+    out = np.empty(omega.shape)
+    block = max(1, LS_BLOCK // max(1, x.size))
+    for lo in range(0, omega.size, block):
+        phase = omega[lo : lo + block, None] * x  # shape (F, K)
+        c, s = np.cos(phase), np.sin(phase)
+        wc, ws = c * w, s * w
+        A = np.empty((len(phase), 3, 3))
+        A[:, 0, 0] = np.einsum("fk,fk->f", wc, c)
+        A[:, 0, 1] = A[:, 1, 0] = np.einsum("fk,fk->f", wc, s)
+        A[:, 1, 1] = np.einsum("fk,fk->f", ws, s)
+        A[:, 0, 2] = A[:, 2, 0] = wc.sum(axis=1)
+        A[:, 1, 2] = A[:, 2, 1] = ws.sum(axis=1)
+        A[:, 2, 2] = 1.0
+        b = np.stack([wc @ y, ws @ y, np.full(len(phase), w @ y)], axis=1)
+        coef = np.linalg.solve(A, b[..., None])[..., 0]
+        out[lo : lo + block] = np.hypot(coef[:, 0], coef[:, 1])
+    return out
+
+
+def _refine_peak(xs: np.ndarray, ys: np.ndarray, ws: np.ndarray, lo: float, hi: float, tol: float) -> tuple[float, float]:
+    """Frequency and amplitude of the largest least-squares sine in [lo, hi], by zooming a grid."""
+    while True:
+        f = np.linspace(lo, hi, ZOOM_POINTS)
+        a = sine_amplitude_um(xs, ys, f, ws)
+        j = int(np.argmax(a))
+        step = f[1] - f[0]
+        if step <= tol:
+            return float(f[j]), float(a[j])
+        lo, hi = max(lo, f[j] - step), min(hi, f[j] + step)
 
 
 def _uniform(x_sorted: np.ndarray, weights: np.ndarray) -> float | None:
@@ -112,7 +146,6 @@ def deviation_spectrum(x_mm: np.ndarray, y_um: np.ndarray, weights: np.ndarray |
     i = int(np.argmax(candidates)) if np.isfinite(candidates).any() else int(np.argmax(amp))
     lo = max(freq[i] - 1.0 / travel_mm, freq[0] * 0.5)
     hi = min(freq[i] + 1.0 / travel_mm, freq[-1])
-    best = minimize_scalar(lambda f: -sine_amplitude_um(xs, ys, f, ws)[0], bounds=(lo, hi), method="bounded",
-                           options={"xatol": 1e-4 / travel_mm})
-    f_peak, a_peak = (float(best.x), float(-best.fun)) if -best.fun >= amp[i] else (float(freq[i]), float(amp[i]))
+    f_best, a_best = _refine_peak(xs, ys, ws, lo, hi, ZOOM_TOL / travel_mm)
+    f_peak, a_peak = (f_best, a_best) if a_best >= amp[i] else (float(freq[i]), float(amp[i]))
     return Spectrum(1.0 / freq, amp, method, 1.0 / f_peak, a_peak)

@@ -90,7 +90,10 @@ def render_to_png(window, path: Path, size: tuple[int, int] | None = None) -> Pa
 
 
 def main(argv: list[str] | None = None) -> int:
+    from lps_gui.allocator import tune_allocator
+
     args = build_parser().parse_args(argv)
+    tune_allocator()
     if args.screenshot is not None:
         os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
     app = make_app()

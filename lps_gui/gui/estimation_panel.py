@@ -15,7 +15,6 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from lps_gui.gui.services import lookup
 from lps_gui.gui.widgets import PathPicker, ValueTable, add_rows, double_spin, fmt, stack
 from lps_gui.gui.workers import Job
 
@@ -87,12 +86,13 @@ def detect_and_estimate(session_dir: Path, method: str, options: dict[str, Any],
     """
     if corners_needed(session_dir):
         from lps_gui.io.session import Session
+        from lps_gui.pipeline.detect import detect_session
 
-        detect_session = lookup("lps_gui.pipeline.detect", "detect_session")
         n = len(Session.open(session_dir).records())
         detect_session(session_dir, progress=progress, cancel=cancel,
                        workers=None if n >= PARALLEL_DETECTION_MIN_VIEWS else 1)
-    estimate_session = lookup("lps_gui.pipeline.estimate", "estimate_session")
+    from lps_gui.pipeline.estimate import estimate_session
+
     return estimate_session(session_dir, method=method, options=options, intrinsics_path=intrinsics_path,
                             progress=progress, cancel=cancel)
 
@@ -167,7 +167,6 @@ class EstimationPanel(QWidget):
 
     def make_job(self) -> Job:
         """The estimation of the chosen session as a Job (not started)."""
-        lookup("lps_gui.pipeline.estimate", "estimate_session")  # say now if the estimator is missing
         session = self.session.path()
         if session is None:
             from lps_gui.errors import InputError

@@ -22,7 +22,6 @@ from PySide6.QtWidgets import (
 
 from lps_gui.core.board import Board
 from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
-from lps_gui.gui.services import lookup
 from lps_gui.gui.widgets import ValueTable, fmt
 from lps_gui.gui.workers import Job, one_line
 
@@ -112,6 +111,9 @@ class IntrinsicsPanel(QWidget):
         self.coverage_img = pg.ImageItem(axisOrder="row-major")
         self.coverage_img.setColorMap(pg.colormap.get("viridis"))
         self.coverage_plot.addItem(self.coverage_img)
+        self.coverage_bar = pg.ColorBarItem(colorMap=pg.colormap.get("viridis"), label="corners per cell",
+                                            interactive=False, values=(0, 1))
+        self.coverage_bar.setImageItem(self.coverage_img, insert_in=self.coverage_plot.getPlotItem())
         tabs = QTabWidget()
         tabs.addTab(self.table, "Parameters")
         tabs.addTab(self.rms_plot, "Per-view error")
@@ -181,11 +183,8 @@ class IntrinsicsPanel(QWidget):
 
     # ------------------------------------------------------------------ calibration
     def start(self) -> None:
-        try:
-            calibrate = lookup("lps_gui.pipeline.intrinsics", "calibrate_images")
-        except Exception as exc:
-            self.run_requested.emit(exc)
-            return
+        from lps_gui.pipeline.intrinsics import calibrate_images as calibrate
+
         if not self.paths:
             from lps_gui.errors import InputError
 
@@ -219,7 +218,9 @@ class IntrinsicsPanel(QWidget):
             self.rms_plot.addItem(pg.BarGraphItem(x=np.arange(rms.size), height=rms, width=0.7, brushes=colors))
         coverage = getattr(calib, "coverage", None)
         if coverage is not None:
-            self.coverage_img.setImage(np.asarray(coverage, float), autoLevels=True)
+            grid = np.asarray(coverage, float)
+            self.coverage_img.setImage(grid, autoLevels=False)
+            self.coverage_bar.setLevels((0.0, max(float(grid.max()), 1.0)))  # the bar states what a colour means
         for i in range(self.list.count()):
             item = self.list.item(i)
             bad = i in flagged

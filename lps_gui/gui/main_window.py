@@ -27,7 +27,7 @@ from lps_gui.gui.intrinsics_panel import IntrinsicsPanel
 from lps_gui.gui.job_runner import JobRunner
 from lps_gui.gui.log_panel import LogPanel
 from lps_gui.gui.results_panel import ResultsPanel
-from lps_gui.gui.services import lookup, preload_backends
+from lps_gui.gui.services import preload_backends
 from lps_gui.gui.stage_controller import StageController
 from lps_gui.gui.stage_panel import StagePanel
 from lps_gui.gui.workers import Job, one_line, stop_all_jobs
@@ -89,9 +89,7 @@ class MainWindow(QMainWindow):
         self._build_menus()
         self._wire()
         self.restore_settings()
-        missing = preload_backends()
-        if missing:
-            log.info("not available yet in this build: %s", ", ".join(missing))
+        preload_backends()
         log.info("lps-gui %s ready", __version__)
 
     # ------------------------------------------------------------------ layout
@@ -167,6 +165,7 @@ class MainWindow(QMainWindow):
         ctl.event_received.connect(self._on_stage_event)
         self.stage_panel.camera_offered.connect(self.camera_panel.set_sim_camera)
         self.camera_panel.failed.connect(self.show_error)
+        self.camera_panel.view_grabbed.connect(lambda path: self.intrinsics_panel.add_images([path]))
         for panel in (self.estimation_panel, self.capture_panel, self.intrinsics_panel):
             panel.run_requested.connect(self._panel_job)
         self.estimation_panel.results_ready.connect(self._on_results)
@@ -185,7 +184,7 @@ class MainWindow(QMainWindow):
     def _on_connection(self, connected: bool, description: str) -> None:
         if connected:
             self.status_conn.setText(f"Stage: {description}")
-            self.settings.setValue("stage/source", self.stage_panel.source.currentData())
+            self.settings.setValue("stage/source", self.stage_panel.current_source())
             self.settings.setValue("stage/baud", self.stage_panel.baud.currentData())
         else:
             self.status_conn.setText("Stage: not connected")
@@ -268,7 +267,9 @@ class MainWindow(QMainWindow):
             self.show_panel("estimation")
             return False
         try:
-            results = lookup("lps_gui.io.results_file", "read_results")(results_path)
+            from lps_gui.io.results_file import read_results
+
+            results = read_results(results_path)
         except Exception as exc:
             self.show_error("Results not loaded", one_line(exc))
             return False
@@ -293,14 +294,11 @@ class MainWindow(QMainWindow):
 
     def export_pdf(self, path: Path) -> Job | None:
         """Write the PDF report in a worker thread."""
-        try:
-            write_report = lookup("lps_gui.report.pdf", "write_report")
-        except Exception as exc:
-            self.show_error("PDF export unavailable", one_line(exc))
-            return None
+        from lps_gui.report.pdf import write_report
+
         panel = self.results_panel
         job = Job(f"report {path.name}", write_report, panel.session_dir or path.parent, panel.results, path)
-        return self.run_job(job, lambda p: log.info("report written to %s", p))
+        return self.run_job(job, lambda p: (log.info("report written to %s", p), panel.set_report(Path(p))))
 
     def export_csv(self, folder: Path) -> list[Path]:
         try:

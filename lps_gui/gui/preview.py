@@ -15,8 +15,9 @@ from typing import Callable
 import numpy as np
 
 from lps_gui.camera.base import Camera
+from lps_gui.errors import LpsError
 from lps_gui.core.board import Board
-from lps_gui.gui.services import Unavailable, lookup
+from lps_gui.camera.detection import detect_chessboard, sharpness
 from lps_gui.gui.workers import one_line
 
 log = logging.getLogger(__name__)
@@ -63,11 +64,8 @@ class PreviewGrabber:
         self._stop = threading.Event()
         self._paused = threading.Event()
         self._thread = threading.Thread(target=self._loop, name="camera-preview", daemon=True)
-        try:
-            self._detect = lookup("lps_gui.camera.detection", "detect_chessboard")
-            self._sharpness = lookup("lps_gui.camera.detection", "sharpness")
-        except Unavailable:
-            self._detect = self._sharpness = None
+        self._detect = detect_chessboard
+        self._sharpness = sharpness
 
     def start(self) -> "PreviewGrabber":
         self._thread.start()
@@ -91,7 +89,7 @@ class PreviewGrabber:
             if not cam.is_open:
                 cam.open()
         except Exception as exc:  # no such device, busy, unplugged: one line to the operator
-            log.error("camera not opened: %s", one_line(exc), exc_info=exc)
+            _log_failure("camera not opened", exc)
             if self.on_error:
                 self.on_error(one_line(exc))
             return False
@@ -116,7 +114,7 @@ class PreviewGrabber:
             try:
                 frame = self.camera.grab()
             except Exception as exc:  # a vanished camera ends the preview, reported once
-                log.error("camera preview stopped: %s", one_line(exc), exc_info=exc)
+                _log_failure("camera preview stopped", exc)
                 if self.on_error:
                     self.on_error(one_line(exc))
                 return
@@ -138,3 +136,14 @@ class PreviewGrabber:
                 self._latest = PreviewResult(n, image, None if corners is None else np.asarray(corners),
                                              sharp, fps, self._detect is not None)
             self._stop.wait(max(0.0, self.period_s - (time.monotonic() - t0)))
+
+
+def _log_failure(what: str, exc: BaseException) -> None:
+    """An expected failure (an :class:`LpsError`: no such device...) is one line; the traceback only at DEBUG.
+
+    The window reports the line to the operator (and logs it); a bug keeps its traceback in the log.
+    """
+    if isinstance(exc, LpsError):
+        log.debug("%s: %s", what, one_line(exc), exc_info=exc)
+    else:
+        log.error("%s: %s", what, one_line(exc), exc_info=exc)

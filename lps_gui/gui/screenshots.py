@@ -35,8 +35,8 @@ def prepare(window, work: Path) -> None:
     from lps_gui.core.simulate import preset
     from lps_gui.pipeline.estimate import estimate_session
     from lps_gui.pipeline.intrinsics import calibrate_images
-    from lps_gui.pipeline.simulate_images import simulate_intrinsics_set
-    from lps_gui.pipeline.simulate_points import simulate_point_session
+    from lps_gui.sim.images import simulate_intrinsics_set
+    from lps_gui.sim.points import simulate_point_session
 
     spec = preset("small", replaced_views=(7,))
     spec = replace(spec, plan=replace(spec.plan, directions="both", runs=2))

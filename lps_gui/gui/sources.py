@@ -4,18 +4,13 @@ The simulated rig (a simulated stage with a simulated camera that renders
 the board at the stage's true pose) is the default, so the application is
 usable with no hardware at all. It runs on real time so motion is visible.
 Every opener runs on a worker thread (opening a port or building the
-renderer takes a moment) and may raise :class:`~lps_gui.gui.services.Unavailable`
-while a back end has not landed yet.
+renderer takes a moment).
 """
 from __future__ import annotations
-
-import inspect
-from typing import Any
 
 from lps_gui.camera.base import Camera
 from lps_gui.core.clock import Clock, RealClock
 from lps_gui.errors import InputError
-from lps_gui.gui.services import Unavailable, lookup
 from lps_gui.hardware.stage import Stage
 
 SIM = "sim"
@@ -28,52 +23,51 @@ CAMERA_FOLLOWS_STAGE = "sim"  # the simulated camera riding the simulated stage
 def stage_choices() -> list[tuple[str, str]]:
     """(label, source) pairs: simulated, emulator, then every serial port found."""
     out = [("Simulated stage", SIM), ("GRBL emulator (pty)", EMULATOR)]
+    from lps_gui.hardware import list_serial_ports
+
     try:
-        ports = lookup("lps_gui.hardware", "list_serial_ports")()
+        ports = list_serial_ports()
     except Exception:  # no port listing yet (or no serial support): offer the two simulations
         ports = []
     for p in ports:
         name = getattr(p, "device", None) or (p[0] if isinstance(p, (tuple, list)) else str(p))
         desc = getattr(p, "description", "") or ""
         out.append((f"{name} {desc}".strip(), f"grbl:{name}"))
+    out += by_id_choices()
     return out
 
 
-def _accepts(fn: Any, name: str) -> bool:
-    try:
-        return name in inspect.signature(fn).parameters
-    except (TypeError, ValueError):
-        return False
+def by_id_choices() -> list[tuple[str, str]]:
+    """The stable /dev/serial/by-id names of the serial adapters (they survive replugging)."""
+    from lps_gui.hardware import serial_ports_by_id
+
+    return [(f"{link} ({device.rsplit('/', 1)[-1]})", f"grbl:{link}") for link, device in serial_ports_by_id()]
+
+
+def source_from_text(text: str) -> str | None:
+    """A source typed into the editable box: sim, emulator, grbl:PORT, or a bare port (/dev/pts/5, COM3)."""
+    text = text.strip()
+    if text in (SIM, EMULATOR) or (text.startswith("grbl:") and len(text) > 5):
+        return text
+    if text.startswith(("/dev/", "COM", "socket://", "rfc2217://", "loop://")):
+        return f"grbl:{text}"
+    return None
 
 
 def simulated_rig(clock: Clock | None = None) -> tuple[Stage, Camera]:
-    """The simulated stage and the camera riding it, on ``clock`` (real time by default).
-
-    Uses the capture layer's rig builder when present; otherwise composes the
-    same two real parts (SimulatedStage with the preset's error model, and a
-    SimulatedCamera rendering at the stage's true pose).
-    """
+    """The simulated stage and the camera riding it, on ``clock`` (real time by default)."""
     from lps_gui.core.simulate import preset
+    from lps_gui.sim.rig import make_simulated_rig
 
-    clock = clock or RealClock()
-    spec = preset(SIM_PRESET)
-    try:
-        make_rig = lookup("lps_gui.capture.simulated_rig", "make_simulated_rig")
-    except Unavailable:
-        make_rig = None
-    if make_rig is not None:
-        return make_rig(spec, clock=clock) if _accepts(make_rig, "clock") else make_rig(spec)
-    stage_cls = lookup("lps_gui.hardware.sim_stage", "SimulatedStage")
-    camera_cls = lookup("lps_gui.camera.sim_camera", "SimulatedCamera")
-    stage = stage_cls(errors=spec.rig.errors, seed=spec.seed, clock=clock)
-    return stage, camera_cls(spec.rig, pose_source=stage.true_pose, seed=spec.seed, clock=clock)
+    return make_simulated_rig(preset(SIM_PRESET), clock=clock or RealClock())
 
 
 def open_stage_source(source: str, baud: int = 115200, clock: Clock | None = None) -> tuple[Stage, Camera | None]:
     """Build the stage for ``source``; the simulated rig also yields its camera."""
     if source == SIM:
         return simulated_rig(clock)
-    open_stage = lookup("lps_gui.hardware", "open_stage")
+    from lps_gui.hardware import open_stage
+
     if source == EMULATOR:
         return open_stage(EMULATOR), None
     if source.startswith("grbl:"):
@@ -92,4 +86,6 @@ def camera_choices(sim_available: bool) -> list[tuple[str, str]]:
 
 def open_camera_source(spec: str) -> Camera:
     """Open a non-simulated camera (device index, file or URL) through the camera layer."""
-    return lookup("lps_gui.camera", "open_camera")(spec)
+    from lps_gui.camera import open_camera
+
+    return open_camera(spec)

@@ -24,6 +24,7 @@ import numpy as np
 
 from lps_gui.core.clock import Clock, SimClock
 from lps_gui.core.stage_errors import StageErrorModel, TruePose
+from lps_gui.core.planar_rig import PlanarErrorModel, PlanarTruePose
 from lps_gui.errors import HardwareError
 from lps_gui.hardware.grbl.codes import SETTINGS, GrblError, check_setting, setting_info
 from lps_gui.hardware.motion import Profile
@@ -47,6 +48,9 @@ class SimulatedStage(Stage):
     axis : the axis the LPS measurement moves along.
     homing_required : start in Alarm like GRBL with $22=1 and the homing lock.
     soft_limits : GRBL $20.
+    axis_travel_mm : per-axis soft-limit ranges overriding ``travel_mm`` (e.g. {"Y": (0, 1016)}).
+    planar_errors : an XY gantry's error model (SPEC 10); then X and Y both carry the camera
+        and :meth:`true_planar_pose` gives the truth.
     """
 
     def __init__(
@@ -61,6 +65,8 @@ class SimulatedStage(Stage):
         homing_required: bool = False,
         soft_limits: bool = True,
         start_mm: float = 0.0,
+        planar_errors: PlanarErrorModel | None = None,
+        axis_travel_mm: dict[str, tuple[float, float]] | None = None,
     ) -> None:
         super().__init__()
         if axis not in AXES:
@@ -69,12 +75,15 @@ class SimulatedStage(Stage):
         self.errors = errors or StageErrorModel()
         self.seed = seed
         self.travel_mm = (float(travel_mm[0]), float(travel_mm[1]))
+        self.axis_travel_mm = [self.travel_mm] * 3
+        for name, (lo, hi) in (axis_travel_mm or {}).items():
+            self.axis_travel_mm[AXES.index(name.upper())] = (float(lo), float(hi))
         self.clock: Clock = clock if clock is not None else SimClock()
         self.settings: dict[int, float] = {n: float(s.default) for n, s in SETTINGS.items()}
         for i in range(3):
             self.settings[110 + i] = float(max_rate_mm_min)
             self.settings[120 + i] = float(accel_mm_s2)
-            self.settings[130 + i] = self.travel_mm[1] - self.travel_mm[0]
+            self.settings[130 + i] = self.axis_travel_mm[i][1] - self.axis_travel_mm[i][0]
         self.settings.update({20: float(soft_limits), 22: 1.0, 23: 7.0, 24: 100.0, 25: float(max_rate_mm_min), 27: 1.0})
         self._rng = np.random.default_rng(seed)
         self._lock = threading.RLock()
@@ -86,6 +95,9 @@ class SimulatedStage(Stage):
         self._alarm: int | None = 0 if homing_required else None  # 0: GRBL's homing lock, no code
         self._last_dir = 1
         self._noise_um = 0.0
+        self.planar_errors = planar_errors
+        self._axis_dir = [1, 1, 1]  # per axis: side of the last approach (planar truth)
+        self._axis_noise_um = [0.0, 0.0, 0.0]  # per axis: repeatability draw of its last move
         self._connected = False
         self._vanish_at: float | None = None
         self._vanished = False
@@ -177,10 +189,18 @@ class SimulatedStage(Stage):
 
     def _complete(self, p: Profile) -> None:
         """A move ended: its direction sets the backlash side, and it gets its repeatability draw."""
-        if p.axis == AXES.index(self.axis) and p.direction != 0:
+        if p.axis == AXES.index(self.axis) and p.direction != 0 and self.planar_errors is None:
             self._last_dir = p.direction
             rep = self.errors.repeatability_um
             self._noise_um = float(self._rng.normal(0.0, rep)) if rep > 0 else 0.0
+        if self.planar_errors is not None and p.axis in (0, 1) and p.direction != 0:
+            self._axis_dir[p.axis] = p.direction
+            rep = (self.planar_errors.x, self.planar_errors.y)[p.axis].repeatability_um
+            self._axis_noise_um[p.axis] = float(self._axis_rng(p.axis).normal(0.0, rep)) if rep > 0 else 0.0
+
+    def _axis_rng(self, axis: int) -> np.random.Generator:
+        """The generator of an XY axis' repeatability draw (a seeded rig draws the same value per stop)."""
+        return self._rng
 
     def _update(self, t: float | None = None) -> None:
         """Retire motion finished by time ``t`` and emit a state event on change."""
@@ -255,6 +275,26 @@ class SimulatedStage(Stage):
                 angles_urad=pose.angles_urad,
             )
 
+    def true_planar_pose(self) -> PlanarTruePose:
+        """Where an XY carriage really is now (K=1), from the planar error model.
+
+        Each axis keeps the backlash side of its last approach and the
+        repeatability draw of its last completed move.
+        """
+        if self.planar_errors is None:
+            raise ValueError("this simulated stage has no planar error model")
+        with self._lock:
+            t = self.clock.now()
+            self._update(t)
+            pos, _ = self._motion.positions(t)
+            p = self._motion.active()
+            dirs = list(self._axis_dir)
+            if p is not None and p.direction and p.axis in (0, 1):
+                dirs[p.axis] = p.direction
+            pose = self.planar_errors.true_pose(np.array([[pos[0], pos[1]]]), np.array([dirs[:2]], dtype=float))
+            noise = 1e-3 * np.array([self._axis_noise_um[:2]])
+            return PlanarTruePose(pose.plane_mm + noise, pose.normal_um, pose.angles_urad)
+
     def describe(self) -> dict:
         return {
             **super().describe(),
@@ -263,6 +303,7 @@ class SimulatedStage(Stage):
             "accel_mm_s2": self.accel_mm_s2(AXES.index(self.axis)),
             "seed": self.seed,
             "errors": self.errors.to_dict(),
+            **({"axes": ["X", "Y"], "planar_errors": self.planar_errors.to_dict()} if self.planar_errors else {}),
         }
 
     # ------------------------------------------------------------------ alarms and locks
@@ -315,8 +356,9 @@ class SimulatedStage(Stage):
         feed = min(feed_mm_min, self.max_rate_mm_min(axis))
         self._motion.plan(self.clock.now(), axis, kind, target_mm, feed, self.accel_mm_s2(axis))
 
-    def _in_travel(self, target_mm: float) -> bool:
-        return self.travel_mm[0] <= target_mm <= self.travel_mm[1]
+    def _in_travel(self, target_mm: float, axis: int) -> bool:
+        lo, hi = self.axis_travel_mm[axis]
+        return lo <= target_mm <= hi
 
     def _wait_planner(self) -> None:
         """Block (in clock time) until a planner block frees, like a GRBL line waiting for space."""
@@ -332,9 +374,10 @@ class SimulatedStage(Stage):
             self._require_gcode_ok()
             if not feed_mm_min or feed_mm_min <= 0:
                 raise GrblError("error", 22, f"move to {position_mm} mm")
-            if self.soft_limits and not self._in_travel(position_mm):
+            if self.soft_limits and not self._in_travel(position_mm, i):
+                lo, hi = self.axis_travel_mm[i]
                 raise self._raise_alarm(
-                    2, f"move to {position_mm:.3f} mm is outside the travel {self.travel_mm[0]:g}..{self.travel_mm[1]:g} mm"
+                    2, f"move of {AXES[i]} to {position_mm:.3f} mm is outside its travel {lo:g}..{hi:g} mm"
                 )
             self._wait_planner()
             if self._motion.hold:
@@ -353,7 +396,7 @@ class SimulatedStage(Stage):
                 raise GrblError("error", 22, "jog")
             start = self.planned_mm(i)
             target = float(start + distance_mm)
-            if self.soft_limits and not self._in_travel(target):
+            if self.soft_limits and not self._in_travel(target, i):
                 raise GrblError("error", 15, f"jog to {target:.3f} mm")
             self._wait_planner()
             self._plan(i, "Jog", target, float(feed_mm_min))

@@ -37,6 +37,17 @@ def _float(d: dict[str, Any], key: str, optional: bool = False) -> float | None:
     return float(v)
 
 
+def _coordinate(d: dict[str, Any], key: str, optional: bool = False) -> float | tuple[float, float] | None:
+    """A position: a finite number (one axis) or [x, y] (a planar stage)."""
+    v = d.get(key)
+    if isinstance(v, (list, tuple)):
+        if len(v) != 2:
+            raise ValueError(f"field {key!r}: a planar position is [x, y], not {v!r}")
+        x, y = (_float({key: c}, key) for c in v)
+        return (x, y)
+    return _float(d, key, optional)
+
+
 def parse_time(v: Any) -> float:
     """Unix seconds from a number or an ISO 8601 string (no zone: local time)."""
     if isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v):
@@ -68,12 +79,13 @@ def capture_fields(d: Any) -> dict[str, Any]:
         "index": _int(d, "index"),
         "run": _int(d, "run"),
         "direction": direction,
-        "target_mm": _float(d, "target_mm"),
-        "reported_mm": _float(d, "reported_mm", optional=True),
+        "target_mm": _coordinate(d, "target_mm"),
+        "reported_mm": _coordinate(d, "reported_mm", optional=True),
         "file": d["file"],
         "sha256": sha,
         "time": parse_time(d.get("time", 0.0)),
         "frame": _int(d, "frame", 0),
+        "commanded_mm": _float(d, "commanded_mm", optional=True),
     }
 
 

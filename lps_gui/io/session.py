@@ -15,6 +15,7 @@ from typing import Any, Iterable
 from lps_gui.core.board import Board
 from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.plan import Plan, PlannedStop
+from lps_gui.core.planar_plan import PlanarPlan, PlanarStop
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import append_line_durable, sha256_bytes, write_bytes_atomic
 from lps_gui.io.board_file import board_from_dict, board_to_dict
@@ -35,15 +36,22 @@ class CaptureRecord:
     index: int
     run: int
     direction: str  # "+" or "-"
-    target_mm: float
-    reported_mm: float | None
+    target_mm: float | tuple[float, float]  # [x, y] on a planar stage (SPEC 10)
+    reported_mm: float | tuple[float, float] | None
     file: str  # relative to the session folder
     sha256: str | None
     time: float  # unix seconds
     frame: int = 0
+    commanded_mm: float | None = None  # sent to the stage through a compensation table; absent without one
 
     def to_json(self) -> str:
-        return json.dumps(asdict(self), separators=(",", ":"))
+        d = asdict(self)
+        for key in ("target_mm", "reported_mm"):
+            if isinstance(d[key], tuple):
+                d[key] = list(d[key])
+        if d["commanded_mm"] is None:
+            del d["commanded_mm"]
+        return json.dumps(d, separators=(",", ":"))
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> "CaptureRecord":
@@ -66,7 +74,7 @@ class Session:
         cls,
         folder: Path | str,
         board: Board,
-        plan: Plan,
+        plan: Plan | PlanarPlan,
         intrinsics: CameraIntrinsics | str | None = None,
         camera: dict[str, Any] | None = None,
         stage: dict[str, Any] | None = None,
@@ -111,8 +119,19 @@ class Session:
     def board(self) -> Board:
         return board_from_dict(self.meta.get("board") or {}, str(self.folder / SESSION_FILE))
 
-    def plan(self) -> Plan:
-        return Plan.from_dict(self.meta.get("plan") or {})
+    @property
+    def axes(self) -> list[str]:
+        """The axes the camera moves along: ["X"] (a line) or ["X", "Y"] (a planar stage, SPEC 10)."""
+        axes = (self.meta.get("plan") or {}).get("axes") or ["X"]
+        return [str(a) for a in axes] if isinstance(axes, list) else ["X"]
+
+    @property
+    def planar(self) -> bool:
+        return len(self.axes) == 2
+
+    def plan(self) -> Plan | PlanarPlan:
+        d = self.meta.get("plan") or {}
+        return PlanarPlan.from_dict(d) if self.planar else Plan.from_dict(d)
 
     def has_intrinsics(self) -> bool:
         return bool(self.meta.get("intrinsics"))
@@ -163,7 +182,7 @@ class Session:
         write_bytes_atomic(self.folder / rel, data)
         return rel, sha256_bytes(data)
 
-    def remaining_stops(self) -> list[PlannedStop]:
+    def remaining_stops(self) -> list[PlannedStop] | list[PlanarStop]:
         """Planned frames not yet listed in captures.jsonl, in capture order."""
         done = {r.index for r in self.records()}
         return [s for s in self.plan().stops() if s.index not in done]

@@ -3,13 +3,11 @@
 Simulate an intrinsics set and calibrate it; capture a bidirectional session
 on the paper's rig with a realistic stage error through the capture engine
 and the simulated camera; detect; estimate; write report.pdf and the CSVs;
-compare with the simulator's truth. Pieces that are not installed are
-skipped with a one-line note saying what was used instead, so the demo
-always runs as far as the code base allows.
+compare with the simulator's truth. The printed error against truth is
+results.json's ``truth_comparison`` (one reduction, :func:`lps_gui.sim.truth.reduce_truth`).
 """
 from __future__ import annotations
 
-import importlib
 import logging
 import shutil
 import time
@@ -24,12 +22,24 @@ from lps_gui.core.plan import Plan
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.core.simulate import SimulationSpec, paper_rig_spec, small_spec
 from lps_gui.errors import InputError
+from lps_gui.io.intrinsics_file import write_intrinsics
 from lps_gui.io.session import Session
+from lps_gui.pipeline.detect import detect_session
+from lps_gui.pipeline.estimate import estimate_session
+from lps_gui.pipeline.intrinsics import calibrate_images
+from lps_gui.sim.images import simulate_intrinsics_set
+from lps_gui.sim.session import create_simulated_session, simulated_engine
 
 log = logging.getLogger(__name__)
 
 MARKER = ".lps-demo"  # a folder the demo made and may clear on the next run
 PAPER_SPEC = {"accuracy_um": 20.0, "repeatability_um": 5.0, "straightness_um": 38.0}  # the paper's stage table
+# the simulated board is exact at 20 C; the stage is a little warm (steel screw), as in a lab
+DEMO_ENVIRONMENT = {"board_temperature_c": 20.0, "board_cte_ppm_per_k": 23.0, "square_mm_uncertainty_um": 0.1,
+                    "stage_temperature_c": 20.5, "stage_cte_ppm_per_k": 11.5,
+                    "notes": "simulated rig; board on aluminium composite, values as a lab would record them"}
+DEMO_IDENTIFICATION = {"operator": "lps demo", "customer": "demonstration (simulated rig)",
+                       "stage_model": "paper's lead-screw stage (simulated)", "location": "simulator"}
 BarFactory = Callable[[str], ProgressFn]
 
 
@@ -70,17 +80,6 @@ def demo_spec(quick: bool, seed: int = 0) -> SimulationSpec:
 
     plan = Plan(start_mm=0.0, stop_mm=98.0, step_mm=2.0, directions="both", runs=2)
     return paper_rig_spec(seed=seed, errors=paper_stage_errors(), plan=plan)
-
-
-def available(module: str, name: str) -> Any | None:
-    """``module.name`` if that piece of the code base is installed, else None."""
-    try:
-        mod = importlib.import_module(module)
-    except ImportError as exc:
-        if exc.name and module.startswith(exc.name):  # the piece itself is absent, not a dependency of it
-            return None
-        raise
-    return getattr(mod, name, None)
 
 
 def prepare_out(out: Path) -> None:
@@ -129,28 +128,20 @@ def run_demo(
     step("intrinsics", status, message, t0)
 
     t0 = time.monotonic()
-    session, has_images, message, status = capture_step(out / "session", spec, intrinsics, bar("capture"), cancel)
+    session, message, status = capture_step(out / "session", spec, intrinsics, bar("capture"), cancel)
     step("capture", status, message, t0)
     res.session_dir = session.folder
     session.meta["stage_spec"] = dict(PAPER_SPEC)
+    session.meta.setdefault("environment", dict(DEMO_ENVIRONMENT))
+    session.meta.setdefault("identification", dict(DEMO_IDENTIFICATION))
     session.save_meta()
 
     t0 = time.monotonic()
-    detect_session = available("lps_gui.pipeline.detect", "detect_session")
-    if not has_images:
-        step("detect", "skipped", "skipped (point-level session: corners.vnl written by the simulator)", t0)
-    elif detect_session is None:
-        raise InputError("detect: the image pipeline is not installed, but the session holds images; reinstall lps-calib")
-    else:
-        table = detect_session(session.folder, bar("detect"), cancel)
-        n_ok = int(np.isfinite(table.corners_px).any(axis=(1, 2)).sum())
-        step("detect", "done", f"board found in {n_ok}/{len(table.names)} images", t0)
+    table = detect_session(session.folder, bar("detect"), cancel)
+    n_ok = int(np.isfinite(table.corners_px).any(axis=(1, 2)).sum())
+    step("detect", "done", f"board found in {n_ok}/{len(table.names)} images", t0)
 
     t0 = time.monotonic()
-    estimate_session = available("lps_gui.pipeline.estimate", "estimate_session")
-    if estimate_session is None:
-        step("estimate", "skipped", "skipped (pipeline.estimate not installed yet): no results, no report", t0)
-        return res
     results = estimate_session(session.folder, method="joint", progress=bar("estimate"), cancel=cancel)
     res.results = results
     p = results.get("parameters") or {}
@@ -163,25 +154,26 @@ def run_demo(
     res.report_pdf = write_report(session.folder, results, progress=bar("report"))
     res.csvs = [session.folder / n for n in ("positions.csv", "summary.csv") if (session.folder / n).exists()]
     step("report", "done", f"{res.report_pdf}", t0)
-    res.summary = summary_lines(results, session.truth, spec)
+    res.summary = summary_lines(results, spec)
+    # close the loop: compensate, re-capture, re-measure (pipeline/compensation_pass.py)
+    from lps_gui.pipeline.compensation_pass import compensation_pass
+
+    t0 = time.monotonic()
+    cp = compensation_pass(session.folder, out / "session-compensated", bar("compensated capture"), cancel)
+    step("compensate", "done", "; ".join(cp.lines()), t0)
+    res.summary += cp.lines()
     return res
 
 
 def calibrate_step(out: Path, spec: SimulationSpec, quick: bool, progress: ProgressFn, cancel: CancelToken | None,
                    seed: int) -> tuple[CameraIntrinsics, str, str]:
-    """Render a varied-pose intrinsics set and calibrate it; the true intrinsics when the pipeline is absent."""
-    simulate_set = available("lps_gui.pipeline.simulate_images", "simulate_intrinsics_set")
-    calibrate = available("lps_gui.pipeline.intrinsics", "calibrate_images")
+    """Render a varied-pose intrinsics set and calibrate it."""
     truth = spec.rig.intrinsics
-    if simulate_set is None or calibrate is None:
-        return truth, "skipped (image pipeline not installed): using the true intrinsics", "skipped"
-    from lps_gui.io.intrinsics_file import write_intrinsics
-
     n_views = 10 if quick else 15
     folder = out / "intrinsics-set"
-    paths = simulate_set(folder, spec.rig.board, truth, n_views=n_views, seed=seed + 1,
-                         progress=_first_half(progress), cancel=cancel)
-    cal = calibrate(paths, spec.rig.board, progress=_second_half(progress), cancel=cancel)
+    paths = simulate_intrinsics_set(folder, spec.rig.board, truth, n_views=n_views, seed=seed + 1,
+                                    progress=_first_half(progress), cancel=cancel)
+    cal = calibrate_images(paths, spec.rig.board, progress=_second_half(progress), cancel=cancel)
     write_intrinsics(out / "intrinsics.json", cal.intrinsics)
     fx_err = cal.intrinsics.fx - truth.fx
     return (cal.intrinsics,
@@ -198,37 +190,15 @@ def _second_half(progress: ProgressFn) -> ProgressFn:
 
 
 def capture_step(folder: Path, spec: SimulationSpec, intrinsics: CameraIntrinsics, progress: ProgressFn,
-                 cancel: CancelToken | None) -> tuple[Session, bool, str, str]:
-    """Capture the session: the engine on the simulated rig, else rendered images, else point level.
+                 cancel: CancelToken | None) -> tuple[Session, str, str]:
+    """Drive the simulated stage (simulated time) and camera through the real capture engine.
 
-    Returns (session, holds images, message, status).
+    Returns (session, message, status).
     """
-    create = available("lps_gui.capture.sim_session", "create_simulated_session")
-    engine = available("lps_gui.capture.sim_session", "simulated_engine") if create is not None else None
-    if create is not None and engine is not None:
-        return _capture_with_engine(folder, spec, intrinsics, progress, cancel, create, engine)
-    render = available("lps_gui.pipeline.simulate_images", "simulate_image_session")
-    n = spec.plan.n_frames()
-    if render is not None:
-        session = render(spec, folder, progress=progress, cancel=cancel, intrinsics=intrinsics)
-        return (session, True, f"capture engine not installed: rendered {n} images of the same simulated rig "
-                               f"directly ({folder})", "fallback")
-    simulate_points = available("lps_gui.pipeline.simulate_points", "simulate_point_session")
-    if simulate_points is not None:
-        session = simulate_points(spec, folder)
-    else:
-        session = _point_session(spec, folder, intrinsics)
-    progress(n, n, "point-level")
-    return session, False, f"skipped images (image pipeline not installed): point-level simulation of {n} views", "fallback"
-
-
-def _capture_with_engine(folder: Path, spec: SimulationSpec, intrinsics: CameraIntrinsics, progress: ProgressFn,
-                         cancel: CancelToken | None, create: Any, engine: Any) -> tuple[Session, bool, str, str]:
-    """Drive the simulated stage (simulated time) and camera through the real capture engine."""
-    session, stage, camera = create(folder, spec, intrinsics=intrinsics)
+    session, stage, camera = create_simulated_session(folder, spec, intrinsics=intrinsics)
     stage.connect()
     try:
-        summary = engine(session, stage, camera).run(progress, cancel)
+        summary = simulated_engine(session, stage, camera).run(progress, cancel)
     finally:
         for close in (camera.close, stage.disconnect):
             try:
@@ -239,58 +209,34 @@ def _capture_with_engine(folder: Path, spec: SimulationSpec, intrinsics: CameraI
         raise InputError(f"capture stopped after {summary.listed}/{summary.total} frames: {summary.error or summary.state}; "
                          f"the frames are kept in {folder}")
     session = Session.open(folder)  # the engine folded the per-capture truth into session.json
-    return session, True, f"captured {summary.listed} frames through the capture engine on the simulated rig ({folder})", "done"
-
-
-def _point_session(spec: SimulationSpec, folder: Path, intrinsics: CameraIntrinsics) -> Session:
-    """A point-level session (corners.vnl + truth) from the core simulator, when nothing better exists."""
-    from lps_gui.core.simulate import simulate_views
-    from lps_gui.io.corners_vnl import CornerTable, write_corners_vnl
-    from lps_gui.io.session import CaptureRecord
-
-    views = simulate_views(spec)
-    session = Session.create(folder, spec.rig.board, spec.plan, intrinsics=intrinsics, truth=views.truth,
-                             camera={"driver": "point simulator"}, stage={"driver": "simulated", "errors": spec.rig.errors.to_dict()},
-                             extra={"simulation": {"name": spec.name, "seed": spec.seed, "level": "points"}})
-    names = [f"images/{s.index:06d}.png" for s in views.stops]
-    session.add_records(CaptureRecord(s.index, s.run, s.direction, s.target_mm, s.target_mm, n, None, 0.0, s.frame)
-                        for s, n in zip(views.stops, names))
-    write_corners_vnl(session.corners_path, CornerTable(names, views.corners_px))
-    return session
+    return session, f"captured {summary.listed} frames through the capture engine on the simulated rig ({folder})", "done"
 
 
 # ----------------------------------------------------------------------------- summary
 
 
-def truth_errors(results: dict[str, Any], truth: dict[str, Any] | None) -> dict[str, float] | None:
-    """Measured vs simulator truth (outliers excluded): deviation RMS and max in um."""
-    from lps_gui.report.figures import position_columns, truth_columns
-
-    t = truth_columns(results, truth)
-    if t is None:
+def truth_errors(results: dict[str, Any]) -> dict[str, float] | None:
+    """results.json's ``truth_comparison`` in the demo's words: position error RMS and max, median sigma (um)."""
+    tc = results.get("truth_comparison") or {}
+    if tc.get("position_rms_error_um") is None:
         return None
-    cols = position_columns(results)
-    ok = ~cols["outlier"] & np.isfinite(cols["deviation_um"])
-    err = cols["deviation_um"][ok] - t["deviation_um"][ok]
-    err = err - err[0] if err.size else err  # both are relative to the first capture
-    if err.size == 0:
-        return None
-    return {"rms_um": float(np.sqrt(np.mean(err**2))), "max_um": float(np.max(np.abs(err))),
-            "median_sigma_um": float(np.nanmedian(cols["sigma_um"][ok]))}
+    return {"rms_um": float(tc["position_rms_error_um"]), "max_um": float(tc["position_max_abs_error_um"]),
+            "median_sigma_um": float(tc.get("median_sigma_um") or np.nan)}
 
 
-def summary_lines(results: dict[str, Any], truth: dict[str, Any] | None, spec: SimulationSpec) -> list[str]:
+def summary_lines(results: dict[str, Any], spec: SimulationSpec) -> list[str]:
     """Five lines a newcomer reads first: what was measured, the stage figures, the verdict, the truth check."""
-    from lps_gui.report.summary import extremes_rows, fmt, spec_checks
+    from lps_gui.report.summary import extremes_rows, fmt
+    from lps_gui.report.verdict import verdicts
 
     p = results.get("parameters") or {}
     single = (results.get("figures") or {}).get("single_run") or {}
     n_out = sum(1 for r in results.get("positions") or [] if r.get("outlier"))
     plan = spec.plan
-    ext = {r.name: r.value for r in extremes_rows(results)}
-    checks = spec_checks(results, PAPER_SPEC)
-    verdict = ", ".join(f"{c.name} {'PASS' if c.passed else ('FAIL' if c.passed is False else 'n/a')}" for c in checks)
-    te = truth_errors(results, truth)
+    ext = {r.name: r.text() if r.unresolved or r.value is None else f"{r.text()} {r.unit}" for r in extremes_rows(results)}
+    verdict = ", ".join(f"{v.name} {v.verdict}" for v in verdicts(results, PAPER_SPEC))
+    U = (results.get("uncertainty") or {}).get("expanded_k2_um")
+    te = truth_errors(results)
     tc = results.get("truth_comparison") or {}
     truth_line = ("error against truth: " + (f"position RMS {te['rms_um']:.2f} \u00b5m, max {te['max_um']:.2f} \u00b5m "
                                              f"(median 1-sigma {te['median_sigma_um']:.2f} \u00b5m)" if te else "no truth"))
@@ -302,9 +248,11 @@ def summary_lines(results: dict[str, Any], truth: dict[str, Any] | None, spec: S
         f"x {plan.runs} runs), {n_out} flagged outlier(s); RMS residual {fmt(p.get('rms_px'))} px",
         f"positioning: scale {fmt(single.get('scale_ppm'))} ppm, periodic {fmt(single.get('periodic_amplitude_um'))} \u00b5m "
         f"at {fmt(single.get('periodic_period_mm'))} mm, mean step {fmt(single.get('mean_step_mm'), 6)} mm",
-        f"straightness p-v {fmt(ext.get('Max straightness v1 (peak-to-valley)'))} / "
-        f"{fmt(ext.get('Max straightness v2 (peak-to-valley)'))} \u00b5m; max |roll| {fmt(ext.get('Max |roll|'))}, "
-        f"|pitch| {fmt(ext.get('Max |pitch|'))}, |yaw| {fmt(ext.get('Max |yaw|'))} \u00b5rad",
-        f"paper's spec (\u00b120 \u00b5m, \u00b15 \u00b5m, 38 \u00b5m): {verdict}",
+        f"straightness p-v (board plane) v1 {ext.get('Max straightness v1 (peak-to-valley)', '-')}, "
+        f"v2 {ext.get('Max straightness v2 (peak-to-valley)', '-')}; image rotation p-v "
+        f"{ext.get('Image rotation (peak-to-valley)', '-')}; max |roll| {ext.get('Max |roll|', '-')}, "
+        f"|pitch| {ext.get('Max |pitch|', '-')}, |yaw| {ext.get('Max |yaw|', '-')}",
+        f"paper's spec (\u00b120 \u00b5m, \u00b15 \u00b5m, 38 \u00b5m): {verdict}"
+        + (f"; U (k = 2) {fmt(U, 2)} \u00b5m over the travel" if U is not None else ""),
         truth_line,
     ]

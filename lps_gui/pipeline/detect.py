@@ -14,7 +14,6 @@ captures.jsonl: a re-run detects only the views not yet in it.
 from __future__ import annotations
 
 import logging
-import multiprocessing
 import os
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -24,6 +23,7 @@ from typing import Sequence
 
 import numpy as np
 
+from lps_gui.camera.processes import process_context
 from lps_gui.core.board import Board
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import Cancelled, InputError
@@ -85,18 +85,6 @@ def load_grey(path: str, sha256: str | None = None, image_size: tuple[int, int] 
     return image, ""
 
 
-def process_context() -> "multiprocessing.context.BaseContext":
-    """Worker processes are spawned, never forked.
-
-    A forked child inherits OpenCV's thread pool in whatever state the
-    parent's threads left it (and a GUI's threads' locks): the child then
-    hangs in its first cv2.setNumThreads or parallel call. Spawned workers
-    start clean; the price is ~0.5 s of start-up, and a calling script needs
-    the usual ``if __name__ == "__main__":`` guard.
-    """
-    return multiprocessing.get_context("spawn")
-
-
 def _init_worker() -> None:
     import cv2
 
@@ -129,8 +117,13 @@ def detect_chunk(
 
 
 def _chunks(jobs: list[ViewJob], workers: int) -> list[list[ViewJob]]:
-    """Contiguous chunks: long enough to amortize a full detection, enough to balance cores."""
-    size = int(np.clip(np.ceil(len(jobs) / (4 * workers)), 8, 64))
+    """Contiguous chunks: long enough to amortize a full detection, enough to balance cores.
+
+    Every chunk starts with a full detection (~15 tracked frames' worth), so
+    there are few: about two per process (the workers and this one, which
+    takes chunks too), at most 64 frames each.
+    """
+    size = int(np.clip(np.ceil(len(jobs) / (2 * workers + 1)), 8, 64))
     return [jobs[i : i + size] for i in range(0, len(jobs), size)]
 
 
@@ -176,17 +169,32 @@ def run_detection(
     finished: set[int] = set()
     try:
         with ProcessPoolExecutor(max_workers=min(workers, len(chunks)), mp_context=process_context(), initializer=_init_worker) as pool:
-            pending: dict[Future, int] = {
-                pool.submit(detect_chunk, c, board, image_size, track): i for i, c in enumerate(chunks) if i > 0
-            }
+            # At most one queued chunk per worker (plus one spare); this process takes the next unqueued chunk whenever
+            # it is free (the first while the workers start up), so no core waits while work is left.
+            queue = list(range(1, len(chunks)))
+            n_workers = min(workers, len(chunks))
+            pending: dict[Future, int] = {}
+
+            def refill() -> None:
+                while queue and len(pending) < n_workers + 1:  # one spare, so a worker never waits for this process
+                    i = queue.pop(0)
+                    pending[pool.submit(detect_chunk, chunks[i], board, image_size, track)] = i
+
+            refill()
             try:
-                take(detect_chunk(chunks[0], board, image_size, track))  # while the workers start up
-                finished.add(0)
-                while pending:
-                    done, _ = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+                local = [0]
+                while local or pending:
+                    if local:
+                        i = local.pop()
+                        take(detect_chunk(chunks[i], board, image_size, track))
+                        finished.add(i)
+                    done, _ = wait(pending, timeout=0 if queue else 0.2, return_when=FIRST_COMPLETED)
                     for fut in done:
                         take(fut.result())
                         finished.add(pending.pop(fut))
+                    refill()
+                    if queue:
+                        local.append(queue.pop(0))
                     check_cancel()
             except BaseException:
                 for fut in pending:

@@ -18,11 +18,16 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from lps_gui.sim.truth import centred, residual_from_line, true_deviation_um
+
 # Colours that print and read in grey scale: blue / orange, black truth, red outliers.
 FORWARD_COLOR = "#1f5fa8"
 BACKWARD_COLOR = "#e07b00"
 TRUTH_COLOR = "#222222"
+TRUTH_COLORS = {"+": "#0d2747", "-": "#6b3500"}  # truth per direction: dark shades of the measured colours
+SPEC_COLOR = "#c00000"
 OUTLIER_COLOR = "#d00000"
+IMAGE_ROTATION_COLOR = "#111111"
 COMPONENT_COLORS = ("#1f5fa8", "#2a9d3c", "#a8326e")
 
 STYLES = ("line", "markers", "line+markers")
@@ -78,7 +83,8 @@ class FigureSpec:
         return not any(np.isfinite(s.y).any() for s in self.series)
 
 
-TRUTH_KEYS = ("deviation_um", "straightness_um_1", "straightness_um_2", "roll_urad", "pitch_urad", "yaw_urad")
+TRUTH_KEYS = ("deviation_um", "straightness_um_1", "straightness_um_2", "roll_urad", "pitch_urad", "yaw_urad",
+              "image_rotation_urad")
 FIGURE_KEYS = ("positions", "deviation", "step", "straightness", "angles", "residuals", "spectrum")
 
 
@@ -95,7 +101,7 @@ def position_columns(results: dict[str, Any]) -> dict[str, np.ndarray]:
     numeric = ("index", "run", "target_mm", "measured_mm", "deviation_um", "sigma_um", "sigma_total_um",
                "rms_px", "n_corners", "straightness_um_1", "straightness_um_2", "straightness_sigma_um_1",
                "straightness_sigma_um_2", "roll_urad", "pitch_urad", "yaw_urad", "roll_sigma_urad",
-               "pitch_sigma_urad", "yaw_sigma_urad")
+               "pitch_sigma_urad", "yaw_sigma_urad", "image_rotation_urad", "image_rotation_sigma_urad")
     cols: dict[str, np.ndarray] = {}
     for name in numeric:
         cols[name] = np.array([_num(r.get(name)) for r in rows], dtype=float)
@@ -143,12 +149,14 @@ def truth_columns(results: dict[str, Any], truth: dict[str, Any] | None) -> dict
     """Truth per capture, reduced like the measurement; None for a real session.
 
     The estimator puts truth beside each position (``truth_deviation_um``,
-    ``truth_straightness_um_1`` ..., already reduced); those are used first.
-    Otherwise ``truth`` is the session's truth record (``positions_mm`` relative to the
-    first capture, ``straightness_um`` (K, 2), ``angles_urad`` (K, 3)) indexed
-    by capture index. Returns arrays aligned with :func:`position_columns`:
-    ``deviation_um`` (zero at the first capture), ``straightness_um_1/2``
-    (linear trend removed), ``roll/pitch/yaw_urad`` (mean removed).
+    ``truth_straightness_um_1`` ..., reduced by :func:`lps_gui.sim.truth.truth_comparison`);
+    those are used first. Otherwise ``truth`` is the session's truth record
+    (``positions_mm``, ``straightness_um`` (K, 2), ``angles_urad`` (K, 3)) indexed
+    by capture index, reduced with the same functions and the same reference
+    capture (results' ``reference_index``, else the first capture not flagged).
+    Returns arrays aligned with :func:`position_columns`: ``deviation_um``
+    (zero at the reference capture), ``straightness_um_1/2`` (linear trend
+    removed), ``roll/pitch/yaw_urad`` (mean removed).
     """
     rows = sorted(results.get("positions") or [], key=lambda r: r.get("index", 0))
     if rows and any(r.get("truth_deviation_um") is not None for r in rows):
@@ -160,19 +168,16 @@ def truth_columns(results: dict[str, Any], truth: dict[str, Any] | None) -> dict
     s_true_mm = np.asarray(truth["positions_mm"], dtype=float)
     if idx.size == 0 or idx.max() >= s_true_mm.size or idx.min() < 0:
         return None
-    target = cols["target_mm"]
-    first = int(np.argmin(idx))
-    out: dict[str, np.ndarray] = {}
-    dev = (s_true_mm[idx] - (target - target[first])) * 1000.0
-    out["deviation_um"] = dev - dev[first]
-    axis_mm = s_true_mm[idx]
+    compared = ~cols["outlier"]
+    if not compared.any():
+        return None
+    ref_index = (results.get("parameters") or {}).get("reference_index")
+    ref = int(np.flatnonzero(idx == ref_index)[0]) if ref_index in set(idx.tolist()) else int(np.flatnonzero(compared)[0])
+    out: dict[str, np.ndarray] = {"deviation_um": true_deviation_um(s_true_mm[idx], cols["target_mm"], ref)}
     straight = np.asarray(truth.get("straightness_um") or np.zeros((s_true_mm.size, 2)), dtype=float)[idx]
-    design = np.stack([np.ones_like(axis_mm), axis_mm], axis=1)  # shape (K, 2)
-    coef, *_ = np.linalg.lstsq(design, straight, rcond=None)
-    resid = straight - design @ coef  # shape (K, 2): distance from the best line
+    resid = residual_from_line(straight, cols["target_mm"], compared)  # shape (K, 2): distance from the best line
     out["straightness_um_1"], out["straightness_um_2"] = resid[:, 0], resid[:, 1]
-    angles = np.asarray(truth.get("angles_urad") or np.zeros((s_true_mm.size, 3)), dtype=float)[idx]
-    angles = angles - angles.mean(axis=0)
+    angles = centred(np.asarray(truth.get("angles_urad") or np.zeros((s_true_mm.size, 3)), dtype=float)[idx], compared)
     out["roll_urad"], out["pitch_urad"], out["yaw_urad"] = angles[:, 0], angles[:, 1], angles[:, 2]
     return out
 
@@ -191,6 +196,10 @@ def figures_from_results(results: dict[str, Any], truth: dict[str, Any] | None =
         The session's ``truth`` record (simulated sessions); drawn dashed beside
         the measurement. Without it, ``results["truth"]`` is used when present.
     """
+    if len(results.get("axes") or ["X"]) == 2:  # a planar session (SPEC 10)
+        from lps_gui.report.planar_figures import planar_figures_from_results
+
+        return planar_figures_from_results(results)
     cols = position_columns(results)
     truth = truth if truth is not None else results.get("truth")
     tcols = truth_columns(results, truth)
@@ -252,7 +261,7 @@ def deviation_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] |
             notes.append(f"{_dir_label(d)}: band = \u00b12 sigma (measurement noise)")
         if tcols is not None:
             tt, tmean, _, _ = per_target_stats(x, tcols["deviation_um"][sel], np.ones(x.shape, bool))
-            series.append(_truth_series(tt, tmean, f"truth {_dir_label(d)}"))
+            series.append(_truth_series(tt, tmean, f"truth {_dir_label(d)}", TRUTH_COLORS[d]))
     return FigureSpec("deviation", "Positioning deviation vs target", "target position [mm]", "deviation [\u00b5m]",
                       series, "; ".join(notes))
 
@@ -303,7 +312,7 @@ def step_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] | None
         if d in truth_steps:
             tx, ty = truth_steps[d]
             tt, tmean, _, _ = per_target_stats(tx, ty, np.ones(tx.shape, bool))
-            series.append(_truth_series(tt, tmean, f"truth {_dir_label(d)}"))
+            series.append(_truth_series(tt, tmean, f"truth {_dir_label(d)}", TRUTH_COLORS[d]))
     return FigureSpec("step", "Step deviation", "target position (step midpoint) [mm]",
                       "measured step \u2212 commanded step [\u00b5m]", series)
 
@@ -327,7 +336,7 @@ def _component_series(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] 
             lo, hi = mean - band, mean + band
         series.append(Series(t, mean, f"{name} {_dir_label(d)}", "line" if d == "+" else "markers", color,
                              band_low=lo, band_high=hi))
-    if tcols is not None:
+    if tcols is not None and column in tcols:
         t, mean, _, _ = per_target_stats(cols["target_mm"], tcols[column], np.ones(keep.shape, bool))
         series.append(_truth_series(t, mean, f"truth {name}", color))
     return series
@@ -339,7 +348,7 @@ def straightness_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray
     for k in (1, 2):
         series += _component_series(cols, tcols, f"straightness_um_{k}", f"straightness_sigma_um_{k}", f"v{k}",
                                     COMPONENT_COLORS[k - 1])
-    return FigureSpec("straightness", "Straightness (deviation from the fitted line)", "target position [mm]",
+    return FigureSpec("straightness", "Straightness at the board plane (deviation from the fitted line)", "target position [mm]",
                       "straightness [\u00b5m]", series,
                       "v1: perpendicular closest to the image y axis; v2: along the viewing direction; "
                       "band: \u00b12\u03c3 forward")
@@ -350,9 +359,13 @@ def angles_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] | No
     series = []
     for k, name in enumerate(("roll", "pitch", "yaw")):
         series += _component_series(cols, tcols, f"{name}_urad", f"{name}_sigma_urad", name, COMPONENT_COLORS[k])
-    return FigureSpec("angles", "Angular error motions (roll, pitch, yaw)", "target position [mm]",
-                      "angle [\u00b5rad]", series,
-                      "roll about the motion axis u, pitch about v1, yaw about v2; band: \u00b12\u03c3 forward")
+    note = "roll about the motion axis u, pitch about v1, yaw about v2; band: \u00b12\u03c3 forward"
+    if np.isfinite(cols["image_rotation_urad"]).any():  # constant-orientation fit (SPEC 11): resolved per view
+        series += _component_series(cols, tcols, "image_rotation_urad", "image_rotation_sigma_urad",
+                                    "image rotation", IMAGE_ROTATION_COLOR)
+        note = "per-view poses: roll about u, pitch about v1, yaw about v2; image rotation: about the optical axis; band \u00b12\u03c3 fwd"
+    return FigureSpec("angles", "Angular error motions (roll, pitch, yaw) and image rotation", "target position [mm]",
+                      "angle [\u00b5rad]", series, note)
 
 
 def residuals_figure(cols: dict[str, np.ndarray]) -> FigureSpec:
@@ -384,3 +397,29 @@ def figure_by_key(figures: Sequence[FigureSpec], key: str) -> FigureSpec:
         if f.key == key:
             return f
     raise KeyError(key)
+
+
+def with_spec_band(figure: FigureSpec, limit_um: float, plus_minus: bool = True) -> FigureSpec:
+    """The deviation figure with the accuracy limit drawn as two dashed red lines.
+
+    The deviation's zero (the first capture) is arbitrary, so the band is
+    centred on the measured band (mean +- 2 s, or the deviations), as the
+    verdict compares A/2 with a +- limit; a ``"band"`` limit is a full width.
+    """
+    measured = [s for s in figure.series if not s.dashed]
+    lows = [s.band_low if s.band_low is not None else s.y for s in measured]
+    highs = [s.band_high if s.band_high is not None else s.y for s in measured]
+    lo = np.concatenate([np.ravel(a) for a in lows]) if lows else np.array([])
+    hi = np.concatenate([np.ravel(a) for a in highs]) if highs else np.array([])
+    lo, hi = lo[np.isfinite(lo)], hi[np.isfinite(hi)]
+    xs = np.concatenate([np.ravel(s.x) for s in measured]) if measured else np.array([])
+    xs = xs[np.isfinite(xs)]
+    if not (lo.size and hi.size and xs.size and np.isfinite(limit_um)):
+        return figure
+    centre = 0.5 * (float(hi.max()) + float(lo.min()))
+    half = float(limit_um) if plus_minus else 0.5 * float(limit_um)
+    x0, x1 = float(xs.min()), float(xs.max())
+    band = Series(np.array([x0, x1, np.nan, x0, x1]), np.array([centre + half] * 2 + [np.nan] + [centre - half] * 2),
+                  f"accuracy limit \u00b1{half:g} \u00b5m (centred on the band)", "line", SPEC_COLOR, dashed=True)
+    return FigureSpec(figure.key, figure.title, figure.x_label, figure.y_label, [*figure.series, band],
+                      figure.notes, figure.x_log)

@@ -5,8 +5,8 @@ from dataclasses import asdict, replace
 
 from lps_gui.core.camera_model import CameraIntrinsics
 
-from lps_gui.capture.sim_session import create_simulated_session, simulated_engine
-from lps_gui.capture.simulated_rig import spec_for_plan
+from lps_gui.sim.session import create_simulated_session, simulated_engine
+from lps_gui.sim.rig import spec_for_plan
 from lps_gui.core.plan import Plan
 from lps_gui.io.atomic import sha256_file
 from lps_gui.io.session import Session

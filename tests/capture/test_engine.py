@@ -9,7 +9,7 @@ from collections import namedtuple
 import numpy as np
 import pytest
 
-from lps_gui.capture.truth import read_truth
+from lps_gui.sim.truth import read_truth
 from lps_gui.core.plan import Plan
 from lps_gui.core.stage_errors import StageErrorModel
 from lps_gui.errors import InputError

@@ -6,18 +6,11 @@ is the truth. Tolerances come from the estimate's own sigmas.
 """
 from __future__ import annotations
 
-import importlib.util
-
 import numpy as np
 import pytest
 
 from lps_gui.io.session import Session
 from tests.capture.helpers import start_capture
-
-pytestmark = pytest.mark.skipif(
-    importlib.util.find_spec("lps_gui.pipeline.estimate") is None or importlib.util.find_spec("lps_gui.pipeline.detect") is None,
-    reason="needs lps_gui.pipeline.estimate (estimation issue) and lps_gui.pipeline.detect (image issue)",
-)
 
 
 @pytest.mark.slow

@@ -53,3 +53,24 @@ def test_stacked_projection_shapes_and_paper_distortion():
     assert proj.d_uv_d_intrinsics.shape == (4, 5, 2, 9)
     ref = cv2.projectPoints(x.reshape(-1, 3), np.zeros(3), np.zeros(3), PAPER_INTRINSICS.camera_matrix, PAPER_INTRINSICS.dist)[0]
     assert rel_err(proj.uv.reshape(-1, 2), ref.reshape(-1, 2)) < 1e-12
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_point_and_intrinsics_jacobians_match_central_differences(seed):
+    """d uv / d x_cam and d uv / d intrinsics of project(), column by column, against central differences."""
+    from tests.core.finite_differences import central_jacobian, column_difference
+
+    intr, X, rvec, tvec = random_case(seed)
+    R = cv2.Rodrigues(rvec)[0]
+    x_cam = X @ R.T + tvec
+    proj = project(x_cam, intr, want_jacobian=True, want_intrinsics_jacobian=True)
+    J_x = central_jacobian(lambda d: project(x_cam + d, intr).uv, 3, 1e-4)
+    assert column_difference(proj.d_uv_d_xcam, J_x) < 1e-6
+    v0 = intr.vector()
+    h = np.full(9, 1e-3)  # uv is linear in the distortion coefficients: any step is exact there
+    J_i = central_jacobian(lambda d: project(x_cam, intr.with_vector(v0 + d)).uv, 9, h)
+    assert column_difference(proj.d_uv_d_intrinsics, J_i) < 1e-6
+    # the check can fail: one distortion column off by 1 % is seen
+    wrong = proj.d_uv_d_intrinsics.copy()
+    wrong[..., 4] *= 1.01
+    assert column_difference(wrong, J_i) > 1e-3

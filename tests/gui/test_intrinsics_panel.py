@@ -4,11 +4,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-pytest.importorskip("lps_gui.pipeline.intrinsics")
-pytest.importorskip("lps_gui.pipeline.simulate_images")
-
-from lps_gui.core.simulate import preset  # noqa: E402
-from lps_gui.pipeline.simulate_images import simulate_intrinsics_set  # noqa: E402
+from lps_gui.core.simulate import preset
+from lps_gui.sim.images import simulate_intrinsics_set
 
 pytestmark = pytest.mark.gui
 N_VIEWS = 8

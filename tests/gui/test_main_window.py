@@ -4,7 +4,6 @@ from __future__ import annotations
 import pytest
 
 from lps_gui.core.plan import Plan
-from lps_gui.gui.services import Unavailable, lookup
 
 pytestmark = pytest.mark.gui
 
@@ -37,13 +36,6 @@ def test_settings_are_remembered(make_window, settings):
     assert w2.stage_panel.source.currentData() == "emulator"
     assert w2.last_folder() == "/tmp/somewhere"
     assert w2.docks["log"].isHidden()
-
-
-def test_a_missing_back_end_is_named_not_crashed():
-    with pytest.raises(Unavailable, match=r"lps_gui\.pipeline\.nothing_here is not available yet"):
-        lookup("lps_gui.pipeline.nothing_here", "run")
-    with pytest.raises(Unavailable, match="no_such_function"):
-        lookup("lps_gui.core.plan", "no_such_function")
 
 
 def test_estimate_without_a_session_says_what_to_do(qtbot, window):

@@ -85,7 +85,6 @@ def test_settings_are_read_from_the_connected_stage_and_written(qtbot, window):
 
 def test_grbl_emulator_over_a_pty_and_the_cable_pulled(qtbot, window):
     """The real GRBL driver over a pseudo-terminal: jog, then the port disappears mid-session."""
-    pytest.importorskip("lps_gui.hardware.grbl.emulator")
     panel = window.stage_panel
     panel.select_source("emulator")
     assert panel.source.currentData() == "emulator"

@@ -17,7 +17,7 @@ from lps_gui.io.corners_vnl import read_corners_vnl
 from lps_gui.io.session import Session
 from lps_gui.pipeline import detect as detect_mod
 from lps_gui.pipeline.detect import detect_images, detect_session
-from lps_gui.pipeline.simulate_images import simulate_image_session
+from lps_gui.sim.images import simulate_image_session
 
 SPEC = small_spec(views=12)
 

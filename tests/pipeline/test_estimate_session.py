@@ -8,7 +8,7 @@ from lps_gui.cli import main
 from lps_gui.core.simulate import small_spec
 from lps_gui.io.results_file import read_results
 from lps_gui.pipeline.estimate import estimate_session
-from lps_gui.pipeline.simulate_points import simulate_point_session
+from lps_gui.sim.points import simulate_point_session
 
 
 @pytest.fixture()
@@ -31,6 +31,23 @@ def test_results_files_follow_spec(session):
     assert tc["flagged_outliers"] == tc["injected_outliers"] == [4]
     # errors against truth are of the size of the reported sigmas
     assert tc["position_rms_error_um"] < 3 * tc["mean_sigma_um"]
+
+
+def test_truth_comparison_is_the_positions_table_against_its_truth_column(session):
+    """One reference: deviation_um and truth_deviation_um are both zero at the reference capture, so the
+    figure recomputed from the table equals truth_comparison's."""
+    import numpy as np
+
+    results = estimate_session(session)
+    rows = [r for r in results["positions"] if r["used"]]
+    ref = results["parameters"]["reference_index"]
+    ref_row = next(r for r in results["positions"] if r["index"] == ref)
+    assert ref_row["deviation_um"] == 0.0 and ref_row["truth_deviation_um"] == 0.0
+    err = np.array([r["deviation_um"] - r["truth_deviation_um"] for r in rows])
+    tc = results["truth_comparison"]
+    assert tc["position_rms_error_um"] == pytest.approx(np.sqrt(np.mean(err**2)), rel=1e-9)
+    assert tc["position_max_abs_error_um"] == pytest.approx(np.max(np.abs(err)), rel=1e-9)
+    assert tc["median_sigma_um"] == pytest.approx(np.median([r["sigma_um"] for r in rows]))
 
 
 @pytest.mark.parametrize("method", ["hybrid", "pnp"])

@@ -9,7 +9,7 @@ from lps_gui.core.camera_model import INTRINSIC_NAMES
 from lps_gui.core.simulate import small_spec
 from lps_gui.io.intrinsics_file import read_intrinsics
 from lps_gui.pipeline.intrinsics import calibrate_images
-from lps_gui.pipeline.simulate_images import simulate_intrinsics_set
+from lps_gui.sim.images import simulate_intrinsics_set
 
 SPEC = small_spec()
 

@@ -33,15 +33,20 @@ class GrblEmulator:
 
     Use as a context manager in tests: ``with GrblEmulator(...) as emu: GrblStage(emu.path)``.
     ``firmware`` holds GRBL's state; ``stage`` is the simulated stage that moves.
+    ``homing_init_lock=True`` is stock GRBL 1.1h (config.h HOMING_INIT_LOCK): with
+    ``$22=1`` it powers up in Alarm. The default (off, ``[OPT:VL,...]``) keeps the
+    in-process rigs of tests and demos unlocked; ``lps emulate-grbl`` is stock.
     """
 
-    def __init__(self, stage: SimulatedStage | None = None, faults: Faults | None = None, time_scale: float = 1.0) -> None:
+    def __init__(self, stage: SimulatedStage | None = None, faults: Faults | None = None, time_scale: float = 1.0,
+                 homing_init_lock: bool = False) -> None:
         self.stage = stage if stage is not None else SimulatedStage()
         self.faults = faults or Faults()
         self.time_scale = float(time_scale)
         self.path = ""
         self.dropped = False
-        self.firmware = GrblFirmware(self.stage, self.faults, send=self._send, on_drop=self._drop_now)
+        self.firmware = GrblFirmware(self.stage, self.faults, send=self._send, on_drop=self._drop_now,
+                                     homing_init_lock=homing_init_lock)
         self._master = self._slave = -1
         self._thread: threading.Thread | None = None
         self._running = False
@@ -73,7 +78,7 @@ class GrblEmulator:
             self.stage.connect()
         self._running = True
         self._last_real = time.monotonic()
-        self.firmware.welcome()  # power-up prints what a reset prints
+        self.firmware.power_up()  # the homing lock (if built with it), then what a reset prints
         self._flush_out()
         self._thread = threading.Thread(target=self._serve, name="grbl-emulator", daemon=True)
         self._thread.start()
@@ -168,21 +173,37 @@ class GrblEmulator:
         self._flush_out()
 
 
-def emulated_grbl_stage(time_scale: float = 1.0, faults: Faults | None = None, **stage_options):
+def emulated_grbl_stage(time_scale: float = 1.0, faults: Faults | None = None, simulated: SimulatedStage | None = None,
+                        **stage_options):
     """A :class:`GrblStage` connected to a fresh emulator (``open_stage("emulator")``).
 
-    ``stage_options`` go to the :class:`SimulatedStage` under the emulator
-    (``clock`` is replaced: the emulator owns simulated time). The emulator
-    stops when the returned stage disconnects.
+    The emulator serves ``simulated`` (e.g. the simulated rig's stage, whose
+    true pose a simulated camera renders), else a new :class:`SimulatedStage`
+    built from ``stage_options`` (``clock`` is replaced: the emulator owns
+    simulated time). The returned stage forwards the capture engine's
+    ``seed_capture`` hook to the simulated stage when it has one, and stops
+    the emulator when it disconnects.
     """
     from lps_gui.hardware.grbl.driver import GrblStage
 
     stage_options.pop("clock", None)
-    emu = GrblEmulator(SimulatedStage(**stage_options), faults=faults, time_scale=time_scale)
+    served = simulated if simulated is not None else SimulatedStage(**stage_options)
+    emu = GrblEmulator(served, faults=faults, time_scale=time_scale)
     path = emu.start()
 
     class EmulatedGrblStage(GrblStage):
         emulator = emu
+        simulated = served
+
+        def seed_capture(self, key: int) -> None:
+            hook = getattr(served, "seed_capture", None)
+            if hook is not None:
+                hook(key)
+
+        def seed_axes(self, key_x: int, key_y: int) -> None:
+            hook = getattr(served, "seed_axes", None)
+            if hook is not None:
+                hook(key_x, key_y)
 
         def disconnect(self) -> None:
             try:
@@ -190,10 +211,13 @@ def emulated_grbl_stage(time_scale: float = 1.0, faults: Faults | None = None, *
             finally:
                 emu.stop()
 
+        def describe(self) -> dict:
+            return {**super().describe(), "emulated": served.describe()}
+
     stage = EmulatedGrblStage(path)
     try:
         stage.connect()
-    except Exception:
+    except BaseException:
         emu.stop()
         raise
     return stage

@@ -1,0 +1,71 @@
+"""How the capture engine reaches a target of a planar (XY) plan (SPEC 10).
+
+Each axis is approached from the side the plan gives it
+(:attr:`PlanarStop.approach`, ISO 230-2 per axis): an axis that must move
+toward its target from that side moves straight there; one that would
+arrive from the other side, or whose last approach was from the other side,
+first goes to an overshoot point on its approach side. The axes move one
+after the other (X, then Y), each a plain ``G1`` of one axis, so each
+arrives from its own side whatever the other does.
+"""
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+
+from lps_gui.core.planar_plan import MOVE_TOL_MM, PlanarPlan, PlanarStop
+from lps_gui.errors import InputError
+from lps_gui.hardware.stage import Stage
+
+PLANAR_AXES = ("X", "Y")
+
+
+def format_target(target_mm: float | tuple[float, float]) -> str:
+    """A target for messages: ``12.5 mm`` or ``(12.5, 30) mm``."""
+    if isinstance(target_mm, tuple):
+        return f"({target_mm[0]:g}, {target_mm[1]:g}) mm"
+    return f"{target_mm:g} mm"
+
+
+def axis_moves(here_mm: tuple[float, float], sides: list[int | None], stop: PlanarStop, overshoot_mm: float
+               ) -> list[tuple[str, float]]:
+    """The single-axis moves that bring the carriage onto ``stop`` from its approach sides.
+
+    ``sides`` holds each axis' side of its last approach (None: unknown, e.g.
+    after a pause); it is updated in place.
+    """
+    moves: list[tuple[str, float]] = []
+    for a, name in enumerate(PLANAR_AXES):
+        target, side = stop.target_mm[a], stop.approach[a]
+        delta = target - here_mm[a]
+        if abs(delta) <= MOVE_TOL_MM and sides[a] == side:
+            continue  # already there, approached from the right side
+        if delta * side <= MOVE_TOL_MM:  # it would arrive from the other side (or not move at all)
+            moves.append((name, target - side * max(overshoot_mm, 0.0)))  # come round from the approach side
+        moves.append((name, target))
+        sides[a] = side
+    return moves
+
+
+def go_to_planar(stage: Stage, stop: PlanarStop, plan: PlanarPlan, sides: list[int | None],
+                 move: Callable[[float, float, str], None]) -> tuple[float, float]:
+    """Move onto ``stop`` (axis by axis, each from its side); returns the reported (x, y) in mm."""
+    here = (float(stage.position_mm("X")), float(stage.position_mm("Y")))
+    for axis, target in axis_moves(here, sides, stop, plan.overshoot_mm):
+        move(target, plan.feed_mm_min, axis)
+    return (float(stage.position_mm("X")), float(stage.position_mm("Y")))
+
+
+def check_planar_plan_in_travel(plan: PlanarPlan, stage: Stage) -> None:
+    """InputError before any move when a target or overshoot lies outside an axis' known travel."""
+    travel = getattr(stage, "axis_travel_mm", None)
+    if travel is None:
+        return
+    t = plan.targets()
+    for a, name in enumerate(PLANAR_AXES):
+        lo, hi = float(np.min(t[:, a])) - plan.overshoot_mm, float(np.max(t[:, a])) + plan.overshoot_mm
+        t_lo, t_hi = travel[a]
+        if lo < t_lo or hi > t_hi:
+            raise InputError(f"plan: {name} moves from {lo:g} to {hi:g} mm (targets and overshoot) but the stage's {name} "
+                             f"travels {t_lo:g}..{t_hi:g} mm; shorten the plan or the overshoot")

@@ -1,0 +1,106 @@
+"""`lps plan-rig`: before any capture, does the board stay in view, and what sigma to expect."""
+from __future__ import annotations
+
+import argparse
+
+HELP = "check a rig before capturing: board in view over the whole plan, and the position sigma to expect"
+
+
+def _numbers(text: str) -> tuple[float, ...]:
+    try:
+        values = tuple(float(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected numbers separated by commas, got {text!r}") from None
+    if not values:
+        raise argparse.ArgumentTypeError("expected at least one number")
+    return values
+
+
+def _size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT, got {text!r}") from None
+    return w, h
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    cam = p.add_argument_group("camera (either --intrinsics or the lens and sensor)")
+    cam.add_argument("--intrinsics", help="intrinsics.json or OpenCV YAML of the camera")
+    cam.add_argument("--focal-mm", type=float, help="lens focal length, mm")
+    cam.add_argument("--pixel-um", type=float, help="pixel pitch, um")
+    cam.add_argument("--image", type=_size, help="image size WIDTHxHEIGHT, px")
+    p.add_argument("--board", help="board.json; or give --inner-corners and --square-mm")
+    p.add_argument("--inner-corners", type=_size, help="inner corners COLSxROWS")
+    p.add_argument("--square-mm", type=float, help="square size, mm")
+    p.add_argument("--distance-mm", type=_numbers, required=True,
+                   help="camera-to-board distance(s), mm; several (400,500,600) print one row each")
+    p.add_argument("--start", type=_numbers, default=(0.0,), help="first target: X or X,Y (mm)")
+    p.add_argument("--stop", type=_numbers, required=True, help="last target: X or X,Y (mm); X,Y plans a planar grid")
+    p.add_argument("--step", type=_numbers, required=True, help="step: X or X,Y (mm)")
+    p.add_argument("--noise-px", type=float, default=0.1, help="corner noise to expect, px (default 0.1)")
+    p.add_argument("--json", action="store_true", help="print the predictions as JSON")
+
+
+def _camera(args: argparse.Namespace):
+    from lps_gui.core.rig_planning import intrinsics_from_lens
+    from lps_gui.errors import InputError
+
+    if args.intrinsics:
+        from lps_gui.io.intrinsics_file import read_intrinsics
+
+        return read_intrinsics(args.intrinsics)
+    if args.focal_mm is None or args.pixel_um is None or args.image is None:
+        raise InputError("plan-rig: give --intrinsics FILE, or --focal-mm, --pixel-um and --image WxH")
+    return intrinsics_from_lens(args.focal_mm, args.pixel_um, args.image)
+
+
+def _board(args: argparse.Namespace):
+    from lps_gui.core.board import Board
+    from lps_gui.errors import InputError
+
+    if args.board:
+        from lps_gui.io.board_file import read_board
+
+        return read_board(args.board)
+    if args.inner_corners is None or args.square_mm is None:
+        raise InputError("plan-rig: give --board board.json, or --inner-corners COLSxROWS and --square-mm")
+    return Board(cols=args.inner_corners[0], rows=args.inner_corners[1], square_mm=args.square_mm)
+
+
+def _plan(args: argparse.Namespace):
+    from lps_gui.core.plan import Plan
+    from lps_gui.core.planar_plan import PlanarPlan
+    from lps_gui.errors import InputError
+
+    dims = {len(args.start), len(args.stop), len(args.step)}
+    if dims == {1}:
+        return Plan(start_mm=args.start[0], stop_mm=args.stop[0], step_mm=args.step[0], overshoot_mm=0.0)
+    if dims <= {1, 2} and len(args.stop) == 2:
+        pair = [(v * 2 if len(v) == 1 else v) for v in (args.start, args.stop, args.step)]
+        return PlanarPlan(start_mm=tuple(pair[0]), stop_mm=tuple(pair[1]), step_mm=tuple(pair[2]), overshoot_mm=0.0)
+    raise InputError("plan-rig: --start, --stop and --step take one value (a line) or two, X,Y (a planar grid)")
+
+
+def run(args: argparse.Namespace) -> int:
+    import json
+
+    from lps_gui.core.rig_planning import predict_rig
+
+    intrinsics, board, plan = _camera(args), _board(args), _plan(args)
+    rows = [predict_rig(board, intrinsics, d, plan, args.noise_px) for d in args.distance_mm]
+    if args.json:
+        print(json.dumps([r.to_dict() for r in rows], indent=2))
+        return 0 if all(r.board_in_view for r in rows) else 3
+    axes = "X,Y" if len(rows[0].axes) == 2 else "X"
+    print(f"plan: {rows[0].n_targets} targets on {axes}; corner noise {args.noise_px:g} px; "
+          f"board {board.cols}x{board.rows} at {board.square_mm:g} mm")
+    print(f"{'distance mm':>12} {'board px':>12} {'in view':>8} {'sigma um (median / max)':>24}")
+    for r in rows:
+        sig = "-" if r.sigma_um_median is None else f"{r.sigma_um_median:.2f} / {r.sigma_um_max:.2f}"
+        view = "yes" if r.board_in_view else f"no ({r.targets_losing_board})"
+        size = f"{r.board_size_px[0]:.0f}x{r.board_size_px[1]:.0f}"
+        print(f"{r.distance_mm:>12g} {size:>12} {view:>8} {sig:>24}")
+        for note in r.notes:
+            print(f"{'':>12} {note}")
+    return 0 if all(r.board_in_view for r in rows) else 3

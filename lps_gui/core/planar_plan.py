@@ -1,0 +1,242 @@
+"""Capture plans for XY gantries (SPEC 10) as plain data.
+
+A grid (``start_mm``, ``stop_mm``, ``step_mm`` as [x, y], serpentine or raster)
+or explicit ``targets_mm`` [[x, y], ...] is one forward pass; a backward pass
+visits the same targets in reverse order. Each axis is approached from the
+side it is moving in (ISO 230-2 per axis): the approach direction of an axis
+at a stop is the sign of its last move, and a run's first stop is reached
+from an overshoot on the side of each axis' first move in that run.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Iterator, NamedTuple
+
+import numpy as np
+
+from lps_gui.core.plan import DIRECTIONS
+from lps_gui.errors import InputError
+
+PATTERNS = ("serpentine", "raster")
+MAX_PLANAR_TARGETS = 100_000
+MOVE_TOL_MM = 1e-9
+
+
+class PlanarStop(NamedTuple):
+    """One frame of a planar session."""
+
+    index: int
+    run: int
+    direction: str  # "+" forward pass, "-" backward pass
+    target_mm: tuple[float, float]
+    frame: int
+    approach: tuple[int, int]  # +1 / -1 per axis: the side each axis reached the target from
+
+
+def _pair(v: Any, name: str) -> tuple[float, float]:
+    try:
+        a = np.asarray(v, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise InputError(f"planar plan: {name} must be [x, y] in mm, got {v!r}") from None
+    if a.size != 2 or not np.all(np.isfinite(a)):
+        raise InputError(f"planar plan: {name} must be two finite numbers [x, y] in mm, got {v!r}")
+    return float(a[0]), float(a[1])
+
+
+@dataclass(frozen=True)
+class PlanarPlan:
+    """A 2-D capture plan; lengths in mm."""
+
+    start_mm: tuple[float, float] = (0.0, 0.0)
+    stop_mm: tuple[float, float] = (10.0, 10.0)
+    step_mm: tuple[float, float] = (5.0, 5.0)
+    targets_mm: tuple[tuple[float, float], ...] | None = None
+    pattern: str = "serpentine"
+    directions: str = "+"
+    runs: int = 1
+    overshoot_mm: float = 1.0
+    settle_s: float = 0.2
+    frames_per_stop: int = 1
+    feed_mm_min: float = 600.0
+    axes: tuple[str, str] = ("X", "Y")
+
+    def __post_init__(self) -> None:
+        if self.directions not in DIRECTIONS:
+            raise InputError(f"planar plan: directions must be one of {DIRECTIONS}, got {self.directions!r}")
+        if self.pattern not in PATTERNS:
+            raise InputError(f"planar plan: pattern must be one of {PATTERNS}, got {self.pattern!r}")
+        if self.runs < 1 or self.frames_per_stop < 1:
+            raise InputError("planar plan: runs and frames_per_stop must be at least 1")
+        if not (self.overshoot_mm >= 0 and self.settle_s >= 0 and self.feed_mm_min > 0):
+            raise InputError("planar plan: overshoot and settle must be >= 0 and the feed > 0")
+        if self.targets_mm is None:
+            counts = []
+            for a, (s0, s1, ds) in enumerate(zip(self.start_mm, self.stop_mm, self.step_mm)):
+                if not (np.isfinite(ds) and ds > 0) and s1 != s0:
+                    raise InputError(f"planar plan: step {ds} mm on axis {self.axes[a]} must be positive")
+                counts.append(1 if s1 == s0 else int(round(abs(s1 - s0) / ds)) + 1)
+            if counts[0] * counts[1] > MAX_PLANAR_TARGETS:
+                raise InputError(f"planar plan: {counts[0]} x {counts[1]} targets exceed the limit of "
+                                 f"{MAX_PLANAR_TARGETS}; use a coarser step")
+            if counts[0] * counts[1] < 3:
+                raise InputError("planar plan: the grid has fewer than 3 targets; widen it or refine the step")
+        elif len(self.targets_mm) < 3:
+            raise InputError("planar plan: give at least 3 targets [x, y] not on one line")
+
+    def targets(self) -> np.ndarray:
+        """Targets of one forward pass in visiting order, shape (m, 2) mm."""
+        if self.targets_mm is not None:
+            return np.asarray(self.targets_mm, dtype=float).reshape(-1, 2)
+        axes = []
+        for s0, s1, ds in zip(self.start_mm, self.stop_mm, self.step_mm):
+            n = 1 if s1 == s0 else int(round(abs(s1 - s0) / ds)) + 1
+            axes.append(s0 + np.sign(s1 - s0) * ds * np.arange(n) if n > 1 else np.array([s0]))
+        xs, ys = axes
+        rows = []
+        for j, y in enumerate(ys):
+            row = xs if (self.pattern == "raster" or j % 2 == 0) else xs[::-1]
+            rows.append(np.column_stack([row, np.full(row.size, y)]))
+        return np.concatenate(rows)
+
+    def run_directions(self) -> list[str]:
+        return ["+", "-"] if self.directions == "both" else [self.directions]
+
+    def stops(self) -> Iterator[PlanarStop]:
+        """Every frame of the session in capture order."""
+        forward = self.targets()
+        index = 0
+        for run in range(1, self.runs + 1):
+            for direction in self.run_directions():
+                ordered = forward if direction == "+" else forward[::-1]
+                approach = approach_directions(ordered, 1 if direction == "+" else -1)
+                for target, app in zip(ordered, approach):
+                    for frame in range(self.frames_per_stop):
+                        yield PlanarStop(index, run, direction, (float(target[0]), float(target[1])), frame,
+                                         (int(app[0]), int(app[1])))
+                        index += 1
+
+    def n_frames(self) -> int:
+        return len(self.targets()) * len(self.run_directions()) * self.runs * self.frames_per_stop
+
+    def arrival_indices(self) -> dict[int, tuple[int, int]]:
+        """Per frame, for each axis, the first frame of the pass since which that axis has held its target.
+
+        An axis that does not move between stops stays where it arrived: the
+        simulated gantry keys each axis' repeatability draw on this index, so
+        a resumed capture (which re-approaches both axes) reproduces it.
+        """
+        out: dict[int, tuple[int, int]] = {}
+        first = [0, 0]
+        prev: PlanarStop | None = None
+        for s in self.stops():
+            for a in range(2):
+                same_pass = prev is not None and (prev.run, prev.direction) == (s.run, s.direction)
+                if not (same_pass and abs(prev.target_mm[a] - s.target_mm[a]) <= MOVE_TOL_MM
+                        and prev.approach[a] == s.approach[a]):
+                    first[a] = s.index
+            out[s.index] = (first[0], first[1])
+            prev = s
+        return out
+
+    def approach_start_mm(self, ordered_targets: np.ndarray, default_sign: int) -> np.ndarray:
+        """Where to go before a pass so its first target is approached as the pass continues."""
+        first = approach_directions(ordered_targets, default_sign)[0]
+        return np.asarray(ordered_targets[0], dtype=float) - self.overshoot_mm * first
+
+    def to_dict(self) -> dict[str, Any]:
+        d: dict[str, Any] = {
+            "axes": list(self.axes), "pattern": self.pattern, "directions": self.directions, "runs": self.runs,
+            "overshoot_mm": self.overshoot_mm, "settle_s": self.settle_s,
+            "frames_per_stop": self.frames_per_stop, "feed_mm_min": self.feed_mm_min,
+        }
+        if self.targets_mm is not None:
+            d["targets_mm"] = [list(t) for t in self.targets_mm]
+        else:
+            d.update(start_mm=list(self.start_mm), stop_mm=list(self.stop_mm), step_mm=list(self.step_mm))
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> "PlanarPlan":
+        kw: dict[str, Any] = {}
+        for key in ("start_mm", "stop_mm", "step_mm"):
+            if key in d:
+                kw[key] = _pair(d[key], key)
+        if d.get("targets_mm") is not None:
+            t = d["targets_mm"]
+            if not isinstance(t, (list, tuple)):
+                raise InputError("planar plan: targets_mm must be a list of [x, y]")
+            kw["targets_mm"] = tuple(_pair(p, f"targets_mm[{i}]") for i, p in enumerate(t))
+        for key, typ in (("pattern", str), ("directions", str), ("runs", int), ("overshoot_mm", float),
+                         ("settle_s", float), ("frames_per_stop", int), ("feed_mm_min", float)):
+            if key in d:
+                try:
+                    kw[key] = typ(d[key])
+                except (TypeError, ValueError):
+                    raise InputError(f"planar plan: {key} must be a {typ.__name__}, got {d[key]!r}") from None
+        if "axes" in d:
+            kw["axes"] = tuple(str(a) for a in d["axes"])
+        return cls(**kw)
+
+
+def approach_directions(ordered: np.ndarray, default_sign: int) -> np.ndarray:
+    """Per-axis approach side (+1/-1) of each target visited in ``ordered`` (m, 2), shape (m, 2).
+
+    An axis keeps the side of the move that brought it to a target. Where it
+    did not move on the way in but leaves in the other direction (the start of
+    a serpentine row), the engine overshoots first, so the target is approached
+    from the side the axis goes on in. Where it reverses right at a target, the
+    target belongs to the longer of the two monotonic runs of moves (a line
+    beats the jump to the next line; a tie keeps the way in). An axis that
+    never moves takes ``default_sign``.
+    """
+    t = np.asarray(ordered, dtype=float)
+    m = t.shape[0]
+    out = np.full(t.shape, int(default_sign), dtype=int)
+    for a in range(t.shape[1]):
+        moves = np.diff(t[:, a])
+        sign = np.where(np.abs(moves) > MOVE_TOL_MM, np.sign(moves), 0).astype(int)
+        nz = np.flatnonzero(sign)
+        if nz.size == 0:
+            continue
+        seg = np.concatenate([[0], np.cumsum(sign[nz][1:] != sign[nz][:-1])])  # run id of each move
+        seg_len = np.bincount(seg)
+        for i in range(m):
+            k = int(np.searchsorted(nz, i))  # first nonzero move leaving at or after stop i
+            if k == 0:
+                out[i, a] = sign[nz[0]]
+                continue
+            if k == nz.size:
+                out[i, a] = sign[nz[-1]]
+                continue
+            j_in, j_out = nz[k - 1], nz[k]
+            s_in, s_out = sign[j_in], sign[j_out]
+            lands, leaves = j_in == i - 1, j_out == i
+            if s_in == s_out or (lands and not leaves) or (not lands and not leaves):
+                out[i, a] = s_in
+            elif leaves and not lands:
+                out[i, a] = s_out
+            else:
+                out[i, a] = s_out if seg_len[seg[k]] > seg_len[seg[k - 1]] else s_in
+    return out
+
+
+def iso_lines_plan(
+    x_targets_mm: np.ndarray,
+    y_levels_mm: np.ndarray,
+    y_targets_mm: np.ndarray,
+    x_levels_mm: np.ndarray,
+    runs: int = 5,
+    **kw: Any,
+) -> PlanarPlan:
+    """ISO 230-2 lines per axis: along X at each Y level, then along Y at each X level.
+
+    With ``directions="both"`` (the default here) each line is run forward
+    and backward, ``runs`` times (ISO 230-2 asks for 5).
+    """
+    targets: list[tuple[float, float]] = []
+    for y in np.atleast_1d(y_levels_mm):
+        targets += [(float(x), float(y)) for x in np.sort(np.atleast_1d(x_targets_mm))]
+    for x in np.atleast_1d(x_levels_mm):
+        targets += [(float(x), float(y)) for y in np.sort(np.atleast_1d(y_targets_mm))]
+    kw.setdefault("directions", "both")
+    return PlanarPlan(targets_mm=tuple(targets), runs=runs, **kw)

@@ -1,0 +1,183 @@
+"""Estimate a planar (XY) session (SPEC 10) and assemble its results.
+
+Reads the session as the 1-D pipeline does, takes every capture's per-axis
+approach side from the plan, runs :func:`lps_gui.core.planar_estimate.estimate_planar`
+and builds results.json with ``axes: ["X", "Y"]``, the planar positions
+table and ``figures.planar``; the CSVs follow SPEC 10. Everything is computed
+before anything is written.
+"""
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+
+from lps_gui import __version__
+from lps_gui.core.camera_model import CameraIntrinsics
+from lps_gui.core.planar_estimate import PlanarEstimate, PlanarObservations, estimate_planar
+from lps_gui.core.planar_figures import planar_figures
+from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
+from lps_gui.core.rotation import log_so3
+from lps_gui.errors import InputError
+from lps_gui.io.atomic import sha256_file
+from lps_gui.io.board_file import board_to_dict
+from lps_gui.io.corners_vnl import read_corners_vnl
+from lps_gui.io.intrinsics_file import intrinsics_to_dict
+from lps_gui.io.results_file import FORMAT
+from lps_gui.io.session import SESSION_FILE, Session
+from lps_gui.sim.planar_truth import planar_session_truth, planar_truth_comparison
+
+
+def planar_observations_from_session(session: Session, intrinsics: CameraIntrinsics | None = None) -> PlanarObservations:
+    """Match every line of captures.jsonl to its corners; approach sides from the plan."""
+    board = session.board()
+    intr = intrinsics or session.intrinsics()
+    records = session.records()
+    if not records:
+        raise InputError(f"{session.captures_path}: no captures listed; capture or simulate a session first")
+    for r in records:
+        if not isinstance(r.target_mm, tuple):
+            raise InputError(f"{session.captures_path}: capture {r.index} has target_mm {r.target_mm!r}, "
+                             "not [x, y]; a planar session (plan.axes [X, Y]) lists both coordinates")
+    table = read_corners_vnl(session.corners_path, board.n_corners)
+    rows = table.index()
+    missing = [r.file for r in records if r.file not in rows]
+    if missing:
+        raise InputError(f"{session.corners_path}: {len(missing)} captured image(s) have no corners "
+                         f"(first: {missing[0]}); run `lps detect {session.folder}`")
+    approach_by_index = {s.index: s.approach for s in session.plan().stops()}
+    approach = [approach_by_index.get(r.index, (1, 1)) for r in records]
+    return PlanarObservations(
+        board=board, intrinsics=intr, corners_px=table.corners_px[[rows[r.file] for r in records]],
+        target_mm=[r.target_mm for r in records], approach=approach,
+        direction=[1.0 if r.direction == "+" else -1.0 for r in records], run=[r.run for r in records],
+        index=[r.index for r in records], names=[r.file for r in records], source=str(session.corners_path),
+    )
+
+
+def estimate_planar_session(
+    session: Session,
+    method: str = "joint",
+    options: dict[str, Any] | None = None,
+    intrinsics: CameraIntrinsics | None = None,
+    intrinsics_source: str = "session.json",
+    progress: ProgressFn = no_progress,
+    cancel: CancelToken | None = None,
+) -> dict[str, Any]:
+    """Estimate a planar session; returns the results.json content (not written here)."""
+    opts = dict(options or {})
+    obs = planar_observations_from_session(session, intrinsics)
+    est = estimate_planar(obs, method=method, outlier_k=float(opts.get("outlier_k", 5.0)),
+                          detect_outliers=bool(opts.get("detect_outliers", True)), robust=bool(opts.get("robust", False)),
+                          progress=progress, cancel=cancel)
+    return build_planar_results(session, obs, est, intrinsics_source, opts)
+
+
+def _f(x: Any) -> float | None:
+    x = float(x)
+    return x if np.isfinite(x) else None
+
+
+def build_planar_results(session: Session, obs: PlanarObservations, est: PlanarEstimate, intrinsics_source: str,
+                         settings: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The results.json document of a planar session (SPEC 10; schema in docs/ARCHITECTURE.md)."""
+    dev = est.deviation_um(obs.target_mm)
+    sig = 1e3 * est.sigma_xy_mm
+    ref_target = obs.target_mm[est.reference_view]
+    positions = []
+    for i in range(obs.K):
+        ok = bool(est.usable[i])
+        positions.append({
+            "index": int(obs.index[i]), "run": int(obs.run[i]), "direction": "+" if obs.direction[i] > 0 else "-",
+            "target_x_mm": float(obs.target_mm[i, 0]), "target_y_mm": float(obs.target_mm[i, 1]),
+            "measured_x_mm": _f(est.state.xy[i, 0] + ref_target[0]) if ok else None,
+            "measured_y_mm": _f(est.state.xy[i, 1] + ref_target[1]) if ok else None,
+            "deviation_x_um": _f(dev[i, 0]) if ok else None, "deviation_y_um": _f(dev[i, 1]) if ok else None,
+            "sigma_x_um": _f(sig[i, 0]) if est.used[i] else None, "sigma_y_um": _f(sig[i, 1]) if est.used[i] else None,
+            "rms_px": _f(est.rms_px[i]), "n_corners": int(est.n_corners[i]), "outlier": bool(est.outlier[i]),
+            "outlier_reason": est.outlier_reason[i] or ("board not found" if not ok else ""),
+            "used": bool(est.used[i]), "approach": [int(v) for v in obs.approach[i]], "file": obs.names[i],
+        })
+    valid = est.used & np.all(np.isfinite(dev), axis=1)
+    sig_fig = np.where(sig > 0, sig, np.nanmedian(sig[valid & (sig[:, 0] > 0)], axis=0) if valid.any() else 1.0)
+    figs = planar_figures(obs.target_mm, obs.approach, obs.run, obs.direction, dev, sig_fig, valid,
+                          est.fit.G, est.fit.cov_G)
+    planar = {**figs.geometry.to_dict(), "per_axis": figs.per_axis, "lines": [ln.to_dict() for ln in figs.lines],
+              "nodes": figs.nodes, "notes": figs.notes, "motion_matrix": est.fit.G.tolist()}
+    st = est.state
+    parameters = {
+        "R_cam_board": st.R.tolist(), "rvec_rad": log_so3(st.R).tolist(), "l0_cam_mm": st.l0.tolist(),
+        "n_x_cam": st.P[:, 0].tolist(), "n_y_cam": st.P[:, 1].tolist(),
+        "u_x_board": st.motion_axes_board()[:, 0].tolist(), "u_y_board": st.motion_axes_board()[:, 1].tolist(),
+        "sigma_px": est.sigma_px, "rms_px": _f(np.sqrt(np.nanmean(est.rms_px[est.used] ** 2))),
+        "n_views": obs.K, "n_used": int(est.used.sum()), "n_outliers": int(est.outlier.sum()),
+        "n_observations": est.n_observations, "dof": est.dof, "iterations": est.iterations,
+        "converged": est.converged, "reference_index": int(obs.index[est.reference_view]),
+    }
+    inputs = {"session": str(session.folder), "intrinsics_source": intrinsics_source, "sha256": {}}
+    for name in (SESSION_FILE, session.captures_path.name, session.corners_path.name):
+        path = session.folder / name
+        if path.exists():
+            inputs["sha256"][name] = sha256_file(path)
+    results: dict[str, Any] = {
+        "format": FORMAT, "software": {"name": "lps-calib", "version": __version__},
+        "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "method": est.method, "axes": ["X", "Y"],
+        "settings": dict(settings or {}), "inputs": inputs, "board": board_to_dict(obs.board),
+        "intrinsics": intrinsics_to_dict(obs.intrinsics),
+        "session_meta": {k: session.meta.get(k) for k in ("camera", "stage", "plan", "stage_spec", "created")
+                         if k in session.meta},
+        "parameters": parameters, "positions": positions, "figures": {"planar": planar},
+        "flags": est.flags, "timings_s": dict(est.timings_s),
+    }
+    truth = planar_session_truth(session)
+    if truth is not None:
+        results["truth_comparison"] = planar_truth_comparison(obs, est, truth, positions)
+        _add_truth_to_nodes(planar["nodes"], obs, positions, valid)
+    results["summary"] = planar_summary_rows(results)
+    return results
+
+
+def _add_truth_to_nodes(nodes: list[dict[str, Any]], obs: PlanarObservations, positions: list[dict],
+                        valid: np.ndarray) -> None:
+    """The simulator's mean error vector at every node, beside the measured one (for the error map)."""
+    from lps_gui.core.planar_figures import node_errors
+
+    true_dev = np.array([[_num(r.get("truth_deviation_x_um")), _num(r.get("truth_deviation_y_um"))] for r in positions])
+    ok = valid & np.all(np.isfinite(true_dev), axis=1)
+    for node, t in zip(nodes, node_errors(obs.target_mm, obs.direction, true_dev, np.ones_like(true_dev), ok)):
+        node["truth_error_um"] = t.get("error_um")
+
+
+def _num(v: Any) -> float:
+    return float("nan") if v is None else float(v)
+
+
+def planar_summary_rows(results: dict[str, Any]) -> list[tuple[str, Any, str]]:
+    """(name, value, unit) rows for summary.csv of a planar session."""
+    p = results["parameters"]
+    pl = results["figures"]["planar"]
+    rows: list[tuple[str, Any, str]] = [
+        ("method", results["method"], ""), ("axes", "X,Y", ""), ("views", p["n_views"], ""),
+        ("views_used", p["n_used"], ""), ("outlier_views", p["n_outliers"], ""),
+        ("corner_noise_sigma", p["sigma_px"], "px"), ("rms_reprojection", p["rms_px"], "px"),
+        ("squareness", pl["squareness_urad"], "urad"), ("squareness_sigma", pl["squareness_sigma_urad"], "urad"),
+        ("squareness_um_per_m", pl["squareness_um_per_m"], "um/m"),
+        ("scale_x", pl["scale_x_ppm"], "ppm"), ("scale_x_sigma", pl["scale_x_sigma_ppm"], "ppm"),
+        ("scale_y", pl["scale_y_ppm"], "ppm"), ("scale_y_sigma", pl["scale_y_sigma_ppm"], "ppm"),
+    ]
+    for axis, other in (("X", "Y"), ("Y", "X")):
+        a = pl["per_axis"].get(axis)
+        if not a:
+            continue
+        rows.append((f"straightness_{axis.lower()}_along_{other.lower()}_max", a["straightness_um_max"], "um"))
+        iso = (a.get("iso230_2") or {}).get("iso230_2") or {}
+        for key in ("A_um", "R_um", "E_um", "B_um"):
+            if iso.get(key) is not None:
+                rows.append((f"iso230_2_{axis.lower()}_{key[:-3]}", iso[key], "um"))
+    tc = results.get("truth_comparison") or {}
+    if tc.get("position_rms_error_um") is not None:
+        rows.append(("truth_position_rms_error", tc["position_rms_error_um"], "um"))
+        rows.append(("truth_position_max_abs_error", tc["position_max_abs_error_um"], "um"))
+    rows.append(("software_version", results["software"]["version"], ""))
+    return rows

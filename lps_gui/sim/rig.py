@@ -1,0 +1,154 @@
+"""The simulated rig: a simulated stage and a simulated camera that renders where the stage really is.
+
+One :class:`~lps_gui.core.simulate.SimulationSpec` describes it; the stage
+carries the spec's :class:`StageErrorModel`, the camera renders the board
+through :meth:`SimulatedStage.true_pose`, both run on one clock (a
+:class:`SimClock` unless told otherwise). The CLI, the GUI and the demo use
+:func:`make_simulated_rig`; the stage error model and the rig geometry it
+binds are pure models in ``core/stage_errors.py`` and ``core/rig.py``.
+
+Both devices implement the capture engine's optional ``seed_capture(key)``
+hook: the stage's repeatability draw for a stop and the camera's image noise
+for a frame come from generators seeded by (seed, capture index), so a
+capture killed and resumed yields the same images, byte for byte, as one
+that ran straight through.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from lps_gui.camera.sim_camera import SimulatedCamera
+from lps_gui.core.clock import Clock, SimClock
+from lps_gui.core.plan import Plan
+from lps_gui.core.rig import Rig
+from lps_gui.core.simulate import SimulationSpec, preset
+from lps_gui.core.stage_errors import StageErrorModel
+from lps_gui.errors import InputError
+from lps_gui.hardware.sim_stage import SimulatedStage
+from lps_gui.io.board_file import board_from_dict, board_to_dict
+from lps_gui.io.intrinsics_file import intrinsics_from_dict, intrinsics_to_dict
+from lps_gui.sim.truth import TRUTH_FILE
+
+_STAGE_STREAM, _CAMERA_STREAM = 0, 1  # independent noise streams per capture
+
+
+class RigStage(SimulatedStage):
+    """A :class:`SimulatedStage` whose repeatability draw per stop is seeded by the capture index."""
+
+    def seed_capture(self, key: int) -> None:
+        """Seed the draw of the next completed move (the move onto stop ``key``)."""
+        with self._lock:
+            self._rng = np.random.default_rng([self.seed, int(key), _STAGE_STREAM])
+
+    def seed_axes(self, key_x: int, key_y: int) -> None:
+        """Key each XY axis' repeatability draw on the frame it arrived at (PlanarPlan.arrival_indices)."""
+        with self._lock:
+            self._axis_keys = (int(key_x), int(key_y))
+
+    def _axis_rng(self, axis: int) -> np.random.Generator:
+        """An XY axis draws one value per arrival, however many moves reach it (a resume adds overshoots)."""
+        keys = getattr(self, "_axis_keys", None)
+        if keys is None:
+            return self._rng
+        return np.random.default_rng([self.seed, keys[axis], _STAGE_STREAM, 1 + axis])
+
+
+class RigCamera(SimulatedCamera):
+    """A :class:`SimulatedCamera` whose image noise is seeded by the capture index."""
+
+    def seed_capture(self, key: int) -> None:
+        """Seed the noise of the next grab (capture ``key``)."""
+        self._rng = np.random.default_rng([self.seed, int(key), _CAMERA_STREAM])
+
+
+def stage_travel_mm(plan: Plan, margin_mm: float = 5.0) -> tuple[float, float]:
+    """Soft-limit range that holds the plan's targets and overshoots, with a margin."""
+    t = plan.targets()
+    lo = float(t[0]) - plan.overshoot_mm - margin_mm
+    hi = float(t[-1]) + plan.overshoot_mm + margin_mm
+    return (min(lo, -margin_mm), max(hi, 500.0))
+
+
+def make_simulated_rig(
+    spec: SimulationSpec,
+    clock: Clock | None = None,
+    noise_grey: float = 2.0,
+    **options: Any,
+) -> tuple[RigStage, RigCamera]:
+    """Build (not connect, not open) the simulated stage and the camera bound to its true pose.
+
+    Parameters
+    ----------
+    spec : rig (board, intrinsics, mount, stage errors), plan and ``seed``.
+    clock : shared by stage and camera; a fresh :class:`SimClock` when None.
+    noise_grey : image noise sigma in grey levels.
+    options : ``max_rate_mm_min``, ``accel_mm_s2`` go to the stage, the rest
+        (``blur_px``, ``exposure_s``...) to the camera's renderer.
+    """
+    clock = clock if clock is not None else SimClock()
+    stage_keys = {"max_rate_mm_min", "accel_mm_s2", "homing_required", "soft_limits"}
+    stage_opts = {k: v for k, v in options.items() if k in stage_keys}
+    camera_opts = {k: v for k, v in options.items() if k not in stage_keys}
+    stage = RigStage(
+        errors=spec.rig.errors, seed=spec.seed, clock=clock, travel_mm=stage_travel_mm(spec.plan), **stage_opts
+    )
+    camera = RigCamera(spec.rig, pose_source=stage.true_pose, noise_grey=noise_grey, seed=spec.seed, clock=clock, **camera_opts)
+    return stage, camera
+
+
+def spec_for_plan(preset_name: str, plan: Plan | None = None, seed: int = 0) -> SimulationSpec:
+    """A preset's rig re-aimed so the board is centred over ``plan``'s travel.
+
+    The preset's camera distance, tilt, axis misalignment and stage errors
+    are kept; only the mount moves so the middle of the travel sees the
+    board centre.
+    """
+    spec = preset(preset_name, seed=seed)
+    if plan is None:
+        return spec
+    rig = spec.rig
+    t_old, t_new = spec.plan.targets(), plan.targets()
+    mid_old = 0.5 * (t_old[0] + t_old[-1])
+    mid_new = 0.5 * (t_new[0] + t_new[-1])
+    C0 = rig.C0_board + (mid_old - mid_new) * rig.u_board
+    return replace(spec, rig=replace(rig, C0_board=C0), plan=plan)
+
+
+def rig_truth(spec: SimulationSpec, camera: SimulatedCamera) -> dict[str, Any]:
+    """The static truth of a simulated capture for session.json (per-capture truth comes later).
+
+    Holds everything :func:`spec_from_truth` needs to rebuild the same rig on
+    ``lps capture --resume``, with the field names of :func:`core.simulate.true_views`.
+    """
+    return {
+        "simulated": True,
+        "preset": spec.name,
+        "seed": spec.seed,
+        "R_cam_board": spec.rig.R_cam_board.tolist(),
+        "C0_board": spec.rig.C0_board.tolist(),
+        "u_board": spec.rig.u_board.tolist(),
+        "stage_errors": spec.rig.errors.to_dict(),
+        "board": board_to_dict(spec.rig.board),
+        "intrinsics": intrinsics_to_dict(spec.rig.intrinsics),
+        "camera": {"noise_grey": camera.noise_grey, "blur_px": camera.lighting.blur_px},
+        "per_capture": TRUTH_FILE,
+    }
+
+
+def spec_from_truth(truth: dict[str, Any], plan: Plan, source: str = "session.json") -> SimulationSpec:
+    """Rebuild the :class:`SimulationSpec` recorded by :func:`rig_truth`."""
+    try:
+        rig = Rig(
+            board=board_from_dict(truth["board"], source),
+            intrinsics=intrinsics_from_dict(truth["intrinsics"], source),
+            R_cam_board=np.asarray(truth["R_cam_board"], dtype=float),
+            C0_board=np.asarray(truth["C0_board"], dtype=float),
+            u_board=np.asarray(truth["u_board"], dtype=float),
+            errors=StageErrorModel.from_dict(truth["stage_errors"]),
+        )
+        return SimulationSpec(str(truth.get("preset", "sim")), rig, plan, seed=int(truth.get("seed", 0)))
+    except (KeyError, TypeError, ValueError) as exc:
+        raise InputError(f"{source}: the simulated rig's truth is incomplete ({exc}); start a new session") from exc

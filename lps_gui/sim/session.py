@@ -1,0 +1,102 @@
+"""The one writer of simulated sessions, and capture sessions on the simulated rig.
+
+Every simulated session (corner level, rendered images, the capture engine
+on the simulated rig, the demo, the GUI) gets its session.json from
+:func:`write_simulated_session`: the rig's board and plan, the truth, and a
+``simulation`` record (preset, seed, level). A capture on the simulated rig
+records the rig itself (:func:`lps_gui.sim.rig.rig_truth`), so
+``lps capture --resume`` rebuilds the same stage error model, mount and
+camera and goes on as if nothing happened; per-capture truth goes to
+a sidecar and, once complete, into session.json (:mod:`lps_gui.sim.truth`).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from lps_gui.capture.engine import CaptureEngine
+from lps_gui.core.camera_model import CameraIntrinsics
+from lps_gui.core.clock import Clock
+from lps_gui.core.simulate import SimulationSpec
+from lps_gui.errors import InputError
+from lps_gui.hardware.stage import Stage
+from lps_gui.io.atomic import check_writable
+from lps_gui.io.session import Session
+from lps_gui.sim.rig import RigCamera, RigStage, make_simulated_rig, rig_truth, spec_from_truth
+from lps_gui.sim.truth import TruthRecorder
+
+
+def write_simulated_session(
+    folder: Path | str,
+    spec: SimulationSpec,
+    level: str,
+    *,
+    intrinsics: CameraIntrinsics | str | None,
+    camera: dict[str, Any],
+    stage: dict[str, Any],
+    truth: dict[str, Any],
+    **simulation: Any,
+) -> Session:
+    """Create the session folder of a simulated experiment (session.json only; captures follow).
+
+    ``level`` says how it was made (``"points"``, ``"images"``, ``"capture"``);
+    ``simulation`` adds fields to session.json's ``simulation`` record.
+    """
+    return Session.create(
+        folder,
+        board=spec.rig.board,
+        plan=spec.plan,
+        intrinsics=intrinsics if intrinsics is not None else spec.rig.intrinsics,
+        camera=camera,
+        stage=stage,
+        truth=truth,
+        extra={"simulation": {"preset": spec.name, "seed": spec.seed, "level": level, **simulation}},
+    )
+
+
+def start_rig_session(
+    folder: Path | str,
+    spec: SimulationSpec,
+    stage: RigStage,
+    camera: RigCamera,
+    intrinsics: CameraIntrinsics | str | None = None,
+) -> Session:
+    """The session of a capture on an existing simulated rig (the GUI's rig, or :func:`create_simulated_session`'s)."""
+    return write_simulated_session(folder, spec, "capture", intrinsics=intrinsics, camera=camera.properties(),
+                                   stage=stage.describe(), truth=rig_truth(spec, camera))
+
+
+def create_simulated_session(
+    folder: Path | str,
+    spec: SimulationSpec,
+    clock: Clock | None = None,
+    noise_grey: float = 2.0,
+    intrinsics: CameraIntrinsics | str | None = None,
+    **options: Any,
+) -> tuple[Session, RigStage, RigCamera]:
+    """Create a session for ``spec`` and its rig (stage not yet connected).
+
+    ``intrinsics`` default to the rig's true intrinsics (a simulation knows
+    them); pass calibrated ones to test the effect of calibration error.
+    """
+    check_writable(folder)
+    stage, camera = make_simulated_rig(spec, clock=clock, noise_grey=noise_grey, **options)
+    return start_rig_session(folder, spec, stage, camera, intrinsics), stage, camera
+
+
+def reopen_simulated_rig(session: Session, clock: Clock | None = None) -> tuple[RigStage, RigCamera]:
+    """Rebuild the simulated rig a session was captured with (for ``--resume``)."""
+    truth = session.truth
+    if not truth or not truth.get("simulated"):
+        raise InputError(f"{session.folder}: not captured on the simulated rig; resume it with --stage and --camera")
+    spec = spec_from_truth(truth, session.plan(), str(session.folder / "session.json"))
+    cam = truth.get("camera") or {}
+    return make_simulated_rig(spec, clock=clock, noise_grey=float(cam.get("noise_grey", 2.0)), blur_px=float(cam.get("blur_px", 1.2)))
+
+
+def simulated_engine(session: Session, stage: Stage, camera: RigCamera, encode: str = ".png") -> CaptureEngine:
+    """A :class:`CaptureEngine` that also records the true pose of every frame (the pose the camera renders).
+
+    ``stage`` is the rig's stage or a driver in front of it (the GRBL emulator).
+    """
+    return CaptureEngine(stage, camera, session, encode=encode, truth_recorder=TruthRecorder(camera.pose_source))

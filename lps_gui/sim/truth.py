@@ -1,0 +1,369 @@
+"""The simulator's ground truth: written, read (one rule) and compared with a measurement (one reduction).
+
+Where truth lives
+    The point and image simulators know every pose up front and store it in
+    session.json's ``truth`` (``index``, ``axis_mm``, ``positions_mm``,
+    ``straightness_um`` (K, 2), ``angles_urad`` (K, 3), in capture-index
+    order; the layout of :func:`core.simulate.true_views`). A capture on the
+    simulated rig learns it as the stage moves: :class:`TruthRecorder` appends
+    one line per frame to :data:`TRUTH_FILE` (durably, before the frame's
+    capture line, so every listed frame has its truth) and, once the plan is
+    complete, folds it into session.json in the same layout.
+
+The one reading rule
+    A resumed capture may have appended a line twice for one index, or a crash
+    may have torn the last line: the last complete line per index wins, a torn
+    line is ignored (:func:`read_truth`). :func:`session_truth` gives the same
+    arrays whichever of the two places holds the truth.
+
+The one reference convention (SPEC section 5: offset zero at the first capture)
+    A stage measurement is relative: the estimate fixes its gauge at the
+    *reference capture*, the first capture whose board was found and which is
+    not an outlier (the first capture of the session unless it is unusable).
+    Truth is put in the same frame: measured and true coordinates are both
+    taken relative to that capture, so the error there is zero by construction
+    and every other error is ``(measured - measured[ref]) - (true - true[ref])``.
+    :func:`reduce_truth` does this for coordinates of shape (K, D) (D = 1 on a
+    linear stage, 2 on a planar one, SPEC section 10); results.json's
+    ``truth_comparison``, the report's truth curves, the GUI and ``lps demo``'s
+    printed line all come from it. Truth straightness is put relative to its
+    least-squares line over the compared views (as the estimate's is) and truth
+    angles relative to their mean (as the estimate's are, to the common R).
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+
+from lps_gui.core.estimate_types import LpsEstimate
+from lps_gui.core.observations import Observations
+from lps_gui.core.rig import Rig
+from lps_gui.core.simulate import board_plane_positions, board_plane_straightness
+from lps_gui.core.stage_errors import StageErrorModel, TruePose
+from lps_gui.io.atomic import append_line_durable, write_text_atomic
+from lps_gui.io.board_file import board_from_dict
+from lps_gui.io.intrinsics_file import intrinsics_from_dict
+from lps_gui.io.results_file import json_float as _f
+from lps_gui.io.session import Session
+
+TRUTH_FILE = "truth.jsonl"
+ANGLE_NAMES = ("roll", "pitch", "yaw")
+
+
+# ----------------------------------------------------------------------------- write (capture on the simulated rig)
+
+
+def pose_truth(pose: TruePose) -> dict[str, Any]:
+    """A one-carriage :class:`TruePose` (K=1) as a JSON-able dict."""
+    return {
+        "axis_mm": float(pose.axis_mm.ravel()[0]),
+        "straightness_um": [float(v) for v in pose.straightness_um.reshape(-1)[:2]],
+        "angles_urad": [float(v) for v in pose.angles_urad.reshape(-1)[:3]],
+    }
+
+
+def append_truth(session: Session, index: int, truth: dict[str, Any]) -> None:
+    """Append the truth of capture ``index`` to truth.jsonl (fsynced)."""
+    line = json.dumps({"index": int(index), **truth}, separators=(",", ":"))
+    append_line_durable(session.folder / TRUTH_FILE, line)
+
+
+def read_truth(session: Session) -> dict[int, dict[str, Any]]:
+    """Truth per capture index from truth.jsonl (last line per index wins; a torn line is ignored)."""
+    path = session.folder / TRUTH_FILE
+    if not path.exists():
+        return {}
+    out: dict[int, dict[str, Any]] = {}
+    for line in path.read_text(encoding="utf-8").splitlines():
+        try:
+            d = json.loads(line)
+            out[int(d["index"])] = d
+        except (json.JSONDecodeError, KeyError, TypeError, ValueError):
+            continue  # a crash tore it; the capture it belongs to was not listed
+    return out
+
+
+def prune_truth(session: Session) -> None:
+    """Keep only the truth lines of listed captures (once each): run before a capture (re)starts.
+
+    A crash between a frame's truth line and its capture line leaves a line
+    for a frame that is not listed (or a torn one); the resumed capture
+    takes that frame again, so without pruning its index would appear twice.
+    """
+    path = session.folder / TRUTH_FILE
+    if not path.exists():
+        return
+    listed = {r.index for r in session.records()}
+    per_index = read_truth(session)
+    keep = [per_index[i] for i in sorted(per_index) if i in listed]
+    text = "".join(json.dumps(d, separators=(",", ":")) + "\n" for d in keep)
+    if text != path.read_text(encoding="utf-8"):
+        write_text_atomic(path, text)
+
+
+def finalize_truth(session: Session) -> None:
+    """Write the per-capture truth of every listed capture into session.json's ``truth``."""
+    per_index = read_truth(session)
+    indices = sorted({r.index for r in session.records()} & set(per_index))
+    if not indices:
+        return
+    rows = [per_index[i] for i in indices]
+    axis = [float(r["axis_mm"]) for r in rows]
+    truth = dict(session.meta.get("truth") or {})
+    truth.update(
+        {
+            "index": indices,
+            "axis_mm": axis,
+            "positions_mm": [a - axis[0] for a in axis],
+            "straightness_um": [list(r["straightness_um"]) for r in rows],
+            "angles_urad": [list(r["angles_urad"]) for r in rows],
+        }
+    )
+    session.meta["truth"] = truth
+    session.save_meta()
+
+
+class TruthRecorder:
+    """The capture engine's truth hook on the simulated rig: the pose the camera renders, per frame."""
+
+    def __init__(self, pose_source: Callable[[], TruePose]) -> None:
+        self.pose_source = pose_source
+
+    def prune(self, session: Session) -> None:
+        prune_truth(session)
+
+    def record(self, session: Session, index: int) -> None:
+        append_truth(session, index, pose_truth(self.pose_source()))
+
+    def finalize(self, session: Session) -> None:
+        finalize_truth(session)
+
+
+# ----------------------------------------------------------------------------- read
+
+
+def session_truth(session: Session) -> dict[str, Any] | None:
+    """Arrays index (K,), axis_mm (K,), straightness_um (K, 2), angles_urad (K, 3), or None for a real session.
+
+    truth.jsonl wins over session.json (it is the newer record while a capture
+    is incomplete). With the rig's geometry recorded, also ``plane_mm`` (K,):
+    the positions a constant-orientation model sees (core.simulate.board_plane_positions).
+    """
+    meta = session.meta.get("truth") or {}
+    per_index = read_truth(session)
+    if per_index:
+        lines = [per_index[i] for i in sorted(per_index)]
+        out: dict[str, Any] = {
+            "index": np.array([l["index"] for l in lines], dtype=int),
+            "axis_mm": np.array([l["axis_mm"] for l in lines], dtype=float),
+        }
+        if all("straightness_um" in l for l in lines):
+            out["straightness_um"] = np.array([l["straightness_um"] for l in lines], dtype=float).reshape(-1, 2)
+        if all("angles_urad" in l for l in lines):
+            out["angles_urad"] = np.array([l["angles_urad"] for l in lines], dtype=float).reshape(-1, 3)
+    elif meta.get("axis_mm") is not None:
+        K = len(meta["axis_mm"])
+        out = {"index": np.array(meta.get("index", range(K)), dtype=int), "axis_mm": np.asarray(meta["axis_mm"], dtype=float)}
+        if meta.get("straightness_um") is not None:
+            out["straightness_um"] = np.asarray(meta["straightness_um"], dtype=float).reshape(K, 2)
+        if meta.get("angles_urad") is not None:
+            out["angles_urad"] = np.asarray(meta["angles_urad"], dtype=float).reshape(K, 3)
+    else:
+        return None
+    out["replaced_views"] = meta.get("replaced_views", [])
+    out["bumped_views"] = meta.get("bumped_views", [])
+    plane = _board_plane(session, meta, out)
+    if plane is not None:
+        out["plane_mm"], out["plane_straightness_um"], out["image_rotation_urad"] = plane
+    return out
+
+
+def _board_plane(session: Session, meta: dict[str, Any], truth: dict[str, Any]
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """What a constant-orientation model sees of the true poses: positions at the board plane (K,),
+    straightness at the board plane (K, 2) um and the rotation about the optical axis (K,) urad."""
+    if not all(k in meta for k in ("R_cam_board", "C0_board", "u_board")):
+        return None
+    K = truth["axis_mm"].size
+    board = board_from_dict(meta["board"]) if "board" in meta else session.board()
+    intr = intrinsics_from_dict(meta["intrinsics"]) if "intrinsics" in meta else session.intrinsics()
+    rig = Rig(board, intr, np.asarray(meta["R_cam_board"], float), np.asarray(meta["C0_board"], float),
+              np.asarray(meta["u_board"], float), StageErrorModel())
+    pose = TruePose(truth["axis_mm"], truth.get("straightness_um", np.zeros((K, 2))), truth.get("angles_urad", np.zeros((K, 3))))
+    return (board_plane_positions(rig, pose), *board_plane_straightness(rig, pose))
+
+
+# ----------------------------------------------------------------------------- reduce
+
+
+@dataclass(frozen=True)
+class TruthReduction:
+    """Measured minus true coordinates, both relative to the reference capture (module docstring)."""
+
+    error_um: np.ndarray  # (K, D); row ``reference`` is zero
+    compared: np.ndarray  # (K,) bool: the views the figures below are taken over
+    rms_um: float | None  # RMS over compared views of the error vector's length
+    max_abs_um: float | None  # largest error vector length
+    z_mean_square: float | None  # mean of (error / sigma)^2 over compared views but the reference (expect ~1)
+
+
+def _as_kd(x: np.ndarray) -> np.ndarray:
+    x = np.asarray(x, dtype=float)
+    return x[:, None] if x.ndim == 1 else x
+
+
+def reduce_truth(
+    measured_mm: np.ndarray,
+    true_mm: np.ndarray,
+    reference: int,
+    compared: np.ndarray,
+    sigma_mm: np.ndarray | None = None,
+) -> TruthReduction:
+    """The one comparison of a measurement with the simulator's truth.
+
+    Parameters
+    ----------
+    measured_mm, true_mm : (K,) or (K, D) coordinates per view in mm, in any
+        origin (each is taken relative to its own row ``reference``).
+    reference : the reference capture's view (the estimate's gauge view).
+    compared : (K,) bool, the views to take figures over (used and with truth).
+    sigma_mm : (K,) or (K, D) 1-sigma of the measured coordinates, for the z test.
+    """
+    m, t = _as_kd(measured_mm), _as_kd(true_mm)
+    err = 1e3 * ((m - m[reference]) - (t - t[reference]))
+    ok = np.asarray(compared, dtype=bool)
+    lengths = np.sqrt(np.sum(err[ok] ** 2, axis=1))
+    z_ms = None
+    if sigma_mm is not None:
+        others = ok & (np.arange(err.shape[0]) != reference)
+        z = err[others] / np.maximum(1e3 * _as_kd(sigma_mm)[others], 1e-12)
+        z = z[np.isfinite(z)]
+        z_ms = float(np.mean(z**2)) if z.size else None
+    return TruthReduction(
+        error_um=err,
+        compared=ok,
+        rms_um=_f(np.sqrt(np.mean(lengths**2))) if lengths.size else None,
+        max_abs_um=_f(np.max(lengths)) if lengths.size else None,
+        z_mean_square=z_ms,
+    )
+
+
+def residual_from_line(values: np.ndarray, coord_mm: np.ndarray, fit: np.ndarray) -> np.ndarray:
+    """``values`` (K, P) minus their least-squares line in ``coord_mm`` (K,) or plane in (K, D), fitted on ``fit``."""
+    c = _as_kd(coord_mm)
+    design = np.concatenate([np.ones((c.shape[0], 1)), c], axis=1)  # shape (K, 1 + D)
+    coef = np.linalg.lstsq(design[fit], values[fit], rcond=None)[0]
+    return values - design @ coef
+
+
+def true_deviation_um(true_mm: np.ndarray, target_mm: np.ndarray, reference: int) -> np.ndarray:
+    """The simulator's positioning error per view in um: true minus nominal travel from the reference capture."""
+    t, g = np.asarray(true_mm, dtype=float), np.asarray(target_mm, dtype=float)
+    return 1e3 * ((t - t[reference]) - (g - g[reference]))
+
+
+def centred(values: np.ndarray, compared: np.ndarray) -> np.ndarray:
+    """``values`` (K, P) minus their mean over the compared views (angles: relative to the common rotation)."""
+    return values - np.mean(values[compared], axis=0)
+
+
+def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any], positions: list[dict]) -> dict[str, Any]:
+    """results.json ``truth_comparison`` (schema in docs/ARCHITECTURE.md); also puts truth beside each position.
+
+    Everything here goes through :func:`reduce_truth` with the estimate's
+    reference capture, so the numbers are the ones the report, the GUI and
+    ``lps demo`` show.
+    """
+    by_index = {int(i): k for k, i in enumerate(truth["index"])}
+    rows = np.array([by_index.get(int(i), -1) for i in obs.index])
+    have = rows >= 0
+    ref = est.reference_view
+    if not have[ref]:
+        return {"note": "truth does not cover the reference capture"}
+    take = np.maximum(rows, 0)
+    ok = est.used & have
+
+    def per_view(values: np.ndarray) -> np.ndarray:
+        v = np.asarray(values, dtype=float)[take]
+        v[~have] = np.nan
+        return v
+
+    axis = per_view(truth["axis_mm"])
+    pos = reduce_truth(est.state.s, axis, ref, ok, est.sigma_s_mm)
+    true_dev = true_deviation_um(axis, obs.target_mm, ref)
+    sigma_um = 1e3 * est.sigma_s_mm[ok]
+    out: dict[str, Any] = {
+        "position_rms_error_um": pos.rms_um,
+        "position_max_abs_error_um": pos.max_abs_um,
+        "mean_sigma_um": _f(np.nanmean(sigma_um)) if sigma_um.size else None,
+        "median_sigma_um": _f(np.nanmedian(sigma_um)) if sigma_um.size else None,
+        "z_mean_square": pos.z_mean_square,
+        "injected_outliers": sorted(set(truth.get("replaced_views", [])) | set(truth.get("bumped_views", []))),
+        "flagged_outliers": sorted(int(i) for i in obs.index[est.outlier]),
+    }
+    # the estimate's straightness is relative to a least-squares line and its angles to the common rotation
+    straight = truth.get("plane_straightness_um", truth.get("straightness_um"))  # at the board plane (SPEC 11)
+    straight = residual_from_line(per_view(straight), obs.target_mm, ok) if straight is not None and ok.any() else None
+    angles = truth.get("angles_urad")
+    angles = centred(per_view(angles), ok) if angles is not None and ok.any() else None
+    plane_dev = None
+    if "plane_mm" in truth:
+        # what the constant-orientation model can see: displacement at the board plane (Abbe offset = distance)
+        plane = per_view(truth["plane_mm"])
+        at_plane = reduce_truth(est.state.s, plane, ref, ok, est.sigma_s_mm)
+        out["board_plane_rms_error_um"] = at_plane.rms_um
+        out["board_plane_max_abs_error_um"] = at_plane.max_abs_um
+        out["board_plane_z_mean_square"] = at_plane.z_mean_square
+        out["abbe_rms_um"] = reduce_truth(plane, axis, ref, ok).rms_um
+        plane_dev = true_deviation_um(plane, obs.target_mm, ref)
+    rotation = truth.get("image_rotation_urad")
+    rotation = per_view(rotation) if rotation is not None else None
+    out.update(truth_errors(est, straight, rotation, ok))
+    for k, row in enumerate(positions):
+        if not have[k]:
+            continue
+        row["truth_deviation_um"] = _f(true_dev[k])
+        if rotation is not None and ok.any():
+            row["truth_image_rotation_urad"] = _f(rotation[k] - np.nanmean(rotation[ok]))
+        if plane_dev is not None:
+            row["truth_plane_deviation_um"] = _f(plane_dev[k])
+        if straight is not None:
+            row["truth_straightness_um_1"] = _f(straight[k, 0])
+            row["truth_straightness_um_2"] = _f(straight[k, 1])
+        if angles is not None:
+            for j, key in enumerate(ANGLE_NAMES):
+                row[f"truth_{key}_urad"] = _f(angles[k, j])
+    return out
+
+
+def truth_errors(est: LpsEstimate, straight_truth: np.ndarray | None, rotation_truth: np.ndarray | None,
+                 ok: np.ndarray) -> dict[str, Any]:
+    """RMS error and mean (error/sigma)^2 of v1, v2 and the image rotation against simulator truth.
+
+    ``straight_truth`` (K, 2) is already relative to its least-squares line,
+    ``rotation_truth`` (K,) per view; the image rotation is compared with both
+    means removed (the common R absorbs a constant rotation).
+    """
+    bp = est.board_plane
+    out: dict[str, Any] = {}
+    if bp is None:
+        return out
+    if straight_truth is not None:
+        for j in (0, 1):
+            keep = ok & np.isfinite(straight_truth[:, j]) & np.isfinite(bp.straightness_um[:, j])
+            if keep.sum() < 3:
+                continue
+            err = bp.straightness_um[keep, j] - straight_truth[keep, j]
+            out[f"straightness_rms_error_um_{j + 1}"] = _f(np.sqrt(np.mean(err**2)))
+            out[f"straightness_z_mean_square_{j + 1}"] = _f(np.mean((err / bp.straightness_sigma_um[keep, j]) ** 2))
+    if rotation_truth is not None:
+        keep = ok & np.isfinite(rotation_truth) & np.isfinite(bp.image_rotation_urad)
+        if keep.sum() >= 3:
+            e = bp.image_rotation_urad[keep] - rotation_truth[keep]
+            e = e - e.mean()
+            out["image_rotation_rms_error_urad"] = _f(np.sqrt(np.mean(e**2)))
+            out["image_rotation_z_mean_square"] = _f(np.mean((e / bp.image_rotation_sigma_urad[keep]) ** 2))
+    return out

@@ -433,6 +433,15 @@ def _(tmp: Path) -> Outcome:
     return clean_error(*lps("simulate", tmp / "s", "--points", "--noise-px", "-1")[::2], needle="noise")
 
 
+@case("input", "rig description with noise_px < 0", "exit 2, names noise_px")
+def _(tmp: Path) -> Outcome:
+    lps("simulate", tmp / "rig.json", "--write-rig")
+    rig = json.loads((tmp / "rig.json").read_text())
+    rig["noise_px"] = -1
+    (tmp / "rig.json").write_text(json.dumps(rig))
+    return clean_error(*lps("simulate", tmp / "s", "--points", "--rig", tmp / "rig.json")[::2], needle="noise_px")
+
+
 # ------------------------------------------------------------------ bad inputs: CLI as a new user
 @case("input", "detect /nonexistent", "exit 2, not found")
 def _(tmp: Path) -> Outcome:

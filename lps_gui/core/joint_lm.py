@@ -83,8 +83,24 @@ class LmResult:
 
 def residuals(state: LpsState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """Reprojection residuals uv - measured, shape (K, N, 2); zero where not seen."""
-    x, y, z = _camera_points(state, X)
-    parts = project_parts(x, y, z, state.intrinsics)
+    t = state.l0[None, :] + state.s[:, None] * state.n[None, :]  # shape (K, 3)
+    return pose_residuals(state.R, t, X, state.intrinsics, corners, mask)
+
+
+def camera_points(R: np.ndarray, t: np.ndarray, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Camera-frame coordinates R X + t_i of every corner in every view: three arrays of shape (K, N).
+
+    ``R`` (3, 3) is the common orientation, ``t`` (K, 3) the per-view translations of any model.
+    """
+    RX = X @ R.T  # shape (N, 3)
+    return tuple(RX[None, :, i] + t[:, i, None] for i in range(3))  # type: ignore[return-value]
+
+
+def pose_residuals(R: np.ndarray, t: np.ndarray, X: np.ndarray, intrinsics: CameraIntrinsics, corners: np.ndarray,
+                   mask: np.ndarray) -> np.ndarray:
+    """Residuals uv - measured (K, N, 2) of views with a common R and translations t (K, 3); zero where unused."""
+    x, y, z = camera_points(R, t, X)
+    parts = project_parts(x, y, z, intrinsics)
     m = np.nan_to_num(corners)
     r = np.empty(corners.shape)
     r[..., 0] = np.where(mask, parts.u - m[..., 0], 0.0)
@@ -94,9 +110,7 @@ def residuals(state: LpsState, X: np.ndarray, corners: np.ndarray, mask: np.ndar
 
 def _camera_points(state: LpsState, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Camera-frame coordinates of every corner in every view, three arrays of shape (K, N)."""
-    RX = X @ state.R.T  # shape (N, 3)
-    t = state.l0[None, :] + state.s[:, None] * state.n[None, :]  # shape (K, 3)
-    return tuple(RX[None, :, i] + t[:, i, None] for i in range(3))  # type: ignore[return-value]
+    return camera_points(state.R, state.l0[None, :] + state.s[:, None] * state.n[None, :], X)
 
 
 def huber_threshold(r: np.ndarray, mask: np.ndarray, huber_scale: float) -> float:
@@ -337,12 +351,12 @@ def solve_arrowhead(
     Bf = eq.B * Dinv[:, None]  # shape (K, p): w_i = B_i / D_i
     S = A - eq.B.T @ Bf
     rhs = g - Bf.T @ eq.g_s
-    d_theta = -_solve_spd(S, rhs)
+    d_theta = -solve_spd(S, rhs)
     d_s = np.where(free, -(eq.g_s + eq.B @ d_theta) * Dinv, 0.0)
     return d_theta, d_s
 
 
-def _solve_spd(S: np.ndarray, b: np.ndarray) -> np.ndarray:
+def solve_spd(S: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Solve the small reduced system by Cholesky (numpy: scipy.linalg's import costs more than the solve)."""
     try:
         L = np.linalg.cholesky(S)

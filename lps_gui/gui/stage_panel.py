@@ -9,11 +9,12 @@ never while a number, list or text field has focus, where they edit).
 from __future__ import annotations
 
 import math
+import time
 
 from PySide6.QtCore import QEvent, QObject, Qt, QTimer, Signal
 from PySide6.QtGui import QFont, QKeyEvent, QKeySequence, QShortcut
 from PySide6.QtWidgets import (
-    QAbstractItemView, QAbstractSpinBox, QApplication, QCheckBox, QComboBox, QDoubleSpinBox, QGridLayout, QGroupBox,
+    QAbstractButton, QAbstractItemView, QAbstractSpinBox, QApplication, QCheckBox, QComboBox, QDoubleSpinBox, QGridLayout, QGroupBox,
     QHBoxLayout, QHeaderView, QLabel, QLineEdit, QMessageBox, QPushButton, QTableWidget, QTableWidgetItem, QTabWidget,
     QVBoxLayout, QWidget,
 )
@@ -27,6 +28,7 @@ from lps_gui.hardware.stage import AXES, StageSetting, StageStatus
 JOG_STEPS_MM = (0.01, 0.1, 1.0, 10.0, 50.0)
 CONTINUOUS = 0.0  # the "hold" step: jog while the button is pressed
 HOLD_JOG_PERIOD_MS = 100  # GRBL's joystick rule: short jogs of v*dt queued while held, jog cancel on release
+MACHINE_REFRESH_S = 0.5
 AXIS_SETS = (("XYZ", "X Y Z"), ("X", "X only"), ("XY", "X Y"))
 STATE_COLORS = {"Idle": "#2a9d3c", "Run": "#1f5fa8", "Jog": "#1f5fa8", "Home": "#1f5fa8", "Hold": "#e07b00",
                 "Alarm": "#d00000", "Door": "#d00000", "Disconnected": "#777777"}
@@ -79,6 +81,7 @@ class StagePanel(QWidget):
         self.readout: dict[str, QLabel] = {}
         self._axis_widgets: dict[str, list[QWidget]] = {ax: [] for ax in AXES}
         self._axes_shown = "".join(AXES)
+        self._machine_shown_at = 0.0
         for i, ax in enumerate(AXES):
             name = QLabel(ax)
             name.setFont(big)
@@ -243,8 +246,8 @@ class StagePanel(QWidget):
         self._shortcuts = []
         self._lock_box: QMessageBox | None = None
         self._lock_asked = False
-        for w in [self, *self.findChildren(QWidget)]:
-            w.installEventFilter(self)  # jog keys decided in one place: eventFilter()
+        for b in self.findChildren(QAbstractButton):  # buttons take arrows for focus moves: decide first
+            b.installEventFilter(self)
         self.keyboard_jog.toggled.connect(lambda _on: self._show_keyboard_state())
         app = QApplication.instance()
         if app is not None:
@@ -274,14 +277,32 @@ class StagePanel(QWidget):
             return False  # the key edits the field
         return self._in_jog_area(w) or self.keyboard_jog.isChecked()
 
+    def _jog_key(self, event: QKeyEvent) -> bool:
+        """Jog for a jog key if keyboard jog is active for the focus widget; True when the key was used."""
+        move = JOG_KEYS.get(Qt.Key(event.key()))
+        if move is None or event.modifiers() not in (Qt.KeyboardModifier.NoModifier, Qt.KeyboardModifier.KeypadModifier):
+            return False
+        if not self.keyboard_jog_active():
+            return False
+        if not event.isAutoRepeat():  # one step per press: a held key must not queue a run of jogs
+            self.jog(*move)
+        return True
+
+    def keyPressEvent(self, event: QKeyEvent) -> None:
+        """Keys the focus widget ignored (the jog area, labels) end here; fields use theirs and never do.
+
+        Only the buttons carry an event filter (they take arrows for focus moves):
+        a Python filter on every widget would run for every paint event and
+        compete for the GIL with the workers.
+        """
+        if self._jog_key(event):
+            event.accept()
+            return
+        super().keyPressEvent(event)
+
     def eventFilter(self, obj: QObject, event: QEvent) -> bool:
-        if event.type() == QEvent.Type.KeyPress and isinstance(obj, QWidget):
-            key_event: QKeyEvent = event  # type: ignore[assignment]
-            move = JOG_KEYS.get(Qt.Key(key_event.key()))
-            if move is not None and key_event.modifiers() == Qt.KeyboardModifier.NoModifier and self.keyboard_jog_active(obj):
-                if not key_event.isAutoRepeat():  # one step per press: a held key must not queue a run of jogs
-                    self.jog(*move)
-                return True
+        if event.type() == QEvent.Type.KeyPress and self._jog_key(event):  # type: ignore[arg-type]
+            return True
         return super().eventFilter(obj, event)
 
     def _on_focus_changed(self, _old: QWidget | None, _new: QWidget | None) -> None:
@@ -367,10 +388,7 @@ class StagePanel(QWidget):
     def show_status(self, st: StageStatus) -> None:
         for ax, v in zip(AXES, st.work_mm):
             self.readout[ax].setText(f"{v:10.3f}")
-        shown = [i for i, ax in enumerate(AXES) if ax in self._axes_shown]
-        offset = [st.work_mm[i] - st.machine_mm[i] for i in shown]
-        self.machine_label.setText("machine " + "  ".join(f"{AXES[i]} {st.machine_mm[i]:.3f}" for i in shown)
-                                   + ("   offset " + " ".join(f"{v:+.3f}" for v in offset) if any(offset) else ""))
+        self._show_machine(st)
         self._show_state(st.state)
         self.feed_label.setText(f"feed {st.feed_mm_min:.0f} mm/min")
         if st.state == "Alarm" and not self._lock_asked:
@@ -378,6 +396,20 @@ class StagePanel(QWidget):
             self._ask_home_or_unlock()
         elif st.state != "Alarm":
             self._lock_asked = False  # a later alarm asks again
+
+    def _show_machine(self, st: StageStatus) -> None:
+        """Machine position and offset, at most twice a second while moving: a changed label re-lays out the
+        whole window, which at the poll rate starved the GUI thread during a capture."""
+        now = time.monotonic()
+        if st.state in ("Run", "Jog", "Home") and now - self._machine_shown_at < MACHINE_REFRESH_S:
+            return
+        shown = [i for i, ax in enumerate(AXES) if ax in self._axes_shown]
+        offset = [st.work_mm[i] - st.machine_mm[i] for i in shown]
+        text = ("machine " + "  ".join(f"{AXES[i]} {st.machine_mm[i]:.3f}" for i in shown)
+                + ("   offset " + " ".join(f"{v:+.3f}" for v in offset) if any(offset) else ""))
+        if text != self.machine_label.text():
+            self.machine_label.setText(text)
+            self._machine_shown_at = now
 
     def _ask_home_or_unlock(self) -> None:
         """A stage in Alarm (GRBL powers up so with homing enabled) moves only after $H or $X: ask which."""

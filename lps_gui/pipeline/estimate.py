@@ -26,7 +26,7 @@ from lps_gui.errors import InputError
 from lps_gui.io.atomic import sha256_file
 from lps_gui.io.board_file import board_to_dict
 from lps_gui.io.corners_vnl import read_corners_vnl
-from lps_gui.io.intrinsics_file import intrinsics_to_dict, read_intrinsics
+from lps_gui.io.intrinsics_file import apply_board_warp, intrinsics_to_dict, read_intrinsics
 from lps_gui.io.results_file import assemble_results, summary_rows, write_results  # noqa: F401 (summary_rows re-exported)
 from lps_gui.io.results_file import json_float as _f
 from lps_gui.io.results_history import keep_previous, record_latest
@@ -56,8 +56,9 @@ def make_options(method: str = "joint", options: dict[str, Any] | EstimateOption
 
 def observations_from_session(session: Session, intrinsics: CameraIntrinsics | None = None) -> Observations:
     """Match every line of captures.jsonl to its corners in corners.vnl."""
-    board = session_board(session)  # square size at the board's temperature (environment)
     intr = intrinsics or session.intrinsics()
+    # square size at the board's temperature (environment), bowed as the intrinsics calibration found it
+    board = apply_board_warp(session_board(session), intr)
     records = session.records()
     if not records:
         raise InputError(f"{session.captures_path}: no captures listed; capture or simulate a session first")

@@ -34,14 +34,19 @@ class ExportResult:
     straightness_used: bool = False
 
 
-def straightness_resolved(results: dict[str, Any]) -> bool:
-    """True when results.json says the straightness is resolved (``figures.straightness_resolved``).
+def straightness_resolved(results: dict[str, Any]) -> tuple[bool, bool]:
+    """Which straightness components (v1, v2) results.json calls resolved (``figures.straightness.v1/v2``).
 
     A span of per-view values is no test: the span of K noisy values is
-    several sigmas by itself, and adding per-view noise (30-300 um) to the
-    line moves every camera off its best pose.
+    several sigmas by itself, and adding per-view noise to the line moves
+    every camera off its best pose. Only a component whose profile the data
+    resolve (core.resolution: above what noise alone would span) moves the
+    exported cameras off the fitted line.
     """
-    return bool((results.get("figures") or {}).get("straightness_resolved"))
+    st = (results.get("figures") or {}).get("straightness")
+    if not isinstance(st, dict):
+        return (False, False)
+    return tuple(bool((st.get(f"v{k}") or {}).get("resolved")) for k in (1, 2))  # type: ignore[return-value]
 
 
 def export_session(session_dir: Path | str, fmt: str, out: Path | str, straightness: str = "auto") -> ExportResult:
@@ -67,10 +72,11 @@ def export_session(session_dir: Path | str, fmt: str, out: Path | str, straightn
     if not keep:
         raise InputError(f"{session.folder}: no usable capture to export")
     s = np.array([float(r["measured_mm"]) - t_ref for r in keep])
-    use_st = straightness == "on" or (straightness == "auto" and straightness_resolved(results))
+    use = (True, True) if straightness == "on" else straightness_resolved(results) if straightness == "auto" else (False, False)
     st = None
-    if use_st:
-        st = 1e-3 * np.array([[float(r.get("straightness_um_1") or 0.0), float(r.get("straightness_um_2") or 0.0)] for r in keep])
+    if any(use):
+        st = 1e-3 * np.array([[float(r.get(f"straightness_um_{k}") or 0.0) if use[k - 1] else 0.0 for k in (1, 2)]
+                              for r in keep])
     res.straightness_used = st is not None
     C = camera_centres(R, l0, n, s, st)
     names = [str(r["file"]) for r in keep]

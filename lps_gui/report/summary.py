@@ -426,15 +426,9 @@ POSITION_TABLE_COLUMNS = (  # (key, header, decimals or None for text, width in 
 )
 
 
-def position_table(results: dict[str, Any]) -> tuple[list[str], list[list[str]], list[float]]:
-    """Header, text rows and column widths (mm) of the per-position table (fixed decimals per column).
-
-    The truth column appears only for simulated sessions (results carry ``truth_deviation_um``).
-    """
-    positions = sorted(results.get("positions") or [], key=lambda r: r.get("index", 0))
-    has_truth = any(r.get("truth_deviation_um") is not None for r in positions)
-    columns = [c for c in POSITION_TABLE_COLUMNS if has_truth or c[0] != "truth_deviation_um"]
-    header = [c[1] for c in columns]
+def table_cells(positions: Sequence[dict[str, Any]], columns: Sequence[tuple[str, str, int | None, float]]
+                ) -> list[list[str]]:
+    """Text cells of a per-position table: fixed decimals per column, a dash when absent, "yes" for outliers."""
     body = []
     for r in positions:
         row = []
@@ -448,4 +442,17 @@ def position_table(results: dict[str, Any]) -> tuple[list[str], list[list[str]],
                 f = _num(v)
                 row.append(DASH if f is None else f"{f:.{decimals}f}")
         body.append(row)
+    return body
+
+
+def position_table(results: dict[str, Any]) -> tuple[list[str], list[list[str]], list[float]]:
+    """Header, text rows and column widths (mm) of the per-position table (fixed decimals per column).
+
+    The truth column appears only for simulated sessions (results carry ``truth_deviation_um``).
+    """
+    positions = sorted(results.get("positions") or [], key=lambda r: r.get("index", 0))
+    has_truth = any(r.get("truth_deviation_um") is not None for r in positions)
+    columns = [c for c in POSITION_TABLE_COLUMNS if has_truth or c[0] != "truth_deviation_um"]
+    header = [c[1] for c in columns]
+    body = table_cells(positions, columns)
     return header, body, [float(c[3]) for c in columns]

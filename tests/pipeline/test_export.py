@@ -126,3 +126,11 @@ def test_csv_has_nominal_and_measured_centres(session, tmp_path):
         mea = np.array([float(r[f"measured_{a}_mm"]) for a in "xyz"])
         dev = truth[int(r["index"])]["deviation_um"]
         assert np.linalg.norm(mea - nom) * 1e3 == pytest.approx(abs(dev), abs=1e-2)
+
+
+def test_straightness_components_move_the_cameras_only_when_resolved():
+    from lps_gui.pipeline.export import straightness_resolved
+
+    assert straightness_resolved({"figures": {}}) == (False, False)
+    figs = {"straightness": {"v1": {"resolved": True}, "v2": {"resolved": False}}}
+    assert straightness_resolved({"figures": figs}) == (True, False)

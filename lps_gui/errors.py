@@ -26,3 +26,7 @@ class HardwareError(LpsError):
 
 class Cancelled(LpsError):
     """Long work stopped on request; what was done so far is kept."""
+
+
+class StorageError(LpsError):
+    """A file could not be written completely (disk full, read-only folder); the old file is kept."""

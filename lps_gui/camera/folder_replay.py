@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 import cv2
+import numpy as np
 
 from lps_gui.camera.base import Camera, Frame
 from lps_gui.camera.opencv_camera import _to_8bit
@@ -84,7 +85,7 @@ class FolderReplayCamera(Camera):
                 raise HardwareError(f"folder replay {self.folder}: all {len(self.files)} images replayed; add images or use loop")
             self._next = 0
         path = self.files[self._next]
-        image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+        image = _read_checked(path)
         if image is None:
             raise HardwareError(f"{path}: cannot read this image; replace or remove it")
         image = _to_8bit(image, self.grey)
@@ -96,9 +97,21 @@ class FolderReplayCamera(Camera):
         out: dict[str, Any] = {"driver": "FolderReplayCamera", "folder": str(self.folder), "n_images": len(self.files)}
         out["channels"] = 1 if self.grey else 3
         if self._size is None and self.files:
-            first = cv2.imread(str(self.files[0]), cv2.IMREAD_UNCHANGED)
+            first = _read_checked(self.files[0])
             if first is not None:
                 self._size = (first.shape[1], first.shape[0])
         if self._size is not None:
             out["width"], out["height"] = self._size
         return out
+
+
+def _read_checked(path: Path) -> np.ndarray | None:
+    """Decode ``path`` after checking its header's pixel count (a tiny file can decode to gigabytes)."""
+    from lps_gui.core.image_header import check_image_header
+
+    try:
+        data = path.read_bytes()
+    except OSError:
+        return None
+    check_image_header(data[:1 << 16], str(path))
+    return cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED) if data else None

@@ -38,6 +38,7 @@ from lps_gui.errors import HardwareError, InputError
 from lps_gui.hardware.stage import EventSource, Stage
 from lps_gui.io.atomic import check_writable
 from lps_gui.io.session import IMAGES_DIR, CaptureRecord, Session
+from lps_gui.io.session_lock import SessionLock
 
 class TruthRecorder(Protocol):
     """What a simulated rig records beside the frames (``lps_gui.sim.truth.TruthRecorder``)."""
@@ -85,6 +86,19 @@ def check_plan_in_travel(plan: Plan, stage: Stage) -> None:
         )
 
 
+LOSSLESS = (".png", ".tif", ".tiff", ".bmp", ".pgm", ".ppm")
+POSITION_TOLERANCE_MM = 0.01  # GRBL reports its step count: any real miss is a lost move, not noise
+
+
+def check_reached(target_mm: float, reported_mm: float, tolerance_mm: float = POSITION_TOLERANCE_MM) -> None:
+    """HardwareError when the stage reports a position off the target by more than ``tolerance_mm``."""
+    if not abs(reported_mm - target_mm) <= tolerance_mm:  # also catches NaN
+        raise HardwareError(
+            f"stage: reports {reported_mm:.4f} mm after the move to {target_mm:.4f} mm ({1e3 * (reported_mm - target_mm):+.1f} um, "
+            f"tolerance {1e3 * tolerance_mm:.0f} um); check for a limit, a stall or lost steps, then resume"
+        )
+
+
 def bytes_per_frame(camera: Camera) -> int:
     """Upper bound of one stored frame: the raw size (PNG only shrinks it); 8 MB when unknown."""
     props = camera.properties()
@@ -111,6 +125,9 @@ class CaptureEngine:
         table's inverse (``CompensationTable.command_mm``): the stage is sent
         there so the true position lands on the nominal; captures.jsonl then
         records ``commanded_mm``. None: command the targets as planned.
+    position_tolerance_mm : the stage's reported position after a move must
+        be this close to the position commanded, or the capture pauses with an
+        error (a stage that stopped short must not be listed as the target).
 
     :meth:`pause`, :meth:`resume`, :meth:`abort` and :meth:`progress` are
     safe to call from any thread while :meth:`run` blocks in another.
@@ -127,16 +144,21 @@ class CaptureEngine:
         truth_recorder: TruthRecorder | None = None,
         move_timeout_s: float = 60.0,
         command_of: Callable[[float, int], float] | None = None,
+        position_tolerance_mm: float = POSITION_TOLERANCE_MM,
     ) -> None:
         self.stage = stage
         self.camera = camera
         self.session = session
         self.clock: Clock = clock or getattr(stage, "clock", None) or RealClock()
         self.encode = encode if encode.startswith(".") else "." + encode
+        if self.encode.lower() not in LOSSLESS:
+            raise InputError(f"--encode {encode}: not a lossless format; use one of {', '.join(LOSSLESS)} "
+                             "(lossy compression moves corners)")
         self.truth_recorder = truth_recorder
         self.move_timeout_s = float(move_timeout_s)
         self.command_of = command_of
         self._commanded_mm: float | None = None
+        self.position_tolerance_mm = float(position_tolerance_mm)
         self._plan = session.plan()
         self._total = self._plan.n_frames()
         self._lock = threading.Lock()
@@ -223,7 +245,9 @@ class CaptureEngine:
             self._axis_sides = [None, None]
         t0 = self.clock.now()
         captured = 0
+        lock = SessionLock(self.session.folder)
         try:
+            lock.__enter__()  # one writer per session: a second capture or resume is told who holds it
             remaining = self.session.remaining_stops()
             self._set(done=self._total - len(remaining))
             if remaining:
@@ -267,6 +291,7 @@ class CaptureEngine:
                 self.truth_recorder.finalize(self.session)
             self._finish(ev.DONE, f"capture complete: {self._total} frames")
         finally:
+            lock.__exit__(None, None, None)
             with self._lock:
                 self._active = False
         return CaptureSummary(
@@ -294,6 +319,8 @@ class CaptureEngine:
             self._reported_mm = go_to_planar(self.stage, stop, self._plan, self._axis_sides, self._move)
             self.clock.sleep(self._plan.settle_s)
             self._reported_mm = (float(self.stage.position_mm("X")), float(self.stage.position_mm("Y")))
+            for want, got in zip(stop.target_mm, self._reported_mm):
+                check_reached(float(want), got, self.position_tolerance_mm)
             self._last_move = (stop.run, stop.direction, stop.target_mm, stop.index - stop.frame)
             return
         plan, feed = self._plan, self._plan.feed_mm_min
@@ -315,6 +342,8 @@ class CaptureEngine:
         self._move(stop.target_mm if self._commanded_mm is None else self._commanded_mm, feed)
         self.clock.sleep(plan.settle_s)
         self._reported_mm = float(self.stage.position_mm())
+        commanded = stop.target_mm if self._commanded_mm is None else self._commanded_mm
+        check_reached(commanded, self._reported_mm, self.position_tolerance_mm)
         self._last_move = (stop.run, stop.direction, stop.target_mm, stop.index - stop.frame)
 
     def _move(self, target_mm: float, feed_mm_min: float, axis: str | None = None) -> None:

@@ -10,8 +10,6 @@ from __future__ import annotations
 import argparse
 import logging
 import sys
-import tempfile
-from pathlib import Path
 
 from lps_gui.cli import (capture, compare, compensate, demo, detect, emulate_grbl, estimate, export, intrinsics, plan_rig,
                      report, simulate)
@@ -30,8 +28,6 @@ COMMANDS = {
     "export": export,
     "compare": compare,
 }
-
-LOG_PATH = Path(tempfile.gettempdir()) / "lps-calib.log"
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -62,10 +58,13 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "command", None):
         parser.print_help()
         return 2
+    from lps_gui.cli.log_file import process_log_handler
+
+    handler, log_where = process_log_handler()
     logging.basicConfig(
         level=logging.DEBUG if args.verbose else logging.INFO,
         format="%(asctime)s %(name)s %(levelname)s %(message)s",
-        handlers=[logging.FileHandler(LOG_PATH)] + ([logging.StreamHandler()] if args.verbose else []),
+        handlers=[handler] + ([logging.StreamHandler()] if args.verbose else []),
     )
     try:
         return int(args._module.run(args) or 0)
@@ -78,7 +77,7 @@ def main(argv: list[str] | None = None) -> int:
         return 130
     except Exception as exc:  # a bug: one line here, the traceback in the log
         logging.getLogger("lps").exception("unexpected failure")
-        print(f"lps {args.command}: internal error: {type(exc).__name__}: {exc} (traceback in {LOG_PATH})", file=sys.stderr)
+        print(f"lps {args.command}: internal error: {type(exc).__name__}: {exc} (traceback in {log_where})", file=sys.stderr)
         return 1
 
 

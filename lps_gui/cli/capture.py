@@ -86,10 +86,18 @@ def run(args: argparse.Namespace) -> int:
         return 0
     print(
         f"lps capture: {summary.state}: {summary.error or 'stopped'}; {summary.listed}/{summary.total} frames kept, "
-        f"continue with `lps capture --resume {summary.folder}`",
+        f"continue with `lps capture --resume {summary.folder}{_resume_devices_hint(session)}`",
         file=sys.stderr,
     )
     return 3
+
+
+def _resume_devices_hint(session) -> str:
+    """The device switches a resume of a real-device session needs (never read back by itself)."""
+    if (session.truth or {}).get("simulated"):
+        return ""
+    stage, camera = (session.meta.get("stage") or {}).get("spec"), (session.meta.get("camera") or {}).get("spec")
+    return f" --stage {stage} --camera {camera}" if stage and camera else " --stage ... --camera ..."
 
 
 def _intrinsics_mode(args: argparse.Namespace) -> int:
@@ -233,12 +241,9 @@ def _resume(args: argparse.Namespace):
         stage, camera = reopen_simulated_rig(session, clock=_clock(args))
         stage = _bind_stage(args.stage or "sim", stage, args.time_scale)
         return session, stage, camera, simulated_engine(session, stage, camera, args.encode)
-    stage_spec = args.stage or (session.meta.get("stage") or {}).get("spec")
-    camera_spec = args.camera or (session.meta.get("camera") or {}).get("spec")
-    if not stage_spec or not camera_spec:
-        from lps_gui.errors import InputError
+    from lps_gui.cli.resume_devices import devices_named_by_operator
 
-        raise InputError(f"{session.folder}: say which devices to resume with: --stage ... --camera ...")
+    stage_spec, camera_spec = devices_named_by_operator(session, args.stage, args.camera)
     stage, camera = _open_devices(stage_spec, camera_spec)
     try:
         _release_lock(args, stage)

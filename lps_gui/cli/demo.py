@@ -10,7 +10,8 @@ HELP = "run the whole simulated rig end to end and write report.pdf and the CSVs
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--quick", action="store_true", help="small camera and fewer stops (seconds, not minutes)")
-    parser.add_argument("--out", type=Path, default=Path("demo-output"), help="output folder (default demo-output)")
+    parser.add_argument("--out", type=Path, default=Path("demo-output"),
+                        help="output folder (default demo-output): an existing or new folder; a name with a suffix is refused")
     parser.add_argument("--seed", type=int, default=0, help="random seed of the simulation")
 
 
@@ -18,6 +19,10 @@ def run(args: argparse.Namespace) -> int:
     from lps_gui.cli.progress_bar import ProgressBar
     from lps_gui.pipeline.demo import run_demo
 
+    from lps_gui.errors import InputError
+
+    if args.out.suffix and not args.out.is_dir():
+        raise InputError(f"--out {args.out}: lps demo writes a folder of files; give a folder name without a suffix")
     t0 = time.monotonic()
     res = run_demo(args.out, quick=args.quick, bar=ProgressBar, say=lambda line: print(line, flush=True), seed=args.seed)
     print()

@@ -13,7 +13,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.epilog = "exit status: 0 every view detected, 3 some views failed (listed on stderr and in corners.vnl), 2 bad input"
     parser.add_argument("inputs", nargs="+", metavar="SESSION|IMAGE", help="a session folder, or image files/folders")
     parser.add_argument("--board", help="board.json (required for images; a session has its own)")
-    parser.add_argument("--out", help="corners file for images (default: corners.vnl here)")
+    parser.add_argument("--out", help="corners file for images (default corners.vnl here): an existing folder gets "
+                        "corners.vnl inside; a name ending in .vnl is the file; a name without suffix is a new folder")
     parser.add_argument("--workers", type=int, default=None, help="processes (default: one per core)")
     parser.add_argument("--force", action="store_true", help="detect every view again, ignoring corners.vnl")
     parser.add_argument("--no-track", action="store_true", help="detect every image from scratch (unrelated views)")
@@ -28,12 +29,21 @@ def run(args: argparse.Namespace) -> int:
     from lps_gui.io.session import SESSION_FILE
 
     inputs = [Path(p) for p in args.inputs]
+    missing = [p for p in inputs if not p.exists()]
+    if missing:
+        raise InputError(f"{missing[0]}: not found; give a session folder or image files/folders")
     bar = ProgressBar("detect")
     t0 = time.monotonic()
     if len(inputs) == 1 and (inputs[0] / SESSION_FILE).exists():
+        from lps_gui.io.session_lock import SessionLock
         from lps_gui.pipeline.detect import detect_session
 
-        table = detect_session(inputs[0], bar, workers=args.workers, force=args.force)
+        if args.out:
+            raise InputError(f"--out: a session's corners always go into {inputs[0] / 'corners.vnl'}; drop --out")
+        if args.board:
+            raise InputError(f"--board: the session {inputs[0]} has its own board (session.json); drop --board")
+        with SessionLock(inputs[0]):
+            table = detect_session(inputs[0], bar, workers=args.workers, force=args.force, track=not args.no_track)
         out = inputs[0] / "corners.vnl"
     else:
         from lps_gui.io.board_file import read_board
@@ -41,12 +51,22 @@ def run(args: argparse.Namespace) -> int:
         from lps_gui.pipeline.detect import detect_images
         from lps_gui.pipeline.intrinsics import expand_image_paths
 
-        if not args.board:
-            raise InputError("detect: images need --board board.json (or pass a session folder)")
-        board = read_board(args.board)
+        from lps_gui.cli.out_path import resolve_out
+
         paths = expand_image_paths(inputs)
+        if not paths:
+            raise InputError(f"{inputs[0]}: no images here (and no session.json); give image files, a folder of "
+                             "images or a session folder")
+        if not args.board:
+            raise InputError(f"detect: {len(paths)} image(s) need --board board.json (a session folder has its own)")
+        board = read_board(args.board)
+        out = resolve_out(args.out, "corners.vnl", None, (".vnl",), "lps detect")
         table = detect_images(paths, board, bar, workers=args.workers, track=not args.no_track)
-        out = Path(args.out or "corners.vnl")
+        if len(table.failed) == len(table.names):
+            for name, reason in table.failed.items():
+                print(f"failed: {name}: {reason}", file=sys.stderr)
+            raise InputError(f"detect: the board was found in none of the {len(paths)} image(s); nothing written "
+                             "(check --board matches the printed board)")
         write_corners_vnl(out, table)
     for name, reason in table.failed.items():
         print(f"failed: {name}: {reason}", file=sys.stderr)

@@ -6,12 +6,19 @@ import argparse
 HELP = "estimate the stage's true positions from a session's corners (joint LM by default)"
 
 
+EXIT_DOUBTFUL = 4
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.epilog = ("exit status: 0 estimated, 4 results written but not trustworthy (the solver did not converge or the "
+                "corner noise is implausible; the reason is printed), 2 bad input or the results could not be written")
     p.add_argument("session", help="session folder (session.json, captures.jsonl, corners.vnl)")
     p.add_argument("--method", default="joint", choices=("joint", "hybrid", "pnp", "calibrate"),
                    help="joint LM (default), the paper's hybrid, per-view PnP, or full calibration (reference)")
     p.add_argument("--intrinsics", help="intrinsics JSON/YAML instead of the session's")
-    p.add_argument("--out", help="folder for results (default: the session folder)")
+    p.add_argument("--out", help="where to write (default the session folder): an existing folder gets results.json "
+                   "(and the CSVs) inside; a name ending in .json is the results file (CSVs beside it as "
+                   "NAME-positions.csv, NAME-summary.csv); a name without suffix is a new folder")
     p.add_argument("--robust", action="store_true", help="Huber loss on corner residuals (joint)")
     p.add_argument("--outlier-k", type=float, default=5.0, help="robust sigmas that flag an outlier view (default 5)")
     p.add_argument("--no-outliers", action="store_true", help="do not look for outlier views")
@@ -23,8 +30,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    import sys
+    from pathlib import Path
+
+    from lps_gui.cli.out_path import resolve_out
     from lps_gui.cli.progress_bar import ProgressBar
+    from lps_gui.io.session_lock import SessionLock
     from lps_gui.pipeline.estimate import estimate_session
+    from lps_gui.pipeline.session_checks import result_doubts
 
     options = {
         "robust": args.robust,
@@ -36,15 +49,29 @@ def run(args: argparse.Namespace) -> int:
         "grid_resolution_mm": args.grid_resolution_mm,
         "threshold_px": args.threshold_px,
     }
-    results = estimate_session(args.session, args.method, options, args.intrinsics, args.out, progress=ProgressBar("estimate"))
+    out = resolve_out(args.out, "results.json", args.session, (".json",), "lps estimate") if args.out else None
+    lock = SessionLock(args.session) if out is None and Path(args.session).is_dir() else None
+    if lock is not None:
+        lock.__enter__()  # refused at once when a capture or detection holds the session
+    try:
+        results = estimate_session(args.session, args.method, options, args.intrinsics, out, progress=ProgressBar("estimate"))
+    finally:
+        if lock is not None:
+            lock.__exit__(None, None, None)
     print(format_summary(results))
-    import sys
-
     from lps_gui.io.results_history import stale_report_message
 
     if (stale := stale_report_message(args.session)) and not args.out:
         print(stale, file=sys.stderr)
-    return 0
+    doubts = result_doubts(results)
+    for doubt in doubts:
+        print(f"lps estimate: warning: {doubt}", file=sys.stderr)
+    return EXIT_DOUBTFUL if doubts else 0
+
+
+def _g(value: object, spec: str) -> str:
+    """``value`` formatted with ``spec``, or "n/a" when it is missing (null in results.json)."""
+    return format(value, spec) if isinstance(value, (int, float)) else "n/a"
 
 
 def format_planar_summary(results: dict) -> str:
@@ -86,31 +113,31 @@ def format_summary(results: dict) -> str:
     single = fig.get("single_run") or {}
     lines = [
         f"method {results['method']}: {p['n_used']}/{p['n_views']} views used, {p['n_outliers']} outlier(s), "
-        f"corner noise {p['sigma_px']:.3f} px, {results['timings_s'].get('total', 0.0):.2f} s",
+        f"corner noise {_g(p['sigma_px'], '.3f')} px, {_g(results['timings_s'].get('total', 0.0), '.2f')} s",
     ]
     if single:
         lines.append(
-            f"mean step {single.get('mean_step_mm', float('nan')):.5f} mm (std {single.get('step_std_um', float('nan')):.2f} um), "
-            f"max |deviation| {single.get('max_abs_deviation_um', float('nan')):.2f} um, scale {single.get('scale_ppm', float('nan')):+.1f} ppm"
+            f"mean step {_g(single.get('mean_step_mm'), '.5f')} mm (std {_g(single.get('step_std_um'), '.2f')} um), "
+            f"max |deviation| {_g(single.get('max_abs_deviation_um'), '.2f')} um, scale {_g(single.get('scale_ppm'), '+.1f')} ppm"
         )
     sig = [r["sigma_total_um"] for r in results["positions"] if r.get("sigma_total_um") is not None and r["used"]]
     if sig:
-        lines.append(f"position sigma (total) median {sorted(sig)[len(sig) // 2]:.2f} um")
+        lines.append(f"position sigma (total) median {_g(sorted(sig)[len(sig) // 2], '.2f')} um")
     iso = fig.get("iso230_2") or {}
     if iso.get("A_um") is not None or iso.get("E_um") is not None:
-        parts = [f"{k[:-3]} {iso[k]:.2f} um" for k in ("A_um", "R_um", "E_um", "B_um", "M_um") if iso.get(k) is not None]
+        parts = [f"{k[:-3]} {_g(iso[k], '.2f')} um" for k in ("A_um", "R_um", "E_um", "B_um", "M_um") if iso.get(k) is not None]
         lines.append("ISO 230-2: " + ", ".join(parts))
     for f in results["flags"]:
         lines.append(f"outlier view {f['index']}: {f['message']}")
     tc = results.get("truth_comparison")
     if tc and tc.get("position_rms_error_um") is not None:
         lines.append(
-            f"against truth: position RMS error {tc['position_rms_error_um']:.2f} um (max {tc['position_max_abs_error_um']:.2f} um), "
-            f"mean reported sigma {tc['mean_sigma_um']:.2f} um"
+            f"against truth: position RMS error {_g(tc['position_rms_error_um'], '.2f')} um "
+            f"(max {_g(tc['position_max_abs_error_um'], '.2f')} um), mean reported sigma {_g(tc['mean_sigma_um'], '.2f')} um"
         )
     if tc and tc.get("board_plane_rms_error_um") is not None:
         lines.append(
-            f"against truth at the board plane (what a constant-orientation model sees; Abbe term RMS {tc['abbe_rms_um']:.2f} um): "
-            f"RMS error {tc['board_plane_rms_error_um']:.2f} um, mean (error/sigma)^2 {tc['board_plane_z_mean_square']:.2f}"
+            f"against truth at the board plane (what a constant-orientation model sees; Abbe term RMS {_g(tc['abbe_rms_um'], '.2f')} um): "
+            f"RMS error {_g(tc['board_plane_rms_error_um'], '.2f')} um, mean (error/sigma)^2 {_g(tc['board_plane_z_mean_square'], '.2f')}"
         )
     return "\n".join(lines)

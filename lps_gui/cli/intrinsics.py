@@ -13,7 +13,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.epilog = "exit status: 0 calibrated from every image, 3 some images unusable (listed), 2 bad input"
     parser.add_argument("images", nargs="+", help="image files or folders of images")
     parser.add_argument("--board", required=True, help="board.json")
-    parser.add_argument("--out", default="intrinsics.json", help="intrinsics JSON to write (default: intrinsics.json)")
+    parser.add_argument("--out", default=None, help="intrinsics to write (default intrinsics.json here): an existing "
+                        "folder gets intrinsics.json inside; a name ending in .json/.yaml/.yml is the file; a name "
+                        "without suffix is a new folder")
     parser.add_argument("--yaml", help="also write OpenCV FileStorage YAML here")
     parser.add_argument("--cameramodel", help="also write an mrcal .cameramodel here")
     parser.add_argument("--lensmodel", choices=("opencv5", "opencv8"), default="opencv5",
@@ -37,7 +39,10 @@ def run(args: argparse.Namespace) -> int:
     from lps_gui.io.intrinsics_file import write_intrinsics
     from lps_gui.pipeline.intrinsics import calibrate_images, cross_validate_calibration
 
+    from lps_gui.cli.out_path import resolve_out
+
     board = read_board(args.board)
+    args.out = resolve_out(args.out, "intrinsics.json", None, (".json", ".yaml", ".yml"), "lps intrinsics")
     flags = cv2.CALIB_FIX_K3 if args.fix_k3 else 0
     cal = calibrate_images([Path(p) for p in args.images], board, ProgressBar("intrinsics"), workers=args.workers, flags=flags, warp=args.warp)
     write_intrinsics(args.out, cal.intrinsics)

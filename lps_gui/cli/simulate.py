@@ -67,7 +67,19 @@ def build_spec(args: argparse.Namespace):
         overrides["seed"] = args.seed
     if args.noise_px is not None:
         overrides["noise_px"] = args.noise_px
-    return replace(spec, **overrides)
+    spec = replace(spec, **overrides)
+    _check_noise(spec, "--noise-px" if args.noise_px is not None else (args.rig or "preset"))
+    return spec
+
+
+def _check_noise(spec, source: str) -> None:
+    """Noise sigmas and the outlier fraction must be non-negative numbers (numpy raises "scale < 0" otherwise)."""
+    from lps_gui.errors import InputError
+
+    for name in ("noise_px", "noise_clip_px", "missing_fraction"):
+        value = getattr(spec, name, None)
+        if value is not None and not float(value) >= 0:
+            raise InputError(f"{source}: {name} is {value}; give 0 or more")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -44,15 +44,9 @@ class Plan:
     def __post_init__(self) -> None:
         if self.directions not in DIRECTIONS:
             raise InputError(f"plan: directions must be one of {DIRECTIONS}, got {self.directions!r}")
-        if self.runs < 1 or self.frames_per_stop < 1:
-            raise InputError("plan: runs and frames_per_stop must be at least 1")
-        if self.targets_mm is None:
-            if self.step_mm == 0 or (self.stop_mm - self.start_mm) / self.step_mm < 0:
-                raise InputError(
-                    f"plan: step {self.step_mm} mm does not lead from {self.start_mm} to {self.stop_mm} mm"
-                )
-        elif len(self.targets_mm) < 2:
-            raise InputError("plan: give at least 2 targets")
+        from lps_gui.core.plan_limits import check_plan_fields
+
+        check_plan_fields(self)  # counts and ranges before anything is built from them
 
     def targets(self) -> np.ndarray:
         """Ascending target positions (mm), shape (m,)."""
@@ -94,7 +88,9 @@ class Plan:
     def from_dict(cls, d: dict[str, Any]) -> "Plan":
         known = {k: v for k, v in d.items() if k in cls.__dataclass_fields__}
         if known.get("targets_mm") is not None:
-            known["targets_mm"] = tuple(float(t) for t in known["targets_mm"])
+            if not isinstance(known["targets_mm"], (list, tuple)):
+                raise InputError(f"plan: targets_mm must be a list of positions (mm), not {known['targets_mm']!r}")
+            known["targets_mm"] = tuple(known["targets_mm"])
         try:
             return cls(**known)
         except TypeError as exc:

@@ -7,7 +7,6 @@ so the screen and the paper show the same numbers.
 from __future__ import annotations
 
 import logging
-import shutil
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -336,18 +335,18 @@ class ResultsPanel(QWidget):
 
         if self.results_dir is None:
             raise InputError("export: no results to export; run an estimation first")
+        from lps_gui.io.file_set import write_file_set
+
         folder = Path(folder)
-        folder.mkdir(parents=True, exist_ok=True)
-        out = []
+        files = {}
         for name in CSV_FILES:
             src = self.results_dir / name
             if not src.exists():
                 raise InputError(f"{src}: not found; run the estimation again to write the CSV files")
-            dst = folder / name
-            if src.resolve() != dst.resolve():
-                shutil.copyfile(src, dst)
-            out.append(dst)
-        return out
+            if src.resolve() != (folder / name).resolve():
+                files[name] = src.read_bytes()
+        write_file_set(folder, files)  # checked, all or nothing (a full disk leaves no half export)
+        return [folder / name for name in CSV_FILES]
 
 
 def with_limits(figures: list[Any], spec: dict[str, Any] | None) -> list[Any]:

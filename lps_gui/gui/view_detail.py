@@ -10,7 +10,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import cv2
 import numpy as np
 import pyqtgraph as pg
 from PySide6.QtCore import Qt
@@ -18,6 +17,7 @@ from PySide6.QtWidgets import QLabel, QVBoxLayout, QWidget
 
 from lps_gui.core.camera_model import project_board
 from lps_gui.core.lps_model import LpsLine
+from lps_gui.io.image_file import decode_image
 
 ARROW_GAIN = 50.0  # residual vectors drawn this many times longer than they are
 
@@ -103,7 +103,13 @@ class ViewDetail(QWidget):
         if session_dir is not None and row.get("file"):
             path = Path(session_dir) / str(row["file"])
             if path.exists():
-                image = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
+                from lps_gui.errors import InputError
+                from lps_gui.io.session_paths import read_session_file
+
+                try:  # inside the session, size and pixel count checked before decoding
+                    image = decode_image(read_session_file(session_dir, str(row["file"])), str(path))
+                except InputError:
+                    image = None
         self.sensor.setData([], [])
         if image is not None:
             self.image.setImage(image, autoLevels=False, levels=(0, 255))

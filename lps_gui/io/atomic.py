@@ -1,15 +1,21 @@
 """Crash-safe file writes: a file is either the old one or the complete new one.
 
-Write to a temporary name in the same folder, fsync, rename over the target,
-fsync the folder. Appends to a log are fsynced line by line so a crash loses
-at most the line being written, which readers then ignore.
+Write to a temporary name in the same folder, fsync, check the temp file
+holds every byte, rename over the target, fsync the folder. A write that
+fails (disk full, read-only folder) raises :class:`StorageError` and leaves
+the old file in place; nothing is renamed unless it was checked.
+Appends to a log are fsynced line by line so a crash loses at most the line
+being written, which readers then ignore.
 """
 from __future__ import annotations
 
+import errno
 import hashlib
 import os
 import tempfile
 from pathlib import Path
+
+from lps_gui.errors import InputError, StorageError
 
 
 def _umask() -> int:
@@ -31,25 +37,107 @@ def fsync_dir(folder: Path) -> None:
         os.close(fd)
 
 
-def write_bytes_atomic(path: Path | str, data: bytes) -> None:
-    """Write ``data`` to ``path`` atomically (temp file, fsync, rename)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+def storage_error(path: Path | str, exc: OSError) -> StorageError:
+    """The one-line error of a failed write, naming the file and what to do."""
+    reason = exc.strerror or str(exc)
+    if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EIO):
+        hint = "free disk space"
+    elif exc.errno in (errno.EROFS, errno.EACCES, errno.EPERM):
+        hint = "make the folder writable or choose another"
+    else:
+        hint = "check the disk and the folder"
+    return StorageError(f"{path}: cannot write ({reason}); {hint} and run again (the previous file is kept)")
+
+
+def temp_path(path: Path) -> Path:
+    """A fresh temporary name beside ``path`` (same folder, so the rename is atomic)."""
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    except OSError as exc:
+        raise storage_error(path, exc) from exc
+    os.close(fd)
+    return Path(tmp)
+
+
+def write_temp(path: Path, data: bytes) -> Path:
+    """Write ``data`` to a new temp file beside ``path``, fsynced and size-checked; returns its path."""
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    except OSError as exc:
+        raise storage_error(path, exc) from exc
     try:
         os.fchmod(fd, 0o666 & ~_umask())  # mkstemp makes 0600; files should read like any other
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
+        view = memoryview(data)
+        while view:
+            n = os.write(fd, view)
+            if n <= 0:
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+            view = view[n:]
+        os.fsync(fd)
+        size = os.fstat(fd).st_size
+        if size != len(data):
+            raise OSError(errno.EIO, f"wrote {size} of {len(data)} bytes")
+    except OSError as exc:
+        os.close(fd)
+        _unlink(tmp)
+        raise storage_error(path, exc) from exc
     except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
+        os.close(fd)
+        _unlink(tmp)
         raise
+    os.close(fd)
+    return Path(tmp)
+
+
+def commit_temp(tmp: Path | str, path: Path | str, expected_size: int | None = None, min_size: int = 1,
+                ends_with: bytes = b"") -> None:
+    """Check a finished temp file (fsync, size) and rename it over ``path``.
+
+    For writers that fill the temp file themselves (a QPdfWriter): the file
+    must exist, hold at least ``min_size`` bytes (exactly ``expected_size`` if
+    given), end with ``ends_with`` (a format's trailer: Qt reports no error
+    when a full disk cuts a PDF short) and fsync cleanly, or it is deleted and :class:`StorageError`
+    raised with the old ``path`` untouched.
+    """
+    tmp, path = Path(tmp), Path(path)
+    try:
+        fd = os.open(tmp, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0))
+        try:
+            os.fsync(fd)
+            size = os.fstat(fd).st_size
+            tail = os.pread(fd, len(ends_with) + 64, max(0, size - len(ends_with) - 64)) if ends_with else b""
+        finally:
+            os.close(fd)
+        if size < min_size or (expected_size is not None and size != expected_size):
+            want = expected_size if expected_size is not None else f">= {min_size}"
+            raise OSError(errno.EIO, f"incomplete file ({size} bytes, expected {want})")
+        if ends_with and not tail.rstrip().endswith(ends_with):
+            raise OSError(errno.EIO, f"incomplete file ({size} bytes, no {ends_with.decode(errors='replace')} trailer)")
+        os.replace(tmp, path)
+    except OSError as exc:
+        _unlink(tmp)
+        raise storage_error(path, exc) from exc
     fsync_dir(path.parent)
+
+
+def _unlink(path: Path | str) -> None:
+    try:
+        os.unlink(path)
+    except OSError:
+        pass
+
+
+def write_bytes_atomic(path: Path | str, data: bytes) -> None:
+    """Write ``data`` to ``path`` atomically (temp file, fsync, size check, rename)."""
+    path = Path(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise storage_error(path, exc) from exc
+    if path.is_symlink():
+        raise InputError(f"{path}: is a symbolic link; refusing to replace it (use a regular file)")
+    tmp = write_temp(path, data)
+    commit_temp(tmp, path, expected_size=len(data), min_size=0)
 
 
 def write_text_atomic(path: Path | str, text: str) -> None:
@@ -57,23 +145,44 @@ def write_text_atomic(path: Path | str, text: str) -> None:
 
 
 def append_line_durable(path: Path | str, line: str) -> None:
-    """Append one line (newline added) and fsync; repair a torn last line first."""
+    """Append one line (newline added) and fsync; repair a torn last line first.
+
+    A symlinked log is refused (O_NOFOLLOW): the repair truncates, and must
+    never truncate a file elsewhere.
+    """
     path = Path(path)
     if "\n" in line:
         raise ValueError("append_line_durable takes a single line")
-    with open(path, "a+b") as f:
-        size = f.seek(0, os.SEEK_END)
-        if size:
-            f.seek(size - 1)
-            if f.read(1) != b"\n":  # a crash tore the last line: drop it
-                f.seek(0)
-                content = f.read()
-                keep = content[: content.rfind(b"\n") + 1]
-                f.truncate(len(keep))
-        f.seek(0, os.SEEK_END)
-        f.write(line.encode("utf-8") + b"\n")
-        f.flush()
-        os.fsync(f.fileno())
+    try:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0), 0o666)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            raise InputError(f"{path}: is a symbolic link; session files must be regular files in the session folder") from None
+        raise storage_error(path, exc) from exc
+    with os.fdopen(fd, "r+b") as f:
+        import stat
+
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise InputError(f"{path}: not a regular file; session files must be regular files")
+        try:
+            size = f.seek(0, os.SEEK_END)
+            if size:
+                f.seek(size - 1)
+                if f.read(1) != b"\n":  # a crash tore the last line: drop it
+                    f.seek(0)
+                    content = f.read()
+                    keep = content[: content.rfind(b"\n") + 1]
+                    f.truncate(len(keep))
+            end = f.seek(0, os.SEEK_END)
+            f.write(line.encode("utf-8") + b"\n")
+            f.flush()
+            os.fsync(f.fileno())
+        except OSError as exc:
+            try:  # a partial line must not stay behind (the next reader would call it torn)
+                f.truncate(end)
+            except (OSError, UnboundLocalError):
+                pass
+            raise storage_error(path, exc) from exc
 
 
 def sha256_bytes(data: bytes) -> str:
@@ -91,8 +200,6 @@ def sha256_file(path: Path | str, chunk: int = 1 << 20) -> str:
 def check_writable(folder: Path | str, need_bytes: int = 0) -> None:
     """Raise InputError before any work if ``folder`` cannot take ``need_bytes``."""
     import shutil
-
-    from lps_gui.errors import InputError
 
     folder = Path(folder)
     try:

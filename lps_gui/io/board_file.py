@@ -7,9 +7,11 @@ from typing import Any
 from lps_gui.core.board import Board
 from lps_gui.errors import InputError
 from lps_gui.io.jsonfile import read_json, write_json
+from lps_gui.io.value_checks import check_board_values
 
 
 def board_from_dict(d: dict[str, Any], source: str = "board") -> Board:
+    check_board_values(d, source)
     try:
         cols, rows = (int(v) for v in d["inner_corners"])
         return Board(

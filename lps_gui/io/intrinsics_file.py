@@ -24,11 +24,13 @@ from lps_gui.io.atomic import write_text_atomic
 from lps_gui.io.cameramodel_file import SUFFIX as CAMERAMODEL_SUFFIX
 from lps_gui.io.cameramodel_file import read_cameramodel, write_cameramodel
 from lps_gui.io.jsonfile import read_json, write_json
+from lps_gui.io.value_checks import check_intrinsics_values
 
 YAML_SUFFIXES = (".yaml", ".yml", ".xml")
 
 
 def intrinsics_from_dict(d: dict[str, Any], source: str = "intrinsics") -> CameraIntrinsics:
+    check_intrinsics_values(d, source)
     try:
         K = np.asarray(d["camera_matrix"], dtype=float).reshape(3, 3)
         dist = np.asarray(d.get("dist", [0.0] * 5), dtype=float).ravel()

@@ -3,8 +3,10 @@
 results.json is the complete, versioned record (schema in
 docs/ARCHITECTURE.md), assembled here only (:func:`assemble_results`); the
 CSVs are views of it for spreadsheets (:func:`summary_rows` gives summary.csv's
-rows). All three are written atomically, results.json last, so a reader never
-sees a results.json whose CSVs are missing.
+rows). All three are written as one set (:func:`lps_gui.io.file_set.write_file_set`):
+each to a checked temp file, then renamed together, results.json last, so a
+full disk leaves the old set whole and a reader never sees a results.json
+whose CSVs are from another run.
 """
 from __future__ import annotations
 
@@ -18,8 +20,8 @@ from typing import Any
 
 from lps_gui import __version__
 from lps_gui.errors import InputError
-from lps_gui.io.atomic import write_text_atomic
-from lps_gui.io.jsonfile import read_json, write_json
+from lps_gui.io.file_set import write_file_set
+from lps_gui.io.jsonfile import json_bytes, read_json
 
 FORMAT = "lps-results/1"
 RESULTS_FILE = "results.json"
@@ -317,18 +319,28 @@ def summary_csv(results: dict[str, Any]) -> str:
 
 
 def write_results(folder: Path | str, results: dict[str, Any]) -> dict[str, Path]:
-    """Write the three result files into ``folder``; returns their paths."""
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    paths = {
-        "positions": folder / POSITIONS_FILE,
-        "summary": folder / SUMMARY_FILE,
-        "results": folder / RESULTS_FILE,
+    """Write the three result files into ``folder``; returns their paths.
+
+    A ``folder`` ending in ``.json`` names the results file itself; its CSVs
+    go beside it as ``<stem>-positions.csv`` and ``<stem>-summary.csv``.
+    """
+    folder, names = _result_names(Path(folder))
+    files = {
+        names["positions"]: positions_csv(results).encode("utf-8"),
+        names["summary"]: summary_csv(results).encode("utf-8"),
+        names["results"]: json_bytes(results),
     }
-    write_text_atomic(paths["positions"], positions_csv(results))
-    write_text_atomic(paths["summary"], summary_csv(results))
-    write_json(paths["results"], results)
-    return paths
+    written = write_file_set(folder, files, last=names["results"])
+    return {key: written[name] for key, name in names.items()}
+
+
+def _result_names(path: Path) -> tuple[Path, dict[str, str]]:
+    if path.suffix.lower() != ".json" or path.is_dir():
+        return path, {"positions": POSITIONS_FILE, "summary": SUMMARY_FILE, "results": RESULTS_FILE}
+    if path.name == RESULTS_FILE:
+        return path.parent, {"positions": POSITIONS_FILE, "summary": SUMMARY_FILE, "results": RESULTS_FILE}
+    return path.parent, {"positions": f"{path.stem}-{POSITIONS_FILE}", "summary": f"{path.stem}-{SUMMARY_FILE}",
+                         "results": path.name}
 
 
 def read_results(path: Path | str) -> dict[str, Any]:

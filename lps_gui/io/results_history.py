@@ -11,10 +11,10 @@ record survives copies to any file system.
 from __future__ import annotations
 
 import re
-import shutil
 from pathlib import Path
 from typing import Any
 
+from lps_gui.io.file_set import write_file_set
 from lps_gui.io.jsonfile import read_json, write_json
 from lps_gui.io.results_file import POSITIONS_FILE, RESULTS_FILE, SUMMARY_FILE
 
@@ -32,10 +32,8 @@ def entry_name(results: dict[str, Any]) -> str:
 
 
 def _copy_set(src: Path, dest: Path) -> None:
-    dest.mkdir(parents=True, exist_ok=True)
-    for name in SET:
-        if (src / name).is_file():
-            shutil.copy2(src / name, dest / name)
+    """Copy the result set into ``dest`` as one checked set (a full disk leaves no half copy)."""
+    write_file_set(dest, {name: (src / name).read_bytes() for name in SET if (src / name).is_file()}, last=RESULTS_FILE)
 
 
 def keep_previous(session_dir: Path | str) -> Path | None:

@@ -55,27 +55,10 @@ class CaptureRecord:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> "CaptureRecord":
-        return cls(
-            index=int(d["index"]),
-            run=int(d["run"]),
-            direction=str(d["direction"]),
-            target_mm=_coordinate(d["target_mm"]),
-            reported_mm=None if d.get("reported_mm") is None else _coordinate(d["reported_mm"]),
-            file=str(d["file"]),
-            sha256=d.get("sha256"),
-            time=float(d.get("time", 0.0)),
-            frame=int(d.get("frame", 0)),
-            commanded_mm=None if d.get("commanded_mm") is None else float(d["commanded_mm"]),
-        )
+        """A record from one parsed line; ValueError names the field that is wrong."""
+        from lps_gui.io.capture_fields import capture_fields
 
-
-def _coordinate(v: Any) -> float | tuple[float, float]:
-    """A position: a number (one axis) or [x, y] (a planar stage, SPEC 10)."""
-    if isinstance(v, (list, tuple)):
-        if len(v) != 2:
-            raise ValueError(f"a planar position is [x, y], got {v!r}")
-        return (float(v[0]), float(v[1]))
-    return float(v)
+        return cls(**capture_fields(d))
 
 
 class Session:
@@ -178,22 +161,17 @@ class Session:
         return self.folder / CORNERS_FILE
 
     def records(self) -> list[CaptureRecord]:
-        """Every complete line of captures.jsonl (a torn last line is ignored)."""
+        """Every complete line of captures.jsonl (a torn last line is ignored).
+
+        A line that is not a record, a ``file`` outside the session folder or
+        an index listed twice (two writers at once) is an error naming the line.
+        """
+        from lps_gui.io.capture_fields import parse_capture_lines
+
         path = self.captures_path
         if not path.exists():
             return []
-        out: list[CaptureRecord] = []
-        lines = path.read_text(encoding="utf-8").split("\n")
-        for n, line in enumerate(lines, 1):
-            if not line.strip():
-                continue
-            try:
-                out.append(CaptureRecord.from_dict(json.loads(line)))
-            except (json.JSONDecodeError, KeyError, ValueError, TypeError):
-                if n == len(lines):  # torn by a crash mid-append: not listed
-                    continue
-                raise InputError(f"{path}: line {n} is not a capture record; restore the file from a backup") from None
-        return out
+        return [CaptureRecord(**fields) for fields in parse_capture_lines(path)]
 
     def append(self, record: CaptureRecord) -> None:
         append_line_durable(self.captures_path, record.to_json())

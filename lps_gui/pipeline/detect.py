@@ -29,6 +29,7 @@ from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import Cancelled, InputError
 from lps_gui.io.atomic import sha256_file
 from lps_gui.io.corners_vnl import CornerTable, read_corners_vnl, write_corners_vnl
+from lps_gui.io.corners_hashes import corners_current, hash_meta, image_hashes
 from lps_gui.io.session import Session
 
 log = logging.getLogger(__name__)
@@ -41,6 +42,7 @@ class ViewJob:
     name: str
     path: str
     sha256: str | None = None
+    session: str | None = None  # the session folder when ``path`` is a session file (checked to stay inside)
 
 
 @dataclass
@@ -51,21 +53,31 @@ class ViewResult:
     reason: str = ""
 
 
-def load_grey(path: str, sha256: str | None = None, image_size: tuple[int, int] | None = None) -> tuple[np.ndarray | None, str]:
-    """Decode an image file to 8-bit grey, or explain in one line why not."""
+def load_grey(path: str, sha256: str | None = None, image_size: tuple[int, int] | None = None,
+              session: str | None = None) -> tuple[np.ndarray | None, str]:
+    """Decode an image file to 8-bit grey, or explain in one line why not.
+
+    With ``session``, ``path`` is relative to it and must stay inside it
+    (:mod:`lps_gui.io.session_paths`); every image's size is checked before
+    it is read and its pixel count before it is decoded.
+    """
     import hashlib
 
-    import cv2
+    from lps_gui.io.image_file import decode_image, read_file_limited
+    from lps_gui.io.session_paths import read_session_file
 
-    try:
-        data = Path(path).read_bytes()
-    except FileNotFoundError:
+    if not (Path(session or "") / path).exists() and not Path(session or "", path).is_symlink():
         return None, "image file missing"
-    except OSError as exc:
-        return None, f"image unreadable ({exc.strerror})"
-    if sha256 is not None and hashlib.sha256(data).hexdigest() != sha256:
-        return None, "image changed since capture (sha256 differs from captures.jsonl)"
-    image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_GRAYSCALE) if data else None
+    try:
+        data = read_session_file(session, path) if session is not None else read_file_limited(path)
+        if sha256 is not None and hashlib.sha256(data).hexdigest() != sha256:
+            return None, "image changed since capture (sha256 differs from captures.jsonl)"
+        image = decode_image(data, path)
+    except InputError as exc:  # the caller names the view: drop the path the message starts with
+        reason = str(exc)
+        for prefix in (str(Path(session or "") / path), path):
+            reason = reason.removeprefix(prefix + ": ")
+        return None, reason
     if image is None:
         return None, "image unreadable or truncated"
     if image_size is not None and (image.shape[1], image.shape[0]) != tuple(image_size):
@@ -89,7 +101,7 @@ def detect_chunk(
     tracker = ChessboardTracker(board, DetectionOptions(track=track))
     out: list[ViewResult] = []
     for job in jobs:
-        image, reason = load_grey(job.path, job.sha256, image_size)
+        image, reason = load_grey(job.path, job.sha256, image_size, job.session)
         if image is None:
             tracker.reset()
             out.append(ViewResult(job.name, None, "failed", reason))
@@ -241,6 +253,7 @@ def detect_session(
     cancel: CancelToken | None = None,
     workers: int | None = None,
     force: bool = False,
+    track: bool = True,
 ) -> CornerTable:
     """Detect every capture of a session and write ``corners.vnl`` (atomically).
 
@@ -263,7 +276,7 @@ def detect_session(
             image_size = session.intrinsics().image_size
         except InputError as exc:  # detection does not need intrinsics: go on without the size check
             log.warning("%s", exc)
-    meta = {"captures_sha256": captures_sha, "board": _board_key(board)}
+    meta = {"captures_sha256": captures_sha, "board": _board_key(board), **hash_meta(records)}
     kept: dict[str, ViewResult] = {}
     if not force and session.corners_path.exists():
         try:
@@ -272,28 +285,37 @@ def detect_session(
             log.warning("ignoring unusable %s: %s", session.corners_path, exc)
         else:
             if old.meta.get("board", meta["board"]) == meta["board"]:
+                current = image_hashes(records)
                 for name, corners in zip(old.names, old.corners_px):
-                    if name not in old.failed and np.isfinite(corners).any():
+                    if name not in old.failed and np.isfinite(corners).any() and corners_current(old, name, current):
                         kept[name] = ViewResult(name, corners, "kept")
                 if old.meta.get("captures_sha256") == captures_sha and all(n in kept or n in old.failed for n in names):
                     progress(len(names), len(names), "corners.vnl is up to date")
                     old.meta["up_to_date"] = "yes"  # for the caller; not written
                     return old
-    jobs = [ViewJob(r.file, str(session.folder / r.file), r.sha256) for r in records if r.file not in kept]
+    jobs = [ViewJob(r.file, r.file, r.sha256, str(session.folder)) for r in records if r.file not in kept]
     results = dict(kept)
     try:
         if jobs:
-            results.update(run_detection(jobs, board, progress, cancel, workers, image_size))
+            results.update(run_detection(jobs, board, progress, cancel, workers, image_size, track))
     except Cancelled as exc:
         results.update(getattr(exc, "partial", {}))
         table = _table(names, results, board.n_corners, {**meta, "captures_sha256": "partial"})
         table.names = [n for n in names if n in results]
         table.corners_px = table.corners_px[[i for i, n in enumerate(names) if n in results]]
-        write_corners_vnl(session.corners_path, table)
+        _write_session_corners(session, table)
         raise
     methods = [r.method for r in results.values()]
     labels = {"track": "tracked", "full": "full", "charuco": "charuco", "kept": "kept", "failed": "failed"}
     meta["detection"] = ", ".join(f"{label} {methods.count(m)}" for m, label in labels.items() if m == "track" or m in methods)
     table = _table(names, results, board.n_corners, meta)
-    write_corners_vnl(session.corners_path, table)
+    _write_session_corners(session, table)
     return table
+
+
+def _write_session_corners(session: Session, table: CornerTable) -> None:
+    """corners.vnl under the session lock (a capture or another detection may be writing)."""
+    from lps_gui.io.session_lock import SessionLock
+
+    with SessionLock(session.folder):
+        write_corners_vnl(session.corners_path, table)

@@ -9,6 +9,7 @@ written, so a failure leaves the session as it was.
 from __future__ import annotations
 
 import time
+from contextlib import nullcontext
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -30,7 +31,9 @@ from lps_gui.io.results_file import assemble_results, summary_rows, write_result
 from lps_gui.io.results_file import json_float as _f
 from lps_gui.io.results_history import keep_previous, record_latest
 from lps_gui.io.session import SESSION_FILE, Session
+from lps_gui.io.session_lock import SessionLock
 from lps_gui.pipeline.board_plane_results import position_fields, straightness_figures
+from lps_gui.pipeline.session_checks import check_corners_current, check_view_geometry
 from lps_gui.pipeline.uncertainty import add_uncertainty, session_board
 from lps_gui.sim.truth import session_truth, truth_comparison  # truth_comparison re-exported for callers
 
@@ -60,6 +63,7 @@ def observations_from_session(session: Session, intrinsics: CameraIntrinsics | N
     if not records:
         raise InputError(f"{session.captures_path}: no captures listed; capture or simulate a session first")
     table = read_corners_vnl(session.corners_path, board.n_corners)
+    check_corners_current(session, table, records)
     rows = table.index()
     missing = [r.file for r in records if r.file not in rows]
     if missing:
@@ -67,6 +71,7 @@ def observations_from_session(session: Session, intrinsics: CameraIntrinsics | N
             f"{session.corners_path}: {len(missing)} captured image(s) have no corners (first: {missing[0]}); run `lps detect {session.folder}`"
         )
     corners = table.corners_px[[rows[r.file] for r in records]]
+    check_view_geometry(corners, [r.file for r in records], session.corners_path)
     return Observations(
         board=board,
         intrinsics=intr,
@@ -114,7 +119,8 @@ def estimate_session(
     results["timings_s"]["pipeline_total"] = time.perf_counter() - t0
     if cancel is not None:
         cancel.check("estimation")
-    _write_keeping_history(session, out_dir, results)
+    with SessionLock(session.folder) if not out_dir else nullcontext():  # one writer per session
+        _write_keeping_history(session, out_dir, results)
     return results
 
 

@@ -28,16 +28,25 @@ def expand_image_paths(items: list[Path]) -> list[Path]:
 
 
 def image_size_of(paths: list[Path], table: CornerTable) -> tuple[int, int]:
-    """Size (w, h) of the first image that was read."""
-    import cv2
+    """Size (w, h) of the first image the board was found in (from its header, checked like every read)."""
+    from lps_gui.core.image_header import HEADER_BYTES, check_image_header
+    from lps_gui.io.image_file import read_image
 
     for p in paths:
         if str(p) in table.failed:
             continue
-        img = cv2.imread(str(p), cv2.IMREAD_GRAYSCALE)
-        if img is not None:
-            return (img.shape[1], img.shape[0])
-    raise InputError("intrinsics: none of the images could be read; check the paths")
+        with open(p, "rb") as f:
+            size = check_image_header(f.read(HEADER_BYTES), str(p))
+        if size is None:
+            img = read_image(p)
+            size = (img.shape[1], img.shape[0])
+        return size
+    unreadable = [n for n, why in table.failed.items() if "board" not in why]
+    if len(unreadable) == len(paths):
+        raise InputError(f"intrinsics: none of the {len(paths)} images could be read (first: {unreadable[0]}: "
+                         f"{table.failed[unreadable[0]]}); check the paths")
+    raise InputError(f"intrinsics: the board was found in none of the {len(paths)} images; check --board matches "
+                     "the printed board (inner corners, type)")
 
 
 def calibrate_images(
@@ -59,6 +68,7 @@ def calibrate_images(
     paths = expand_image_paths(paths)
     table = detect_images(paths, board, progress, cancel, workers, track=False)
     size = image_size_of(paths, table)
+    drop_repeated_views(table)
     cal = calibrate_intrinsics(board.flat_points(), list(table.corners_px), size, flags=flags, warp=warp)
     cal.view_names = list(table.names)
     cal.warnings += [f"{name}: {reason}" for name, reason in table.failed.items()]
@@ -88,3 +98,25 @@ def _with_report(cal: IntrinsicsCalibration) -> CameraIntrinsics:
         extra["board_warp_mm"] = [float(v) for v in cal.warp_mm]
         extra["board_warp_sigma_mm"] = [float(v) for v in cal.warp_sigma_mm]
     return replace(cal.intrinsics, extra=extra)
+
+
+def drop_repeated_views(table: CornerTable, min_views: int = 3) -> None:
+    """Mark views that repeat an earlier one (or whose corners lie on a line) as failed, with the reason.
+
+    Copies of one image would shrink the reported std as if they were new
+    poses; fewer than ``min_views`` distinct usable views are refused.
+    """
+    from lps_gui.core.view_geometry import collinear_views, duplicate_views
+
+    for k in collinear_views(table.corners_px):
+        table.failed.setdefault(table.names[k], "corners lie on one line (board edge-on or corrupt corners)")
+    for first, later in duplicate_views(table.corners_px):
+        if table.names[first] not in table.failed:
+            table.failed.setdefault(table.names[later], f"same view as {table.names[first]} (corners within 0.5 px): "
+                                    "a copy adds no information; take a new pose")
+    for name in table.failed:
+        table.corners_px[table.names.index(name)] = np.nan
+    usable = len(table.names) - len(table.failed)
+    if usable < min_views:
+        raise InputError(f"intrinsics: only {usable} distinct usable view(s) of {len(table.names)}; calibration "
+                         f"needs at least {min_views} varied poses of the board (tilted, at several places)")

@@ -49,6 +49,7 @@ class PdfFlow:
         from PySide6.QtCore import QMarginsF
         from PySide6.QtGui import QPageLayout, QPageSize, QPainter, QPdfWriter
 
+        self.path = Path(path)
         self.writer = QPdfWriter(str(path))
         self.writer.setResolution(RESOLUTION_DPI)
         self.writer.setTitle(title)
@@ -86,7 +87,12 @@ class PdfFlow:
             self.new_page()
 
     def finish(self) -> int:
-        self.painter.end()
+        """End painting; a PDF Qt could not write completely (disk full) raises StorageError."""
+        from lps_gui.errors import StorageError
+
+        if not self.painter.end():
+            raise StorageError(f"{self.path}: the PDF could not be written completely; "
+                               "free disk space or choose another --out (the previous report is kept)")
         return self.page
 
     def abort(self) -> None:

@@ -15,6 +15,7 @@ from typing import Any
 
 from lps_gui.core.progress import ProgressFn, no_progress
 from lps_gui.errors import InputError
+from lps_gui.io.atomic import commit_temp, temp_path
 from lps_gui.io.jsonfile import read_json
 from lps_gui.report import summary as S
 from lps_gui.report.figures import figures_from_results
@@ -89,7 +90,7 @@ def render_report(session_dir: Path, results: dict | None = None, out: Path | No
     if not out.parent.is_dir():
         raise InputError(f"{out.parent}: folder not found; create it or choose another --out")
     ensure_gui_app()
-    tmp = out.with_name(f".{out.name}.tmp")
+    tmp = temp_path(out)
     name = (results.get("inputs") or {}).get("session") or session_dir.name
     flow = PdfFlow(tmp, f"LPS measurement report: {name}",
                    f"lps-calib {__version__} \u00b7 {name} \u00b7 {results.get('created', '')}")
@@ -134,7 +135,7 @@ def render_report(session_dir: Path, results: dict | None = None, out: Path | No
         flow.abort()
         tmp.unlink(missing_ok=True)
         raise
-    tmp.replace(out)  # a half-painted report never takes the place of a good one
+    commit_temp(tmp, out, ends_with=b"%%EOF")  # a half-written report never takes the place of a good one
     progress(len(steps), len(steps), f"wrote {out}")
     return ReportInfo(out, n_pages, flow.log.pages, tuple(flow.log.clipped))
 
@@ -292,7 +293,15 @@ def _thumbnail(path: Path) -> Any:
     from PySide6.QtCore import Qt
     from PySide6.QtGui import QImage
 
-    if not path.is_file():
+    from lps_gui.core.image_header import check_image_header
+
+    if not path.is_file() or path.is_symlink():
+        return None
+    try:
+        with open(path, "rb") as f:
+            check_image_header(f.read(1 << 16), str(path))
+    except (OSError, InputError) as exc:
+        log.info("report: no thumbnail of %s: %s", path, exc)
         return None
     image = QImage(str(path))
     if image.isNull():

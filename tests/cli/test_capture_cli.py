@@ -94,7 +94,7 @@ def test_existing_session_is_never_overwritten(tmp_path, capsys):
 
 
 def test_real_camera_path_pauses_when_images_run_out_and_resumes(tmp_path, capsys):
-    """Stage "sim" + a folder-replay camera: the non-simulated code path, resumed from session.json's specs."""
+    """Stage "sim" + a folder-replay camera: the non-simulated code path, resumed with the devices named again."""
     frames = tmp_path / "frames"
     frames.mkdir()
     for i in range(3):
@@ -110,7 +110,10 @@ def test_real_camera_path_pauses_when_images_run_out_and_resumes(tmp_path, capsy
     meta = Session.open(out).meta
     assert meta["camera"]["spec"] == str(frames) and meta["stage"]["spec"] == "sim" and "truth" not in meta
     cv2.imwrite(str(frames / "f3.png"), np.full((24, 32), 30, np.uint8))
-    assert lps_main(["capture", "--resume", str(out)]) == 0
+    assert lps_main(["capture", "--resume", str(out)]) == 2  # devices from session.json are never opened by themselves
+    err = capsys.readouterr().err
+    assert "give --stage and --camera" in err and f"--camera {frames}" in err and len(err.strip().splitlines()) == 1
+    assert lps_main(["capture", "--resume", str(out), "--stage", "sim", "--camera", str(frames)]) == 0
     records = _records(out)
     assert [r["index"] for r in records] == [0, 1, 2, 3]
     assert [r["reported_mm"] for r in records] == [0.0, 1.0, 2.0, 3.0]

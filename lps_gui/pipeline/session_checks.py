@@ -1,0 +1,67 @@
+"""Are the corners usable and the results still those of the session's current files?
+
+corners.vnl names the image hash of every view (:mod:`lps_gui.io.corners_hashes`)
+and results.json the sha256 of session.json, captures.jsonl and corners.vnl
+it was computed from. Estimation refuses corners of replaced images; the
+report says when results.json no longer matches the session. A view whose
+corners lie on one line fixes no pose and is refused by name.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Sequence
+
+from lps_gui.errors import InputError
+from lps_gui.io.atomic import sha256_file
+from lps_gui.io.corners_hashes import image_hashes, stale_views
+from lps_gui.io.corners_vnl import CornerTable
+from lps_gui.io.session import Session
+
+
+def check_corners_current(session: Session, table: CornerTable, records: Sequence[Any]) -> None:
+    """InputError when corners.vnl holds corners of images that were replaced since detection."""
+    stale = stale_views(table, image_hashes(records))
+    if stale:
+        raise InputError(f"{session.corners_path}: {len(stale)} view(s) were detected in an older image "
+                         f"(first: {stale[0]}; captures.jsonl lists a new sha256); run `lps detect {session.folder}`")
+
+
+def check_view_geometry(corners_px: Any, names: Sequence[str], source: Path | str) -> None:
+    """InputError naming the views whose corners lie on one line (they would give a silent wrong position)."""
+    from lps_gui.core.view_geometry import collinear_views
+
+    bad = collinear_views(corners_px)
+    if bad:
+        raise InputError(f"{source}: {len(bad)} view(s) have all corners on one line (first: {names[bad[0]]}); "
+                         "the board is edge-on or the corners are corrupt: re-run `lps detect` or remove the view")
+
+
+def stale_inputs(session_dir: Path | str, results: dict[str, Any]) -> list[str]:
+    """Session files whose sha256 differs from the one results.json was computed from."""
+    folder = Path(session_dir)
+    recorded = ((results.get("inputs") or {}).get("sha256") or {})
+    changed = []
+    for name, digest in recorded.items():
+        path = folder / str(name)
+        if "/" in str(name) or not path.is_file():
+            continue
+        if sha256_file(path) != digest:
+            changed.append(str(name))
+    return changed
+
+
+MAX_PLAUSIBLE_NOISE_PX = 5.0  # sub-pixel corners scatter ~0.1 px; 5 px means the model or the corners are wrong
+
+
+def result_doubts(results: dict[str, Any]) -> list[str]:
+    """Why a finished estimate must not be trusted (empty when nothing is wrong)."""
+    p = results.get("parameters") or {}
+    doubts = []
+    if p.get("converged") is False:
+        doubts.append(f"the solver did not converge in {p.get('iterations', '?')} iterations; the positions are not "
+                      "a solution: check the corners (`lps detect --force`) and the intrinsics")
+    sigma = p.get("sigma_px")
+    if not isinstance(sigma, (int, float)) or not sigma == sigma or sigma > MAX_PLAUSIBLE_NOISE_PX:
+        doubts.append(f"corner noise {sigma if sigma is not None else 'unknown'} px is implausible (over "
+                      f"{MAX_PLAUSIBLE_NOISE_PX:g} px); the corners or the intrinsics do not fit the images")
+    return doubts

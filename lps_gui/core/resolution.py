@@ -17,14 +17,12 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy.special import ndtri
+from scipy.special import chdtrc, ndtri
 
 
 def chi2_sf(x: float, dof: float) -> float:
-    """Survival function of chi-square (scipy.stats imported here: it costs 0.3 s at start-up)."""
-    from scipy.stats import chi2
-
-    return float(chi2.sf(x, dof))
+    """Survival function of chi-square, P(X > x) (scipy.special's: importing scipy.stats costs 0.7 s)."""
+    return float(chdtrc(dof, x))
 
 
 ISO_RUNS_PER_DIRECTION = 5

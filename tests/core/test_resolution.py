@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from lps_gui.core.resolution import (is_indicative, is_resolved, noise_max_abs, noise_peak_to_valley,
                                      not_resolved_text, profile_span, straightness_verdict)
@@ -65,3 +66,12 @@ def test_straightness_verdict_branches():
 def test_fewer_than_five_runs_per_direction_are_indicative():
     runs = lambda n: {"per_run": [{"run": i, "direction": d} for i in range(n) for d in "+-"]}  # noqa: E731
     assert is_indicative(runs(2)) and not is_indicative(runs(5))
+
+
+def test_chi2_survival_matches_scipy_stats():
+    from scipy.stats import chi2
+
+    from lps_gui.core.resolution import chi2_sf
+
+    for x, dof in ((3.0, 2), (50.0, 20), (1.0, 7), (400.0, 300)):
+        assert chi2_sf(x, dof) == pytest.approx(chi2.sf(x, dof), rel=1e-12)

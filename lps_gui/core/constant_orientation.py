@@ -86,7 +86,7 @@ def view_residuals(
 def _linearize(R, b, phi, axis, Y, corners, mask, intrinsics, with_projection=False):
     """Residuals (2, K, N) and Jacobian (2, 4, K, N) in (b, phi), masked (and d uv / d x_cam)."""
     E = exp_so3(phi[:, None] * axis)
-    EY = np.einsum("kij,nj->kni", E, Y)  # shape (K, N, 3)
+    EY = np.matmul(Y[None], np.transpose(E, (0, 2, 1)))  # E Y for every view, shape (K, N, 3)
     x = EY + b[:, None, :]
     parts = project_parts(x[..., 0], x[..., 1], x[..., 2], intrinsics, want_jacobian=True)
     w = mask.astype(float)
@@ -152,9 +152,11 @@ def solve_views(
     for it in range(iterations + 1):
         Y = (X - X0) @ R.T
         r, J, P = _linearize(R, b, phi, axis, Y, corners, mask, intrinsics, with_projection=True)
-        H = np.einsum("cpkn,cqkn->kpq", J, J)
+        Jk = np.transpose(J, (2, 1, 0, 3)).reshape(K, N_VIEW_PARAMS, -1)  # shape (K, 4, 2N): batched BLAS
+        rk = np.transpose(r, (1, 0, 2)).reshape(K, -1, 1)  # shape (K, 2N, 1)
+        H = Jk @ np.transpose(Jk, (0, 2, 1))
         H[~seen] = eye
-        g = np.einsum("cpkn,ckn->kp", J, r)
+        g = (Jk @ rk)[..., 0]
         g[~seen] = 0.0
         H_inv = np.linalg.inv(H)
         if common is not None:

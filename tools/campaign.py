@@ -428,6 +428,14 @@ for _args, _needle in (
     CASES.append(Case("input", "capture " + " ".join(_args), f"exit 2 ({_needle}), nothing captured", _plan_case))
 
 
+@case("input", "estimate a paper rig whose board leaves the view (1500 stops)", "exit 2 at once, says the board left the view")
+def _(tmp: Path) -> Outcome:
+    code, _, err = lps("simulate", tmp / "s", "--points", "--preset", "paper-rig", "--stops", "1500")
+    if code != 0:
+        return Outcome(False, f"simulate exit {code}: {last_line(err)}")
+    return clean_error(*lps("estimate", tmp / "s")[::2], needle="leaves the camera's view")
+
+
 @case("input", "simulate --noise-px -1", "exit 2")
 def _(tmp: Path) -> Outcome:
     return clean_error(*lps("simulate", tmp / "s", "--points", "--noise-px", "-1")[::2], needle="noise")

@@ -30,8 +30,16 @@ def check_view_geometry(corners_px: Any, names: Sequence[str], source: Path | st
     """InputError naming the views whose corners lie on one line (they would give a silent wrong position)."""
     from lps_gui.core.view_geometry import collinear_views
 
+    import numpy as np
+
     bad = collinear_views(corners_px)
     if bad:
+        seen = np.all(np.isfinite(np.asarray(corners_px, float)[bad]), axis=-1).sum(axis=1)
+        n = np.asarray(corners_px).shape[1]
+        if np.all(seen < n):  # part of the board is missing in each: it is leaving the image
+            raise InputError(f"{source}: the board leaves the camera's view in {len(bad)} view(s) (first: "
+                             f"{names[bad[0]]}, {int(seen[0])} of {n} corners seen, all on one line); move the "
+                             "camera back or shorten the travel (`lps plan-rig` checks a plan before capture)")
         raise InputError(f"{source}: {len(bad)} view(s) have all corners on one line (first: {names[bad[0]]}); "
                          "the board is edge-on or the corners are corrupt: re-run `lps detect` or remove the view")
 

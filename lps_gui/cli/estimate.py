@@ -88,12 +88,21 @@ def format_planar_summary(results: dict) -> str:
     if sig:
         sx, sy = sorted(s[0] for s in sig), sorted(s[1] for s in sig)
         lines.append(f"position sigma median x {sx[len(sx) // 2]:.2f} um, y {sy[len(sy) // 2]:.2f} um (1 sigma, noise only)")
+    from lps_gui.core.resolution import not_resolved_text
+
+    def span_text(d: dict | None) -> str:
+        if not d or d.get("span_um") is None:
+            return "-"
+        return f"{d['span_um']:.2f} um" if d.get("resolved") else not_resolved_text(d.get("noise_span_um"), "um")
+
     for axis, other in (("X", "Y"), ("Y", "X")):
         a = pl["per_axis"].get(axis)
         if a:
             iso = (a.get("iso230_2") or {}).get("iso230_2") or {}
             extra = "".join(f", {k[:-3]} {iso[k]:.2f} um" for k in ("A_um", "R_um", "E_um") if iso.get(k) is not None)
-            lines.append(f"{axis}: {a['lines']} line(s), straightness along {other} up to {a['straightness_um_max']:.2f} um{extra}")
+            straight = span_text(a.get("straightness")) if a.get("straightness") else f"{a['straightness_um_max']:.2f} um"
+            oop = f"; out of plane {span_text(a['out_of_plane'])}" if a.get("out_of_plane") else ""
+            lines.append(f"{axis}: {a['lines']} line(s), straightness along {other} {straight}{oop}{extra}")
     for f in results["flags"]:
         lines.append(f"outlier view {f['index']}: {f['message']}")
     tc = results.get("truth_comparison") or {}

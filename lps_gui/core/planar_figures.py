@@ -17,6 +17,7 @@ import numpy as np
 
 from lps_gui.core.iso230 import figures_for_session
 from lps_gui.core.iso230_run import JsonDataclass, target_index
+from lps_gui.core.resolution import profile_span
 
 LINE_TOL_MM = 1e-6
 MIN_LINE_TARGETS = 3
@@ -75,6 +76,8 @@ class LineFigures(JsonDataclass):
     straightness_um: float | None  # peak-to-valley of the cross-axis deviation from its least-squares line
     straightness_sigma_um: float | None  # median 1-sigma of the cross-axis coordinates on the line
     iso230_2: dict[str, Any] | None  # figures of core.iso230 for the moving axis along this line
+    straightness: dict[str, Any] | None = None  # core.resolution.profile_span: in the plane, with its noise p-v
+    out_of_plane: dict[str, Any] | None = None  # the same for the displacement along the plane normal
 
 
 @dataclass
@@ -98,15 +101,18 @@ def _lines(target_mm: np.ndarray, valid: np.ndarray, moving: int) -> list[tuple[
     return out
 
 
-def _straightness(t_along: np.ndarray, cross_um: np.ndarray, sigma_um: np.ndarray) -> tuple[float, float]:
-    """Peak-to-valley of the cross deviation about its least-squares line (ISO 230-1 reference line)."""
+def _straightness(t_along: np.ndarray, cross_um: np.ndarray, sigma_um: np.ndarray) -> tuple[float, float, dict]:
+    """Peak-to-valley of the cross deviation about its least-squares line (ISO 230-1 reference line),
+    the median 1-sigma, and the resolution of that profile (core.resolution.profile_span)."""
     targets, j = target_index(t_along)
     n = np.bincount(j, minlength=targets.size)
     mean = np.bincount(j, cross_um, minlength=targets.size) / n
     A = np.column_stack([np.ones(targets.size), targets - targets.mean()])
     coef, *_ = np.linalg.lstsq(A, mean, rcond=None)
     resid = mean - A @ coef
-    return float(np.ptp(resid)), float(np.median(sigma_um))
+    off_line = cross_um - (coef[0] + coef[1] * (t_along - targets.mean()))  # every capture off the same line
+    span = profile_span(off_line, sigma_um, t_along, np.isfinite(off_line))
+    return float(np.ptp(resid)), float(np.median(sigma_um)), span.to_dict("um")
 
 
 def planar_figures(
@@ -119,8 +125,14 @@ def planar_figures(
     valid: np.ndarray,
     G: np.ndarray,
     cov_G: np.ndarray,
+    out_of_plane_um: np.ndarray | None = None,
+    out_of_plane_sigma_um: np.ndarray | None = None,
 ) -> PlanarFigures:
-    """All planar figures from per-capture deviations (K, 2) um and sigmas (K, 2) um."""
+    """All planar figures from per-capture deviations (K, 2) um and sigmas (K, 2) um.
+
+    ``out_of_plane_um`` (K,) with its sigma (core.planar_flatness) adds each
+    line's straightness along the plane normal.
+    """
     geometry = axis_geometry(G, cov_G)
     notes: list[str] = []
     lines: list[LineFigures] = []
@@ -128,7 +140,10 @@ def planar_figures(
     for moving in range(2):
         other = 1 - moving
         for at, sel in _lines(target_mm, valid, moving):
-            p_v, s = _straightness(target_mm[sel, moving], deviation_um[sel, other], sigma_um[sel, other])
+            p_v, s, span = _straightness(target_mm[sel, moving], deviation_um[sel, other], sigma_um[sel, other])
+            oop = None
+            if out_of_plane_um is not None and out_of_plane_sigma_um is not None:
+                oop = _straightness(target_mm[sel, moving], out_of_plane_um[sel], out_of_plane_sigma_um[sel])[2]
             iso = None
             signs = approach[sel, moving]
             runs_key = run[sel] * 2 + (direction[sel] > 0)
@@ -137,7 +152,8 @@ def planar_figures(
                                           deviation_um[sel, moving], None)
             except Exception as exc:  # a line too short for the figures: say so, keep the rest
                 notes.append(f"{names[moving]} line at {names[other]}={at:g} mm: no ISO 230-2 figures ({exc})")
-            lines.append(LineFigures(names[moving], at, int(np.unique(target_mm[sel, moving]).size), p_v, s, iso))
+            lines.append(LineFigures(names[moving], at, int(np.unique(target_mm[sel, moving]).size), p_v, s, iso,
+                                     span, oop))
     per_axis: dict[str, Any] = {}
     for name in names:
         own = [ln for ln in lines if ln.axis == name]
@@ -150,8 +166,13 @@ def planar_figures(
             "straightness_um_max": worst.straightness_um,
             "straightness_at_mm": worst.at_mm,
             "straightness_sigma_um": worst.straightness_sigma_um,
+            "straightness": worst.straightness,
             "iso230_2": _worst_iso(own),
         }
+        with_oop = [ln for ln in own if ln.out_of_plane and ln.out_of_plane.get("span_um") is not None]
+        if with_oop:
+            w = max(with_oop, key=lambda ln: ln.out_of_plane["span_um"])
+            per_axis[name]["out_of_plane"] = {**w.out_of_plane, "at_mm": w.at_mm}
     return PlanarFigures(geometry, lines, per_axis, node_errors(target_mm, direction, deviation_um, sigma_um, valid),
                          notes)
 

@@ -17,6 +17,7 @@ from lps_gui import __version__
 from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.planar_estimate import PlanarEstimate, PlanarObservations, estimate_planar
 from lps_gui.core.planar_figures import planar_figures
+from lps_gui.core.planar_flatness import out_of_plane
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.core.rotation import log_so3
 from lps_gui.errors import InputError
@@ -101,8 +102,15 @@ def build_planar_results(session: Session, obs: PlanarObservations, est: PlanarE
         })
     valid = est.used & np.all(np.isfinite(dev), axis=1)
     sig_fig = np.where(sig > 0, sig, np.nanmedian(sig[valid & (sig[:, 0] > 0)], axis=0) if valid.any() else 1.0)
+    oop = None
+    if est.method == "joint":  # the displacement along the plane normal at the board plane (core/planar_flatness)
+        oop = out_of_plane(est.state, obs.board.object_points(), obs.corners_px, obs.mask() & est.usable[:, None],
+                           obs.target_mm, est.used)
+        for row, v, sv in zip(positions, oop.normal_um, oop.sigma_um):
+            row["out_of_plane_um"], row["out_of_plane_sigma_um"] = _f(v), _f(sv)
     figs = planar_figures(obs.target_mm, obs.approach, obs.run, obs.direction, dev, sig_fig, valid,
-                          est.fit.G, est.fit.cov_G)
+                          est.fit.G, est.fit.cov_G, None if oop is None else oop.normal_um,
+                          None if oop is None else oop.sigma_um)
     planar = {**figs.geometry.to_dict(), "per_axis": figs.per_axis, "lines": [ln.to_dict() for ln in figs.lines],
               "nodes": figs.nodes, "notes": figs.notes, "motion_matrix": est.fit.G.tolist()}
     st = est.state
@@ -170,7 +178,17 @@ def planar_summary_rows(results: dict[str, Any]) -> list[tuple[str, Any, str]]:
         a = pl["per_axis"].get(axis)
         if not a:
             continue
-        rows.append((f"straightness_{axis.lower()}_along_{other.lower()}_max", a["straightness_um_max"], "um"))
+        st = a.get("straightness") or {}
+        resolved = st.get("resolved", True)  # an unresolved span keeps its row, empty (no finding)
+        rows.append((f"straightness_{axis.lower()}_along_{other.lower()}_max", a["straightness_um_max"] if resolved else None,
+                     "um"))
+        if st:
+            rows.append((f"straightness_{axis.lower()}_along_{other.lower()}_noise_span", st.get("noise_span_um"), "um"))
+        oop = a.get("out_of_plane")
+        if oop:
+            rows.append((f"out_of_plane_straightness_{axis.lower()}_max", oop["span_um"] if oop.get("resolved") else None,
+                         "um"))
+            rows.append((f"out_of_plane_straightness_{axis.lower()}_noise_span", oop.get("noise_span_um"), "um"))
         iso = (a.get("iso230_2") or {}).get("iso230_2") or {}
         for key in ("A_um", "R_um", "E_um", "B_um"):
             if iso.get(key) is not None:

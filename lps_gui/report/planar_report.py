@@ -41,8 +41,14 @@ def planar_summary_rows(results: dict[str, Any]) -> list[Row]:
         a = (pl.get("per_axis") or {}).get(axis)
         if not a:
             continue
+        st = a.get("straightness") or {}
         rows.append(Row(f"Straightness of {axis} (in the plane, along {other}), worst line", a["straightness_um_max"],
-                        "\u00b5m", f"{a['lines']} line(s); per-point 1\u03c3 {fmt(a['straightness_sigma_um'])} \u00b5m"))
+                        "\u00b5m", f"{a['lines']} line(s); per-point 1\u03c3 {fmt(a['straightness_sigma_um'])} \u00b5m",
+                        unresolved=_unresolved(st)))
+        oop = a.get("out_of_plane")
+        if oop:
+            rows.append(Row(f"Straightness of {axis} out of the plane (along the normal), worst line", oop.get("span_um"),
+                            "\u00b5m", f"per-target 1\u03c3 {fmt(oop.get('sigma_um'))} \u00b5m", unresolved=_unresolved(oop)))
         iso = (a.get("iso230_2") or {}).get("iso230_2") or {}
         for key, name in (("A_um", "accuracy A"), ("R_um", "repeatability R"), ("E_um", "systematic E"),
                           ("B_um", "reversal B")):
@@ -52,6 +58,15 @@ def planar_summary_rows(results: dict[str, Any]) -> list[Row]:
     rows.append(Row("Corner noise (a posteriori)", p["sigma_px"], "px"))
     rows.append(Row("Views used / outliers", float(p["n_used"]), "", f"{p['n_outliers']} outlier view(s)"))
     return rows
+
+
+def _unresolved(span: dict[str, Any]) -> str:
+    """"not resolved (σ X)" for a p-v that noise alone could give (core.resolution), else empty."""
+    from lps_gui.core.resolution import not_resolved_text
+
+    if not span or span.get("resolved", True):
+        return ""
+    return not_resolved_text(span.get("noise_span_um"), "\u00b5m")
 
 
 def planar_truth_rows(results: dict[str, Any]) -> list[Row]:
@@ -88,7 +103,8 @@ def paint_planar_report(flow: Any, meta: dict[str, Any], results: dict[str, Any]
     flow.heading("Axis geometry and per-axis figures (measured)", 11)
     rows = planar_summary_rows(results)
     flow.table(["figure", "value", "unit", "uncertainty / note"], [[r.name, r.text(), r.unit, r.note] for r in rows],
-               [78, 20, 14, 68], align_right_from=1, align_left=(3,))
+               [78, 30, 12, 60], align_right_from=1, align_left=(3,),
+               colors=["#888888" if r.unresolved else None for r in rows])
     flow.paragraph("Uncertainties are from corner noise alone (1\u03c3 and U with k = 2); a board square-size error is a "
                    "common scale error of both axes and does not change squareness.", size_pt=7.5, color="#555555")
     for note in (results["figures"]["planar"].get("notes") or []):

@@ -88,3 +88,19 @@ def test_error_map_exaggeration_is_stated_and_round():
 
     assert nice_exaggeration(10.0, 10.0) == 500.0  # 0.8 * 10 mm / 10 um = 800 -> 500
     assert nice_exaggeration(0.0, 10.0) == 1.0
+
+
+def test_planar_straightness_in_and_out_of_the_plane_carry_their_resolution(planar_session):
+    r = json.loads((planar_session / "results.json").read_text())
+    for axis in ("X", "Y"):
+        a = r["figures"]["planar"]["per_axis"][axis]
+        for key in ("straightness", "out_of_plane"):
+            d = a[key]
+            assert d["noise_span_um"] > 0 and isinstance(d["resolved"], bool)
+    row = next(p for p in r["positions"] if p["used"])
+    assert "out_of_plane_um" in row and row["out_of_plane_sigma_um"] > 0
+    summary = {name: value for name, value, _ in r["summary"]}
+    # an unresolved span has its row but no value: never a finding
+    for axis in ("x", "y"):
+        if not r["figures"]["planar"]["per_axis"][axis.upper()]["out_of_plane"]["resolved"]:
+            assert summary[f"out_of_plane_straightness_{axis}_max"] is None

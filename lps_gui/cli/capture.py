@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import argparse
 
+from lps_gui.cli import planar_capture
+
 HELP = "capture a session: move the stage through a plan and store an image per stop (resumable)"
 
 
@@ -43,6 +45,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     s.add_argument("--real-time", action="store_true", help="simulated rig: move and settle in real time (default: simulated time)")
     s.add_argument("--time-scale", type=float, default=1.0, help="--stage emulator: simulated time runs this many times faster than real")
     s.add_argument("--encode", default=".png", help="image format (lossless): .png (default), .tif, .bmp")
+    planar_capture.add_arguments(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -57,7 +60,8 @@ def run(args: argparse.Namespace) -> int:
         return _intrinsics_mode(args)
     if bool(args.out) == bool(args.resume):
         raise InputError("give either --out SESSION (new capture) or --resume SESSION")
-    session, stage, camera, engine = _resume(args) if args.resume else _start(args)
+    opened = planar_capture.open_planar_capture(args)  # None: a single-axis capture
+    session, stage, camera, engine = opened or (_resume(args) if args.resume else _start(args))
     try:
         print(f"capturing into {session.folder}: {_describe(session)}", file=sys.stderr)
         summary = engine.run(progress=ProgressBar("capture"))
@@ -136,6 +140,8 @@ def _describe(session) -> str:
     from lps_gui.capture.plans import describe_plan, plan_duration_s
 
     plan = session.plan()
+    if session.planar:
+        return planar_capture.describe_planar(plan)
     return f"{describe_plan(plan)}, about {plan_duration_s(plan) / 60:.1f} min of stage time"
 
 

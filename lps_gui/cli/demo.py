@@ -12,12 +12,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--quick", action="store_true", help="small camera and fewer stops (seconds, not minutes)")
     parser.add_argument("--out", type=Path, default=Path("demo-output"), help="output folder (default demo-output)")
     parser.add_argument("--seed", type=int, default=0, help="random seed of the simulation")
+    parser.add_argument("--planar", action="store_true", help="the planar pipeline on a simulated XY gantry (SPEC 10)")
 
 
 def run(args: argparse.Namespace) -> int:
     from lps_gui.cli.progress_bar import ProgressBar
     from lps_gui.pipeline.demo import run_demo
 
+    if args.planar:
+        from lps_gui.pipeline.demo_planar import run_planar_demo as run_demo
     t0 = time.monotonic()
     res = run_demo(args.out, quick=args.quick, bar=ProgressBar, say=lambda line: print(line, flush=True), seed=args.seed)
     print()

@@ -97,22 +97,6 @@ def parse_targets_xy(text: str) -> tuple[tuple[float, float], ...]:
     return tuple(out)
 
 
-def iso_lines_from_grid(grid) -> Any:
-    """The ISO 230-2 lines preset on a grid: every grid X along Y levels at both ends and the middle, and back."""
-    import numpy as np
-
-    from lps_gui.core.planar_plan import iso_lines_plan
-
-    t = grid.targets()
-    xs, ys = np.unique(t[:, 0]), np.unique(t[:, 1])
-
-    def levels(v: np.ndarray) -> np.ndarray:
-        return np.unique(v[np.round(np.linspace(0, v.size - 1, ISO_LEVELS)).astype(int)])
-
-    keep = {k: getattr(grid, k) for k in ("overshoot_mm", "settle_s", "frames_per_stop", "feed_mm_min")}
-    return iso_lines_plan(xs, levels(ys), ys, levels(xs), runs=ISO_RUNS, **keep)
-
-
 def build_planar_plan(args: argparse.Namespace, base=None):
     """The planar plan of the command line: --plan FILE, --grid / --targets-xy / --iso-lines, then the switches."""
     from lps_gui.core.planar_plan import PlanarPlan
@@ -146,7 +130,9 @@ def build_planar_plan(args: argparse.Namespace, base=None):
     if args.iso_lines:
         if plan.targets_mm is not None:
             raise InputError("--iso-lines needs a grid: give --grid X0,Y0:X1,Y1:DX,DY")
-        plan = iso_lines_from_grid(plan)
+        from lps_gui.core.planar_plan import iso_lines_on_grid
+
+        plan = iso_lines_on_grid(plan, ISO_LEVELS, ISO_RUNS)
     if args.directions:
         plan = replace(plan, directions=args.directions)
     if args.runs is not None:
@@ -183,26 +169,6 @@ def planar_preset_name(preset: str | None) -> str:
     return name
 
 
-def check_board_in_view(spec) -> None:
-    """InputError when the simulated camera would lose the board at some target (nothing measured there)."""
-    import numpy as np
-
-    from lps_gui.core.camera_model import project_board
-    from lps_gui.core.planar_rig import PlanarTruePose
-    from lps_gui.errors import InputError
-
-    t = spec.plan.targets()
-    rig = spec.rig
-    R, tr = rig.camera_poses(PlanarTruePose(t, np.zeros(len(t)), np.zeros((len(t), 3))))
-    uv = project_board(R, tr, rig.board.object_points(), rig.intrinsics)  # shape (K, N, 2)
-    w, h = rig.intrinsics.image_size
-    out = ((uv[..., 0] < 0) | (uv[..., 0] > w - 1) | (uv[..., 1] < 0) | (uv[..., 1] > h - 1)).any(axis=1)
-    if out.any():
-        x, y = t[np.flatnonzero(out)[0]]
-        raise InputError(f"plan: the board leaves the simulated camera's view at {int(out.sum())} of {len(t)} targets "
-                         f"(first ({x:g}, {y:g}) mm); shorten the grid (see `lps plan-rig`)")
-
-
 # ----------------------------------------------------------------------------- start and resume
 
 
@@ -221,6 +187,8 @@ def _start(args: argparse.Namespace):
         make_spec = PLANAR_PRESETS[planar_preset_name(args.preset)]
         plan = build_planar_plan(args, make_spec(seed=args.seed).plan)
         spec = make_spec(seed=args.seed, plan=plan)  # the camera centred over this plan
+        from lps_gui.sim.planar_rig import check_board_in_view
+
         check_board_in_view(spec)
         intr = _read_intrinsics(args.intrinsics)
         from lps_gui.sim.planar_rig import create_simulated_gantry_session, gantry_engine

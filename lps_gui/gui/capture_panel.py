@@ -23,6 +23,9 @@ from lps_gui.core.board import Board
 from lps_gui.capture.plans import plan_duration_s
 from lps_gui.core.plan import Plan
 from lps_gui.errors import InputError
+from lps_gui.gui.planar_plan_editor import (
+    PlanarPlanEditor, apply_shared_to_panel, planar_duration_s, planar_engine, shared_from_panel,
+)
 from lps_gui.gui.widgets import PathPicker, add_rows, double_spin, stack
 from lps_gui.gui.workers import Job, one_line
 
@@ -92,6 +95,11 @@ class CapturePanel(QWidget):
             ("Directions", self.directions), ("Runs", self.runs), ("Overshoot", self.overshoot_mm),
             ("Settle", self.settle_s), ("Frames per stop", self.frames_per_stop), ("Feed", self.feed_mm_min),
             ("", self.summary)])
+        self.planar_editor = PlanarPlanEditor(lambda: shared_from_panel(self), self.board, self.intrinsics,
+                                              lambda fields: apply_shared_to_panel(self, fields))
+        self.planar_editor.changed.connect(self.update_summary)
+        self.planar_editor.enabled.toggled.connect(
+            lambda on: [w.setEnabled(not on) for w in (self.start_mm, self.stop_mm, self.step_mm)])
 
         self.folder = PathPicker("empty: a new dated folder beside the last one", folder=True, start_dir=self.start_dir)
         sess = QGroupBox("Session")
@@ -111,7 +119,7 @@ class CapturePanel(QWidget):
         self.progress = QProgressBar()
         self.eta = QLabel("idle")
 
-        stack(self, [plan_box, sess, row, self.progress, self.eta]).addStretch(1)
+        stack(self, [plan_box, (self.planar_editor, 1), sess, row, self.progress, self.eta]).addStretch(1)
 
         for w in (self.start_mm, self.stop_mm, self.step_mm, self.overshoot_mm, self.settle_s, self.feed_mm_min):
             w.valueChanged.connect(self.update_summary)
@@ -128,6 +136,8 @@ class CapturePanel(QWidget):
 
     # ------------------------------------------------------------------ plan
     def plan(self) -> Plan:
+        if self.planar_editor.active():
+            return self.planar_editor.plan()
         return Plan(start_mm=self.start_mm.value(), stop_mm=self.stop_mm.value(), step_mm=self.step_mm.value(),
                     directions=str(self.directions.currentData()), runs=self.runs.value(),
                     overshoot_mm=self.overshoot_mm.value(), settle_s=self.settle_s.value(),
@@ -152,7 +162,7 @@ class CapturePanel(QWidget):
             self.start_btn.setEnabled(False)
             return
         self.summary.setText(f"{len(plan.targets())} targets, {plan.n_frames()} frames, "
-                             f"about {fmt_duration(plan_duration_s(plan))}")
+                             f"about {fmt_duration(planar_duration_s(plan) if self.planar_editor.active() else plan_duration_s(plan))}")
         self.start_btn.setEnabled(self.job is None)
 
     # ------------------------------------------------------------------ running
@@ -166,10 +176,17 @@ class CapturePanel(QWidget):
                     base = base.parent
                 folder = base / time.strftime("session-%Y%m%d-%H%M%S")
                 self.folder.set_text(str(folder))
-            stage, camera = self._rig()
             plan = self.plan()
+            gantry = self.planar_editor.build_gantry(plan) if self.planar_editor.active() else None
+            stage, camera = gantry[1:] if gantry else self._rig()
         except Exception as exc:
             self.run_requested.emit(exc)
+            return
+        if gantry:  # the simulated XY gantry built for this plan, its truth recorded
+            from lps_gui.sim.planar_rig import start_gantry_session
+
+            self.set_board(gantry[0].rig.board)
+            self._run(folder, lambda: start_gantry_session(folder, gantry[0], stage, camera), stage, camera)
             return
         simulated = is_simulated_rig(stage, camera)
         if simulated:
@@ -203,9 +220,11 @@ class CapturePanel(QWidget):
             remaining = session.remaining_stops()
             if not remaining:
                 raise InputError(f"{folder}: every planned stop is captured already; estimate it instead")
-            self.set_plan(session.plan())
+            gantry = self.planar_editor.resume_rig(session)  # a planar session: its editor, its simulated gantry
+            if not session.planar:
+                self.set_plan(session.plan())
             self.folder.set_text(str(folder))
-            stage, camera = self._rig()
+            stage, camera = gantry or self._rig()
         except Exception as exc:
             self.run_requested.emit(exc)
             return
@@ -233,9 +252,10 @@ class CapturePanel(QWidget):
             from lps_gui.capture.engine import CaptureEngine
             from lps_gui.sim.session import simulated_engine
 
-            if is_simulated_rig(stage, camera) and (session.truth or {}).get("simulated"):
+            engine = planar_engine(session, stage, camera)  # the simulated gantry records its truth
+            if engine is None and is_simulated_rig(stage, camera) and (session.truth or {}).get("simulated"):
                 engine = simulated_engine(session, stage, camera)
-            else:
+            elif engine is None:
                 engine = CaptureEngine(stage, camera, session)
             self.engine = engine  # pause/abort from the GUI thread are thread-safe engine calls
             if self._abort_early:
@@ -322,7 +342,7 @@ class CapturePanel(QWidget):
     # ------------------------------------------------------------------ settings
     def save(self, s: QSettings) -> None:
         for k, v in self.plan().to_dict().items():
-            if k in PLAN_FIELDS:
+            if k in PLAN_FIELDS and not isinstance(v, list):  # a planar plan's [x, y] stay out of the line plan
                 s.setValue(f"plan/{k}", v)
 
     def restore(self, s: QSettings) -> None:

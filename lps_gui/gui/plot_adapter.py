@@ -34,7 +34,7 @@ class DrawnFigure:
         for s, item in zip(self.spec.series, self.items):
             if s.label.startswith(label_prefix):
                 x, _ = item.getData()
-                n += 0 if x is None else len(x)
+                n += 0 if x is None else int(np.isfinite(x).sum())
         return n
 
 
@@ -45,7 +45,7 @@ def _rgba(color: str, alpha: int) -> tuple[int, int, int, int]:
 
 def draw_series(plot: pg.PlotItem, s: Series, drawn: DrawnFigure) -> None:
     """Add one series (band first, then curve, then outlier crosses) to ``plot``."""
-    s = s.finite()
+    raw, s = s, s.finite()
     keep = ~np.asarray(s.marked, bool) if s.marked is not None else np.ones(s.y.shape, bool)
     drawn.inlier_y.append(s.y[keep])
     if s.band_low is not None and s.band_high is not None:
@@ -63,7 +63,10 @@ def draw_series(plot: pg.PlotItem, s: Series, drawn: DrawnFigure) -> None:
     kwargs: dict = {"pen": pen, "name": s.label}
     if "markers" in s.style:
         kwargs.update(symbol="o", symbolSize=MARKER_SIZE_PX, symbolBrush=pg.mkBrush(s.color), symbolPen=None)
-    item = pg.PlotDataItem(s.x, s.y, **kwargs)
+    if s.style == "line" and raw is not s and s.band_low is None and s.marked is None:
+        item = pg.PlotDataItem(raw.x, raw.y, connect="finite", **kwargs)  # NaN breaks the line, as in the PDF (arrows)
+    else:
+        item = pg.PlotDataItem(s.x, s.y, **kwargs)
     plot.addItem(item)
     drawn.items.append(item)
     if s.marked is not None and np.any(s.marked):

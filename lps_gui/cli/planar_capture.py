@@ -225,8 +225,8 @@ def _start(args: argparse.Namespace):
 
 
 def _resume(args: argparse.Namespace, session):
-    """A planar session goes on where it stopped: on the rebuilt simulated gantry, or on the devices named."""
-    from lps_gui.cli.capture import _bind_stage, _clock, _open_devices
+    """A planar session on the simulated gantry goes on on the rebuilt gantry; None: on devices, as in 1-D."""
+    from lps_gui.cli.capture import _bind_stage, _clock
     from lps_gui.errors import InputError
 
     given = [s for s, v in (("--grid", args.grid), ("--targets-xy", args.targets_xy), ("--iso-lines", args.iso_lines),
@@ -234,17 +234,10 @@ def _resume(args: argparse.Namespace, session):
     if given:
         raise InputError(f"{' '.join(given)}: a resumed session keeps its own plan; drop {given[0]}")
     truth = session.truth or {}
-    if truth.get("simulated") and (args.camera or "sim") == "sim":
-        from lps_gui.sim.planar_rig import gantry_engine, reopen_simulated_gantry
+    if not (truth.get("simulated") and (args.camera or "sim") == "sim"):
+        return None  # real devices: the engine takes the planar plan from the session as it is
+    from lps_gui.sim.planar_rig import gantry_engine, reopen_simulated_gantry
 
-        rig_stage, camera = reopen_simulated_gantry(session, clock=_clock(args))
-        stage = _bind_stage(args.stage or "sim", rig_stage, args.time_scale)
-        return session, stage, camera, gantry_engine(session, stage, camera, args.encode)
-    from lps_gui.capture.engine import CaptureEngine
-
-    stage_spec = args.stage or (session.meta.get("stage") or {}).get("spec")
-    camera_spec = args.camera or (session.meta.get("camera") or {}).get("spec")
-    if not stage_spec or not camera_spec or camera_spec == "sim":
-        raise InputError(f"{session.folder}: say which devices to resume with: --stage ... --camera ...")
-    stage, camera = _open_devices(stage_spec, camera_spec)
-    return session, stage, camera, CaptureEngine(stage, camera, session, encode=args.encode)
+    rig_stage, camera = reopen_simulated_gantry(session, clock=_clock(args))
+    stage = _bind_stage(args.stage or "sim", rig_stage, args.time_scale)
+    return session, stage, camera, gantry_engine(session, stage, camera, args.encode)

@@ -129,3 +129,27 @@ def test_sigkill_mid_run_then_resume_equals_uninterrupted(tmp_path, reference):
     assert image_bytes(resumed) == image_bytes(reference)
     assert resumed.truth["plane_mm"] == reference.truth["plane_mm"]
     assert resumed.truth["board_plane_mm"] == reference.truth["board_plane_mm"]
+
+
+def test_planar_plan_on_real_devices_moves_both_axes_and_resumes_from_the_session(tmp_path, capsys):
+    """Stage "sim" + a folder-replay camera: the non-simulated planar path, X and Y moves, resumed from session.json."""
+    import cv2
+
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    for i in range(3):
+        cv2.imwrite(str(frames / f"f{i}.png"), np.full((24, 32), 10 * i, np.uint8))
+    board = tmp_path / "board.json"
+    board.write_text('{"type": "chessboard", "inner_corners": [9, 6], "square_mm": 20}')
+    out = tmp_path / "s"
+    assert lps_main(["capture", "--targets-xy", "0,0;5,0;5,5;0,5", "--stage", "sim", "--camera", str(frames),
+                     "--board", str(board), "--settle", "0", "--out", str(out)]) == 3  # the replay runs out
+    assert "lps capture --resume" in capsys.readouterr().err
+    session = Session.open(out)
+    assert session.planar and session.meta["stage"]["axes"] == ["X", "Y"] and "truth" not in session.meta
+    recs = session.records()
+    assert [r.target_mm for r in recs] == [(0.0, 0.0), (5.0, 0.0), (5.0, 5.0)]
+    assert all(np.allclose(r.reported_mm, r.target_mm, atol=1e-6) for r in recs)
+    cv2.imwrite(str(frames / "f3.png"), np.full((24, 32), 40, np.uint8))
+    assert lps_main(["capture", "--resume", str(out)]) == 0
+    assert [r.target_mm for r in Session.open(out).records()][-1] == (0.0, 5.0)

@@ -37,7 +37,19 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def wants_planar(args: argparse.Namespace) -> bool:
-    return bool(getattr(args, "planar", False) or args.grid or args.targets_xy or args.iso_lines)
+    """A planar switch, or a --plan file whose axes are [X, Y] (a planar session.json is a plan file too)."""
+    if getattr(args, "planar", False) or args.grid or args.targets_xy or args.iso_lines:
+        return True
+    return bool(args.plan) and _plan_file_axes(args.plan) == ["X", "Y"]
+
+
+def _plan_file_axes(path: str) -> list[str] | None:
+    from lps_gui.io.jsonfile import read_json
+
+    d = read_json(path, "plan file")
+    if isinstance(d, dict) and isinstance(d.get("plan"), dict):
+        d = d["plan"]
+    return d.get("axes") if isinstance(d, dict) else None
 
 
 def open_planar_capture(args: argparse.Namespace):

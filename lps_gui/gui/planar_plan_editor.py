@@ -36,7 +36,7 @@ GANTRY_PRESETS = (("Connected stage and camera", GANTRY_OFF), ("Simulated gantry
 MAX_ARROWS = 80  # arrows along the path; beyond this the path alone shows the order
 MAX_NUMBERS = 40  # stops numbered on the plot
 MAX_PREDICTED_TARGETS = 3000  # the rig prediction is skipped for larger plans (a readout, not a job)
-NOISE_PX = 0.1  # corner noise assumed by the prediction (paper rig)
+NOISE_PX = 0.1  # corner noise the prediction assumes by default (the paper's rig)
 ISO_LEVELS, ISO_RUNS = 3, 5  # the ISO 230-2 lines preset: 3 lines per axis, 5 runs (as `lps capture --iso-lines`)
 SHARED_FIELDS = ("directions", "runs", "overshoot_mm", "settle_s", "frames_per_stop", "feed_mm_min")
 
@@ -88,6 +88,8 @@ class PlanarPlanEditor(QGroupBox):
         self.demo_btn.setToolTip("A 5 x 3 grid at 10 mm, forward and backward, on the simulated gantry")
         self.distance_mm = double_spin(10.0, 100000.0, 600.0, 0, " mm")
         self.distance_mm.setToolTip("Camera-to-board distance for the prediction (the simulated gantry sets its own)")
+        self.noise_px = double_spin(0.001, 10.0, NOISE_PX, 3, " px")
+        self.noise_px.setToolTip("Corner noise the prediction assumes (rendered simulated images: about 0.02 px)")
         self.prediction = QLabel()
         self.prediction.setWordWrap(True)
         self.plot = pg.PlotWidget()
@@ -125,7 +127,8 @@ class PlanarPlanEditor(QGroupBox):
         add_rows(form, [("Start", pair(self.start_x, self.start_y)),
                         ("Stop", pair(self.stop_x, self.stop_y)), ("Step", pair(self.step_x, self.step_y)),
                         ("Pattern", self.pattern), ("", self.iso_lines), ("Stage", self.gantry),
-                        ("Camera distance", self.distance_mm), ("Rig prediction", self.prediction)])
+                        ("Camera distance", self.distance_mm), ("Corner noise", self.noise_px),
+                        ("Rig prediction", self.prediction)])
         form.addRow(self.plot)
         form.addRow(self.order_note)
         self.scroll.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
@@ -135,7 +138,8 @@ class PlanarPlanEditor(QGroupBox):
         self._timer.setSingleShot(True)
         self._timer.setInterval(250)
         self._timer.timeout.connect(self.refresh)
-        for w in (self.start_x, self.start_y, self.stop_x, self.stop_y, self.step_x, self.step_y, self.distance_mm):
+        for w in (self.start_x, self.start_y, self.stop_x, self.stop_y, self.step_x, self.step_y, self.distance_mm,
+                  self.noise_px):
             w.valueChanged.connect(self._edited)
         for c in (self.pattern, self.gantry):
             c.currentIndexChanged.connect(self._edited)
@@ -304,7 +308,7 @@ class PlanarPlanEditor(QGroupBox):
             if intr is None:
                 return "calibrate the camera (Intrinsics panel) to predict what the rig will see"
         try:
-            r = predict_rig(board, intr, distance, plan, NOISE_PX)
+            r = predict_rig(board, intr, distance, plan, self.noise_px.value())
         except Exception as exc:  # a readout: say why, never stop the editor
             log.info("rig prediction failed", exc_info=True)
             return f"no prediction: {exc}"
@@ -313,7 +317,7 @@ class PlanarPlanEditor(QGroupBox):
                      f"{r.n_targets} targets</span>")
         sig = ("" if r.sigma_um_median is None
                else f"; expected position sigma {r.sigma_um_median:.2f} µm median, {r.sigma_um_max:.2f} µm max "
-                    f"per coordinate at {NOISE_PX:g} px corner noise")
+                    f"per coordinate at {self.noise_px.value():g} px corner noise")
         return f"{distance:.0f} mm from the board, board image {r.board_size_px[0]:.0f} x {r.board_size_px[1]:.0f} px: {view}{sig}"
 
 

@@ -153,3 +153,11 @@ def test_planar_plan_on_real_devices_moves_both_axes_and_resumes_from_the_sessio
     cv2.imwrite(str(frames / "f3.png"), np.full((24, 32), 40, np.uint8))
     assert lps_main(["capture", "--resume", str(out)]) == 0
     assert [r.target_mm for r in Session.open(out).records()][-1] == (0.0, 5.0)
+
+
+def test_a_planar_plan_file_makes_a_planar_capture(tmp_path):
+    plan = tmp_path / "plan.json"
+    plan.write_text('{"axes": ["X", "Y"], "targets_mm": [[0, 0], [10, 0], [10, 10]], "settle_s": 0, "feed_mm_min": 3000}')
+    out = tmp_path / "s"
+    assert lps_main(["capture", "--plan", str(plan), "--out", str(out)]) == 0
+    assert [r.target_mm for r in Session.open(out).records()] == [(0.0, 0.0), (10.0, 0.0), (10.0, 10.0)]

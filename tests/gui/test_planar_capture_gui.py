@@ -3,6 +3,7 @@ the simulated gantry from the GUI, resume after an abort, and the planar results
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pyqtgraph as pg
@@ -73,6 +74,10 @@ def test_rig_prediction_readout_on_the_simulated_gantry_and_without_intrinsics(e
     editor.refresh()
     text = editor.prediction.text()
     assert "board in view at every target" in text and "expected position sigma" in text
+    sigma = float(re.search(r"sigma ([0-9.]+) µm median", text).group(1))
+    editor.noise_px.setValue(0.2)  # the Cramér-Rao sigma scales with the corner noise
+    editor.refresh()
+    assert float(re.search(r"sigma ([0-9.]+) µm median", editor.prediction.text()).group(1)) == pytest.approx(2 * sigma, rel=0.01)
     editor.stop_x.setValue(900.0)  # far beyond the paper camera's view at 600 mm
     editor.refresh()
     assert "board leaves the view" in editor.prediction.text()

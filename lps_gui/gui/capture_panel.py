@@ -179,6 +179,8 @@ class CapturePanel(QWidget):
             plan = self.plan()
             gantry = self.planar_editor.build_gantry(plan) if self.planar_editor.active() else None
             stage, camera = gantry[1:] if gantry else self._rig()
+            if self.planar_editor.active() and not gantry:
+                self.planar_editor.check_connected_rig(is_simulated_rig(stage, camera))
         except Exception as exc:
             self.run_requested.emit(exc)
             return

@@ -216,6 +216,12 @@ class PlanarPlanEditor(QGroupBox):
         stage.connect()
         return spec, stage, camera
 
+    def check_connected_rig(self, one_axis_simulation: bool) -> None:
+        """InputError for a planar plan on the single-axis simulated rig (it has no Y axis to measure)."""
+        if one_axis_simulation:
+            raise InputError("planar plan: the simulated stage in the Stage panel has one axis; "
+                             "choose Stage: Simulated gantry in the planar plan box, or connect an XY stage")
+
     def resume_rig(self, session: Any) -> tuple[Any, Any] | None:
         """For a planar session: show its plan; on the simulated gantry, rebuild it (stage connected).
 

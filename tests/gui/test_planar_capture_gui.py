@@ -130,3 +130,17 @@ def test_planar_capture_on_the_simulated_gantry_then_estimate_and_resume(qtbot, 
     assert [r["target_mm"] for r in recs2] == [r["target_mm"] for r in recs]
     truth2 = json.loads((folder2 / "session.json").read_text())["truth"]
     assert np.allclose(truth2["plane_mm"], meta["truth"]["plane_mm"])  # same seed, same gantry: same true path
+
+
+def test_planar_plan_on_the_single_axis_simulated_rig_says_what_to_choose(qtbot, make_window, tmp_path):
+    from tests.gui.conftest import connect_sim
+
+    window = make_window(sim_clock=SimClock())
+    connect_sim(qtbot, window)
+    cap = window.capture_panel
+    cap.planar_editor.enabled.setChecked(True)  # stage: "Connected stage and camera" (the 1-D simulated rig)
+    cap.folder.set_text(str(tmp_path / "nope"))
+    with qtbot.waitSignal(cap.run_requested, timeout=5000) as sig:
+        cap.start_btn.click()
+    assert "Simulated gantry" in str(sig.args[0])
+    assert not (tmp_path / "nope").exists()

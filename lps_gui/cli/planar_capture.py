@@ -43,31 +43,18 @@ def wants_planar(args: argparse.Namespace) -> bool:
     return bool(args.plan) and _plan_file_axes(args.plan) == ["X", "Y"]
 
 
-def _plan_file_axes(path: str) -> list[str] | None:
+def _plan_fields(path: str) -> dict | None:
+    """The plan fields of a plan file (top level or under "plan"); None when it is not a JSON object."""
     from lps_gui.io.jsonfile import read_json
 
     d = read_json(path, "plan file")
     if isinstance(d, dict) and isinstance(d.get("plan"), dict):
         d = d["plan"]
-    return d.get("axes") if isinstance(d, dict) else None
+    return d if isinstance(d, dict) else None
 
 
-def open_planar_capture(args: argparse.Namespace):
-    """(session, stage, camera, engine) for a planar capture or resume; None when the command is 1-D."""
-    if args.resume:
-        from lps_gui.io.session import Session
-
-        session = Session.open(args.resume)
-        if not session.planar:
-            if wants_planar(args):
-                from lps_gui.errors import InputError
-
-                raise InputError(f"{session.folder}: a single-axis session; resume it without the planar switches")
-            return None
-        return _resume(args, session)
-    if not wants_planar(args):
-        return None
-    return _start(args)
+def _plan_file_axes(path: str) -> list[str] | None:
+    return (_plan_fields(path) or {}).get("axes")
 
 
 def describe_planar(plan) -> str:
@@ -157,12 +144,9 @@ def read_planar_plan(path: str):
     """A planar plan file (fields at the top level or under "plan", SPEC 10)."""
     from lps_gui.core.planar_plan import PlanarPlan
     from lps_gui.errors import InputError
-    from lps_gui.io.jsonfile import read_json
 
-    d = read_json(path, "plan file")
-    if isinstance(d, dict) and isinstance(d.get("plan"), dict):
-        d = d["plan"]
-    if not isinstance(d, dict):
+    d = _plan_fields(path)
+    if d is None:
         raise InputError(f"{path}: a planar plan file is a JSON object with start_mm: [x, y], stop_mm, step_mm...")
     try:
         return PlanarPlan.from_dict(d)

@@ -57,6 +57,24 @@ def _plan_file_axes(path: str) -> list[str] | None:
     return (_plan_fields(path) or {}).get("axes")
 
 
+def open_planar_capture(args: argparse.Namespace):
+    """(session, stage, camera, engine) for a planar capture or resume; None when the command is 1-D."""
+    if args.resume:
+        from lps_gui.io.session import Session
+
+        session = Session.open(args.resume)
+        if not session.planar:
+            if wants_planar(args):
+                from lps_gui.errors import InputError
+
+                raise InputError(f"{session.folder}: a single-axis session; resume it without the planar switches")
+            return None
+        return _resume(args, session)
+    if not wants_planar(args):
+        return None
+    return _start(args)
+
+
 def describe_planar(plan) -> str:
     """One line for the CLI: targets, extent, passes, frames."""
     t = plan.targets()

@@ -107,6 +107,10 @@ class CaptureEngine:
     truth_recorder : for a simulated rig, records the true pose at each grab
         (see :mod:`lps_gui.sim.truth`); the engine only says when.
     move_timeout_s : minimum time a move may take before it is an error.
+    command_of : ``(nominal_mm, direction) -> commanded_mm``, a compensation
+        table's inverse (``CompensationTable.command_mm``): the stage is sent
+        there so the true position lands on the nominal; captures.jsonl then
+        records ``commanded_mm``. None: command the targets as planned.
 
     :meth:`pause`, :meth:`resume`, :meth:`abort` and :meth:`progress` are
     safe to call from any thread while :meth:`run` blocks in another.
@@ -122,6 +126,7 @@ class CaptureEngine:
         *,
         truth_recorder: TruthRecorder | None = None,
         move_timeout_s: float = 60.0,
+        command_of: Callable[[float, int], float] | None = None,
     ) -> None:
         self.stage = stage
         self.camera = camera
@@ -130,6 +135,8 @@ class CaptureEngine:
         self.encode = encode if encode.startswith(".") else "." + encode
         self.truth_recorder = truth_recorder
         self.move_timeout_s = float(move_timeout_s)
+        self.command_of = command_of
+        self._commanded_mm: float | None = None
         self._plan = session.plan()
         self._total = self._plan.n_frames()
         self._lock = threading.Lock()
@@ -304,7 +311,8 @@ class CaptureEngine:
             self._move(start, feed)
         _hook(self.stage, stop.index - stop.frame)
         self._emit(CaptureEvent("move", f"move to {stop.target_mm:g} mm", stop.index))
-        self._move(stop.target_mm, feed)
+        self._commanded_mm = None if self.command_of is None else float(self.command_of(stop.target_mm, int(sign)))
+        self._move(stop.target_mm if self._commanded_mm is None else self._commanded_mm, feed)
         self.clock.sleep(plan.settle_s)
         self._reported_mm = float(self.stage.position_mm())
         self._last_move = (stop.run, stop.direction, stop.target_mm, stop.index - stop.frame)
@@ -333,6 +341,7 @@ class CaptureEngine:
             sha256=sha,
             time=time.time(),
             frame=stop.frame,
+            commanded_mm=self._commanded_mm,
         )
         self.session.append(record)
         self._emit(CaptureEvent("frame", rel, stop.index, record.__dict__.copy()))

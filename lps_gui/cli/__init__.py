@@ -13,7 +13,8 @@ import sys
 import tempfile
 from pathlib import Path
 
-from lps_gui.cli import capture, demo, detect, emulate_grbl, estimate, intrinsics, plan_rig, report, simulate
+from lps_gui.cli import (capture, compare, compensate, demo, detect, emulate_grbl, estimate, export, intrinsics, plan_rig,
+                     report, simulate)
 
 COMMANDS = {
     "demo": demo,
@@ -25,6 +26,9 @@ COMMANDS = {
     "capture": capture,
     "emulate-grbl": emulate_grbl,
     "plan-rig": plan_rig,
+    "compensate": compensate,
+    "export": export,
+    "compare": compare,
 }
 
 LOG_PATH = Path(tempfile.gettempdir()) / "lps-calib.log"

@@ -45,6 +45,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     s.add_argument("--real-time", action="store_true", help="simulated rig: move and settle in real time (default: simulated time)")
     s.add_argument("--time-scale", type=float, default=1.0, help="--stage emulator: simulated time runs this many times faster than real")
     s.add_argument("--encode", default=".png", help="image format (lossless): .png (default), .tif, .bmp")
+    lock = s.add_mutually_exclusive_group()
+    lock.add_argument("--home", action="store_true", help="a stage locked in Alarm (GRBL powers up so with homing on) is homed ($H) first")
+    lock.add_argument("--unlock", action="store_true", help="a stage locked in Alarm is unlocked ($X) first, without homing")
+    from lps_gui.cli.capture_setup import add_setup_arguments
+
+    add_setup_arguments(p)
+    s.add_argument("--compensation", metavar="FILE", help="command each target through this table's inverse (lps compensate --format csv|linuxcnc|linuxcnc-offsets)")
     planar_capture.add_arguments(p)
 
 
@@ -60,9 +67,20 @@ def run(args: argparse.Namespace) -> int:
         return _intrinsics_mode(args)
     if bool(args.out) == bool(args.resume):
         raise InputError("give either --out SESSION (new capture) or --resume SESSION")
+    from lps_gui.cli.capture_setup import apply_setup, setup_meta
+
+    extra = setup_meta(args)  # --spec, environment, identification: checked before any device opens
+    if args.compensation:
+        from lps_gui.io.compensation_file import read_table
+
+        read_table(args.compensation)  # a bad table fails before a session is created
     opened = planar_capture.open_planar_capture(args)  # None: a single-axis capture
     session, stage, camera, engine = opened or (_resume(args) if args.resume else _start(args))
+    apply_setup(session, extra)
     try:
+        from lps_gui.capture.compensated import apply_compensation
+
+        apply_compensation(engine, session, args.compensation)
         print(f"capturing into {session.folder}: {_describe(session)}", file=sys.stderr)
         summary = engine.run(progress=ProgressBar("capture"))
     finally:
@@ -153,6 +171,9 @@ def _plan(args: argparse.Namespace, base=None):
     fields = {k: getattr(args, k) for k in ("start_mm", "stop_mm", "step_mm", "directions", "runs", "overshoot_mm", "settle_s", "frames_per_stop", "feed_mm_min")}
     if args.targets:
         fields["targets_mm"] = parse_targets(args.targets)
+    from lps_gui.cli.capture_setup import iso_plan_fields
+
+    fields.update(iso_plan_fields(args, base))
     if base is None and not any(fields[k] is not None for k in ("start_mm", "stop_mm", "step_mm", "targets_mm") if k in fields):
         from lps_gui.errors import InputError
 
@@ -167,6 +188,7 @@ def _start(args: argparse.Namespace):
 
     stage_spec, camera_spec = args.stage or "sim", args.camera or "sim"
     intr = _read_intrinsics(args.intrinsics)
+    _preflight(args, stage_spec, camera_spec)  # everything checkable before anything is created
     if camera_spec == "sim":
         from lps_gui.sim.rig import spec_for_plan
         from lps_gui.sim.session import create_simulated_session, simulated_engine
@@ -178,6 +200,7 @@ def _start(args: argparse.Namespace):
         spec = spec_for_plan(args.preset, _plan(args, base), seed=args.seed)
         session, stage, camera = create_simulated_session(args.out, spec, clock=_clock(args), noise_grey=args.noise_grey, intrinsics=intr)
         stage = _bind_stage(stage_spec, stage, args.time_scale)
+        _release_lock(args, stage)
         session.meta["stage"] = {**stage.describe(), "spec": stage_spec}
         session.meta["camera"] = {**camera.properties(), "spec": "sim"}
         if args.intrinsics:
@@ -191,6 +214,7 @@ def _start(args: argparse.Namespace):
     board, plan = read_board(args.board), _plan(args)
     stage, camera = _open_devices(stage_spec, camera_spec)
     try:
+        _release_lock(args, stage)
         session = Session.create(
             args.out, board, plan, intr,
             camera={**camera.properties(), "spec": camera_spec},
@@ -222,7 +246,28 @@ def _resume(args: argparse.Namespace):
 
         raise InputError(f"{session.folder}: say which devices to resume with: --stage ... --camera ...")
     stage, camera = _open_devices(stage_spec, camera_spec)
+    try:
+        _release_lock(args, stage)
+    except BaseException:
+        _close(stage, camera)
+        raise
     return session, stage, camera, CaptureEngine(stage, camera, session, encode=args.encode)
+
+
+def _preflight(args: argparse.Namespace, stage_spec: str, camera_spec: str) -> None:
+    from lps_gui.cli.capture_preflight import check_capture_args
+
+    check_capture_args(args, stage_spec, camera_spec)
+
+
+def _release_lock(args: argparse.Namespace, stage) -> None:
+    import sys
+
+    from lps_gui.capture.stage_lock import release_lock
+
+    done = release_lock(stage, "home" if args.home else "unlock" if args.unlock else None)
+    if done:
+        print(f"lps capture: the stage was locked in Alarm; {done} it", file=sys.stderr)
 
 
 def _open_devices(stage_spec: str, camera_spec: str):

@@ -17,7 +17,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--max-rate", type=float, default=3000.0, help="max rate $110 in mm/min")
     parser.add_argument("--accel", type=float, default=200.0, help="acceleration $120 in mm/s^2")
     parser.add_argument("--start", type=float, default=0.0, help="carriage position at power-up (mm)")
-    parser.add_argument("--homing-required", action="store_true", help="start locked in Alarm until $H or $X (GRBL with $22=1)")
+    parser.add_argument("--homing-required", action="store_true", help="start locked in Alarm until $H or $X, even with --no-homing-lock")
+    parser.add_argument("--no-homing-lock", action="store_true",
+                        help="build without HOMING_INIT_LOCK ([OPT:VL]): power up Idle although $22=1 (stock 1.1h powers up in Alarm)")
     parser.add_argument("--errors", choices=("none", "paper"), default="none", help="true-position error model of the carriage")
     parser.add_argument("--seed", type=int, default=0, help="seed of the repeatability draws")
     faults = parser.add_argument_group("fault injection")
@@ -26,6 +28,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     faults.add_argument("--error-every", type=int, default=0, metavar="N", help="answer every Nth command with an error instead of executing it")
     faults.add_argument("--error-code", type=int, default=20, metavar="CODE", help="the error code of --error-every (default 20)")
     faults.add_argument("--reply-delay", type=float, default=0.0, metavar="S", help="delay every reply by S seconds (slow replies)")
+    faults.add_argument("--fail-homing", type=int, nargs="?", const=8, choices=(8, 9), metavar="CODE",
+                        help="every $H fails half-way with ALARM:CODE (8 pull-off, the default; 9 switch not found), then ok and a reset")
     faults.add_argument("--garbage-every", type=int, default=0, metavar="N", help="send a line of garbage bytes before every Nth message")
 
 
@@ -55,13 +59,14 @@ def run(args: argparse.Namespace) -> int:
     faults = Faults(
         drop_after_lines=args.drop_after_lines, alarm_mid_move=args.alarm_mid_move, error_every=args.error_every,
         error_code=args.error_code, reply_delay_s=args.reply_delay, garbage_every=args.garbage_every,
+        fail_homing=args.fail_homing,
     )
     stop = threading.Event()
     try:  # SIGTERM (a service manager, `kill`) stops as cleanly as Ctrl-C; set before the path is announced
         signal.signal(signal.SIGTERM, lambda *_: stop.set())
     except ValueError:  # not the main thread (tests calling run() directly)
         pass
-    emu = GrblEmulator(stage, faults=faults, time_scale=args.time_scale)
+    emu = GrblEmulator(stage, faults=faults, time_scale=args.time_scale, homing_init_lock=not args.no_homing_lock)
     try:
         path = emu.start()
         print(path, flush=True)

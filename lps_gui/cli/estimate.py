@@ -38,6 +38,12 @@ def run(args: argparse.Namespace) -> int:
     }
     results = estimate_session(args.session, args.method, options, args.intrinsics, args.out, progress=ProgressBar("estimate"))
     print(format_summary(results))
+    import sys
+
+    from lps_gui.io.results_history import stale_report_message
+
+    if (stale := stale_report_message(args.session)) and not args.out:
+        print(stale, file=sys.stderr)
     return 0
 
 

@@ -15,7 +15,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--board", required=True, help="board.json")
     parser.add_argument("--out", default="intrinsics.json", help="intrinsics JSON to write (default: intrinsics.json)")
     parser.add_argument("--yaml", help="also write OpenCV FileStorage YAML here")
+    parser.add_argument("--cameramodel", help="also write an mrcal .cameramodel here")
+    parser.add_argument("--lensmodel", choices=("opencv5", "opencv8"), default="opencv5",
+                        help="mrcal lens model of --cameramodel (opencv8 with k4..k6 = 0; default opencv5)")
     parser.add_argument("--fix-k3", action="store_true", help="hold k3 at 0 (narrow fields of view)")
+    parser.add_argument("--warp", choices=("auto", "on", "off"), default="auto",
+                        help="estimate the board's bow with the intrinsics (auto: unless the views cannot separate it; on: fail then)")
+    parser.add_argument("--cross-validate", action="store_true",
+                        help="also calibrate the even and the odd images apart and compare the two projections")
+    parser.add_argument("--report", help="also write the intrinsics report (PDF with residual, uncertainty and coverage maps) here")
     parser.add_argument("--workers", type=int, default=None, help="processes (default: one per core)")
 
 
@@ -27,16 +35,27 @@ def run(args: argparse.Namespace) -> int:
     from lps_gui.cli.progress_bar import ProgressBar
     from lps_gui.io.board_file import read_board
     from lps_gui.io.intrinsics_file import write_intrinsics
-    from lps_gui.pipeline.intrinsics import calibrate_images
+    from lps_gui.pipeline.intrinsics import calibrate_images, cross_validate_calibration
 
     board = read_board(args.board)
     flags = cv2.CALIB_FIX_K3 if args.fix_k3 else 0
-    cal = calibrate_images([Path(p) for p in args.images], board, ProgressBar("intrinsics"), workers=args.workers, flags=flags)
+    cal = calibrate_images([Path(p) for p in args.images], board, ProgressBar("intrinsics"), workers=args.workers, flags=flags, warp=args.warp)
     write_intrinsics(args.out, cal.intrinsics)
     if args.yaml:
         write_intrinsics(args.yaml, cal.intrinsics)
+    if args.cameramodel:
+        from lps_gui.io.cameramodel_file import write_cameramodel
+
+        write_cameramodel(args.cameramodel, cal.intrinsics, "LENSMODEL_" + args.lensmodel.upper())
     print(cal.summary())
-    print(f"wrote {args.out}" + (f" and {args.yaml}" if args.yaml else ""))
+    crossval = cross_validate_calibration(cal, board, flags=flags, warp=args.warp) if args.cross_validate else None
+    if crossval is not None:
+        print(crossval.summary())
+    if args.report:
+        from lps_gui.report.intrinsics_report import write_intrinsics_report
+
+        write_intrinsics_report(cal, args.report, crossval, title=Path(args.out).name)
+    print("wrote " + ", ".join(str(p) for p in (args.out, args.yaml, args.cameramodel, args.report) if p))
     failed = [w for w in cal.warnings if any(w.startswith(n + ":") for n in cal.view_names)]
     if failed:
         print(f"{len(failed)} image(s) not used; see the lines above", file=sys.stderr)

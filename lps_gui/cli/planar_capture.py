@@ -72,6 +72,12 @@ def open_planar_capture(args: argparse.Namespace):
         return _resume(args, session)
     if not wants_planar(args):
         return None
+    from lps_gui.errors import InputError
+
+    if getattr(args, "compensation", None):
+        raise InputError("--compensation: a table corrects one axis; planar plans are captured without one")
+    if getattr(args, "iso_plan", False):
+        raise InputError("--iso-plan is the single-axis ISO 230-2 preset; a planar plan takes --iso-lines")
     return _start(args)
 
 
@@ -187,10 +193,11 @@ def planar_preset_name(preset: str | None) -> str:
 
 
 def _start(args: argparse.Namespace):
-    from lps_gui.cli.capture import _bind_stage, _clock, _close, _open_devices, _read_intrinsics
+    from lps_gui.cli.capture import _bind_stage, _clock, _close, _open_devices, _preflight, _read_intrinsics, _release_lock
     from lps_gui.errors import InputError
 
     stage_spec, camera_spec = args.stage or "sim", args.camera or "sim"
+    _preflight(args, stage_spec, camera_spec)  # the stage against the camera, the image format
     if camera_spec == "sim":
         if args.board:
             raise InputError("--board: the simulated gantry's board comes from --preset; drop --board")
@@ -210,6 +217,7 @@ def _start(args: argparse.Namespace):
         session, rig_stage, camera = create_simulated_gantry_session(args.out, spec, clock=_clock(args),
                                                                      noise_grey=args.noise_grey, intrinsics=intr)
         stage = _bind_stage(stage_spec, rig_stage, args.time_scale)
+        _release_lock(args, stage)
         session.meta["stage"] = {**stage.describe(), "axes": ["X", "Y"], "spec": stage_spec}
         session.meta["camera"] = {**camera.properties(), "spec": "sim"}
         if args.intrinsics:
@@ -226,6 +234,7 @@ def _start(args: argparse.Namespace):
     board, intr = read_board(args.board), _read_intrinsics(args.intrinsics)
     stage, camera = _open_devices(stage_spec, camera_spec)
     try:
+        _release_lock(args, stage)
         session = Session.create(
             args.out, board, plan, intr,
             camera={**camera.properties(), "spec": camera_spec},

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from lps_gui.core.joint_lm import solve_spd
 from lps_gui.errors import DegenerateGeometryError
 
 
@@ -59,18 +60,9 @@ def solve_block_arrowhead(
     W = Dinv @ B  # shape (K, b, p)
     S = A - np.einsum("kbp,kbq->pq", B, W)
     rhs = g_theta - np.einsum("kbp,kb->p", W, g_s)
-    d_theta = -_solve_spd(S, rhs)
+    d_theta = -solve_spd(S, rhs)
     d_s = -np.einsum("kab,kb->ka", Dinv, g_s + B @ d_theta)
     return d_theta, d_s
-
-
-def _solve_spd(S: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-    try:
-        L = np.linalg.cholesky(S)
-    except np.linalg.LinAlgError:
-        return np.linalg.lstsq(S, rhs, rcond=None)[0]
-    y = np.linalg.solve(L, rhs)
-    return np.linalg.solve(L.T, y)
 
 
 @dataclass(frozen=True)

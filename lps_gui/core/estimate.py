@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from lps_gui.core.camera_model import INTRINSIC_NAMES
+from lps_gui.core.constant_orientation import board_plane_from_model
 from lps_gui.core.estimate_types import METHODS, EstimateOptions, LpsEstimate, step_pairs
 from lps_gui.core.hybrid import initial_line, solve_hybrid, view_costs
 from lps_gui.core.joint_lm import N_POSE_PARAMS, LmOptions, LpsState, linearize, solve_joint, solve_positions_only
@@ -289,17 +290,23 @@ def _uncertainty(obs: Observations, opt: EstimateOptions, sol: _Solution, X: np.
     return _Uncertainty(sigma2, var_s, var_total, step_sigma, param_sigmas, inv, G_s, eq.n_obs, n_params)
 
 
+
 def _finish(obs: Observations, opt: EstimateOptions, sol: _Solution, X: np.ndarray, mask_all: np.ndarray,
             timings: dict[str, float]) -> LpsEstimate:
-    """Uncertainty, per-view RMS and 6-DOF motions of the solution, as an :class:`LpsEstimate`."""
+    """Uncertainty, per-view RMS, 6-DOF motions and board-plane straightness of the solution, as an :class:`LpsEstimate`."""
     t0 = time.perf_counter()
     unc = _uncertainty(obs, opt, sol, X, mask_all)
     timings["uncertainty"] = time.perf_counter() - t0
-    six = None
+    six = board_plane = None
     if opt.six_dof:
         t1 = time.perf_counter()
         six = _six_dof(sol.state, obs, X, mask_all, sol.usable, sol.used)
         timings["six_dof"] = time.perf_counter() - t1
+        t1 = time.perf_counter()  # straightness at the board plane and image rotation (SPEC 11)
+        state = sol.state
+        board_plane = board_plane_from_model(state.R, state.line().translations(state.s), state.line().u_board, X,
+                                             obs.corners_px, mask_all, state.intrinsics, state.s, sol.usable, sol.used)
+        timings["board_plane"] = time.perf_counter() - t1
     return LpsEstimate(
         method=opt.method,
         options=opt,
@@ -325,6 +332,7 @@ def _finish(obs: Observations, opt: EstimateOptions, sol: _Solution, X: np.ndarr
         timings_s=timings,
         inverse=unc.inverse,
         intrinsics_gradient=unc.intrinsics_gradient,
+        board_plane=board_plane,
     )
 
 

@@ -6,6 +6,7 @@ from typing import Any
 
 import numpy as np
 
+from lps_gui.core.constant_orientation import BoardPlaneMotion
 from lps_gui.core.hybrid import HybridOptions
 from lps_gui.core.joint_lm import LpsState
 from lps_gui.core.six_dof import SixDof
@@ -68,6 +69,7 @@ class LpsEstimate:
     timings_s: dict[str, float]
     inverse: ArrowheadInverse | None = None  # of the final solve, in units of sigma_px^2
     intrinsics_gradient: np.ndarray | None = None  # shape (K, 9): d s / d intrinsics
+    board_plane: BoardPlaneMotion | None = None  # straightness at the board plane, image rotation (SPEC 11)
 
     def linear_functional_sigma(self, a: np.ndarray) -> tuple[float, float]:
         """Sigma (mm) of sum_i a_i s_i from noise alone and in total (with intrinsics).

@@ -16,7 +16,10 @@ import cv2
 import numpy as np
 
 from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
+from lps_gui.core.intrinsics_refine import RejectedCorner, WarpNotSeparableError, refine_intrinsics
 from lps_gui.errors import DegenerateGeometryError, InputError
+
+WARP_MODES = ("auto", "on", "off")
 
 MIN_VIEWS = 3
 MIN_CORNERS_PER_VIEW = 6
@@ -29,8 +32,8 @@ class IntrinsicsCalibration:
 
     intrinsics: CameraIntrinsics  # full 9x9 covariance (INTRINSIC_NAMES order), diag = std^2
     std: np.ndarray  # shape (9,), INTRINSIC_NAMES order
-    rms_px: float  # RMS length of the 2-D reprojection error (OpenCV's figure; sqrt(2) x per-axis sigma)
-    per_view_rms_px: np.ndarray  # shape (V,), same measure per view, NaN for views not used
+    rms_px: float  # RMS length of the 2-D reprojection error over the kept corners (OpenCV's figure; sqrt(2) x per-axis sigma)
+    per_view_rms_px: np.ndarray  # shape (V,), same measure per view over all its corners (rejected ones too), NaN for views not used
     coverage: np.ndarray  # shape (grid_rows, grid_cols): corners per image cell
     flagged_views: list[int]
     warnings: list[str]
@@ -38,6 +41,16 @@ class IntrinsicsCalibration:
     rvecs: np.ndarray  # shape (V, 3), NaN for views not used
     tvecs: np.ndarray  # shape (V, 3) mm
     view_names: list[str] = field(default_factory=list)
+    warp_mm: np.ndarray | None = None  # (bow_x, bow_y) of the board, None when not estimated
+    warp_sigma_mm: np.ndarray | None = None
+    rejected_corners: list[RejectedCorner] = field(default_factory=list)
+    residuals_px: list[np.ndarray] = field(default_factory=list)  # per view (N, 2) observed - projected, NaN where not seen
+    image_points: list[np.ndarray] = field(default_factory=list)  # per view (N, 2) px as given
+
+    def coverage_on(self, grid: tuple[int, int]) -> np.ndarray:
+        """Corner counts of the used views on another (cols, rows) grid."""
+        pts = [self.image_points[k] for k in self.used_views]
+        return coverage_grid(np.concatenate(pts), self.intrinsics.image_size, grid)
 
     def coverage_fraction(self) -> float:
         return float(np.mean(self.coverage > 0))
@@ -46,6 +59,16 @@ class IntrinsicsCalibration:
         """Human-readable lines: each parameter with its std, error figures, flags, warnings."""
         lines = [f"{name:>3} = {v:12.6g} +- {s:.3g}" for name, v, s in zip(INTRINSIC_NAMES, self.intrinsics.vector(), self.std)]
         lines.append(f"rms = {self.rms_px:.4f} px over {len(self.used_views)} views; coverage {100 * self.coverage_fraction():.0f} % of the image grid")
+        if self.warp_mm is not None:
+            lines.append(
+                f"board bow = {self.warp_mm[0]:+.3f} +- {self.warp_sigma_mm[0]:.3f} mm along x, "
+                f"{self.warp_mm[1]:+.3f} +- {self.warp_sigma_mm[1]:.3f} mm along y (centre relative to the edges)"
+            )
+        if self.rejected_corners:
+            lines.append(f"rejected {len(self.rejected_corners)} corner(s) as outliers:")
+            for c in self.rejected_corners:
+                name = self.view_names[c.view] if c.view < len(self.view_names) else f"view {c.view}"
+                lines.append(f"  {name} corner {c.corner}: residual {c.residual_px:.2f} px")
         for i in self.flagged_views:
             name = self.view_names[i] if i < len(self.view_names) else f"view {i}"
             lines.append(f"flagged: {name} (rms {self.per_view_rms_px[i]:.3f} px): removing it lowers the error markedly")
@@ -84,6 +107,8 @@ def calibrate_intrinsics(
     flags: int = 0,
     grid: tuple[int, int] = (8, 6),
     flag_k: float = 5.0,
+    warp: str = "auto",
+    reject_outliers: bool = True,
 ) -> IntrinsicsCalibration:
     """Calibrate a camera from board views.
 
@@ -97,9 +122,20 @@ def calibrate_intrinsics(
     flag_k : a view is a candidate outlier when its RMS exceeds the median
         by ``flag_k`` robust sigmas; it is flagged when dropping it lowers
         the overall RMS by more than 10 %.
+    warp : "auto" estimates the board's bow with the intrinsics and falls
+        back to a flat board (with a warning) when the views cannot separate
+        it; "on" raises :class:`WarpNotSeparableError` then; "off" = flat.
+    reject_outliers : drop single corners far beyond the noise (listed in
+        ``rejected_corners``).
+
+    OpenCV's calibration (flat board) is the starting point; the joint
+    refinement of :func:`refine_intrinsics` gives the final values, the
+    covariance and the residuals.
     """
+    if warp not in WARP_MODES:
+        raise InputError(f"intrinsics: warp must be one of {', '.join(WARP_MODES)}, got {warp!r}")
     X = np.asarray(object_points, dtype=np.float32).reshape(-1, 3)
-    objs, imgs, used, warnings = [], [], [], []
+    objs, imgs, used, ids, warnings = [], [], [], [], []
     for k, uv in enumerate(image_points):
         uv = np.asarray(uv, dtype=float).reshape(-1, 2)
         if uv.shape[0] != X.shape[0]:
@@ -110,6 +146,7 @@ def calibrate_intrinsics(
         objs.append(X[ok])
         imgs.append(uv[ok].astype(np.float32).reshape(-1, 1, 2))
         used.append(k)
+        ids.append(np.flatnonzero(ok))
     V = len(image_points)
     if len(used) < MIN_VIEWS:
         raise DegenerateGeometryError(
@@ -128,59 +165,42 @@ def calibrate_intrinsics(
     coverage = coverage_grid(np.concatenate([i.reshape(-1, 2) for i in imgs]), image_size, grid)
     warnings += _warnings(coverage, r_all[used], std, K, len(used))
     dist5 = np.asarray(dist, dtype=float).ravel()[:5]
-    cov = full_covariance(objs, imgs, CameraIntrinsics(image_size, K, dist5), rvecs, tvecs, free=std > 0)
-    if cov is None or not np.allclose(np.sqrt(np.clip(np.diag(cov), 0, None)), std, rtol=0.1, atol=1e-12):
-        cov = np.diag(std**2)  # keep OpenCV's figures when our Jacobian disagrees with them
+    seed = CameraIntrinsics(image_size, K, dist5)
+    X64 = X.astype(float)
+    size_mm = (float(np.ptp(X64[:, 0])), float(np.ptp(X64[:, 1])))
+    args = (size_mm, [X64[i] for i in ids], [np.asarray(image_points[k], float).reshape(-1, 2)[i] for k, i in zip(used, ids)],
+            ids, used, seed, [np.ravel(r) for r in rvecs], [np.ravel(t) for t in tvecs], std > 0)
+    try:
+        ref = refine_intrinsics(*args, estimate_warp=warp != "off", reject_outliers=reject_outliers)
+    except WarpNotSeparableError as exc:
+        if warp == "on":
+            raise
+        warnings.append(f"board bow not estimated: {str(exc).split('; ')[0].removeprefix('intrinsics: ')}")
+        ref = refine_intrinsics(*args, estimate_warp=False, reject_outliers=reject_outliers)
+    intr = seed.with_vector(ref.intrinsics_vector)
+    std = np.sqrt(np.clip(np.diag(ref.covariance), 0.0, None))
+    residuals = [np.full((X.shape[0], 2), np.nan) for _ in range(V)]
+    for k, i, r in zip(used, ids, ref.residuals_px):
+        residuals[k][i] = r
+    per_view_rms = np.full(V, np.nan)
+    per_view_rms[used] = [np.sqrt(np.nanmean(np.sum(residuals[k] ** 2, axis=1))) for k in used]
+    r2 = np.concatenate([np.sum(r[kk] ** 2, axis=1) for r, kk in zip(ref.residuals_px, ref.kept)])
+    rms = float(np.sqrt(np.mean(r2)))
+    r_all[used] = np.array(ref.rvecs)
+    t_all[used] = np.array(ref.tvecs)
     intr = CameraIntrinsics(
         image_size=image_size,
-        camera_matrix=K,
-        dist=dist5,
-        covariance=cov,
-        rms_px=float(rms),
+        camera_matrix=intr.camera_matrix,
+        dist=intr.dist,
+        covariance=ref.covariance,
+        rms_px=rms,
         n_views=len(used),
     )
-    return IntrinsicsCalibration(intr, std, float(rms), per_view_rms, coverage, flagged, warnings, used, r_all, t_all)
-
-
-def full_covariance(
-    objs: list[np.ndarray],
-    imgs: list[np.ndarray],
-    intrinsics: CameraIntrinsics,
-    rvecs: list[np.ndarray],
-    tvecs: list[np.ndarray],
-    free: np.ndarray,
-) -> np.ndarray | None:
-    """9x9 covariance of the intrinsics (INTRINSIC_NAMES order) with their correlations.
-
-    OpenCV returns standard deviations only, but fx/fy and k1/k2/k3 are
-    strongly correlated, which matters when the estimator propagates them.
-    Gauss-Newton at the solution: per-view 6x6 pose blocks are eliminated by
-    Schur complement; sigma^2 = SSR / (2N - p) as in OpenCV. Fixed
-    parameters (``free`` False) get zero rows and columns.
-    """
-    from lps_gui.core.camera_model import pose_jacobian_rodrigues
-
-    idx = np.flatnonzero(free)
-    info = np.zeros((idx.size, idx.size))
-    ssr, n_obs = 0.0, 0
-    for X, uv_obs, r, t in zip(objs, imgs, rvecs, tvecs):
-        uv, J = pose_jacobian_rodrigues(np.ravel(r), np.ravel(t), X.astype(float), intrinsics)[:2]
-        ssr += float(np.sum((uv - uv_obs.reshape(-1, 2)) ** 2))
-        n_obs += 2 * uv.shape[0]
-        Jp = J[..., :6].reshape(-1, 6)
-        Ji = J[..., 6:][..., idx].reshape(-1, idx.size)
-        A, B = Jp.T @ Jp, Jp.T @ Ji
-        info += Ji.T @ Ji - B.T @ np.linalg.solve(A, B)
-    dof = n_obs - idx.size - 6 * len(objs)
-    if dof <= 0:
-        return None
-    try:
-        cov_free = np.linalg.inv(info) * ssr / dof
-    except np.linalg.LinAlgError:
-        return None
-    cov = np.zeros((9, 9))
-    cov[np.ix_(idx, idx)] = 0.5 * (cov_free + cov_free.T)
-    return cov
+    warp_sigma = None if ref.warp_cov is None else np.sqrt(np.diag(ref.warp_cov))
+    return IntrinsicsCalibration(intr, std, rms, per_view_rms, coverage, flagged, warnings, used, r_all, t_all,
+                                 warp_mm=ref.warp_mm, warp_sigma_mm=warp_sigma, rejected_corners=ref.rejected,
+                                 residuals_px=residuals,
+                                 image_points=[np.asarray(u, float).reshape(-1, 2) for u in image_points])
 
 
 def _flag_views(objs, imgs, used, per_view_rms, image_size, flags, rms, flag_k) -> list[int]:

@@ -23,6 +23,7 @@ import numpy as np
 
 from lps_gui.core.iso230_run import (TARGET_TOL_MM, JsonDataclass, RunFigures, capture_arrays, finite_or_none,
                                      json_value, single_run_figures, target_index)
+from lps_gui.core.resolution import ISO_RUNS_PER_DIRECTION, is_indicative, straightness_verdict
 from lps_gui.errors import InputError
 
 __all__ = ["TARGET_TOL_MM", "Iso230Figures", "RunFigures", "TargetTable", "bidirectional_figures",
@@ -290,10 +291,15 @@ def check_specification(figures: dict[str, Any], spec: dict[str, Any]) -> list[d
       noise alone spans the limit (4 x ``figures["straightness_sigma_um"]``)
       is "not resolved" (``passed`` None), not a verdict on the stage.
 
+    With ``figures["straightness"]`` (board-plane spans with their noise p-v)
+    the straight-line row comes from :func:`core.resolution.straightness_verdict`.
+    Every row carries ``indicative``: True when fewer runs per direction than
+    ISO 230-2 asks (5) back the figures; such a verdict is not a FAIL.
+
     Returns
     -------
-    list of ``{"name", "measured", "limit", "unit", "passed", "note"}`` rows; ``passed`` is
-    None when the session does not measure the figure.
+    list of ``{"name", "measured", "limit", "unit", "passed", "note", "indicative"}`` rows;
+    ``passed`` is None when the session does not measure (or resolve) the figure.
     """
     mode = str(spec.get("limits", "plus_minus"))
     if mode not in ("plus_minus", "band"):
@@ -331,7 +337,10 @@ def check_specification(figures: dict[str, Any], spec: dict[str, Any]) -> list[d
         rows.append(row("Repeatability", None if value is None else value * half, lim,
                         what + versus if value is not None else "needs two or more runs per direction"))
     lim = limit("straightness_um")
-    if lim is not None:
+    verdict = None if lim is None else straightness_verdict(figures, lim)
+    if verdict is not None:
+        rows.append({"name": "Straight-line accuracy", "limit": lim, "unit": "\u00b5m", **verdict})
+    elif lim is not None:
         spans = [finite_or_none(v) for v in np.ravel(np.asarray(figures.get("straightness_um_max"), dtype=object))]
         spans = [v for v in spans if v is not None]
         value = max(spans) if spans else None
@@ -343,4 +352,9 @@ def check_specification(figures: dict[str, Any], spec: dict[str, Any]) -> list[d
             r["passed"] = None
             r["note"] = f"not resolved: noise alone spans ~{4 * noise:.0f} \u00b5m (per-view \u03c3 {noise:.1f} \u00b5m)"
         rows.append(r)
+    indicative = is_indicative(figures)
+    for r in rows:
+        r["indicative"] = indicative
+        if indicative and r["passed"] is not None:
+            r["note"] += f"; indicative: fewer than {ISO_RUNS_PER_DIRECTION} runs per direction"
     return rows

@@ -83,8 +83,24 @@ class LmResult:
 
 def residuals(state: LpsState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """Reprojection residuals uv - measured, shape (K, N, 2); zero where not seen."""
-    x, y, z = _camera_points(state, X)
-    parts = project_parts(x, y, z, state.intrinsics)
+    t = state.l0[None, :] + state.s[:, None] * state.n[None, :]  # shape (K, 3)
+    return pose_residuals(state.R, t, X, state.intrinsics, corners, mask)
+
+
+def camera_points(R: np.ndarray, t: np.ndarray, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Camera-frame coordinates R X + t_i of every corner in every view: three arrays of shape (K, N).
+
+    ``R`` (3, 3) is the common orientation, ``t`` (K, 3) the per-view translations of any model.
+    """
+    RX = X @ R.T  # shape (N, 3)
+    return tuple(RX[None, :, i] + t[:, i, None] for i in range(3))  # type: ignore[return-value]
+
+
+def pose_residuals(R: np.ndarray, t: np.ndarray, X: np.ndarray, intrinsics: CameraIntrinsics, corners: np.ndarray,
+                   mask: np.ndarray) -> np.ndarray:
+    """Residuals uv - measured (K, N, 2) of views with a common R and translations t (K, 3); zero where unused."""
+    x, y, z = camera_points(R, t, X)
+    parts = project_parts(x, y, z, intrinsics)
     m = np.nan_to_num(corners)
     r = np.empty(corners.shape)
     r[..., 0] = np.where(mask, parts.u - m[..., 0], 0.0)
@@ -94,9 +110,7 @@ def residuals(state: LpsState, X: np.ndarray, corners: np.ndarray, mask: np.ndar
 
 def _camera_points(state: LpsState, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Camera-frame coordinates of every corner in every view, three arrays of shape (K, N)."""
-    RX = X @ state.R.T  # shape (N, 3)
-    t = state.l0[None, :] + state.s[:, None] * state.n[None, :]  # shape (K, 3)
-    return tuple(RX[None, :, i] + t[:, i, None] for i in range(3))  # type: ignore[return-value]
+    return camera_points(state.R, state.l0[None, :] + state.s[:, None] * state.n[None, :], X)
 
 
 def huber_threshold(r: np.ndarray, mask: np.ndarray, huber_scale: float) -> float:
@@ -129,6 +143,9 @@ def robust_cost(r: np.ndarray, mask: np.ndarray, c: float | None) -> float:
     return float(np.sum(np.where(e <= c, e2, 2.0 * c * e - c * c)))
 
 
+LINEARIZE_BLOCK = 64  # views per pass: the (p, 2, views, N) Jacobian stays ~35 MB at N = 540, p = 17
+
+
 def linearize(
     state: LpsState,
     X: np.ndarray,
@@ -140,7 +157,45 @@ def linearize(
     """Normal-equation blocks at ``state``; returns them and the residuals (K, N, 2).
 
     ``huber_c`` (px) turns on the Huber loss: its IRLS weights enter the blocks.
+    Views enter the sums independently, so they are linearized LINEARIZE_BLOCK
+    at a time: the Jacobian of 1600 views would be 0.1-0.25 GB, and its
+    allocation and page faults cost more than the arithmetic.
     """
+    K = mask.shape[0]
+    if K <= LINEARIZE_BLOCK:
+        return _linearize_views(state, X, corners, mask, huber_c, with_intrinsics)
+    parts = []
+    for lo in range(0, K, LINEARIZE_BLOCK):
+        b = slice(lo, lo + LINEARIZE_BLOCK)
+        sub = LpsState(state.R, state.l0, state.n, state.s[b], state.intrinsics)
+        parts.append(_linearize_views(sub, X, corners[b], mask[b], huber_c, with_intrinsics))
+    eqs = [e for e, _ in parts]
+    eq = NormalEquations(
+        A=sum(e.A for e in eqs),
+        B=np.concatenate([e.B for e in eqs]),
+        D=np.concatenate([e.D for e in eqs]),
+        g_theta=sum(e.g_theta for e in eqs),
+        g_s=np.concatenate([e.g_s for e in eqs]),
+        cost=float(sum(e.cost for e in eqs)),
+        ssr=float(sum(e.ssr for e in eqs)),
+        n_obs=sum(e.n_obs for e in eqs),
+        basis=eqs[0].basis,
+        weights=np.concatenate([e.weights for e in eqs]),
+    )
+    return eq, np.concatenate([r for _, r in parts])
+
+
+def _linearize_views(
+    state: LpsState,
+    X: np.ndarray,
+    corners: np.ndarray,
+    mask: np.ndarray,
+    huber_c: float | None,
+    with_intrinsics: bool,
+) -> tuple[NormalEquations, np.ndarray]:
+    """:func:`linearize` on a few views at once."""
+    if not with_intrinsics:
+        return _linearize_pose(state, X, corners, mask, huber_c)
     x, y, z = _camera_points(state, X)
     parts = project_parts(x, y, z, state.intrinsics, want_jacobian=True)
     m = np.nan_to_num(corners)
@@ -202,6 +257,79 @@ def linearize(
     return eq, r
 
 
+def _linearize_pose(
+    state: LpsState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray, huber_c: float | None
+) -> tuple[NormalEquations, np.ndarray]:
+    """The blocks without intrinsics, contracted through each corner's 3x3 ``P^T W P``.
+
+    Every pose column of the Jacobian is a 3x8 map ``G = U_n + s_k V`` of the
+    corner's d r / d x_cam = P (2x3): rotation ``[RX_n]x``, translation I,
+    direction ``s_k basis^T``. So ``J^T W J`` needs only M = P^T W P and
+    q = P^T W r per corner (9 numbers), summed over views with weights 1,
+    s_k, s_k^2 and then mapped by the N small U_n: no (8, 2, K, N) Jacobian.
+    """
+    x, y, z = _camera_points(state, X)
+    parts = project_parts(x, y, z, state.intrinsics, want_jacobian=True)
+    obs = np.nan_to_num(corners)
+    r = np.empty(mask.shape + (2,))
+    r[..., 0] = np.where(mask, parts.u - obs[..., 0], 0.0)
+    r[..., 1] = np.where(mask, parts.v - obs[..., 1], 0.0)
+    weights = huber_weights(r, mask, huber_c)
+    wu, wv = (r[..., 0], r[..., 1]) if huber_c is None and mask.all() else (weights * r[..., 0], weights * r[..., 1])
+    du, dv = parts.du, parts.dv
+    weighted = not (huber_c is None and mask.all())
+    wdu = [weights * d for d in du] if weighted else du
+    wdv = [weights * d for d in dv] if weighted else dv
+    M = np.empty((3, 3) + mask.shape)  # P^T W P per corner
+    for i in range(3):
+        for j in range(i, 3):
+            M[i, j] = wdu[i] * du[j] + wdv[i] * dv[j]
+            M[j, i] = M[i, j]
+    q = np.stack([du[i] * wu + dv[i] * wv for i in range(3)])  # P^T W r, shape (3, K, N)
+    n = state.n
+    m = np.einsum("ijkn,j->ikn", M, n)  # M n, shape (3, K, N)
+    s = state.s
+    RX = X @ state.R.T  # shape (N, 3)
+    basis = sphere_tangent_basis(n)
+    p = N_POSE_PARAMS
+    U = np.zeros((len(X), p, 3))
+    U[:, 0:3, :] = _skew_rows(RX)
+    U[:, 3:6, :] = np.eye(3)
+    V = np.zeros((p, 3))
+    V[6:8] = basis.T
+    M0 = M.sum(axis=2)  # shape (3, 3, N)
+    M1 = np.einsum("ijkn,k->ijn", M, s)
+    M2 = np.einsum("ijkn,k->ij", M, s * s)
+    UM1 = np.einsum("npi,ijn->pj", U, M1)  # sum_n U_n M1_n, shape (p, 3)
+    A = np.einsum("npi,ijn,nqj->pq", U, M0, U) + UM1 @ V.T + V @ UM1.T + V @ M2 @ V.T
+    q0 = q.sum(axis=1)  # shape (3, N)
+    g_theta = np.einsum("npi,in->p", U, q0) + V @ np.einsum("ikn,k->i", q, s)
+    m_sum = m.sum(axis=2)  # shape (3, K)
+    B = np.empty((len(s), p))
+    B[:, 0:3] = np.stack([m[2] @ RX[:, 1] - m[1] @ RX[:, 2], m[0] @ RX[:, 2] - m[2] @ RX[:, 0],
+                          m[1] @ RX[:, 0] - m[0] @ RX[:, 1]], axis=1)
+    B[:, 3:6] = m_sum.T
+    B[:, 6:8] = s[:, None] * (m_sum.T @ basis)
+    D = np.einsum("ikn,i->k", m, n)
+    g_s = np.einsum("ikn,i->k", q, n)
+    e2 = np.sum(r * r, axis=-1)
+    eq = NormalEquations(
+        A=A, B=B, D=D, g_theta=g_theta, g_s=g_s,
+        cost=robust_cost(r, mask, huber_c), ssr=float(np.sum(e2[mask])), n_obs=int(2 * mask.sum()),
+        basis=basis, weights=weights,
+    )
+    return eq, r
+
+
+def _skew_rows(v: np.ndarray) -> np.ndarray:
+    """[v]x for each row of v (N, 3): the map P -> v x P."""
+    out = np.zeros((len(v), 3, 3))
+    out[:, 0, 1], out[:, 0, 2] = -v[:, 2], v[:, 1]
+    out[:, 1, 0], out[:, 1, 2] = v[:, 2], -v[:, 0]
+    out[:, 2, 0], out[:, 2, 1] = -v[:, 1], v[:, 0]
+    return out
+
+
 def solve_arrowhead(
     eq: NormalEquations,
     free_s: np.ndarray,
@@ -223,12 +351,12 @@ def solve_arrowhead(
     Bf = eq.B * Dinv[:, None]  # shape (K, p): w_i = B_i / D_i
     S = A - eq.B.T @ Bf
     rhs = g - Bf.T @ eq.g_s
-    d_theta = -_solve_spd(S, rhs)
+    d_theta = -solve_spd(S, rhs)
     d_s = np.where(free, -(eq.g_s + eq.B @ d_theta) * Dinv, 0.0)
     return d_theta, d_s
 
 
-def _solve_spd(S: np.ndarray, b: np.ndarray) -> np.ndarray:
+def solve_spd(S: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Solve the small reduced system by Cholesky (numpy: scipy.linalg's import costs more than the solve)."""
     try:
         L = np.linalg.cholesky(S)

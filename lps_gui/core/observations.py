@@ -12,8 +12,30 @@ from lps_gui.errors import DegenerateGeometryError, InputError
 MIN_CORNERS_PER_VIEW = 6
 
 
+class CornerViews:
+    """What every estimator's input knows of its corners (``corners_px`` shape (K, N, 2), NaN where missing)."""
+
+    corners_px: np.ndarray
+
+    @property
+    def K(self) -> int:
+        return self.corners_px.shape[0]
+
+    @property
+    def N(self) -> int:
+        return self.corners_px.shape[1]
+
+    def mask(self) -> np.ndarray:
+        """Which corners were seen, shape (K, N) bool."""
+        return np.all(np.isfinite(self.corners_px), axis=-1)
+
+    def usable_views(self) -> np.ndarray:
+        """Views with enough corners for a pose, shape (K,) bool."""
+        return self.mask().sum(axis=1) >= MIN_CORNERS_PER_VIEW
+
+
 @dataclass
-class Observations:
+class Observations(CornerViews):
     """Corners of K views (NaN where missing) and what the stage was told to do."""
 
     board: Board
@@ -36,21 +58,6 @@ class Observations:
         if not self.names:
             self.names = [f"view{i}" for i in self.index]
 
-    @property
-    def K(self) -> int:
-        return self.corners_px.shape[0]
-
-    @property
-    def N(self) -> int:
-        return self.corners_px.shape[1]
-
-    def mask(self) -> np.ndarray:
-        """Which corners were seen, shape (K, N) bool."""
-        return np.all(np.isfinite(self.corners_px), axis=-1)
-
-    def usable_views(self) -> np.ndarray:
-        """Views with enough corners for a pose, shape (K,) bool."""
-        return self.mask().sum(axis=1) >= MIN_CORNERS_PER_VIEW
 
     def subset(self, keep: np.ndarray) -> "Observations":
         """The views selected by a boolean mask or an index array."""

@@ -20,7 +20,7 @@ import numpy as np
 from lps_gui.core.block_arrowhead import BlockArrowheadInverse, block_arrowhead_inverse
 from lps_gui.core.board import Board
 from lps_gui.core.camera_model import CameraIntrinsics
-from lps_gui.core.observations import MIN_CORNERS_PER_VIEW
+from lps_gui.core.observations import CornerViews
 from lps_gui.core.outliers import reprojection_outliers, robust_sigma
 from lps_gui.core.planar_model import (
     N_PLANAR_SHARED,
@@ -39,7 +39,7 @@ PLANAR_METHODS = ("joint", "pnp")
 
 
 @dataclass
-class PlanarObservations:
+class PlanarObservations(CornerViews):
     """Corners of K views of one board taken on an XY stage."""
 
     board: Board
@@ -63,16 +63,6 @@ class PlanarObservations:
         self.index = np.asarray(self.index, dtype=int).reshape(K)
         if not self.names:
             self.names = [f"view{i}" for i in self.index]
-
-    @property
-    def K(self) -> int:
-        return self.corners_px.shape[0]
-
-    def mask(self) -> np.ndarray:
-        return np.all(np.isfinite(self.corners_px), axis=-1)
-
-    def usable_views(self) -> np.ndarray:
-        return self.mask().sum(axis=1) >= MIN_CORNERS_PER_VIEW
 
     def validate(self) -> None:
         """One-line errors for input that cannot determine a plane of motion."""

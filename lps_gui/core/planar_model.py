@@ -17,7 +17,7 @@ import numpy as np
 
 from lps_gui.core.block_arrowhead import solve_block_arrowhead
 from lps_gui.core.camera_model import CameraIntrinsics, project_parts
-from lps_gui.core.joint_lm import huber_threshold, huber_weights, robust_cost
+from lps_gui.core.joint_lm import camera_points, huber_threshold, huber_weights, pose_residuals, robust_cost
 from lps_gui.core.progress import CancelToken
 from lps_gui.core.rotation import exp_so3
 
@@ -68,20 +68,12 @@ class PlanarState:
 
 
 def _camera_points(state: PlanarState, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    RX = X @ state.R.T  # shape (N, 3)
-    t = state.translations()  # shape (K, 3)
-    return tuple(RX[None, :, i] + t[:, i, None] for i in range(3))  # type: ignore[return-value]
+    return camera_points(state.R, state.translations(), X)
 
 
 def planar_residuals(state: PlanarState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """Reprojection residuals uv - measured, shape (K, N, 2); zero where not used."""
-    x, y, z = _camera_points(state, X)
-    parts = project_parts(x, y, z, state.intrinsics)
-    m = np.nan_to_num(corners)
-    r = np.empty(corners.shape)
-    r[..., 0] = np.where(mask, parts.u - m[..., 0], 0.0)
-    r[..., 1] = np.where(mask, parts.v - m[..., 1], 0.0)
-    return r
+    return pose_residuals(state.R, state.translations(), X, state.intrinsics, corners, mask)
 
 
 @dataclass

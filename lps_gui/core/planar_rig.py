@@ -21,6 +21,7 @@ import numpy as np
 from lps_gui.core.board import Board
 from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.lps_model import unit
+from lps_gui.core.rig import carried_camera_poses
 from lps_gui.core.rotation import exp_so3
 from lps_gui.core.stage_errors import StageErrorModel
 
@@ -89,11 +90,8 @@ class PlanarRig:
 
     def camera_poses(self, pose: PlanarTruePose) -> tuple[np.ndarray, np.ndarray]:
         """R_cam_board shape (K, 3, 3) and t_cam_board shape (K, 3) of the true poses."""
-        C = self.camera_centres(pose)
-        Q = exp_so3(1e-6 * pose.angles_urad @ self.axes_board.T)  # carriage rotation, board frame
-        R = np.einsum("ij,kjl->kil", self.R_cam_board, np.transpose(Q, (0, 2, 1)))
-        t = -np.einsum("kij,kj->ki", R, C)
-        return R, t
+        return carried_camera_poses(self.R_cam_board, self.camera_centres(pose),
+                                    1e-6 * pose.angles_urad @ self.axes_board.T)
 
     @classmethod
     def facing_board(

@@ -34,8 +34,9 @@ def solve_pnp(
             continue
         obj = points_board[seen].astype(np.float64)
         img = corners_px[i, seen].astype(np.float64)
+        planar = obj * np.array([1.0, 1.0, 0.0])  # IPPE needs z = 0; a bowed board (Board.warp_mm) is refined below
         try:
-            good, rvec, tvec = cv2.solvePnP(obj, img, Kmat, dist, flags=cv2.SOLVEPNP_IPPE)
+            good, rvec, tvec = cv2.solvePnP(planar, img, Kmat, dist, flags=cv2.SOLVEPNP_IPPE)
             if good:
                 rvec, tvec = cv2.solvePnPRefineLM(obj, img, Kmat, dist, rvec, tvec)
         except cv2.error:

@@ -16,6 +16,19 @@ from lps_gui.core.rotation import exp_so3
 from lps_gui.core.stage_errors import StageErrorModel, TruePose
 
 
+def carried_camera_poses(R_cam_board: np.ndarray, C_board: np.ndarray, w_board: np.ndarray
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """Poses of a camera whose carriage sits at centres ``C_board`` (K, 3) mm, rotated by ``w_board`` (K, 3) rad.
+
+    The carriage rotates by Q = exp(w) in the board frame, so the camera's
+    orientation R_cam_board becomes R Q^T and t = -R C. Returns R (K, 3, 3), t (K, 3).
+    """
+    Q = exp_so3(w_board)
+    R = np.einsum("ij,kjl->kil", R_cam_board, np.transpose(Q, (0, 2, 1)))
+    t = -np.einsum("kij,kj->ki", R, C_board)
+    return R, t
+
+
 @dataclass(frozen=True)
 class Rig:
     """Everything the simulators need to know about the physical set-up."""
@@ -45,11 +58,7 @@ class Rig:
             + pose.axis_mm[:, None] * u[None, :]
             + 1e-3 * (pose.straightness_um[:, :1] * v1[None, :] + pose.straightness_um[:, 1:2] * v2[None, :])
         )
-        w_board = 1e-6 * pose.angles_urad @ F.T  # shape (K, 3)
-        Q = exp_so3(w_board)
-        R = np.einsum("ij,kjl->kil", self.R_cam_board, np.transpose(Q, (0, 2, 1)))
-        t = -np.einsum("kij,kj->ki", R, C)
-        return R, t
+        return carried_camera_poses(self.R_cam_board, C, 1e-6 * pose.angles_urad @ F.T)
 
     @classmethod
     def facing_board(

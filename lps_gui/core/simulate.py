@@ -296,3 +296,23 @@ def board_plane_positions(rig: Rig, pose: TruePose) -> np.ndarray:
     state = LpsState(rig.R_cam_board, -rig.R_cam_board @ rig.C0_board, -rig.R_cam_board @ rig.u_board,
                      np.asarray(pose.axis_mm, dtype=float).copy(), rig.intrinsics)
     return solve_positions_only(state, X, uv, np.ones(uv.shape[:2], dtype=bool), iterations=12)
+
+
+def board_plane_straightness(rig: Rig, pose: TruePose) -> tuple[np.ndarray, np.ndarray]:
+    """Truth for the constant-orientation straightness and image rotation (SPEC 11).
+
+    Returns the displacement at the board centre along v1, v2 (K, 2) um, not
+    yet relative to a line, and the camera's rotation about its optical axis
+    (K,) urad: D = C + w x (X0 - C) (first order in the carriage rotation w),
+    independent of any solver; equals ``pose.straightness_um`` plus the
+    line's offset without angular errors.
+    """
+    from lps_gui.core.constant_orientation import board_plane_offsets
+
+    R, t = rig.camera_poses(pose)
+    C = -np.einsum("kji,kj->ki", R, t)
+    F = rig.frame()
+    w = 1e-6 * np.asarray(pose.angles_urad, dtype=float) @ F.T
+    X0 = rig.board.object_points().mean(axis=0)
+    D = board_plane_offsets(C, w, X0)
+    return 1e3 * D @ F[:, 1:], 1e6 * w @ rig.R_cam_board[2]

@@ -3,20 +3,28 @@
 The picture comes from :class:`PreviewGrabber` (a worker thread); a GUI timer
 shows the newest frame with ``ImageItem.setImage(..., autoLevels=False)``, so
 the preview never blocks the window whatever the camera does.
+Exposure, gain, focus and white balance are offered where the device has them
+(``camera/controls.py``) and locked while a capture borrows the camera; a jump
+of brightness or sharpness between frames (an auto mode at work) is warned
+about; "Grab view" stores the current frame as an intrinsics view.
 """
 from __future__ import annotations
 
 import logging
+from pathlib import Path
 from typing import Callable
 
 import numpy as np
 import pyqtgraph as pg
 from PySide6.QtCore import QTimer, Signal
 from PySide6.QtWidgets import (
-    QComboBox, QGridLayout, QGroupBox, QHBoxLayout, QLabel, QProgressBar, QPushButton, QVBoxLayout, QWidget,
+    QCheckBox, QComboBox, QDoubleSpinBox, QFileDialog, QGridLayout, QGroupBox, QHBoxLayout, QLabel, QProgressBar,
+    QPushButton, QVBoxLayout, QWidget,
 )
 
+from lps_gui.camera import controls
 from lps_gui.camera.base import Camera
+from lps_gui.camera.frame_watch import FrameWatch
 from lps_gui.core.board import Board
 from lps_gui.gui.preview import PreviewGrabber
 from lps_gui.gui.sources import CAMERA_FOLLOWS_STAGE, camera_choices, open_camera_source
@@ -31,6 +39,7 @@ class CameraPanel(QWidget):
     """Live view through the camera; the simulated camera follows the simulated stage."""
 
     failed = Signal(str, str)  # title, one-line cause
+    view_grabbed = Signal(object)  # Path of an image stored by "Grab view"
     _grab_failed = Signal(str)
     _opened = Signal(object)
 
@@ -41,6 +50,11 @@ class CameraPanel(QWidget):
         self.sim_camera: Camera | None = None
         self.grabber: PreviewGrabber | None = None
         self._shown = 0
+        self.watch = FrameWatch()
+        self.views_folder: Path | None = None
+        self._views = 0
+        self._locked = False
+        self.control_widgets: dict[str, tuple[QDoubleSpinBox, QCheckBox | None]] = {}
 
         self.source = QComboBox()
         self.open_btn = QPushButton("Start preview")
@@ -78,13 +92,30 @@ class CameraPanel(QWidget):
         ig.addWidget(self.sharpness_label, 1, 2)
         ig.addWidget(QLabel("Rate"), 2, 0)
         ig.addWidget(self.fps_label, 2, 1)
+        self.jump_label = QLabel("")
+        self.jump_label.setWordWrap(True)
+        self.jump_label.setStyleSheet("QLabel { color: #b00020; font-weight: bold; }")
+        ig.addWidget(self.jump_label, 3, 0, 1, 3)
+        self.grab_btn = QPushButton("Grab view")
+        self.grab_btn.setToolTip("Store the current frame as a view for the intrinsics calibration")
+        self.grab_btn.setEnabled(False)
+        self.grab_btn.clicked.connect(self.grab_view)
+        ig.addWidget(self.grab_btn, 2, 2)
         ig.setColumnStretch(1, 1)
+
+        self.controls_box = QGroupBox("Camera controls")
+        self.controls_grid = QGridLayout(self.controls_box)
+        self.controls_note = QLabel("no adjustable controls (start a device preview)")
+        self.controls_note.setStyleSheet("QLabel { color: #777777; }")
+        self.controls_grid.addWidget(self.controls_note, 0, 0, 1, 3)
 
         lay = QVBoxLayout(self)
         lay.setContentsMargins(6, 6, 6, 6)
         lay.addLayout(top)
         lay.addWidget(self.view, 1)
         lay.addWidget(info)
+        lay.addWidget(self.controls_box)
+        self.controls_box.setVisible(False)
 
         self.timer = QTimer(self)
         self.timer.setInterval(REFRESH_MS)
@@ -140,6 +171,94 @@ class CameraPanel(QWidget):
     def _on_opened(self, camera: Camera) -> None:
         if self.grabber is not None:
             self.camera = camera
+            self.show_controls(camera)
+            self.grab_btn.setEnabled(True)
+
+    # ------------------------------------------------------------------ controls
+    def show_controls(self, camera: Camera | None) -> None:
+        """One spin box (and an "auto" box) per control the device reports; none for simulated or file cameras."""
+        while self.controls_grid.count() > 1:
+            item = self.controls_grid.takeAt(1)
+            if item.widget() is not None:
+                item.widget().deleteLater()
+        self.control_widgets = {}
+        values = controls.available(camera) if camera is not None else {}
+        autos = controls.auto_modes(camera) if camera is not None else {}
+        self.controls_note.setVisible(not values)
+        self.controls_box.setVisible(bool(values))  # simulated and file cameras have none: no empty box
+        for row, (name, value) in enumerate(values.items(), start=1):
+            spin = QDoubleSpinBox()
+            spin.setRange(-100000.0, 100000.0)
+            spin.setDecimals(2)
+            spin.setValue(value)
+            spin.setKeyboardTracking(False)
+            spin.valueChanged.connect(lambda v, n=name: self._set_control(n, v))
+            auto = None
+            if name in autos:
+                auto = QCheckBox("auto")
+                auto.setChecked(autos[name])
+                auto.setToolTip("Automatic mode: changes between frames spoil a measurement; switch it off")
+                auto.toggled.connect(lambda on, n=name: self._set_auto(n, on))
+                spin.setEnabled(not autos[name])
+            self.controls_grid.addWidget(QLabel(name.capitalize()), row, 0)
+            self.controls_grid.addWidget(spin, row, 1)
+            if auto is not None:
+                self.controls_grid.addWidget(auto, row, 2)
+            self.control_widgets[name] = (spin, auto)
+        self.lock_controls(self._locked)
+
+    def _set_control(self, name: str, value: float) -> None:
+        if self.camera is not None and not controls.set_control(self.camera, name, value):
+            log.warning("camera: the device refused %s = %g", name, value)
+        self.watch.reset()
+
+    def _set_auto(self, name: str, on: bool) -> None:
+        if self.camera is not None and not controls.set_auto(self.camera, name, on):
+            log.warning("camera: the device refused automatic %s %s", name, "on" if on else "off")
+        spin, _ = self.control_widgets[name]
+        spin.setEnabled(not on and not self._locked)
+        self.watch.reset()
+
+    def lock_controls(self, locked: bool) -> None:
+        """During a capture nothing about the picture may change: the controls are read-only."""
+        self._locked = locked
+        for spin, auto in self.control_widgets.values():
+            spin.setEnabled(not locked and not (auto is not None and auto.isChecked()))
+            if auto is not None:
+                auto.setEnabled(not locked)
+        self.grab_btn.setEnabled(not locked and self.grabber is not None)
+
+    # ------------------------------------------------------------------ intrinsics views
+    def set_views_folder(self, folder: Path | str) -> None:
+        self.views_folder = Path(folder)
+        self.views_folder.mkdir(parents=True, exist_ok=True)
+        self._views = len(list(self.views_folder.glob("view_*.png")))
+
+    def grab_view(self) -> Path | None:
+        """Store the frame on screen as ``view_NNN.png`` in the views folder (asked for once)."""
+        image = self.last_image()
+        if image is None:
+            return None
+        if self.views_folder is None:
+            folder = QFileDialog.getExistingDirectory(self, "Folder for the intrinsics views")
+            if not folder:
+                return None
+            self.set_views_folder(folder)
+        import cv2
+
+        from lps_gui.io.atomic import write_bytes_atomic
+
+        assert self.views_folder is not None
+        path = self.views_folder / f"view_{self._views:03d}.png"
+        ok, buf = cv2.imencode(".png", np.ascontiguousarray(image))
+        if not ok:
+            self.failed.emit("View not stored", f"{path}: the frame could not be encoded")
+            return None
+        write_bytes_atomic(path, buf.tobytes())
+        self._views += 1
+        log.info("camera: view %d stored as %s", self._views, path)
+        self.view_grabbed.emit(path)
+        return path
 
     def stop(self) -> None:
         grabber, self.grabber = self.grabber, None
@@ -153,15 +272,23 @@ class CameraPanel(QWidget):
         self.camera = None
         self.open_btn.setText("Start preview")
         self.source.setEnabled(True)
+        self.grab_btn.setEnabled(False)
+        self.show_controls(None)
+        self.watch.reset()
+        self.jump_label.setText("")
 
     def pause(self, on: bool) -> None:
-        """Lend the camera to the capture engine (on) or take it back (off)."""
+        """Lend the camera to the capture engine (on) or take it back (off); the controls lock meanwhile."""
         if self.grabber is not None:
             self.grabber.pause(on)
+        self.lock_controls(on)
 
     def _on_grab_failed(self, message: str) -> None:
         opened = self.camera is not None
         self.stop()
+        self.image.clear()  # no frozen last frame that looks live
+        self.overlay.setData([], [])
+        self.first_corner.setData([], [])
         self.placeholder.setVisible(True)
         self._set_detect("camera lost" if opened else "not opened", "#d00000")
         self.failed.emit("Camera preview stopped" if opened else "Camera not opened", message)
@@ -174,6 +301,11 @@ class CameraPanel(QWidget):
         first = self._shown == 0
         self._shown = res.number
         self.image.setImage(res.image, autoLevels=False, levels=(0, 255))
+        jump = self.watch.check(res.image, res.sharpness if res.sharpness is not None else -1.0)  # -1: no figure
+        if jump:
+            if jump.split(":")[0] != self.jump_label.text().split(":")[0]:
+                log.warning("camera: %s", jump)
+            self.jump_label.setText(jump)
         if first:
             h, w = res.image.shape[:2]
             self.viewbox.setRange(xRange=(0, w), yRange=(0, h), padding=0.0)

@@ -31,6 +31,8 @@ from lps_gui.gui.workers import Job, one_line
 
 log = logging.getLogger(__name__)
 
+DEFAULT_FRAME_S = 0.25  # grab + encode + durable write of one frame, until a capture has measured it
+START_S = 1.5  # session folder, engine and camera start, first move: once per capture
 PLAN_FIELDS = ("start_mm", "stop_mm", "step_mm", "directions", "runs", "overshoot_mm", "settle_s",
                "frames_per_stop", "feed_mm_min")
 
@@ -45,6 +47,13 @@ def sim_spec() -> Any:
     from lps_gui.gui.sources import SIM_PRESET
 
     return preset(SIM_PRESET)
+
+
+def _describe(stage: Any) -> dict[str, Any]:
+    try:
+        return dict(stage.describe() or {})
+    except Exception:  # a stage that cannot describe itself now still gets an estimate
+        return {}
 
 
 def fmt_duration(seconds: float) -> str:
@@ -90,21 +99,43 @@ class CapturePanel(QWidget):
         self.feed_mm_min = double_spin(1.0, 20000.0, 600.0, 0, " mm/min")
         plan_box = QGroupBox("Plan")
         self.summary = QLabel()
-        add_rows(QFormLayout(plan_box), [
+        self.summary.setWordWrap(True)
+        self.iso_btn = QPushButton("ISO 230-2 plan")
+        self.iso_btn.setToolTip("5 runs in both directions over targets spaced non-uniformly between start and stop, "
+                                "spread over the lead-screw pitch so the targets do not alias it")
+        self.pitch_mm = double_spin(0.0, 100.0, 0.0, 3, " mm")
+        self.pitch_mm.setSpecialValueText("pitch unknown")
+        self.pitch_mm.setToolTip("lead-screw pitch for the ISO 230-2 plan (0: unknown)")
+        iso_row = QHBoxLayout()
+        iso_row.addWidget(self.iso_btn)
+        iso_row.addWidget(self.pitch_mm)
+        self._iso_targets: tuple[float, ...] | None = None
+        self.frame_s = DEFAULT_FRAME_S
+        self._frames_at_start = 0
+        form = QFormLayout(plan_box)
+        add_rows(form, [
             ("Start", self.start_mm), ("Stop", self.stop_mm), ("Step", self.step_mm),
             ("Directions", self.directions), ("Runs", self.runs), ("Overshoot", self.overshoot_mm),
-            ("Settle", self.settle_s), ("Frames per stop", self.frames_per_stop), ("Feed", self.feed_mm_min),
-            ("", self.summary)])
+            ("Settle", self.settle_s), ("Frames per stop", self.frames_per_stop), ("Feed", self.feed_mm_min)])
+        form.addRow("Preset", iso_row)
+        form.addRow("", self.summary)
+        from lps_gui.gui.report_setup import ReportSetupBox
+
+        self.report_setup = ReportSetupBox()
         self.planar_editor = PlanarPlanEditor(lambda: shared_from_panel(self), self.board, self.intrinsics,
                                               lambda fields: apply_shared_to_panel(self, fields))
         self.planar_editor.changed.connect(self.update_summary)
         self.planar_editor.enabled.toggled.connect(
-            lambda on: [w.setEnabled(not on) for w in (self.start_mm, self.stop_mm, self.step_mm)])
+            lambda on: [w.setEnabled(not on) for w in (self.start_mm, self.stop_mm, self.step_mm, self.iso_btn)])
 
         self.folder = PathPicker("empty: a new dated folder beside the last one", folder=True, start_dir=self.start_dir)
         sess = QGroupBox("Session")
         sl = QVBoxLayout(sess)
         sl.addWidget(self.folder)
+        self.compensation = PathPicker("optional: compensation table (CSV, LinuxCNC)", folder=False,
+                                       filter="Compensation tables (*.csv *.comp *.txt);;All files (*)", start_dir=self.start_dir)
+        self.compensation.setToolTip("Command each target through this table's inverse so the true position lands on the nominal")
+        sl.addWidget(self.compensation)
         self.resume_session_btn = QPushButton("Resume session…")
         self.resume_session_btn.setToolTip("Continue an interrupted session at the first stop not captured")
         sl.addWidget(self.resume_session_btn)
@@ -119,8 +150,11 @@ class CapturePanel(QWidget):
         self.progress = QProgressBar()
         self.eta = QLabel("idle")
 
-        stack(self, [plan_box, (self.planar_editor, 1), sess, row, self.progress, self.eta]).addStretch(1)
+        stack(self, [plan_box, (self.planar_editor, 1), self.report_setup, sess, row, self.progress, self.eta]).addStretch(1)
 
+        for w in (self.start_mm, self.stop_mm, self.step_mm):
+            w.valueChanged.connect(self._targets_edited)
+        self.iso_btn.clicked.connect(self.apply_iso_plan)
         for w in (self.start_mm, self.stop_mm, self.step_mm, self.overshoot_mm, self.settle_s, self.feed_mm_min):
             w.valueChanged.connect(self.update_summary)
         for w in (self.runs, self.frames_per_stop):
@@ -139,6 +173,7 @@ class CapturePanel(QWidget):
         if self.planar_editor.active():
             return self.planar_editor.plan()
         return Plan(start_mm=self.start_mm.value(), stop_mm=self.stop_mm.value(), step_mm=self.step_mm.value(),
+                    targets_mm=self._iso_targets,
                     directions=str(self.directions.currentData()), runs=self.runs.value(),
                     overshoot_mm=self.overshoot_mm.value(), settle_s=self.settle_s.value(),
                     frames_per_stop=self.frames_per_stop.value(), feed_mm_min=self.feed_mm_min.value())
@@ -147,6 +182,7 @@ class CapturePanel(QWidget):
         self.start_mm.setValue(plan.start_mm)
         self.stop_mm.setValue(plan.stop_mm)
         self.step_mm.setValue(plan.step_mm)
+        self._iso_targets = tuple(plan.targets_mm) if plan.targets_mm is not None else None
         self.directions.setCurrentIndex(max(0, self.directions.findData(plan.directions)))
         self.runs.setValue(plan.runs)
         self.overshoot_mm.setValue(plan.overshoot_mm)
@@ -162,8 +198,38 @@ class CapturePanel(QWidget):
             self.start_btn.setEnabled(False)
             return
         self.summary.setText(f"{len(plan.targets())} targets, {plan.n_frames()} frames, "
-                             f"about {fmt_duration(planar_duration_s(plan) if self.planar_editor.active() else plan_duration_s(plan))}")
+                             f"about {fmt_duration(self.estimate_s(plan))}"
+                             + (" (ISO 230-2 targets, non-uniform)" if self._iso_targets else ""))
         self.start_btn.setEnabled(self.job is None)
+
+    def estimate_s(self, plan: Plan) -> float:
+        """Expected capture time: the stage's moves and settles plus the measured time per frame."""
+        accel = float((getattr(self.stage_ctl, "stage", None) and _describe(self.stage_ctl.stage).get("accel_mm_s2"))
+                      or 200.0)
+        duration = planar_duration_s if self.planar_editor.active() else plan_duration_s
+        return START_S + duration(plan, accel_mm_s2=accel, grab_s=self.frame_s)
+
+    def apply_iso_plan(self) -> None:
+        """The ISO 230-2 preset: 5 runs both ways, non-uniform targets over [start, stop] (step as spacing)."""
+        from lps_gui.core.presets import iso230_plan_fields
+
+        start, stop = self.start_mm.value(), self.stop_mm.value()
+        n = max(5, int(round((stop - start) / max(self.step_mm.value(), 1e-9))) + 1)
+        try:
+            fields = iso230_plan_fields(start, stop, n, self.pitch_mm.value() or None)
+        except InputError as exc:
+            self.summary.setText(f"<span style='color:#b00020'>{one_line(exc)}</span>")
+            return
+        self.directions.setCurrentIndex(self.directions.findData(fields["directions"]))
+        self.runs.setValue(fields["runs"])
+        self._iso_targets = fields["targets_mm"]
+        self.update_summary()
+
+    def _targets_edited(self) -> None:
+        if self._iso_targets is not None and not self.signalsBlocked():
+            plan_targets = self._iso_targets
+            if (self.start_mm.value(), self.stop_mm.value()) != (plan_targets[0], plan_targets[-1]):
+                self._iso_targets = None  # the range changed by hand: uniform targets again
 
     # ------------------------------------------------------------------ running
     def start(self) -> None:
@@ -181,6 +247,7 @@ class CapturePanel(QWidget):
             stage, camera = gantry[1:] if gantry else self._rig()
             if self.planar_editor.active() and not gantry:
                 self.planar_editor.check_connected_rig(is_simulated_rig(stage, camera))
+            extra = self.report_setup.meta()  # spec, environment, identification for session.json
         except Exception as exc:
             self.run_requested.emit(exc)
             return
@@ -188,7 +255,7 @@ class CapturePanel(QWidget):
             from lps_gui.sim.planar_rig import start_gantry_session
 
             self.set_board(gantry[0].rig.board)
-            self._run(folder, lambda: start_gantry_session(folder, gantry[0], stage, camera), stage, camera)
+            self._run(folder, lambda: start_gantry_session(folder, gantry[0], stage, camera, extra=extra), stage, camera)
             return
         simulated = is_simulated_rig(stage, camera)
         if simulated:
@@ -202,9 +269,13 @@ class CapturePanel(QWidget):
             if simulated:
                 from lps_gui.sim.session import start_rig_session
 
-                return start_rig_session(folder, replace(sim_spec(), plan=plan), stage, camera)
+                session = start_rig_session(folder, replace(sim_spec(), plan=plan), stage, camera)
+                if extra:  # specification, environment, identification for the report
+                    session.meta.update(extra)
+                    session.save_meta()
+                return session
             return Session.create(folder, board, plan, intrinsics=intrinsics, camera=camera.properties(),
-                                  stage=stage.describe())
+                                  stage=stage.describe(), extra=extra)
 
         self._run(folder, create, stage, camera)
 
@@ -248,6 +319,7 @@ class CapturePanel(QWidget):
         """Run the capture in a worker: make the session (file writes), build the engine, run it."""
         self.session_dir = Path(folder)
         self.camera_panel.pause(True)
+        table_path = self.compensation.path()  # read on the GUI thread
 
         def work(progress: Any, cancel: Any) -> Any:
             session = make_session()
@@ -259,6 +331,9 @@ class CapturePanel(QWidget):
                 engine = simulated_engine(session, stage, camera)
             elif engine is None:
                 engine = CaptureEngine(stage, camera, session)
+            from lps_gui.capture.compensated import apply_compensation
+
+            apply_compensation(engine, session, table_path)  # a table, or the session's own on resume
             self.engine = engine  # pause/abort from the GUI thread are thread-safe engine calls
             if self._abort_early:
                 engine.abort()
@@ -280,6 +355,7 @@ class CapturePanel(QWidget):
     def _on_summary(self, summary: Any) -> None:
         """The engine returned: complete, aborted, or stopped by an error (frames kept in every case)."""
         state = getattr(summary, "state", "done")
+        self._learn_frame_time(summary)
         if state == "done":
             self.eta.setText(f"complete: {summary.listed} frames in {self.session_dir}")
             self.session_done.emit(self.session_dir)
@@ -289,6 +365,19 @@ class CapturePanel(QWidget):
             message = summary.error or "capture stopped"
             self.eta.setText(f"stopped: {message}")
             self.failed.emit("Capture stopped", message)
+
+    def _learn_frame_time(self, summary: Any) -> None:
+        """Per-frame time of this rig from a capture that ran from start to end (for the next estimate)."""
+        captured = int(getattr(summary, "captured", 0) or 0)
+        if getattr(summary, "state", "") != "done" or captured < 3 or captured != int(getattr(summary, "total", -1)):
+            return
+        elapsed = time.monotonic() - self._t0
+        plan = self.plan()
+        duration = planar_duration_s if self.planar_editor.active() else plan_duration_s
+        motion = duration(plan, grab_s=0.0) * captured / max(plan.n_frames(), 1)
+        self.frame_s = min(10.0, max(0.01, (elapsed - START_S - motion) / captured))
+        log.info("capture: %.3f s per frame measured; used for the next estimate", self.frame_s)
+        self.update_summary()
 
     def set_board(self, board: Board) -> None:
         """Hook for the main window: the board the simulated rig really has."""
@@ -346,8 +435,15 @@ class CapturePanel(QWidget):
         for k, v in self.plan().to_dict().items():
             if k in PLAN_FIELDS and not isinstance(v, list):  # a planar plan's [x, y] stay out of the line plan
                 s.setValue(f"plan/{k}", v)
+        s.setValue("capture/frame_s", self.frame_s)
+        self.report_setup.save(s)
 
     def restore(self, s: QSettings) -> None:
+        self.report_setup.restore(s)
+        try:
+            self.frame_s = float(s.value("capture/frame_s") or DEFAULT_FRAME_S)
+        except (TypeError, ValueError):
+            self.frame_s = DEFAULT_FRAME_S
         d = {k: s.value(f"plan/{k}") for k in PLAN_FIELDS if s.value(f"plan/{k}") is not None}
         if not d:
             return

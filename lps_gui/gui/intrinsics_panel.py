@@ -2,8 +2,12 @@
 
 Calibration is :func:`lps_gui.pipeline.intrinsics.calibrate_images` (what
 ``lps intrinsics`` runs). The panel shows each parameter with its standard
-deviation, per-view RMS as bars (flagged views red), the coverage of the
-image by corners as a heat map, and thumbnails of the images.
+deviation (and the board's bow), thumbnails of the images with each one's
+RMS, and the pictures of :mod:`lps_gui.report.intrinsics_pictures`
+(per-view residuals, residual vector field, projection-uncertainty and
+coverage maps with colour bars, the cross-validation map), the same ones the
+intrinsics report prints. "Cross-validate" calibrates the even and the odd
+images apart and compares the two (:mod:`lps_gui.core.intrinsics_crossval`).
 """
 from __future__ import annotations
 
@@ -12,7 +16,6 @@ from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
-import pyqtgraph as pg
 from PySide6.QtCore import QSize, Qt, Signal
 from PySide6.QtGui import QBrush, QColor, QIcon, QImage, QImageReader, QPixmap
 from PySide6.QtWidgets import (
@@ -47,6 +50,30 @@ def load_thumbnails(paths: list[Path], progress: Callable[..., None], cancel: An
     return out
 
 
+class PictureView(QLabel):
+    """A QImage shown scaled to the label, keeping its aspect ratio."""
+
+    def __init__(self, placeholder: str) -> None:
+        super().__init__(placeholder)
+        self.setAlignment(Qt.AlignmentFlag.AlignCenter)
+        self.setMinimumSize(200, 140)
+        self.image: QImage | None = None
+
+    def set_image(self, image: QImage | None) -> None:
+        self.image = image
+        self._rescale()
+
+    def resizeEvent(self, event: Any) -> None:  # noqa: N802 (Qt's name)
+        super().resizeEvent(event)
+        self._rescale()
+
+    def _rescale(self) -> None:
+        if self.image is None or self.image.isNull():
+            return
+        self.setPixmap(QPixmap.fromImage(self.image).scaled(self.size(), Qt.AspectRatioMode.KeepAspectRatio,
+                                                            Qt.TransformationMode.SmoothTransformation))
+
+
 class IntrinsicsPanel(QWidget):
     """Calibrate the camera from board images, or load a calibration."""
 
@@ -60,6 +87,7 @@ class IntrinsicsPanel(QWidget):
         self.paths: list[Path] = []
         self.intrinsics: CameraIntrinsics | None = None
         self.calibration: Any = None
+        self.crossval: Any = None
         self.job: Job | None = None
 
         self.cols = QSpinBox()
@@ -92,29 +120,27 @@ class IntrinsicsPanel(QWidget):
         self.load_btn = QPushButton("Load…")
         self.save_btn = QPushButton("Save…")
         self.save_btn.setEnabled(False)
+        self.crossval_btn = QPushButton("Cross-validate")
+        self.crossval_btn.setToolTip("calibrate the even and the odd images apart and compare the two projections")
+        self.crossval_btn.setEnabled(False)
         row1 = QHBoxLayout()
         for b in (self.add_btn, self.folder_btn, self.clear_btn):
             row1.addWidget(b)
         row2 = QHBoxLayout()
-        for b in (self.calib_btn, self.cancel_btn, self.load_btn, self.save_btn):
+        for b in (self.calib_btn, self.crossval_btn, self.cancel_btn, self.load_btn, self.save_btn):
             row2.addWidget(b)
         self.message = QLabel("Add 6–30 images of the board in varied poses, then calibrate.")
         self.message.setWordWrap(True)
 
         self.table = ValueTable(["Parameter", "Value", "σ", "Unit"])
-        self.rms_plot = pg.PlotWidget(background="w", title="RMS reprojection per view")
-        self.rms_plot.setLabel("bottom", "view")
-        self.rms_plot.setLabel("left", "RMS [px]")
-        self.coverage_plot = pg.PlotWidget(background="w", title="Coverage of the image by corners")
-        self.coverage_plot.setAspectLocked(True)
-        self.coverage_plot.invertY(True)
-        self.coverage_img = pg.ImageItem(axisOrder="row-major")
-        self.coverage_img.setColorMap(pg.colormap.get("viridis"))
-        self.coverage_plot.addItem(self.coverage_img)
+        self.pictures = {name: PictureView(f"{name}: calibrate first") for name in
+                         ("Residuals per view", "Residual field", "Uncertainty", "Coverage", "Cross-validation")}
+        self.pictures["Cross-validation"].setText("Cross-validation: calibrate, then press Cross-validate")
         tabs = QTabWidget()
         tabs.addTab(self.table, "Parameters")
-        tabs.addTab(self.rms_plot, "Per-view error")
-        tabs.addTab(self.coverage_plot, "Coverage")
+        for name, view in self.pictures.items():
+            tabs.addTab(view, name)
+        self.tabs = tabs
 
         split = QSplitter(Qt.Orientation.Vertical)
         split.addWidget(self.list)
@@ -135,6 +161,7 @@ class IntrinsicsPanel(QWidget):
         self.cancel_btn.clicked.connect(lambda: self.job and self.job.cancel())
         self.load_btn.clicked.connect(self.load_dialog)
         self.save_btn.clicked.connect(self.save_dialog)
+        self.crossval_btn.clicked.connect(self.start_cross_validation)
 
     def board(self) -> Board:
         return Board(cols=self.cols.value(), rows=self.rows.value(), square_mm=self.square.value())
@@ -201,7 +228,31 @@ class IntrinsicsPanel(QWidget):
     def _finished(self) -> None:
         self.job = None
         self.calib_btn.setEnabled(True)
+        self.crossval_btn.setEnabled(bool(getattr(self.calibration, "image_points", None)))
         self.cancel_btn.setEnabled(False)
+
+    def start_cross_validation(self) -> None:
+        from lps_gui.pipeline.intrinsics import cross_validate_calibration
+
+        if self.calibration is None:
+            return
+        job = Job("cross-validation", cross_validate_calibration, self.calibration, self.board(), pass_progress=False)
+        job.succeeded.connect(self.show_cross_validation)
+        job.failed.connect(lambda msg, _tb: self.message.setText(f"cross-validation failed: {msg}"))
+        job.finished.connect(self._finished)
+        self.job = job
+        self.calib_btn.setEnabled(False)
+        self.crossval_btn.setEnabled(False)
+        self.message.setText("cross-validating: calibrating the even and the odd images apart…")
+        self.run_requested.emit(job)
+
+    def show_cross_validation(self, crossval: Any) -> None:
+        from lps_gui.report.intrinsics_pictures import crossval_picture
+
+        self.crossval = crossval
+        self.pictures["Cross-validation"].set_image(crossval_picture(crossval))
+        self.tabs.setCurrentWidget(self.pictures["Cross-validation"])
+        self.message.setText(crossval.diff.verdict())
 
     def show_calibration(self, calib: Any) -> None:
         """Show an IntrinsicsCalibration: parameters with std, per-view RMS, coverage, flagged views."""
@@ -209,13 +260,6 @@ class IntrinsicsPanel(QWidget):
         self.set_intrinsics(calib.intrinsics)
         rms = np.asarray(getattr(calib, "per_view_rms_px", []), float)  # shape (V,)
         flagged = set(int(i) for i in (getattr(calib, "flagged_views", None) or []))
-        self.rms_plot.clear()
-        if rms.size:
-            colors = [pg.mkBrush("#d00000" if i in flagged else "#1f5fa8") for i in range(rms.size)]
-            self.rms_plot.addItem(pg.BarGraphItem(x=np.arange(rms.size), height=rms, width=0.7, brushes=colors))
-        coverage = getattr(calib, "coverage", None)
-        if coverage is not None:
-            self.coverage_img.setImage(np.asarray(coverage, float), autoLevels=True)
         for i in range(self.list.count()):
             item = self.list.item(i)
             bad = i in flagged
@@ -224,10 +268,28 @@ class IntrinsicsPanel(QWidget):
                 text += f"   {rms[i]:.3f} px" + ("   ⚠ flagged" if bad else "")
             item.setText(text)
             item.setForeground(QBrush(QColor("#d00000" if bad else "#000000")))
+        self._show_pictures(calib)
+        self.crossval_btn.setEnabled(self.job is None and bool(getattr(calib, "image_points", None)))
         warnings = list(getattr(calib, "warnings", None) or [])
         self.message.setText(
-            f"RMS {fmt(calib.intrinsics.rms_px)} px over {rms.size} views; {len(flagged)} flagged."
+            f"RMS {fmt(calib.intrinsics.rms_px)} px over {rms.size} views; {len(flagged)} flagged; "
+            f"{len(getattr(calib, 'rejected_corners', []))} corner(s) rejected."
             + ("  " + " ".join(warnings) if warnings else ""))
+
+    def _show_pictures(self, calib: Any) -> None:
+        from lps_gui.report.intrinsics_pictures import coverage_picture, per_view_errors, residual_field, uncertainty_picture
+
+        if not getattr(calib, "residuals_px", None):
+            return
+        for name, draw in (("Residual field", residual_field), ("Residuals per view", per_view_errors),
+                           ("Uncertainty", uncertainty_picture), ("Coverage", coverage_picture)):
+            try:
+                self.pictures[name].set_image(draw(calib))
+            except Exception as exc:  # a picture that cannot be drawn must not hide the calibration
+                log.warning("intrinsics picture %s not drawn: %s", name, one_line(exc))
+        self.pictures["Cross-validation"].set_image(None)
+        self.pictures["Cross-validation"].setPixmap(QPixmap())
+        self.pictures["Cross-validation"].setText("Cross-validation: press Cross-validate")
 
     def set_intrinsics(self, intr: CameraIntrinsics) -> None:
         self.intrinsics = intr
@@ -235,6 +297,10 @@ class IntrinsicsPanel(QWidget):
         values = intr.vector()
         rows = [(n, f"{v:.6g}", fmt(std[i], 3) if std is not None else "—", UNITS.get(n, ""))
                 for i, (n, v) in enumerate(zip(INTRINSIC_NAMES, values))]
+        bow, bow_sigma = intr.extra.get("board_warp_mm"), intr.extra.get("board_warp_sigma_mm")
+        if bow is not None:
+            for axis, v, sv in zip("xy", bow, bow_sigma or [None, None]):
+                rows.append((f"board bow {axis}", f"{v:+.4f}", fmt(sv, 3) if sv is not None else "—", "mm"))
         rows.append(("image size", f"{intr.image_size[0]} × {intr.image_size[1]}", "", "px"))
         self.table.set_rows(rows)
         self.save_btn.setEnabled(True)
@@ -243,7 +309,7 @@ class IntrinsicsPanel(QWidget):
     # ------------------------------------------------------------------ files
     def load_dialog(self) -> None:
         path, _ = QFileDialog.getOpenFileName(self, "Load intrinsics", self.start_dir(),
-                                              "Intrinsics (*.json *.yaml *.yml *.xml)")
+                                              "Intrinsics (*.json *.yaml *.yml *.xml *.cameramodel)")
         if path:
             self.load(Path(path))
 
@@ -258,7 +324,7 @@ class IntrinsicsPanel(QWidget):
 
     def save_dialog(self) -> None:
         path, _ = QFileDialog.getSaveFileName(self, "Save intrinsics", str(Path(self.start_dir()) / "intrinsics.json"),
-                                              "JSON (*.json);;OpenCV YAML (*.yaml)")
+                                              "JSON (*.json);;OpenCV YAML (*.yaml);;mrcal (*.cameramodel)")
         if path:
             self.save(Path(path))
 

@@ -165,6 +165,7 @@ class MainWindow(QMainWindow):
         ctl.event_received.connect(self._on_stage_event)
         self.stage_panel.camera_offered.connect(self.camera_panel.set_sim_camera)
         self.camera_panel.failed.connect(self.show_error)
+        self.camera_panel.view_grabbed.connect(lambda path: self.intrinsics_panel.add_images([path]))
         for panel in (self.estimation_panel, self.capture_panel, self.intrinsics_panel):
             panel.run_requested.connect(self._panel_job)
         self.estimation_panel.results_ready.connect(self._on_results)
@@ -183,7 +184,7 @@ class MainWindow(QMainWindow):
     def _on_connection(self, connected: bool, description: str) -> None:
         if connected:
             self.status_conn.setText(f"Stage: {description}")
-            self.settings.setValue("stage/source", self.stage_panel.source.currentData())
+            self.settings.setValue("stage/source", self.stage_panel.current_source())
             self.settings.setValue("stage/baud", self.stage_panel.baud.currentData())
         else:
             self.status_conn.setText("Stage: not connected")
@@ -297,7 +298,7 @@ class MainWindow(QMainWindow):
 
         panel = self.results_panel
         job = Job(f"report {path.name}", write_report, panel.session_dir or path.parent, panel.results, path)
-        return self.run_job(job, lambda p: log.info("report written to %s", p))
+        return self.run_job(job, lambda p: (log.info("report written to %s", p), panel.set_report(Path(p))))
 
     def export_csv(self, folder: Path) -> list[Path]:
         try:

@@ -73,7 +73,7 @@ class PlanarPlanEditor(QGroupBox):
         self.board = board
         self.intrinsics = intrinsics
         self.clock: Any = None  # the simulated gantry's clock (None: real time)
-        self.enabled = QCheckBox("Planar XY plan (both axes, SPEC 10)")
+        self.enabled = QCheckBox("Planar XY plan (both axes)")
         self.start_x, self.start_y = double_spin(-10000, 10000, 0.0, 3, " mm"), double_spin(-10000, 10000, 0.0, 3, " mm")
         self.stop_x, self.stop_y = double_spin(-10000, 10000, 40.0, 3, " mm"), double_spin(-10000, 10000, 20.0, 3, " mm")
         self.step_x, self.step_y = double_spin(0.001, 10000, 10.0, 3, " mm"), double_spin(0.001, 10000, 10.0, 3, " mm")
@@ -113,8 +113,11 @@ class PlanarPlanEditor(QGroupBox):
             return w
 
         outer = QVBoxLayout(self)
-        outer.addWidget(self.enabled)
-        outer.addWidget(self.demo_btn)
+        outer.setContentsMargins(6, 2, 6, 2)
+        top = QHBoxLayout()  # one row while planar mode is off: the line plan's panel stays about as compact
+        top.addWidget(self.enabled, 1)
+        top.addWidget(self.demo_btn)
+        outer.addLayout(top)
         self.body = QWidget()
         self.scroll = QScrollArea()  # hidden until planar mode is on; scrolls so the window keeps its size
         self.scroll.setWidgetResizable(True)

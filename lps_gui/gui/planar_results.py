@@ -7,6 +7,7 @@ figures table and the per-position table come from
 """
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 
@@ -15,15 +16,20 @@ def is_planar(results: dict[str, Any]) -> bool:
 
 
 def planar_table_rows(results: dict[str, Any]) -> list[tuple[str, str, str]] | None:
-    """(figure, value, unit and note) rows of a planar session's figures and truth check; None for one axis."""
+    """(figure, value, U (k = 2), unit and note) rows of a planar session's figures and truth check; None for one axis."""
     if not is_planar(results) or not (results.get("figures") or {}).get("planar"):
         return None
     from lps_gui.report.planar_report import planar_summary_rows, planar_truth_rows
 
     rows = planar_summary_rows(results)
     if (results.get("truth_comparison") or {}).get("position_rms_error_um") is not None:
-        rows += [type(r)(f"Truth: {r.name}", r.value, r.unit, r.note, r.digits) for r in planar_truth_rows(results)]
-    return [(r.name, r.text(), f"{r.unit}  {r.note}".strip()) for r in rows]
+        rows += [replace(r, name=f"Truth: {r.name}") for r in planar_truth_rows(results)]
+    return [(r.name, r.text(), _u_text(r), f"{r.unit}  {r.note}".strip()) for r in rows]
+
+
+def _u_text(row: Any) -> str:
+    u = getattr(row, "u_text", None)
+    return u() if callable(u) else ""
 
 
 def position_table_for(results: dict[str, Any]) -> tuple[list[str], list[list[str]]]:

@@ -16,6 +16,7 @@ from lps_gui.report.figures import OUTLIER_COLOR, FigureSpec, Series
 
 BAND_ALPHA = 50  # of 255: a 2-sigma band reads as a tint behind the curve
 MARKER_SIZE_PX = 6
+LEGEND_ROW = 4  # PlotItem layout rows: 0 title, 1 top axis, 2 view, 3 bottom axis; the legend goes under
 
 
 @dataclass
@@ -34,7 +35,7 @@ class DrawnFigure:
         for s, item in zip(self.spec.series, self.items):
             if s.label.startswith(label_prefix):
                 x, _ = item.getData()
-                n += 0 if x is None else int(np.isfinite(x).sum())
+                n += 0 if x is None else len(x)
         return n
 
 
@@ -46,6 +47,7 @@ def _rgba(color: str, alpha: int) -> tuple[int, int, int, int]:
 def draw_series(plot: pg.PlotItem, s: Series, drawn: DrawnFigure) -> None:
     """Add one series (band first, then curve, then outlier crosses) to ``plot``."""
     raw, s = s, s.finite()
+    gaps = raw is not s and raw.style == "line" and raw.band_low is None  # a NaN breaks a plain line (two limits)
     keep = ~np.asarray(s.marked, bool) if s.marked is not None else np.ones(s.y.shape, bool)
     drawn.inlier_y.append(s.y[keep])
     if s.band_low is not None and s.band_high is not None:
@@ -63,10 +65,7 @@ def draw_series(plot: pg.PlotItem, s: Series, drawn: DrawnFigure) -> None:
     kwargs: dict = {"pen": pen, "name": s.label}
     if "markers" in s.style:
         kwargs.update(symbol="o", symbolSize=MARKER_SIZE_PX, symbolBrush=pg.mkBrush(s.color), symbolPen=None)
-    if s.style == "line" and raw is not s and s.band_low is None and s.marked is None:
-        item = pg.PlotDataItem(raw.x, raw.y, connect="finite", **kwargs)  # NaN breaks the line, as in the PDF (arrows)
-    else:
-        item = pg.PlotDataItem(s.x, s.y, **kwargs)
+    item = pg.PlotDataItem(raw.x, raw.y, connect="finite", **kwargs) if gaps else pg.PlotDataItem(s.x, s.y, **kwargs)
     plot.addItem(item)
     drawn.items.append(item)
     if s.marked is not None and np.any(s.marked):
@@ -92,9 +91,11 @@ def figure_steps(plot: pg.PlotItem, fig: FigureSpec) -> tuple[DrawnFigure, list[
             plot.legend.clear()  # first: removing items one by one would resize the legend each time
         plot.clear()
         if plot.legend is None:
-            plot.addLegend(offset=(10, 10), labelTextSize="8pt", labelTextColor="#202020",
-                           brush=pg.mkBrush(255, 255, 255, 200), pen=pg.mkPen("#b0b0b0"))
-        plot.legend.setColumnCount(2 if len(fig.series) > 3 else 1)  # wide and short: hides less data
+            # below the axes, in the plot's own layout: the legend never covers data
+            plot.legend = pg.LegendItem(labelTextSize="8pt", labelTextColor="#202020",
+                                        brush=pg.mkBrush(255, 255, 255, 0), pen=pg.mkPen(None))
+            plot.layout.addItem(plot.legend, LEGEND_ROW, 1)
+        plot.legend.setColumnCount(3 if len(fig.series) > 4 else 2)
         plot.setTitle(fig.title, color="#202020", size="11pt")
         plot.setLabel("bottom", fig.x_label)
         plot.setLabel("left", fig.y_label)

@@ -15,6 +15,7 @@ from typing import Callable
 import numpy as np
 
 from lps_gui.camera.base import Camera
+from lps_gui.errors import LpsError
 from lps_gui.core.board import Board
 from lps_gui.camera.detection import detect_chessboard, sharpness
 from lps_gui.gui.workers import one_line
@@ -88,7 +89,7 @@ class PreviewGrabber:
             if not cam.is_open:
                 cam.open()
         except Exception as exc:  # no such device, busy, unplugged: one line to the operator
-            log.error("camera not opened: %s", one_line(exc), exc_info=exc)
+            _log_failure("camera not opened", exc)
             if self.on_error:
                 self.on_error(one_line(exc))
             return False
@@ -113,7 +114,7 @@ class PreviewGrabber:
             try:
                 frame = self.camera.grab()
             except Exception as exc:  # a vanished camera ends the preview, reported once
-                log.error("camera preview stopped: %s", one_line(exc), exc_info=exc)
+                _log_failure("camera preview stopped", exc)
                 if self.on_error:
                     self.on_error(one_line(exc))
                 return
@@ -135,3 +136,14 @@ class PreviewGrabber:
                 self._latest = PreviewResult(n, image, None if corners is None else np.asarray(corners),
                                              sharp, fps, self._detect is not None)
             self._stop.wait(max(0.0, self.period_s - (time.monotonic() - t0)))
+
+
+def _log_failure(what: str, exc: BaseException) -> None:
+    """An expected failure (an :class:`LpsError`: no such device...) is one line; the traceback only at DEBUG.
+
+    The window reports the line to the operator (and logs it); a bug keeps its traceback in the log.
+    """
+    if isinstance(exc, LpsError):
+        log.debug("%s: %s", what, one_line(exc), exc_info=exc)
+    else:
+        log.error("%s: %s", what, one_line(exc), exc_info=exc)

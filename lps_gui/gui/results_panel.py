@@ -58,17 +58,24 @@ class ResultsPanel(QWidget):
         self.header.setWordWrap(True)
         self.pdf_btn = QPushButton("Export PDF…")
         self.csv_btn = QPushButton("Export CSV…")
-        for b in (self.pdf_btn, self.csv_btn):
+        self.open_report_btn = QPushButton("Open report")
+        self.open_report_btn.setToolTip("Open the exported PDF report in the system's viewer")
+        self.report_path: Path | None = None
+        for b in (self.pdf_btn, self.csv_btn, self.open_report_btn):
             b.setEnabled(False)
         top = QHBoxLayout()
         top.addWidget(self.header, 1)
         top.addWidget(self.pdf_btn)
+        top.addWidget(self.open_report_btn)
         top.addWidget(self.csv_btn)
+        self.verdict = QLabel("")
+        self.verdict.setWordWrap(True)
+        self.verdict.setTextFormat(Qt.TextFormat.RichText)
 
         self.tabs = QTabWidget()
         self.tabs.setDocumentMode(True)
         self.plots: dict[str, pg.PlotWidget] = {}
-        self.iso_table = ValueTable(["Figure", "Value", "Unit"], numeric=(1,))
+        self.iso_table = ValueTable(["Figure", "Value", "U (k = 2)", "Unit"], numeric=(1, 2))
         self.position_table = TextTable(numeric=range(1, 30))
         self.detail = ViewDetail()
         split = QSplitter(Qt.Orientation.Horizontal)
@@ -80,6 +87,7 @@ class ResultsPanel(QWidget):
         lay = QVBoxLayout(self)
         lay.setContentsMargins(6, 6, 6, 6)
         lay.addLayout(top)
+        lay.addWidget(self.verdict)
         lay.addWidget(split, 1)
         empty = figures_from_results({})
         self._build_tabs(empty)
@@ -88,6 +96,7 @@ class ResultsPanel(QWidget):
                 step()
         self.pdf_btn.clicked.connect(lambda: self.export_requested.emit("pdf"))
         self.csv_btn.clicked.connect(lambda: self.export_requested.emit("csv"))
+        self.open_report_btn.clicked.connect(self.open_report)
 
     # ------------------------------------------------------------------ showing
     def set_results(self, results: dict[str, Any], session_dir: Path | None = None,
@@ -102,16 +111,23 @@ class ResultsPanel(QWidget):
         self.session_dir = Path(session_dir) if session_dir else None
         self.results_dir = Path(results_dir) if results_dir else self.session_dir
         self._corners = None
-        figures = figures_from_results(results, self._session_truth())
+        meta = self._session_meta()
+        spec = meta.get("stage_spec") or (results.get("session_meta") or {}).get("stage_spec")
+        figures = with_limits(figures_from_results(results, meta.get("truth")), spec)
         self._build_tabs(figures)
-        for i, fig in enumerate(figures):
-            self.tabs.setTabToolTip(i, fig.notes or fig.title)
+        for fig in figures:
+            self.tabs.setTabToolTip(self.tabs.indexOf(self.plots[fig.key]), fig.notes or fig.title)
+        self.tabs.setCurrentWidget(self.iso_table)  # the answer first: accuracy figures and verdict
         self.drawn.clear()
         self._header(results)
+        self.verdict.setText(verdict_html(results, spec))
         for b in (self.pdf_btn, self.csv_btn):
             b.setEnabled(True)
+        report = self.session_dir / "report.pdf" if self.session_dir else None
+        self.set_report(report if report is not None and report.is_file() else None)
         # the visible figure first, then the others, then the tables
-        order = sorted(range(len(figures)), key=lambda i: i != self.tabs.currentIndex())
+        current = self.tabs.currentIndex()
+        order = sorted(range(len(figures)), key=lambda i: self.tabs.indexOf(self.plots[figures[i].key]) != current)
         self._queue = []
         for i in order:
             self._queue += self._draw_steps(figures[i])
@@ -144,11 +160,11 @@ class ResultsPanel(QWidget):
         if keys == self._tab_keys:
             return
         self.tabs.clear()
+        self.tabs.addTab(self.iso_table, "Accuracy figures")
         for fig in figures:
             plot = self.plots.get(fig.key) or pg.PlotWidget(background="w")
             self.plots[fig.key] = plot
             self.tabs.addTab(plot, TAB_NAMES.get(fig.key, fig.title))
-        self.tabs.addTab(self.iso_table, "Accuracy figures")
         self.tabs.addTab(self.position_table, "Table")
         self._tab_keys = keys
 
@@ -175,22 +191,64 @@ class ResultsPanel(QWidget):
             + (f"; peak deviation {_f(maxdev)} µm" if maxdev is not None else "")
             + ("<br><i>outliers beyond an axis are drawn at its edge</i>" if n_out else ""))
 
-    def _session_truth(self) -> dict[str, Any] | None:
+    def _session_meta(self) -> dict[str, Any]:
         if self.session_dir is None:
-            return None
+            return {}
         try:
             from lps_gui.io.session import Session
 
-            return Session.open(self.session_dir).truth
+            return Session.open(self.session_dir).meta
         except Exception:  # a results file without its session still plots
-            return None
+            return {}
+
+    # ------------------------------------------------------------------ report
+    def set_report(self, path: Path | None) -> None:
+        """The PDF that "Open report" opens (after an export, or the session's report.pdf); stale ones say so."""
+        self.report_path = Path(path) if path else None
+        self.open_report_btn.setEnabled(self.report_path is not None)
+        tip = "Open the exported PDF report in the system's viewer"
+        if self.report_path is not None and self.session_dir is not None:
+            from lps_gui.io.results_history import stale_report_message
+
+            if self.report_path == self.session_dir / "report.pdf" and (stale := stale_report_message(self.session_dir)):
+                tip = stale
+                self.header.setText(self.header.text() + "<br><i>report.pdf is older than these results: "
+                                    "export the PDF again</i>")
+        self.open_report_btn.setToolTip(tip)
+
+    def open_report(self) -> bool:
+        """Open :attr:`report_path` with the desktop's PDF viewer."""
+        from PySide6.QtCore import QUrl
+        from PySide6.QtGui import QDesktopServices
+
+        if self.report_path is None or not self.report_path.is_file():
+            return False
+        return bool(QDesktopServices.openUrl(QUrl.fromLocalFile(str(self.report_path))))
 
     def _fill_tables(self, results: dict[str, Any]) -> None:
         from lps_gui.gui.planar_results import planar_table_rows
         from lps_gui.report.summary import summary_rows
 
-        rows = planar_table_rows(results)  # None: a single-axis session
-        self.iso_table.set_rows(rows if rows is not None else [(r.name, r.text(), r.unit) for r in summary_rows(results)])
+        planar_rows = planar_table_rows(results)  # None: a single-axis session
+        if planar_rows is not None:
+            self.iso_table.set_rows(planar_rows)
+            return
+        rows = summary_rows(results)
+        self.iso_table.set_rows([(r.name, r.text(), r.u_text(), r.unit) for r in rows])
+        self._grey_unresolved(rows)
+
+    def _grey_unresolved(self, rows: list[Any]) -> None:
+        """A figure the data do not resolve reads "not resolved (σ X)" in grey, never as a finding."""
+        from PySide6.QtGui import QBrush, QColor
+
+        grey = QBrush(QColor("#888888"))
+        for i, r in enumerate(rows):
+            if getattr(r, "unresolved", ""):
+                for c in range(self.iso_table.columnCount()):
+                    item = self.iso_table.item(i, c)
+                    if item is not None:
+                        item.setForeground(grey)
+                        item.setToolTip(r.unresolved)
 
     def _fill_positions(self, results: dict[str, Any]) -> None:
         """Format the per-position table on a worker thread (hundreds of rows), then show it."""
@@ -295,6 +353,31 @@ class ResultsPanel(QWidget):
                 shutil.copyfile(src, dst)
             out.append(dst)
         return out
+
+
+def with_limits(figures: list[Any], spec: dict[str, Any] | None) -> list[Any]:
+    """The figures with the accuracy limit drawn on the deviation plot (as on the report's page 1)."""
+    from lps_gui.report.figures import with_spec_band
+
+    limit = (spec or {}).get("accuracy_um")
+    if limit is None:
+        return figures
+    plus_minus = str(spec.get("limits", "plus_minus")) == "plus_minus"
+    return [with_spec_band(f, float(limit), plus_minus) if f.key == "deviation" else f for f in figures]
+
+
+def verdict_html(results: dict[str, Any], spec: dict[str, Any] | None) -> str:
+    """One line per specification row, coloured like the report's verdict."""
+    from lps_gui.report.summary import fmt
+    from lps_gui.report.verdict import overall, verdicts
+
+    rows = verdicts(results, spec)
+    parts = [f"<b>{overall(rows)}</b>"]
+    for v in rows:
+        u = f" \u00b1 {fmt(v.u_k2)}" if v.u_k2 is not None else ""
+        parts.append(f"<span style='color:{v.color}'>{v.name}: {fmt(v.measured)}{u} {v.unit} "
+                     f"(limit {fmt(v.limit)} {v.unit}) \u2014 <b>{v.verdict}</b></span>")
+    return "<br>".join(parts)
 
 
 def load_corners(session_dir: Path) -> tuple[Any, np.ndarray]:

@@ -33,7 +33,25 @@ def stage_choices() -> list[tuple[str, str]]:
         name = getattr(p, "device", None) or (p[0] if isinstance(p, (tuple, list)) else str(p))
         desc = getattr(p, "description", "") or ""
         out.append((f"{name} {desc}".strip(), f"grbl:{name}"))
+    out += by_id_choices()
     return out
+
+
+def by_id_choices() -> list[tuple[str, str]]:
+    """The stable /dev/serial/by-id names of the serial adapters (they survive replugging)."""
+    from lps_gui.hardware import serial_ports_by_id
+
+    return [(f"{link} ({device.rsplit('/', 1)[-1]})", f"grbl:{link}") for link, device in serial_ports_by_id()]
+
+
+def source_from_text(text: str) -> str | None:
+    """A source typed into the editable box: sim, emulator, grbl:PORT, or a bare port (/dev/pts/5, COM3)."""
+    text = text.strip()
+    if text in (SIM, EMULATOR) or (text.startswith("grbl:") and len(text) > 5):
+        return text
+    if text.startswith(("/dev/", "COM", "socket://", "rfc2217://", "loop://")):
+        return f"grbl:{text}"
+    return None
 
 
 def simulated_rig(clock: Clock | None = None) -> tuple[Stage, Camera]:

@@ -3,7 +3,8 @@
 Stage methods block until the controller acknowledges (a serial round trip),
 so every call runs on one dedicated worker thread, in order; the GUI thread
 only submits and receives signals. A status poll runs several times a second
-while connected. A HardwareError from any call (port vanished, alarm) is
+while connected, on its own thread, so the readout keeps moving (and shows
+Home) while a long call such as homing blocks the command thread. A HardwareError from any call (port vanished, alarm) is
 reported once and, if the link is gone, turns the controller to
 "Disconnected" without touching anything already captured.
 """
@@ -42,6 +43,7 @@ class StageController(QObject):
         self.description = ""
         self.last_status: StageStatus | None = None
         self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="stage")
+        self._status_pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="stage-status")
         self._poll_pending = False
         self._unsubscribe: Callable[[], None] | None = None
         self._timer = QTimer(self)
@@ -107,6 +109,7 @@ class StageController(QObject):
     def shutdown(self) -> None:
         self.detach("closed")
         self._pool.shutdown(wait=True, cancel_futures=True)
+        self._status_pool.shutdown(wait=True, cancel_futures=True)
 
     # ------------------------------------------------------------------ commands
     def call(self, what: str, method: str, *args: Any) -> Future | None:
@@ -116,7 +119,31 @@ class StageController(QObject):
             return None
         stage = self.stage
         log.info("stage: %s", what)
-        return self._submit(what, lambda: getattr(stage, method)(*args))
+        fut = self._submit(what, lambda: getattr(stage, method)(*args))
+        if method == "home":
+            fut.add_done_callback(lambda f: self._log_home_end(stage, f))
+        return fut
+
+    def _log_home_end(self, stage: Stage, fut: Future) -> None:  # stage thread
+        """Homing moves the carriage a long way without a word: say when and where it ended."""
+        if fut.exception() is not None:
+            return  # _check logs the failure
+        try:
+            st = stage.status()
+            where = ", ".join(f"{ax} {v:.3f}" for ax, v in zip("XYZ", st.machine_mm))
+            log.info("stage: homing finished (%s); machine position %s mm", st.state, where)
+        except Exception:  # noqa: BLE001 - the end is still worth logging
+            log.info("stage: homing finished")
+
+    def call_now(self, what: str, method: str, *args: Any) -> Future | None:
+        """Like :meth:`call` for real-time commands (jog cancel, feed hold): not queued behind other calls."""
+        if self.stage is None:
+            return None
+        stage = self.stage
+        log.info("stage: %s", what)
+        fut = self._status_pool.submit(lambda: getattr(stage, method)(*args))
+        fut.add_done_callback(lambda f: self._check(what, f))
+        return fut
 
     def read_settings(self) -> None:
         if self.stage is None:
@@ -138,12 +165,16 @@ class StageController(QObject):
         def go() -> StageStatus:
             return stage.status()
 
-        fut = self._submit("status", go)
-        fut.add_done_callback(self._on_polled)
+        fut = self._status_pool.submit(go)
+        fut.add_done_callback(lambda f: self._on_polled(stage, f))
 
-    def _on_polled(self, fut: Future) -> None:  # stage thread
+    def _on_polled(self, stage: Stage, fut: Future) -> None:  # status thread
         self._poll_pending = False
-        if fut.exception() is None:
+        if self.stage is not stage:
+            return  # disconnected meanwhile: a failed late poll is no lost link
+        if fut.exception() is not None:
+            self._check("status", fut)
+        else:
             st = fut.result()
             self.last_status = st
             self.status_changed.emit(st)

@@ -2,24 +2,34 @@
 
 Every stage call goes through :class:`StageController` (one stage thread);
 this widget only submits commands and shows what the controller reports.
+Keyboard jog is never a side effect of typing: the arrow keys move the stage
+only while the jog area has focus, or with the "Keyboard jog" box ticked (and
+never while a number, list or text field has focus, where they edit).
 """
 from __future__ import annotations
 
 import math
+import time
 
-from PySide6.QtCore import Qt, Signal
-from PySide6.QtGui import QFont, QKeySequence, QShortcut
+from PySide6.QtCore import QEvent, QObject, Qt, QTimer, Signal
+from PySide6.QtGui import QFont, QKeyEvent, QKeySequence, QShortcut
 from PySide6.QtWidgets import (
-    QAbstractItemView, QComboBox, QDoubleSpinBox, QGridLayout, QGroupBox, QHBoxLayout, QHeaderView, QLabel,
-    QMessageBox, QPushButton, QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget,
+    QAbstractButton, QAbstractItemView, QAbstractSpinBox, QApplication, QCheckBox, QComboBox, QDoubleSpinBox, QGridLayout, QGroupBox,
+    QHBoxLayout, QHeaderView, QLabel, QLineEdit, QMessageBox, QPushButton, QTableWidget, QTableWidgetItem, QTabWidget,
+    QVBoxLayout, QWidget,
 )
 
 from lps_gui.core.clock import Clock
-from lps_gui.gui.sources import BAUD_RATES, SIM, open_stage_source, stage_choices
+from lps_gui.gui.stage_console import StageConsole
+from lps_gui.gui.sources import BAUD_RATES, SIM, open_stage_source, source_from_text, stage_choices
 from lps_gui.gui.stage_controller import StageController
 from lps_gui.hardware.stage import AXES, StageSetting, StageStatus
 
 JOG_STEPS_MM = (0.01, 0.1, 1.0, 10.0, 50.0)
+CONTINUOUS = 0.0  # the "hold" step: jog while the button is pressed
+HOLD_JOG_PERIOD_MS = 100  # GRBL's joystick rule: short jogs of v*dt queued while held, jog cancel on release
+MACHINE_REFRESH_S = 0.5
+AXIS_SETS = (("XYZ", "X Y Z"), ("X", "X only"), ("XY", "X Y"))
 STATE_COLORS = {"Idle": "#2a9d3c", "Run": "#1f5fa8", "Jog": "#1f5fa8", "Home": "#1f5fa8", "Hold": "#e07b00",
                 "Alarm": "#d00000", "Door": "#d00000", "Disconnected": "#777777"}
 JOG_KEYS = {  # key -> (axis, sign): arrows move X/Y, Page Up/Down move Z
@@ -42,6 +52,9 @@ class StagePanel(QWidget):
         # --- connection
         self.source = QComboBox()
         self.source.setMinimumContentsLength(18)
+        self.source.setEditable(True)  # an external emulator's /dev/pts/N, a port not listed
+        self.source.setInsertPolicy(QComboBox.InsertPolicy.NoInsert)
+        self.source.setToolTip("Pick a source, or type a port: /dev/pts/5, /dev/serial/by-id/..., COM3, grbl:PORT")
         self.refresh_btn = QPushButton("Refresh")
         self.refresh_btn.setToolTip("List serial ports again")
         self.baud = QComboBox()
@@ -66,6 +79,9 @@ class StagePanel(QWidget):
         big.setBold(True)
         big.setStyleHint(QFont.StyleHint.Monospace)
         self.readout: dict[str, QLabel] = {}
+        self._axis_widgets: dict[str, list[QWidget]] = {ax: [] for ax in AXES}
+        self._axes_shown = "".join(AXES)
+        self._machine_shown_at = 0.0
         for i, ax in enumerate(AXES):
             name = QLabel(ax)
             name.setFont(big)
@@ -75,8 +91,14 @@ class StagePanel(QWidget):
             val.setMinimumWidth(140)
             dg.addWidget(name, i, 0)
             dg.addWidget(val, i, 1)
-            dg.addWidget(QLabel("mm"), i, 2)
+            unit = QLabel("mm")
+            dg.addWidget(unit, i, 2)
             self.readout[ax] = val
+            self._axis_widgets[ax] += [name, val, unit]
+        self.machine_label = QLabel("")
+        self.machine_label.setStyleSheet("QLabel { color: #555555; }")
+        self.machine_label.setToolTip("Machine coordinates (GRBL's homed space) and the work offset")
+        dg.addWidget(self.machine_label, len(AXES), 0, 1, 4)
         self.state_label = QLabel("Disconnected")
         self.state_label.setAlignment(Qt.AlignmentFlag.AlignCenter)
         self.state_label.setMinimumWidth(110)
@@ -86,18 +108,25 @@ class StagePanel(QWidget):
         self._show_state("Disconnected")
 
         # --- jogging
-        jog = QGroupBox("Jog (arrow keys X/Y, Page Up/Down Z)")
+        jog = QGroupBox("Jog (click here, then arrow keys X/Y, Page Up/Down Z)")
+        jog.setFocusPolicy(Qt.FocusPolicy.StrongFocus)  # a click on the area gives it the keys
+        self.jog_area = jog
         jg = QGridLayout(jog)
         self.jog_buttons: dict[tuple[str, int], QPushButton] = {}
         for r, ax in enumerate(AXES):
             for c, sign in enumerate((-1, +1)):
                 b = QPushButton(f"{ax}{'−' if sign < 0 else '+'}")
                 b.clicked.connect(lambda _=False, a=ax, s=sign: self.jog(a, s))
+                b.pressed.connect(lambda a=ax, s=sign: self._hold_jog_start(a, s))
+                b.released.connect(self._hold_jog_stop)
                 jg.addWidget(b, r, c)
                 self.jog_buttons[(ax, sign)] = b
+                self._axis_widgets[ax].append(b)
         self.step = QComboBox()
         for s in JOG_STEPS_MM:
             self.step.addItem(f"{s:g} mm", s)
+        self.step.addItem("hold (continuous)", CONTINUOUS)
+        self.step.setToolTip("Distance per click; 'hold': the stage moves while a jog button is held down")
         self.step.setCurrentIndex(2)
         self.feed = QDoubleSpinBox()
         self.feed.setRange(1.0, 20000.0)
@@ -108,6 +137,49 @@ class StagePanel(QWidget):
         jg.addWidget(self.step, 0, 3)
         jg.addWidget(QLabel("Feed"), 1, 2)
         jg.addWidget(self.feed, 1, 3)
+        self.keyboard_jog = QCheckBox("Keyboard jog")
+        self.keyboard_jog.setToolTip("Arrow keys and Page Up/Down jog while the stage panel has focus "
+                                     "(number and list fields keep their keys)")
+        self.keyboard_state = QLabel()
+        jg.addWidget(self.keyboard_jog, 2, 2)
+        jg.addWidget(self.keyboard_state, 2, 3)
+        self.travel_label = QLabel("travel: read the settings ($$)")
+        self.travel_label.setStyleSheet("QLabel { color: #555555; }")
+        jg.addWidget(self.travel_label, 3, 0, 1, 4)
+        self.axes = QComboBox()
+        for key, label in AXIS_SETS:
+            self.axes.addItem(label, key)
+        self.axes.setToolTip("Axes shown: hide the ones a single-axis stage does not have")
+        self.axes.currentIndexChanged.connect(lambda _i: self.show_axes(self.axes.currentData()))
+        self._hold_timer = QTimer(self)
+        self._hold_timer.setInterval(HOLD_JOG_PERIOD_MS)
+        self._hold_timer.timeout.connect(self._hold_jog_step)
+        self._hold_axis: tuple[str, int] | None = None
+        self._hold_future: object | None = None
+
+        # --- go to
+        goto = QHBoxLayout()
+        self.goto_axis = QComboBox()
+        for ax in AXES:
+            self.goto_axis.addItem(ax, ax)
+        self.goto_target = QDoubleSpinBox()
+        self.goto_target.setRange(-10000.0, 10000.0)
+        self.goto_target.setDecimals(3)
+        self.goto_target.setSuffix(" mm")
+        self.goto_btn = QPushButton("Go to")
+        self.goto_btn.setToolTip("Move to this work coordinate at the jog feed")
+        self.goto_btn.clicked.connect(self.go_to)
+        self.zero_btn = QPushButton("Zero")
+        self.zero_btn.setEnabled(False)
+        self.zero_btn.setToolTip("Set the work zero of this axis here (G10 L20 P1: the G54 offset; GRBL only)")
+        self.zero_btn.clicked.connect(self.zero)
+        goto.addWidget(QLabel("Go to"))
+        goto.addWidget(self.goto_axis)
+        goto.addWidget(self.goto_target, 1)
+        goto.addWidget(self.goto_btn)
+        goto.addWidget(self.zero_btn)
+        goto.addWidget(QLabel("Axes"))
+        goto.addWidget(self.axes)
 
         # --- machine commands
         cmds = QHBoxLayout()
@@ -115,12 +187,15 @@ class StagePanel(QWidget):
         self.unlock_btn = QPushButton("Unlock")
         self.hold_btn = QPushButton("Feed hold")
         self.resume_btn = QPushButton("Resume")
+        self.reset_btn = QPushButton("Reset")
+        self.reset_btn.setToolTip("Soft reset (Ctrl-X): stops at once; needed after a limit alarm ('Reset to continue')")
+        self.reset_btn.clicked.connect(lambda: self.controller.call_now("reset", "soft_reset"))
         self.stop_btn = QPushButton("Stop")
         self.stop_btn.setStyleSheet("QPushButton { color: #b00020; font-weight: bold; }")
         self.stop_btn.setToolTip("Cancel the jog and reset the controller (Esc)")
-        for b in (self.home_btn, self.unlock_btn, self.hold_btn, self.resume_btn, self.stop_btn):
+        for b in (self.home_btn, self.unlock_btn, self.hold_btn, self.resume_btn, self.reset_btn, self.stop_btn):
             cmds.addWidget(b)
-        self.home_btn.clicked.connect(lambda: self.controller.call("home", "home"))
+        self.home_btn.clicked.connect(self.home)
         self.unlock_btn.clicked.connect(lambda: self.controller.call("unlock", "unlock"))
         self.hold_btn.clicked.connect(lambda: self.controller.call("feed hold", "feed_hold"))
         self.resume_btn.clicked.connect(lambda: self.controller.call("resume", "resume"))
@@ -153,8 +228,14 @@ class StagePanel(QWidget):
         lay.addWidget(conn)
         lay.addWidget(dro)
         lay.addWidget(jog)
+        lay.addLayout(goto)
         lay.addLayout(cmds)
-        lay.addWidget(sett, 1)
+        self.console = StageConsole(controller)
+        self.lower_tabs = QTabWidget()  # settings and console share the space: the panel stays short
+        sett.setTitle("")
+        self.lower_tabs.addTab(sett, "Settings ($$)")
+        self.lower_tabs.addTab(self.console, "Console")
+        lay.addWidget(self.lower_tabs, 1)
 
         self.refresh_btn.clicked.connect(self.refresh_sources)
         self.connect_btn.clicked.connect(self.toggle_connection)
@@ -163,17 +244,86 @@ class StagePanel(QWidget):
         controller.settings_read.connect(self.show_settings)
         controller.opened.connect(lambda _stage, extra, _d: self.camera_offered.emit(extra))
         self._shortcuts = []
-        for key, (ax, sign) in JOG_KEYS.items():
-            sc = QShortcut(QKeySequence(key), self, context=Qt.ShortcutContext.WidgetWithChildrenShortcut)
-            sc.activated.connect(lambda a=ax, s=sign: self.jog(a, s))
-            self._shortcuts.append(sc)
+        self._lock_box: QMessageBox | None = None
+        self._lock_asked = False
+        for b in self.findChildren(QAbstractButton):  # buttons take arrows for focus moves: decide first
+            b.installEventFilter(self)
+        self.keyboard_jog.toggled.connect(lambda _on: self._show_keyboard_state())
+        app = QApplication.instance()
+        if app is not None:
+            app.focusChanged.connect(self._on_focus_changed)  # a method: disconnected with the panel
+        self._show_keyboard_state()
         esc = QShortcut(QKeySequence(Qt.Key.Key_Escape), self, context=Qt.ShortcutContext.WidgetWithChildrenShortcut)
         esc.activated.connect(self.stop)
         self._shortcuts.append(esc)
         self.refresh_sources()
         self._set_enabled(False)
 
+    # ------------------------------------------------------------------ keyboard jog
+    def _in_jog_area(self, w: QWidget | None) -> bool:
+        while w is not None:
+            if w is self.jog_area:
+                return True
+            w = w.parentWidget()
+        return False
+
+    def keyboard_jog_active(self, w: QWidget | None = None) -> bool:
+        """Would a jog key pressed in ``w`` (default: the focus widget) move the stage?"""
+        w = w if w is not None else QApplication.focusWidget()
+        if w is None or not (w is self or self.isAncestorOf(w)):
+            return False
+        if isinstance(w, (QAbstractSpinBox, QComboBox, QLineEdit, QAbstractItemView)) or isinstance(
+                w.parentWidget(), (QAbstractSpinBox, QComboBox)):
+            return False  # the key edits the field
+        return self._in_jog_area(w) or self.keyboard_jog.isChecked()
+
+    def _jog_key(self, event: QKeyEvent) -> bool:
+        """Jog for a jog key if keyboard jog is active for the focus widget; True when the key was used."""
+        move = JOG_KEYS.get(Qt.Key(event.key()))
+        if move is None or event.modifiers() not in (Qt.KeyboardModifier.NoModifier, Qt.KeyboardModifier.KeypadModifier):
+            return False
+        if not self.keyboard_jog_active():
+            return False
+        if not event.isAutoRepeat():  # one step per press: a held key must not queue a run of jogs
+            self.jog(*move)
+        return True
+
+    def keyPressEvent(self, event: QKeyEvent) -> None:
+        """Keys the focus widget ignored (the jog area, labels) end here; fields use theirs and never do.
+
+        Only the buttons carry an event filter (they take arrows for focus moves):
+        a Python filter on every widget would run for every paint event and
+        compete for the GIL with the workers.
+        """
+        if self._jog_key(event):
+            event.accept()
+            return
+        super().keyPressEvent(event)
+
+    def eventFilter(self, obj: QObject, event: QEvent) -> bool:
+        if event.type() == QEvent.Type.KeyPress and self._jog_key(event):  # type: ignore[arg-type]
+            return True
+        return super().eventFilter(obj, event)
+
+    def _on_focus_changed(self, _old: QWidget | None, _new: QWidget | None) -> None:
+        self._show_keyboard_state()
+
+    def _show_keyboard_state(self) -> None:
+        on = self.keyboard_jog_active()
+        self.keyboard_state.setText("keys jog: ON" if on else "keys jog: off")
+        self.keyboard_state.setStyleSheet(
+            "QLabel { color: white; background: #1f5fa8; border-radius: 3px; padding: 1px 6px; font-weight: bold; }"
+            if on else "QLabel { color: #777777; }")
+
     # ------------------------------------------------------------------ connection
+    def current_source(self) -> str | None:
+        """The chosen source: a listed entry, or what was typed (``/dev/pts/5`` -> ``grbl:/dev/pts/5``)."""
+        text = self.source.currentText().strip()
+        i = self.source.findText(text)
+        if i >= 0:
+            return self.source.itemData(i)
+        return source_from_text(text)
+
     def refresh_sources(self) -> None:
         current = self.source.currentData()
         self.source.clear()
@@ -188,6 +338,7 @@ class StagePanel(QWidget):
             self.source.addItem(source.split(":", 1)[1], source)
             i = self.source.count() - 1
         self.source.setCurrentIndex(max(i, 0))
+        self.source.setEditText(self.source.itemText(max(i, 0)))
 
     def toggle_connection(self) -> None:
         if self.controller.connected:
@@ -196,7 +347,11 @@ class StagePanel(QWidget):
             self.connect_source()
 
     def connect_source(self) -> None:
-        src = self.source.currentData() or SIM
+        src = self.current_source()
+        if src is None:
+            self.controller.command_failed.emit(
+                "connect", f"stage source {self.source.currentText()!r} not understood; pick one or type a port such as /dev/ttyUSB0")
+            return
         baud = int(self.baud.currentData() or 115200)
         self.connect_btn.setEnabled(False)
         self.connect_btn.setText("Connecting…")
@@ -209,6 +364,9 @@ class StagePanel(QWidget):
         self.source.setEnabled(not connected)
         self.baud.setEnabled(not connected)
         self._set_enabled(connected)
+        stage = self.controller.stage
+        self.zero_btn.setEnabled(connected and callable(getattr(stage, "set_work_zero", None)))
+        self._lock_asked = False
         if connected:
             self.controller.read_settings()
         else:
@@ -222,15 +380,51 @@ class StagePanel(QWidget):
 
     def _set_enabled(self, on: bool) -> None:
         for b in list(self.jog_buttons.values()) + [self.home_btn, self.unlock_btn, self.hold_btn, self.resume_btn,
-                                                    self.stop_btn, self.read_settings_btn, self.write_settings_btn]:
+                                                    self.stop_btn, self.read_settings_btn, self.write_settings_btn,
+                                                    self.goto_btn, self.reset_btn]:
             b.setEnabled(on)
 
     # ------------------------------------------------------------------ readout
     def show_status(self, st: StageStatus) -> None:
         for ax, v in zip(AXES, st.work_mm):
             self.readout[ax].setText(f"{v:10.3f}")
+        self._show_machine(st)
         self._show_state(st.state)
         self.feed_label.setText(f"feed {st.feed_mm_min:.0f} mm/min")
+        if st.state == "Alarm" and not self._lock_asked:
+            self._lock_asked = True
+            self._ask_home_or_unlock()
+        elif st.state != "Alarm":
+            self._lock_asked = False  # a later alarm asks again
+
+    def _show_machine(self, st: StageStatus) -> None:
+        """Machine position and offset, at most twice a second while moving: a changed label re-lays out the
+        whole window, which at the poll rate starved the GUI thread during a capture."""
+        now = time.monotonic()
+        if st.state in ("Run", "Jog", "Home") and now - self._machine_shown_at < MACHINE_REFRESH_S:
+            return
+        shown = [i for i, ax in enumerate(AXES) if ax in self._axes_shown]
+        offset = [st.work_mm[i] - st.machine_mm[i] for i in shown]
+        text = ("machine " + "  ".join(f"{AXES[i]} {st.machine_mm[i]:.3f}" for i in shown)
+                + ("   offset " + " ".join(f"{v:+.3f}" for v in offset) if any(offset) else ""))
+        if text != self.machine_label.text():
+            self.machine_label.setText(text)
+            self._machine_shown_at = now
+
+    def _ask_home_or_unlock(self) -> None:
+        """A stage in Alarm (GRBL powers up so with homing enabled) moves only after $H or $X: ask which."""
+        box = QMessageBox(QMessageBox.Icon.Question, "Stage locked",
+                          "The stage is locked in Alarm (a GRBL with homing enabled starts so, and after an alarm).\n"
+                          "Home it ($H: drives to the limit switch) or unlock it ($X: keeps the position it believes)?\n"
+                          "After a limit alarm ('Reset to continue') press Reset first.",
+                          parent=self)
+        home = box.addButton("Home", QMessageBox.ButtonRole.AcceptRole)
+        unlock = box.addButton("Unlock", QMessageBox.ButtonRole.ActionRole)
+        box.addButton("Not now", QMessageBox.ButtonRole.RejectRole)
+        home.clicked.connect(self.home)
+        unlock.clicked.connect(lambda: self.controller.call("unlock", "unlock"))
+        box.open()
+        self._lock_box = box
 
     def _show_state(self, state: str) -> None:
         color = STATE_COLORS.get(state, "#555555")
@@ -239,23 +433,83 @@ class StagePanel(QWidget):
             f"QLabel {{ background: {color}; color: white; border-radius: 4px; padding: 4px 8px; font-weight: bold; }}")
 
     # ------------------------------------------------------------------ motion
+    def home(self) -> None:
+        """``$H``: shown as Home at once (the cycle may run for a minute); the controller logs its end."""
+        if self.controller.call("home", "home") is not None:
+            self._show_state("Home")
+
     def jog(self, axis: str, sign: int) -> None:
         if not self.controller.connected:
             return
         step_mm = float(self.step.currentData())
+        if step_mm == CONTINUOUS:
+            if self._hold_axis is None:  # a key press: one 1 mm step (a key has no release to stop on)
+                self.controller.call(f"jog {axis} {sign:+g} mm", "jog", float(sign), self.feed.value(), axis)
+            return
         self.controller.call(f"jog {axis} {sign * step_mm:+g} mm", "jog", sign * step_mm, self.feed.value(), axis)
+
+    def _hold_jog_start(self, axis: str, sign: int) -> None:
+        if float(self.step.currentData()) != CONTINUOUS or not self.controller.connected:
+            return
+        self._hold_axis = (axis, sign)
+        self._hold_future = None
+        self._hold_jog_step()
+        self._hold_timer.start()
+
+    def _hold_jog_step(self) -> None:
+        """Queue the next short jog (v * dt) once the last one is planned: at most one waits on our side."""
+        if self._hold_axis is None:
+            return
+        fut = self._hold_future
+        if fut is not None and not fut.done():  # type: ignore[attr-defined]
+            return
+        if fut is not None and fut.exception() is not None:  # type: ignore[attr-defined]
+            self._hold_jog_stop()  # e.g. error:15 at the end of the travel
+            return
+        axis, sign = self._hold_axis
+        feed = self.feed.value()
+        step = sign * feed / 60.0 * HOLD_JOG_PERIOD_MS / 1000.0 * 1.5  # a little ahead: no stutter between jogs
+        self._hold_future = self.controller.call(f"jog {axis} {step:+.3f} mm (held)", "jog", step, feed, axis)
+
+    def _hold_jog_stop(self) -> None:
+        if self._hold_axis is None:
+            return
+        self._hold_axis = None
+        self._hold_timer.stop()
+        self.controller.call_now("jog cancel", "jog_cancel")
+
+    def zero(self) -> None:
+        axis = self.goto_axis.currentData()
+        self.controller.call(f"zero {axis} (work offset)", "set_work_zero", axis)
+
+    def go_to(self) -> None:
+        axis = self.goto_axis.currentData()
+        target = self.goto_target.value()
+        self.controller.call(f"go to {axis} {target:.3f} mm", "move_to", target, self.feed.value(), axis)
+
+    def show_axes(self, axes: str) -> None:
+        """Show only ``axes`` (e.g. "X" for a single-axis stage) in the readout, the jog pad and go-to."""
+        self._axes_shown = axes
+        for ax, widgets in self._axis_widgets.items():
+            for w in widgets:
+                w.setVisible(ax in axes)
+        for i in range(self.goto_axis.count()):
+            self.goto_axis.model().item(i).setEnabled(self.goto_axis.itemData(i) in axes)  # type: ignore[attr-defined]
+        if self.goto_axis.currentData() not in axes:
+            self.goto_axis.setCurrentIndex(self.goto_axis.findData(axes[0]))
 
     def stop(self) -> None:
         """Stop motion now: cancel a jog; a programmed move is held (Resume continues it)."""
         st = self.controller.last_status
         if st is not None and st.state == "Run":
-            self.controller.call("feed hold", "feed_hold")
+            self.controller.call_now("feed hold", "feed_hold")
         else:
-            self.controller.call("jog cancel", "jog_cancel")
+            self.controller.call_now("jog cancel", "jog_cancel")
 
     # ------------------------------------------------------------------ settings
     def show_settings(self, settings: list[StageSetting]) -> None:
         self._settings = list(settings)
+        self.travel_label.setText(travel_text({st.number: st.value for st in settings}))
         t = self.settings_table
         t.setRowCount(len(settings))
         for r, s in enumerate(settings):
@@ -297,6 +551,15 @@ class StagePanel(QWidget):
             self.controller.write_setting(number, value)
         if changes:
             self.controller.read_settings()
+
+
+def travel_text(values: dict[int, float]) -> str:
+    """The soft-limit travel of each axis from $20 and $130-$132 (GRBL's machine space: -$13x .. 0 after homing)."""
+    spans = [f"{ax} {values[130 + i]:g} mm" for i, ax in enumerate(AXES) if 130 + i in values]
+    if not spans:
+        return "travel: unknown"
+    limits = "soft limits ON" if values.get(20) else "soft limits off ($20=0): nothing stops a move past the ends"
+    return f"travel {', '.join(spans)}; {limits}"
 
 
 def _is_integer_setting(s: StageSetting) -> bool:

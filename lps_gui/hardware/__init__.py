@@ -46,3 +46,18 @@ def list_serial_ports() -> list[str]:
     from serial.tools import list_ports
 
     return sorted(p.device for p in list_ports.comports())
+
+
+def serial_ports_by_id(folder: str = "/dev/serial/by-id") -> list[tuple[str, str]]:
+    """(stable name, device) of the USB serial adapters udev lists by id, sorted.
+
+    ``/dev/serial/by-id/usb-1a86_USB_Serial-if00-port0`` survives replugging and
+    reboots where ``/dev/ttyUSB0`` may become ``ttyUSB1``; empty where it does not exist.
+    """
+    import os
+
+    try:
+        names = sorted(os.listdir(folder))
+    except OSError:
+        return []
+    return [(os.path.join(folder, n), os.path.realpath(os.path.join(folder, n))) for n in names]

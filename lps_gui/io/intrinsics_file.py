@@ -2,9 +2,13 @@
 
 JSON: ``{"image_size": [w, h], "camera_matrix": 3x3, "dist": [k1,k2,p1,p2,k3],
 "std": {"fx": .., ...}, "rms_px": x, "n_views": n}``, optionally a full
-``"covariance"`` (9x9 in ``covariance_order``). YAML: OpenCV's
+``"covariance"`` (9x9 in ``covariance_order``), and when the calibration
+estimated the board's bow ``"board_warp_mm": [bow_x, bow_y]`` with
+``"board_warp_sigma_mm"`` (see :class:`Board`; the LPS estimate then uses the
+bowed board, :func:`apply_board_warp`). YAML: OpenCV's
 ``camera_matrix``, ``distortion_coefficients``, ``image_width``,
-``image_height``, plus our ``std_intrinsics`` when known.
+``image_height``, plus our ``std_intrinsics`` when known. ``.cameramodel``: mrcal's format
+(:mod:`lps_gui.io.cameramodel_file`).
 """
 from __future__ import annotations
 
@@ -13,9 +17,12 @@ from typing import Any
 
 import numpy as np
 
+from lps_gui.core.board import Board
 from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_text_atomic
+from lps_gui.io.cameramodel_file import SUFFIX as CAMERAMODEL_SUFFIX
+from lps_gui.io.cameramodel_file import read_cameramodel, write_cameramodel
 from lps_gui.io.jsonfile import read_json, write_json
 
 YAML_SUFFIXES = (".yaml", ".yml", ".xml")
@@ -69,9 +76,24 @@ def intrinsics_to_dict(intr: CameraIntrinsics) -> dict[str, Any]:
     return d
 
 
+def apply_board_warp(board: Board, intr: CameraIntrinsics | None) -> Board:
+    """The board as the intrinsics calibration found it: bowed by ``board_warp_mm`` when that is known."""
+    from dataclasses import replace
+
+    warp = None if intr is None else intr.extra.get("board_warp_mm")
+    if warp is None:
+        return board
+    try:
+        return replace(board, warp_mm=(float(warp[0]), float(warp[1])))
+    except (TypeError, ValueError, IndexError) as exc:
+        raise InputError(f"intrinsics: board_warp_mm must be [bow_x, bow_y] in mm, got {warp!r}") from exc
+
+
 def read_intrinsics(path: Path | str) -> CameraIntrinsics:
-    """Read intrinsics from JSON or OpenCV YAML/XML (chosen by suffix)."""
+    """Read intrinsics from JSON, OpenCV YAML/XML or mrcal .cameramodel (chosen by suffix)."""
     path = Path(path)
+    if path.suffix.lower() == CAMERAMODEL_SUFFIX:
+        return read_cameramodel(path)
     if path.suffix.lower() in YAML_SUFFIXES:
         return _read_opencv_yaml(path)
     return intrinsics_from_dict(read_json(path, "intrinsics file"), str(path))
@@ -79,7 +101,9 @@ def read_intrinsics(path: Path | str) -> CameraIntrinsics:
 
 def write_intrinsics(path: Path | str, intr: CameraIntrinsics) -> None:
     path = Path(path)
-    if path.suffix.lower() in YAML_SUFFIXES:
+    if path.suffix.lower() == CAMERAMODEL_SUFFIX:
+        write_cameramodel(path, intr)
+    elif path.suffix.lower() in YAML_SUFFIXES:
         _write_opencv_yaml(path, intr)
     else:
         write_json(path, intrinsics_to_dict(intr))

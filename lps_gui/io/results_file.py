@@ -114,6 +114,7 @@ class SummaryFigure:
     value: Any
     unit: str = ""
     digits: int = 3  # significant digits when printed
+    unresolved: str = ""  # "not resolved (σ X)": noise alone could give the value (core.resolution); no finding
 
 
 MU = "\u00b5"
@@ -132,6 +133,14 @@ TRUTH_FIGURES = {
                                      MU + "m"),
     "board_plane_z_mean_square": ("truth_board_plane_z_mean_square", "Truth at the board plane: mean (error/\u03c3)\u00b2", ""),
     "abbe_rms_um": ("truth_abbe_term_rms", "Truth: Abbe term (board plane - camera centre) RMS", MU + "m"),
+    "straightness_rms_error_um_1": ("truth_straightness_rms_error_1", "Truth: straightness v1 error RMS (board plane)",
+                                    MU + "m"),
+    "straightness_rms_error_um_2": ("truth_straightness_rms_error_2", "Truth: straightness v2 error RMS (board plane)",
+                                    MU + "m"),
+    "straightness_z_mean_square_1": ("truth_straightness_z_mean_square_1", "Truth: straightness v1 mean (error/\u03c3)\u00b2", ""),
+    "straightness_z_mean_square_2": ("truth_straightness_z_mean_square_2", "Truth: straightness v2 mean (error/\u03c3)\u00b2", ""),
+    "image_rotation_rms_error_urad": ("truth_image_rotation_rms_error", "Truth: image rotation error RMS", MU + "rad"),
+    "image_rotation_z_mean_square": ("truth_image_rotation_z_mean_square", "Truth: image rotation mean (error/\u03c3)\u00b2", ""),
 }
 
 
@@ -175,8 +184,41 @@ def iso_figures(iso: dict[str, Any] | None) -> list[SummaryFigure]:
     return out
 
 
+def resolved_extreme_figures(results: dict[str, Any]) -> list[SummaryFigure] | None:
+    """Straightness, image rotation and angles with their resolution (results with ``figures["straightness"]``).
+
+    A figure that noise alone could produce carries "not resolved (σ X)", X
+    its noise p-v (or noise max |x|): printed instead of the value, never a finding.
+    """
+    from lps_gui.core.resolution import not_resolved_text
+
+    figs = results.get("figures") or {}
+    st = figs.get("straightness")
+    if not isinstance(st, dict):
+        return None
+
+    def fig(key: str, label: str, d: dict[str, Any], value_key: str, noise_key: str, unit: str) -> SummaryFigure:
+        text = "" if d.get("resolved") else not_resolved_text(finite_number(d.get(noise_key)), unit)
+        return SummaryFigure(key, label, finite_number(d.get(value_key)), unit, unresolved=text)
+
+    out = [fig(f"straightness_span_{k}", f"Max straightness v{k} (peak-to-valley)", st.get(f"v{k}") or {}, "span_um",
+               "noise_span_um", MU + "m") for k in (1, 2)]
+    rot = figs.get("image_rotation")
+    if isinstance(rot, dict):
+        out.append(fig("image_rotation_span", "Image rotation (peak-to-valley)", rot, "span_urad", "noise_span_urad",
+                       MU + "rad"))
+    angles = figs.get("angles_resolution") or {}
+    for name in ("roll", "pitch", "yaw"):
+        out.append(fig(f"max_abs_{name}", f"Max |{name}|", angles.get(name) or {}, "max_abs_urad", "noise_max_abs_urad",
+                       MU + "rad"))
+    return out
+
+
 def extreme_figures(results: dict[str, Any]) -> list[SummaryFigure]:
     """Peak-to-valley straightness v1/v2 and max |roll|, |pitch|, |yaw| over the positions not flagged."""
+    resolved = resolved_extreme_figures(results)
+    if resolved is not None:
+        return resolved
     rows = [r for r in results.get("positions") or [] if not r.get("outlier")]
 
     def column(key: str) -> list[float]:
@@ -232,8 +274,12 @@ def summary_figures(results: dict[str, Any]) -> list[SummaryFigure]:
 
 
 def summary_rows(results: dict[str, Any]) -> list[tuple[str, Any, str]]:
-    """(name, value, unit) rows of summary.csv: every figure of :func:`summary_figures` with a value."""
-    return [(f.key, f.value, f.unit.replace(MU, "u")) for f in summary_figures(results) if f.value is not None]
+    """(name, value, unit) rows of summary.csv: every figure of :func:`summary_figures` with a value.
+
+    An unresolved figure keeps its row with an empty value (noise alone could give it: no finding).
+    """
+    return [(f.key, None if f.unresolved else f.value, f.unit.replace(MU, "u"))
+            for f in summary_figures(results) if f.value is not None]
 
 
 def _fmt(value: Any) -> str:

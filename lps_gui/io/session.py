@@ -42,12 +42,15 @@ class CaptureRecord:
     sha256: str | None
     time: float  # unix seconds
     frame: int = 0
+    commanded_mm: float | None = None  # sent to the stage through a compensation table; absent without one
 
     def to_json(self) -> str:
         d = asdict(self)
         for key in ("target_mm", "reported_mm"):
             if isinstance(d[key], tuple):
                 d[key] = list(d[key])
+        if d["commanded_mm"] is None:
+            del d["commanded_mm"]
         return json.dumps(d, separators=(",", ":"))
 
     @classmethod
@@ -62,6 +65,7 @@ class CaptureRecord:
             sha256=d.get("sha256"),
             time=float(d.get("time", 0.0)),
             frame=int(d.get("frame", 0)),
+            commanded_mm=None if d.get("commanded_mm") is None else float(d["commanded_mm"]),
         )
 
 

@@ -25,10 +25,13 @@ from lps_gui.errors import InputError
 from lps_gui.io.atomic import sha256_file
 from lps_gui.io.board_file import board_to_dict
 from lps_gui.io.corners_vnl import read_corners_vnl
-from lps_gui.io.intrinsics_file import intrinsics_to_dict, read_intrinsics
+from lps_gui.io.intrinsics_file import apply_board_warp, intrinsics_to_dict, read_intrinsics
 from lps_gui.io.results_file import assemble_results, summary_rows, write_results  # noqa: F401 (summary_rows re-exported)
 from lps_gui.io.results_file import json_float as _f
+from lps_gui.io.results_history import keep_previous, record_latest
 from lps_gui.io.session import SESSION_FILE, Session
+from lps_gui.pipeline.board_plane_results import position_fields, straightness_figures
+from lps_gui.pipeline.uncertainty import add_uncertainty, session_board
 from lps_gui.sim.truth import session_truth, truth_comparison  # truth_comparison re-exported for callers
 
 HYBRID_KEYS = {"grid_window_mm": "window_mm", "grid_resolution_mm": "resolution_mm", "grid_points": "grid_points",
@@ -50,8 +53,9 @@ def make_options(method: str = "joint", options: dict[str, Any] | EstimateOption
 
 def observations_from_session(session: Session, intrinsics: CameraIntrinsics | None = None) -> Observations:
     """Match every line of captures.jsonl to its corners in corners.vnl."""
-    board = session.board()
     intr = intrinsics or session.intrinsics()
+    # square size at the board's temperature (environment), bowed as the intrinsics calibration found it
+    board = apply_board_warp(session_board(session), intr)
     records = session.records()
     if not records:
         raise InputError(f"{session.captures_path}: no captures listed; capture or simulate a session first")
@@ -101,7 +105,7 @@ def estimate_session(
         results["timings_s"]["pipeline_total"] = time.perf_counter() - t0
         if cancel is not None:
             cancel.check("estimation")
-        write_results(Path(out_dir) if out_dir else session.folder, results)
+        _write_keeping_history(session, out_dir, results)
         return results
     opt = make_options(method, options)
     obs = observations_from_session(session, intr)
@@ -110,8 +114,17 @@ def estimate_session(
     results["timings_s"]["pipeline_total"] = time.perf_counter() - t0
     if cancel is not None:
         cancel.check("estimation")
-    write_results(Path(out_dir) if out_dir else session.folder, results)
+    _write_keeping_history(session, out_dir, results)
     return results
+
+
+def _write_keeping_history(session: Session, out_dir: Path | str | None, results: dict[str, Any]) -> None:
+    """Write the result set; into the session folder, the previous set is kept (results/<time>-<method>/)."""
+    if out_dir is None:
+        keep_previous(session.folder)
+    write_results(Path(out_dir) if out_dir else session.folder, results)
+    if out_dir is None:
+        record_latest(session.folder, results)
 
 
 # ----------------------------------------------------------------------------- results
@@ -120,7 +133,7 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate, intrins
     """The results.json document: its parts computed here, assembled by :func:`lps_gui.io.results_file.assemble_results`."""
     positions = position_rows(obs, est)
     truth = session_truth(session)
-    return assemble_results(
+    results = assemble_results(
         method=est.method,
         settings=est.options.to_dict(),
         inputs=session_inputs(session, intrinsics_source),
@@ -134,6 +147,7 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate, intrins
         timings_s=dict(est.timings_s),
         truth_comparison=truth_comparison(obs, est, truth, positions) if truth is not None else None,
     )
+    return add_uncertainty(results, session)  # environment, GUM budget, U (k = 2) per figure
 
 
 def position_rows(obs: Observations, est: LpsEstimate) -> list[dict[str, Any]]:
@@ -159,10 +173,8 @@ def position_rows(obs: Observations, est: LpsEstimate) -> list[dict[str, Any]]:
             "used": bool(est.used[i]),
             "file": obs.names[i],
         }
+        row.update(position_fields(est, i))  # straightness at the board plane (SPEC 11), image rotation
         if six is not None:
-            for j, key in enumerate(("straightness_um_1", "straightness_um_2")):
-                row[key] = _f(six.straightness_um[i, j])
-                row[key.replace("um_", "sigma_um_")] = _f(six.straightness_sigma_um[i, j])
             for j, key in enumerate(("roll", "pitch", "yaw")):
                 row[f"{key}_urad"] = _f(six.angles_urad[i, j])
                 row[f"{key}_sigma_urad"] = _f(six.angles_sigma_urad[i, j])
@@ -185,10 +197,9 @@ def session_figures(obs: Observations, est: LpsEstimate) -> dict[str, Any]:
     single = figures.get("single_run")
     if single is not None and valid.sum() >= 3:
         single.update(scale_with_uncertainty(obs, est, valid, sigma_um))
+    if valid.any():
+        figures.update(straightness_figures(obs.target_mm, est, valid))
     if six is not None and valid.any():
-        figures["straightness_um_max"] = _f(np.nanmax(np.ptp(six.straightness_um[valid], axis=0)))
-        figures["straightness_span_um"] = [_f(v) for v in np.ptp(six.straightness_um[valid], axis=0)]
-        figures["straightness_sigma_um"] = _f(np.nanmax(np.nanmedian(six.straightness_sigma_um[valid], axis=0)))
         figures["angles_span_urad"] = dict(zip(("roll", "pitch", "yaw"), (_f(v) for v in np.ptp(six.angles_urad[valid], axis=0))))
     return figures
 

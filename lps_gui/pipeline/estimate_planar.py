@@ -23,7 +23,7 @@ from lps_gui.errors import InputError
 from lps_gui.io.atomic import sha256_file
 from lps_gui.io.board_file import board_to_dict
 from lps_gui.io.corners_vnl import read_corners_vnl
-from lps_gui.io.intrinsics_file import intrinsics_to_dict
+from lps_gui.io.intrinsics_file import apply_board_warp, intrinsics_to_dict
 from lps_gui.io.results_file import FORMAT
 from lps_gui.io.session import SESSION_FILE, Session
 from lps_gui.sim.planar_truth import planar_session_truth, planar_truth_comparison
@@ -31,8 +31,8 @@ from lps_gui.sim.planar_truth import planar_session_truth, planar_truth_comparis
 
 def planar_observations_from_session(session: Session, intrinsics: CameraIntrinsics | None = None) -> PlanarObservations:
     """Match every line of captures.jsonl to its corners; approach sides from the plan."""
-    board = session.board()
     intr = intrinsics or session.intrinsics()
+    board = apply_board_warp(session.board(), intr)  # the bow found by the intrinsics calibration, if any
     records = session.records()
     if not records:
         raise InputError(f"{session.captures_path}: no captures listed; capture or simulate a session first")

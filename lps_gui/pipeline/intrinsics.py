@@ -8,6 +8,7 @@ import numpy as np
 from lps_gui.core.board import Board
 from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.intrinsics_calibration import IntrinsicsCalibration, calibrate_intrinsics
+from lps_gui.core.intrinsics_crossval import CrossValidation, cross_validate
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import InputError
 from lps_gui.io.corners_vnl import CornerTable
@@ -46,6 +47,7 @@ def calibrate_images(
     cancel: CancelToken | None = None,
     workers: int | None = None,
     flags: int = 0,
+    warp: str = "auto",
 ) -> IntrinsicsCalibration:
     """Detect the board in every image and calibrate; failed images are listed in the warnings.
 
@@ -57,11 +59,16 @@ def calibrate_images(
     paths = expand_image_paths(paths)
     table = detect_images(paths, board, progress, cancel, workers, track=False)
     size = image_size_of(paths, table)
-    cal = calibrate_intrinsics(board.object_points(), list(table.corners_px), size, flags=flags)
+    cal = calibrate_intrinsics(board.flat_points(), list(table.corners_px), size, flags=flags, warp=warp)
     cal.view_names = list(table.names)
     cal.warnings += [f"{name}: {reason}" for name, reason in table.failed.items()]
     cal.intrinsics = _with_report(cal)
     return cal
+
+
+def cross_validate_calibration(cal: IntrinsicsCalibration, board: Board, flags: int = 0, warp: str = "auto") -> CrossValidation:
+    """Calibrate the even and the odd views of ``cal`` apart (same corners) and compare their projections."""
+    return cross_validate(board.flat_points(), cal.image_points, cal.intrinsics.image_size, flags=flags, warp=warp)
 
 
 def _with_report(cal: IntrinsicsCalibration) -> CameraIntrinsics:
@@ -74,5 +81,10 @@ def _with_report(cal: IntrinsicsCalibration) -> CameraIntrinsics:
         "coverage_grid": cal.coverage.tolist(),
         "flagged_views": [names[i] for i in cal.flagged_views],
         "warnings": list(cal.warnings),
+        "rejected_corners": [{"view": names[c.view], "corner": c.corner, "residual_px": round(c.residual_px, 4)}
+                             for c in cal.rejected_corners],
     }
+    if cal.warp_mm is not None:
+        extra["board_warp_mm"] = [float(v) for v in cal.warp_mm]
+        extra["board_warp_sigma_mm"] = [float(v) for v in cal.warp_sigma_mm]
     return replace(cal.intrinsics, extra=extra)

@@ -24,7 +24,10 @@ from lps_gui.sim.truth import centred, residual_from_line, true_deviation_um
 FORWARD_COLOR = "#1f5fa8"
 BACKWARD_COLOR = "#e07b00"
 TRUTH_COLOR = "#222222"
+TRUTH_COLORS = {"+": "#0d2747", "-": "#6b3500"}  # truth per direction: dark shades of the measured colours
+SPEC_COLOR = "#c00000"
 OUTLIER_COLOR = "#d00000"
+IMAGE_ROTATION_COLOR = "#111111"
 COMPONENT_COLORS = ("#1f5fa8", "#2a9d3c", "#a8326e")
 
 STYLES = ("line", "markers", "line+markers")
@@ -80,7 +83,8 @@ class FigureSpec:
         return not any(np.isfinite(s.y).any() for s in self.series)
 
 
-TRUTH_KEYS = ("deviation_um", "straightness_um_1", "straightness_um_2", "roll_urad", "pitch_urad", "yaw_urad")
+TRUTH_KEYS = ("deviation_um", "straightness_um_1", "straightness_um_2", "roll_urad", "pitch_urad", "yaw_urad",
+              "image_rotation_urad")
 FIGURE_KEYS = ("positions", "deviation", "step", "straightness", "angles", "residuals", "spectrum")
 
 
@@ -97,7 +101,7 @@ def position_columns(results: dict[str, Any]) -> dict[str, np.ndarray]:
     numeric = ("index", "run", "target_mm", "measured_mm", "deviation_um", "sigma_um", "sigma_total_um",
                "rms_px", "n_corners", "straightness_um_1", "straightness_um_2", "straightness_sigma_um_1",
                "straightness_sigma_um_2", "roll_urad", "pitch_urad", "yaw_urad", "roll_sigma_urad",
-               "pitch_sigma_urad", "yaw_sigma_urad")
+               "pitch_sigma_urad", "yaw_sigma_urad", "image_rotation_urad", "image_rotation_sigma_urad")
     cols: dict[str, np.ndarray] = {}
     for name in numeric:
         cols[name] = np.array([_num(r.get(name)) for r in rows], dtype=float)
@@ -257,7 +261,7 @@ def deviation_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] |
             notes.append(f"{_dir_label(d)}: band = \u00b12 sigma (measurement noise)")
         if tcols is not None:
             tt, tmean, _, _ = per_target_stats(x, tcols["deviation_um"][sel], np.ones(x.shape, bool))
-            series.append(_truth_series(tt, tmean, f"truth {_dir_label(d)}"))
+            series.append(_truth_series(tt, tmean, f"truth {_dir_label(d)}", TRUTH_COLORS[d]))
     return FigureSpec("deviation", "Positioning deviation vs target", "target position [mm]", "deviation [\u00b5m]",
                       series, "; ".join(notes))
 
@@ -308,7 +312,7 @@ def step_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] | None
         if d in truth_steps:
             tx, ty = truth_steps[d]
             tt, tmean, _, _ = per_target_stats(tx, ty, np.ones(tx.shape, bool))
-            series.append(_truth_series(tt, tmean, f"truth {_dir_label(d)}"))
+            series.append(_truth_series(tt, tmean, f"truth {_dir_label(d)}", TRUTH_COLORS[d]))
     return FigureSpec("step", "Step deviation", "target position (step midpoint) [mm]",
                       "measured step \u2212 commanded step [\u00b5m]", series)
 
@@ -332,7 +336,7 @@ def _component_series(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] 
             lo, hi = mean - band, mean + band
         series.append(Series(t, mean, f"{name} {_dir_label(d)}", "line" if d == "+" else "markers", color,
                              band_low=lo, band_high=hi))
-    if tcols is not None:
+    if tcols is not None and column in tcols:
         t, mean, _, _ = per_target_stats(cols["target_mm"], tcols[column], np.ones(keep.shape, bool))
         series.append(_truth_series(t, mean, f"truth {name}", color))
     return series
@@ -344,7 +348,7 @@ def straightness_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray
     for k in (1, 2):
         series += _component_series(cols, tcols, f"straightness_um_{k}", f"straightness_sigma_um_{k}", f"v{k}",
                                     COMPONENT_COLORS[k - 1])
-    return FigureSpec("straightness", "Straightness (deviation from the fitted line)", "target position [mm]",
+    return FigureSpec("straightness", "Straightness at the board plane (deviation from the fitted line)", "target position [mm]",
                       "straightness [\u00b5m]", series,
                       "v1: perpendicular closest to the image y axis; v2: along the viewing direction; "
                       "band: \u00b12\u03c3 forward")
@@ -355,9 +359,13 @@ def angles_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] | No
     series = []
     for k, name in enumerate(("roll", "pitch", "yaw")):
         series += _component_series(cols, tcols, f"{name}_urad", f"{name}_sigma_urad", name, COMPONENT_COLORS[k])
-    return FigureSpec("angles", "Angular error motions (roll, pitch, yaw)", "target position [mm]",
-                      "angle [\u00b5rad]", series,
-                      "roll about the motion axis u, pitch about v1, yaw about v2; band: \u00b12\u03c3 forward")
+    note = "roll about the motion axis u, pitch about v1, yaw about v2; band: \u00b12\u03c3 forward"
+    if np.isfinite(cols["image_rotation_urad"]).any():  # constant-orientation fit (SPEC 11): resolved per view
+        series += _component_series(cols, tcols, "image_rotation_urad", "image_rotation_sigma_urad",
+                                    "image rotation", IMAGE_ROTATION_COLOR)
+        note = "per-view poses: roll about u, pitch about v1, yaw about v2; image rotation: about the optical axis; band \u00b12\u03c3 fwd"
+    return FigureSpec("angles", "Angular error motions (roll, pitch, yaw) and image rotation", "target position [mm]",
+                      "angle [\u00b5rad]", series, note)
 
 
 def residuals_figure(cols: dict[str, np.ndarray]) -> FigureSpec:
@@ -389,3 +397,29 @@ def figure_by_key(figures: Sequence[FigureSpec], key: str) -> FigureSpec:
         if f.key == key:
             return f
     raise KeyError(key)
+
+
+def with_spec_band(figure: FigureSpec, limit_um: float, plus_minus: bool = True) -> FigureSpec:
+    """The deviation figure with the accuracy limit drawn as two dashed red lines.
+
+    The deviation's zero (the first capture) is arbitrary, so the band is
+    centred on the measured band (mean +- 2 s, or the deviations), as the
+    verdict compares A/2 with a +- limit; a ``"band"`` limit is a full width.
+    """
+    measured = [s for s in figure.series if not s.dashed]
+    lows = [s.band_low if s.band_low is not None else s.y for s in measured]
+    highs = [s.band_high if s.band_high is not None else s.y for s in measured]
+    lo = np.concatenate([np.ravel(a) for a in lows]) if lows else np.array([])
+    hi = np.concatenate([np.ravel(a) for a in highs]) if highs else np.array([])
+    lo, hi = lo[np.isfinite(lo)], hi[np.isfinite(hi)]
+    xs = np.concatenate([np.ravel(s.x) for s in measured]) if measured else np.array([])
+    xs = xs[np.isfinite(xs)]
+    if not (lo.size and hi.size and xs.size and np.isfinite(limit_um)):
+        return figure
+    centre = 0.5 * (float(hi.max()) + float(lo.min()))
+    half = float(limit_um) if plus_minus else 0.5 * float(limit_um)
+    x0, x1 = float(xs.min()), float(xs.max())
+    band = Series(np.array([x0, x1, np.nan, x0, x1]), np.array([centre + half] * 2 + [np.nan] + [centre - half] * 2),
+                  f"accuracy limit \u00b1{half:g} \u00b5m (centred on the band)", "line", SPEC_COLOR, dashed=True)
+    return FigureSpec(figure.key, figure.title, figure.x_label, figure.y_label, [*figure.series, band],
+                      figure.notes, figure.x_log)

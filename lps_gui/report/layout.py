@@ -36,6 +36,7 @@ class PageLog:
     """What went on which page (tests check the page plan against the PDF)."""
 
     pages: list[list[str]] = field(default_factory=lambda: [[]])
+    clipped: list[str] = field(default_factory=list)  # table cells wider than their column ("page N: text")
 
     def add(self, what: str) -> None:
         self.pages[-1].append(what)
@@ -162,6 +163,9 @@ class PdfFlow:
                 right = i >= align_right_from and i not in align_left
                 align = Qt.AlignmentFlag.AlignRight if right else Qt.AlignmentFlag.AlignLeft
                 p.setPen(QColor(color or "#000000"))
+                room = w * mm - 2 * mm
+                if any(p.fontMetrics().horizontalAdvance(line) > room + 0.5 for line in cell.split("\n")):
+                    self.log.clipped.append(f"page {self.page}: {cell}")
                 p.drawText(QRectF(x + 1 * mm, self.y, w * mm - 2 * mm, lines * row_mm * mm),
                            int(align | Qt.AlignmentFlag.AlignVCenter), cell)
                 x += w * mm

@@ -9,7 +9,7 @@ result, and the per-position table. Qt is imported inside functions only.
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -35,6 +35,7 @@ class ReportInfo:
     path: Path
     n_pages: int
     pages: list[list[str]]
+    clipped: tuple[str, ...] = ()  # table cells wider than their column (none in a good report)
 
 
 def load_results(session_dir: Path) -> dict[str, Any]:
@@ -106,6 +107,10 @@ def render_report(session_dir: Path, results: dict | None = None, out: Path | No
         progress(0, len(steps), "front pages")
         _front_page(flow, meta, results, __version__)
         flow.new_page()
+        _figures_page(flow, results)
+        flow.new_page()
+        _uncertainty_page(flow, results)
+        flow.new_page()
         _method_page(flow, results)
         flow.heading("What limits this result", 11)
         for note in S.limits_notes(results):
@@ -123,6 +128,7 @@ def render_report(session_dir: Path, results: dict | None = None, out: Path | No
         header, rows, widths = S.position_table(results)
         colors = ["#c00000" if r[-1] else None for r in rows]
         flow.table(header, rows, widths, size_pt=6.3, row_mm=3.35, align_right_from=0, colors=colors)
+        _truth_page(flow, results)
         n_pages = flow.finish()
     except BaseException:
         flow.abort()
@@ -130,35 +136,112 @@ def render_report(session_dir: Path, results: dict | None = None, out: Path | No
         raise
     tmp.replace(out)  # a half-painted report never takes the place of a good one
     progress(len(steps), len(steps), f"wrote {out}")
-    return ReportInfo(out, n_pages, flow.log.pages)
+    return ReportInfo(out, n_pages, flow.log.pages, tuple(flow.log.clipped))
 
 
 def _front_page(flow: Any, meta: dict[str, Any], results: dict[str, Any], version: str) -> None:
-    flow.heading("Linear positioning stage \u2014 measurement report", 15)
-    flow.space(1)
-    title = S.title_rows(meta, results, version)
-    flow.table(None, [[k, v] for k, v in title], [32, 148], size_pt=8.5, row_mm=4.6, align_right_from=9)
+    """Page 1: the verdict with U (k = 2), the deviation plot with the limit drawn, the identification."""
+    from lps_gui.report.figures import figure_by_key, with_spec_band
+    from lps_gui.report.verdict import overall, verdicts
 
-    flow.heading("Summary figures", 11)
+    spec = meta.get("stage_spec") or results.get("stage_spec") or (results.get("session_meta") or {}).get("stage_spec")
+    flow.heading("Linear positioning stage \u2014 measurement report", 15)
+    rows = verdicts(results, spec)
+    flow.heading("Verdict", 11)
+    flow.paragraph(overall(rows), size_pt=10.0, color=_overall_color(rows))
+    if rows:
+        cells = [[v.name, _with_unit(v.measured, v.unit), "\u00b1 " + _with_unit(v.u_k2, v.unit) if v.u_k2 is not None
+                  else "not assessed", f"{S.fmt(v.limit)} {v.unit}", v.verdict] for v in rows]
+        flow.table(["criterion", "measured", "U (k = 2)", "limit", "verdict"], cells, [44, 26, 28, 26, 56],
+                   size_pt=8.5, row_mm=4.6, colors=[v.color for v in rows], align_left=(4,))
+        for v in rows:
+            flow.paragraph(f"{v.name}: {v.note}.", size_pt=7.0, color="#555555")
+        flow.paragraph("Decision rule ISO 14253-1: PASS when the figure plus U is within the limit, FAIL when the "
+                       "figure minus U is beyond it, otherwise not resolved. U covers the measurement (see the "
+                       "uncertainty budget), not the stage's own scatter.", size_pt=7.0, color="#555555")
+    else:
+        flow.paragraph("No stage specification in session.json (key \"stage_spec\"; enter it with lps capture "
+                       "--spec or in the capture panel): no verdict is given.", color="#555555")
+    deviation = figure_by_key(figures_from_results(results, None), "deviation")
+    deviation = replace(deviation, series=[s for s in deviation.series if not s.label.startswith("truth")])  # p. 1: measured only
+    limit = (spec or {}).get("accuracy_um")
+    if limit is not None:
+        deviation = with_spec_band(deviation, float(limit), str(spec.get("limits", "plus_minus")) == "plus_minus")
+    flow.figure(deviation, 100.0)
+    flow.heading("Identification", 11)
+    title = S.title_rows(meta, results, version)
+    title.append(("Results", f"{results.get('created', DASH_TEXT)}, method {results.get('method', DASH_TEXT)}"))
+    flow.table(None, [[k, v] for k, v in title], [30, 150], size_pt=8.0, row_mm=4.2, align_right_from=9)
+
+
+DASH_TEXT = S.DASH
+
+
+def _with_unit(value: float | None, unit: str) -> str:
+    return S.DASH if value is None else f"{S.fmt(value)} {unit}"
+
+
+def _overall_color(rows: list[Any]) -> str:
+    words = [r.verdict for r in rows]
+    if rows and all(w == "PASS" for w in words):
+        return "#007a1f"
+    return "#c00000" if "FAIL" in words else "#333333"
+
+
+def _figures_page(flow: Any, results: dict[str, Any]) -> None:
+    """Measured figures with U (k = 2), then the ISO 230-2 per-target table."""
+    from lps_gui.report.iso_table import iso_target_table
+
+    flow.heading("Measured figures", 11)
     rows = S.summary_rows(results)
-    flow.table(["figure", "value", "unit"], [[r.name, r.text(), r.unit] for r in rows], [80, 30, 16])
+    flow.table(["figure", "value", "U (k = 2)", "unit"], [[r.name, r.text(), r.u_text(), r.unit] for r in rows],
+               [88, 26, 22, 16], colors=["#888888" if r.unresolved else None for r in rows])
     for note in S.figure_notes(results):
         flow.paragraph(note, size_pt=7.5, color="#555555")
+    flow.paragraph("\u03c3 and s are 1-sigma. \u03c3 of a position is the measurement's noise only (corner noise); "
+                   "s is the scatter over runs (ISO 230-2). U (k = 2) is the expanded measurement uncertainty "
+                   "(see the uncertainty budget); figures of one target (R, B, step std) carry only the noise terms, which do not "
+                   "cancel there.", size_pt=7.5, color="#555555")
+    table = iso_target_table(results)
+    if table is not None:
+        header, body, widths = table
+        flow.heading("ISO 230-2 per target", 11)
+        flow.table(header, body, widths, size_pt=6.8, row_mm=3.4, align_right_from=0)
+        flow.paragraph("x\u0304: mean deviation over the runs; s: standard deviation over the runs (1-sigma, "
+                       "n \u2212 1); R = 4 s each way; B\u2c7c = x\u0304\u2191 \u2212 x\u0304\u2193; "
+                       "R\u2c7c = max(2s\u2191 + 2s\u2193 + |B\u2c7c|, R\u2191, R\u2193). Deviations are "
+                       "relative to the first capture.", size_pt=7.0, color="#555555")
 
-    checks = S.spec_checks(results, meta.get("stage_spec") or results.get("stage_spec"))
-    flow.heading("Stage specification", 11)
-    if checks:
-        cells, colors = [], []
-        for c in checks:
-            verdict = "PASS" if c.passed else ("FAIL" if c.passed is False else "not measured")
-            cells.append([c.name, S.fmt(c.measured), f"{S.fmt(c.limit)} {c.unit}", verdict, c.note])
-            colors.append("#007a1f" if c.passed else ("#c00000" if c.passed is False else "#555555"))
-        flow.table(["criterion", "measured", "limit", "verdict", "how it is judged"], cells, [36, 18, 20, 24, 82],
-                   colors=colors, align_right_from=1, align_left=(4,))
-    else:
-        flow.paragraph("No stage specification in session.json (key \"stage_spec\", e.g. "
-                       "{\"accuracy_um\": 20, \"repeatability_um\": 5, \"straightness_um\": 38}); no verdict given.",
-                       color="#555555")
+
+def _uncertainty_page(flow: Any, results: dict[str, Any]) -> None:
+    """Environment, then the GUM budget (ISO/TR 230-9 style)."""
+    from lps_gui.report import budget_table as B
+
+    flow.heading("Environment", 11)
+    flow.table(None, [list(r) for r in B.environment_rows(results)], [52, 128], size_pt=8.0, row_mm=4.2,
+               align_right_from=9)
+    flow.heading("Uncertainty budget (GUM, ISO/TR 230-9)", 11)
+    rows = B.budget_rows(results)
+    if not rows:
+        flow.paragraph("These results carry no uncertainty budget; re-run lps estimate.", color="#555555")
+        return
+    flow.table(B.BUDGET_HEADER, rows, B.BUDGET_WIDTHS, size_pt=7.5, row_mm=4.0, align_right_from=2,
+               align_left=(3, 5))
+    for note in B.budget_notes(results):
+        flow.paragraph(note, size_pt=7.5, color="#333333")
+
+
+def _truth_page(flow: Any, results: dict[str, Any]) -> None:
+    """The simulator's truth on its own page: not part of the measurement."""
+    rows = S.truth_rows(results)
+    if not rows:
+        return
+    flow.new_page()
+    flow.heading("Simulator truth (simulated session only)", 11)
+    flow.paragraph("This session was simulated: the simulator knows the stage's true positions. These rows compare "
+                   "the measurement with that truth; they are a check of the method, not part of a measurement "
+                   "of a real stage.", color="#555555")
+    flow.table(["figure against truth", "value", "unit"], [[r.name, r.text(), r.unit] for r in rows], [100, 26, 16])
 
 
 
@@ -173,7 +256,7 @@ def _method_page(flow: Any, results: dict[str, Any]) -> None:
     flow.table(None, method, [30, 70], size_pt=7.5, row_mm=row_mm, align_right_from=9)
     below_method = flow.y
     flow.y = top
-    flow.table(["intrinsic", "value", "std"], intr, [16, 30, 24], size_pt=7.5, row_mm=row_mm, x_mm=110)
+    flow.table(["intrinsic", "value", "1\u03c3"], intr, [16, 30, 24], size_pt=7.5, row_mm=row_mm, x_mm=110)
     flow.y = max(flow.y, below_method)
 
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 from typing import Any
 
 from lps_gui.report.planar_figures import planar_figures_from_results
-from lps_gui.report.summary import DASH, Row, fmt
+from lps_gui.report.summary import Row, fmt, table_cells
 
 PLANAR_TABLE_COLUMNS = (  # key, header, decimals, width mm
     ("index", "#", None, 9), ("run", "run", None, 8), ("direction", "dir", None, 8),
@@ -75,18 +75,7 @@ def planar_position_table(results: dict[str, Any]) -> tuple[list[str], list[list
     positions = sorted(results.get("positions") or [], key=lambda r: r.get("index", 0))
     has_truth = any(r.get("truth_deviation_x_um") is not None for r in positions)
     columns = [c for c in PLANAR_TABLE_COLUMNS if has_truth or not c[0].startswith("truth_")]
-    body = []
-    for r in positions:
-        row = []
-        for key, _, decimals, _ in columns:
-            v = r.get(key)
-            if key == "outlier":
-                row.append("yes" if v else "")
-            elif decimals is None:
-                row.append(str(v) if v is not None else DASH)
-            else:
-                row.append(DASH if v is None else f"{float(v):.{decimals}f}")
-        body.append(row)
+    body = table_cells(positions, columns)
     return [c[1] for c in columns], body, [float(c[3]) for c in columns]
 
 

@@ -6,7 +6,8 @@ every number printed has exactly one source. No Qt here.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import re
+from dataclasses import dataclass, replace
 from typing import Any, Sequence
 
 import numpy as np
@@ -20,6 +21,7 @@ METHOD_NAMES = {"joint": "joint LM (all positions, orientation and line at once)
                 "pnp": "per-view PnP (baseline)", "calibrate": "full calibration (reference only)"}
 INTRINSIC_ORDER = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3")
 DASH = "\u2014"
+ZERO_BELOW = 1e-9  # |values| below this print as 0 (no unit of the report resolves them)
 
 
 @dataclass(frozen=True)
@@ -31,10 +33,23 @@ class Row:
     unit: str = ""
     note: str = ""
     digits: int = 3  # significant digits when printed
+    unresolved: str = ""  # "not resolved (σ X)": printed instead of a value, greyed (core.resolution)
+    key: str = ""  # the figure's key in results.json (for its U)
+    u_k2: float | None = None  # expanded uncertainty (k = 2) in ``unit``, None when not assessed
 
     def text(self) -> str:
         """The value as printed: ``digits`` significant digits, a dash when absent."""
-        return fmt(self.value, self.digits)
+        return self.unresolved or fmt(self.value, self.digits)
+
+    def u_text(self) -> str:
+        """U (k = 2) as printed ("\u00b1 0.52"; with the value's decimals when it is far smaller), empty when not assessed."""
+        if self.u_k2 is None:
+            return ""
+        text = fmt(self.u_k2, 2)
+        value = self.text()
+        if "e" in text and "." in value:  # e.g. a mean step 2.000054 mm +- 0.000086 mm, not 8.6e-05
+            text = f"{self.u_k2:.{len(value.split('.')[1])}f}"
+        return f"\u00b1 {text}"
 
 
 @dataclass(frozen=True)
@@ -47,6 +62,22 @@ class SpecCheck:
     unit: str
     passed: bool | None  # None: not measured by this session
     note: str = ""
+    indicative: bool = False  # fewer runs than ISO 230-2 asks: a verdict to read, not a FAIL
+
+    def verdict(self) -> str:
+        """PASS / FAIL / not resolved, "(indicative)" when fewer than 5 runs per direction back it."""
+        if self.passed is None:
+            return "not resolved" if self.measured is not None else "not measured"
+        word = "PASS" if self.passed else ("above limit" if self.indicative else "FAIL")
+        return f"{word} (indicative)" if self.indicative else word
+
+    def color(self) -> str:
+        """Green pass, red fail; grey when not resolved; muted (never red) when indicative."""
+        if self.passed is None:
+            return "#555555"
+        if self.indicative:
+            return "#4f7a5a" if self.passed else "#8a6d00"
+        return "#007a1f" if self.passed else "#c00000"
 
 
 def fmt(value: float | None, digits: int = 3) -> str:
@@ -54,8 +85,8 @@ def fmt(value: float | None, digits: int = 3) -> str:
     if value is None or not isinstance(value, (int, float, np.floating, np.integer)) or not math.isfinite(value):
         return DASH
     v = float(value)
-    if v == 0:
-        return "0"
+    if abs(v) < ZERO_BELOW:
+        return "0"  # rounding noise of a difference (e.g. an Abbe term of 6e-12 um) reads as what it is
     mag = int(math.floor(math.log10(abs(v))))
     if mag >= 6 or mag < -4:
         return f"{v:.{digits - 1}e}"
@@ -67,9 +98,15 @@ def fmt(value: float | None, digits: int = 3) -> str:
 
 
 def title_rows(session_meta: dict[str, Any], results: dict[str, Any], version: str) -> list[tuple[str, str]]:
-    """(label, text) pairs of the title block: who, what, with which equipment and software."""
+    """(label, text) pairs of the identification block: who, what, with which equipment and software.
+
+    ``session_meta["identification"]`` holds what the operator typed (operator,
+    customer, stage_model, stage_serial, controller_serial, location); a
+    driver's class name ("RigStage") is printed as words ("simulated stage").
+    """
     camera = session_meta.get("camera") or {}
     stage = session_meta.get("stage") or {}
+    ident = session_meta.get("identification") or {}
     board = results.get("board") or session_meta.get("board") or {}
     corners = board.get("inner_corners") or ["?", "?"]
     sha = ((results.get("inputs") or {}).get("sha256") or {})
@@ -78,26 +115,57 @@ def title_rows(session_meta: dict[str, Any], results: dict[str, Any], version: s
     rig = session_meta.get("rig") or stage.get("rig") or (f"simulated ({truth.get('preset', 'simulator')})" if truth else DASH)
     intr = results.get("intrinsics") or {}
     size = intr.get("image_size") or camera.get("image_size")
+    if not size and camera.get("width") and camera.get("height"):
+        size = [camera["width"], camera["height"]]
     fx = (np.asarray(intr.get("camera_matrix") or np.zeros((3, 3)), dtype=float))[0, 0]
     lens = _describe(camera, ("lens", "focal_length_mm"), "")
+    stage_text = _describe({**stage, "model": ident.get("stage_model") or stage.get("model")},
+                           ("name", "model", "driver", "kind"), DASH)
+    if ident.get("stage_serial"):
+        stage_text += f", serial {ident['stage_serial']}"
+    if stage.get("axis"):
+        stage_text += f", axis {stage['axis']}"
+    controller = _describe(stage, ("controller", "firmware", "port"), "simulated (no controller)" if truth else DASH)
+    if ident.get("controller_serial"):
+        controller += f", serial {ident['controller_serial']}"
+    board_text = f"chessboard {corners[0]}\u00d7{corners[1]} inner corners, square {fmt(board.get('square_mm'), 4)} mm at 20 \u00b0C"
+    u_sq = (results.get("environment") or {}).get("square_mm_uncertainty_um")
+    if u_sq is not None:
+        board_text += f", u = {fmt(_num(u_sq), 2)} \u00b5m"
     return [
         ("Date", str(results.get("created") or session_meta.get("created") or DASH)),
+        ("Customer", str(ident.get("customer") or "not recorded")),
+        ("Operator", str(ident.get("operator") or "not recorded")),
+        ("Location", str(ident.get("location") or "not recorded")),
         ("Session", str((results.get("inputs") or {}).get("session") or DASH)),
         ("Rig", str(rig)),
-        ("Stage", _describe(stage, ("name", "model", "driver", "kind"), DASH)
-         + (f", axis {stage['axis']}" if stage.get("axis") else "")),
-        ("Controller", _describe(stage, ("controller", "firmware", "port"), "simulated (no controller)" if truth else DASH)),
+        ("Stage", stage_text),
+        ("Controller", controller),
         ("Camera", _describe(camera, ("name", "model", "driver", "device", "source"), DASH)
          + (f", {size[0]}\u00d7{size[1]} px" if size else "")),
         ("Lens", lens or (f"not recorded; focal length {fx:.1f} px from the intrinsics" if fx else DASH)),
-        ("Board", f"chessboard {corners[0]}\u00d7{corners[1]} inner corners, square {fmt(board.get('square_mm'), 4)} mm"),
+        ("Board", board_text),
         ("Software", f"lps-calib {version}"),
         ("Session hash", f"sha256 {session_hash[:16]}\u2026 (session.json)" if session_hash else DASH),
     ]
 
 
+CLASS_WORDS = {"RigStage": "simulated stage", "SimStage": "simulated stage", "SimulatedCamera": "simulated camera",
+               "SimCamera": "simulated camera"}
+
+
+def _words(value: Any) -> str:
+    """A driver's class name as words: "RigStage" -> "simulated stage", "GrblStage" -> "grbl stage"."""
+    text = str(value)
+    if text in CLASS_WORDS:
+        return CLASS_WORDS[text]
+    if re.fullmatch(r"(?:[A-Z][a-z0-9]+){2,}", text):
+        return " ".join(w.lower() for w in re.findall(r"[A-Z][a-z0-9]+", text))
+    return text
+
+
 def _describe(d: dict[str, Any], keys: Sequence[str], default: str) -> str:
-    parts = [str(d[k]) for k in keys if d.get(k) not in (None, "", {})]
+    parts = [_words(d[k]) for k in keys if d.get(k) not in (None, "", {})]
     return ", ".join(parts) if parts else default
 
 
@@ -139,8 +207,15 @@ def method_rows(results: dict[str, Any]) -> list[tuple[str, str]]:
 # ----------------------------------------------------------------------------- figures
 
 
+ONE_SIGMA_LABELS = {"scale_sigma": "Scale error 1\u03c3 (noise only, correlations included)",
+                    "scale_sigma_total": "Scale error 1\u03c3 (noise and intrinsics)",
+                    "truth_mean_sigma": "Truth: mean position 1\u03c3 (noise only)",
+                    "truth_median_sigma": "Truth: median position 1\u03c3 (noise only)"}
+
+
 def _row(f: SummaryFigure) -> Row:
-    return Row(f.label or f.key, f.value, f.unit, digits=f.digits)
+    return Row(ONE_SIGMA_LABELS.get(f.key, f.label or f.key), f.value, f.unit, digits=f.digits, key=f.key,
+               unresolved=f.unresolved)
 
 
 def iso_rows(iso: dict[str, Any] | None) -> list[Row]:
@@ -160,9 +235,55 @@ def summary_rows(results: dict[str, Any]) -> list[Row]:
     The figures of :func:`lps_gui.io.results_file.summary_figures` (the same
     builder as summary.csv) that have a report label: single-run figures,
     ISO 230-2 figures (absent with one run), maxima of straightness and
-    angles over the positions not flagged, and the truth comparison.
+    angles over the positions not flagged; the truth comparison is :func:`truth_rows`, on its own page.
     """
-    return [_row(f) for f in summary_figures(results) if f.label is not None]
+    return [_with_u(results, _row(f)) for f in summary_figures(results)
+            if f.label is not None and not f.key.startswith("truth_")]
+
+
+def truth_rows(results: dict[str, Any]) -> list[Row]:
+    """The simulator's truth comparison (simulated sessions only): printed on its own page, labelled."""
+    return [_row(f) for f in summary_figures(results) if f.label is not None and f.key.startswith("truth_")]
+
+
+U_KEYS = {"step_std": "step_std_um", "max_abs_deviation": "max_abs_deviation_um", "scale": "scale_ppm",
+          "periodic_amplitude": "periodic_amplitude_um"}  # summary figure -> results uncertainty.figures_k2
+
+
+def _with_u(results: dict[str, Any], row: Row) -> Row:
+    """The row with its U (k = 2) from results ``uncertainty`` (None where not assessed)."""
+    unc = results.get("uncertainty") or {}
+    u = unc.get("figures_k2") or {}
+    if not unc:
+        return row
+    key = row.key
+    if key == "mean_step":
+        value = _mean_step_u_mm(results)
+    elif key.startswith("iso230_2_"):
+        value = _num(u.get(key.removeprefix("iso230_2_") + "_um"))
+    elif key.startswith("straightness_span_"):
+        value = _median_sigma_u(results, f"straightness_sigma_um_{key[-1]}", views=2)
+    elif key.startswith("max_abs_") and key != "max_abs_deviation":
+        value = _median_sigma_u(results, f"{key.removeprefix('max_abs_')}_sigma_urad", views=1)
+    else:
+        value = _num(u.get(U_KEYS.get(key, "")))
+    return replace(row, u_k2=value)
+
+
+def _median_sigma_u(results: dict[str, Any], column: str, views: int) -> float | None:
+    """2 x the median per-view 1-sigma of ``column`` (x sqrt 2 for a peak-to-valley of two views)."""
+    s = [v for v in (_num(r.get(column)) for r in results.get("positions") or [] if not r.get("outlier")) if v is not None]
+    return float(2.0 * math.sqrt(views) * np.median(s)) if s else None
+
+
+def _mean_step_u_mm(results: dict[str, Any]) -> float | None:
+    """U of the mean step: U over the travel divided by the number of steps (in mm)."""
+    unc = results.get("uncertainty") or {}
+    n = ((results.get("figures") or {}).get("iso230_2") or {}).get("n_targets")
+    if n is None:
+        n = len({round(float(r["target_mm"]), 6) for r in results.get("positions") or [] if r.get("target_mm") is not None})
+    U = _num(unc.get("expanded_k2_um"))
+    return None if U is None or not n or n < 2 else 1e-3 * U / (n - 1)
 
 
 def figure_notes(results: dict[str, Any]) -> list[str]:
@@ -200,7 +321,8 @@ def spec_checks(results: dict[str, Any], spec: dict[str, Any] | None) -> list[Sp
 def _as_check(c: dict[str, Any]) -> SpecCheck:
     passed = c.get("passed")
     return SpecCheck(str(c.get("name", "")), _num(c.get("measured")), float(c.get("limit", math.nan)),
-                     str(c.get("unit") or "\u00b5m"), None if passed is None else bool(passed), str(c.get("note") or ""))
+                     str(c.get("unit") or "\u00b5m"), None if passed is None else bool(passed), str(c.get("note") or ""),
+                     bool(c.get("indicative", False)))
 
 
 # ----------------------------------------------------------------------------- limits
@@ -217,7 +339,9 @@ def limits_notes(results: dict[str, Any]) -> list[str]:
         f"({fmt(_num(board.get('square_mm')), 4)} mm as given). An error in the printed square size is a pure "
         "scale error: a square 0.1 % too large makes every position and the scale error 1000 ppm too large, "
         "and leaves the shape of the deviation curve, the straightness and the angles unchanged. Measure the "
-        "board with a calibrated instrument to remove it.",
+        "board with a calibrated instrument to remove it; its certified uncertainty (environment "
+        "square_mm_uncertainty_um) and its temperature enter the uncertainty budget, and a board away from "
+        "20 \u00b0C is corrected with its expansion coefficient.",
     ]
     if sig.size:
         text = (f"Uncertainty per position: noise alone gives a median \u03c3 of {fmt(float(np.median(sig)), 2)} \u00b5m")
@@ -228,17 +352,7 @@ def limits_notes(results: dict[str, Any]) -> list[str]:
         else:
             text += "; the intrinsics uncertainty was not propagated (no intrinsics covariance given)."
         notes.append(text)
-    six = {k: cols[k][np.isfinite(cols[k])] for k in ("straightness_sigma_um_1", "straightness_sigma_um_2",
-                                                      "roll_sigma_urad", "pitch_sigma_urad", "yaw_sigma_urad")}
-    if all(v.size for v in six.values()):
-        med = {k: fmt(float(np.median(v)), 2) for k, v in six.items()}
-        notes.append(
-            "Straightness and angles come from each view's own pose, which is far less certain than its position "
-            f"along the line: median 1\u03c3 is {med['straightness_sigma_um_1']} \u00b5m (v1) and "
-            f"{med['straightness_sigma_um_2']} \u00b5m (v2); roll {med['roll_sigma_urad']}, pitch "
-            f"{med['pitch_sigma_urad']}, yaw {med['yaw_sigma_urad']} \u00b5rad. A peak-to-valley over many views "
-            "grows with this noise (about 5-6\u03c3 for a few hundred views), so judge a straightness limit "
-            "against the plotted \u00b12\u03c3 bands, or average more frames per stop.")
+    notes += straightness_notes(results, cols)
     notes.append(
         "Abbe offset: the model holds the camera's orientation constant, so a pitch or yaw of the carriage "
         "about an axis across the motion shifts the image like a translation of (board distance x angle). "
@@ -248,6 +362,39 @@ def limits_notes(results: dict[str, Any]) -> list[str]:
     notes.append("Deviations are relative to the first capture (offset zero there), not to the carriage's "
                  "encoder reading; the first capture's own noise is part of every other position's \u03c3.")
     return notes
+
+
+def straightness_notes(results: dict[str, Any], cols: dict[str, np.ndarray]) -> list[str]:
+    """What one planar board resolves (SPEC 11): straightness and image rotation yes, the tilts hardly."""
+    med = {k: fmt(float(np.median(v[np.isfinite(v)])), 2) if np.isfinite(v).any() else DASH
+           for k, v in ((k, cols.get(k, np.array([np.nan]))) for k in (
+               "straightness_sigma_um_1", "straightness_sigma_um_2", "roll_sigma_urad", "pitch_sigma_urad",
+               "yaw_sigma_urad"))}
+    rot = np.array([_num(r.get("image_rotation_sigma_urad")) or np.nan for r in results.get("positions") or []], float)
+    rot_med = fmt(float(np.median(rot[np.isfinite(rot)])), 2) if np.isfinite(rot).any() else DASH
+    st = (results.get("figures") or {}).get("straightness") or {}
+    if "constant orientation" not in str(st.get("basis", "")):
+        return ["Straightness and angles come from each view's own pose, which is far less certain than its "
+                f"position along the line: median 1\u03c3 is {med['straightness_sigma_um_1']} \u00b5m (v1) and "
+                f"{med['straightness_sigma_um_2']} \u00b5m (v2). Figures that noise alone could produce are shown "
+                "as \"not resolved\"."]
+    return [
+        "Straightness is the displacement of the line of sight at the board plane (the same Abbe convention as "
+        "the positions), per view with the common orientation, off a least-squares line: median 1\u03c3 "
+        f"{med['straightness_sigma_um_1']} \u00b5m in the board plane across the motion (v1) and "
+        f"{med['straightness_sigma_um_2']} \u00b5m along the viewing direction (v2), which the board shows only "
+        f"through its image scale. Image rotation (about the optical axis) has a median 1\u03c3 of {rot_med} "
+        "\u00b5rad per view. Peak-to-valley figures are taken over the targets (runs and directions averaged) and "
+        "are findings only above what noise alone would span (shown beside them); otherwise they read \"not "
+        "resolved\". The \u03c3 counts the corner noise; a corner detector's bias that repeats at the same pose is "
+        "not in it.",
+        "Tilts: a tilt of the camera about an axis parallel to the board shifts the image like a translation of "
+        "(distance x angle), so one planar board separates roll and pitch from straightness only through weak "
+        f"perspective: per-view 1\u03c3 roll {med['roll_sigma_urad']}, pitch {med['pitch_sigma_urad']}, yaw "
+        f"{med['yaw_sigma_urad']} \u00b5rad, shown as \"not resolved\" where noise alone reaches the figure. Their "
+        "effect at the board plane is inside the straightness and positions (Abbe offset). A second board at "
+        "another distance in the same view would separate them; this version does not support a two-depth target.",
+    ]
 
 
 def outlier_rows(results: dict[str, Any]) -> list[dict[str, Any]]:
@@ -271,23 +418,17 @@ def outlier_rows(results: dict[str, Any]) -> list[dict[str, Any]]:
 POSITION_TABLE_COLUMNS = (  # (key, header, decimals or None for text, width in mm)
     ("index", "#", 0, 9), ("run", "run", 0, 7), ("direction", "dir", None, 6), ("target_mm", "target\n[mm]", 3, 13),
     ("measured_mm", "measured\n[mm]", 4, 15), ("deviation_um", "deviation\n[\u00b5m]", 2, 14),
-    ("truth_deviation_um", "truth dev.\n[\u00b5m]", 2, 14),
-    ("sigma_um", "\u03c3\n[\u00b5m]", 2, 10), ("rms_px", "rms\n[px]", 3, 10),
+    ("truth_deviation_um", "truth dev.\n[\u00b5m]", 2, 16),
+    ("sigma_um", "1\u03c3 noise\n[\u00b5m]", 2, 13), ("rms_px", "rms\n[px]", 3, 10),
     ("straightness_um_1", "str. v1\n[\u00b5m]", 2, 13), ("straightness_um_2", "str. v2\n[\u00b5m]", 2, 13),
     ("roll_urad", "roll\n[\u00b5rad]", 1, 13), ("pitch_urad", "pitch\n[\u00b5rad]", 1, 13),
     ("yaw_urad", "yaw\n[\u00b5rad]", 1, 13), ("outlier", "outlier", None, 11),
 )
 
 
-def position_table(results: dict[str, Any]) -> tuple[list[str], list[list[str]], list[float]]:
-    """Header, text rows and column widths (mm) of the per-position table (fixed decimals per column).
-
-    The truth column appears only for simulated sessions (results carry ``truth_deviation_um``).
-    """
-    positions = sorted(results.get("positions") or [], key=lambda r: r.get("index", 0))
-    has_truth = any(r.get("truth_deviation_um") is not None for r in positions)
-    columns = [c for c in POSITION_TABLE_COLUMNS if has_truth or c[0] != "truth_deviation_um"]
-    header = [c[1] for c in columns]
+def table_cells(positions: Sequence[dict[str, Any]], columns: Sequence[tuple[str, str, int | None, float]]
+                ) -> list[list[str]]:
+    """Text cells of a per-position table: fixed decimals per column, a dash when absent, "yes" for outliers."""
     body = []
     for r in positions:
         row = []
@@ -301,4 +442,17 @@ def position_table(results: dict[str, Any]) -> tuple[list[str], list[list[str]],
                 f = _num(v)
                 row.append(DASH if f is None else f"{f:.{decimals}f}")
         body.append(row)
+    return body
+
+
+def position_table(results: dict[str, Any]) -> tuple[list[str], list[list[str]], list[float]]:
+    """Header, text rows and column widths (mm) of the per-position table (fixed decimals per column).
+
+    The truth column appears only for simulated sessions (results carry ``truth_deviation_um``).
+    """
+    positions = sorted(results.get("positions") or [], key=lambda r: r.get("index", 0))
+    has_truth = any(r.get("truth_deviation_um") is not None for r in positions)
+    columns = [c for c in POSITION_TABLE_COLUMNS if has_truth or c[0] != "truth_deviation_um"]
+    header = [c[1] for c in columns]
+    body = table_cells(positions, columns)
     return header, body, [float(c[3]) for c in columns]

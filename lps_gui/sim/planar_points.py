@@ -12,13 +12,12 @@ from pathlib import Path
 
 import numpy as np
 
-from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.planar_simulate import PlanarSimulationSpec, simulate_planar_views
 from lps_gui.io.board_file import write_board
 from lps_gui.io.corners_vnl import CornerTable, write_corners_vnl
 from lps_gui.io.intrinsics_file import write_intrinsics
 from lps_gui.io.session import CaptureRecord, Session
-from lps_gui.sim.points import typical_std
+from lps_gui.sim.points import calibrated_intrinsics
 from lps_gui.sim.session import write_simulated_session
 
 
@@ -27,7 +26,7 @@ def simulate_planar_point_session(spec: PlanarSimulationSpec, out: Path | str) -
     out = Path(out)
     views = simulate_planar_views(spec)
     true = spec.rig.intrinsics
-    intr = CameraIntrinsics(true.image_size, true.camera_matrix, true.dist, covariance=np.diag(typical_std(true) ** 2))
+    intr = calibrated_intrinsics(true)
     truth = dict(views.truth)
     truth["index"] = [s.index for s in views.stops]
     truth["board"] = {"type": spec.rig.board.type, "inner_corners": [spec.rig.board.cols, spec.rig.board.rows],

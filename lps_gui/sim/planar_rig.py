@@ -129,12 +129,19 @@ def create_simulated_gantry_session(folder, spec: PlanarSimulationSpec, clock: C
 
 
 def start_gantry_session(folder, spec: PlanarSimulationSpec, stage: RigStage, camera: RigCamera,
-                         intrinsics=None) -> Session:
-    """The session of a capture on an existing simulated gantry (the GUI's, or :func:`create_simulated_gantry_session`'s)."""
+                         intrinsics=None, extra: dict[str, Any] | None = None) -> Session:
+    """The session of a capture on an existing simulated gantry (the GUI's, or :func:`create_simulated_gantry_session`'s).
+
+    ``extra``: further session.json entries (the GUI's specification, environment, identification).
+    """
     from lps_gui.sim.session import write_simulated_session
 
-    return write_simulated_session(folder, spec, "capture", intrinsics=intrinsics, camera=camera.properties(),
-                                   stage={**stage.describe(), "axes": ["X", "Y"]}, truth=gantry_truth(spec, camera))
+    session = write_simulated_session(folder, spec, "capture", intrinsics=intrinsics, camera=camera.properties(),
+                                      stage={**stage.describe(), "axes": ["X", "Y"]}, truth=gantry_truth(spec, camera))
+    if extra:
+        session.meta.update(extra)
+        session.save_meta()
+    return session
 
 
 def reopen_simulated_gantry(session: Session, clock: Clock | None = None) -> tuple[RigStage, RigCamera]:

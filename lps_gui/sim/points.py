@@ -30,12 +30,17 @@ def typical_std(intrinsics: CameraIntrinsics) -> np.ndarray:
     return std
 
 
+def calibrated_intrinsics(true: CameraIntrinsics) -> CameraIntrinsics:
+    """The true intrinsics with a typical calibration's covariance: what a point session embeds."""
+    return CameraIntrinsics(true.image_size, true.camera_matrix, true.dist, covariance=np.diag(typical_std(true) ** 2))
+
+
 def simulate_point_session(spec: SimulationSpec, out: Path | str) -> Session:
     """Simulate ``spec`` at the corner level into a new session folder ``out``."""
     out = Path(out)
     views = simulate_views(spec)
     true = spec.rig.intrinsics
-    intr = CameraIntrinsics(true.image_size, true.camera_matrix, true.dist, covariance=np.diag(typical_std(true) ** 2))
+    intr = calibrated_intrinsics(true)
     truth = dict(views.truth)
     truth["index"] = [s.index for s in views.stops]
     session = write_simulated_session(

@@ -41,7 +41,7 @@ import numpy as np
 from lps_gui.core.estimate_types import LpsEstimate
 from lps_gui.core.observations import Observations
 from lps_gui.core.rig import Rig
-from lps_gui.core.simulate import board_plane_positions
+from lps_gui.core.simulate import board_plane_positions, board_plane_straightness
 from lps_gui.core.stage_errors import StageErrorModel, TruePose
 from lps_gui.io.atomic import append_line_durable, write_text_atomic
 from lps_gui.io.board_file import board_from_dict
@@ -177,11 +177,14 @@ def session_truth(session: Session) -> dict[str, Any] | None:
     out["bumped_views"] = meta.get("bumped_views", [])
     plane = _board_plane(session, meta, out)
     if plane is not None:
-        out["plane_mm"] = plane
+        out["plane_mm"], out["plane_straightness_um"], out["image_rotation_urad"] = plane
     return out
 
 
-def _board_plane(session: Session, meta: dict[str, Any], truth: dict[str, Any]) -> np.ndarray | None:
+def _board_plane(session: Session, meta: dict[str, Any], truth: dict[str, Any]
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """What a constant-orientation model sees of the true poses: positions at the board plane (K,),
+    straightness at the board plane (K, 2) um and the rotation about the optical axis (K,) urad."""
     if not all(k in meta for k in ("R_cam_board", "C0_board", "u_board")):
         return None
     K = truth["axis_mm"].size
@@ -190,7 +193,7 @@ def _board_plane(session: Session, meta: dict[str, Any], truth: dict[str, Any]) 
     rig = Rig(board, intr, np.asarray(meta["R_cam_board"], float), np.asarray(meta["C0_board"], float),
               np.asarray(meta["u_board"], float), StageErrorModel())
     pose = TruePose(truth["axis_mm"], truth.get("straightness_um", np.zeros((K, 2))), truth.get("angles_urad", np.zeros((K, 3))))
-    return board_plane_positions(rig, pose)
+    return (board_plane_positions(rig, pose), *board_plane_straightness(rig, pose))
 
 
 # ----------------------------------------------------------------------------- reduce
@@ -302,7 +305,7 @@ def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any],
         "flagged_outliers": sorted(int(i) for i in obs.index[est.outlier]),
     }
     # the estimate's straightness is relative to a least-squares line and its angles to the common rotation
-    straight = truth.get("straightness_um")
+    straight = truth.get("plane_straightness_um", truth.get("straightness_um"))  # at the board plane (SPEC 11)
     straight = residual_from_line(per_view(straight), obs.target_mm, ok) if straight is not None and ok.any() else None
     angles = truth.get("angles_urad")
     angles = centred(per_view(angles), ok) if angles is not None and ok.any() else None
@@ -316,10 +319,15 @@ def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any],
         out["board_plane_z_mean_square"] = at_plane.z_mean_square
         out["abbe_rms_um"] = reduce_truth(plane, axis, ref, ok).rms_um
         plane_dev = true_deviation_um(plane, obs.target_mm, ref)
+    rotation = truth.get("image_rotation_urad")
+    rotation = per_view(rotation) if rotation is not None else None
+    out.update(truth_errors(est, straight, rotation, ok))
     for k, row in enumerate(positions):
         if not have[k]:
             continue
         row["truth_deviation_um"] = _f(true_dev[k])
+        if rotation is not None and ok.any():
+            row["truth_image_rotation_urad"] = _f(rotation[k] - np.nanmean(rotation[ok]))
         if plane_dev is not None:
             row["truth_plane_deviation_um"] = _f(plane_dev[k])
         if straight is not None:
@@ -328,4 +336,34 @@ def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any],
         if angles is not None:
             for j, key in enumerate(ANGLE_NAMES):
                 row[f"truth_{key}_urad"] = _f(angles[k, j])
+    return out
+
+
+def truth_errors(est: LpsEstimate, straight_truth: np.ndarray | None, rotation_truth: np.ndarray | None,
+                 ok: np.ndarray) -> dict[str, Any]:
+    """RMS error and mean (error/sigma)^2 of v1, v2 and the image rotation against simulator truth.
+
+    ``straight_truth`` (K, 2) is already relative to its least-squares line,
+    ``rotation_truth`` (K,) per view; the image rotation is compared with both
+    means removed (the common R absorbs a constant rotation).
+    """
+    bp = est.board_plane
+    out: dict[str, Any] = {}
+    if bp is None:
+        return out
+    if straight_truth is not None:
+        for j in (0, 1):
+            keep = ok & np.isfinite(straight_truth[:, j]) & np.isfinite(bp.straightness_um[:, j])
+            if keep.sum() < 3:
+                continue
+            err = bp.straightness_um[keep, j] - straight_truth[keep, j]
+            out[f"straightness_rms_error_um_{j + 1}"] = _f(np.sqrt(np.mean(err**2)))
+            out[f"straightness_z_mean_square_{j + 1}"] = _f(np.mean((err / bp.straightness_sigma_um[keep, j]) ** 2))
+    if rotation_truth is not None:
+        keep = ok & np.isfinite(rotation_truth) & np.isfinite(bp.image_rotation_urad)
+        if keep.sum() >= 3:
+            e = bp.image_rotation_urad[keep] - rotation_truth[keep]
+            e = e - e.mean()
+            out["image_rotation_rms_error_urad"] = _f(np.sqrt(np.mean(e**2)))
+            out["image_rotation_z_mean_square"] = _f(np.mean((e / bp.image_rotation_sigma_urad[keep]) ** 2))
     return out

@@ -92,6 +92,15 @@ def test_full_covariance_matches_opencv_std_and_keeps_correlations():
     cal = calibrate_intrinsics(BOARD.object_points(), list(uv), INTR.image_size)
     cov = cal.intrinsics.covariance
     assert np.allclose(np.sqrt(np.diag(cov)), cal.std, rtol=0.02)
+    # with a flat board and no rejections our refinement is OpenCV's solution, with OpenCV's sigmas
+    flat = calibrate_intrinsics(BOARD.object_points(), list(uv), INTR.image_size, warp="off", reject_outliers=False)
+    objs = [BOARD.object_points().astype(np.float32)] * 15
+    rms, K, dist, *_rest, std_cv, _, _ = cv2.calibrateCameraExtended(
+        objs, [u.astype(np.float32).reshape(-1, 1, 2) for u in uv], INTR.image_size, None, None,
+        criteria=(cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-12))
+    assert np.allclose(flat.intrinsics.vector()[:4], [K[0, 0], K[1, 1], K[0, 2], K[1, 2]], atol=1e-4)
+    assert np.allclose(flat.std, std_cv.ravel()[:9], rtol=0.02)
+    assert flat.rms_px == pytest.approx(rms, rel=1e-4)
     corr_k1_k2 = cov[4, 5] / np.sqrt(cov[4, 4] * cov[5, 5])
     assert corr_k1_k2 < -0.8  # radial terms trade off: a diagonal covariance would hide it
     fixed = calibrate_intrinsics(BOARD.object_points(), list(uv), INTR.image_size, flags=cv2.CALIB_FIX_K3)

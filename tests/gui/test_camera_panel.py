@@ -42,3 +42,21 @@ def test_a_camera_that_cannot_open_is_reported(qtbot, window):
     title, message = window.last_error
     assert title == "Camera not opened" and "camera device 7" in message and "\n" not in message
     qtbot.waitUntil(lambda: cam.grabber is None and cam.open_btn.text() == "Start preview", timeout=5000)
+
+
+def test_a_failed_camera_open_is_one_log_line_and_the_preview_clears(qtbot, window, caplog):
+    import logging
+
+    import numpy as np
+
+    caplog.set_level(logging.INFO)
+    cam = window.camera_panel
+    cam.image.setImage(np.full((48, 64), 200, np.uint8))  # a frame from before
+    cam.source.addItem("Camera device 7", "7")
+    cam.source.setCurrentIndex(cam.source.count() - 1)
+    assert cam.start()
+    qtbot.waitUntil(lambda: window.last_error is not None and cam.grabber is None, timeout=10000)
+    errors = [r for r in caplog.records if r.levelno >= logging.ERROR]
+    assert len(errors) == 1 and "camera device 7" in errors[0].getMessage() and errors[0].exc_info is None
+    assert "\n" not in errors[0].getMessage()
+    assert cam.last_image() is None and cam.placeholder.isVisible()

@@ -50,7 +50,7 @@ def test_reset_prints_banner_then_build_info_and_help(emu):
     e, port = emu
     assert port.ask(b"\x18", until="Grbl") == ["", "Grbl 1.1h ['$' for help]"]
     assert BANNER == "\r\nGrbl 1.1h ['$' for help]\r\n"
-    assert port.ask(b"$I\n") == ["[VER:1.1h.20190830:]", "[OPT:V,15,128]", "ok"]
+    assert port.ask(b"$I\n") == ["[VER:1.1h.20190830:]", "[OPT:VL,15,128]", "ok"]  # built without HOMING_INIT_LOCK
     assert port.ask(b"$\n") == ["[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X $H ~ ! ? ctrl-x]", "ok"]
     assert port.ask(b"$G\n") == ["[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]", "ok"]
     assert port.ask(b"$I=rig 1\n") == ["ok"]
@@ -157,3 +157,103 @@ def test_check_mode_and_sleep(emu):
     assert port.ask(b"$SLP\n") == ["ok"] and port.lines("[MSG") == ["[MSG:Sleeping]"]
     assert port.ask(b"?", until="<")[-1].startswith("<Sleep|")
     assert port.ask(b"\x18", until="[MSG")[-1] == "[MSG:'$H'|'$X' to unlock]"
+
+
+# ---------------------------------------------------------------------------------------------
+# Sequences of GRBL 1.1h's own source (main.c, protocol.c, system.c, limits.c, motion_control.c)
+
+
+@pytest.fixture
+def stock():
+    """Stock 1.1h (HOMING_INIT_LOCK) with $22=1, as it powers up; port opened before the banner."""
+    e = GrblEmulator(SimulatedStage(travel_mm=(0.0, 100.0), start_mm=10.0), time_scale=50.0, homing_init_lock=True)
+    master_path = e.start()
+    port = Port(master_path)
+    yield e, port
+    port.close()
+    e.stop()
+
+
+def test_power_up_with_homing_enabled_is_alarm_with_unlock_message(stock):
+    e, port = stock
+    assert e.stage.settings[22] == 1.0
+    assert port.ask(b"?", until="<")[-1].startswith("<Alarm|")
+    assert port.ask(b"$I\n") == ["[VER:1.1h.20190830:]", "[OPT:V,15,128]", "ok"]
+    assert port.ask(b"G0 X1\n") == ["error:9"]
+    assert port.ask(b"$X\n") == ["[MSG:Caution: Unlocked]", "ok"]
+    # a soft reset out of Idle keeps Idle (main.c keeps prior_state): banner without the unlock message
+    assert port.ask(b"\x18", until="Grbl") == ["", "Grbl 1.1h ['$' for help]"]
+    assert port.ask(b"?", until="<")[-1].startswith("<Idle|")
+
+
+def test_failed_homing_is_alarm_then_the_ok_of_H_then_the_reset_banner(stock):
+    e, port = stock
+    e.faults.fail_homing = 8
+    assert port.ask(b"$H\n", until="[MSG", timeout_s=3.0) == [
+        "ALARM:8", "ok", "", "Grbl 1.1h ['$' for help]", "[MSG:'$H'|'$X' to unlock]"]
+    assert not e.stage.homed and port.ask(b"?", until="<")[-1].startswith("<Alarm|")
+    e.faults.fail_homing = 9
+    assert port.ask(b"$H\n", until="[MSG", timeout_s=3.0)[:2] == ["ALARM:9", "ok"]
+    e.faults.fail_homing = None
+    assert port.ask(b"$H\n", timeout_s=3.0) == ["ok"] and e.stage.homed
+
+
+def test_status_asked_during_homing_is_answered_when_the_cycle_ends(stock):
+    e, port = stock
+    port.ser.write(b"$H\n")
+    time.sleep(0.02)
+    assert port.ask(b"?", timeout_s=3.0)[0].startswith("<Home|")
+
+
+def test_soft_limit_is_alarm_2_and_the_line_ok_comes_after_the_reset(stock):
+    e, port = stock
+    port.ask(b"$X\n")
+    assert port.ask(b"G0 X500\n", until="[MSG") == ["ALARM:2", "[MSG:Reset to continue]"]
+    port.ser.write(b"$X\n")  # ignored: the critical loop reads nothing, the reset flushes RX
+    with pytest.raises(AssertionError, match=r"got \[\]"):
+        port.lines(until="ok", timeout_s=0.2)
+    assert port.ask(b"\x18", until="[MSG") == ["ok", "", "Grbl 1.1h ['$' for help]", "[MSG:'$H'|'$X' to unlock]"]
+
+
+def test_lines_during_a_feed_hold_are_answered_only_after_resume(stock):
+    e, port = stock
+    port.ask(b"$X\n")
+    assert port.ask(b"G1 X90 F300\n") == ["ok"]
+    port.ser.write(b"!")
+    time.sleep(0.05)
+    port.ser.write(b"G1 X20 F3000\n$$\n")  # received, not executed: protocol_exec_rt_suspend()
+    with pytest.raises(AssertionError, match=r"got \[\]"):
+        port.lines(until="ok", timeout_s=0.3)
+    assert port.ask(b"?", until="<")[-1].startswith("<Hold:0|")  # status still answered
+    port.ser.write(b"~")
+    assert port.lines(until="ok") == ["ok"]  # the G1
+    assert port.lines(until="ok")[-1] == "error:8"  # $$ during the resumed cycle (system.c: not in CYCLE)
+
+
+def test_idle_feed_hold_also_holds_back_lines(stock):
+    e, port = stock
+    port.ask(b"$X\n")
+    port.ser.write(b"!")
+    time.sleep(0.05)
+    assert port.ask(b"?", until="<")[-1].startswith("<Hold:0|")
+    port.ser.write(b"\n")
+    with pytest.raises(AssertionError, match=r"got \[\]"):
+        port.lines(until="ok", timeout_s=0.2)
+    port.ser.write(b"~")
+    assert port.lines(until="ok") == ["ok"]
+
+
+def test_g10_l20_sets_the_work_offset_reported_as_wco_and_kept_over_a_reset(stock):
+    e, port = stock
+    port.ask(b"$X\n")
+    assert port.ask(b"G0 X30\n") == ["ok"]
+    time.sleep(0.1)
+    assert port.ask(b"G10 L20 P1 X0\n") == ["ok"]
+    report = port.ask(b"?", until="<")[-1]
+    assert "MPos:-70.000" in report and "WCO:-70.000,-100.000,-100.000" in report  # sent at once after the change
+    assert port.ask(b"G0 X5\n") == ["ok"]  # work 5 = stage 35
+    time.sleep(0.2)
+    assert e.stage.status().work_mm[0] == pytest.approx(35.0)
+    assert port.ask(b"G10 L2 P1 X-100\n") == ["ok"]  # back to the power-up offset
+    assert port.ask(b"G10 L20 X0\n") == ["error:28"] and port.ask(b"G10 L20 P2 X0\n") == ["error:20"]
+    assert port.ask(b"G0 L2 X1\n") == ["error:36"]

@@ -8,7 +8,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from lps_gui.core.board import Board
+from lps_gui.core.environment import Environment, thermal_record
 from lps_gui.core.iso230 import figures_for_session
+from lps_gui.pipeline.uncertainty import uncertainty_of
 from lps_gui.core.simulate import small_spec, true_views
 
 
@@ -61,6 +64,9 @@ def make_results(runs: int = 2, directions: str = "both", views: int = 12, seed:
         "timings_s": {"total": 1.0},
         "truth_comparison": {"position_rms_error_um": 0.5},
     }
+    env = {"board_temperature_c": 21.0, "board_cte_ppm_per_k": 10.0, "square_mm_uncertainty_um": 0.2}
+    results["environment"] = thermal_record(Board(9, 6, 20.0), Environment.from_dict(env))
+    results["uncertainty"] = uncertainty_of(results, Environment.from_dict(env), 20.0)
     return results, truth
 
 

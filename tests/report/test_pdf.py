@@ -43,14 +43,19 @@ def test_pdf_has_the_planned_pages_and_opens(tmp_path):
     folder = _session(tmp_path, results, truth, {"accuracy_um": 20, "repeatability_um": 5, "straightness_um": 38})
     info = render_report(folder)
     assert info.path == folder / "report.pdf"
-    # front page, method page, three pages of plots (the last with outliers), one table page
-    assert _pdf_pages(info.path) == info.n_pages == len(info.pages) == 6
-    assert info.pages[0] == ["Linear positioning stage \u2014 measurement report", "Summary figures", "Stage specification"]
-    assert info.pages[1] == ["Method and camera", "What limits this result"]
-    figs = [w for page in info.pages for w in page if w.startswith("figure:")]
+    # verdict page, figures, uncertainty, method, three pages of plots (the last with outliers), table, truth
+    assert _pdf_pages(info.path) == info.n_pages == len(info.pages) == 9
+    assert info.pages[0] == ["Linear positioning stage \u2014 measurement report", "Verdict", "figure:deviation",
+                             "Identification"]
+    assert info.pages[1] == ["Measured figures", "ISO 230-2 per target"]
+    assert info.pages[2] == ["Environment", "Uncertainty budget (GUM, ISO/TR 230-9)"]
+    assert info.pages[3] == ["Method and camera", "What limits this result"]
+    assert info.clipped == ()
+    figs = [w for page in info.pages[1:] for w in page if w.startswith("figure:")]
     assert figs == ["figure:positions", "figure:deviation", "figure:step", "figure:straightness", "figure:angles",
                     "figure:residuals", "figure:spectrum"]
-    assert info.pages[-1] == ["Per-position results"]
+    assert info.pages[-2] == ["Per-position results"]
+    assert info.pages[-1] == ["Simulator truth (simulated session only)"]
     if shutil.which("pdftoppm"):
         subprocess.run(["pdftoppm", "-r", "10", "-png", str(info.path), str(tmp_path / "p")], check=True)
         assert len(list(tmp_path.glob("p-*.png"))) == info.n_pages
@@ -71,7 +76,7 @@ def test_printed_summary_numbers_come_from_results(tmp_path):
     results["figures"]["single_run"]["periodic_period_mm"] = 7.77
     folder = _session(tmp_path, results, truth)
     path = write_report(folder)
-    text = subprocess.run(["pdftotext", "-layout", "-f", "1", "-l", "1", str(path), "-"], capture_output=True,
+    text = subprocess.run(["pdftotext", "-layout", "-f", "2", "-l", "2", str(path), "-"], capture_output=True,
                           text=True, check=True).stdout
     for row in summary_rows(results):
         line = next((ln for ln in text.splitlines() if ln.strip().startswith(row.name)), None)
@@ -118,3 +123,51 @@ def test_failed_render_keeps_the_previous_report(tmp_path):
         write_report(folder, results)
     assert good.read_bytes() == before
     assert not list(folder.glob(".report.pdf*"))
+
+
+def _page_text(path: Path, page: int, *extra: str) -> str:
+    return subprocess.run(["pdftotext", *extra, "-f", str(page), "-l", str(page), str(path), "-"],
+                          capture_output=True, text=True, check=True).stdout
+
+
+@pytest.mark.skipif(shutil.which("pdftotext") is None, reason="poppler's pdftotext not installed")
+def test_page_one_states_the_verdict_with_expanded_uncertainty_and_nothing_is_clipped(tmp_path):
+    from lps_gui.report.layout import ensure_gui_app
+    from lps_gui.report.verdict import verdicts
+
+    results, truth = make_results()  # 2 runs per direction: indicative
+    spec = {"accuracy_um": 20, "repeatability_um": 5, "straightness_um": 38}
+    folder = _session(tmp_path, results, truth, spec)
+    info = render_report(folder)
+    assert info.clipped == ()  # every table cell fits its column (measured with the painter's font metrics)
+    text = _page_text(info.path, 1, "-layout")
+    assert "Verdict" in text and "U (k = 2)" in text
+    rows = verdicts(results, spec)
+    assert len(rows) == 3
+    for v in rows:
+        line = next((ln for ln in text.splitlines() if ln.strip().startswith(v.name)), None)
+        assert line is not None, v.name
+        assert v.verdict in line
+        if v.u_k2 is not None:
+            from lps_gui.report.summary import fmt
+            assert f"\u00b1 {fmt(v.u_k2)}" in line
+    assert "(indicative)" in text and "FAIL\n" not in text.replace(" ", "")  # fewer than 5 runs: never a bare FAIL
+    assert "Truth:" not in text  # simulator truth has its own page
+    assert "RigStage" not in text
+    last = _page_text(info.path, info.n_pages)
+    assert "Simulator truth" in last and "Truth: position error RMS" in last
+    # pdftotext -bbox: every word of page 1 lies inside the page's text area (nothing runs off the page)
+    ensure_gui_app()
+    box = _page_text(info.path, 1, "-bbox")
+    xs = [float(v) for v in re.findall(r'xMax="([0-9.]+)"', box)]
+    assert xs and max(xs) <= 595.0 - 15 / 25.4 * 72 + 1.0
+
+
+def test_a_too_narrow_column_is_reported_as_clipped(tmp_path):
+    from lps_gui.report.layout import PdfFlow, ensure_gui_app
+
+    ensure_gui_app()
+    flow = PdfFlow(tmp_path / "t.pdf", "t", "t")
+    flow.table(["a", "b"], [["short", "a cell far too long for a column of ten millimetres"]], [20, 10])
+    flow.finish()
+    assert flow.log.clipped == ["page 1: a cell far too long for a column of ten millimetres"]

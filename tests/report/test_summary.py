@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from lps_gui.report.summary import (extremes_rows, fmt, intrinsics_rows, iso_rows, outlier_rows, position_table,
-                                    spec_checks, summary_rows, title_rows)
+                                    spec_checks, summary_rows, title_rows, truth_rows)
 from tests.report.conftest import make_results
 
 SPEC = {"accuracy_um": 20, "repeatability_um": 5, "straightness_um": 38}
@@ -17,7 +17,12 @@ def test_summary_rows_print_the_results_figures():
     assert rows["Scale error"].value == single["scale_ppm"] and rows["Scale error"].unit == "ppm"
     assert rows["Mean step"].value == single["mean_step_mm"] and rows["Mean step"].text() == f"{single['mean_step_mm']:.6f}"
     assert rows["Periodic error period"].value == single["periodic_period_mm"]
-    assert rows["Truth: position error RMS"].value == 0.5
+    assert not any(name.startswith("Truth") for name in rows)  # truth has its own page
+    assert {r.name: r.value for r in truth_rows(results)}["Truth: position error RMS"] == 0.5
+    U = results["uncertainty"]["figures_k2"]
+    assert rows["ISO 230-2 Accuracy A (bidirectional)"].u_k2 == U["A_um"] == results["uncertainty"]["expanded_k2_um"]
+    assert rows["ISO 230-2 Repeatability R (bidirectional)"].u_k2 == U["R_um"] < U["A_um"]
+    assert rows["Max |deviation|"].u_text().startswith("\u00b1 ")
     iso = results["figures"]["iso230_2"]
     assert rows["ISO 230-2 Accuracy A (bidirectional)"].value == iso["A_um"]
     assert rows["ISO 230-2 Repeatability R (backward \u2193)"].value == iso["R_down_um"]
@@ -62,6 +67,7 @@ def test_spec_checks_pass_and_fail_against_the_limits():
 def test_fmt_significant_digits_and_dash():
     assert fmt(12.3456) == "12.3" and fmt(0.0012345) == "0.00123" and fmt(None) == "\u2014"
     assert fmt(float("nan")) == "\u2014" and fmt(0) == "0" and fmt(2.0001, 7) == "2.000100"
+    assert fmt(6.47e-12) == "0" and fmt(-3e-11) == "0"  # rounding noise of a difference reads 0
 
 
 def test_position_table_has_one_row_per_position_in_index_order():
@@ -103,3 +109,36 @@ def test_figure_notes_are_collected_once():
     results["figures"]["single_run"]["notes"] = ["a", "b"]
     results["figures"]["iso230_2"]["notes"] = ["b", "c"]
     assert figure_notes(results) == ["a", "b", "c"]
+
+
+def test_class_names_are_printed_as_words_and_identification_is_shown():
+    results, _ = make_results()
+    meta = {"stage": {"driver": "RigStage", "axis": "X"}, "camera": {"driver": "SimulatedCamera"},
+            "identification": {"operator": "A. Meier", "customer": "ACME", "stage_serial": "SN 42"}}
+    rows = dict(title_rows(meta, results, "1"))
+    assert rows["Stage"] == "simulated stage, serial SN 42, axis X" and rows["Camera"].startswith("simulated camera")
+    assert rows["Operator"] == "A. Meier" and rows["Customer"] == "ACME"
+    assert dict(title_rows({"stage": {"driver": "GrblStage"}}, results, "1"))["Stage"] == "grbl stage"
+
+
+def test_verdict_decision_rule_and_indicative_runs():
+    from lps_gui.report.verdict import INDICATIVE_COLOR, verdicts
+
+    results, _ = make_results()
+    iso = results["figures"]["iso230_2"]
+    U = results["uncertainty"]["figures_k2"]["A_um"]
+    a_half = iso["A_um"] / 2
+    # limit well above: PASS, indicative with 2 runs (never green without 5 runs, never red)
+    far = verdicts(results, {"accuracy_um": a_half + U})[0]
+    assert far.verdict == "PASS (indicative)" and far.color == INDICATIVE_COLOR and far.u_k2 == U / 2
+    # limit inside the uncertainty zone: not resolved
+    near = verdicts(results, {"accuracy_um": a_half + U / 4})[0]
+    assert near.verdict == "not resolved"
+    below = verdicts(results, {"accuracy_um": a_half - U / 4})[0]
+    assert below.verdict == "not resolved"
+    # with 5 runs per direction the same figures give a full verdict
+    iso["n_runs_up"] = iso["n_runs_down"] = 5
+    assert verdicts(results, {"accuracy_um": a_half + U})[0].verdict == "PASS"
+    fail = verdicts(results, {"accuracy_um": (a_half - U / 2) / 2})[0]
+    assert fail.verdict == "FAIL" and fail.color == "#c00000"
+    assert verdicts(results, None) == []

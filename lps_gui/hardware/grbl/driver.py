@@ -9,6 +9,12 @@ This module gives GRBL's messages their meaning for a stage: status reports
 (MPos or WPos per ``$10``, the last WCO remembered, inches per ``$13``) become
 :class:`StageStatus`; ``ALARM:N`` fails every line in flight and is raised by
 the next wait; the banner means a reset; ``[MSG:]`` lines become events.
+What GRBL 1.1h's source does after an alarm or during a hold (docs/hardware.md):
+the lines an alarm cut short still get an ``ok`` (kept as orphans by the link);
+ALARM:3 and 6-10 reset GRBL by itself 500 ms later (the next line waits for the
+banner, a ``?`` is re-sent); ALARM:1/2 need a reset (lines are refused with
+that advice); during a feed hold GRBL answers no line until ``~`` (new lines
+are refused, lines in flight wait through the hold).
 Moves and jogs are acknowledged when planned; :meth:`GrblStage.wait_idle`
 polls ``?`` until the motion is over. Settings are written only with nothing
 in flight (send-response), as GRBL's docs require for EEPROM writes.
@@ -38,6 +44,10 @@ from lps_gui.hardware.stage import Stage, StageEvent, StageSetting, StageStatus
 
 RT_STATUS, RT_HOLD, RT_RESUME, RT_RESET, RT_JOG_CANCEL = b"?", b"!", b"~", b"\x18", b"\x85"
 RESETS_AFTER_OK = ("[MSG:Disabled]", "[MSG:Restoring defaults]")  # system.c: mc_reset() after these
+CRITICAL_ALARMS = (1, 2)  # protocol_exec_rt_system(): hard/soft limit block everything until a reset
+SELF_RESET_ALARMS = (3, 6, 7, 8, 9, 10)  # raised with mc_reset(): GRBL re-initializes on its own
+HELD_STATES = ("Hold", "Door")  # protocol_exec_rt_suspend(): no line is read until resumed
+UNLOCK_MESSAGE = "'$H'|'$X' to unlock"
 __all__ = ["ControllerReset", "GrblStage"]
 
 
@@ -83,6 +93,9 @@ class GrblStage(Stage):
         self._overrides: tuple[int, int, int] | None = None
         self._alarm_code: int | None = None
         self._critical = False
+        self._reset_due = False
+        self._held = False
+        self._locked = False
         self._homing = False
         self._last_state = ""
 
@@ -99,6 +112,11 @@ class GrblStage(Stage):
         self.link.timeout_s = value
 
     @property
+    def locked(self) -> bool:
+        """GRBL is in its alarm lock (power-up with homing enabled, after an alarm): home or unlock first."""
+        return self._locked
+
+    @property
     def garbage_lines(self) -> int:
         """Unrecognized lines skipped so far (line noise, a wrong baud rate)."""
         return self.link.garbage_lines
@@ -108,7 +126,7 @@ class GrblStage(Stage):
         """Open the port, reset (or not) the controller, read ``$I``, ``$$`` and one status."""
         if self.connected:
             return
-        self._critical = self._homing = False
+        self._critical = self._homing = self._reset_due = self._held = self._locked = False
         self.link.open()
         try:
             if self.reset_on_connect:
@@ -153,13 +171,18 @@ class GrblStage(Stage):
         elif kind == "error":
             self.events.emit(StageEvent("error", code=msg.code, text=msg.text))
         elif kind == "alarm":
-            self._alarm_code = int(msg.code)
-            err = GrblError("alarm", int(msg.code), f"GRBL on {self.port_name}")
-            self.link.fail_pending(err)
+            code = int(msg.code)
+            self._alarm_code = code
+            self._locked = True
+            with self.link.cond:
+                self._critical = self._critical or code in CRITICAL_ALARMS
+                self._reset_due = self._reset_due or code in SELF_RESET_ALARMS
+            err = GrblError("alarm", code, f"GRBL on {self.port_name}")
+            self.link.orphan_pending(err)
             self.events.emit(StageEvent("alarm", code=msg.code, text=str(err)))
         elif kind == "banner":
             self.version = msg.text
-            self._critical = False
+            self._critical = self._reset_due = self._held = False
             self.link.fail_pending(ControllerReset(
                 f"GRBL on {self.port_name} was reset while a command was in flight; check the stage state"))
             with self.link.cond:
@@ -167,6 +190,8 @@ class GrblStage(Stage):
                 self.link.cond.notify_all()
             self.events.emit(StageEvent("message", text=f"Grbl {msg.text} started"))
         elif kind == "msg":
+            if msg.text == UNLOCK_MESSAGE:
+                self._locked = True
             if msg.text == "Reset to continue":
                 self._critical = True
                 with self.link.cond:
@@ -196,15 +221,45 @@ class GrblStage(Stage):
             self._status = st
             self._status_seq += 1
             self.link.cond.notify_all()
+        self._held = r.state in HELD_STATES
+        if r.state == "Idle":
+            self._locked = False
         if r.state != self._last_state:
             self._last_state = r.state
             self.events.emit(StageEvent("state", text=r.state))
 
     # ------------------------------------------------------------------ lines
     def send(self, line: str, timeout_s: float | None = None) -> Pending:
-        """Queue a line with character counting; see :meth:`GrblLink.send`."""
+        """Queue a line with character counting; see :meth:`GrblLink.send`.
+
+        Refused while GRBL would not read it: in a critical alarm (its reset flushes
+        the line unanswered) and in a feed hold (answered only after ``~``). After
+        an alarm that resets GRBL by itself, the line waits for the banner (sent
+        earlier, the reset would flush it).
+        """
         self.require_connected()
+        self._refuse_if_critical(line)
+        if self._reset_due:
+            self.link.wait_for(lambda: not self._reset_due, self.timeout_s,
+                               f"no reset banner within {self.timeout_s:g} s after ALARM:{self._alarm_code}; reset the controller")
+        if self._held and self.status().state in HELD_STATES:
+            raise HardwareError(f"GRBL on {self.port_name} is in a feed hold: {line.strip()!r} not sent; "
+                                f"resume (~) or reset the controller first")
         return self.link.send(line, timeout_s)
+
+    def _refuse_if_critical(self, what: str) -> None:
+        if self._critical:
+            code = self._alarm_code if self._alarm_code in CRITICAL_ALARMS else 2
+            raise HardwareError(
+                f"GRBL on {self.port_name}: {GrblError('alarm', code).args[0].split('.')[0]} needs a reset "
+                f"('Reset to continue'): {what.strip()!r} not sent; reset the controller, then unlock ($X) or home ($H)")
+
+    def _still_held(self) -> bool:
+        """A reply is overdue: is GRBL holding it back in a feed hold (not a cable fault)?"""
+        try:
+            return self.status().state in HELD_STATES
+        except HardwareError:
+            return False
 
     def command(self, line: str, timeout_s: float | None = None) -> list[str]:
         """Send one line and wait for its ``ok`` (send-response); return the lines it printed.
@@ -213,7 +268,7 @@ class GrblStage(Stage):
         ``ok``; then this also waits for the banner, so the next line is not lost.
         """
         n = self._banners
-        lines = self.link.wait_reply(self.send(line, timeout_s), timeout_s)
+        lines = self.link.wait_reply(self.send(line, timeout_s), timeout_s, keep_waiting=self._still_held)
         if any(ln in RESETS_AFTER_OK for ln in lines):
             self.link.wait_for(lambda: self._banners > n, self.timeout_s, f"no banner after {line!r} within {self.timeout_s:g} s")
         return lines
@@ -222,7 +277,7 @@ class GrblStage(Stage):
         """Stream G-code with character counting; wait for every ``ok``; raise on the first error."""
         sent = [self.send(ln, timeout_s) for ln in lines if ln.strip()]
         for p in sent:
-            self.link.wait_reply(p, timeout_s)
+            self.link.wait_reply(p, timeout_s, keep_waiting=self._still_held)
 
     def realtime(self, byte: bytes) -> None:
         """Send a real-time command byte (never counted, acted on at once)."""
@@ -240,21 +295,30 @@ class GrblStage(Stage):
         with self._status_lock:
             n = self._status_seq
             self.realtime(RT_STATUS)
+            # a reset swallows a pending '?' (main.c clears the flags): ask again while waiting;
+            # GRBL ignores extra '?' before its report
             self.link.wait_for(lambda: self._status_seq > n or self._critical, self.timeout_s,
-                               f"no status report within {self.timeout_s:g} s; check the cable or reset the controller")
+                               f"no status report within {self.timeout_s:g} s; check the cable or reset the controller",
+                               retry=lambda: self.realtime(RT_STATUS))
         return self._status if not self._critical else self.status()
 
     def home(self) -> None:
+        """``$H``; a homing failure (ALARM:6-9) raises, and GRBL resets itself right after."""
+        self._refuse_if_critical("$H")
         self._homing = True
         try:
             self.command("$H", timeout_s=self.homing_timeout_s)
             self._alarm_code = None
+            self._locked = False
         finally:
             self._homing = False
 
     def unlock(self) -> None:
+        """``$X``; in a critical alarm (ALARM:1/2) GRBL needs a reset first, and this says so."""
+        self._refuse_if_critical("$X")
         self.command("$X")
         self._alarm_code = None
+        self._locked = False
 
     def soft_reset(self) -> None:
         """Ctrl-X and wait for the banner (GRBL raises ALARM:3 if it was moving)."""
@@ -265,6 +329,7 @@ class GrblStage(Stage):
 
     def feed_hold(self) -> None:
         self.realtime(RT_HOLD)
+        self._held = True  # until a status report says otherwise (a hold in Jog only cancels it)
 
     def resume(self) -> None:
         self.realtime(RT_RESUME)
@@ -279,6 +344,13 @@ class GrblStage(Stage):
 
     def jog_cancel(self) -> None:
         self.realtime(RT_JOG_CANCEL)
+
+    def set_work_zero(self, axis: str | None = None, value_mm: float = 0.0) -> None:
+        """Make the current position read ``value_mm`` on ``axis`` (``G10 L20 P1``: the G54 offset, kept in EEPROM).
+
+        GRBL reports the new WCO in the next status report, so :meth:`status` stays right.
+        """
+        self.command(f"G10 L20 P1 {(axis or self.axis).upper()}{value_mm:.3f}")
 
     def wait_idle(self, timeout_s: float = 60.0) -> StageStatus:
         """Poll ``?`` until Idle with nothing in flight; alarms and timeouts raise.

@@ -33,15 +33,20 @@ class GrblEmulator:
 
     Use as a context manager in tests: ``with GrblEmulator(...) as emu: GrblStage(emu.path)``.
     ``firmware`` holds GRBL's state; ``stage`` is the simulated stage that moves.
+    ``homing_init_lock=True`` is stock GRBL 1.1h (config.h HOMING_INIT_LOCK): with
+    ``$22=1`` it powers up in Alarm. The default (off, ``[OPT:VL,...]``) keeps the
+    in-process rigs of tests and demos unlocked; ``lps emulate-grbl`` is stock.
     """
 
-    def __init__(self, stage: SimulatedStage | None = None, faults: Faults | None = None, time_scale: float = 1.0) -> None:
+    def __init__(self, stage: SimulatedStage | None = None, faults: Faults | None = None, time_scale: float = 1.0,
+                 homing_init_lock: bool = False) -> None:
         self.stage = stage if stage is not None else SimulatedStage()
         self.faults = faults or Faults()
         self.time_scale = float(time_scale)
         self.path = ""
         self.dropped = False
-        self.firmware = GrblFirmware(self.stage, self.faults, send=self._send, on_drop=self._drop_now)
+        self.firmware = GrblFirmware(self.stage, self.faults, send=self._send, on_drop=self._drop_now,
+                                     homing_init_lock=homing_init_lock)
         self._master = self._slave = -1
         self._thread: threading.Thread | None = None
         self._running = False
@@ -73,7 +78,7 @@ class GrblEmulator:
             self.stage.connect()
         self._running = True
         self._last_real = time.monotonic()
-        self.firmware.welcome()  # power-up prints what a reset prints
+        self.firmware.power_up()  # the homing lock (if built with it), then what a reset prints
         self._flush_out()
         self._thread = threading.Thread(target=self._serve, name="grbl-emulator", daemon=True)
         self._thread.start()

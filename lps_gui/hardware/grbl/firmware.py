@@ -31,11 +31,12 @@ from lps_gui.hardware.stage import AXES
 
 log = logging.getLogger(__name__)
 
-VERSION, BUILD, OPTIONS = "1.1h", "20190830", "V"
+VERSION, BUILD = "1.1h", "20190830"
 BANNER = f"\r\nGrbl {VERSION} ['$' for help]\r\n"
 HELP = "[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X $H ~ ! ? ctrl-x]"
 RT_STATUS, RT_HOLD, RT_RESUME, RT_RESET, RT_JOG_CANCEL = 0x3F, 0x21, 0x7E, 0x18, 0x85
 BUSY = ("Run", "Hold", "Jog", "Home", "Door")
+ALARM_REPORT_DELAY_S = 0.5  # report.c report_alarm_message(): delay_ms(500) after ALARM:N
 WCO_BUSY, WCO_IDLE, OVR_BUSY, OVR_IDLE = 30, 10, 20, 10  # config.h refresh counts
 
 
@@ -48,6 +49,8 @@ class Faults:
     error_every : answer every Nth command line with ``error:<error_code>`` instead of executing it.
     reply_delay_s : delay everything the emulator sends by this many real seconds.
     garbage_every : send a line of garbage bytes before every Nth message.
+    fail_homing : every ``$H`` fails half-way with ``ALARM:<code>`` (8: pull-off did not clear
+        the switch, 9: switch not found), then the ``ok`` of ``$H`` and a self-reset (limits.c).
     """
 
     drop_after_lines: int | None = None
@@ -56,6 +59,7 @@ class Faults:
     error_code: int = 20
     reply_delay_s: float = 0.0
     garbage_every: int = 0
+    fail_homing: int | None = None
 
 
 class GrblFirmware:
@@ -64,10 +68,14 @@ class GrblFirmware:
     Feed received bytes to :meth:`receive`, call :meth:`poll` often (it runs
     waiting actions and executes complete lines); output goes to ``send``.
     ``on_drop`` is called when the drop-after-lines fault fires.
+    ``homing_init_lock`` is config.h's HOMING_INIT_LOCK (stock 1.1h: on): with
+    ``$22=1`` the controller powers up in Alarm; off, ``[OPT:]`` carries ``L``.
     """
 
-    def __init__(self, stage: SimulatedStage, faults: Faults, send: Callable[[str], None], on_drop: Callable[[], None]) -> None:
+    def __init__(self, stage: SimulatedStage, faults: Faults, send: Callable[[str], None], on_drop: Callable[[], None],
+                 homing_init_lock: bool = False) -> None:
         self.stage = stage
+        self.homing_init_lock = homing_init_lock
         self.faults = faults
         self._send = send
         self._on_drop = on_drop
@@ -77,20 +85,47 @@ class GrblFirmware:
         self._n_cmd = 0
         self._build_user = ""
         self._initial_settings = dict(stage.settings)
+        self._user = [0.0, 0.0, 0.0]  # G54 shift set by G10 (EEPROM in GRBL: survives resets)
         self._reset_state()
 
     @property
     def busy(self) -> bool:
         """Something waits on time (a line, a move): poll often."""
-        return self._pending is not None or self.stage.next_event_s() is not None
+        return self._pending is not None or self._abort_at is not None or self.stage.next_event_s() is not None
+
+    @property
+    def options(self) -> str:
+        """``[OPT:]`` letters: V (variable spindle), L (built without HOMING_INIT_LOCK)."""
+        return "V" + ("" if self.homing_init_lock else "L")
 
     def poll(self) -> None:
-        """Run the waiting action, fire a due mid-move alarm, execute complete lines."""
+        """Run the waiting action, fire a due mid-move alarm, execute complete lines.
+
+        During a feed hold nothing runs: protocol.c calls protocol_execute_realtime()
+        at every line end (and mc_line() in its planner-full loop), and that stays
+        in protocol_exec_rt_suspend() while sys.suspend is set, so no line is
+        answered until ``~`` (only ``?``, ``~``, ``!`` and Ctrl-X act).
+        """
         self._check_mid_move_alarm()
-        if self._pending is not None and not self._critical and self._pending():
+        if self._abort_at is not None:
+            if self.stage.clock.now() < self._abort_at:
+                return
+            self._finish_abort()
+        if self._critical or self.halted or self._held():
+            return
+        if self._pending is not None and self._pending():
             self._pending = None
         while self._pending is None and not self._critical and not self.halted and b"\n" in self._rx.replace(b"\r", b"\n"):
             self._next_line()
+
+    def _held(self) -> bool:
+        return self.stage.status().state == "Hold"
+
+    def power_up(self) -> None:
+        """main.c at power-up: with HOMING_INIT_LOCK and ``$22=1`` the state is Alarm, then the welcome."""
+        if self.homing_init_lock and self.stage.homing_enabled and self.stage.alarm_code is None:
+            self.stage.trigger_alarm(0)  # the silent homing lock (no ALARM:N line)
+        self.welcome()
 
     def _reset_state(self) -> None:
         self._rx = bytearray()
@@ -98,19 +133,31 @@ class GrblFirmware:
         self._wco_counter = 0
         self._ovr_counter = 0
         self._critical = False
+        self._ok_on_reset = False  # a line was executing when a critical alarm hit: its ok follows the reset
+        self._status_in_homing = False  # a '?' during homing is answered when the cycle ends
+        self._abort_at: float | None = None  # an alarm's self-reset is due (after report.c's 500 ms delay)
         self._pending: Callable[[], bool] | None = None
         self._check = False
         self._sleep = False
 
     def welcome(self) -> None:
-        """What GRBL prints at power-up and after every reset."""
+        """What GRBL prints at power-up and after every reset (main.c, protocol_main_loop()).
+
+        The state survives a reset (main.c keeps ``prior_state``), so the unlock
+        message follows the banner whenever the controller comes up in Alarm: at
+        power-up with the homing lock, and after a reset out of an alarm.
+        """
         self._send(BANNER)
         if self.stage.alarm_code is not None:
             self._send("[MSG:'$H'|'$X' to unlock]")
 
-    def _wco(self) -> tuple[float, float, float]:
-        """G54 offset: machine 0 sits at the top of the travel, work = the stage's coordinates."""
+    def _base(self) -> tuple[float, float, float]:
+        """Machine 0 sits at the top of the travel: machine = stage coordinate + base."""
         return (-self.stage.travel_mm[1],) * 3  # type: ignore[return-value]
+
+    def _wco(self) -> tuple[float, float, float]:
+        """G54 offset: the base (work = the stage's coordinates) plus what G10 set since (``_user``)."""
+        return tuple(b + u for b, u in zip(self._base(), self._user))  # type: ignore[return-value]
 
     def _status_line(self) -> str:
         st = self.stage.status()
@@ -118,7 +165,7 @@ class GrblFirmware:
         sub = st.substate if state == st.state else None
         wco = self._wco()
         mask = int(self.stage.settings[10])
-        work = st.work_mm
+        work = tuple(s - u for s, u in zip(st.work_mm, self._user))
         busy = state in BUSY
         show_wco = self._wco_counter == 0
         if show_wco:
@@ -152,7 +199,11 @@ class GrblFirmware:
         if b == RT_RESET:
             self._soft_reset()
         elif b == RT_STATUS:
-            if not self._critical and self.stage.status().state != "Home":
+            if self._abort_at is not None:
+                pass  # the flag is set, then cleared by the reset (main.c): this '?' is lost
+            elif self.stage.status().state == "Home":
+                self._status_in_homing = True  # flag kept; limits_go_home() never reports
+            elif not self._critical:
                 self._send(self._status_line())
         elif b == RT_HOLD:
             if not self._critical and self.stage.status().state != "Home":
@@ -171,11 +222,19 @@ class GrblFirmware:
             self._rx.append(b)
 
     def _soft_reset(self) -> None:
-        """Ctrl-X: stop at once (ALARM:3 in motion, ALARM:6 while homing), flush RX, banner again."""
+        """Ctrl-X: stop at once (ALARM:3 in motion, ALARM:6 while homing), flush RX, banner again.
+
+        A line still executing (waiting for planner space, homing, dwelling, or
+        the one that raised a critical alarm) returns to the main loop on the
+        abort and prints its ``ok`` before main() re-initializes (the banner).
+        """
         before = self.stage.alarm_code
+        line_open = self._pending is not None or self._ok_on_reset
         self.stage.soft_reset()
         if self.stage.alarm_code != before and self.stage.alarm_code:
             self._send(f"ALARM:{self.stage.alarm_code}")
+        if line_open:
+            self._send("ok")
         if self._sleep and self.stage.alarm_code is None:
             self.stage.trigger_alarm(0)  # GRBL wakes from sleep into the alarm lock
         self._reset_state()
@@ -189,16 +248,35 @@ class GrblFirmware:
         fire = progress is not None and progress[0] in ("Run", "Jog") and progress[1] >= 0.5
         if fire:
             self.faults.alarm_mid_move = None
-            self._alarm(code)
+            self._alarm(code, line_open=self._pending is not None)
 
-    def _alarm(self, code: int) -> None:
+    def _alarm(self, code: int, line_open: bool) -> None:
+        """An alarm as protocol_exec_rt_system() handles it; ``line_open``: a line is executing.
+
+        Every alarm but the probe ones comes with mc_reset() (limits.c, motion_control.c):
+        hard/soft limit (1, 2) are critical, everything but a reset is ignored and the
+        line's ``ok`` follows the user's reset; the others (3, 6-10) abort at once:
+        ``ALARM:N``, 500 ms (report.c) in which a ``?`` is lost, the executing line's
+        ``ok``, the banner and the unlock message.
+        """
         if self.stage.alarm_code != code:
             self.stage.trigger_alarm(code)
         self._pending = None
         self._send(f"ALARM:{code}")
         if code in (1, 2):  # critical: ignore everything until a reset
             self._critical = True
+            self._ok_on_reset = line_open
             self._send("[MSG:Reset to continue]")
+        elif code not in (4, 5):  # probe failures alone do not reset
+            self._ok_on_reset = line_open
+            self._abort_at = self.stage.clock.now() + ALARM_REPORT_DELAY_S
+
+    def _finish_abort(self) -> None:
+        """The self-reset after an alarm: the executing line's ``ok``, then main() starts again."""
+        if self._ok_on_reset:
+            self._send("ok")
+        self._reset_state()
+        self.welcome()
 
     def _next_line(self) -> None:
         buf = self._rx.replace(b"\r", b"\n")
@@ -227,7 +305,7 @@ class GrblFirmware:
             self._send(f"error:{e.code}")
         except GrblError as e:
             if e.kind == "alarm":
-                self._alarm(e.code)
+                self._alarm(e.code, line_open=True)
             else:
                 self._send(f"error:{e.code}")
 
@@ -316,7 +394,7 @@ class GrblFirmware:
             return
         elif cmd == "I":
             self._send(f"[VER:{VERSION}.{BUILD}:{self._build_user}]")
-            self._send(f"[OPT:{OPTIONS},{PLANNER_BLOCKS},{RX_BUFFER_BYTES}]")
+            self._send(f"[OPT:{self.options},{PLANNER_BLOCKS},{RX_BUFFER_BYTES}]")
         elif cmd.startswith("I="):
             if len(cmd) - 2 > 79 - 1:
                 raise CodeError(14)
@@ -326,6 +404,8 @@ class GrblFirmware:
                 raise CodeError(3)
             if cmd != "RST=#":
                 self.stage.settings.update(self._initial_settings)
+            if cmd != "RST=$":
+                self._user = [0.0, 0.0, 0.0]
             self._send("[MSG:Restoring defaults]")
             self._send("ok")
             self._soft_reset()
@@ -349,8 +429,25 @@ class GrblFirmware:
         self._send("ok")
 
     def _homing_done(self) -> bool:
-        if self.stage.status().state == "Home":
+        """``$H`` ends: a held-back ``?`` is answered (state still Home), then ``ok``.
+
+        With the fail-homing fault the cycle stops half-way with ALARM:8/9, and the
+        ``ok`` of ``$H`` still comes (system.c returns STATUS_OK after the abort),
+        then the self-reset's banner (limits.c: mc_reset() on a homing failure).
+        """
+        code = self.faults.fail_homing
+        progress = self.stage.motion_progress()
+        done = self.stage.status().state != "Home"  # a slow poll may find the cycle over: it fails all the same
+        if code and (done or (progress is not None and progress[0] == "Home" and progress[1] >= 0.5)):
+            self._status_in_homing = False  # the reset clears the pending report
+            self.stage.homed = False
+            self._alarm(int(code), line_open=True)
+            return True
+        if not done:
             return False
+        if self._status_in_homing:
+            self._status_in_homing = False
+            self._send(self._status_line().replace("<Idle", "<Home", 1))
         self._send("ok")
         return True
 
@@ -363,11 +460,11 @@ class GrblFirmware:
             i = AXES.index(letter)
             v = value * scale
             if block.g.get("non_modal") == 53.0:
-                out[i] = v - self._wco()[i]
+                out[i] = v - self._base()[i]
             elif distance == 91.0:
                 out[i] = self.stage.planned_mm(i) + v
             else:
-                out[i] = v
+                out[i] = v + self._user[i]
         return out
 
     def _gcode(self, block: Block) -> None:
@@ -381,6 +478,9 @@ class GrblFirmware:
             m["feed"] = block.words["F"] * (MM_PER_INCH if m["units"] == 20.0 else 1.0)
         if block.g.get("non_modal") == 4.0:
             self._dwell(block.words["P"])
+            return
+        if block.g.get("non_modal") == 10.0:
+            self._set_offset(block)
             return
         targets = self._targets(block, m["distance"])
         if targets and m["motion"] == 1.0 and m["feed"] <= 0:
@@ -401,7 +501,7 @@ class GrblFirmware:
                 while moves and self.stage.planner_free() > 0:
                     moves.pop(0)[1]()
             except GrblError as e:
-                self._alarm(e.code) if e.kind == "alarm" else self._send(f"error:{e.code}")
+                self._alarm(e.code, line_open=True) if e.kind == "alarm" else self._send(f"error:{e.code}")
                 return True
             if moves:
                 return False
@@ -410,6 +510,23 @@ class GrblFirmware:
 
         if not plan():
             self._pending = plan
+
+    def _set_offset(self, block: Block) -> None:
+        """G10 L2 P1 (offset = the values) / G10 L20 P1 (the current position becomes the values), G54 only.
+
+        gcode.c: G10 waits for the planner (protocol_buffer_synchronize via the
+        coordinate-change path) and GRBL reports the new WCO at once.
+        """
+        scale = MM_PER_INCH if block.g.get("units", self._modal["units"]) == 20.0 else 1.0
+        for letter, value in block.axes.items():
+            i = AXES.index(letter)
+            v = value * scale
+            if block.words["L"] == 20:
+                self._user[i] = self.stage.planned_mm(i) - v
+            else:
+                self._user[i] = v - self._base()[i]
+        self._wco_counter = 0
+        self._send("ok")
 
     def _dwell(self, seconds: float) -> None:
         """G4: wait for the planner to empty, then dwell (simulated seconds), then ``ok``."""

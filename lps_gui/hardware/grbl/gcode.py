@@ -17,15 +17,15 @@ LINE_BUFFER_SIZE = 80  # GRBL's LINE_BUFFER_SIZE: longer lines answer error:11
 
 # modal groups of the G words we accept (GRBL numbering of the groups is irrelevant here)
 G_GROUPS = {
-    0.0: "motion", 1.0: "motion", 4.0: "non_modal", 53.0: "non_modal",
+    0.0: "motion", 1.0: "motion", 4.0: "non_modal", 10.0: "non_modal", 53.0: "non_modal",
     90.0: "distance", 91.0: "distance", 20.0: "units", 21.0: "units",
     17.0: "plane", 18.0: "plane", 19.0: "plane", 94.0: "feed_mode", 54.0: "coord",
 }
 M_GROUPS = {0: "stop", 1: "stop", 2: "stop", 30: "stop", 3: "spindle", 4: "spindle", 5: "spindle",
             7: "coolant", 8: "coolant", 9: "coolant"}
 AXIS_LETTERS = "XYZ"
-VALUE_LETTERS = "NFPSTXYZ"
-KNOWN_UNUSED = "IJKLRQ"  # GRBL knows them, but nothing here uses them: error:36
+VALUE_LETTERS = "NFPSTXYZL"
+KNOWN_UNUSED = "IJKRQ"  # GRBL knows them, but nothing here uses them: error:36
 JOG_G = {20.0, 21.0, 90.0, 91.0, 53.0}
 
 
@@ -130,6 +130,18 @@ def parse_block(text: str, jog: bool = False) -> Block:
             raise CodeError(36)
         return block
     if set(block.words) & set(KNOWN_UNUSED):
+        raise CodeError(36)
+    if block.g.get("non_modal") == 10.0:  # gcode.c: L2/L20 with P0..P6; only G54 (P0/P1) is emulated
+        if "L" not in block.words or "P" not in block.words:
+            raise CodeError(28)
+        if block.words["L"] not in (2, 20) or block.words["P"] != int(block.words["P"]) or not 0 <= block.words["P"] <= 6:
+            raise CodeError(20)
+        if block.words["P"] > 1:
+            raise CodeError(20)  # G55-G59 not emulated
+        if not block.axes:
+            raise CodeError(26)
+        return block
+    if "L" in block.words:
         raise CodeError(36)
     if block.g.get("non_modal") == 4.0:
         if "P" not in block.words:

@@ -7,7 +7,10 @@ already-open pyserial-like object (an emulator's pty, a scripted fake).
 GRBL answers every line with exactly one ``ok`` or ``error:N``, in order, so
 the link keeps the unanswered lines in a FIFO: an answer completes the
 oldest, push lines printed before it (``[VER:]``, ``$N=``, ``[MSG:]``...) are
-collected for it. Lines go out only while the unanswered bytes (with their
+collected for it. A line an alarm cut short still gets its answer from GRBL
+(the abort returns through the main loop, which prints ``ok``, before the
+reset banner): it stays in the FIFO as an *orphan* whose waiter was already
+failed, so that ``ok`` is not credited to the next line. Lines go out only while the unanswered bytes (with their
 ``\\n``) fit in GRBL's RX buffer minus one (GRBL's ``stream.py`` rule), so a
 stream keeps the planner full without overrunning the controller. Every wait
 has a deadline; a read or write failure marks the link dead with a one-line
@@ -45,6 +48,7 @@ class Pending:
     done: threading.Event = field(default_factory=threading.Event)
     lines: list[str] = field(default_factory=list)
     error: Exception | None = None
+    orphan: bool = False  # failed early (an alarm); its late answer is swallowed
 
 
 class GrblLink:
@@ -157,6 +161,10 @@ class GrblLink:
                     return
                 p = self._pending.popleft()
                 self._rx_used -= p.nbytes
+                if p.orphan:
+                    log.info("GRBL: %r answers %r, which an alarm cut short; not credited to a later line", line, p.line)
+                    self.cond.notify_all()
+                    return
                 if msg.kind == "error":
                     p.error = GrblError("error", int(msg.code), f"GRBL rejected {p.line!r}")
                 p.done.set()
@@ -181,13 +189,23 @@ class GrblLink:
         self._on_message(Message("disconnected", text=str(self.dead)))
 
     def fail_pending(self, err: Exception | None) -> None:
-        """Complete every unanswered line with ``err`` (an alarm, a reset, a lost port) and free the RX budget."""
+        """Complete every unanswered line with ``err`` (a reset, a lost port), forget them, free the RX budget."""
         with self.cond:
             while self._pending:
                 p = self._pending.popleft()
-                p.error = err or HardwareError(f"GRBL on {self.port_name}: line {p.line!r} lost")
-                p.done.set()
+                if not p.done.is_set():
+                    p.error = err or HardwareError(f"GRBL on {self.port_name}: line {p.line!r} lost")
+                    p.done.set()
             self._rx_used = 0
+            self.cond.notify_all()
+
+    def orphan_pending(self, err: Exception) -> None:
+        """Fail every waiter with ``err`` (an alarm) but keep the lines: GRBL still answers them, or resets."""
+        with self.cond:
+            for p in self._pending:
+                if not p.done.is_set():
+                    p.error, p.orphan = err, True
+                    p.done.set()
             self.cond.notify_all()
 
     # ------------------------------------------------------------------ writing
@@ -202,17 +220,30 @@ class GrblLink:
             self.vanished(exc)
             raise self.dead from None
 
-    def wait_for(self, predicate: Callable[[], bool], timeout_s: float, what: str) -> None:
-        """Block until ``predicate()`` (checked under :attr:`cond`) or raise with ``what`` after ``timeout_s``."""
+    def wait_for(self, predicate: Callable[[], bool], timeout_s: float, what: str,
+                 retry: Callable[[], None] | None = None, retry_every_s: float = 0.25) -> None:
+        """Block until ``predicate()`` (checked under :attr:`cond`) or raise with ``what`` after ``timeout_s``.
+
+        ``retry`` (called outside the lock every ``retry_every_s``) re-sends what a
+        reset may have swallowed, e.g. a ``?``.
+        """
         deadline = time.monotonic() + timeout_s
-        with self.cond:
-            while not predicate():
-                if self.dead is not None:
-                    raise self.dead
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    raise HardwareError(f"GRBL on {self.port_name}: {what}")
-                self.cond.wait(min(left, 0.1))
+        next_retry = time.monotonic() + retry_every_s
+        while True:
+            with self.cond:
+                while not predicate():
+                    if self.dead is not None:
+                        raise self.dead
+                    now = time.monotonic()
+                    if now >= deadline:
+                        raise HardwareError(f"GRBL on {self.port_name}: {what}")
+                    if retry is not None and now >= next_retry:
+                        break
+                    self.cond.wait(min(deadline - now, next_retry - now if retry else 0.1, 0.1))
+                else:
+                    return
+            retry()
+            next_retry = time.monotonic() + retry_every_s
 
     def send(self, line: str, timeout_s: float | None = None) -> Pending:
         """Queue a line within the RX-buffer budget (character counting); return without its answer."""
@@ -229,12 +260,19 @@ class GrblLink:
         self.write(data)
         return p
 
-    def wait_reply(self, p: Pending, timeout_s: float | None = None) -> list[str]:
-        """Wait for the answer of a sent line; return its push lines or raise GrblError/HardwareError."""
+    def wait_reply(self, p: Pending, timeout_s: float | None = None,
+                   keep_waiting: Callable[[], bool] | None = None) -> list[str]:
+        """Wait for the answer of a sent line; return its push lines or raise GrblError/HardwareError.
+
+        When the deadline passes, ``keep_waiting()`` may extend it (a feed hold:
+        GRBL answers no line until ``~``, which is no cable fault).
+        """
         timeout_s = self.timeout_s if timeout_s is None else timeout_s
-        if not p.done.wait(timeout_s):
+        while not p.done.wait(timeout_s):
             if self.dead is not None:
                 raise self.dead
+            if keep_waiting is not None and keep_waiting():
+                continue
             raise HardwareError(
                 f"GRBL on {self.port_name}: no reply to {p.line!r} within {timeout_s:g} s; check the cable or reset the controller"
             )

@@ -1,0 +1,24 @@
+"""`lps compare BEFORE AFTER`: the as-found / as-left PDF of two estimated sessions of one stage."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+HELP = "as-found / as-left report: deviation curves overlaid, ISO 230-2 figures side by side, improvement"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("before", type=Path, help="estimated session before compensation (as found)")
+    p.add_argument("after", type=Path, help="estimated session after compensation (as left)")
+    p.add_argument("--out", type=Path, default=None, help="PDF to write (default AFTER/as-found-as-left.pdf)")
+
+
+def run(args: argparse.Namespace) -> int:
+    from lps_gui.report.compare import comparison_rows, write_comparison
+    from lps_gui.report.pdf import load_results
+
+    path = write_comparison(args.before, args.after, args.out)
+    for name, b, a, factor in comparison_rows(load_results(args.before), load_results(args.after)):
+        print(f"{name}: {b} -> {a} um {factor}")
+    print(f"report: {path}")
+    return 0

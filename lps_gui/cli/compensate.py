@@ -1,0 +1,37 @@
+"""`lps compensate`: the compensation table of an estimated session, for a controller.
+
+Examples::
+
+    lps compensate run1 --format linuxcnc --out x.comp          # [JOINT_0] COMP_FILE = x.comp, COMP_FILE_TYPE = 0
+    lps compensate run1 --format linuxcnc-offsets --out x.comp  # COMP_FILE_TYPE = 1
+    lps compensate run1 --format csv --out comp.csv             # with sigmas; lps capture --compensation reads it
+"""
+from __future__ import annotations
+
+import argparse
+
+HELP = "compensation table of an estimated session (LinuxCNC, Mach4, CSV) and backlash settings"
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    from lps_gui.io.compensation_file import FORMATS
+
+    p.add_argument("session", help="session folder with results.json (run lps estimate first)")
+    p.add_argument("--format", required=True, choices=FORMATS, help="table format")
+    p.add_argument("--out", required=True, metavar="FILE", help="table file to write")
+    p.add_argument("--axis", default="X", choices=("X", "Y", "Z"), help="controller axis of the backlash lines (default X)")
+
+
+def run(args: argparse.Namespace) -> int:
+    from lps_gui.pipeline.compensate import compensate_session
+
+    table, lines = compensate_session(args.session, args.format, args.out, args.axis)
+    worst = max(float(abs(table.offset_um(1)).max()), float(abs(table.offset_um(-1)).max()))
+    kind = "bidirectional" if table.bidirectional else "one direction measured, its column repeated"
+    print(f"{args.out}: {len(table.nominal_mm)} points {table.nominal_mm[0]:g}..{table.nominal_mm[-1]:g} mm ({kind}), "
+          f"largest offset {worst:.2f} um")
+    if lines:
+        print(f"backlash {table.backlash_um():.2f} um:")
+        for line in lines:
+            print(f"  {line}")
+    return 0

@@ -1,0 +1,186 @@
+"""Is a figure resolved by the data? One rule for the report, the GUI and the verdicts.
+
+A figure is *resolved* when its uncertainty is below both its value and the
+limit it is judged against; otherwise it is shown as "not resolved (sigma X)"
+and never as a finding. For a peak-to-valley (or a maximum of |x|) over many
+views the uncertainty that matters is what noise alone would produce: the
+range of n independent normal errors has mean ~2 sigma sqrt(2 ln n) (about
+6 sigma for 400 views) and a spread of its own, so the "noise p-v" is its
+mean plus 3 standard deviations, and a p-v is resolved only above it.
+
+ISO 230-2 asks for 5 runs per direction; verdicts from fewer are indicative.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy.special import ndtri
+
+
+def chi2_sf(x: float, dof: float) -> float:
+    """Survival function of chi-square (scipy.stats imported here: it costs 0.3 s at start-up)."""
+    from scipy.stats import chi2
+
+    return float(chi2.sf(x, dof))
+
+
+ISO_RUNS_PER_DIRECTION = 5
+NOISE_K = 3.0  # a p-v is a finding only when 3 sd above what noise alone gives
+PROFILE_P_VALUE = 1e-3  # ... and its profile is not flat at this significance
+
+
+def expected_max_normal(n: int) -> float:
+    """E[max of n standard normals], Blom's approximation (within 1 % for n >= 5)."""
+    if n < 2:
+        return 0.0
+    return float(ndtri((n - 0.375) / (n + 0.25)))
+
+
+def _sd_max_normal(n: int) -> float:
+    """Standard deviation of the max of n standard normals (Gumbel limit, ~10 % for n >= 10)."""
+    if n < 2:
+        return 1.0
+    return float(math.pi / math.sqrt(6.0) / math.sqrt(2.0 * math.log(n)))
+
+
+def noise_peak_to_valley(sigma: float, n: int, k: float = NOISE_K) -> float:
+    """The p-v that n independent N(0, sigma^2) values stay below: mean + k sd of their range."""
+    return float(sigma) * (2.0 * expected_max_normal(int(n)) + k * math.sqrt(2.0) * _sd_max_normal(int(n)))
+
+
+def noise_max_abs(sigma: float, n: int, k: float = NOISE_K) -> float:
+    """The max |x| that n independent N(0, sigma^2) values stay below: mean + k sd."""
+    if n < 1:
+        return 0.0
+    p = (n - 0.375) / (n + 0.25)
+    return float(sigma) * (float(ndtri(0.5 * (1.0 + p))) + k * _sd_max_normal(2 * int(n)))
+
+
+def is_resolved(value: float | None, sigma: float | None, limit: float | None = None) -> bool:
+    """True when ``sigma`` is finite and below |value| and below ``limit`` (if given)."""
+    if value is None or sigma is None or not (math.isfinite(value) and math.isfinite(sigma)):
+        return False
+    if sigma >= abs(value):
+        return False
+    return limit is None or sigma < limit
+
+
+def not_resolved_text(sigma: float | None, unit: str, digits: int = 2) -> str:
+    """``"not resolved (σ 12 µm)"``: the words every reader of an unresolved figure sees."""
+    if sigma is None or not math.isfinite(sigma):
+        return "not resolved"
+    return f"not resolved (\u03c3 {_short(sigma, digits)} {unit})"
+
+
+def _short(v: float, digits: int) -> str:
+    if v == 0:
+        return "0"
+    decimals = max(0, digits - 1 - int(math.floor(math.log10(abs(v)))))
+    return f"{v:.{decimals}f}"
+
+
+@dataclass(frozen=True)
+class ProfileSpan:
+    """Peak-to-valley of an error profile over the targets, with what noise alone would give."""
+
+    span: float | None  # p-v of the per-target means
+    sigma: float | None  # median sigma of one per-target mean
+    noise_span: float | None  # expected p-v from noise alone (the p-v's uncertainty)
+    n_targets: int
+    resolved: bool
+
+    def to_dict(self, unit: str) -> dict[str, Any]:
+        return {f"span_{unit}": self.span, f"sigma_{unit}": self.sigma, f"noise_span_{unit}": self.noise_span,
+                "n_targets": self.n_targets, "resolved": self.resolved}
+
+
+def profile_span(values: np.ndarray, sigma: np.ndarray, target: np.ndarray, valid: np.ndarray,
+                 limit: float | None = None) -> ProfileSpan:
+    """P-v of the per-target means of ``values`` (all runs and directions averaged).
+
+    Averaging the captures of one target divides their independent noise by
+    sqrt(n), but not an error that repeats at the same pose (a corner
+    detector's bias on a rendered or real image): the sigma of a per-target
+    mean is therefore at least the scatter seen in the data, from second
+    differences of neighbouring targets (a smooth profile has none). Resolved: the per-target means differ from zero (they are already
+    off a least-squares line) at p < 0.001 by a chi-square test, and the p-v
+    exceeds the noise p-v of that many targets (and the limit, if given).
+    """
+    v = np.asarray(values, float)
+    s = np.asarray(sigma, float)
+    ok = np.asarray(valid, bool) & np.isfinite(v) & np.isfinite(s)
+    if ok.sum() < 2:
+        return ProfileSpan(None, None, None, 0, False)
+    keys, inv = np.unique(np.round(np.asarray(target, float)[ok], 6), return_inverse=True)
+    m = keys.size
+    count = np.bincount(inv, minlength=m)
+    mean = np.bincount(inv, weights=v[ok], minlength=m) / count
+    sig_mean = np.sqrt(np.bincount(inv, weights=s[ok] ** 2, minlength=m)) / count
+    if m >= 5:  # noise seen in the data: second differences of neighbouring targets (keys are sorted)
+        empirical = float(np.sqrt(np.mean(np.diff(mean, 2) ** 2) / 6.0))
+        sig_mean = np.maximum(sig_mean, empirical)
+    span = float(np.ptp(mean))
+    sig = float(np.median(sig_mean))
+    noise = noise_peak_to_valley(float(np.sqrt(np.mean(sig_mean**2))), m)
+    # a profile is a finding when it is significantly not flat (chi-square of the per-target means
+    # against their sigma, two dof taken by the reference line), not merely when its range is large
+    chi2 = float(np.sum((mean / np.maximum(sig_mean, 1e-300)) ** 2))
+    significant = m > 2 and float(chi2_sf(chi2, m - 2)) < PROFILE_P_VALUE
+    return ProfileSpan(span, sig, noise, int(m), significant and is_resolved(span, noise, limit))
+
+
+def runs_per_direction(figures: dict[str, Any]) -> int:
+    """The smaller number of runs of the directions measured (from ``figures["per_run"]``)."""
+    counts: dict[str, int] = {}
+    for r in figures.get("per_run") or []:
+        counts[str(r.get("direction"))] = counts.get(str(r.get("direction")), 0) + 1
+    return min(counts.values()) if counts else 0
+
+
+def is_indicative(figures: dict[str, Any]) -> bool:
+    """True when fewer runs per direction than ISO 230-2 asks back the figures."""
+    return runs_per_direction(figures) < ISO_RUNS_PER_DIRECTION
+
+
+def straightness_verdict(figures: dict[str, Any], limit: float) -> dict[str, Any] | None:
+    """Straight-line accuracy against ``limit`` (full width) from the resolved v1/v2 spans, or None.
+
+    Uses ``figures["straightness"]`` (per-target p-v of each direction with its
+    noise p-v). Noise only inflates a p-v, so p-v <= limit passes; a p-v above
+    the limit by more than its noise p-v fails; in between, or when the noise
+    p-v alone reaches the limit, the limit is not resolved (``passed`` None).
+    A span flat within noise still passes: the data resolve that it is below.
+    A resolved failure in one direction fails even if the other is not resolved.
+    """
+    st = figures.get("straightness")
+    if not isinstance(st, dict) or not all(isinstance(st.get(k), dict) for k in ("v1", "v2")):
+        return None
+    verdicts, notes, spans = [], [], []
+    for k in ("v1", "v2"):
+        span, noise = st[k].get("span_um"), st[k].get("noise_span_um")
+        if span is None or noise is None:
+            verdicts.append(None)
+            notes.append(f"{k} not measured")
+            continue
+        spans.append(float(span))
+        head = f"{k} {_short(span, 3)} \u00b5m (noise p-v {_short(noise, 2)}{'' if st[k].get('resolved') else ', flat within noise'})"
+        if span - noise > limit:
+            verdicts.append(False)
+            notes.append(f"{head} above the limit beyond its noise")
+        elif noise >= limit:
+            verdicts.append(None)
+            notes.append(f"{k} not resolved: noise alone spans {_short(noise, 2)} \u00b5m")
+        elif span <= limit:
+            verdicts.append(True)
+            notes.append(head)
+        else:
+            verdicts.append(None)
+            notes.append(f"{head} within its noise of the limit")
+    passed = False if False in verdicts else (True if all(v is True for v in verdicts) else None)
+    m = st["v1"].get("n_targets")
+    basis = str(st.get("basis", ""))
+    return {"measured": max(spans) if spans else None, "passed": passed,
+            "note": f"p-v over {m} targets at the {basis.split(',')[0] if basis else 'board plane'}: " + "; ".join(notes)}

@@ -1,0 +1,106 @@
+"""A raw console for G-code and ``$`` commands, with history, like UGS / CNCjs / bCNC offer.
+
+Lines go through the :class:`StageController` (the one command thread) to
+``stage.command(line)`` and the reply (the lines GRBL printed, then ``ok`` or
+the one-line error) is appended. Stages without a G-code interpreter (the
+simulated stage) have no ``command``: the console says so and stays disabled.
+"""
+from __future__ import annotations
+
+from concurrent.futures import Future
+
+from PySide6.QtCore import Qt, Signal
+from PySide6.QtGui import QFont, QKeyEvent
+from PySide6.QtWidgets import QHBoxLayout, QLineEdit, QPlainTextEdit, QPushButton, QVBoxLayout, QWidget
+
+from lps_gui.gui.stage_controller import StageController
+from lps_gui.gui.workers import one_line
+
+HISTORY_MAX = 200
+
+
+class HistoryLineEdit(QLineEdit):
+    """A line edit whose Up / Down keys walk through the lines entered before (shell style)."""
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.history: list[str] = []
+        self._index = 0  # == len(history): the line being typed
+
+    def remember(self, line: str) -> None:
+        if line and (not self.history or self.history[-1] != line):
+            self.history.append(line)
+            del self.history[:-HISTORY_MAX]
+        self._index = len(self.history)
+
+    def keyPressEvent(self, event: QKeyEvent) -> None:
+        if event.key() in (Qt.Key.Key_Up, Qt.Key.Key_Down) and self.history:
+            step = -1 if event.key() == Qt.Key.Key_Up else 1
+            self._index = min(max(self._index + step, 0), len(self.history))
+            self.setText(self.history[self._index] if self._index < len(self.history) else "")
+            return
+        super().keyPressEvent(event)
+
+
+class StageConsole(QWidget):
+    """Type a line, Enter sends it; the transcript shows what went out and what came back."""
+
+    _reply = Signal(str)  # from the stage thread
+
+    def __init__(self, controller: StageController, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.controller = controller
+        self.transcript = QPlainTextEdit()
+        self.transcript.setReadOnly(True)
+        self.transcript.setMaximumBlockCount(2000)
+        mono = QFont()
+        mono.setStyleHint(QFont.StyleHint.Monospace)
+        mono.setFamily("monospace")
+        self.transcript.setFont(mono)
+        self.line = HistoryLineEdit()
+        self.line.setPlaceholderText("G-code or $ command, e.g. $$  $#  G0 X10  (Up/Down: history)")
+        self.send_btn = QPushButton("Send")
+        row = QHBoxLayout()
+        row.addWidget(self.line, 1)
+        row.addWidget(self.send_btn)
+        lay = QVBoxLayout(self)
+        lay.setContentsMargins(0, 0, 0, 0)
+        lay.addWidget(self.transcript, 1)
+        lay.addLayout(row)
+        self.line.returnPressed.connect(self.send)
+        self.send_btn.clicked.connect(self.send)
+        self._reply.connect(self.transcript.appendPlainText)
+        controller.connection_changed.connect(lambda _c, _d: self.update_enabled())
+        self.update_enabled()
+
+    def available(self) -> bool:
+        stage = self.controller.stage
+        return stage is not None and callable(getattr(stage, "command", None))
+
+    def update_enabled(self) -> None:
+        on = self.available()
+        self.line.setEnabled(on)
+        self.send_btn.setEnabled(on)
+        if self.controller.stage is not None and not on:
+            self.line.setPlaceholderText("this stage has no G-code console (the simulated stage); connect a GRBL")
+
+    def send(self) -> Future | None:
+        text = self.line.text().strip()
+        if not text or not self.available():
+            return None
+        self.line.remember(text)
+        self.line.clear()
+        self.transcript.appendPlainText(f"> {text}")
+        fut = self.controller.call(f"console {text}", "command", text)
+        if fut is not None:
+            fut.add_done_callback(self._answered)
+        return fut
+
+    def _answered(self, fut: Future) -> None:  # stage thread: only emit
+        exc = fut.exception()
+        if exc is not None:
+            self._reply.emit(f"  {one_line(exc)}")
+            return
+        for ln in fut.result() or []:
+            self._reply.emit(f"  {ln}")
+        self._reply.emit("  ok")

@@ -1,0 +1,93 @@
+"""Results history: every estimate of a session is kept, the latest is recorded, stale reports are named.
+
+``lps estimate`` writes the latest results at the top of the session folder
+(results.json, positions.csv, summary.csv: what every reader opens) and a
+copy into ``results/<created>-<method>/``; ``results/latest.json`` records
+which one is the latest. A top-level results.json from before the history
+existed is copied into the history before it is replaced, so re-running an
+estimate (or another method) never loses a result. No symlinks: a plain
+record survives copies to any file system.
+"""
+from __future__ import annotations
+
+import re
+import shutil
+from pathlib import Path
+from typing import Any
+
+from lps_gui.io.jsonfile import read_json, write_json
+from lps_gui.io.results_file import POSITIONS_FILE, RESULTS_FILE, SUMMARY_FILE
+
+HISTORY_DIR = "results"
+LATEST_FILE = "latest.json"
+REPORT_FILE = "report.pdf"
+SET = (RESULTS_FILE, POSITIONS_FILE, SUMMARY_FILE)
+
+
+def entry_name(results: dict[str, Any]) -> str:
+    """``20261201T162004-joint``: the results' creation time and method, safe as a folder name."""
+    created = re.sub(r"[^0-9T]", "", str(results.get("created") or "")[:19]) or "undated"
+    method = re.sub(r"[^A-Za-z0-9_-]", "_", str(results.get("method") or "unknown"))
+    return f"{created}-{method}"
+
+
+def _copy_set(src: Path, dest: Path) -> None:
+    dest.mkdir(parents=True, exist_ok=True)
+    for name in SET:
+        if (src / name).is_file():
+            shutil.copy2(src / name, dest / name)
+
+
+def keep_previous(session_dir: Path | str) -> Path | None:
+    """Copy the top-level result set into the history unless it is there already; returns its folder."""
+    folder = Path(session_dir)
+    top = folder / RESULTS_FILE
+    if not top.is_file():
+        return None
+    try:
+        previous = read_json(top, "results file")
+    except Exception:  # an unreadable old file is kept where it is, never a reason to stop an estimate
+        return None
+    dest = folder / HISTORY_DIR / entry_name(previous if isinstance(previous, dict) else {})
+    if not (dest / RESULTS_FILE).exists():
+        _copy_set(folder, dest)
+    return dest
+
+
+def record_latest(session_dir: Path | str, results: dict[str, Any]) -> Path:
+    """After the top-level set was written: copy it into the history and record it as the latest."""
+    folder = Path(session_dir)
+    dest = folder / HISTORY_DIR / entry_name(results)
+    n = 1
+    while (dest / RESULTS_FILE).exists() and read_json(dest / RESULTS_FILE, "results file") != results:
+        n += 1  # two estimates within one second: keep both
+        dest = folder / HISTORY_DIR / f"{entry_name(results)}-{n}"
+    _copy_set(folder, dest)
+    write_json(folder / HISTORY_DIR / LATEST_FILE, {"latest": dest.name, "created": results.get("created"),
+                                                     "method": results.get("method")})
+    return dest
+
+
+def history(session_dir: Path | str) -> list[dict[str, Any]]:
+    """Every kept result set, oldest first: ``{"name", "path", "created", "method", "latest"}``."""
+    base = Path(session_dir) / HISTORY_DIR
+    latest = None
+    if (base / LATEST_FILE).is_file():
+        latest = (read_json(base / LATEST_FILE, "results history") or {}).get("latest")
+    out = []
+    sets = [p for p in base.glob("*") if (p / RESULTS_FILE).is_file()]
+    for d in sorted(sets, key=lambda p: ((p / RESULTS_FILE).stat().st_mtime, p.name)):  # copies keep the mtime
+        meta = read_json(d / RESULTS_FILE, "results file")
+        out.append({"name": d.name, "path": d, "created": meta.get("created"), "method": meta.get("method"),
+                    "latest": d.name == latest})
+    return out
+
+
+def stale_report_message(session_dir: Path | str) -> str | None:
+    """A sentence when report.pdf is older than results.json (the report shows superseded results)."""
+    folder = Path(session_dir)
+    report, results = folder / REPORT_FILE, folder / RESULTS_FILE
+    if report.is_file() and results.is_file() and report.stat().st_mtime < results.stat().st_mtime:
+        return (f"{report}: older than {results.name} (results were re-estimated); "
+                f"run `lps report {folder}` for a report of the latest results")
+    return None

@@ -1,0 +1,95 @@
+"""`lps export`: every capture's measured camera pose for COLMAP, nerfstudio or a CSV (SPEC 12).
+
+Poses come from results.json: the common rotation and line of the estimate,
+each capture's measured position along it, and the measured straightness
+when results.json marks it resolved (otherwise the fitted line is the best
+knowledge and per-view straightness would only add noise; ``on`` forces it).
+Outlier and unusable views are left out and listed in ``excluded.txt``.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from lps_gui.core.export_poses import camera_centres, world_to_camera
+from lps_gui.errors import InputError
+from lps_gui.io.atomic import write_text_atomic
+from lps_gui.io.export_files import write_colmap, write_nerfstudio, write_poses_csv
+from lps_gui.io.intrinsics_file import intrinsics_from_dict
+from lps_gui.io.session import Session
+from lps_gui.pipeline.compensate import session_results
+
+FORMATS = ("colmap", "nerfstudio", "csv")
+
+
+@dataclass
+class ExportResult:
+    files: list[Path] = field(default_factory=list)
+    n_exported: int = 0
+    excluded: list[str] = field(default_factory=list)
+    straightness_used: bool = False
+
+
+def straightness_resolved(results: dict[str, Any]) -> bool:
+    """True when results.json says the straightness is resolved (``figures.straightness_resolved``).
+
+    A span of per-view values is no test: the span of K noisy values is
+    several sigmas by itself, and adding per-view noise (30-300 um) to the
+    line moves every camera off its best pose.
+    """
+    return bool((results.get("figures") or {}).get("straightness_resolved"))
+
+
+def export_session(session_dir: Path | str, fmt: str, out: Path | str, straightness: str = "auto") -> ExportResult:
+    """Write ``fmt`` files for ``session_dir`` into ``out``; ``straightness``: auto | on | off."""
+    if fmt not in FORMATS:
+        raise InputError(f"--format {fmt}: choose one of {', '.join(FORMATS)}")
+    session = Session.open(session_dir)
+    results = session_results(session.folder)
+    p = results.get("parameters") or {}
+    try:
+        R = np.asarray(p["R_cam_board"], dtype=float)
+        l0, n = np.asarray(p["l0_cam_mm"], dtype=float), np.asarray(p["n_cam"], dtype=float)
+    except KeyError as exc:
+        raise InputError(f"{session.folder}/results.json: no {exc} in parameters; estimate the session again") from exc
+    intr = intrinsics_from_dict(results["intrinsics"], "results.json")
+    rows = results.get("positions") or []
+    ref = [r for r in rows if r.get("index") == p.get("reference_index")]
+    if not ref:
+        raise InputError(f"{session.folder}/results.json: the reference capture is missing; estimate the session again")
+    t_ref = float(ref[0]["target_mm"])
+    keep = [r for r in rows if r.get("used", True) and not r.get("outlier") and r.get("measured_mm") is not None]
+    res = ExportResult(excluded=[f"{r.get('file')}  {r.get('outlier_reason') or 'not used'}" for r in rows if r not in keep])
+    if not keep:
+        raise InputError(f"{session.folder}: no usable capture to export")
+    s = np.array([float(r["measured_mm"]) - t_ref for r in keep])
+    use_st = straightness == "on" or (straightness == "auto" and straightness_resolved(results))
+    st = None
+    if use_st:
+        st = 1e-3 * np.array([[float(r.get("straightness_um_1") or 0.0), float(r.get("straightness_um_2") or 0.0)] for r in keep])
+    res.straightness_used = st is not None
+    C = camera_centres(R, l0, n, s, st)
+    names = [str(r["file"]) for r in keep]
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    if fmt == "colmap":
+        res.files = write_colmap(out, intr, R, world_to_camera(R, C), names, session.board().object_points())
+    elif fmt == "nerfstudio":
+        root = os.path.relpath(session.folder.resolve(), out.resolve())
+        res.files = [write_nerfstudio(out, intr, R, C, names, Path(root).as_posix())]
+    else:
+        nominal = camera_centres(R, l0, n, np.array([float(r["target_mm"]) - t_ref for r in keep]))
+        table = [{**{k: r.get(k) for k in ("index", "run", "direction", "file", "target_mm", "measured_mm")},
+                  **dict(zip(("nominal_x_mm", "nominal_y_mm", "nominal_z_mm"), map(float, cn))),
+                  **dict(zip(("measured_x_mm", "measured_y_mm", "measured_z_mm"), map(float, cm)))}
+                 for r, cn, cm in zip(keep, nominal, C)]
+        res.files = [write_poses_csv(out / "camera_centres.csv", table)]
+    path = out / "excluded.txt"
+    write_text_atomic(path, "".join(f"{line}\n" for line in res.excluded))
+    res.files.append(path)
+    res.n_exported = len(keep)
+    return res

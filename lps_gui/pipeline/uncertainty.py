@@ -1,0 +1,97 @@
+"""Environment and uncertainty of a session's results (results.json ``environment``, ``uncertainty``).
+
+Two hooks for :mod:`lps_gui.pipeline.estimate`: :func:`session_board`
+gives the board at the measurement temperature (the thermal correction of
+the length scale, :mod:`lps_gui.core.environment`), and
+:func:`add_uncertainty` adds the environment record, the GUM budget
+(:mod:`lps_gui.core.uncertainty_budget`) and U (k = 2) of every headline
+figure to a finished results dict. The budget is built from results.json
+alone, so it does not depend on how the estimate is assembled.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from lps_gui.core.board import Board
+from lps_gui.core.environment import Environment, corrected_board, thermal_record
+from lps_gui.core.uncertainty_budget import BudgetInputs, budget_rows, combine, figure_uncertainties
+from lps_gui.io.session import SESSION_FILE, Session
+
+
+def session_environment(session: Session) -> Environment:
+    """session.json ``environment`` parsed (empty when absent)."""
+    return Environment.from_dict(session.meta.get("environment"), f"{session.folder / SESSION_FILE}: environment")
+
+
+def session_board(session: Session) -> Board:
+    """The session's board with its square size corrected to the board's temperature."""
+    return corrected_board(session.board(), session_environment(session))
+
+
+def _column(positions: list[dict[str, Any]], key: str) -> np.ndarray:
+    return np.array([np.nan if r.get(key) is None else float(r[key]) for r in positions], dtype=float)
+
+
+def budget_inputs(results: dict[str, Any], square_mm: float) -> BudgetInputs:
+    """BudgetInputs from results.json: used views' sigmas, travel, board distance, pitch/yaw."""
+    used = [r for r in results.get("positions") or []
+            if r.get("used", not r.get("outlier")) and r.get("deviation_um") is not None]
+    targets = _column(used, "target_mm")
+    travel = float(np.nanmax(targets) - np.nanmin(targets)) if targets.size else 0.0
+    p = results.get("parameters") or {}
+    tilt = np.stack([_column(used, "pitch_urad"), _column(used, "yaw_urad")], axis=1) if used else None
+    tilt_sig = np.stack([_column(used, "pitch_sigma_urad"), _column(used, "yaw_sigma_urad")], axis=1) if used else None
+    if tilt is not None and not np.isfinite(tilt).any():
+        tilt = tilt_sig = None
+    return BudgetInputs(
+        travel_mm=travel, square_mm=square_mm, sigma_px=float(p.get("sigma_px") or 0.0),
+        sigma_um=_column(used, "sigma_um"), sigma_total_um=_column(used, "sigma_total_um"),
+        abbe_lever_mm=abbe_lever_mm(results),
+        tilt_urad=tilt, tilt_sigma_urad=tilt_sig, target_mm=targets)
+
+
+def abbe_lever_mm(results: dict[str, Any]) -> tuple[float, float] | None:
+    """(d, h): camera -> board centre along v2 (the lever of pitch) and along v1 (of yaw), mm.
+
+    From the fitted line (results ``parameters``: R_cam_board, l0_cam_mm, u_board) and the board's size.
+    """
+    from lps_gui.core.lps_model import motion_frame
+
+    p = results.get("parameters") or {}
+    board = results.get("board") or {}
+    try:
+        R = np.asarray(p["R_cam_board"], float)
+        l0 = np.asarray(p["l0_cam_mm"], float)
+        frame = motion_frame(R, np.asarray(p["u_board"], float))
+        cols, rows = board.get("inner_corners") or (2, 2)
+        centre = 0.5 * float(board.get("square_mm") or 0.0) * np.array([cols - 1, rows - 1, 0.0])
+    except (KeyError, TypeError, ValueError):
+        return None
+    r = centre + R.T @ l0  # board centre minus camera centre, in the board frame
+    return float(abs(r @ frame[:, 2])), float(abs(r @ frame[:, 1]))
+
+
+def add_uncertainty(results: dict[str, Any], session: Session) -> dict[str, Any]:
+    """Add ``environment`` and ``uncertainty`` to results (in place; also returned).
+
+    ``board.square_mm`` stays the nominal (20 C) size; the size used is in
+    ``environment.square_mm_used``.
+    """
+    env = session_environment(session)
+    nominal = session.board()
+    results["environment"] = thermal_record(nominal, env)
+    if isinstance(results.get("board"), dict):
+        results["board"]["square_mm"] = nominal.square_mm
+    results["uncertainty"] = uncertainty_of(results, env, nominal.square_mm)
+    return results
+
+
+def uncertainty_of(results: dict[str, Any], env: Environment, square_mm: float) -> dict[str, Any]:
+    """results.json ``uncertainty`` of a results dict: budget, U (k = 2), U per headline figure."""
+    x = budget_inputs(results, square_mm)
+    unc = combine(budget_rows(x, env))
+    unc["travel_mm"] = x.travel_mm
+    unc["figures_k2"] = figure_uncertainties(unc, results.get("figures") or {}, x.travel_mm, n_views=x.sigma_um.size)
+    return unc

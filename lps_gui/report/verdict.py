@@ -1,0 +1,98 @@
+"""The verdict of page 1: each specification row with its measured figure, U (k = 2) and the limit.
+
+Decision rule (ISO 14253-1): a row PASSes when the measured figure plus its
+expanded uncertainty is within the limit, FAILs when the figure minus U is
+beyond it, and is "not resolved" when the limit lies inside the
+uncertainty zone (or the check itself says so). Figures from fewer runs than
+ISO 230-2 asks (5 per direction) are "indicative": the word is printed and
+the colour is amber, never a red FAIL. Rows come from
+:func:`lps_gui.report.summary.spec_checks`, whichever rows the results carry.
+No Qt here.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from lps_gui.core.iso230 import ISO_RUNS
+from lps_gui.report.summary import SpecCheck, spec_checks
+
+PASS_COLOR, FAIL_COLOR, INDICATIVE_COLOR, GREY = "#007a1f", "#c00000", "#a05a00", "#555555"
+# which U of results.json uncertainty.figures_k2 belongs to a check, and whether the check is a run statistic
+CHECK_FIGURES = {"Positional accuracy": ("A_um", True), "Repeatability": ("R_um", True),
+                 "Straight-line accuracy": ("straightness_um_max", False)}
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """One row of the verdict table."""
+
+    name: str
+    measured: float | None
+    u_k2: float | None  # expanded uncertainty of ``measured`` as compared with the limit
+    limit: float
+    unit: str
+    verdict: str  # "PASS", "FAIL", "not resolved", "not measured", each optionally "(indicative)"
+    color: str
+    note: str
+
+
+def runs_per_direction(results: dict[str, Any]) -> int:
+    """The fewest runs of a direction that was measured (1 without ISO figures)."""
+    iso = (results.get("figures") or {}).get("iso230_2") or {}
+    runs = [int(n) for n in (iso.get("n_runs_up") or 0, iso.get("n_runs_down") or 0) if n]
+    return min(runs) if runs else 1
+
+
+def _decide(c: SpecCheck, u: float | None) -> str:
+    if c.passed is None or c.measured is None:
+        return "not resolved" if c.note.lower().startswith("not resolved") or c.measured is not None else "not measured"
+    if u is None or not math.isfinite(u):
+        return "PASS" if c.passed else "FAIL"
+    if c.passed and c.measured + u > c.limit:
+        return "not resolved"
+    if not c.passed and c.measured - u <= c.limit:
+        return "not resolved"
+    return "PASS" if c.passed else "FAIL"
+
+
+def verdicts(results: dict[str, Any], spec: dict[str, Any] | None) -> list[Verdict]:
+    """The verdict rows of a results dict against a stage specification (empty without one)."""
+    if not spec:
+        return []
+    figures_k2 = (results.get("uncertainty") or {}).get("figures_k2") or {}
+    half = 0.5 if str(spec.get("limits", "plus_minus")) == "plus_minus" else 1.0
+    runs = runs_per_direction(results)
+    out = []
+    for c in spec_checks(results, spec):
+        key, run_statistic = CHECK_FIGURES.get(c.name, (None, False))
+        u = figures_k2.get(key) if key else None
+        if u is not None and run_statistic:
+            u = float(u) * half  # the figure is compared as a half band against a +- limit
+        word = _decide(c, u)
+        indicative = run_statistic and runs < ISO_RUNS and word in ("PASS", "FAIL")
+        color = {"PASS": PASS_COLOR, "FAIL": FAIL_COLOR}.get(word, GREY)
+        note = c.note
+        if word == "not resolved" and c.passed is not None:
+            note = f"the limit lies within \u00b1U of the figure (ISO 14253-1); {c.note}"
+        if indicative:
+            color = INDICATIVE_COLOR
+            note = f"{runs} run(s) per direction, ISO 230-2 asks for {ISO_RUNS}; {note}"
+            word += " (indicative)"
+        out.append(Verdict(c.name, c.measured, u, c.limit, c.unit, word, color, note))
+    return out
+
+
+def overall(rows: list[Verdict]) -> str:
+    """One line for the top of page 1."""
+    if not rows:
+        return "No stage specification given: figures only, no verdict."
+    words = [r.verdict for r in rows]
+    if any(w == "FAIL" for w in words):
+        return "FAIL: the stage is outside its specification beyond the measurement uncertainty."
+    if all(w == "PASS" for w in words):
+        return "PASS: every specified figure is within its limit, uncertainty included."
+    if any(w.startswith("FAIL") for w in words):
+        return "Indicative FAIL: too few runs for an ISO 230-2 verdict; repeat with 5 runs per direction."
+    return "Not fully resolved: see the rows below (indicative, not resolved or not measured)."

@@ -1,0 +1,97 @@
+"""Environment (thermal scale) and the GUM uncertainty budget, as pure math."""
+import math
+
+import numpy as np
+import pytest
+
+from lps_gui.core.board import Board
+from lps_gui.core.environment import Environment, corrected_board, thermal_scale
+from lps_gui.core.uncertainty_budget import BudgetInputs, budget_rows, combine, figure_uncertainties
+from lps_gui.errors import InputError
+
+
+def test_warm_board_has_larger_squares():
+    env = Environment.from_dict({"board_temperature_c": 23, "board_cte_ppm_per_k": 23})
+    assert thermal_scale(env) == pytest.approx(1 + 69e-6)
+    assert corrected_board(Board(9, 6, 20.0), env).square_mm == pytest.approx(20.0 * (1 + 69e-6))
+    cold = Environment.from_dict({"board_temperature_c": 18, "board_cte_ppm_per_k": 10})
+    assert thermal_scale(cold) == pytest.approx(1 - 20e-6)
+    assert thermal_scale(Environment.from_dict({"board_temperature_c": 30})) == 1.0  # no coefficient, no correction
+
+
+@pytest.mark.parametrize("bad, needle", [({"board_temperature_c": "warm"}, "board_temperature_c"),
+                                          ({"board_temp": 20}, "unknown key"),
+                                          ({"square_mm_uncertainty_um": -1}, "negative"),
+                                          ({"stage_temperature_c": 293.15}, "Celsius")])
+def test_bad_environment_is_one_line_error(bad, needle):
+    with pytest.raises(InputError, match=needle):
+        Environment.from_dict(bad)
+
+
+def _inputs(**kw):
+    n = 40
+    rng = np.random.default_rng(1)
+    base = dict(travel_mm=100.0, square_mm=10.0, sigma_px=0.1, sigma_um=np.full(n, 0.6), sigma_total_um=np.full(n, 1.0),
+                abbe_lever_mm=(600.0, 50.0), tilt_urad=rng.normal(0, 5, (n, 2)), tilt_sigma_urad=np.full((n, 2), 5.0))
+    base.update(kw)
+    return BudgetInputs(**base)
+
+
+def test_budget_rows_and_expanded_uncertainty():
+    env = Environment.from_dict({"board_temperature_c": 23, "board_cte_ppm_per_k": 23, "square_mm_uncertainty_um": 0.5,
+                                 "stage_temperature_c": 21, "stage_cte_ppm_per_k": 12})
+    rows = {r.source: r for r in budget_rows(_inputs(), env)}
+    assert set(rows) >= {"corner noise", "reference view noise", "intrinsics", "board square size",
+                         "board temperature", "board expansion coefficient", "stage temperature", "Abbe offset"}
+    assert rows["corner noise"].contribution_um == pytest.approx(0.6 / math.sqrt(2))
+    assert rows["intrinsics"].contribution_um == pytest.approx(0.8)
+    assert rows["board square size"].contribution_um == pytest.approx(10 * 0.5)  # 10 squares over 100 mm
+    assert rows["board temperature"].contribution_um == pytest.approx(23 * 100e-3 * 0.5)  # 0.5 K default
+    assert rows["board expansion coefficient"].contribution_um == pytest.approx(3 * 100e-3 * 2.3)  # 10 % of 23
+    assert rows["stage temperature"].contribution_um == pytest.approx(12 * 100e-3 / math.sqrt(3))
+    for r in rows.values():
+        if r.contribution_um is not None and r.value is not None:
+            assert r.contribution_um == pytest.approx(abs(r.sensitivity) * r.value)
+    unc = combine(list(rows.values()))
+    u_c = math.sqrt(sum(r.contribution_um ** 2 for r in rows.values()))
+    assert unc["expanded_k2_um"] == pytest.approx(2 * u_c) and unc["coverage_factor"] == 2
+    figs = figure_uncertainties(unc, {"single_run": {"scale_sigma_total_ppm": 1.0}}, 100.0)
+    assert figs["A_um"] == unc["expanded_k2_um"]
+    assert figs["R_um"] < figs["A_um"]  # scale and temperature cancel at one target
+    assert figs["scale_ppm"] > 2 * 50  # the square's 0.5 um per 10 mm is 50 ppm
+
+
+def test_tilt_within_noise_gives_no_abbe_term_and_missing_sources_are_listed():
+    n = 200
+    rng = np.random.default_rng(2)
+    rows = {r.source: r for r in budget_rows(_inputs(tilt_urad=rng.normal(0, 5, (n, 2)),
+                                                     tilt_sigma_urad=np.full((n, 2), 5.0),
+                                                     sigma_um=np.full(n, 0.6), sigma_total_um=np.full(n, 1.0)),
+                                             Environment())}
+    assert rows["Abbe offset"].contribution_um < 600e-3 * 2.0  # the noise alone is not an Abbe error
+    # a real pitch of 10 urad amplitude along the travel is found through the noise, over the board distance
+    t = np.linspace(0, 100, n)
+    pitch = 10.0 * np.sin(2 * np.pi * t / 200.0)  # smooth, RMS 7.07 urad
+    tilt = np.stack([pitch + rng.normal(0, 5, n), rng.normal(0, 5, n)], axis=1)
+    abbe = {r.source: r for r in budget_rows(_inputs(tilt_urad=tilt, tilt_sigma_urad=np.full((n, 2), 5.0), target_mm=t,
+                                                     sigma_um=np.full(n, 0.6), sigma_total_um=np.full(n, 1.0)),
+                                             Environment())}["Abbe offset"]
+    assert abbe.contribution_um == pytest.approx(0.6 * np.std(pitch), rel=0.25)
+    unc = combine(list(rows.values()))
+    assert {"board square size", "board temperature", "stage temperature"} <= set(unc["not_in_u"])
+
+
+def test_periodic_amplitude_uncertainty_matches_a_monte_carlo_fit():
+    """U of a fitted sinusoid's amplitude from noise: check sqrt(2/n) against simulated fits."""
+    rng = np.random.default_rng(7)
+    n, sigma = 100, 0.5
+    x = np.linspace(0, 100, n)
+    A = np.stack([np.sin(2 * np.pi * x / 5), np.cos(2 * np.pi * x / 5)], axis=1)
+    amps = []
+    for _ in range(400):
+        y = 3.0 * np.sin(2 * np.pi * x / 5) + rng.normal(0, sigma, n)
+        c = np.linalg.lstsq(A, y, rcond=None)[0]
+        amps.append(np.hypot(*c))
+    unc = {"coverage_factor": 2.0, "expanded_k2_um": 1.0, "noise_standard_um": sigma * math.sqrt(2)}
+    U = figure_uncertainties(unc, {}, 100.0, n_views=n)["periodic_amplitude_um"]
+    assert U / 2 == pytest.approx(np.std(amps), rel=0.15)

@@ -1,0 +1,31 @@
+"""Re-running `lps estimate` keeps every previous result set; a report older than its results says so."""
+import json
+import os
+
+from lps_gui.cli import main
+from lps_gui.core.simulate import small_spec
+from lps_gui.io.results_history import history, stale_report_message
+from lps_gui.pipeline.estimate import estimate_session
+from lps_gui.sim.points import simulate_point_session
+
+
+def test_two_estimates_are_both_kept_and_the_latest_is_recorded(tmp_path, capsys):
+    folder = tmp_path / "s"
+    simulate_point_session(small_spec(seed=2, views=8, directions="+", runs=1), folder)
+    # a result set from before the history existed: kept when it is replaced
+    first = estimate_session(folder, method="pnp", out_dir=folder)
+    (folder / "report.pdf").write_bytes(b"%PDF-1.4 stand-in")
+    os.utime(folder / "report.pdf", (1, 1))
+    assert main(["estimate", str(folder)]) == 0
+    err = capsys.readouterr().err
+    assert "report.pdf: older than results.json" in err and "lps report" in err
+    assert stale_report_message(folder) is not None
+    kept = history(folder)
+    assert [h["method"] for h in kept] == ["pnp", "joint"]
+    assert [h["latest"] for h in kept] == [False, True]
+    assert json.loads((kept[0]["path"] / "results.json").read_text())["created"] == first["created"]
+    assert (kept[1]["path"] / "positions.csv").read_text() == (folder / "positions.csv").read_text()
+    latest = json.loads((folder / "results" / "latest.json").read_text())
+    assert latest["latest"] == kept[1]["name"] and latest["method"] == "joint"
+    (folder / "report.pdf").touch()
+    assert stale_report_message(folder) is None

@@ -131,7 +131,8 @@ def planar_summary_lines(results: dict[str, Any]) -> list[str]:
         f"RMS residual {_s(p.get('rms_px'), 3)} px",
         f"squareness {_v(pl.get('squareness_urad'))} \u00b1 {_s(pl.get('squareness_sigma_urad'))} \u00b5rad "
         f"({_v(pl.get('squareness_um_per_m'))} \u00b5m/m); truth {_v(tc.get('squareness_urad'))} \u00b5rad"
-        + (f" (the stage model's {_v(tc['model_squareness_urad'])}, plus the angular error motions seen at the board)"
+        + (f" (the stage model's {_v(tc['model_squareness_urad'])}; the truth is the angle of the true path's "
+           "least-squares lines, tilted by the axes' straightness)"
            if tc.get("model_squareness_urad") is not None else ""),
     ]
     for axis in ("x", "y"):

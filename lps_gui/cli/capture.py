@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import argparse
 
+from lps_gui.cli import planar_capture
+
 HELP = "capture a session: move the stage through a plan and store an image per stop (resumable)"
 
 
@@ -50,6 +52,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
     add_setup_arguments(p)
     s.add_argument("--compensation", metavar="FILE", help="command each target through this table's inverse (lps compensate --format csv|linuxcnc|linuxcnc-offsets)")
+    planar_capture.add_arguments(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -71,7 +74,8 @@ def run(args: argparse.Namespace) -> int:
         from lps_gui.io.compensation_file import read_table
 
         read_table(args.compensation)  # a bad table fails before a session is created
-    session, stage, camera, engine = _resume(args) if args.resume else _start(args)
+    opened = planar_capture.open_planar_capture(args)  # None: a single-axis capture
+    session, stage, camera, engine = opened or (_resume(args) if args.resume else _start(args))
     apply_setup(session, extra)
     try:
         from lps_gui.capture.compensated import apply_compensation
@@ -162,6 +166,8 @@ def _describe(session) -> str:
     from lps_gui.capture.plans import describe_plan, plan_duration_s
 
     plan = session.plan()
+    if session.planar:
+        return planar_capture.describe_planar(plan)
     return f"{describe_plan(plan)}, about {plan_duration_s(plan) / 60:.1f} min of stage time"
 
 

@@ -13,6 +13,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", type=Path, default=Path("demo-output"),
                         help="output folder (default demo-output): an existing or new folder; a name with a suffix is refused")
     parser.add_argument("--seed", type=int, default=0, help="random seed of the simulation")
+    parser.add_argument("--planar", action="store_true", help="the planar pipeline on a simulated XY gantry (SPEC 10)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -23,6 +24,9 @@ def run(args: argparse.Namespace) -> int:
 
     if args.out.suffix and not args.out.is_dir():
         raise InputError(f"--out {args.out}: lps demo writes a folder of files; give a folder name without a suffix")
+
+    if args.planar:
+        from lps_gui.pipeline.demo_planar import run_planar_demo as run_demo
     t0 = time.monotonic()
     res = run_demo(args.out, quick=args.quick, bar=ProgressBar, say=lambda line: print(line, flush=True), seed=args.seed)
     print()

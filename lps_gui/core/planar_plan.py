@@ -240,3 +240,19 @@ def iso_lines_plan(
         targets += [(float(x), float(y)) for y in np.sort(np.atleast_1d(y_targets_mm))]
     kw.setdefault("directions", "both")
     return PlanarPlan(targets_mm=tuple(targets), runs=runs, **kw)
+
+
+def iso_lines_on_grid(grid: PlanarPlan, levels: int = 3, runs: int = 5) -> PlanarPlan:
+    """The ISO 230-2 lines preset on ``grid``: every grid X along Y at ``levels`` Y levels (both ends and
+    between), every grid Y along X at ``levels`` X levels; forward and backward, ``runs`` runs.
+
+    The grid's overshoot, settle, frames per stop and feed are kept.
+    """
+    t = grid.targets()
+    xs, ys = np.unique(t[:, 0]), np.unique(t[:, 1])
+
+    def pick(v: np.ndarray) -> np.ndarray:
+        return np.unique(v[np.round(np.linspace(0, v.size - 1, levels)).astype(int)])
+
+    keep = {k: getattr(grid, k) for k in ("overshoot_mm", "settle_s", "frames_per_stop", "feed_mm_min")}
+    return iso_lines_plan(xs, pick(ys), ys, pick(xs), runs=runs, **keep)

@@ -23,6 +23,9 @@ from lps_gui.core.board import Board
 from lps_gui.capture.plans import plan_duration_s
 from lps_gui.core.plan import Plan
 from lps_gui.errors import InputError
+from lps_gui.gui.planar_plan_editor import (
+    PlanarPlanEditor, apply_shared_to_panel, planar_duration_s, planar_engine, shared_from_panel,
+)
 from lps_gui.gui.widgets import PathPicker, add_rows, double_spin, stack
 from lps_gui.gui.workers import Job, one_line
 
@@ -119,6 +122,11 @@ class CapturePanel(QWidget):
         from lps_gui.gui.report_setup import ReportSetupBox
 
         self.report_setup = ReportSetupBox()
+        self.planar_editor = PlanarPlanEditor(lambda: shared_from_panel(self), self.board, self.intrinsics,
+                                              lambda fields: apply_shared_to_panel(self, fields))
+        self.planar_editor.changed.connect(self.update_summary)
+        self.planar_editor.enabled.toggled.connect(
+            lambda on: [w.setEnabled(not on) for w in (self.start_mm, self.stop_mm, self.step_mm, self.iso_btn)])
 
         self.folder = PathPicker("empty: a new dated folder beside the last one", folder=True, start_dir=self.start_dir)
         sess = QGroupBox("Session")
@@ -142,7 +150,7 @@ class CapturePanel(QWidget):
         self.progress = QProgressBar()
         self.eta = QLabel("idle")
 
-        stack(self, [plan_box, self.report_setup, sess, row, self.progress, self.eta]).addStretch(1)
+        stack(self, [plan_box, (self.planar_editor, 1), self.report_setup, sess, row, self.progress, self.eta]).addStretch(1)
 
         for w in (self.start_mm, self.stop_mm, self.step_mm):
             w.valueChanged.connect(self._targets_edited)
@@ -162,6 +170,8 @@ class CapturePanel(QWidget):
 
     # ------------------------------------------------------------------ plan
     def plan(self) -> Plan:
+        if self.planar_editor.active():
+            return self.planar_editor.plan()
         return Plan(start_mm=self.start_mm.value(), stop_mm=self.stop_mm.value(), step_mm=self.step_mm.value(),
                     targets_mm=self._iso_targets,
                     directions=str(self.directions.currentData()), runs=self.runs.value(),
@@ -196,7 +206,8 @@ class CapturePanel(QWidget):
         """Expected capture time: the stage's moves and settles plus the measured time per frame."""
         accel = float((getattr(self.stage_ctl, "stage", None) and _describe(self.stage_ctl.stage).get("accel_mm_s2"))
                       or 200.0)
-        return START_S + plan_duration_s(plan, accel_mm_s2=accel, grab_s=self.frame_s)
+        duration = planar_duration_s if self.planar_editor.active() else plan_duration_s
+        return START_S + duration(plan, accel_mm_s2=accel, grab_s=self.frame_s)
 
     def apply_iso_plan(self) -> None:
         """The ISO 230-2 preset: 5 runs both ways, non-uniform targets over [start, stop] (step as spacing)."""
@@ -231,11 +242,20 @@ class CapturePanel(QWidget):
                     base = base.parent
                 folder = base / time.strftime("session-%Y%m%d-%H%M%S")
                 self.folder.set_text(str(folder))
-            stage, camera = self._rig()
             plan = self.plan()
+            gantry = self.planar_editor.build_gantry(plan) if self.planar_editor.active() else None
+            stage, camera = gantry[1:] if gantry else self._rig()
+            if self.planar_editor.active() and not gantry:
+                self.planar_editor.check_connected_rig(is_simulated_rig(stage, camera))
             extra = self.report_setup.meta()  # spec, environment, identification for session.json
         except Exception as exc:
             self.run_requested.emit(exc)
+            return
+        if gantry:  # the simulated XY gantry built for this plan, its truth recorded
+            from lps_gui.sim.planar_rig import start_gantry_session
+
+            self.set_board(gantry[0].rig.board)
+            self._run(folder, lambda: start_gantry_session(folder, gantry[0], stage, camera, extra=extra), stage, camera)
             return
         simulated = is_simulated_rig(stage, camera)
         if simulated:
@@ -273,9 +293,11 @@ class CapturePanel(QWidget):
             remaining = session.remaining_stops()
             if not remaining:
                 raise InputError(f"{folder}: every planned stop is captured already; estimate it instead")
-            self.set_plan(session.plan())
+            gantry = self.planar_editor.resume_rig(session)  # a planar session: its editor, its simulated gantry
+            if not session.planar:
+                self.set_plan(session.plan())
             self.folder.set_text(str(folder))
-            stage, camera = self._rig()
+            stage, camera = gantry or self._rig()
         except Exception as exc:
             self.run_requested.emit(exc)
             return
@@ -304,9 +326,10 @@ class CapturePanel(QWidget):
             from lps_gui.capture.engine import CaptureEngine
             from lps_gui.sim.session import simulated_engine
 
-            if is_simulated_rig(stage, camera) and (session.truth or {}).get("simulated"):
+            engine = planar_engine(session, stage, camera)  # the simulated gantry records its truth
+            if engine is None and is_simulated_rig(stage, camera) and (session.truth or {}).get("simulated"):
                 engine = simulated_engine(session, stage, camera)
-            else:
+            elif engine is None:
                 engine = CaptureEngine(stage, camera, session)
             from lps_gui.capture.compensated import apply_compensation
 
@@ -350,7 +373,8 @@ class CapturePanel(QWidget):
             return
         elapsed = time.monotonic() - self._t0
         plan = self.plan()
-        motion = plan_duration_s(plan, grab_s=0.0) * captured / max(plan.n_frames(), 1)
+        duration = planar_duration_s if self.planar_editor.active() else plan_duration_s
+        motion = duration(plan, grab_s=0.0) * captured / max(plan.n_frames(), 1)
         self.frame_s = min(10.0, max(0.01, (elapsed - START_S - motion) / captured))
         log.info("capture: %.3f s per frame measured; used for the next estimate", self.frame_s)
         self.update_summary()
@@ -409,7 +433,7 @@ class CapturePanel(QWidget):
     # ------------------------------------------------------------------ settings
     def save(self, s: QSettings) -> None:
         for k, v in self.plan().to_dict().items():
-            if k in PLAN_FIELDS:
+            if k in PLAN_FIELDS and not isinstance(v, list):  # a planar plan's [x, y] stay out of the line plan
                 s.setValue(f"plan/{k}", v)
         s.setValue("capture/frame_s", self.frame_s)
         self.report_setup.save(s)

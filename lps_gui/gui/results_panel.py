@@ -225,8 +225,13 @@ class ResultsPanel(QWidget):
         return bool(QDesktopServices.openUrl(QUrl.fromLocalFile(str(self.report_path))))
 
     def _fill_tables(self, results: dict[str, Any]) -> None:
+        from lps_gui.gui.planar_results import planar_table_rows
         from lps_gui.report.summary import summary_rows
 
+        planar_rows = planar_table_rows(results)  # None: a single-axis session
+        if planar_rows is not None:
+            self.iso_table.set_rows(planar_rows)
+            return
         rows = summary_rows(results)
         self.iso_table.set_rows([(r.name, r.text(), r.u_text(), r.unit) for r in rows])
         self._grey_unresolved(rows)
@@ -246,10 +251,10 @@ class ResultsPanel(QWidget):
 
     def _fill_positions(self, results: dict[str, Any]) -> None:
         """Format the per-position table on a worker thread (hundreds of rows), then show it."""
-        from lps_gui.report.summary import position_table
+        from lps_gui.gui.planar_results import position_table_for
 
         self._pending_table = True
-        job = Job("format positions", lambda: position_table(results)[:2], pass_progress=False)
+        job = Job("format positions", lambda: position_table_for(results), pass_progress=False)
         job.succeeded.connect(lambda table, r=results: self._show_positions(table, r))
         job.finished.connect(lambda: setattr(self, "_pending_table", False))
         job.start()

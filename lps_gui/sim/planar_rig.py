@@ -122,13 +122,26 @@ def create_simulated_gantry_session(folder, spec: PlanarSimulationSpec, clock: C
                                     noise_grey: float = 2.0, intrinsics=None, **options: Any):
     """A new session for a planar capture on the simulated gantry: (session, stage, camera)."""
     from lps_gui.io.atomic import check_writable
-    from lps_gui.sim.session import write_simulated_session
 
     check_writable(folder)
     stage, camera = make_simulated_gantry(spec, clock=clock, noise_grey=noise_grey, **options)
+    return start_gantry_session(folder, spec, stage, camera, intrinsics), stage, camera
+
+
+def start_gantry_session(folder, spec: PlanarSimulationSpec, stage: RigStage, camera: RigCamera,
+                         intrinsics=None, extra: dict[str, Any] | None = None) -> Session:
+    """The session of a capture on an existing simulated gantry (the GUI's, or :func:`create_simulated_gantry_session`'s).
+
+    ``extra``: further session.json entries (the GUI's specification, environment, identification).
+    """
+    from lps_gui.sim.session import write_simulated_session
+
     session = write_simulated_session(folder, spec, "capture", intrinsics=intrinsics, camera=camera.properties(),
                                       stage={**stage.describe(), "axes": ["X", "Y"]}, truth=gantry_truth(spec, camera))
-    return session, stage, camera
+    if extra:
+        session.meta.update(extra)
+        session.save_meta()
+    return session
 
 
 def reopen_simulated_gantry(session: Session, clock: Clock | None = None) -> tuple[RigStage, RigCamera]:
@@ -148,3 +161,17 @@ def gantry_engine(session: Session, stage, camera: RigCamera, encode: str = ".pn
 
     return CaptureEngine(stage, camera, session, encode=encode,
                          truth_recorder=PlanarTruthRecorder(camera.rig, camera.pose_source))
+
+
+def check_board_in_view(spec: PlanarSimulationSpec) -> None:
+    """InputError when the simulated camera would lose the board at some target (nothing measured there)."""
+    t = spec.plan.targets()
+    rig = spec.rig
+    R, tr = rig.camera_poses(PlanarTruePose(t, np.zeros(len(t)), np.zeros((len(t), 3))))
+    uv = project_board(R, tr, rig.board.object_points(), rig.intrinsics)  # shape (K, N, 2)
+    w, h = rig.intrinsics.image_size
+    out = ((uv[..., 0] < 0) | (uv[..., 0] > w - 1) | (uv[..., 1] < 0) | (uv[..., 1] > h - 1)).any(axis=1)
+    if out.any():
+        x, y = t[np.flatnonzero(out)[0]]
+        raise InputError(f"plan: the board leaves the simulated camera's view at {int(out.sum())} of {len(t)} targets "
+                         f"(first ({x:g}, {y:g}) mm); shorten the grid (see `lps plan-rig`)")

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from lps_gui.core.planar_estimate import PlanarEstimate, PlanarObservations, planar_truth_in_stage_frame
-from lps_gui.core.planar_figures import axis_geometry
+from lps_gui.core.planar_figures import axis_geometry, planar_figures
 from lps_gui.core.planar_estimate import affine_motion
 from lps_gui.io.session import Session
 from lps_gui.sim.truth import read_truth, reduce_truth, true_deviation_um
@@ -86,6 +86,10 @@ def planar_truth_comparison(obs: PlanarObservations, est: PlanarEstimate, truth:
     if "squareness_urad" in truth:
         out["model_squareness_urad"] = truth["squareness_urad"]
     true_dev = true_deviation_um(true_xy, obs.target_mm, ref)
+    true_figs = planar_figures(obs.target_mm, obs.approach, obs.run, obs.direction, true_dev, np.ones_like(true_dev),
+                               ok, np.eye(2), np.zeros((4, 4)))  # the same per-line reduction as the estimate's
+    for axis in ("X", "Y"):
+        out[f"straightness_{axis.lower()}_um"] = (true_figs.per_axis.get(axis) or {}).get("straightness_um_max")
     for k, row in enumerate(positions):
         row["truth_deviation_x_um"] = _f(true_dev[k, 0])
         row["truth_deviation_y_um"] = _f(true_dev[k, 1])

@@ -1,0 +1,43 @@
+"""What the results panel shows for a planar (XY) session: the report's own rows and table (SPEC 10).
+
+The figures tabs already come from :func:`lps_gui.report.figures.figures_from_results`
+(which hands planar results to :mod:`lps_gui.report.planar_figures`); the
+figures table and the per-position table come from
+:mod:`lps_gui.report.planar_report`, so the screen and the PDF show the same numbers.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any
+
+
+def is_planar(results: dict[str, Any]) -> bool:
+    return len(results.get("axes") or ["X"]) == 2
+
+
+def planar_table_rows(results: dict[str, Any]) -> list[tuple[str, str, str]] | None:
+    """(figure, value, U (k = 2), unit and note) rows of a planar session's figures and truth check; None for one axis."""
+    if not is_planar(results) or not (results.get("figures") or {}).get("planar"):
+        return None
+    from lps_gui.report.planar_report import planar_summary_rows, planar_truth_rows
+
+    rows = planar_summary_rows(results)
+    if (results.get("truth_comparison") or {}).get("position_rms_error_um") is not None:
+        rows += [replace(r, name=f"Truth: {r.name}") for r in planar_truth_rows(results)]
+    return [(r.name, r.text(), _u_text(r), f"{r.unit}  {r.note}".strip()) for r in rows]
+
+
+def _u_text(row: Any) -> str:
+    u = getattr(row, "u_text", None)
+    return u() if callable(u) else ""
+
+
+def position_table_for(results: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
+    """Header and rows of the per-position table, planar or single-axis."""
+    if is_planar(results):
+        from lps_gui.report.planar_report import planar_position_table
+
+        return planar_position_table(results)[:2]
+    from lps_gui.report.summary import position_table
+
+    return position_table(results)[:2]

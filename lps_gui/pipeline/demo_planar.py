@@ -138,9 +138,14 @@ def planar_summary_lines(results: dict[str, Any]) -> list[str]:
     for axis in ("x", "y"):
         lines.append(f"scale {axis.upper()} {_v(pl.get(f'scale_{axis}_ppm'))} \u00b1 {_s(pl.get(f'scale_{axis}_sigma_ppm'))}"
                      f" ppm; truth {_v(tc.get(f'scale_{axis}_ppm'))} ppm")
+    from lps_gui.core.resolution import not_resolved_text
+
     for axis, other in (("X", "Y"), ("Y", "X")):
         a = per_axis.get(axis) or {}
-        lines.append(f"straightness of {axis} (along {other}, worst line) {_s(a.get('straightness_um_max'), 2)} \u00b5m "
+        st = a.get("straightness") or {}
+        value = (f"{_s(a.get('straightness_um_max'), 2)} \u00b5m" if st.get("resolved", True)
+                 else not_resolved_text(st.get("noise_span_um"), "\u00b5m"))  # noise alone could give it: no finding
+        lines.append(f"straightness of {axis} (along {other}, worst line) {value} "
                      f"(per-point 1-sigma {_s(a.get('straightness_sigma_um'), 2)} \u00b5m); "
                      f"truth {_s(tc.get(f'straightness_{axis.lower()}_um'), 2)} \u00b5m")
     if tc.get("position_rms_error_um") is not None:

@@ -207,13 +207,7 @@ def _start(args: argparse.Namespace):
         base = preset(args.preset).plan
         spec = spec_for_plan(args.preset, _plan(args, base), seed=args.seed)
         session, stage, camera = create_simulated_session(args.out, spec, clock=_clock(args), noise_grey=args.noise_grey, intrinsics=intr)
-        stage = _bind_stage(stage_spec, stage, args.time_scale)
-        _release_lock(args, stage)
-        session.meta["stage"] = {**stage.describe(), "spec": stage_spec}
-        session.meta["camera"] = {**camera.properties(), "spec": "sim"}
-        if args.intrinsics:
-            session.meta["intrinsics_source"] = str(args.intrinsics)
-        session.save_meta()
+        stage = bind_simulated_stage(args, session, stage, camera, stage_spec)
         return session, stage, camera, simulated_engine(session, stage, camera, args.encode)
     if not args.board:
         raise InputError("--board FILE is required with a real camera (see SPEC 7 for board.json)")
@@ -289,6 +283,19 @@ def _open_devices(stage_spec: str, camera_spec: str):
         stage.disconnect()
         raise
     return stage, camera
+
+
+def bind_simulated_stage(args: argparse.Namespace, session, rig_stage, camera, stage_spec: str, **stage_meta):
+    """The simulated rig's stage as the command line asked for it (direct or through the emulator), unlocked
+    as asked, and recorded in session.json with the camera and the intrinsics' source."""
+    stage = _bind_stage(stage_spec, rig_stage, args.time_scale)
+    _release_lock(args, stage)
+    session.meta["stage"] = {**stage.describe(), **stage_meta, "spec": stage_spec}
+    session.meta["camera"] = {**camera.properties(), "spec": "sim"}
+    if args.intrinsics:
+        session.meta["intrinsics_source"] = str(args.intrinsics)
+    session.save_meta()
+    return stage
 
 
 def _bind_stage(stage_spec: str, rig_stage, time_scale: float = 1.0):

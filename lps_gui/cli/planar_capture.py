@@ -193,7 +193,8 @@ def planar_preset_name(preset: str | None) -> str:
 
 
 def _start(args: argparse.Namespace):
-    from lps_gui.cli.capture import _bind_stage, _clock, _close, _open_devices, _preflight, _read_intrinsics, _release_lock
+    from lps_gui.cli.capture import (_clock, _close, _open_devices, _preflight, _read_intrinsics, _release_lock,
+                                     bind_simulated_stage)
     from lps_gui.errors import InputError
 
     stage_spec, camera_spec = args.stage or "sim", args.camera or "sim"
@@ -216,13 +217,7 @@ def _start(args: argparse.Namespace):
 
         session, rig_stage, camera = create_simulated_gantry_session(args.out, spec, clock=_clock(args),
                                                                      noise_grey=args.noise_grey, intrinsics=intr)
-        stage = _bind_stage(stage_spec, rig_stage, args.time_scale)
-        _release_lock(args, stage)
-        session.meta["stage"] = {**stage.describe(), "axes": ["X", "Y"], "spec": stage_spec}
-        session.meta["camera"] = {**camera.properties(), "spec": "sim"}
-        if args.intrinsics:
-            session.meta["intrinsics_source"] = str(args.intrinsics)
-        session.save_meta()
+        stage = bind_simulated_stage(args, session, rig_stage, camera, stage_spec, axes=["X", "Y"])
         return session, stage, camera, gantry_engine(session, stage, camera, args.encode)
     if not args.board:
         raise InputError("--board FILE is required with a real camera (see SPEC 7 for board.json)")

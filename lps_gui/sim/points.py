@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -37,23 +38,35 @@ def calibrated_intrinsics(true: CameraIntrinsics) -> CameraIntrinsics:
 
 def simulate_point_session(spec: SimulationSpec, out: Path | str) -> Session:
     """Simulate ``spec`` at the corner level into a new session folder ``out``."""
-    out = Path(out)
     views = simulate_views(spec)
+    return write_point_session(out, spec, views.stops, views.corners_px, views.truth,
+                               {"driver": "simulated", "errors": spec.rig.errors.to_dict()})
+
+
+def write_point_session(out: Path | str, spec: Any, stops: Sequence[Any], corners_px: np.ndarray,
+                        truth: dict[str, Any], stage: dict[str, Any]) -> Session:
+    """The files a capture plus detection would leave, for simulated corners of a line or a planar plan.
+
+    session.json (through the one simulated-session writer, with ``truth``),
+    captures.jsonl, corners.vnl, board.json and intrinsics.json: the true
+    intrinsics with a typical calibration's covariance, so the total sigma
+    has something to propagate.
+    """
+    out = Path(out)
     true = spec.rig.intrinsics
     intr = calibrated_intrinsics(true)
-    truth = dict(views.truth)
-    truth["index"] = [s.index for s in views.stops]
+    truth = {**truth, "index": [s.index for s in stops]}
     session = write_simulated_session(
         out, spec, "points", intrinsics=intr,
         camera={"driver": "simulated (points)", "image_size": list(true.image_size)},
-        stage={"driver": "simulated", "errors": spec.rig.errors.to_dict()},
-        truth=truth, noise_px=spec.noise_px,
+        stage=stage, truth=truth, noise_px=spec.noise_px,
     )
     write_board(out / "board.json", spec.rig.board)
     write_intrinsics(out / "intrinsics.json", intr)
-    names = [f"images/{s.index:06d}.png" for s in views.stops]
+    names = [f"images/{s.index:06d}.png" for s in stops]
     now = time.time()
-    for stop, name in zip(views.stops, names):
-        session.append(CaptureRecord(stop.index, stop.run, stop.direction, stop.target_mm, stop.target_mm, name, None, now, stop.frame))
-    write_corners_vnl(session.corners_path, CornerTable(names, views.corners_px, meta={"source": "simulated points"}))
+    for stop, name in zip(stops, names):
+        session.append(CaptureRecord(stop.index, stop.run, stop.direction, stop.target_mm, stop.target_mm, name, None,
+                                     now, stop.frame))
+    write_corners_vnl(session.corners_path, CornerTable(names, corners_px, meta={"source": "simulated points"}))
     return session

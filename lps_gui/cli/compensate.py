@@ -19,7 +19,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("session", help="session folder with results.json (run lps estimate first)")
     p.add_argument("--format", required=True, choices=FORMATS, help="table format")
     p.add_argument("--out", required=True, metavar="FILE", help="table file to write")
-    p.add_argument("--axis", default="X", choices=("X", "Y", "Z"), help="controller axis of the backlash lines (default X)")
+    p.add_argument("--axis", default="X", choices=("X", "Y", "Z"),
+                   help="controller axis of the backlash lines (default X); of a planar session, the axis whose table "
+                        "is written (the skew settings come with either)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -31,7 +33,8 @@ def run(args: argparse.Namespace) -> int:
     print(f"{args.out}: {len(table.nominal_mm)} points {table.nominal_mm[0]:g}..{table.nominal_mm[-1]:g} mm ({kind}), "
           f"largest offset {worst:.2f} um")
     if lines:
-        print(f"backlash {table.backlash_um():.2f} um:")
+        b = table.backlash_um()
+        print("controller settings" + (f" (backlash {b:.2f} um)" if b is not None else "") + ":")
         for line in lines:
             print(f"  {line}")
     return 0

@@ -8,7 +8,7 @@ import numpy as np
 
 from lps_gui.core.compensation import CompensationTable, build_table, own_sigma_um
 from lps_gui.errors import InputError
-from lps_gui.io.compensation_file import backlash_lines, write_table
+from lps_gui.io.compensation_file import backlash_lines, skew_lines, write_table
 from lps_gui.io.results_file import read_results
 
 RESULTS_FILE = "results.json"
@@ -25,11 +25,19 @@ def session_results(session_dir: Path | str) -> dict[str, Any]:
     return read_results(path)
 
 
-def table_from_results(results: dict[str, Any], max_points: int = 256) -> CompensationTable:
-    """The compensation table of an estimated session (outliers and unusable views left out)."""
+def table_from_results(results: dict[str, Any], max_points: int = 256, axis: str = "X") -> CompensationTable:
+    """The compensation table of an estimated session (outliers and unusable views left out).
+
+    A planar session (SPEC 10) gives the table of ``axis``: its deviation
+    against its target over every capture (all lines of the other axis pooled;
+    the other axis' squareness goes to the skew settings), each capture's
+    direction being the side that axis was approached from.
+    """
     rows = results.get("positions") or []
     if not rows:
         raise InputError("results.json holds no positions; estimate the session again")
+    if len(results.get("axes") or ["X"]) == 2:
+        return _planar_axis_table(results, rows, axis, max_points)
 
     def col(key: str) -> np.ndarray:
         return np.array([np.nan if r.get(key) is None else float(r[key]) for r in rows])
@@ -44,10 +52,34 @@ def table_from_results(results: dict[str, Any], max_points: int = 256) -> Compen
     return build_table(col("target_mm"), direction, col("run"), col("deviation_um"), sigma, valid, max_points)
 
 
+def _planar_axis_table(results: dict[str, Any], rows: list[dict[str, Any]], axis: str, max_points: int
+                       ) -> CompensationTable:
+    if axis not in ("X", "Y"):
+        raise InputError(f"--axis {axis}: a planar session measured X and Y; choose one of them")
+    a = "XY".index(axis)
+    key = axis.lower()
+
+    def col(name: str) -> np.ndarray:
+        return np.array([np.nan if r.get(name) is None else float(r[name]) for r in rows])
+
+    ref = (results.get("parameters") or {}).get("reference_index")
+    is_ref = np.array([r.get("index") == ref for r in rows])
+    valid = np.array([bool(r.get("used")) and r.get(f"deviation_{key}_um") is not None for r in rows])
+    side = np.array([float((r.get("approach") or [1, 1])[a]) for r in rows])
+    passes = col("run") * 2 + np.array([r.get("direction") == "+" for r in rows])
+    sigma = own_sigma_um(col(f"sigma_{key}_um"), is_ref)
+    return build_table(col(f"target_{key}_mm"), side, passes, col(f"deviation_{key}_um"), sigma, valid, max_points)
+
+
 def compensate_session(session_dir: Path | str, fmt: str, out: Path | str, axis: str = "X") -> tuple[CompensationTable, list[str]]:
-    """Write the table of ``session_dir`` as ``fmt`` to ``out``; return it and the backlash lines to print."""
-    table = table_from_results(session_results(session_dir))
+    """Write the table of ``session_dir`` as ``fmt`` to ``out``; return it and the settings lines to print
+    (backlash; for a planar session also the skew correction from the measured squareness)."""
+    results = session_results(session_dir)
+    table = table_from_results(results, axis=axis)
     write_table(out, table, fmt)
     b = table.backlash_um()
     lines = [] if b is None else backlash_lines(b, axis)
+    planar = (results.get("figures") or {}).get("planar")
+    if planar and planar.get("squareness_urad") is not None:
+        lines += skew_lines(float(planar["squareness_urad"]))
     return table, lines

@@ -111,3 +111,17 @@ def test_several_runs_carry_the_repeatability_into_sigma(tmp_path):
     assert 0.3 < np.mean(err[near] ** 2 / sig[near] ** 2) < 2.0
     assert np.mean(np.abs(err) <= 2 * sig + 0.5) >= 0.95
     assert np.median(sig[near]) > 1.0 / np.sqrt(3) * 0.8  # at least the repeatability of a 3-run mean
+
+
+def test_planar_session_gives_a_table_per_axis_and_the_skew_settings(tmp_path):
+    from lps_gui.cli import main as lps_main
+    from lps_gui.pipeline.compensate import compensate_session
+
+    s = tmp_path / "planar"
+    assert lps_main(["simulate", "--planar", "--points", str(s), "--directions", "both", "--noise-px", "0.02"]) == 0
+    assert lps_main(["estimate", str(s)]) == 0
+    for axis, backlash in (("X", 5.0), ("Y", 4.0)):  # the paper-planar gantry's backlash per axis
+        table, lines = compensate_session(s, "linuxcnc", tmp_path / f"{axis}.comp", axis)
+        assert abs(table.backlash_um() - backlash) < 0.5, (axis, table.backlash_um())
+        assert any(line.startswith(f"${160 + 'XY'.index(axis)}=") for line in lines)
+        assert any(line.startswith("SET_SKEW XY=") for line in lines) and any(line.startswith("M852 I") for line in lines)

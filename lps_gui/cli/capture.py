@@ -190,9 +190,7 @@ def _plan(args: argparse.Namespace, base=None):
 
 
 def _start(args: argparse.Namespace):
-    from lps_gui.capture.engine import CaptureEngine
     from lps_gui.errors import InputError
-    from lps_gui.io.session import Session
 
     stage_spec, camera_spec = args.stage or "sim", args.camera or "sim"
     intr = _read_intrinsics(args.intrinsics)
@@ -213,14 +211,21 @@ def _start(args: argparse.Namespace):
         raise InputError("--board FILE is required with a real camera (see SPEC 7 for board.json)")
     from lps_gui.io.board_file import read_board
 
-    board, plan = read_board(args.board), _plan(args)
+    return device_session(args, read_board(args.board), _plan(args), intr, stage_spec, camera_spec)
+
+
+def device_session(args: argparse.Namespace, board, plan, intr, stage_spec: str, camera_spec: str, **stage_meta):
+    """Open the operator's devices, unlock as asked and create the session on them (devices closed on failure)."""
+    from lps_gui.capture.engine import CaptureEngine
+    from lps_gui.io.session import Session
+
     stage, camera = _open_devices(stage_spec, camera_spec)
     try:
         _release_lock(args, stage)
         session = Session.create(
             args.out, board, plan, intr,
             camera={**camera.properties(), "spec": camera_spec},
-            stage={**stage.describe(), "spec": stage_spec},
+            stage={**stage.describe(), **stage_meta, "spec": stage_spec},
             extra={"intrinsics_source": str(args.intrinsics)} if args.intrinsics else None,
         )
     except BaseException:

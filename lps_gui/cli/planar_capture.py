@@ -193,8 +193,7 @@ def planar_preset_name(preset: str | None) -> str:
 
 
 def _start(args: argparse.Namespace):
-    from lps_gui.cli.capture import (_clock, _close, _open_devices, _preflight, _read_intrinsics, _release_lock,
-                                     bind_simulated_stage)
+    from lps_gui.cli.capture import _clock, _preflight, _read_intrinsics, bind_simulated_stage, device_session
     from lps_gui.errors import InputError
 
     stage_spec, camera_spec = args.stage or "sim", args.camera or "sim"
@@ -221,25 +220,11 @@ def _start(args: argparse.Namespace):
         return session, stage, camera, gantry_engine(session, stage, camera, args.encode)
     if not args.board:
         raise InputError("--board FILE is required with a real camera (see SPEC 7 for board.json)")
-    from lps_gui.capture.engine import CaptureEngine
     from lps_gui.io.board_file import read_board
-    from lps_gui.io.session import Session
 
     plan = build_planar_plan(args)
     board, intr = read_board(args.board), _read_intrinsics(args.intrinsics)
-    stage, camera = _open_devices(stage_spec, camera_spec)
-    try:
-        _release_lock(args, stage)
-        session = Session.create(
-            args.out, board, plan, intr,
-            camera={**camera.properties(), "spec": camera_spec},
-            stage={**stage.describe(), "axes": ["X", "Y"], "spec": stage_spec},
-            extra={"intrinsics_source": str(args.intrinsics)} if args.intrinsics else None,
-        )
-    except BaseException:
-        _close(stage, camera)
-        raise
-    return session, stage, camera, CaptureEngine(stage, camera, session, encode=args.encode)
+    return device_session(args, board, plan, intr, stage_spec, camera_spec, axes=["X", "Y"])
 
 
 def _resume(args: argparse.Namespace, session):

@@ -16,6 +16,11 @@ from lps_gui.errors import InputError
 DIRECTIONS = ("+", "-", "both")
 
 
+def run_directions(directions: str) -> list[str]:
+    """The passes of a run: "both" is forward then backward."""
+    return ["+", "-"] if directions == "both" else [directions]
+
+
 class PlannedStop(NamedTuple):
     """One frame to capture: its place in the session and its target."""
 
@@ -57,7 +62,7 @@ class Plan:
         return np.sort(t)
 
     def run_directions(self) -> list[str]:
-        return ["+", "-"] if self.directions == "both" else [self.directions]
+        return run_directions(self.directions)
 
     def stops(self) -> Iterator[PlannedStop]:
         """Every frame of the session in capture order."""

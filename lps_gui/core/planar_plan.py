@@ -14,7 +14,7 @@ from typing import Any, Iterator, NamedTuple
 
 import numpy as np
 
-from lps_gui.core.plan import DIRECTIONS
+from lps_gui.core.plan import DIRECTIONS, run_directions
 from lps_gui.errors import InputError
 
 PATTERNS = ("serpentine", "raster")
@@ -99,7 +99,7 @@ class PlanarPlan:
         return np.concatenate(rows)
 
     def run_directions(self) -> list[str]:
-        return ["+", "-"] if self.directions == "both" else [self.directions]
+        return run_directions(self.directions)
 
     def stops(self) -> Iterator[PlanarStop]:
         """Every frame of the session in capture order."""

@@ -83,7 +83,9 @@ def planar_truth_rows(results: dict[str, Any]) -> list[Row]:
         Row("Squareness error", tc["squareness_error_urad"], "\u00b5rad", f"{fmt(tc['squareness_z'])} \u03c3"),
         Row("Scale X error", tc["scale_x_error_ppm"], "ppm"),
         Row("Scale Y error", tc["scale_y_error_ppm"], "ppm"),
-    ]
+    ] + ([Row("Out-of-plane displacement error RMS (board plane)", tc["out_of_plane_rms_error_um"], "\u00b5m",
+              f"mean (error/\u03c3)\u00b2 {fmt(tc.get('out_of_plane_z_mean_square'))}")]
+         if tc.get("out_of_plane_rms_error_um") is not None else [])
 
 
 def planar_position_table(results: dict[str, Any]) -> tuple[list[str], list[list[str]], list[float]]:

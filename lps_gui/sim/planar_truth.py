@@ -28,6 +28,8 @@ def planar_session_truth(session: Session) -> dict[str, Any] | None:
         rows = [per_index[i] for i in sorted(per_index)]
         meta.update(index=[r["index"] for r in rows], plane_mm=[r["plane_mm"] for r in rows],
                     board_plane_mm=[r["board_plane_mm"] for r in rows])
+        if all("normal_um" in r and "angles_urad" in r for r in rows):
+            meta.update(normal_um=[r["normal_um"] for r in rows], angles_urad=[r["angles_urad"] for r in rows])
     if meta.get("plane_mm") is None:
         return None
     K = len(meta["plane_mm"])
@@ -42,7 +44,32 @@ def planar_session_truth(session: Session) -> dict[str, Any] | None:
     squareness = ((meta.get("rig") or {}).get("stage_errors") or {}).get("squareness_urad")
     if squareness is not None:
         out["squareness_urad"] = float(squareness)
+    normal = _board_plane_normal_um(meta, out["plane_mm"], K)
+    if normal is not None:
+        out["board_plane_normal_um"] = normal
     return out
+
+
+def _board_plane_normal_um(meta: dict[str, Any], plane_mm: np.ndarray, K: int) -> np.ndarray | None:
+    """Where a constant-orientation model sees each true pose along the plane normal, at the board centre (um).
+
+    The carriage's out-of-plane displacement plus what its rotation w does at
+    the board: D = C + w x (X0 - C) (core.constant_orientation.board_plane_offsets,
+    first order in w, no solver), projected on the stage's normal e_n.
+    """
+    rig, board = meta.get("rig") or {}, meta.get("board")
+    if meta.get("normal_um") is None or meta.get("angles_urad") is None or not rig or not board:
+        return None
+    from lps_gui.core.constant_orientation import board_plane_offsets
+    from lps_gui.io.board_file import board_from_dict
+
+    E = np.asarray(rig["axes_board"], float)
+    C0 = np.asarray(rig["C0_board"], float)
+    normal = np.asarray(meta["normal_um"], float).reshape(K)
+    C = C0[None, :] + plane_mm @ E[:, :2].T + 1e-3 * normal[:, None] * E[None, :, 2]
+    w = 1e-6 * np.asarray(meta["angles_urad"], float).reshape(K, 3) @ E.T
+    X0 = board_from_dict(board, "session.json truth").object_points().mean(axis=0)
+    return 1e3 * (board_plane_offsets(C, w, X0) - C0[None, :]) @ E[:, 2]
 
 
 def _f(x: Any) -> float | None:
@@ -93,4 +120,26 @@ def planar_truth_comparison(obs: PlanarObservations, est: PlanarEstimate, truth:
     for k, row in enumerate(positions):
         row["truth_deviation_x_um"] = _f(true_dev[k, 0])
         row["truth_deviation_y_um"] = _f(true_dev[k, 1])
+    out.update(_out_of_plane_errors(obs, truth, rows, ok, positions))
     return out
+
+
+def _out_of_plane_errors(obs: PlanarObservations, truth: dict[str, Any], rows: np.ndarray, ok: np.ndarray,
+                         positions: list[dict]) -> dict[str, Any]:
+    """The estimate's out-of-plane displacement against truth, both off their least-squares plane over ``ok``."""
+    if "board_plane_normal_um" not in truth:
+        return {}
+    est_v = np.array([np.nan if r.get("out_of_plane_um") is None else r["out_of_plane_um"] for r in positions])
+    est_s = np.array([np.nan if r.get("out_of_plane_sigma_um") is None else r["out_of_plane_sigma_um"]
+                      for r in positions])
+    keep = ok & np.isfinite(est_v) & np.isfinite(est_s)
+    if keep.sum() < 4:
+        return {}
+    design = np.column_stack([np.ones(obs.K), obs.target_mm])
+    true_v = truth["board_plane_normal_um"][rows]
+    true_v = true_v - design @ np.linalg.lstsq(design[keep], true_v[keep], rcond=None)[0]
+    err = est_v[keep] - true_v[keep]
+    for k, row in enumerate(positions):
+        row["truth_out_of_plane_um"] = _f(true_v[k])
+    return {"out_of_plane_rms_error_um": _f(np.sqrt(np.mean(err**2))),
+            "out_of_plane_z_mean_square": _f(np.mean((err / est_s[keep]) ** 2))}

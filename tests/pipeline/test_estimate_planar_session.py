@@ -104,3 +104,10 @@ def test_planar_straightness_in_and_out_of_the_plane_carry_their_resolution(plan
     for axis in ("x", "y"):
         if not r["figures"]["planar"]["per_axis"][axis.upper()]["out_of_plane"]["resolved"]:
             assert summary[f"out_of_plane_straightness_{axis}_max"] is None
+
+
+def test_out_of_plane_displacement_is_compared_with_the_truth_at_the_board_plane(planar_session):
+    r = json.loads((planar_session / "results.json").read_text())
+    tc = r["truth_comparison"]
+    assert 0.3 < tc["out_of_plane_z_mean_square"] < 3.0, tc
+    assert any(p.get("truth_out_of_plane_um") is not None for p in r["positions"])

@@ -86,7 +86,7 @@ def true_E_rows(before: dict[str, Any], after: dict[str, Any]) -> list[list[str]
 def write_comparison(before_dir: Path | str, after_dir: Path | str, out: Path | str | None = None) -> Path:
     """Write the as-found / as-left PDF (default AFTER/as-found-as-left.pdf); returns its path."""
     from lps_gui import __version__
-    from lps_gui.report.layout import PdfFlow, ensure_gui_app
+    from lps_gui.report.layout import ensure_gui_app, pdf_file
     from lps_gui.report.pdf import load_results
 
     before, after = load_results(Path(before_dir)), load_results(Path(after_dir))
@@ -97,9 +97,7 @@ def write_comparison(before_dir: Path | str, after_dir: Path | str, out: Path | 
     if not rows:
         raise InputError("as-found/as-left: neither session has ISO 230-2 figures; measure both directions or two runs")
     ensure_gui_app()
-    tmp = out.with_name(f".{out.name}.tmp")
-    flow = PdfFlow(tmp, "As found / as left", f"lps-calib {__version__} \u00b7 {Path(before_dir).name} -> {Path(after_dir).name}")
-    try:
+    with pdf_file(out, "As found / as left", f"lps-calib {__version__} \u00b7 {Path(before_dir).name} -> {Path(after_dir).name}") as flow:
         flow.heading("Stage compensation: as found / as left", 15)
         flow.paragraph(f"as found: {before.get('inputs', {}).get('session', before_dir)}  ({before.get('created', '')})")
         flow.paragraph(f"as left: {after.get('inputs', {}).get('session', after_dir)}  ({after.get('created', '')})")
@@ -110,12 +108,6 @@ def write_comparison(before_dir: Path | str, after_dir: Path | str, out: Path | 
         flow.figure(comparison_figure(before, after), 110.0)
         flow.paragraph("Improvement = as found / as left. The as-left E cannot fall below the measurement's own noise: "
                        "the table's entries carry that noise into the correction.")
-        flow.finish()
-    except BaseException:
-        flow.abort()
-        tmp.unlink(missing_ok=True)
-        raise
-    tmp.replace(out)
     return out
 
 

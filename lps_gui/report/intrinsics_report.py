@@ -42,15 +42,13 @@ def write_intrinsics_report(cal: "IntrinsicsCalibration", out: Path | str, cross
     """Write the PDF; returns its number of pages. A failure leaves no partial file."""
     from lps_gui import __version__
     from lps_gui.report.intrinsics_pictures import intrinsics_pictures
-    from lps_gui.report.layout import PdfFlow, ensure_gui_app
+    from lps_gui.report.layout import ensure_gui_app, pdf_file
 
     out = Path(out)
     if not out.parent.is_dir():
         raise InputError(f"{out.parent}: folder not found; create it or choose another --report")
     ensure_gui_app()
-    tmp = out.with_name(f".{out.name}.tmp")
-    flow = PdfFlow(tmp, f"Camera intrinsics report {title}".strip(), f"lps-calib {__version__} \u00b7 intrinsics {title}".strip())
-    try:
+    with pdf_file(out, f"Camera intrinsics report {title}".strip(), f"lps-calib {__version__} \u00b7 intrinsics {title}".strip()) as flow:
         flow.heading("Camera intrinsics \u2014 calibration report", 15)
         flow.paragraph("Board warp as mrcal models it: corner z = bow_x (1 - x\u00b2) + bow_y (1 - y\u00b2) with the "
                        "corner grid spanning [-1, 1]; the bow is the centre's offset from the edges along each board axis. "
@@ -76,10 +74,4 @@ def write_intrinsics_report(cal: "IntrinsicsCalibration", out: Path | str, cross
                 flow.new_page()
             flow.log.add(f"picture:{caption}")
             flow.space(flow.image(image, (180.0 - PICTURE_WIDTH_MM) / 2, PICTURE_WIDTH_MM, caption) + 4.0)
-        pages = flow.finish()
-    except BaseException:
-        flow.abort()
-        tmp.unlink(missing_ok=True)
-        raise
-    tmp.replace(out)
-    return pages
+    return flow.page

@@ -6,9 +6,10 @@ every page gets the same footer. Qt is imported inside functions only.
 from __future__ import annotations
 
 import os
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Iterator, Sequence
 
 from lps_gui.report.figures import FigureSpec
 from lps_gui.report.plot_painter import font, paint_figure
@@ -223,3 +224,31 @@ class PdfFlow:
 
     def space(self, mm: float) -> None:
         self.y += mm * self.mm
+
+
+@contextmanager
+def pdf_file(out: Path, title: str, footer: str) -> Iterator["PdfFlow"]:
+    """Paint a PDF into a temp file beside ``out``; only a complete one replaces ``out``.
+
+    On leaving the block the painter is ended (its result checked) and the temp
+    file is committed by :func:`lps_gui.io.atomic.commit_temp` (fsync, size,
+    ``%%EOF`` trailer: Qt reports success when a full disk cuts a PDF short); on
+    an exception it is aborted and removed, and the previous ``out`` is kept.
+    """
+    from lps_gui.io.atomic import commit_temp, temp_path
+
+    out = Path(out)
+    tmp = temp_path(out)
+    try:
+        flow = PdfFlow(tmp, title, footer)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    try:
+        yield flow
+        flow.finish()
+    except BaseException:
+        flow.abort()
+        tmp.unlink(missing_ok=True)
+        raise
+    commit_temp(tmp, out, ends_with=b"%%EOF")

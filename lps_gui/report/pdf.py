@@ -15,7 +15,6 @@ from typing import Any
 
 from lps_gui.core.progress import ProgressFn, no_progress
 from lps_gui.errors import InputError
-from lps_gui.io.atomic import commit_temp, temp_path
 from lps_gui.io.jsonfile import read_json
 from lps_gui.report import summary as S
 from lps_gui.report.figures import figures_from_results
@@ -81,7 +80,7 @@ def render_report(session_dir: Path, results: dict | None = None, out: Path | No
                   progress: ProgressFn = no_progress) -> ReportInfo:
     """:func:`write_report` that also returns the page plan (for tests and the GUI)."""
     from lps_gui import __version__
-    from lps_gui.report.layout import PdfFlow, ensure_gui_app
+    from lps_gui.report.layout import ensure_gui_app, pdf_file
 
     session_dir = Path(session_dir)
     results = results if results is not None else load_results(session_dir)
@@ -90,54 +89,49 @@ def render_report(session_dir: Path, results: dict | None = None, out: Path | No
     if not out.parent.is_dir():
         raise InputError(f"{out.parent}: folder not found; create it or choose another --out")
     ensure_gui_app()
-    tmp = temp_path(out)
     name = (results.get("inputs") or {}).get("session") or session_dir.name
-    flow = PdfFlow(tmp, f"LPS measurement report: {name}",
-                   f"lps-calib {__version__} \u00b7 {name} \u00b7 {results.get('created', '')}")
     steps = ("front pages", "plots", "outliers", "table")
-    try:
+    with pdf_file(out, f"LPS measurement report: {name}",
+                  f"lps-calib {__version__} \u00b7 {name} \u00b7 {results.get('created', '')}") as flow:
         if len(results.get("axes") or ["X"]) == 2:  # a planar session (SPEC 10)
             from lps_gui.report.planar_report import paint_planar_report
 
             progress(0, len(steps), "planar report")
             paint_planar_report(flow, meta, results, S.title_rows(meta, results, __version__), FIGURE_HEIGHT_MM)
-            n_pages = flow.finish()
-            tmp.replace(out)
-            progress(len(steps), len(steps), f"wrote {out}")
-            return ReportInfo(out, n_pages, flow.log.pages)
-        progress(0, len(steps), "front pages")
-        _front_page(flow, meta, results, __version__)
-        flow.new_page()
-        _figures_page(flow, results)
-        flow.new_page()
-        _uncertainty_page(flow, results)
-        flow.new_page()
-        _method_page(flow, results)
-        flow.heading("What limits this result", 11)
-        for note in S.limits_notes(results):
-            flow.paragraph(note)
-        progress(1, len(steps), "plots")
-        flow.new_page()
-        flow.heading("Plots")
-        for spec in figures_from_results(results, meta.get("truth")):
-            flow.figure(spec, FIGURE_HEIGHT_MM)
-        progress(2, len(steps), "outliers")
-        _outliers(flow, session_dir, results)
-        progress(3, len(steps), "table")
-        flow.new_page()
-        flow.heading("Per-position results")
-        header, rows, widths = S.position_table(results)
-        colors = ["#c00000" if r[-1] else None for r in rows]
-        flow.table(header, rows, widths, size_pt=6.3, row_mm=3.35, align_right_from=0, colors=colors)
-        _truth_page(flow, results)
-        n_pages = flow.finish()
-    except BaseException:
-        flow.abort()
-        tmp.unlink(missing_ok=True)
-        raise
-    commit_temp(tmp, out, ends_with=b"%%EOF")  # a half-written report never takes the place of a good one
+        else:
+            _paint_line_report(flow, session_dir, meta, results, __version__, progress, steps)
     progress(len(steps), len(steps), f"wrote {out}")
-    return ReportInfo(out, n_pages, flow.log.pages, tuple(flow.log.clipped))
+    return ReportInfo(out, flow.page, flow.log.pages, tuple(flow.log.clipped))
+
+
+def _paint_line_report(flow: Any, session_dir: Path, meta: dict[str, Any], results: dict[str, Any], version: str,
+                       progress: ProgressFn, steps: tuple[str, ...]) -> None:
+    """Every page of a line (single-axis) session's report."""
+    progress(0, len(steps), "front pages")
+    _front_page(flow, meta, results, version)
+    flow.new_page()
+    _figures_page(flow, results)
+    flow.new_page()
+    _uncertainty_page(flow, results)
+    flow.new_page()
+    _method_page(flow, results)
+    flow.heading("What limits this result", 11)
+    for note in S.limits_notes(results):
+        flow.paragraph(note)
+    progress(1, len(steps), "plots")
+    flow.new_page()
+    flow.heading("Plots")
+    for spec in figures_from_results(results, meta.get("truth")):
+        flow.figure(spec, FIGURE_HEIGHT_MM)
+    progress(2, len(steps), "outliers")
+    _outliers(flow, session_dir, results)
+    progress(3, len(steps), "table")
+    flow.new_page()
+    flow.heading("Per-position results")
+    header, rows, widths = S.position_table(results)
+    colors = ["#c00000" if r[-1] else None for r in rows]
+    flow.table(header, rows, widths, size_pt=6.3, row_mm=3.35, align_right_from=0, colors=colors)
+    _truth_page(flow, results)
 
 
 def _front_page(flow: Any, meta: dict[str, Any], results: dict[str, Any], version: str) -> None:

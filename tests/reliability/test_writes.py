@@ -133,3 +133,27 @@ def test_item2_estimate_on_a_full_disk_is_one_line_and_keeps_the_old_results(poi
     assert err.startswith("lps estimate: error:") and "No space left" in err
     assert {n: (point_session / n).read_bytes() for n in names} == before
     assert not [p for p in point_session.iterdir() if p.name.endswith(".tmp")]
+
+
+@pytest.mark.gui
+def test_item1_every_pdf_writer_goes_through_the_checked_commit(tmp_path, monkeypatch):
+    """The as-found/as-left PDF (and every other report) is committed only when complete: one mechanism."""
+    from lps_gui.errors import StorageError
+    from lps_gui.report.compare import write_comparison
+    from lps_gui.report.layout import PdfFlow
+
+    finish = PdfFlow.finish
+
+    def finish_on_full_disk(self):
+        pages = finish(self)
+        os.truncate(self.path, min(8192, os.path.getsize(self.path) // 2))
+        return pages
+
+    folder = _report_folder(tmp_path)
+    out = tmp_path / "compare.pdf"
+    out.write_bytes(OLD_REPORT)
+    monkeypatch.setattr(PdfFlow, "finish", finish_on_full_disk)
+    with pytest.raises(StorageError):
+        write_comparison(folder, folder, out)
+    assert out.read_bytes() == OLD_REPORT
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["compare.pdf", "s"]  # no temp file left

@@ -27,6 +27,7 @@ from lps_gui.core.planar_model import (
     PlanarState,
     initial_planar_state,
     linearize_planar,
+    planar_positions_only,
     planar_residuals,
     solve_planar,
 )
@@ -216,8 +217,6 @@ def estimate_planar(
         state = res.state
     others = usable & ~used
     if others.any():
-        from lps_gui.core.planar_simulate import planar_positions_only
-
         sub = state.copy()
         sub.xy = state.xy[others]
         state.xy[others] = planar_positions_only(sub, X, obs.corners_px[others], mask_all[others])

@@ -150,6 +150,21 @@ def linearize_planar(
     return eq, r_kn2
 
 
+def planar_positions_only(state: PlanarState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray,
+                          iterations: int = 10) -> np.ndarray:
+    """Each view's best (x, y) with R, l0 and the plane held (2x2 Gauss-Newton per view), shape (K, 2)."""
+    sub = state.copy()
+    for _ in range(iterations):
+        eq, _ = linearize_planar(sub, X, corners, mask)
+        ok = np.linalg.det(eq.D) > 0
+        step = np.zeros_like(sub.xy)
+        step[ok] = -np.linalg.solve(eq.D[ok], eq.g_s[ok][..., None])[..., 0]
+        sub.xy = sub.xy + step
+        if np.max(np.abs(step)) < 1e-10:
+            break
+    return sub.xy
+
+
 def apply_planar_step(state: PlanarState, d_theta: np.ndarray, d_s: np.ndarray) -> PlanarState:
     R = exp_so3(d_theta[0:3]) @ state.R
     l0 = state.l0 + d_theta[3:6]

@@ -16,7 +16,7 @@ import numpy as np
 
 from lps_gui.core.board import Board
 from lps_gui.core.camera_model import project_board
-from lps_gui.core.planar_model import PlanarState, linearize_planar
+from lps_gui.core.planar_model import PlanarState, planar_positions_only
 from lps_gui.core.planar_plan import PlanarPlan, PlanarStop
 from lps_gui.core.planar_rig import PlanarErrorModel, PlanarRig, PlanarTruePose
 from lps_gui.core.rotation import exp_so3
@@ -59,21 +59,6 @@ def nominal_planar_state(rig: PlanarRig, xy_mm: np.ndarray) -> PlanarState:
     P = R @ (-rig.axes_board)  # n_x = -R e_x, n_y = -R e_y; third column completes a rotation
     P[:, 2] = np.cross(P[:, 0], P[:, 1])
     return PlanarState(R.copy(), l0, P, np.asarray(xy_mm, dtype=float).copy(), rig.intrinsics)
-
-
-def planar_positions_only(state: PlanarState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray,
-                          iterations: int = 10) -> np.ndarray:
-    """Each view's best (x, y) with R, l0 and the plane held (2x2 Gauss-Newton per view), shape (K, 2)."""
-    sub = state.copy()
-    for _ in range(iterations):
-        eq, _ = linearize_planar(sub, X, corners, mask)
-        ok = np.linalg.det(eq.D) > 0
-        step = np.zeros_like(sub.xy)
-        step[ok] = -np.linalg.solve(eq.D[ok], eq.g_s[ok][..., None])[..., 0]
-        sub.xy = sub.xy + step
-        if np.max(np.abs(step)) < 1e-10:
-            break
-    return sub.xy
 
 
 def simulate_planar_views(spec: PlanarSimulationSpec) -> PlanarSimulatedViews:

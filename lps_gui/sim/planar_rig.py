@@ -16,7 +16,8 @@ from lps_gui.core.camera_model import project_board
 from lps_gui.core.clock import Clock, SimClock
 from lps_gui.core.planar_plan import PlanarPlan
 from lps_gui.core.planar_rig import PlanarErrorModel, PlanarRig, PlanarTruePose
-from lps_gui.core.planar_simulate import PlanarSimulationSpec, nominal_planar_state, planar_positions_only
+from lps_gui.core.planar_model import planar_positions_only
+from lps_gui.core.planar_simulate import PlanarSimulationSpec, nominal_planar_state
 from lps_gui.errors import InputError
 from lps_gui.io.board_file import board_from_dict, board_to_dict
 from lps_gui.io.intrinsics_file import intrinsics_from_dict, intrinsics_to_dict

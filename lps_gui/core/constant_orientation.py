@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lps_gui.core.camera_model import CameraIntrinsics, project_parts
+from lps_gui.core.pose_normals import PoseNormals, pose_normals
 from lps_gui.core.lps_model import motion_frame, unit
 from lps_gui.core.rotation import exp_so3
 
@@ -83,31 +84,47 @@ def view_residuals(
     return np.where(mask[..., None], np.nan_to_num(r), 0.0)
 
 
-def _linearize(R, b, phi, axis, Y, corners, mask, intrinsics, with_projection=False):
-    """Residuals (2, K, N) and Jacobian (2, 4, K, N) in (b, phi), masked (and d uv / d x_cam)."""
-    E = exp_so3(phi[:, None] * axis)
-    EY = np.matmul(Y[None], np.transpose(E, (0, 2, 1)))  # E Y for every view, shape (K, N, 3)
-    x = EY + b[:, None, :]
-    parts = project_parts(x[..., 0], x[..., 1], x[..., 2], intrinsics, want_jacobian=True)
-    w = mask.astype(float)
-    mu, mv = np.nan_to_num(corners[..., 0]), np.nan_to_num(corners[..., 1])
-    r = np.stack([(parts.u - mu) * w, (parts.v - mv) * w])
-    P = np.stack([np.stack(parts.du), np.stack(parts.dv)])  # shape (2, 3, K, N)
-    d_phi = np.cross(axis[:, None, :], EY)  # d x / d phi = a x (E Y), shape (K, N, 3)
-    J_phi = np.einsum("cikn,kni->ckn", P, d_phi)
-    J = np.concatenate([P, J_phi[:, None]], axis=1) * w  # shape (2, 4, K, N)
-    return (r, J, P) if with_projection else (r, J)
+@dataclass
+class ViewEquations:
+    """Normal-equation blocks of the (b, phi) fit and of R's two tilts, per view."""
+
+    H: np.ndarray  # shape (K, 4, 4): (b, phi)
+    g: np.ndarray  # shape (K, 4)
+    B: np.ndarray  # shape (K, 4, 2): (b, phi) against the tilts (omega_x, omega_y)
+    H_w: np.ndarray  # shape (K, 2, 2): the tilts
+    g_w: np.ndarray  # shape (K, 2)
+    ssr: np.ndarray  # shape (K,) px^2
 
 
-def _rotation_jacobian(R, phi, axis, Y, P, w):
-    """d uv / d (omega_x, omega_y) of a common left perturbation R <- exp([omega]x) R, shape (2, 2, K, N)."""
+def view_equations(
+    R: np.ndarray, b: np.ndarray, phi: np.ndarray, axis: np.ndarray, X: np.ndarray, X0: np.ndarray,
+    corners: np.ndarray, mask: np.ndarray, intrinsics: CameraIntrinsics, start: PoseNormals | None = None,
+) -> ViewEquations:
+    """The model as a parametrization of the poses, mapped through each view's 6x6 pose blocks.
+
+    View k's pose is ``Q = E R``, ``t = b - Q X0`` with ``E = exp(phi [a]x)``.
+    In the left pose perturbation (w, t): d b -> t; d phi -> w = a, t = -a x Q X0;
+    a tilt of R about e_j, ``R <- exp([e_j]x) R``, -> w = E e_j, t = -E e_j x Q X0.
+    ``start``: the pose blocks at these poses, when the caller has them.
+    """
     E = exp_so3(phi[:, None] * axis)
-    cols = []
-    for k in range(2):
-        dY = np.cross(np.eye(3)[k][None, :], Y)  # e_k x R (X - X0), shape (N, 3)
-        dx = np.einsum("kij,nj->kni", E, dY)
-        cols.append(np.einsum("cikn,kni->ckn", P, dx))
-    return np.stack(cols, axis=1) * w
+    Q = E @ R
+    c = Q @ X0  # Q X0 per view, shape (K, 3)
+    pn = start if start is not None else pose_normals(Q, b - c, X, corners, mask, intrinsics)
+    K = b.shape[0]
+    T = np.zeros((K, 6, N_VIEW_PARAMS + 2))
+    T[:, 3:, 0:3] = np.eye(3)
+    T[:, :3, 3] = axis
+    T[:, 3:, 3] = -np.cross(axis, c)
+    Ej = np.transpose(E[:, :, 0:2], (0, 2, 1))  # E e_x, E e_y as rows, shape (K, 2, 3)
+    T[:, :3, 4:6] = E[:, :, 0:2]
+    T[:, 3:, 4:6] = -np.transpose(np.cross(Ej, c[:, None, :]), (0, 2, 1))
+    Tt = np.transpose(T, (0, 2, 1))
+    HT = Tt @ pn.H @ T  # shape (K, 6, 6) in (b, phi, omega_x, omega_y)
+    gT = (Tt @ pn.g[..., None])[..., 0]
+    v = slice(0, N_VIEW_PARAMS)
+    w = slice(N_VIEW_PARAMS, N_VIEW_PARAMS + 2)
+    return ViewEquations(HT[:, v, v], gT[:, v], HT[:, v, w], HT[:, w, w], gT[:, w], pn.ssr)
 
 
 def solve_views(
@@ -120,6 +137,7 @@ def solve_views(
     intrinsics: CameraIntrinsics,
     iterations: int = 2,
     refine_rotation: np.ndarray | None = None,
+    start: PoseNormals | None = None,
 ) -> ConstantOrientationViews:
     """Batched Gauss-Newton on every view's (b, phi), optionally with the common R's two tilts.
 
@@ -148,22 +166,16 @@ def solve_views(
     seen = n_obs >= 2 * N_VIEW_PARAMS
     common = None if refine_rotation is None else np.asarray(refine_rotation, bool) & seen
     eye = np.eye(N_VIEW_PARAMS)
-    w = mask.astype(float)
     for it in range(iterations + 1):
-        Y = (X - X0) @ R.T
-        r, J, P = _linearize(R, b, phi, axis, Y, corners, mask, intrinsics, with_projection=True)
-        Jk = np.transpose(J, (2, 1, 0, 3)).reshape(K, N_VIEW_PARAMS, -1)  # shape (K, 4, 2N): batched BLAS
-        rk = np.transpose(r, (1, 0, 2)).reshape(K, -1, 1)  # shape (K, 2N, 1)
-        H = Jk @ np.transpose(Jk, (0, 2, 1))
+        eqs = view_equations(R, b, phi, axis, X, X0, corners, mask, intrinsics, start if it == 0 else None)
+        H = eqs.H.copy()
         H[~seen] = eye
-        g = (Jk @ rk)[..., 0]
+        g = eqs.g.copy()
         g[~seen] = 0.0
         H_inv = np.linalg.inv(H)
         if common is not None:
-            Jw = _rotation_jacobian(R, phi, axis, Y, P, w) * common[None, None, :, None]
-            A = np.einsum("cpkn,cqkn->pq", Jw, Jw)
-            B = np.einsum("cpkn,cqkn->kpq", J, Jw)  # shape (K, 4, 2)
-            B[~seen] = 0.0
+            A = eqs.H_w[common].sum(axis=0)
+            B = np.where(common[:, None, None], eqs.B, 0.0)  # shape (K, 4, 2)
             HB = H_inv @ B  # shape (K, 4, 2)
             S = A - np.einsum("kpa,kpb->ab", B, HB)
             S_inv = np.linalg.inv(S)
@@ -171,7 +183,7 @@ def solve_views(
             break
         g_view = g
         if common is not None:
-            g_w = np.einsum("cpkn,ckn->p", Jw, r)
+            g_w = eqs.g_w[common].sum(axis=0)
             rhs = g_w - np.einsum("kpa,kp->a", HB, g_view)
             d_w = -S_inv @ rhs
             g_view = g_view + B @ d_w
@@ -183,7 +195,7 @@ def solve_views(
     if common is not None:
         cov[:, 3, 3] += np.einsum("ka,ab,kb->k", HB[:, 3, :], S_inv, HB[:, 3, :])
     cov[~seen] = np.inf
-    ssr = np.einsum("ckn,ckn->k", r, r)
+    ssr = eqs.ssr.copy()
     return ConstantOrientationViews(b, phi, axis, cov, ssr, n_obs, R)
 
 

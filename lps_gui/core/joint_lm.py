@@ -19,6 +19,7 @@ import numpy as np
 
 from lps_gui.core.camera_model import CameraIntrinsics, intrinsics_jacobian, project_parts
 from lps_gui.core.lps_model import LpsLine, sphere_retract, sphere_tangent_basis
+from lps_gui.core.pose_normals import pose_normals
 from lps_gui.core.progress import CancelToken
 from lps_gui.core.rotation import exp_so3
 
@@ -69,6 +70,7 @@ class NormalEquations:
     n_obs: int  # number of scalar residuals used (2 per corner)
     basis: np.ndarray = field(default_factory=lambda: np.zeros((3, 2)))  # tangent basis of n
     weights: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # shape (K, N)
+    view_ssr: np.ndarray = field(default_factory=lambda: np.zeros(0))  # shape (K,): each view's plain SSR, px^2
 
 
 @dataclass
@@ -143,7 +145,7 @@ def robust_cost(r: np.ndarray, mask: np.ndarray, c: float | None) -> float:
     return float(np.sum(np.where(e <= c, e2, 2.0 * c * e - c * c)))
 
 
-LINEARIZE_BLOCK = 64  # views per pass: the (p, 2, views, N) Jacobian stays ~35 MB at N = 540, p = 17
+LINEARIZE_BLOCK = 64  # views per pass with intrinsics: the (17, 2, views, N) Jacobian stays ~35 MB at N = 540
 
 
 def linearize(
@@ -153,22 +155,25 @@ def linearize(
     mask: np.ndarray,
     huber_c: float | None = None,
     with_intrinsics: bool = False,
-) -> tuple[NormalEquations, np.ndarray]:
-    """Normal-equation blocks at ``state``; returns them and the residuals (K, N, 2).
+    want_residuals: bool = True,
+) -> tuple[NormalEquations, np.ndarray | None]:
+    """Normal-equation blocks at ``state``; returns them and the residuals (K, N, 2) (None if not wanted).
 
     ``huber_c`` (px) turns on the Huber loss: its IRLS weights enter the blocks.
-    Views enter the sums independently, so they are linearized LINEARIZE_BLOCK
-    at a time: the Jacobian of 1600 views would be 0.1-0.25 GB, and its
-    allocation and page faults cost more than the arithmetic.
+    Without intrinsics the blocks come from each view's 6x6 pose blocks. With
+    them the Jacobian is built LINEARIZE_BLOCK views at a time: that of 1600
+    views would be 0.1-0.25 GB, and its page faults cost more than the arithmetic.
     """
+    if not with_intrinsics:
+        return _linearize_pose(state, X, corners, mask, huber_c, want_residuals)
     K = mask.shape[0]
-    if K <= LINEARIZE_BLOCK:
-        return _linearize_views(state, X, corners, mask, huber_c, with_intrinsics)
     parts = []
     for lo in range(0, K, LINEARIZE_BLOCK):
         b = slice(lo, lo + LINEARIZE_BLOCK)
         sub = LpsState(state.R, state.l0, state.n, state.s[b], state.intrinsics)
-        parts.append(_linearize_views(sub, X, corners[b], mask[b], huber_c, with_intrinsics))
+        parts.append(_linearize_views(sub, X, corners[b], mask[b], huber_c))
+    if len(parts) == 1:
+        return parts[0]
     eqs = [e for e, _ in parts]
     eq = NormalEquations(
         A=sum(e.A for e in eqs),
@@ -181,6 +186,7 @@ def linearize(
         n_obs=sum(e.n_obs for e in eqs),
         basis=eqs[0].basis,
         weights=np.concatenate([e.weights for e in eqs]),
+        view_ssr=np.concatenate([e.view_ssr for e in eqs]),
     )
     return eq, np.concatenate([r for _, r in parts])
 
@@ -191,11 +197,9 @@ def _linearize_views(
     corners: np.ndarray,
     mask: np.ndarray,
     huber_c: float | None,
-    with_intrinsics: bool,
 ) -> tuple[NormalEquations, np.ndarray]:
-    """:func:`linearize` on a few views at once."""
-    if not with_intrinsics:
-        return _linearize_pose(state, X, corners, mask, huber_c)
+    """:func:`linearize` with the intrinsics, on a few views at once: the full Jacobian."""
+    with_intrinsics = True
     x, y, z = _camera_points(state, X)
     parts = project_parts(x, y, z, state.intrinsics, want_jacobian=True)
     m = np.nan_to_num(corners)
@@ -253,81 +257,49 @@ def _linearize_views(
         n_obs=int(2 * mask.sum()),
         basis=basis,
         weights=weights,
+        view_ssr=np.where(mask, e2, 0.0).sum(axis=1),
     )
     return eq, r
 
 
 def _linearize_pose(
-    state: LpsState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray, huber_c: float | None
-) -> tuple[NormalEquations, np.ndarray]:
-    """The blocks without intrinsics, contracted through each corner's 3x3 ``P^T W P``.
+    state: LpsState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray, huber_c: float | None,
+    want_residuals: bool = True,
+) -> tuple[NormalEquations, np.ndarray | None]:
+    """The blocks without intrinsics, from each view's 6x6 pose blocks (:mod:`lps_gui.core.pose_normals`).
 
-    Every pose column of the Jacobian is a 3x8 map ``G = U_n + s_k V`` of the
-    corner's d r / d x_cam = P (2x3): rotation ``[RX_n]x``, translation I,
-    direction ``s_k basis^T``. So ``J^T W J`` needs only M = P^T W P and
-    q = P^T W r per corner (9 numbers), summed over views with weights 1,
-    s_k, s_k^2 and then mapped by the N small U_n: no (8, 2, K, N) Jacobian.
+    The LPS model is a parametrization of the poses: view k sits at
+    ``R, t_k = l0 + s_k n``, so its pose perturbation is ``(w, t) = T_k
+    (theta, s_k)`` with rotation -> w, l0 -> t, direction -> s_k basis, s_k -> n.
+    ``J^T W J`` is then sum_k T_k^T H_k T_k: sums of H_k weighted by 1, s_k,
+    s_k^2, never a Jacobian over the corners.
     """
-    x, y, z = _camera_points(state, X)
-    parts = project_parts(x, y, z, state.intrinsics, want_jacobian=True)
-    obs = np.nan_to_num(corners)
-    r = np.empty(mask.shape + (2,))
-    r[..., 0] = np.where(mask, parts.u - obs[..., 0], 0.0)
-    r[..., 1] = np.where(mask, parts.v - obs[..., 1], 0.0)
-    weights = huber_weights(r, mask, huber_c)
-    wu, wv = (r[..., 0], r[..., 1]) if huber_c is None and mask.all() else (weights * r[..., 0], weights * r[..., 1])
-    du, dv = parts.du, parts.dv
-    weighted = not (huber_c is None and mask.all())
-    wdu = [weights * d for d in du] if weighted else du
-    wdv = [weights * d for d in dv] if weighted else dv
-    M = np.empty((3, 3) + mask.shape)  # P^T W P per corner
-    for i in range(3):
-        for j in range(i, 3):
-            M[i, j] = wdu[i] * du[j] + wdv[i] * dv[j]
-            M[j, i] = M[i, j]
-    q = np.stack([du[i] * wu + dv[i] * wv for i in range(3)])  # P^T W r, shape (3, K, N)
-    n = state.n
-    m = np.einsum("ijkn,j->ikn", M, n)  # M n, shape (3, K, N)
-    s = state.s
-    RX = X @ state.R.T  # shape (N, 3)
+    t = state.l0[None, :] + state.s[:, None] * state.n[None, :]
+    pn = pose_normals(state.R, t, X, corners, mask, state.intrinsics, huber_c, want_weights=huber_c is not None,
+                      want_residuals=want_residuals)
+    s, n = state.s, state.n
     basis = sphere_tangent_basis(n)
+    H, g = pn.H, pn.g
+    H0, H1, H2 = H.sum(axis=0), np.einsum("kij,k->ij", H, s), np.einsum("kij,k->ij", H[:, 3:, 3:], s * s)
     p = N_POSE_PARAMS
-    U = np.zeros((len(X), p, 3))
-    U[:, 0:3, :] = _skew_rows(RX)
-    U[:, 3:6, :] = np.eye(3)
-    V = np.zeros((p, 3))
-    V[6:8] = basis.T
-    M0 = M.sum(axis=2)  # shape (3, 3, N)
-    M1 = np.einsum("ijkn,k->ijn", M, s)
-    M2 = np.einsum("ijkn,k->ij", M, s * s)
-    UM1 = np.einsum("npi,ijn->pj", U, M1)  # sum_n U_n M1_n, shape (p, 3)
-    A = np.einsum("npi,ijn,nqj->pq", U, M0, U) + UM1 @ V.T + V @ UM1.T + V @ M2 @ V.T
-    q0 = q.sum(axis=1)  # shape (3, N)
-    g_theta = np.einsum("npi,in->p", U, q0) + V @ np.einsum("ikn,k->i", q, s)
-    m_sum = m.sum(axis=2)  # shape (3, K)
+    A = np.empty((p, p))
+    A[0:6, 0:6] = H0
+    A[0:6, 6:8] = H1[:, 3:] @ basis
+    A[6:8, 0:6] = A[0:6, 6:8].T
+    A[6:8, 6:8] = basis.T @ H2 @ basis
+    h = H[:, :, 3:] @ n  # d (w, t) block against s_k: shape (K, 6)
     B = np.empty((len(s), p))
-    B[:, 0:3] = np.stack([m[2] @ RX[:, 1] - m[1] @ RX[:, 2], m[0] @ RX[:, 2] - m[2] @ RX[:, 0],
-                          m[1] @ RX[:, 0] - m[0] @ RX[:, 1]], axis=1)
-    B[:, 3:6] = m_sum.T
-    B[:, 6:8] = s[:, None] * (m_sum.T @ basis)
-    D = np.einsum("ikn,i->k", m, n)
-    g_s = np.einsum("ikn,i->k", q, n)
-    e2 = np.sum(r * r, axis=-1)
+    B[:, 0:6] = h
+    B[:, 6:8] = s[:, None] * (h[:, 3:] @ basis)
+    g_sum = g.sum(axis=0)
+    g_theta = np.concatenate([g_sum, basis.T @ (g[:, 3:].T @ s)])
+    weights = pn.weights if pn.weights is not None else mask.astype(float)
     eq = NormalEquations(
-        A=A, B=B, D=D, g_theta=g_theta, g_s=g_s,
-        cost=robust_cost(r, mask, huber_c), ssr=float(np.sum(e2[mask])), n_obs=int(2 * mask.sum()),
-        basis=basis, weights=weights,
+        A=A, B=B, D=h[:, 3:] @ n, g_theta=g_theta, g_s=g[:, 3:] @ n,
+        cost=float(pn.cost.sum()), ssr=float(pn.ssr.sum()), n_obs=int(pn.n_obs.sum()),
+        basis=basis, weights=weights, view_ssr=pn.ssr,
     )
-    return eq, r
-
-
-def _skew_rows(v: np.ndarray) -> np.ndarray:
-    """[v]x for each row of v (N, 3): the map P -> v x P."""
-    out = np.zeros((len(v), 3, 3))
-    out[:, 0, 1], out[:, 0, 2] = -v[:, 2], v[:, 1]
-    out[:, 1, 0], out[:, 1, 2] = v[:, 2], -v[:, 0]
-    out[:, 2, 0], out[:, 2, 1] = -v[:, 1], v[:, 0]
-    return out
+    return eq, pn.residuals
 
 
 def solve_arrowhead(

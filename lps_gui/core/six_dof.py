@@ -1,7 +1,8 @@
 """6-DOF per position (SPEC 4.5): straightness and angular error motions.
 
 Each view's pose is refined on its own (fixed intrinsics), all views at once:
-the per-view normal equations are 6x6 and solved batched. The camera centres
+the per-view normal equations are 6x6 (:mod:`lps_gui.core.pose_normals`) and
+solved batched. The camera centres
 C_i = -R_i^T t_i give straightness as their distance from a least-squares
 line in the two perpendicular directions (v1, v2) of the motion frame; the
 rotation of R_i against the common R, expressed in (u, v1, v2), gives roll,
@@ -13,8 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lps_gui.core.camera_model import CameraIntrinsics, project_parts
+from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.lps_model import motion_frame
+from lps_gui.core.pose_normals import PoseNormals, pose_normals
 from lps_gui.core.rotation import exp_so3, log_so3, skew
 
 
@@ -35,9 +37,6 @@ class SixDof:
     frame: np.ndarray  # shape (3, 3): (u, v1, v2) columns, board frame
 
 
-VIEW_BLOCK = 128  # views refined at once: bounds the (views, N, 2, 6) Jacobian to ~10 MB at N = 540
-
-
 def refine_view_poses(
     R0: np.ndarray,
     t0: np.ndarray,
@@ -46,51 +45,30 @@ def refine_view_poses(
     mask: np.ndarray,
     intrinsics: CameraIntrinsics,
     iterations: int = 3,
+    start: PoseNormals | None = None,
 ) -> ViewPoses:
     """Batched Gauss-Newton on every view's pose (left-perturbed rotation, translation).
 
     Started from the common model, 3 iterations converge to 1e-6 um on the
     paper rig (quadratic convergence from a close start); more cost time only.
-    Views are independent, so they are refined in blocks of VIEW_BLOCK: each
-    block's Jacobian is (B, 2N, 6) and J^T J a batched matrix product.
+    Each view's 6x6 normal equations come from :func:`pose_normals` and are
+    solved batched. ``start``: the blocks at (R0, t0) when the caller has
+    them already (the constant-orientation fit starts from the same poses).
     """
-    K = len(t0)
-    R = np.empty((K, 3, 3))
-    t = np.empty((K, 3))
-    H = np.empty((K, 6, 6))
-    ssr = np.empty(K)
-    for lo in range(0, K, VIEW_BLOCK):
-        b = slice(lo, lo + VIEW_BLOCK)
-        R[b], t[b], H[b], ssr[b] = _refine_block(np.array(R0[b], float), np.array(t0[b], float), X, corners[b], mask[b],
-                                                 intrinsics, iterations)
-    return ViewPoses(R, t, np.linalg.inv(H + 1e-12 * np.eye(6)), ssr)
-
-
-def _refine_block(R: np.ndarray, t: np.ndarray, X: np.ndarray, corners: np.ndarray, mask: np.ndarray,
-                  intrinsics: CameraIntrinsics, iterations: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    B, N = corners.shape[:2]
-    observed = np.nan_to_num(corners)
-    w = mask.astype(float)[..., None]  # shape (B, N, 1)
-    J = np.empty((B, N, 2, 6))
+    R = np.array(np.broadcast_to(R0, (len(t0), 3, 3)), dtype=float)
+    t = np.array(t0, dtype=float)
+    eye = 1e-12 * np.eye(6)
+    pn = start
     for it in range(iterations + 1):
-        RX = X @ np.transpose(R, (0, 2, 1))  # shape (B, N, 3)
-        parts = project_parts(RX[..., 0] + t[:, None, 0], RX[..., 1] + t[:, None, 1], RX[..., 2] + t[:, None, 2],
-                              intrinsics, want_jacobian=True)
-        r = (np.stack([parts.u, parts.v], axis=-1) - observed) * w  # shape (B, N, 2)
-        for c, d in enumerate((parts.du, parts.dv)):
-            P = np.stack(d, axis=-1) * w  # d (u or v) / d translation, shape (B, N, 3)
-            J[:, :, c, 3:] = P
-            J[:, :, c, :3] = np.cross(RX, P)  # d / d w of a left perturbation: (R X) x P
-        Jf = J.reshape(B, 2 * N, 6)
-        JT = np.transpose(Jf, (0, 2, 1))
-        H = JT @ Jf  # shape (B, 6, 6)
+        if pn is None:
+            pn = pose_normals(R, t, X, corners, mask, intrinsics)
         if it == iterations:
             break
-        g = (JT @ r.reshape(B, 2 * N, 1))[..., 0]
-        delta = -np.linalg.solve(H + 1e-12 * np.eye(6), g[..., None])[..., 0]
+        delta = -np.linalg.solve(pn.H + eye, pn.g[..., None])[..., 0]
         R = exp_so3(delta[:, :3]) @ R
         t = t + delta[:, 3:]
-    return R, t, H, np.einsum("bnc,bnc->b", r, r)
+        pn = None
+    return ViewPoses(R, t, np.linalg.inv(pn.H + eye), pn.ssr)
 
 
 def six_dof_motion(poses: ViewPoses, R_common: np.ndarray, valid: np.ndarray, sigma2_px: float) -> SixDof:

@@ -95,29 +95,42 @@ def run_session(seed: int, views_count: int, bow1: float = 20.0, bow2: float = 5
     return spec, views, est, truth, rot_truth, X0
 
 
-def test_jacobian_matches_central_differences():
+def test_view_equations_match_central_differences():
+    """(b, phi) and R's two tilts, through the 6x6 pose blocks, against differences of view_residuals."""
+    from tests.core.finite_differences import central_jacobian, normalized_difference
+
+    TOL = 1e-5  # every entry at 1e-5 of its own scale (tests/core/finite_differences.py)
+
     spec = paper_rig_spec(seed=3, plan=Plan(start_mm=0.0, stop_mm=40.0, step_mm=10.0))
     views = simulate_views(spec)
     X = spec.rig.board.object_points()
     X0 = X.mean(axis=0)
     R = spec.rig.R_cam_board
-    mask = np.all(np.isfinite(views.corners_px), axis=-1)
+    corners = views.corners_px.copy()
+    corners[1, 7:30] = np.nan
+    mask = np.all(np.isfinite(corners), axis=-1)
     b = co.start_from_line(R, views.t_cam_board, X0) + np.array([0.3, -0.2, 1.0])
     phi = np.linspace(-2e-3, 2e-3, b.shape[0])
-    axis = co.unit(b)
-    Y = (X - X0) @ R.T
-    _, J = co._linearize(R, b, phi, axis, Y, views.corners_px, mask, spec.rig.intrinsics)
-    steps = (1e-5, 1e-5, 1e-5, 1e-8)
-    for p, h in enumerate(steps):
-        db, dphi = np.zeros_like(b), np.zeros_like(phi)
-        if p < 3:
-            db[:, p] = h
-        else:
-            dphi[:] = h
-        rp = co.view_residuals(R, b + db, phi + dphi, axis, X, X0, views.corners_px, mask, spec.rig.intrinsics)
-        rm = co.view_residuals(R, b - db, phi - dphi, axis, X, X0, views.corners_px, mask, spec.rig.intrinsics)
-        fd = np.moveaxis((rp - rm) / (2 * h), -1, 0)  # shape (2, K, N)
-        assert np.allclose(J[:, p], fd, rtol=1e-5, atol=1e-6 * np.abs(fd).max()), f"parameter {p}"
+    axis = co.unit(b)  # any axis, not only the optical one
+    intr = spec.rig.intrinsics
+    eqs = co.view_equations(R, b, phi, axis, X, X0, corners, mask, intr)
+    for k in range(b.shape[0]):
+        def r_of(d, k=k):
+            bk, phik = b.copy(), phi.copy()
+            bk[k] += d[:3]
+            phik[k] += d[3]
+            Rk = exp_so3(np.array([d[4], d[5], 0.0])) @ R
+            return co.view_residuals(Rk, bk[k : k + 1], phik[k : k + 1], axis[k : k + 1], X, X0, corners[k : k + 1],
+                                     mask[k : k + 1], intr).reshape(-1)
+
+        J = central_jacobian(r_of, 6, np.r_[np.full(3, 1e-5), np.full(3, 1e-8)])
+        H = np.block([[eqs.H[k], eqs.B[k]], [eqs.B[k].T, eqs.H_w[k]]])
+        assert normalized_difference(H, J.T @ J) < TOL, f"view {k}"
+        r = r_of(np.zeros(6))
+        g_num = J.T @ r
+        scale = np.sqrt(np.diag(J.T @ J)) * np.linalg.norm(r)
+        assert np.max(np.abs(np.r_[eqs.g[k], eqs.g_w[k]] - g_num) / scale) < TOL, f"view {k}"
+        assert eqs.ssr[k] == pytest.approx(float(r @ r))
 
 
 def test_line_residual_sigma_matches_dense_hat_matrix():

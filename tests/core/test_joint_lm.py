@@ -73,12 +73,15 @@ def test_linearize_matches_central_differences(case, with_intrinsics):
     assert eq.n_obs == 2 * mask.sum() and Jt.shape[1] == p and Js.shape[1] == K
 
 
-def test_a_perturbed_jacobian_term_fails_the_check(case, monkeypatch):
-    """The check above can fail: scale d r / d s by 1.01 (a wrong chain-rule term) and it does."""
-    import lps_gui.core.joint_lm as joint_lm
+@pytest.mark.parametrize("with_intrinsics", [False, True])
+def test_a_perturbed_jacobian_term_fails_the_check(case, monkeypatch, with_intrinsics):
+    """The check above can fail: scale d u / d z by 1.01 (a wrong chain-rule term) and it does."""
+    import importlib
 
+    # the pose-only blocks come from core.pose_normals, the full Jacobian from joint_lm itself
+    module = importlib.import_module("lps_gui.core.joint_lm" if with_intrinsics else "lps_gui.core.pose_normals")
     state, X, corners, mask = case
-    real = joint_lm.project_parts
+    real = module.project_parts
 
     def skewed(x, y, z, intrinsics, want_jacobian=False):
         parts = real(x, y, z, intrinsics, want_jacobian)
@@ -86,9 +89,9 @@ def test_a_perturbed_jacobian_term_fails_the_check(case, monkeypatch):
             parts = parts._replace(du=(parts.du[0], parts.du[1], 1.01 * parts.du[2]))
         return parts
 
-    monkeypatch.setattr(joint_lm, "project_parts", skewed)
-    eq, _ = linearize(state, X, corners, mask)
-    monkeypatch.setattr(joint_lm, "project_parts", real)
+    monkeypatch.setattr(module, "project_parts", skewed)
+    eq, _ = linearize(state, X, corners, mask, with_intrinsics=with_intrinsics)
+    monkeypatch.setattr(module, "project_parts", real)
     J = numeric_jacobian(state, X, corners, mask, eq.A.shape[0])
     H = np.block([[eq.A, eq.B.T], [eq.B, np.diag(eq.D)]])
     assert normalized_difference(H, J.T @ J) > 100 * TOL

@@ -154,6 +154,26 @@ def project_parts(
     return ProjectionParts(u, v, du, dv, xp, yp, xd, yd)
 
 
+def intrinsics_rows(parts: ProjectionParts, intrinsics: CameraIntrinsics) -> tuple[np.ndarray, np.ndarray]:
+    """d u / d intrinsics and d v / d intrinsics, each shape (9,) + parts' shape (parameter-major, contiguous)."""
+    fx, fy = intrinsics.fx, intrinsics.fy
+    xp, yp, xd, yd = parts.xp, parts.yp, parts.xd, parts.yd
+    xx, yy, xy = xp * xp, yp * yp, xp * yp
+    r2 = xx + yy
+    r4 = r2 * r2
+    Ju = np.zeros((9,) + xp.shape)
+    Jv = np.zeros((9,) + xp.shape)
+    Ju[0], Jv[1] = xd, yd
+    Ju[2], Jv[3] = 1.0, 1.0
+    fxp, fyp = fx * xp, fy * yp
+    Ju[4], Jv[4] = fxp * r2, fyp * r2
+    Ju[5], Jv[5] = fxp * r4, fyp * r4
+    Ju[6], Jv[6] = 2.0 * fx * xy, fy * (r2 + 2.0 * yy)
+    Ju[7], Jv[7] = fx * (r2 + 2.0 * xx), 2.0 * fy * xy
+    Ju[8], Jv[8] = Ju[5] * r2, Jv[5] * r2
+    return Ju, Jv
+
+
 def intrinsics_jacobian(parts: ProjectionParts, intrinsics: CameraIntrinsics) -> np.ndarray:
     """d uv / d intrinsics, shape (..., 2, 9), from the parts of a projection."""
     fx, fy = intrinsics.fx, intrinsics.fy

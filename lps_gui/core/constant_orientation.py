@@ -295,17 +295,19 @@ def board_plane_from_model(
     along_mm: np.ndarray,
     usable: np.ndarray,
     used: np.ndarray,
+    start: PoseNormals | None = None,
 ) -> BoardPlaneMotion:
     """The whole step after the joint LM: per-view fit from the model's t_i, then the figures.
 
     Views without a board get NaN; outlier views (usable, not used) get their
-    own figures relative to the used views' line.
+    own figures relative to the used views' line. ``start``: the pose blocks
+    at the model's poses over ``mask & usable``, when the caller has them.
     """
     X0 = np.asarray(X, float).mean(axis=0)
     usable = np.asarray(usable, bool)
     used = np.asarray(used, bool) & usable
     views = solve_views(R, start_from_line(R, translations, X0), X, X0, corners, mask & usable[:, None], intrinsics,
-                        refine_rotation=used)
+                        refine_rotation=used, start=start)
     out = board_plane_motion(views, views.R, u_board, X0, along_mm, used)
     for arr in (out.straightness_um, out.straightness_sigma_um, out.image_rotation_urad, out.image_rotation_sigma_urad):
         arr[~usable] = np.nan

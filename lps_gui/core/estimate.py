@@ -19,11 +19,21 @@ from lps_gui.core.camera_model import INTRINSIC_NAMES
 from lps_gui.core.constant_orientation import board_plane_from_model
 from lps_gui.core.estimate_types import METHODS, EstimateOptions, LpsEstimate, step_pairs
 from lps_gui.core.hybrid import initial_line, solve_hybrid, view_costs
-from lps_gui.core.joint_lm import N_POSE_PARAMS, LmOptions, LpsState, linearize, solve_joint, solve_positions_only
+from lps_gui.core.joint_lm import (
+    N_POSE_PARAMS,
+    LmOptions,
+    LpsState,
+    NormalEquations,
+    linearize,
+    linearize_poses,
+    solve_joint,
+    solve_positions_only,
+)
 from lps_gui.core.observations import Observations
 from lps_gui.core.outliers import position_outliers, reprojection_outliers
 from lps_gui.core.per_view import estimate_per_view
 from lps_gui.core.pnp import solve_pnp
+from lps_gui.core.pose_normals import PoseNormals
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.core.six_dof import SixDof, refine_view_poses, six_dof_motion
 from lps_gui.core.uncertainty import (
@@ -54,6 +64,7 @@ class _Solution:
     flags: list[dict[str, Any]] = field(default_factory=list)
     iterations: int = 0
     converged: bool = False
+    equations: NormalEquations | None = None  # the joint LM's, at ``state`` over the used views (None: hybrid)
 
     @property
     def used(self) -> np.ndarray:
@@ -93,8 +104,8 @@ def estimate(
         if cancel is not None:
             cancel.check("estimation")
         t0 = time.perf_counter()
-        sol.state, sol.iterations, sol.converged = _solve(sol.state, obs, X, mask_all & sol.used[:, None], sol.used, sol.ref,
-                                                          opt, progress, cancel)
+        sol.state, sol.iterations, sol.converged, sol.equations = _solve(
+            sol.state, obs, X, mask_all & sol.used[:, None], sol.used, sol.ref, opt, progress, cancel)
         timings["solve"] = timings.get("solve", 0.0) + time.perf_counter() - t0
         if not opt.detect_outliers or not _outlier_round(sol, obs, X, mask_all, opt.outlier_k, round_no + 1):
             break
@@ -146,12 +157,12 @@ def _solve(
     opt: EstimateOptions,
     progress: ProgressFn,
     cancel: CancelToken | None,
-) -> tuple[LpsState, int, bool]:
+) -> tuple[LpsState, int, bool, NormalEquations | None]:
     free = used.copy()
     free[ref] = False
     if opt.method == "hybrid":
         res = solve_hybrid(state, X, obs.corners_px, mask, used, opt.hybrid, progress, cancel)
-        return _regauge(res.state, ref), res.rounds, res.converged
+        return _regauge(res.state, ref), res.rounds, res.converged, None
     prior = None
     if opt.self_calibrate:
         if obs.intrinsics.covariance is None:
@@ -168,7 +179,8 @@ def _solve(
         intrinsics_prior=prior,
     )
     progress(2, 4, f"joint LM: {lm.iterations} iterations")
-    return lm.state, lm.iterations, lm.converged
+    plain = not opt.robust and not opt.self_calibrate  # then lm.equations are the plain pose blocks the outlier round needs
+    return lm.state, lm.iterations, lm.converged, lm.equations if plain else None
 
 
 def _regauge(state: LpsState, ref: int) -> LpsState:
@@ -188,9 +200,17 @@ def _views_of(state: LpsState, idx: np.ndarray) -> LpsState:
     return LpsState(state.R, state.l0, state.n, state.s[idx].copy(), state.intrinsics)
 
 
-def _view_rms(state: LpsState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray) -> np.ndarray:
+def _view_rms(state: LpsState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray,
+              known_ssr: np.ndarray | None = None, known: np.ndarray | None = None) -> np.ndarray:
+    """Each view's reprojection RMS (px); ``known_ssr`` of the ``known`` views comes from a pass already made."""
     n = mask.sum(axis=1)
-    cost = view_costs(state, X, corners, mask)
+    if known_ssr is None:
+        cost = view_costs(state, X, corners, mask)
+    else:
+        cost = np.where(known, known_ssr, 0.0)
+        rest = np.flatnonzero(~known & (n > 0))
+        if rest.size:
+            cost[rest] = view_costs(_views_of(state, rest), X, corners[rest], mask[rest])
     return np.where(n > 0, np.sqrt(cost / np.maximum(2 * n, 1)), np.nan)
 
 
@@ -203,8 +223,10 @@ def _outlier_round(sol: _Solution, obs: Observations, X: np.ndarray, mask_all: n
     """
     used = sol.used
     mask = mask_all & used[:, None]
-    rms = _view_rms(sol.state, X, obs.corners_px, mask_all)
-    eq, _ = linearize(sol.state, X, obs.corners_px, mask)
+    eq = sol.equations  # the LM's last pass, when it was the plain one at this state
+    if eq is None:
+        eq, _ = linearize(sol.state, X, obs.corners_px, mask, want_residuals=False)
+    rms = _view_rms(sol.state, X, obs.corners_px, mask_all, eq.view_ssr, used)
     sigma2 = noise_variance(eq.ssr, eq.n_obs, N_POSE_PARAMS + int(used.sum()) - 1)
     inv = arrowhead_inverse(eq.A, eq.B, eq.D, sol.free())
     sigma_um = 1e3 * np.sqrt(sigma2 * inv.var_s())
@@ -244,6 +266,7 @@ class _Uncertainty:
     intrinsics_gradient: np.ndarray | None  # d s / d intrinsics, (K, 9)
     n_obs: int
     n_params: int
+    poses: PoseNormals  # every usable view's pose blocks at the solution: the per-view fits start from them
 
 
 def _uncertainty(obs: Observations, opt: EstimateOptions, sol: _Solution, X: np.ndarray, mask_all: np.ndarray) -> _Uncertainty:
@@ -251,7 +274,9 @@ def _uncertainty(obs: Observations, opt: EstimateOptions, sol: _Solution, X: np.
     used, usable, free = sol.used, sol.usable, sol.free()
     mask = mask_all & used[:, None]
     have_cov = obs.intrinsics.covariance is not None
-    eq, _ = linearize(sol.state, X, obs.corners_px, mask, with_intrinsics=have_cov or opt.self_calibrate)
+    # one pass over every usable view; only the used ones enter the equations
+    eq, poses = linearize_poses(sol.state, X, obs.corners_px, mask_all, with_intrinsics=have_cov or opt.self_calibrate,
+                                views=used)
     p = N_POSE_PARAMS
     A, B = eq.A, eq.B
     if opt.self_calibrate:
@@ -269,11 +294,11 @@ def _uncertainty(obs: Observations, opt: EstimateOptions, sol: _Solution, X: np.
     if have_cov and not opt.self_calibrate:
         _, G_s = intrinsics_sensitivity(inv, eq.A[:p, p:], eq.B[:, p:])
         var_total = var_s + propagated_variance(G_s, obs.intrinsics.covariance)
-    # positions of views outside the solve: their own 1-D sigma (noise only)
+    # positions of views outside the solve: their own 1-D sigma (noise only), n^T H_tt n of their pose blocks
     alone = usable & ~used
     if alone.any():
-        eq_o, _ = linearize(_views_of(sol.state, np.flatnonzero(alone)), X, obs.corners_px[alone], mask_all[alone])
-        var_o = sigma2 / np.maximum(eq_o.D, 1e-300)
+        n = sol.state.n
+        var_o = sigma2 / np.maximum(np.einsum("i,kij,j->k", n, poses.H[alone, 3:, 3:], n), 1e-300)
         var_s[alone] = var_o
         var_total[alone] = var_o
     var_s[~usable] = np.nan
@@ -287,7 +312,7 @@ def _uncertainty(obs: Observations, opt: EstimateOptions, sol: _Solution, X: np.
     param_sigmas = {"rvec_sigma_rad": sd[0:3].tolist(), "l0_sigma_mm": sd[3:6].tolist(), "n_sigma_rad": sd[6:p].tolist()}
     if opt.self_calibrate:
         param_sigmas["intrinsics_sigma"] = sd[p : p + N_INTRINSICS].tolist()
-    return _Uncertainty(sigma2, var_s, var_total, step_sigma, param_sigmas, inv, G_s, eq.n_obs, n_params)
+    return _Uncertainty(sigma2, var_s, var_total, step_sigma, param_sigmas, inv, G_s, eq.n_obs, n_params, poses)
 
 
 
@@ -300,12 +325,13 @@ def _finish(obs: Observations, opt: EstimateOptions, sol: _Solution, X: np.ndarr
     six = board_plane = None
     if opt.six_dof:
         t1 = time.perf_counter()
-        six = _six_dof(sol.state, obs, X, mask_all, sol.usable, sol.used)
+        six = _six_dof(sol.state, obs, X, mask_all, sol.usable, sol.used, unc.poses)
         timings["six_dof"] = time.perf_counter() - t1
         t1 = time.perf_counter()  # straightness at the board plane and image rotation (SPEC 11)
         state = sol.state
         board_plane = board_plane_from_model(state.R, state.line().translations(state.s), state.line().u_board, X,
-                                             obs.corners_px, mask_all, state.intrinsics, state.s, sol.usable, sol.used)
+                                             obs.corners_px, mask_all, state.intrinsics, state.s, sol.usable, sol.used,
+                                             start=unc.poses)
         timings["board_plane"] = time.perf_counter() - t1
     return LpsEstimate(
         method=opt.method,
@@ -320,7 +346,7 @@ def _finish(obs: Observations, opt: EstimateOptions, sol: _Solution, X: np.ndarr
         sigma_s_mm=np.sqrt(unc.var_s),
         sigma_total_mm=np.sqrt(unc.var_total),
         step_sigma_mm=unc.step_sigma,
-        rms_px=_view_rms(sol.state, X, obs.corners_px, mask_all),
+        rms_px=_view_rms(sol.state, X, obs.corners_px, mask_all, unc.poses.ssr, sol.usable),
         n_corners=mask_all.sum(axis=1),
         parameter_sigmas=unc.parameter_sigmas,
         iterations=sol.iterations,
@@ -337,7 +363,8 @@ def _finish(obs: Observations, opt: EstimateOptions, sol: _Solution, X: np.ndarr
 
 
 def _six_dof(
-    state: LpsState, obs: Observations, X: np.ndarray, mask_all: np.ndarray, usable: np.ndarray, used: np.ndarray
+    state: LpsState, obs: Observations, X: np.ndarray, mask_all: np.ndarray, usable: np.ndarray, used: np.ndarray,
+    start: PoseNormals | None = None,
 ) -> SixDof:
     """Per-view poses started from the common model, then straightness and angles.
 
@@ -348,7 +375,8 @@ def _six_dof(
     K = obs.K
     t_model = state.line().translations(state.s)
     t_model[~usable] = state.l0
-    poses = refine_view_poses(np.broadcast_to(state.R, (K, 3, 3)), t_model, X, obs.corners_px, mask_all, state.intrinsics)
+    poses = refine_view_poses(np.broadcast_to(state.R, (K, 3, 3)), t_model, X, obs.corners_px, mask_all, state.intrinsics,
+                              start=start)
     n_obs = int(2 * mask_all[used].sum())
     sigma2 = noise_variance(float(poses.ssr[used].sum()), n_obs, 6 * int(used.sum()))
     six = six_dof_motion(poses, state.R, used, sigma2)

@@ -17,9 +17,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from lps_gui.core.camera_model import CameraIntrinsics, intrinsics_jacobian, project_parts
+from lps_gui.core.camera_model import CameraIntrinsics, project_parts
 from lps_gui.core.lps_model import LpsLine, sphere_retract, sphere_tangent_basis
-from lps_gui.core.pose_normals import pose_normals
+from lps_gui.core.pose_normals import PoseNormals, pose_normals
 from lps_gui.core.progress import CancelToken
 from lps_gui.core.rotation import exp_so3
 
@@ -53,6 +53,7 @@ class LmOptions:
     estimate_intrinsics: bool = False  # self-calibration with the prior N(I0, Sigma_I)
     fix_positions: bool = False  # hybrid step 3: only theta moves
     relative_tolerance: float = 1e-9
+    step_tolerance_chi2: float = 1e-6  # stop when the model's decrease is below this many noise variances
     initial_damping: float = 1e-4
 
 
@@ -145,9 +146,6 @@ def robust_cost(r: np.ndarray, mask: np.ndarray, c: float | None) -> float:
     return float(np.sum(np.where(e <= c, e2, 2.0 * c * e - c * c)))
 
 
-LINEARIZE_BLOCK = 64  # views per pass with intrinsics: the (17, 2, views, N) Jacobian stays ~35 MB at N = 540
-
-
 def linearize(
     state: LpsState,
     X: np.ndarray,
@@ -160,146 +158,65 @@ def linearize(
     """Normal-equation blocks at ``state``; returns them and the residuals (K, N, 2) (None if not wanted).
 
     ``huber_c`` (px) turns on the Huber loss: its IRLS weights enter the blocks.
-    Without intrinsics the blocks come from each view's 6x6 pose blocks. With
-    them the Jacobian is built LINEARIZE_BLOCK views at a time: that of 1600
-    views would be 0.1-0.25 GB, and its page faults cost more than the arithmetic.
+    ``with_intrinsics`` appends the 9 intrinsics to theta.
     """
-    if not with_intrinsics:
-        return _linearize_pose(state, X, corners, mask, huber_c, want_residuals)
-    K = mask.shape[0]
-    parts = []
-    for lo in range(0, K, LINEARIZE_BLOCK):
-        b = slice(lo, lo + LINEARIZE_BLOCK)
-        sub = LpsState(state.R, state.l0, state.n, state.s[b], state.intrinsics)
-        parts.append(_linearize_views(sub, X, corners[b], mask[b], huber_c))
-    if len(parts) == 1:
-        return parts[0]
-    eqs = [e for e, _ in parts]
-    eq = NormalEquations(
-        A=sum(e.A for e in eqs),
-        B=np.concatenate([e.B for e in eqs]),
-        D=np.concatenate([e.D for e in eqs]),
-        g_theta=sum(e.g_theta for e in eqs),
-        g_s=np.concatenate([e.g_s for e in eqs]),
-        cost=float(sum(e.cost for e in eqs)),
-        ssr=float(sum(e.ssr for e in eqs)),
-        n_obs=sum(e.n_obs for e in eqs),
-        basis=eqs[0].basis,
-        weights=np.concatenate([e.weights for e in eqs]),
-        view_ssr=np.concatenate([e.view_ssr for e in eqs]),
-    )
-    return eq, np.concatenate([r for _, r in parts])
+    eq, pn = linearize_poses(state, X, corners, mask, huber_c, with_intrinsics, want_residuals)
+    return eq, pn.residuals
 
 
-def _linearize_views(
-    state: LpsState,
-    X: np.ndarray,
-    corners: np.ndarray,
-    mask: np.ndarray,
-    huber_c: float | None,
-) -> tuple[NormalEquations, np.ndarray]:
-    """:func:`linearize` with the intrinsics, on a few views at once: the full Jacobian."""
-    with_intrinsics = True
-    x, y, z = _camera_points(state, X)
-    parts = project_parts(x, y, z, state.intrinsics, want_jacobian=True)
-    m = np.nan_to_num(corners)
-    r = np.empty((2,) + mask.shape)  # residuals, component-major: shape (2, K, N)
-    r[0] = np.where(mask, parts.u - m[..., 0], 0.0)
-    r[1] = np.where(mask, parts.v - m[..., 1], 0.0)
-    # d r / d x_cam, shape (2, K, N) per coordinate
-    Px = np.stack([parts.du[0], parts.dv[0]])
-    Py = np.stack([parts.du[1], parts.dv[1]])
-    Pz = np.stack([parts.du[2], parts.dv[2]])
-
-    def P_dot(v: np.ndarray) -> np.ndarray:  # P @ v for a 3-vector, cheaper than matmul
-        return Px * v[0] + Py * v[1] + Pz * v[2]
-
-    RX = X @ state.R.T  # shape (N, 3)
-    basis = sphere_tangent_basis(state.n)
-    p = N_POSE_PARAMS + (9 if with_intrinsics else 0)
-    K, N = mask.shape
-    J = np.empty((p, 2, K, N))  # d r / d theta, parameter-major so each column is contiguous
-    a, b, c = RX[None, None, :, 0], RX[None, None, :, 1], RX[None, None, :, 2]
-    J[0] = b * Pz - c * Py  # RX x P_row: left-perturbed rotation
-    J[1] = c * Px - a * Pz
-    J[2] = a * Py - b * Px
-    J[3], J[4], J[5] = Px, Py, Pz
-    s_col = state.s[None, :, None]
-    J[6] = s_col * P_dot(basis[:, 0])
-    J[7] = s_col * P_dot(basis[:, 1])
-    if with_intrinsics:
-        J[8:17] = np.moveaxis(intrinsics_jacobian(parts, state.intrinsics), (-2, -1), (1, 0))
-    Js = P_dot(state.n)  # shape (2, K, N): d r / d s_i
-
-    r_kn2 = np.moveaxis(r, 0, -1)  # view (K, N, 2) for the weights
-    weights = huber_weights(r_kn2, mask, huber_c)
-    Jf = J.reshape(p, -1)
-    if huber_c is None and mask.all():  # the common case: no weighting copies
-        wJs, wr = Js, r
-        A = Jf @ Jf.T
-    else:
-        wJs, wr = weights[None] * Js, weights[None] * r
-        A = (Jf * np.broadcast_to(weights[None], r.shape).reshape(1, -1)) @ Jf.T
-    B = np.einsum("pckn,ckn->kp", J, wJs)
-    D = np.einsum("ckn,ckn->k", wJs, Js)
-    g_s = np.einsum("ckn,ckn->k", wJs, r)
-    g_theta = Jf @ wr.reshape(-1)
-    r = r_kn2
-    e2 = np.sum(r * r, axis=-1)
-    eq = NormalEquations(
-        A=A,
-        B=B,
-        D=D,
-        g_theta=g_theta,
-        g_s=g_s,
-        cost=robust_cost(r, mask, huber_c),
-        ssr=float(np.sum(e2[mask])),
-        n_obs=int(2 * mask.sum()),
-        basis=basis,
-        weights=weights,
-        view_ssr=np.where(mask, e2, 0.0).sum(axis=1),
-    )
-    return eq, r
-
-
-def _linearize_pose(
-    state: LpsState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray, huber_c: float | None,
-    want_residuals: bool = True,
-) -> tuple[NormalEquations, np.ndarray | None]:
-    """The blocks without intrinsics, from each view's 6x6 pose blocks (:mod:`lps_gui.core.pose_normals`).
+def linearize_poses(
+    state: LpsState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray, huber_c: float | None = None,
+    with_intrinsics: bool = False, want_residuals: bool = False, views: np.ndarray | None = None,
+) -> tuple[NormalEquations, PoseNormals]:
+    """The blocks from each view's 6x6 pose blocks (:mod:`lps_gui.core.pose_normals`), and those pose blocks.
 
     The LPS model is a parametrization of the poses: view k sits at
     ``R, t_k = l0 + s_k n``, so its pose perturbation is ``(w, t) = T_k
     (theta, s_k)`` with rotation -> w, l0 -> t, direction -> s_k basis, s_k -> n.
     ``J^T W J`` is then sum_k T_k^T H_k T_k: sums of H_k weighted by 1, s_k,
-    s_k^2, never a Jacobian over the corners.
+    s_k^2, never a Jacobian over the corners. The pose blocks are returned
+    too: the per-view fits that start from the model reuse them.
+
+    ``views`` (K,) bool: only these views enter the equations (as if the
+    others' corners were masked); the pose blocks still cover every view of
+    ``mask``, so one pass serves the solve and the views outside it.
     """
     t = state.l0[None, :] + state.s[:, None] * state.n[None, :]
     pn = pose_normals(state.R, t, X, corners, mask, state.intrinsics, huber_c, want_weights=huber_c is not None,
-                      want_residuals=want_residuals)
+                      want_residuals=want_residuals, with_intrinsics=with_intrinsics, summed_views=views)
     s, n = state.s, state.n
     basis = sphere_tangent_basis(n)
-    H, g = pn.H, pn.g
+    sel = np.ones(len(s), bool) if views is None else np.asarray(views, bool)
+    H = np.where(sel[:, None, None], pn.H, 0.0)
+    g = np.where(sel[:, None], pn.g, 0.0)
     H0, H1, H2 = H.sum(axis=0), np.einsum("kij,k->ij", H, s), np.einsum("kij,k->ij", H[:, 3:, 3:], s * s)
-    p = N_POSE_PARAMS
+    p = N_POSE_PARAMS + (9 if with_intrinsics else 0)
     A = np.empty((p, p))
     A[0:6, 0:6] = H0
     A[0:6, 6:8] = H1[:, 3:] @ basis
     A[6:8, 0:6] = A[0:6, 6:8].T
     A[6:8, 6:8] = basis.T @ H2 @ basis
-    h = H[:, :, 3:] @ n  # d (w, t) block against s_k: shape (K, 6)
+    h = H[:, :, 3:] @ n  # the (w, t) rows against s_k: shape (K, 6)
     B = np.empty((len(s), p))
     B[:, 0:6] = h
     B[:, 6:8] = s[:, None] * (h[:, 3:] @ basis)
     g_sum = g.sum(axis=0)
     g_theta = np.concatenate([g_sum, basis.T @ (g[:, 3:].T @ s)])
-    weights = pn.weights if pn.weights is not None else mask.astype(float)
+    if with_intrinsics:
+        HI = np.where(sel[:, None, None], pn.H_pose_intrinsics, 0.0)  # (K, 6, 9)
+        A[0:6, 8:] = HI.sum(axis=0)
+        A[6:8, 8:] = basis.T @ np.einsum("kij,k->ij", HI[:, 3:], s)
+        A[8:, 0:8] = A[0:8, 8:].T
+        A[8:, 8:] = pn.H_intrinsics
+        B[:, 8:] = np.einsum("kij,i->kj", HI[:, 3:], n)
+        g_theta = np.concatenate([g_theta, pn.g_intrinsics])
+    weights = (pn.weights if pn.weights is not None else mask.astype(float)) * sel[:, None]
     eq = NormalEquations(
         A=A, B=B, D=h[:, 3:] @ n, g_theta=g_theta, g_s=g[:, 3:] @ n,
-        cost=float(pn.cost.sum()), ssr=float(pn.ssr.sum()), n_obs=int(pn.n_obs.sum()),
-        basis=basis, weights=weights, view_ssr=pn.ssr,
+        cost=float(pn.cost[sel].sum()), ssr=float(pn.ssr[sel].sum()), n_obs=int(pn.n_obs[sel].sum()),
+        basis=basis, weights=weights, view_ssr=np.where(sel, pn.ssr, 0.0),
     )
-    return eq, pn.residuals
+    return eq, pn
 
 
 def solve_arrowhead(
@@ -326,6 +243,17 @@ def solve_arrowhead(
     d_theta = -solve_spd(S, rhs)
     d_s = np.where(free, -(eq.g_s + eq.B @ d_theta) * Dinv, 0.0)
     return d_theta, d_s
+
+
+def predicted_decrease(
+    eq: NormalEquations, d_theta: np.ndarray, d_s: np.ndarray,
+    prior_A: np.ndarray | None = None, prior_g: np.ndarray | None = None,
+) -> float:
+    """How much the Gauss-Newton model says a step lowers the cost: -(2 g.d + d^T H d)."""
+    A = eq.A + (prior_A if prior_A is not None else 0.0)
+    g = eq.g_theta + (prior_g if prior_g is not None else 0.0)
+    quad = d_theta @ A @ d_theta + 2.0 * d_theta @ (eq.B.T @ d_s) + d_s @ (eq.D * d_s)
+    return float(-(2.0 * (g @ d_theta + eq.g_s @ d_s) + quad))
 
 
 def solve_spd(S: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -401,15 +329,17 @@ def solve_joint(
         if cancel is not None:
             cancel.check("estimation")
         d_theta, d_s = solve_arrowhead(eq, free, lam, prior_A, prior_g)
+        noise_var = cost / max(eq.n_obs, 1)
+        if predicted_decrease(eq, d_theta, d_s, prior_A, prior_g) <= opt.step_tolerance_chi2 * noise_var:
+            converged = True  # the step would move the parameters by < 1e-3 sigma jointly: no pass spent on it
+            break
         trial = apply_step(state, d_theta, d_s, eq.basis)
         trial_prior, trial_prior_g = prior_terms(trial)
-        trial_cost = robust_cost(residuals(trial, X, corners, mask), mask, huber_c) + trial_prior
-        if trial_cost <= cost:
+        trial_eq, _ = linearize(trial, X, corners, mask, huber_c, with_intr, want_residuals=False)
+        trial_cost = trial_eq.cost + trial_prior
+        if trial_cost <= cost:  # one pass both judges the step and linearizes at the new state
             improvement = (cost - trial_cost) / max(cost, 1e-300)
-            state = trial
-            eq, r = linearize(state, X, corners, mask, huber_c, with_intr)
-            prior_g = trial_prior_g
-            cost = eq.cost + trial_prior
+            state, eq, prior_g, cost = trial, trial_eq, trial_prior_g, trial_cost
             history.append(cost)
             lam = max(lam / 10.0, 1e-12)
             if improvement < opt.relative_tolerance:

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lps_gui.core.camera_model import CameraIntrinsics, project_parts
+from lps_gui.core.camera_model import CameraIntrinsics, ProjectionParts, intrinsics_rows, project_parts
 
 BLOCK_VIEWS = 32  # views per pass: ~17k corners, each temporary ~140 kB (cache-resident)
 
@@ -49,6 +49,9 @@ class PoseNormals:
     n_obs: np.ndarray  # shape (K,) scalar residuals used (2 per corner)
     weights: np.ndarray | None = None  # shape (K, N): mask x robust weight, when asked
     residuals: np.ndarray | None = None  # shape (K, N, 2): projected - observed (0 where unused), when asked
+    H_pose_intrinsics: np.ndarray | None = None  # shape (K, 6, 9): (w, t) against the intrinsics, when asked
+    H_intrinsics: np.ndarray | None = None  # shape (9, 9): summed over all views
+    g_intrinsics: np.ndarray | None = None  # shape (9,)
 
 
 def board_moments(X: np.ndarray) -> np.ndarray:
@@ -67,13 +70,18 @@ def pose_normals(
     huber_c: float | None = None,
     want_weights: bool = False,
     want_residuals: bool = False,
+    with_intrinsics: bool = False,
+    summed_views: np.ndarray | None = None,
 ) -> PoseNormals:
     """The 6x6 blocks of every view at poses ``x = Q_k X + t_k``.
 
     ``Q`` is one rotation (3, 3) shared by all views or one per view (K, 3, 3);
     ``t`` (K, 3) mm; ``corners`` (K, N, 2) px with ``mask`` (K, N) the corners to
     use; ``huber_c`` (px) turns on the Huber loss on each corner's residual
-    norm (its IRLS weights enter H and g).
+    norm (its IRLS weights enter H and g). ``with_intrinsics`` adds the blocks
+    of the 9 intrinsics (:data:`~lps_gui.core.camera_model.INTRINSIC_NAMES`):
+    against each view's pose, and among themselves summed over the views in
+    ``summed_views`` (K,) bool (all by default).
     """
     t = np.asarray(t, float)
     K, N = mask.shape
@@ -82,18 +90,24 @@ def pose_normals(
     moments = board_moments(X)
     out = PoseNormals(np.empty((K, 6, 6)), np.empty((K, 6)), np.empty(K), np.empty(K), 2 * mask.sum(axis=1),
                       np.empty((K, N)) if want_weights else None, np.empty((K, N, 2)) if want_residuals else None)
+    if with_intrinsics:
+        out.H_pose_intrinsics = np.empty((K, 6, 9))
+        out.H_intrinsics = np.zeros((9, 9))
+        out.g_intrinsics = np.zeros(9)
     y_common = X @ Q.T if Q.ndim == 2 else None
     for lo in range(0, K, BLOCK_VIEWS):
         b = slice(lo, min(K, lo + BLOCK_VIEWS))
         Qb = Q if Q.ndim == 2 else Q[b]
         y = y_common[None] if y_common is not None else np.matmul(X[None], np.transpose(Qb, (0, 2, 1)))
-        _block(out, b, Qb, y, t[b], corners[b], mask[b], moments, intrinsics, huber_c)
+        _block(out, b, Qb, y, t[b], corners[b], mask[b], moments, intrinsics, huber_c,
+               None if summed_views is None else summed_views[b])
     return out
 
 
 def _block(out: PoseNormals, b: slice, Q: np.ndarray, y: np.ndarray, t: np.ndarray, corners: np.ndarray,
-           mask: np.ndarray, moments: np.ndarray, intrinsics: CameraIntrinsics, huber_c: float | None) -> None:
-    """Fill views ``b`` of ``out``; ``y`` (1 or B, N, 3) = Q X."""
+           mask: np.ndarray, moments: np.ndarray, intrinsics: CameraIntrinsics, huber_c: float | None,
+           summed: np.ndarray | None) -> None:
+    """Fill views ``b`` of ``out``; ``y`` (1 or B, N, 3) = Q X; ``summed``: the views that enter the global sums."""
     B, N = mask.shape
     x = [y[..., a] + t[:, a, None] for a in range(3)]
     parts = project_parts(x[0], x[1], x[2], intrinsics, want_jacobian=True)
@@ -129,6 +143,35 @@ def _block(out: PoseNormals, b: slice, Q: np.ndarray, y: np.ndarray, t: np.ndarr
         C[6 + i] += wdv[i] * rv
     S = (C.reshape(9 * B, N) @ moments).reshape(9, B, 13)
     _assemble(out, b, Q, S)
+    if out.H_intrinsics is not None:
+        w_sum = w if summed is None or summed.all() else np.broadcast_to(summed[:, None], (B, N)) * (1.0 if w is None else w)
+        _intrinsics_block(out, b, Q, parts, ru, rv, w, w_sum, moments[:, :4], intrinsics)
+
+
+def _intrinsics_block(out: PoseNormals, b: slice, Q: np.ndarray, parts: ProjectionParts, ru: np.ndarray,
+                      rv: np.ndarray, w: np.ndarray | None, w_sum: np.ndarray | None, moments: np.ndarray,
+                      intrinsics: CameraIntrinsics) -> None:
+    """Add views ``b``'s intrinsics blocks: P^T W J_I per corner, moments against (1, X) -> (w, t) rows.
+
+    ``w_sum`` weights the corners in the sums over views (zero for views left out of them).
+    """
+    B, N = ru.shape
+    Ju, Jv = intrinsics_rows(parts, intrinsics)  # each (9, B, N)
+    du, dv = np.stack(parts.du), np.stack(parts.dv)  # (3, B, N)
+    if w is not None:
+        du, dv = du * w, dv * w
+    C = du[:, None] * Ju[None] + dv[:, None] * Jv[None]  # (3, 9, B, N): sum P^T W J_I
+    S = (C.reshape(27 * B, N) @ moments).reshape(3, 9, B, 4)
+    Qb = np.broadcast_to(Q, (B, 3, 3))
+    S1 = np.einsum("blm,kjbm->bkjl", Qb, S[..., 1:4])  # first moments in y = Q X: (B, 3, 9, 3)
+    H = out.H_pose_intrinsics[b]
+    H[:, 3:] = np.moveaxis(S[..., 0], -1, 0)  # t rows: sum P^T W J_I
+    H[:, :3] = np.einsum("ilk,bkjl->bij", _LEVI, S1)  # w rows: sum [y]x P^T W J_I
+    G = np.concatenate([Ju, Jv], axis=2).reshape(9, 2 * B * N)  # (9, 2 B N)
+    r = np.concatenate([ru, rv], axis=1).reshape(-1)
+    Gw = G if w_sum is None else G * np.concatenate([w_sum, w_sum], axis=1).reshape(-1)
+    out.H_intrinsics += Gw @ G.T
+    out.g_intrinsics += Gw @ r
 
 
 def _assemble(out: PoseNormals, b: slice, Q: np.ndarray, S: np.ndarray) -> None:

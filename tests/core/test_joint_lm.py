@@ -78,8 +78,8 @@ def test_a_perturbed_jacobian_term_fails_the_check(case, monkeypatch, with_intri
     """The check above can fail: scale d u / d z by 1.01 (a wrong chain-rule term) and it does."""
     import importlib
 
-    # the pose-only blocks come from core.pose_normals, the full Jacobian from joint_lm itself
-    module = importlib.import_module("lps_gui.core.joint_lm" if with_intrinsics else "lps_gui.core.pose_normals")
+    # every block comes from core.pose_normals
+    module = importlib.import_module("lps_gui.core.pose_normals")
     state, X, corners, mask = case
     real = module.project_parts
 

@@ -38,3 +38,19 @@ def test_pose_blocks_equal_the_full_jacobian_ones(case, huber_c):
     np.testing.assert_array_equal(r_pose, r_full)
     if huber_c is not None:
         assert (pose.weights[mask] < 1).any()  # the loss is active
+
+
+@pytest.mark.parametrize("with_intrinsics", [False, True])
+def test_a_view_selection_equals_masking_the_other_views(case, with_intrinsics):
+    """One pass over every view with ``views`` selecting the solve's equals the pass over the used views' corners."""
+    from lps_gui.core.joint_lm import linearize_poses
+
+    state, X, corners, mask = case
+    used = np.ones(mask.shape[0], bool)
+    used[[2, 40, 41]] = False
+    sel, pn = linearize_poses(state, X, corners, mask, with_intrinsics=with_intrinsics, views=used)
+    masked, _ = linearize(state, X, corners, mask & used[:, None], with_intrinsics=with_intrinsics)
+    for name in ("A", "B", "D", "g_theta", "g_s", "weights", "view_ssr"):
+        np.testing.assert_allclose(getattr(sel, name), getattr(masked, name), rtol=1e-12, atol=1e-12 * np.abs(getattr(masked, name)).max())
+    assert (sel.ssr, sel.n_obs) == pytest.approx((masked.ssr, masked.n_obs), rel=1e-12)
+    assert np.all(pn.ssr[~used] > 0)  # the views left out still have their own blocks

@@ -48,6 +48,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from lps_gui.blas_threads import limit_blas_threads
+
+    limit_blas_threads()  # before anything imports numpy
     from lps_gui.errors import LpsError
 
     from lps_gui.allocator import tune_allocator

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from lps_gui.core.blocks import in_parallel
 from lps_gui.core.camera_model import CameraIntrinsics, ProjectionParts, intrinsics_rows, project_parts
 
 BLOCK_VIEWS = 32  # views per pass: ~17k corners, each temporary ~140 kB (cache-resident)
@@ -92,22 +93,29 @@ def pose_normals(
                       np.empty((K, N)) if want_weights else None, np.empty((K, N, 2)) if want_residuals else None)
     if with_intrinsics:
         out.H_pose_intrinsics = np.empty((K, 6, 9))
-        out.H_intrinsics = np.zeros((9, 9))
-        out.g_intrinsics = np.zeros(9)
     y_common = X @ Q.T if Q.ndim == 2 else None
-    for lo in range(0, K, BLOCK_VIEWS):
+
+    def one(lo: int) -> tuple[np.ndarray, np.ndarray] | None:
         b = slice(lo, min(K, lo + BLOCK_VIEWS))
         Qb = Q if Q.ndim == 2 else Q[b]
         y = y_common[None] if y_common is not None else np.matmul(X[None], np.transpose(Qb, (0, 2, 1)))
-        _block(out, b, Qb, y, t[b], corners[b], mask[b], moments, intrinsics, huber_c,
-               None if summed_views is None else summed_views[b])
+        return _block(out, b, Qb, y, t[b], corners[b], mask[b], moments, intrinsics, huber_c,
+                      None if summed_views is None else summed_views[b])
+
+    sums = in_parallel(one, range(0, K, BLOCK_VIEWS))
+    if with_intrinsics:
+        out.H_intrinsics = sum((h for h, _ in sums), np.zeros((9, 9)))
+        out.g_intrinsics = sum((g for _, g in sums), np.zeros(9))
     return out
 
 
 def _block(out: PoseNormals, b: slice, Q: np.ndarray, y: np.ndarray, t: np.ndarray, corners: np.ndarray,
            mask: np.ndarray, moments: np.ndarray, intrinsics: CameraIntrinsics, huber_c: float | None,
-           summed: np.ndarray | None) -> None:
-    """Fill views ``b`` of ``out``; ``y`` (1 or B, N, 3) = Q X; ``summed``: the views that enter the global sums."""
+           summed: np.ndarray | None) -> tuple[np.ndarray, np.ndarray] | None:
+    """Fill views ``b`` of ``out``; ``y`` (1 or B, N, 3) = Q X; ``summed``: the views that enter the global sums.
+
+    Returns this block's share of the intrinsics' own blocks (H_II, g_I) when asked for them.
+    """
     B, N = mask.shape
     x = [y[..., a] + t[:, a, None] for a in range(3)]
     parts = project_parts(x[0], x[1], x[2], intrinsics, want_jacobian=True)
@@ -143,17 +151,19 @@ def _block(out: PoseNormals, b: slice, Q: np.ndarray, y: np.ndarray, t: np.ndarr
         C[6 + i] += wdv[i] * rv
     S = (C.reshape(9 * B, N) @ moments).reshape(9, B, 13)
     _assemble(out, b, Q, S)
-    if out.H_intrinsics is not None:
-        w_sum = w if summed is None or summed.all() else np.broadcast_to(summed[:, None], (B, N)) * (1.0 if w is None else w)
-        _intrinsics_block(out, b, Q, parts, ru, rv, w, w_sum, moments[:, :4], intrinsics)
+    if out.H_pose_intrinsics is None:
+        return None
+    w_sum = w if summed is None or summed.all() else np.broadcast_to(summed[:, None], (B, N)) * (1.0 if w is None else w)
+    return _intrinsics_block(out, b, Q, parts, ru, rv, w, w_sum, moments[:, :4], intrinsics)
 
 
 def _intrinsics_block(out: PoseNormals, b: slice, Q: np.ndarray, parts: ProjectionParts, ru: np.ndarray,
                       rv: np.ndarray, w: np.ndarray | None, w_sum: np.ndarray | None, moments: np.ndarray,
-                      intrinsics: CameraIntrinsics) -> None:
-    """Add views ``b``'s intrinsics blocks: P^T W J_I per corner, moments against (1, X) -> (w, t) rows.
+                      intrinsics: CameraIntrinsics) -> tuple[np.ndarray, np.ndarray]:
+    """Views ``b``'s intrinsics blocks: P^T W J_I per corner, moments against (1, X) -> (w, t) rows.
 
-    ``w_sum`` weights the corners in the sums over views (zero for views left out of them).
+    Returns the block's (H_II, g_I); ``w_sum`` weights the corners in them
+    (zero for views left out of the sums over views).
     """
     B, N = ru.shape
     Ju, Jv = intrinsics_rows(parts, intrinsics)  # each (9, B, N)
@@ -170,8 +180,7 @@ def _intrinsics_block(out: PoseNormals, b: slice, Q: np.ndarray, parts: Projecti
     G = np.concatenate([Ju, Jv], axis=2).reshape(9, 2 * B * N)  # (9, 2 B N)
     r = np.concatenate([ru, rv], axis=1).reshape(-1)
     Gw = G if w_sum is None else G * np.concatenate([w_sum, w_sum], axis=1).reshape(-1)
-    out.H_intrinsics += Gw @ G.T
-    out.g_intrinsics += Gw @ r
+    return Gw @ G.T, Gw @ r
 
 
 def _assemble(out: PoseNormals, b: slice, Q: np.ndarray, S: np.ndarray) -> None:

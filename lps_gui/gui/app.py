@@ -90,6 +90,9 @@ def render_to_png(window, path: Path, size: tuple[int, int] | None = None) -> Pa
 
 
 def main(argv: list[str] | None = None) -> int:
+    from lps_gui.blas_threads import limit_blas_threads
+
+    limit_blas_threads()  # before anything imports numpy
     from lps_gui.allocator import tune_allocator
 
     args = build_parser().parse_args(argv)

@@ -54,7 +54,9 @@ class LmOptions:
     fix_positions: bool = False  # hybrid step 3: only theta moves
     relative_tolerance: float = 1e-9
     step_tolerance_chi2: float = 1e-6  # stop when the model's decrease is below this many noise variances
-    initial_damping: float = 1e-4
+    # near Gauss-Newton from the PnP start: at K=1600, 1e-4 held the steps short and stopped 1.2e-4 um from the
+    # minimum after 3 iterations; 1e-6 stops 5e-6 um from it after 2 (a failed step still raises the damping)
+    initial_damping: float = 1e-6
 
 
 @dataclass

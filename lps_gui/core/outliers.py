@@ -38,17 +38,21 @@ def local_trend_residuals(
     Returns shape (K,), NaN where a view has fewer than 2 valid neighbours.
     """
     out = np.full(deviation.shape, np.nan)
+    offsets = np.r_[np.arange(-half_window, 0), np.arange(1, half_window + 1)]
     for g in np.unique(groups):
         idx = np.flatnonzero((groups == g) & valid)
         if idx.size < 3:
             continue
         idx = idx[np.argsort(target_mm[idx], kind="stable")]
         d = deviation[idx]
-        for j, i in enumerate(idx):
-            lo, hi = max(0, j - half_window), min(idx.size, j + half_window + 1)
-            neighbours = np.concatenate([d[lo:j], d[j + 1 : hi]])
-            if neighbours.size >= 2:
-                out[i] = d[j] - np.median(neighbours)
+        at = np.arange(idx.size)[:, None] + offsets[None, :]  # each view's neighbours, shape (m, 2 half_window)
+        inside = (at >= 0) & (at < idx.size)
+        window = np.sort(np.where(inside, d[np.clip(at, 0, idx.size - 1)], np.nan), axis=1)  # NaN sort last
+        n = inside.sum(axis=1)
+        rows = np.arange(idx.size)
+        median = 0.5 * (window[rows, (n - 1) // 2] + window[rows, n // 2])
+        ok = n >= 2
+        out[idx[ok]] = d[ok] - median[ok]
     return out
 
 

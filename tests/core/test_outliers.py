@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from lps_gui.core.outliers import MAD_TO_SIGMA, local_trend_residuals, position_outliers, reprojection_outliers, robust_sigma
 
@@ -40,3 +41,22 @@ def test_replaced_view_leaves_its_local_trend():
     # the view's own sigma bounds the scale: with 20 um sigmas nothing is flagged
     flags, _ = position_outliers(dev, target, groups, valid, np.full(40, 20.0), k=5.0)
     assert not flags.any()
+
+
+def test_local_trend_equals_the_median_of_each_views_own_neighbours():
+    """The vectorized windows against the definition, view by view, on ragged groups with gaps."""
+
+    rng = np.random.default_rng(0)
+    for K in (3, 4, 7, 50, 301):
+        dev, target = rng.normal(size=K), rng.permutation(K).astype(float)
+        groups, valid = rng.integers(0, 3, K), rng.random(K) > 0.1
+        got = local_trend_residuals(dev, target, groups, valid, half_window=3)
+        for i in range(K):
+            same = np.flatnonzero((groups == groups[i]) & valid)
+            same = same[np.argsort(target[same], kind="stable")]
+            if not valid[i] or same.size < 3:
+                assert np.isnan(got[i])
+                continue
+            j = int(np.flatnonzero(same == i)[0])
+            nb = np.r_[dev[same[max(0, j - 3):j]], dev[same[j + 1:j + 4]]]
+            assert got[i] == pytest.approx(dev[i] - np.median(nb), abs=1e-15)

@@ -23,7 +23,7 @@ import hashlib
 import os
 import threading
 from dataclasses import dataclass, field
-from queue import SimpleQueue
+from queue import Queue
 from typing import BinaryIO
 
 import numpy as np
@@ -55,7 +55,6 @@ class _Rows:
     run_first: list[np.ndarray] = field(default_factory=list)  # global row index of each run's first row
     run_missing: list[np.ndarray] = field(default_factory=list)  # is that row a missing corner
     run_names: list[str] = field(default_factory=list)
-    any_missing: bool = False
     last_name: bytes = b""
 
 
@@ -104,22 +103,23 @@ def read_simple(stream: BinaryIO, n_corners: int) -> Simple | None:
                 break
             carry = end - last
             buf[margin : margin + carry] = buf[last:end]
-        if header is None or not rows.count:
-            return None
-        return _table(rows, n_corners, *header, digest.hexdigest())
+        sha256 = digest.hexdigest() if header is not None and rows.count else None
+        return None if sha256 is None else _table(rows, n_corners, *header, sha256)
 
 
 class _Hasher:
     """sha256 of the blocks as they are read, on a thread of its own (hashlib lets go of the GIL).
 
     The parse and the hash then share the two cores of a small machine
-    instead of adding up. Leaving the ``with`` block ends the thread.
+    instead of adding up; the queue is short, so a slow hash holds back the
+    reader, not memory. Leaving the ``with`` block ends the thread.
     """
 
     def __init__(self) -> None:
         self._digest = hashlib.sha256()
-        self._queue: SimpleQueue[bytes | None] = SimpleQueue()
+        self._queue: Queue[bytes | None] = Queue(maxsize=8)
         self._thread = threading.Thread(target=self._run, name="corners-sha256", daemon=True)
+        self._failed = False
 
     def __enter__(self) -> "_Hasher":
         self._thread.start()
@@ -130,16 +130,20 @@ class _Hasher:
 
     def _run(self) -> None:
         while (data := self._queue.get()) is not None:
-            self._digest.update(data)
+            if not self._failed:
+                try:
+                    self._digest.update(data)
+                except BaseException:  # noqa: BLE001 (out of memory...): keep taking blocks so the reader never waits forever
+                    self._failed = True
 
     def add(self, data: bytes) -> None:
         self._queue.put(data)
 
-    def hexdigest(self) -> str:
-        """The digest of everything added (waits for the thread)."""
+    def hexdigest(self) -> str | None:
+        """The digest of everything added (waits for the thread); None if hashing failed."""
         self._queue.put(None)
         self._thread.join()
-        return self._digest.hexdigest()
+        return None if self._failed else self._digest.hexdigest()
 
 
 def _comment_lines(buf: bytearray, pos: int, end: int, comments: list[str]) -> int | None:
@@ -211,7 +215,6 @@ def _read_rows(block: np.ndarray, begin: int, rows: _Rows, final: bool, has_dash
     numeric = slice(None) if missing is None else np.flatnonzero(~missing)
     if missing is not None:
         xy[missing] = np.nan
-        rows.any_missing = True
     out = xy if missing is None else np.empty((len(numeric), 2))
     for col, negative in ((0, x_negative), (1, y_negative)):
         if not _fixed_point(block, sep[numeric, col + 1], lengths[numeric, col] - 1, negative, out[:, col]):
@@ -335,14 +338,16 @@ def _table(rows: _Rows, n_corners: int, failed: dict[str, str], meta: dict[str, 
     not_found = (count == 1) & np.concatenate(rows.run_missing)
     if not (not_found | (count == n_corners)).all() or len(set(rows.run_names)) < len(rows.run_names):
         return None  # a wrong corner count, or a view in two runs: the general reader explains or gathers
-    xy = rows.xy
-    xy.resize((rows.count, 2), refcheck=False)  # give back the unused capacity (never touched)
-    if not rows.any_missing:  # every row a corner, every view complete: the rows are the array
+    xy = rows.xy[: rows.count]  # the capacity past it was never touched: it costs address space, not memory
+    if not not_found.any():  # every view n_corners rows (missing corners are NaN rows): the rows are the array
         corners = xy.reshape(len(first_row), n_corners, 2)
-    else:
-        corners = np.full((len(first_row), n_corners, 2), np.nan)  # shape (K, N, 2)
-        found = ~not_found
-        corners[found] = xy[first_row[found, None] + np.arange(n_corners)]
+    else:  # views not found are one row in the file and n_corners NaN rows here: copy the runs between them
+        corners = np.empty((len(first_row), n_corners, 2))  # shape (K, N, 2)
+        gaps = np.flatnonzero(not_found)
+        for lo, hi in zip(np.concatenate([[0], gaps + 1]), np.concatenate([gaps, [len(first_row)]])):
+            if hi > lo:
+                corners[lo:hi] = xy[first_row[lo] : first_row[lo] + (hi - lo) * n_corners].reshape(hi - lo, n_corners, 2)
+        corners[gaps] = np.nan
     for i in np.flatnonzero(not_found):
         failed.setdefault(rows.run_names[i], "board not found")
     return Simple(rows.run_names, corners, failed, meta, sha256)

@@ -279,15 +279,15 @@ def _fixed_point(block: np.ndarray, end: np.ndarray, length: np.ndarray, negativ
         digits[:, col] *= first <= col
     if int(digits.max()) >= 10:
         return False
-    mantissa = digits[:, 0].astype(float)
+    # Horner's rule in integers: uint32 holds 9 digits (the common case), int64 up to 18
+    mantissa = digits[:, 0].astype(np.uint32 if width - 1 <= 9 else np.int64)
     for col in range(1, width):
         if col != point:
-            mantissa *= 10.0
-            mantissa += digits[:, col]  # exact: integers below 2**53
-    mantissa /= float(10**decimals)
+            mantissa *= 10
+            mantissa += digits[:, col]
+    np.divide(mantissa, float(10**decimals), out=out)  # both exact doubles: the quotient is correctly rounded
     if negative is not None:
-        np.negative(mantissa, out=mantissa, where=negative)
-    out[:] = mantissa
+        np.negative(out, out=out, where=negative)
     return True
 
 

@@ -30,7 +30,6 @@ _BLOCK = 1 << 20  # bytes per read: the block's temporaries stay in cache, and t
 _MAX_WIDTH = 16  # sign, point and 14 digits: every mantissa is an exact integer below 2**53
 _SPACE, _NEWLINE, _HASH, _MINUS, _POINT, _ZERO, _ONE = 32, 10, 35, 45, 46, 48, 49
 _ROW_SEPARATORS = int(np.frombuffer(bytes([_SPACE, _SPACE, _SPACE, _NEWLINE]), np.uint32)[0])
-_MIN_ROW_BYTES = 8  # "a 1 2 0\n"
 
 
 @dataclass
@@ -48,7 +47,8 @@ class Simple:
 class _Rows:
     """The rows read so far: (x, y) of each (NaN when missing), and where each view's run begins."""
 
-    xy: np.ndarray  # shape (capacity, 2)
+    file_bytes: int
+    xy: np.ndarray = field(default_factory=lambda: np.empty((0, 2)))  # shape (capacity, 2)
     count: int = 0
     run_first: list[np.ndarray] = field(default_factory=list)  # global row index of each run's first row
     run_missing: list[np.ndarray] = field(default_factory=list)  # is that row a missing corner
@@ -64,7 +64,7 @@ def read_simple(stream: BinaryIO, n_corners: int) -> Simple | None:
     "board not found" unless a comment gives its reason.
     """
     size = os.fstat(stream.fileno()).st_size
-    rows = _Rows(np.empty((size // _MIN_ROW_BYTES + 1, 2)))  # pages are touched only as rows arrive
+    rows = _Rows(size)
     margin = _MAX_WIDTH  # room before the first row for the windows of right-aligned numbers
     buf = bytearray(margin + _BLOCK)
     view = memoryview(buf)
@@ -161,7 +161,7 @@ def _read_rows(block: np.ndarray, begin: int, rows: _Rows, final: bool, has_dash
     lengths = gaps.reshape(-1, 4)  # shape (rows, 4): x, y, level and the next row's name, plus one
     n_rows = len(sep)
     if rows.count + n_rows > len(rows.xy):
-        return False
+        _reserve(rows, n_rows, (len(block) - begin) / n_rows)
     line_start = np.empty(n_rows, np.int64)
     line_start[0] = begin
     np.add(sep[:-1, 3], 1, out=line_start[1:])
@@ -182,6 +182,19 @@ def _read_rows(block: np.ndarray, begin: int, rows: _Rows, final: bool, has_dash
         return False
     rows.count += n_rows
     return True
+
+
+def _reserve(rows: _Rows, n_rows: int, row_bytes: float) -> None:
+    """Room for ``n_rows`` more rows, and for the rest of the file at 1.25 times its rate of rows per byte.
+
+    The first block sets the size (rows of the same view are alike); a file
+    whose rows get shorter later grows it again, at least doubling.
+    """
+    need = rows.count + n_rows
+    guess = int(1.25 * rows.file_bytes / row_bytes) + n_rows
+    xy = np.empty((max(need, guess, 2 * len(rows.xy)), 2))
+    xy[: rows.count] = rows.xy[: rows.count]
+    rows.xy = xy
 
 
 def _missing(block: np.ndarray, sep: np.ndarray, lengths: np.ndarray) -> tuple[np.ndarray | None, ...]:

@@ -252,6 +252,10 @@ def test_blocks_split_rows_and_comments_anywhere(tmp_path, monkeypatch, block):
     for name in ("fixed failed view", "fixed no final newline", "fixed view in two runs", "fixed long numbers"):
         (tmp_path / "case.vnl").write_bytes(FIXED[name].encode())
         _same_read(tmp_path / "case.vnl", 2)
+    # long rows first, then many short ones: the room guessed from the first block must grow
+    long_then_short = F + "a_rather_long_image_name_0001.png 1234.5000 1000.2500 0\n" * 2 + "".join(f"v{i} - - -\n" for i in range(60))
+    (tmp_path / "case.vnl").write_bytes(long_then_short.encode())
+    assert len(_same_read(tmp_path / "case.vnl", 2).names) == 61
 
 
 def test_mutated_files_match_the_line_by_line_reader(tmp_path):

@@ -1,8 +1,10 @@
 """The numpy corners.vnl reader and writer against the line-by-line ones they replaced (issue 15).
 
 Every case is run through both: the bytes written must be identical, and
-reading must give the same table or the same error message (line number
-included). The reference lives in ``corners_vnl_reference.py``.
+reading must give the same table (bit for bit, -0.0 included) or the same
+error message (line number included), whichever of the library's two paths
+reads it (the streaming fast path for the writer's form, the general reader
+for anything else). The reference lives in ``corners_vnl_reference.py``.
 """
 from __future__ import annotations
 

@@ -1,7 +1,8 @@
 """lps-calib: measure a linear positioning system with a camera and a chessboard.
 
 The version has one source, ``pyproject.toml``; installed metadata carries it,
-and a source checkout falls back to reading the file.
+and a source checkout falls back to reading the file. It is looked up when
+first asked for (``from lps_gui import __version__``).
 """
 from __future__ import annotations
 
@@ -24,4 +25,10 @@ def _read_version() -> str:
         return "0+unknown"
 
 
-__version__ = _read_version()
+def __getattr__(name: str) -> str:
+    """``__version__`` on first use: importlib.metadata costs 20 ms, which a command like `lps estimate` never needs."""
+    if name == "__version__":
+        version = _read_version()
+        globals()["__version__"] = version
+        return version
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -13,12 +13,21 @@ the test session, the benchmarks), never the math in ``core``.
 from __future__ import annotations
 
 import ctypes
-import ctypes.util
 import sys
 
 _M_TRIM_THRESHOLD = -1
 _M_MMAP_THRESHOLD = -3
 _done = False
+
+
+def _libc() -> ctypes.CDLL:
+    """glibc by its usual name; find_library (which runs ldconfig: 5 ms at every start) only when that fails."""
+    try:
+        return ctypes.CDLL("libc.so.6")
+    except OSError:
+        from ctypes.util import find_library
+
+        return ctypes.CDLL(find_library("c") or "libc.so.6")
 
 
 def tune_allocator(mmap_threshold_bytes: int = 64 << 20, trim_threshold_bytes: int = 512 << 20) -> bool:
@@ -27,7 +36,7 @@ def tune_allocator(mmap_threshold_bytes: int = 64 << 20, trim_threshold_bytes: i
     if _done or not sys.platform.startswith("linux"):
         return _done
     try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+        libc = _libc()
         ok = libc.mallopt(_M_MMAP_THRESHOLD, int(mmap_threshold_bytes)) == 1
         ok &= libc.mallopt(_M_TRIM_THRESHOLD, int(trim_threshold_bytes)) == 1
     except (OSError, AttributeError):

@@ -17,12 +17,24 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy.special import chdtrc, ndtri
 
 
 def chi2_sf(x: float, dof: float) -> float:
-    """Survival function of chi-square, P(X > x) (scipy.special's: importing scipy.stats costs 0.7 s)."""
+    """Survival function of chi-square, P(X > x) (scipy.special's: importing scipy.stats costs 0.7 s).
+
+    scipy.special (0.1 s to import) is imported here, where it is used, not
+    by everything that imports this module (`lps estimate` reads its inputs first).
+    """
+    from scipy.special import chdtrc
+
     return float(chdtrc(dof, x))
+
+
+def _ndtri(p: float) -> float:
+    """The standard normal quantile (scipy.special's, imported when first needed)."""
+    from scipy.special import ndtri
+
+    return float(ndtri(p))
 
 
 ISO_RUNS_PER_DIRECTION = 5
@@ -34,7 +46,7 @@ def expected_max_normal(n: int) -> float:
     """E[max of n standard normals], Blom's approximation (within 1 % for n >= 5)."""
     if n < 2:
         return 0.0
-    return float(ndtri((n - 0.375) / (n + 0.25)))
+    return _ndtri((n - 0.375) / (n + 0.25))
 
 
 def _sd_max_normal(n: int) -> float:
@@ -54,7 +66,7 @@ def noise_max_abs(sigma: float, n: int, k: float = NOISE_K) -> float:
     if n < 1:
         return 0.0
     p = (n - 0.375) / (n + 0.25)
-    return float(sigma) * (float(ndtri(0.5 * (1.0 + p))) + k * _sd_max_normal(2 * int(n)))
+    return float(sigma) * (_ndtri(0.5 * (1.0 + p)) + k * _sd_max_normal(2 * int(n)))
 
 
 def is_resolved(value: float | None, sigma: float | None, limit: float | None = None) -> bool:

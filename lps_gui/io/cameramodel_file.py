@@ -21,7 +21,6 @@ from pathlib import Path
 
 import numpy as np
 
-from lps_gui import __version__
 from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_text_atomic
@@ -71,6 +70,8 @@ def format_cameramodel(intr: CameraIntrinsics, lensmodel: str = "LENSMODEL_OPENC
         raise InputError(f"cameramodel: can write {', '.join(WRITABLE)}, not {lensmodel!r}")
     coeffs = list(intr.dist) + ([0.0, 0.0, 0.0] if lensmodel == "LENSMODEL_OPENCV8" else [])
     values = [intr.fx, intr.fy, intr.cx, intr.cy, *coeffs]
+    from lps_gui import __version__  # importlib.metadata: only when a file is written
+
     lines = [f"# written by lps-calib {__version__}"]
     std = intr.std()
     if std is not None:

@@ -5,14 +5,18 @@ One row per corner, row-major (SPEC 2 order); a missing corner is ``- - -``
 row, with the reason in a ``## failed <filename>: <reason>`` comment. Other
 ``## key = value`` comments carry metadata (e.g. the hash of captures.jsonl).
 
-A session of 1600 views holds 864k rows, so both directions work on the whole
-file as numpy byte arrays (tokens found by whitespace masks, numbers parsed by
-one bytes-to-float cast, names grouped by runs), never one Python object per
-row: reading and writing cost a few tenths of a second instead of seconds.
+A session of 1600 views holds 864k rows, so both directions work on numpy
+byte arrays, never one Python object per row. Reading first tries
+:mod:`lps_gui.io.corners_vnl_fast` (the file as the writer makes it, streamed
+in blocks and hashed on the way: about 0.1 s at K=1600); any other file, and
+every error, goes to the general reader here (tokens found by whitespace
+masks, numbers parsed by one bytes-to-float cast, names grouped by runs),
+whose messages name the first offending line as a line-by-line reader would.
 Comment lines are few and are handled one by one.
 """
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -20,6 +24,7 @@ import numpy as np
 
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_bytes_atomic
+from lps_gui.io.corners_vnl_fast import read_simple
 
 HEADER = "# filename x y level"
 
@@ -30,6 +35,8 @@ _ODD_BREAKS = (b"\r", b"\x0b", b"\x0c", b"\x1c", b"\x1d", b"\x1e", b"\xc2\x85", 
 _ODD_BYTES = np.zeros(256, bool)
 _ODD_BYTES[[13, 11, 12, 28, 29, 30, 0xC2, 0xE2]] = True  # first bytes of those breaks: one cheap scan first
 _CHUNK = 1 << 18  # tokens parsed per numpy pass: caps the padded temporaries at a few MB
+# Unicode spaces inside a line (str.split() splits there too; the line-breaking ones are made \n first), as UTF-8
+_UNICODE_SPACES = tuple(chr(c).encode("utf-8") for c in (0xA0, 0x1680, *range(0x2000, 0x200B), 0x202F, 0x205F, 0x3000))
 
 
 @dataclass
@@ -40,6 +47,8 @@ class CornerTable:
     corners_px: np.ndarray  # shape (K, N, 2), NaN where missing
     failed: dict[str, str] = field(default_factory=dict)  # name -> reason
     meta: dict[str, str] = field(default_factory=dict)
+    # sha256 of the file's bytes as they were parsed (results.json ``inputs``), None for a table made in memory
+    sha256: str | None = field(default=None, compare=False)
 
     def index(self) -> dict[str, int]:
         return {name: i for i, name in enumerate(self.names)}
@@ -144,6 +153,13 @@ def read_corners_vnl(path: Path | str, n_corners: int) -> CornerTable:
     """
     path = Path(path)
     try:
+        with open(path, "rb") as stream:
+            simple = read_simple(stream, n_corners)
+    except OSError:
+        simple = None  # the general reader below names the problem
+    if simple is not None:
+        return CornerTable(simple.names, simple.corners_px, simple.failed, simple.meta, simple.sha256)
+    try:
         data = path.read_bytes()
         text = data.decode("utf-8")
     except FileNotFoundError:
@@ -157,13 +173,19 @@ def read_corners_vnl(path: Path | str, n_corners: int) -> CornerTable:
         # rare: line breaks other than \n, as text mode and splitlines() see them
         buf = np.frombuffer("\n".join(text.splitlines()).encode("utf-8"), np.uint8)
     del text
-    return _parse(path, buf, n_corners)
+    spaces = [seq for seq in _UNICODE_SPACES if seq in data] if not data.isascii() else []
+    table = _parse(path, buf, n_corners, spaces)
+    table.sha256 = hashlib.sha256(data).hexdigest()
+    return table
 
 
-def _parse(path: Path, buf: np.ndarray, n_corners: int) -> CornerTable:
+def _parse(path: Path, buf: np.ndarray, n_corners: int, unicode_spaces: list[bytes]) -> CornerTable:
     ws = buf <= 32  # space, \n and the other ASCII whitespace; the rare other control bytes are fixed below
     control = np.flatnonzero((buf < 32) & (buf != 10))
     ws[control] = _WHITESPACE[buf[control]]
+    has_nul = bool(len(control)) and bool((buf[control] == 0).any())  # numpy's bytes type would drop a token's NUL
+    for seq in unicode_spaces:
+        _mark(ws, buf, seq)
     tok_start = np.flatnonzero(~ws & np.concatenate([[True], ws[:-1]]))
     tok_end = np.flatnonzero(~ws & np.concatenate([ws[1:], [True]])) + 1
     del ws
@@ -223,10 +245,12 @@ def _parse(path: Path, buf: np.ndarray, n_corners: int) -> CornerTable:
     for lo in range(0, len(xy_tokens), _CHUNK):
         part = xy_tokens[lo : lo + _CHUNK]
         try:
+            if has_nul:
+                raise ValueError("a NUL byte in the file")
             values[lo : lo + len(part)] = _token_matrix(buf, tok_start[part], tok_len[part]).astype(float)
             continue
         except ValueError:  # find the token, with Python's float() as the judge (numpy's cast is its fast path)
-            parsed = [_float_or_none(bytes(buf[tok_start[t] : tok_end[t]])) for t in part]
+            parsed = [_float_or_none(bytes(buf[tok_start[t] : tok_end[t]]).decode("utf-8")) for t in part]
         bad = next((i for i, v in enumerate(parsed) if v is None), None)
         if bad is None:
             values[lo : lo + len(part)] = parsed
@@ -281,7 +305,18 @@ def _token_matrix(buf: np.ndarray, start: np.ndarray, length: np.ndarray) -> np.
     return mat.view(f"S{width}").ravel()
 
 
-def _float_or_none(token: bytes) -> float | None:
+def _mark(ws: np.ndarray, buf: np.ndarray, seq: bytes) -> None:
+    """Mark the bytes of every occurrence of ``seq`` (a multi-byte space) as whitespace."""
+    n = len(seq)
+    hit = buf[: len(buf) - n + 1] == seq[0]
+    for i in range(1, n):
+        hit &= buf[i : len(buf) - n + 1 + i] == seq[i]
+    at = np.flatnonzero(hit)
+    for i in range(n):
+        ws[at + i] = True
+
+
+def _float_or_none(token: str) -> float | None:
     try:
         return float(token)
     except ValueError:
@@ -299,7 +334,8 @@ def _group_names(buf: np.ndarray, start: np.ndarray, length: np.ndarray) -> tupl
     for lo in range(0, len(start), _CHUNK):
         hi = min(lo + _CHUNK + 1, len(start))
         mat = _token_matrix(buf, start[lo:hi], length[lo:hi])
-        run_starts.extend((lo + 1 + np.flatnonzero(mat[1:] != mat[:-1])).tolist())
+        n = length[lo:hi]  # lengths too: the padding would make "a\0" equal to "a"
+        run_starts.extend((lo + 1 + np.flatnonzero((mat[1:] != mat[:-1]) | (n[1:] != n[:-1]))).tolist())
     run_starts_arr = np.array(run_starts)
     run_names = [bytes(buf[s : s + n]).decode("utf-8") for s, n in zip(start[run_starts_arr], length[run_starts_arr])]
     index: dict[str, int] = {}

@@ -70,7 +70,10 @@ def observations_from_session(session: Session, intrinsics: CameraIntrinsics | N
         raise InputError(
             f"{session.corners_path}: {len(missing)} captured image(s) have no corners (first: {missing[0]}); run `lps detect {session.folder}`"
         )
-    corners = table.corners_px[[rows[r.file] for r in records]]
+    order = np.array([rows[r.file] for r in records])
+    # captures.jsonl and corners.vnl list the views in one order when detection wrote the file: no copy then
+    in_order = len(order) == len(table.names) and bool((order == np.arange(len(order))).all())
+    corners = table.corners_px if in_order else table.corners_px[order]
     check_view_geometry(corners, [r.file for r in records], session.corners_path)
     return Observations(
         board=board,

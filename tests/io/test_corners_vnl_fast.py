@@ -1,10 +1,14 @@
 """The numpy corners.vnl reader and writer against the line-by-line ones they replaced (issue 15).
 
 Every case is run through both: the bytes written must be identical, and
-reading must give the same table or the same error message (line number
-included). The reference lives in ``corners_vnl_reference.py``.
+reading must give the same table (bit for bit, -0.0 included) or the same
+error message (line number included), whichever of the library's two paths
+reads it (the streaming fast path for the writer's form, the general reader
+for anything else). The reference lives in ``corners_vnl_reference.py``.
 """
 from __future__ import annotations
+
+import hashlib
 
 import numpy as np
 import pytest
@@ -29,6 +33,10 @@ def _same_read(path, n_corners):
     assert list(got.failed) == list(want.failed)
     assert got.meta == want.meta
     np.testing.assert_array_equal(got.corners_px, want.corners_px)
+    finite = np.isfinite(want.corners_px)
+    assert got.corners_px.dtype == np.float64
+    assert (got.corners_px.view(np.int64)[finite] == want.corners_px.view(np.int64)[finite]).all()  # -0.0 too
+    assert got.sha256 == hashlib.sha256(path.read_bytes()).hexdigest()
     return got
 
 
@@ -142,3 +150,127 @@ def test_many_rows_across_parse_chunks(tmp_path, monkeypatch):
     text[30] = text[30].split()[0] + " 1.0 zz 0"
     (tmp_path / "bad.vnl").write_text("\n".join(text) + "\n")
     _same_read(tmp_path / "bad.vnl", 6)
+
+
+# ----------------------------------------------------------------------------- the streaming fast path (issue 15)
+# Files in the writer's fixed-point form are read by io/corners_vnl_fast.read_simple; anything it does not
+# take must fall through to the general reader with the same table or the same message.
+
+F = H + "## source = test\n"
+FIXED = {
+    "fixed plain": F + "a 1.5000 2.2500 0\na 3.0000 4.0625 0\nb 5.1250 6.0000 0\nb 7.0000 8.5000 0\n",
+    "fixed negative and minus zero": F + "a -1.5000 -0.0000 0\na 3.0000 -4.0625 0\nb -0.0000 6.0000 0\nb 7.0000 8.5000 0\n",
+    "fixed missing rows": F + "a - - -\na 3.0000 4.0625 0\nb 5.1250 6.0000 -1\nb 7.0000 8.5000 0\n",
+    "fixed one dash": F + "a 1.5000 - 0\na 3.0000 4.0625 0\nb - 6.0000 0\nb 7.0000 8.5000 0\n",
+    "fixed dash and garbage": F + "a - zz 0\na 3.0000 4.0625 0\nb 5.1250 6.0000 -\nb 7.0000 8.5000 0\n",
+    "fixed level other": F + "a 1.5000 2.2500 1\na 3.0000 4.0625 -2\nb 5.1250 6.0000 -1x\nb 7.0000 8.5000 0.5\n",
+    "fixed failed view": F + "## failed c: blurred\na 1.5000 2.2500 0\na 3.0000 4.0625 0\nc - - -\nb 5.1250 6.0000 0\nb 7.0000 8.5000 0\nd - - -\n",
+    "fixed no final newline": F + "a 1.5000 2.2500 0\na 3.0000 4.0625 0\nb 5.1250 6.0000 0\nb 7.0000 8.5000 0",
+    "fixed crlf": (F + "a 1.5000 2.2500 0\na 3.0000 4.0625 0\nb 5.1250 6.0000 0\nb 7.0000 8.5000 0\n").replace("\n", "\r\n"),
+    "fixed cr in a comment": H + "## source = x\ry\na 1.5000 2.2500 0\na 3.0000 4.0625 0\n",
+    "fixed tab": F + "a 1.5000\t2.2500 0\na 3.0000 4.0625 0\n",
+    "fixed tab in a comment": H + "##\tsource = x\t\na 1.5000 2.2500 0\na 3.0000 4.0625 0\n",
+    "fixed double space": F + "a 1.5000  2.2500 0\na 3.0000 4.0625 0\n",
+    "fixed leading space": F + " a 1.5000 2.2500 0\na 3.0000 4.0625 0\n",
+    "fixed trailing space": F + "a 1.5000 2.2500 0 \na 3.0000 4.0625 0\n",
+    "fixed trailing garbage": F + "a 1.5000 2.2500 0\na 3.0000 4.0625 0\n\x00\x00",
+    "fixed blank line": F + "a 1.5000 2.2500 0\n\na 3.0000 4.0625 0\n",
+    "fixed blank line after header": F + "\na 1.5000 2.2500 0\na 3.0000 4.0625 0\n",
+    "fixed three fields": F + "a 1.5000 2.2500\na 3.0000 4.0625\n",
+    "fixed five fields": F + "a 1.5000 2.2500 0 x\na 3.0000 4.0625 0 y\n",
+    "fixed truncated": F + "a 1.5000 2.2500 0\na 3.0000\n",
+    "fixed comment between rows": F + "a 1.5000 2.2500 0\n## failed q: x\na 3.0000 4.0625 0\n",
+    "fixed name starting with hash": F + "a 1.5000 2.2500 0\n#a 3.0000 4.0625 0\n",
+    "fixed header late": "## source = x\na 1.5000 2.2500 0\na 3.0000 4.0625 0\n" + H,
+    "fixed no header": "## source = x\na 1.5000 2.2500 0\na 3.0000 4.0625 0\n",
+    "fixed header only": F,
+    "fixed other decimals": F + "a 1.5 2.25 0\na 3.0 4.0625 0\n",
+    "fixed two decimals counts": F + "a 1.5000 2.25 0\na 3.0000 4.0625 0\n",
+    "fixed exponent": F + "a 1.5000 2.2e10 0\na 3.0000 4.0625 0\n",
+    "fixed exponent same width": F + "a 1.5000 2.25e1 0\na 3.0000 4.0625 0\n",
+    "fixed nan": F + "a 1.5000 nan 0\na 3.0000 4.0625 0\n",
+    "fixed inf": F + "a 1.5000 2.2500 0\na inf 4.0625 0\n",
+    "fixed plus": F + "a +1.5000 2.2500 0\na 3.0000 4.0625 0\n",
+    "fixed two signs": F + "a --1.5000 2.2500 0\na 3.0000 4.0625 0\n",
+    "fixed sign inside": F + "a 1-5.0000 2.2500 0\na 3.0000 4.0625 0\n",
+    "fixed no integer digits": F + "a .5000 2.2500 0\na 3.0000 4.0625 0\n",
+    "fixed minus point": F + "a -.5000 2.2500 0\na 3.0000 4.0625 0\n",
+    "fixed two points": F + "a 1.5.000 2.2500 0\na 3.0000 4.0625 0\n",
+    "fixed letter": F + "a 1.5o00 2.2500 0\na 3.0000 4.0625 0\n",
+    "fixed long numbers": F + "a 12345678901.5000 2.2500 0\na 3.0000 123456789.0625 0\n",
+    "fixed too long numbers": F + "a 1234567890123.5000 2.2500 0\na 3.0000 4.0625 0\n",
+    "fixed wide and narrow": F + "a 1.5000 2.2500 0\na 1234.0000 4.0625 0\nb -1.1250 -1234.5678 0\nb 7.0000 8.5000 0\n",
+    "fixed short first name": H + "a 1.5000 2.2500 0\na 12345.0000 4.0625 0\n",
+    "fixed interleaved views": F + "a 1.5000 2.2500 0\nb 3.0000 4.0625 0\na 5.1250 6.0000 0\nb 7.0000 8.5000 0\n",
+    "fixed view in two runs": F + "a 1.5000 2.2500 0\na 3.0000 4.0625 0\nb 5.1250 6.0000 0\nb 7.0000 8.5000 0\na 1.0000 1.0000 0\na 1.0000 1.0000 0\n",
+    "fixed too few corners": F + "a 1.5000 2.2500 0\nb 5.1250 6.0000 0\nb 7.0000 8.5000 0\n",
+    "fixed too many corners": F + "a 1.5000 2.2500 0\na 1.5000 2.2500 0\na 1.5000 2.2500 0\n",
+    "fixed names of two lengths": F + "ab 1.5000 2.2500 0\nab 3.0000 4.0625 0\nabc 5.1250 6.0000 0\nabc 7.0000 8.5000 0\n",
+    "fixed name prefix": F + "images/000001.png 1.5000 2.2500 0\nimages/000001.png 3.0000 4.0625 0\n"
+                         "images/000001.pn 5.1250 6.0000 0\nimages/000001.pn 7.0000 8.5000 0\n",
+    "fixed unicode name": F + "bild_\u00fc.png 1.5000 2.2500 0\nbild_\u00fc.png 3.0000 4.0625 0\n",
+    "fixed control byte in name": F + "a\x01 1.5000 2.2500 0\na\x01 3.0000 4.0625 0\n",
+    "fixed only missing": F + "a - - -\nb - - -\n",
+}
+
+
+@pytest.mark.parametrize("name", list(FIXED))
+@pytest.mark.parametrize("n_corners", [1, 2])
+def test_fast_path_cases_match_the_line_by_line_reader(tmp_path, name, n_corners):
+    path = tmp_path / "corners.vnl"
+    path.write_bytes(FIXED[name].encode("utf-8"))
+    _same_read(path, n_corners)
+
+
+def test_the_writers_files_take_the_fast_path(tmp_path):
+    """Not a timing test: the common file must not fall back to the general reader unnoticed."""
+    from lps_gui.io.corners_vnl_fast import read_simple
+
+    table = _table(np.random.default_rng(7), k=9, n=12)
+    write_corners_vnl(tmp_path / "corners.vnl", table)
+    with open(tmp_path / "corners.vnl", "rb") as stream:
+        simple = read_simple(stream, 12)
+    assert simple is not None
+    assert simple.names == table.names
+    assert simple.sha256 == hashlib.sha256((tmp_path / "corners.vnl").read_bytes()).hexdigest()
+    for name in ("fixed plain", "fixed negative and minus zero", "fixed missing rows", "fixed failed view",
+                 "fixed no final newline", "fixed wide and narrow", "fixed names of two lengths"):
+        (tmp_path / "case.vnl").write_bytes(FIXED[name].encode())
+        with open(tmp_path / "case.vnl", "rb") as stream:
+            assert read_simple(stream, 2) is not None, name
+
+
+@pytest.mark.parametrize("block", [64, 97, 256])
+def test_blocks_split_rows_and_comments_anywhere(tmp_path, monkeypatch, block):
+    """Small read blocks: rows, comments and names cut at every place; a line longer than a block falls back."""
+    import lps_gui.io.corners_vnl_fast as fast
+
+    monkeypatch.setattr(fast, "_BLOCK", block)
+    table = _table(np.random.default_rng(block), k=9, n=6)
+    table.meta.update({f"sha256 images/{i:06d}.png": "ab" * 32 for i in range(9)})  # a long comment block
+    write_corners_vnl(tmp_path / "corners.vnl", table)
+    back = _same_read(tmp_path / "corners.vnl", 6)
+    assert back.names == table.names
+    for name in ("fixed failed view", "fixed no final newline", "fixed view in two runs", "fixed long numbers"):
+        (tmp_path / "case.vnl").write_bytes(FIXED[name].encode())
+        _same_read(tmp_path / "case.vnl", 2)
+    # long rows first, then many short ones: the room guessed from the first block must grow
+    long_then_short = F + "a_rather_long_image_name_0001.png 1234.5000 1000.2500 0\n" * 2 + "".join(f"v{i} - - -\n" for i in range(60))
+    (tmp_path / "case.vnl").write_bytes(long_then_short.encode())
+    assert len(_same_read(tmp_path / "case.vnl", 2).names) == 61
+
+
+def test_mutated_files_match_the_line_by_line_reader(tmp_path):
+    """Seeded fuzz: one or two bytes of a written file replaced by one that matters to a parser."""
+    rng = np.random.default_rng(15)
+    interesting = b" \t\r\n\x00\x0c-+.eE#0159xn"
+    table = _table(rng, k=7, n=6)
+    clean = corners_vnl_bytes(table)
+    start = clean.index(b"\nimages") + 1
+    path = tmp_path / "corners.vnl"
+    for _ in range(300):
+        data = bytearray(clean)
+        for at in rng.integers(start - 5, len(data), rng.integers(1, 3)):
+            data[at] = interesting[rng.integers(len(interesting))]
+        path.write_bytes(bytes(data))
+        _same_read(path, 6)

@@ -23,8 +23,7 @@ import numpy as np
 from lps_gui.core.camera_model import CameraIntrinsics
 
 BLOCK_VIEWS = 64  # views per block: its (64, N) arrays stay in L2 at N = 540
-STEP_TOL_MM = 1e-12  # converged: steps this small are rounding
-FAST_TOL_MM, FAST_RATIO = 1e-9, 1e-3  # or a small step that shrank 1000x: the rest is < 1e-12 mm
+TOL_MM = 1e-12  # done when the step, or what is left after it at the contraction seen, is below this
 MAX_ITERATIONS = 12
 
 
@@ -93,7 +92,7 @@ def positions_on_line(
         xt = np.matmul(R_true[b], XT) + t_true[b, :, None]  # shape (k, 3, N)
         xd_true, yd_true = _distorted(xt[:, 0], xt[:, 1], xt[:, 2], intrinsics)
         s = s_out[b].copy()
-        previous = np.inf
+        previous = np.full(s.shape, np.inf)
         for _ in range(MAX_ITERATIONS):
             sc = s[:, None]
             xd, yd, dxd, dyd = _distorted_along(a_x + sc * n[0], a_y + sc * n[1], a_z + sc * n[2], n, intrinsics)
@@ -102,8 +101,11 @@ def positions_on_line(
             D = fx2 * np.einsum("kn,kn->k", dxd, dxd) + fy2 * np.einsum("kn,kn->k", dyd, dyd)
             step = np.where(D > 0, -g / np.where(D > 0, D, 1.0), 0.0)
             s += step
-            size = float(np.max(np.abs(step)))
-            if size < STEP_TOL_MM or (size < FAST_TOL_MM and size < FAST_RATIO * previous):
+            size = np.abs(step)
+            # Gauss-Newton contracts by rho = size / previous per step (or faster): size rho / (1 - rho) is left
+            shrank = (size < previous) & np.isfinite(previous)  # not on the first step: no contraction seen yet
+            left = np.where(shrank, size * size / np.where(shrank, previous - size, 1.0), np.inf)
+            if np.all((size < TOL_MM) | (left < TOL_MM)):
                 break
             previous = size
         s_out[b] = s

@@ -48,7 +48,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from lps_gui.exit_collections import collect_again, freeze_for_exit
+    from lps_gui.gc_tuning import collect_again, freeze_for_exit
 
     collect_again()  # an earlier main() in this process froze its objects for its exit
     try:

@@ -3,6 +3,7 @@ main() in the same process gives them back to the collector first."""
 import gc
 
 import lps_gui.cli as cli
+from lps_gui.gc_tuning import paused
 
 
 def test_main_freezes_at_the_end_and_unfreezes_at_the_start(monkeypatch, capsys):
@@ -22,3 +23,20 @@ def test_main_freezes_at_the_end_and_unfreezes_at_the_start(monkeypatch, capsys)
     finally:
         gc.unfreeze()
     capsys.readouterr()
+
+
+def test_paused_restores_the_collector_as_it_was():
+    assert gc.isenabled()
+    with paused():
+        assert not gc.isenabled()
+        with paused():
+            assert not gc.isenabled()
+        assert not gc.isenabled()  # an outer pause is not ended by an inner one
+    assert gc.isenabled()
+    gc.disable()
+    try:
+        with paused():
+            pass
+        assert not gc.isenabled()  # a collector the caller turned off stays off
+    finally:
+        gc.enable()

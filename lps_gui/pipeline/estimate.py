@@ -28,7 +28,8 @@ from lps_gui.io.atomic import sha256_file
 from lps_gui.io.board_file import board_to_dict
 from lps_gui.io.corners_vnl import read_corners_vnl
 from lps_gui.io.intrinsics_file import apply_board_warp, intrinsics_to_dict, read_intrinsics
-from lps_gui.io.results_file import assemble_results, json_floats, rows_from_columns, summary_rows, write_results  # noqa: F401 (summary_rows re-exported)
+from lps_gui.io.results_file import assemble_results, summary_rows, write_results  # noqa: F401 (summary_rows re-exported)
+from lps_gui.io.results_file import json_floats, rows_from_columns
 from lps_gui.io.results_file import json_float as _f
 from lps_gui.io.results_history import keep_previous, record_latest
 from lps_gui.io.session import SESSION_FILE, Session
@@ -182,7 +183,8 @@ def position_rows(obs: Observations, est: LpsEstimate) -> list[dict[str, Any]]:
         "rms_px": json_floats(est.rms_px),
         "n_corners": np.asarray(est.n_corners).astype(int).tolist(),
         "outlier": np.asarray(est.outlier).astype(bool).tolist(),
-        "outlier_reason": [reason or ("" if ok else "board not found") for reason, ok in zip(est.outlier_reason, usable.tolist())],
+        "outlier_reason": [reason or ("" if ok else "board not found")
+                           for reason, ok in zip(est.outlier_reason, usable.tolist())],
         "used": np.asarray(est.used).astype(bool).tolist(),
         "file": list(obs.names),
     }

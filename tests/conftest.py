@@ -4,7 +4,10 @@ The report paints with a QGuiApplication when none exists; widgets need a
 QApplication. Creating the QApplication first, once, lets PDF tests and GUI
 tests share one process in any order.
 """
+import gc
 import os
+
+import pytest
 
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # what the entry points do (lps_gui/blas_threads.py), before numpy loads
@@ -20,3 +23,10 @@ def pytest_configure(config):
         return
     if QApplication.instance() is None:
         config._lps_qapp = QApplication(["lps-tests"])
+
+
+@pytest.fixture(autouse=True)
+def _collector_as_usual():
+    """`lps`'s main() freezes what is alive for its exit (lps_gui/gc_tuning.py); the next test collects as usual."""
+    yield
+    gc.unfreeze()

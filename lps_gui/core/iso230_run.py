@@ -118,13 +118,27 @@ def _steps_mm(t: np.ndarray, measured: np.ndarray, ok: np.ndarray, group: np.nda
     return s[np.isfinite(s)]
 
 
-def _scale_design(t: np.ndarray, group: np.ndarray) -> np.ndarray:
-    """Columns (t - t_mean, one indicator per group): shape (n, 1 + groups)."""
+def _within_groups(t: np.ndarray, group: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, bool]:
+    """The scale fit x = offset_g + b (t - t_mean) in closed form, weights ``w`` (1/sigma^2).
+
+    With one offset per group the slope only sees t centred in its group:
+    ``tc = t - (weighted mean of t in its group)``, and b = sum(w tc x) / S
+    with S = sum(w tc^2). Returns (g, tc, S, determined): g the group index
+    of each point; ``determined`` is False when t is (numerically) constant
+    within every group, where the design's rank is short (the tolerance of
+    numpy's matrix_rank, on the Frobenius norm of the weighted design).
+    O(n), where the SVD of the (n, 1 + groups) design cost O(n groups^2) and
+    seconds under a loaded BLAS at K = 5000 with 20 groups.
+    """
     _, g = np.unique(group, return_inverse=True)
-    design = np.zeros((t.size, 1 + int(g.max()) + 1))
-    design[:, 0] = t - t.mean()
-    design[np.arange(t.size), 1 + g.ravel()] = 1.0
-    return design
+    g = g.ravel()
+    n_groups = int(g.max()) + 1 if g.size else 0
+    w_sum = np.bincount(g, w, minlength=n_groups)
+    tc = t - (np.bincount(g, w * t, minlength=n_groups) / w_sum)[g]
+    S = float(np.sum(w * tc * tc))
+    frobenius2 = float(np.sum(w * (t - t.mean()) ** 2) + np.sum(w))
+    tol = max(t.size, 1 + n_groups) * np.finfo(float).eps
+    return g, tc, S, S > tol * tol * frobenius2 and t.size > n_groups
 
 
 def scale_functional(t: np.ndarray, group: np.ndarray, w: np.ndarray | None = None) -> np.ndarray | None:
@@ -133,13 +147,11 @@ def scale_functional(t: np.ndarray, group: np.ndarray, w: np.ndarray | None = No
     Weighted by ``w`` (1/sigma^2) when given. The slope is linear in the
     deviations, so a caller holding their full covariance C gets the slope's
     sigma as sqrt(a C a^T) (correlations included); None when the groups and
-    targets do not determine a slope.
+    targets do not determine a slope. ``a = w tc / S`` (:func:`_within_groups`).
     """
-    design = _scale_design(t, group)
-    sw = np.ones_like(t) if w is None else np.sqrt(w)
-    if np.linalg.matrix_rank(design * sw[:, None]) < design.shape[1]:
-        return None
-    return np.linalg.pinv(design * sw[:, None])[0] * sw
+    w = np.ones_like(t) if w is None else np.asarray(w, dtype=float)
+    _, tc, S, determined = _within_groups(t, group, w)
+    return w * tc / S if determined else None
 
 
 def _scale_fit(t: np.ndarray, x: np.ndarray, w: np.ndarray | None, group: np.ndarray
@@ -150,20 +162,24 @@ def _scale_fit(t: np.ndarray, x: np.ndarray, w: np.ndarray | None, group: np.nda
     (independent deviations) scaled up by sqrt(chi2/dof) when the scatter
     exceeds the sigmas (Birge ratio). The estimator replaces it with the
     sigma from the full covariance of the positions (same row, :func:`scale_functional`).
+    The residual is x minus its group's weighted mean and the slope's part
+    (the least-squares residual, whatever the rank).
     """
-    design = _scale_design(t, group)
-    sw = np.ones_like(t) if w is None else np.sqrt(w)
-    coef, *_ = np.linalg.lstsq(design * sw[:, None], x * sw, rcond=None)
-    resid = x - design @ coef
-    row = scale_functional(t, group, w)
-    if row is None:
-        return resid, None, None
-    dof = t.size - design.shape[1]
+    ww = np.ones_like(t) if w is None else np.asarray(w, dtype=float)
+    g, tc, S, determined = _within_groups(t, group, ww)
+    n_groups = int(g.max()) + 1 if g.size else 0
+    xc = x - (np.bincount(g, ww * x, minlength=n_groups) / np.bincount(g, ww, minlength=n_groups))[g]
+    if not determined:
+        return xc, None, None
+    row = ww * tc / S
+    b = float(row @ x)
+    resid = xc - b * tc
+    dof = t.size - (1 + n_groups)
     if dof <= 0:
-        return resid, float(row @ x), None
-    chi2_red = float(np.sum(sw**2 * resid**2) / dof)
-    var = float(np.sum(row**2 / (sw**2))) * (chi2_red if w is None else max(1.0, chi2_red))
-    return resid, float(row @ x), float(np.sqrt(var))
+        return resid, b, None
+    chi2_red = float(np.sum(ww * resid**2) / dof)
+    var = float(np.sum(row**2 / ww)) * (chi2_red if w is None else max(1.0, chi2_red))
+    return resid, b, float(np.sqrt(var))
 
 
 def single_run_figures(target_mm: np.ndarray, deviation_um: np.ndarray, valid: np.ndarray | None = None,

@@ -287,15 +287,13 @@ def board_plane_positions(rig: Rig, pose: TruePose) -> np.ndarray:
     displacement at the board plane, an Abbe offset equal to the distance.
     This is that displacement, from noise-free projections of the true poses
     and the rig's nominal line; it equals ``pose.axis_mm`` without angular errors.
+    The per-view least squares is :func:`lps_gui.core.board_plane_truth.positions_on_line`.
     """
-    from lps_gui.core.joint_lm import LpsState, solve_positions_only
+    from lps_gui.core.board_plane_truth import positions_on_line
 
     R, t = rig.camera_poses(pose)
-    X = rig.board.object_points()
-    uv = project_board(R, t, X, rig.intrinsics)
-    state = LpsState(rig.R_cam_board, -rig.R_cam_board @ rig.C0_board, -rig.R_cam_board @ rig.u_board,
-                     np.asarray(pose.axis_mm, dtype=float).copy(), rig.intrinsics)
-    return solve_positions_only(state, X, uv, np.ones(uv.shape[:2], dtype=bool), iterations=12)
+    return positions_on_line(R, t, rig.board.object_points(), rig.intrinsics, rig.R_cam_board,
+                             -rig.R_cam_board @ rig.C0_board, -rig.R_cam_board @ rig.u_board, pose.axis_mm)
 
 
 def board_plane_straightness(rig: Rig, pose: TruePose) -> tuple[np.ndarray, np.ndarray]:

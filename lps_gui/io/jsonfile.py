@@ -28,8 +28,53 @@ def read_json(path: Path | str, what: str = "file") -> Any:
 
 
 def json_bytes(data: Any) -> bytes:
-    """The file content :func:`write_json` writes (indented, numpy-aware)."""
-    return (json.dumps(data, indent=2, sort_keys=False, default=_default) + "\n").encode("utf-8")
+    """The file content :func:`write_json` writes: objects indented, each list item on one line (numpy-aware).
+
+    An object is laid out like ``json.dumps(indent=2)``; a list of numbers or
+    strings stays on one line and a list of rows (objects, lists) gets one row
+    per line, each row compact. The text still reads and diffs well (a
+    results.json position is one line), and every row goes through the C
+    encoder: ``indent=`` falls back to the pure-Python encoder, 60 ms for the
+    260k items of a K = 1600 results.json. The values are the same (same
+    float repr); ``json.loads`` gives back what ``indent=2`` would.
+    """
+    parts: list[str] = []
+    _layout(data, 0, parts)
+    parts.append("\n")
+    return "".join(parts).encode("utf-8")
+
+
+_SCALARS = (str, int, float, bool, type(None))
+_NESTED = (dict, list, tuple)
+
+
+def _compact(obj: Any) -> str:
+    """One JSON value on one line, by the C encoder."""
+    return _ENCODER.encode(obj)
+
+
+def _key(key: Any) -> str:
+    """A non-string object key, encoded as json writes it (1 -> '"1"', True -> '"true"')."""
+    return _compact({key: 0})[1:-4]
+
+
+def _layout(obj: Any, level: int, parts: list[str]) -> None:
+    """Append the text of ``obj`` at nesting ``level`` to ``parts`` (the layout of :func:`json_bytes`)."""
+    if isinstance(obj, dict) and obj:
+        inner = "\n" + "  " * (level + 1)
+        sep = "{" + inner
+        for key, value in obj.items():
+            parts.append(sep + (_compact(key) if isinstance(key, str) else _key(key)) + ": ")
+            _layout(value, level + 1, parts)
+            sep = "," + inner
+        parts.append("\n" + "  " * level + "}")
+    elif isinstance(obj, (list, tuple)) and any(isinstance(v, _NESTED) or getattr(v, "ndim", 0) for v in obj):
+        inner = "\n" + "  " * (level + 1)
+        parts.append("[" + inner + ("," + inner).join(_compact(v) for v in obj) + "\n" + "  " * level + "]")
+    elif isinstance(obj, (_SCALARS, dict, list, tuple)):
+        parts.append(_compact(obj))
+    else:  # numpy arrays and scalars, paths: what json's default hook makes of them, laid out the same way
+        _layout(_default(obj), level, parts)
 
 
 def write_json(path: Path | str, data: Any) -> None:
@@ -46,3 +91,6 @@ def _default(obj: Any) -> Any:
     if isinstance(obj, Path):
         return str(obj)
     raise TypeError(f"not JSON serializable: {type(obj).__name__}")
+
+
+_ENCODER = json.JSONEncoder(separators=(", ", ": "), default=_default)  # indent=None: the C encoder

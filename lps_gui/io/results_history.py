@@ -42,6 +42,9 @@ def keep_previous(session_dir: Path | str) -> Path | None:
     top = folder / RESULTS_FILE
     if not top.is_file():
         return None
+    kept = _kept_as_latest(folder)
+    if kept is not None:
+        return kept
     try:
         previous = read_json(top, "results file")
     except Exception:  # an unreadable old file is kept where it is, never a reason to stop an estimate
@@ -50,6 +53,26 @@ def keep_previous(session_dir: Path | str) -> Path | None:
     if not (dest / RESULTS_FILE).exists():
         _copy_set(folder, dest)
     return dest
+
+
+def _kept_as_latest(folder: Path) -> Path | None:
+    """The history entry results/latest.json names, if its results.json is byte for byte the top-level one.
+
+    The usual case (the top-level set is the one the last estimate recorded):
+    a comparison of bytes instead of parsing a results.json of megabytes for
+    its creation time and method.
+    """
+    try:
+        name = (read_json(folder / HISTORY_DIR / LATEST_FILE, "results history") or {}).get("latest")
+        if not isinstance(name, str) or not name or "/" in name or name in (".", ".."):
+            return None
+        entry = folder / HISTORY_DIR / name
+        top, kept = folder / RESULTS_FILE, entry / RESULTS_FILE
+        if kept.stat().st_size != top.stat().st_size or kept.read_bytes() != top.read_bytes():
+            return None
+    except Exception:  # no or unreadable record: the full check decides
+        return None
+    return entry
 
 
 def record_latest(session_dir: Path | str, results: dict[str, Any]) -> Path:

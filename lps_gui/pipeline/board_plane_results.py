@@ -14,6 +14,7 @@ import numpy as np
 
 from lps_gui.core.estimate_types import LpsEstimate
 from lps_gui.core.resolution import is_resolved, noise_max_abs, profile_span
+from lps_gui.io.results_file import json_floats
 
 
 def _f(x: Any) -> float | None:
@@ -21,25 +22,25 @@ def _f(x: Any) -> float | None:
     return x if np.isfinite(x) else None
 
 
-def position_fields(est: LpsEstimate, i: int) -> dict[str, Any]:
-    """The per-position straightness / image rotation entries of view ``i``."""
-    row: dict[str, Any] = {}
+def position_columns(est: LpsEstimate) -> dict[str, list[Any]]:
+    """The per-position straightness / image rotation entries of every view, as columns (K each)."""
+    cols: dict[str, list[Any]] = {}
     bp, six = est.board_plane, est.six_dof
     if six is not None:
         for j in (0, 1):
-            row[f"pose_straightness_um_{j + 1}"] = _f(six.straightness_um[i, j])
-            row[f"pose_straightness_sigma_um_{j + 1}"] = _f(six.straightness_sigma_um[i, j])
+            cols[f"pose_straightness_um_{j + 1}"] = json_floats(six.straightness_um[:, j])
+            cols[f"pose_straightness_sigma_um_{j + 1}"] = json_floats(six.straightness_sigma_um[:, j])
     if bp is not None:
         for j in (0, 1):
-            row[f"straightness_um_{j + 1}"] = _f(bp.straightness_um[i, j])
-            row[f"straightness_sigma_um_{j + 1}"] = _f(bp.straightness_sigma_um[i, j])
-        row["image_rotation_urad"] = _f(bp.image_rotation_urad[i])
-        row["image_rotation_sigma_urad"] = _f(bp.image_rotation_sigma_urad[i])
+            cols[f"straightness_um_{j + 1}"] = json_floats(bp.straightness_um[:, j])
+            cols[f"straightness_sigma_um_{j + 1}"] = json_floats(bp.straightness_sigma_um[:, j])
+        cols["image_rotation_urad"] = json_floats(bp.image_rotation_urad)
+        cols["image_rotation_sigma_urad"] = json_floats(bp.image_rotation_sigma_urad)
     elif six is not None:  # per-view methods have no common orientation: the pose figures are all there is
         for j in (0, 1):
-            row[f"straightness_um_{j + 1}"] = row[f"pose_straightness_um_{j + 1}"]
-            row[f"straightness_sigma_um_{j + 1}"] = row[f"pose_straightness_sigma_um_{j + 1}"]
-    return row
+            cols[f"straightness_um_{j + 1}"] = cols[f"pose_straightness_um_{j + 1}"]
+            cols[f"straightness_sigma_um_{j + 1}"] = cols[f"pose_straightness_sigma_um_{j + 1}"]
+    return cols
 
 
 def straightness_figures(target_mm: np.ndarray, est: LpsEstimate, valid: np.ndarray) -> dict[str, Any]:

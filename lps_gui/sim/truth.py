@@ -46,7 +46,7 @@ from lps_gui.core.stage_errors import StageErrorModel, TruePose
 from lps_gui.io.atomic import append_line_durable, write_text_atomic
 from lps_gui.io.board_file import board_from_dict
 from lps_gui.io.intrinsics_file import intrinsics_from_dict
-from lps_gui.io.results_file import json_float as _f
+from lps_gui.io.results_file import json_float as _f, json_floats
 from lps_gui.io.session import Session
 
 TRUTH_FILE = "truth.jsonl"
@@ -322,20 +322,20 @@ def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any],
     rotation = truth.get("image_rotation_urad")
     rotation = per_view(rotation) if rotation is not None else None
     out.update(truth_errors(est, straight, rotation, ok))
-    for k, row in enumerate(positions):
-        if not have[k]:
-            continue
-        row["truth_deviation_um"] = _f(true_dev[k])
-        if rotation is not None and ok.any():
-            row["truth_image_rotation_urad"] = _f(rotation[k] - np.nanmean(rotation[ok]))
-        if plane_dev is not None:
-            row["truth_plane_deviation_um"] = _f(plane_dev[k])
-        if straight is not None:
-            row["truth_straightness_um_1"] = _f(straight[k, 0])
-            row["truth_straightness_um_2"] = _f(straight[k, 1])
-        if angles is not None:
-            for j, key in enumerate(ANGLE_NAMES):
-                row[f"truth_{key}_urad"] = _f(angles[k, j])
+    columns = {"truth_deviation_um": true_dev}  # per position, beside the estimate (views with truth only)
+    if rotation is not None and ok.any():
+        columns["truth_image_rotation_urad"] = rotation - np.nanmean(rotation[ok])
+    if plane_dev is not None:
+        columns["truth_plane_deviation_um"] = plane_dev
+    if straight is not None:
+        columns["truth_straightness_um_1"], columns["truth_straightness_um_2"] = straight[:, 0], straight[:, 1]
+    if angles is not None:
+        for j, key in enumerate(ANGLE_NAMES):
+            columns[f"truth_{key}_urad"] = angles[:, j]
+    keys = list(columns)
+    values = list(zip(*(json_floats(v) for v in columns.values())))
+    for k in np.flatnonzero(have).tolist():
+        positions[k].update(zip(keys, values[k]))
     return out
 
 

@@ -29,3 +29,16 @@ def test_two_estimates_are_both_kept_and_the_latest_is_recorded(tmp_path, capsys
     assert latest["latest"] == kept[1]["name"] and latest["method"] == "joint"
     (folder / "report.pdf").touch()
     assert stale_report_message(folder) is None
+
+
+def test_a_top_level_set_other_than_the_recorded_latest_is_kept_before_it_is_replaced(tmp_path):
+    """keep_previous skips the copy only when results/latest.json's entry holds the same bytes as the top level."""
+    folder = tmp_path / "s"
+    simulate_point_session(small_spec(seed=2, views=8, directions="+", runs=1), folder)
+    estimate_session(folder, method="pnp")  # recorded as the latest
+    assert [h["method"] for h in history(folder)] == ["pnp"]
+    estimate_session(folder, method="hybrid", out_dir=folder)  # written over the top level, not recorded
+    estimate_session(folder, method="joint")
+    assert [h["method"] for h in history(folder)] == ["pnp", "hybrid", "joint"]
+    estimate_session(folder, method="joint")  # the top level is the recorded latest: nothing copied twice
+    assert [h["method"] for h in history(folder)] == ["pnp", "hybrid", "joint", "joint"]

@@ -24,7 +24,7 @@ import numpy as np
 
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_bytes_atomic
-from lps_gui.io.corners_vnl_fast import read_simple
+from lps_gui.io.corners_vnl_fast import comment_fields, read_simple
 
 HEADER = "# filename x y level"
 
@@ -205,21 +205,7 @@ def _parse(path: Path, buf: np.ndarray, n_corners: int, unicode_spaces: list[byt
         hi = newline[line] if line < len(newline) else size
         return bytes(buf[lo:hi]).decode("utf-8")
 
-    failed: dict[str, str] = {}
-    meta: dict[str, str] = {}
-    saw_header = False
-    for line in line_of[comment]:
-        text = raw(line).strip()
-        if text.startswith("##"):
-            body = text[2:].strip()
-            if body.startswith("failed "):
-                name, _, reason = body[7:].partition(":")
-                failed[name.strip()] = reason.strip()
-            elif "=" in body:
-                k, _, v = body.partition("=")
-                meta[k.strip()] = v.strip()
-        else:
-            saw_header = saw_header or text.split()[1:4] == ["filename", "x", "y"]
+    failed, meta, saw_header = comment_fields([raw(line) for line in line_of[comment]])
 
     errors: list[tuple[int, int, str]] = []  # (line, rank among errors of one line, message); the first wins
     data_lines, t0, n_data_tok = line_of[~comment], line_first[~comment], n_tok[~comment]

@@ -116,8 +116,8 @@ def _comment_lines(buf: bytearray, pos: int, end: int, comments: list[str]) -> i
     return min(pos, end)
 
 
-def _read_comments(comments: list[str]) -> tuple[dict[str, str], dict[str, str]] | None:
-    """(failed views, metadata) of the ``#`` lines, read as the general reader reads them; None without the header."""
+def comment_fields(comments: list[str]) -> tuple[dict[str, str], dict[str, str], bool]:
+    """(failed views, metadata, header seen) of a file's ``#`` lines: the one reading both readers share."""
     failed: dict[str, str] = {}
     meta: dict[str, str] = {}
     saw_header = False
@@ -133,6 +133,12 @@ def _read_comments(comments: list[str]) -> tuple[dict[str, str], dict[str, str]]
                 meta[k.strip()] = v.strip()
         else:
             saw_header = saw_header or text.split()[1:4] == ["filename", "x", "y"]
+    return failed, meta, saw_header
+
+
+def _read_comments(comments: list[str]) -> tuple[dict[str, str], dict[str, str]] | None:
+    """(failed views, metadata) of the ``#`` lines; None without the header."""
+    failed, meta, saw_header = comment_fields(comments)
     return (failed, meta) if saw_header else None
 
 

@@ -123,14 +123,6 @@ CASES = {
 }
 
 
-@pytest.mark.parametrize("name", list(CASES))
-@pytest.mark.parametrize("n_corners", [1, 2])
-def test_reader_matches_the_line_by_line_one(tmp_path, name, n_corners):
-    path = tmp_path / "corners.vnl"
-    path.write_bytes(CASES[name].encode("utf-8"))
-    _same_read(path, n_corners)
-
-
 def test_unreadable_files_give_the_same_errors(tmp_path):
     _same_read(tmp_path / "absent.vnl", 2)
     (tmp_path / "bad.vnl").write_bytes(H.encode() + b"a\xff 1 2 0\n")
@@ -214,11 +206,12 @@ FIXED = {
 }
 
 
-@pytest.mark.parametrize("name", list(FIXED))
+@pytest.mark.parametrize("name", list(CASES) + list(FIXED))
 @pytest.mark.parametrize("n_corners", [1, 2])
-def test_fast_path_cases_match_the_line_by_line_reader(tmp_path, name, n_corners):
+def test_reader_matches_the_line_by_line_one(tmp_path, name, n_corners):
+    """General cases (CASES) and the fast path's own (FIXED)."""
     path = tmp_path / "corners.vnl"
-    path.write_bytes(FIXED[name].encode("utf-8"))
+    path.write_bytes({**CASES, **FIXED}[name].encode("utf-8"))
     _same_read(path, n_corners)
 
 

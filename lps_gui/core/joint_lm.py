@@ -113,11 +113,6 @@ def pose_residuals(R: np.ndarray, t: np.ndarray, X: np.ndarray, intrinsics: Came
     return r
 
 
-def _camera_points(state: LpsState, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Camera-frame coordinates of every corner in every view, three arrays of shape (K, N)."""
-    return camera_points(state.R, state.l0[None, :] + state.s[:, None] * state.n[None, :], X)
-
-
 def huber_threshold(r: np.ndarray, mask: np.ndarray, huber_scale: float) -> float:
     """Huber threshold (px) on a corner's residual norm: ``huber_scale`` robust sigmas.
 

@@ -200,17 +200,15 @@ def _views_of(state: LpsState, idx: np.ndarray) -> LpsState:
     return LpsState(state.R, state.l0, state.n, state.s[idx].copy(), state.intrinsics)
 
 
-def _view_rms(state: LpsState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray,
-              known_ssr: np.ndarray | None = None, known: np.ndarray | None = None) -> np.ndarray:
-    """Each view's reprojection RMS (px); ``known_ssr`` of the ``known`` views comes from a pass already made."""
+def _view_rms(state: LpsState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray, known_ssr: np.ndarray,
+              known: np.ndarray) -> np.ndarray:
+    """Each view's reprojection RMS (px): ``known_ssr`` of the ``known`` views comes from a pass already made,
+    the other views with corners are projected here."""
     n = mask.sum(axis=1)
-    if known_ssr is None:
-        cost = view_costs(state, X, corners, mask)
-    else:
-        cost = np.where(known, known_ssr, 0.0)
-        rest = np.flatnonzero(~known & (n > 0))
-        if rest.size:
-            cost[rest] = view_costs(_views_of(state, rest), X, corners[rest], mask[rest])
+    cost = np.where(known, known_ssr, 0.0)
+    rest = np.flatnonzero(~known & (n > 0))
+    if rest.size:
+        cost[rest] = view_costs(_views_of(state, rest), X, corners[rest], mask[rest])
     return np.where(n > 0, np.sqrt(cost / np.maximum(2 * n, 1)), np.nan)
 
 
@@ -272,7 +270,6 @@ class _Uncertainty:
 def _uncertainty(obs: Observations, opt: EstimateOptions, sol: _Solution, X: np.ndarray, mask_all: np.ndarray) -> _Uncertainty:
     """Cov = sigma^2 H^-1 by the arrowhead inverse; intrinsics propagated; excluded views on their own."""
     used, usable, free = sol.used, sol.usable, sol.free()
-    mask = mask_all & used[:, None]
     have_cov = obs.intrinsics.covariance is not None
     # one pass over every usable view; only the used ones enter the equations
     eq, poses = linearize_poses(sol.state, X, obs.corners_px, mask_all, with_intrinsics=have_cov or opt.self_calibrate,

@@ -20,28 +20,20 @@ from __future__ import annotations
 
 import numpy as np
 
-from lps_gui.core.camera_model import CameraIntrinsics
+from lps_gui.core.camera_model import CameraIntrinsics, project_parts
 
 BLOCK_VIEWS = 64  # views per block: its (64, N) arrays stay in L2 at N = 540
 TOL_MM = 1e-12  # done when the step, or what is left after it at the contraction seen, is below this
 MAX_ITERATIONS = 12
 
 
-def _distorted(x: np.ndarray, y: np.ndarray, z: np.ndarray, intr: CameraIntrinsics) -> tuple[np.ndarray, np.ndarray]:
-    """Normalized distorted coordinates (xd, yd) of camera-frame points (core.camera_model's model)."""
-    k1, k2, p1, p2, k3 = intr.dist
-    inv_z = 1.0 / z
-    xp, yp = x * inv_z, y * inv_z
-    xx, yy, xy = xp * xp, yp * yp, xp * yp
-    r2 = xx + yy
-    radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
-    return (xp * radial + 2.0 * p1 * xy + p2 * (r2 + 2.0 * xx),
-            yp * radial + p1 * (r2 + 2.0 * yy) + 2.0 * p2 * xy)
-
-
 def _distorted_along(x: np.ndarray, y: np.ndarray, z: np.ndarray, n: np.ndarray, intr: CameraIntrinsics
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(xd, yd) and their derivatives along the camera-frame direction ``n`` (3,): d/ds of (x, y, z) + s n."""
+    """(xd, yd) and their derivatives along the camera-frame direction ``n`` (3,): d/ds of (x, y, z) + s n.
+
+    The distortion of :func:`lps_gui.core.camera_model.project_parts`, differentiated along one
+    direction only (forward mode): 2 derivatives per corner where its Jacobian has 6.
+    """
     k1, k2, p1, p2, k3 = intr.dist
     inv_z = 1.0 / z
     xp, yp = x * inv_z, y * inv_z
@@ -90,7 +82,8 @@ def positions_on_line(
     for lo in range(0, s_out.size, BLOCK_VIEWS):
         b = slice(lo, lo + BLOCK_VIEWS)
         xt = np.matmul(R_true[b], XT) + t_true[b, :, None]  # shape (k, 3, N)
-        xd_true, yd_true = _distorted(xt[:, 0], xt[:, 1], xt[:, 2], intrinsics)
+        true = project_parts(xt[:, 0], xt[:, 1], xt[:, 2], intrinsics)  # the camera model's own projection
+        xd_true, yd_true = true.xd, true.yd
         s = s_out[b].copy()
         previous = np.full(s.shape, np.inf)
         for _ in range(MAX_ITERATIONS):

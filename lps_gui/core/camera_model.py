@@ -175,23 +175,9 @@ def intrinsics_rows(parts: ProjectionParts, intrinsics: CameraIntrinsics) -> tup
 
 
 def intrinsics_jacobian(parts: ProjectionParts, intrinsics: CameraIntrinsics) -> np.ndarray:
-    """d uv / d intrinsics, shape (..., 2, 9), from the parts of a projection."""
-    fx, fy = intrinsics.fx, intrinsics.fy
-    xp, yp, xd, yd = parts.xp, parts.yp, parts.xd, parts.yd
-    xx, yy, xy = xp * xp, yp * yp, xp * yp
-    r2 = xx + yy
-    r4 = r2 * r2
-    d_i = np.zeros(xp.shape + (2, 9))
-    d_i[..., 0, 0] = xd
-    d_i[..., 1, 1] = yd
-    d_i[..., 0, 2] = 1.0
-    d_i[..., 1, 3] = 1.0
-    d_i[..., 0, 4], d_i[..., 1, 4] = fx * xp * r2, fy * yp * r2
-    d_i[..., 0, 5], d_i[..., 1, 5] = fx * xp * r4, fy * yp * r4
-    d_i[..., 0, 6], d_i[..., 1, 6] = fx * 2.0 * xy, fy * (r2 + 2.0 * yy)
-    d_i[..., 0, 7], d_i[..., 1, 7] = fx * (r2 + 2.0 * xx), fy * 2.0 * xy
-    d_i[..., 0, 8], d_i[..., 1, 8] = fx * xp * r2 * r4, fy * yp * r2 * r4
-    return d_i
+    """d uv / d intrinsics, shape (..., 2, 9), from the parts of a projection (the rows of :func:`intrinsics_rows`)."""
+    Ju, Jv = intrinsics_rows(parts, intrinsics)
+    return np.stack([np.moveaxis(Ju, 0, -1), np.moveaxis(Jv, 0, -1)], axis=-2)
 
 
 def project(

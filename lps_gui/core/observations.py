@@ -48,6 +48,7 @@ class Observations(CornerViews):
     index: np.ndarray  # shape (K,) int: capture index
     names: list[str] = field(default_factory=list)
     source: str = "observations"
+    source_sha256: str | None = None  # of the corner file's bytes as they were read (results.json inputs)
 
     def __post_init__(self) -> None:
         self.corners_px = np.asarray(self.corners_px, dtype=float)

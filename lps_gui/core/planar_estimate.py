@@ -53,6 +53,7 @@ class PlanarObservations(CornerViews):
     index: np.ndarray  # shape (K,)
     names: list[str] = field(default_factory=list)
     source: str = "planar observations"
+    source_sha256: str | None = None  # of the corner file's bytes as they were read (results.json inputs)
 
     def __post_init__(self) -> None:
         self.corners_px = np.asarray(self.corners_px, dtype=float)

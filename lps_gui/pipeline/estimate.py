@@ -24,7 +24,6 @@ from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.core.rotation import log_so3
 from lps_gui.errors import InputError
 from lps_gui.gc_tuning import paused as paused_collections
-from lps_gui.io.atomic import sha256_file
 from lps_gui.io.board_file import board_to_dict
 from lps_gui.io.corners_vnl import read_corners_vnl
 from lps_gui.io.intrinsics_file import apply_board_warp, intrinsics_to_dict, read_intrinsics
@@ -32,10 +31,10 @@ from lps_gui.io.results_file import assemble_results, summary_rows, write_result
 from lps_gui.io.results_file import json_floats, rows_from_columns
 from lps_gui.io.results_file import json_float as _f
 from lps_gui.io.results_history import keep_previous, record_latest
-from lps_gui.io.session import SESSION_FILE, Session
+from lps_gui.io.session import Session
 from lps_gui.io.session_lock import SessionLock
 from lps_gui.pipeline.board_plane_results import position_columns, straightness_figures
-from lps_gui.pipeline.session_checks import check_corners_current, check_view_geometry
+from lps_gui.pipeline.session_checks import check_corners_current, check_view_geometry, session_inputs
 from lps_gui.pipeline.uncertainty import add_uncertainty, session_board
 from lps_gui.sim.truth import session_truth, truth_comparison  # truth_comparison re-exported for callers
 
@@ -87,6 +86,7 @@ def observations_from_session(session: Session, intrinsics: CameraIntrinsics | N
         index=[r.index for r in records],
         names=[r.file for r in records],
         source=str(session.corners_path),
+        source_sha256=table.sha256,
     )
 
 
@@ -149,7 +149,7 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate, intrins
     results = assemble_results(
         method=est.method,
         settings=est.options.to_dict(),
-        inputs=session_inputs(session, intrinsics_source),
+        inputs=session_inputs(session, intrinsics_source, {session.corners_path.name: obs.source_sha256}),
         board=board_to_dict(obs.board),
         intrinsics=intrinsics_to_dict(obs.intrinsics),
         session_meta={k: session.meta.get(k) for k in ("camera", "stage", "plan", "stage_spec", "created") if k in session.meta},
@@ -245,16 +245,6 @@ def estimate_parameters(obs: Observations, est: LpsEstimate) -> dict[str, Any]:
     if est.options.self_calibrate:
         parameters["intrinsics_estimated"] = dict(zip(INTRINSIC_NAMES, est.state.intrinsics.vector().tolist()))
     return parameters
-
-
-def session_inputs(session: Session, intrinsics_source: str) -> dict[str, Any]:
-    """results.json ``inputs``: where the data came from, with the sha256 of each input file."""
-    inputs = {"session": str(session.folder), "intrinsics_source": intrinsics_source, "sha256": {}}
-    for name in (SESSION_FILE, session.captures_path.name, session.corners_path.name):
-        path = session.folder / name
-        if path.exists():
-            inputs["sha256"][name] = sha256_file(path)
-    return inputs
 
 
 def scale_with_uncertainty(obs: Observations, est: LpsEstimate, valid: np.ndarray, sigma_um: np.ndarray) -> dict[str, Any]:

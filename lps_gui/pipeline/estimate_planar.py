@@ -21,12 +21,12 @@ from lps_gui.core.planar_flatness import out_of_plane
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.core.rotation import log_so3
 from lps_gui.errors import InputError
-from lps_gui.io.atomic import sha256_file
 from lps_gui.io.board_file import board_to_dict
 from lps_gui.io.corners_vnl import read_corners_vnl
 from lps_gui.io.intrinsics_file import apply_board_warp, intrinsics_to_dict
 from lps_gui.io.results_file import FORMAT
-from lps_gui.io.session import SESSION_FILE, Session
+from lps_gui.io.session import Session
+from lps_gui.pipeline.session_checks import session_inputs
 from lps_gui.sim.planar_truth import planar_session_truth, planar_truth_comparison
 
 
@@ -54,6 +54,7 @@ def planar_observations_from_session(session: Session, intrinsics: CameraIntrins
         target_mm=[r.target_mm for r in records], approach=approach,
         direction=[1.0 if r.direction == "+" else -1.0 for r in records], run=[r.run for r in records],
         index=[r.index for r in records], names=[r.file for r in records], source=str(session.corners_path),
+        source_sha256=table.sha256,
     )
 
 
@@ -123,11 +124,7 @@ def build_planar_results(session: Session, obs: PlanarObservations, est: PlanarE
         "n_observations": est.n_observations, "dof": est.dof, "iterations": est.iterations,
         "converged": est.converged, "reference_index": int(obs.index[est.reference_view]),
     }
-    inputs = {"session": str(session.folder), "intrinsics_source": intrinsics_source, "sha256": {}}
-    for name in (SESSION_FILE, session.captures_path.name, session.corners_path.name):
-        path = session.folder / name
-        if path.exists():
-            inputs["sha256"][name] = sha256_file(path)
+    inputs = session_inputs(session, intrinsics_source, {session.corners_path.name: obs.source_sha256})
     results: dict[str, Any] = {
         "format": FORMAT, "software": {"name": "lps-calib", "version": __version__},
         "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "method": est.method, "axes": ["X", "Y"],

@@ -15,7 +15,7 @@ from lps_gui.errors import InputError
 from lps_gui.io.atomic import sha256_file
 from lps_gui.io.corners_hashes import image_hashes, stale_views
 from lps_gui.io.corners_vnl import CornerTable
-from lps_gui.io.session import Session
+from lps_gui.io.session import SESSION_FILE, Session
 
 
 def check_corners_current(session: Session, table: CornerTable, records: Sequence[Any]) -> None:
@@ -42,6 +42,23 @@ def check_view_geometry(corners_px: Any, names: Sequence[str], source: Path | st
                              "camera back or shorten the travel (`lps plan-rig` checks a plan before capture)")
         raise InputError(f"{source}: {len(bad)} view(s) have all corners on one line (first: {names[bad[0]]}); "
                          "the board is edge-on or the corners are corrupt: re-run `lps detect` or remove the view")
+
+
+def session_inputs(session: Session, intrinsics_source: str, known: dict[str, str | None] | None = None
+                   ) -> dict[str, Any]:
+    """results.json ``inputs``: where the data came from, with the sha256 of each input file.
+
+    ``known``: hashes already taken of the bytes that were read (corners.vnl is hashed as it is parsed), not
+    read again.
+    """
+    inputs: dict[str, Any] = {"session": str(session.folder), "intrinsics_source": intrinsics_source, "sha256": {}}
+    for name in (SESSION_FILE, session.captures_path.name, session.corners_path.name):
+        path = session.folder / name
+        if (known or {}).get(name):
+            inputs["sha256"][name] = known[name]
+        elif path.exists():
+            inputs["sha256"][name] = sha256_file(path)
+    return inputs
 
 
 def stale_inputs(session_dir: Path | str, results: dict[str, Any]) -> list[str]:

@@ -33,6 +33,18 @@ def test_results_files_follow_spec(session):
     assert tc["position_rms_error_um"] < 3 * tc["mean_sigma_um"]
 
 
+def test_inputs_record_the_hash_of_every_file_read(session):
+    """corners.vnl is hashed as it is parsed, the others from disk: all equal the files' own sha256."""
+    from lps_gui.io.atomic import sha256_file
+    from lps_gui.pipeline.session_checks import stale_inputs
+
+    results = estimate_session(session)
+    recorded = results["inputs"]["sha256"]
+    assert set(recorded) == {"session.json", "captures.jsonl", "corners.vnl"}
+    assert all(recorded[name] == sha256_file(session / name) for name in recorded)
+    assert stale_inputs(session, results) == []
+
+
 def test_truth_comparison_is_the_positions_table_against_its_truth_column(session):
     """One reference: deviation_um and truth_deviation_um are both zero at the reference capture, so the
     figure recomputed from the table equals truth_comparison's."""

@@ -1,0 +1,312 @@
+"""Positions along the whole travel against a row or constellation of targets (SPEC 13).
+
+x_cam = R (Q_j X + p_j) + l0 + N s_i: one camera orientation R, the motion frame
+N (3 x D; D = 1 line, 2 plane), each stop's coordinates s_i (D,), and the
+mounting pose (Q_j, p_j) of every target but the first (the world frame).
+Known intrinsics. Gauss-Newton (Levenberg-Marquardt damped) on the block
+arrowhead: 8 shared columns (R 3, l0 3, the tilt of N 2) plus 6 per target,
+and D per view; the per-view D x D blocks are eliminated by a Schur complement,
+so a step costs O(corners) plus one (8 + 6 (T - 1))^2 solve.
+
+Gauges: s of the reference view is 0 (SPEC 5: positions relative to the
+reference capture); N turns only out of its own span (D = 1: the two tilts of n;
+D = 2: the tilts of the plane), the rotation within the plane is fixed
+afterwards so that x runs along the fitted X motion (SPEC 10).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from lps_gui.core.camera_model import CameraIntrinsics, project_parts
+from lps_gui.core.pnp import solve_pnp
+from lps_gui.core.rotation import chordal_mean, exp_so3, skew
+from lps_gui.core.target_chain import chain_targets
+from lps_gui.core.target_rig import TargetLayout
+from lps_gui.core.targets import Target
+from lps_gui.errors import DegenerateGeometryError
+
+N_COMMON = 8  # R (3), l0 (3), tilt of the motion frame (2)
+MIN_CORNERS = 6
+
+
+@dataclass
+class TargetObservations:
+    """Corners of K views of T targets, laid end to end (see io/target_corners_vnl)."""
+
+    targets: list[Target]
+    corners_px: np.ndarray  # (K, N, 2), NaN where not seen
+    targets_mm: np.ndarray  # (K, D) commanded stage coordinates
+    names: list[str]
+
+    @property
+    def own_points(self) -> np.ndarray:
+        return np.concatenate([t.board.object_points() for t in self.targets])
+
+    @property
+    def which(self) -> np.ndarray:
+        return np.repeat(np.arange(len(self.targets)), [t.board.n_corners for t in self.targets])
+
+
+@dataclass
+class TargetSolution:
+    R: np.ndarray  # (3, 3) camera from world
+    l0: np.ndarray  # (3,) mm
+    N: np.ndarray  # (3, D) motion directions in the camera frame
+    s: np.ndarray  # (K, D) mm, NaN for views without a target; 0 at the reference view
+    Q: np.ndarray  # (T, 3, 3)
+    p: np.ndarray  # (T, 3) mm
+    sigma_s: np.ndarray  # (K, D) mm, corner noise at sigma_px, relative to the reference view
+    sigma_centred: np.ndarray  # (K, D) mm: of s_i minus the mean over the used views (no reference noise)
+    target_sigma: np.ndarray  # (T, 6): rotation (rad, left perturbation) and p (mm); zero for target 0
+    sigma_px: float  # a-posteriori corner noise
+    rms_px: np.ndarray  # (K,)
+    used: np.ndarray  # (K,) bool
+    reference: int
+    ties: np.ndarray  # (T, T) views seeing both
+    iterations: int
+    converged: bool
+
+    def layout(self, targets: list[Target]) -> TargetLayout:
+        return TargetLayout(tuple(targets), self.Q, self.p)
+
+
+# ----------------------------------------------------------------------------- initialization
+
+
+def _frame(A: np.ndarray) -> np.ndarray:
+    """A rotation whose first D columns span the columns of A (3, D) in order (Gram-Schmidt), det +1."""
+    D = A.shape[1]
+    c0 = A[:, 0] / np.linalg.norm(A[:, 0])
+    if D == 1:
+        helper = np.eye(3)[int(np.argmin(np.abs(c0)))]
+        c1 = np.cross(c0, helper)
+        c1 /= np.linalg.norm(c1)
+    else:
+        c1 = A[:, 1] - (A[:, 1] @ c0) * c0
+        c1 /= np.linalg.norm(c1)
+    return np.stack([c0, c1, np.cross(c0, c1)], axis=1)
+
+
+def initial_solution(obs: TargetObservations, intrinsics: CameraIntrinsics) -> dict:
+    """R, l0, frame F, s, Q, p from per-view PnP of every seen target, chained from target 0."""
+    own, which = obs.own_points, obs.which
+    K, T = len(obs.names), len(obs.targets)
+    Rv = np.tile(np.eye(3), (K, T, 1, 1))
+    tv = np.zeros((K, T, 3))
+    ok = np.zeros((K, T), bool)
+    for j in range(T):
+        sel = which == j
+        R_j, t_j, ok_j = solve_pnp(own[sel], obs.corners_px[:, sel], intrinsics)
+        Rv[:, j], tv[:, j], ok[:, j] = R_j, t_j, ok_j
+    Q, p, ties = chain_targets(Rv, tv, ok, [t.id for t in obs.targets], obs.names)
+    used = ok.any(axis=1)
+    if used.sum() < 3:
+        raise DegenerateGeometryError(f"only {used.sum()} views see a target; the line needs at least 3")
+    R_world = np.einsum("ktij,tlj->ktil", Rv, Q)  # R_cam_j Q_j^T: camera from world, per target
+    t_world = tv - np.einsum("ktij,tj->kti", R_world, p)
+    R = chordal_mean(R_world[ok])
+    t = np.zeros((K, 3))
+    for i in np.flatnonzero(used):
+        # under the common R each seen target gives the world origin in the camera: t = t_cj - R p_j
+        t[i] = np.mean(tv[i, ok[i]] - (R @ p[ok[i]].T).T, axis=0)
+    ref = int(np.flatnonzero(used)[0])
+    dt = t[used] - t[ref]
+    dx = obs.targets_mm[used] - obs.targets_mm[ref]
+    A, *_ = np.linalg.lstsq(dx, dt, rcond=None)  # dt ~ dx A: A (D, 3)
+    if np.linalg.matrix_rank(dx) < dx.shape[1]:
+        raise DegenerateGeometryError("the stops do not span the plan's axes; the motion directions are undetermined")
+    F = _frame(A.T)
+    D = obs.targets_mm.shape[1]
+    s = np.full((K, D), np.nan)
+    s[used] = (t[used] - t[ref]) @ F[:, :D]
+    return {"R": R, "l0": t[ref].copy(), "F": F, "s": s, "Q": Q, "p": p, "ties": ties, "used": used, "ref": ref}
+
+
+# ----------------------------------------------------------------------------- linearization
+
+
+@dataclass
+class _Lin:
+    cost: float
+    r: np.ndarray  # (M, 2)
+    Jc: np.ndarray  # (M, 2, 8)
+    Jt: np.ndarray  # (M, 2, 6) for the corner's own target (zero rows for target 0)
+    Jv: np.ndarray  # (M, 2, D)
+
+
+def _linearize(state: dict, X: np.ndarray, tj: np.ndarray, view: np.ndarray, uv: np.ndarray,
+               intrinsics: CameraIntrinsics, D: int, want_jacobian: bool = True) -> _Lin:
+    R, l0, F, s, Q, p = state["R"], state["l0"], state["F"], state["s"], state["Q"], state["p"]
+    QX = np.einsum("mij,mj->mi", Q[tj], X)
+    Xw = QX + p[tj]
+    N = F[:, :D]
+    ts = s[view] @ N.T  # (M, 3)
+    RXw = Xw @ R.T
+    P = RXw + l0 + ts
+    parts = project_parts(P[:, 0], P[:, 1], P[:, 2], intrinsics, want_jacobian)
+    r = np.stack([parts.u, parts.v], axis=1) - uv
+    cost = float(np.sum(r * r))
+    if not want_jacobian:
+        return _Lin(cost, r, None, None, None)  # type: ignore[arg-type]
+    dP = np.stack([np.stack(parts.du, axis=1), np.stack(parts.dv, axis=1)], axis=1)  # (M, 2, 3)
+    B = F[:, 1:3] if D == 1 else F[:, 0:2]  # axes N may turn about
+    Jc = np.empty((len(P), 2, N_COMMON))
+    Jc[:, :, 0:3] = -np.einsum("mak,mkl->mal", dP, skew(RXw))
+    Jc[:, :, 3:6] = dP
+    Jc[:, :, 6:8] = -np.einsum("mak,mkl,lb->mab", dP, skew(ts), B)
+    dPR = dP @ R  # d uv / d X_w
+    Jt = np.empty((len(P), 2, 6))
+    Jt[:, :, 0:3] = -np.einsum("mak,mkl->mal", dPR, skew(QX))
+    Jt[:, :, 3:6] = dPR
+    Jt[tj == 0] = 0.0
+    Jv = dP @ N
+    return _Lin(cost, r, Jc, Jt, Jv)
+
+
+def _normal_equations(lin: _Lin, tj: np.ndarray, view: np.ndarray, K: int, T: int, D: int, free_view: np.ndarray):
+    """Arrowhead blocks: A_gg (G, G), A_gv (K, G, D), A_vv (K, D, D), b_g (G,), b_v (K, D)."""
+    G = N_COMMON + 6 * (T - 1)
+    M = len(tj)
+    Jg = np.zeros((M, 2, G))
+    Jg[:, :, :N_COMMON] = lin.Jc
+    for j in range(1, T):
+        sel = tj == j
+        Jg[sel, :, N_COMMON + 6 * (j - 1): N_COMMON + 6 * j] = lin.Jt[sel]
+    Jv = lin.Jv * free_view[view][:, None, None]
+    J2 = Jg.reshape(2 * M, G)
+    A_gg = J2.T @ J2
+    b_g = J2.T @ lin.r.reshape(2 * M)
+    # views are contiguous (corners listed view by view): per-view sums by reduceat over their runs
+    starts = np.flatnonzero(np.r_[True, view[1:] != view[:-1]])
+    rows = view[starts]
+    A_gv = np.zeros((K, G, D))
+    A_vv = np.zeros((K, D, D))
+    b_v = np.zeros((K, D))
+    A_gv[rows] = np.add.reduceat(np.einsum("mag,mad->mgd", Jg, Jv), starts, axis=0)
+    A_vv[rows] = np.add.reduceat(np.einsum("mad,mae->mde", Jv, Jv), starts, axis=0)
+    b_v[rows] = np.add.reduceat(np.einsum("mad,ma->md", Jv, lin.r), starts, axis=0)
+    return A_gg, A_gv, A_vv, b_g, b_v
+
+
+def _schur_solve(A_gg, A_gv, A_vv, b_g, b_v, lam: float, free_view: np.ndarray):
+    """Damped step (globals, views), and the pieces the covariance needs."""
+    D = A_vv.shape[1]
+    eye = np.eye(D)
+    Avv = A_vv + lam * (A_vv * eye) + np.where(free_view, 0.0, 1.0)[:, None, None] * eye  # fixed views: identity
+    Avv_inv = np.linalg.inv(Avv)
+    W = np.einsum("kgd,kde->kge", A_gv, Avv_inv)  # A_gv A_vv^-1
+    S = A_gg + lam * np.diag(np.diag(A_gg)) - np.einsum("kgd,khd->gh", W, A_gv)
+    rhs = b_g - np.einsum("kgd,kd->g", W, b_v)
+    dg = -np.linalg.solve(S, rhs)
+    dv = -np.einsum("kde,ke->kd", Avv_inv, b_v + np.einsum("kgd,g->kd", A_gv, dg))
+    dv[~free_view] = 0.0
+    return dg, dv, S, W, Avv_inv
+
+
+def _retract(state: dict, dg: np.ndarray, dv: np.ndarray, D: int, T: int) -> dict:
+    F = state["F"]
+    B = F[:, 1:3] if D == 1 else F[:, 0:2]
+    new = dict(state)
+    new["R"] = exp_so3(dg[0:3]) @ state["R"]
+    new["l0"] = state["l0"] + dg[3:6]
+    new["F"] = exp_so3(B @ dg[6:8]) @ F
+    new["s"] = state["s"] + dv
+    Q, p = state["Q"].copy(), state["p"].copy()
+    for j in range(1, T):
+        d = dg[N_COMMON + 6 * (j - 1): N_COMMON + 6 * j]
+        Q[j] = exp_so3(d[0:3]) @ Q[j]
+        p[j] = p[j] + d[3:6]
+    new["Q"], new["p"] = Q, p
+    return new
+
+
+# ----------------------------------------------------------------------------- solve
+
+
+def solve_targets(
+    obs: TargetObservations, intrinsics: CameraIntrinsics, max_iterations: int = 50, tolerance: float = 1e-10,
+    progress=None,
+) -> TargetSolution:
+    """Positions of every stop and the targets' poses, jointly; sigmas from (J^T J)^-1 at the solution."""
+    state = initial_solution(obs, intrinsics)
+    K, T, D = len(obs.names), len(obs.targets), obs.targets_mm.shape[1]
+    used, ref = state["used"], state["ref"]
+    state["s"] = np.where(used[:, None], state["s"], 0.0)
+    seen = np.isfinite(obs.corners_px[..., 0]) & used[:, None]
+    view, corner = np.nonzero(seen)
+    X, tj, uv = obs.own_points[corner], obs.which[corner], obs.corners_px[view, corner]
+    free_view = used.copy()
+    free_view[ref] = False
+    lam, converged, it = 1e-6, False, 0
+    lin = _linearize(state, X, tj, view, uv, intrinsics, D)
+    for it in range(1, max_iterations + 1):
+        A = _normal_equations(lin, tj, view, K, T, D, free_view)
+        while True:
+            dg, dv, *_ = _schur_solve(*A, lam, free_view)
+            trial = _retract(state, dg, dv, D, T)
+            lin_t = _linearize(trial, X, tj, view, uv, intrinsics, D)
+            if lin_t.cost <= lin.cost:
+                break
+            lam *= 10.0
+            if lam > 1e6:
+                break
+        gain = lin.cost - lin_t.cost
+        if lin_t.cost <= lin.cost:
+            state, lin = trial, lin_t
+            lam = max(lam / 10.0, 1e-9)
+        if progress is not None:
+            progress(it, max_iterations, f"target model: iteration {it}, rms {np.sqrt(lin.cost / len(view)):.3f} px")
+        if gain <= tolerance * max(lin.cost, 1e-300) or lam > 1e6:
+            converged = lam <= 1e6
+            break
+    A_gg, A_gv, A_vv, b_g, b_v = _normal_equations(lin, tj, view, K, T, D, free_view)
+    _, _, S, W, Avv_inv = _schur_solve(A_gg, A_gv, A_vv, b_g, b_v, 0.0, free_view)
+    n_params = N_COMMON + 6 * (T - 1) + D * int(free_view.sum())
+    dof = max(2 * len(view) - n_params, 1)
+    sigma2 = lin.cost / dof
+    S_inv = np.linalg.inv(S)
+    cov_s, cov_c = _position_covariances(Avv_inv, W, S_inv, free_view, used)
+    cov_s, cov_c = cov_s * sigma2, cov_c * sigma2
+    target_sigma = np.zeros((T, 6))
+    if T > 1:
+        target_sigma[1:] = np.sqrt(np.maximum(np.diag(S_inv)[N_COMMON:], 0.0) * sigma2).reshape(T - 1, 6)
+    sq = np.bincount(view, weights=np.sum(lin.r * lin.r, axis=1), minlength=K)
+    cnt = np.bincount(view, minlength=K)
+    rms = np.where(cnt > 0, np.sqrt(sq / np.maximum(cnt, 1)), np.nan)
+    s = np.where(used[:, None], state["s"], np.nan)
+    F = state["F"]
+    N = F[:, :D]
+    if D == 2:
+        G = _x_along_motion(s, obs.targets_mm, used, ref)
+        N, s = N @ G, s @ G
+        cov_s, cov_c = (np.einsum("dx,kde,ey->kxy", G, c, G) for c in (cov_s, cov_c))
+    sigma_s, sigma_c = (np.sqrt(np.maximum(np.einsum("kdd->kd", c), 0.0)) for c in (cov_s, cov_c))
+    sigma_s[~used] = sigma_c[~used] = np.nan
+    return TargetSolution(state["R"], state["l0"], N, s, state["Q"], state["p"], sigma_s, sigma_c, target_sigma,
+                          float(np.sqrt(sigma2)), rms, used, ref, state["ties"], it, converged)
+
+
+def _position_covariances(Avv_inv, W, S_inv, free_view, used):
+    """Per-view covariances (K, D, D) of s_i (reference gauge) and of s_i - mean_k s_k, unscaled.
+
+    Cov(s_i, s_k) = A_vv_i^-1 [i = k] + W_i^T S^-1 W_k for free views (the reference's s is fixed).
+    """
+    Wf = W * free_view[:, None, None]
+    Af = Avv_inv * free_view[:, None, None]
+    cov = Af + np.einsum("kgd,gh,khe->kde", Wf, S_inv, Wf)
+    n = max(int(used.sum()), 1)
+    Wsum = Wf.sum(axis=0)  # (G, D)
+    cross = (Af + np.einsum("kgd,gh,he->kde", Wf, S_inv, Wsum)) / n  # Cov(s_i, mean s)
+    var_mean = (Af.sum(axis=0) + Wsum.T @ S_inv @ Wsum) / n ** 2
+    centred = cov - cross - np.swapaxes(cross, 1, 2) + var_mean
+    return cov, centred
+
+
+def _x_along_motion(s: np.ndarray, targets_mm: np.ndarray, used: np.ndarray, ref: int) -> np.ndarray:
+    """The 2 x 2 rotation whose columns are the new x (along the fitted X motion, SPEC 10) and y."""
+    dx = targets_mm[used] - targets_mm[ref]
+    A, *_ = np.linalg.lstsq(dx, s[used] - s[ref], rcond=None)  # s ~ dx A: row 0 is where +X moves
+    a = A[0] / np.linalg.norm(A[0])
+    return np.array([[a[0], -a[1]], [a[1], a[0]]])

@@ -67,6 +67,54 @@ class TargetSolution:
     ties: np.ndarray  # (T, T) views seeing both
     iterations: int
     converged: bool
+    covariance: "PositionCovariance"
+
+    def planar_axes(self, targets_mm: np.ndarray) -> dict[str, float]:
+        """Scales of X and Y (ppm) and the squareness of Y to X (urad), with sigmas (SPEC 10 names).
+
+        From the least-squares fit s_i ~ c + (targets_i) A over the used views; squareness is the
+        angle between the +X and +Y motion directions minus 90 degrees. Linear in the positions to
+        first order, so each sigma is that functional's variance under the full covariance.
+        """
+        used = self.used
+        X = targets_mm[used] - targets_mm[used].mean(axis=0)
+        L = np.linalg.solve(X.T @ X, X.T)  # (2, n): A = L s
+        A = L @ self.s[used]
+        (a, e), (b, c) = A
+        g = np.zeros((4, len(self.s), 2))
+        rows = np.flatnonzero(used)
+        g[0, rows, 0] = L[0] * a / np.hypot(a, e)  # |A0|
+        g[0, rows, 1] = L[0] * e / np.hypot(a, e)
+        g[1, rows, 0] = L[1] * b / np.hypot(b, c)  # |A1|
+        g[1, rows, 1] = L[1] * c / np.hypot(b, c)
+        # squareness = atan2(c, b) - atan2(e, a) - pi/2
+        g[2, rows, 0] = L[1] * (-c / (b * b + c * c)) - L[0] * (-e / (a * a + e * e))
+        g[2, rows, 1] = L[1] * (b / (b * b + c * c)) - L[0] * (a / (a * a + e * e))
+        sig = [np.sqrt(self.covariance.variance(g[k])) for k in range(3)]
+        squareness = np.arctan2(c, b) - np.arctan2(e, a) - np.pi / 2
+        return {"scale_x_ppm": (np.hypot(a, e) - 1) * 1e6, "scale_x_sigma_ppm": sig[0] * 1e6,
+                "scale_y_ppm": (np.hypot(b, c) - 1) * 1e6, "scale_y_sigma_ppm": sig[1] * 1e6,
+                "squareness_urad": squareness * 1e6, "squareness_sigma_urad": sig[2] * 1e6}
+
+
+@dataclass
+class PositionCovariance:
+    """The positions' full covariance, kept factored: Cov(s_i, s_k) = A_i [i = k] + W_i^T S^-1 W_k, scaled.
+
+    ``turn`` (D, D) maps the solver's coordinates to the reported ones (s_reported = s turn).
+    """
+
+    A_inv: np.ndarray  # (K, D, D), zero for fixed views
+    W: np.ndarray  # (K, G, D)
+    S_inv: np.ndarray  # (G, G)
+    sigma2: float
+    turn: np.ndarray
+
+    def variance(self, g: np.ndarray) -> float:
+        """Variance of sum_i g_i . s_i for weights g (K, D) on the reported coordinates."""
+        gs = g @ self.turn.T  # weights on the solver's coordinates
+        w = np.einsum("kgd,kd->g", self.W, gs)
+        return float(self.sigma2 * (np.einsum("kd,kde,ke->", gs, self.A_inv, gs) + w @ self.S_inv @ w))
 
     def layout(self, targets: list[Target]) -> TargetLayout:
         return TargetLayout(tuple(targets), self.Q, self.p)
@@ -278,14 +326,17 @@ def solve_targets(
     s = np.where(used[:, None], state["s"], np.nan)
     F = state["F"]
     N = F[:, :D]
+    turn = np.eye(D)
     if D == 2:
-        G = _x_along_motion(s, obs.targets_mm, used, ref)
+        G = turn = _x_along_motion(s, obs.targets_mm, used, ref)
         N, s = N @ G, s @ G
         cov_s, cov_c = (np.einsum("dx,kde,ey->kxy", G, c, G) for c in (cov_s, cov_c))
     sigma_s, sigma_c = (np.sqrt(np.maximum(np.einsum("kdd->kd", c), 0.0)) for c in (cov_s, cov_c))
     sigma_s[~used] = sigma_c[~used] = np.nan
     return TargetSolution(state["R"], state["l0"], N, s, state["Q"], state["p"], sigma_s, sigma_c, target_sigma,
-                          float(np.sqrt(sigma2)), rms, used, ref, state["ties"], it, converged)
+                          float(np.sqrt(sigma2)), rms, used, ref, state["ties"], it, converged,
+                          PositionCovariance(Avv_inv * free_view[:, None, None], W * free_view[:, None, None],
+                                             S_inv, sigma2, turn))
 
 
 def _position_covariances(Avv_inv, W, S_inv, free_view, used):

@@ -11,8 +11,8 @@ import argparse
 import logging
 import sys
 
-from lps_gui.cli import (capture, compare, compensate, demo, detect, emulate_grbl, estimate, export, intrinsics, plan_rig,
-                     report, simulate)
+from lps_gui.cli import (capture, compare, compensate, demo, detect, emulate_grbl, estimate, export, intrinsics,
+                         make_targets, plan_rig, report, simulate)
 
 COMMANDS = {
     "demo": demo,
@@ -27,6 +27,7 @@ COMMANDS = {
     "compensate": compensate,
     "export": export,
     "compare": compare,
+    "make-targets": make_targets,
 }
 
 

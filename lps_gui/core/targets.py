@@ -41,6 +41,10 @@ class Target:
         if self.board.type != "charuco":
             raise InputError(f"targets: target {self.id} is a {self.board.type}; targets must be charuco boards "
                              "(their markers tell the targets apart)")
+        marker = self.board.marker_mm
+        if marker is not None and not 0 < marker < self.board.square_mm:
+            raise InputError(f"targets: target {self.id} marker_mm {marker} must be smaller than its square_mm "
+                             f"{self.board.square_mm} (and positive)")
         if self.first_marker < 0:
             raise InputError(f"targets: target {self.id} first_marker {self.first_marker} must be 0 or more")
 

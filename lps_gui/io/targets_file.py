@@ -56,11 +56,11 @@ def targets_from_list(items: Any, source: str = "session.json targets") -> list[
     if not isinstance(items, list):
         raise InputError(f"{source}: targets must be a list of target objects (SPEC 13)")
     targets = [target_from_dict(d, f"{source}[{j}]") for j, d in enumerate(items)]
-    check_targets(targets, _dictionary_sizes(targets))
+    check_targets(targets, dictionary_sizes(targets))
     return targets
 
 
-def _dictionary_sizes(targets: list[Target]) -> dict[str, int]:
+def dictionary_sizes(targets: list[Target]) -> dict[str, int]:
     """Marker counts of the dictionaries in use (OpenCV knows them; names it does not are caught at detection)."""
     sizes: dict[str, int] = {}
     for t in targets:

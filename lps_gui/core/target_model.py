@@ -21,7 +21,7 @@ import numpy as np
 
 from lps_gui.core.camera_model import CameraIntrinsics, project_parts
 from lps_gui.core.pnp import solve_pnp
-from lps_gui.core.rotation import chordal_mean, exp_so3, skew
+from lps_gui.core.rotation import chordal_mean, exp_so3
 from lps_gui.core.target_chain import chain_targets
 from lps_gui.core.target_rig import TargetLayout
 from lps_gui.core.targets import Target
@@ -201,12 +201,13 @@ def _linearize(state: dict, X: np.ndarray, tj: np.ndarray, view: np.ndarray, uv:
     dP = np.stack([np.stack(parts.du, axis=1), np.stack(parts.dv, axis=1)], axis=1)  # (M, 2, 3)
     B = F[:, 1:3] if D == 1 else F[:, 0:2]  # axes N may turn about
     Jc = np.empty((len(P), 2, N_COMMON))
-    Jc[:, :, 0:3] = -np.einsum("mak,mkl->mal", dP, skew(RXw))
+    # a row a times -[v]x is -(a x v): the rotation columns as cross products
+    Jc[:, :, 0:3] = -np.cross(dP, RXw[:, None, :])
     Jc[:, :, 3:6] = dP
-    Jc[:, :, 6:8] = -np.einsum("mak,mkl,lb->mab", dP, skew(ts), B)
+    Jc[:, :, 6:8] = -np.cross(dP, ts[:, None, :]) @ B
     dPR = dP @ R  # d uv / d X_w
     Jt = np.empty((len(P), 2, 6))
-    Jt[:, :, 0:3] = -np.einsum("mak,mkl->mal", dPR, skew(QX))
+    Jt[:, :, 0:3] = -np.cross(dPR, QX[:, None, :])
     Jt[:, :, 3:6] = dPR
     Jt[tj == 0] = 0.0
     Jv = dP @ N
@@ -214,27 +215,48 @@ def _linearize(state: dict, X: np.ndarray, tj: np.ndarray, view: np.ndarray, uv:
 
 
 def _normal_equations(lin: _Lin, tj: np.ndarray, view: np.ndarray, K: int, T: int, D: int, free_view: np.ndarray):
-    """Arrowhead blocks: A_gg (G, G), A_gv (K, G, D), A_vv (K, D, D), b_g (G,), b_v (K, D)."""
+    """Arrowhead blocks: A_gg (G, G), A_gv (K, G, D), A_vv (K, D, D), b_g (G,), b_v (K, D).
+
+    A corner touches the 8 common columns, its own target's 6 and its view's D, so every block is a
+    sum over the (view, target) runs of corners (contiguous: corners are listed view by view, each
+    view's targets end to end); the target-target part of A_gg is block diagonal.
+    """
     G = N_COMMON + 6 * (T - 1)
-    M = len(tj)
-    Jg = np.zeros((M, 2, G))
-    Jg[:, :, :N_COMMON] = lin.Jc
-    for j in range(1, T):
-        sel = tj == j
-        Jg[sel, :, N_COMMON + 6 * (j - 1): N_COMMON + 6 * j] = lin.Jt[sel]
+    Jc, Jt, r = lin.Jc, lin.Jt, lin.r
     Jv = lin.Jv * free_view[view][:, None, None]
-    J2 = Jg.reshape(2 * M, G)
-    A_gg = J2.T @ J2
-    b_g = J2.T @ lin.r.reshape(2 * M)
-    # views are contiguous (corners listed view by view): per-view sums by reduceat over their runs
-    starts = np.flatnonzero(np.r_[True, view[1:] != view[:-1]])
-    rows = view[starts]
+    key = view * T + tj
+    starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
+    pv, pt = view[starts], tj[starts]
+
+    def run_sum(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        return np.add.reduceat(np.matmul(x.transpose(0, 2, 1), y), starts, axis=0)
+
+    cc, ct, tt = run_sum(Jc, Jc), run_sum(Jc, Jt), run_sum(Jt, Jt)
+    cv, tv, vv = run_sum(Jc, Jv), run_sum(Jt, Jv), run_sum(Jv, Jv)
+    r3 = r[:, :, None]
+    bc, bt, bv = (run_sum(J, r3)[..., 0] for J in (Jc, Jt, Jv))
+    A_gg = np.zeros((G, G))
+    b_g = np.zeros(G)
+    A_gg[:N_COMMON, :N_COMMON] = cc.sum(axis=0)
+    b_g[:N_COMMON] = bc.sum(axis=0)
+    for j in range(1, T):
+        on = pt == j
+        if not on.any():
+            continue
+        sl = slice(N_COMMON + 6 * (j - 1), N_COMMON + 6 * j)
+        A_gg[:N_COMMON, sl] = ct[on].sum(axis=0)
+        A_gg[sl, :N_COMMON] = A_gg[:N_COMMON, sl].T
+        A_gg[sl, sl] = tt[on].sum(axis=0)
+        b_g[sl] = bt[on].sum(axis=0)
     A_gv = np.zeros((K, G, D))
     A_vv = np.zeros((K, D, D))
     b_v = np.zeros((K, D))
-    A_gv[rows] = np.add.reduceat(np.einsum("mag,mad->mgd", Jg, Jv), starts, axis=0)
-    A_vv[rows] = np.add.reduceat(np.einsum("mad,mae->mde", Jv, Jv), starts, axis=0)
-    b_v[rows] = np.add.reduceat(np.einsum("mad,ma->md", Jv, lin.r), starts, axis=0)
+    np.add.at(A_gv[:, :N_COMMON], pv, cv)
+    np.add.at(A_vv, pv, vv)
+    np.add.at(b_v, pv, bv)
+    tgt = pt > 0
+    rows = N_COMMON + 6 * (pt[tgt] - 1)[:, None] + np.arange(6)  # (pairs, 6) row index of each target column
+    A_gv[pv[tgt][:, None], rows] = tv[tgt]
     return A_gg, A_gv, A_vv, b_g, b_v
 
 
@@ -275,9 +297,13 @@ def _retract(state: dict, dg: np.ndarray, dv: np.ndarray, D: int, T: int) -> dic
 
 def solve_targets(
     obs: TargetObservations, intrinsics: CameraIntrinsics, max_iterations: int = 50, tolerance: float = 1e-10,
-    progress=None,
+    progress=None, noise_px: float | None = None,
 ) -> TargetSolution:
-    """Positions of every stop and the targets' poses, jointly; sigmas from (J^T J)^-1 at the solution."""
+    """Positions of every stop and the targets' poses, jointly; sigmas from (J^T J)^-1 at the solution.
+
+    ``noise_px``: the corner noise to scale the sigmas with (a planner's noise-free views); None takes
+    the a-posteriori noise of the fit.
+    """
     state = initial_solution(obs, intrinsics)
     K, T, D = len(obs.names), len(obs.targets), obs.targets_mm.shape[1]
     used, ref = state["used"], state["ref"]
@@ -306,14 +332,15 @@ def solve_targets(
             lam = max(lam / 10.0, 1e-9)
         if progress is not None:
             progress(it, max_iterations, f"target model: iteration {it}, rms {np.sqrt(lin.cost / len(view)):.3f} px")
-        if gain <= tolerance * max(lin.cost, 1e-300) or lam > 1e6:
-            converged = lam <= 1e6
+        exact = lin.cost < 1e-20 * len(view)  # noise-free views (a planner's): nothing left to gain
+        if gain <= tolerance * max(lin.cost, 1e-300) or lam > 1e6 or exact:
+            converged = lam <= 1e6 or exact
             break
     A_gg, A_gv, A_vv, b_g, b_v = _normal_equations(lin, tj, view, K, T, D, free_view)
     _, _, S, W, Avv_inv = _schur_solve(A_gg, A_gv, A_vv, b_g, b_v, 0.0, free_view)
     n_params = N_COMMON + 6 * (T - 1) + D * int(free_view.sum())
     dof = max(2 * len(view) - n_params, 1)
-    sigma2 = lin.cost / dof
+    sigma2 = lin.cost / dof if noise_px is None else float(noise_px) ** 2
     S_inv = np.linalg.inv(S)
     cov_s, cov_c = _position_covariances(Avv_inv, W, S_inv, free_view, used)
     cov_s, cov_c = cov_s * sigma2, cov_c * sigma2

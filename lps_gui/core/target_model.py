@@ -22,6 +22,8 @@ import numpy as np
 from lps_gui.core.camera_model import CameraIntrinsics, project_parts
 from lps_gui.core.pnp import solve_pnp
 from lps_gui.core.rotation import chordal_mean, exp_so3
+from lps_gui.core.target_arrowhead import (
+    Linearization, PositionCovariance, levenberg_marquardt, retract_targets, view_covariances, view_rms)
 from lps_gui.core.target_chain import chain_targets
 from lps_gui.core.target_rig import TargetLayout
 from lps_gui.core.targets import Target
@@ -97,29 +99,6 @@ class TargetSolution:
                 "squareness_urad": squareness * 1e6, "squareness_sigma_urad": sig[2] * 1e6}
 
 
-@dataclass
-class PositionCovariance:
-    """The positions' full covariance, kept factored: Cov(s_i, s_k) = A_i [i = k] + W_i^T S^-1 W_k, scaled.
-
-    ``turn`` (D, D) maps the solver's coordinates to the reported ones (s_reported = s turn).
-    """
-
-    A_inv: np.ndarray  # (K, D, D), zero for fixed views
-    W: np.ndarray  # (K, G, D)
-    S_inv: np.ndarray  # (G, G)
-    sigma2: float
-    turn: np.ndarray
-
-    def variance(self, g: np.ndarray) -> float:
-        """Variance of sum_i g_i . s_i for weights g (K, D) on the reported coordinates."""
-        gs = g @ self.turn.T  # weights on the solver's coordinates
-        w = np.einsum("kgd,kd->g", self.W, gs)
-        return float(self.sigma2 * (np.einsum("kd,kde,ke->", gs, self.A_inv, gs) + w @ self.S_inv @ w))
-
-    def layout(self, targets: list[Target]) -> TargetLayout:
-        return TargetLayout(tuple(targets), self.Q, self.p)
-
-
 # ----------------------------------------------------------------------------- initialization
 
 
@@ -175,17 +154,8 @@ def initial_solution(obs: TargetObservations, intrinsics: CameraIntrinsics) -> d
 # ----------------------------------------------------------------------------- linearization
 
 
-@dataclass
-class _Lin:
-    cost: float
-    r: np.ndarray  # (M, 2)
-    Jc: np.ndarray  # (M, 2, 8)
-    Jt: np.ndarray  # (M, 2, 6) for the corner's own target (zero rows for target 0)
-    Jv: np.ndarray  # (M, 2, D)
-
-
 def _linearize(state: dict, X: np.ndarray, tj: np.ndarray, view: np.ndarray, uv: np.ndarray,
-               intrinsics: CameraIntrinsics, D: int, want_jacobian: bool = True) -> _Lin:
+               intrinsics: CameraIntrinsics, D: int, want_jacobian: bool = True) -> Linearization:
     R, l0, F, s, Q, p = state["R"], state["l0"], state["F"], state["s"], state["Q"], state["p"]
     QX = np.einsum("mij,mj->mi", Q[tj], X)
     Xw = QX + p[tj]
@@ -197,7 +167,7 @@ def _linearize(state: dict, X: np.ndarray, tj: np.ndarray, view: np.ndarray, uv:
     r = np.stack([parts.u, parts.v], axis=1) - uv
     cost = float(np.sum(r * r))
     if not want_jacobian:
-        return _Lin(cost, r, None, None, None)  # type: ignore[arg-type]
+        return Linearization(cost, r, None, None, None)  # type: ignore[arg-type]
     dP = np.stack([np.stack(parts.du, axis=1), np.stack(parts.dv, axis=1)], axis=1)  # (M, 2, 3)
     B = F[:, 1:3] if D == 1 else F[:, 0:2]  # axes N may turn about
     Jc = np.empty((len(P), 2, N_COMMON))
@@ -211,68 +181,7 @@ def _linearize(state: dict, X: np.ndarray, tj: np.ndarray, view: np.ndarray, uv:
     Jt[:, :, 3:6] = dPR
     Jt[tj == 0] = 0.0
     Jv = dP @ N
-    return _Lin(cost, r, Jc, Jt, Jv)
-
-
-def _normal_equations(lin: _Lin, tj: np.ndarray, view: np.ndarray, K: int, T: int, D: int, free_view: np.ndarray):
-    """Arrowhead blocks: A_gg (G, G), A_gv (K, G, D), A_vv (K, D, D), b_g (G,), b_v (K, D).
-
-    A corner touches the 8 common columns, its own target's 6 and its view's D, so every block is a
-    sum over the (view, target) runs of corners (contiguous: corners are listed view by view, each
-    view's targets end to end); the target-target part of A_gg is block diagonal.
-    """
-    G = N_COMMON + 6 * (T - 1)
-    Jc, Jt, r = lin.Jc, lin.Jt, lin.r
-    Jv = lin.Jv * free_view[view][:, None, None]
-    key = view * T + tj
-    starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
-    pv, pt = view[starts], tj[starts]
-
-    def run_sum(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        return np.add.reduceat(np.matmul(x.transpose(0, 2, 1), y), starts, axis=0)
-
-    cc, ct, tt = run_sum(Jc, Jc), run_sum(Jc, Jt), run_sum(Jt, Jt)
-    cv, tv, vv = run_sum(Jc, Jv), run_sum(Jt, Jv), run_sum(Jv, Jv)
-    r3 = r[:, :, None]
-    bc, bt, bv = (run_sum(J, r3)[..., 0] for J in (Jc, Jt, Jv))
-    A_gg = np.zeros((G, G))
-    b_g = np.zeros(G)
-    A_gg[:N_COMMON, :N_COMMON] = cc.sum(axis=0)
-    b_g[:N_COMMON] = bc.sum(axis=0)
-    for j in range(1, T):
-        on = pt == j
-        if not on.any():
-            continue
-        sl = slice(N_COMMON + 6 * (j - 1), N_COMMON + 6 * j)
-        A_gg[:N_COMMON, sl] = ct[on].sum(axis=0)
-        A_gg[sl, :N_COMMON] = A_gg[:N_COMMON, sl].T
-        A_gg[sl, sl] = tt[on].sum(axis=0)
-        b_g[sl] = bt[on].sum(axis=0)
-    A_gv = np.zeros((K, G, D))
-    A_vv = np.zeros((K, D, D))
-    b_v = np.zeros((K, D))
-    np.add.at(A_gv[:, :N_COMMON], pv, cv)
-    np.add.at(A_vv, pv, vv)
-    np.add.at(b_v, pv, bv)
-    tgt = pt > 0
-    rows = N_COMMON + 6 * (pt[tgt] - 1)[:, None] + np.arange(6)  # (pairs, 6) row index of each target column
-    A_gv[pv[tgt][:, None], rows] = tv[tgt]
-    return A_gg, A_gv, A_vv, b_g, b_v
-
-
-def _schur_solve(A_gg, A_gv, A_vv, b_g, b_v, lam: float, free_view: np.ndarray):
-    """Damped step (globals, views), and the pieces the covariance needs."""
-    D = A_vv.shape[1]
-    eye = np.eye(D)
-    Avv = A_vv + lam * (A_vv * eye) + np.where(free_view, 0.0, 1.0)[:, None, None] * eye  # fixed views: identity
-    Avv_inv = np.linalg.inv(Avv)
-    W = np.einsum("kgd,kde->kge", A_gv, Avv_inv)  # A_gv A_vv^-1
-    S = A_gg + lam * np.diag(np.diag(A_gg)) - np.einsum("kgd,khd->gh", W, A_gv)
-    rhs = b_g - np.einsum("kgd,kd->g", W, b_v)
-    dg = -np.linalg.solve(S, rhs)
-    dv = -np.einsum("kde,ke->kd", Avv_inv, b_v + np.einsum("kgd,g->kd", A_gv, dg))
-    dv[~free_view] = 0.0
-    return dg, dv, S, W, Avv_inv
+    return Linearization(cost, r, Jc, Jt, Jv)
 
 
 def _retract(state: dict, dg: np.ndarray, dv: np.ndarray, D: int, T: int) -> dict:
@@ -283,12 +192,7 @@ def _retract(state: dict, dg: np.ndarray, dv: np.ndarray, D: int, T: int) -> dic
     new["l0"] = state["l0"] + dg[3:6]
     new["F"] = exp_so3(B @ dg[6:8]) @ F
     new["s"] = state["s"] + dv
-    Q, p = state["Q"].copy(), state["p"].copy()
-    for j in range(1, T):
-        d = dg[N_COMMON + 6 * (j - 1): N_COMMON + 6 * j]
-        Q[j] = exp_so3(d[0:3]) @ Q[j]
-        p[j] = p[j] + d[3:6]
-    new["Q"], new["p"] = Q, p
+    new["Q"], new["p"] = retract_targets(state["Q"], state["p"], dg[N_COMMON:])
     return new
 
 
@@ -313,43 +217,21 @@ def solve_targets(
     X, tj, uv = obs.own_points[corner], obs.which[corner], obs.corners_px[view, corner]
     free_view = used.copy()
     free_view[ref] = False
-    lam, converged, it = 1e-6, False, 0
-    lin = _linearize(state, X, tj, view, uv, intrinsics, D)
-    for it in range(1, max_iterations + 1):
-        A = _normal_equations(lin, tj, view, K, T, D, free_view)
-        while True:
-            dg, dv, *_ = _schur_solve(*A, lam, free_view)
-            trial = _retract(state, dg, dv, D, T)
-            lin_t = _linearize(trial, X, tj, view, uv, intrinsics, D)
-            if lin_t.cost <= lin.cost:
-                break
-            lam *= 10.0
-            if lam > 1e6:
-                break
-        gain = lin.cost - lin_t.cost
-        if lin_t.cost <= lin.cost:
-            state, lin = trial, lin_t
-            lam = max(lam / 10.0, 1e-9)
-        if progress is not None:
-            progress(it, max_iterations, f"target model: iteration {it}, rms {np.sqrt(lin.cost / len(view)):.3f} px")
-        exact = lin.cost < 1e-20 * len(view)  # noise-free views (a planner's): nothing left to gain
-        if gain <= tolerance * max(lin.cost, 1e-300) or lam > 1e6 or exact:
-            converged = lam <= 1e6 or exact
-            break
-    A_gg, A_gv, A_vv, b_g, b_v = _normal_equations(lin, tj, view, K, T, D, free_view)
-    _, _, S, W, Avv_inv = _schur_solve(A_gg, A_gv, A_vv, b_g, b_v, 0.0, free_view)
+    fit = levenberg_marquardt(
+        state, lambda st, jac=True: _linearize(st, X, tj, view, uv, intrinsics, D, jac),
+        lambda st, dg, dv: _retract(st, dg, dv, D, T), tj, view, K, T, free_view, max_iterations, tolerance,
+        progress, "target model")
+    state, lin, it, converged = fit.state, fit.lin, fit.iterations, fit.converged
     n_params = N_COMMON + 6 * (T - 1) + D * int(free_view.sum())
     dof = max(2 * len(view) - n_params, 1)
     sigma2 = lin.cost / dof if noise_px is None else float(noise_px) ** 2
-    S_inv = np.linalg.inv(S)
-    cov_s, cov_c = _position_covariances(Avv_inv, W, S_inv, free_view, used)
+    S_inv, W, Avv_inv = fit.S_inv, fit.W, fit.Avv_inv
+    cov_s, cov_c = view_covariances(Avv_inv, W, S_inv, free_view, used)
     cov_s, cov_c = cov_s * sigma2, cov_c * sigma2
     target_sigma = np.zeros((T, 6))
     if T > 1:
         target_sigma[1:] = np.sqrt(np.maximum(np.diag(S_inv)[N_COMMON:], 0.0) * sigma2).reshape(T - 1, 6)
-    sq = np.bincount(view, weights=np.sum(lin.r * lin.r, axis=1), minlength=K)
-    cnt = np.bincount(view, minlength=K)
-    rms = np.where(cnt > 0, np.sqrt(sq / np.maximum(cnt, 1)), np.nan)
+    rms = view_rms(lin.r, view, K)
     s = np.where(used[:, None], state["s"], np.nan)
     F = state["F"]
     N = F[:, :D]
@@ -364,22 +246,6 @@ def solve_targets(
                           float(np.sqrt(sigma2)), rms, used, ref, state["ties"], it, converged,
                           PositionCovariance(Avv_inv * free_view[:, None, None], W * free_view[:, None, None],
                                              S_inv, sigma2, turn))
-
-
-def _position_covariances(Avv_inv, W, S_inv, free_view, used):
-    """Per-view covariances (K, D, D) of s_i (reference gauge) and of s_i - mean_k s_k, unscaled.
-
-    Cov(s_i, s_k) = A_vv_i^-1 [i = k] + W_i^T S^-1 W_k for free views (the reference's s is fixed).
-    """
-    Wf = W * free_view[:, None, None]
-    Af = Avv_inv * free_view[:, None, None]
-    cov = Af + np.einsum("kgd,gh,khe->kde", Wf, S_inv, Wf)
-    n = max(int(used.sum()), 1)
-    Wsum = Wf.sum(axis=0)  # (G, D)
-    cross = (Af + np.einsum("kgd,gh,he->kde", Wf, S_inv, Wsum)) / n  # Cov(s_i, mean s)
-    var_mean = (Af.sum(axis=0) + Wsum.T @ S_inv @ Wsum) / n ** 2
-    centred = cov - cross - np.swapaxes(cross, 1, 2) + var_mean
-    return cov, centred
 
 
 def _x_along_motion(s: np.ndarray, targets_mm: np.ndarray, used: np.ndarray, ref: int) -> np.ndarray:

@@ -189,6 +189,13 @@ class PositionCovariance:
         w = np.einsum("kgd,kd->g", self.W, gs)
         return float(self.sigma2 * (np.einsum("kd,kde,ke->", gs, self.A_inv, gs) + w @ self.S_inv @ w))
 
+    def variances(self, g: np.ndarray) -> np.ndarray:
+        """Variances of Q linear functionals sum_k g[q, k] . v_k, weights g (Q, K, P) on the reported coordinates."""
+        gs = g @ self.turn.T
+        wg = np.einsum("kgp,qkp->qg", self.W, gs)
+        own = np.einsum("qkp,kpr,qkr->q", gs, self.A_inv, gs)
+        return self.sigma2 * (own + np.einsum("qg,gh,qh->q", wg, self.S_inv, wg))
+
     def cross(self, i: int, k: int) -> np.ndarray:
         """Cov(v_i, v_k) (P, P) in the solver's coordinates, scaled."""
         c = self.W[i].T @ self.S_inv @ self.W[k]

@@ -116,8 +116,8 @@ def _frame(A: np.ndarray) -> np.ndarray:
     return np.stack([c0, c1, np.cross(c0, c1)], axis=1)
 
 
-def initial_solution(obs: TargetObservations, intrinsics: CameraIntrinsics) -> dict:
-    """R, l0, frame F, s, Q, p from per-view PnP of every seen target, chained from target 0."""
+def target_views(obs: TargetObservations, intrinsics: CameraIntrinsics) -> dict:
+    """Each view's PnP pose of each target it sees, and the targets chained from target 0 (Q, p, ties)."""
     own, which = obs.own_points, obs.which
     K, T = len(obs.names), len(obs.targets)
     Rv = np.tile(np.eye(3), (K, T, 1, 1))
@@ -130,10 +130,17 @@ def initial_solution(obs: TargetObservations, intrinsics: CameraIntrinsics) -> d
     Q, p, ties = chain_targets(Rv, tv, ok, [t.id for t in obs.targets], obs.names)
     used = ok.any(axis=1)
     if used.sum() < 3:
-        raise DegenerateGeometryError(f"only {used.sum()} views see a target; the line needs at least 3")
+        raise DegenerateGeometryError(f"only {used.sum()} views see a target; the motion needs at least 3")
     R_world = np.einsum("ktij,tlj->ktil", Rv, Q)  # R_cam_j Q_j^T: camera from world, per target
-    t_world = tv - np.einsum("ktij,tj->kti", R_world, p)
-    R = chordal_mean(R_world[ok])
+    return {"Rv": Rv, "tv": tv, "ok": ok, "Q": Q, "p": p, "ties": ties, "used": used, "R_world": R_world}
+
+
+def initial_solution(obs: TargetObservations, intrinsics: CameraIntrinsics) -> dict:
+    """R, l0, frame F, s, Q, p from per-view PnP of every seen target, chained from target 0."""
+    views = target_views(obs, intrinsics)
+    K = len(obs.names)
+    tv, ok, Q, p, ties, used = (views[k] for k in ("tv", "ok", "Q", "p", "ties", "used"))
+    R = chordal_mean(views["R_world"][ok])
     t = np.zeros((K, 3))
     for i in np.flatnonzero(used):
         # under the common R each seen target gives the world origin in the camera: t = t_cj - R p_j

@@ -52,22 +52,53 @@ def row_layout(
     return TargetLayout(tuple(targets), Q, p)
 
 
+def occluded(layout: TargetLayout, R: np.ndarray, t: np.ndarray, world: np.ndarray, which: np.ndarray,
+             margin_squares: float = 0.5) -> np.ndarray:
+    """(K, N) corners hidden behind another target's paper (a nearer row of a two-depth constellation).
+
+    ``R`` (3, 3) or (K, 3, 3), ``t`` (K, 3): camera from world. A corner is hidden when the segment from
+    the camera centre to it crosses another target's plane inside that target's paper.
+    """
+    Rk = np.broadcast_to(R, (len(t), 3, 3))
+    C = -np.einsum("kji,kj->ki", Rk, t)  # camera centres in the world
+    hidden = np.zeros((len(t), len(world)), bool)
+    ray = world[None, :, :] - C[:, None, :]  # (K, N, 3)
+    for k, tgt in enumerate(layout.targets):
+        n = layout.Q[k][:, 2]
+        denom = ray @ n
+        with np.errstate(divide="ignore", invalid="ignore"):
+            lam = ((layout.p[k] - C) @ n)[:, None] / denom
+        cross = (lam > 0) & (lam < 1 - 1e-9) & (which[None, :] != k)
+        if not cross.any():
+            continue
+        hit = C[:, None, :] + lam[..., None] * ray - layout.p[k]
+        local = hit @ layout.Q[k]  # in target k's frame
+        s, m = tgt.board.square_mm, 1.0 + margin_squares
+        inside = ((local[..., 0] > -m * s) & (local[..., 0] < (tgt.board.cols - 1 + m) * s)
+                  & (local[..., 1] > -m * s) & (local[..., 1] < (tgt.board.rows - 1 + m) * s))
+        hidden |= cross & inside
+    return hidden
+
+
 def observe(
     layout: TargetLayout, intrinsics: CameraIntrinsics, R: np.ndarray, t: np.ndarray,
     noise_px: float = 0.0, seed: int = 0, border_px: float = 2.0,
 ) -> np.ndarray:
     """Corners (K, N, 2) of every target seen from camera translations ``t`` (K, 3); NaN where not seen.
 
-    A corner is seen when it is in front of the camera and inside the image by ``border_px`` (the
-    targets of a row face the camera by construction); the noise is Gaussian, per coordinate.
+    ``R`` is one orientation (3, 3) or one per view (K, 3, 3). A corner is seen when it is in front of
+    the camera, inside the image by ``border_px`` and not behind another target's paper (the targets
+    face the camera by construction); the noise is Gaussian, per coordinate.
     """
     _, world, which = layout.points()
-    x_cam = np.einsum("ij,nj->ni", R, world)[None] + t[:, None, :]
+    R = np.asarray(R, float)
+    x_cam = (np.einsum("ij,nj->ni", R, world)[None] if R.ndim == 2 else np.einsum("kij,nj->kni", R, world))
+    x_cam = x_cam + t[:, None, :]
     uv = project(x_cam, intrinsics).uv
     w, h = intrinsics.image_size
     inside = ((uv[..., 0] >= border_px) & (uv[..., 0] <= w - 1 - border_px)
               & (uv[..., 1] >= border_px) & (uv[..., 1] <= h - 1 - border_px) & (x_cam[..., 2] > 0))
-    seen = inside
+    seen = inside & ~occluded(layout, R, t, world, which)
     rng = np.random.default_rng(seed)
     uv = uv + rng.normal(0.0, noise_px, uv.shape) if noise_px > 0 else uv
     uv[~seen] = np.nan

@@ -43,20 +43,21 @@ def normal_equations(lin: Linearization, tj: np.ndarray, view: np.ndarray, K: in
     key = view * T + tj
     starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
     pv, pt = view[starts], tj[starts]
-
-    def run_sum(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        return np.add.reduceat(np.matmul(x.transpose(0, 2, 1), y), starts, axis=0)
-
-    tt, tv, vv = run_sum(Jt, Jt), run_sum(Jt, Jv), run_sum(Jv, Jv)
-    r3 = r[:, :, None]
-    bt, bv = run_sum(Jt, r3)[..., 0], run_sum(Jv, r3)[..., 0]
+    # one pass: every corner's J^T J and J^T r over its C + 6 + P columns (two residual rows), summed per run
+    J = np.concatenate([Jc, Jt, Jv], axis=2)
+    runs = np.add.reduceat(np.einsum("mai,maj->mij", J, J), starts, axis=0)
+    rhs = np.add.reduceat(np.einsum("mai,ma->mi", J, r), starts, axis=0)
+    c, t6 = slice(0, C), slice(C, C + 6)
+    v = slice(C + 6, C + 6 + P)
+    tt, tv, vv = runs[:, t6, t6], runs[:, t6, v], runs[:, v, v]
+    bt, bv = rhs[:, t6], rhs[:, v]
+    cc, ct, cv = runs[:, c, c], runs[:, c, t6], runs[:, c, v]
     A_gg = np.zeros((G, G))
     b_g = np.zeros(G)
     A_gv = np.zeros((K, G, P))
     if C:
-        cc, ct, cv = run_sum(Jc, Jc), run_sum(Jc, Jt), run_sum(Jc, Jv)
         A_gg[:C, :C] = cc.sum(axis=0)
-        b_g[:C] = run_sum(Jc, r3)[..., 0].sum(axis=0)
+        b_g[:C] = rhs[:, c].sum(axis=0)
         np.add.at(A_gv[:, :C], pv, cv)
     for j in range(1, T):
         on = pt == j
@@ -127,13 +128,13 @@ def levenberg_marquardt(
         while True:
             dg, dv, *_ = schur_step(*blocks, lam, free_view)
             trial = retract(state, dg, dv)
-            lin_t = linearize(trial)
-            if lin_t.cost <= lin.cost or lam > 1e6:
+            cost_t = linearize(trial, False).cost  # the Jacobian only for a step that is taken
+            if cost_t <= lin.cost or lam > 1e6:
                 break
             lam *= 10.0
-        gain = lin.cost - lin_t.cost
-        if lin_t.cost <= lin.cost:
-            state, lin = trial, lin_t
+        gain = lin.cost - cost_t
+        if cost_t <= lin.cost:
+            state, lin = trial, linearize(trial)
             lam = max(lam / 10.0, 1e-9)
         if progress is not None:
             progress(it, max_iterations, f"{label}: iteration {it}, rms {np.sqrt(lin.cost / max(len(view), 1)):.3f} px")

@@ -125,7 +125,7 @@ def target_views(obs: TargetObservations, intrinsics: CameraIntrinsics) -> dict:
     ok = np.zeros((K, T), bool)
     for j in range(T):
         sel = which == j
-        R_j, t_j, ok_j = solve_pnp(own[sel], obs.corners_px[:, sel], intrinsics)
+        R_j, t_j, ok_j = solve_pnp(own[sel], obs.corners_px[:, sel], intrinsics, refine=False)
         Rv[:, j], tv[:, j], ok[:, j] = R_j, t_j, ok_j
     Q, p, ties = chain_targets(Rv, tv, ok, [t.id for t in obs.targets], obs.names)
     used = ok.any(axis=1)

@@ -106,3 +106,18 @@ def test_a_single_board_file_is_not_the_target_layout(tmp_path):
     assert not is_target_layout(path)
     with pytest.raises(InputError, match="first line must be"):
         read_target_corners(path, _targets())
+
+
+def test_a_session_names_its_targets_instead_of_a_board(tmp_path):
+    from lps_gui.core.camera_model import CameraIntrinsics
+    from lps_gui.core.plan import Plan
+    from lps_gui.io.session import Session
+
+    targets = _targets()
+    intr = CameraIntrinsics.from_values((640, 480), 500.0, 500.0, 320.0, 240.0)
+    s = Session.create(tmp_path / "s", targets, Plan(start_mm=0.0, stop_mm=10.0, step_mm=1.0), intr)
+    again = Session.open(tmp_path / "s")
+    assert "board" not in again.meta and again.targets() == targets
+    with pytest.raises(InputError, match="names targets"):
+        again.board()
+    assert s.targets() == targets

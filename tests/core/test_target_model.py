@@ -202,3 +202,20 @@ def test_an_untied_target_is_a_one_line_error():
     with pytest.raises(DegenerateGeometryError) as err:
         solve_targets(obs, PAPER_CAMERA)
     assert "target T3 is not tied to target T0" in str(err.value)
+
+
+def test_the_targets_section_names_poses_sigmas_views_ties_and_stretch():
+    from lps_gui.core.target_summary import target_rows
+
+    obs, layout, _ = paper_x_axis(2)
+    sol = solve_targets(obs, PAPER_CAMERA)
+    rows = target_rows(obs.targets, sol.Q, sol.p, sol.target_sigma, obs.corners_px, obs.targets_mm, sol.used)
+    assert [r["id"] for r in rows] == [f"T{j}" for j in range(6)]
+    assert rows[0]["p_sigma_mm"] == [0.0, 0.0, 0.0]  # the world frame
+    for j, r in enumerate(rows[1:], start=1):
+        assert np.abs(np.array(r["p_mm"]) - layout.p[j]).max() < 4 * max(r["p_sigma_mm"])
+        assert 0 < r["ties"] <= r["views"]
+    # the row is seen left to right: each target's stretch starts after the previous one's
+    starts = [r["stretch_mm"][0][0] for r in rows]
+    assert starts == sorted(starts) and rows[0]["stretch_mm"][0][0] == 0.0
+    assert rows[-1]["stretch_mm"][1][0] == pytest.approx(120 * 12.7)

@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import argparse
+
+from lps_gui.cli.option_types import workers
 import sys
 
 HELP = "detect the board's corners in a session (writes corners.vnl) or in images"
@@ -15,7 +17,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--board", help="board.json (required for images; a session has its own)")
     parser.add_argument("--out", help="corners file for images (default corners.vnl here): an existing folder gets "
                         "corners.vnl inside; a name ending in .vnl is the file; a name without suffix is a new folder")
-    parser.add_argument("--workers", type=int, default=None, help="processes (default: one per core)")
+    parser.add_argument("--workers", type=workers, default=None, help="processes (default: one per core)")
     parser.add_argument("--force", action="store_true", help="detect every view again, ignoring corners.vnl")
     parser.add_argument("--no-track", action="store_true", help="detect every image from scratch (unrelated views)")
 

@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import argparse
+
+from lps_gui.cli.option_types import workers
 import sys
 
 HELP = "calibrate camera intrinsics (with each parameter's std) from varied-pose board images"
@@ -26,7 +28,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--cross-validate", action="store_true",
                         help="also calibrate the even and the odd images apart and compare the two projections")
     parser.add_argument("--report", help="also write the intrinsics report (PDF with residual, uncertainty and coverage maps) here")
-    parser.add_argument("--workers", type=int, default=None, help="processes (default: one per core)")
+    parser.add_argument("--workers", type=workers, default=None, help="processes (default: one per core)")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -24,6 +24,7 @@ from lps_gui import __version__
 from lps_gui.errors import InputError
 from lps_gui.io.file_set import write_file_set
 from lps_gui.io.jsonfile import json_bytes, read_json
+from lps_gui.io.results_checks import check_results
 
 FORMAT = "lps-results/1"
 RESULTS_FILE = "results.json"
@@ -385,7 +386,8 @@ def read_results(path: Path | str) -> dict[str, Any]:
         path = path / RESULTS_FILE
     if not path.exists():
         raise InputError(f"{path}: no results yet; run `lps estimate {path.parent}` first")
-    data = read_json(path, "results file")
+    data = read_json(path, "results file", follow_symlinks=False)  # lps writes it, never as a link
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise InputError(f"{path}: not an {FORMAT} file; re-run `lps estimate`")
+    check_results(data, str(path))
     return data

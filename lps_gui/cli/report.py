@@ -33,6 +33,10 @@ def run(args: argparse.Namespace) -> int:
     if not (folder / "results.json").exists() and not (folder / "session.json").exists():
         raise InputError(f"{folder}: not a session folder (no session.json or results.json); give the folder "
                          "`lps capture` or `lps simulate` made")
+    if (folder / "session.json").exists() or (folder / "session.json").is_symlink():
+        from lps_gui.io.session import Session
+
+        Session.open(folder)  # session.json as every command reads it: a regular file inside, no link, no FIFO
     out = resolve_out(args.out, "report.pdf", folder, (".pdf",), "lps report")
     results = load_results(folder)
     path = write_report(folder, results=results, out=out, progress=ProgressBar("report"))

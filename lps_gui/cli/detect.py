@@ -67,6 +67,10 @@ def run(args: argparse.Namespace) -> int:
         if len(table.failed) == len(table.names):
             for name, reason in table.failed.items():
                 print(f"failed: {name}: {reason}", file=sys.stderr)
+            unreadable = [(n, why) for n, why in table.failed.items() if "board" not in why]
+            if unreadable:
+                raise InputError(f"detect: none of the {len(paths)} image(s) could be used (first: {unreadable[0][0]}: "
+                                 f"{unreadable[0][1]}); nothing written")
             raise InputError(f"detect: the board was found in none of the {len(paths)} image(s); nothing written "
                              "(check --board matches the printed board)")
         write_corners_vnl(out, table)

@@ -24,7 +24,7 @@ def run(args: argparse.Namespace) -> int:
 
     from lps_gui.errors import InputError
 
-    if args.out.suffix and not args.out.is_dir():
+    if (args.out.suffix or args.out.exists() or args.out.is_symlink()) and not args.out.is_dir():
         raise InputError(f"--out {args.out}: lps demo writes a folder of files; give a folder name without a suffix")
 
     if args.planar:

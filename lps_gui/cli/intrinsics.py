@@ -41,10 +41,13 @@ def run(args: argparse.Namespace) -> int:
     from lps_gui.io.intrinsics_file import write_intrinsics
     from lps_gui.pipeline.intrinsics import calibrate_images, cross_validate_calibration
 
-    from lps_gui.cli.out_path import resolve_out
+    from lps_gui.cli.out_path import check_out_file, resolve_out
 
     board = read_board(args.board)
     args.out = resolve_out(args.out, "intrinsics.json", None, (".json", ".yaml", ".yml"), "lps intrinsics")
+    for extra in (args.yaml, args.cameramodel, args.report):
+        if extra:
+            check_out_file(extra)
     flags = cv2.CALIB_FIX_K3 if args.fix_k3 else 0
     cal = calibrate_images([Path(p) for p in args.images], board, ProgressBar("intrinsics"), workers=args.workers, flags=flags, warp=args.warp)
     write_intrinsics(args.out, cal.intrinsics)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import argparse
 
-from lps_gui.cli.option_types import finite, float_range, int_range, nonnegative_finite, nonnegative_int, positive_finite
+from lps_gui.cli.option_types import finite, float_range, int_range, nonnegative_finite, nonnegative_int
 
 from lps_gui.cli import planar_capture
 
@@ -33,10 +33,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--targets", help="explicit targets, comma separated mm")
     g.add_argument("--directions", choices=("+", "-", "both"), help="approach direction(s) of the runs")
     g.add_argument("--runs", type=int_range(1, 1000), help="number of runs (per direction)")
-    g.add_argument("--overshoot", type=nonnegative_finite, dest="overshoot_mm", help="overshoot before a run's first target, mm")
-    g.add_argument("--settle", type=nonnegative_finite, dest="settle_s", help="wait after each move, s")
+    g.add_argument("--overshoot", type=float, dest="overshoot_mm", help="overshoot before a run's first target, mm")
+    g.add_argument("--settle", type=float, dest="settle_s", help="wait after each move, s")
     g.add_argument("--frames", type=int_range(1, 1000), dest="frames_per_stop", help="frames per stop")
-    g.add_argument("--feed", type=positive_finite, dest="feed_mm_min", help="feed of the moves, mm/min")
+    g.add_argument("--feed", type=float, dest="feed_mm_min", help="feed of the moves, mm/min")
     g.add_argument("--intrinsics-views", type=int_range(3, 1000), metavar="N", help="guided intrinsics mode: N varied views of a hand-held board into --out (no stage)")
     s = p.add_argument_group("set-up")
     s.add_argument("--board", metavar="FILE", help="board.json (required with a real camera)")
@@ -247,6 +247,11 @@ def _resume(args: argparse.Namespace):
 
         stage, camera = reopen_simulated_rig(session, clock=_clock(args))
         stage = _bind_stage(args.stage or "sim", stage, args.time_scale)
+        if "spec" not in (session.meta.get("stage") or {}) or "spec" not in (session.meta.get("camera") or {}):
+            # a kill between the start's two session.json writes left the devices unrecorded: record them now
+            session.meta["stage"] = {**stage.describe(), "spec": args.stage or "sim"}
+            session.meta["camera"] = {**camera.properties(), "spec": "sim"}
+            session.save_meta()
         return session, stage, camera, simulated_engine(session, stage, camera, args.encode)
     from lps_gui.cli.resume_devices import devices_named_by_operator
 

@@ -69,7 +69,7 @@ def int_range(lo: int, hi: int) -> Callable[[str], int]:
     def check(text: str) -> int:
         value = _whole(text)
         if not lo <= value <= hi:
-            raise argparse.ArgumentTypeError(f"must be a whole number from {lo} to {hi}, got {text}")
+            raise argparse.ArgumentTypeError(f"must be a whole number, at least {lo} and at most {hi}, got {text}")
         return value
 
     check.__name__ = f"int {lo}..{hi}"

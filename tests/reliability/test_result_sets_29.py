@@ -192,3 +192,35 @@ def test_item7_a_session_removed_mid_estimate_is_not_recreated(estimated, monkey
     assert main(["estimate", str(estimated)]) == 2
     assert "moved or removed" in capsys.readouterr().err
     assert not estimated.exists()
+
+
+# ----------------------------------------------------------------------------- item 15
+def test_item15_a_kill_between_the_two_session_json_writes_is_repaired_by_the_resume(tmp_path, monkeypatch):
+    from lps_gui.io.session import Session
+
+    out = tmp_path / "N"
+    real = Session.save_meta
+
+    def killed(self):
+        raise Killed()
+
+    monkeypatch.setattr(Session, "save_meta", killed)
+    with pytest.raises(Killed):
+        main(["capture", "--out", str(out), "--stop", "4", "--step", "2"])
+    monkeypatch.setattr(Session, "save_meta", real)
+    assert "spec" not in Session.open(out).meta["stage"]
+    assert main(["capture", "--resume", str(out)]) == 0
+    meta = Session.open(out).meta
+    assert meta["stage"]["spec"] == "sim" and meta["camera"]["spec"] == "sim"
+
+
+def test_item12_a_full_disk_in_a_writer_without_its_own_check_is_one_line_not_a_bug(tmp_path, monkeypatch, capsys):
+    from lps_gui.pipeline import demo
+
+    def full(*_a, **_k):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(tmp_path / "d" / "intrinsics" / "view_003.png"))
+
+    monkeypatch.setattr(demo, "run_demo", full)
+    assert main(["demo", "--quick", "--out", str(tmp_path / "d")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "No space left" in err[0] and "internal error" not in err[0] and "view_003.png" in err[0]

@@ -26,7 +26,7 @@ def check_results(data: dict[str, Any], source: str) -> None:
             raise InputError(f"{source}: '{name}' is not a JSON {'object' if kind is dict else 'list'}; {fix}")
     rows = data.get("positions")
     if not rows:
-        raise InputError(f"{source}: holds no positions; {fix}")
+        raise InputError(f"{source}: has no per-position table (no positions); {fix}")
     planar = len(data.get("axes") or ["X"]) == 2
     keys = PLANAR_KEYS if planar else LINE_KEYS
     measured = 0

@@ -23,7 +23,7 @@ def resolve_out(out: str | Path | None, usual_name: str, default_folder: Path | 
         folder = Path(default_folder) if default_folder is not None else Path.cwd()
         return folder / usual_name
     path = Path(out)
-    if path.is_dir() and not path.is_symlink():
+    if path.is_dir():
         return check_out_file(path / usual_name, allow=(usual_name,))
     check_out_file(path, allow=(usual_name,))
     suffix = path.suffix.lower()

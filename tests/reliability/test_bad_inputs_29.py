@@ -186,7 +186,7 @@ def _corner_value(c: Ctx, value: str) -> list[str]:
 
 def _tiff_ifd_at_end(path: Path, w: int = 12000, h: int = 12000) -> Path:
     """A little-endian TIFF whose IFD follows the image data (as OpenCV writes it), declaring w x h."""
-    data = b"\0" * 4096
+    data = b"\0" * 70000  # past the 64 KB a header check reads
     ifd_offset = 8 + len(data)
     entries = [(256, 4, 1, w), (257, 4, 1, h), (258, 3, 1, 8), (259, 3, 1, 1), (262, 3, 1, 1),
                (273, 4, 1, 8), (277, 3, 1, 1), (278, 4, 1, h), (279, 4, 1, len(data))]
@@ -427,3 +427,22 @@ def category_counts() -> dict[str, int]:
 
 
 __all__ = ["CASES", "Case", "Ctx", "category_counts", "run_lps", "snapshot", "np"]
+
+
+DOC_ROWS = ("wrong result", "data destroyed", "read outside", "hang", "oversized", "internal error", "output path", "option")
+
+
+def test_docs_reliability_counts_match_this_table():
+    """docs/reliability.md's issue-29 table states this table's counts (its 'handled now' column is what this suite asserts)."""
+    import re
+
+    doc = (Path(__file__).parents[2] / "docs" / "reliability.md").read_text()
+    block = doc.split("<!-- issue29:start -->")[1].split("<!-- issue29:end -->")[0]
+    rows = [line.split("|")[1:-1] for line in block.strip().splitlines()[2:]]
+    counts = category_counts()
+    for category, row in zip(DOC_ROWS, rows):
+        cases, now = int(row[1]), int(row[3])
+        assert cases == now == counts[category], (category, row)
+    total = rows[len(DOC_ROWS)]
+    assert int(re.sub(r"\D", "", total[1])) == int(re.sub(r"\D", "", total[3])) == len(CASES) == sum(counts.values())
+    assert set(counts) == set(DOC_ROWS)

@@ -397,7 +397,7 @@ def _(tmp: Path) -> Outcome:
     return clean_error(*lps("estimate", s)[::2], needle="on one line")
 
 
-@case("input", "corners scaled x1e12", "exit 4, loud warning")
+@case("input", "corners scaled x1e12", "exit 2 (corners refused) or 4, loud")
 def _(tmp: Path) -> Outcome:
     from lps_gui.io.corners_vnl import read_corners_vnl, write_corners_vnl
 

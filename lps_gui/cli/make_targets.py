@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import argparse
 
+from lps_gui.cli.option_types import float_range, int_range, nonnegative_int
+
 HELP = "write printable ChArUco targets (PDF, true scale) and their session.json list"
 
 
@@ -24,34 +26,14 @@ def _size(text: str) -> tuple[int, int]:
     return w, h
 
 
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not 0 < value < 1e4:
-        raise argparse.ArgumentTypeError(f"expected a size in mm between 0 and 10000, got {text!r}")
-    return value
-
-
-def _count(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if not 1 <= value <= 100:
-        raise argparse.ArgumentTypeError(f"expected 1 to 100 targets, got {value}")
-    return value
-
-
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("out", help="folder for targets.pdf and targets.json (created if missing)")
-    p.add_argument("--count", type=_count, default=6, help="number of targets (default 6)")
+    p.add_argument("--count", type=int_range(1, 100), default=6, help="number of targets (default 6)")
     p.add_argument("--inner-corners", type=_size, default=(10, 7), help="inner corners COLSxROWS (default 10x7)")
-    p.add_argument("--square-mm", type=_positive, default=30.0, help="square size, mm (default 30)")
-    p.add_argument("--marker-mm", type=_positive, help="marker size, mm (default 70 %% of the square)")
+    p.add_argument("--square-mm", type=float_range(0.0, 1e4, low_open=True), default=30.0, help="square size, mm (default 30)")
+    p.add_argument("--marker-mm", type=float_range(0.0, 1e4, low_open=True), help="marker size, mm (default 70 %% of the square)")
     p.add_argument("--dictionary", default="DICT_5X5_1000", help="ArUco dictionary (default DICT_5X5_1000)")
-    p.add_argument("--first-marker", type=int, default=0,
+    p.add_argument("--first-marker", type=nonnegative_int, default=0,
                    help="first marker id of the first target (another set in the same session starts after the last)")
     p.add_argument("--prefix", default="T", help="target ids are PREFIX0, PREFIX1, ... (default T)")
 
@@ -69,8 +51,6 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise InputError(f"{out}: exists and is not a folder; give a folder for targets.pdf and targets.json")
-    if args.first_marker < 0:
-        raise InputError(f"--first-marker {args.first_marker}: marker ids start at 0 or more")
     cols, rows = args.inner_corners
     board = Board(cols, rows, args.square_mm, type="charuco", marker_mm=args.marker_mm, dictionary=args.dictionary)
     n = (cols + 1) * (rows + 1) // 2

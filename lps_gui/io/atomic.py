@@ -50,12 +50,20 @@ def storage_error(path: Path | str, exc: OSError) -> StorageError:
 
 
 def temp_path(path: Path) -> Path:
-    """A fresh temporary name beside ``path`` (same folder, so the rename is atomic)."""
+    """A fresh temporary name beside ``path`` (same folder, so the rename is atomic).
+
+    Its mode follows the user's umask (mkstemp makes 0600): a writer that fills
+    it (QPdfWriter keeps the mode of the file it opens) leaves a file that reads
+    like any other output.
+    """
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     except OSError as exc:
         raise storage_error(path, exc) from exc
-    os.close(fd)
+    try:
+        os.fchmod(fd, 0o666 & ~_umask())
+    finally:
+        os.close(fd)
     return Path(tmp)
 
 

@@ -171,3 +171,18 @@ def test_a_too_narrow_column_is_reported_as_clipped(tmp_path):
     flow.table(["a", "b"], [["short", "a cell far too long for a column of ten millimetres"]], [20, 10])
     flow.finish()
     assert flow.log.clipped == ["page 1: a cell far too long for a column of ten millimetres"]
+
+
+@pytest.mark.parametrize("umask", [0o022, 0o027])
+def test_report_pdf_is_written_with_the_users_umask(tmp_path, umask):
+    import os
+    import stat
+
+    results, truth = make_results()
+    folder = _session(tmp_path, results, truth)
+    old = os.umask(umask)
+    try:
+        path = write_report(folder)
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE(os.stat(path).st_mode) == 0o666 & ~umask  # not mkstemp's 0600

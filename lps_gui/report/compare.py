@@ -13,8 +13,8 @@ from typing import Any
 import numpy as np
 
 from lps_gui.errors import InputError
-from lps_gui.report.figures import (BACKWARD_COLOR, FORWARD_COLOR, FigureSpec, Series, _by_direction, _dir_label,
-                                    per_target_stats, position_columns)
+from lps_gui.report.figure_spec import BACKWARD_COLOR, FORWARD_COLOR, FigureSpec, Series
+from lps_gui.report.figures import _by_direction, _dir_label, per_target_stats, position_columns
 from lps_gui.report.summary import fmt
 
 COMPARE_FILE = "as-found-as-left.pdf"

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterator, Sequence
 
-from lps_gui.report.figures import FigureSpec
+from lps_gui.report.figure_spec import FigureSpec
 from lps_gui.report.plot_painter import font, paint_figure
 
 RESOLUTION_DPI = 600

@@ -18,6 +18,7 @@ from lps_gui.errors import InputError
 from lps_gui.io.jsonfile import read_json
 from lps_gui.report import summary as S
 from lps_gui.report.figures import figures_from_results
+from lps_gui.report.planar_report import paint_planar_report
 
 log = logging.getLogger(__name__)
 
@@ -94,8 +95,6 @@ def render_report(session_dir: Path, results: dict | None = None, out: Path | No
     with pdf_file(out, f"LPS measurement report: {name}",
                   f"lps-calib {__version__} \u00b7 {name} \u00b7 {results.get('created', '')}") as flow:
         if len(results.get("axes") or ["X"]) == 2:  # a planar session (SPEC 10)
-            from lps_gui.report.planar_report import paint_planar_report
-
             progress(0, len(steps), "planar report")
             paint_planar_report(flow, meta, results, S.title_rows(meta, results, __version__), FIGURE_HEIGHT_MM)
         else:

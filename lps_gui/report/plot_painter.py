@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from lps_gui.report.axes import data_range, log_ticks, nice_ticks, padded, tick_label
-from lps_gui.report.figures import OUTLIER_COLOR, FigureSpec, Series
+from lps_gui.report.figure_spec import OUTLIER_COLOR, FigureSpec, Series
 
 FONT_FAMILY = "DejaVu Sans"
 

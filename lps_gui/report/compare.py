@@ -83,8 +83,12 @@ def true_E_rows(before: dict[str, Any], after: dict[str, Any]) -> list[list[str]
     return [["true E (simulator)", fmt(b), fmt(a), f"{b / a:.1f}x" if a else ""]]
 
 
-def write_comparison(before_dir: Path | str, after_dir: Path | str, out: Path | str | None = None) -> Path:
-    """Write the as-found / as-left PDF (default AFTER/as-found-as-left.pdf); returns its path."""
+def write_comparison(before_dir: Path | str, after_dir: Path | str, out: Path | str | None = None,
+                     clipped: list[str] | None = None) -> Path:
+    """Write the as-found / as-left PDF (default AFTER/as-found-as-left.pdf); returns its path.
+
+    ``clipped``, when given, receives every string that does not fit its box (the layout check).
+    """
     from lps_gui import __version__
     from lps_gui.report.layout import ensure_gui_app, pdf_file
     from lps_gui.report.pdf import load_results
@@ -108,6 +112,8 @@ def write_comparison(before_dir: Path | str, after_dir: Path | str, out: Path | 
         flow.figure(comparison_figure(before, after), 110.0)
         flow.paragraph("Improvement = as found / as left. The as-left E cannot fall below the measurement's own noise: "
                        "the table's entries carry that noise into the correction.")
+    if clipped is not None:
+        clipped.extend(flow.log.clipped)
     return out
 
 

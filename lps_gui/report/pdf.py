@@ -36,7 +36,8 @@ class ReportInfo:
     path: Path
     n_pages: int
     pages: list[list[str]]
-    clipped: tuple[str, ...] = ()  # table cells wider than their column (none in a good report)
+    clipped: tuple[str, ...] = ()  # "page N: text" of strings wider than their box (none in a good report)
+    texts: tuple[Any, ...] = ()  # every drawn string (lps_gui.report.text_fit.DrawnText), page by page
 
 
 def load_results(session_dir: Path) -> dict[str, Any]:
@@ -100,7 +101,7 @@ def render_report(session_dir: Path, results: dict | None = None, out: Path | No
         else:
             _paint_line_report(flow, session_dir, meta, results, __version__, progress, steps)
     progress(len(steps), len(steps), f"wrote {out}")
-    return ReportInfo(out, flow.page, flow.log.pages, tuple(flow.log.clipped))
+    return ReportInfo(out, flow.page, flow.log.pages, tuple(flow.log.clipped), tuple(flow.log.text.texts))
 
 
 def _paint_line_report(flow: Any, session_dir: Path, meta: dict[str, Any], results: dict[str, Any], version: str,

@@ -73,3 +73,23 @@ def make_results(runs: int = 2, directions: str = "both", views: int = 12, seed:
 @pytest.fixture
 def results_and_truth():
     return make_results()
+
+
+def with_unresolved_extremes(results: dict) -> dict:
+    """The results with straightness, image rotation and angles figures as `lps demo --quick` gives them.
+
+    Every one is "not resolved" with a wide noise bound: the longest cells of the
+    report's "Measured figures" table (the demo's page 2 cut them before the layout check).
+    """
+    figs = results["figures"]
+    figs["straightness"] = {"basis": "board plane, constant orientation (SPEC 11)",
+                            "v1": {"span_um": 3.53, "sigma_um": 1.33, "noise_span_um": 7.57, "n_targets": 12,
+                                   "resolved": False},
+                            "v2": {"span_um": 29.3, "sigma_um": 10.8, "noise_span_um": 61.4, "n_targets": 12,
+                                   "resolved": False}}
+    figs["image_rotation"] = {"span_urad": 63.9, "sigma_urad": 22.1, "noise_span_urad": 126.3, "n_targets": 12,
+                              "resolved": False}
+    figs["angles_resolution"] = {name: {"max_abs_urad": v, "noise_max_abs_urad": n, "resolved": False}
+                                 for name, v, n in (("roll", 1454.3, 2320.5), ("pitch", 704.5, 1671.2),
+                                                    ("yaw", 88.2, 168.4))}
+    return results

@@ -163,16 +163,6 @@ def test_page_one_states_the_verdict_with_expanded_uncertainty_and_nothing_is_cl
     assert xs and max(xs) <= 595.0 - 15 / 25.4 * 72 + 1.0
 
 
-def test_a_too_narrow_column_is_reported_as_clipped(tmp_path):
-    from lps_gui.report.layout import PdfFlow, ensure_gui_app
-
-    ensure_gui_app()
-    flow = PdfFlow(tmp_path / "t.pdf", "t", "t")
-    flow.table(["a", "b"], [["short", "a cell far too long for a column of ten millimetres"]], [20, 10])
-    flow.finish()
-    assert flow.log.clipped == ["page 1: a cell far too long for a column of ten millimetres"]
-
-
 @pytest.mark.parametrize("umask", [0o022, 0o027])
 def test_report_pdf_is_written_with_the_users_umask(tmp_path, umask):
     import os

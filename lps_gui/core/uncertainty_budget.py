@@ -185,8 +185,13 @@ def combine(rows: list[BudgetRow], k: float = COVERAGE_FACTOR) -> dict[str, Any]
 
 
 def figure_uncertainties(unc: dict[str, Any], figures: dict[str, Any], travel_mm: float,
-                         n_views: int = 0) -> dict[str, float | None]:
-    """U (k = 2) of each headline figure, keyed like the figures (um, ppm for the scale).
+                         n_views: int = 0, n_targets: int = 0,
+                         angle_sigma_urad: dict[str, float] | None = None) -> dict[str, float | None]:
+    """U (k = 2) of each headline figure, keyed like the figures (um, ppm for the scale, urad for angles).
+
+    The one source of every U the report, the GUI and the CLI print; the mean
+    step's is ``mean_step_um`` (U over the travel / (``n_targets`` - 1)), the
+    p-v and max |x| figures' come from :func:`extreme_uncertainties`.
 
     The periodic amplitude is a sinusoid fitted to ``n_views`` noisy positions:
     its 1-sigma is the per-view noise times sqrt(2 / n) (the reference view's
@@ -213,4 +218,39 @@ def figure_uncertainties(unc: dict[str, Any], figures: dict[str, Any], travel_mm
                                     else k * (u_noise / math.sqrt(2.0)) * math.sqrt(2.0 / n_views))  # per-view part
     s = figures.get("straightness_sigma_um")
     out["straightness_um_max"] = None if s is None else k * float(s)
+    out.update(extreme_uncertainties(figures, k, angle_sigma_urad or {}))
+    if n_targets >= 2 and U is not None:
+        out["mean_step_um"] = float(U) / (n_targets - 1)  # (last - first) / (n - 1): U over the travel shared out
+    return out
+
+
+def extreme_uncertainties(figures: dict[str, Any], k: float, angle_sigma_urad: dict[str, float]) -> dict[str, float]:
+    """U (k) of the peak-to-valley and max |x| figures, keyed like the report's rows (um, urad).
+
+    A p-v of per-target means is the difference of two of them: k sqrt 2 times
+    the sigma of one mean (``figures["straightness"]["v1"]["sigma_um"]``).
+    ``straightness_span_max`` is the U of the larger span, the one the
+    straight-line verdict compares with its limit. A max |angle| is one view's
+    angle: k times the median per-view sigma (``angle_sigma_urad``). Whether
+    noise alone could give the figure is a separate question
+    (:mod:`lps_gui.core.resolution`): an unresolved figure is printed without a value.
+    """
+    out: dict[str, float] = {}
+    st = figures.get("straightness")
+    if isinstance(st, dict):
+        spans = []
+        for j in (1, 2):
+            d = st.get(f"v{j}") or {}
+            if d.get("sigma_um") is not None:
+                out[f"straightness_span_{j}"] = k * math.sqrt(2.0) * float(d["sigma_um"])
+                if d.get("span_um") is not None:
+                    spans.append((float(d["span_um"]), out[f"straightness_span_{j}"]))
+        if spans:
+            out["straightness_span_max"] = max(spans)[1]
+    rot = figures.get("image_rotation")
+    if isinstance(rot, dict) and rot.get("sigma_urad") is not None:
+        out["image_rotation_span"] = k * math.sqrt(2.0) * float(rot["sigma_urad"])
+    for name, sigma in angle_sigma_urad.items():
+        if sigma is not None and math.isfinite(sigma):
+            out[f"max_abs_{name}"] = k * float(sigma)
     return out

@@ -145,15 +145,18 @@ def _front_page(flow: Any, meta: dict[str, Any], results: dict[str, Any], versio
     flow.heading("Verdict", 11)
     flow.paragraph(overall(rows), size_pt=10.0, color=_overall_color(rows))
     if rows:
-        cells = [[v.name, _with_unit(v.measured, v.unit), "\u00b1 " + _with_unit(v.u_k2, v.unit) if v.u_k2 is not None
+        cells = [[v.name, v.measured_text(), "\u00b1 " + _with_unit(v.u_k2, v.unit) if v.u_k2 is not None
                   else "not assessed", f"{S.fmt(v.limit)} {v.unit}", v.verdict] for v in rows]
-        flow.table(["criterion", "measured", "U (k = 2)", "limit", "verdict"], cells, [44, 26, 28, 26, 56],
+        flow.table(["criterion", "compared figure", "U (k = 2)", "limit", "verdict"], cells, [40, 34, 26, 24, 56],
                    size_pt=8.5, row_mm=4.6, colors=[v.color for v in rows], align_left=(4,))
         for v in rows:
             flow.paragraph(f"{v.name}: {v.note}.", size_pt=7.0, color="#555555")
         flow.paragraph("Decision rule ISO 14253-1: PASS when the figure plus U is within the limit, FAIL when the "
-                       "figure minus U is beyond it, otherwise not resolved. U covers the measurement (see the "
-                       "uncertainty budget), not the stage's own scatter.", size_pt=7.0, color="#555555")
+                       "figure minus U is beyond it, otherwise not resolved. Each U is that of the figure compared: "
+                       "against a \u00b1 limit the half band A/2 (or R/2) is compared, so its U is half the U of A "
+                       "(or R) listed under \"Measured figures\"; a p-v's U is that of the larger per-target span. "
+                       "U covers the measurement (see the uncertainty budget), not the stage's own scatter.",
+                       size_pt=7.0, color="#555555")
     else:
         flow.paragraph("No stage specification in session.json (key \"stage_spec\"; enter it with lps capture "
                        "--spec or in the capture panel): no verdict is given.", color="#555555")
@@ -183,20 +186,31 @@ def _overall_color(rows: list[Any]) -> str:
     return "#c00000" if "FAIL" in words else "#333333"
 
 
+FRONT_FIGURES = ("iso230_2_A", "iso230_2_R", "iso230_2_E", "iso230_2_B", "max_abs_deviation", "scale",
+                 "straightness_span_1", "straightness_span_2")  # page 1 without a stage spec
+
+
+def _figure_table(flow: Any, rows: list[S.Row]) -> None:
+    """Figures with their U (k = 2): the one table painter of page 1 and "Measured figures"."""
+    flow.table(["figure", "value", "U (k = 2)", "unit"], [[r.name, r.text(), r.u_text(), r.unit] for r in rows],
+               [88, 26, 22, 16], colors=["#888888" if r.unresolved else None for r in rows])
+
+
 def _figures_page(flow: Any, results: dict[str, Any]) -> None:
     """Measured figures with U (k = 2), then the ISO 230-2 per-target table."""
     from lps_gui.report.iso_table import iso_target_table
 
     flow.heading("Measured figures", 11)
-    rows = S.summary_rows(results)
-    flow.table(["figure", "value", "U (k = 2)", "unit"], [[r.name, r.text(), r.u_text(), r.unit] for r in rows],
-               [88, 26, 22, 16], colors=["#888888" if r.unresolved else None for r in rows])
+    _figure_table(flow, S.summary_rows(results))
     for note in S.figure_notes(results):
         flow.paragraph(note, size_pt=7.5, color="#555555")
     flow.paragraph("\u03c3 and s are 1-sigma. \u03c3 of a position is the measurement's noise only (corner noise); "
-                   "s is the scatter over runs (ISO 230-2). U (k = 2) is the expanded measurement uncertainty "
-                   "(see the uncertainty budget); figures of one target (R, B, step std) carry only the noise terms, which do not "
-                   "cancel there.", size_pt=7.5, color="#555555")
+                   "s is the scatter over runs (ISO 230-2). U (k = 2) is the expanded measurement uncertainty of the "
+                   "figure in its row (see the uncertainty budget): spans of positions (A, E, M, max |deviation|) carry "
+                   "U of a displacement over the travel; figures of one target (R, B, step std) carry only the noise "
+                   "terms, which do not cancel there; a p-v carries U of the difference of two per-target means. A "
+                   "figure \"not resolved\" states no value and so no U: noise alone reaches the bound it names "
+                   "(noise p-v, or noise max for a max |x|).", size_pt=7.5, color="#555555")
     table = iso_target_table(results)
     if table is not None:
         header, body, widths = table

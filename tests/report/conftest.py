@@ -15,6 +15,9 @@ from lps_gui.pipeline.uncertainty import uncertainty_of
 from lps_gui.core.simulate import small_spec, true_views
 
 
+ENVIRONMENT = {"board_temperature_c": 21.0, "board_cte_ppm_per_k": 10.0, "square_mm_uncertainty_um": 0.2}
+
+
 def make_results(runs: int = 2, directions: str = "both", views: int = 12, seed: int = 3) -> tuple[dict, dict]:
     """(results dict, session truth) for a small bidirectional simulated session."""
     spec = small_spec(seed=seed, views=views, directions=directions, runs=runs)
@@ -64,7 +67,7 @@ def make_results(runs: int = 2, directions: str = "both", views: int = 12, seed:
         "timings_s": {"total": 1.0},
         "truth_comparison": {"position_rms_error_um": 0.5},
     }
-    env = {"board_temperature_c": 21.0, "board_cte_ppm_per_k": 10.0, "square_mm_uncertainty_um": 0.2}
+    env = ENVIRONMENT
     results["environment"] = thermal_record(Board(9, 6, 20.0), Environment.from_dict(env))
     results["uncertainty"] = uncertainty_of(results, Environment.from_dict(env), 20.0)
     return results, truth
@@ -92,4 +95,7 @@ def with_unresolved_extremes(results: dict) -> dict:
     figs["angles_resolution"] = {name: {"max_abs_urad": v, "noise_max_abs_urad": n, "resolved": False}
                                  for name, v, n in (("roll", 1454.3, 2320.5), ("pitch", 704.5, 1671.2),
                                                     ("yaw", 88.2, 168.4))}
+    figs["straightness"]["v1"].update(span_um=12.5, resolved=True)  # one resolved p-v: printed with its U
+    env = Environment.from_dict(ENVIRONMENT)
+    results["uncertainty"] = uncertainty_of(results, env, 20.0)  # the per-figure U of the figures just added
     return results

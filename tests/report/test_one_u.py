@@ -1,0 +1,62 @@
+"""One figure, one U: every page prints the U (k = 2) of results.json ``uncertainty.figures_k2`` for a figure."""
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from lps_gui.report.pdf import render_report
+from lps_gui.report.summary import fmt, summary_rows, u_key
+from lps_gui.report.verdict import verdicts
+from tests.report.conftest import make_results, with_unresolved_extremes
+
+pytestmark = pytest.mark.gui
+SPEC = {"accuracy_um": 20, "repeatability_um": 5, "straightness_um": 38}
+
+
+def _cells_after(texts: list[str], name: str, n: int) -> list[str]:
+    """The ``n`` table cells drawn after the cell ``name`` (a row's cells are drawn left to right)."""
+    i = texts.index(name)
+    return texts[i + 1:i + 1 + n]
+
+
+def _table_texts(info, page: int) -> list[str]:
+    return [t.text for t in info.texts if t.page == page and t.where == "table"]
+
+
+def test_the_same_figure_carries_the_same_u_on_every_page_and_in_results(tmp_path):
+    results, truth = with_unresolved_extremes(make_results()[0]), make_results()[1]
+    folder = tmp_path / "s"
+    folder.mkdir()
+    (folder / "session.json").write_text(json.dumps({"format": "lps-session/1", "truth": truth, "stage_spec": SPEC}))
+    (folder / "results.json").write_text(json.dumps(results))
+    info = render_report(folder)
+    k2 = results["uncertainty"]["figures_k2"]
+
+    page2 = _table_texts(info, 2)
+    printed_u: dict[str, str] = {}
+    for row in summary_rows(results):
+        value, u_cell, unit = _cells_after(page2, row.name, 3)
+        assert value == row.text() and u_cell == row.u_text() and unit == row.unit
+        if row.unresolved:  # "not resolved (noise p-v X)" states no value, hence no U (never one smaller than X)
+            assert u_cell == "" and row.u_k2 is None
+            continue
+        want = k2.get("mean_step_um") * 1e-3 if row.key == "mean_step" else k2.get(u_key(row.key))
+        assert row.u_k2 == want, row.name  # results.json is the one source
+        printed_u[row.key] = u_cell
+    assert printed_u["iso230_2_A"] == f"\u00b1 {fmt(k2['A_um'], 2)}"
+    assert printed_u["straightness_span_1"] == f"\u00b1 {fmt(k2['straightness_span_1'], 2)}"
+
+    page1 = _table_texts(info, 1)
+    rows = {v.name: v for v in verdicts(results, SPEC)}
+    accuracy = rows["Positional accuracy"]
+    measured, u_cell = _cells_after(page1, "Positional accuracy", 2)
+    assert measured.startswith("A/2 = ")  # the quantity the U belongs to is named
+    assert accuracy.u_k2 == pytest.approx(0.5 * k2["A_um"], rel=1e-12)  # U(A/2) = U(A)/2, A's U is page 2's
+    assert u_cell == f"\u00b1 {fmt(accuracy.u_k2)} \u00b5m"
+    straight = rows["Straight-line accuracy"]
+    measured, u_cell = _cells_after(page1, "Straight-line accuracy", 2)
+    assert measured.startswith("p-v v2 = ") and straight.u_k2 == k2["straightness_span_2"]  # the larger span's U
+
+    page3 = [t.text for t in info.texts if t.page == 3]
+    assert any(f"expanded U = k u_c = {fmt(k2['A_um'])} \u00b5m" in t for t in page3)  # the budget's U is A's

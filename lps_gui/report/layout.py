@@ -13,7 +13,7 @@ from typing import Any, Iterator, Sequence
 
 from lps_gui.report.figure_spec import FigureSpec
 from lps_gui.report.plot_painter import paint_figure
-from lps_gui.report.text_fit import TextLog, draw_text, fit_widths, font
+from lps_gui.report.text_fit import DrawnText, TextLog, draw_text, fit_widths, font
 
 RESOLUTION_DPI = 600
 MARGIN_MM = 15.0
@@ -183,6 +183,9 @@ class PdfFlow:
         widths = fit_widths(widths_mm, need, max(limit, sum(widths_mm)))
         total_w = sum(widths) * mm
         wrap = int(Qt.TextFlag.TextWordWrap)
+        first = str((header or (rows[0] if rows else [""]))[0])
+        self.log.text.texts.append(DrawnText(self.page, "table width", f"table \"{first}\"",
+                                             (self.left + self.width - x_left, row_mm * mm), (total_w, 0.0)))
 
         def lines_of(cells: Sequence[str], fm: Any) -> int:
             n = 1

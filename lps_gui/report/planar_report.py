@@ -16,12 +16,12 @@ from lps_gui.report.planar_figures import planar_figures_from_results
 from lps_gui.report.summary import Row, fmt, table_cells
 
 PLANAR_TABLE_COLUMNS = (  # key, header, decimals, width mm
-    ("index", "#", None, 9), ("run", "run", None, 8), ("direction", "dir", None, 8),
-    ("target_x_mm", "X target mm", 3, 19), ("target_y_mm", "Y target mm", 3, 19),
-    ("deviation_x_um", "dev X \u00b5m", 2, 17), ("deviation_y_um", "dev Y \u00b5m", 2, 17),
-    ("sigma_x_um", "1\u03c3 X \u00b5m", 2, 16), ("sigma_y_um", "1\u03c3 Y \u00b5m", 2, 16),
-    ("rms_px", "RMS px", 3, 14), ("truth_deviation_x_um", "truth X \u00b5m", 2, 16),
-    ("truth_deviation_y_um", "truth Y \u00b5m", 2, 16), ("outlier", "outlier", None, 12),
+    ("index", "#", None, 8), ("run", "run", None, 7), ("direction", "dir", None, 7),
+    ("target_x_mm", "X target\n[mm]", 3, 15), ("target_y_mm", "Y target\n[mm]", 3, 15),
+    ("deviation_x_um", "dev X\n[\u00b5m]", 2, 14), ("deviation_y_um", "dev Y\n[\u00b5m]", 2, 14),
+    ("sigma_x_um", "1\u03c3 X\n[\u00b5m]", 2, 13), ("sigma_y_um", "1\u03c3 Y\n[\u00b5m]", 2, 13),
+    ("rms_px", "RMS\n[px]", 3, 11), ("truth_deviation_x_um", "truth X\n[\u00b5m]", 2, 14),
+    ("truth_deviation_y_um", "truth Y\n[\u00b5m]", 2, 14), ("outlier", "outlier", None, 11),
 )
 
 
@@ -61,7 +61,7 @@ def planar_summary_rows(results: dict[str, Any]) -> list[Row]:
 
 
 def _unresolved(span: dict[str, Any]) -> str:
-    """"not resolved (σ X)" for a p-v that noise alone could give (core.resolution), else empty."""
+    """"not resolved (noise p-v X)" for a p-v that noise alone could give (core.resolution), else empty."""
     from lps_gui.core.resolution import not_resolved_text
 
     if not span or span.get("resolved", True):

@@ -114,6 +114,7 @@ def fit_widths(widths: Sequence[float], need: Sequence[float], max_total: float)
     cells are wrapped by the caller.
     """
     w = [float(x) for x in widths]
+    room = max(0.0, max_total - sum(w))
     short = [max(0.0, n - c) for n, c in zip(need, w)]
     deficit = sum(short)
     if deficit <= 0:
@@ -122,6 +123,6 @@ def fit_widths(widths: Sequence[float], need: Sequence[float], max_total: float)
     take = min(sum(slack), deficit)
     if take > 0:
         w = [c - take * s / sum(slack) for c, s in zip(w, slack)]
-    extra = min(deficit - take, max(0.0, max_total - sum(w)))
+    extra = min(deficit - take, room)
     given = take + extra
     return [c + given * d / deficit for c, d in zip(w, short)]

@@ -32,6 +32,8 @@ def test_fit_widths_takes_slack_first_then_room():
     assert w == pytest.approx([70, 44]) and sum(w) == pytest.approx(114)
     w = fit_widths([20, 10], [20, 40], 50)  # no slack: grows up to the room, then the caller wraps
     assert w == pytest.approx([20, 30])
+    w = fit_widths([78, 30, 12, 60], [92.8, 47, 8, 45], 180)  # slack and room together never pass max_total
+    assert sum(w) == pytest.approx(180) and w[2] == pytest.approx(8) and w[3] == pytest.approx(45)
 
 
 def test_the_demos_cut_cell_is_an_overflow_and_widening_removes_it(tmp_path):

@@ -159,7 +159,8 @@ def _front_page(flow: Any, meta: dict[str, Any], results: dict[str, Any], versio
                        size_pt=7.0, color="#555555")
     else:
         flow.paragraph("No stage specification in session.json (key \"stage_spec\"; enter it with lps capture "
-                       "--spec or in the capture panel): no verdict is given.", color="#555555")
+                       "--spec or in the capture panel): no verdict is given. The measured figures:", color="#555555")
+        _figure_table(flow, [r for r in S.summary_rows(results) if r.key in FRONT_FIGURES])
     deviation = figure_by_key(figures_from_results(results, None), "deviation")
     deviation = replace(deviation, series=[s for s in deviation.series if not s.label.startswith("truth")])  # p. 1: measured only
     limit = (spec or {}).get("accuracy_um")

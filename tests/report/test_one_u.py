@@ -60,3 +60,23 @@ def test_the_same_figure_carries_the_same_u_on_every_page_and_in_results(tmp_pat
 
     page3 = [t.text for t in info.texts if t.page == 3]
     assert any(f"expanded U = k u_c = {fmt(k2['A_um'])} \u00b5m" in t for t in page3)  # the budget's U is A's
+
+
+def test_without_a_stage_spec_page_one_shows_the_measured_figures_with_u(tmp_path):
+    from lps_gui.report.pdf import FRONT_FIGURES
+
+    results, truth = make_results()
+    folder = tmp_path / "s"
+    folder.mkdir()
+    (folder / "session.json").write_text(json.dumps({"format": "lps-session/1", "truth": truth}))
+    (folder / "results.json").write_text(json.dumps(results))
+    info = render_report(folder)
+    page1 = _table_texts(info, 1)
+    shown = [r for r in summary_rows(results) if r.key in FRONT_FIGURES]
+    assert {r.key for r in shown} >= {"iso230_2_A", "iso230_2_R", "iso230_2_E", "max_abs_deviation", "scale"}
+    for row in shown:
+        value, u_cell, unit = _cells_after(page1, row.name, 3)
+        assert value == row.text() and unit == row.unit
+        assert u_cell == row.u_text()  # with U (k = 2) where assessed, the same as page 2's
+        assert row.key not in ("iso230_2_A", "iso230_2_E", "max_abs_deviation") or u_cell.startswith("\u00b1 ")
+        assert _cells_after(_table_texts(info, 2), row.name, 3)[1] == u_cell

@@ -16,6 +16,7 @@ from typing import Any
 from lps_gui.core.progress import ProgressFn, no_progress
 from lps_gui.errors import InputError
 from lps_gui.io.jsonfile import read_json
+from lps_gui.report import sections as R
 from lps_gui.report import summary as S
 from lps_gui.report.figures import figures_from_results
 from lps_gui.report.planar_report import paint_planar_report
@@ -112,7 +113,7 @@ def _paint_line_report(flow: Any, session_dir: Path, meta: dict[str, Any], resul
     flow.new_page()
     _figures_page(flow, results)
     flow.new_page()
-    _uncertainty_page(flow, results)
+    R.uncertainty_sections(flow, results)
     flow.new_page()
     _method_page(flow, results)
     flow.heading("What limits this result", 11)
@@ -137,30 +138,10 @@ def _paint_line_report(flow: Any, session_dir: Path, meta: dict[str, Any], resul
 def _front_page(flow: Any, meta: dict[str, Any], results: dict[str, Any], version: str) -> None:
     """Page 1: the verdict with U (k = 2), the deviation plot with the limit drawn, the identification."""
     from lps_gui.report.figures import figure_by_key, with_spec_band
-    from lps_gui.report.verdict import overall, verdicts
 
-    spec = meta.get("stage_spec") or results.get("stage_spec") or (results.get("session_meta") or {}).get("stage_spec")
+    spec = R.stage_spec(meta, results)
     flow.heading("Linear positioning stage \u2014 measurement report", 15)
-    rows = verdicts(results, spec)
-    flow.heading("Verdict", 11)
-    flow.paragraph(overall(rows), size_pt=10.0, color=_overall_color(rows))
-    if rows:
-        cells = [[v.name, v.measured_text(), "\u00b1 " + _with_unit(v.u_k2, v.unit) if v.u_k2 is not None
-                  else "not assessed", f"{S.fmt(v.limit)} {v.unit}", v.verdict] for v in rows]
-        flow.table(["criterion", "compared figure", "U (k = 2)", "limit", "verdict"], cells, [40, 34, 26, 24, 56],
-                   size_pt=8.5, row_mm=4.6, colors=[v.color for v in rows], align_left=(4,))
-        for v in rows:
-            flow.paragraph(f"{v.name}: {v.note}.", size_pt=7.0, color="#555555")
-        flow.paragraph("Decision rule ISO 14253-1: PASS when the figure plus U is within the limit, FAIL when the "
-                       "figure minus U is beyond it, otherwise not resolved. Each U is that of the figure compared: "
-                       "against a \u00b1 limit the half band A/2 (or R/2) is compared, so its U is half the U of A "
-                       "(or R) listed under \"Measured figures\"; a p-v's U is that of the larger per-target span. "
-                       "U covers the measurement (see the uncertainty budget), not the stage's own scatter.",
-                       size_pt=7.0, color="#555555")
-    else:
-        flow.paragraph("No stage specification in session.json (key \"stage_spec\"; enter it with lps capture "
-                       "--spec or in the capture panel): no verdict is given. The measured figures:", color="#555555")
-        _figure_table(flow, [r for r in S.summary_rows(results) if r.key in FRONT_FIGURES])
+    R.verdict_section(flow, results, spec, [r for r in S.summary_rows(results) if r.key in R.FRONT_FIGURES])
     deviation = figure_by_key(figures_from_results(results, None), "deviation")
     deviation = replace(deviation, series=[s for s in deviation.series if not s.label.startswith("truth")])  # p. 1: measured only
     limit = (spec or {}).get("accuracy_um")
@@ -176,69 +157,23 @@ def _front_page(flow: Any, meta: dict[str, Any], results: dict[str, Any], versio
 DASH_TEXT = S.DASH
 
 
-def _with_unit(value: float | None, unit: str) -> str:
-    return S.DASH if value is None else f"{S.fmt(value)} {unit}"
-
-
-def _overall_color(rows: list[Any]) -> str:
-    words = [r.verdict for r in rows]
-    if rows and all(w == "PASS" for w in words):
-        return "#007a1f"
-    return "#c00000" if "FAIL" in words else "#333333"
-
-
-FRONT_FIGURES = ("iso230_2_A", "iso230_2_R", "iso230_2_E", "iso230_2_B", "max_abs_deviation", "scale",
-                 "straightness_span_1", "straightness_span_2")  # page 1 without a stage spec
-
-
-def _figure_table(flow: Any, rows: list[S.Row]) -> None:
-    """Figures with their U (k = 2): the one table painter of page 1 and "Measured figures"."""
-    flow.table(["figure", "value", "U (k = 2)", "unit"], [[r.name, r.text(), r.u_text(), r.unit] for r in rows],
-               [88, 26, 22, 16], colors=["#888888" if r.unresolved else None for r in rows])
-
-
 def _figures_page(flow: Any, results: dict[str, Any]) -> None:
     """Measured figures with U (k = 2), then the ISO 230-2 per-target table."""
-    from lps_gui.report.iso_table import iso_target_table
-
     flow.heading("Measured figures", 11)
-    _figure_table(flow, S.summary_rows(results))
+    R.figure_table(flow, S.summary_rows(results))
     for note in S.figure_notes(results):
         flow.paragraph(note, size_pt=7.5, color="#555555")
-    flow.paragraph("\u03c3 and s are 1-sigma. \u03c3 of a position is the measurement's noise only (corner noise); "
-                   "s is the scatter over runs (ISO 230-2). U (k = 2) is the expanded measurement uncertainty of the "
-                   "figure in its row (see the uncertainty budget): spans of positions (A, E, M, max |deviation|) carry "
-                   "U of a displacement over the travel; figures of one target (R, B, step std) carry only the noise "
-                   "terms, which do not cancel there; a p-v carries U of the difference of two per-target means. A "
-                   "figure \"not resolved\" states no value and so no U: noise alone reaches the bound it names "
-                   "(noise p-v, or noise max for a max |x|).", size_pt=7.5, color="#555555")
-    table = iso_target_table(results)
-    if table is not None:
-        header, body, widths = table
-        flow.heading("ISO 230-2 per target", 11)
-        flow.table(header, body, widths, size_pt=6.8, row_mm=3.4, align_right_from=0)
-        flow.paragraph("x\u0304: mean deviation over the runs; s: standard deviation over the runs (1-sigma, "
-                       "n \u2212 1); R = 4 s each way; B\u2c7c = x\u0304\u2191 \u2212 x\u0304\u2193; "
-                       "R\u2c7c = max(2s\u2191 + 2s\u2193 + |B\u2c7c|, R\u2191, R\u2193). Deviations are "
-                       "relative to the first capture.", size_pt=7.0, color="#555555")
+    flow.paragraph(U_NOTE, size_pt=7.5, color="#555555")
+    R.iso_section(flow, results)
 
 
-def _uncertainty_page(flow: Any, results: dict[str, Any]) -> None:
-    """Environment, then the GUM budget (ISO/TR 230-9 style)."""
-    from lps_gui.report import budget_table as B
-
-    flow.heading("Environment", 11)
-    flow.table(None, [list(r) for r in B.environment_rows(results)], [52, 128], size_pt=8.0, row_mm=4.2,
-               align_right_from=9)
-    flow.heading("Uncertainty budget (GUM, ISO/TR 230-9)", 11)
-    rows = B.budget_rows(results)
-    if not rows:
-        flow.paragraph("These results carry no uncertainty budget; re-run lps estimate.", color="#555555")
-        return
-    flow.table(B.BUDGET_HEADER, rows, B.BUDGET_WIDTHS, size_pt=7.5, row_mm=4.0, align_right_from=2,
-               align_left=(3, 5))
-    for note in B.budget_notes(results):
-        flow.paragraph(note, size_pt=7.5, color="#333333")
+U_NOTE = ("\u03c3 and s are 1-sigma. \u03c3 of a position is the measurement's noise only (corner noise); "
+          "s is the scatter over runs (ISO 230-2). U (k = 2) is the expanded measurement uncertainty of the "
+          "figure in its row (see the uncertainty budget): spans of positions (A, E, M, max |deviation|) carry "
+          "U of a displacement over the travel; figures of one target (R, B, step std) carry only the noise "
+          "terms, which do not cancel there; a p-v carries U of the difference of two per-target means. A "
+          "figure \"not resolved\" states no value and so no U: noise alone reaches the bound it names "
+          "(noise p-v, or noise max for a max |x|).")
 
 
 def _truth_page(flow: Any, results: dict[str, Any]) -> None:

@@ -36,10 +36,11 @@ class Row:
     unresolved: str = ""  # "not resolved (noise p-v X)": printed instead of a value, greyed (core.resolution)
     key: str = ""  # the figure's key in results.json (for its U)
     u_k2: float | None = None  # expanded uncertainty (k = 2) in ``unit``, None when not assessed
+    shown: str = ""  # printed instead of the number when a count reads better as text ("30 / 30")
 
     def text(self) -> str:
         """The value as printed: ``digits`` significant digits, a dash when absent."""
-        return self.unresolved or fmt(self.value, self.digits)
+        return self.unresolved or self.shown or fmt(self.value, self.digits)
 
     def u_text(self) -> str:
         """U (k = 2) as printed ("\u00b1 0.52"; with the value's decimals when it is far smaller), empty when not assessed."""
@@ -123,7 +124,10 @@ def title_rows(session_meta: dict[str, Any], results: dict[str, Any], version: s
                            ("name", "model", "driver", "kind"), DASH)
     if ident.get("stage_serial"):
         stage_text += f", serial {ident['stage_serial']}"
-    if stage.get("axis"):
+    axes = stage.get("axes") or results.get("axes") or []
+    if len(axes) > 1:
+        stage_text += f", axes {', '.join(str(a) for a in axes)}"
+    elif stage.get("axis"):
         stage_text += f", axis {stage['axis']}"
     controller = _describe(stage, ("controller", "firmware", "port"), "simulated (no controller)" if truth else DASH)
     if ident.get("controller_serial"):

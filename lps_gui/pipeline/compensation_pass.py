@@ -18,6 +18,7 @@ from lps_gui.io.session import Session
 from lps_gui.report.compare import session_E_um, true_E_um
 
 TABLE_FILE = "compensation.csv"
+CARRIED_META = ("stage_spec", "environment", "identification")  # as left is judged like as found
 
 
 @dataclass
@@ -81,6 +82,10 @@ def compensation_pass(
     cam = truth.get("camera") or {}
     session, stage, camera = create_simulated_session(after_dir, spec, noise_grey=float(cam.get("noise_grey", 2.0)),
                                                       intrinsics=before.meta.get("intrinsics"))
+    carried = {k: before.meta[k] for k in CARRIED_META if k in before.meta}  # the same stage, board and room
+    if carried:
+        session.meta.update(carried)
+        session.save_meta()
     table_path = write_table(session.folder / TABLE_FILE, table, "csv")
     stage.connect()
     engine = simulated_engine(session, stage, camera)

@@ -166,7 +166,7 @@ def positions_figure(cols: dict[str, np.ndarray]) -> FigureSpec:
     for d, sel in _by_direction(cols):
         series.append(Series(cols["target_mm"][sel], cols["measured_mm"][sel], f"measured {_dir_label(d)}",
                              "markers", _color(d), marked=cols["outlier"][sel]))
-    return FigureSpec("positions", "Measured position vs target", "target position [mm]", "measured position d_i [mm]",
+    return FigureSpec("positions", "Measured position vs target", "target position [mm]", "measured position d\u1d62 [mm]",
                       series)
 
 

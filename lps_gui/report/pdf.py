@@ -198,7 +198,7 @@ def _method_page(flow: Any, results: dict[str, Any]) -> None:
     flow.heading("Method and camera", 11)
     flow.ensure(row_mm * (max(len(method), len(intr) + 1) + 1))
     top = flow.y
-    flow.table(None, method, [30, 70], size_pt=7.5, row_mm=row_mm, align_right_from=9)
+    flow.table(None, method, [30, 70], size_pt=7.5, row_mm=row_mm, align_right_from=9, max_width_mm=108)
     below_method = flow.y
     flow.y = top
     flow.table(["intrinsic", "value", "1\u03c3"], intr, [16, 30, 24], size_pt=7.5, row_mm=row_mm, x_mm=110)

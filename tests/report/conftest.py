@@ -99,3 +99,18 @@ def with_unresolved_extremes(results: dict) -> dict:
     env = Environment.from_dict(ENVIRONMENT)
     results["uncertainty"] = uncertainty_of(results, env, 20.0)  # the per-figure U of the figures just added
     return results
+
+
+def write_session(folder, results: dict, truth: dict | None = None, spec: dict | None = None):
+    """A session folder holding session.json (truth, stage spec) and results.json: what the reports read."""
+    import json
+
+    folder.mkdir(parents=True)
+    meta = {"format": "lps-session/1", "camera": {"name": "simulated"}, "stage": {"name": "sim"}}
+    if truth:
+        meta["truth"] = truth
+    if spec:
+        meta["stage_spec"] = spec
+    (folder / "session.json").write_text(json.dumps(meta))
+    (folder / "results.json").write_text(json.dumps(results))
+    return folder

@@ -1,29 +1,18 @@
 """The layout-time clipping check: every string drawn is measured against its box, in every kind of PDF."""
 from __future__ import annotations
 
-import json
-
 import numpy as np
 import pytest
 
 from lps_gui.report.text_fit import fit_widths
-from tests.report.conftest import make_results, with_unresolved_extremes
+from tests.report.conftest import make_results, with_unresolved_extremes, write_session
 from tests.report.test_intrinsics_report import BOARD, INTR, corners  # noqa: F401  (the calibration fixture)
 
 pytestmark = pytest.mark.gui
 SPEC = {"accuracy_um": 20, "repeatability_um": 5, "straightness_um": 38}
 
 
-def _session(folder, results, truth=None, spec=None):
-    folder.mkdir(parents=True)
-    meta = {"format": "lps-session/1", "camera": {"name": "simulated"}, "stage": {"name": "sim"}}
-    if truth:
-        meta["truth"] = truth
-    if spec:
-        meta["stage_spec"] = spec
-    (folder / "session.json").write_text(json.dumps(meta))
-    (folder / "results.json").write_text(json.dumps(results))
-    return folder
+_session = write_session
 
 
 def test_fit_widths_takes_slack_first_then_room():

@@ -1,7 +1,6 @@
 """The PDF opens, has the planned pages, and prints the numbers of results.json."""
 from __future__ import annotations
 
-import json
 import re
 import shutil
 import subprocess
@@ -13,22 +12,13 @@ import pytest
 from lps_gui.errors import InputError
 from lps_gui.report.pdf import render_report, write_report
 from lps_gui.report.summary import summary_rows
-from tests.report.conftest import make_results
+from tests.report.conftest import make_results, write_session
 
 pytestmark = pytest.mark.gui
 
 
 def _session(tmp_path: Path, results: dict, truth: dict | None, spec: dict | None = None) -> Path:
-    folder = tmp_path / "session"
-    folder.mkdir()
-    meta = {"format": "lps-session/1", "camera": {"name": "simulated"}, "stage": {"name": "sim"}}
-    if truth:
-        meta["truth"] = truth
-    if spec:
-        meta["stage_spec"] = spec
-    (folder / "session.json").write_text(json.dumps(meta))
-    (folder / "results.json").write_text(json.dumps(results))
-    return folder
+    return write_session(tmp_path / "session", results, truth, spec)
 
 
 def _pdf_pages(path: Path) -> int:

@@ -33,6 +33,7 @@ from lps_gui.core.environment import Environment
 COVERAGE_FACTOR = 2.0
 NOISE_SOURCES = ("corner noise", "reference view noise")
 TILT_DEGREE = 3  # a carriage's pitch and yaw along the travel: smooth, a cubic follows it
+TILT_K = 3.0  # a tilt spread counts when it exceeds the noise share by this many of its sd
 
 
 @dataclass(frozen=True)
@@ -145,6 +146,9 @@ def smooth_tilt_spread_urad(tilt: np.ndarray, sigma: np.ndarray, target_mm: np.n
     a polynomial of ``degree`` in the target is fitted to each angle, and the
     noise's share of the fitted curve's variance (sigma^2 (degree + 1) / n)
     is subtracted. Without targets, the raw variance minus sigma^2 is used.
+    What remains counts only above ``TILT_K`` standard deviations of that
+    noise share: a quick demo's per-view sigma of ~500 urad otherwise left a
+    random ~80 urad "tilt" (a 50 um Abbe term on a stage with none).
     """
     ok = np.all(np.isfinite(tilt), axis=1)
     tilt, sigma = tilt[ok], sigma[ok]
@@ -156,10 +160,14 @@ def smooth_tilt_spread_urad(tilt: np.ndarray, sigma: np.ndarray, target_mm: np.n
         A = np.vander(u, degree + 1)
         fit = A @ np.linalg.lstsq(A, tilt, rcond=None)[0]
         spread = np.var(fit, axis=0) - noise * (degree + 1) / n
+        scatter = noise * math.sqrt(2.0 * (degree + 1)) / n  # sd of that noise share (chi-square, degree + 1 dof)
     elif n > 1:
         spread = np.var(tilt, axis=0) - noise
+        scatter = noise * math.sqrt(2.0 / n)
     else:
         return np.zeros(tilt.shape[1])
+    # a tilt curve within TILT_K sd of what noise alone leaves is not resolved: no Abbe term from noise
+    spread = np.where(spread > TILT_K * scatter, spread, 0.0)
     return np.sqrt(np.clip(spread, 0.0, None))
 
 

@@ -18,7 +18,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from lps_gui.report.figure_spec import (BACKWARD_COLOR, COMPONENT_COLORS, DIRECTION_ARROWS, DIRECTION_NAMES,
-                                        FORWARD_COLOR, IMAGE_ROTATION_COLOR, OUTLIER_COLOR, SPEC_COLOR, TRUTH_COLOR,
+                                        FORWARD_COLOR, IMAGE_ROTATION_COLOR, SPEC_COLOR, TRUTH_COLOR,
                                         TRUTH_COLORS, FigureSpec, Series, num_or_nan)
 from lps_gui.report.planar_figures import planar_figures_from_results
 from lps_gui.sim.truth import centred, residual_from_line, true_deviation_um

@@ -18,7 +18,7 @@ from lps_gui.errors import InputError
 from lps_gui.io.jsonfile import read_json
 from lps_gui.report import sections as R
 from lps_gui.report import summary as S
-from lps_gui.report.figures import figures_from_results
+from lps_gui.report.figures import figure_by_key, figures_from_results, with_spec_band
 from lps_gui.report.planar_report import paint_planar_report
 
 log = logging.getLogger(__name__)
@@ -137,8 +137,6 @@ def _paint_line_report(flow: Any, session_dir: Path, meta: dict[str, Any], resul
 
 def _front_page(flow: Any, meta: dict[str, Any], results: dict[str, Any], version: str) -> None:
     """Page 1: the verdict with U (k = 2), the deviation plot with the limit drawn, the identification."""
-    from lps_gui.report.figures import figure_by_key, with_spec_band
-
     spec = R.stage_spec(meta, results)
     flow.heading("Linear positioning stage \u2014 measurement report", 15)
     R.verdict_section(flow, results, spec, [r for r in S.summary_rows(results) if r.key in R.FRONT_FIGURES])

@@ -17,7 +17,7 @@ from typing import Any
 
 from lps_gui.core.iso230 import ISO_RUNS
 from lps_gui.core.resolution import runs_per_direction
-from lps_gui.report.summary import SpecCheck, spec_checks
+from lps_gui.report.summary import SpecCheck, fmt, spec_checks
 
 PASS_COLOR, FAIL_COLOR, INDICATIVE_COLOR, GREY = "#007a1f", "#c00000", "#a05a00", "#555555"
 # which U of results.json uncertainty.figures_k2 belongs to a check, and whether the check is a run statistic
@@ -43,8 +43,6 @@ class Verdict:
 
     def measured_text(self) -> str:
         """The compared quantity and its value, e.g. "A/2 = 13.1 µm" (the figure page 2 lists as A is twice it)."""
-        from lps_gui.report.summary import fmt
-
         value = "\u2014" if self.measured is None else f"{fmt(self.measured)} {self.unit}"
         return f"{self.quantity} = {value}" if self.quantity else value
 

@@ -2,14 +2,15 @@
 
 Every stage call goes through :class:`StageController` (one stage thread);
 this widget only submits commands and shows what the controller reports.
-Keyboard jog is never a side effect of typing: the arrow keys move the stage
-only while the jog area has focus, or with the "Keyboard jog" box ticked (and
-never while a number, list or text field has focus, where they edit).
+Keyboard jog is never a side effect of typing or clicking: the arrow keys
+move the stage only with the "Keyboard jog" box ticked (off at start), while
+the panel has focus, and never while a number, list or text field has focus,
+where they edit. The readout takes work, machine and offset of every axis
+from one status report, with GRBL's offset sign (work = machine - offset).
 """
 from __future__ import annotations
 
 import math
-import time
 
 from PySide6.QtCore import QEvent, QObject, Qt, QTimer, Signal
 from PySide6.QtGui import QFont, QKeyEvent, QKeySequence, QShortcut
@@ -23,12 +24,11 @@ from lps_gui.core.clock import Clock
 from lps_gui.gui.stage_console import StageConsole
 from lps_gui.gui.sources import BAUD_RATES, SIM, open_stage_source, source_from_text, stage_choices
 from lps_gui.gui.stage_controller import StageController
-from lps_gui.hardware.stage import AXES, StageSetting, StageStatus
+from lps_gui.hardware.stage import AXES, WORK_SYSTEMS, StageSetting, StageStatus
 
 JOG_STEPS_MM = (0.01, 0.1, 1.0, 10.0, 50.0)
 CONTINUOUS = 0.0  # the "hold" step: jog while the button is pressed
 HOLD_JOG_PERIOD_MS = 100  # GRBL's joystick rule: short jogs of v*dt queued while held, jog cancel on release
-MACHINE_REFRESH_S = 0.5
 AXIS_SETS = (("XYZ", "X Y Z"), ("X", "X only"), ("XY", "X Y"))
 STATE_COLORS = {"Idle": "#2a9d3c", "Run": "#1f5fa8", "Jog": "#1f5fa8", "Home": "#1f5fa8", "Hold": "#e07b00",
                 "Alarm": "#d00000", "Door": "#d00000", "Disconnected": "#777777"}
@@ -42,6 +42,7 @@ class StagePanel(QWidget):
     """Connect a stage, watch its position, move it."""
 
     camera_offered = Signal(object)  # the simulated camera that rides the simulated stage, or None
+    _work_system_read = Signal(str)  # from the stage thread
 
     def __init__(self, controller: StageController, clock: Clock | None = None, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -71,45 +72,71 @@ class StagePanel(QWidget):
         g.addWidget(self.baud, 1, 1)
         g.addWidget(self.connect_btn, 1, 2)
 
-        # --- digital readout
-        dro = QGroupBox("Position (work coordinates)")
+        # --- digital readout: work, machine and offset of each axis, all from one status report
+        dro = QGroupBox("Position")
         dg = QGridLayout(dro)
+        dg.setHorizontalSpacing(6)
         big = QFont()
-        big.setPointSize(16)
+        big.setPointSize(15)
         big.setBold(True)
         big.setStyleHint(QFont.StyleHint.Monospace)
         self.readout: dict[str, QLabel] = {}
+        self.machine: dict[str, QLabel] = {}
+        self.offset: dict[str, QLabel] = {}
+        self.zero_buttons: dict[str, QPushButton] = {}
+        self.to_zero_buttons: dict[str, QPushButton] = {}
         self._axis_widgets: dict[str, list[QWidget]] = {ax: [] for ax in AXES}
         self._axes_shown = "".join(AXES)
-        self._machine_shown_at = 0.0
-        for i, ax in enumerate(AXES):
+        self.work_system = QComboBox()
+        for name in WORK_SYSTEMS:
+            self.work_system.addItem(name, name)
+        self.work_system.setToolTip("Work coordinate system (G54-G59) the readout, Go to and Zero refer to")
+        self.work_system.activated.connect(lambda _i: self.select_work_system(self.work_system.currentData()))
+        dg.addWidget(QLabel("Work"), 0, 1, alignment=Qt.AlignmentFlag.AlignRight)
+        dg.addWidget(self.work_system, 0, 2, 1, 2)
+        for c, (text, tip) in enumerate((("Machine", "Machine coordinates (GRBL's homed space)"),
+                                         ("Offset", "Work offset of the selected system, GRBL's sign ($#): "
+                                                    "work = machine − offset"))):
+            head = QLabel(text)
+            head.setToolTip(tip)
+            dg.addWidget(head, 0, 4 + c, alignment=Qt.AlignmentFlag.AlignRight)
+        for i, ax in enumerate(AXES, start=1):
             name = QLabel(ax)
             name.setFont(big)
-            val = QLabel("---")
-            val.setFont(big)
-            val.setAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
-            val.setMinimumWidth(140)
-            dg.addWidget(name, i, 0)
-            dg.addWidget(val, i, 1)
+            val = _fixed_label(big, "-00000.000")
+            mach = _fixed_label(self.font(), "-00000.000")
+            off = _fixed_label(self.font(), "-00000.000")
+            for w in (mach, off):
+                w.setStyleSheet("QLabel { color: #555555; }")
+            zero = QPushButton("Zero")
+            zero.setToolTip(f"Make {ax} read 0 here in the selected work system (asks first)")
+            zero.clicked.connect(lambda _=False, a=ax: self.ask_zero(a))
+            home = QPushButton("→0")
+            home.setToolTip(f"Move {ax} to its work zero at the jog feed")
+            home.clicked.connect(lambda _=False, a=ax: self.go_to_zero(a))
+            for b in (zero, home):
+                b.setFixedWidth(b.fontMetrics().horizontalAdvance(" Zero ") + 16)
             unit = QLabel("mm")
-            dg.addWidget(unit, i, 2)
-            self.readout[ax] = val
-            self._axis_widgets[ax] += [name, val, unit]
-        self.machine_label = QLabel("")
-        self.machine_label.setStyleSheet("QLabel { color: #555555; }")
-        self.machine_label.setToolTip("Machine coordinates (GRBL's homed space) and the work offset")
-        dg.addWidget(self.machine_label, len(AXES), 0, 1, 4)
-        self.state_label = QLabel("Disconnected")
-        self.state_label.setAlignment(Qt.AlignmentFlag.AlignCenter)
-        self.state_label.setMinimumWidth(110)
-        self.feed_label = QLabel("feed 0 mm/min")
-        dg.addWidget(self.state_label, 0, 3)
-        dg.addWidget(self.feed_label, 1, 3)
+            for c, w in enumerate((name, val, unit, mach, off, zero, home)):
+                dg.addWidget(w, i, c)
+            self.readout[ax], self.machine[ax], self.offset[ax] = val, mach, off
+            self.zero_buttons[ax], self.to_zero_buttons[ax] = zero, home
+            self._axis_widgets[ax] += [name, val, unit, mach, off, zero, home]
+        self.state_label = _fixed_label(self.font(), "Disconnected", Qt.AlignmentFlag.AlignCenter)
+        self.state_label.setFixedSize(self.state_label.width() + 20, self.state_label.height() + 6)  # its padding
+        self.feed_label = _fixed_label(self.font(), "feed 00000 mm/min", Qt.AlignmentFlag.AlignLeft)
+        self.feed_label.setText("feed 0 mm/min")
+        state_row = QHBoxLayout()
+        state_row.addWidget(self.state_label)
+        state_row.addWidget(self.feed_label)
+        state_row.addStretch(1)
+        dg.addLayout(state_row, len(AXES) + 1, 0, 1, 7)
         self._show_state("Disconnected")
+        self._zero_box: QMessageBox | None = None
 
         # --- jogging
-        jog = QGroupBox("Jog (click here, then arrow keys X/Y, Page Up/Down Z)")
-        jog.setFocusPolicy(Qt.FocusPolicy.StrongFocus)  # a click on the area gives it the keys
+        jog = QGroupBox("Jog")
+        jog.setFocusPolicy(Qt.FocusPolicy.StrongFocus)  # a click on the area takes the focus off a field
         self.jog_area = jog
         jg = QGridLayout(jog)
         self.jog_buttons: dict[tuple[str, int], QPushButton] = {}
@@ -138,8 +165,9 @@ class StagePanel(QWidget):
         jg.addWidget(QLabel("Feed"), 1, 2)
         jg.addWidget(self.feed, 1, 3)
         self.keyboard_jog = QCheckBox("Keyboard jog")
-        self.keyboard_jog.setToolTip("Arrow keys and Page Up/Down jog while the stage panel has focus "
-                                     "(number and list fields keep their keys)")
+        self.keyboard_jog.setChecked(False)  # off at start: a key never moves the stage unasked
+        self.keyboard_jog.setToolTip("When ticked: arrow keys jog X/Y and Page Up/Down jog Z while the stage panel "
+                                     "has focus (number and list fields keep their keys)")
         self.keyboard_state = QLabel()
         jg.addWidget(self.keyboard_jog, 2, 2)
         jg.addWidget(self.keyboard_state, 2, 3)
@@ -169,15 +197,10 @@ class StagePanel(QWidget):
         self.goto_btn = QPushButton("Go to")
         self.goto_btn.setToolTip("Move to this work coordinate at the jog feed")
         self.goto_btn.clicked.connect(self.go_to)
-        self.zero_btn = QPushButton("Zero")
-        self.zero_btn.setEnabled(False)
-        self.zero_btn.setToolTip("Set the work zero of this axis here (G10 L20 P1: the G54 offset; GRBL only)")
-        self.zero_btn.clicked.connect(self.zero)
         goto.addWidget(QLabel("Go to"))
         goto.addWidget(self.goto_axis)
         goto.addWidget(self.goto_target, 1)
         goto.addWidget(self.goto_btn)
-        goto.addWidget(self.zero_btn)
         goto.addWidget(QLabel("Axes"))
         goto.addWidget(self.axes)
 
@@ -185,19 +208,18 @@ class StagePanel(QWidget):
         cmds = QHBoxLayout()
         self.home_btn = QPushButton("Home")
         self.unlock_btn = QPushButton("Unlock")
-        self.hold_btn = QPushButton("Feed hold")
         self.resume_btn = QPushButton("Resume")
         self.reset_btn = QPushButton("Reset")
         self.reset_btn.setToolTip("Soft reset (Ctrl-X): stops at once; needed after a limit alarm ('Reset to continue')")
-        self.reset_btn.clicked.connect(lambda: self.controller.call_now("reset", "soft_reset"))
-        self.stop_btn = QPushButton("Stop")
+        self.reset_btn.clicked.connect(self.reset)
+        self.stop_btn = QPushButton("Stop (feed hold)")
         self.stop_btn.setStyleSheet("QPushButton { color: #b00020; font-weight: bold; }")
-        self.stop_btn.setToolTip("Cancel the jog and reset the controller (Esc)")
-        for b in (self.home_btn, self.unlock_btn, self.hold_btn, self.resume_btn, self.reset_btn, self.stop_btn):
+        self.stop_btn.setToolTip("Esc: cancels a jog, or holds a programmed move (feed hold). "
+                                 "Resume continues the move; Reset discards it")
+        for b in (self.home_btn, self.unlock_btn, self.resume_btn, self.stop_btn, self.reset_btn):
             cmds.addWidget(b)
         self.home_btn.clicked.connect(self.home)
         self.unlock_btn.clicked.connect(lambda: self.controller.call("unlock", "unlock"))
-        self.hold_btn.clicked.connect(lambda: self.controller.call("feed hold", "feed_hold"))
         self.resume_btn.clicked.connect(lambda: self.controller.call("resume", "resume"))
         self.stop_btn.clicked.connect(self.stop)
 
@@ -243,6 +265,7 @@ class StagePanel(QWidget):
         controller.connection_changed.connect(self._on_connection)
         controller.settings_read.connect(self.show_settings)
         controller.opened.connect(lambda _stage, extra, _d: self.camera_offered.emit(extra))
+        self._work_system_read.connect(self._show_work_system)
         self._shortcuts = []
         self._lock_box: QMessageBox | None = None
         self._lock_asked = False
@@ -364,25 +387,30 @@ class StagePanel(QWidget):
         self.source.setEnabled(not connected)
         self.baud.setEnabled(not connected)
         self._set_enabled(connected)
-        stage = self.controller.stage
-        self.zero_btn.setEnabled(connected and callable(getattr(stage, "set_work_zero", None)))
         self._lock_asked = False
         if connected:
             self.controller.read_settings()
+            self._read_work_system()
         else:
             self._show_state("Disconnected")
-            for v in self.readout.values():
-                v.setText("---")
+            for labels in (self.readout, self.machine, self.offset):
+                for v in labels.values():
+                    v.setText("---")
 
     def connect_failed(self) -> None:
         """The controller could not open the source: offer Connect again."""
         self._on_connection(False, "")
 
     def _set_enabled(self, on: bool) -> None:
-        for b in list(self.jog_buttons.values()) + [self.home_btn, self.unlock_btn, self.hold_btn, self.resume_btn,
-                                                    self.stop_btn, self.read_settings_btn, self.write_settings_btn,
-                                                    self.goto_btn, self.reset_btn]:
+        for b in list(self.jog_buttons.values()) + list(self.to_zero_buttons.values()) + [
+                self.home_btn, self.unlock_btn, self.resume_btn, self.stop_btn, self.read_settings_btn,
+                self.write_settings_btn, self.goto_btn, self.reset_btn]:
             b.setEnabled(on)
+        stage = self.controller.stage
+        offsets = on and stage is not None and bool(stage.work_systems)
+        for b in self.zero_buttons.values():
+            b.setEnabled(offsets)
+        self.work_system.setEnabled(offsets)
 
     # ------------------------------------------------------------------ readout
     def show_status(self, st: StageStatus) -> None:
@@ -398,18 +426,14 @@ class StagePanel(QWidget):
             self._lock_asked = False  # a later alarm asks again
 
     def _show_machine(self, st: StageStatus) -> None:
-        """Machine position and offset, at most twice a second while moving: a changed label re-lays out the
-        whole window, which at the poll rate starved the GUI thread during a capture."""
-        now = time.monotonic()
-        if st.state in ("Run", "Jog", "Home") and now - self._machine_shown_at < MACHINE_REFRESH_S:
-            return
-        shown = [i for i, ax in enumerate(AXES) if ax in self._axes_shown]
-        offset = [st.work_mm[i] - st.machine_mm[i] for i in shown]
-        text = ("machine " + "  ".join(f"{AXES[i]} {st.machine_mm[i]:.3f}" for i in shown)
-                + ("   offset " + " ".join(f"{v:+.3f}" for v in offset) if any(offset) else ""))
-        if text != self.machine_label.text():
-            self.machine_label.setText(text)
-            self._machine_shown_at = now
+        """Machine position and offset (GRBL's WCO = machine - work) of the same report as the work readout.
+
+        The labels have a fixed size, so a new text repaints them without re-laying out the window
+        (at the poll rate that starved the GUI thread during a capture).
+        """
+        for ax, m, w in zip(AXES, st.machine_mm, st.work_mm):
+            self.machine[ax].setText(f"{m:.3f}")
+            self.offset[ax].setText(f"{m - w:.3f}")
 
     def _ask_home_or_unlock(self) -> None:
         """A stage in Alarm (GRBL powers up so with homing enabled) moves only after $H or $X: ask which."""
@@ -478,9 +502,50 @@ class StagePanel(QWidget):
         self._hold_timer.stop()
         self.controller.call_now("jog cancel", "jog_cancel")
 
-    def zero(self) -> None:
-        axis = self.goto_axis.currentData()
-        self.controller.call(f"zero {axis} (work offset)", "set_work_zero", axis)
+    # ------------------------------------------------------------------ work coordinates
+    def _read_work_system(self) -> None:
+        stage = self.controller.stage
+        if stage is None or not stage.work_systems:
+            self.work_system.setCurrentIndex(0)
+            return
+        fut = self.controller.call("read the work coordinate system", "work_system")
+        if fut is not None:
+            fut.add_done_callback(lambda f: None if f.exception() else self._work_system_read.emit(f.result()))
+
+    def _show_work_system(self, name: str) -> None:
+        i = self.work_system.findData(name)
+        if i >= 0:
+            self.work_system.setCurrentIndex(i)
+
+    def select_work_system(self, name: str) -> None:
+        """Make ``name`` (G54-G59) the system the readout, Go to and Zero use."""
+        if self.controller.call(f"select work system {name}", "select_work_system", name) is not None:
+            self._show_work_system(name)
+
+    def ask_zero(self, axis: str) -> None:
+        """Zero ``axis`` in the selected system after the operator confirmed (it rewrites a stored offset)."""
+        system = self.work_system.currentData()
+        box = QMessageBox(QMessageBox.Icon.Question, f"Zero {axis} in {system}?",
+                          f"Make {axis} read 0.000 mm here in {system}?\n"
+                          f"This changes the {system} offset stored in the controller; the other systems "
+                          "and the machine position stay as they are.",
+                          QMessageBox.StandardButton.Yes | QMessageBox.StandardButton.Cancel, self)
+        box.setDefaultButton(QMessageBox.StandardButton.Cancel)
+        box.button(QMessageBox.StandardButton.Yes).setText(f"Zero {axis} in {system}")
+        box.finished.connect(lambda r: self.zero(axis) if r == QMessageBox.StandardButton.Yes else None)
+        box.open()
+        self._zero_box = box
+
+    def zero(self, axis: str) -> None:
+        system = self.work_system.currentData()
+        self.controller.call(f"zero {axis} in {system} (work offset)", "set_work_zero", axis)
+
+    def go_to_zero(self, axis: str) -> None:
+        self.controller.call(f"go to {axis} 0 ({self.work_system.currentData()})", "move_to", 0.0, self.feed.value(), axis)
+
+    def reset(self) -> None:
+        """Soft reset (Ctrl-X): what a feed hold cannot do, discard the held move; GRBL may then need unlocking."""
+        self.controller.call_now("reset", "soft_reset")
 
     def go_to(self) -> None:
         axis = self.goto_axis.currentData()
@@ -565,3 +630,13 @@ def travel_text(values: dict[int, float]) -> str:
 def _is_integer_setting(s: StageSetting) -> bool:
     unit = (s.unit or "").lower()
     return unit in ("mask", "boolean", "bool", "") and float(s.value).is_integer() and "mm" not in unit
+
+
+def _fixed_label(font: QFont, widest: str, align: Qt.AlignmentFlag = Qt.AlignmentFlag.AlignRight) -> QLabel:
+    """A label sized once for ``widest``: new text repaints it without a window re-layout."""
+    label = QLabel("---")
+    label.setFont(font)
+    label.setAlignment(align | Qt.AlignmentFlag.AlignVCenter)
+    fm = label.fontMetrics()
+    label.setFixedSize(fm.horizontalAdvance(widest) + 8, fm.height() + 4)
+    return label

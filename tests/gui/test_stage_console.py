@@ -121,7 +121,7 @@ def test_typed_pty_of_an_external_grbl_connects_asks_home_or_unlock_and_shows_ho
     qtbot.waitUntil(lambda: panel.state_label.text() == "Idle", timeout=20000)
     qtbot.waitUntil(lambda: any("homing finished" in r.getMessage() for r in caplog.records), timeout=5000)
     assert external_grbl.stage.homed
-    assert "machine X -99.000" in panel.machine_label.text()
+    assert panel.machine["X"].text() == "-99.000"
 
 
 def test_console_sends_lines_keeps_history_and_shows_replies(qtbot, window, external_grbl):
@@ -157,10 +157,16 @@ def test_console_sends_lines_keeps_history_and_shows_replies(qtbot, window, exte
     qtbot.waitUntil(lambda: window.stage_ctl.last_status.state == "Idle", timeout=5000)
     panel.goto_btn.click()
     qtbot.waitUntil(lambda: abs(float(panel.readout["X"].text()) - 42.5) < 1e-6, timeout=10000)
-    assert panel.zero_btn.isEnabled()
-    panel.zero_btn.click()  # the work zero moves here; the machine position does not
+    machine = float(panel.machine["X"].text())
+    assert panel.zero_buttons["X"].isEnabled() and panel.work_system.currentData() == "G54"
+    panel.zero_buttons["X"].click()  # asks first, naming the system it changes
+    box = panel._zero_box
+    assert box is not None and "G54" in box.text() and "G54" in box.windowTitle()
+    box.button(box.StandardButton.Yes).click()  # the work zero moves here; the machine position does not
     qtbot.waitUntil(lambda: abs(float(panel.readout["X"].text())) < 1e-6, timeout=10000)
-    assert "offset" in panel.machine_label.text()
+    qtbot.waitUntil(lambda: abs(float(panel.offset["X"].text()) - machine) < 1e-6, timeout=5000)  # GRBL's sign
+    assert float(panel.machine["X"].text()) == pytest.approx(machine)
+    assert window.stage_ctl.stage.work_offsets()["G54"][0] == pytest.approx(machine)  # $# agrees with the DRO
     assert external_grbl.stage.status().work_mm[0] == pytest.approx(42.5)
 
 
@@ -168,7 +174,7 @@ def test_console_is_disabled_for_the_simulated_stage_and_axes_can_be_hidden(qtbo
     connect_sim(qtbot, window)
     panel = window.stage_panel
     assert not panel.console.line.isEnabled() and "no G-code console" in panel.console.line.placeholderText()
-    assert not panel.zero_btn.isEnabled()  # the simulated stage has no work offsets
+    assert panel.zero_buttons["X"].isEnabled() and panel.work_system.isEnabled()  # GRBL's work offset model
     panel.axes.setCurrentIndex(panel.axes.findData("X"))
     assert panel.readout["X"].isVisible() and not panel.readout["Y"].isVisible()
     assert not panel.jog_buttons[("Z", +1)].isVisible()

@@ -283,13 +283,6 @@ class StagePanel(QWidget):
         self._set_enabled(False)
 
     # ------------------------------------------------------------------ keyboard jog
-    def _in_jog_area(self, w: QWidget | None) -> bool:
-        while w is not None:
-            if w is self.jog_area:
-                return True
-            w = w.parentWidget()
-        return False
-
     def keyboard_jog_active(self, w: QWidget | None = None) -> bool:
         """Would a jog key pressed in ``w`` (default: the focus widget) move the stage?"""
         w = w if w is not None else QApplication.focusWidget()
@@ -298,7 +291,7 @@ class StagePanel(QWidget):
         if isinstance(w, (QAbstractSpinBox, QComboBox, QLineEdit, QAbstractItemView)) or isinstance(
                 w.parentWidget(), (QAbstractSpinBox, QComboBox)):
             return False  # the key edits the field
-        return self._in_jog_area(w) or self.keyboard_jog.isChecked()
+        return self.keyboard_jog.isChecked()
 
     def _jog_key(self, event: QKeyEvent) -> bool:
         """Jog for a jog key if keyboard jog is active for the focus widget; True when the key was used."""

@@ -51,24 +51,32 @@ def test_a_key_press_in_a_focused_spin_box_does_not_move_the_stage(qtbot, window
     assert jogs == []
 
 
-def test_keyboard_jog_when_the_jog_area_has_focus_or_the_toggle_is_on(qtbot, window, jogs):
-    connect_sim(qtbot, window)
+def test_keyboard_jog_only_while_the_toggle_is_on(qtbot, window, jogs):
+    """Issue 26 item 8: right after Connect (the Stage panel has focus) arrows do nothing until the toggle is on."""
     panel = window.stage_panel
+    assert not panel.keyboard_jog.isChecked()  # off at start
+    connect_sim(qtbot, window)
     panel.step.setCurrentIndex(panel.step.findData(1.0))
     panel.feed.setValue(3000.0)
+    before = _position(window)
+    for w in (panel.connect_btn, panel.jog_area, panel.jog_buttons[("X", -1)], panel.read_settings_btn):
+        w.setFocus()
+        qtbot.waitUntil(lambda w=w: QApplication.focusWidget() is w, timeout=2000)
+        assert panel.keyboard_state.text() == "keys jog: off"
+        for key in (Qt.Key.Key_Left, Qt.Key.Key_Right, Qt.Key.Key_Up, Qt.Key.Key_PageUp):
+            qtbot.keyClick(w, key)
+    qtbot.wait(300)
+    assert jogs == [] and _position(window) == before
+    panel.keyboard_jog.setChecked(True)
     panel.jog_area.setFocus()
     qtbot.waitUntil(lambda: panel.keyboard_state.text() == "keys jog: ON", timeout=2000)
     y0 = _position(window)[1]
     qtbot.keyClick(panel.jog_area, Qt.Key.Key_Up)
     qtbot.waitUntil(lambda: abs(_position(window)[1] - (y0 + 1.0)) < 1e-6, timeout=10000)
-    assert jogs == [("Y", +1)]
-    panel.read_settings_btn.setFocus()  # outside the jog area: only with the toggle
-    qtbot.keyClick(panel.read_settings_btn, Qt.Key.Key_Right)
-    assert jogs == [("Y", +1)]
-    panel.keyboard_jog.setChecked(True)
-    assert panel.keyboard_state.text() == "keys jog: ON"
     qtbot.keyClick(panel.read_settings_btn, Qt.Key.Key_Right)
     assert jogs == [("Y", +1), ("X", +1)]
+    panel.keyboard_jog.setChecked(False)
+    assert panel.keyboard_state.text() == "keys jog: off"
 
 
 def test_serial_ports_by_id_lists_stable_names(tmp_path):

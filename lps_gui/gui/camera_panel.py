@@ -26,6 +26,7 @@ from lps_gui.camera import controls
 from lps_gui.camera.base import Camera
 from lps_gui.camera.frame_watch import FrameWatch
 from lps_gui.core.board import Board
+from lps_gui.gui.fit import guard_wheel
 from lps_gui.gui.preview import PreviewGrabber
 from lps_gui.gui.sources import CAMERA_FOLLOWS_STAGE, camera_choices, open_camera_source
 
@@ -205,6 +206,7 @@ class CameraPanel(QWidget):
             if auto is not None:
                 self.controls_grid.addWidget(auto, row, 2)
             self.control_widgets[name] = (spin, auto)
+        guard_wheel(self.controls_box)  # built per camera: after the window guarded its own fields
         self.lock_controls(self._locked)
 
     def _set_control(self, name: str, value: float) -> None:

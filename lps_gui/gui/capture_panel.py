@@ -149,6 +149,7 @@ class CapturePanel(QWidget):
             row.addWidget(b)
         self.progress = QProgressBar()
         self.eta = QLabel("idle")
+        self.eta.setWordWrap(True)  # a long error wraps; it does not widen the dock
 
         stack(self, [plan_box, (self.planar_editor, 1), self.report_setup, sess, row, self.progress, self.eta]).addStretch(1)
 

@@ -135,6 +135,7 @@ class EstimationPanel(QWidget):
         self.progress = QProgressBar()
         self.progress.setFormat("%p%")
         self.message = QLabel("idle")
+        self.message.setWordWrap(True)  # a long error wraps; it does not widen the dock
         row = QHBoxLayout()
         row.addWidget(self.run_btn)
         row.addWidget(self.cancel_btn)

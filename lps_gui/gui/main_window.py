@@ -23,6 +23,7 @@ from lps_gui.core.clock import Clock
 from lps_gui.gui.camera_panel import CameraPanel
 from lps_gui.gui.capture_panel import CapturePanel
 from lps_gui.gui.estimation_panel import EstimationPanel
+from lps_gui.gui.fit import clamp_to_screen, guard_wheel, scrolled
 from lps_gui.gui.intrinsics_panel import IntrinsicsPanel
 from lps_gui.gui.job_runner import JobRunner
 from lps_gui.gui.log_panel import LogPanel
@@ -38,6 +39,7 @@ log = logging.getLogger("lps_gui.gui")
 ORGANIZATION = "lps-calib"
 APPLICATION = "lps-gui"
 LAYOUT_VERSION = 1
+SCROLLED = ("stage", "camera", "intrinsics", "capture", "estimation")  # they grow; the window must not
 
 
 class MainWindow(QMainWindow):
@@ -73,7 +75,7 @@ class MainWindow(QMainWindow):
         ):
             dock = QDockWidget(title, self)
             dock.setObjectName(f"dock_{name}")
-            dock.setWidget(widget)
+            dock.setWidget(scrolled(widget) if name in SCROLLED else widget)
             self.docks[name] = dock
         self.default_layout()
 
@@ -89,6 +91,7 @@ class MainWindow(QMainWindow):
         self._build_menus()
         self._wire()
         self.restore_settings()
+        guard_wheel(self)
         preload_backends()
         log.info("lps-gui %s ready", __version__)
 
@@ -108,6 +111,7 @@ class MainWindow(QMainWindow):
         d["stage"].raise_()
         self.resizeDocks([d["stage"], d["results"], d["camera"]], [420, 840, 340], Qt.Orientation.Horizontal)
         self.resizeDocks([d["camera"], d["log"]], [600, 250], Qt.Orientation.Vertical)
+        clamp_to_screen(self)
 
     def show_panel(self, name: str) -> None:
         dock = self.docks[name]
@@ -333,6 +337,7 @@ class MainWindow(QMainWindow):
             self.restoreGeometry(geometry)
         else:
             self.resize(1600, 1000)
+        clamp_to_screen(self)  # a geometry saved on a bigger screen, or the default on a small one
         state = s.value("window/state")
         if state is not None:
             self.restoreState(state, LAYOUT_VERSION)

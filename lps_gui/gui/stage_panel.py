@@ -172,6 +172,7 @@ class StagePanel(QWidget):
         jg.addWidget(self.keyboard_jog, 2, 2)
         jg.addWidget(self.keyboard_state, 2, 3)
         self.travel_label = QLabel("travel: read the settings ($$)")
+        self.travel_label.setWordWrap(True)
         self.travel_label.setStyleSheet("QLabel { color: #555555; }")
         jg.addWidget(self.travel_label, 3, 0, 1, 4)
         self.axes = QComboBox()

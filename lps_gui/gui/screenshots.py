@@ -95,15 +95,15 @@ def make_screenshots(out_dir: Path) -> list[Path]:
             prepare(window, work)
             window.show_panel("stage")
             rp = window.results_panel
-            rp.tabs.setCurrentWidget(rp.plots["deviation"])
+            rp.show_figure("deviation")
             written = [render_to_png(window, out_dir / "main.png")]
             for name in PANELS:
                 window.show_panel(name)
                 if name == "results":  # the outlier view, found from the residual plot
-                    rp.tabs.setCurrentWidget(rp.plots["residuals"])
+                    rp.show_figure("residuals")
                 wait_until(lambda: False, 0.2)
                 written.append(render_to_png(window.docks[name], out_dir / f"{name}.png"))
-            rp.tabs.setCurrentWidget(rp.plots["deviation"])
+            rp.show_figure("deviation")
             written.append(render_to_png(window.docks["results"], out_dir / "results-deviation.png"))
             window.show_panel("stage")
         finally:

@@ -92,6 +92,8 @@ class ResultsPanel(QWidget):
         self.accuracy_page.addWidget(self.iso_table)
         self.accuracy_page.addWidget(targets)
         self.accuracy_page.setSizes([300, 200])
+        for w in (self.target_label, self.target_table):
+            w.setVisible(False)  # until results with ISO 230-2 figures come
         self.position_table = TextTable(numeric=range(1, 30))
         self.detail = ViewDetail()
         split = QSplitter(Qt.Orientation.Horizontal)

@@ -52,7 +52,7 @@ class StagePanel(QWidget):
 
         # --- connection
         self.source = QComboBox()
-        self.source.setMinimumContentsLength(18)
+        self.source.setMinimumContentsLength(14)
         self.source.setEditable(True)  # an external emulator's /dev/pts/N, a port not listed
         self.source.setInsertPolicy(QComboBox.InsertPolicy.NoInsert)
         self.source.setToolTip("Pick a source, or type a port: /dev/pts/5, /dev/serial/by-id/..., COM3, grbl:PORT")
@@ -77,7 +77,7 @@ class StagePanel(QWidget):
         dg = QGridLayout(dro)
         dg.setHorizontalSpacing(6)
         big = QFont()
-        big.setPointSize(15)
+        big.setPointSize(14)
         big.setBold(True)
         big.setStyleHint(QFont.StyleHint.Monospace)
         self.readout: dict[str, QLabel] = {}
@@ -92,20 +92,20 @@ class StagePanel(QWidget):
             self.work_system.addItem(name, name)
         self.work_system.setToolTip("Work coordinate system (G54-G59) the readout, Go to and Zero refer to")
         self.work_system.activated.connect(lambda _i: self.select_work_system(self.work_system.currentData()))
-        dg.addWidget(QLabel("Work"), 0, 1, alignment=Qt.AlignmentFlag.AlignRight)
-        dg.addWidget(self.work_system, 0, 2, 1, 2)
-        for c, (text, tip) in enumerate((("Machine", "Machine coordinates (GRBL's homed space)"),
-                                         ("Offset", "Work offset of the selected system, GRBL's sign ($#): "
+        dg.addWidget(self.work_system, 0, 1, alignment=Qt.AlignmentFlag.AlignRight)
+        for c, (text, tip) in enumerate((("Machine", "Machine coordinates (GRBL's homed space), mm"),
+                                         ("Offset", "Work offset of the selected system in mm, GRBL's sign ($#): "
                                                     "work = machine − offset"))):
             head = QLabel(text)
             head.setToolTip(tip)
-            dg.addWidget(head, 0, 4 + c, alignment=Qt.AlignmentFlag.AlignRight)
+            dg.addWidget(head, 0, 2 + c, alignment=Qt.AlignmentFlag.AlignRight)
         for i, ax in enumerate(AXES, start=1):
             name = QLabel(ax)
             name.setFont(big)
-            val = _fixed_label(big, "-00000.000")
-            mach = _fixed_label(self.font(), "-00000.000")
-            off = _fixed_label(self.font(), "-00000.000")
+            val = _fixed_label(big, "-0000.000")
+            val.setToolTip(f"{ax} in work coordinates of the selected system, mm")
+            mach = _fixed_label(self.font(), "-0000.000")
+            off = _fixed_label(self.font(), "-0000.000")
             for w in (mach, off):
                 w.setStyleSheet("QLabel { color: #555555; }")
             zero = QPushButton("Zero")
@@ -115,13 +115,12 @@ class StagePanel(QWidget):
             home.setToolTip(f"Move {ax} to its work zero at the jog feed")
             home.clicked.connect(lambda _=False, a=ax: self.go_to_zero(a))
             for b in (zero, home):
-                b.setFixedWidth(b.fontMetrics().horizontalAdvance(" Zero ") + 16)
-            unit = QLabel("mm")
-            for c, w in enumerate((name, val, unit, mach, off, zero, home)):
+                b.setFixedWidth(b.fontMetrics().horizontalAdvance("Zero") + 14)
+            for c, w in enumerate((name, val, mach, off, zero, home)):
                 dg.addWidget(w, i, c)
             self.readout[ax], self.machine[ax], self.offset[ax] = val, mach, off
             self.zero_buttons[ax], self.to_zero_buttons[ax] = zero, home
-            self._axis_widgets[ax] += [name, val, unit, mach, off, zero, home]
+            self._axis_widgets[ax] += [name, val, mach, off, zero, home]
         self.state_label = _fixed_label(self.font(), "Disconnected", Qt.AlignmentFlag.AlignCenter)
         self.state_label.setFixedSize(self.state_label.width() + 20, self.state_label.height() + 6)  # its padding
         self.feed_label = _fixed_label(self.font(), "feed 00000 mm/min", Qt.AlignmentFlag.AlignLeft)
@@ -130,7 +129,7 @@ class StagePanel(QWidget):
         state_row.addWidget(self.state_label)
         state_row.addWidget(self.feed_label)
         state_row.addStretch(1)
-        dg.addLayout(state_row, len(AXES) + 1, 0, 1, 7)
+        dg.addLayout(state_row, len(AXES) + 1, 0, 1, 6)
         self._show_state("Disconnected")
         self._zero_box: QMessageBox | None = None
 
@@ -206,7 +205,7 @@ class StagePanel(QWidget):
         goto.addWidget(self.axes)
 
         # --- machine commands
-        cmds = QHBoxLayout()
+        cmds = QGridLayout()
         self.home_btn = QPushButton("Home")
         self.unlock_btn = QPushButton("Unlock")
         self.resume_btn = QPushButton("Resume")
@@ -217,8 +216,10 @@ class StagePanel(QWidget):
         self.stop_btn.setStyleSheet("QPushButton { color: #b00020; font-weight: bold; }")
         self.stop_btn.setToolTip("Esc: cancels a jog, or holds a programmed move (feed hold). "
                                  "Resume continues the move; Reset discards it")
-        for b in (self.home_btn, self.unlock_btn, self.resume_btn, self.stop_btn, self.reset_btn):
-            cmds.addWidget(b)
+        for i, b in enumerate((self.home_btn, self.unlock_btn, self.resume_btn)):
+            cmds.addWidget(b, 0, i)
+        cmds.addWidget(self.stop_btn, 1, 0, 1, 2)
+        cmds.addWidget(self.reset_btn, 1, 2)
         self.home_btn.clicked.connect(self.home)
         self.unlock_btn.clicked.connect(lambda: self.controller.call("unlock", "unlock"))
         self.resume_btn.clicked.connect(lambda: self.controller.call("resume", "resume"))

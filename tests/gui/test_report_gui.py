@@ -79,12 +79,16 @@ def test_results_open_on_accuracy_with_limit_drawn_and_open_report(qtbot, window
     assert rp.open_report_btn.isEnabled() and rp.report_path == folder / "report.pdf"
 
 
-def test_results_show_every_column_all_tabs_and_the_per_target_table(qtbot, window, tmp_path):
+def test_results_show_every_column_all_tabs_and_the_per_target_table(qtbot, window, tmp_path, monkeypatch):
     """Issue 26 item 10: U (k = 2) and Unit in sight, no tab behind scroll arrows, the ISO per-target table."""
     from tests.report.conftest import make_results
 
     results, _truth = make_results()
+    import lps_gui.gui.main_window as main_window
+
+    monkeypatch.setattr(main_window, "clamp_to_screen", lambda w: None)  # a 1600 px screen, not offscreen's 800
     window.resize(1600, 960)
+    window.default_layout()  # the first start's layout
     rp = window.results_panel
     window.show_panel("results")
     with qtbot.waitSignal(rp.drawing_done, timeout=20000):

@@ -26,7 +26,10 @@ def _fits(qtbot, window) -> None:
     assert window.frameGeometry().height() <= SCREEN_H, window.frameGeometry()
 
 
-def test_the_window_stays_within_a_1000_px_screen_with_every_section_expanded(qtbot, window):
+def test_the_window_stays_within_a_1000_px_screen_with_every_section_expanded(qtbot, window, monkeypatch):
+    import lps_gui.gui.main_window as main_window
+
+    monkeypatch.setattr(main_window, "clamp_to_screen", lambda w: None)  # offscreen's screen is 800x600: not it
     window.resize(1600, SCREEN_H - 40)
     _fits(qtbot, window)
     _expand_everything(window)
@@ -34,6 +37,15 @@ def test_the_window_stays_within_a_1000_px_screen_with_every_section_expanded(qt
     window.default_layout()  # View > Reset layout
     _fits(qtbot, window)
     assert window.docks["stage"].width() < 560
+
+
+def test_a_saved_geometry_larger_than_the_screen_is_clamped(qtbot, window):
+    from lps_gui.gui.fit import available_geometry, clamp_to_screen
+
+    area = available_geometry(window)
+    window.resize(area.width() + 500, area.height() + 500)
+    clamp_to_screen(window)
+    assert window.frameGeometry().height() <= area.height() and window.frameGeometry().width() <= area.width()
 
 
 def test_a_long_error_does_not_widen_the_left_dock(qtbot, window):

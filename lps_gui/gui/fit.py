@@ -68,7 +68,7 @@ def clamp_to_screen(widget: QWidget) -> None:
     if (w, h) != (widget.width(), widget.height()):
         widget.resize(w, h)
     frame = widget.frameGeometry()
-    x = min(max(frame.x(), area.left()), area.right() + 1 - frame.width())
-    y = min(max(frame.y(), area.top()), area.bottom() + 1 - frame.height())
+    x = max(min(frame.x(), area.right() + 1 - frame.width()), area.left())  # too wide: the left edge stays seen
+    y = max(min(frame.y(), area.bottom() + 1 - frame.height()), area.top())
     if (x, y) != (frame.x(), frame.y()):
         widget.move(x, y)

@@ -345,7 +345,7 @@ class CapturePanel(QWidget):
         job.progress.connect(self._on_progress)
         job.succeeded.connect(self._on_summary)
         job.cancelled.connect(lambda msg: self.eta.setText(msg))
-        job.failed.connect(lambda msg, _tb: self.eta.setText(f"stopped: {msg}; captured frames are kept"))
+        job.failed.connect(lambda msg, _tb: self.eta.setText(f"stopped: {msg}" + self._kept()))
         job.finished.connect(self._on_finished)
         self.job = job
         self._t0 = time.monotonic()
@@ -408,7 +408,11 @@ class CapturePanel(QWidget):
         """The stage vanished: stop the capture; what is on disk stays."""
         if self.job is not None:
             self.abort()
-            self.eta.setText(f"stage lost: {message}; captured frames are kept, resume later")
+            self.eta.setText(f"stage lost: {message}" + (self._kept() + ", resume later" if self.progress.value() > 0 else ""))
+
+    def _kept(self) -> str:
+        """What a stopped capture leaves: said only when frames were captured."""
+        return "; the captured frames are kept" if self.progress.value() > 0 else "; no frame was captured"
 
     def _on_progress(self, done: int, total: int, message: str) -> None:
         self.progress.setMaximum(max(total, 1))
@@ -419,6 +423,8 @@ class CapturePanel(QWidget):
                          + (f" — {message}" if message else ""))
 
     def _on_finished(self) -> None:
+        if self.job is not None and self.job.error is not None:
+            self.progress.reset()  # a failed or aborted run leaves no half-full bar behind
         self.job = None
         self.engine = None
         self.camera_panel.pause(False)

@@ -219,6 +219,8 @@ class EstimationPanel(QWidget):
         self.table.set_rows(parameter_rows(results))
 
     def _on_finished(self) -> None:
+        if self.job is not None and self.job.error is not None:
+            self.progress.reset()
         self.run_btn.setEnabled(True)
         self.cancel_btn.setEnabled(False)
         self.job = None

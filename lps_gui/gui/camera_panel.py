@@ -59,6 +59,8 @@ class CameraPanel(QWidget):
         self.control_widgets: dict[str, tuple[QDoubleSpinBox, QCheckBox | None]] = {}
 
         self.source = QComboBox()
+        self.source.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+        self.source.setMinimumContentsLength(12)  # a long label elides; the dock keeps its width
         self.open_btn = QPushButton("Start preview")
         top = QHBoxLayout()
         top.addWidget(QLabel("Source"))
@@ -148,6 +150,8 @@ class CameraPanel(QWidget):
         if on != self.sim_expected:
             self.sim_expected = on
             self.set_sim_camera(self.sim_camera)
+            if on and self.grabber is None:
+                self.source.setCurrentIndex(max(self.source.findData(CAMERA_FOLLOWS_STAGE), 0))
 
     def toggle(self) -> None:
         if self.grabber is not None:

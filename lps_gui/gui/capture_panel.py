@@ -380,6 +380,10 @@ class CapturePanel(QWidget):
         log.info("capture: %.3f s per frame measured; used for the next estimate", self.frame_s)
         self.update_summary()
 
+    def set_folder(self, folder: Path) -> None:
+        """The folder the next capture writes (empty: a new dated folder)."""
+        self.folder.set_text(str(folder))
+
     def set_board(self, board: Board) -> None:
         """Hook for the main window: the board the simulated rig really has."""
         self.board_changed.emit(board)

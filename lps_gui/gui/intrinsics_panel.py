@@ -133,9 +133,11 @@ class IntrinsicsPanel(QWidget):
         row1 = QHBoxLayout()
         for b in (self.add_btn, self.folder_btn, self.clear_btn):
             row1.addWidget(b)
-        row2 = QHBoxLayout()
-        for b in (self.calib_btn, self.crossval_btn, self.cancel_btn, self.load_btn, self.save_btn):
+        row2 = QHBoxLayout()  # two rows of buttons: the panel fits a 440 px dock
+        for b in (self.calib_btn, self.crossval_btn, self.cancel_btn):
             row2.addWidget(b)
+        for b in (self.load_btn, self.save_btn):
+            row1.addWidget(b)
         self.message = QLabel("Add 6–30 images of the board in varied poses, then calibrate.")
         self.message.setWordWrap(True)
 

@@ -73,7 +73,7 @@ def prepare(window, work: Path) -> None:
 
     # capture: the plan of the session above, into a fresh folder
     window.capture_panel.set_plan(spec.plan)
-    window.capture_panel.folder.set_text(str(work / "new-session"))
+    window.capture_panel.set_folder(work / "new-session")
 
 
 def make_screenshots(out_dir: Path) -> list[Path]:

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 
-from PySide6.QtCore import QEvent, QObject, Qt, QTimer, Signal
+from PySide6.QtCore import QEvent, QObject, QSettings, Qt, QTimer, Signal
 from PySide6.QtGui import QFont, QKeyEvent, QKeySequence, QShortcut
 from PySide6.QtWidgets import (
     QAbstractButton, QAbstractItemView, QAbstractSpinBox, QApplication, QCheckBox, QComboBox, QDoubleSpinBox, QGridLayout, QGroupBox,
@@ -42,6 +42,7 @@ class StagePanel(QWidget):
     """Connect a stage, watch its position, move it."""
 
     camera_offered = Signal(object)  # the simulated camera that rides the simulated stage, or None
+    source_changed = Signal(object)  # the source now chosen (sim, emulator, grbl:PORT) or None: not understood
     _work_system_read = Signal(str)  # from the stage thread
 
     def __init__(self, controller: StageController, clock: Clock | None = None, parent: QWidget | None = None) -> None:
@@ -261,6 +262,7 @@ class StagePanel(QWidget):
         self.lower_tabs.addTab(self.console, "Console")
         lay.addWidget(self.lower_tabs, 1)
 
+        self.source.currentTextChanged.connect(lambda _t: self.source_changed.emit(self.current_source()))
         self.refresh_btn.clicked.connect(self.refresh_sources)
         self.connect_btn.clicked.connect(self.toggle_connection)
         controller.status_changed.connect(self.show_status)
@@ -350,6 +352,23 @@ class StagePanel(QWidget):
         i = self.source.findData(current)
         self.source.setCurrentIndex(max(i, 0))
 
+    def baud_rate(self) -> int:
+        return int(self.baud.currentData() or 115200)
+
+    def remember(self, s: QSettings) -> None:
+        """Keep the source and speed that connected, for the next start."""
+        s.setValue("stage/source", self.current_source())
+        s.setValue("stage/baud", self.baud_rate())
+
+    def restore(self, s: QSettings) -> None:
+        source = s.value("stage/source")
+        if source:
+            self.select_source(str(source))  # the simulated stage is the default otherwise
+        baud = s.value("stage/baud")
+        i = self.baud.findData(int(baud)) if baud is not None else -1
+        if i >= 0:
+            self.baud.setCurrentIndex(i)
+
     def select_source(self, source: str) -> None:
         i = self.source.findData(source)
         if i < 0 and source.startswith("grbl:"):
@@ -370,7 +389,7 @@ class StagePanel(QWidget):
             self.controller.command_failed.emit(
                 "connect", f"stage source {self.source.currentText()!r} not understood; pick one or type a port such as /dev/ttyUSB0")
             return
-        baud = int(self.baud.currentData() or 115200)
+        baud = self.baud_rate()
         self.connect_btn.setEnabled(False)
         self.connect_btn.setText("Connecting…")
         clock = self.clock

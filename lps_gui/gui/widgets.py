@@ -125,6 +125,7 @@ def double_spin(lo: float, hi: float, value: float, decimals: int, suffix: str) 
 
 def add_rows(form: QFormLayout, rows: Sequence[tuple[str, QWidget]]) -> None:
     """Fill a form layout with (label, widget) rows."""
+    form.setRowWrapPolicy(QFormLayout.RowWrapPolicy.WrapLongRows)  # narrow dock: the field goes under its label
     for label, widget in rows:
         form.addRow(label, widget)
 

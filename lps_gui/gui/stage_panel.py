@@ -29,6 +29,7 @@ from lps_gui.hardware.stage import AXES, WORK_SYSTEMS, StageSetting, StageStatus
 JOG_STEPS_MM = (0.01, 0.1, 1.0, 10.0, 50.0)
 CONTINUOUS = 0.0  # the "hold" step: jog while the button is pressed
 HOLD_JOG_PERIOD_MS = 100  # GRBL's joystick rule: short jogs of v*dt queued while held, jog cancel on release
+PORT_WATCH_MS = 3000  # how often the source list looks for new serial ports and emulator ptys
 AXIS_SETS = (("XYZ", "X Y Z"), ("X", "X only"), ("XY", "X Y"))
 STATE_COLORS = {"Idle": "#2a9d3c", "Run": "#1f5fa8", "Jog": "#1f5fa8", "Home": "#1f5fa8", "Hold": "#e07b00",
                 "Alarm": "#d00000", "Door": "#d00000", "Disconnected": "#777777"}
@@ -283,7 +284,12 @@ class StagePanel(QWidget):
         esc = QShortcut(QKeySequence(Qt.Key.Key_Escape), self, context=Qt.ShortcutContext.WidgetWithChildrenShortcut)
         esc.activated.connect(self.stop)
         self._shortcuts.append(esc)
+        self._choices: list[tuple[str, str]] = []
         self.refresh_sources()
+        self._port_timer = QTimer(self)
+        self._port_timer.setInterval(PORT_WATCH_MS)
+        self._port_timer.timeout.connect(self._watch_ports)
+        self._port_timer.start()
         self._set_enabled(False)
 
     # ------------------------------------------------------------------ keyboard jog
@@ -344,13 +350,29 @@ class StagePanel(QWidget):
             return self.source.itemData(i)
         return source_from_text(text)
 
-    def refresh_sources(self) -> None:
-        current = self.source.currentData()
+    def refresh_sources(self, choices: list[tuple[str, str]] | None = None) -> None:
+        """List the sources again (serial ports, by-id names, announced emulator ptys), keeping the choice."""
+        choices = stage_choices() if choices is None else choices
+        current = self.current_source()
+        self.source.blockSignals(True)
         self.source.clear()
-        for label, src in stage_choices():
+        for label, src in choices:
             self.source.addItem(label, src)
-        i = self.source.findData(current)
-        self.source.setCurrentIndex(max(i, 0))
+        self.source.blockSignals(False)
+        self._choices = choices
+        if current is not None and self.source.findData(current) < 0 and current.startswith("grbl:"):
+            self.select_source(current)  # a typed port stays
+        else:
+            self.source.setCurrentIndex(max(self.source.findData(current), 0))
+        self.source_changed.emit(self.current_source())
+
+    def _watch_ports(self) -> None:
+        """Every few seconds while disconnected: a plugged adapter or a started emulator appears by itself."""
+        if self.controller.connected or self.source.hasFocus() or self.source.view().isVisible():
+            return
+        choices = stage_choices()
+        if choices != self._choices:
+            self.refresh_sources(choices)
 
     def baud_rate(self) -> int:
         return int(self.baud.currentData() or 115200)

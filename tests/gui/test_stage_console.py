@@ -202,3 +202,23 @@ def test_press_and_hold_jogs_until_released(qtbot, window):
     stopped = _position(window)[0]
     qtbot.wait(400)
     assert _position(window)[0] == stopped  # released: no queued jog runs on
+
+
+def test_an_emulator_started_elsewhere_appears_in_the_source_list(qtbot, window, tmp_path, monkeypatch):
+    """Issue 26 item 12: `lps emulate-grbl` announces its pty; the panel lists it without Refresh."""
+    import lps_gui.hardware.announce as announce
+
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(tmp_path))
+    panel = window.stage_panel
+    with GrblEmulator(SimulatedStage(travel_mm=(0.0, 100.0)), time_scale=4.0) as emu:
+        withdraw = announce.announce(emu.path)
+        assert announce.announced_ports() == [emu.path]
+        panel._watch_ports()  # what the timer does every few seconds
+        i = panel.source.findData(f"grbl:{emu.path}")
+        assert i >= 0 and "emulator" in panel.source.itemText(i)
+        assert panel.source.currentData() == "sim"  # the choice is kept
+        withdraw()
+    panel._watch_ports()
+    assert panel.source.findData(f"grbl:{emu.path}") < 0
+    (announce.announce_dir() / "999999999").write_text("/dev/pts/999\n")  # a dead emulator's file
+    assert announce.announced_ports() == [] and not (announce.announce_dir() / "999999999").exists()

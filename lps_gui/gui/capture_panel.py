@@ -88,7 +88,7 @@ class CapturePanel(QWidget):
         self.stop_mm = double_spin(-10000, 10000, 58.0, 3, " mm")
         self.step_mm = double_spin(0.001, 10000, 2.0, 3, " mm")
         self.directions = QComboBox()
-        for label, key in (("forward ↑", "+"), ("backward ↓", "-"), ("both (ISO 230-2)", "both")):
+        for label, key in (("both (ISO 230-2)", "both"), ("forward ↑", "+"), ("backward ↓", "-")):
             self.directions.addItem(label, key)
         self.runs = QSpinBox()
         self.runs.setRange(1, 100)
@@ -113,11 +113,11 @@ class CapturePanel(QWidget):
         self.frame_s = DEFAULT_FRAME_S
         self._frames_at_start = 0
         form = QFormLayout(plan_box)
+        form.addRow("Preset", iso_row)  # first: the plan a standard calibration needs
         add_rows(form, [
             ("Start", self.start_mm), ("Stop", self.stop_mm), ("Step", self.step_mm),
             ("Directions", self.directions), ("Runs", self.runs), ("Overshoot", self.overshoot_mm),
             ("Settle", self.settle_s), ("Frames per stop", self.frames_per_stop), ("Feed", self.feed_mm_min)])
-        form.addRow("Preset", iso_row)
         form.addRow("", self.summary)
         from lps_gui.gui.report_setup import ReportSetupBox
 
@@ -167,6 +167,7 @@ class CapturePanel(QWidget):
         self.abort_btn.clicked.connect(self.abort)
         self.resume_session_btn.clicked.connect(self.resume_session_dialog)
         self._set_running(False)
+        self.apply_iso_plan()  # the default plan: ISO 230-2's 5 bidirectional runs (a saved plan replaces it)
         self.update_summary()
 
     # ------------------------------------------------------------------ plan

@@ -18,7 +18,7 @@ from PySide6.QtWidgets import (
     QHBoxLayout, QLabel, QPushButton, QSplitter, QTabWidget, QVBoxLayout, QWidget,
 )
 
-from lps_gui.gui.plot_adapter import DrawnFigure, figure_steps
+from lps_gui.gui.plot_adapter import DrawnFigure, ReadableAxis, figure_steps
 from lps_gui.gui.view_detail import ViewDetail
 from lps_gui.gui.widgets import TextTable, ValueTable
 from lps_gui.gui.workers import Job
@@ -186,7 +186,8 @@ class ResultsPanel(QWidget):
         self._pages.clear()
         self.tabs.addTab(self.accuracy_page, "Accuracy")
         for fig in figures:
-            self.plots.setdefault(fig.key, pg.PlotWidget(background="w"))
+            if fig.key not in self.plots:
+                self.plots[fig.key] = pg.PlotWidget(background="w", axisItems={"bottom": ReadableAxis("bottom")})
         for fig in figures:
             if fig.key in self._pages:
                 continue

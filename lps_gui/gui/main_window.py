@@ -110,7 +110,7 @@ class MainWindow(QMainWindow):
         self.splitDockWidget(d["results"], d["camera"], Qt.Orientation.Horizontal)
         self.splitDockWidget(d["camera"], d["log"], Qt.Orientation.Vertical)
         d["stage"].raise_()
-        self.resizeDocks([d["stage"], d["results"], d["camera"]], [440, 880, 280], Qt.Orientation.Horizontal)
+        self.resizeDocks([d["stage"], d["results"], d["camera"]], [430, 860, 310], Qt.Orientation.Horizontal)
         self.resizeDocks([d["camera"], d["log"]], [600, 250], Qt.Orientation.Vertical)
         clamp_to_screen(self)
 

@@ -200,6 +200,8 @@ class ResultsPanel(QWidget):
                 page = self._groups.setdefault(title, QSplitter(Qt.Orientation.Vertical))
                 for k in members:
                     page.addWidget(self.plots[k])
+                page.setStretchFactor(0, 3)  # the group's main figure first and larger
+                page.setStretchFactor(1, 2)
             for k in members:
                 self._pages[k] = page
             self.tabs.addTab(page, title)

@@ -103,8 +103,12 @@ def make_screenshots(out_dir: Path) -> list[Path]:
                     rp.show_figure("residuals")
                 wait_until(lambda: False, 0.2)
                 written.append(render_to_png(window.docks[name], out_dir / f"{name}.png"))
-            rp.show_figure("deviation")
-            written.append(render_to_png(window.docks["results"], out_dir / "results-deviation.png"))
+            for name, show in (("deviation", lambda: rp.show_figure("deviation")),
+                               ("angles", lambda: rp.show_figure("angles")), ("steps", lambda: rp.show_figure("step")),
+                               ("accuracy", lambda: rp.tabs.setCurrentWidget(rp.accuracy_page))):
+                show()
+                wait_until(lambda: False, 0.2)
+                written.append(render_to_png(window.docks["results"], out_dir / f"results-{name}.png"))
             window.show_panel("stage")
         finally:
             window.shutdown()

@@ -37,7 +37,7 @@ def test_work_machine_and_offset_come_from_one_report_while_moving(qtbot, window
 
     ctl.status_changed.connect(record)
     panel.step.setCurrentIndex(panel.step.findData(50.0))
-    panel.feed.setValue(1200.0)  # 2.5 s of motion: about a dozen reports
+    panel.feed.setValue(600.0)  # 5 s of motion: about 25 reports, at least a few on a loaded machine
     panel.jog_buttons[("X", +1)].click()
     qtbot.waitUntil(lambda: len([s for s, _ in samples if s.state == "Jog"]) >= 4, timeout=10000)
     qtbot.waitUntil(lambda: samples[-1][0].state == "Idle", timeout=10000)

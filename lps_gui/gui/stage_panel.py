@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 
 from PySide6.QtCore import QEvent, QObject, QSettings, Qt, QTimer, Signal
-from PySide6.QtGui import QFont, QKeyEvent, QKeySequence, QShortcut
+from PySide6.QtGui import QKeyEvent, QKeySequence, QShortcut
 from PySide6.QtWidgets import (
     QAbstractButton, QAbstractItemView, QAbstractSpinBox, QApplication, QCheckBox, QComboBox, QDoubleSpinBox, QGridLayout, QGroupBox,
     QHBoxLayout, QHeaderView, QLabel, QLineEdit, QMessageBox, QPushButton, QTableWidget, QTableWidgetItem, QTabWidget,
@@ -21,18 +21,17 @@ from PySide6.QtWidgets import (
 )
 
 from lps_gui.core.clock import Clock
+from lps_gui.gui.dro import PositionReadout
 from lps_gui.gui.stage_console import StageConsole
 from lps_gui.gui.sources import BAUD_RATES, SIM, open_stage_source, source_from_text, stage_choices
 from lps_gui.gui.stage_controller import StageController
-from lps_gui.hardware.stage import AXES, WORK_SYSTEMS, StageSetting, StageStatus
+from lps_gui.hardware.stage import AXES, StageSetting, StageStatus
 
 JOG_STEPS_MM = (0.01, 0.1, 1.0, 10.0, 50.0)
 CONTINUOUS = 0.0  # the "hold" step: jog while the button is pressed
 HOLD_JOG_PERIOD_MS = 100  # GRBL's joystick rule: short jogs of v*dt queued while held, jog cancel on release
 PORT_WATCH_MS = 3000  # how often the source list looks for new serial ports and emulator ptys
 AXIS_SETS = (("XYZ", "X Y Z"), ("X", "X only"), ("XY", "X Y"))
-STATE_COLORS = {"Idle": "#2a9d3c", "Run": "#1f5fa8", "Jog": "#1f5fa8", "Home": "#1f5fa8", "Hold": "#e07b00",
-                "Alarm": "#d00000", "Door": "#d00000", "Disconnected": "#777777"}
 JOG_KEYS = {  # key -> (axis, sign): arrows move X/Y, Page Up/Down move Z
     Qt.Key.Key_Right: ("X", +1), Qt.Key.Key_Left: ("X", -1), Qt.Key.Key_Up: ("Y", +1),
     Qt.Key.Key_Down: ("Y", -1), Qt.Key.Key_PageUp: ("Z", +1), Qt.Key.Key_PageDown: ("Z", -1),
@@ -74,66 +73,17 @@ class StagePanel(QWidget):
         g.addWidget(self.baud, 1, 1)
         g.addWidget(self.connect_btn, 1, 2)
 
-        # --- digital readout: work, machine and offset of each axis, all from one status report
-        dro = QGroupBox("Position")
-        dg = QGridLayout(dro)
-        dg.setHorizontalSpacing(6)
-        big = QFont()
-        big.setPointSize(14)
-        big.setBold(True)
-        big.setStyleHint(QFont.StyleHint.Monospace)
-        self.readout: dict[str, QLabel] = {}
-        self.machine: dict[str, QLabel] = {}
-        self.offset: dict[str, QLabel] = {}
-        self.zero_buttons: dict[str, QPushButton] = {}
-        self.to_zero_buttons: dict[str, QPushButton] = {}
-        self._axis_widgets: dict[str, list[QWidget]] = {ax: [] for ax in AXES}
+        # --- digital readout
+        dro = PositionReadout()
+        self.dro = dro
+        self.readout, self.machine, self.offset = dro.readout, dro.machine, dro.offset
+        self.zero_buttons, self.to_zero_buttons = dro.zero_buttons, dro.to_zero_buttons
+        self.work_system, self.state_label, self.feed_label = dro.work_system, dro.state_label, dro.feed_label
+        self._axis_widgets: dict[str, list[QWidget]] = {ax: list(ws) for ax, ws in dro.axis_widgets.items()}
         self._axes_shown = "".join(AXES)
-        self.work_system = QComboBox()
-        for name in WORK_SYSTEMS:
-            self.work_system.addItem(name, name)
-        self.work_system.setToolTip("Work coordinate system (G54-G59) the readout, Go to and Zero refer to")
-        self.work_system.activated.connect(lambda _i: self.select_work_system(self.work_system.currentData()))
-        dg.addWidget(self.work_system, 0, 1, alignment=Qt.AlignmentFlag.AlignRight)
-        for c, (text, tip) in enumerate((("Machine", "Machine coordinates (GRBL's homed space), mm"),
-                                         ("Offset", "Work offset of the selected system in mm, GRBL's sign ($#): "
-                                                    "work = machine − offset"))):
-            head = QLabel(text)
-            head.setToolTip(tip)
-            dg.addWidget(head, 0, 2 + c, alignment=Qt.AlignmentFlag.AlignRight)
-        for i, ax in enumerate(AXES, start=1):
-            name = QLabel(ax)
-            name.setFont(big)
-            val = _fixed_label(big, "-0000.000")
-            val.setToolTip(f"{ax} in work coordinates of the selected system, mm")
-            mach = _fixed_label(self.font(), "-0000.000")
-            off = _fixed_label(self.font(), "-0000.000")
-            for w in (mach, off):
-                w.setStyleSheet("QLabel { color: #555555; }")
-            zero = QPushButton("Zero")
-            zero.setToolTip(f"Make {ax} read 0 here in the selected work system (asks first)")
-            zero.clicked.connect(lambda _=False, a=ax: self.ask_zero(a))
-            home = QPushButton("→0")
-            home.setToolTip(f"Move {ax} to its work zero at the jog feed")
-            home.clicked.connect(lambda _=False, a=ax: self.go_to_zero(a))
-            for b in (zero, home):
-                b.setFixedWidth(b.fontMetrics().horizontalAdvance("Zero") + 14)
-            for c, w in enumerate((name, val, mach, off, zero, home)):
-                dg.addWidget(w, i, c)
-            self.readout[ax], self.machine[ax], self.offset[ax] = val, mach, off
-            self.zero_buttons[ax], self.to_zero_buttons[ax] = zero, home
-            self._axis_widgets[ax] += [name, val, mach, off, zero, home]
-        self.state_label = _fixed_label(self.font(), "Disconnected", Qt.AlignmentFlag.AlignCenter)
-        self.state_label.setFixedSize(self.state_label.width() + 20, self.state_label.height() + 6)  # its padding
-        self.feed_label = _fixed_label(self.font(), "feed 00000 mm/min", Qt.AlignmentFlag.AlignLeft)
-        self.feed_label.setText("feed 0 mm/min")
-        state_row = QHBoxLayout()
-        state_row.addWidget(self.state_label)
-        state_row.addWidget(self.feed_label)
-        state_row.addStretch(1)
-        dg.addLayout(state_row, len(AXES) + 1, 0, 1, 6)
-        self._show_state("Disconnected")
-        self._zero_box: QMessageBox | None = None
+        dro.system_chosen.connect(self.select_work_system)
+        dro.zero_confirmed.connect(self.zero)
+        dro.to_zero_requested.connect(self.go_to_zero)
 
         # --- jogging
         jog = QGroupBox("Jog")
@@ -270,7 +220,7 @@ class StagePanel(QWidget):
         controller.connection_changed.connect(self._on_connection)
         controller.settings_read.connect(self.show_settings)
         controller.opened.connect(lambda _stage, extra, _d: self.camera_offered.emit(extra))
-        self._work_system_read.connect(self._show_work_system)
+        self._work_system_read.connect(self.dro.show_system)
         self._shortcuts = []
         self._lock_box: QMessageBox | None = None
         self._lock_asked = False
@@ -428,10 +378,7 @@ class StagePanel(QWidget):
             self.controller.read_settings()
             self._read_work_system()
         else:
-            self._show_state("Disconnected")
-            for labels in (self.readout, self.machine, self.offset):
-                for v in labels.values():
-                    v.setText("---")
+            self.dro.clear()
 
     def connect_failed(self) -> None:
         """The controller could not open the source: offer Connect again."""
@@ -443,33 +390,16 @@ class StagePanel(QWidget):
                 self.write_settings_btn, self.goto_btn, self.reset_btn]:
             b.setEnabled(on)
         stage = self.controller.stage
-        offsets = on and stage is not None and bool(stage.work_systems)
-        for b in self.zero_buttons.values():
-            b.setEnabled(offsets)
-        self.work_system.setEnabled(offsets)
+        self.dro.set_offsets_enabled(on and stage is not None and bool(stage.work_systems))
 
     # ------------------------------------------------------------------ readout
     def show_status(self, st: StageStatus) -> None:
-        for ax, v in zip(AXES, st.work_mm):
-            self.readout[ax].setText(f"{v:10.3f}")
-        self._show_machine(st)
-        self._show_state(st.state)
-        self.feed_label.setText(f"feed {st.feed_mm_min:.0f} mm/min")
+        self.dro.show_status(st)
         if st.state == "Alarm" and not self._lock_asked:
             self._lock_asked = True
             self._ask_home_or_unlock()
         elif st.state != "Alarm":
             self._lock_asked = False  # a later alarm asks again
-
-    def _show_machine(self, st: StageStatus) -> None:
-        """Machine position and offset (GRBL's WCO = machine - work) of the same report as the work readout.
-
-        The labels have a fixed size, so a new text repaints them without re-laying out the window
-        (at the poll rate that starved the GUI thread during a capture).
-        """
-        for ax, m, w in zip(AXES, st.machine_mm, st.work_mm):
-            self.machine[ax].setText(f"{m:.3f}")
-            self.offset[ax].setText(f"{m - w:.3f}")
 
     def _ask_home_or_unlock(self) -> None:
         """A stage in Alarm (GRBL powers up so with homing enabled) moves only after $H or $X: ask which."""
@@ -486,17 +416,11 @@ class StagePanel(QWidget):
         box.open()
         self._lock_box = box
 
-    def _show_state(self, state: str) -> None:
-        color = STATE_COLORS.get(state, "#555555")
-        self.state_label.setText(state)
-        self.state_label.setStyleSheet(
-            f"QLabel {{ background: {color}; color: white; border-radius: 4px; padding: 4px 8px; font-weight: bold; }}")
-
     # ------------------------------------------------------------------ motion
     def home(self) -> None:
         """``$H``: shown as Home at once (the cycle may run for a minute); the controller logs its end."""
         if self.controller.call("home", "home") is not None:
-            self._show_state("Home")
+            self.dro.show_state("Home")
 
     def jog(self, axis: str, sign: int) -> None:
         if not self.controller.connected:
@@ -548,29 +472,10 @@ class StagePanel(QWidget):
         if fut is not None:
             fut.add_done_callback(lambda f: None if f.exception() else self._work_system_read.emit(f.result()))
 
-    def _show_work_system(self, name: str) -> None:
-        i = self.work_system.findData(name)
-        if i >= 0:
-            self.work_system.setCurrentIndex(i)
-
     def select_work_system(self, name: str) -> None:
         """Make ``name`` (G54-G59) the system the readout, Go to and Zero use."""
         if self.controller.call(f"select work system {name}", "select_work_system", name) is not None:
-            self._show_work_system(name)
-
-    def ask_zero(self, axis: str) -> None:
-        """Zero ``axis`` in the selected system after the operator confirmed (it rewrites a stored offset)."""
-        system = self.work_system.currentData()
-        box = QMessageBox(QMessageBox.Icon.Question, f"Zero {axis} in {system}?",
-                          f"Make {axis} read 0.000 mm here in {system}?\n"
-                          f"This changes the {system} offset stored in the controller; the other systems "
-                          "and the machine position stay as they are.",
-                          QMessageBox.StandardButton.Yes | QMessageBox.StandardButton.Cancel, self)
-        box.setDefaultButton(QMessageBox.StandardButton.Cancel)
-        box.button(QMessageBox.StandardButton.Yes).setText(f"Zero {axis} in {system}")
-        box.finished.connect(lambda r: self.zero(axis) if r == QMessageBox.StandardButton.Yes else None)
-        box.open()
-        self._zero_box = box
+            self.dro.show_system(name)
 
     def zero(self, axis: str) -> None:
         system = self.work_system.currentData()
@@ -667,12 +572,3 @@ def _is_integer_setting(s: StageSetting) -> bool:
     unit = (s.unit or "").lower()
     return unit in ("mask", "boolean", "bool", "") and float(s.value).is_integer() and "mm" not in unit
 
-
-def _fixed_label(font: QFont, widest: str, align: Qt.AlignmentFlag = Qt.AlignmentFlag.AlignRight) -> QLabel:
-    """A label sized once for ``widest``: new text repaints it without a window re-layout."""
-    label = QLabel("---")
-    label.setFont(font)
-    label.setAlignment(align | Qt.AlignmentFlag.AlignVCenter)
-    fm = label.fontMetrics()
-    label.setFixedSize(fm.horizontalAdvance(widest) + 8, fm.height() + 4)
-    return label

@@ -168,7 +168,7 @@ def test_console_sends_lines_keeps_history_and_shows_replies(qtbot, window, exte
     machine = float(panel.machine["X"].text())
     assert panel.zero_buttons["X"].isEnabled() and panel.work_system.currentData() == "G54"
     panel.zero_buttons["X"].click()  # asks first, naming the system it changes
-    box = panel._zero_box
+    box = panel.dro.zero_box
     assert box is not None and "G54" in box.text() and "G54" in box.windowTitle()
     box.button(box.StandardButton.Yes).click()  # the work zero moves here; the machine position does not
     qtbot.waitUntil(lambda: abs(float(panel.readout["X"].text())) < 1e-6, timeout=10000)

@@ -16,7 +16,7 @@ def _dro(panel, axis="X") -> tuple[float, float, float]:
 
 def _confirm_zero(qtbot, panel, axis: str) -> None:
     panel.zero_buttons[axis].click()
-    box = panel._zero_box
+    box = panel.dro.zero_box
     assert box is not None and panel.work_system.currentData() in box.text()
     box.button(box.StandardButton.Yes).click()
 
@@ -62,7 +62,7 @@ def test_work_system_selector_zero_and_return_to_zero(qtbot, window):
     panel.work_system.activated.emit(panel.work_system.currentIndex())
     qtbot.waitUntil(lambda: stage.work_system() == "G56", timeout=5000)
     panel.zero_buttons["X"].click()
-    box = panel._zero_box
+    box = panel.dro.zero_box
     assert "G56" in box.windowTitle() and "G56 offset" in box.text()
     box.button(box.StandardButton.Cancel).click()  # cancelled: nothing changes
     qtbot.wait(200)

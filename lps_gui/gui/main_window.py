@@ -98,6 +98,11 @@ class MainWindow(QMainWindow):
 
     # ------------------------------------------------------------------ layout
     def default_layout(self) -> None:
+        """View > Reset layout: the docks as at first start, the window within the screen."""
+        self.arrange_docks()
+        clamp_to_screen(self)
+
+    def arrange_docks(self) -> None:
         """Left: stage / capture / estimation / intrinsics tabs; right: results beside camera and log."""
         d = self.docks
         for dock in d.values():
@@ -112,7 +117,6 @@ class MainWindow(QMainWindow):
         d["stage"].raise_()
         self.resizeDocks([d["stage"], d["results"], d["camera"]], [430, 860, 310], Qt.Orientation.Horizontal)
         self.resizeDocks([d["camera"], d["log"]], [600, 250], Qt.Orientation.Vertical)
-        clamp_to_screen(self)
 
     def show_panel(self, name: str) -> None:
         dock = self.docks[name]

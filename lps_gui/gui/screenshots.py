@@ -92,6 +92,7 @@ def make_screenshots(out_dir: Path) -> list[Path]:
         try:
             window.resize(*SIZE)
             window.show()
+            window.arrange_docks()  # the first start's layout at this size (offscreen's screen is smaller)
             prepare(window, work)
             window.show_panel("stage")
             rp = window.results_panel

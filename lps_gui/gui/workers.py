@@ -169,9 +169,6 @@ class Job(QObject):
             log.info("%s: cancel requested", self.name)
         self.token.cancel()
 
-    def is_running(self) -> bool:
-        return self._thread.isRunning()
-
     def wait(self, timeout_ms: int = 30000) -> bool:
         return self._thread.wait(timeout_ms)
 

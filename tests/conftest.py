@@ -9,6 +9,8 @@ import os
 
 import pytest
 
+pytest_plugins = ["tests.watchdog"]  # a hung test fails with every thread's stack; a deadlock ends the run
+
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # what the entry points do (lps_gui/blas_threads.py), before numpy loads
 

@@ -8,11 +8,13 @@ from __future__ import annotations
 
 import argparse
 
+from lps_gui.cli.option_types import float_range
+
 HELP = "serve a GRBL 1.1 emulator on a pseudo-terminal (prints its path) until Ctrl-C"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--time-scale", type=float, default=1.0, help="simulated seconds per real second (default 1: GRBL's own timing)")
+    parser.add_argument("--time-scale", type=float_range(1e-3, 1e6), default=1.0, help="simulated seconds per real second (default 1: GRBL's own timing)")
     parser.add_argument("--travel", type=float, nargs=2, default=(-5.0, 500.0), metavar=("MIN_MM", "MAX_MM"), help="soft-limit travel in work coordinates")
     parser.add_argument("--max-rate", type=float, default=3000.0, help="max rate $110 in mm/min")
     parser.add_argument("--accel", type=float, default=200.0, help="acceleration $120 in mm/s^2")

@@ -41,6 +41,7 @@ def run(args: argparse.Namespace) -> int:
     import threading
 
     from lps_gui.errors import InputError
+    from lps_gui.hardware.announce import announce
     from lps_gui.hardware.grbl.emulator import Faults, GrblEmulator
     from lps_gui.hardware.sim_stage import SimulatedStage
 
@@ -69,8 +70,10 @@ def run(args: argparse.Namespace) -> int:
     except ValueError:  # not the main thread (tests calling run() directly)
         pass
     emu = GrblEmulator(stage, faults=faults, time_scale=args.time_scale, homing_init_lock=not args.no_homing_lock)
+    withdraw = None
     try:
         path = emu.start()
+        withdraw = announce(path)  # the GUI's stage list shows it
         print(path, flush=True)
         print(f"GRBL 1.1h emulator on {path} (115200 baud, any rate works on a pty); Ctrl-C to stop", file=sys.stderr, flush=True)
         while not stop.wait(0.2):
@@ -85,5 +88,7 @@ def run(args: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         print("emulator: stopped", file=sys.stderr)
     finally:
+        if withdraw is not None:
+            withdraw()
         emu.stop()
     return 0

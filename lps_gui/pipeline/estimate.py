@@ -27,7 +27,7 @@ from lps_gui.gc_tuning import paused as paused_collections
 from lps_gui.io.board_file import board_to_dict
 from lps_gui.io.corners_vnl import read_corners_vnl
 from lps_gui.io.intrinsics_file import apply_board_warp, intrinsics_to_dict, read_intrinsics
-from lps_gui.io.results_file import assemble_results, summary_rows, write_results  # noqa: F401 (summary_rows re-exported)
+from lps_gui.io.results_file import assemble_results, write_results
 from lps_gui.io.results_file import json_floats, rows_from_columns
 from lps_gui.io.results_file import json_float as _f
 from lps_gui.io.results_history import commit_results
@@ -121,7 +121,7 @@ def estimate_session(
     opt = make_options(method, options)
     obs = observations_from_session(session, intr)
     est = estimate(obs, opt, progress, cancel)
-    with paused_collections():  # results are trees of dicts and lists: nothing for the cyclic collector (14 ms)
+    with paused_collections():  # results are trees of dicts and lists: nothing for the cyclic collector
         results = build_results(session, obs, est, intrinsics_source=str(intrinsics_path or "session.json"))
         results["timings_s"]["pipeline_total"] = time.perf_counter() - t0
         if cancel is not None:
@@ -167,7 +167,7 @@ def position_rows(obs: Observations, est: LpsEstimate) -> list[dict[str, Any]]:
     """results.json ``positions``: one row per capture, in capture order.
 
     Built column by column (numpy, then one list per key) and zipped into
-    rows: a loop over K views x 40 fields of float() calls cost 20 ms at K = 1600.
+    rows: a loop over K views x 40 fields of float() calls is slow at large K.
     """
     dev_um = est.deviation_um(obs.target_mm)
     usable = np.asarray(est.usable, dtype=bool)

@@ -69,8 +69,9 @@ def test_settings_listing_order_and_format(emu):
     assert port.ask(b"$999=1\n") == ["error:3"]
     assert port.ask(b"$110=-5\n") == ["error:4"]
     assert port.ask(b"$0=2\n") == ["error:6"]
-    assert port.ask(b"$100=100000\n") == ["error:12"]
-    assert port.ask(b"$Q\n") == ["error:3"]
+    assert port.ask(b"$100=100000\n") == ["ok"]  # settings.c: no step-rate check without MAX_STEP_RATE_HZ
+    assert port.ask(b"$Q\n") == ["error:2"]  # system.c: read_float() fails on 'Q'
+    assert port.ask(b"$10=\n") == ["error:2"] and port.ask(b"$10\n") == ["error:3"]
 
 
 def test_status_report_fields_follow_mask_and_refresh_counters(emu):
@@ -94,8 +95,9 @@ def test_motion_states_and_error_codes(emu):
     port.ser.write(b"G91 G0 X-5\nG4 P0\n")
     assert port.lines("ok") == ["ok"] and port.lines("ok") == ["ok"]
     assert e.stage.status().work_mm[0] == pytest.approx(45.0)
-    assert port.ask(b"G2 X1 Y1 R1\n") == ["error:20"]
-    assert port.ask(b"G0 G1 X1\n") == ["error:21"]
+    assert port.ask(b"G2 X1 Y1\n") == ["error:35"]  # an arc needs R or I/J in the XY plane
+    assert port.ask(b"G0 G1 X1\n") == ["error:24"]  # two commands that use axis words
+    assert port.ask(b"G17 G18\n") == ["error:21"]
     assert port.ask(b"(comment only)\n") == ["ok"]
     assert port.ask(b"G1 X" + b"1" * 90 + b"\n") == ["error:11"]
 
@@ -255,5 +257,6 @@ def test_g10_l20_sets_the_work_offset_reported_as_wco_and_kept_over_a_reset(stoc
     time.sleep(0.2)
     assert e.stage.status().work_mm[0] == pytest.approx(35.0)
     assert port.ask(b"G10 L2 P1 X-100\n") == ["ok"]  # back to the power-up offset
-    assert port.ask(b"G10 L20 X0\n") == ["error:28"] and port.ask(b"G10 L20 P2 X0\n") == ["error:20"]
+    assert port.ask(b"G10 X0\n") == ["error:28"] and port.ask(b"G10 L20 P7 X0\n") == ["error:29"]
+    assert port.ask(b"G10 L3 P1 X0\n") == ["error:20"]
     assert port.ask(b"G0 L2 X1\n") == ["error:36"]

@@ -1,0 +1,68 @@
+"""A raw serial client for a stepped GRBL emulator: write bytes, run the firmware, read whole lines.
+
+With ``GrblEmulator(stepped=True)`` simulated time stands still until the test
+advances it, and :meth:`SteppedPort.send` makes the emulator read and execute
+what was written before it returns, so every answer is already on the pty:
+no test waits on wall-clock time for anything but bytes already sent.
+"""
+from __future__ import annotations
+
+import time
+
+import serial
+
+from lps_gui.hardware.grbl.emulator import GrblEmulator
+
+READ_LIMIT_S = 10.0  # a bound against a hang, never a timing window: the bytes are already written
+
+
+class SteppedPort:
+    """pyserial on the emulator's pty, in step with the emulator's clock."""
+
+    def __init__(self, emu: GrblEmulator) -> None:
+        self.emu = emu
+        self.ser = serial.Serial(emu.path, 115200, timeout=0.01)
+        self.buf = b""
+
+    def send(self, data: bytes) -> None:
+        """Write, then let the emulator read and execute it (no simulated time passes)."""
+        self.ser.write(data)
+        self.ser.flush()
+        self.emu.settle()
+
+    def advance(self, seconds: float) -> None:
+        self.emu.advance(seconds)
+
+    def lines(self, n: int) -> list[str]:
+        """The next ``n`` lines GRBL sent (CR LF stripped)."""
+        out: list[str] = []
+        deadline = time.monotonic() + READ_LIMIT_S
+        while len(out) < n:
+            while b"\r\n" in self.buf and len(out) < n:
+                raw, self.buf = self.buf.split(b"\r\n", 1)
+                out.append(raw.decode("latin-1"))
+            if len(out) >= n:
+                break
+            if time.monotonic() > deadline:
+                raise AssertionError(f"only {len(out)} of {n} lines: {out}")
+            self.buf += self.ser.read(256)
+        return out
+
+    def pending(self) -> list[str]:
+        """Every complete line already sent (the emulator flushed before :meth:`send` returned)."""
+        self.emu.settle()
+        self.buf += self.ser.read(4096)
+        while self.ser.in_waiting:
+            self.buf += self.ser.read(4096)
+        out = []
+        while b"\r\n" in self.buf:
+            raw, self.buf = self.buf.split(b"\r\n", 1)
+            out.append(raw.decode("latin-1"))
+        return out
+
+    def ask(self, data: bytes, n: int = 1) -> list[str]:
+        self.send(data)
+        return self.lines(n)
+
+    def close(self) -> None:
+        self.ser.close()

@@ -7,12 +7,15 @@ no test waits on wall-clock time for anything but bytes already sent.
 """
 from __future__ import annotations
 
+import threading
 import time
+from typing import Callable, TypeVar
 
 import serial
 
 from lps_gui.hardware.grbl.emulator import GrblEmulator
 
+T = TypeVar("T")
 READ_LIMIT_S = 10.0  # a bound against a hang, never a timing window: the bytes are already written
 
 
@@ -66,3 +69,32 @@ class SteppedPort:
 
     def close(self) -> None:
         self.ser.close()
+
+
+def drive(emu: GrblEmulator, fn: Callable[[], T], sim_step_s: float = 0.05, limit_s: float = 30.0) -> T:
+    """Run ``fn()`` (a driver call that waits on motion) in a thread while simulated time advances.
+
+    Time moves in ``sim_step_s`` steps between short yields, so the call sees the
+    controller progress however slowly the machine runs; ``limit_s`` (wall) only
+    stops a hang. Returns what ``fn`` returned or raises what it raised.
+    """
+    result: list = []
+    errors: list[BaseException] = []
+
+    def run() -> None:
+        try:
+            result.append(fn())
+        except BaseException as exc:  # noqa: BLE001 - re-raised in the caller's thread
+            errors.append(exc)
+
+    worker = threading.Thread(target=run, daemon=True)
+    worker.start()
+    deadline = time.monotonic() + limit_s
+    while worker.is_alive():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"{fn!r} still running after {limit_s:g} s of wall time")
+        emu.advance(sim_step_s)
+        worker.join(0.002)
+    if errors:
+        raise errors[0]
+    return result[0]

@@ -234,20 +234,21 @@ class GrblStage(Stage):
             self.events.emit(StageEvent("state", text=r.state))
 
     # ------------------------------------------------------------------ lines
-    def send(self, line: str, timeout_s: float | None = None) -> Pending:
+    def send(self, line: str, timeout_s: float | None = None, refuse_in_hold: bool = True) -> Pending:
         """Queue a line with character counting; see :meth:`GrblLink.send`.
 
         Refused while GRBL would not read it: in a critical alarm (its reset flushes
-        the line unanswered) and in a feed hold (answered only after ``~``). After
-        an alarm that resets GRBL by itself, the line waits for the banner (sent
-        earlier, the reset would flush it).
+        the line unanswered) and, unless ``refuse_in_hold`` is off (the rest of a
+        stream that began before the hold), in a feed hold (answered only after
+        ``~``). After an alarm that resets GRBL by itself, the line waits for the
+        banner (sent earlier, the reset would flush it).
         """
         self.require_connected()
         self._refuse_if_critical(line)
         if self._reset_due:
             self.link.wait_for(lambda: not self._reset_due, self.timeout_s,
                                f"no reset banner within {self.timeout_s:g} s after ALARM:{self._alarm_code}; reset the controller")
-        if self._held and self.status().state in HELD_STATES:
+        if refuse_in_hold and self._held and self.status().state in HELD_STATES:
             raise HardwareError(f"GRBL on {self.port_name} is in a feed hold: {line.strip()!r} not sent; "
                                 f"resume (~) or reset the controller first")
         return self.link.send(line, timeout_s, keep_waiting=self._still_busy)
@@ -304,9 +305,14 @@ class GrblStage(Stage):
         return lines
 
     def stream(self, lines: list[str], timeout_s: float | None = None) -> None:
-        """Stream G-code with character counting; wait for every ``ok``; raise on the first error."""
+        """Stream G-code with character counting; wait for every ``ok``; raise on the first error.
+
+        A feed hold that begins mid-stream holds the stream (GRBL buffers the
+        rest and runs it after ``~``); a stream is refused only if it starts in a hold.
+        """
         self._idle_since = None
-        sent = [self.send(ln, timeout_s) for ln in lines if ln.strip()]
+        todo = [ln for ln in lines if ln.strip()]
+        sent = [self.send(ln, timeout_s, refuse_in_hold=k == 0) for k, ln in enumerate(todo)]
         for p in sent:
             self.link.wait_reply(p, timeout_s, keep_waiting=self._still_busy)
 

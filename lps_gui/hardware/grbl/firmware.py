@@ -93,6 +93,8 @@ class GrblFirmware:
         self._on_drop = on_drop
         self.rx_overflow_bytes = 0  # bytes dropped because the host overran the 128-byte RX buffer
         self.lines_received = 0
+        self.resets_received = 0  # Ctrl-X bytes, and those an alarm's delay swallowed
+        self.resets_lost = 0
         self.halted = False
         self._n_cmd = 0
         self._build_user = ""
@@ -253,8 +255,9 @@ class GrblFirmware:
     def receive(self, b: int) -> None:
         """GRBL's serial ISR: real-time bytes act at once, the rest goes to the RX buffer."""
         if b == RT_RESET:
+            self.resets_received += 1
             if self._abort_at is not None or self._critical_msg_at is not None:
-                pass  # mc_reset() already flagged the reset; protocol_exec_rt_system() clears it for 1/2
+                self.resets_lost += 1  # mc_reset() already flagged the reset; protocol_exec_rt_system() clears it for 1/2
             else:
                 self._soft_reset()
         elif b == RT_STATUS:

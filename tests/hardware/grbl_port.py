@@ -13,6 +13,7 @@ from typing import Callable, TypeVar
 
 import serial
 
+from lps_gui.hardware.grbl.driver import GrblStage
 from lps_gui.hardware.grbl.emulator import GrblEmulator
 
 T = TypeVar("T")
@@ -98,3 +99,28 @@ def drive(emu: GrblEmulator, fn: Callable[[], T], sim_step_s: float = 0.05, limi
     if errors:
         raise errors[0]
     return result[0]
+
+
+class SteppedGrblStage(GrblStage):
+    """A GrblStage on a stepped emulator whose waiting calls move simulated time on (via :func:`drive`).
+
+    Between calls the emulator's clock stands still, so a move just acknowledged
+    is still at its start when the next line, hold or cancel arrives.
+    """
+
+    emulator: GrblEmulator
+
+    def wait_idle(self, timeout_s: float = 60.0):
+        return drive(self.emulator, lambda: GrblStage.wait_idle(self, timeout_s=timeout_s))
+
+    def home(self) -> None:
+        drive(self.emulator, lambda: GrblStage.home(self), sim_step_s=0.02)
+
+    def soft_reset(self) -> None:
+        drive(self.emulator, lambda: GrblStage.soft_reset(self))
+
+
+def stepped_stage(emu: GrblEmulator, **options) -> SteppedGrblStage:
+    stage = SteppedGrblStage(emu.path, **options)
+    stage.emulator = emu
+    return stage

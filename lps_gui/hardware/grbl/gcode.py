@@ -264,8 +264,7 @@ def _read_words(text: str, block: Block, jog: bool) -> int:
     return axis_command
 
 
-def check_block(text: str, state: ParserState, coords: list[list[float]], jog: bool = False,
-                arc_tolerance_mm: float = 0.002) -> Block:
+def check_block(text: str, state: ParserState, coords: list[list[float]], jog: bool = False) -> Block:
     """Check a cleaned block (for a jog, the part after ``$J=``) against ``state``; raise CodeError(N) like GRBL.
 
     ``coords`` are the stored coordinate data (machine mm): G54-G59, G28, G30.

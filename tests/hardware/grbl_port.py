@@ -72,7 +72,7 @@ class SteppedPort:
         self.ser.close()
 
 
-def drive(emu: GrblEmulator, fn: Callable[[], T], sim_step_s: float = 0.05, limit_s: float = 30.0) -> T:
+def drive(emu: GrblEmulator, fn: Callable[[], T], sim_step_s: float = 0.5, limit_s: float = 120.0) -> T:
     """Run ``fn()`` (a driver call that waits on motion) in a thread while simulated time advances.
 
     Time moves in ``sim_step_s`` steps between short yields, so the call sees the
@@ -114,7 +114,7 @@ class SteppedGrblStage(GrblStage):
         return drive(self.emulator, lambda: GrblStage.wait_idle(self, timeout_s=timeout_s))
 
     def home(self) -> None:
-        drive(self.emulator, lambda: GrblStage.home(self), sim_step_s=0.02)
+        drive(self.emulator, lambda: GrblStage.home(self), sim_step_s=0.1)
 
     def soft_reset(self) -> None:
         drive(self.emulator, lambda: GrblStage.soft_reset(self))

@@ -29,11 +29,11 @@ class Port:
         self.ser.flush()
         self.emu.settle()
 
-    def ask(self, data: bytes, until: str = "ok", timeout_s: float = 1.0) -> list[str]:
+    def ask(self, data: bytes, until: str = "ok", timeout_s: float = 5.0) -> list[str]:
         self.write(data)
         return self.lines(until, timeout_s)
 
-    def lines(self, until: str, timeout_s: float = 1.0) -> list[str]:
+    def lines(self, until: str, timeout_s: float = 5.0) -> list[str]:
         """Lines up to one starting with ``until``; the bound only stops a hang (answers are already sent)."""
         out: list[str] = []
         deadline = time.monotonic() + timeout_s

@@ -72,33 +72,43 @@ class SteppedPort:
         self.ser.close()
 
 
-def drive(emu: GrblEmulator, fn: Callable[[], T], sim_step_s: float = 0.5, limit_s: float = 120.0) -> T:
-    """Run ``fn()`` (a driver call that waits on motion) in a thread while simulated time advances.
+class Background:
+    """A driver call left waiting in a thread while the test looks at it and moves time on."""
 
-    Time moves in ``sim_step_s`` steps between short yields, so the call sees the
-    controller progress however slowly the machine runs; ``limit_s`` (wall) only
-    stops a hang. Returns what ``fn`` returned or raises what it raised.
-    """
-    result: list = []
-    errors: list[BaseException] = []
+    def __init__(self, fn: Callable[[], object]) -> None:
+        self.errors: list[BaseException] = []
+        self.result: list = []
+        self.thread = threading.Thread(target=self._run, args=(fn,), daemon=True)
+        self.thread.start()
 
-    def run() -> None:
+    def _run(self, fn: Callable[[], object]) -> None:
         try:
-            result.append(fn())
-        except BaseException as exc:  # noqa: BLE001 - re-raised in the caller's thread
-            errors.append(exc)
+            self.result.append(fn())
+        except BaseException as exc:  # noqa: BLE001 - re-raised by finish() or read by the test
+            self.errors.append(exc)
 
-    worker = threading.Thread(target=run, daemon=True)
-    worker.start()
-    deadline = time.monotonic() + limit_s
-    while worker.is_alive():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"{fn!r} still running after {limit_s:g} s of wall time")
-        emu.advance(sim_step_s)
-        worker.join(0.002)
-    if errors:
-        raise errors[0]
-    return result[0]
+    def waiting(self) -> bool:
+        return self.thread.is_alive() and not self.errors
+
+    def finish(self, emu: GrblEmulator, sim_step_s: float = 0.5, limit_s: float = 120.0):
+        """Advance simulated time in ``sim_step_s`` steps until the call returns; return or raise what it did.
+
+        ``limit_s`` (wall) only stops a hang.
+        """
+        deadline = time.monotonic() + limit_s
+        while self.thread.is_alive():
+            if time.monotonic() > deadline:
+                raise AssertionError(f"still waiting after {limit_s:g} s of wall time")
+            emu.advance(sim_step_s)
+            self.thread.join(0.002)
+        if self.errors:
+            raise self.errors[0]
+        return self.result[0]
+
+
+def drive(emu: GrblEmulator, fn: Callable[[], T], sim_step_s: float = 0.5, limit_s: float = 120.0) -> T:
+    """Run ``fn()`` (a driver call that waits on motion) while simulated time advances; its result or error."""
+    return Background(fn).finish(emu, sim_step_s, limit_s)
 
 
 class SteppedGrblStage(GrblStage):

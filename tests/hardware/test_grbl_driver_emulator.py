@@ -184,7 +184,7 @@ def test_fault_dropped_connection_mid_wait(rig):
 
 def test_fault_dropped_connection_after_n_lines():
     with GrblEmulator(SimulatedStage(), faults=Faults(drop_after_lines=3), time_scale=SCALE) as emu:
-        stage = GrblStage(emu.path, timeout_s=1.0)
+        stage = GrblStage(emu.path, timeout_s=5.0)
         stage.connect()  # $I and $$ are lines 1 and 2
         with pytest.raises(HardwareError, match="port vanished"):
             stage.move_to(5.0, 600.0)

@@ -16,7 +16,6 @@ timeout (a line must still be waiting after it), never a window something must f
 from __future__ import annotations
 
 import contextlib
-import threading
 import time
 
 import pytest
@@ -27,7 +26,7 @@ from lps_gui.hardware.grbl.driver import GrblStage
 from lps_gui.hardware.grbl.emulator import GrblEmulator
 from lps_gui.hardware.sim_stage import SimulatedStage
 
-from tests.hardware.grbl_port import drive
+from tests.hardware.grbl_port import Background, drive
 
 OUTLAST = 1.6  # wall seconds a waiting line is left alone, in units of the driver's reply timeout
 TIMEOUT_S = 1.5  # the driver's reply timeout in the waiting tests: a loaded machine still answers '?' within it
@@ -51,35 +50,6 @@ def _rig(timeout_s: float = 2.0):
 def stock():
     with _rig() as rig:
         yield rig
-
-
-class Background:
-    """A driver call left waiting in a thread while the test looks at it and moves time on."""
-
-    def __init__(self, fn) -> None:
-        self.errors: list[BaseException] = []
-        self.result: list = []
-        self.thread = threading.Thread(target=self._run, args=(fn,), daemon=True)
-        self.thread.start()
-
-    def _run(self, fn) -> None:
-        try:
-            self.result.append(fn())
-        except BaseException as exc:  # noqa: BLE001 - reported by the test's assertions
-            self.errors.append(exc)
-
-    def waiting(self) -> bool:
-        return self.thread.is_alive() and not self.errors
-
-    def finish(self, emu: GrblEmulator, sim_step_s: float = 0.5, limit_s: float = 120.0) -> None:
-        """Advance simulated time until the call returns; raise what it raised."""
-        deadline = time.monotonic() + limit_s
-        while self.thread.is_alive():
-            assert time.monotonic() < deadline, "the call did not return"
-            emu.advance(sim_step_s)
-            self.thread.join(0.002)
-        if self.errors:
-            raise self.errors[0]
 
 
 def test_power_up_alarm_is_reported_as_locked(stock):

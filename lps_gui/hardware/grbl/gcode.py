@@ -443,7 +443,7 @@ def arc_points(block: Block, position: list[float], arc_tolerance_mm: float) -> 
     elif travel <= 5e-7:
         travel += 2 * math.pi
     r, tol = block.r, arc_tolerance_mm
-    segments = int(math.floor(abs(0.5 * travel * r) / math.sqrt(tol * (2 * r - tol)))) if r > tol / 2 else 0
+    segments = int(math.floor(abs(0.5 * travel * r) / math.sqrt(tol * (2 * r - tol)))) if 0 < tol < 2 * r else 0
     points = []
     for k in range(1, segments):
         a = travel * k / segments

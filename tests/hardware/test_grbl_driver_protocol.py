@@ -188,3 +188,26 @@ def test_vanished_port_fails_fast_and_reconnect_starts_over():
 def test_unopenable_port_is_a_clear_error():
     with pytest.raises(HardwareError, match="cannot open port '/dev/does-not-exist'"):
         GrblStage("/dev/does-not-exist").connect()
+
+
+def test_soft_reset_after_alarm_2_waits_for_reset_to_continue():
+    script = [(b"G90 G21 G1 X600 F600\n", b"ALARM:2\r\n"), (b"\x18", b"ok\r\n" + BANNER + b"[MSG:'$H'|'$X' to unlock]\r\n")]
+    with expected_protocol(script, timeout_s=30.0) as (stage, fake):  # a deadline the test never reaches
+        with pytest.raises(GrblError, match="ALARM:2"):
+            stage.move_to(600.0, 600.0)
+        resetting = threading.Thread(target=stage.soft_reset)
+        resetting.start()
+        resetting.join(0.3)
+        assert resetting.is_alive() and fake.written[-1] != b"\x18"  # protocol.c would clear a reset sent now
+        fake.push(b"[MSG:Reset to continue]\r\n")
+        resetting.join(10.0)
+        assert not resetting.is_alive() and fake.written[-1] == b"\x18"
+
+
+def test_soft_reset_resends_once_when_reset_to_continue_never_came():
+    script = [(b"G90 G21 G1 X600 F600\n", b"ALARM:2\r\n"), (b"\x18", b""), (b"\x18", b"ok\r\n" + BANNER)]
+    with expected_protocol(script, timeout_s=0.2) as (stage, fake):
+        with pytest.raises(GrblError, match="ALARM:2"):
+            stage.move_to(600.0, 600.0)
+        stage.soft_reset()  # no message within the timeout: a reset, no banner, one more reset
+        assert fake.written[-2:] == [b"\x18", b"\x18"]

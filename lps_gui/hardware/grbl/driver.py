@@ -376,8 +376,16 @@ class GrblStage(Stage):
         if self._banners > n:
             self._critical = False
             return
+        blind = self._critical and not self._reset_ready  # the message never came: this reset may be cleared
+        what = f"no banner within {self.timeout_s:g} s after a soft reset"
         self.realtime(RT_RESET)
-        self.link.wait_for(lambda: self._banners > n, self.timeout_s, f"no banner within {self.timeout_s:g} s after a soft reset")
+        try:
+            self.link.wait_for(lambda: self._banners > n, self.timeout_s, what)
+        except HardwareError:
+            if not blind or self.link.dead is not None:
+                raise
+            self.realtime(RT_RESET)
+            self.link.wait_for(lambda: self._banners > n, self.timeout_s, what)
         self._critical = False
 
     def feed_hold(self) -> None:

@@ -27,12 +27,14 @@ class SteppedPort:
         self.emu = emu
         self.ser = serial.Serial(emu.path, 115200, timeout=0.01)
         self.buf = b""
+        self.sent = emu.bytes_in  # what the emulator will have read once our writes are in
 
     def send(self, data: bytes) -> None:
         """Write, then let the emulator read and execute it (no simulated time passes)."""
         self.ser.write(data)
         self.ser.flush()
-        self.emu.settle()
+        self.sent += len(data)
+        self.emu.settle(until_bytes=self.sent)
 
     def advance(self, seconds: float) -> None:
         self.emu.advance(seconds)

@@ -23,11 +23,14 @@ class Port:
         self.ser = serial.Serial(emu.path, 115200, timeout=0.02)
         self.ser.reset_input_buffer()
         self.buf = b""
+        self.sent = emu.bytes_in
 
     def write(self, data: bytes) -> None:
+        """Write, then let the emulator read all of it and execute it (no simulated time passes)."""
         self.ser.write(data)
         self.ser.flush()
-        self.emu.settle()
+        self.sent += len(data)
+        self.emu.settle(until_bytes=self.sent)
 
     def ask(self, data: bytes, until: str = "ok", timeout_s: float = 5.0) -> list[str]:
         self.write(data)

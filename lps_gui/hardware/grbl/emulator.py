@@ -50,6 +50,7 @@ class GrblEmulator:
         if stepped and not isinstance(self.stage.clock, SimClock):
             raise ValueError("a stepped GRBL emulator needs a stage on a SimClock")
         self._lock = threading.RLock()  # the firmware is driven by the serving thread and by advance()
+        self.bytes_in = 0  # bytes read from the port (a stepped test waits until its writes are in)
         self.path = ""
         self.dropped = False
         self.firmware = GrblFirmware(self.stage, self.faults, send=self._send, on_drop=self._drop_now,
@@ -184,6 +185,7 @@ class GrblEmulator:
                 return
             if not data:
                 return
+            self.bytes_in += len(data)
             for b in data:
                 self.firmware.receive(b)
 
@@ -209,8 +211,18 @@ class GrblEmulator:
                     break
                 clock.advance(min(step_s, left))
 
-    def settle(self) -> None:
-        """Stepped clock: read what was written and run the firmware once, without time passing."""
+    def settle(self, until_bytes: int | None = None, limit_s: float = 10.0) -> None:
+        """Stepped clock: read what was written and run the firmware once, without time passing.
+
+        ``until_bytes``: first wait (``limit_s`` at most) until that many bytes came
+        in since start: a pty may hand a write to the other side a moment later.
+        """
+        deadline = time.monotonic() + limit_s
+        while until_bytes is not None and self.bytes_in < until_bytes and time.monotonic() < deadline:
+            with self._lock:
+                self._read_input()
+            if self.bytes_in < until_bytes:
+                time.sleep(0.001)
         self.advance(0.0)
 
 

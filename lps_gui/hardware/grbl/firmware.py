@@ -207,7 +207,11 @@ class GrblFirmware:
             self._send("[MSG:'$H'|'$X' to unlock]")
 
     def _base(self) -> tuple[float, float, float]:
-        """Machine 0 sits at the top of the travel: machine = stage coordinate + base."""
+        """Machine 0 sits at the top of the travel: machine = stage coordinate + base.
+
+        The simulated stage's own work offsets stay zero under the emulator (its
+        coordinates are its machine ones); the firmware keeps GRBL's offsets itself.
+        """
         return (-self.stage.travel_mm[1],) * 3  # type: ignore[return-value]
 
     def _machine_planned(self) -> list[float]:

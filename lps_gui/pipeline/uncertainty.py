@@ -93,5 +93,10 @@ def uncertainty_of(results: dict[str, Any], env: Environment, square_mm: float) 
     x = budget_inputs(results, square_mm)
     unc = combine(budget_rows(x, env))
     unc["travel_mm"] = x.travel_mm
-    unc["figures_k2"] = figure_uncertainties(unc, results.get("figures") or {}, x.travel_mm, n_views=x.sigma_um.size)
+    used = [r for r in results.get("positions") or [] if not r.get("outlier")]
+    targets = {round(float(r["target_mm"]), 6) for r in used if isinstance(r.get("target_mm"), (int, float))}
+    angle_sigma = {name: float(np.nanmedian(s)) for name in ("roll", "pitch", "yaw")
+                   if (s := _column(used, f"{name}_sigma_urad")).size and np.isfinite(s).any()}
+    unc["figures_k2"] = figure_uncertainties(unc, results.get("figures") or {}, x.travel_mm, n_views=x.sigma_um.size,
+                                             n_targets=len(targets), angle_sigma_urad=angle_sigma)
     return unc

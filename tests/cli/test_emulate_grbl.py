@@ -43,12 +43,12 @@ def test_emulate_grbl_serves_a_pty_until_ctrl_c():
     try:
         path = proc.stdout.readline().strip()
         assert path.startswith("/dev/")
-        stage = GrblStage(path, timeout_s=2.0, poll_interval_s=0.01)
+        stage = GrblStage(path, timeout_s=5.0, poll_interval_s=0.01)
         stage.connect()
         assert stage.status().state == "Alarm"
         stage.home()
         stage.move_to(25.0, 3000.0)
-        assert stage.wait_idle(timeout_s=3.0).work_mm[0] == pytest.approx(25.0)
+        assert stage.wait_idle(timeout_s=30.0).work_mm[0] == pytest.approx(25.0)
         stage.disconnect()
     finally:
         out, err = _stop(proc, signal.SIGINT)
@@ -60,7 +60,7 @@ def test_emulate_grbl_fault_switch_drops_the_connection():
     proc = _serve("--drop-after-lines", "3")
     try:
         path = proc.stdout.readline().strip()
-        stage = GrblStage(path, timeout_s=2.0)
+        stage = GrblStage(path, timeout_s=5.0)
         stage.connect()
         with pytest.raises(HardwareError, match="port vanished"):
             stage.move_to(5.0, 600.0)

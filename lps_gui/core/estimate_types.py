@@ -1,7 +1,7 @@
 """What the estimator takes and gives: options and the estimate with its covariance."""
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
@@ -14,6 +14,20 @@ from lps_gui.core.uncertainty import ArrowheadInverse
 from lps_gui.errors import InputError
 
 METHODS = ("joint", "hybrid", "pnp", "calibrate")
+METHODS_BY_AXES = {1: METHODS, 2: ("joint", "pnp")}  # the hybrid grid search and Eq. 2 are 1-D by construction
+
+
+@dataclass(frozen=True)
+class Selections:
+    """Which parameter groups a solve moves, as mrcal's problem selections (the others are held).
+
+    The shared stage parameters (rotation, line or plane) and every view's
+    position on its D axes are always free. The board's warp is held as the
+    intrinsics calibration found it; the target poses of SPEC 13 (rows,
+    constellations) join here as one more group.
+    """
+
+    intrinsics: bool = False  # the 9 intrinsics, with the calibration's covariance as prior (SPEC 4.6)
 
 
 @dataclass
@@ -36,9 +50,19 @@ class EstimateOptions:
             raise InputError("outlier_k must be positive (robust sigmas, default 5)")
 
     def to_dict(self) -> dict[str, Any]:
-        from dataclasses import asdict
-
         return asdict(self)
+
+    def selections(self) -> Selections:
+        """The parameter groups this estimation frees."""
+        return Selections(intrinsics=self.self_calibrate)
+
+    def check_axes(self, D: int) -> None:
+        """InputError when the method or a selection does not exist for a stage of D axes."""
+        if self.method not in METHODS_BY_AXES[D]:
+            raise InputError(f"method {self.method!r} is not available for a stage of {D} axes; use one of "
+                             f"{', '.join(METHODS_BY_AXES[D])} (the hybrid grid search is 1-D only)")
+        if D > 1 and self.selections().intrinsics:
+            raise InputError("self-calibration is 1-D only for now; estimate the planar session without it")
 
 
 @dataclass

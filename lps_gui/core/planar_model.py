@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lps_gui.core.block_arrowhead import solve_block_arrowhead
-from lps_gui.core.camera_model import CameraIntrinsics, project_parts
+from lps_gui.core.camera_model import CameraIntrinsics, intrinsics_rows, project_parts
 from lps_gui.core.joint_lm import camera_points, huber_threshold, huber_weights, pose_residuals, robust_cost
 from lps_gui.core.progress import CancelToken
 from lps_gui.core.rotation import exp_so3
@@ -89,17 +89,22 @@ class PlanarEquations:
     ssr: float
     n_obs: int
     weights: np.ndarray  # shape (K, N)
+    cross_theta: np.ndarray | None = None  # shape (p, 9): J_theta^T W J_intrinsics, when asked
+    cross_s: np.ndarray | None = None  # shape (K, 2, 9): J_s^T W J_intrinsics per view
 
 
-def planar_jacobians(state: PlanarState, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def planar_jacobians(state: PlanarState, X: np.ndarray, with_intrinsics: bool = False
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
     """Projection and Jacobians of the planar model at ``state``.
 
     Returns uv shape (2, K, N), J_theta shape (8, 2, K, N) (left-perturbed
-    rotation, l0, plane tilts about n_x and n_y) and J_s shape (2, 2, K, N)
-    (d uv / d x_i and d uv / d y_i).
+    rotation, l0, plane tilts about n_x and n_y), J_s shape (2, 2, K, N)
+    (d uv / d x_i and d uv / d y_i) and, when asked, J_I shape (9, 2, K, N)
+    (d uv / d intrinsics, :data:`~lps_gui.core.camera_model.INTRINSIC_NAMES`).
     """
     x, y, z = _camera_points(state, X)
     parts = project_parts(x, y, z, state.intrinsics, want_jacobian=True)
+    J_I = np.stack(intrinsics_rows(parts, state.intrinsics), axis=1) if with_intrinsics else None
     Px = np.stack([parts.du[0], parts.dv[0]])  # shape (2, K, N)
     Py = np.stack([parts.du[1], parts.dv[1]])
     Pz = np.stack([parts.du[2], parts.dv[2]])
@@ -121,14 +126,16 @@ def planar_jacobians(state: PlanarState, X: np.ndarray) -> tuple[np.ndarray, np.
     J[7] = -state.xy[None, :, 0, None] * Pn_z
     Js = np.stack([P_dot(state.P[:, 0]), P_dot(state.P[:, 1])])
     uv = np.stack([parts.u, parts.v])
-    return uv, J, Js, RX
+    return uv, J, Js, J_I
 
 
 def linearize_planar(
-    state: PlanarState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray, huber_c: float | None = None
+    state: PlanarState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray, huber_c: float | None = None,
+    with_intrinsics: bool = False,
 ) -> tuple[PlanarEquations, np.ndarray]:
-    """Normal-equation blocks at ``state`` and the residuals (K, N, 2)."""
-    uv, J, Js, _ = planar_jacobians(state, X)
+    """Normal-equation blocks at ``state`` and the residuals (K, N, 2); ``with_intrinsics`` adds the
+    pose blocks' cross terms with the intrinsics (for propagating their covariance, the intrinsics held)."""
+    uv, J, Js, J_I = planar_jacobians(state, X, with_intrinsics)
     m = np.nan_to_num(corners)
     r = np.empty_like(uv)  # shape (2, K, N)
     r[0] = np.where(mask, uv[0] - m[..., 0], 0.0)
@@ -147,6 +154,10 @@ def linearize_planar(
     e2 = np.sum(r_kn2 * r_kn2, axis=-1)
     eq = PlanarEquations(A, B, D, g_theta, g_s, robust_cost(r_kn2, mask, huber_c), float(np.sum(e2[mask])),
                          int(2 * mask.sum()), weights)
+    if J_I is not None:
+        wJ_I = (w[None] * J_I).reshape(J_I.shape[0], -1)
+        eq.cross_theta = Jf @ wJ_I.T
+        eq.cross_s = np.einsum("ackn,ickn->kai", Js, w[None] * J_I)
     return eq, r_kn2
 
 

@@ -5,7 +5,9 @@ import cv2
 import numpy as np
 import pytest
 
-from lps_gui.core.planar_estimate import PlanarObservations, estimate_planar, planar_truth_in_stage_frame
+from lps_gui.core.estimate import EstimateOptions, estimate
+from lps_gui.core.observations import Observations
+from lps_gui.core.planar_estimate import planar_truth_in_stage_frame
 from lps_gui.core.planar_figures import axis_geometry, planar_figures
 from lps_gui.core.planar_model import apply_planar_step, planar_jacobians
 from lps_gui.core.planar_rig import PlanarErrorModel
@@ -22,9 +24,9 @@ from lps_gui.errors import DegenerateGeometryError, InputError
 
 def observations(spec, views) -> PlanarObservations:
     st = views.stops
-    return PlanarObservations(spec.rig.board, spec.rig.intrinsics, views.corners_px, [s.target_mm for s in st],
-                              [s.approach for s in st], [1 if s.direction == "+" else -1 for s in st],
-                              [s.run for s in st], [s.index for s in st], source="simulated planar session")
+    return Observations(spec.rig.board, spec.rig.intrinsics, views.corners_px, [s.target_mm for s in st],
+                        [1 if s.direction == "+" else -1 for s in st], [s.run for s in st], [s.index for s in st],
+                        source="simulated planar session", approach=[s.approach for s in st])
 
 
 def true_stage_xy(est, obs, views) -> np.ndarray:
@@ -90,7 +92,7 @@ def test_paper_planar_positions_reach_the_cramer_rao_bound_and_recover_squarenes
     spec = paper_planar_spec(seed=11)  # 15 x 9 grid at 10 mm, 0.1 px, 150 urad, +80 / -50 ppm
     views = simulate_planar_views(spec)
     obs = observations(spec, views)
-    est = estimate_planar(obs)
+    est = estimate(obs)
     assert est.converged and not est.outlier.any()
     truth = true_stage_xy(est, obs, views)
     err_um = 1e3 * (est.state.xy - truth)[est.used]
@@ -98,7 +100,7 @@ def test_paper_planar_positions_reach_the_cramer_rao_bound_and_recover_squarenes
     crb_um = 1e3 * np.sqrt(np.mean(crb_xy_sigma_mm(spec, views)[1:] ** 2))
     assert 0.5 < crb_um < 4.0  # about 2 um per coordinate on this rig
     assert rms < 1.3 * crb_um, (rms, crb_um)
-    pnp = estimate_planar(obs, method="pnp")  # the baseline: per-view poses, each with its own depth and tilt noise
+    pnp = estimate(obs, EstimateOptions(method="pnp"))  # the baseline: per-view poses, each with its own depth and tilt noise
     rms_pnp = 1e3 * np.sqrt(np.mean((pnp.state.xy - true_stage_xy(pnp, obs, views))[pnp.used] ** 2))
     assert rms_pnp > 1.5 * rms, (rms_pnp, rms)  # measured: 4.3 um against 2.0 um
     # reported sigmas agree with the bound
@@ -127,7 +129,7 @@ def test_square_error_model_without_straightness_gives_its_parameters():
     spec = small_planar_spec(seed=2, errors=errors, noise_px=0.02)
     views = simulate_planar_views(spec)
     obs = observations(spec, views)
-    est = estimate_planar(obs)
+    est = estimate(obs)
     geo = axis_geometry(est.fit.G, est.fit.cov_G)
     for value, truth, sigma in ((geo.squareness_urad, 150.0, geo.squareness_sigma_urad),
                                 (geo.scale_x_ppm, 80.0, geo.scale_x_sigma_ppm),
@@ -142,7 +144,7 @@ def test_planar_sigmas_are_honest_over_monte_carlo_repetitions():
         spec = small_planar_spec(seed=100 + seed)
         views = simulate_planar_views(spec)
         obs = observations(spec, views)
-        est = estimate_planar(obs, detect_outliers=False)
+        est = estimate(obs, EstimateOptions(detect_outliers=False))
         truth = true_stage_xy(est, obs, views)
         e = (est.state.xy - truth)[1:]
         z2.append(np.mean((e / est.sigma_xy_mm[1:]) ** 2))
@@ -157,7 +159,7 @@ def test_replaced_and_bumped_views_are_flagged_and_the_rest_unchanged():
     base = small_planar_spec(seed=5)
     spec = type(base)(**{**base.__dict__, "replaced_views": (7,), "bumped_views": (15,), "replaced_offset": 5})
     views = simulate_planar_views(spec)
-    est = estimate_planar(observations(spec, views))
+    est = estimate(observations(spec, views))
     assert set(np.flatnonzero(est.outlier)) == {7, 15}
     kinds = {f["index"]: f["kind"] for f in est.flags}
     assert kinds[7] == "position"  # a bumped camera shows as either, depending on the bump's axis
@@ -168,14 +170,14 @@ def test_collinear_targets_are_refused_with_a_one_line_message():
     spec = small_planar_spec(plan=PlanarPlan(start_mm=(0.0, 0.0), stop_mm=(50.0, 0.0), step_mm=(10.0, 10.0)))
     views = simulate_planar_views(spec)
     with pytest.raises(DegenerateGeometryError, match="one line"):
-        estimate_planar(observations(spec, views))
+        estimate(observations(spec, views))
 
 
 def test_hybrid_is_refused_for_planar_sessions():
     spec = small_planar_spec()
     views = simulate_planar_views(spec)
     with pytest.raises(InputError, match="1-D only"):
-        estimate_planar(observations(spec, views), method="hybrid")
+        estimate(observations(spec, views), EstimateOptions(method="hybrid"))
 
 
 def test_planar_figures_lines_and_nodes():
@@ -183,7 +185,7 @@ def test_planar_figures_lines_and_nodes():
                                                      directions="both", runs=2))
     views = simulate_planar_views(spec)
     obs = observations(spec, views)
-    est = estimate_planar(obs)
+    est = estimate(obs)
     figs = planar_figures(obs.target_mm, obs.approach, obs.run, obs.direction, est.deviation_um(obs.target_mm),
                           1e3 * est.sigma_xy_mm, est.used, est.fit.G, est.fit.cov_G)
     assert {ln.axis for ln in figs.lines} == {"X", "Y"}

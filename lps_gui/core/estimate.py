@@ -25,7 +25,7 @@ import numpy as np
 
 from lps_gui.core.camera_model import INTRINSIC_NAMES
 from lps_gui.core.constant_orientation import board_plane_from_model
-from lps_gui.core.estimate_types import METHODS, EstimateOptions, LpsEstimate, step_pairs
+from lps_gui.core.estimate_types import METHODS, PRIOR_JITTER, EstimateOptions, LpsEstimate, step_pairs
 from lps_gui.core.hybrid import initial_line, solve_hybrid, view_costs
 from lps_gui.core.joint_lm import (
     N_POSE_PARAMS,
@@ -52,13 +52,12 @@ from lps_gui.core.uncertainty import (
     noise_variance,
     propagated_variance,
 )
-from lps_gui.errors import DegenerateGeometryError, InputError
+from lps_gui.errors import DegenerateGeometryError
 
 __all__ = ["METHODS", "EstimateOptions", "LpsEstimate", "PlanarEstimate", "estimate"]
 
 INIT_VIEWS = 24  # per-view PnP on this many spread views initializes the joint LM
 N_INTRINSICS = len(INTRINSIC_NAMES)  # 9, after the pose parameters when self-calibrating
-PRIOR_JITTER = 1e-18  # keeps an intrinsics covariance with exact zeros invertible
 
 
 def estimate(
@@ -157,11 +156,7 @@ def _solve(
     if opt.method == "hybrid":
         res = solve_hybrid(state, X, obs.corners_px, mask, used, opt.hybrid, progress, cancel)
         return _regauge(res.state, ref), res.rounds, res.converged, None
-    prior = None
-    if opt.self_calibrate:
-        if obs.intrinsics.covariance is None:
-            raise InputError("self-calibration needs the intrinsics' std or covariance in intrinsics.json")
-        prior = (obs.intrinsics.vector(), obs.intrinsics.covariance + PRIOR_JITTER * np.eye(N_INTRINSICS))
+    prior = opt.intrinsics_prior(obs.intrinsics)
     lm = solve_joint(
         state,
         X,

@@ -6,6 +6,7 @@ from typing import Any
 
 import numpy as np
 
+from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
 from lps_gui.core.constant_orientation import BoardPlaneMotion
 from lps_gui.core.hybrid import HybridOptions
 from lps_gui.core.joint_lm import LpsState
@@ -15,6 +16,7 @@ from lps_gui.errors import InputError
 
 METHODS = ("joint", "hybrid", "pnp", "calibrate")
 METHODS_BY_AXES = {1: METHODS, 2: ("joint", "pnp")}  # the hybrid grid search and Eq. 2 are 1-D by construction
+PRIOR_JITTER = 1e-18  # keeps an intrinsics covariance with exact zeros invertible
 
 
 @dataclass(frozen=True)
@@ -56,13 +58,19 @@ class EstimateOptions:
         """The parameter groups this estimation frees."""
         return Selections(intrinsics=self.self_calibrate)
 
+    def intrinsics_prior(self, intrinsics: CameraIntrinsics) -> tuple[np.ndarray, np.ndarray] | None:
+        """(I0, Sigma_I) of the intrinsics when they are selected (free with their calibration as prior), else None."""
+        if not self.selections().intrinsics:
+            return None
+        if intrinsics.covariance is None:
+            raise InputError("self-calibration needs the intrinsics' std or covariance in intrinsics.json")
+        return intrinsics.vector(), intrinsics.covariance + PRIOR_JITTER * np.eye(len(INTRINSIC_NAMES))
+
     def check_axes(self, D: int) -> None:
         """InputError when the method or a selection does not exist for a stage of D axes."""
         if self.method not in METHODS_BY_AXES[D]:
             raise InputError(f"method {self.method!r} is not available for a stage of {D} axes; use one of "
                              f"{', '.join(METHODS_BY_AXES[D])} (the hybrid grid search is 1-D only)")
-        if D > 1 and self.selections().intrinsics:
-            raise InputError("self-calibration is 1-D only for now; estimate the planar session without it")
 
 
 @dataclass

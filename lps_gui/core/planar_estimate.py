@@ -122,11 +122,12 @@ def estimate_plane(obs: Observations, opt: EstimateOptions, progress: ProgressFn
         return est
 
     sol = Solution(state, ref, usable, np.zeros(obs.K, dtype=bool), [""] * obs.K)
+    prior = opt.intrinsics_prior(obs.intrinsics)
     progress(1, 4, "joint planar solve")
 
     def solve(sol: Solution) -> None:
         res = solve_planar(sol.state, X, obs.corners_px, mask_all & sol.used[:, None], sol.free(), robust=opt.robust,
-                           cancel=cancel)
+                           cancel=cancel, intrinsics_prior=prior)
         sol.state, sol.iterations, sol.converged = res.state, res.iterations, res.converged
 
     solve_with_outliers(sol, solve, lambda sol, round_no: _outlier_round(sol, obs, X, mask_all, opt.outlier_k, round_no),
@@ -143,21 +144,18 @@ def estimate_plane(obs: Observations, opt: EstimateOptions, progress: ProgressFn
     state = _regauge(state, ref)
     state, angle = _align_to_x_motion(state, obs.target_mm, obs.approach, used)
     t0 = time.perf_counter()
-    eq, _ = linearize_planar(state, X, obs.corners_px, mask, with_intrinsics=obs.intrinsics.covariance is not None)
-    inv, sigma2 = _inverse(eq, free)
+    inv, sigma2, G_s, n_params = _uncertainty(state, obs, X, mask, free, prior)
     cov = sigma2 * inv.cov_view()
-    G_s = None
     cov_total = cov
-    if eq.cross_theta is not None:
-        G_s = block_intrinsics_sensitivity(inv, eq.cross_theta, eq.cross_s)
+    if G_s is not None:
         cov_total = cov + np.einsum("kai,ij,kbj->kab", G_s, obs.intrinsics.covariance, G_s)
     timings["uncertainty"] = time.perf_counter() - t0
-    n_params = N_PLANAR_SHARED + 2 * int(free.sum())
+    eq_n_obs = int(2 * mask.sum())
     est = PlanarEstimate(
         method=opt.method, state=state, reference_view=ref, usable=usable, used=used, outlier=sol.outlier,
         outlier_reason=sol.reasons, sigma_px=float(np.sqrt(sigma2)), cov_xy_mm2=cov,
         rms_px=_view_rms(state, X, obs.corners_px, mask_all), n_corners=mask_all.sum(axis=1),
-        iterations=sol.iterations, converged=sol.converged, n_observations=eq.n_obs, dof=eq.n_obs - n_params,
+        iterations=sol.iterations, converged=sol.converged, n_observations=eq_n_obs, dof=eq_n_obs - n_params,
         flags=sol.flags, timings_s=timings, inverse=inv, options=opt, cov_xy_total_mm2=cov_total,
         intrinsics_gradient=G_s,
     )
@@ -200,6 +198,30 @@ def _view_rms(state: PlanarState, X: np.ndarray, corners: np.ndarray, mask: np.n
     n = mask.sum(axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(n > 0, np.sqrt(np.sum(r * r, axis=(1, 2)) / np.maximum(n, 1)), np.nan)
+
+
+def _uncertainty(state: PlanarState, obs: Observations, X: np.ndarray, mask: np.ndarray, free: np.ndarray,
+                 prior: tuple[np.ndarray, np.ndarray] | None
+                 ) -> tuple[BlockArrowheadInverse, float, np.ndarray | None, int]:
+    """H^-1 at the solution, the noise variance, d (x, y) / d intrinsics and the number of unknowns.
+
+    Intrinsics held: their covariance is propagated (when known) through the pose blocks' cross terms;
+    intrinsics free (self-calibration): the prior's information joins H and nothing is propagated.
+    """
+    with_intr = prior is not None or obs.intrinsics.covariance is not None
+    eq, _ = linearize_planar(state, X, obs.corners_px, mask, with_intrinsics=with_intr)
+    p = N_PLANAR_SHARED
+    n_params = p + 2 * int(free.sum())
+    if prior is not None:
+        A = eq.A.copy()
+        A[p:, p:] += np.linalg.inv(prior[1])
+        n_params += A.shape[0] - p
+        sigma2 = noise_variance(eq.ssr, eq.n_obs, n_params)
+        return block_arrowhead_inverse(A, eq.B, eq.D, free), sigma2, None, n_params
+    sigma2 = noise_variance(eq.ssr, eq.n_obs, n_params)
+    inv = block_arrowhead_inverse(eq.A[:p, :p], eq.B[..., :p], eq.D, free)
+    G_s = block_intrinsics_sensitivity(inv, eq.A[:p, p:], eq.B[..., p:]) if with_intr else None
+    return inv, sigma2, G_s, n_params
 
 
 def _inverse(eq: PlanarEquations, free: np.ndarray) -> tuple[BlockArrowheadInverse, float]:

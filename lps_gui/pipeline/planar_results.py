@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from lps_gui import __version__
+from lps_gui.core.camera_model import INTRINSIC_NAMES
 from lps_gui.core.observations import Observations
 from lps_gui.core.planar_estimate import PlanarEstimate
 from lps_gui.core.planar_figures import node_errors, planar_figures
@@ -77,6 +78,8 @@ def build_planar_results(session: Session, obs: Observations, est: PlanarEstimat
         "n_observations": est.n_observations, "dof": est.dof, "iterations": est.iterations,
         "converged": est.converged, "reference_index": int(obs.index[est.reference_view]),
     }
+    if est.options.self_calibrate:
+        parameters["intrinsics_estimated"] = dict(zip(INTRINSIC_NAMES, st.intrinsics.vector().tolist()))
     inputs = session_inputs(session, intrinsics_source, {session.corners_path.name: obs.source_sha256})
     results: dict[str, Any] = {
         "format": FORMAT, "software": {"name": "lps-calib", "version": __version__},

@@ -171,3 +171,27 @@ def test_planar_figures_lines_and_nodes():
     assert figs.per_axis["X"]["iso230_2"] is not None
     d = figs.to_dict()
     assert d["geometry"]["squareness_sigma_urad"] > 0
+
+
+def test_planar_self_calibration_frees_the_intrinsics_under_their_prior():
+    """The intrinsics selection for D = 2: the 9 intrinsics join the shared parameters with the calibration's
+    covariance as prior; the positions' sigma then carries their uncertainty and stays honest."""
+    from dataclasses import replace
+
+    spec = small_planar_spec(seed=5)
+    views = simulate_planar_views(spec)
+    sd = np.r_[2.0, 2.0, 2.0, 2.0, 0.01, 0.01, 1e-4, 1e-4, 0.01]
+    obs = observations(spec, views)
+    obs.intrinsics = replace(obs.intrinsics, covariance=np.diag(sd**2))
+    held = estimate(obs, EstimateOptions())
+    free = estimate(obs, EstimateOptions(self_calibrate=True))
+    assert free.converged and free.dof == held.dof - 9
+    moved = (free.state.intrinsics.vector() - obs.intrinsics.vector()) / sd
+    assert 0 < np.max(np.abs(moved)) < 3.0
+    truth = true_stage_xy(free, obs, views)
+    rest = free.used & (np.arange(obs.K) != free.reference_view)
+    z2 = np.mean(((free.state.xy - truth)[rest] / free.sigma_total_xy_mm[rest]) ** 2)
+    assert 0.2 < z2 < 3.0, z2
+    # the corners inform the intrinsics too: the positions' total sigma is below the prior's propagation alone
+    assert np.median(free.sigma_total_xy_mm[1:]) < np.median(held.sigma_total_xy_mm[1:])
+    assert np.all(held.sigma_total_xy_mm[1:] >= held.sigma_xy_mm[1:])

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from lps_gui.cli import main as lps_main
+from lps_gui.core.camera_model import INTRINSIC_NAMES
 from lps_gui.errors import InputError
 from lps_gui.io.session_lock import SessionBusy, SessionLock
 from lps_gui.pipeline.estimate import estimate_session
@@ -138,3 +139,11 @@ def test_views_with_collinear_corners_are_refused(session, tmp_path):
             estimate_session(session, out_dir=tmp_path / "collinear")
     finally:
         (session / "corners.vnl").write_text(corners)
+
+
+def test_planar_self_calibration_through_the_one_path(planar, tmp_path):
+    res = estimate_session(planar, options={"self_calibrate": True}, out_dir=tmp_path / "sc")
+    assert res["settings"]["self_calibrate"] is True
+    estimated = res["parameters"]["intrinsics_estimated"]
+    assert list(estimated) == list(INTRINSIC_NAMES) and res["parameters"]["converged"]
+    assert estimated["fx"] != res["intrinsics"]["camera_matrix"][0][0]  # free, moved off the prior's centre

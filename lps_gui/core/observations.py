@@ -10,6 +10,11 @@ from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.errors import DegenerateGeometryError, InputError
 
 MIN_CORNERS_PER_VIEW = 6
+UNSPANNED = {  # targets that do not span the stage's D axes, by D
+    1: "all views are at one target position; the line direction is undetermined, capture along the axis",
+    2: "the usable targets lie on one line; a planar session needs targets spread over both axes "
+       "(or estimate it as 1-D)",
+}
 
 
 class CornerViews:
@@ -104,13 +109,7 @@ class Observations(CornerViews):
             raise DegenerateGeometryError(
                 f"{self.source}: only {int(usable.sum())} views show the board; need at least 3 {need}"
             )
-        t = self.target_mm[usable]
-        if self.D == 1 and np.ptp(t) <= 0:
-            raise DegenerateGeometryError(
-                f"{self.source}: all views are at one target position; the line direction is undetermined, capture along the axis"
-            )
-        if self.D == 2:
-            sv = np.linalg.svd(t - t.mean(axis=0), compute_uv=False)
-            if sv.size < 2 or sv[1] <= 1e-9 * max(sv[0], 1e-300):
-                raise DegenerateGeometryError(f"{self.source}: the usable targets lie on one line; a planar "
-                                              "session needs targets spread over both axes (or estimate it as 1-D)")
+        t = self.targets[usable]
+        sv = np.linalg.svd(t - t.mean(axis=0), compute_uv=False)  # the targets must span all D axes
+        if sv.size < self.D or sv[self.D - 1] <= 1e-9 * max(sv[0], 1e-300):
+            raise DegenerateGeometryError(f"{self.source}: {UNSPANNED[self.D]}")

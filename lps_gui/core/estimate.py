@@ -25,7 +25,7 @@ import numpy as np
 
 from lps_gui.core.camera_model import INTRINSIC_NAMES
 from lps_gui.core.constant_orientation import board_plane_from_model
-from lps_gui.core.estimate_types import METHODS, PRIOR_JITTER, EstimateOptions, LpsEstimate, step_pairs
+from lps_gui.core.estimate_types import METHODS, EstimateOptions, LpsEstimate, step_pairs
 from lps_gui.core.hybrid import initial_line, solve_hybrid, view_costs
 from lps_gui.core.joint_lm import (
     N_POSE_PARAMS,
@@ -250,7 +250,7 @@ def _uncertainty(obs: Observations, opt: EstimateOptions, sol: Solution, X: np.n
     A, B = eq.A, eq.B
     if opt.self_calibrate:
         A = A.copy()
-        A[p:, p:] += np.linalg.inv(obs.intrinsics.covariance + PRIOR_JITTER * np.eye(N_INTRINSICS))
+        A[p:, p:] += np.linalg.inv(opt.intrinsics_prior(obs.intrinsics)[1])
         n_params = p + N_INTRINSICS + int(free.sum())
     else:
         A, B = A[:p, :p], B[:, :p]

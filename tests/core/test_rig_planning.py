@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.core.estimate import EstimateOptions, estimate
+from lps_gui.core.estimate import estimate
 from lps_gui.core.observations import Observations
 from lps_gui.core.planar_plan import PlanarPlan
 from lps_gui.core.planar_simulate import simulate_planar_views, small_planar_spec

@@ -70,7 +70,8 @@ class EstimateOptions:
         """InputError when the method or a selection does not exist for a stage of D axes."""
         if self.method not in METHODS_BY_AXES[D]:
             raise InputError(f"method {self.method!r} is not available for a stage of {D} axes; use one of "
-                             f"{', '.join(METHODS_BY_AXES[D])} (the hybrid grid search is 1-D only)")
+                             f"{', '.join(METHODS_BY_AXES[D])} (the hybrid grid search and the full calibration "
+                             "are 1-D only)")
 
 
 @dataclass

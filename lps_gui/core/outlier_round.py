@@ -61,7 +61,8 @@ def judge_views(sol: Solution, rms: np.ndarray, position_test: PositionTest, ind
     new = (bumped | moved) & ~sol.outlier
     for i in np.flatnonzero(new):
         if bumped[i]:
-            sol.reasons[i] = f"reprojection RMS {rms[i]:.3f} px against a median of {np.median(rms[used]):.3f} px (camera bumped?)"
+            sol.reasons[i] = (f"reprojection RMS {rms[i]:.3f} px against a median of {np.median(rms[used]):.3f} px "
+                              "(camera bumped?)")
             kind = "reprojection"
         else:
             sol.reasons[i] = position_reason(i)
@@ -73,13 +74,15 @@ def judge_views(sol: Solution, rms: np.ndarray, position_test: PositionTest, ind
     if sol.outlier[sol.ref]:
         sol.ref = int(np.flatnonzero(sol.used)[0])
     if sol.used.sum() < MIN_VIEWS_LEFT:
-        raise DegenerateGeometryError(f"{source}: fewer than {MIN_VIEWS_LEFT} views are left after removing outliers; check the capture")
+        raise DegenerateGeometryError(f"{source}: fewer than {MIN_VIEWS_LEFT} views are left after removing outliers; "
+                                      "check the capture")
     return True
 
 
 def solve_with_outliers(sol: Solution, solve: Callable[[Solution], None], judge: Callable[[Solution, int], bool],
                         opt: EstimateOptions, timings: dict[str, float], cancel: CancelToken | None = None) -> Solution:
-    """Solve, then up to ``opt.max_outlier_rounds + 1`` judgements, each flagging one followed by a solve without them."""
+    """Solve, then up to ``opt.max_outlier_rounds + 1`` judgements; one that flags views is followed by a solve
+    without them."""
     def timed_solve() -> None:
         if cancel is not None:
             cancel.check("estimation")

@@ -13,7 +13,7 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6.QtCore import Qt
 
-from lps_gui.report.figures import OUTLIER_COLOR, FigureSpec, Series
+from lps_gui.report.figure_spec import OUTLIER_COLOR, FigureSpec, Series
 
 BAND_ALPHA = 50  # of 255: a 2-sigma band reads as a tint behind the curve
 MARKER_SIZE_PX = 6

@@ -110,5 +110,11 @@ def _axis_uncertainty(results: dict[str, Any], env: Environment, square_mm: floa
     x = budget_inputs(results, square_mm, axis)
     unc = combine(budget_rows(x, env))
     unc["travel_mm"] = x.travel_mm
-    unc["figures_k2"] = figure_uncertainties(unc, figures, x.travel_mm, n_views=x.sigma_um.size)
+    used = [r for r in results.get("positions") or [] if not r.get("outlier")]
+    key = f"target_{axis}_mm" if axis else "target_mm"
+    targets = {round(float(r[key]), 6) for r in used if isinstance(r.get(key), (int, float))}
+    angle_sigma = {name: float(np.nanmedian(s)) for name in ("roll", "pitch", "yaw")
+                   if (s := _column(used, f"{name}_sigma_urad")).size and np.isfinite(s).any()}
+    unc["figures_k2"] = figure_uncertainties(unc, figures, x.travel_mm, n_views=x.sigma_um.size,
+                                             n_targets=len(targets), angle_sigma_urad=angle_sigma)
     return unc

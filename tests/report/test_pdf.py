@@ -1,7 +1,6 @@
 """The PDF opens, has the planned pages, and prints the numbers of results.json."""
 from __future__ import annotations
 
-import json
 import re
 import shutil
 import subprocess
@@ -13,22 +12,13 @@ import pytest
 from lps_gui.errors import InputError
 from lps_gui.report.pdf import render_report, write_report
 from lps_gui.report.summary import summary_rows
-from tests.report.conftest import make_results
+from tests.report.conftest import make_results, write_session
 
 pytestmark = pytest.mark.gui
 
 
 def _session(tmp_path: Path, results: dict, truth: dict | None, spec: dict | None = None) -> Path:
-    folder = tmp_path / "session"
-    folder.mkdir()
-    meta = {"format": "lps-session/1", "camera": {"name": "simulated"}, "stage": {"name": "sim"}}
-    if truth:
-        meta["truth"] = truth
-    if spec:
-        meta["stage_spec"] = spec
-    (folder / "session.json").write_text(json.dumps(meta))
-    (folder / "results.json").write_text(json.dumps(results))
-    return folder
+    return write_session(tmp_path / "session", results, truth, spec)
 
 
 def _pdf_pages(path: Path) -> int:
@@ -163,11 +153,16 @@ def test_page_one_states_the_verdict_with_expanded_uncertainty_and_nothing_is_cl
     assert xs and max(xs) <= 595.0 - 15 / 25.4 * 72 + 1.0
 
 
-def test_a_too_narrow_column_is_reported_as_clipped(tmp_path):
-    from lps_gui.report.layout import PdfFlow, ensure_gui_app
+@pytest.mark.parametrize("umask", [0o022, 0o027])
+def test_report_pdf_is_written_with_the_users_umask(tmp_path, umask):
+    import os
+    import stat
 
-    ensure_gui_app()
-    flow = PdfFlow(tmp_path / "t.pdf", "t", "t")
-    flow.table(["a", "b"], [["short", "a cell far too long for a column of ten millimetres"]], [20, 10])
-    flow.finish()
-    assert flow.log.clipped == ["page 1: a cell far too long for a column of ten millimetres"]
+    results, truth = make_results()
+    folder = _session(tmp_path, results, truth)
+    old = os.umask(umask)
+    try:
+        path = write_report(folder)
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE(os.stat(path).st_mode) == 0o666 & ~umask  # not mkstemp's 0600

@@ -21,7 +21,7 @@ from lps_gui.core.stage_errors import StageErrorModel
 from lps_gui.errors import DegenerateGeometryError, InputError
 
 
-def observations(spec, views) -> PlanarObservations:
+def observations(spec, views) -> Observations:
     st = views.stops
     return Observations(spec.rig.board, spec.rig.intrinsics, views.corners_px, [s.target_mm for s in st],
                         [1 if s.direction == "+" else -1 for s in st], [s.run for s in st], [s.index for s in st],

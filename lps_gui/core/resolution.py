@@ -20,9 +20,9 @@ import numpy as np
 
 
 def chi2_sf(x: float, dof: float) -> float:
-    """Survival function of chi-square, P(X > x) (scipy.special's: importing scipy.stats costs 0.7 s).
+    """Survival function of chi-square, P(X > x) (scipy.special's: scipy.stats is far slower to import).
 
-    scipy.special (0.1 s to import) is imported here, where it is used, not
+    scipy.special (itself slow to import) is imported here, where it is used, not
     by everything that imports this module (`lps estimate` reads its inputs first).
     """
     from scipy.special import chdtrc

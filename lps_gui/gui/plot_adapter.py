@@ -171,11 +171,3 @@ def fit_range(plot: pg.PlotItem, drawn: DrawnFigure, pad_fraction: float = 0.08)
             cross.setData(x, np.clip(yo, lo - 0.5 * pad, hi + 0.5 * pad))
     plot.enableAutoRange(axis="x")
     plot.setYRange(lo - pad, hi + pad, padding=0.0)
-
-
-def draw_figure(plot: pg.PlotItem, fig: FigureSpec) -> DrawnFigure:
-    """Replace ``plot``'s contents by ``fig``: title, axis labels with units, legend, series."""
-    drawn, steps = figure_steps(plot, fig)
-    for step in steps:
-        step()
-    return drawn

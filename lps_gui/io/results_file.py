@@ -2,7 +2,7 @@
 
 results.json is the complete, versioned record (schema in
 docs/ARCHITECTURE.md), assembled here only (:func:`assemble_results`); the
-CSVs are views of it for spreadsheets (:func:`summary_rows` gives summary.csv's
+CSVs are views of it for spreadsheets (:func:`summary_csv_rows` gives summary.csv's
 rows). All three are written as one set (:func:`lps_gui.io.file_set.write_file_set`):
 each to a checked temp file, then renamed together, results.json last, so a
 full disk leaves the old set whole and a reader never sees a results.json
@@ -121,7 +121,7 @@ def assemble_results(
     }
     if truth_comparison is not None:
         results["truth_comparison"] = truth_comparison
-    results["summary"] = summary_rows(results)
+    results["summary"] = summary_csv_rows(results)
     return results
 
 
@@ -294,7 +294,7 @@ def summary_figures(results: dict[str, Any]) -> list[SummaryFigure]:
     return out
 
 
-def summary_rows(results: dict[str, Any]) -> list[tuple[str, Any, str]]:
+def summary_csv_rows(results: dict[str, Any]) -> list[tuple[str, Any, str]]:
     """(name, value, unit) rows of summary.csv: every figure of :func:`summary_figures` with a value.
 
     An unresolved figure keeps its row with an empty value (noise alone could give it: no finding).

@@ -12,6 +12,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from lps_gui.core.camera_model import INTRINSIC_NAMES
 from lps_gui.io.results_file import SummaryFigure, extreme_figures, iso_figures, summary_figures
 from lps_gui.io.results_file import finite_number as _num
 from lps_gui.report.figures import position_columns
@@ -19,7 +20,6 @@ from lps_gui.report.figures import position_columns
 METHOD_NAMES = {"joint": "joint LM (all positions, orientation and line at once)",
                 "hybrid": "paper's hybrid algorithm (LM + per-view grid search)",
                 "pnp": "per-view PnP (baseline)", "calibrate": "full calibration (reference only)"}
-INTRINSIC_ORDER = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3")
 DASH = "\u2014"
 ZERO_BELOW = 1e-9  # |values| below this print as 0 (no unit of the report resolves them)
 
@@ -182,7 +182,7 @@ def intrinsics_rows(results: dict[str, Any]) -> list[tuple[str, str, str]]:
               "p1": dist[2], "p2": dist[3], "k3": dist[4]}
     std = intr.get("std") or {}
     out = []
-    for name in INTRINSIC_ORDER:
+    for name in INTRINSIC_NAMES:
         unit = " px" if name in ("fx", "fy", "cx", "cy") else ""
         out.append((name, (f"{values[name]:.3f}" if unit else fmt(values[name], 4)) + unit, fmt(_num(std.get(name)), 2) + (unit if _num(std.get(name)) is not None else "")))
     return out

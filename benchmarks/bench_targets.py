@@ -15,6 +15,8 @@ import sys
 import time
 from pathlib import Path
 
+from bench_estimate import best_time  # noqa: E402  (run from benchmarks/: its folder is on sys.path)
+
 from lps_gui.blas_threads import limit_blas_threads
 
 limit_blas_threads()  # as lps does, before numpy loads
@@ -28,15 +30,6 @@ from test_target_model import PAPER_CAMERA, paper_x_axis  # noqa: E402
 
 from lps_gui.core.pose_model import solve_poses  # noqa: E402
 from lps_gui.core.target_model import solve_targets  # noqa: E402
-
-
-def best(fn, repeats: int = 3):
-    t_best, out = np.inf, None
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = fn()
-        t_best = min(t_best, time.perf_counter() - t0)
-    return t_best, out
 
 
 def calibrate_time(obs, layout, intrinsics) -> float:
@@ -56,13 +49,13 @@ def calibrate_time(obs, layout, intrinsics) -> float:
 
 def main() -> int:
     obs, layout, _ = paper_x_axis(0)
-    t_line, sol = best(lambda: solve_targets(obs, PAPER_CAMERA))
+    t_line, sol = best_time(lambda: solve_targets(obs, PAPER_CAMERA), 3)
     t_cv = calibrate_time(obs, layout, PAPER_CAMERA)
     n = int(np.isfinite(obs.corners_px[..., 0]).sum())
     print(f"row, 121 stops, 6 targets, {n} corners: line model {t_line:.3f} s ({sol.iterations} iterations), "
           f"cv2.calibrateCamera {t_cv:.3f} s, ratio {t_line / t_cv:.2f}")
     obs2, truth = two_depth_scene(0)
-    t_pose, _ = best(lambda: solve_poses(obs2, CAMERA), 2)
+    t_pose, _ = best_time(lambda: solve_poses(obs2, CAMERA), 2)
     t_cv2 = calibrate_time(obs2, truth["layout"], CAMERA)
     n2 = int(np.isfinite(obs2.corners_px[..., 0]).sum())
     print(f"two depths, 121 stops, 16 targets, {n2} corners: full-pose model {t_pose:.3f} s, "

@@ -14,10 +14,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lps_gui.core.camera_model import CameraIntrinsics, project_parts
+from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.rotation import chordal_mean, exp_so3
 from lps_gui.core.target_arrowhead import (
-    Linearization, PositionCovariance, levenberg_marquardt, retract_targets, view_rms)
+    Linearization, PositionCovariance, levenberg_marquardt, project_residuals, retract_targets, view_rms)
 from lps_gui.core.target_model import TargetObservations, target_views
 
 
@@ -43,12 +43,9 @@ def _linearize(state: dict, X, tj, view, uv, intrinsics: CameraIntrinsics, want_
     Rv = R[view]
     RXw = np.einsum("mij,mj->mi", Rv, QX + p[tj])
     P = RXw + t[view]
-    parts = project_parts(P[:, 0], P[:, 1], P[:, 2], intrinsics, want_jacobian)
-    r = np.stack([parts.u, parts.v], axis=1) - uv
-    cost = float(np.sum(r * r))
-    if not want_jacobian:
+    cost, r, dP = project_residuals(P, uv, intrinsics, want_jacobian)
+    if dP is None:
         return Linearization(cost, r, None, None, None)  # type: ignore[arg-type]
-    dP = np.stack([np.stack(parts.du, axis=1), np.stack(parts.dv, axis=1)], axis=1)  # (M, 2, 3)
     Jv = np.empty((len(P), 2, 6))
     Jv[:, :, 0:3] = -np.cross(dP, RXw[:, None, :])  # a row times -[v]x is -(row x v)
     Jv[:, :, 3:6] = dP

@@ -16,6 +16,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from lps_gui.core.camera_model import CameraIntrinsics, project_parts
 from lps_gui.core.rotation import exp_so3
 
 
@@ -28,6 +29,16 @@ class Linearization:
     Jc: np.ndarray  # (M, 2, C) shared columns
     Jt: np.ndarray  # (M, 2, 6) the corner's own target (zero rows for target 0)
     Jv: np.ndarray  # (M, 2, P) the corner's own view
+
+
+def project_residuals(P: np.ndarray, uv: np.ndarray, intrinsics: CameraIntrinsics, want_jacobian: bool = True):
+    """Cost, residuals (M, 2) of camera-frame points P (M, 3) against corners uv, and d uv / d P (M, 2, 3) or None."""
+    parts = project_parts(P[:, 0], P[:, 1], P[:, 2], intrinsics, want_jacobian)
+    r = np.stack([parts.u, parts.v], axis=1) - uv
+    cost = float(np.sum(r * r))
+    if not want_jacobian:
+        return cost, r, None
+    return cost, r, np.stack([np.stack(parts.du, axis=1), np.stack(parts.dv, axis=1)], axis=1)
 
 
 def normal_equations(lin: Linearization, tj: np.ndarray, view: np.ndarray, K: int, T: int, free_view: np.ndarray):

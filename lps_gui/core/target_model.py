@@ -19,11 +19,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lps_gui.core.camera_model import CameraIntrinsics, project_parts
+from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.pnp import solve_pnp
 from lps_gui.core.rotation import chordal_mean, exp_so3
 from lps_gui.core.target_arrowhead import (
-    Linearization, PositionCovariance, levenberg_marquardt, retract_targets, view_covariances, view_rms)
+    Linearization, PositionCovariance, levenberg_marquardt, project_residuals, retract_targets, view_covariances,
+    view_rms)
 from lps_gui.core.target_chain import chain_targets
 from lps_gui.core.target_rig import TargetLayout
 from lps_gui.core.targets import Target
@@ -170,12 +171,9 @@ def _linearize(state: dict, X: np.ndarray, tj: np.ndarray, view: np.ndarray, uv:
     ts = s[view] @ N.T  # (M, 3)
     RXw = Xw @ R.T
     P = RXw + l0 + ts
-    parts = project_parts(P[:, 0], P[:, 1], P[:, 2], intrinsics, want_jacobian)
-    r = np.stack([parts.u, parts.v], axis=1) - uv
-    cost = float(np.sum(r * r))
-    if not want_jacobian:
+    cost, r, dP = project_residuals(P, uv, intrinsics, want_jacobian)
+    if dP is None:
         return Linearization(cost, r, None, None, None)  # type: ignore[arg-type]
-    dP = np.stack([np.stack(parts.du, axis=1), np.stack(parts.dv, axis=1)], axis=1)  # (M, 2, 3)
     B = F[:, 1:3] if D == 1 else F[:, 0:2]  # axes N may turn about
     Jc = np.empty((len(P), 2, N_COMMON))
     # a row a times -[v]x is -(a x v): the rotation columns as cross products

@@ -4,8 +4,6 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import cv2
-
 from lps_gui.core.targets import Target, check_targets
 from lps_gui.errors import InputError
 from lps_gui.io.board_file import board_from_dict, board_to_dict
@@ -61,7 +59,13 @@ def targets_from_list(items: Any, source: str = "session.json targets") -> list[
 
 
 def dictionary_sizes(targets: list[Target]) -> dict[str, int]:
-    """Marker counts of the dictionaries in use (OpenCV knows them; names it does not are caught at detection)."""
+    """Marker counts of the dictionaries in use (OpenCV knows them; names it does not are caught at detection).
+
+    cv2 is imported here, where it is used: io/session imports this module, and `lps estimate` starts
+    without OpenCV.
+    """
+    import cv2
+
     sizes: dict[str, int] = {}
     for t in targets:
         name = t.board.dictionary or ""

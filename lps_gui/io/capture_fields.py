@@ -86,6 +86,7 @@ def capture_fields(d: Any) -> dict[str, Any]:
         "time": parse_time(d.get("time", 0.0)),
         "frame": _int(d, "frame", 0),
         "commanded_mm": _float(d, "commanded_mm", optional=True),
+        "settle_s": _float(d, "settle_s", optional=True),
     }
 
 

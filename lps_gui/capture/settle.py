@@ -2,12 +2,15 @@
 
 A stage rings after a move (a decaying oscillation of the carriage, the
 camera arm or the board stand); a fixed settle time is either too long or
-too short. Here the camera itself is the sensor: frames are grabbed until two
+too short. Here the camera itself is the sensor: frames are grabbed until
 consecutive ones show the board at the same place, within ``settle_px``
 (the mean corner displacement: vibration moves the board rigidly in the
 image, and the mean over N corners has 1/sqrt(N) of one corner's noise), or
 until ``timeout_s`` (then the last frame is taken and the record says how
-long it waited). ``average`` frames are then grabbed and averaged pixel by
+long it waited). ``agree_frames`` consecutive frames must agree pairwise:
+2 is the plain "two consecutive frames agree"; the default 3 (two pairs in
+a row) is not fooled by the turning point of an oscillation, where one pair
+of frames sampled either side of a peak agrees by chance. ``average`` frames are then grabbed and averaged pixel by
 pixel: the corners found in the mean image are the mean of the corners to
 first order (sub-pixel refinement is linear in the grey levels for small
 noise), so their noise falls as 1/sqrt(N).
@@ -35,12 +38,15 @@ class SettleOptions:
     settle_px: float | None = None
     timeout_s: float = 10.0
     average: int = 1
+    agree_frames: int = 3
 
     def __post_init__(self) -> None:
         if self.settle_px is not None and not self.settle_px > 0:
             raise InputError(f"--settle-px {self.settle_px}: give a positive shift in pixels, e.g. 0.05")
         if not self.timeout_s > 0:
             raise InputError(f"--settle-timeout-s {self.timeout_s}: give a positive time in seconds")
+        if not 2 <= int(self.agree_frames) <= 100:
+            raise InputError(f"--settle-frames {self.agree_frames}: give a whole number from 2 to 100")
         if not 1 <= int(self.average) <= 1000:
             raise InputError(f"--average-frames {self.average}: give a whole number from 1 to 1000")
 
@@ -52,7 +58,8 @@ class SettleOptions:
         """What session.json records under ``acquisition``."""
         out: dict[str, Any] = {"average_frames": int(self.average)}
         if self.settle_px is not None:
-            out.update(settle_px=float(self.settle_px), settle_timeout_s=float(self.timeout_s))
+            out.update(settle_px=float(self.settle_px), settle_timeout_s=float(self.timeout_s),
+                       settle_frames=int(self.agree_frames))
         return out
 
 
@@ -91,21 +98,25 @@ class Settler:
         return detect_chessboard(frame.image, self.board, reference_px=reference)
 
     def settle(self, camera: Camera) -> tuple[Frame, float, bool, float | None]:
-        """Grab until two consecutive frames agree; (last frame, settle time, agreed, last shift)."""
+        """Grab until ``agree_frames`` consecutive frames agree; (last frame, settle time, agreed, last shift)."""
         t0 = self.clock.now()
-        prev = camera.grab()
-        prev_c = self._corners(prev, None)
+        frame = camera.grab()
+        prev_c = self._corners(frame, None)
         shift: float | None = None
+        agreeing = 1  # frames in a row whose consecutive shifts are under the threshold
         for _ in range(MAX_GRABS):
             frame = camera.grab()
             corners = self._corners(frame, prev_c)
             if corners is not None and prev_c is not None and len(corners) == len(prev_c):
                 shift = board_shift_px(prev_c, corners)
-                if shift < float(self.options.settle_px or 0.0):
+                agreeing = agreeing + 1 if shift < float(self.options.settle_px or 0.0) else 1
+                if agreeing >= self.options.agree_frames:
                     return frame, self.clock.now() - t0, True, shift
+            else:
+                agreeing = 1
             if self.clock.now() - t0 >= self.options.timeout_s:
                 break
-            prev, prev_c = frame, corners
+            prev_c = corners
         return frame, self.clock.now() - t0, False, shift
 
     def grab(self, camera: Camera, settle: bool) -> StopFrame:

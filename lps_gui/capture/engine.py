@@ -186,9 +186,13 @@ class CaptureEngine:
         self._axis_sides: list[int | None] = [None, None]  # planar: side of each axis' last approach
         self._arrivals: dict[int, tuple[int, int]] | None = None  # planar: see PlanarPlan.arrival_indices
         self._active = False
-        self.settle = settle if settle is not None and settle.active else None
-        self._settler = None if self.settle is None else Settler(session.board(), self.settle, self.clock)
+        self.configure_settle(settle)
         self._locked: dict[str, Any] = {}
+
+    def configure_settle(self, settle: SettleOptions | None) -> None:
+        """Settle detection and averaging for the next :meth:`run` (None or inactive options: neither)."""
+        self.settle = settle if settle is not None and settle.active else None
+        self._settler = None if self.settle is None else Settler(self.session.board(), self.settle, self.clock)
 
     # ------------------------------------------------------------------ control (any thread)
     def pause(self) -> None:

@@ -144,7 +144,9 @@ class GPhoto2Camera(Camera):
         gp = self._gp
         try:
             path = self._cam.capture(gp.GP_CAPTURE_IMAGE)
-            data = bytes(self._cam.file_get(path.folder, path.name, gp.GP_FILE_TYPE_NORMAL).get_data_and_size())
+            picture = self._cam.file_get(path.folder, path.name, gp.GP_FILE_TYPE_NORMAL)
+            data = bytes(picture.get_data_and_size())  # copied while the CameraFile lives: the view is its memory
+            del picture
             self._cam.file_delete(path.folder, path.name)
             checked = self._controls.frame_values() if self._controls is not None else {}
         except gp.GPhoto2Error as exc:

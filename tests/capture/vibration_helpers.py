@@ -16,7 +16,7 @@ from lps_gui.hardware.sim_stage import Vibration
 from lps_gui.sim.session import create_simulated_session
 from tests.capture.helpers import tiny_spec
 
-VIB_PLAN = Plan(start_mm=0.0, stop_mm=36.0, step_mm=4.0, directions="+", runs=1, overshoot_mm=1.0, settle_s=0.0,
+VIB_PLAN = Plan(start_mm=0.0, stop_mm=32.0, step_mm=8.0, directions="+", runs=1, overshoot_mm=1.0, settle_s=0.0,
                 feed_mm_min=1200.0)
 RINGING = Vibration(amplitude_um=150.0, frequency_hz=8.0, decay_s=0.25)
 FRAME_S = 0.04  # the simulated camera's frame time (25 fps): settle grabs advance the simulated clock

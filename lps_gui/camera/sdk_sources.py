@@ -41,10 +41,6 @@ def sdk_camera(spec: str, cti: str | None = None, **options: Any) -> Camera:
     address = spec.partition(":")[2].strip()
     module, cls, _, _ = FAMILIES[family]
     factory = getattr(importlib.import_module(module), cls)
-    if family == "v4l2":
-        if not address.startswith("/dev/"):
-            raise InputError(f"camera {spec!r}: give the device node, e.g. v4l2:/dev/video0")
-        return factory(address, **options)
     if family == "genicam":
         return factory(address, cti=cti, **options)
     return factory(address, **options)

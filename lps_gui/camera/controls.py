@@ -93,8 +93,8 @@ def auto_modes(camera: Any) -> dict[str, bool]:
     return out
 
 
-def set_control(camera: Any, name: str, value: float) -> bool:
-    """Switch the control to manual and set it; False when the device refuses."""
+def set_control(camera: Any, name: str, value: Value) -> bool:
+    """Switch the control to manual and set it; False when the device refuses (strings: SDK enumerations)."""
     surface = surface_of(camera)
     if surface is not None:
         return surface.set(name, value)

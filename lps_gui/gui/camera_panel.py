@@ -55,6 +55,7 @@ class CameraPanel(QWidget):
         self._views = 0
         self._locked = False
         self.control_widgets: dict[str, tuple[QDoubleSpinBox, QCheckBox | None]] = {}
+        self.choice_widgets: dict[str, QComboBox] = {}
 
         self.source = QComboBox()
         self.open_btn = QPushButton("Start preview")
@@ -182,10 +183,12 @@ class CameraPanel(QWidget):
             if item.widget() is not None:
                 item.widget().deleteLater()
         self.control_widgets = {}
+        self.choice_widgets = {}
         values = controls.available(camera) if camera is not None else {}
         autos = controls.auto_modes(camera) if camera is not None else {}
-        self.controls_note.setVisible(not values)
-        self.controls_box.setVisible(bool(values))  # simulated and file cameras have none: no empty box
+        choices = controls.choice_controls(camera) if camera is not None else {}
+        self.controls_note.setVisible(not values and not choices)
+        self.controls_box.setVisible(bool(values or choices))  # simulated and file cameras have none: no empty box
         for row, (name, value) in enumerate(values.items(), start=1):
             spin = QDoubleSpinBox()
             spin.setRange(-100000.0, 100000.0)
@@ -205,11 +208,19 @@ class CameraPanel(QWidget):
             if auto is not None:
                 self.controls_grid.addWidget(auto, row, 2)
             self.control_widgets[name] = (spin, auto)
+        for row, (name, (value, offered)) in enumerate(choices.items(), start=len(values) + 1):
+            combo = QComboBox()  # an SDK's enumerated control: pixel format, trigger, ISO, shutter speed...
+            combo.addItems(list(offered))
+            combo.setCurrentText(value)
+            combo.currentTextChanged.connect(lambda v, n=name: self._set_control(n, v))
+            self.controls_grid.addWidget(QLabel(name.capitalize()), row, 0)
+            self.controls_grid.addWidget(combo, row, 1)
+            self.choice_widgets[name] = combo
         self.lock_controls(self._locked)
 
-    def _set_control(self, name: str, value: float) -> None:
+    def _set_control(self, name: str, value: float | str) -> None:
         if self.camera is not None and not controls.set_control(self.camera, name, value):
-            log.warning("camera: the device refused %s = %g", name, value)
+            log.warning("camera: the device refused %s = %s", name, value)
         self.watch.reset()
 
     def _set_auto(self, name: str, on: bool) -> None:
@@ -226,6 +237,8 @@ class CameraPanel(QWidget):
             spin.setEnabled(not locked and not (auto is not None and auto.isChecked()))
             if auto is not None:
                 auto.setEnabled(not locked)
+        for combo in self.choice_widgets.values():
+            combo.setEnabled(not locked)
         self.grab_btn.setEnabled(not locked and self.grabber is not None)
 
     # ------------------------------------------------------------------ intrinsics views

@@ -113,3 +113,27 @@ def test_paper_rig_through_the_emulated_basler_gives_the_simulated_cameras_corne
     # and `lps estimate` measures the same positions from both
     measured = [[p["measured_mm"] for p in r["positions"]] for r in (direct_results, fed_results)]
     assert len(measured[0]) == 4 and measured[0] == measured[1]
+
+
+def test_locked_controls_are_recorded_and_put_back_when_a_capture_resumes(tmp_path):
+    from lps_gui.capture.engine import CaptureEngine
+    from tests.capture.helpers import start_capture
+
+    plan = Plan(start_mm=0.0, stop_mm=6.0, step_mm=2.0, directions="+", runs=1, overshoot_mm=1.0, settle_s=0.1, feed_mm_min=1200.0)
+    session, stage, _, _ = start_capture(tmp_path / "s", plan=plan)
+    cam = PylonCamera("0815-0001")
+    cam.open()
+    try:
+        cam.device.ExposureAuto.SetValue("Continuous")
+        cam.device.ExposureTime.SetValue(1500.0)
+        engine = CaptureEngine(stage, cam, session)
+        engine.subscribe(lambda e: engine.abort() if e.kind == "frame" and e.index == 1 else None)
+        assert engine.run().state == "aborted"
+        locked = Session.open(session.folder).meta["camera"]["controls_locked"]
+        assert locked["exposure"] == 1500.0 and cam.device.ExposureAuto.GetValue() == "Off"
+        cam.device.ExposureTime.SetValue(8000.0)  # someone touched the camera between the runs
+        assert CaptureEngine(stage, cam, session).run().state == "done"
+        assert cam.device.ExposureTime.GetValue() == 1500.0  # the recorded value, put back before the first frame
+        assert len(session.records()) == 4
+    finally:
+        cam.close()

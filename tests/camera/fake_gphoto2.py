@@ -1,8 +1,8 @@
 """A stand-in for the ``gphoto2`` module with the real one's call surface, replaying a recorded sequence.
 
-The calls and results were recorded from python-gphoto2 2.6.4 (libgphoto2
-2.5.34) on its virtual camera: ``capture`` answers a CameraFilePath
-(folder /store_00010001/DCIM/100GPHOT, names GPH_0NNN.JPG), ``file_get`` a
+The calls and results follow a run of python-gphoto2 2.6.4 (libgphoto2
+2.5.34) on the library's virtual camera: ``capture`` answers a CameraFilePath
+(folder /store_00010001/DCIM/100GPHOT, first name GPH_0099.JPG), ``file_get`` a
 CameraFile whose ``get_data_and_size`` is the picture's bytes, ``file_delete``
 nothing. Here the pictures are the simulated camera's renders (PNG, so the
 comparison is exact); ``unplug_at`` makes the n-th call of a kind raise
@@ -75,7 +75,7 @@ class FakeGPhoto2:
                               "iso": Widget("100", ("Auto", "100", "200")),
                               "imageformat": Widget("Large Fine JPEG", ("Large Fine JPEG", "RAW")),
                               "whitebalance": Widget("Automatic", ("Automatic", "Daylight", "Tungsten"))})
-        self._next = 99
+        self._next = 98  # the virtual camera named its first picture GPH_0099.JPG
         module = self
 
         class Camera:

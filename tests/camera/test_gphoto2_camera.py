@@ -49,8 +49,8 @@ def test_the_recorded_sequence_capture_download_delete_per_frame(rig):
     first = names.index("capture")
     assert names[first:] == PER_FRAME * 6
     gets = [c for c in fake.calls if c[0] in ("file_get", "file_delete")]
-    assert gets[0] == ("file_get", "/store_00010001/DCIM/100GPHOT", "GPH_0100.JPG", 1)
-    assert gets[1] == ("file_delete", "/store_00010001/DCIM/100GPHOT", "GPH_0100.JPG")
+    assert gets[0] == ("file_get", "/store_00010001/DCIM/100GPHOT", "GPH_0099.JPG", 1)
+    assert gets[1] == ("file_delete", "/store_00010001/DCIM/100GPHOT", "GPH_0099.JPG")
     for r, want in zip(session.records(), delivered):
         assert np.array_equal(cv2.imread(str(session.folder / r.file), cv2.IMREAD_GRAYSCALE), want)
     locked = session.meta["camera"]["controls_locked"]

@@ -74,6 +74,54 @@ class NodeAccess(Protocol):
     def symbolics(self, name: str) -> tuple[str, ...] | None: ...
 
 
+class GenApiNodes(abc.ABC):
+    """:class:`NodeAccess` over a GenApi node map; subclasses name the SDK's own accessors."""
+
+    @abc.abstractmethod
+    def _lookup(self, name: str) -> object | None: ...  # the node, None when absent
+    @abc.abstractmethod
+    def _readable(self, node: object) -> bool: ...
+    @abc.abstractmethod
+    def _writable(self, node: object) -> bool: ...
+    @abc.abstractmethod
+    def _get(self, node: object) -> object: ...
+    @abc.abstractmethod
+    def _put(self, node: object, value: object) -> None: ...
+    @abc.abstractmethod
+    def _enum(self, node: object) -> tuple[str, ...]: ...
+
+    def _node(self, name: str) -> object | None:
+        node = self._lookup(name)
+        return node if node is not None and self._readable(node) else None
+
+    def read(self, name: str) -> Value | None:
+        node = self._node(name)
+        if node is None:
+            return None
+        try:
+            v = self._get(node)
+        except Exception:  # a category or command node has no value
+            return None
+        return v if isinstance(v, str) else float(v) if isinstance(v, (int, float)) else None
+
+    def write(self, name: str, value: Value) -> bool:
+        node = self._lookup(name)
+        if node is None or not self._writable(node):
+            return False
+        try:
+            self._put(node, value if isinstance(value, str) else type(self._get(node))(value))
+        except Exception:  # out of range, wrong type: the device refuses
+            return False
+        return True
+
+    def symbolics(self, name: str) -> tuple[str, ...] | None:
+        node = self._node(name)
+        try:
+            return tuple(self._enum(node)) if node is not None else None
+        except Exception:  # not an enumeration
+            return None
+
+
 # control -> candidate features (the first the device has is used), and the automatic-mode feature
 FEATURES: dict[str, tuple[tuple[str, ...], str | None]] = {
     "exposure": (("ExposureTime", "ExposureTimeAbs"), "ExposureAuto"),

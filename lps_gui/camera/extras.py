@@ -1,34 +1,56 @@
-"""The optional SDK packages of the camera families, imported only when their source is chosen.
+"""The optional SDK packages of the camera families, imported only when their source is opened.
 
 The core install stays small: ``pip install lps-calib[genicam]`` (harvesters
 and the genicam wheel), ``[basler]`` (pypylon), ``[gphoto2]`` (python-gphoto2).
-A missing one is a one-line error naming the extra to install.
+A missing one is a one-line error naming the extra to install. The imports
+sit inside these functions on purpose: an SDK is loaded only by the source
+that needs it (not to dodge an import cycle).
 """
 from __future__ import annotations
 
-import importlib
-import importlib.util
 from types import ModuleType
 
 from lps_gui.errors import InputError
 
-EXTRAS = {"harvesters": "genicam", "genicam": "genicam", "pypylon": "basler", "gphoto2": "gphoto2"}
+
+def _missing(package: str, extra: str, source: str) -> InputError:
+    return InputError(f"camera {source}: the {package} package is not installed; pip install lps-calib[{extra}]")
 
 
-def import_sdk(module: str, source: str) -> ModuleType:
-    """``module`` (e.g. "pypylon.pylon"), or InputError naming the extra for ``source`` (e.g. "pylon:123")."""
+def pylon_sdk(source: str) -> tuple[ModuleType, ModuleType]:
+    """pypylon's ``pylon`` and ``genicam`` modules."""
     try:
-        return importlib.import_module(module)
+        from pypylon import genicam, pylon
     except ImportError:
-        extra = EXTRAS[module.split(".")[0]]
-        raise InputError(
-            f"camera {source}: the {module.split('.')[0]} package is not installed; pip install lps-calib[{extra}]"
-        ) from None
+        raise _missing("pypylon", "basler", source) from None
+    return pylon, genicam
 
 
-def installed(module: str) -> bool:
-    """Whether ``module`` can be imported (the GUI lists only the families it finds)."""
-    return importlib.util.find_spec(module) is not None
+def harvesters_sdk(source: str) -> tuple[ModuleType, ModuleType]:
+    """``harvesters.core`` and ``genicam.genapi``."""
+    try:
+        import harvesters.core
+        from genicam import genapi
+    except ImportError:
+        raise _missing("harvesters", "genicam", source) from None
+    return harvesters.core, genapi
+
+
+def genicam_package(source: str) -> ModuleType:
+    """The genicam wheel's package (it bundles the viky.cti demo producer)."""
+    try:
+        import genicam
+    except ImportError:
+        raise _missing("genicam", "genicam", source) from None
+    return genicam
+
+
+def gphoto2_sdk(source: str) -> ModuleType:
+    try:
+        import gphoto2
+    except ImportError:
+        raise _missing("gphoto2", "gphoto2", source) from None
+    return gphoto2
 
 
 def first_line(exc: BaseException) -> str:

@@ -16,11 +16,12 @@ from typing import Any
 
 import numpy as np
 
-from lps_gui.camera.base import Camera, Frame
-from lps_gui.camera.control_surface import ControlSurface, NodeMapControls, Value
-from lps_gui.camera.extras import first_line, import_sdk
-from lps_gui.camera.pixels import BayerGrey, is_supported, to_grey8
-from lps_gui.core.clock import Clock, RealClock
+from lps_gui.camera.base import Frame
+from lps_gui.camera.control_surface import GenApiNodes, NodeMapControls
+from lps_gui.camera.extras import first_line, genicam_package, harvesters_sdk
+from lps_gui.camera.pixels import is_supported
+from lps_gui.camera.sdk_device import SdkCamera
+from lps_gui.core.clock import Clock
 from lps_gui.errors import HardwareError, InputError
 
 FETCH_TIMEOUT_S = 5.0
@@ -45,51 +46,36 @@ def producer_files(cti: str | None, source: str) -> list[str]:
 def demo_producer() -> str | None:
     """The viky.cti demo producer bundled with the genicam wheel, if installed."""
     try:
-        genicam = import_sdk("genicam", "genicam:")
+        genicam = genicam_package("genicam:")
     except InputError:
         return None
     path = Path(genicam.__file__).with_name("viky.cti")
     return str(path) if path.is_file() else None
 
 
-class HarvesterNodes:
+class HarvesterNodes(GenApiNodes):
     """:class:`NodeAccess` over a harvesters (genicam.genapi) node map."""
 
     def __init__(self, node_map: Any, genapi: Any) -> None:
         self.node_map, self.genapi = node_map, genapi
 
-    def _node(self, name: str) -> Any:
-        if not self.node_map.has_node(name):
-            return None
-        node = getattr(self.node_map, name)
-        return node if self.genapi.is_readable(node) else None
+    def _lookup(self, name: str) -> Any:
+        return getattr(self.node_map, name) if self.node_map.has_node(name) else None
 
-    def read(self, name: str) -> Value | None:
-        node = self._node(name)
-        if node is None:
-            return None
-        try:
-            v = node.value
-        except Exception:  # a category or command node has no value
-            return None
-        return v if isinstance(v, str) else float(v) if isinstance(v, (int, float)) else None
+    def _readable(self, node: Any) -> bool:
+        return bool(self.genapi.is_readable(node))
 
-    def write(self, name: str, value: Value) -> bool:
-        node = getattr(self.node_map, name) if self.node_map.has_node(name) else None
-        if node is None or not self.genapi.is_writable(node):
-            return False
-        try:
-            node.value = value if isinstance(value, str) else type(node.value)(value)
-        except Exception:  # out of range, wrong type: the device refuses
-            return False
-        return True
+    def _writable(self, node: Any) -> bool:
+        return bool(self.genapi.is_writable(node))
 
-    def symbolics(self, name: str) -> tuple[str, ...] | None:
-        node = self._node(name)
-        try:
-            return tuple(node.symbolics) if node is not None else None
-        except Exception:  # not an enumeration
-            return None
+    def _get(self, node: Any) -> Any:
+        return node.value
+
+    def _put(self, node: Any, value: Any) -> None:
+        node.value = value
+
+    def _enum(self, node: Any) -> tuple[str, ...]:
+        return tuple(node.symbolics)
 
 
 def list_genicam_devices(cti: str | None = None) -> list[tuple[str, str]]:
@@ -106,7 +92,7 @@ def list_genicam_devices(cti: str | None = None) -> list[tuple[str, str]]:
 
 
 def _harvester(files: list[str], source: str) -> Any:
-    core = import_sdk("harvesters.core", source)
+    core, _ = harvesters_sdk(source)
     h = core.Harvester()
     for f in files:
         h.add_file(f, check_existence=True, check_validity=True)
@@ -114,25 +100,21 @@ def _harvester(files: list[str], source: str) -> Any:
     return h
 
 
-class GenICamCamera(Camera):
+class GenICamCamera(SdkCamera):
     """:class:`Camera` over a harvesters ``ImageAcquirer``; frames 8-bit grey (mono and Bayer without demosaic)."""
 
+    driver = "GenICamCamera"
+
     def __init__(self, serial: str = "", cti: str | None = None, clock: Clock | None = None) -> None:
-        self.serial = serial
-        self.cti = cti
-        self.source = f"genicam:{serial}"
-        self.clock = clock or RealClock()
+        super().__init__(f"genicam:{serial}", clock)
+        self.serial, self.cti = serial, cti
         self._h: Any = None
-        self._ia: Any = None
-        self._controls: NodeMapControls | None = None
-        self._bayer = BayerGrey()
-        self._frame_no = 0
 
     def open(self) -> None:
-        if self._ia is not None:
+        if self._handle is not None:
             return
         files = producer_files(self.cti, self.source)
-        genapi = import_sdk("genicam.genapi", self.source)
+        _, genapi = harvesters_sdk(self.source)
         h = _harvester(files, self.source)
         try:
             ia = h.create({"serial_number": self.serial} if self.serial else 0)
@@ -140,39 +122,29 @@ class GenICamCamera(Camera):
             found = ", ".join(d.serial_number for d in h.device_info_list) or "none"
             h.reset()
             raise HardwareError(f"camera {self.source}: cannot open ({first_line(exc)}); serials found: {found}") from None
-        self._h, self._ia = h, ia
+        self._h, self._handle = h, ia
         self._controls = NodeMapControls(HarvesterNodes(ia.remote_device.node_map, genapi))
-        self._frame_no = 0
 
-    @property
-    def is_open(self) -> bool:
-        return self._ia is not None
-
-    def close(self) -> None:
-        ia, h, self._ia, self._h, self._controls = self._ia, self._h, None, None, None
-        for fn in ((ia.stop, ia.destroy) if ia is not None else ()) + ((h.reset,) if h is not None else ()):
-            try:
-                fn()
-            except Exception:  # a vanished device cannot be released: it is gone either way
-                pass
-
-    def control_surface(self) -> ControlSurface | None:
-        return self._controls
+    def _release(self, handle: Any) -> None:
+        h, self._h = self._h, None
+        try:
+            handle.stop()
+            handle.destroy()
+        finally:
+            if h is not None:
+                h.reset()
 
     @property
     def node_map(self) -> Any:
         """The remote device's node map (for features outside the common controls)."""
-        if self._ia is None:
-            raise HardwareError(f"camera {self.source}: not open; open the camera first")
-        return self._ia.remote_device.node_map
+        return self._opened().remote_device.node_map
 
     def grab(self) -> Frame:
-        if self._ia is None:
-            raise HardwareError(f"camera {self.source}: grab before open(); open the camera first")
+        ia = self._opened()
         try:
-            if not self._ia.is_acquiring():
-                self._ia.start()
-            with self._ia.fetch(timeout=FETCH_TIMEOUT_S) as buf:
+            if not ia.is_acquiring():
+                ia.start()
+            with ia.fetch(timeout=FETCH_TIMEOUT_S) as buf:
                 c = buf.payload.components[0]
                 fmt = str(c.data_format)
                 if not is_supported(fmt):
@@ -185,20 +157,12 @@ class GenICamCamera(Camera):
         except Exception as exc:  # fetch timeout, a removed device
             self.close()
             raise HardwareError(f"camera {self.source}: no frame ({first_line(exc)}); check the cable, then resume") from None
-        image = to_grey8(data, fmt, self._bayer)
-        self._frame_no += 1
-        meta: dict[str, Any] = {"frame": self._frame_no, "pixel_format": fmt}
-        if self._controls is not None:
-            meta["controls"] = self._controls.frame_values()
-        return Frame(image=image, time=self.clock.now(), meta=meta)
+        return self._frame(data, fmt)
 
     def properties(self) -> dict[str, Any]:
-        out: dict[str, Any] = {"driver": "GenICamCamera", "source": self.source, "channels": 1, "cti": self.cti}
-        if self._ia is not None:
-            info = self._ia.device.module  # the GenTL device: vendor and model as the producer reports them
-            nm = self._ia.remote_device.node_map
-            out.update(model=str(getattr(info, "model", "")), serial=self.serial,
+        out = {**super().properties(), "cti": self.cti}
+        if self._handle is not None:
+            nm = self._handle.remote_device.node_map
+            out.update(model=str(getattr(self._handle.device.module, "model", "")), serial=self.serial,
                        width=int(nm.Width.value), height=int(nm.Height.value))
-            if self._controls is not None:
-                out["controls"] = self._controls.values()
         return out

@@ -18,11 +18,12 @@ from typing import Any
 import cv2
 import numpy as np
 
-from lps_gui.camera.base import Camera, Frame
+from lps_gui.camera.base import Frame
 from lps_gui.camera.control_surface import ControlSurface, Value
-from lps_gui.camera.extras import first_line, import_sdk
+from lps_gui.camera.extras import first_line, gphoto2_sdk
 from lps_gui.camera.pixels import colour_to_grey, to_8bit
-from lps_gui.core.clock import Clock, RealClock
+from lps_gui.camera.sdk_device import SdkCamera
+from lps_gui.core.clock import Clock
 from lps_gui.errors import HardwareError, InputError
 
 WIDGETS = {"exposure": "shutterspeed", "gain": "iso", "pixel format": "imageformat", "white balance": "whitebalance"}
@@ -32,7 +33,7 @@ FIXED_WHITE_BALANCE = ("Daylight", "daylight", "Sunny")
 
 def list_gphoto2_devices() -> list[tuple[str, str]]:
     """(label, source) of the cameras libgphoto2 detects."""
-    gp = import_sdk("gphoto2", "gphoto2:")
+    gp = gphoto2_sdk("gphoto2:")
     found = gp.Camera.autodetect()
     return [(f"{found.get_name(i)} ({found.get_value(i)})", f"gphoto2:{found.get_value(i)}") for i in range(found.count())]
 
@@ -93,21 +94,19 @@ class GPhoto2Controls(ControlSurface):
         return locked
 
 
-class GPhoto2Camera(Camera):
+class GPhoto2Camera(SdkCamera):
     """:class:`Camera` over ``gphoto2.Camera``: capture, download, delete, decode to 8-bit grey."""
 
+    driver = "GPhoto2Camera"
+
     def __init__(self, port: str = "", clock: Clock | None = None) -> None:
+        super().__init__(f"gphoto2:{port}", clock)
         self.port = port
-        self.source = f"gphoto2:{port}"
-        self.clock = clock or RealClock()
-        self._cam: Any = None
-        self._controls: GPhoto2Controls | None = None
-        self._frame_no = 0
 
     def open(self) -> None:
-        if self._cam is not None:
+        if self._handle is not None:
             return
-        gp = import_sdk("gphoto2", self.source)
+        gp = gphoto2_sdk(self.source)
         cam = gp.Camera()
         try:
             if self.port:
@@ -119,49 +118,27 @@ class GPhoto2Camera(Camera):
             hint = "no camera found: plug it in, switch it on, close other programs using it (gvfs)" \
                 if exc.code in (gp.GP_ERROR_MODEL_NOT_FOUND, gp.GP_ERROR_UNKNOWN_PORT) else "check the cable"
             raise HardwareError(f"camera {self.source}: cannot open ({first_line(exc)}); {hint}") from None
-        self._cam, self._gp = cam, gp
+        self._handle, self._gp = cam, gp
         self._controls = GPhoto2Controls(cam)
 
-    @property
-    def is_open(self) -> bool:
-        return self._cam is not None
-
-    def close(self) -> None:
-        cam, self._cam, self._controls = self._cam, None, None
-        if cam is not None:
-            try:
-                cam.exit()
-            except Exception:  # a vanished camera cannot be released: it is gone either way
-                pass
-
-    def control_surface(self) -> ControlSurface | None:
-        return self._controls
+    def _release(self, handle: Any) -> None:
+        handle.exit()
 
     def grab(self) -> Frame:
         """Capture, download and delete one picture; HardwareError (camera closed) when the camera goes away."""
-        if self._cam is None:
-            raise HardwareError(f"camera {self.source}: grab before open(); open the camera first")
-        gp = self._gp
+        cam, gp = self._opened(), self._gp
         try:
-            path = self._cam.capture(gp.GP_CAPTURE_IMAGE)
-            picture = self._cam.file_get(path.folder, path.name, gp.GP_FILE_TYPE_NORMAL)
+            path = cam.capture(gp.GP_CAPTURE_IMAGE)
+            picture = cam.file_get(path.folder, path.name, gp.GP_FILE_TYPE_NORMAL)
             data = bytes(picture.get_data_and_size())  # copied while the CameraFile lives: the view is its memory
             del picture
-            self._cam.file_delete(path.folder, path.name)
-            checked = self._controls.frame_values() if self._controls is not None else {}
+            cam.file_delete(path.folder, path.name)
+            frame = self._frame(decode(data, f"camera {self.source}: {path.name}"), file=path.name)
         except gp.GPhoto2Error as exc:
             self.close()
             raise HardwareError(f"camera {self.source}: lost during capture ({first_line(exc)}); "
                                 "reconnect or switch the camera on, then resume") from None
-        image = decode(data, f"camera {self.source}: {path.name}")
-        self._frame_no += 1
-        return Frame(image=image, time=self.clock.now(), meta={"frame": self._frame_no, "file": path.name, "controls": checked})
-
-    def properties(self) -> dict[str, Any]:
-        out: dict[str, Any] = {"driver": "GPhoto2Camera", "source": self.source, "channels": 1}
-        if self._controls is not None:
-            out["controls"] = self._controls.values()
-        return out
+        return frame
 
 
 def decode(data: bytes, what: str) -> np.ndarray:

@@ -11,77 +11,60 @@ from __future__ import annotations
 
 from typing import Any
 
-from lps_gui.camera.base import Camera, Frame
-from lps_gui.camera.control_surface import ControlSurface, NodeMapControls, Value
-from lps_gui.camera.extras import first_line, import_sdk
-from lps_gui.camera.pixels import BayerGrey, to_grey8
-from lps_gui.core.clock import Clock, RealClock
+from lps_gui.camera.base import Frame
+from lps_gui.camera.control_surface import GenApiNodes, NodeMapControls
+from lps_gui.camera.extras import first_line, pylon_sdk
+from lps_gui.camera.sdk_device import SdkCamera
+from lps_gui.core.clock import Clock
 from lps_gui.errors import HardwareError
 
 GRAB_TIMEOUT_MS = 5000
 
 
-class PylonNodes:
+class PylonNodes(GenApiNodes):
     """:class:`NodeAccess` over a pypylon node map."""
 
     def __init__(self, node_map: Any, genicam: Any) -> None:
         self.node_map, self.genicam = node_map, genicam
 
-    def _node(self, name: str) -> Any:
-        node = self.node_map.GetNode(name)
-        return node if node is not None and self.genicam.IsReadable(node) else None
+    def _lookup(self, name: str) -> Any:
+        return self.node_map.GetNode(name)
 
-    def read(self, name: str) -> Value | None:
-        node = self._node(name)
-        if node is None:
-            return None
-        try:
-            v = node.GetValue()
-        except Exception:  # a category or command node has no value
-            return None
-        return v if isinstance(v, str) else float(v) if isinstance(v, (int, float)) else None
+    def _readable(self, node: Any) -> bool:
+        return bool(self.genicam.IsReadable(node))
 
-    def write(self, name: str, value: Value) -> bool:
-        node = self.node_map.GetNode(name)
-        if node is None or not self.genicam.IsWritable(node):
-            return False
-        try:
-            node.SetValue(value if isinstance(value, str) else type(node.GetValue())(value))
-        except Exception:  # out of range, wrong type: the device refuses
-            return False
-        return True
+    def _writable(self, node: Any) -> bool:
+        return bool(self.genicam.IsWritable(node))
 
-    def symbolics(self, name: str) -> tuple[str, ...] | None:
-        node = self._node(name)
-        try:
-            return tuple(node.GetSymbolics()) if node is not None else None
-        except Exception:  # not an enumeration
-            return None
+    def _get(self, node: Any) -> Any:
+        return node.GetValue()
+
+    def _put(self, node: Any, value: Any) -> None:
+        node.SetValue(value)
+
+    def _enum(self, node: Any) -> tuple[str, ...]:
+        return tuple(node.GetSymbolics())
 
 
 def list_pylon_devices() -> list[tuple[str, str]]:
     """(label, source) of every device pylon finds (emulated ones under PYLON_CAMEMU)."""
-    pylon = import_sdk("pypylon.pylon", "pylon:")
+    pylon, _ = pylon_sdk("pylon:")
     return [(f"{d.GetFriendlyName()}", f"pylon:{d.GetSerialNumber()}") for d in pylon.TlFactory.GetInstance().EnumerateDevices()]
 
 
-class PylonCamera(Camera):
+class PylonCamera(SdkCamera):
     """:class:`Camera` over a pypylon ``InstantCamera``; frames 8-bit grey (mono and Bayer without demosaic)."""
 
+    driver = "PylonCamera"
+
     def __init__(self, serial: str = "", clock: Clock | None = None) -> None:
+        super().__init__(f"pylon:{serial}", clock)
         self.serial = serial
-        self.source = f"pylon:{serial}"
-        self.clock = clock or RealClock()
-        self._cam: Any = None
-        self._controls: NodeMapControls | None = None
-        self._bayer = BayerGrey()
-        self._frame_no = 0
 
     def open(self) -> None:
-        if self._cam is not None:
+        if self._handle is not None:
             return
-        pylon = import_sdk("pypylon.pylon", self.source)
-        genicam = import_sdk("pypylon.genicam", self.source)
+        pylon, genicam = pylon_sdk(self.source)
         factory = pylon.TlFactory.GetInstance()
         try:
             if self.serial:
@@ -96,31 +79,16 @@ class PylonCamera(Camera):
             raise HardwareError(
                 f"camera {self.source}: cannot open ({first_line(exc)}); check the serial, the cable and pylon Viewer"
             ) from None
-        self._cam, self._pylon = cam, pylon
+        self._handle = cam
         self._controls = NodeMapControls(PylonNodes(cam.GetNodeMap(), genicam))
-        self._frame_no = 0
 
-    @property
-    def is_open(self) -> bool:
-        return self._cam is not None
-
-    def close(self) -> None:
-        cam, self._cam, self._controls = self._cam, None, None
-        if cam is not None:
-            try:
-                cam.Close()
-            except Exception:  # a vanished device cannot be closed: it is gone either way
-                pass
+    def _release(self, handle: Any) -> None:
+        handle.Close()
 
     @property
     def device(self) -> Any:
         """The open ``InstantCamera`` (for features outside the common controls)."""
-        if self._cam is None:
-            raise HardwareError(f"camera {self.source}: not open; open the camera first")
-        return self._cam
-
-    def control_surface(self) -> ControlSurface | None:
-        return self._controls
+        return self._opened()
 
     def grab(self) -> Frame:
         cam = self.device
@@ -135,20 +103,12 @@ class PylonCamera(Camera):
             data = result.GetArray()
         finally:
             result.Release()
-        fmt = str(self._controls.values().get("pixel format", "Mono8")) if self._controls else "Mono8"
-        image = to_grey8(data, fmt, self._bayer)
-        self._frame_no += 1
-        meta: dict[str, Any] = {"frame": self._frame_no, "pixel_format": fmt}
-        if self._controls is not None:
-            meta["controls"] = self._controls.frame_values()
-        return Frame(image=image, time=self.clock.now(), meta=meta)
+        return self._frame(data, str(cam.PixelFormat.GetValue()))
 
     def properties(self) -> dict[str, Any]:
-        out: dict[str, Any] = {"driver": "PylonCamera", "source": self.source, "channels": 1}
-        if self._cam is not None:
-            info = self._cam.GetDeviceInfo()
+        out = super().properties()
+        if self._handle is not None:
+            info = self._handle.GetDeviceInfo()
             out.update(model=info.GetModelName(), serial=info.GetSerialNumber(),
-                       width=int(self._cam.Width.GetValue()), height=int(self._cam.Height.GetValue()))
-            if self._controls is not None:
-                out["controls"] = self._controls.values()
+                       width=int(self._handle.Width.GetValue()), height=int(self._handle.Height.GetValue()))
         return out

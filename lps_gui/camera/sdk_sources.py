@@ -7,22 +7,21 @@ list); a family whose SDK is missing or fails to enumerate lists nothing.
 """
 from __future__ import annotations
 
-import importlib
 import logging
+from types import ModuleType
 from typing import Any
 
 from lps_gui.camera.base import Camera
-from lps_gui.camera.extras import installed
-from lps_gui.errors import InputError, LpsError
+from lps_gui.errors import InputError
 
 log = logging.getLogger(__name__)
 
-# prefix -> (adapter module, class, SDK module the family needs, device lister)
+# prefix -> (camera class, device lister) in the family's adapter module
 FAMILIES = {
-    "genicam": ("lps_gui.camera.genicam_camera", "GenICamCamera", "harvesters", "list_genicam_devices"),
-    "pylon": ("lps_gui.camera.pylon_camera", "PylonCamera", "pypylon", "list_pylon_devices"),
-    "gphoto2": ("lps_gui.camera.gphoto2_camera", "GPhoto2Camera", "gphoto2", "list_gphoto2_devices"),
-    "v4l2": ("lps_gui.camera.v4l2_camera", "V4L2Camera", "cv2", "list_v4l2_devices"),
+    "genicam": ("GenICamCamera", "list_genicam_devices"),
+    "pylon": ("PylonCamera", "list_pylon_devices"),
+    "gphoto2": ("GPhoto2Camera", "list_gphoto2_devices"),
+    "v4l2": ("V4L2Camera", "list_v4l2_devices"),
 }
 SDK_SPECS = "genicam:SERIAL [--cti PATH] | pylon:SERIAL | gphoto2:[PORT] | v4l2:/dev/videoN"
 
@@ -33,14 +32,26 @@ def family_of(spec: str) -> str | None:
     return head if sep and head in FAMILIES else None
 
 
+def adapter(family: str) -> ModuleType:
+    """The family's adapter module, imported when that source is first used (it loads its SDK only on open)."""
+    if family == "genicam":
+        from lps_gui.camera import genicam_camera as module
+    elif family == "pylon":
+        from lps_gui.camera import pylon_camera as module
+    elif family == "gphoto2":
+        from lps_gui.camera import gphoto2_camera as module
+    else:
+        from lps_gui.camera import v4l2_camera as module
+    return module
+
+
 def sdk_camera(spec: str, cti: str | None = None, **options: Any) -> Camera:
     """The (unopened) camera of an SDK source; ``cti`` is the GenTL producer of ``genicam:``."""
     family = family_of(spec)
     if family is None:
         raise InputError(f"camera {spec!r}: not an SDK source; use {SDK_SPECS}")
     address = spec.partition(":")[2].strip()
-    module, cls, _, _ = FAMILIES[family]
-    factory = getattr(importlib.import_module(module), cls)
+    factory = getattr(adapter(family), FAMILIES[family][0])
     if family == "genicam":
         return factory(address, cti=cti, **options)
     return factory(address, **options)
@@ -49,12 +60,10 @@ def sdk_camera(spec: str, cti: str | None = None, **options: Any) -> Camera:
 def list_devices(cti: str | None = None) -> list[tuple[str, str]]:
     """(label, source) of the devices every installed SDK finds now."""
     out: list[tuple[str, str]] = []
-    for family, (module, _, sdk, lister) in FAMILIES.items():
-        if not installed(sdk):
-            continue
-        fn = getattr(importlib.import_module(module), lister)
+    for family, (_, lister) in FAMILIES.items():
+        fn = getattr(adapter(family), lister)
         try:
             out += fn(cti) if family == "genicam" else fn()
-        except (LpsError, Exception) as exc:  # an SDK that cannot enumerate (no runtime, no permission) lists nothing
+        except Exception as exc:  # an SDK not installed (InputError), or that cannot enumerate, lists nothing
             log.info("camera: %s devices not listed (%s)", family, exc)
     return out

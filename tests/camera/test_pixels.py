@@ -6,7 +6,6 @@ import pytest
 
 from lps_gui.camera.detection import detect_chessboard
 from lps_gui.camera.pixels import BayerGrey, to_grey8
-from lps_gui.core.board import Board
 from lps_gui.errors import HardwareError
 from lps_gui.camera.render import BoardRenderer
 from tests.capture.helpers import tiny_spec

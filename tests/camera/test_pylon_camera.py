@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 
 from lps_gui.camera import controls, open_camera
-from lps_gui.camera.base import Frame
 from lps_gui.camera.pylon_camera import PylonCamera, list_pylon_devices
 from lps_gui.capture.camera_lock import check_frame
 from lps_gui.core.plan import Plan

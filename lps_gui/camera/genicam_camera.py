@@ -5,8 +5,10 @@ Vision Vimba, MATRIX VISION mvGenTL...) opens the device; it comes from
 ``--cti PATH`` or the standard ``GENICAM_GENTL64_PATH`` (folders holding .cti
 files, ``os.pathsep`` separated). The genicam wheel bundles a demo producer,
 ``viky.cti`` (three virtual devices, serials 0..2, 400x400), used by the tests.
-Each grab starts the acquisition if needed and fetches the next buffer;
-controls are the SFNC features of the remote device's node map.
+Each grab is a fresh acquisition (start, fetch, stop: no buffer queued
+during a move is ever taken); streaming (the preview) keeps the acquisition
+running and fetches the next buffer. Controls are the SFNC features of the
+remote device's node map.
 """
 from __future__ import annotations
 
@@ -134,12 +136,19 @@ class GenICamCamera(SdkCamera):
             if h is not None:
                 h.reset()
 
+    def _stop_stream(self, handle: Any) -> None:
+        handle.stop()
+
     @property
     def node_map(self) -> Any:
         """The remote device's node map (for features outside the common controls)."""
         return self._opened().remote_device.node_map
 
     def grab(self) -> Frame:
+        with self._grab_lock:
+            return self._grab()
+
+    def _grab(self) -> Frame:
         ia = self._opened()
         try:
             if not ia.is_acquiring():
@@ -152,6 +161,8 @@ class GenICamCamera(SdkCamera):
                 channels = int(round(c.num_components_per_pixel)) or 1
                 shape = (c.height, c.width) if channels == 1 else (c.height, c.width, channels)
                 data = np.array(c.data, copy=True).reshape(shape)
+            if not self.streaming:
+                ia.stop()
         except HardwareError:
             raise
         except Exception as exc:  # fetch timeout, a removed device

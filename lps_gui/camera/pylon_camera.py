@@ -2,7 +2,8 @@
 
 Each :meth:`PylonCamera.grab` is one ``GrabOne``: acquisition starts after
 the call, so the frame is exposed after the stage settled, never a buffered
-one from before the move. Controls are the GenICam features of the node map
+one from before the move; streaming (the preview) grabs continuously with
+``GrabStrategy_LatestImageOnly``. Controls are the GenICam features of the node map
 (:class:`~lps_gui.camera.control_surface.NodeMapControls`). Without a camera,
 ``PYLON_CAMEMU=N`` makes pylon offer N emulated cameras (serials 0815-0000...)
 whose ``ImageFilename`` feature returns a given image byte for byte.
@@ -79,11 +80,14 @@ class PylonCamera(SdkCamera):
             raise HardwareError(
                 f"camera {self.source}: cannot open ({first_line(exc)}); check the serial, the cable and pylon Viewer"
             ) from None
-        self._handle = cam
+        self._handle, self._pylon = cam, pylon
         self._controls = NodeMapControls(PylonNodes(cam.GetNodeMap(), genicam))
 
     def _release(self, handle: Any) -> None:
         handle.Close()
+
+    def _stop_stream(self, handle: Any) -> None:
+        handle.StopGrabbing()
 
     @property
     def device(self) -> Any:
@@ -91,9 +95,18 @@ class PylonCamera(SdkCamera):
         return self._opened()
 
     def grab(self) -> Frame:
+        with self._grab_lock:
+            return self._grab()
+
+    def _grab(self) -> Frame:
         cam = self.device
         try:
-            result = cam.GrabOne(GRAB_TIMEOUT_MS)
+            if not self.streaming:
+                result = cam.GrabOne(GRAB_TIMEOUT_MS)
+            else:
+                if not cam.IsGrabbing():
+                    cam.StartGrabbing(self._pylon.GrabStrategy_LatestImageOnly)
+                result = cam.RetrieveResult(GRAB_TIMEOUT_MS, self._pylon.TimeoutHandling_ThrowException)
         except Exception as exc:  # timeout or a removed device
             self.close()
             raise HardwareError(f"camera {self.source}: no frame ({first_line(exc)}); check the cable, then resume") from None

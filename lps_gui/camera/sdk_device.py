@@ -1,6 +1,13 @@
-"""What the SDK cameras share: the device handle, closing it whatever state it is in, the frame they build."""
+"""What the SDK cameras share: the device handle, closing it whatever state it is in, the frame they build.
+
+Two ways to grab: by default every :meth:`grab` is a fresh acquisition (it
+starts after the call, so a capture never stores a frame exposed during the
+move, whatever the SDK buffered); :meth:`set_streaming` (the GUI preview) lets
+the device run at its own rate and hands out the newest frame.
+"""
 from __future__ import annotations
 
+import threading
 from typing import Any
 
 import numpy as np
@@ -24,6 +31,21 @@ class SdkCamera(Camera):
         self._controls: ControlSurface | None = None
         self._bayer = BayerGrey()  # gains fixed at the first raw frame
         self._frame_no = 0
+        self.streaming = False
+        self._grab_lock = threading.Lock()  # the preview thread grabs while the GUI switches the mode
+
+    def set_streaming(self, on: bool) -> None:
+        """Run the device continuously (preview at the device's rate) or grab fresh frames one by one (capture)."""
+        with self._grab_lock:
+            if self.streaming and not on and self._handle is not None:
+                try:
+                    self._stop_stream(self._handle)
+                except Exception:  # a vanished device is not streaming any more either
+                    pass
+            self.streaming = bool(on)
+
+    def _stop_stream(self, handle: Any) -> None:
+        """Stop a continuous acquisition (SDKs that stream override it)."""
 
     @property
     def is_open(self) -> bool:

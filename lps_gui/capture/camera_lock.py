@@ -20,7 +20,14 @@ RELATIVE_TOLERANCE = 1e-3  # devices round a set value to their register step
 
 
 def lock_camera(camera: Camera, session: Session) -> dict[str, Any]:
-    """Lock the controls (to the recorded values when the session has them) and record them; the locked values."""
+    """Lock the controls (to the recorded values when the session has them) and record them; the locked values.
+
+    An SDK camera streaming for a preview is switched to fresh frames: each frame of the capture is its
+    own acquisition, started after the stage stood still.
+    """
+    fresh = getattr(camera, "set_streaming", None)
+    if callable(fresh):
+        fresh(False)
     cam_meta = session.meta.setdefault("camera", {})
     recorded = cam_meta.get("controls_locked")
     if recorded:

@@ -35,6 +35,13 @@ REFRESH_MS = 33  # the GUI looks for a new frame 30 times a second
 SHARPNESS_FULL_SCALE = 2000.0  # Laplacian-variance figure shown as a full bar
 
 
+def _stream(camera: Camera, on: bool) -> None:
+    """Continuous acquisition for the preview, fresh frames for a capture (SDK cameras; others have one mode)."""
+    fn = getattr(camera, "set_streaming", None)
+    if callable(fn):
+        fn(on)
+
+
 class CameraPanel(QWidget):
     """Live view through the camera; the simulated camera follows the simulated stage."""
 
@@ -172,6 +179,7 @@ class CameraPanel(QWidget):
     def _on_opened(self, camera: Camera) -> None:
         if self.grabber is not None:
             self.camera = camera
+            _stream(camera, not self._locked)  # an SDK camera previews at the device's own rate
             self.show_controls(camera)
             self.grab_btn.setEnabled(True)
 
@@ -294,6 +302,8 @@ class CameraPanel(QWidget):
         """Lend the camera to the capture engine (on) or take it back (off); the controls lock meanwhile."""
         if self.grabber is not None:
             self.grabber.pause(on)
+        if self.camera is not None:
+            _stream(self.camera, not on)  # a capture takes fresh frames, one acquisition each
         self.lock_controls(on)
 
     def _on_grab_failed(self, message: str) -> None:

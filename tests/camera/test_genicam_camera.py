@@ -41,6 +41,11 @@ def test_frames_are_grabbed_and_controls_read_and_set_through_the_node_map(cti):
         cam.node_map.Width.value = 320
         frames = [cam.grab() for _ in range(3)]
         assert all(f.image.shape == (400, 320) and f.meta["pixel_format"] == "Mono8" for f in frames)
+        assert not cam._handle.is_acquiring()  # each capture frame is its own acquisition
+        cam.set_streaming(True)
+        assert cam.grab().image.shape == (400, 320) and cam._handle.is_acquiring()  # the preview keeps it running
+        cam.set_streaming(False)
+        assert not cam._handle.is_acquiring()
         assert cam.properties()["width"] == 320 and cam.properties()["controls"]["pixel format"] == "Mono8"
         assert controls.lock(cam) == {"pixel format": "Mono8", "frame rate": float(cam.node_map.AcquisitionFrameRate.value)}
     finally:

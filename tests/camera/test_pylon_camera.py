@@ -58,6 +58,23 @@ def test_controls_are_read_set_and_locked_through_the_node_map():
         cam.close()
 
 
+def test_streaming_for_the_preview_and_fresh_frames_for_a_capture(tmp_path):
+    from lps_gui.capture.camera_lock import lock_camera
+    from tests.capture.helpers import start_capture
+
+    cam = open_camera("pylon:0815-0000")
+    try:
+        cam.set_streaming(True)
+        frames = [cam.grab() for _ in range(3)]
+        assert cam.device.IsGrabbing() and len({f.meta["frame"] for f in frames}) == 3
+        session, _, _, _ = start_capture(tmp_path / "s")
+        lock_camera(cam, session)  # a capture borrows the previewed camera
+        assert not cam.streaming and not cam.device.IsGrabbing()
+        assert cam.grab().image.ndim == 2 and not cam.device.IsGrabbing()  # GrabOne: one acquisition per frame
+    finally:
+        cam.close()
+
+
 def test_bayer_frames_come_full_size_and_grey():
     cam = open_camera("pylon:0815-0000")
     try:

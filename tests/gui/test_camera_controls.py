@@ -64,9 +64,10 @@ def test_the_source_list_has_the_sdk_devices_and_their_controls_show(qtbot, wind
         spin, auto = cam.control_widgets["exposure"]
         spin.setValue(3000.0)
         assert cam.camera.device.ExposureTime.GetValue() == 3000.0
-        cam.lock_controls(True)
-        assert not cam.choice_widgets["pixel format"].isEnabled() and not spin.isEnabled()
-        cam.lock_controls(False)
-        assert cam.choice_widgets["pixel format"].isEnabled()
+        assert cam.camera.streaming  # the preview runs at the device's rate
+        cam.pause(True)  # lent to a capture: locked, fresh frames
+        assert not cam.choice_widgets["pixel format"].isEnabled() and not spin.isEnabled() and not cam.camera.streaming
+        cam.pause(False)
+        assert cam.choice_widgets["pixel format"].isEnabled() and cam.camera.streaming
     finally:
         cam.stop()

@@ -28,8 +28,7 @@ def lock_camera(camera: Camera, session: Session) -> dict[str, Any]:
     fresh = getattr(camera, "set_streaming", None)
     if callable(fresh):
         fresh(False)
-    cam_meta = session.meta.setdefault("camera", {})
-    recorded = cam_meta.get("controls_locked")
+    recorded = (session.meta.get("camera") or {}).get("controls_locked")
     if recorded:
         refused = controls.apply(camera, recorded)
         if refused:
@@ -37,8 +36,8 @@ def lock_camera(camera: Camera, session: Session) -> dict[str, Any]:
                                 "set them on the device as in session.json, then resume")
         return dict(recorded)
     locked = controls.lock(camera)
-    if locked:
-        cam_meta["controls_locked"] = locked
+    if locked:  # cameras without controls (simulated, files) leave session.json as it was
+        session.meta.setdefault("camera", {})["controls_locked"] = locked
         session.save_meta()
     return locked
 

@@ -119,7 +119,9 @@ def _resume_devices_hint(session) -> str:
     if (session.truth or {}).get("simulated"):
         return ""
     stage, camera = (session.meta.get("stage") or {}).get("spec"), (session.meta.get("camera") or {}).get("spec")
-    return f" --stage {stage} --camera {camera}" if stage and camera else " --stage ... --camera ..."
+    cti = (session.meta.get("camera") or {}).get("cti")  # a GenICam camera's producer
+    return (f" --stage {stage} --camera {camera}" + (f" --cti {cti}" if cti else "")) if stage and camera \
+        else " --stage ... --camera ..."
 
 
 def _intrinsics_mode(args: argparse.Namespace) -> int:

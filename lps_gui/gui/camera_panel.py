@@ -65,6 +65,9 @@ class CameraPanel(QWidget):
         self.choice_widgets: dict[str, QComboBox] = {}
 
         self.source = QComboBox()
+        # SDK device names are long ("Basler acA1920-40um (40123456)"): the box does not widen the window for them
+        self.source.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+        self.source.setMinimumContentsLength(10)
         self.open_btn = QPushButton("Start preview")
         top = QHBoxLayout()
         top.addWidget(QLabel("Source"))
@@ -218,6 +221,8 @@ class CameraPanel(QWidget):
             self.control_widgets[name] = (spin, auto)
         for row, (name, (value, offered)) in enumerate(choices.items(), start=len(values) + 1):
             combo = QComboBox()  # an SDK's enumerated control: pixel format, trigger, ISO, shutter speed...
+            combo.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+            combo.setMinimumContentsLength(8)  # long symbolic names do not widen the window
             combo.addItems(list(offered))
             combo.setCurrentText(value)
             combo.currentTextChanged.connect(lambda v, n=name: self._set_control(n, v))

@@ -93,13 +93,12 @@ def sdk_devices(rescan: bool = False) -> list[tuple[str, str]]:
 
 
 def camera_choices(sim_available: bool, rescan: bool = False) -> list[tuple[str, str]]:
-    """(label, spec) pairs for the camera panel: the simulated camera, the SDKs' devices, device indices 0 and 1."""
+    """(label, spec) pairs for the camera panel: the simulated camera, device indices 0 and 1, the SDKs' devices."""
     out = []
     if sim_available:
         out.append(("Simulated camera (on the stage)", CAMERA_FOLLOWS_STAGE))
-    out += sdk_devices(rescan)
     out += [("Camera device 0", "0"), ("Camera device 1", "1")]
-    return out
+    return out + sdk_devices(rescan)
 
 
 def open_camera_source(spec: str) -> Camera:

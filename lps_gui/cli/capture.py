@@ -148,7 +148,7 @@ def _intrinsics_mode(args: argparse.Namespace) -> int:
         camera.open()
     else:
         if not args.board:
-            raise InputError("--board FILE is required with a real camera (see SPEC 7 for board.json)")
+            raise InputError("--board FILE is required with a real camera (board.json is described in docs/capture.md)")
         from lps_gui.camera import open_camera
 
         board = read_board(args.board)
@@ -230,7 +230,7 @@ def _start(args: argparse.Namespace):
         stage = bind_simulated_stage(args, session, stage, camera, stage_spec)
         return session, stage, camera, simulated_engine(session, stage, camera, args.encode)
     if not args.board:
-        raise InputError("--board FILE is required with a real camera (see SPEC 7 for board.json)")
+        raise InputError("--board FILE is required with a real camera (board.json is described in docs/capture.md)")
     from lps_gui.io.board_file import read_board
 
     return device_session(args, read_board(args.board), _plan(args), intr, stage_spec, camera_spec)

@@ -25,7 +25,7 @@ ISO_RUNS = 5  # ISO 230-2 asks for 5 runs per direction
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    g = p.add_argument_group("planar XY plans (SPEC 10); --grid, --targets-xy or --iso-lines imply --planar")
+    g = p.add_argument_group("planar XY plans (docs/planar.md); --grid, --targets-xy or --iso-lines imply --planar")
     g.add_argument("--planar", action="store_true",
                    help="an XY gantry: a grid over both axes (simulated: presets small-planar, paper-planar)")
     g.add_argument("--grid", metavar="X0,Y0:X1,Y1:DX,DY", help="planar grid: start, stop and step in mm")
@@ -219,7 +219,7 @@ def _start(args: argparse.Namespace):
         stage = bind_simulated_stage(args, session, rig_stage, camera, stage_spec, axes=["X", "Y"])
         return session, stage, camera, gantry_engine(session, stage, camera, args.encode)
     if not args.board:
-        raise InputError("--board FILE is required with a real camera (see SPEC 7 for board.json)")
+        raise InputError("--board FILE is required with a real camera (board.json is described in docs/capture.md)")
     from lps_gui.io.board_file import read_board
 
     plan = build_planar_plan(args)

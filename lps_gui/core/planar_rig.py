@@ -20,7 +20,6 @@ import numpy as np
 
 from lps_gui.core.board import Board
 from lps_gui.core.camera_model import CameraIntrinsics
-from lps_gui.core.lps_model import unit
 from lps_gui.core.rig import carried_camera_poses
 from lps_gui.core.rotation import exp_so3
 from lps_gui.core.stage_errors import StageErrorModel
@@ -113,18 +112,6 @@ class PlanarRig:
         C0 = C_mid - E[:, :2] @ np.asarray(centre_xy_mm, dtype=float)
         return cls(board, intrinsics, R, C0, E, errors or PlanarErrorModel())
 
-    def nominal_translations(self, plane_mm: np.ndarray) -> np.ndarray:
-        """t of an error-free carriage at stage-plane positions (K, 2): the model's view of them."""
-        C = self.C0_board[None, :] + np.asarray(plane_mm, dtype=float) @ self.axes_board[:, :2].T
-        return -C @ self.R_cam_board.T
-
     def to_dict(self) -> dict[str, Any]:
         return {"R_cam_board": self.R_cam_board.tolist(), "C0_board": self.C0_board.tolist(),
                 "axes_board": self.axes_board.tolist(), "stage_errors": self.errors.to_dict()}
-
-
-def unit_axes(e_x: np.ndarray, e_y: np.ndarray) -> np.ndarray:
-    """Orthonormal stage frame from two approximate axis directions, shape (3, 3)."""
-    ex = unit(e_x)
-    ey = unit(np.asarray(e_y, dtype=float) - (np.asarray(e_y, dtype=float) @ ex) * ex)
-    return np.column_stack([ex, ey, np.cross(ex, ey)])

@@ -11,7 +11,7 @@ import os
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any
 
 from lps_gui.core.board import Board
 from lps_gui.core.camera_model import CameraIntrinsics
@@ -228,7 +228,3 @@ class Session:
         """Planned frames not yet listed in captures.jsonl, in capture order."""
         done = {r.index for r in self.records()}
         return [s for s in self.plan().stops() if s.index not in done]
-
-    def add_records(self, records: Iterable[CaptureRecord]) -> None:
-        for r in records:
-            self.append(r)

@@ -13,8 +13,8 @@ import logging
 import sys
 from typing import NoReturn
 
-from lps_gui.cli import (capture, compare, compensate, demo, detect, emulate_grbl, estimate, export, intrinsics, plan_rig,
-                     report, simulate)
+from lps_gui.cli import (capture, compare, compensate, demo, detect, emulate_grbl, estimate, export, intrinsics,
+                         make_targets, plan_rig, report, simulate)
 
 COMMANDS = {
     "demo": demo,
@@ -29,6 +29,7 @@ COMMANDS = {
     "compensate": compensate,
     "export": export,
     "compare": compare,
+    "make-targets": make_targets,
 }
 
 

@@ -12,6 +12,7 @@ import pytest
 pytest_plugins = ["tests.watchdog"]  # a hung test fails with every thread's stack; a deadlock ends the run
 
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+os.environ.setdefault("PYLON_CAMEMU", "2")  # pylon offers two emulated cameras (read when pylon first loads)
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # what the entry points do (lps_gui/blas_threads.py), before numpy loads
 
 

@@ -9,9 +9,10 @@ from pathlib import Path
 from typing import Any
 
 from lps_gui.camera.base import Camera
+from lps_gui.camera.sdk_sources import SDK_SPECS, family_of, sdk_camera
 from lps_gui.errors import InputError
 
-CAMERA_SPECS = "sim | N (device index) | DIR (replay a folder) | FILE (video or image sequence) | URL"
+CAMERA_SPECS = f"sim | N (device index) | {SDK_SPECS} | DIR (replay a folder) | FILE (video or image sequence) | URL"
 
 
 def open_camera(spec: str, **options: Any) -> Camera:
@@ -20,11 +21,16 @@ def open_camera(spec: str, **options: Any) -> Camera:
     ``"sim"`` -> :class:`SimulatedCamera` (needs ``rig`` and ``pose_source``
     keywords, e.g. a simulated stage's ``true_pose``); ``"0"`` -> device 0;
     an existing folder -> :class:`FolderReplayCamera`; a file or a URL ->
-    :class:`OpenCVCamera`. Other ``options`` go to the camera's constructor.
+    :class:`OpenCVCamera`; ``genicam:``, ``pylon:``, ``gphoto2:``, ``v4l2:``
+    -> the SDK family's camera (``cti`` option: the GenTL producer). Other
+    ``options`` go to the camera's constructor.
     """
     spec = str(spec).strip()
     camera: Camera
-    if spec == "sim":
+    cti = options.pop("cti", None)
+    if family_of(spec) is not None:
+        camera = sdk_camera(spec, cti=cti, **options)
+    elif spec == "sim":
         if "rig" not in options or "pose_source" not in options:
             raise InputError("camera sim: the simulated camera rides the simulated stage; choose the simulated stage (--stage sim)")
         from lps_gui.camera.sim_camera import SimulatedCamera

@@ -3,9 +3,12 @@ from __future__ import annotations
 
 import abc
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:  # annotation only: the SDK cameras implement it
+    from lps_gui.camera.control_surface import ControlSurface
 
 
 @dataclass(frozen=True)
@@ -46,6 +49,10 @@ class Camera(abc.ABC):
     def properties(self) -> dict[str, Any]:
         """What a session.json records about this camera."""
         return {"driver": type(self).__name__}
+
+    def control_surface(self) -> "ControlSurface | None":
+        """The device's SDK controls (GenICam, pylon, gphoto2) while open; None: none, or OpenCV's (camera/controls.py)."""
+        return None
 
     def __enter__(self) -> "Camera":
         self.open()

@@ -1,16 +1,21 @@
-"""Exposure, gain, focus and white balance of a camera, where the device has them (OpenCV properties).
+"""Exposure, gain, focus and white balance of a camera, where the device has them (OpenCV properties or an SDK).
 
 A measurement needs them fixed: an auto exposure or autofocus that changes
 between frames moves the detected corners (issue 13, item 14). OpenCV exposes
 them as ``CAP_PROP_*``; a device without one answers ``get`` with -1 (or 0 on
 some back ends) and refuses ``set``, so a control is offered only when the
 device reports a value for it. The GUI locks the controls during a capture.
+SDK cameras (GenICam, pylon, gphoto2) answer through their
+:meth:`~lps_gui.camera.base.Camera.control_surface` instead; the functions
+below take either kind.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any, Protocol
+
+from lps_gui.camera.control_surface import ControlSurface, Value
 
 
 @dataclass(frozen=True)
@@ -49,11 +54,20 @@ def device_of(camera: Any) -> PropertyDevice | None:
     return cap if cap is not None and hasattr(cap, "get") and hasattr(cap, "set") else None
 
 
+def surface_of(camera: Any) -> ControlSurface | None:
+    """The SDK control surface of a camera, when it has one (open GenICam, pylon, gphoto2 cameras)."""
+    fn = getattr(camera, "control_surface", None)
+    return fn() if callable(fn) else None
+
+
 def available(camera: Any) -> dict[str, float]:
-    """Controls the device reports a value for: name -> current value (empty for simulated or file cameras)."""
+    """Numeric controls the device reports a value for: name -> current value (empty for simulated or file cameras)."""
+    surface = surface_of(camera)
+    if surface is not None:
+        return {n: v for n, v in surface.values().items() if isinstance(v, float)}
     dev = device_of(camera)
-    if dev is None or isinstance(getattr(camera, "source", 0), str):  # files and streams have no controls
-        return {}
+    if dev is None or not getattr(camera, "is_device", not isinstance(getattr(camera, "source", 0), str)):
+        return {}  # files and streams have no controls
     out = {}
     for c in all_controls():
         v = float(dev.get(c.prop))
@@ -64,6 +78,9 @@ def available(camera: Any) -> dict[str, float]:
 
 def auto_modes(camera: Any) -> dict[str, bool]:
     """name -> automatic mode on, for the controls that have one and report it."""
+    surface = surface_of(camera)
+    if surface is not None:
+        return surface.autos()
     dev = device_of(camera)
     out: dict[str, bool] = {}
     if dev is None:
@@ -76,8 +93,11 @@ def auto_modes(camera: Any) -> dict[str, bool]:
     return out
 
 
-def set_control(camera: Any, name: str, value: float) -> bool:
-    """Switch the control to manual and set it; False when the device refuses."""
+def set_control(camera: Any, name: str, value: Value) -> bool:
+    """Switch the control to manual and set it; False when the device refuses (strings: SDK enumerations)."""
+    surface = surface_of(camera)
+    if surface is not None:
+        return surface.set(name, value)
     dev = device_of(camera)
     c = next((c for c in all_controls() if c.name == name), None)
     if dev is None or c is None:
@@ -88,8 +108,39 @@ def set_control(camera: Any, name: str, value: float) -> bool:
 
 
 def set_auto(camera: Any, name: str, on: bool) -> bool:
+    surface = surface_of(camera)
+    if surface is not None:
+        return surface.set_auto(name, on)
     dev = device_of(camera)
     c = next((c for c in all_controls() if c.name == name), None)
     if dev is None or c is None or c.auto is None:
         return False
     return bool(dev.set(c.auto, c.auto_on if on else c.auto_off))
+
+
+def choice_controls(camera: Any) -> dict[str, tuple[str, tuple[str, ...]]]:
+    """Enumerated SDK controls (pixel format, trigger, ISO...): name -> (current value, allowed values)."""
+    surface = surface_of(camera)
+    if surface is None:
+        return {}
+    return {n: (v, surface.choices(n) or (v,)) for n, v in surface.values().items() if isinstance(v, str)}
+
+
+def lock(camera: Any) -> dict[str, Value]:
+    """Every automatic mode off; the values now in force, for session.json (empty: nothing to lock)."""
+    surface = surface_of(camera)
+    if surface is not None:
+        return surface.lock()
+    for name, on in auto_modes(camera).items():
+        if on:
+            set_auto(camera, name, False)
+    return dict(available(camera))
+
+
+def apply(camera: Any, recorded: dict[str, Value]) -> list[str]:
+    """Put recorded values back (a resumed capture); the names the device would not take."""
+    surface = surface_of(camera)
+    if surface is not None:
+        return surface.apply(recorded)
+    now = lock(camera)
+    return [n for n, v in recorded.items() if n in now and now[n] != v and not set_control(camera, n, float(v))]

@@ -29,6 +29,9 @@ class OpenCVCamera(Camera):
     clock : timestamps frames (monotonic real time by default).
     """
 
+    backend: int = cv2.CAP_ANY  # OpenCV's videoio back end (V4L2Camera: cv2.CAP_V4L2)
+    device_controls: bool | None = None  # None: a device index has controls, files and URLs do not
+
     def __init__(
         self,
         source: int | str,
@@ -46,18 +49,23 @@ class OpenCVCamera(Camera):
         self._frame_no = 0
 
     @property
+    def is_device(self) -> bool:
+        """A device (index or V4L2 node) with controls, not a file or a stream."""
+        return isinstance(self.source, int) if self.device_controls is None else self.device_controls
+
+    @property
     def _name(self) -> str:
         return f"camera {self.source!r}" if isinstance(self.source, str) else f"camera device {self.source}"
 
     def open(self) -> None:
         if self._cap is not None:
             return
-        cap = cv2.VideoCapture(self.source)
+        cap = cv2.VideoCapture(self.source, self.backend)
         if not cap.isOpened():
             cap.release()
             hint = (
                 "check the index, the cable and that no other program uses it"
-                if isinstance(self.source, int)
+                if self.is_device
                 else "check the path or URL and that OpenCV can decode it"
             )
             raise HardwareError(f"{self._name}: cannot open; {hint}")
@@ -83,7 +91,7 @@ class OpenCVCamera(Camera):
             raise HardwareError(f"{self._name}: grab before open(); open the camera first")
         ok, image = self._cap.read()
         if not ok or image is None:
-            if isinstance(self.source, int) or "://" in str(self.source):
+            if self.is_device or "://" in str(self.source):
                 raise HardwareError(f"{self._name}: no frame delivered; check the cable or stream, then resume")
             raise HardwareError(f"{self._name}: no more frames after {self._frame_no}; the file is exhausted")
         image = _to_8bit(image, self.grey)

@@ -28,6 +28,8 @@ import numpy as np
 
 from lps_gui.camera.base import Camera
 from lps_gui.capture import events as ev
+from lps_gui.capture.camera_lock import check_frame, lock_camera
+from lps_gui.capture.settle import SettleOptions, Settler
 from lps_gui.capture.events import CaptureEvent, CaptureListener, CaptureProgress, CaptureSummary
 from lps_gui.core.clock import Clock, RealClock
 from lps_gui.capture.planar_moves import check_planar_plan_in_travel, format_target, go_to_planar
@@ -128,6 +130,12 @@ class CaptureEngine:
     position_tolerance_mm : the stage's reported position after a move must
         be this close to the position commanded, or the capture pauses with an
         error (a stage that stopped short must not be listed as the target).
+    settle : settle detection before each stop's first frame and frame
+        averaging (:mod:`lps_gui.capture.settle`); recorded in session.json
+        ``acquisition``, the settle time of each stop in captures.jsonl.
+
+    The camera's controls are locked for the whole capture and every frame's
+    exposure and gain checked against them (:mod:`lps_gui.capture.camera_lock`).
 
     :meth:`pause`, :meth:`resume`, :meth:`abort` and :meth:`progress` are
     safe to call from any thread while :meth:`run` blocks in another.
@@ -145,6 +153,7 @@ class CaptureEngine:
         move_timeout_s: float = 60.0,
         command_of: Callable[[float, int], float] | None = None,
         position_tolerance_mm: float = POSITION_TOLERANCE_MM,
+        settle: SettleOptions | None = None,
     ) -> None:
         self.stage = stage
         self.camera = camera
@@ -177,6 +186,13 @@ class CaptureEngine:
         self._axis_sides: list[int | None] = [None, None]  # planar: side of each axis' last approach
         self._arrivals: dict[int, tuple[int, int]] | None = None  # planar: see PlanarPlan.arrival_indices
         self._active = False
+        self.configure_settle(settle)
+        self._locked: dict[str, Any] = {}
+
+    def configure_settle(self, settle: SettleOptions | None) -> None:
+        """Settle detection and averaging for the next :meth:`run` (None or inactive options: neither)."""
+        self.settle = settle if settle is not None and settle.active else None
+        self._settler = None if self.settle is None else Settler(self.session.board(), self.settle, self.clock)
 
     # ------------------------------------------------------------------ control (any thread)
     def pause(self) -> None:
@@ -254,6 +270,10 @@ class CaptureEngine:
                 if not self.camera.is_open:  # first: its frame size bounds the disk space needed
                     self.camera.open()
                 check_writable(self.session.folder / IMAGES_DIR, len(remaining) * bytes_per_frame(self.camera))
+                self._locked = lock_camera(self.camera, self.session)
+                if self.settle is not None and self.session.meta.get("acquisition") != self.settle.to_dict():
+                    self.session.meta["acquisition"] = self.settle.to_dict()
+                    self.session.save_meta()
                 if isinstance(self._plan, PlanarPlan):
                     check_planar_plan_in_travel(self._plan, self.stage)
                 else:
@@ -355,7 +375,18 @@ class CaptureEngine:
     def _take(self, stop: PlannedStop) -> None:
         """Grab, write the image atomically, then list it (truth line first, capture line last)."""
         _hook(self.camera, stop.index)
-        frame = self.camera.grab()
+        settle_s = None
+        if self._settler is None:
+            frame = self.camera.grab()
+            check_frame(self._locked, frame, stop.index)
+        else:
+            got = self._settler.grab(self.camera, settle=stop.frame == 0)
+            for f in got.grabbed:
+                check_frame(self._locked, f, stop.index)
+            frame, settle_s = got.frame, got.settle_s
+            if not got.settled:
+                self._emit(CaptureEvent("warning", f"frame {stop.index}: the picture did not settle within "
+                                        f"{self.settle.timeout_s:g} s (last shift {got.shift_px} px); taken anyway", stop.index))
         data = encode_image(frame.image, self.encode)
         rel, sha = self.session.write_image(image_name(stop.index, self.encode), data)
         if self.truth_recorder is not None:
@@ -371,6 +402,7 @@ class CaptureEngine:
             time=time.time(),
             frame=stop.frame,
             commanded_mm=self._commanded_mm,
+            settle_s=None if settle_s is None else round(float(settle_s), 6),
         )
         self.session.append(record)
         self._emit(CaptureEvent("frame", rel, stop.index, record.__dict__.copy()))

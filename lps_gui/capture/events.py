@@ -24,7 +24,8 @@ class CaptureEvent:
     """Something that happened during a capture.
 
     ``kind`` is one of "started", "approach", "move", "frame", "paused",
-    "resumed", "error", "done", "aborted"; ``index`` is the capture index
+    "resumed", "error", "done", "aborted", "warning" (a stop that did not
+    settle in time); ``index`` is the capture index
     concerned (None when not about one frame); ``record`` is the
     captures.jsonl line as a dict for "frame" events.
     """

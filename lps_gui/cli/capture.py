@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import argparse
 
-from lps_gui.cli.option_types import finite, float_range, int_range, nonnegative_finite, nonnegative_int
+from lps_gui.cli.option_types import finite, float_range, int_range, nonnegative_finite, nonnegative_int, positive_finite
 
 from lps_gui.cli import planar_capture
 
@@ -22,7 +22,9 @@ HELP = "capture a session: move the stage through a plan and store an image per 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--stage", default=None, help="sim | emulator | grbl:PORT (default sim)")
-    p.add_argument("--camera", default=None, help="sim | N (device index) | DIR (replay a folder) | FILE | URL (default sim)")
+    p.add_argument("--camera", default=None, help="sim | N (device index) | genicam:SERIAL | pylon:SERIAL | gphoto2:[PORT] | "
+                   "v4l2:/dev/videoN | DIR (replay a folder) | FILE | URL (default sim)")
+    p.add_argument("--cti", metavar="PATH", help="genicam: the GenTL producer (.cti) of the camera vendor (default: GENICAM_GENTL64_PATH)")
     p.add_argument("--out", metavar="SESSION", help="new session folder")
     p.add_argument("--resume", metavar="SESSION", help="continue this session at the first frame not listed")
     g = p.add_argument_group("plan (a --plan file, switches override its fields)")
@@ -53,6 +55,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     from lps_gui.cli.capture_setup import add_setup_arguments
 
     add_setup_arguments(p)
+    a = p.add_argument_group("settle detection and averaging")
+    a.add_argument("--settle-px", type=positive_finite, metavar="PX", help="before each stop's frame, grab until consecutive frames show the "
+                   "board within PX pixels (mean corner shift), e.g. 0.02")
+    a.add_argument("--settle-timeout-s", type=positive_finite, default=10.0, metavar="S", help="give up settling after S seconds and take the frame (default 10)")
+    a.add_argument("--settle-frames", type=int_range(2, 100), default=3, metavar="N", help="N consecutive frames must agree (default 3; 2: one pair)")
+    a.add_argument("--average-frames", type=int_range(1, 1000), default=1, metavar="N", help="store the pixel mean of N frames per image (noise / sqrt(N))")
     s.add_argument("--compensation", metavar="FILE", help="command each target through this table's inverse (lps compensate --format csv|linuxcnc|linuxcnc-offsets)")
     planar_capture.add_arguments(p)
 
@@ -72,6 +80,7 @@ def run(args: argparse.Namespace) -> int:
     from lps_gui.cli.capture_setup import apply_setup, setup_meta
 
     extra = setup_meta(args)  # --spec, environment, identification: checked before any device opens
+    settle = settle_options(args)
     if args.compensation:
         from lps_gui.io.compensation_file import read_table
 
@@ -83,6 +92,7 @@ def run(args: argparse.Namespace) -> int:
         from lps_gui.capture.compensated import apply_compensation
 
         apply_compensation(engine, session, args.compensation)
+        engine.configure_settle(settle)
         print(f"capturing into {session.folder}: {_describe(session)}", file=sys.stderr)
         summary = engine.run(progress=ProgressBar("capture"))
     finally:
@@ -98,12 +108,22 @@ def run(args: argparse.Namespace) -> int:
     return 3
 
 
+def settle_options(args: argparse.Namespace):
+    """The --settle-* and --average-frames switches (checked: a bad value is one line before any move)."""
+    from lps_gui.capture.settle import SettleOptions
+
+    return SettleOptions(settle_px=args.settle_px, timeout_s=args.settle_timeout_s, average=args.average_frames,
+                         agree_frames=args.settle_frames)
+
+
 def _resume_devices_hint(session) -> str:
     """The device switches a resume of a real-device session needs (never read back by itself)."""
     if (session.truth or {}).get("simulated"):
         return ""
     stage, camera = (session.meta.get("stage") or {}).get("spec"), (session.meta.get("camera") or {}).get("spec")
-    return f" --stage {stage} --camera {camera}" if stage and camera else " --stage ... --camera ..."
+    cti = (session.meta.get("camera") or {}).get("cti")  # a GenICam camera's producer
+    return (f" --stage {stage} --camera {camera}" + (f" --cti {cti}" if cti else "")) if stage and camera \
+        else " --stage ... --camera ..."
 
 
 def _intrinsics_mode(args: argparse.Namespace) -> int:
@@ -132,7 +152,7 @@ def _intrinsics_mode(args: argparse.Namespace) -> int:
         from lps_gui.camera import open_camera
 
         board = read_board(args.board)
-        camera = open_camera(args.camera)
+        camera = open_camera(args.camera, **({"cti": args.cti} if args.cti else {}))
     try:
         cap = IntrinsicsCapture(camera, args.out, board, goals)
         if simulated:
@@ -221,7 +241,7 @@ def device_session(args: argparse.Namespace, board, plan, intr, stage_spec: str,
     from lps_gui.capture.engine import CaptureEngine
     from lps_gui.io.session import Session
 
-    stage, camera = _open_devices(stage_spec, camera_spec)
+    stage, camera = _open_devices(stage_spec, camera_spec, getattr(args, "cti", None))
     try:
         _release_lock(args, stage)
         session = Session.create(
@@ -256,7 +276,7 @@ def _resume(args: argparse.Namespace):
     from lps_gui.cli.resume_devices import devices_named_by_operator
 
     stage_spec, camera_spec = devices_named_by_operator(session, args.stage, args.camera)
-    stage, camera = _open_devices(stage_spec, camera_spec)
+    stage, camera = _open_devices(stage_spec, camera_spec, getattr(args, "cti", None))
     try:
         _release_lock(args, stage)
     except BaseException:
@@ -281,7 +301,7 @@ def _release_lock(args: argparse.Namespace, stage) -> None:
         print(f"lps capture: the stage was locked in Alarm; {done} it", file=sys.stderr)
 
 
-def _open_devices(stage_spec: str, camera_spec: str):
+def _open_devices(stage_spec: str, camera_spec: str, cti: str | None = None):
     from lps_gui.camera import open_camera
     from lps_gui.errors import InputError
     from lps_gui.hardware import open_stage
@@ -290,7 +310,7 @@ def _open_devices(stage_spec: str, camera_spec: str):
         raise InputError("--camera sim follows only the simulated rig; use --stage sim or emulator")
     stage = open_stage(stage_spec)
     try:
-        camera = open_camera(camera_spec)
+        camera = open_camera(camera_spec, **({"cti": cti} if cti else {}))
     except BaseException:
         stage.disconnect()
         raise

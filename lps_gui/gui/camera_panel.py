@@ -36,6 +36,13 @@ REFRESH_MS = 33  # the GUI looks for a new frame 30 times a second
 SHARPNESS_FULL_SCALE = 2000.0  # Laplacian-variance figure shown as a full bar
 
 
+def _stream(camera: Camera, on: bool) -> None:
+    """Continuous acquisition for the preview, fresh frames for a capture (SDK cameras; others have one mode)."""
+    fn = getattr(camera, "set_streaming", None)
+    if callable(fn):
+        fn(on)
+
+
 class CameraPanel(QWidget):
     """Live view through the camera; the simulated camera follows the simulated stage."""
 
@@ -57,6 +64,7 @@ class CameraPanel(QWidget):
         self._views = 0
         self._locked = False
         self.control_widgets: dict[str, tuple[QDoubleSpinBox, QCheckBox | None]] = {}
+        self.choice_widgets: dict[str, QComboBox] = {}
 
         self.source = QComboBox()
         self.source.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
@@ -188,6 +196,7 @@ class CameraPanel(QWidget):
     def _on_opened(self, camera: Camera) -> None:
         if self.grabber is not None:
             self.camera = camera
+            _stream(camera, not self._locked)  # an SDK camera previews at the device's own rate
             self.show_controls(camera)
             self.grab_btn.setEnabled(True)
 
@@ -199,10 +208,12 @@ class CameraPanel(QWidget):
             if item.widget() is not None:
                 item.widget().deleteLater()
         self.control_widgets = {}
+        self.choice_widgets = {}
         values = controls.available(camera) if camera is not None else {}
         autos = controls.auto_modes(camera) if camera is not None else {}
-        self.controls_note.setVisible(not values)
-        self.controls_box.setVisible(bool(values))  # simulated and file cameras have none: no empty box
+        choices = controls.choice_controls(camera) if camera is not None else {}
+        self.controls_note.setVisible(not values and not choices)
+        self.controls_box.setVisible(bool(values or choices))  # simulated and file cameras have none: no empty box
         for row, (name, value) in enumerate(values.items(), start=1):
             spin = QDoubleSpinBox()
             spin.setRange(-100000.0, 100000.0)
@@ -222,12 +233,22 @@ class CameraPanel(QWidget):
             if auto is not None:
                 self.controls_grid.addWidget(auto, row, 2)
             self.control_widgets[name] = (spin, auto)
+        for row, (name, (value, offered)) in enumerate(choices.items(), start=len(values) + 1):
+            combo = QComboBox()  # an SDK's enumerated control: pixel format, trigger, ISO, shutter speed...
+            combo.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+            combo.setMinimumContentsLength(8)  # long symbolic names do not widen the window
+            combo.addItems(list(offered))
+            combo.setCurrentText(value)
+            combo.currentTextChanged.connect(lambda v, n=name: self._set_control(n, v))
+            self.controls_grid.addWidget(QLabel(name.capitalize()), row, 0)
+            self.controls_grid.addWidget(combo, row, 1)
+            self.choice_widgets[name] = combo
         guard_wheel(self.controls_box)  # built per camera: after the window guarded its own fields
         self.lock_controls(self._locked)
 
-    def _set_control(self, name: str, value: float) -> None:
+    def _set_control(self, name: str, value: float | str) -> None:
         if self.camera is not None and not controls.set_control(self.camera, name, value):
-            log.warning("camera: the device refused %s = %g", name, value)
+            log.warning("camera: the device refused %s = %s", name, value)
         self.watch.reset()
 
     def _set_auto(self, name: str, on: bool) -> None:
@@ -244,6 +265,8 @@ class CameraPanel(QWidget):
             spin.setEnabled(not locked and not (auto is not None and auto.isChecked()))
             if auto is not None:
                 auto.setEnabled(not locked)
+        for combo in self.choice_widgets.values():
+            combo.setEnabled(not locked)
         self.grab_btn.setEnabled(not locked and self.grabber is not None)
 
     # ------------------------------------------------------------------ intrinsics views
@@ -299,6 +322,8 @@ class CameraPanel(QWidget):
         """Lend the camera to the capture engine (on) or take it back (off); the controls lock meanwhile."""
         if self.grabber is not None:
             self.grabber.pause(on)
+        if self.camera is not None:
+            _stream(self.camera, not on)  # a capture takes fresh frames, one acquisition each
         self.lock_controls(on)
 
     def _on_grab_failed(self, message: str) -> None:

@@ -79,17 +79,30 @@ def open_stage_source(source: str, baud: int = 115200, clock: Clock | None = Non
     raise InputError(f"stage source {source!r} is unknown; choose one from the list")
 
 
-def camera_choices(sim_available: bool) -> list[tuple[str, str]]:
-    """(label, spec) pairs for the camera panel."""
+_sdk_devices: list[tuple[str, str]] | None = None
+
+
+def sdk_devices(rescan: bool = False) -> list[tuple[str, str]]:
+    """The devices every installed camera SDK finds (GenICam, pylon, gphoto2, V4L2), looked up once unless ``rescan``."""
+    global _sdk_devices
+    if _sdk_devices is None or rescan:
+        from lps_gui.camera.sdk_sources import list_devices
+
+        _sdk_devices = list_devices()
+    return list(_sdk_devices)
+
+
+def camera_choices(sim_available: bool, rescan: bool = False) -> list[tuple[str, str]]:
+    """(label, spec) pairs for the camera panel: the simulated camera, device indices 0 and 1, the SDKs' devices."""
     out = []
     if sim_available:
         out.append(("Simulated camera (on the stage)", CAMERA_FOLLOWS_STAGE))
     out += [("Camera device 0", "0"), ("Camera device 1", "1")]
-    return out
+    return out + sdk_devices(rescan)
 
 
 def open_camera_source(spec: str) -> Camera:
-    """Open a non-simulated camera (device index, file or URL) through the camera layer."""
+    """Open a non-simulated camera (device index, SDK source, file or URL) through the camera layer."""
     from lps_gui.camera import open_camera
 
     return open_camera(spec)

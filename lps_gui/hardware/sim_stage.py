@@ -19,8 +19,10 @@ system; moves, jogs and soft-limit messages are in work coordinates.
 """
 from __future__ import annotations
 
+import math
 import threading
 from contextlib import contextmanager
+from dataclasses import dataclass
 from typing import Iterator
 
 import numpy as np
@@ -36,6 +38,29 @@ from lps_gui.hardware.stage import AXES, WORK_SYSTEMS, Stage, StageEvent, StageS
 
 RX_BUFFER_BYTES = 128
 __all__ = ["PLANNER_BLOCKS", "RX_BUFFER_BYTES", "SimulatedStage"]
+
+
+@dataclass(frozen=True)
+class Vibration:
+    """The carriage rings after each move: ``amplitude_um`` * exp(-t / ``decay_s``) * cos(2 pi ``frequency_hz`` t).
+
+    t is the time since the move ended; the first swing is an overshoot in
+    the direction of the move. The camera sees it (:meth:`SimulatedStage.true_pose`);
+    :meth:`SimulatedStage.resting_pose` is where the carriage comes to rest.
+    """
+
+    amplitude_um: float = 50.0
+    frequency_hz: float = 8.0
+    decay_s: float = 0.25
+
+    def offset_um(self, since_stop_s: float, direction: int) -> float:
+        if since_stop_s < 0:
+            return 0.0
+        return direction * self.amplitude_um * math.exp(-since_stop_s / self.decay_s) * math.cos(
+            2.0 * math.pi * self.frequency_hz * since_stop_s)
+
+    def to_dict(self) -> dict[str, float]:
+        return {"amplitude_um": self.amplitude_um, "frequency_hz": self.frequency_hz, "decay_s": self.decay_s}
 
 
 class SimulatedStage(Stage):
@@ -55,6 +80,7 @@ class SimulatedStage(Stage):
     axis_travel_mm : per-axis soft-limit ranges overriding ``travel_mm`` (e.g. {"Y": (0, 1016)}).
     planar_errors : an XY gantry's error model (SPEC 10); then X and Y both carry the camera
         and :meth:`true_planar_pose` gives the truth.
+    vibration : a decaying oscillation of the measured axis after each move (:class:`Vibration`).
     """
 
     def __init__(
@@ -71,6 +97,7 @@ class SimulatedStage(Stage):
         start_mm: float = 0.0,
         planar_errors: PlanarErrorModel | None = None,
         axis_travel_mm: dict[str, tuple[float, float]] | None = None,
+        vibration: Vibration | None = None,
     ) -> None:
         super().__init__()
         if axis not in AXES:
@@ -106,6 +133,8 @@ class SimulatedStage(Stage):
         self._vanish_at: float | None = None
         self._vanished = False
         self._last_state = ""
+        self.vibration = vibration
+        self._stopped_at: float | None = None  # end of the last completed move of the measured axis
         self._offsets = {name: [0.0, 0.0, 0.0] for name in WORK_SYSTEMS}  # GRBL's sign: work = machine - offset
         self._system = WORK_SYSTEMS[0]
 
@@ -197,6 +226,7 @@ class SimulatedStage(Stage):
         """A move ended: its direction sets the backlash side, and it gets its repeatability draw."""
         if p.axis == AXES.index(self.axis) and p.direction != 0 and self.planar_errors is None:
             self._last_dir = p.direction
+            self._stopped_at = p.t_end
             rep = self.errors.repeatability_um
             self._noise_um = float(self._rng.normal(0.0, rep)) if rep > 0 else 0.0
         if self.planar_errors is not None and p.axis in (0, 1) and p.direction != 0:
@@ -295,8 +325,13 @@ class SimulatedStage(Stage):
         """Where the carriage really is now (K=1), from the shared error model.
 
         Backlash follows the direction of the last approach; the repeatability
-        draw of the last completed move is added to the axis position.
+        draw of the last completed move is added to the axis position, and the
+        ringing of :attr:`vibration` while the stage stands.
         """
+        return self.resting_pose(ringing=True)
+
+    def resting_pose(self, ringing: bool = False) -> TruePose:
+        """:meth:`true_pose` without the vibration: where the carriage comes to rest (the settle tests' truth)."""
         with self._lock:
             t = self.clock.now()
             self._update(t)
@@ -305,8 +340,11 @@ class SimulatedStage(Stage):
             p = self._motion.active()
             direction = p.direction if p is not None and p.direction else self._last_dir
             pose = self.errors.true_pose(np.array([pos[i]]), np.array([float(direction)]))
+            ring_um = 0.0
+            if ringing and self.vibration is not None and p is None and self._stopped_at is not None:
+                ring_um = self.vibration.offset_um(t - self._stopped_at, self._last_dir)
             return TruePose(
-                axis_mm=pose.axis_mm + 1e-3 * self._noise_um,
+                axis_mm=pose.axis_mm + 1e-3 * (self._noise_um + ring_um),
                 straightness_um=pose.straightness_um,
                 angles_urad=pose.angles_urad,
             )
@@ -340,6 +378,7 @@ class SimulatedStage(Stage):
             "seed": self.seed,
             "errors": self.errors.to_dict(),
             **({"axes": ["X", "Y"], "planar_errors": self.planar_errors.to_dict()} if self.planar_errors else {}),
+            **({"vibration": self.vibration.to_dict()} if self.vibration is not None else {}),
         }
 
     # ------------------------------------------------------------------ alarms and locks

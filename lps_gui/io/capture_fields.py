@@ -95,6 +95,7 @@ def capture_fields(d: Any) -> dict[str, Any]:
         "time": parse_time(d.get("time", 0.0)),
         "frame": _int(d, "frame", 0),
         "commanded_mm": _position(d, "commanded_mm", optional=True),
+        "settle_s": _float(d, "settle_s", optional=True),
     }
 
 

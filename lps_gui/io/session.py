@@ -47,14 +47,16 @@ class CaptureRecord:
     time: float  # unix seconds
     frame: int = 0
     commanded_mm: float | None = None  # sent to the stage through a compensation table; absent without one
+    settle_s: float | None = None  # settle detection: time until two frames agreed; absent without it
 
     def to_json(self) -> str:
         d = asdict(self)
         for key in ("target_mm", "reported_mm"):
             if isinstance(d[key], tuple):
                 d[key] = list(d[key])
-        if d["commanded_mm"] is None:
-            del d["commanded_mm"]
+        for key in ("commanded_mm", "settle_s"):
+            if d[key] is None:
+                del d[key]
         return json.dumps(d, separators=(",", ":"))
 
     @classmethod

@@ -85,11 +85,11 @@ def make_simulated_rig(
     spec : rig (board, intrinsics, mount, stage errors), plan and ``seed``.
     clock : shared by stage and camera; a fresh :class:`SimClock` when None.
     noise_grey : image noise sigma in grey levels.
-    options : ``max_rate_mm_min``, ``accel_mm_s2`` go to the stage, the rest
+    options : ``max_rate_mm_min``, ``accel_mm_s2``, ``vibration`` go to the stage, the rest
         (``blur_px``, ``exposure_s``...) to the camera's renderer.
     """
     clock = clock if clock is not None else SimClock()
-    stage_keys = {"max_rate_mm_min", "accel_mm_s2", "homing_required", "soft_limits"}
+    stage_keys = {"max_rate_mm_min", "accel_mm_s2", "homing_required", "soft_limits", "vibration"}
     stage_opts = {k: v for k, v in options.items() if k in stage_keys}
     camera_opts = {k: v for k, v in options.items() if k not in stage_keys}
     stage = RigStage(

@@ -48,3 +48,26 @@ def test_grab_view_stores_the_live_frame_for_the_intrinsics_panel(qtbot, window,
     assert not cam.grab_btn.isEnabled()
     cam.pause(False)
     cam.stop()
+
+
+def test_the_source_list_has_the_sdk_devices_and_their_controls_show(qtbot, window):
+    """pylon's emulated cameras (PYLON_CAMEMU in tests/conftest.py) are listed; a preview shows their controls."""
+    cam = window.camera_panel
+    specs = [cam.source.itemData(i) for i in range(cam.source.count())]
+    assert "pylon:0815-0000" in specs and "pylon:0815-0001" in specs
+    cam.source.setCurrentIndex(specs.index("pylon:0815-0001"))
+    assert cam.start()
+    try:
+        qtbot.waitUntil(lambda: cam.frames_shown > 0 and cam.camera is not None, timeout=20000)
+        assert {"exposure", "gain", "frame rate"} <= set(cam.control_widgets)
+        assert set(cam.choice_widgets) == {"pixel format", "trigger"}
+        spin, auto = cam.control_widgets["exposure"]
+        spin.setValue(3000.0)
+        assert cam.camera.device.ExposureTime.GetValue() == 3000.0
+        assert cam.camera.streaming  # the preview runs at the device's rate
+        cam.pause(True)  # lent to a capture: locked, fresh frames
+        assert not cam.choice_widgets["pixel format"].isEnabled() and not spin.isEnabled() and not cam.camera.streaming
+        cam.pause(False)
+        assert cam.choice_widgets["pixel format"].isEnabled() and cam.camera.streaming
+    finally:
+        cam.stop()

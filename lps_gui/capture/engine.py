@@ -32,7 +32,6 @@ from lps_gui.capture.events import CaptureEvent, CaptureListener, CaptureProgres
 from lps_gui.core.clock import Clock, RealClock
 from lps_gui.capture.planar_moves import check_planar_plan_in_travel, format_target, go_to_planar
 from lps_gui.core.plan import Plan, PlannedStop
-from lps_gui.core.planar_plan import PlanarPlan, PlanarStop
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import HardwareError, InputError
 from lps_gui.hardware.stage import EventSource, Stage
@@ -175,7 +174,7 @@ class CaptureEngine:
         self._last_move: tuple[int, str, float, int] | None = None  # (run, direction, target, stop's first index)
         self._reported_mm: float | tuple[float, float] | None = None
         self._axis_sides: list[int | None] = [None, None]  # planar: side of each axis' last approach
-        self._arrivals: dict[int, tuple[int, int]] | None = None  # planar: see PlanarPlan.arrival_indices
+        self._arrivals: dict[int, tuple[int, int]] | None = None  # planar: see Plan.arrival_indices
         self._active = False
 
     # ------------------------------------------------------------------ control (any thread)
@@ -254,7 +253,7 @@ class CaptureEngine:
                 if not self.camera.is_open:  # first: its frame size bounds the disk space needed
                     self.camera.open()
                 check_writable(self.session.folder / IMAGES_DIR, len(remaining) * bytes_per_frame(self.camera))
-                if isinstance(self._plan, PlanarPlan):
+                if self._plan.planar:
                     check_planar_plan_in_travel(self._plan, self.stage)
                 else:
                     check_plan_in_travel(self._plan, self.stage)
@@ -305,9 +304,9 @@ class CaptureEngine:
         )
 
     # ------------------------------------------------------------------ steps
-    def _go_to(self, stop: PlannedStop | PlanarStop) -> None:
+    def _go_to(self, stop: PlannedStop) -> None:
         """Move onto ``stop``'s target from its own direction, wait, settle, read the position."""
-        if isinstance(stop, PlanarStop):
+        if self._plan.planar:
             self._last_move = None
             _hook(self.stage, stop.index - stop.frame)
             seed_axes = getattr(self.stage, "seed_axes", None)

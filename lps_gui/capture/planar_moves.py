@@ -1,7 +1,7 @@
 """How the capture engine reaches a target of a planar (XY) plan (SPEC 10).
 
 Each axis is approached from the side the plan gives it
-(:attr:`PlanarStop.approach`, ISO 230-2 per axis): an axis that must move
+(:attr:`PlannedStop.approach`, ISO 230-2 per axis): an axis that must move
 toward its target from that side moves straight there; one that would
 arrive from the other side, or whose last approach was from the other side,
 first goes to an overshoot point on its approach side. The axes move one
@@ -14,7 +14,7 @@ from typing import Callable
 
 import numpy as np
 
-from lps_gui.core.planar_plan import MOVE_TOL_MM, PlanarPlan, PlanarStop
+from lps_gui.core.plan import MOVE_TOL_MM, Plan, PlannedStop
 from lps_gui.errors import InputError
 from lps_gui.hardware.stage import Stage
 
@@ -28,7 +28,7 @@ def format_target(target_mm: float | tuple[float, float]) -> str:
     return f"{target_mm:g} mm"
 
 
-def axis_moves(here_mm: tuple[float, float], sides: list[int | None], stop: PlanarStop, overshoot_mm: float
+def axis_moves(here_mm: tuple[float, float], sides: list[int | None], stop: PlannedStop, overshoot_mm: float
                ) -> list[tuple[str, float]]:
     """The single-axis moves that bring the carriage onto ``stop`` from its approach sides.
 
@@ -48,7 +48,7 @@ def axis_moves(here_mm: tuple[float, float], sides: list[int | None], stop: Plan
     return moves
 
 
-def go_to_planar(stage: Stage, stop: PlanarStop, plan: PlanarPlan, sides: list[int | None],
+def go_to_planar(stage: Stage, stop: PlannedStop, plan: Plan, sides: list[int | None],
                  move: Callable[[float, float, str], None]) -> tuple[float, float]:
     """Move onto ``stop`` (axis by axis, each from its side); returns the reported (x, y) in mm."""
     here = (float(stage.position_mm("X")), float(stage.position_mm("Y")))
@@ -57,7 +57,7 @@ def go_to_planar(stage: Stage, stop: PlanarStop, plan: PlanarPlan, sides: list[i
     return (float(stage.position_mm("X")), float(stage.position_mm("Y")))
 
 
-def check_planar_plan_in_travel(plan: PlanarPlan, stage: Stage) -> None:
+def check_planar_plan_in_travel(plan: Plan, stage: Stage) -> None:
     """InputError before any move when a target or overshoot lies outside an axis' known travel."""
     travel = getattr(stage, "axis_travel_mm", None)
     if travel is None:

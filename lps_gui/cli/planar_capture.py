@@ -122,7 +122,7 @@ def parse_targets_xy(text: str) -> tuple[tuple[float, float], ...]:
 
 def build_planar_plan(args: argparse.Namespace, base=None):
     """The planar plan of the command line: --plan FILE, --grid / --targets-xy / --iso-lines, then the switches."""
-    from lps_gui.core.planar_plan import PlanarPlan
+    from lps_gui.core.plan import Plan
     from lps_gui.errors import InputError
 
     for name in ("start_mm", "stop_mm", "step_mm"):
@@ -136,10 +136,10 @@ def build_planar_plan(args: argparse.Namespace, base=None):
         raise InputError("--iso-lines builds its lines on a --grid (or the preset's grid); drop --targets-xy")
     if args.plan:
         base = read_planar_plan(args.plan)
-    plan = base or PlanarPlan()
+    plan = base or Plan.xy()
     if args.grid:
         start, stop, step = parse_grid(args.grid)
-        plan = PlanarPlan(start_mm=start, stop_mm=stop, step_mm=step, pattern=plan.pattern,
+        plan = Plan.xy(start_mm=start, stop_mm=stop, step_mm=step, pattern=plan.pattern,
                           **{k: getattr(plan, k) for k in ("directions", "runs", "overshoot_mm", "settle_s",
                                                              "frames_per_stop", "feed_mm_min")})
     elif args.targets_xy:
@@ -153,7 +153,7 @@ def build_planar_plan(args: argparse.Namespace, base=None):
     if args.iso_lines:
         if plan.targets_mm is not None:
             raise InputError("--iso-lines needs a grid: give --grid X0,Y0:X1,Y1:DX,DY")
-        from lps_gui.core.planar_plan import iso_lines_on_grid
+        from lps_gui.core.plan import iso_lines_on_grid
 
         plan = iso_lines_on_grid(plan, ISO_LEVELS, ISO_RUNS)
     if args.directions:
@@ -166,21 +166,21 @@ def build_planar_plan(args: argparse.Namespace, base=None):
 
 def read_planar_plan(path: str):
     """A planar plan file (fields at the top level or under "plan", SPEC 10)."""
-    from lps_gui.core.planar_plan import PlanarPlan
+    from lps_gui.core.plan import Plan
     from lps_gui.errors import InputError
 
     d = _plan_fields(path)
     if d is None:
         raise InputError(f"{path}: a planar plan file is a JSON object with start_mm: [x, y], stop_mm, step_mm...")
     try:
-        return PlanarPlan.from_dict(d)
+        return Plan.from_dict(d)
     except (InputError, TypeError) as exc:
         raise InputError(f"{path}: {exc}") from exc
 
 
 def planar_preset_name(preset: str | None) -> str:
     """The simulated gantry's preset (the 1-D default "small" means small-planar)."""
-    from lps_gui.core.planar_simulate import PLANAR_PRESETS
+    from lps_gui.core.simulate import PLANAR_PRESETS
     from lps_gui.errors import InputError
 
     name = PLANAR_PRESET_DEFAULT if preset in (None, "small") else preset
@@ -203,21 +203,21 @@ def _start(args: argparse.Namespace):
             raise InputError("--board: the simulated gantry's board comes from --preset; drop --board")
         if stage_spec not in ("sim", "emulator"):
             raise InputError(f"--stage {stage_spec}: the simulated camera rides only --stage sim or emulator")
-        from lps_gui.core.planar_simulate import PLANAR_PRESETS
+        from lps_gui.core.simulate import PLANAR_PRESETS
 
         make_spec = PLANAR_PRESETS[planar_preset_name(args.preset)]
         plan = build_planar_plan(args, make_spec(seed=args.seed).plan)
         spec = make_spec(seed=args.seed, plan=plan)  # the camera centred over this plan
-        from lps_gui.sim.planar_rig import check_board_in_view
+        from lps_gui.sim.rig import check_board_in_view
 
         check_board_in_view(spec)
         intr = _read_intrinsics(args.intrinsics)
-        from lps_gui.sim.planar_rig import create_simulated_gantry_session, gantry_engine
+        from lps_gui.sim.session import create_simulated_session, simulated_engine
 
-        session, rig_stage, camera = create_simulated_gantry_session(args.out, spec, clock=_clock(args),
+        session, rig_stage, camera = create_simulated_session(args.out, spec, clock=_clock(args),
                                                                      noise_grey=args.noise_grey, intrinsics=intr)
         stage = bind_simulated_stage(args, session, rig_stage, camera, stage_spec, axes=["X", "Y"])
-        return session, stage, camera, gantry_engine(session, stage, camera, args.encode)
+        return session, stage, camera, simulated_engine(session, stage, camera, args.encode)
     if not args.board:
         raise InputError("--board FILE is required with a real camera (see SPEC 7 for board.json)")
     from lps_gui.io.board_file import read_board
@@ -239,8 +239,8 @@ def _resume(args: argparse.Namespace, session):
     truth = session.truth or {}
     if not (truth.get("simulated") and (args.camera or "sim") == "sim"):
         return None  # real devices: the engine takes the planar plan from the session as it is
-    from lps_gui.sim.planar_rig import gantry_engine, reopen_simulated_gantry
+    from lps_gui.sim.session import reopen_simulated_rig, simulated_engine
 
-    rig_stage, camera = reopen_simulated_gantry(session, clock=_clock(args))
+    rig_stage, camera = reopen_simulated_rig(session, clock=_clock(args))
     stage = _bind_stage(args.stage or "sim", rig_stage, args.time_scale)
-    return session, stage, camera, gantry_engine(session, stage, camera, args.encode)
+    return session, stage, camera, simulated_engine(session, stage, camera, args.encode)

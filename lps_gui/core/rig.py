@@ -1,11 +1,19 @@
-"""A simulated rig: board, camera, how the camera sits on the stage, and the stage's errors.
+"""A simulated rig: board, camera, how the camera sits on the stage (one axis or an XY gantry), and the stage's errors.
 
-The rig turns a :class:`TruePose` of the carriage into camera poses, so the
-point simulator, the image simulator and the simulated stage share one truth.
+The rig turns the carriage's true pose (:class:`TruePose` on one axis,
+:class:`PlanarTruePose` on two) into camera poses, so the point simulator,
+the image simulator and the simulated stage share one truth. Both rigs face
+the board the same way (:func:`facing_camera`) and carry the camera the
+same way (:func:`carried_camera_poses`).
+
+On a gantry, stage-plane coordinates (mm) are in an orthonormal frame with x
+along the X-axis motion and y perpendicular to it in the plane of motion
+(SPEC 10); the axes are not square (``PlanarErrorModel.squareness_urad``).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -13,7 +21,7 @@ from lps_gui.core.board import Board
 from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.lps_model import motion_frame, unit
 from lps_gui.core.rotation import exp_so3
-from lps_gui.core.stage_errors import StageErrorModel, TruePose
+from lps_gui.core.stage_errors import PlanarErrorModel, PlanarTruePose, StageErrorModel, TruePose
 
 
 def carried_camera_poses(R_cam_board: np.ndarray, C_board: np.ndarray, w_board: np.ndarray
@@ -27,6 +35,15 @@ def carried_camera_poses(R_cam_board: np.ndarray, C_board: np.ndarray, w_board: 
     R = np.einsum("ij,kjl->kil", R_cam_board, np.transpose(Q, (0, 2, 1)))
     t = -np.einsum("kij,kj->ki", R, C_board)
     return R, t
+
+
+def facing_camera(board: Board, distance_mm: float, tilt_deg: tuple[float, float, float]
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """A camera slightly tilted by ``tilt_deg`` that sees the board centre from ``distance_mm``:
+    its orientation R_cam_board (3, 3) and its centre (3,) mm in the board frame."""
+    R = exp_so3(np.deg2rad(np.asarray(tilt_deg)))
+    optical_axis_board = R.T @ np.array([0.0, 0.0, 1.0])
+    return R, board.centre_mm() - distance_mm * optical_axis_board
 
 
 @dataclass(frozen=True)
@@ -76,11 +93,54 @@ class Rig:
         The board centre is seen at mid-travel; the camera is slightly tilted
         and the axis slightly misaligned, as on any real rig.
         """
-        R = exp_so3(np.deg2rad(np.asarray(tilt_deg)))
+        R, C_mid = facing_camera(board, distance_mm, tilt_deg)
         a, b = np.deg2rad(axis_misalignment_deg)
         u = unit(np.array([np.cos(a) * np.cos(b), np.sin(a), np.sin(b)]))
         mid = 0.5 * (travel_mm[0] + travel_mm[1])
-        optical_axis_board = R.T @ np.array([0.0, 0.0, 1.0])
-        C_mid = board.centre_mm() - distance_mm * optical_axis_board
         C0 = C_mid - mid * u
         return cls(board, intrinsics, R, C0, u, errors or StageErrorModel())
+
+
+@dataclass(frozen=True)
+class PlanarRig:
+    """Board, camera and an XY gantry carrying the camera."""
+
+    board: Board
+    intrinsics: CameraIntrinsics
+    R_cam_board: np.ndarray  # shape (3, 3): camera orientation with no angular error
+    C0_board: np.ndarray  # shape (3,) mm: camera centre at commanded (0, 0)
+    axes_board: np.ndarray  # shape (3, 3): columns e_x, e_y, e_n (stage frame in the board frame)
+    errors: PlanarErrorModel
+
+    def camera_centres(self, pose: PlanarTruePose) -> np.ndarray:
+        """True camera centres in the board frame, shape (K, 3) mm."""
+        E = self.axes_board
+        return (self.C0_board[None, :] + pose.plane_mm @ E[:, :2].T
+                + 1e-3 * pose.normal_um[:, None] * E[None, :, 2])
+
+    def camera_poses(self, pose: PlanarTruePose) -> tuple[np.ndarray, np.ndarray]:
+        """R_cam_board shape (K, 3, 3) and t_cam_board shape (K, 3) of the true poses."""
+        return carried_camera_poses(self.R_cam_board, self.camera_centres(pose),
+                                    1e-6 * pose.angles_urad @ self.axes_board.T)
+
+    @classmethod
+    def facing_board(
+        cls,
+        board: Board,
+        intrinsics: CameraIntrinsics,
+        distance_mm: float,
+        centre_xy_mm: tuple[float, float],
+        errors: PlanarErrorModel | None = None,
+        tilt_deg: tuple[float, float, float] = (2.0, -3.0, 1.0),
+        plane_misalignment_deg: tuple[float, float, float] = (0.5, -0.3, 0.4),
+    ) -> "PlanarRig":
+        """A camera array rig: the stage plane nearly parallel to the board, the board centre
+        seen from ``distance_mm`` when the carriage is at ``centre_xy_mm``."""
+        R, C_mid = facing_camera(board, distance_mm, tilt_deg)
+        E = exp_so3(np.deg2rad(np.asarray(plane_misalignment_deg)))  # columns: e_x, e_y, e_n
+        C0 = C_mid - E[:, :2] @ np.asarray(centre_xy_mm, dtype=float)
+        return cls(board, intrinsics, R, C0, E, errors or PlanarErrorModel())
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"R_cam_board": self.R_cam_board.tolist(), "C0_board": self.C0_board.tolist(),
+                "axes_board": self.axes_board.tolist(), "stage_errors": self.errors.to_dict()}

@@ -252,10 +252,10 @@ class CapturePanel(QWidget):
             self.run_requested.emit(exc)
             return
         if gantry:  # the simulated XY gantry built for this plan, its truth recorded
-            from lps_gui.sim.planar_rig import start_gantry_session
+            from lps_gui.sim.session import start_rig_session
 
             self.set_board(gantry[0].rig.board)
-            self._run(folder, lambda: start_gantry_session(folder, gantry[0], stage, camera, extra=extra), stage, camera)
+            self._run(folder, lambda: start_rig_session(folder, gantry[0], stage, camera, extra=extra), stage, camera)
             return
         simulated = is_simulated_rig(stage, camera)
         if simulated:

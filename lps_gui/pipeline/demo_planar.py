@@ -16,18 +16,18 @@ from typing import Any, Callable
 
 import numpy as np
 
-from lps_gui.core.planar_plan import PlanarPlan
-from lps_gui.core.planar_simulate import PlanarSimulationSpec, paper_planar_spec, small_planar_spec
+from lps_gui.core.plan import Plan
+from lps_gui.core.simulate import SimulationSpec, paper_planar_spec, small_planar_spec
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import InputError
 from lps_gui.io.session import Session
 from lps_gui.pipeline.demo import BarFactory, DemoResult, DemoStep, calibrate_step, prepare_out
 from lps_gui.pipeline.detect import detect_session
 from lps_gui.pipeline.estimate import estimate_session
-from lps_gui.sim.planar_rig import create_simulated_gantry_session, gantry_engine
+from lps_gui.sim.session import create_simulated_session, simulated_engine
 
 
-def planar_demo_spec(quick: bool, seed: int = 0) -> PlanarSimulationSpec:
+def planar_demo_spec(quick: bool, seed: int = 0) -> SimulationSpec:
     """The demo's gantry and plan.
 
     Full: the paper's camera (1920x1080, 30x18 board 600 mm away) over a
@@ -36,10 +36,10 @@ def planar_demo_spec(quick: bool, seed: int = 0) -> PlanarSimulationSpec:
     on a 5 x 3 grid at 10 mm, both directions (30 frames).
     """
     if quick:
-        plan = PlanarPlan(start_mm=(0.0, 0.0), stop_mm=(40.0, 20.0), step_mm=(10.0, 10.0), directions="both",
+        plan = Plan.xy(start_mm=(0.0, 0.0), stop_mm=(40.0, 20.0), step_mm=(10.0, 10.0), directions="both",
                           settle_s=0.1, feed_mm_min=3000.0)
         return small_planar_spec(seed=seed, plan=plan)
-    plan = PlanarPlan(start_mm=(0.0, 0.0), stop_mm=(60.0, 40.0), step_mm=(10.0, 10.0), directions="both",
+    plan = Plan.xy(start_mm=(0.0, 0.0), stop_mm=(60.0, 40.0), step_mm=(10.0, 10.0), directions="both",
                       settle_s=0.1, feed_mm_min=3000.0)
     return paper_planar_spec(seed=seed, plan=plan)
 
@@ -96,13 +96,13 @@ def run_planar_demo(
     return res
 
 
-def capture_planar(folder: Path, spec: PlanarSimulationSpec, intrinsics: Any, progress: ProgressFn,
+def capture_planar(folder: Path, spec: SimulationSpec, intrinsics: Any, progress: ProgressFn,
                    cancel: CancelToken | None) -> Session:
     """Drive the simulated gantry (simulated time) and its camera through the real capture engine."""
-    session, stage, camera = create_simulated_gantry_session(folder, spec, intrinsics=intrinsics)
+    session, stage, camera = create_simulated_session(folder, spec, intrinsics=intrinsics)
     stage.connect()
     try:
-        summary = gantry_engine(session, stage, camera).run(progress, cancel)
+        summary = simulated_engine(session, stage, camera).run(progress, cancel)
     finally:
         camera.close()
         stage.disconnect()

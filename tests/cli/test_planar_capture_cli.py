@@ -16,7 +16,7 @@ import pytest
 from lps_gui.cli import capture as capture_cli
 from lps_gui.cli import main as lps_main
 from lps_gui.cli.planar_capture import build_planar_plan
-from lps_gui.core.planar_plan import PlanarPlan
+from lps_gui.core.plan import Plan
 from lps_gui.io.session import Session
 from tests.capture.helpers import assert_listed_frames_intact, image_bytes, records_without_time
 
@@ -34,7 +34,7 @@ def parse(argv: list[str]) -> argparse.Namespace:
 def test_grid_switches_make_the_planar_plan():
     plan = build_planar_plan(parse(["--grid", "0,0:40,20:10,10", "--pattern", "raster", "--runs", "2",
                                     "--directions", "both", "--overshoot", "2"]))
-    assert isinstance(plan, PlanarPlan) and plan.pattern == "raster" and plan.runs == 2 and plan.overshoot_mm == 2
+    assert plan.planar and plan.pattern == "raster" and plan.runs == 2 and plan.overshoot_mm == 2
     t = plan.targets()
     assert t.shape == (15, 2) and tuple(t[5]) == (0.0, 10.0)  # raster: each row starts at X0
     assert plan.n_frames() == 60

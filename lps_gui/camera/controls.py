@@ -10,7 +10,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Any, Protocol
+from typing import Protocol
+
+from lps_gui.camera.base import Camera
 
 
 @dataclass(frozen=True)
@@ -43,16 +45,15 @@ class PropertyDevice(Protocol):
     def set(self, prop: int, value: float) -> bool: ...
 
 
-def device_of(camera: Any) -> PropertyDevice | None:
-    """The ``cv2.VideoCapture`` (or alike) under a camera, if it has one (OpenCVCamera, while open)."""
-    cap = getattr(camera, "_cap", None)
-    return cap if cap is not None and hasattr(cap, "get") and hasattr(cap, "set") else None
+def device_of(camera: Camera) -> PropertyDevice | None:
+    """The ``cv2.VideoCapture`` (or alike) under a camera, if it has one (OpenCVCamera on a device, while open)."""
+    return camera.property_device()
 
 
-def available(camera: Any) -> dict[str, float]:
+def available(camera: Camera) -> dict[str, float]:
     """Controls the device reports a value for: name -> current value (empty for simulated or file cameras)."""
     dev = device_of(camera)
-    if dev is None or isinstance(getattr(camera, "source", 0), str):  # files and streams have no controls
+    if dev is None:  # simulated cameras, files and streams have no controls
         return {}
     out = {}
     for c in all_controls():
@@ -62,7 +63,7 @@ def available(camera: Any) -> dict[str, float]:
     return out
 
 
-def auto_modes(camera: Any) -> dict[str, bool]:
+def auto_modes(camera: Camera) -> dict[str, bool]:
     """name -> automatic mode on, for the controls that have one and report it."""
     dev = device_of(camera)
     out: dict[str, bool] = {}
@@ -76,7 +77,7 @@ def auto_modes(camera: Any) -> dict[str, bool]:
     return out
 
 
-def set_control(camera: Any, name: str, value: float) -> bool:
+def set_control(camera: Camera, name: str, value: float) -> bool:
     """Switch the control to manual and set it; False when the device refuses."""
     dev = device_of(camera)
     c = next((c for c in all_controls() if c.name == name), None)
@@ -87,7 +88,7 @@ def set_control(camera: Any, name: str, value: float) -> bool:
     return bool(dev.set(c.prop, float(value)))
 
 
-def set_auto(camera: Any, name: str, on: bool) -> bool:
+def set_auto(camera: Camera, name: str, on: bool) -> bool:
     dev = device_of(camera)
     c = next((c for c in all_controls() if c.name == name), None)
     if dev is None or c is None or c.auto is None:

@@ -77,6 +77,10 @@ class OpenCVCamera(Camera):
             self._cap.release()
             self._cap = None
 
+    def property_device(self) -> Any:
+        """The open ``cv2.VideoCapture`` of a device; None while closed and for files and streams (no controls)."""
+        return None if isinstance(self.source, str) else self._cap
+
     def grab(self) -> Frame:
         """The next frame; HardwareError when the device fails or a file has no more frames."""
         if self._cap is None:

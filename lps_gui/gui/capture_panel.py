@@ -39,7 +39,7 @@ PLAN_FIELDS = ("start_mm", "stop_mm", "step_mm", "directions", "runs", "overshoo
 
 def is_simulated_rig(stage: Any, camera: Any) -> bool:
     """Whether ``camera`` renders what ``stage`` (a simulated rig) really does: truth can be recorded."""
-    return getattr(camera, "pose_source", None) == getattr(stage, "true_pose", object()) and hasattr(stage, "seed_capture")
+    return camera.pose_source is not None and camera.pose_source == stage.true_pose
 
 
 def sim_spec() -> Any:

@@ -9,11 +9,12 @@ told otherwise). The CLI, the GUI and the demo use :func:`make_simulated_rig`;
 the stage error models and the rig geometry they bind are pure models in
 ``core/stage_errors.py`` and ``core/rig.py``.
 
-Both devices implement the capture engine's optional ``seed_capture(key)``
-hook: the stage's repeatability draw for a stop and the camera's image noise
-for a frame come from generators seeded by (seed, capture index), so a
-capture killed and resumed yields the same images, byte for byte, as one
-that ran straight through.
+Both devices can be seeded (``seed_capture(key)``, through the capture
+engine's one simulator hook, :class:`lps_gui.sim.session.SimulatedRigHook`):
+the stage's repeatability draw for a stop and the camera's image noise for a
+frame come from generators seeded by (seed, capture index), so a capture
+killed and resumed yields the same images, byte for byte, as one that ran
+straight through.
 """
 from __future__ import annotations
 

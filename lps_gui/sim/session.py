@@ -18,6 +18,7 @@ from typing import Any
 from lps_gui.capture.engine import CaptureEngine
 from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.clock import Clock
+from lps_gui.core.plan import Plan, PlannedStop
 from lps_gui.core.rig import PlanarRig
 from lps_gui.core.simulate import SimulationSpec
 from lps_gui.errors import InputError
@@ -107,10 +108,53 @@ def reopen_simulated_rig(session: Session, clock: Clock | None = None) -> tuple[
     return make_simulated_rig(spec, clock=clock, noise_grey=float(cam.get("noise_grey", 2.0)), blur_px=float(cam.get("blur_px", 1.2)))
 
 
+class SimulatedRigHook:
+    """The capture engine's one hook on a simulated rig (``capture.engine.SimulatorHook``).
+
+    It records the pose the camera renders beside every frame (:class:`TruthRecorder`)
+    and seeds the draws: the stage's repeatability per stop (on a gantry per
+    axis, keyed on the frame each axis arrived at, ``Plan.arrival_indices``)
+    and the camera's image noise per frame, from (seed, capture index), so a
+    capture killed and resumed yields the same images as one that ran
+    straight through. ``stage``: the rig's stage, also when the engine drives
+    the GRBL driver in front of it; None: a stage whose draws are not seeded.
+    """
+
+    def __init__(self, plan: Plan, stage: RigStage | None, camera: RigCamera) -> None:
+        self.plan = plan
+        self.stage = stage
+        self.camera = camera
+        self.truth = TruthRecorder(camera.pose_source, camera.rig if isinstance(camera.rig, PlanarRig) else None)
+        self._arrivals: dict[int, tuple[int, ...]] | None = None
+
+    def prune(self, session: Session) -> None:
+        self.truth.prune(session)
+
+    def record(self, session: Session, index: int) -> None:
+        self.truth.record(session, index)
+
+    def finalize(self, session: Session) -> None:
+        self.truth.finalize(session)
+
+    def seed_stop(self, stop: PlannedStop) -> None:
+        if self.stage is None:
+            return
+        self.stage.seed_capture(stop.index - stop.frame)
+        if self.plan.planar:
+            if self._arrivals is None:
+                self._arrivals = self.plan.arrival_indices()
+            self.stage.seed_axes(*self._arrivals[stop.index])
+
+    def seed_frame(self, index: int) -> None:
+        self.camera.seed_capture(index)
+
+
 def simulated_engine(session: Session, stage: Stage, camera: RigCamera, encode: str = ".png") -> CaptureEngine:
-    """A :class:`CaptureEngine` that also records the true pose of every frame (the pose the camera renders).
+    """A :class:`CaptureEngine` that also records the true pose of every frame (the pose the camera renders)
+    and seeds the rig's draws (:class:`SimulatedRigHook`).
 
     ``stage`` is the rig's stage or a driver in front of it (the GRBL emulator).
     """
-    rig = camera.rig if isinstance(camera.rig, PlanarRig) else None
-    return CaptureEngine(stage, camera, session, encode=encode, truth_recorder=TruthRecorder(camera.pose_source, rig))
+    rig_stage = stage if isinstance(stage, RigStage) else stage.simulated  # direct, or behind the GRBL emulator
+    hook = SimulatedRigHook(session.plan(), rig_stage if isinstance(rig_stage, RigStage) else None, camera)
+    return CaptureEngine(stage, camera, session, encode=encode, simulator=hook)

@@ -1,6 +1,8 @@
-"""How the capture engine reaches a target of a planar (XY) plan (SPEC 10).
+"""How the capture engine reaches a stop, and whether a plan fits the stage's travel (one or two axes).
 
-Each axis is approached from the side the plan gives it
+On one axis the engine approaches each run from an overshoot beyond its
+first target (see :mod:`lps_gui.capture.engine`). On an XY gantry (SPEC 10)
+each axis is approached from the side the plan gives it
 (:attr:`PlannedStop.approach`, ISO 230-2 per axis): an axis that must move
 toward its target from that side moves straight there; one that would
 arrive from the other side, or whose last approach was from the other side,
@@ -57,15 +59,30 @@ def go_to_planar(stage: Stage, stop: PlannedStop, plan: Plan, sides: list[int | 
     return (float(stage.position_mm("X")), float(stage.position_mm("Y")))
 
 
-def check_planar_plan_in_travel(plan: Plan, stage: Stage) -> None:
-    """InputError before any move when a target or overshoot lies outside an axis' known travel."""
-    travel = getattr(stage, "axis_travel_mm", None)
-    if travel is None:
-        return
+def check_plan_in_travel(plan: Plan, stage: Stage) -> None:
+    """InputError before any move when a target or overshoot lies outside the stage's known travel.
+
+    Only stages that know their travel (``Stage.travel_mm``, ``axis_travel_mm``: the simulated one) can be
+    checked here; on GRBL, soft limits ($20) raise an alarm at the offending move.
+    """
     t = plan.targets()
+    if not plan.planar:
+        travel = stage.travel_mm
+        if travel is None:
+            return
+        lo, hi = float(t[0]) - plan.overshoot_mm, float(t[-1]) + plan.overshoot_mm
+        if lo < travel[0] or hi > travel[1]:
+            raise InputError(
+                f"plan: moves from {lo:g} to {hi:g} mm (targets and overshoot) but the stage travels "
+                f"{travel[0]:g}..{travel[1]:g} mm; shorten the plan or the overshoot"
+            )
+        return
+    axis_travel = stage.axis_travel_mm
+    if axis_travel is None:
+        return
     for a, name in enumerate(PLANAR_AXES):
         lo, hi = float(np.min(t[:, a])) - plan.overshoot_mm, float(np.max(t[:, a])) + plan.overshoot_mm
-        t_lo, t_hi = travel[a]
+        t_lo, t_hi = axis_travel[a]
         if lo < t_lo or hi > t_hi:
             raise InputError(f"plan: {name} moves from {lo:g} to {hi:g} mm (targets and overshoot) but the stage's {name} "
                              f"travels {t_lo:g}..{t_hi:g} mm; shorten the plan or the overshoot")

@@ -62,12 +62,12 @@ def predict_rig(board: Board, intrinsics: CameraIntrinsics, distance_mm: float, 
     planar = plan.planar
     X = board.object_points()
     if planar:
-        from lps_gui.core.rig import PlanarRig
+        from lps_gui.core.rig import Rig
         from lps_gui.core.stage_errors import PlanarTruePose
 
         targets = plan.targets()
         centre = (0.5 * (targets[:, 0].min() + targets[:, 0].max()), 0.5 * (targets[:, 1].min() + targets[:, 1].max()))
-        rig = PlanarRig.facing_board(board, intrinsics, distance_mm, centre)
+        rig = Rig.facing_board(board, intrinsics, distance_mm, centre, planar=True)
         K = targets.shape[0]
         R, t = rig.camera_poses(PlanarTruePose(targets, np.zeros(K), np.zeros((K, 3))))
         mid = rig.camera_poses(PlanarTruePose(np.array([centre]), np.zeros(1), np.zeros((1, 3))))

@@ -1,7 +1,7 @@
 """Synthetic LPS sessions with known truth (point level), and the rig presets, on one axis or two.
 
 A :class:`SimulationSpec` is the whole description of a simulated experiment:
-rig (a :class:`Rig` on one axis, a :class:`PlanarRig` on an XY gantry), plan,
+rig (a :class:`Rig` on one axis, a :class:`Rig` on an XY gantry), plan,
 corner noise, missing corners and injected outlier views. The image
 simulator renders the same spec; here we only project the corners. On a
 gantry the truth also holds the board-plane positions (what a
@@ -19,7 +19,7 @@ from lps_gui.core.board import Board
 from lps_gui.core.camera_model import CameraIntrinsics, project_board
 from lps_gui.core.plan import Plan, PlannedStop
 from lps_gui.core.planar_model import PlanarState, planar_positions_only
-from lps_gui.core.rig import PlanarRig, Rig
+from lps_gui.core.rig import Rig
 from lps_gui.core.rotation import exp_so3
 from lps_gui.core.stage_errors import ErrorProfile, PlanarErrorModel, PlanarTruePose, StageErrorModel, TruePose
 from lps_gui.errors import InputError
@@ -30,7 +30,7 @@ class SimulationSpec:
     """A simulated experiment; every random draw comes from ``seed``."""
 
     name: str
-    rig: Rig | PlanarRig  # as many axes as the plan
+    rig: Rig  # as many axes as the plan
     plan: Plan
     noise_px: float = 0.1
     noise_clip_px: float | None = None  # paper's synthetic case: |noise| < 1 px
@@ -55,7 +55,7 @@ class SimulatedViews:
     board_plane_mm: np.ndarray | None = None  # gantry, (K, 2): true positions as the constant-orientation model sees them
 
 
-def nominal_planar_state(rig: PlanarRig, xy_mm: np.ndarray) -> PlanarState:
+def nominal_planar_state(rig: Rig, xy_mm: np.ndarray) -> PlanarState:
     """The planar model of an error-free rig, positions ``xy_mm`` (K, 2) in the stage plane."""
     R = rig.R_cam_board
     l0 = -R @ rig.C0_board
@@ -263,7 +263,7 @@ def paper_planar_spec(seed: int = 0, noise_px: float = 0.1, errors: PlanarErrorM
     plan = plan or Plan.xy(start_mm=(0.0, 0.0), stop_mm=(140.0, 80.0), step_mm=(10.0, 10.0))
     t = plan.targets()
     centre = (0.5 * (t[:, 0].min() + t[:, 0].max()), 0.5 * (t[:, 1].min() + t[:, 1].max()))
-    rig = PlanarRig.facing_board(board, PAPER_INTRINSICS, distance_mm, centre,
+    rig = Rig.facing_board(board, PAPER_INTRINSICS, distance_mm, centre,
                                  errors=errors if errors is not None else paper_planar_errors())
     return SimulationSpec("paper-planar", rig, plan, noise_px=noise_px, seed=seed)
 
@@ -275,7 +275,7 @@ def small_planar_spec(seed: int = 0, noise_px: float = 0.2, errors: PlanarErrorM
     plan = plan or Plan.xy(start_mm=(0.0, 0.0), stop_mm=(50.0, 30.0), step_mm=(10.0, 10.0))
     t = plan.targets()
     centre = (0.5 * (t[:, 0].min() + t[:, 0].max()), 0.5 * (t[:, 1].min() + t[:, 1].max()))
-    rig = PlanarRig.facing_board(one_d.rig.board, one_d.rig.intrinsics, 500.0, centre,
+    rig = Rig.facing_board(one_d.rig.board, one_d.rig.intrinsics, 500.0, centre,
                                  errors=errors if errors is not None else paper_planar_errors())
     return SimulationSpec("small-planar", rig, plan, noise_px=noise_px, seed=seed)
 

@@ -27,7 +27,7 @@ from lps_gui.camera.sim_camera import SimulatedCamera
 from lps_gui.core.camera_model import project_board
 from lps_gui.core.clock import Clock, SimClock
 from lps_gui.core.plan import Plan
-from lps_gui.core.rig import PlanarRig, Rig
+from lps_gui.core.rig import Rig
 from lps_gui.core.simulate import SimulationSpec, preset
 from lps_gui.core.stage_errors import PlanarErrorModel, PlanarTruePose, StageErrorModel
 from lps_gui.errors import InputError
@@ -178,16 +178,15 @@ def spec_from_truth(truth: dict[str, Any], plan: Plan, source: str = "session.js
         board, intrinsics = board_from_dict(truth["board"], source), intrinsics_from_dict(truth["intrinsics"], source)
         if plan.planar:
             r = truth["rig"]
-            rig: Rig | PlanarRig = PlanarRig(board, intrinsics, np.asarray(r["R_cam_board"], float),
-                                             np.asarray(r["C0_board"], float), np.asarray(r["axes_board"], float),
-                                             PlanarErrorModel.from_dict(r["stage_errors"]))
+            rig = Rig(board, intrinsics, np.asarray(r["R_cam_board"], float), np.asarray(r["C0_board"], float),
+                      np.asarray(r["axes_board"], float), PlanarErrorModel.from_dict(r["stage_errors"]))
         else:
             rig = Rig(
                 board=board,
                 intrinsics=intrinsics,
                 R_cam_board=np.asarray(truth["R_cam_board"], dtype=float),
                 C0_board=np.asarray(truth["C0_board"], dtype=float),
-                u_board=np.asarray(truth["u_board"], dtype=float),
+                axes_board=np.asarray(truth["u_board"], dtype=float),
                 errors=StageErrorModel.from_dict(truth["stage_errors"]),
             )
         return SimulationSpec(str(truth.get("preset", "sim")), rig, plan, seed=int(truth.get("seed", 0)))

@@ -19,7 +19,7 @@ from lps_gui.capture.engine import CaptureEngine
 from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.clock import Clock
 from lps_gui.core.plan import Plan, PlannedStop
-from lps_gui.core.rig import PlanarRig
+from lps_gui.core.rig import Rig
 from lps_gui.core.simulate import SimulationSpec
 from lps_gui.errors import InputError
 from lps_gui.hardware.stage import Stage
@@ -124,7 +124,7 @@ class SimulatedRigHook:
         self.plan = plan
         self.stage = stage
         self.camera = camera
-        self.truth = TruthRecorder(camera.pose_source, camera.rig if isinstance(camera.rig, PlanarRig) else None)
+        self.truth = TruthRecorder(camera.pose_source, camera.rig if camera.rig.planar else None)
         self._arrivals: dict[int, tuple[int, ...]] | None = None
 
     def prune(self, session: Session) -> None:

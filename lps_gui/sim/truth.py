@@ -42,7 +42,7 @@ from lps_gui.core.camera_model import project_board
 from lps_gui.core.estimate_types import LpsEstimate
 from lps_gui.core.observations import Observations
 from lps_gui.core.planar_model import planar_positions_only
-from lps_gui.core.rig import PlanarRig, Rig
+from lps_gui.core.rig import Rig
 from lps_gui.core.simulate import board_plane_positions, board_plane_straightness, nominal_planar_state
 from lps_gui.core.stage_errors import PlanarTruePose, StageErrorModel, TruePose
 from lps_gui.io.atomic import append_line_durable, write_text_atomic
@@ -67,7 +67,7 @@ def pose_truth(pose: TruePose) -> dict[str, Any]:
     }
 
 
-def planar_pose_truth(rig: PlanarRig, pose: PlanarTruePose) -> dict[str, Any]:
+def planar_pose_truth(rig: Rig, pose: PlanarTruePose) -> dict[str, Any]:
     """A gantry's carriage pose (K=1) as a JSON-able dict; beside the true plane position the board-plane
     position (what a constant-orientation model sees when the carriage tilts), so the comparison needs no
     re-projection later."""
@@ -154,11 +154,11 @@ def finalize_truth(session: Session) -> None:
 class TruthRecorder:
     """The capture engine's truth hook on the simulated rig: the pose the camera renders, per frame.
 
-    ``rig``: a gantry's :class:`PlanarRig` (its rows also hold the board-plane
+    ``rig``: a gantry's :class:`Rig` (its rows also hold the board-plane
     position, :func:`planar_pose_truth`); None on one axis.
     """
 
-    def __init__(self, pose_source: Callable[[], Any], rig: PlanarRig | None = None) -> None:
+    def __init__(self, pose_source: Callable[[], Any], rig: Rig | None = None) -> None:
         self.pose_source = pose_source
         self.rig = rig
 

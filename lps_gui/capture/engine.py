@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import threading
 import time
-from typing import Any, Callable, Protocol
+from typing import Callable, Protocol
 
 import numpy as np
 
@@ -33,7 +33,7 @@ from lps_gui.capture import events as ev
 from lps_gui.capture.events import CaptureEvent, CaptureListener, CaptureProgress, CaptureSummary
 from lps_gui.core.clock import Clock, RealClock
 from lps_gui.capture.moves import check_plan_in_travel, format_target, go_to_planar
-from lps_gui.core.plan import Plan, PlannedStop
+from lps_gui.core.plan import PlannedStop
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import HardwareError, InputError
 from lps_gui.hardware.stage import EventSource, Stage

@@ -19,7 +19,6 @@ from lps_gui.capture.engine import CaptureEngine
 from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.clock import Clock
 from lps_gui.core.plan import Plan, PlannedStop
-from lps_gui.core.rig import Rig
 from lps_gui.core.simulate import SimulationSpec
 from lps_gui.errors import InputError
 from lps_gui.hardware.stage import Stage

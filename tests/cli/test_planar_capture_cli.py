@@ -16,7 +16,6 @@ import pytest
 from lps_gui.cli import capture as capture_cli
 from lps_gui.cli import main as lps_main
 from lps_gui.cli.capture_plan import build_planar_plan
-from lps_gui.core.plan import Plan
 from lps_gui.io.session import Session
 from tests.capture.helpers import assert_listed_frames_intact, image_bytes, records_without_time
 

@@ -11,7 +11,6 @@ import pytest
 
 from lps_gui.core.board import Board
 from lps_gui.core.clock import SimClock
-from lps_gui.core.plan import Plan
 from lps_gui.gui.planar_plan_editor import PlanarPlanEditor, planar_duration_s
 
 pytestmark = pytest.mark.gui

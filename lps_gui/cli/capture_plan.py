@@ -94,8 +94,8 @@ def build_planar_plan(args: argparse.Namespace, base=None):
     if args.grid:
         start, stop, step = parse_grid(args.grid)
         plan = Plan.xy(start_mm=start, stop_mm=stop, step_mm=step, pattern=plan.pattern,
-                          **{k: getattr(plan, k) for k in ("directions", "runs", "overshoot_mm", "settle_s",
-                                                             "frames_per_stop", "feed_mm_min")})
+                       **{k: getattr(plan, k) for k in ("directions", "runs", "overshoot_mm", "settle_s",
+                                                          "frames_per_stop", "feed_mm_min")})
     elif args.targets_xy:
         plan = replace(plan, targets_mm=parse_targets_xy(args.targets_xy))
     fields = {k: getattr(args, k) for k in ("overshoot_mm", "settle_s", "frames_per_stop", "feed_mm_min")}

@@ -162,9 +162,9 @@ class PlanarPlanEditor(QGroupBox):
         """The planar plan of the fields, with the shared fields (``shared`` or the panel's); InputError if invalid."""
         fields = {k: v for k, v in {**self.shared(), **shared}.items() if k in SHARED_FIELDS}
         grid = Plan.xy(start_mm=(self.start_x.value(), self.start_y.value()),
-                          stop_mm=(self.stop_x.value(), self.stop_y.value()),
-                          step_mm=(self.step_x.value(), self.step_y.value()),
-                          pattern=str(self.pattern.currentData()), **fields)
+                       stop_mm=(self.stop_x.value(), self.stop_y.value()),
+                       step_mm=(self.step_x.value(), self.step_y.value()),
+                       pattern=str(self.pattern.currentData()), **fields)
         if not self.iso_lines.isChecked():
             return grid
         return iso_lines_on_grid(grid, ISO_LEVELS, ISO_RUNS)

@@ -14,9 +14,10 @@ from lps_gui.io.session import Session
 from lps_gui.pipeline.detect import detect_session
 from lps_gui.pipeline.estimate import estimate_session
 from lps_gui.sim.session import create_simulated_session, reopen_simulated_rig, simulated_engine
+from tests.capture.helpers import capture_through_emulator
 
 PLAN = Plan.xy(start_mm=(0.0, 0.0), stop_mm=(40.0, 20.0), step_mm=(10.0, 10.0), directions="both",
-                  settle_s=0.1, overshoot_mm=1.0, feed_mm_min=3000.0)
+               settle_s=0.1, overshoot_mm=1.0, feed_mm_min=3000.0)
 
 
 def spec():
@@ -99,18 +100,9 @@ def test_detect_and_estimate_the_captured_planar_session(reference):
 
 
 def test_planar_capture_through_the_grbl_emulator(tmp_path):
-    from lps_gui.sim.emulated import emulated_rig_stage
-
     plan = Plan.xy(start_mm=(0.0, 0.0), stop_mm=(10.0, 10.0), step_mm=(10.0, 10.0), settle_s=0.05,
-                      overshoot_mm=1.0, feed_mm_min=6000.0)
-    sp = small_planar_spec(seed=2, plan=plan)
-    session, rig_stage, camera = create_simulated_session(tmp_path / "grbl", sp)
-    stage = emulated_rig_stage(rig_stage, time_scale=20.0)
-    try:
-        summary = simulated_engine(session, stage, camera).run()
-    finally:
-        stage.disconnect()
-    assert summary.state == "done", summary.error
+                   overshoot_mm=1.0, feed_mm_min=6000.0)
+    capture_through_emulator(tmp_path / "grbl", small_planar_spec(seed=2, plan=plan), time_scale=20.0)
     recs = Session.open(tmp_path / "grbl").records()
     assert [r.target_mm for r in recs] == [(0.0, 0.0), (10.0, 0.0), (10.0, 10.0), (0.0, 10.0)]
     for r in recs:

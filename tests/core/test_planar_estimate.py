@@ -180,7 +180,7 @@ def test_hybrid_is_refused_for_planar_sessions():
 
 def test_planar_figures_lines_and_nodes():
     spec = small_planar_spec(seed=4, plan=Plan.xy(start_mm=(0.0, 0.0), stop_mm=(50.0, 30.0), step_mm=(10.0, 10.0),
-                                                     directions="both", runs=2))
+                                                  directions="both", runs=2))
     views = simulate_views(spec)
     obs = observations(spec, views)
     est = estimate_planar(obs)

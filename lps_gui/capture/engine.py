@@ -32,7 +32,7 @@ from lps_gui.camera.base import Camera
 from lps_gui.capture import events as ev
 from lps_gui.capture.events import CaptureEvent, CaptureListener, CaptureProgress, CaptureSummary
 from lps_gui.core.clock import Clock, RealClock
-from lps_gui.capture.moves import check_plan_in_travel, format_target, go_to_planar
+from lps_gui.capture.moves import approach_point_mm, check_plan_in_travel, format_target, go_to_planar
 from lps_gui.core.plan import PlannedStop
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import HardwareError, InputError
@@ -302,15 +302,9 @@ class CaptureEngine:
             return
         plan, feed = self._plan, self._plan.feed_mm_min
         sign = 1.0 if stop.direction == "+" else -1.0
-        last = self._last_move
-        continues_run = (
-            last is not None
-            and last[:2] == (stop.run, stop.direction)
-            and (stop.target_mm - last[2]) * sign > 0
-        )
+        start = approach_point_mm(plan, stop, self._last_move)
         self._last_move = None
-        if not continues_run and plan.overshoot_mm > 0:
-            start = plan.approach_start_mm(stop.direction, stop.target_mm)
+        if start is not None:
             self._emit(CaptureEvent("approach", f"approach from {start:g} mm", stop.index))
             self._move(start, feed)
         if self.simulator is not None:

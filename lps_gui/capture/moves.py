@@ -1,7 +1,8 @@
 """How the capture engine reaches a stop, and whether a plan fits the stage's travel (one or two axes).
 
-On one axis the engine approaches each run from an overshoot beyond its
-first target (see :mod:`lps_gui.capture.engine`). On an XY gantry (SPEC 10)
+On one axis each run is approached from an overshoot beyond its first
+target, and again wherever the engine does not know where the stage came
+from (:func:`approach_point_mm`). On an XY gantry (SPEC 10)
 each axis is approached from the side the plan gives it
 (:attr:`PlannedStop.approach`, ISO 230-2 per axis): an axis that must move
 toward its target from that side moves straight there; one that would
@@ -28,6 +29,25 @@ def format_target(target_mm: float | tuple[float, float]) -> str:
     if isinstance(target_mm, tuple):
         return f"({target_mm[0]:g}, {target_mm[1]:g}) mm"
     return f"{target_mm:g} mm"
+
+
+def approach_point_mm(plan: Plan, stop: PlannedStop, last_move: tuple | None) -> float | None:
+    """One axis: where to go before the move onto ``stop`` so it is approached from its run's direction.
+
+    None when the run goes on in its direction from the last stop
+    (``last_move``: (run, direction, target, first index) of the stop the
+    engine last reached, None after a pause, an error or at the start of a
+    call) or when the plan has no overshoot.
+    """
+    sign = 1.0 if stop.direction == "+" else -1.0
+    continues_run = (
+        last_move is not None
+        and last_move[:2] == (stop.run, stop.direction)
+        and (stop.target_mm - last_move[2]) * sign > 0
+    )
+    if continues_run or not plan.overshoot_mm > 0:
+        return None
+    return plan.approach_start_mm(stop.direction, stop.target_mm)
 
 
 def axis_moves(here_mm: tuple[float, float], sides: list[int | None], stop: PlannedStop, overshoot_mm: float

@@ -42,6 +42,8 @@ _STAGE_STREAM, _CAMERA_STREAM = 0, 1  # independent noise streams per capture
 class RigStage(SimulatedStage):
     """A :class:`SimulatedStage` whose repeatability draw per stop is seeded by the capture index."""
 
+    _axis_keys: tuple[int, int] | None = None  # an XY gantry's per-axis keys (seed_axes); None: one draw per move
+
     def seed_capture(self, key: int) -> None:
         """Seed the draw of the next completed move (the move onto stop ``key``)."""
         with self._lock:
@@ -54,7 +56,7 @@ class RigStage(SimulatedStage):
 
     def _axis_rng(self, axis: int) -> np.random.Generator:
         """An XY axis draws one value per arrival, however many moves reach it (a resume adds overshoots)."""
-        keys = getattr(self, "_axis_keys", None)
+        keys = self._axis_keys
         if keys is None:
             return self._rng
         return np.random.default_rng([self.seed, keys[axis], _STAGE_STREAM, 1 + axis])

@@ -18,6 +18,7 @@ from lps_gui.camera.base import Camera, Frame
 from lps_gui.camera.opencv_camera import _to_8bit
 from lps_gui.core.clock import Clock, RealClock
 from lps_gui.errors import HardwareError, InputError
+from lps_gui.file_limits import read_file_limited, resolve_in_session
 
 IMAGE_EXTENSIONS = (".png", ".tif", ".tiff", ".bmp", ".jpg", ".jpeg", ".pgm", ".ppm", ".webp")
 
@@ -32,12 +33,18 @@ def list_images(folder: Path) -> list[Path]:
     captures = folder / "captures.jsonl"
     if captures.is_file():
         rows = {}
-        for line in captures.read_text(encoding="utf-8").splitlines():
+        try:
+            text = read_file_limited(captures, 1 << 30, "captures file", follow_symlinks=False).decode("utf-8")
+        except UnicodeDecodeError:
+            raise InputError(f"{captures}: not a text file (binary content); fix or restore it") from None
+        for n, line in enumerate(text.splitlines(), 1):
             try:
                 d = json.loads(line)
-                rows[int(d["index"])] = folder / d["file"]
+                index, file = int(d["index"]), str(d["file"])
             except (json.JSONDecodeError, KeyError, TypeError, ValueError):
                 continue  # a torn last line: not listed
+            # a replayed session is confined like any other: no ../../outside/secret.png, no /dev/zero
+            rows[index] = resolve_in_session(folder, file, f"{captures}: line {n}")
         return [rows[i] for i in sorted(rows)]
     files = [p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_EXTENSIONS]
     return sorted(files, key=lambda p: natural_key(p.name))
@@ -107,11 +114,11 @@ class FolderReplayCamera(Camera):
 
 def _read_checked(path: Path) -> np.ndarray | None:
     """Decode ``path`` after checking its header's pixel count (a tiny file can decode to gigabytes)."""
-    from lps_gui.core.image_header import check_image_header
+    from lps_gui.core.image_header import bytes_reader, check_image_header
 
     try:
-        data = path.read_bytes()
-    except OSError:
-        return None
-    check_image_header(data[:1 << 16], str(path))
+        data = read_file_limited(path, what="image", follow_symlinks=False)
+    except InputError as exc:
+        raise HardwareError(str(exc)) from None
+    check_image_header(data[:1 << 16], str(path), read_at=bytes_reader(data))
     return cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED) if data else None

@@ -8,8 +8,10 @@ one line and leaves the traceback in the log file.
 from __future__ import annotations
 
 import argparse
+import errno
 import logging
 import sys
+from typing import NoReturn
 
 from lps_gui.cli import (capture, compare, compensate, demo, detect, emulate_grbl, estimate, export, intrinsics, plan_rig,
                      report, simulate)
@@ -45,8 +47,15 @@ class _VersionAction(argparse.Action):
         parser.exit()
 
 
+class _OneLineErrors(argparse.ArgumentParser):
+    """A refused option is one line like every other user error (argparse would print the usage first)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _OneLineErrors(
         prog="lps",
         description="Measure a linear positioning stage from a camera's images of a chessboard.",
     )
@@ -102,10 +111,26 @@ def _main(argv: list[str] | None) -> int:
     except KeyboardInterrupt:
         print(f"lps {args.command}: interrupted; what was finished is kept", file=sys.stderr)
         return 130
+    except OSError as exc:
+        if exc.errno not in _STORAGE_ERRNOS:
+            return _bug(args.command, exc, log_where)
+        logging.getLogger("lps").info("storage error", exc_info=True)  # a full disk in a writer not yet checked
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"lps {args.command}: error: {where}cannot write ({exc.strerror}); free disk space or make the folder "
+              "writable and run again", file=sys.stderr)
+        return 2
     except Exception as exc:  # a bug: one line here, the traceback in the log
-        logging.getLogger("lps").exception("unexpected failure")
-        print(f"lps {args.command}: internal error: {type(exc).__name__}: {exc} (traceback in {log_where})", file=sys.stderr)
-        return 1
+        return _bug(args.command, exc, log_where)
+
+
+def _bug(command: str, exc: BaseException, log_where: str) -> int:
+    """A bug: one line here, the traceback in the log."""
+    logging.getLogger("lps").error("unexpected failure", exc_info=exc)
+    print(f"lps {command}: internal error: {type(exc).__name__}: {exc} (traceback in {log_where})", file=sys.stderr)
+    return 1
+
+
+_STORAGE_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EIO, errno.EFBIG}
 
 
 if __name__ == "__main__":

@@ -28,6 +28,7 @@ from lps_gui.cli.capture_devices import (
 from lps_gui.cli.capture_plan import (
     ISO_LEVELS, ISO_RUNS, build_planar_plan, describe, line_plan, planar_preset_name, wants_planar,
 )
+from lps_gui.cli.option_types import finite, float_range, int_range, nonnegative_finite, nonnegative_int
 
 HELP = "capture a session: move the stage through a plan and store an image per stop (resumable)"
 
@@ -39,9 +40,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--resume", metavar="SESSION", help="continue this session at the first frame not listed")
     g = p.add_argument_group("plan (a --plan file, switches override its fields)")
     g.add_argument("--plan", metavar="FILE", help="plan JSON (fields of the plan, or a session.json)")
-    g.add_argument("--start", type=float, dest="start_mm", help="first target, mm")
-    g.add_argument("--stop", type=float, dest="stop_mm", help="last target, mm")
-    g.add_argument("--step", type=float, dest="step_mm", help="target spacing, mm")
+    g.add_argument("--start", type=finite, dest="start_mm", help="first target, mm")
+    g.add_argument("--stop", type=finite, dest="stop_mm", help="last target, mm")
+    g.add_argument("--step", type=finite, dest="step_mm", help="target spacing, mm")
     g.add_argument("--targets", help="explicit targets, comma separated mm")
     g.add_argument("--directions", choices=("+", "-", "both"), help="approach direction(s) of the runs")
     g.add_argument("--runs", type=int, help="number of runs (per direction)")
@@ -49,15 +50,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--settle", type=float, dest="settle_s", help="wait after each move, s")
     g.add_argument("--frames", type=int, dest="frames_per_stop", help="frames per stop")
     g.add_argument("--feed", type=float, dest="feed_mm_min", help="feed of the moves, mm/min")
-    g.add_argument("--intrinsics-views", type=int, metavar="N", help="guided intrinsics mode: N varied views of a hand-held board into --out (no stage)")
+    g.add_argument("--intrinsics-views", type=int_range(3, 1000), metavar="N", help="guided intrinsics mode: N varied views of a hand-held board into --out (no stage)")
     s = p.add_argument_group("set-up")
     s.add_argument("--board", metavar="FILE", help="board.json (required with a real camera)")
     s.add_argument("--intrinsics", metavar="FILE", help="intrinsics (JSON or OpenCV YAML), embedded into session.json")
     s.add_argument("--preset", default="small", help="simulated rig: small | paper-rig | paper-synthetic (default small)")
-    s.add_argument("--seed", type=int, default=0, help="simulated rig: seed of all noise")
-    s.add_argument("--noise-grey", type=float, default=2.0, help="simulated camera: noise sigma, grey levels")
+    s.add_argument("--seed", type=nonnegative_int, default=0, help="simulated rig: seed of all noise")
+    s.add_argument("--noise-grey", type=nonnegative_finite, default=2.0, help="simulated camera: noise sigma, grey levels")
     s.add_argument("--real-time", action="store_true", help="simulated rig: move and settle in real time (default: simulated time)")
-    s.add_argument("--time-scale", type=float, default=1.0, help="--stage emulator: simulated time runs this many times faster than real")
+    s.add_argument("--time-scale", type=float_range(1e-3, 1e6), default=1.0, help="--stage emulator: simulated time runs this many times faster than real")
     s.add_argument("--encode", default=".png", help="image format (lossless): .png (default), .tif, .bmp")
     lock = s.add_mutually_exclusive_group()
     lock.add_argument("--home", action="store_true", help="a stage locked in Alarm (GRBL powers up so with homing on) is homed ($H) first")
@@ -251,6 +252,12 @@ def _resume(args: argparse.Namespace):
 
         stage, camera = reopen_simulated_rig(session, clock=clock(args))
         stage = bind_stage(args.stage or "sim", stage, args.time_scale)
+        if "spec" not in (session.meta.get("stage") or {}) or "spec" not in (session.meta.get("camera") or {}):
+            # a kill between the start's two session.json writes left the devices unrecorded: record them now
+            axes = {"axes": ["X", "Y"]} if session.planar else {}
+            session.meta["stage"] = {**stage.describe(), **axes, "spec": args.stage or "sim"}
+            session.meta["camera"] = {**camera.properties(), "spec": "sim"}
+            session.save_meta()
         return session, stage, camera, simulated_engine(session, stage, camera, args.encode)
     from lps_gui.cli.resume_devices import devices_named_by_operator
 

@@ -8,6 +8,8 @@ non-uniform spacing; :mod:`lps_gui.core.presets`).
 from __future__ import annotations
 
 import argparse
+
+from lps_gui.cli.option_types import finite, int_range, positive_finite
 from typing import Any
 
 ENV_SWITCHES = (("--board-temp", "board_temperature_c", "board temperature, deg C (corrects the length scale to 20 C)"),
@@ -29,11 +31,11 @@ def add_setup_arguments(p: argparse.ArgumentParser) -> None:
                    "its Table 1) or accuracy=UM,repeatability=UM,straightness=UM")
     r.add_argument("--iso-plan", action="store_true", help="ISO 230-2 plan: 5 runs both directions over non-uniform "
                    "targets between --start and --stop")
-    r.add_argument("--iso-targets", type=int, metavar="N", help="number of targets of --iso-plan (default 5 per metre, min 5)")
-    r.add_argument("--pitch", type=float, metavar="MM", help="lead-screw pitch for --iso-plan: targets spread over its phase")
+    r.add_argument("--iso-targets", type=int_range(5, 10000), metavar="N", help="number of targets of --iso-plan (default 5 per metre, min 5)")
+    r.add_argument("--pitch", type=positive_finite, metavar="MM", help="lead-screw pitch for --iso-plan: targets spread over its phase")
     e = p.add_argument_group("environment (session.json 'environment')")
     for flag, key, text in ENV_SWITCHES:
-        e.add_argument(flag, type=float, dest=f"env_{key}", metavar="X", help=text)
+        e.add_argument(flag, type=finite, dest=f"env_{key}", metavar="X", help=text)
     e.add_argument("--env-notes", dest="env_notes", metavar="TEXT", help="free text: thermometer, where it was, ...")
     i = p.add_argument_group("identification (printed on the report)")
     for flag, key in ID_SWITCHES:

@@ -25,8 +25,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from lps_gui.cli.out_path import check_out_file
     from lps_gui.pipeline.compensate import compensate_session
 
+    check_out_file(args.out)
     table, lines = compensate_session(args.session, args.format, args.out, args.axis)
     worst = max(float(abs(table.offset_um(1)).max()), float(abs(table.offset_um(-1)).max()))
     kind = "bidirectional" if table.bidirectional else "one direction measured, its column repeated"

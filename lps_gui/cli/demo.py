@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import argparse
+
+from lps_gui.cli.option_types import nonnegative_int
 import time
 from pathlib import Path
 
@@ -12,7 +14,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--quick", action="store_true", help="small camera and fewer stops (seconds, not minutes)")
     parser.add_argument("--out", type=Path, default=Path("demo-output"),
                         help="output folder (default demo-output): an existing or new folder; a name with a suffix is refused")
-    parser.add_argument("--seed", type=int, default=0, help="random seed of the simulation")
+    parser.add_argument("--seed", type=nonnegative_int, default=0, help="random seed of the simulation")
     parser.add_argument("--planar", action="store_true", help="the planar pipeline on a simulated XY gantry (SPEC 10)")
 
 
@@ -22,7 +24,7 @@ def run(args: argparse.Namespace) -> int:
 
     from lps_gui.errors import InputError
 
-    if args.out.suffix and not args.out.is_dir():
+    if (args.out.suffix or args.out.exists() or args.out.is_symlink()) and not args.out.is_dir():
         raise InputError(f"--out {args.out}: lps demo writes a folder of files; give a folder name without a suffix")
 
     t0 = time.monotonic()

@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import argparse
+
+from lps_gui.cli.option_types import workers
 import sys
 
 HELP = "detect the board's corners in a session (writes corners.vnl) or in images"
@@ -15,7 +17,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--board", help="board.json (required for images; a session has its own)")
     parser.add_argument("--out", help="corners file for images (default corners.vnl here): an existing folder gets "
                         "corners.vnl inside; a name ending in .vnl is the file; a name without suffix is a new folder")
-    parser.add_argument("--workers", type=int, default=None, help="processes (default: one per core)")
+    parser.add_argument("--workers", type=workers, default=None, help="processes (default: one per core)")
     parser.add_argument("--force", action="store_true", help="detect every view again, ignoring corners.vnl")
     parser.add_argument("--no-track", action="store_true", help="detect every image from scratch (unrelated views)")
 
@@ -65,6 +67,10 @@ def run(args: argparse.Namespace) -> int:
         if len(table.failed) == len(table.names):
             for name, reason in table.failed.items():
                 print(f"failed: {name}: {reason}", file=sys.stderr)
+            unreadable = [(n, why) for n, why in table.failed.items() if "board" not in why]
+            if unreadable:
+                raise InputError(f"detect: none of the {len(paths)} image(s) could be used (first: {unreadable[0][0]}: "
+                                 f"{unreadable[0][1]}); nothing written")
             raise InputError(f"detect: the board was found in none of the {len(paths)} image(s); nothing written "
                              "(check --board matches the printed board)")
         write_corners_vnl(out, table)

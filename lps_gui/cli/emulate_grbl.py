@@ -8,11 +8,13 @@ from __future__ import annotations
 
 import argparse
 
+from lps_gui.cli.option_types import float_range
+
 HELP = "serve a GRBL 1.1 emulator on a pseudo-terminal (prints its path) until Ctrl-C"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--time-scale", type=float, default=1.0, help="simulated seconds per real second (default 1: GRBL's own timing)")
+    parser.add_argument("--time-scale", type=float_range(1e-3, 1e6), default=1.0, help="simulated seconds per real second (default 1: GRBL's own timing)")
     parser.add_argument("--travel", type=float, nargs=2, default=(-5.0, 500.0), metavar=("MIN_MM", "MAX_MM"), help="soft-limit travel in work coordinates")
     parser.add_argument("--max-rate", type=float, default=3000.0, help="max rate $110 in mm/min")
     parser.add_argument("--accel", type=float, default=200.0, help="acceleration $120 in mm/s^2")
@@ -39,6 +41,7 @@ def run(args: argparse.Namespace) -> int:
     import threading
 
     from lps_gui.errors import InputError
+    from lps_gui.hardware.announce import announce
     from lps_gui.hardware.grbl.emulator import Faults, GrblEmulator
     from lps_gui.hardware.sim_stage import SimulatedStage
 
@@ -67,8 +70,10 @@ def run(args: argparse.Namespace) -> int:
     except ValueError:  # not the main thread (tests calling run() directly)
         pass
     emu = GrblEmulator(stage, faults=faults, time_scale=args.time_scale, homing_init_lock=not args.no_homing_lock)
+    withdraw = None
     try:
         path = emu.start()
+        withdraw = announce(path)  # the GUI's stage list shows it
         print(path, flush=True)
         print(f"GRBL 1.1h emulator on {path} (115200 baud, any rate works on a pty); Ctrl-C to stop", file=sys.stderr, flush=True)
         while not stop.wait(0.2):
@@ -83,5 +88,7 @@ def run(args: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         print("emulator: stopped", file=sys.stderr)
     finally:
+        if withdraw is not None:
+            withdraw()
         emu.stop()
     return 0

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import argparse
 
+from lps_gui.cli.option_types import positive_finite
+
 HELP = "estimate the stage's true positions from a session's corners (joint LM by default)"
 
 
@@ -20,13 +22,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "(and the CSVs) inside; a name ending in .json is the results file (CSVs beside it as "
                    "NAME-positions.csv, NAME-summary.csv); a name without suffix is a new folder")
     p.add_argument("--robust", action="store_true", help="Huber loss on corner residuals (joint)")
-    p.add_argument("--outlier-k", type=float, default=5.0, help="robust sigmas that flag an outlier view (default 5)")
+    p.add_argument("--outlier-k", type=positive_finite, default=5.0, help="robust sigmas that flag an outlier view (default 5)")
     p.add_argument("--no-outliers", action="store_true", help="do not look for outlier views")
     p.add_argument("--self-calibrate", action="store_true", help="intrinsics free with their covariance as prior (joint)")
     p.add_argument("--no-six-dof", action="store_true", help="skip straightness and angular errors")
-    p.add_argument("--grid-window-mm", type=float, help="hybrid: grid half-width (default 0.5 mm)")
-    p.add_argument("--grid-resolution-mm", type=float, help="hybrid: final grid spacing (default 0.0001 mm)")
-    p.add_argument("--threshold-px", type=float, help="hybrid: stop when the RMS reprojection error is below T px")
+    p.add_argument("--grid-window-mm", type=positive_finite, help="hybrid: grid half-width (default 0.5 mm)")
+    p.add_argument("--grid-resolution-mm", type=positive_finite, help="hybrid: final grid spacing (default 0.0001 mm)")
+    p.add_argument("--threshold-px", type=positive_finite, help="hybrid: stop when the RMS reprojection error is below T px")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -22,8 +22,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from lps_gui.cli.out_path import check_out_folder
     from lps_gui.pipeline.export import export_session
 
+    check_out_folder(args.out)
     res = export_session(args.session, args.format, args.out, args.straightness)
     print(f"{args.out}: {res.n_exported} poses ({'line + straightness' if res.straightness_used else 'on the fitted line'}); "
           f"{len(res.excluded)} views left out (excluded.txt)")

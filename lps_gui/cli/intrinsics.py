@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import argparse
+
+from lps_gui.cli.option_types import workers
 import sys
 
 HELP = "calibrate camera intrinsics (with each parameter's std) from varied-pose board images"
@@ -26,7 +28,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--cross-validate", action="store_true",
                         help="also calibrate the even and the odd images apart and compare the two projections")
     parser.add_argument("--report", help="also write the intrinsics report (PDF with residual, uncertainty and coverage maps) here")
-    parser.add_argument("--workers", type=int, default=None, help="processes (default: one per core)")
+    parser.add_argument("--workers", type=workers, default=None, help="processes (default: one per core)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -39,10 +41,13 @@ def run(args: argparse.Namespace) -> int:
     from lps_gui.io.intrinsics_file import write_intrinsics
     from lps_gui.pipeline.intrinsics import calibrate_images, cross_validate_calibration
 
-    from lps_gui.cli.out_path import resolve_out
+    from lps_gui.cli.out_path import check_out_file, resolve_out
 
     board = read_board(args.board)
     args.out = resolve_out(args.out, "intrinsics.json", None, (".json", ".yaml", ".yml"), "lps intrinsics")
+    for extra in (args.yaml, args.cameramodel, args.report):
+        if extra:
+            check_out_file(extra)
     flags = cv2.CALIB_FIX_K3 if args.fix_k3 else 0
     cal = calibrate_images([Path(p) for p in args.images], board, ProgressBar("intrinsics"), workers=args.workers, flags=flags, warp=args.warp)
     write_intrinsics(args.out, cal.intrinsics)

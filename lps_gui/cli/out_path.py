@@ -24,9 +24,8 @@ def resolve_out(out: str | Path | None, usual_name: str, default_folder: Path | 
         return folder / usual_name
     path = Path(out)
     if path.is_dir():
-        return path / usual_name
-    if path.exists() and not path.is_file():
-        raise InputError(f"--out {path}: not a file or folder; choose another --out")
+        return check_out_file(path / usual_name, allow=(usual_name,))
+    check_out_file(path, allow=(usual_name,))
     suffix = path.suffix.lower()
     if suffix and suffix in suffixes:
         if not path.parent.is_dir():
@@ -49,3 +48,46 @@ OUT_HELP = "an existing folder gets {name} inside; a name ending in {suffixes} i
 def out_help(usual_name: str, suffixes: tuple[str, ...], default: str) -> str:
     """The --out help text of a command, stating the rule."""
     return f"where to write (default {default}): " + OUT_HELP.format(name=usual_name, suffixes="/".join(suffixes))
+
+
+# what a session folder holds and no --out may replace (SPEC 7); the result set only by `lps estimate`
+SESSION_INPUTS = ("session.json", "captures.jsonl", "corners.vnl", "truth.jsonl", ".lock", "board.json", "intrinsics.json")
+SESSION_RESULTS = ("results.json", "positions.csv", "summary.csv")
+SESSION_FOLDERS = ("images", "results")
+
+
+def check_out_file(path: Path | str, allow: tuple[str, ...] = ()) -> Path:
+    """``path`` when it may be written as a file: a new name or an existing regular file that is no session's own.
+
+    Refused: a symbolic link, anything that is not a regular file (a device node: a rename over /dev/full as root
+    replaces the device; a FIFO blocks), and a session's inputs or results (``allow`` names the file the command
+    itself writes there, e.g. `lps estimate`'s results.json).
+    """
+    path = Path(path)
+    if path.is_symlink() or (path.exists() and not path.is_file()):
+        raise InputError(f"--out {path}: exists and is not a regular file; give a new file name or a regular file")
+    try:
+        where = path.parent.resolve() / path.name
+    except (OSError, RuntimeError):
+        return path  # the writer names the problem with the folder
+    for folder in (where.parent, where.parent.parent):
+        if not (folder / "session.json").is_file():
+            continue
+        rel = where.relative_to(folder).parts
+        own = rel[0] in SESSION_FOLDERS if len(rel) > 1 else rel[0] in SESSION_INPUTS + SESSION_RESULTS
+        if own and rel[-1] not in allow:
+            raise InputError(f"--out {path}: is a file of the session {folder}; writing it would destroy the session's "
+                             "data: choose a name outside the session's own files")
+    return path
+
+
+def check_out_folder(path: Path | str) -> Path:
+    """``path`` created as a folder (or an existing one); InputError for a file, a link to one or an unwritable place."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise InputError(f"--out {path}: exists and is not a folder; give a folder (new or existing)")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"--out {path}: cannot create this folder ({exc.strerror}); choose another --out") from None
+    return path

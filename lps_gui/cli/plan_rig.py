@@ -3,7 +3,12 @@ from __future__ import annotations
 
 import argparse
 
+from lps_gui.cli.option_types import positive_finite
+
 HELP = "check a rig before capturing: board in view over the whole plan, and the position sigma to expect"
+
+
+MAX_SIZE = 100_000  # px of an image; inner corners are held to 1000 by the board check
 
 
 def _numbers(text: str) -> tuple[float, ...]:
@@ -21,24 +26,26 @@ def _size(text: str) -> tuple[int, int]:
         w, h = (int(v) for v in text.lower().split("x"))
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT, got {text!r}") from None
+    if not (2 <= w <= MAX_SIZE and 2 <= h <= MAX_SIZE):  # checked before anything of that size is allocated
+        raise argparse.ArgumentTypeError(f"{text}: each of WIDTH and HEIGHT must be from 2 to {MAX_SIZE}")
     return w, h
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     cam = p.add_argument_group("camera (either --intrinsics or the lens and sensor)")
     cam.add_argument("--intrinsics", help="intrinsics.json or OpenCV YAML of the camera")
-    cam.add_argument("--focal-mm", type=float, help="lens focal length, mm")
-    cam.add_argument("--pixel-um", type=float, help="pixel pitch, um")
+    cam.add_argument("--focal-mm", type=positive_finite, help="lens focal length, mm")
+    cam.add_argument("--pixel-um", type=positive_finite, help="pixel pitch, um")
     cam.add_argument("--image", type=_size, help="image size WIDTHxHEIGHT, px")
     p.add_argument("--board", help="board.json; or give --inner-corners and --square-mm")
     p.add_argument("--inner-corners", type=_size, help="inner corners COLSxROWS")
-    p.add_argument("--square-mm", type=float, help="square size, mm")
+    p.add_argument("--square-mm", type=positive_finite, help="square size, mm")
     p.add_argument("--distance-mm", type=_numbers, required=True,
                    help="camera-to-board distance(s), mm; several (400,500,600) print one row each")
     p.add_argument("--start", type=_numbers, default=(0.0,), help="first target: X or X,Y (mm)")
     p.add_argument("--stop", type=_numbers, required=True, help="last target: X or X,Y (mm); X,Y plans a planar grid")
     p.add_argument("--step", type=_numbers, required=True, help="step: X or X,Y (mm)")
-    p.add_argument("--noise-px", type=float, default=0.1, help="corner noise to expect, px (default 0.1)")
+    p.add_argument("--noise-px", type=positive_finite, default=0.1, help="corner noise to expect, px (default 0.1)")
     p.add_argument("--json", action="store_true", help="print the predictions as JSON")
 
 
@@ -56,7 +63,6 @@ def _camera(args: argparse.Namespace):
 
 
 def _board(args: argparse.Namespace):
-    from lps_gui.core.board import Board
     from lps_gui.errors import InputError
 
     if args.board:
@@ -65,7 +71,10 @@ def _board(args: argparse.Namespace):
         return read_board(args.board)
     if args.inner_corners is None or args.square_mm is None:
         raise InputError("plan-rig: give --board board.json, or --inner-corners COLSxROWS and --square-mm")
-    return Board(cols=args.inner_corners[0], rows=args.inner_corners[1], square_mm=args.square_mm)
+    from lps_gui.io.board_file import board_from_dict
+
+    return board_from_dict({"type": "chessboard", "inner_corners": list(args.inner_corners), "square_mm": args.square_mm},
+                           "--inner-corners/--square-mm")  # the one limit of every board (before any allocation)
 
 
 def _plan(args: argparse.Namespace):

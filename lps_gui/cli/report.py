@@ -33,7 +33,15 @@ def run(args: argparse.Namespace) -> int:
     if not (folder / "results.json").exists() and not (folder / "session.json").exists():
         raise InputError(f"{folder}: not a session folder (no session.json or results.json); give the folder "
                          "`lps capture` or `lps simulate` made")
+    if (folder / "session.json").exists() or (folder / "session.json").is_symlink():
+        from lps_gui.io.image_file import check_regular_file
+
+        # session.json as every command reads it: a regular file inside, no link, no FIFO (the report reads it later)
+        check_regular_file(folder / "session.json", "session file", follow_symlinks=False)
     out = resolve_out(args.out, "report.pdf", folder, (".pdf",), "lps report")
+    from lps_gui.io.atomic import remove_orphan_temps
+
+    remove_orphan_temps(out.parent)  # a report killed mid-write left its temp file (only dead writers' are removed)
     results = load_results(folder)
     path = write_report(folder, results=results, out=out, progress=ProgressBar("report"))
     print(f"report: {path}")

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import argparse
 
+from lps_gui.cli.option_types import float_range, int_range, nonnegative_finite, nonnegative_int
+
 HELP = "simulate a session with known truth (rendered images, --points, or --intrinsics-set)"
 
 
@@ -23,18 +25,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--planar", action="store_true",
                    help="an XY gantry (SPEC 10): a grid over both axes; with --points (default preset paper-planar)")
     p.add_argument("--grid", help="planar grid X0,Y0:X1,Y1:DX,DY in mm (default the preset's 15 x 9 at 10 mm)")
-    p.add_argument("--squareness-urad", type=float, help="planar: the gantry's squareness error (default 150)")
+    p.add_argument("--squareness-urad", type=float_range(-1e5, 1e5), help="planar: the gantry's squareness error (default 150)")
     p.add_argument("--rig", help="rig description JSON (board, intrinsics, camera pose, stage errors, plan, noise, outliers)")
     p.add_argument("--write-rig", action="store_true", help="write the preset's rig description to OUT (a .json file) and stop")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--noise-px", type=float, help="corner noise sigma, px (points mode)")
-    p.add_argument("--views", type=int, default=20, help="views of an intrinsics set (default 20)")
+    p.add_argument("--seed", type=nonnegative_int, default=0)
+    p.add_argument("--noise-px", type=nonnegative_finite, help="corner noise sigma, px (points mode)")
+    p.add_argument("--views", type=int_range(3, 10000), default=20, help="views of an intrinsics set (default 20)")
     p.add_argument("--directions", choices=("+", "-", "both"), help="override the plan's directions")
-    p.add_argument("--runs", type=int, help="override the plan's number of runs")
-    p.add_argument("--stops", type=int, help="override the number of targets (same step)")
+    p.add_argument("--runs", type=int_range(1, 1000), help="override the plan's number of runs")
+    p.add_argument("--stops", type=int_range(2, 100000), help="override the number of targets (same step)")
     p.add_argument("--replaced", type=_int_list, default=(), help="capture indices whose image is swapped for another position's")
     p.add_argument("--bumped", type=_int_list, default=(), help="capture indices where the camera is knocked")
-    p.add_argument("--missing-fraction", type=float, default=0.0, help="fraction of corners dropped at random")
+    p.add_argument("--missing-fraction", type=float_range(0.0, 0.9), default=0.0, help="fraction of corners dropped at random")
 
 
 def build_spec(args: argparse.Namespace):

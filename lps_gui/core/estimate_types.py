@@ -32,7 +32,7 @@ class EstimateOptions:
     def __post_init__(self) -> None:
         if self.method not in METHODS:
             raise InputError(f"method {self.method!r} is unknown; choose one of {', '.join(METHODS)}")
-        if self.outlier_k <= 0:
+        if not (0 < self.outlier_k < float("inf")):  # NaN too: it would turn outlier detection off
             raise InputError("outlier_k must be positive (robust sigmas, default 5)")
 
     def to_dict(self) -> dict[str, Any]:

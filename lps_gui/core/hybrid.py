@@ -23,7 +23,10 @@ from lps_gui.core.camera_model import CameraIntrinsics, project_parts
 from lps_gui.core.joint_lm import LmOptions, LmResult, LpsState, linearize, solve_joint
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.core.rotation import chordal_mean
-from lps_gui.errors import DegenerateGeometryError
+from lps_gui.errors import DegenerateGeometryError, InputError
+
+MAX_WINDOW_MM = 1000.0  # +-1 m around each position: more than any stage's error
+MAX_GRID_SPAN = 1e9  # window / resolution: the coarse-to-fine levels stay a few dozen
 
 
 @dataclass
@@ -37,6 +40,22 @@ class HybridOptions:
     max_rounds: int = 30
     relative_improvement: float = 1e-9
     adaptive_window: bool = True  # later rounds search +-4x the previous round's largest move (>= 10 steps)
+
+    def __post_init__(self) -> None:
+        """A zero or NaN window echoes the targets as measurements; a huge one (or a tiny spacing) runs for ever."""
+        w, r, t = self.window_mm, self.resolution_mm, self.threshold_rms_px
+        if not (np.isfinite(w) and 0 < w <= MAX_WINDOW_MM):
+            raise InputError(f"hybrid: grid-window-mm {w} must be over 0 and at most {MAX_WINDOW_MM:g} mm (default 0.5)")
+        if not (np.isfinite(r) and 0 < r <= w):
+            raise InputError(f"hybrid: grid-resolution-mm {r} must be over 0 and at most the window {w:g} mm "
+                             "(default 0.0001)")
+        if w / r > MAX_GRID_SPAN:
+            raise InputError(f"hybrid: the grid of +-{w:g} mm at {r:g} mm spacing has {2 * w / r:.3g} points (at most "
+                             f"{2 * MAX_GRID_SPAN:g}); widen --grid-resolution-mm or narrow --grid-window-mm")
+        if not (isinstance(self.grid_points, int) and 3 <= self.grid_points <= 10_000):
+            raise InputError(f"hybrid: grid_points {self.grid_points} must be a whole number from 3 to 10000")
+        if t is not None and not (np.isfinite(t) and t > 0):
+            raise InputError(f"hybrid: threshold-px {t} must be a positive number (or none: until no improvement)")
 
 
 @dataclass

@@ -9,6 +9,7 @@ checks the pixel count from the header first and refuses an image over
 from __future__ import annotations
 
 import struct
+from typing import Callable
 
 from lps_gui.errors import InputError
 
@@ -49,17 +50,38 @@ def _jpeg(head: bytes) -> tuple[int, int] | None:
     return None
 
 
-def _tiff(head: bytes) -> tuple[int, int] | None:
+ReadAt = Callable[[int, int], bytes]  # (offset, size) -> the bytes of the file there (fewer at its end)
+
+
+class _Unreachable(Exception):
+    """The TIFF's image directory lies beyond the bytes given and no ``read_at`` can fetch it."""
+
+
+def _tiff(head: bytes, read_at: ReadAt | None = None) -> tuple[int, int] | None:
+    """Width and height from the first image directory (IFD), wherever in the file it is.
+
+    OpenCV writes the IFD after the image data, so for anything but a tiny image it is not in the first
+    64 KB: ``read_at`` fetches it (the caller has the file or its bytes); without one the TIFF is unreachable.
+    """
     if head[:4] not in (b"II*\x00", b"MM\x00*"):
         return None
     e = "<" if head[:2] == b"II" else ">"
+
+    def get(offset: int, size: int) -> bytes:
+        if offset + size <= len(head):
+            return head[offset : offset + size]
+        if read_at is None:
+            raise _Unreachable
+        return read_at(offset, size)
+
     try:
         off = struct.unpack(e + "I", head[4:8])[0]
-        n = struct.unpack(e + "H", head[off : off + 2])[0]
+        n = struct.unpack(e + "H", get(off, 2))[0]
+        table = get(off + 2, 12 * n)
         dims: dict[int, int] = {}
         for k in range(n):
-            tag, typ, _count = struct.unpack(e + "HHI", head[off + 2 + 12 * k : off + 10 + 12 * k])
-            raw = head[off + 10 + 12 * k : off + 14 + 12 * k]
+            tag, typ, _count = struct.unpack(e + "HHI", table[12 * k : 12 * k + 8])
+            raw = table[12 * k + 8 : 12 * k + 12]
             if tag in (256, 257):
                 dims[tag] = struct.unpack(e + "H", raw[:2])[0] if typ == 3 else struct.unpack(e + "I", raw)[0]
         return (dims[256], dims[257]) if len(dims) == 2 else None
@@ -82,18 +104,30 @@ def _pnm(head: bytes) -> tuple[int, int] | None:
     return None
 
 
-def image_size_from_header(head: bytes) -> tuple[int, int] | None:
-    """(width, height) from the first bytes of a PNG, JPEG, BMP, TIFF or PGM/PPM file; None if unknown."""
-    for parse in (_png, _jpeg, _bmp, _tiff, _pnm):
+def image_size_from_header(head: bytes, read_at: ReadAt | None = None) -> tuple[int, int] | None:
+    """(width, height) from the first bytes of a PNG, JPEG, BMP, TIFF or PGM/PPM file; None if unknown.
+
+    ``read_at`` reads further into the file for a TIFF whose directory is not in ``head``.
+    """
+    for parse in (_png, _jpeg, _bmp, _pnm):
         size = parse(head)
         if size is not None:
             return int(size[0]), int(size[1])
-    return None
+    size = _tiff(head, read_at)
+    return None if size is None else (int(size[0]), int(size[1]))
 
 
-def check_image_header(head: bytes, name: str, max_pixels: int = MAX_IMAGE_PIXELS) -> tuple[int, int] | None:
-    """Refuse an image whose header declares more than ``max_pixels`` (or no pixels) before it is decoded."""
-    size = image_size_from_header(head)
+def check_image_header(head: bytes, name: str, max_pixels: int = MAX_IMAGE_PIXELS, read_at: ReadAt | None = None
+                       ) -> tuple[int, int] | None:
+    """Refuse an image whose header declares more than ``max_pixels`` (or no pixels) before it is decoded.
+
+    A TIFF whose directory cannot be reached (beyond ``head``, no ``read_at``) is refused: its size is unknown.
+    """
+    try:
+        size = image_size_from_header(head, read_at)
+    except _Unreachable:
+        raise InputError(f"{name}: a TIFF whose image directory is past its first {len(head)} bytes, so its size "
+                         "cannot be checked before decoding; convert it to PNG") from None
     if size is None:
         return None
     w, h = size
@@ -103,3 +137,8 @@ def check_image_header(head: bytes, name: str, max_pixels: int = MAX_IMAGE_PIXEL
         raise InputError(f"{name}: image is {w}x{h} ({w * h / 1e6:.0f} Mpx), over the {max_pixels / 1e6:.0f} Mpx "
                          "limit; use the camera's own images (downscale larger ones)")
     return size
+
+
+def bytes_reader(data: bytes) -> ReadAt:
+    """``read_at`` over bytes already in memory."""
+    return lambda offset, size: data[offset : offset + size]

@@ -26,6 +26,7 @@ from lps_gui.camera import controls
 from lps_gui.camera.base import Camera
 from lps_gui.camera.frame_watch import FrameWatch
 from lps_gui.core.board import Board
+from lps_gui.gui.fit import guard_wheel
 from lps_gui.gui.preview import PreviewGrabber
 from lps_gui.gui.sources import CAMERA_FOLLOWS_STAGE, camera_choices, open_camera_source
 
@@ -48,6 +49,7 @@ class CameraPanel(QWidget):
         self.board = board
         self.camera: Camera | None = None
         self.sim_camera: Camera | None = None
+        self.sim_expected = True  # the simulated stage is the default stage source: its camera is the default here
         self.grabber: PreviewGrabber | None = None
         self._shown = 0
         self.watch = FrameWatch()
@@ -57,6 +59,8 @@ class CameraPanel(QWidget):
         self.control_widgets: dict[str, tuple[QDoubleSpinBox, QCheckBox | None]] = {}
 
         self.source = QComboBox()
+        self.source.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+        self.source.setMinimumContentsLength(12)  # a long label elides; the dock keeps its width
         self.open_btn = QPushButton("Start preview")
         top = QHBoxLayout()
         top.addWidget(QLabel("Source"))
@@ -72,7 +76,8 @@ class CameraPanel(QWidget):
         self.viewbox.addItem(self.overlay)
         self.first_corner = pg.ScatterPlotItem(size=12, pen=pg.mkPen("#ff3030", width=2), brush=None, symbol="s")
         self.viewbox.addItem(self.first_corner)
-        self.placeholder = pg.TextItem("no camera — choose a source and start the preview", color="#bbbbbb", anchor=(0.5, 0.5))
+        self.placeholder = pg.TextItem("no camera\nchoose a source,\nthen start the preview", color="#bbbbbb",
+                                       anchor=(0.5, 0.5))  # short lines: a narrow dock does not clip them
         self.viewbox.addItem(self.placeholder)
         self.placeholder.setPos(320, 240)
         self.viewbox.setRange(xRange=(0, 640), yRange=(0, 480))
@@ -134,11 +139,19 @@ class CameraPanel(QWidget):
         self.sim_camera = camera
         current = self.source.currentData()
         self.source.clear()
-        for label, spec in camera_choices(camera is not None):
+        for label, spec in camera_choices(camera is not None or self.sim_expected):
             self.source.addItem(label, spec)
-        # the camera riding the simulated stage is the natural choice as soon as it exists
-        i = self.source.findData(CAMERA_FOLLOWS_STAGE if camera is not None else current)
+        # the camera riding the simulated stage is the natural choice as soon as it exists (or is expected)
+        i = self.source.findData(CAMERA_FOLLOWS_STAGE if camera is not None or current is None else current)
         self.source.setCurrentIndex(max(i, 0))
+
+    def expect_sim_camera(self, on: bool) -> None:
+        """The stage source is (or is no longer) the simulated rig: offer its camera before it connects."""
+        if on != self.sim_expected:
+            self.sim_expected = on
+            self.set_sim_camera(self.sim_camera)
+            if on and self.grabber is None:
+                self.source.setCurrentIndex(max(self.source.findData(CAMERA_FOLLOWS_STAGE), 0))
 
     def toggle(self) -> None:
         if self.grabber is not None:
@@ -156,6 +169,10 @@ class CameraPanel(QWidget):
         if self.grabber is not None:
             return False
         spec = self.source.currentData()
+        if spec == CAMERA_FOLLOWS_STAGE and self.sim_camera is None:
+            self.failed.emit("Camera not opened", "simulated camera: it rides the simulated stage; connect that first "
+                                                  "(Stage: Connect)")
+            return False
         sim = self.sim_camera if spec == CAMERA_FOLLOWS_STAGE else None
         source = sim if sim is not None else (lambda: open_camera_source(str(spec)))
         self._shown = 0
@@ -205,6 +222,7 @@ class CameraPanel(QWidget):
             if auto is not None:
                 self.controls_grid.addWidget(auto, row, 2)
             self.control_widgets[name] = (spin, auto)
+        guard_wheel(self.controls_box)  # built per camera: after the window guarded its own fields
         self.lock_controls(self._locked)
 
     def _set_control(self, name: str, value: float) -> None:
@@ -290,6 +308,9 @@ class CameraPanel(QWidget):
         self.overlay.setData([], [])
         self.first_corner.setData([], [])
         self.placeholder.setVisible(True)
+        self.sharpness_bar.setValue(0)  # nor the figures of that frame
+        self.sharpness_label.setText("sharpness —")
+        self.fps_label.setText("— fps")
         self._set_detect("camera lost" if opened else "not opened", "#d00000")
         self.failed.emit("Camera preview stopped" if opened else "Camera not opened", message)
 

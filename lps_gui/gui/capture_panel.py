@@ -88,7 +88,7 @@ class CapturePanel(QWidget):
         self.stop_mm = double_spin(-10000, 10000, 58.0, 3, " mm")
         self.step_mm = double_spin(0.001, 10000, 2.0, 3, " mm")
         self.directions = QComboBox()
-        for label, key in (("forward ↑", "+"), ("backward ↓", "-"), ("both (ISO 230-2)", "both")):
+        for label, key in (("both (ISO 230-2)", "both"), ("forward ↑", "+"), ("backward ↓", "-")):
             self.directions.addItem(label, key)
         self.runs = QSpinBox()
         self.runs.setRange(1, 100)
@@ -113,11 +113,11 @@ class CapturePanel(QWidget):
         self.frame_s = DEFAULT_FRAME_S
         self._frames_at_start = 0
         form = QFormLayout(plan_box)
+        form.addRow("Preset", iso_row)  # first: the plan a standard calibration needs
         add_rows(form, [
             ("Start", self.start_mm), ("Stop", self.stop_mm), ("Step", self.step_mm),
             ("Directions", self.directions), ("Runs", self.runs), ("Overshoot", self.overshoot_mm),
             ("Settle", self.settle_s), ("Frames per stop", self.frames_per_stop), ("Feed", self.feed_mm_min)])
-        form.addRow("Preset", iso_row)
         form.addRow("", self.summary)
         from lps_gui.gui.report_setup import ReportSetupBox
 
@@ -149,6 +149,7 @@ class CapturePanel(QWidget):
             row.addWidget(b)
         self.progress = QProgressBar()
         self.eta = QLabel("idle")
+        self.eta.setWordWrap(True)  # a long error wraps; it does not widen the dock
 
         stack(self, [plan_box, (self.planar_editor, 1), self.report_setup, sess, row, self.progress, self.eta]).addStretch(1)
 
@@ -166,6 +167,7 @@ class CapturePanel(QWidget):
         self.abort_btn.clicked.connect(self.abort)
         self.resume_session_btn.clicked.connect(self.resume_session_dialog)
         self._set_running(False)
+        self.apply_iso_plan()  # the default plan: ISO 230-2's 5 bidirectional runs (a saved plan replaces it)
         self.update_summary()
 
     # ------------------------------------------------------------------ plan
@@ -344,7 +346,7 @@ class CapturePanel(QWidget):
         job.progress.connect(self._on_progress)
         job.succeeded.connect(self._on_summary)
         job.cancelled.connect(lambda msg: self.eta.setText(msg))
-        job.failed.connect(lambda msg, _tb: self.eta.setText(f"stopped: {msg}; captured frames are kept"))
+        job.failed.connect(lambda msg, _tb: self.eta.setText(f"stopped: {msg}" + self._kept()))
         job.finished.connect(self._on_finished)
         self.job = job
         self._t0 = time.monotonic()
@@ -379,6 +381,10 @@ class CapturePanel(QWidget):
         log.info("capture: %.3f s per frame measured; used for the next estimate", self.frame_s)
         self.update_summary()
 
+    def set_folder(self, folder: Path) -> None:
+        """The folder the next capture writes (empty: a new dated folder)."""
+        self.folder.set_text(str(folder))
+
     def set_board(self, board: Board) -> None:
         """Hook for the main window: the board the simulated rig really has."""
         self.board_changed.emit(board)
@@ -407,7 +413,11 @@ class CapturePanel(QWidget):
         """The stage vanished: stop the capture; what is on disk stays."""
         if self.job is not None:
             self.abort()
-            self.eta.setText(f"stage lost: {message}; captured frames are kept, resume later")
+            self.eta.setText(f"stage lost: {message}" + (self._kept() + ", resume later" if self.progress.value() > 0 else ""))
+
+    def _kept(self) -> str:
+        """What a stopped capture leaves: said only when frames were captured."""
+        return "; the captured frames are kept" if self.progress.value() > 0 else "; no frame was captured"
 
     def _on_progress(self, done: int, total: int, message: str) -> None:
         self.progress.setMaximum(max(total, 1))
@@ -418,6 +428,8 @@ class CapturePanel(QWidget):
                          + (f" — {message}" if message else ""))
 
     def _on_finished(self) -> None:
+        if self.job is not None and self.job.error is not None:
+            self.progress.reset()  # a failed or aborted run leaves no half-full bar behind
         self.job = None
         self.engine = None
         self.camera_panel.pause(False)

@@ -9,7 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from PySide6.QtCore import Signal
+from PySide6.QtCore import QSettings, Signal
 from PySide6.QtWidgets import (
     QCheckBox, QComboBox, QFormLayout, QGroupBox, QHBoxLayout, QLabel, QProgressBar, QPushButton,
     QWidget,
@@ -135,6 +135,7 @@ class EstimationPanel(QWidget):
         self.progress = QProgressBar()
         self.progress.setFormat("%p%")
         self.message = QLabel("idle")
+        self.message.setWordWrap(True)  # a long error wraps; it does not widen the dock
         row = QHBoxLayout()
         row.addWidget(self.run_btn)
         row.addWidget(self.cancel_btn)
@@ -149,6 +150,22 @@ class EstimationPanel(QWidget):
         self.run_btn.clicked.connect(self.start)
         self.cancel_btn.clicked.connect(self.cancel)
         self._method_changed()
+
+    def set_session(self, folder: Path | str) -> None:
+        """The session the next estimation runs on."""
+        self.session.set_text(str(folder))
+
+    def set_intrinsics_file(self, path: Path | str) -> None:
+        self.intrinsics.set_text(str(path))
+
+    def save(self, s: QSettings) -> None:
+        s.setValue("estimation/method", self.method.currentData())
+
+    def restore(self, s: QSettings) -> None:
+        method = s.value("estimation/method")
+        i = self.method.findData(str(method)) if method else -1
+        if i >= 0:
+            self.method.setCurrentIndex(i)
 
     def _method_changed(self) -> None:
         hybrid = self.method.currentData() == "hybrid"
@@ -218,6 +235,8 @@ class EstimationPanel(QWidget):
         self.table.set_rows(parameter_rows(results))
 
     def _on_finished(self) -> None:
+        if self.job is not None and self.job.error is not None:
+            self.progress.reset()
         self.run_btn.setEnabled(True)
         self.cancel_btn.setEnabled(False)
         self.job = None

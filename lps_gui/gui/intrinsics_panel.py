@@ -55,6 +55,7 @@ class PictureView(QLabel):
 
     def __init__(self, placeholder: str) -> None:
         super().__init__(placeholder)
+        self.placeholder = placeholder
         self.setAlignment(Qt.AlignmentFlag.AlignCenter)
         self.setMinimumSize(200, 140)
         self.image: QImage | None = None
@@ -62,6 +63,12 @@ class PictureView(QLabel):
     def set_image(self, image: QImage | None) -> None:
         self.image = image
         self._rescale()
+
+    def reset(self) -> None:
+        """Back to the placeholder text: no picture of an earlier calibration stays."""
+        self.image = None
+        self.setPixmap(QPixmap())
+        self.setText(self.placeholder)
 
     def resizeEvent(self, event: Any) -> None:  # noqa: N802 (Qt's name)
         super().resizeEvent(event)
@@ -126,9 +133,11 @@ class IntrinsicsPanel(QWidget):
         row1 = QHBoxLayout()
         for b in (self.add_btn, self.folder_btn, self.clear_btn):
             row1.addWidget(b)
-        row2 = QHBoxLayout()
-        for b in (self.calib_btn, self.crossval_btn, self.cancel_btn, self.load_btn, self.save_btn):
+        row2 = QHBoxLayout()  # two rows of buttons: the panel fits a 440 px dock
+        for b in (self.calib_btn, self.crossval_btn, self.cancel_btn):
             row2.addWidget(b)
+        for b in (self.load_btn, self.save_btn):
+            row1.addWidget(b)
         self.message = QLabel("Add 6–30 images of the board in varied poses, then calibrate.")
         self.message.setWordWrap(True)
 
@@ -217,13 +226,24 @@ class IntrinsicsPanel(QWidget):
         job = Job("intrinsics calibration", calibrate, list(self.paths), self.board())
         job.progress.connect(lambda d, t, m: self.message.setText(f"{m} ({d}/{t})" if m else f"{d}/{t}"))
         job.succeeded.connect(self.show_calibration)
-        job.failed.connect(lambda msg, _tb: self.message.setText(f"failed: {msg}"))
+        job.failed.connect(lambda msg, _tb: self.calibration_failed(f"failed: {msg}"))
         job.cancelled.connect(self.message.setText)
         job.finished.connect(self._finished)
         self.job = job
         self.calib_btn.setEnabled(False)
         self.cancel_btn.setEnabled(True)
         self.run_requested.emit(job)
+
+    def calibration_failed(self, message: str) -> None:
+        """A failed run leaves no parameters of an earlier one on screen, and nothing to save."""
+        self.calibration = None
+        self.intrinsics = None
+        self.table.set_rows([])
+        self.save_btn.setEnabled(False)
+        self.crossval_btn.setEnabled(False)
+        for picture in self.pictures.values():
+            picture.reset()
+        self.message.setText(message)
 
     def _finished(self) -> None:
         self.job = None

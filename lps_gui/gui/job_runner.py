@@ -40,7 +40,7 @@ class JobRunner(QObject):
         """Start ``job`` in its thread with status-bar progress, cancel and error reporting."""
         self.jobs.append(job)
         job.progress.connect(self._on_progress)
-        job.failed.connect(lambda msg, tb, name=job.name: self._on_failed(name, msg, tb))
+        job.failed.connect(lambda msg, tb, j=job: self._on_failed(j.name, msg, tb, j.expected_error))
         job.cancelled.connect(lambda msg, name=job.name: log.info("%s: %s", name, msg))
         if on_success is not None:
             job.succeeded.connect(on_success)
@@ -58,8 +58,13 @@ class JobRunner(QObject):
         if message:
             self.label.setText(message[:60])
 
-    def _on_failed(self, name: str, message: str, tb: str) -> None:
-        log.error("%s failed: %s\n%s", name, message, tb.rstrip())
+    def _on_failed(self, name: str, message: str, tb: str, expected: bool = True) -> None:
+        """The box shows the cause; the log gets it too, with the traceback only for a bug."""
+        if expected:
+            log.debug("%s failed:\n%s", name, tb.rstrip())
+        else:
+            log.error("%s failed with a program error (please report it):\n%s", name, tb.rstrip())
+        self.progress.reset()
         self.show_error(f"{name.split(' ')[0].capitalize()} failed", message)
 
     def _on_finished(self, job: Job) -> None:

@@ -63,6 +63,9 @@ class LogPanel(QWidget):
         (logger or logging.getLogger("lps_gui")).removeHandler(self.handler)
 
     def append(self, text: str, level: int = logging.INFO) -> None:
+        """Add a line; the view follows the newest line unless the reader scrolled up to read an older one."""
+        bar = self.view.verticalScrollBar()
+        following = bar.value() >= bar.maximum() - 2
         if level >= logging.ERROR:
             text = f"<span style='color:#b00020'>{_escape(text)}</span>"
             self.view.appendHtml(text)
@@ -70,6 +73,8 @@ class LogPanel(QWidget):
             self.view.appendHtml(f"<span style='color:#a15c00'>{_escape(text)}</span>")
         else:
             self.view.appendPlainText(text)
+        if following:
+            bar.setValue(bar.maximum())
 
     def text(self) -> str:
         return self.view.toPlainText()

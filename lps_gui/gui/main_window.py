@@ -23,11 +23,13 @@ from lps_gui.core.clock import Clock
 from lps_gui.gui.camera_panel import CameraPanel
 from lps_gui.gui.capture_panel import CapturePanel
 from lps_gui.gui.estimation_panel import EstimationPanel
+from lps_gui.gui.fit import clamp_to_screen, guard_wheel, scrolled
 from lps_gui.gui.intrinsics_panel import IntrinsicsPanel
 from lps_gui.gui.job_runner import JobRunner
 from lps_gui.gui.log_panel import LogPanel
 from lps_gui.gui.results_panel import ResultsPanel
 from lps_gui.gui.services import preload_backends
+from lps_gui.gui.sources import SIM
 from lps_gui.gui.stage_controller import StageController
 from lps_gui.gui.stage_panel import StagePanel
 from lps_gui.gui.workers import Job, one_line, stop_all_jobs
@@ -38,6 +40,7 @@ log = logging.getLogger("lps_gui.gui")
 ORGANIZATION = "lps-calib"
 APPLICATION = "lps-gui"
 LAYOUT_VERSION = 1
+SCROLLED = ("stage", "camera", "intrinsics", "capture", "estimation")  # they grow; the window must not
 
 
 class MainWindow(QMainWindow):
@@ -73,7 +76,7 @@ class MainWindow(QMainWindow):
         ):
             dock = QDockWidget(title, self)
             dock.setObjectName(f"dock_{name}")
-            dock.setWidget(widget)
+            dock.setWidget(scrolled(widget) if name in SCROLLED else widget)
             self.docks[name] = dock
         self.default_layout()
 
@@ -89,11 +92,17 @@ class MainWindow(QMainWindow):
         self._build_menus()
         self._wire()
         self.restore_settings()
+        guard_wheel(self)
         preload_backends()
         log.info("lps-gui %s ready", __version__)
 
     # ------------------------------------------------------------------ layout
     def default_layout(self) -> None:
+        """View > Reset layout: the docks as at first start, the window within the screen."""
+        self.arrange_docks()
+        clamp_to_screen(self)
+
+    def arrange_docks(self) -> None:
         """Left: stage / capture / estimation / intrinsics tabs; right: results beside camera and log."""
         d = self.docks
         for dock in d.values():
@@ -106,7 +115,7 @@ class MainWindow(QMainWindow):
         self.splitDockWidget(d["results"], d["camera"], Qt.Orientation.Horizontal)
         self.splitDockWidget(d["camera"], d["log"], Qt.Orientation.Vertical)
         d["stage"].raise_()
-        self.resizeDocks([d["stage"], d["results"], d["camera"]], [420, 840, 340], Qt.Orientation.Horizontal)
+        self.resizeDocks([d["stage"], d["results"], d["camera"]], [430, 860, 310], Qt.Orientation.Horizontal)
         self.resizeDocks([d["camera"], d["log"]], [600, 250], Qt.Orientation.Vertical)
 
     def show_panel(self, name: str) -> None:
@@ -169,7 +178,8 @@ class MainWindow(QMainWindow):
         for panel in (self.estimation_panel, self.capture_panel, self.intrinsics_panel):
             panel.run_requested.connect(self._panel_job)
         self.estimation_panel.results_ready.connect(self._on_results)
-        self.intrinsics_panel.saved.connect(lambda p: self.estimation_panel.intrinsics.set_text(str(p)))
+        self.intrinsics_panel.saved.connect(self.estimation_panel.set_intrinsics_file)
+        self.stage_panel.source_changed.connect(lambda src: self.camera_panel.expect_sim_camera(src == SIM))
         self.capture_panel.session_done.connect(self._on_capture_done)
         self.capture_panel.failed.connect(self.show_error)
         self.capture_panel.board_changed.connect(self.intrinsics_panel.set_board)
@@ -184,8 +194,7 @@ class MainWindow(QMainWindow):
     def _on_connection(self, connected: bool, description: str) -> None:
         if connected:
             self.status_conn.setText(f"Stage: {description}")
-            self.settings.setValue("stage/source", self.stage_panel.current_source())
-            self.settings.setValue("stage/baud", self.stage_panel.baud.currentData())
+            self.stage_panel.remember(self.settings)
         else:
             self.status_conn.setText("Stage: not connected")
             self.status_state.setText("—")
@@ -249,7 +258,7 @@ class MainWindow(QMainWindow):
             self.remember_folder(session_dir)
 
     def _on_capture_done(self, session_dir: Path) -> None:
-        self.estimation_panel.session.set_text(str(session_dir))
+        self.estimation_panel.set_session(session_dir)
         self.remember_folder(session_dir)
 
     def open_session_dialog(self) -> None:
@@ -260,7 +269,7 @@ class MainWindow(QMainWindow):
     def open_session(self, folder: Path) -> bool:
         """Select ``folder`` for estimation and show its results.json if it has one."""
         folder = Path(folder)
-        self.estimation_panel.session.set_text(str(folder))
+        self.estimation_panel.set_session(folder)
         self.remember_folder(folder)
         results_path = folder / "results.json"
         if not results_path.exists():
@@ -333,29 +342,20 @@ class MainWindow(QMainWindow):
             self.restoreGeometry(geometry)
         else:
             self.resize(1600, 1000)
+        clamp_to_screen(self)  # a geometry saved on a bigger screen, or the default on a small one
         state = s.value("window/state")
         if state is not None:
             self.restoreState(state, LAYOUT_VERSION)
-        source = s.value("stage/source")
-        if source:
-            self.stage_panel.select_source(str(source))  # the simulated stage is the default otherwise
-        baud = s.value("stage/baud")
-        if baud is not None:
-            i = self.stage_panel.baud.findData(int(baud))
-            if i >= 0:
-                self.stage_panel.baud.setCurrentIndex(i)
+        self.stage_panel.restore(s)
+        self.camera_panel.expect_sim_camera(self.stage_panel.current_source() == SIM)
         self.capture_panel.restore(s)
-        method = s.value("estimation/method")
-        if method:
-            i = self.estimation_panel.method.findData(str(method))
-            if i >= 0:
-                self.estimation_panel.method.setCurrentIndex(i)
+        self.estimation_panel.restore(s)
 
     def save_settings(self) -> None:
         s = self.settings
         s.setValue("window/geometry", self.saveGeometry())
         s.setValue("window/state", self.saveState(LAYOUT_VERSION))
-        s.setValue("estimation/method", self.estimation_panel.method.currentData())
+        self.estimation_panel.save(s)
         self.capture_panel.save(s)
         s.sync()
 

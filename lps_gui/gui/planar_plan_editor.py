@@ -119,12 +119,7 @@ class PlanarPlanEditor(QGroupBox):
         top.addWidget(self.demo_btn)
         outer.addLayout(top)
         self.body = QWidget()
-        self.scroll = QScrollArea()  # hidden until planar mode is on; scrolls so the window keeps its size
-        self.scroll.setWidgetResizable(True)
-        self.scroll.setFrameShape(QFrame.Shape.NoFrame)
-        self.scroll.setWidget(self.body)
-        self.scroll.setMinimumHeight(160)
-        outer.addWidget(self.scroll, 1)
+        outer.addWidget(self.body, 1)  # hidden until planar mode is on; the Capture dock scrolls, not a box of its own
         form = QFormLayout(self.body)
         form.setContentsMargins(0, 0, 0, 0)
         add_rows(form, [("Start", pair(self.start_x, self.start_y)),
@@ -134,8 +129,6 @@ class PlanarPlanEditor(QGroupBox):
                         ("Rig prediction", self.prediction)])
         form.addRow(self.plot)
         form.addRow(self.order_note)
-        self.scroll.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
-        self.scroll.setMinimumWidth(self.body.minimumSizeHint().width() + 20)  # scroll down, never sideways
 
         self._timer = QTimer(self)
         self._timer.setSingleShot(True)
@@ -250,7 +243,7 @@ class PlanarPlanEditor(QGroupBox):
         self.changed.emit()
 
     def _sync_enabled(self) -> None:
-        self.scroll.setVisible(self.active())
+        self.body.setVisible(self.active())
         grow = QSizePolicy.Policy.Expanding if self.active() else QSizePolicy.Policy.Maximum
         self.setSizePolicy(QSizePolicy.Policy.Preferred, grow)
         self.distance_mm.setEnabled(not self.gantry_preset())

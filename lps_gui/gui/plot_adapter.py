@@ -5,6 +5,7 @@ screen and the report cannot disagree; this module only maps styles.
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -17,6 +18,43 @@ from lps_gui.report.figures import OUTLIER_COLOR, FigureSpec, Series
 BAND_ALPHA = 50  # of 255: a 2-sigma band reads as a tint behind the curve
 MARKER_SIZE_PX = 6
 LEGEND_ROW = 4  # PlotItem layout rows: 0 title, 1 top axis, 2 view, 3 bottom axis; the legend goes under
+COMPACT_LEGEND_AT = 7  # series: from here the legend names each colour once and each line style once
+STYLE_GREY = "#555555"
+
+
+class ReadableAxis(pg.AxisItem):
+    """An axis whose log-scale ticks read as plain numbers (2, 5, 10, 20 mm), not "2·10¹"."""
+
+    def logTickStrings(self, values, scale, spacing):  # noqa: N802 (pyqtgraph's name)
+        out = []
+        for v in 10.0 ** (np.asarray(values, float)) * scale:
+            mantissa = v / 10.0 ** np.floor(np.log10(v)) if v > 0 else 0.0
+            out.append(f"{v:.4g}" if round(mantissa, 6) in (1.0, 2.0, 5.0) else "")  # 1-2-5: no crowding
+        return out
+
+
+def component_name(label: str) -> str:
+    """"roll forward ↑" / "truth roll" -> "roll": what a colour stands for in a compact legend."""
+    return re.sub(r"\s*\b(forward|backward)\b\s*[\u2191\u2193]?", "", label.replace("truth ", "")).strip()
+
+
+def compact_legend(legend: pg.LegendItem, fig: FigureSpec) -> None:
+    """One entry per colour (the component) and one per line style (direction, truth): 12 entries become 7."""
+    seen: dict[str, str] = {}
+    for s in fig.series:
+        seen.setdefault(s.color, component_name(s.label))
+    for color, name in seen.items():
+        legend.addItem(pg.PlotDataItem([0, 1], [0, 0], pen=pg.mkPen(color, width=4)), name)
+    styles = [("line" in s.style and not s.dashed, "markers" in s.style and "line" not in s.style, s.dashed)
+              for s in fig.series]
+    if any(st[0] for st in styles):
+        legend.addItem(pg.PlotDataItem([0, 1], [0, 0], pen=pg.mkPen(STYLE_GREY, width=2)), "forward \u2191 (line, \u00b12\u03c3 band)")
+    if any(st[1] for st in styles):
+        legend.addItem(pg.PlotDataItem([0], [0], pen=None, symbol="o", symbolSize=MARKER_SIZE_PX,
+                                       symbolBrush=pg.mkBrush(STYLE_GREY), symbolPen=None), "backward \u2193")
+    if any(st[2] for st in styles):
+        legend.addItem(pg.PlotDataItem([0, 1], [0, 0], pen=pg.mkPen(STYLE_GREY, width=2, style=Qt.PenStyle.DashLine)),
+                       "truth")
 
 
 @dataclass
@@ -44,8 +82,8 @@ def _rgba(color: str, alpha: int) -> tuple[int, int, int, int]:
     return (c.red(), c.green(), c.blue(), alpha)
 
 
-def draw_series(plot: pg.PlotItem, s: Series, drawn: DrawnFigure) -> None:
-    """Add one series (band first, then curve, then outlier crosses) to ``plot``."""
+def draw_series(plot: pg.PlotItem, s: Series, drawn: DrawnFigure, named: bool = True) -> None:
+    """Add one series (band first, then curve, then outlier crosses) to ``plot``; ``named``: in the legend."""
     raw, s = s, s.finite()
     gaps = raw is not s and raw.style == "line" and raw.band_low is None  # a NaN breaks a plain line (two limits)
     keep = ~np.asarray(s.marked, bool) if s.marked is not None else np.ones(s.y.shape, bool)
@@ -62,7 +100,7 @@ def draw_series(plot: pg.PlotItem, s: Series, drawn: DrawnFigure) -> None:
     pen = None
     if "line" in s.style:
         pen = pg.mkPen(s.color, width=2, style=Qt.PenStyle.DashLine if s.dashed else Qt.PenStyle.SolidLine)
-    kwargs: dict = {"pen": pen, "name": s.label}
+    kwargs: dict = {"pen": pen, "name": s.label if named else None}
     if "markers" in s.style:
         kwargs.update(symbol="o", symbolSize=MARKER_SIZE_PX, symbolBrush=pg.mkBrush(s.color), symbolPen=None)
     item = pg.PlotDataItem(raw.x, raw.y, connect="finite", **kwargs) if gaps else pg.PlotDataItem(s.x, s.y, **kwargs)
@@ -84,6 +122,7 @@ def figure_steps(plot: pg.PlotItem, fig: FigureSpec) -> tuple[DrawnFigure, list[
     event-loop turns and the window never freezes while results come up.
     """
     drawn = DrawnFigure(fig)
+    compact = len(fig.series) >= COMPACT_LEGEND_AT
 
     def setup() -> None:
         plot.disableAutoRange()  # no range update per added item
@@ -95,7 +134,7 @@ def figure_steps(plot: pg.PlotItem, fig: FigureSpec) -> tuple[DrawnFigure, list[
             plot.legend = pg.LegendItem(labelTextSize="8pt", labelTextColor="#202020",
                                         brush=pg.mkBrush(255, 255, 255, 0), pen=pg.mkPen(None))
             plot.layout.addItem(plot.legend, LEGEND_ROW, 1)
-        plot.legend.setColumnCount(3 if len(fig.series) > 4 else 2)
+        plot.legend.setColumnCount(4 if compact else (3 if len(fig.series) > 4 else 2))
         plot.setTitle(fig.title, color="#202020", size="11pt")
         plot.setLabel("bottom", fig.x_label)
         plot.setLabel("left", fig.y_label)
@@ -105,7 +144,9 @@ def figure_steps(plot: pg.PlotItem, fig: FigureSpec) -> tuple[DrawnFigure, list[
         plot.setLogMode(x=fig.x_log, y=False)
 
     steps: list[Callable[[], None]] = [setup]
-    steps += [lambda s=s: draw_series(plot, s, drawn) for s in fig.series]
+    steps += [lambda s=s: draw_series(plot, s, drawn, named=not compact) for s in fig.series]
+    if compact:
+        steps.append(lambda: compact_legend(plot.legend, fig))
     steps.append(lambda: fit_range(plot, drawn))
     return drawn, steps
 

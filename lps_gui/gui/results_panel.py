@@ -18,7 +18,7 @@ from PySide6.QtWidgets import (
     QHBoxLayout, QLabel, QPushButton, QSplitter, QTabWidget, QVBoxLayout, QWidget,
 )
 
-from lps_gui.gui.plot_adapter import DrawnFigure, figure_steps
+from lps_gui.gui.plot_adapter import DrawnFigure, ReadableAxis, figure_steps
 from lps_gui.gui.view_detail import ViewDetail
 from lps_gui.gui.widgets import TextTable, ValueTable
 from lps_gui.gui.workers import Job
@@ -29,6 +29,8 @@ log = logging.getLogger(__name__)
 CSV_FILES = ("positions.csv", "summary.csv")
 TAB_NAMES = {"positions": "Positions", "deviation": "Deviation", "step": "Steps", "straightness": "Straightness",
              "angles": "Roll/pitch/yaw", "residuals": "Residuals", "spectrum": "Spectrum"}
+GROUPS = (("Deviation", ("deviation", "positions")), ("Steps", ("step", "spectrum")),
+          ("Straightness, angles", ("straightness", "angles")))  # one tab each: all tabs fit without arrows
 CLICKABLE = {"positions": ("target_mm", "measured_mm"), "deviation": ("target_mm", "deviation_um"),
              "residuals": ("index", "rms_px")}
 
@@ -73,16 +75,33 @@ class ResultsPanel(QWidget):
 
         self.tabs = QTabWidget()
         self.tabs.setDocumentMode(True)
+        self.tabs.setUsesScrollButtons(False)  # every tab in sight; a narrow panel elides titles instead
+        self.tabs.tabBar().setElideMode(Qt.TextElideMode.ElideRight)
         self.plots: dict[str, pg.PlotWidget] = {}
-        self.iso_table = ValueTable(["Figure", "Value", "U (k = 2)", "Unit"], numeric=(1, 2))
+        self._pages: dict[str, QWidget] = {}  # figure key -> the tab page showing its plot
+        self._groups: dict[str, QSplitter] = {}
+        self.iso_table = ValueTable(["Figure", "Value", "U (k = 2)", "Unit"], numeric=(1, 2), stretch=0)
+        self.target_label = QLabel("ISO 230-2 per target")
+        self.target_table = TextTable(numeric=range(0, 20))
+        self.accuracy_page = QSplitter(Qt.Orientation.Vertical)  # the figures, then the per-target table
+        targets = QWidget()
+        tl = QVBoxLayout(targets)
+        tl.setContentsMargins(0, 4, 0, 0)
+        tl.addWidget(self.target_label)
+        tl.addWidget(self.target_table, 1)
+        self.accuracy_page.addWidget(self.iso_table)
+        self.accuracy_page.addWidget(targets)
+        self.accuracy_page.setSizes([300, 200])
+        for w in (self.target_label, self.target_table):
+            w.setVisible(False)  # until results with ISO 230-2 figures come
         self.position_table = TextTable(numeric=range(1, 30))
         self.detail = ViewDetail()
         split = QSplitter(Qt.Orientation.Horizontal)
         split.addWidget(self.tabs)
         split.addWidget(self.detail)
         split.setStretchFactor(0, 3)
-        split.setStretchFactor(1, 2)
-        split.setSizes([600, 300])
+        split.setStretchFactor(1, 1)
+        split.setSizes([700, 240])  # Results get the room; the clicked view beside them
         lay = QVBoxLayout(self)
         lay.setContentsMargins(6, 6, 6, 6)
         lay.addLayout(top)
@@ -114,9 +133,10 @@ class ResultsPanel(QWidget):
         spec = meta.get("stage_spec") or (results.get("session_meta") or {}).get("stage_spec")
         figures = with_limits(figures_from_results(results, meta.get("truth")), spec)
         self._build_tabs(figures)
-        for fig in figures:
-            self.tabs.setTabToolTip(self.tabs.indexOf(self.plots[fig.key]), fig.notes or fig.title)
-        self.tabs.setCurrentWidget(self.iso_table)  # the answer first: accuracy figures and verdict
+        for page in set(self._pages.values()):
+            tips = [f.notes or f.title for f in figures if self._pages.get(f.key) is page]
+            self.tabs.setTabToolTip(self.tabs.indexOf(page), "\n".join(tips))
+        self.tabs.setCurrentWidget(self.accuracy_page)  # the answer first: accuracy figures and verdict
         self.drawn.clear()
         self._header(results)
         self.verdict.setText(verdict_html(results, spec))
@@ -126,7 +146,7 @@ class ResultsPanel(QWidget):
         self.set_report(report if report is not None and report.is_file() else None)
         # the visible figure first, then the others, then the tables
         current = self.tabs.currentIndex()
-        order = sorted(range(len(figures)), key=lambda i: self.tabs.indexOf(self.plots[figures[i].key]) != current)
+        order = sorted(range(len(figures)), key=lambda i: self.tabs.indexOf(self._pages[figures[i].key]) != current)
         self._queue = []
         for i in order:
             self._queue += self._draw_steps(figures[i])
@@ -154,18 +174,43 @@ class ResultsPanel(QWidget):
         return bool(self._queue) or self._pending_table
 
     def _build_tabs(self, figures: list[Any]) -> None:
-        """One plot per figure key, built once (later results reuse them: no relayout, no new widgets)."""
+        """One plot per figure key, built once (later results reuse them: no relayout, no new widgets).
+
+        Related figures share a tab (:data:`GROUPS`, stacked), so the accuracy page, the plots and the
+        position table all fit in the tab bar.
+        """
         keys = [f.key for f in figures]
         if keys == self._tab_keys:
             return
         self.tabs.clear()
-        self.tabs.addTab(self.iso_table, "Accuracy figures")
+        self._pages.clear()
+        self.tabs.addTab(self.accuracy_page, "Accuracy")
         for fig in figures:
-            plot = self.plots.get(fig.key) or pg.PlotWidget(background="w")
-            self.plots[fig.key] = plot
-            self.tabs.addTab(plot, TAB_NAMES.get(fig.key, fig.title))
+            if fig.key not in self.plots:
+                self.plots[fig.key] = pg.PlotWidget(background="w", axisItems={"bottom": ReadableAxis("bottom")})
+        for fig in figures:
+            if fig.key in self._pages:
+                continue
+            title, members = next(((t, [k for k in g if k in keys]) for t, g in GROUPS if fig.key in g),
+                                  (TAB_NAMES.get(fig.key, fig.title), [fig.key]))
+            if len(members) == 1:
+                page: QWidget = self.plots[fig.key]
+                title = TAB_NAMES.get(fig.key, fig.title)
+            else:
+                page = self._groups.setdefault(title, QSplitter(Qt.Orientation.Vertical))
+                for k in members:
+                    page.addWidget(self.plots[k])
+                page.setStretchFactor(0, 3)  # the group's main figure first and larger
+                page.setStretchFactor(1, 2)
+            for k in members:
+                self._pages[k] = page
+            self.tabs.addTab(page, title)
         self.tabs.addTab(self.position_table, "Table")
         self._tab_keys = keys
+
+    def show_figure(self, key: str) -> None:
+        """Bring the tab holding figure ``key`` to the front."""
+        self.tabs.setCurrentWidget(self._pages[key])
 
     def _draw_steps(self, fig: Any) -> list[Any]:
         drawn, steps = figure_steps(self.plots[fig.key].getPlotItem(), fig)
@@ -228,6 +273,7 @@ class ResultsPanel(QWidget):
         from lps_gui.gui.planar_results import planar_table_rows
         from lps_gui.report.summary import summary_rows
 
+        self._fill_targets(results)
         planar_rows = planar_table_rows(results)  # None: a single-axis session
         if planar_rows is not None:
             self.iso_table.set_rows(planar_rows)
@@ -235,6 +281,18 @@ class ResultsPanel(QWidget):
         rows = summary_rows(results)
         self.iso_table.set_rows([(r.name, r.text(), r.u_text(), r.unit) for r in rows])
         self._grey_unresolved(rows)
+
+    def _fill_targets(self, results: dict[str, Any]) -> None:
+        """The ISO 230-2 per-target table of the report (mean, s, R each way, reversal B), hidden without one."""
+        from lps_gui.report.iso_table import iso_target_table
+
+        table = iso_target_table(results)
+        for w in (self.target_label, self.target_table):
+            w.setVisible(table is not None)
+        if table is not None:
+            header, rows = table[0], table[1]
+            self.target_table.set_rows(header, rows)
+            self.target_label.setText(f"ISO 230-2 per target: {len(rows)} targets (\u00b5m; P\u2c7c in mm)")
 
     def _grey_unresolved(self, rows: list[Any]) -> None:
         """A figure the data do not resolve reads "not resolved (σ X)" in grey, never as a finding."""

@@ -73,7 +73,7 @@ def prepare(window, work: Path) -> None:
 
     # capture: the plan of the session above, into a fresh folder
     window.capture_panel.set_plan(spec.plan)
-    window.capture_panel.folder.set_text(str(work / "new-session"))
+    window.capture_panel.set_folder(work / "new-session")
 
 
 def make_screenshots(out_dir: Path) -> list[Path]:
@@ -92,19 +92,24 @@ def make_screenshots(out_dir: Path) -> list[Path]:
         try:
             window.resize(*SIZE)
             window.show()
+            window.arrange_docks()  # the first start's layout at this size (offscreen's screen is smaller)
             prepare(window, work)
             window.show_panel("stage")
             rp = window.results_panel
-            rp.tabs.setCurrentWidget(rp.plots["deviation"])
+            rp.show_figure("deviation")
             written = [render_to_png(window, out_dir / "main.png")]
             for name in PANELS:
                 window.show_panel(name)
                 if name == "results":  # the outlier view, found from the residual plot
-                    rp.tabs.setCurrentWidget(rp.plots["residuals"])
+                    rp.show_figure("residuals")
                 wait_until(lambda: False, 0.2)
                 written.append(render_to_png(window.docks[name], out_dir / f"{name}.png"))
-            rp.tabs.setCurrentWidget(rp.plots["deviation"])
-            written.append(render_to_png(window.docks["results"], out_dir / "results-deviation.png"))
+            for name, show in (("deviation", lambda: rp.show_figure("deviation")),
+                               ("angles", lambda: rp.show_figure("angles")), ("steps", lambda: rp.show_figure("step")),
+                               ("accuracy", lambda: rp.tabs.setCurrentWidget(rp.accuracy_page))):
+                show()
+                wait_until(lambda: False, 0.2)
+                written.append(render_to_png(window.docks["results"], out_dir / f"results-{name}.png"))
             window.show_panel("stage")
         finally:
             window.shutdown()

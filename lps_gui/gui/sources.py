@@ -34,6 +34,10 @@ def stage_choices() -> list[tuple[str, str]]:
         desc = getattr(p, "description", "") or ""
         out.append((f"{name} {desc}".strip(), f"grbl:{name}"))
     out += by_id_choices()
+    from lps_gui.hardware.announce import announced_ports
+
+    listed = {src for _, src in out}
+    out += [(f"{p} (GRBL emulator)", f"grbl:{p}") for p in announced_ports() if f"grbl:{p}" not in listed]
     return out
 
 

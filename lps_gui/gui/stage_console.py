@@ -58,7 +58,6 @@ class StageConsole(QWidget):
         mono.setFamily("monospace")
         self.transcript.setFont(mono)
         self.line = HistoryLineEdit()
-        self.line.setPlaceholderText("G-code or $ command, e.g. $$  $#  G0 X10  (Up/Down: history)")
         self.send_btn = QPushButton("Send")
         row = QHBoxLayout()
         row.addWidget(self.line, 1)
@@ -81,8 +80,7 @@ class StageConsole(QWidget):
         on = self.available()
         self.line.setEnabled(on)
         self.send_btn.setEnabled(on)
-        if self.controller.stage is not None and not on:
-            self.line.setPlaceholderText("this stage has no G-code console (the simulated stage); connect a GRBL")
+        self.line.setPlaceholderText(console_placeholder(self.controller.stage is not None, on))
 
     def send(self) -> Future | None:
         text = self.line.text().strip()
@@ -104,3 +102,12 @@ class StageConsole(QWidget):
         for ln in fut.result() or []:
             self._reply.emit(f"  {ln}")
         self._reply.emit("  ok")
+
+
+def console_placeholder(connected: bool, has_console: bool) -> str:
+    """What the command line says it takes, for the stage connected now."""
+    if has_console:
+        return "G-code or $ command, e.g. $$  $#  G0 X10  (Up/Down: history)"
+    if connected:
+        return "this stage has no G-code console (the simulated stage); connect a GRBL"
+    return "connect a GRBL stage to send G-code or $ commands"

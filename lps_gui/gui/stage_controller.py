@@ -17,7 +17,7 @@ from typing import Any, Callable
 from PySide6.QtCore import QObject, QTimer, Signal
 
 from lps_gui.errors import HardwareError
-from lps_gui.gui.workers import one_line
+from lps_gui.gui.workers import expected, one_line
 from lps_gui.hardware.stage import Stage, StageStatus
 
 log = logging.getLogger(__name__)
@@ -190,7 +190,7 @@ class StageController(QObject):
         if exc is None:
             return
         msg = one_line(exc)
-        log.error("stage: %s failed: %s", what, msg, exc_info=exc)
+        log.error("stage: %s failed: %s", what, msg, exc_info=None if expected(exc) else exc)
         self.command_failed.emit(what, msg)
         stage = self.stage
         gone = what in ("status", "connect") or stage is None or not _still_connected(stage)

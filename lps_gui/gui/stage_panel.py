@@ -2,17 +2,18 @@
 
 Every stage call goes through :class:`StageController` (one stage thread);
 this widget only submits commands and shows what the controller reports.
-Keyboard jog is never a side effect of typing: the arrow keys move the stage
-only while the jog area has focus, or with the "Keyboard jog" box ticked (and
-never while a number, list or text field has focus, where they edit).
+Keyboard jog is never a side effect of typing or clicking: the arrow keys
+move the stage only with the "Keyboard jog" box ticked (off at start), while
+the panel has focus, and never while a number, list or text field has focus,
+where they edit. The readout takes work, machine and offset of every axis
+from one status report, with GRBL's offset sign (work = machine - offset).
 """
 from __future__ import annotations
 
 import math
-import time
 
-from PySide6.QtCore import QEvent, QObject, Qt, QTimer, Signal
-from PySide6.QtGui import QFont, QKeyEvent, QKeySequence, QShortcut
+from PySide6.QtCore import QEvent, QObject, QSettings, Qt, QTimer, Signal
+from PySide6.QtGui import QKeyEvent, QKeySequence, QShortcut
 from PySide6.QtWidgets import (
     QAbstractButton, QAbstractItemView, QAbstractSpinBox, QApplication, QCheckBox, QComboBox, QDoubleSpinBox, QGridLayout, QGroupBox,
     QHBoxLayout, QHeaderView, QLabel, QLineEdit, QMessageBox, QPushButton, QTableWidget, QTableWidgetItem, QTabWidget,
@@ -20,6 +21,7 @@ from PySide6.QtWidgets import (
 )
 
 from lps_gui.core.clock import Clock
+from lps_gui.gui.dro import PositionReadout
 from lps_gui.gui.stage_console import StageConsole
 from lps_gui.gui.sources import BAUD_RATES, SIM, open_stage_source, source_from_text, stage_choices
 from lps_gui.gui.stage_controller import StageController
@@ -28,10 +30,8 @@ from lps_gui.hardware.stage import AXES, StageSetting, StageStatus
 JOG_STEPS_MM = (0.01, 0.1, 1.0, 10.0, 50.0)
 CONTINUOUS = 0.0  # the "hold" step: jog while the button is pressed
 HOLD_JOG_PERIOD_MS = 100  # GRBL's joystick rule: short jogs of v*dt queued while held, jog cancel on release
-MACHINE_REFRESH_S = 0.5
+PORT_WATCH_MS = 3000  # how often the source list looks for new serial ports and emulator ptys
 AXIS_SETS = (("XYZ", "X Y Z"), ("X", "X only"), ("XY", "X Y"))
-STATE_COLORS = {"Idle": "#2a9d3c", "Run": "#1f5fa8", "Jog": "#1f5fa8", "Home": "#1f5fa8", "Hold": "#e07b00",
-                "Alarm": "#d00000", "Door": "#d00000", "Disconnected": "#777777"}
 JOG_KEYS = {  # key -> (axis, sign): arrows move X/Y, Page Up/Down move Z
     Qt.Key.Key_Right: ("X", +1), Qt.Key.Key_Left: ("X", -1), Qt.Key.Key_Up: ("Y", +1),
     Qt.Key.Key_Down: ("Y", -1), Qt.Key.Key_PageUp: ("Z", +1), Qt.Key.Key_PageDown: ("Z", -1),
@@ -42,6 +42,8 @@ class StagePanel(QWidget):
     """Connect a stage, watch its position, move it."""
 
     camera_offered = Signal(object)  # the simulated camera that rides the simulated stage, or None
+    source_changed = Signal(object)  # the source now chosen (sim, emulator, grbl:PORT) or None: not understood
+    _work_system_read = Signal(str)  # from the stage thread
 
     def __init__(self, controller: StageController, clock: Clock | None = None, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -51,7 +53,7 @@ class StagePanel(QWidget):
 
         # --- connection
         self.source = QComboBox()
-        self.source.setMinimumContentsLength(18)
+        self.source.setMinimumContentsLength(14)
         self.source.setEditable(True)  # an external emulator's /dev/pts/N, a port not listed
         self.source.setInsertPolicy(QComboBox.InsertPolicy.NoInsert)
         self.source.setToolTip("Pick a source, or type a port: /dev/pts/5, /dev/serial/by-id/..., COM3, grbl:PORT")
@@ -72,44 +74,20 @@ class StagePanel(QWidget):
         g.addWidget(self.connect_btn, 1, 2)
 
         # --- digital readout
-        dro = QGroupBox("Position (work coordinates)")
-        dg = QGridLayout(dro)
-        big = QFont()
-        big.setPointSize(16)
-        big.setBold(True)
-        big.setStyleHint(QFont.StyleHint.Monospace)
-        self.readout: dict[str, QLabel] = {}
-        self._axis_widgets: dict[str, list[QWidget]] = {ax: [] for ax in AXES}
+        dro = PositionReadout()
+        self.dro = dro
+        self.readout, self.machine, self.offset = dro.readout, dro.machine, dro.offset
+        self.zero_buttons, self.to_zero_buttons = dro.zero_buttons, dro.to_zero_buttons
+        self.work_system, self.state_label, self.feed_label = dro.work_system, dro.state_label, dro.feed_label
+        self._axis_widgets: dict[str, list[QWidget]] = {ax: list(ws) for ax, ws in dro.axis_widgets.items()}
         self._axes_shown = "".join(AXES)
-        self._machine_shown_at = 0.0
-        for i, ax in enumerate(AXES):
-            name = QLabel(ax)
-            name.setFont(big)
-            val = QLabel("---")
-            val.setFont(big)
-            val.setAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
-            val.setMinimumWidth(140)
-            dg.addWidget(name, i, 0)
-            dg.addWidget(val, i, 1)
-            unit = QLabel("mm")
-            dg.addWidget(unit, i, 2)
-            self.readout[ax] = val
-            self._axis_widgets[ax] += [name, val, unit]
-        self.machine_label = QLabel("")
-        self.machine_label.setStyleSheet("QLabel { color: #555555; }")
-        self.machine_label.setToolTip("Machine coordinates (GRBL's homed space) and the work offset")
-        dg.addWidget(self.machine_label, len(AXES), 0, 1, 4)
-        self.state_label = QLabel("Disconnected")
-        self.state_label.setAlignment(Qt.AlignmentFlag.AlignCenter)
-        self.state_label.setMinimumWidth(110)
-        self.feed_label = QLabel("feed 0 mm/min")
-        dg.addWidget(self.state_label, 0, 3)
-        dg.addWidget(self.feed_label, 1, 3)
-        self._show_state("Disconnected")
+        dro.system_chosen.connect(self.select_work_system)
+        dro.zero_confirmed.connect(self.zero)
+        dro.to_zero_requested.connect(self.go_to_zero)
 
         # --- jogging
-        jog = QGroupBox("Jog (click here, then arrow keys X/Y, Page Up/Down Z)")
-        jog.setFocusPolicy(Qt.FocusPolicy.StrongFocus)  # a click on the area gives it the keys
+        jog = QGroupBox("Jog")
+        jog.setFocusPolicy(Qt.FocusPolicy.StrongFocus)  # a click on the area takes the focus off a field
         self.jog_area = jog
         jg = QGridLayout(jog)
         self.jog_buttons: dict[tuple[str, int], QPushButton] = {}
@@ -138,12 +116,14 @@ class StagePanel(QWidget):
         jg.addWidget(QLabel("Feed"), 1, 2)
         jg.addWidget(self.feed, 1, 3)
         self.keyboard_jog = QCheckBox("Keyboard jog")
-        self.keyboard_jog.setToolTip("Arrow keys and Page Up/Down jog while the stage panel has focus "
-                                     "(number and list fields keep their keys)")
+        self.keyboard_jog.setChecked(False)  # off at start: a key never moves the stage unasked
+        self.keyboard_jog.setToolTip("When ticked: arrow keys jog X/Y and Page Up/Down jog Z while the stage panel "
+                                     "has focus (number and list fields keep their keys)")
         self.keyboard_state = QLabel()
         jg.addWidget(self.keyboard_jog, 2, 2)
         jg.addWidget(self.keyboard_state, 2, 3)
         self.travel_label = QLabel("travel: read the settings ($$)")
+        self.travel_label.setWordWrap(True)
         self.travel_label.setStyleSheet("QLabel { color: #555555; }")
         jg.addWidget(self.travel_label, 3, 0, 1, 4)
         self.axes = QComboBox()
@@ -169,35 +149,31 @@ class StagePanel(QWidget):
         self.goto_btn = QPushButton("Go to")
         self.goto_btn.setToolTip("Move to this work coordinate at the jog feed")
         self.goto_btn.clicked.connect(self.go_to)
-        self.zero_btn = QPushButton("Zero")
-        self.zero_btn.setEnabled(False)
-        self.zero_btn.setToolTip("Set the work zero of this axis here (G10 L20 P1: the G54 offset; GRBL only)")
-        self.zero_btn.clicked.connect(self.zero)
         goto.addWidget(QLabel("Go to"))
         goto.addWidget(self.goto_axis)
         goto.addWidget(self.goto_target, 1)
         goto.addWidget(self.goto_btn)
-        goto.addWidget(self.zero_btn)
         goto.addWidget(QLabel("Axes"))
         goto.addWidget(self.axes)
 
         # --- machine commands
-        cmds = QHBoxLayout()
+        cmds = QGridLayout()
         self.home_btn = QPushButton("Home")
         self.unlock_btn = QPushButton("Unlock")
-        self.hold_btn = QPushButton("Feed hold")
         self.resume_btn = QPushButton("Resume")
         self.reset_btn = QPushButton("Reset")
         self.reset_btn.setToolTip("Soft reset (Ctrl-X): stops at once; needed after a limit alarm ('Reset to continue')")
-        self.reset_btn.clicked.connect(lambda: self.controller.call_now("reset", "soft_reset"))
-        self.stop_btn = QPushButton("Stop")
+        self.reset_btn.clicked.connect(self.reset)
+        self.stop_btn = QPushButton("Stop (feed hold)")
         self.stop_btn.setStyleSheet("QPushButton { color: #b00020; font-weight: bold; }")
-        self.stop_btn.setToolTip("Cancel the jog and reset the controller (Esc)")
-        for b in (self.home_btn, self.unlock_btn, self.hold_btn, self.resume_btn, self.reset_btn, self.stop_btn):
-            cmds.addWidget(b)
+        self.stop_btn.setToolTip("Esc: cancels a jog, or holds a programmed move (feed hold). "
+                                 "Resume continues the move; Reset discards it")
+        for i, b in enumerate((self.home_btn, self.unlock_btn, self.resume_btn)):
+            cmds.addWidget(b, 0, i)
+        cmds.addWidget(self.stop_btn, 1, 0, 1, 2)
+        cmds.addWidget(self.reset_btn, 1, 2)
         self.home_btn.clicked.connect(self.home)
         self.unlock_btn.clicked.connect(lambda: self.controller.call("unlock", "unlock"))
-        self.hold_btn.clicked.connect(lambda: self.controller.call("feed hold", "feed_hold"))
         self.resume_btn.clicked.connect(lambda: self.controller.call("resume", "resume"))
         self.stop_btn.clicked.connect(self.stop)
 
@@ -237,12 +213,14 @@ class StagePanel(QWidget):
         self.lower_tabs.addTab(self.console, "Console")
         lay.addWidget(self.lower_tabs, 1)
 
+        self.source.currentTextChanged.connect(lambda _t: self.source_changed.emit(self.current_source()))
         self.refresh_btn.clicked.connect(self.refresh_sources)
         self.connect_btn.clicked.connect(self.toggle_connection)
         controller.status_changed.connect(self.show_status)
         controller.connection_changed.connect(self._on_connection)
         controller.settings_read.connect(self.show_settings)
         controller.opened.connect(lambda _stage, extra, _d: self.camera_offered.emit(extra))
+        self._work_system_read.connect(self.dro.show_system)
         self._shortcuts = []
         self._lock_box: QMessageBox | None = None
         self._lock_asked = False
@@ -256,17 +234,15 @@ class StagePanel(QWidget):
         esc = QShortcut(QKeySequence(Qt.Key.Key_Escape), self, context=Qt.ShortcutContext.WidgetWithChildrenShortcut)
         esc.activated.connect(self.stop)
         self._shortcuts.append(esc)
+        self._choices: list[tuple[str, str]] = []
         self.refresh_sources()
+        self._port_timer = QTimer(self)
+        self._port_timer.setInterval(PORT_WATCH_MS)
+        self._port_timer.timeout.connect(self._watch_ports)
+        self._port_timer.start()
         self._set_enabled(False)
 
     # ------------------------------------------------------------------ keyboard jog
-    def _in_jog_area(self, w: QWidget | None) -> bool:
-        while w is not None:
-            if w is self.jog_area:
-                return True
-            w = w.parentWidget()
-        return False
-
     def keyboard_jog_active(self, w: QWidget | None = None) -> bool:
         """Would a jog key pressed in ``w`` (default: the focus widget) move the stage?"""
         w = w if w is not None else QApplication.focusWidget()
@@ -275,7 +251,7 @@ class StagePanel(QWidget):
         if isinstance(w, (QAbstractSpinBox, QComboBox, QLineEdit, QAbstractItemView)) or isinstance(
                 w.parentWidget(), (QAbstractSpinBox, QComboBox)):
             return False  # the key edits the field
-        return self._in_jog_area(w) or self.keyboard_jog.isChecked()
+        return self.keyboard_jog.isChecked()
 
     def _jog_key(self, event: QKeyEvent) -> bool:
         """Jog for a jog key if keyboard jog is active for the focus widget; True when the key was used."""
@@ -324,13 +300,46 @@ class StagePanel(QWidget):
             return self.source.itemData(i)
         return source_from_text(text)
 
-    def refresh_sources(self) -> None:
-        current = self.source.currentData()
+    def refresh_sources(self, choices: list[tuple[str, str]] | None = None) -> None:
+        """List the sources again (serial ports, by-id names, announced emulator ptys), keeping the choice."""
+        choices = stage_choices() if choices is None else choices
+        current = self.current_source()
+        self.source.blockSignals(True)
         self.source.clear()
-        for label, src in stage_choices():
+        for label, src in choices:
             self.source.addItem(label, src)
-        i = self.source.findData(current)
-        self.source.setCurrentIndex(max(i, 0))
+        self.source.blockSignals(False)
+        self._choices = choices
+        if current is not None and self.source.findData(current) < 0 and current.startswith("grbl:"):
+            self.select_source(current)  # a typed port stays
+        else:
+            self.source.setCurrentIndex(max(self.source.findData(current), 0))
+        self.source_changed.emit(self.current_source())
+
+    def _watch_ports(self) -> None:
+        """Every few seconds while disconnected: a plugged adapter or a started emulator appears by itself."""
+        if self.controller.connected or self.source.hasFocus() or self.source.view().isVisible():
+            return
+        choices = stage_choices()
+        if choices != self._choices:
+            self.refresh_sources(choices)
+
+    def baud_rate(self) -> int:
+        return int(self.baud.currentData() or 115200)
+
+    def remember(self, s: QSettings) -> None:
+        """Keep the source and speed that connected, for the next start."""
+        s.setValue("stage/source", self.current_source())
+        s.setValue("stage/baud", self.baud_rate())
+
+    def restore(self, s: QSettings) -> None:
+        source = s.value("stage/source")
+        if source:
+            self.select_source(str(source))  # the simulated stage is the default otherwise
+        baud = s.value("stage/baud")
+        i = self.baud.findData(int(baud)) if baud is not None else -1
+        if i >= 0:
+            self.baud.setCurrentIndex(i)
 
     def select_source(self, source: str) -> None:
         i = self.source.findData(source)
@@ -352,7 +361,7 @@ class StagePanel(QWidget):
             self.controller.command_failed.emit(
                 "connect", f"stage source {self.source.currentText()!r} not understood; pick one or type a port such as /dev/ttyUSB0")
             return
-        baud = int(self.baud.currentData() or 115200)
+        baud = self.baud_rate()
         self.connect_btn.setEnabled(False)
         self.connect_btn.setText("Connecting…")
         clock = self.clock
@@ -364,52 +373,33 @@ class StagePanel(QWidget):
         self.source.setEnabled(not connected)
         self.baud.setEnabled(not connected)
         self._set_enabled(connected)
-        stage = self.controller.stage
-        self.zero_btn.setEnabled(connected and callable(getattr(stage, "set_work_zero", None)))
         self._lock_asked = False
         if connected:
             self.controller.read_settings()
+            self._read_work_system()
         else:
-            self._show_state("Disconnected")
-            for v in self.readout.values():
-                v.setText("---")
+            self.dro.clear()
 
     def connect_failed(self) -> None:
         """The controller could not open the source: offer Connect again."""
         self._on_connection(False, "")
 
     def _set_enabled(self, on: bool) -> None:
-        for b in list(self.jog_buttons.values()) + [self.home_btn, self.unlock_btn, self.hold_btn, self.resume_btn,
-                                                    self.stop_btn, self.read_settings_btn, self.write_settings_btn,
-                                                    self.goto_btn, self.reset_btn]:
+        for b in list(self.jog_buttons.values()) + list(self.to_zero_buttons.values()) + [
+                self.home_btn, self.unlock_btn, self.resume_btn, self.stop_btn, self.read_settings_btn,
+                self.write_settings_btn, self.goto_btn, self.reset_btn]:
             b.setEnabled(on)
+        stage = self.controller.stage
+        self.dro.set_offsets_enabled(on and stage is not None and bool(stage.work_systems))
 
     # ------------------------------------------------------------------ readout
     def show_status(self, st: StageStatus) -> None:
-        for ax, v in zip(AXES, st.work_mm):
-            self.readout[ax].setText(f"{v:10.3f}")
-        self._show_machine(st)
-        self._show_state(st.state)
-        self.feed_label.setText(f"feed {st.feed_mm_min:.0f} mm/min")
+        self.dro.show_status(st)
         if st.state == "Alarm" and not self._lock_asked:
             self._lock_asked = True
             self._ask_home_or_unlock()
         elif st.state != "Alarm":
             self._lock_asked = False  # a later alarm asks again
-
-    def _show_machine(self, st: StageStatus) -> None:
-        """Machine position and offset, at most twice a second while moving: a changed label re-lays out the
-        whole window, which at the poll rate starved the GUI thread during a capture."""
-        now = time.monotonic()
-        if st.state in ("Run", "Jog", "Home") and now - self._machine_shown_at < MACHINE_REFRESH_S:
-            return
-        shown = [i for i, ax in enumerate(AXES) if ax in self._axes_shown]
-        offset = [st.work_mm[i] - st.machine_mm[i] for i in shown]
-        text = ("machine " + "  ".join(f"{AXES[i]} {st.machine_mm[i]:.3f}" for i in shown)
-                + ("   offset " + " ".join(f"{v:+.3f}" for v in offset) if any(offset) else ""))
-        if text != self.machine_label.text():
-            self.machine_label.setText(text)
-            self._machine_shown_at = now
 
     def _ask_home_or_unlock(self) -> None:
         """A stage in Alarm (GRBL powers up so with homing enabled) moves only after $H or $X: ask which."""
@@ -426,17 +416,11 @@ class StagePanel(QWidget):
         box.open()
         self._lock_box = box
 
-    def _show_state(self, state: str) -> None:
-        color = STATE_COLORS.get(state, "#555555")
-        self.state_label.setText(state)
-        self.state_label.setStyleSheet(
-            f"QLabel {{ background: {color}; color: white; border-radius: 4px; padding: 4px 8px; font-weight: bold; }}")
-
     # ------------------------------------------------------------------ motion
     def home(self) -> None:
         """``$H``: shown as Home at once (the cycle may run for a minute); the controller logs its end."""
         if self.controller.call("home", "home") is not None:
-            self._show_state("Home")
+            self.dro.show_state("Home")
 
     def jog(self, axis: str, sign: int) -> None:
         if not self.controller.connected:
@@ -478,9 +462,31 @@ class StagePanel(QWidget):
         self._hold_timer.stop()
         self.controller.call_now("jog cancel", "jog_cancel")
 
-    def zero(self) -> None:
-        axis = self.goto_axis.currentData()
-        self.controller.call(f"zero {axis} (work offset)", "set_work_zero", axis)
+    # ------------------------------------------------------------------ work coordinates
+    def _read_work_system(self) -> None:
+        stage = self.controller.stage
+        if stage is None or not stage.work_systems:
+            self.work_system.setCurrentIndex(0)
+            return
+        fut = self.controller.call("read the work coordinate system", "work_system")
+        if fut is not None:
+            fut.add_done_callback(lambda f: None if f.exception() else self._work_system_read.emit(f.result()))
+
+    def select_work_system(self, name: str) -> None:
+        """Make ``name`` (G54-G59) the system the readout, Go to and Zero use."""
+        if self.controller.call(f"select work system {name}", "select_work_system", name) is not None:
+            self.dro.show_system(name)
+
+    def zero(self, axis: str) -> None:
+        system = self.work_system.currentData()
+        self.controller.call(f"zero {axis} in {system} (work offset)", "set_work_zero", axis)
+
+    def go_to_zero(self, axis: str) -> None:
+        self.controller.call(f"go to {axis} 0 ({self.work_system.currentData()})", "move_to", 0.0, self.feed.value(), axis)
+
+    def reset(self) -> None:
+        """Soft reset (Ctrl-X): what a feed hold cannot do, discard the held move; GRBL may then need unlocking."""
+        self.controller.call_now("reset", "soft_reset")
 
     def go_to(self) -> None:
         axis = self.goto_axis.currentData()
@@ -565,3 +571,4 @@ def travel_text(values: dict[int, float]) -> str:
 def _is_integer_setting(s: StageSetting) -> bool:
     unit = (s.unit or "").lower()
     return unit in ("mask", "boolean", "bool", "") and float(s.value).is_integer() and "mm" not in unit
+

@@ -56,9 +56,11 @@ class PathPicker(QWidget):
 class ValueTable(QTableWidget):
     """A read-only table of rows of text, sized to its contents."""
 
-    def __init__(self, headers: Sequence[str], numeric: Sequence[int] = (1, 2), parent: QWidget | None = None) -> None:
+    def __init__(self, headers: Sequence[str], numeric: Sequence[int] = (1, 2), parent: QWidget | None = None,
+                 stretch: int | None = None) -> None:
         super().__init__(0, len(headers), parent)
         self.numeric = set(numeric)  # right-aligned columns
+        self.stretch = stretch  # the column that gives up width (elided, full text in its tooltip): the others stay seen
         self.setHorizontalHeaderLabels(list(headers))
         self.verticalHeader().setVisible(False)
         self.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
@@ -77,11 +79,17 @@ class ValueTable(QTableWidget):
             for r, row in enumerate(rows):
                 for c, text in enumerate(row):
                     item = QTableWidgetItem(str(text))
+                    if c == self.stretch:
+                        item.setToolTip(str(text))
                     if c in self.numeric:
                         item.setTextAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
                     self.setItem(r, c, item)
             self.resizeColumnsToContents()
-            hh.setStretchLastSection(True)
+            if self.stretch is not None:
+                hh.setStretchLastSection(False)
+                hh.setSectionResizeMode(self.stretch, QHeaderView.ResizeMode.Stretch)
+            else:
+                hh.setStretchLastSection(True)
         finally:
             self.setUpdatesEnabled(True)
 
@@ -117,6 +125,7 @@ def double_spin(lo: float, hi: float, value: float, decimals: int, suffix: str) 
 
 def add_rows(form: QFormLayout, rows: Sequence[tuple[str, QWidget]]) -> None:
     """Fill a form layout with (label, widget) rows."""
+    form.setRowWrapPolicy(QFormLayout.RowWrapPolicy.WrapLongRows)  # narrow dock: the field goes under its label
     for label, widget in rows:
         form.addRow(label, widget)
 

@@ -21,6 +21,7 @@ from PySide6.QtCore import QObject, QThread, Signal
 
 from lps_gui.core.progress import CancelToken
 from lps_gui.errors import Cancelled, LpsError
+from lps_gui.gui.wording import for_gui
 
 log = logging.getLogger(__name__)
 
@@ -28,11 +29,17 @@ PROGRESS_INTERVAL_S = 0.05  # at most ~20 progress signals per second
 
 
 def one_line(exc: BaseException) -> str:
-    """The message a user sees: the first line of an LpsError, or the type and text of a bug."""
+    """The message a user sees: the first line of an LpsError or OSError worded for the GUI, or the type and text
+    of a bug."""
     text = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
-    if isinstance(exc, LpsError):
-        return text or type(exc).__name__
+    if expected(exc):
+        return for_gui(text) if text else "stopped without a reason given"
     return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+def expected(exc: BaseException) -> bool:
+    """A failure the user can act on (bad input, hardware, disk), not a bug: its traceback is not news."""
+    return isinstance(exc, (LpsError, OSError))
 
 
 UI_SWITCH_INTERVAL_S = 0.001  # GIL slice while jobs run: the GUI thread waits at most ~1 ms for it
@@ -152,6 +159,7 @@ class Job(QObject):
         self._thread.finished.connect(self._on_thread_finished)
         self.result: Any = None
         self.error: str | None = None
+        self.expected_error = True  # False: the failure was a bug, its traceback belongs in the log
         self.started_at = 0.0
 
     # ------------------------------------------------------------------ control (GUI thread)
@@ -198,6 +206,7 @@ class Job(QObject):
             self.cancelled.emit(self.error)
         except Exception as exc:  # every failure reaches the user as one line, the log gets the rest
             self.error = one_line(exc)
+            self.expected_error = expected(exc)
             tb = traceback.format_exc()
             self.failed.emit(self.error, tb)
         else:
@@ -207,5 +216,6 @@ class Job(QObject):
     def _on_thread_finished(self) -> None:  # GUI thread
         _job_ended()
         _RUNNING.discard(self)
-        log.info("%s: finished in %.2f s", self.name, time.monotonic() - self.started_at)
+        if self.error is None:  # a failure or a cancel is reported by whoever shows it, without a duration
+            log.info("%s: finished in %.2f s", self.name, time.monotonic() - self.started_at)
         self.finished.emit()

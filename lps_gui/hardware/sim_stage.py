@@ -12,7 +12,10 @@ renders from :meth:`SimulatedStage.true_pose`.
 Rules mirror GRBL 1.1 (the GRBL emulator runs on top of this class): codes
 come from ``grbl/codes.py``; settings are GRBL's ``$N`` numbers; a soft-limit
 violation of a move is ALARM:2, of a jog error:15; G-code in Alarm or Jog is
-error:9; a reset during motion is ALARM:3.
+error:9; a reset during motion is ALARM:3. Work coordinates follow GRBL's
+model: six systems G54-G59 (all offsets zero at start, so work = machine
+until the operator zeroes an axis), work = machine - offset of the selected
+system; moves, jogs and soft-limit messages are in work coordinates.
 """
 from __future__ import annotations
 
@@ -28,7 +31,7 @@ from lps_gui.errors import HardwareError
 from lps_gui.hardware.grbl.codes import SETTINGS, GrblError, check_setting, setting_info
 from lps_gui.hardware.motion import Profile
 from lps_gui.hardware.planner import PLANNER_BLOCKS, HeldMove, MotionPlanner
-from lps_gui.hardware.stage import AXES, Stage, StageEvent, StageSetting, StageStatus
+from lps_gui.hardware.stage import AXES, WORK_SYSTEMS, Stage, StageEvent, StageSetting, StageStatus
 
 RX_BUFFER_BYTES = 128
 __all__ = ["PLANNER_BLOCKS", "RX_BUFFER_BYTES", "SimulatedStage"]
@@ -41,7 +44,8 @@ class SimulatedStage(Stage):
     ----------
     errors : true-position error model (zero errors when None).
     seed : seeds the repeatability draws (one per completed move of ``axis``).
-    travel_mm : (min, max) soft-limit range of every axis in work coordinates (mm).
+    travel_mm : (min, max) soft-limit range of every axis in machine coordinates (mm; equal to the work
+        coordinates while every offset is zero, as at start).
     max_rate_mm_min, accel_mm_s2 : velocity and acceleration limits (GRBL $11x, $12x).
     clock : time source; a fresh SimClock when None (tests never sleep).
     axis : the axis the LPS measurement moves along.
@@ -101,6 +105,8 @@ class SimulatedStage(Stage):
         self._vanish_at: float | None = None
         self._vanished = False
         self._last_state = ""
+        self._offsets = {name: [0.0, 0.0, 0.0] for name in WORK_SYSTEMS}  # GRBL's sign: work = machine - offset
+        self._system = WORK_SYSTEMS[0]
 
     # ------------------------------------------------------------------ settings
     def _ax(self, axis: str | None) -> int:
@@ -243,14 +249,44 @@ class SimulatedStage(Stage):
         with self._lock:
             return self._motion.next_event_s()
 
+    # ------------------------------------------------------------------ work coordinates
+    work_systems = WORK_SYSTEMS
+
+    def _offset(self, axis: int) -> float:
+        return self._offsets[self._system][axis]
+
+    def work_system(self) -> str:
+        with self._lock:
+            return self._system
+
+    def select_work_system(self, name: str) -> None:
+        with self._command():
+            if name not in WORK_SYSTEMS:
+                raise GrblError("error", 20, f"work coordinate system {name!r}")
+            self._require_gcode_ok()
+            self._system = name
+
+    def work_offsets(self) -> dict[str, tuple[float, float, float]]:
+        with self._lock:
+            return {name: (o[0], o[1], o[2]) for name, o in self._offsets.items()}
+
+    def set_work_zero(self, axis: str | None = None, value_mm: float = 0.0) -> None:
+        """``G10 L20``: the selected system's offset becomes what makes the position read ``value_mm`` now."""
+        with self._command() as t:
+            i = self._ax(axis)
+            self._require_gcode_ok()
+            pos, _ = self._motion.positions(t)
+            self._offsets[self._system][i] = float(pos[i]) - float(value_mm)
+
     # ------------------------------------------------------------------ status
     def status(self) -> StageStatus:
         with self._command() as t:
             state, sub = self._state()
             pos, feed = self._motion.positions(t)
             free = self._motion.free
+            work = tuple(float(p) - o for p, o in zip(pos, self._offsets[self._system]))
             return StageStatus(
-                state=state, substate=sub, machine_mm=tuple(pos), work_mm=tuple(pos),
+                state=state, substate=sub, machine_mm=tuple(pos), work_mm=work,
                 feed_mm_min=feed, buffer=(free, RX_BUFFER_BYTES), overrides=(100, 100, 100), time=t,
             )
 
@@ -373,16 +409,18 @@ class SimulatedStage(Stage):
             self._require_gcode_ok()
             if not feed_mm_min or feed_mm_min <= 0:
                 raise GrblError("error", 22, f"move to {position_mm} mm")
-            if self.soft_limits and not self._in_travel(position_mm, i):
+            off = self._offset(i)
+            target = float(position_mm) + off
+            if self.soft_limits and not self._in_travel(target, i):
                 lo, hi = self.axis_travel_mm[i]
                 raise self._raise_alarm(
-                    2, f"move of {AXES[i]} to {position_mm:.3f} mm is outside its travel {lo:g}..{hi:g} mm"
+                    2, f"move of {AXES[i]} to {position_mm:.3f} mm is outside its travel {lo - off:g}..{hi - off:g} mm"
                 )
             self._wait_planner()
             if self._motion.hold:
-                self._motion.held.append(HeldMove(i, "Run", float(position_mm), float(feed_mm_min)))
+                self._motion.held.append(HeldMove(i, "Run", target, float(feed_mm_min)))
             else:
-                self._plan(i, "Run", float(position_mm), float(feed_mm_min))
+                self._plan(i, "Run", target, float(feed_mm_min))
             self._update()
 
     def jog(self, distance_mm: float, feed_mm_min: float, axis: str | None = None) -> None:
@@ -396,7 +434,7 @@ class SimulatedStage(Stage):
             start = self.planned_mm(i)
             target = float(start + distance_mm)
             if self.soft_limits and not self._in_travel(target, i):
-                raise GrblError("error", 15, f"jog to {target:.3f} mm")
+                raise GrblError("error", 15, f"jog to {target - self._offset(i):.3f} mm")
             self._wait_planner()
             self._plan(i, "Jog", target, float(feed_mm_min))
             self._update()

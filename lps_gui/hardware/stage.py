@@ -15,6 +15,7 @@ from lps_gui.core.clock import Clock
 from lps_gui.errors import HardwareError
 
 AXES = ("X", "Y", "Z")
+WORK_SYSTEMS = ("G54", "G55", "G56", "G57", "G58", "G59")  # GRBL's work coordinate systems (G10 L2/L20 P1..P6)
 
 
 @dataclass(frozen=True)
@@ -154,6 +155,25 @@ class Stage(abc.ABC):
     def read_settings(self) -> list[StageSetting]: ...
     @abc.abstractmethod
     def write_setting(self, number: int, value: float) -> None: ...
+
+    # work coordinates (GRBL's model: work = machine - offset of the selected system)
+    work_systems: tuple[str, ...] = ()  # the systems this driver can select and zero; () = work is machine
+
+    def work_system(self) -> str:
+        """The selected work coordinate system (G54 when the driver has none)."""
+        return WORK_SYSTEMS[0]
+
+    def select_work_system(self, name: str) -> None:
+        """Make ``name`` (one of :attr:`work_systems`) the system positions and moves refer to."""
+        raise HardwareError(f"{type(self).__name__}: no work coordinate systems; positions are machine positions")
+
+    def work_offsets(self) -> dict[str, tuple[float, float, float]]:
+        """Offset of every system in mm, GRBL's sign (``$#``): work = machine - offset."""
+        return {}
+
+    def set_work_zero(self, axis: str | None = None, value_mm: float = 0.0) -> None:
+        """Make the current position read ``value_mm`` on ``axis`` in the selected system."""
+        raise HardwareError(f"{type(self).__name__}: no work coordinate systems; positions are machine positions")
 
     # conveniences shared by all drivers
     def position_mm(self, axis: str | None = None) -> float:

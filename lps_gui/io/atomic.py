@@ -12,6 +12,7 @@ from __future__ import annotations
 import errno
 import hashlib
 import os
+import re
 import tempfile
 from pathlib import Path
 
@@ -49,10 +50,47 @@ def storage_error(path: Path | str, exc: OSError) -> StorageError:
     return StorageError(f"{path}: cannot write ({reason}); {hint} and run again (the previous file is kept)")
 
 
+TEMP_SUFFIX = ".tmp"
+_TEMP_NAME = re.compile(r"^\..+\.(\d+)-[^.]*\.tmp$")  # .NAME.PID-RANDOM.tmp
+
+
+def _temp_prefix(path: Path) -> str:
+    """``.NAME.PID-``: the writer's pid in the name tells a killed run's temp file from a live one."""
+    return f".{path.name}.{os.getpid()}-"
+
+
+def remove_orphan_temps(folder: Path | str) -> list[Path]:
+    """Delete the temp files in ``folder`` whose writing process is gone (killed mid-write); returns them.
+
+    Only temp files named by :func:`write_temp` are touched, and only when their pid no longer runs:
+    a live writer's temp file (another command writing a report into the session) is left alone.
+    """
+    removed = []
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return removed
+    for entry in entries:
+        m = _TEMP_NAME.match(entry.name)
+        if not m or not entry.is_file(follow_symlinks=False):
+            continue
+        pid = int(m.group(1))
+        try:
+            os.kill(pid, 0)
+            continue  # that process still runs
+        except ProcessLookupError:
+            pass
+        except (PermissionError, OverflowError, ValueError):
+            continue
+        _unlink(entry.path)
+        removed.append(Path(entry.path))
+    return removed
+
+
 def temp_path(path: Path) -> Path:
     """A fresh temporary name beside ``path`` (same folder, so the rename is atomic)."""
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        fd, tmp = tempfile.mkstemp(prefix=_temp_prefix(path), suffix=TEMP_SUFFIX, dir=path.parent)
     except OSError as exc:
         raise storage_error(path, exc) from exc
     os.close(fd)
@@ -62,7 +100,7 @@ def temp_path(path: Path) -> Path:
 def write_temp(path: Path, data: bytes) -> Path:
     """Write ``data`` to a new temp file beside ``path``, fsynced and size-checked; returns its path."""
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        fd, tmp = tempfile.mkstemp(prefix=_temp_prefix(path), suffix=TEMP_SUFFIX, dir=path.parent)
     except OSError as exc:
         raise storage_error(path, exc) from exc
     try:

@@ -17,6 +17,7 @@ from lps_gui.io.session_paths import check_relative
 
 MAX_INDEX = 10_000_000  # far above any plan (plans are limited well below this)
 MAX_LINE_BYTES = 1 << 16
+MAX_POSITION_MM = 1e6  # a kilometre of travel
 
 
 def _int(d: dict[str, Any], key: str, default: int | None = None) -> int:
@@ -37,15 +38,23 @@ def _float(d: dict[str, Any], key: str, optional: bool = False) -> float | None:
     return float(v)
 
 
+def _position(d: dict[str, Any], key: str, optional: bool = False) -> float | None:
+    """A finite number of mm within any stage's travel (1e308 would overflow the solver)."""
+    v = _float(d, key, optional)
+    if v is not None and abs(v) > MAX_POSITION_MM:
+        raise ValueError(f"field {key!r} is {v!r} mm, outside +-{MAX_POSITION_MM:g} mm")
+    return v
+
+
 def _coordinate(d: dict[str, Any], key: str, optional: bool = False) -> float | tuple[float, float] | None:
     """A position: a finite number (one axis) or [x, y] (a planar stage)."""
     v = d.get(key)
     if isinstance(v, (list, tuple)):
         if len(v) != 2:
             raise ValueError(f"field {key!r}: a planar position is [x, y], not {v!r}")
-        x, y = (_float({key: c}, key) for c in v)
+        x, y = (_position({key: c}, key) for c in v)
         return (x, y)
-    return _float(d, key, optional)
+    return _position(d, key, optional)
 
 
 def parse_time(v: Any) -> float:
@@ -85,7 +94,7 @@ def capture_fields(d: Any) -> dict[str, Any]:
         "sha256": sha,
         "time": parse_time(d.get("time", 0.0)),
         "frame": _int(d, "frame", 0),
-        "commanded_mm": _float(d, "commanded_mm", optional=True),
+        "commanded_mm": _position(d, "commanded_mm", optional=True),
     }
 
 

@@ -17,6 +17,8 @@ Comment lines are few and are handled one by one.
 from __future__ import annotations
 
 import hashlib
+import os
+import stat
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -25,6 +27,9 @@ import numpy as np
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_bytes_atomic
 from lps_gui.io.corners_vnl_fast import comment_fields, read_simple
+
+MAX_CORNERS_BYTES = 2 << 30  # 100000 views (the plan limit) of 54 corners: ~2 GB; the fast reader sizes its table by the file
+MAX_GENERAL_BYTES = 256 << 20  # hand-edited files (CR line ends, tabs, odd spaces) go through the general parser
 
 HEADER = "# filename x y level"
 
@@ -153,14 +158,32 @@ def read_corners_vnl(path: Path | str, n_corners: int) -> CornerTable:
     """
     path = Path(path)
     try:
-        with open(path, "rb") as stream:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOFOLLOW", 0))  # a FIFO must not block
+    except FileNotFoundError:
+        raise InputError(f"{path}: corners file not found; run `lps detect` first") from None
+    except OSError as exc:
+        why = "is a symbolic link; session files must be regular files inside the session folder" if path.is_symlink() \
+            else f"cannot read corners ({exc.strerror})"
+        raise InputError(f"{path}: {why}") from None
+    with os.fdopen(fd, "rb") as stream:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            raise InputError(f"{path}: not a regular file; delete it and run `lps detect` again")
+        if st.st_size > MAX_CORNERS_BYTES:
+            raise InputError(f"{path}: {st.st_size / 1e6:.0f} MB, over the {MAX_CORNERS_BYTES / 1e6:.0f} MB limit of a "
+                             "corners file; delete it and run `lps detect` again")
+        try:
             simple = read_simple(stream, n_corners)
-    except OSError:
-        simple = None  # the general reader below names the problem
-    if simple is not None:
-        return CornerTable(simple.names, simple.corners_px, simple.failed, simple.meta, simple.sha256)
+        except OSError:
+            simple = None  # the general reader below names the problem
+        if simple is not None:
+            return CornerTable(simple.names, simple.corners_px, simple.failed, simple.meta, simple.sha256)
+        if st.st_size > MAX_GENERAL_BYTES:  # the general parser holds ~10 index arrays per byte
+            raise InputError(f"{path}: {st.st_size / 1e6:.0f} MB and not in the form `lps detect` writes (over the "
+                             f"{MAX_GENERAL_BYTES / 1e6:.0f} MB this reader takes); delete it and run `lps detect` again")
+        stream.seek(0)
+        data = stream.read(MAX_GENERAL_BYTES + 1)
     try:
-        data = path.read_bytes()
         text = data.decode("utf-8")
     except FileNotFoundError:
         raise InputError(f"{path}: corners file not found; run `lps detect` first") from None

@@ -21,6 +21,7 @@ import numpy as np
 from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.export_poses import PIXEL_CENTRE_SHIFT, camera_to_world_opengl, rotation_to_quaternion
 from lps_gui.io.atomic import write_text_atomic
+from lps_gui.io.file_set import write_file_set
 
 POSES_CSV_COLUMNS = ("index", "run", "direction", "file", "target_mm", "measured_mm",
                      "nominal_x_mm", "nominal_y_mm", "nominal_z_mm", "measured_x_mm", "measured_y_mm", "measured_z_mm")
@@ -50,10 +51,10 @@ def write_colmap(folder: Path, intr: CameraIntrinsics, R: np.ndarray, t: np.ndar
            "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)",
            f"# Number of points: {len(board_points)}"]
     pts += [f"{k} {X!r} {Y!r} {Z!r} 255 255 255 0" for k, (X, Y, Z) in enumerate(board_points.tolist(), start=1)]
-    paths = [folder / "cameras.txt", folder / "images.txt", folder / "points3D.txt"]
-    for path, text in zip(paths, (cams, "\n".join(lines) + "\n", "\n".join(pts) + "\n")):
-        write_text_atomic(path, text)
-    return paths
+    texts = {"cameras.txt": cams, "points3D.txt": "\n".join(pts) + "\n", "images.txt": "\n".join(lines) + "\n"}
+    # one set: a kill or a full disk over an older export leaves the old three files or the new three, never a mix
+    write_file_set(folder, {name: text.encode("utf-8") for name, text in texts.items()}, last="images.txt")
+    return [folder / "cameras.txt", folder / "images.txt", folder / "points3D.txt"]
 
 
 def write_nerfstudio(folder: Path, intr: CameraIntrinsics, R: np.ndarray, centres: np.ndarray, names: Sequence[str],

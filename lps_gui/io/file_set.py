@@ -1,18 +1,32 @@
-"""Write several files that belong together (results.json and its CSVs) as one set.
+"""Write several files that belong together (results.json, its CSVs, results/latest.json) as one set.
 
-Every file goes to a checked temp file first; only when all of them are
-complete are they renamed, one after the other, in a row of renames that
-cannot run out of disk space. A failure before the renames leaves every old
-file as it was. The set is given as a folder and ``{name: bytes}`` so a
-caller can aim it at a fresh folder (a results history entry) as easily as
-at the session folder.
+Every file goes to a checked temp file first. Only when all of them are
+complete is a journal written (atomically) naming the renames; then the
+renames run, and the journal is removed. A failure before the journal
+leaves every old file as it was; a kill after it leaves a journal that the
+next writer or reader of the folder rolls forward (:func:`recover_file_set`:
+the temps are complete and fsynced, so the renames can always be finished).
+A reader therefore sees the old set or the new one, never a mix, once any
+lps command has looked at the folder. Names may lie one folder down
+(``results/latest.json``) so the history record joins the same commit.
 """
 from __future__ import annotations
 
-from pathlib import Path
+import errno
+import json
+import os
+from pathlib import Path, PurePosixPath
 from typing import Mapping
 
-from lps_gui.io.atomic import _unlink, commit_temp, fsync_dir, storage_error, write_temp
+from lps_gui.io.atomic import _unlink, fsync_dir, storage_error, write_bytes_atomic, write_temp
+
+JOURNAL = ".file-set-commit.json"
+
+
+def _check_name(name: str) -> None:
+    p = PurePosixPath(name)
+    if not name or p.is_absolute() or any(part in ("", ".", "..") for part in p.parts) or len(p.parts) > 2:
+        raise ValueError(f"write_file_set takes file names (at most one folder down), not {name!r}")
 
 
 def write_file_set(folder: Path | str, files: Mapping[str, bytes], last: str | None = None) -> dict[str, Path]:
@@ -21,29 +35,67 @@ def write_file_set(folder: Path | str, files: Mapping[str, bytes], last: str | N
     Returns the path of every file written.
     """
     folder = Path(folder)
+    order = [n for n in files if n != last] + ([last] if last in files else [])
+    for name in order:
+        _check_name(name)
     try:
         folder.mkdir(parents=True, exist_ok=True)
+        for name in order:
+            (folder / name).parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise storage_error(folder, exc) from exc
-    order = [n for n in files if n != last] + ([last] if last in files else [])
+    recover_file_set(folder)
     temps: dict[str, Path] = {}
     try:
         for name in order:
-            if "/" in name or name in ("", ".", ".."):
-                raise ValueError(f"write_file_set takes plain file names, not {name!r}")
             temps[name] = write_temp(folder / name, files[name])
+        journal = [[str(temps[name].relative_to(folder)), name] for name in order]
+        write_bytes_atomic(folder / JOURNAL, json.dumps({"renames": journal}).encode("utf-8"))
     except BaseException:
         for tmp in temps.values():
             _unlink(tmp)
         raise
-    for i, name in enumerate(order):
-        try:
-            commit_temp(temps[name], folder / name, expected_size=len(files[name]), min_size=0)
-        except BaseException:
-            for later in order[i + 1:]:
-                _unlink(temps[later])
-            raise
-    fsync_dir(folder)
+    _finish(folder, journal)
     return {name: folder / name for name in order}
 
 
+def _finish(folder: Path, renames: list[list[str]]) -> None:
+    """Run the journal's renames (those not done yet), sync the folders, drop the journal."""
+    dirs = {folder}
+    for tmp, name in renames:
+        try:
+            os.replace(folder / tmp, folder / name)
+        except FileNotFoundError:
+            pass  # done already (by a reader that rolled forward, or before a kill)
+        except OSError as exc:
+            raise storage_error(folder / name, exc) from exc
+        dirs.add((folder / name).parent)
+    for d in dirs:
+        fsync_dir(d)
+    _unlink(folder / JOURNAL)
+    fsync_dir(folder)
+
+
+def recover_file_set(folder: Path | str) -> bool:
+    """Finish the commit a killed writer left in ``folder`` (its journal); True when there was one.
+
+    Safe to call by anyone at any time: every rename is of a complete temp file and is done at most once.
+    """
+    folder = Path(folder)
+    path = folder / JOURNAL
+    try:
+        with open(path, "rb") as f:
+            record = json.loads(f.read(1 << 20))
+        renames = [[str(t), str(n)] for t, n in record["renames"]]
+        for tmp, name in renames:
+            _check_name(name)
+            if "/" in tmp and PurePosixPath(tmp).parent != PurePosixPath(name).parent or ".." in tmp:
+                raise ValueError(tmp)
+    except FileNotFoundError:
+        return False
+    except (OSError, ValueError, KeyError, TypeError) as exc:  # a journal of another program, or torn: drop it
+        if not isinstance(exc, OSError) or exc.errno != errno.EACCES:
+            _unlink(path)
+        return False
+    _finish(folder, renames)
+    return True

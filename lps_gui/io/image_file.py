@@ -7,47 +7,40 @@ refused with one line instead of exhausting memory.
 from __future__ import annotations
 
 import os
-import stat
 from pathlib import Path
 
 import numpy as np
 
-from lps_gui.core.image_header import HEADER_BYTES, check_image_header
+from lps_gui.core.image_header import HEADER_BYTES, bytes_reader, check_image_header
 from lps_gui.errors import InputError
+from lps_gui.file_limits import MAX_FILE_BYTES, check_regular_file, read_file_limited  # re-exported: every reader's way in
 
-MAX_IMAGE_BYTES = 1 << 30  # 1 GB on disk
-
-
-def read_file_limited(path: Path | str, max_bytes: int = MAX_IMAGE_BYTES, what: str = "image",
-                      follow_symlinks: bool = True) -> bytes:
-    """The bytes of a regular file of at most ``max_bytes`` (not a device, FIFO or folder)."""
-    path = Path(path)
-    flags = os.O_RDONLY | (0 if follow_symlinks else getattr(os, "O_NOFOLLOW", 0)) | getattr(os, "O_NONBLOCK", 0)
-    try:
-        fd = os.open(path, flags)
-    except FileNotFoundError:
-        raise InputError(f"{path}: {what} not found; check the path") from None
-    except OSError as exc:
-        if not follow_symlinks and path.is_symlink():
-            raise InputError(f"{path}: is a symbolic link; session files must be regular files inside the session folder") from None
-        raise InputError(f"{path}: cannot read the {what} ({exc.strerror})") from None
-    with os.fdopen(fd, "rb") as f:
-        st = os.fstat(fd)
-        if not stat.S_ISREG(st.st_mode):
-            raise InputError(f"{path}: not a regular file; give an {what} file")
-        if st.st_size > max_bytes:
-            raise InputError(f"{path}: {st.st_size / 1e6:.0f} MB, over the {max_bytes / 1e6:.0f} MB limit for an {what}")
-        return f.read(max_bytes + 1)
+MAX_IMAGE_BYTES = MAX_FILE_BYTES  # 1 GB on disk
+__all__ = ["MAX_IMAGE_BYTES", "check_regular_file", "decode_image", "read_file_limited", "read_image"]
 
 
 def decode_image(data: bytes, name: str, flags: int | None = None) -> np.ndarray | None:
     """Decode bytes after the header check; None when OpenCV cannot decode them."""
     import cv2
 
-    check_image_header(data[:HEADER_BYTES], name)
+    check_image_header(data[:HEADER_BYTES], name, read_at=bytes_reader(data))
     if not data:
         return None
     return cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_GRAYSCALE if flags is None else flags)
+
+
+def image_size(path: Path | str) -> tuple[int, int]:
+    """(width, height) of an image file from its header (checked like every read), decoding only formats without one."""
+    path = Path(path)
+    st = check_regular_file(path, "image")
+    if st.st_size > MAX_IMAGE_BYTES:
+        raise InputError(f"{path}: {st.st_size / 1e6:.0f} MB, over the {MAX_IMAGE_BYTES / 1e6:.0f} MB limit for an image")
+    with open(path, "rb") as f:
+        size = check_image_header(f.read(HEADER_BYTES), str(path), read_at=lambda offset, n: os.pread(f.fileno(), n, offset))
+    if size is None:
+        image = read_image(path)
+        size = (image.shape[1], image.shape[0])
+    return size
 
 
 def read_image(path: Path | str, flags: int | None = None) -> np.ndarray:

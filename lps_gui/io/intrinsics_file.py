@@ -23,6 +23,7 @@ from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_text_atomic
 from lps_gui.io.cameramodel_file import SUFFIX as CAMERAMODEL_SUFFIX
 from lps_gui.io.cameramodel_file import read_cameramodel, write_cameramodel
+from lps_gui.io.image_file import check_regular_file, read_file_limited
 from lps_gui.io.jsonfile import read_json, write_json
 from lps_gui.io.value_checks import check_intrinsics_values
 
@@ -91,14 +92,22 @@ def apply_board_warp(board: Board, intr: CameraIntrinsics | None) -> Board:
         raise InputError(f"intrinsics: board_warp_mm must be [bow_x, bow_y] in mm, got {warp!r}") from exc
 
 
-def read_intrinsics(path: Path | str) -> CameraIntrinsics:
-    """Read intrinsics from JSON, OpenCV YAML/XML or mrcal .cameramodel (chosen by suffix)."""
+MAX_INTRINSICS_BYTES = 16 << 20  # a calibration with per-view figures of 10000 views is a few MB
+
+
+def read_intrinsics(path: Path | str, follow_symlinks: bool = True) -> CameraIntrinsics:
+    """Read intrinsics from JSON, OpenCV YAML/XML or mrcal .cameramodel (chosen by suffix).
+
+    The file must be a regular one (a FIFO would block the read for ever); ``follow_symlinks=False`` for a
+    file a session names.
+    """
     path = Path(path)
     if path.suffix.lower() == CAMERAMODEL_SUFFIX:
+        check_regular_file(path, "intrinsics file", follow_symlinks)
         return read_cameramodel(path)
     if path.suffix.lower() in YAML_SUFFIXES:
-        return _read_opencv_yaml(path)
-    return intrinsics_from_dict(read_json(path, "intrinsics file"), str(path))
+        return _read_opencv_yaml(path, read_file_limited(path, MAX_INTRINSICS_BYTES, "intrinsics file", follow_symlinks))
+    return intrinsics_from_dict(read_json(path, "intrinsics file", follow_symlinks), str(path))
 
 
 def write_intrinsics(path: Path | str, intr: CameraIntrinsics) -> None:
@@ -111,24 +120,27 @@ def write_intrinsics(path: Path | str, intr: CameraIntrinsics) -> None:
         write_json(path, intrinsics_to_dict(intr))
 
 
-def _read_opencv_yaml(path: Path) -> CameraIntrinsics:
+def _read_opencv_yaml(path: Path, data: bytes) -> CameraIntrinsics:
+    """The intrinsics of OpenCV FileStorage text ``data`` (read by the caller: limits checked, no FIFO)."""
     import cv2
 
-    if not path.exists():
-        raise InputError(f"{path}: intrinsics file not found; check the path")
     try:
-        fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
-    except cv2.error as exc:
-        raise InputError(f"{path}: not an OpenCV FileStorage file ({str(exc).splitlines()[-1]})") from exc
-    try:
-        K = fs.getNode("camera_matrix").mat()
-        dist = fs.getNode("distortion_coefficients").mat()
-        w = fs.getNode("image_width").real()
-        h = fs.getNode("image_height").real()
-        std = fs.getNode("std_intrinsics").mat()
-        rms = fs.getNode("rms_px").real()
-    finally:
-        fs.release()
+        text = data.decode("utf-8")
+        fs = cv2.FileStorage(text, cv2.FILE_STORAGE_READ | cv2.FILE_STORAGE_MEMORY)
+        try:
+            K = fs.getNode("camera_matrix").mat()
+            dist = fs.getNode("distortion_coefficients").mat()
+            w = fs.getNode("image_width").real()
+            h = fs.getNode("image_height").real()
+            std = fs.getNode("std_intrinsics").mat()
+            rms = fs.getNode("rms_px").real()
+        finally:
+            fs.release()
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not a text file (binary content); give OpenCV calibration YAML") from None
+    except (cv2.error, SystemError, ValueError) as exc:  # garbage YAML: cv2.error or a SystemError from its binding
+        why = (str(exc).strip().splitlines() or [type(exc).__name__])[-1]
+        raise InputError(f"{path}: not an OpenCV FileStorage file ({why[:120]})") from None
     if K is None or dist is None:
         raise InputError(f"{path}: needs camera_matrix and distortion_coefficients nodes (OpenCV calibration YAML)")
     d: dict[str, Any] = {"image_size": [int(w), int(h)], "camera_matrix": K, "dist": dist.ravel()[:5]}

@@ -7,18 +7,22 @@ from typing import Any
 
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_bytes_atomic
+from lps_gui.io.image_file import read_file_limited
 
 
-def read_json(path: Path | str, what: str = "file") -> Any:
+MAX_JSON_BYTES = 256 << 20  # a results.json of 100000 views is ~100 MB
+
+
+def read_json(path: Path | str, what: str = "file", follow_symlinks: bool = True) -> Any:
+    """Parsed JSON of a regular file (a FIFO or device is refused before it is opened for reading, the size capped).
+
+    ``follow_symlinks=False`` for the files of a session folder: lps never writes them as links.
+    """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = read_file_limited(path, MAX_JSON_BYTES, what, follow_symlinks=follow_symlinks).decode("utf-8")
     except UnicodeDecodeError:
         raise InputError(f"{path}: not a text file (binary content); fix or regenerate the {what}") from None
-    except FileNotFoundError:
-        raise InputError(f"{path}: {what} not found; check the path") from None
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read {what} ({exc.strerror})") from exc
     try:
         return json.loads(text)
     except json.JSONDecodeError as exc:

@@ -21,9 +21,10 @@ from typing import Any
 import numpy as np
 
 from lps_gui import __version__
-from lps_gui.errors import InputError
-from lps_gui.io.file_set import write_file_set
+from lps_gui.errors import InputError, LpsError
+from lps_gui.io.file_set import JOURNAL, recover_file_set, write_file_set
 from lps_gui.io.jsonfile import json_bytes, read_json
+from lps_gui.io.results_checks import check_results
 
 FORMAT = "lps-results/1"
 RESULTS_FILE = "results.json"
@@ -360,13 +361,18 @@ def write_results(folder: Path | str, results: dict[str, Any]) -> dict[str, Path
     go beside it as ``<stem>-positions.csv`` and ``<stem>-summary.csv``.
     """
     folder, names = _result_names(Path(folder))
-    files = {
+    written = write_file_set(folder, result_set_bytes(results, names), last=names["results"])
+    return {key: written[name] for key, name in names.items()}
+
+
+def result_set_bytes(results: dict[str, Any], names: dict[str, str] | None = None) -> dict[str, bytes]:
+    """The content of the result set: ``{file name: bytes}`` of positions.csv, summary.csv and results.json."""
+    names = names or {"positions": POSITIONS_FILE, "summary": SUMMARY_FILE, "results": RESULTS_FILE}
+    return {
         names["positions"]: positions_csv(results).encode("utf-8"),
         names["summary"]: summary_csv(results).encode("utf-8"),
         names["results"]: json_bytes(results),
     }
-    written = write_file_set(folder, files, last=names["results"])
-    return {key: written[name] for key, name in names.items()}
 
 
 def _result_names(path: Path) -> tuple[Path, dict[str, str]]:
@@ -385,7 +391,13 @@ def read_results(path: Path | str) -> dict[str, Any]:
         path = path / RESULTS_FILE
     if not path.exists():
         raise InputError(f"{path}: no results yet; run `lps estimate {path.parent}` first")
-    data = read_json(path, "results file")
+    if (path.parent / JOURNAL).exists():  # a writer was killed mid-commit: finish it, so the set read is one set
+        try:
+            recover_file_set(path.parent)
+        except LpsError:  # a read-only copy: read what is there
+            pass
+    data = read_json(path, "results file", follow_symlinks=False)  # lps writes it, never as a link
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise InputError(f"{path}: not an {FORMAT} file; re-run `lps estimate`")
+    check_results(data, str(path))
     return data

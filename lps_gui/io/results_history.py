@@ -14,9 +14,10 @@ import re
 from pathlib import Path
 from typing import Any
 
+from lps_gui.io.atomic import write_bytes_atomic
 from lps_gui.io.file_set import write_file_set
-from lps_gui.io.jsonfile import read_json, write_json
-from lps_gui.io.results_file import POSITIONS_FILE, RESULTS_FILE, SUMMARY_FILE
+from lps_gui.io.jsonfile import json_bytes, read_json
+from lps_gui.io.results_file import POSITIONS_FILE, RESULTS_FILE, SUMMARY_FILE, result_set_bytes
 
 HISTORY_DIR = "results"
 LATEST_FILE = "latest.json"
@@ -75,17 +76,42 @@ def _kept_as_latest(folder: Path) -> Path | None:
     return entry
 
 
-def record_latest(session_dir: Path | str, results: dict[str, Any]) -> Path:
-    """After the top-level set was written: copy it into the history and record it as the latest."""
-    folder = Path(session_dir)
+def _new_entry(folder: Path, results: dict[str, Any]) -> Path:
     dest = folder / HISTORY_DIR / entry_name(results)
     n = 1
     while (dest / RESULTS_FILE).exists() and read_json(dest / RESULTS_FILE, "results file") != results:
         n += 1  # two estimates within one second: keep both
         dest = folder / HISTORY_DIR / f"{entry_name(results)}-{n}"
+    return dest
+
+
+def _latest_record(dest: Path, results: dict[str, Any]) -> bytes:
+    return json_bytes({"latest": dest.name, "created": results.get("created"), "method": results.get("method")})
+
+
+def record_latest(session_dir: Path | str, results: dict[str, Any]) -> Path:
+    """After the top-level set was written: copy it into the history and record it as the latest."""
+    folder = Path(session_dir)
+    dest = _new_entry(folder, results)
     _copy_set(folder, dest)
-    write_json(folder / HISTORY_DIR / LATEST_FILE, {"latest": dest.name, "created": results.get("created"),
-                                                     "method": results.get("method")})
+    write_bytes_atomic(folder / HISTORY_DIR / LATEST_FILE, _latest_record(dest, results))
+    return dest
+
+
+def commit_results(session_dir: Path | str, results: dict[str, Any]) -> Path:
+    """Write a new result set into the session folder as one commit; returns its history entry.
+
+    The previous set is kept first, then the new set's history copy is written; only then are the top-level
+    results.json, positions.csv, summary.csv and results/latest.json replaced, in one journaled commit
+    (:func:`lps_gui.io.file_set.write_file_set`). A full disk at any step leaves the old set (and latest.json
+    naming it) in place, a kill leaves the old set or a journal the next command finishes.
+    """
+    folder = Path(session_dir)
+    keep_previous(folder)
+    files = result_set_bytes(results)
+    dest = _new_entry(folder, results)
+    write_file_set(dest, files, last=RESULTS_FILE)
+    write_file_set(folder, {**files, f"{HISTORY_DIR}/{LATEST_FILE}": _latest_record(dest, results)}, last=RESULTS_FILE)
     return dest
 
 

@@ -7,6 +7,7 @@ tells a resumed capture where to go on.
 from __future__ import annotations
 
 import json
+import os
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -15,11 +16,12 @@ from typing import Any, Iterable
 from lps_gui.core.board import Board
 from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.plan import Plan, PlannedStop
-from lps_gui.errors import InputError
+from lps_gui.errors import InputError, StorageError
 from lps_gui.io.atomic import append_line_durable, sha256_bytes, write_bytes_atomic
 from lps_gui.io.board_file import board_from_dict, board_to_dict
 from lps_gui.io.intrinsics_file import intrinsics_from_dict, intrinsics_to_dict, read_intrinsics
 from lps_gui.io.jsonfile import read_json, write_json
+from lps_gui.io.session_paths import resolve_in_session
 
 FORMAT = "lps-session/1"
 SESSION_FILE = "session.json"
@@ -60,12 +62,32 @@ class CaptureRecord:
         return cls(**capture_fields(d))
 
 
+def _identity(folder: Path) -> tuple[int, int] | None:
+    """(st_dev, st_ino) of a folder, or None when there is none at that path."""
+    try:
+        st = os.stat(folder)
+    except OSError:
+        return None
+    return (st.st_dev, st.st_ino)
+
+
 class Session:
     """A session folder on disk; cheap to open, reads files on demand."""
 
     def __init__(self, folder: Path | str, meta: dict[str, Any]):
         self.folder = Path(folder)
         self.meta = meta
+        self._identity = _identity(self.folder)
+
+    def check_present(self) -> None:
+        """StorageError when the folder opened is no longer at its path (moved, removed, replaced).
+
+        Checked before every write: a session moved mid-capture would otherwise be split, the old path
+        recreated with the rest of the frames and a new session.json.
+        """
+        if self._identity is None or _identity(self.folder) != self._identity:
+            raise StorageError(f"{self.folder}: the session folder was moved or removed while lps was writing to it; "
+                               "nothing more is written: put it back (or resume the moved session with --resume)")
 
     # -------------------------------------------------------------- create/open
     @classmethod
@@ -82,9 +104,14 @@ class Session:
     ) -> "Session":
         """Write session.json into ``folder`` (created); refuse to overwrite a session."""
         folder = Path(folder)
-        if (folder / SESSION_FILE).exists():
+        if (folder.exists() or folder.is_symlink()) and not folder.is_dir():
+            raise InputError(f"{folder}: exists and is not a folder; give a new or an empty folder for the session")
+        if (folder / SESSION_FILE).exists() or (folder / SESSION_FILE).is_symlink():
             raise InputError(f"{folder}: already holds a session; use --resume or choose an empty folder")
-        (folder / IMAGES_DIR).mkdir(parents=True, exist_ok=True)
+        try:
+            (folder / IMAGES_DIR).mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise InputError(f"{folder}: cannot create the session folder ({exc.strerror}); choose another place") from None
         meta: dict[str, Any] = {
             "format": FORMAT,
             "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
@@ -106,12 +133,13 @@ class Session:
         folder = Path(folder)
         if not folder.is_dir():
             raise InputError(f"{folder}: session folder not found; check the path")
-        meta = read_json(folder / SESSION_FILE, "session file")
+        meta = read_json(folder / SESSION_FILE, "session file", follow_symlinks=False)
         if not isinstance(meta, dict) or meta.get("format") != FORMAT:
             raise InputError(f"{folder / SESSION_FILE}: not an {FORMAT} session file")
         return cls(folder, meta)
 
     def save_meta(self) -> None:
+        self.check_present()
         write_json(self.folder / SESSION_FILE, self.meta)
 
     # -------------------------------------------------------------- contents
@@ -121,8 +149,12 @@ class Session:
     @property
     def axes(self) -> list[str]:
         """The axes the camera moves along: ["X"] (a line) or ["X", "Y"] (a planar stage, SPEC 10)."""
-        axes = (self.meta.get("plan") or {}).get("axes") or ["X"]
-        return [str(a) for a in axes] if isinstance(axes, list) else ["X"]
+        plan = self.meta.get("plan") or {}
+        axes = plan.get("axes", ["X"]) if isinstance(plan, dict) else None
+        if axes in (["X"], ["X", "Y"]) or axes is None and isinstance(plan, dict):
+            return list(axes or ["X"])
+        raise InputError(f"{self.folder / SESSION_FILE}: plan.axes is {axes!r}; a session measures [\"X\"] (a line) or "
+                         "[\"X\", \"Y\"] (a planar stage): fix or regenerate session.json")
 
     @property
     def planar(self) -> bool:
@@ -142,9 +174,9 @@ class Session:
             raise InputError(
                 f"{self.folder / SESSION_FILE}: has no intrinsics; pass --intrinsics FILE or run `lps intrinsics` first"
             )
-        if isinstance(value, str):
-            path = Path(value)
-            return read_intrinsics(path if path.is_absolute() else self.folder / path)
+        if isinstance(value, str):  # a file inside the session, never one elsewhere a copied session.json names
+            where = f"{self.folder / SESSION_FILE}: intrinsics"
+            return read_intrinsics(resolve_in_session(self.folder, value, where), follow_symlinks=False)
         return intrinsics_from_dict(value, str(self.folder / SESSION_FILE))
 
     @property
@@ -168,16 +200,24 @@ class Session:
         from lps_gui.io.capture_fields import parse_capture_lines
 
         path = self.captures_path
-        if not path.exists():
+        if not path.exists() and not path.is_symlink():
             return []
-        return [CaptureRecord(**fields) for fields in parse_capture_lines(path)]
+        records = [CaptureRecord(**fields) for fields in parse_capture_lines(path)]
+        planar = self.planar
+        for r in records:
+            if isinstance(r.target_mm, tuple) != planar:
+                raise InputError(f"{path}: capture {r.index} has target_mm {r.target_mm!r}; this session measures "
+                                 f"{'X,Y: give [x, y]' if planar else 'one axis: give one number'} (mm)")
+        return records
 
     def append(self, record: CaptureRecord) -> None:
+        self.check_present()
         append_line_durable(self.captures_path, record.to_json())
 
     def write_image(self, name: str, data: bytes) -> tuple[str, str]:
         """Store encoded image bytes atomically; returns (relative file, sha256)."""
         rel = f"{IMAGES_DIR}/{name}"
+        self.check_present()
         write_bytes_atomic(self.folder / rel, data)
         return rel, sha256_bytes(data)
 

@@ -20,7 +20,9 @@ import time
 from pathlib import Path
 from types import TracebackType
 
-from lps_gui.errors import InputError
+from lps_gui.errors import InputError, LpsError
+from lps_gui.io.atomic import remove_orphan_temps
+from lps_gui.io.file_set import recover_file_set
 
 LOCK_FILE = ".lock"
 
@@ -35,6 +37,25 @@ def _holder_text(raw: bytes) -> str:
         return f"pid {info['pid']} on {info['host']} ({info['command']}, since {info['since']})"
     except (ValueError, KeyError, TypeError, UnicodeDecodeError):
         return "another process"
+
+
+def tidy_after_kill(folder: Path) -> None:
+    """What a killed writer left: finish its journaled result commit, delete its temp files.
+
+    Run by whoever takes the lock (no other writer of the session runs then; a live process's temp files
+    are kept by pid all the same).
+    """
+    places = [folder, folder / "images", folder / "results"]
+    try:
+        places += [p for p in (folder / "results").iterdir() if p.is_dir() and not p.is_symlink()]
+    except OSError:
+        pass
+    for place in places:
+        try:
+            recover_file_set(place)
+        except LpsError:  # a read-only folder: the next writable run finishes it
+            pass
+        remove_orphan_temps(place)
 
 
 class SessionLock:
@@ -90,6 +111,7 @@ class SessionLock:
             pass
         self._fd = fd
         self._held[self._key] = 1
+        tidy_after_kill(self.folder)
         return self
 
     def _open(self, path: Path) -> int:

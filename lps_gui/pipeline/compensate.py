@@ -10,19 +10,22 @@ from lps_gui.core.compensation import CompensationTable, build_table, own_sigma_
 from lps_gui.errors import InputError
 from lps_gui.io.compensation_file import backlash_lines, skew_lines, write_table
 from lps_gui.io.results_file import read_results
+from lps_gui.pipeline.session_checks import require_current_results
 
 RESULTS_FILE = "results.json"
 
 
-def session_results(session_dir: Path | str) -> dict[str, Any]:
-    """results.json of a session folder, with a one-line error when it is missing."""
+def session_results(session_dir: Path | str, command: str = "compensate") -> dict[str, Any]:
+    """results.json of a session folder, computed from its current files; a one-line error otherwise."""
     folder = Path(session_dir)
     path = folder / RESULTS_FILE
     if not folder.is_dir():
         raise InputError(f"{folder}: session folder not found; check the path")
     if not path.exists():
         raise InputError(f"{folder}: no results.json; run `lps estimate {folder}` first")
-    return read_results(path)
+    results = read_results(path)
+    require_current_results(folder, results, command)
+    return results
 
 
 def table_from_results(results: dict[str, Any], max_points: int = 256, axis: str = "X") -> CompensationTable:

@@ -30,7 +30,7 @@ from lps_gui.io.intrinsics_file import apply_board_warp, intrinsics_to_dict, rea
 from lps_gui.io.results_file import assemble_results, summary_rows, write_results  # noqa: F401 (summary_rows re-exported)
 from lps_gui.io.results_file import json_floats, rows_from_columns
 from lps_gui.io.results_file import json_float as _f
-from lps_gui.io.results_history import keep_previous, record_latest
+from lps_gui.io.results_history import commit_results
 from lps_gui.io.session import Session
 from lps_gui.io.session_lock import SessionLock
 from lps_gui.pipeline.board_plane_results import position_columns, straightness_figures
@@ -134,10 +134,10 @@ def estimate_session(
 def _write_keeping_history(session: Session, out_dir: Path | str | None, results: dict[str, Any]) -> None:
     """Write the result set; into the session folder, the previous set is kept (results/<time>-<method>/)."""
     if out_dir is None:
-        keep_previous(session.folder)
-    write_results(Path(out_dir) if out_dir else session.folder, results)
-    if out_dir is None:
-        record_latest(session.folder, results)
+        session.check_present()  # moved or removed while estimating: a new folder must not appear at the old path
+        commit_results(session.folder, results)  # history copy first, then one journaled commit of the set
+    else:
+        write_results(Path(out_dir), results)
 
 
 # ----------------------------------------------------------------------------- results

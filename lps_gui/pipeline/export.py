@@ -54,7 +54,10 @@ def export_session(session_dir: Path | str, fmt: str, out: Path | str, straightn
     if fmt not in FORMATS:
         raise InputError(f"--format {fmt}: choose one of {', '.join(FORMATS)}")
     session = Session.open(session_dir)
-    results = session_results(session.folder)
+    results = session_results(session.folder, "export")
+    if len(results.get("axes") or ["X"]) == 2:
+        raise InputError(f"{session.folder}: a planar (X,Y) session; lps export writes the poses of a line (1-D "
+                         "sessions) only, so there is nothing to re-estimate: use results.json's positions instead")
     p = results.get("parameters") or {}
     try:
         R = np.asarray(p["R_cam_board"], dtype=float)

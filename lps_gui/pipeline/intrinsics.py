@@ -28,19 +28,25 @@ def expand_image_paths(items: list[Path]) -> list[Path]:
 
 
 def image_size_of(paths: list[Path], table: CornerTable) -> tuple[int, int]:
-    """Size (w, h) of the first image the board was found in (from its header, checked like every read)."""
-    from lps_gui.core.image_header import HEADER_BYTES, check_image_header
-    from lps_gui.io.image_file import read_image
+    """Size (w, h) of the images the board was found in (from their headers, checked like every read).
 
+    Images of two sizes are refused: one camera model cannot fit both, and a calibration of a mixed set
+    comes out confidently wrong (k2, k3 off by 10x).
+    """
+    from lps_gui.io.image_file import image_size
+
+    sizes: dict[tuple[int, int], list[str]] = {}
     for p in paths:
-        if str(p) in table.failed:
-            continue
-        with open(p, "rb") as f:
-            size = check_image_header(f.read(HEADER_BYTES), str(p))
-        if size is None:
-            img = read_image(p)
-            size = (img.shape[1], img.shape[0])
-        return size
+        if str(p) not in table.failed:
+            sizes.setdefault(image_size(p), []).append(str(p))
+    if len(sizes) > 1:
+        common = max(sizes, key=lambda k: len(sizes[k]))
+        other = next(k for k in sizes if k != common)
+        raise InputError(f"intrinsics: the images are of {len(sizes)} sizes: {len(sizes[common])} of "
+                         f"{common[0]}x{common[1]}, {len(sizes[other])} of {other[0]}x{other[1]} (first: "
+                         f"{sizes[other][0]}); calibrate with images of one camera at one resolution")
+    if sizes:
+        return next(iter(sizes))
     unreadable = [n for n, why in table.failed.items() if "board" not in why]
     if len(unreadable) == len(paths):
         raise InputError(f"intrinsics: none of the {len(paths)} images could be read (first: {unreadable[0]}: "

@@ -26,12 +26,22 @@ def check_corners_current(session: Session, table: CornerTable, records: Sequenc
                          f"(first: {stale[0]}; captures.jsonl lists a new sha256); run `lps detect {session.folder}`")
 
 
+MAX_CORNER_PX = 1e6  # no camera is a million pixels across
+
+
 def check_view_geometry(corners_px: Any, names: Sequence[str], source: Path | str) -> None:
-    """InputError naming the views whose corners lie on one line (they would give a silent wrong position)."""
+    """InputError naming the views whose corners lie on one line (they would give a silent wrong position)
+    or that hold a corner no camera can see (1e308 overflows the solver's sums)."""
     from lps_gui.core.view_geometry import collinear_views
 
     import numpy as np
 
+    xy = np.asarray(corners_px, float)
+    absurd = ~(np.isnan(xy) | (np.abs(xy) <= MAX_CORNER_PX))
+    if absurd.any():
+        view = int(np.argwhere(absurd)[0][0])
+        raise InputError(f"{source}: view {names[view]} has a corner at {xy[absurd][0]:g} px (over {MAX_CORNER_PX:g}); "
+                         "the corners are corrupt: delete corners.vnl and run `lps detect` again")
     bad = collinear_views(corners_px)
     if bad:
         seen = np.all(np.isfinite(np.asarray(corners_px, float)[bad]), axis=-1).sum(axis=1)
@@ -73,6 +83,25 @@ def stale_inputs(session_dir: Path | str, results: dict[str, Any]) -> list[str]:
         if sha256_file(path) != digest:
             changed.append(str(name))
     return changed
+
+
+def require_current_results(session_dir: Path | str, results: dict[str, Any], command: str) -> None:
+    """InputError when results.json was not computed from this session's current files.
+
+    The check `lps report` makes (exit 3 after writing), made before anything is written by the commands whose
+    output drives a machine or other software (compensate, export, compare): a results.json copied from another
+    session, or one older than the session's corners, would give a confident table of another stage.
+    """
+    folder = Path(session_dir)
+    recorded = (results.get("inputs") or {}).get("sha256") or {}
+    if not isinstance(recorded, dict) or not recorded:
+        raise InputError(f"{folder}/results.json: records no input hashes (made by another program or an old lps); "
+                         f"run `lps estimate {folder}` before `lps {command}`")
+    changed = stale_inputs(folder, results)
+    if changed:
+        raise InputError(f"{folder}/results.json: was computed from other files ({', '.join(changed)} differ: results of "
+                         f"another session, or of this one before it changed); run `lps estimate {folder}` before "
+                         f"`lps {command}`")
 
 
 MAX_PLAUSIBLE_NOISE_PX = 5.0  # sub-pixel corners scatter ~0.1 px; 5 px means the model or the corners are wrong

@@ -50,8 +50,11 @@ from lps_gui.io.board_file import board_from_dict
 from lps_gui.io.intrinsics_file import intrinsics_from_dict
 from lps_gui.io.results_file import json_float as _f, json_floats
 from lps_gui.io.session import Session
+from lps_gui.io.session_paths import read_session_file
+from lps_gui.errors import InputError
 
 TRUTH_FILE = "truth.jsonl"
+MAX_TRUTH_BYTES = 256 << 20  # ~300 bytes a capture
 ANGLE_NAMES = ("roll", "pitch", "yaw")
 
 
@@ -86,6 +89,7 @@ def planar_pose_truth(rig: Rig, pose: PlanarTruePose) -> dict[str, Any]:
 def append_truth(session: Session, index: int, truth: dict[str, Any]) -> None:
     """Append the truth of capture ``index`` to truth.jsonl (fsynced)."""
     line = json.dumps({"index": int(index), **truth}, separators=(",", ":"))
+    session.check_present()
     append_line_durable(session.folder / TRUTH_FILE, line)
 
 
@@ -95,7 +99,11 @@ def read_truth(session: Session) -> dict[int, dict[str, Any]]:
     if not path.exists():
         return {}
     out: dict[int, dict[str, Any]] = {}
-    for line in path.read_text(encoding="utf-8").splitlines():
+    try:  # inside the session, a regular file, size-capped (never /dev/zero through a link)
+        text = read_session_file(session.folder, TRUTH_FILE, MAX_TRUTH_BYTES, "truth file").decode("utf-8")
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not a text file (binary content); regenerate the session") from None
+    for line in text.splitlines():
         try:
             d = json.loads(line)
             out[int(d["index"])] = d
@@ -118,7 +126,7 @@ def prune_truth(session: Session) -> None:
     per_index = read_truth(session)
     keep = [per_index[i] for i in sorted(per_index) if i in listed]
     text = "".join(json.dumps(d, separators=(",", ":")) + "\n" for d in keep)
-    if text != path.read_text(encoding="utf-8"):
+    if text.encode("utf-8") != read_session_file(session.folder, TRUTH_FILE, MAX_TRUTH_BYTES, "truth file"):
         write_text_atomic(path, text)
 
 
@@ -182,7 +190,20 @@ def session_truth(session: Session) -> dict[str, Any] | None:
     truth.jsonl wins over session.json (it is the newer record while a capture
     is incomplete). With the rig's geometry recorded, also ``plane_mm`` (K,):
     the positions a constant-orientation model sees (core.simulate.board_plane_positions).
+    A truth that is not numbers of those shapes is an InputError naming the files.
     """
+    try:
+        out = _session_truth(session)
+    except (TypeError, ValueError, KeyError, IndexError) as exc:
+        raise InputError(f"{session.folder}: the simulator's truth (session.json 'truth' or {TRUTH_FILE}) is not "
+                         f"numbers of the expected shape ({str(exc)[:80]}); regenerate the session") from None
+    if out is not None and not all(np.all(np.isfinite(out[k])) for k in ("axis_mm", "straightness_um", "angles_urad")
+                                   if k in out):
+        raise InputError(f"{session.folder}: the simulator's truth holds non-finite values; regenerate the session")
+    return out
+
+
+def _session_truth(session: Session) -> dict[str, Any] | None:
     meta = session.meta.get("truth") or {}
     per_index = read_truth(session)
     if per_index:

@@ -62,3 +62,29 @@ def test_screenshot_of_a_missing_session_fails_with_one_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"lps-gui: {tmp_path / 'nowhere'}: session folder not found; check the path"]
     assert not (tmp_path / "w.png").exists()
+
+
+def test_the_window_uses_what_panels_expose_not_their_child_widgets(window):
+    """Issue 23: no `stage_panel.baud`, `estimation_panel.method.findData` in the window."""
+    import inspect
+    import re
+
+    from PySide6.QtWidgets import QWidget
+
+    import lps_gui.gui.main_window as main_window
+
+    chains = set(re.findall(r"self\.(\w+_panel)\.(\w+)\.\w+", inspect.getsource(main_window)))
+    assert chains  # signals are used this way
+    reached = [f"{p}.{a}" for p, a in chains if isinstance(getattr(getattr(window, p), a, None), QWidget)]
+    assert reached == []
+
+
+def test_the_camera_defaults_to_the_simulated_one_while_the_simulated_stage_is_chosen(window):
+    cam, stage = window.camera_panel, window.stage_panel
+    assert stage.current_source() == "sim" and cam.source.currentData() == "sim"
+    stage.select_source("emulator")
+    assert cam.source.findData("sim") < 0 and cam.source.currentData() == "0"
+    stage.select_source("sim")
+    assert cam.source.currentData() == "sim"
+    cam.start()  # before the stage is connected: one line saying what to do, nothing opened
+    assert cam.grabber is None and "connect" in window.last_error[1]

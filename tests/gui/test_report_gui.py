@@ -68,7 +68,7 @@ def test_results_open_on_accuracy_with_limit_drawn_and_open_report(qtbot, window
     assert not rp.open_report_btn.isEnabled()
     with qtbot.waitSignal(rp.drawing_done, timeout=20000):
         rp.set_results(results, folder, folder)
-    assert rp.tabs.currentWidget() is rp.iso_table
+    assert rp.tabs.currentWidget() is rp.accuracy_page
     assert rp.iso_table.item(0, 2) is not None and "\u00b1" in rp.iso_table.item(0, 2).text()
     assert "Positional accuracy" in rp.verdict.text() and "indicative" in rp.verdict.text()
     labels = [s.label for s in rp.drawn["deviation"].spec.series]
@@ -77,3 +77,28 @@ def test_results_open_on_accuracy_with_limit_drawn_and_open_report(qtbot, window
     (folder / "report.pdf").write_bytes(b"%PDF-1.4")
     rp.set_report(folder / "report.pdf")
     assert rp.open_report_btn.isEnabled() and rp.report_path == folder / "report.pdf"
+
+
+def test_results_show_every_column_all_tabs_and_the_per_target_table(qtbot, window, tmp_path, monkeypatch):
+    """Issue 26 item 10: U (k = 2) and Unit in sight, no tab behind scroll arrows, the ISO per-target table."""
+    from tests.report.conftest import make_results
+
+    results, _truth = make_results()
+    import lps_gui.gui.main_window as main_window
+
+    monkeypatch.setattr(main_window, "clamp_to_screen", lambda w: None)  # a 1600 px screen, not offscreen's 800
+    window.resize(1600, 960)
+    window.default_layout()  # the first start's layout
+    rp = window.results_panel
+    window.show_panel("results")
+    with qtbot.waitSignal(rp.drawing_done, timeout=20000):
+        rp.set_results(results, None, None)
+    qtbot.wait(50)
+    table = rp.iso_table
+    assert [table.horizontalHeaderItem(c).text() for c in range(4)] == ["Figure", "Value", "U (k = 2)", "Unit"]
+    for c in (1, 2, 3):  # wholly inside the visible part of the table
+        assert table.columnViewportPosition(c) + table.columnWidth(c) <= table.viewport().width(), c
+    bar = rp.tabs.tabBar()
+    assert rp.tabs.count() <= 7 and bar.sizeHint().width() <= rp.tabs.width()
+    assert rp.target_table.isVisibleTo(rp) and rp.target_table.rowCount() == len(
+        results["figures"]["iso230_2"]["per_target"]["target_mm"])

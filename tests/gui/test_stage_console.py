@@ -51,24 +51,32 @@ def test_a_key_press_in_a_focused_spin_box_does_not_move_the_stage(qtbot, window
     assert jogs == []
 
 
-def test_keyboard_jog_when_the_jog_area_has_focus_or_the_toggle_is_on(qtbot, window, jogs):
-    connect_sim(qtbot, window)
+def test_keyboard_jog_only_while_the_toggle_is_on(qtbot, window, jogs):
+    """Issue 26 item 8: right after Connect (the Stage panel has focus) arrows do nothing until the toggle is on."""
     panel = window.stage_panel
+    assert not panel.keyboard_jog.isChecked()  # off at start
+    connect_sim(qtbot, window)
     panel.step.setCurrentIndex(panel.step.findData(1.0))
     panel.feed.setValue(3000.0)
+    before = _position(window)
+    for w in (panel.connect_btn, panel.jog_area, panel.jog_buttons[("X", -1)], panel.read_settings_btn):
+        w.setFocus()
+        qtbot.waitUntil(lambda w=w: QApplication.focusWidget() is w, timeout=2000)
+        assert panel.keyboard_state.text() == "keys jog: off"
+        for key in (Qt.Key.Key_Left, Qt.Key.Key_Right, Qt.Key.Key_Up, Qt.Key.Key_PageUp):
+            qtbot.keyClick(w, key)
+    qtbot.wait(300)
+    assert jogs == [] and _position(window) == before
+    panel.keyboard_jog.setChecked(True)
     panel.jog_area.setFocus()
     qtbot.waitUntil(lambda: panel.keyboard_state.text() == "keys jog: ON", timeout=2000)
     y0 = _position(window)[1]
     qtbot.keyClick(panel.jog_area, Qt.Key.Key_Up)
     qtbot.waitUntil(lambda: abs(_position(window)[1] - (y0 + 1.0)) < 1e-6, timeout=10000)
-    assert jogs == [("Y", +1)]
-    panel.read_settings_btn.setFocus()  # outside the jog area: only with the toggle
-    qtbot.keyClick(panel.read_settings_btn, Qt.Key.Key_Right)
-    assert jogs == [("Y", +1)]
-    panel.keyboard_jog.setChecked(True)
-    assert panel.keyboard_state.text() == "keys jog: ON"
     qtbot.keyClick(panel.read_settings_btn, Qt.Key.Key_Right)
     assert jogs == [("Y", +1), ("X", +1)]
+    panel.keyboard_jog.setChecked(False)
+    assert panel.keyboard_state.text() == "keys jog: off"
 
 
 def test_serial_ports_by_id_lists_stable_names(tmp_path):
@@ -121,7 +129,7 @@ def test_typed_pty_of_an_external_grbl_connects_asks_home_or_unlock_and_shows_ho
     qtbot.waitUntil(lambda: panel.state_label.text() == "Idle", timeout=20000)
     qtbot.waitUntil(lambda: any("homing finished" in r.getMessage() for r in caplog.records), timeout=5000)
     assert external_grbl.stage.homed
-    assert "machine X -99.000" in panel.machine_label.text()
+    assert panel.machine["X"].text() == "-99.000"
 
 
 def test_console_sends_lines_keeps_history_and_shows_replies(qtbot, window, external_grbl):
@@ -157,10 +165,16 @@ def test_console_sends_lines_keeps_history_and_shows_replies(qtbot, window, exte
     qtbot.waitUntil(lambda: window.stage_ctl.last_status.state == "Idle", timeout=5000)
     panel.goto_btn.click()
     qtbot.waitUntil(lambda: abs(float(panel.readout["X"].text()) - 42.5) < 1e-6, timeout=10000)
-    assert panel.zero_btn.isEnabled()
-    panel.zero_btn.click()  # the work zero moves here; the machine position does not
+    machine = float(panel.machine["X"].text())
+    assert panel.zero_buttons["X"].isEnabled() and panel.work_system.currentData() == "G54"
+    panel.zero_buttons["X"].click()  # asks first, naming the system it changes
+    box = panel.dro.zero_box
+    assert box is not None and "G54" in box.text() and "G54" in box.windowTitle()
+    box.button(box.StandardButton.Yes).click()  # the work zero moves here; the machine position does not
     qtbot.waitUntil(lambda: abs(float(panel.readout["X"].text())) < 1e-6, timeout=10000)
-    assert "offset" in panel.machine_label.text()
+    qtbot.waitUntil(lambda: abs(float(panel.offset["X"].text()) - machine) < 1e-6, timeout=5000)  # GRBL's sign
+    assert float(panel.machine["X"].text()) == pytest.approx(machine)
+    assert window.stage_ctl.stage.work_offsets()["G54"][0] == pytest.approx(machine)  # $# agrees with the DRO
     assert external_grbl.stage.status().work_mm[0] == pytest.approx(42.5)
 
 
@@ -168,7 +182,7 @@ def test_console_is_disabled_for_the_simulated_stage_and_axes_can_be_hidden(qtbo
     connect_sim(qtbot, window)
     panel = window.stage_panel
     assert not panel.console.line.isEnabled() and "no G-code console" in panel.console.line.placeholderText()
-    assert not panel.zero_btn.isEnabled()  # the simulated stage has no work offsets
+    assert panel.zero_buttons["X"].isEnabled() and panel.work_system.isEnabled()  # GRBL's work offset model
     panel.axes.setCurrentIndex(panel.axes.findData("X"))
     assert panel.readout["X"].isVisible() and not panel.readout["Y"].isVisible()
     assert not panel.jog_buttons[("Z", +1)].isVisible()
@@ -188,3 +202,23 @@ def test_press_and_hold_jogs_until_released(qtbot, window):
     stopped = _position(window)[0]
     qtbot.wait(400)
     assert _position(window)[0] == stopped  # released: no queued jog runs on
+
+
+def test_an_emulator_started_elsewhere_appears_in_the_source_list(qtbot, window, tmp_path, monkeypatch):
+    """Issue 26 item 12: `lps emulate-grbl` announces its pty; the panel lists it without Refresh."""
+    import lps_gui.hardware.announce as announce
+
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(tmp_path))
+    panel = window.stage_panel
+    with GrblEmulator(SimulatedStage(travel_mm=(0.0, 100.0)), time_scale=4.0) as emu:
+        withdraw = announce.announce(emu.path)
+        assert announce.announced_ports() == [emu.path]
+        panel._watch_ports()  # what the timer does every few seconds
+        i = panel.source.findData(f"grbl:{emu.path}")
+        assert i >= 0 and "emulator" in panel.source.itemText(i)
+        assert panel.source.currentData() == "sim"  # the choice is kept
+        withdraw()
+    panel._watch_ports()
+    assert panel.source.findData(f"grbl:{emu.path}") < 0
+    (announce.announce_dir() / "999999999").write_text("/dev/pts/999\n")  # a dead emulator's file
+    assert announce.announced_ports() == [] and not (announce.announce_dir() / "999999999").exists()

@@ -28,7 +28,8 @@ def test_connect_jog_and_see_the_readout_change(qtbot, window):
     qtbot.waitUntil(lambda: abs(readout_mm(window) - (x0 + 10.0)) < 1e-6 and panel.state_label.text() == "Idle",
                     timeout=10000)
     assert "X 10.000" in window.status_pos.text() or f"X {x0 + 10:.3f}" in window.status_pos.text()
-    # keyboard jogging: Left arrow moves X back by one step
+    # keyboard jogging, once the toggle is on: Left arrow moves X back by one step
+    panel.keyboard_jog.setChecked(True)
     panel.jog_buttons[("X", -1)].setFocus()
     qtbot.keyClick(panel.jog_buttons[("X", -1)], Qt.Key.Key_Left)
     qtbot.waitUntil(lambda: abs(readout_mm(window) - x0) < 1e-6, timeout=10000)

@@ -133,3 +133,13 @@ def test_gcode_accepts_what_a_stage_needs():
     j = parse_block("G91G21X-0.5F1000", jog=True)
     assert j.axes == {"X": -0.5} and j.words["F"] == 1000.0
     assert parse_block("G4P0.01").words["P"] == 0.01
+
+
+def test_offsets_and_the_active_work_system_are_parsed():
+    from lps_gui.hardware.grbl.protocol import parse_offsets, parse_work_system
+
+    lines = ["[G54:-500.000,0.000,0.000]", "[G55:1.500,-2.000,0.000]", "[G92:0.000,0.000,0.000]", "[TLO:0.000]",
+             "[PRB:0.000,0.000,0.000:0]"]
+    assert parse_offsets(lines) == {"G54": (-500.0, 0.0, 0.0), "G55": (1.5, -2.0, 0.0), "G92": (0.0, 0.0, 0.0)}
+    assert parse_work_system(["[GC:G0 G57 G17 G21 G90 G94 M5 M9 T0 F0 S0]"]) == "G57"
+    assert parse_work_system(["ok"]) is None

@@ -225,3 +225,22 @@ def test_full_planner_waits_in_clock_time_and_never_spins_in_a_hold():
         st.move_to(50.0, 3000.0)
     st.resume()
     assert st.wait_idle().work_mm[0] == pytest.approx(25.0)
+
+
+def test_six_work_systems_keep_their_own_offsets_and_limits_stay_in_machine_space():
+    st = make(travel_mm=(0.0, 100.0), start_mm=40.0)
+    assert st.work_offsets() == {name: (0.0, 0.0, 0.0) for name in st.work_systems}  # work = machine at start
+    st.set_work_zero("X", 10.0)  # G54: here reads 10
+    assert st.work_offsets()["G54"] == (30.0, 0.0, 0.0)
+    st.select_work_system("G55")
+    assert st.work_system() == "G55" and st.status().work_mm[0] == pytest.approx(40.0)
+    st.set_work_zero("X")
+    st.move_to(-20.0, 3000.0)
+    assert st.wait_idle().machine_mm[0] == pytest.approx(20.0)
+    with pytest.raises(GrblError, match="error:15"):
+        st.jog(-30.0, 1000.0)  # machine -10: beyond the low end
+    with pytest.raises(GrblError, match=r"travel -40\.\.60 mm: ALARM:2"):
+        st.move_to(70.0, 1000.0)  # the travel named in work coordinates
+    st.unlock()
+    st.select_work_system("G54")
+    assert st.status().work_mm[0] == pytest.approx(-10.0)

@@ -92,3 +92,19 @@ def test_settings_have_names_units_and_write_back(stage: Stage):
 def test_home_goes_to_low_switch_plus_pull_off(stage: Stage):
     stage.home()
     assert stage.wait_idle(timeout_s=30.0).work_mm[0] == pytest.approx(TRAVEL[0] + 1.0)
+
+
+def test_work_zero_follows_grbls_offset_model(stage: Stage):
+    """Issue 26 item 7: work = machine - offset (GRBL's sign, as `$#` shows it) on both stages."""
+    assert stage.work_system() == "G54" and "G59" in stage.work_systems
+    stage.move_to(30.0, 3000.0)
+    machine = stage.wait_idle(timeout_s=30.0).machine_mm[0]
+    stage.set_work_zero("X")
+    st = stage.status()
+    assert st.work_mm[0] == pytest.approx(0.0, abs=1e-9) and st.machine_mm[0] == pytest.approx(machine)
+    assert stage.work_offsets()["G54"][0] == pytest.approx(machine)
+    stage.move_to(5.0, 3000.0)  # moves are in work coordinates
+    st = stage.wait_idle(timeout_s=30.0)
+    assert st.work_mm[0] == pytest.approx(5.0) and st.machine_mm[0] == pytest.approx(machine + 5.0)
+    with pytest.raises(HardwareError):
+        stage.select_work_system("G60")

@@ -38,9 +38,11 @@ from lps_gui.hardware.grbl.protocol import (
     jog_line,
     move_line,
     parse_build_info,
+    parse_offsets,
     parse_settings,
+    parse_work_system,
 )
-from lps_gui.hardware.stage import Stage, StageEvent, StageSetting, StageStatus
+from lps_gui.hardware.stage import WORK_SYSTEMS, Stage, StageEvent, StageSetting, StageStatus
 
 RT_STATUS, RT_HOLD, RT_RESUME, RT_RESET, RT_JOG_CANCEL = b"?", b"!", b"~", b"\x18", b"\x85"
 RESETS_AFTER_OK = ("[MSG:Disabled]", "[MSG:Restoring defaults]")  # system.c: mc_reset() after these
@@ -345,12 +347,31 @@ class GrblStage(Stage):
     def jog_cancel(self) -> None:
         self.realtime(RT_JOG_CANCEL)
 
-    def set_work_zero(self, axis: str | None = None, value_mm: float = 0.0) -> None:
-        """Make the current position read ``value_mm`` on ``axis`` (``G10 L20 P1``: the G54 offset, kept in EEPROM).
+    # ------------------------------------------------------------------ Stage: work coordinates
+    work_systems = WORK_SYSTEMS
 
-        GRBL reports the new WCO in the next status report, so :meth:`status` stays right.
+    def work_system(self) -> str:
+        """The active system from ``$G`` (G54 if the reply names none)."""
+        return parse_work_system(self.command("$G")) or WORK_SYSTEMS[0]
+
+    def select_work_system(self, name: str) -> None:
+        if name not in WORK_SYSTEMS:
+            raise HardwareError(f"work coordinate system {name!r} unknown; choose one of {', '.join(WORK_SYSTEMS)}")
+        self.command(name)
+
+    def work_offsets(self) -> dict[str, tuple[float, float, float]]:
+        """``$#``: the stored offsets in mm (GRBL's sign: work = machine - offset)."""
+        scale = MM_PER_INCH if self.settings.get(13) else 1.0
+        return {name: tuple(v * scale for v in axes)  # type: ignore[misc]
+                for name, axes in parse_offsets(self.command("$#")).items() if name in WORK_SYSTEMS}
+
+    def set_work_zero(self, axis: str | None = None, value_mm: float = 0.0) -> None:
+        """Make the current position read ``value_mm`` on ``axis`` in the active system (``G10 L20 P0``).
+
+        P0 is the active system (G54 = P1 ... G59 = P6), kept in EEPROM; GRBL
+        reports the new WCO in the next status report, so :meth:`status` stays right.
         """
-        self.command(f"G10 L20 P1 {(axis or self.axis).upper()}{value_mm:.3f}")
+        self.command(f"G10 L20 P0 {(axis or self.axis).upper()}{value_mm:.3f}")
 
     def wait_idle(self, timeout_s: float = 60.0) -> StageStatus:
         """Poll ``?`` until Idle with nothing in flight; alarms and timeouts raise.

@@ -211,3 +211,23 @@ def move_line(position_mm: float, feed_mm_min: float, axis: str = "X") -> str:
 def jog_line(distance_mm: float, feed_mm_min: float, axis: str = "X") -> str:
     """An incremental metric jog, e.g. ``$J=G91 G21 X0.5 F1000`` (every jog needs its F)."""
     return f"$J=G91 G21 {axis}{_num(distance_mm)} F{_num(feed_mm_min)}"
+
+
+def parse_offsets(lines: list[str]) -> dict[str, Axes]:
+    """The ``$#`` reply's coordinate offsets by name (``[G54:-500.000,0.000,0.000]`` -> {"G54": (-500, 0, 0)})."""
+    out: dict[str, Axes] = {}
+    for line in lines:
+        m = re.match(r"^\[(G5[4-9]|G28|G30|G92):([-\d.,]+)\]$", line.strip())
+        if m:
+            out[m.group(1)] = _axes(m.group(2))
+    return out
+
+
+def parse_work_system(lines: list[str]) -> str | None:
+    """The active work coordinate system in a ``$G`` reply (``[GC:G0 G55 G17 ...]``), None if absent."""
+    for line in lines:
+        if line.startswith("[GC:"):
+            m = re.search(r"\bG5[4-9]\b", line)
+            if m:
+                return m.group(0)
+    return None

@@ -26,7 +26,7 @@ def _read_version() -> str:
 
 
 def __getattr__(name: str) -> str:
-    """``__version__`` on first use: importlib.metadata costs 20 ms, which a command like `lps estimate` never needs."""
+    """``__version__`` on first use: importlib.metadata is slow to import, and a command like `lps estimate` never needs it."""
     if name == "__version__":
         version = _read_version()
         globals()["__version__"] = version

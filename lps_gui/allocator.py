@@ -21,7 +21,7 @@ _done = False
 
 
 def _libc() -> ctypes.CDLL:
-    """glibc by its usual name; find_library (which runs ldconfig: 5 ms at every start) only when that fails."""
+    """glibc by its usual name; find_library (which runs ldconfig at every start) only when that fails."""
     try:
         return ctypes.CDLL("libc.so.6")
     except OSError:

@@ -3,8 +3,8 @@
 Our matrix products are small (a block's 300 x 540 corners against 540 x 13
 board moments, 6x6 and 17x17 systems). OpenBLAS still hands them to its
 worker threads, which spin-wait between calls; numpy and scipy each bring a
-pool. On this project's 2-core machine, loaded by another process, one pose
-pass at K=1600 took 0.37-0.47 s with those pools and 0.10 s without them.
+pool. On a loaded machine those spinning pools take the cores from the
+block threads: a pose pass runs several times slower with them.
 The variable only takes effect before numpy is first imported, so the entry
 points (``lps``, ``lps-gui``, the test session) call this first; a value the
 user set is kept.

@@ -6,9 +6,9 @@ containers survive. Two moments where that is pure cost:
 
 - Building and writing results: trees of dicts and lists of floats, freed by
   reference counting, with no cycles to find; yet K = 1600 position rows
-  trigger a full collection (14 ms). :func:`paused` holds the collector off
+  trigger a full collection. :func:`paused` holds the collector off
   for such a block and restores it after.
-- Exit: the interpreter collects everything alive again (35 ms of the 50 ms
+- Exit: the interpreter collects everything alive again (most of the time
   from ``lps estimate``'s last line to the process' end). Objects moved to the
   permanent generation by :func:`gc.freeze` are skipped; reference counting
   still frees them as the modules are torn down and atexit handlers (log

@@ -9,6 +9,8 @@ import os
 
 import pytest
 
+pytest_plugins = ["tests.watchdog"]  # a hung test fails with every thread's stack; a deadlock ends the run
+
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # what the entry points do (lps_gui/blas_threads.py), before numpy loads
 
@@ -26,7 +28,19 @@ def pytest_configure(config):
 
 
 @pytest.fixture(autouse=True)
-def _collector_as_usual():
-    """`lps`'s main() freezes what is alive for its exit (lps_gui/gc_tuning.py); the next test collects as usual."""
+def _collector_as_usual(request):
+    """`lps`'s main() freezes what is alive for its exit (lps_gui/gc_tuning.py); the next test collects as usual.
+
+    A Qt test's windows and widgets go now, on the GUI thread: pytest-qt only
+    closes them and calls deleteLater, which no event loop runs before the next
+    test, and a Python-owned widget left in a reference cycle is otherwise
+    destroyed by the cyclic collector on whatever thread triggers a collection
+    (an estimator's block thread, a camera preview), off the GUI thread.
+    """
     yield
     gc.unfreeze()
+    if "qtbot" in request.fixturenames:
+        from PySide6.QtCore import QCoreApplication, QEvent
+
+        QCoreApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete)
+        gc.collect()

@@ -11,7 +11,7 @@ def process_context() -> multiprocessing.context.BaseContext:
     A forked child inherits OpenCV's thread pool in whatever state the
     parent's threads left it (and a GUI's threads' locks): the child then
     hangs in its first cv2.setNumThreads or parallel call. Spawned workers
-    start clean; the price is ~0.5 s of start-up, and a calling script needs
+    start clean; the price is a slower start-up, and a calling script needs
     the usual ``if __name__ == "__main__":`` guard.
     """
     return multiprocessing.get_context("spawn")

@@ -83,6 +83,18 @@ def _box_inside(x: np.ndarray, width: np.ndarray, lo: float, hi: float) -> np.nd
     return np.clip((np.minimum(x + half, hi) - np.maximum(x - half, lo)) / width, 0.0, 1.0)
 
 
+@dataclass(frozen=True)
+class Surface:
+    """Each pixel's ray on a board: board coordinates and footprint (squares), front-facing mask, depth."""
+
+    bx: np.ndarray
+    by: np.ndarray
+    wx: np.ndarray
+    wy: np.ndarray
+    facing: np.ndarray
+    depth: np.ndarray  # along the optical axis per unit of normalized ray, i.e. z_cam (mm)
+
+
 class BoardRenderer:
     """Renders 8-bit grey images of ``board`` through ``intrinsics``.
 
@@ -104,13 +116,15 @@ class BoardRenderer:
         lighting: Lighting | None = None,
         noise_grey: float = 0.0,
         texture_seed: int = 1,
+        rays: tuple[np.ndarray, ...] | None = None,
     ) -> None:
         self.board = board
         self.intrinsics = intrinsics
         self.margin_squares = float(margin_squares)
         self.lighting = lighting or Lighting()
         self.noise_grey = float(noise_grey)
-        self._x, self._y, self._j00, self._j01, self._j10, self._j11 = _undistorted_rays(intrinsics)
+        self.rays = rays if rays is not None else _undistorted_rays(intrinsics)  # shared by renderers of one camera
+        self._x, self._y, self._j00, self._j01, self._j10, self._j11 = self.rays
         w, h = intrinsics.image_size
         self._gain = None
         if self.lighting.vignetting:
@@ -130,31 +144,50 @@ class BoardRenderer:
 
     def render_float(self, R_cam_board: np.ndarray, t_cam_board: np.ndarray) -> np.ndarray:
         """Noise-free irradiance in grey levels, float32 shape (H, W)."""
+        surface = self.surface(R_cam_board, t_cam_board)
+        board_val, paper = self.shade(surface)
+        lt = self.lighting
+        img = lt.background + paper * (board_val - lt.background)
+        img = np.where(surface.facing, img, lt.background).astype(np.float32)
+        return self.optics(img)
+
+    def surface(self, R_cam_board: np.ndarray, t_cam_board: np.ndarray,
+                window: tuple[slice, slice] = (slice(None), slice(None))) -> "Surface":
+        """Where each pixel's ray meets the board (in squares), its footprint there and its depth.
+
+        ``window`` (rows, columns) restricts the work to part of the image (a target's bounding box).
+        """
         s = self.board.square_mm
         R = np.asarray(R_cam_board, dtype=float).reshape(3, 3)
         t = np.asarray(t_cam_board, dtype=float).ravel()
         # normalized image point ~ [r1 r2 t] (X, Y, 1): invert for board coords in squares
         H = np.column_stack([R[:, 0] * s, R[:, 1] * s, t])
         G = np.linalg.inv(H).astype(np.float32)  # normalized -> board (squares), homogeneous
-        x, y = self._x, self._y
+        x, y = self._x[window], self._y[window]
+        j00, j01, j10, j11 = (j[window] for j in (self._j00, self._j01, self._j10, self._j11))
         wz = G[2, 0] * x + G[2, 1] * y + G[2, 2]
         facing = wz > 0  # rays that hit the board plane in front of the camera
         inv_w = 1.0 / np.where(facing, wz, 1.0)
         bx = (G[0, 0] * x + G[0, 1] * y + G[0, 2]) * inv_w
         by = (G[1, 0] * x + G[1, 1] * y + G[1, 2]) * inv_w
         if self.board.warp_mm is not None:
-            bx, by = self._on_warped_surface(R, t, bx, by)
+            bx, by = self._on_warped_surface(R, t, bx, by, x, y)
         # d(bx, by) / d(x', y') of the homography, chained with d(x', y') / d(u, v)
         a00 = (G[0, 0] - bx * G[2, 0]) * inv_w
         a01 = (G[0, 1] - bx * G[2, 1]) * inv_w
         a10 = (G[1, 0] - by * G[2, 0]) * inv_w
         a11 = (G[1, 1] - by * G[2, 1]) * inv_w
-        wx = np.abs(a00 * self._j00 + a01 * self._j10) + np.abs(a00 * self._j01 + a01 * self._j11)
-        wy = np.abs(a10 * self._j00 + a11 * self._j10) + np.abs(a10 * self._j01 + a11 * self._j11)
+        wx = np.abs(a00 * j00 + a01 * j10) + np.abs(a00 * j01 + a01 * j11)
+        wy = np.abs(a10 * j00 + a11 * j10) + np.abs(a10 * j01 + a11 * j11)
         if not self.lighting.antialias:
             wx[:], wy[:] = 1e-4, 1e-4
         np.maximum(wx, 1e-4, out=wx)
         np.maximum(wy, 1e-4, out=wy)
+        return Surface(bx, by, wx, wy, facing, inv_w)
+
+    def shade(self, surface: "Surface") -> tuple[np.ndarray, np.ndarray]:
+        """The board's grey level at each pixel and the fraction of the pixel the paper covers."""
+        bx, by, wx, wy = surface.bx, surface.by, surface.wx, surface.wy
         # squares span [-1, cols] x [-1, rows]; square [0,1)x[0,1) is black
         checker = _box_square_wave(bx, wx) * _box_square_wave(by, wy)  # +1 black, -1 white
         inside = _box_inside(bx, wx, -1.0, self.board.cols) * _box_inside(by, wy, -1.0, self.board.rows)
@@ -166,16 +199,19 @@ class BoardRenderer:
         if self._texture is not None:
             tex = cv2.remap(self._texture, (bx + 1.0 + m) * 16, (by + 1.0 + m) * 16, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
             board_val *= 1.0 + lt.texture * tex
-        img = lt.background + paper * (board_val - lt.background)
-        img = np.where(facing, img, lt.background).astype(np.float32)
-        if lt.blur_px > 0:
-            img = cv2.GaussianBlur(img, (0, 0), lt.blur_px)
+        return board_val, paper
+
+    def optics(self, img: np.ndarray) -> np.ndarray:
+        """Blur and vignetting of the lens, applied to the whole scene's irradiance."""
+        if self.lighting.blur_px > 0:
+            img = cv2.GaussianBlur(img, (0, 0), self.lighting.blur_px)
         if self._gain is not None:
             img *= self._gain
         return img
 
     def _on_warped_surface(
-        self, R: np.ndarray, t: np.ndarray, bx: np.ndarray, by: np.ndarray, iterations: int = 4
+        self, R: np.ndarray, t: np.ndarray, bx: np.ndarray, by: np.ndarray, x: np.ndarray, y: np.ndarray,
+        iterations: int = 4,
     ) -> tuple[np.ndarray, np.ndarray]:
         """Where each pixel's ray meets the bowed board (Board.warp_mm), board squares.
 
@@ -188,7 +224,6 @@ class BoardRenderer:
         """
         s = self.board.square_mm
         c = -R.T @ t  # camera centre in the board frame, mm
-        x, y = self._x, self._y
         d = [np.float32(R[0, k]) * x + np.float32(R[1, k]) * y + np.float32(R[2, k]) for k in range(3)]
         dz = np.where(np.abs(d[2]) > 1e-9, d[2], np.float32(1e-9))
         for _ in range(iterations):
@@ -209,7 +244,10 @@ class BoardRenderer:
         Noise (Gaussian ``noise_grey`` and shot noise) is drawn from ``rng``;
         without an ``rng`` the image is noise-free (only quantized).
         """
-        img = self.render_float(R_cam_board, t_cam_board)
+        return self.quantize(self.render_float(R_cam_board, t_cam_board), rng)
+
+    def quantize(self, img: np.ndarray, rng: np.random.Generator | None = None) -> np.ndarray:
+        """Sensor noise (from ``rng``; none without one) and 8-bit quantization of an irradiance image."""
         if rng is not None and (self.noise_grey > 0 or self.lighting.shot_gain > 0):
             noise = rng.standard_normal(size=img.shape, dtype=np.float32)
             if self.lighting.shot_gain > 0:

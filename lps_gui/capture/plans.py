@@ -16,7 +16,7 @@ import numpy as np
 
 from lps_gui.core.plan import Plan
 from lps_gui.errors import InputError
-from lps_gui.io.jsonfile import read_json, write_json
+from lps_gui.io.jsonfile import read_json
 
 
 def read_plan(path: Path | str) -> Plan:
@@ -30,10 +30,6 @@ def read_plan(path: Path | str) -> Plan:
         return Plan.from_dict(d)
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from exc
-
-
-def write_plan(path: Path | str, plan: Plan) -> None:
-    write_json(path, plan.to_dict())
 
 
 def plan_with(base: Plan | None, **fields: Any) -> Plan:

@@ -67,7 +67,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
     add_setup_arguments(p)
     s.add_argument("--compensation", metavar="FILE", help="command each target through this table's inverse (lps compensate --format csv|linuxcnc|linuxcnc-offsets)")
-    g = p.add_argument_group("planar XY plans (SPEC 10); --grid, --targets-xy or --iso-lines imply --planar")
+    g = p.add_argument_group("planar XY plans (docs/planar.md); --grid, --targets-xy or --iso-lines imply --planar")
     g.add_argument("--planar", action="store_true",
                    help="an XY gantry: a grid over both axes (simulated: presets small-planar, paper-planar)")
     g.add_argument("--grid", metavar="X0,Y0:X1,Y1:DX,DY", help="planar grid: start, stop and step in mm")
@@ -148,7 +148,7 @@ def _intrinsics_mode(args: argparse.Namespace) -> int:
         camera.open()
     else:
         if not args.board:
-            raise InputError("--board FILE is required with a real camera (see SPEC 7 for board.json)")
+            raise InputError("--board FILE is required with a real camera (board.json is described in docs/capture.md)")
         from lps_gui.camera import open_camera
 
         board = read_board(args.board)
@@ -219,7 +219,7 @@ def _start(args: argparse.Namespace):
         stage = bind_simulated_stage(args, session, stage, camera, stage_spec, **axes)
         return session, stage, camera, simulated_engine(session, stage, camera, args.encode)
     if not args.board:
-        raise InputError("--board FILE is required with a real camera (see SPEC 7 for board.json)")
+        raise InputError("--board FILE is required with a real camera (board.json is described in docs/capture.md)")
     from lps_gui.io.board_file import read_board
 
     if planar:

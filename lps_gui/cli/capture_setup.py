@@ -14,7 +14,7 @@ from typing import Any
 
 ENV_SWITCHES = (("--board-temp", "board_temperature_c", "board temperature, deg C (corrects the length scale to 20 C)"),
                 ("--board-cte", "board_cte_ppm_per_k", "board expansion coefficient, ppm/K (e.g. 23 aluminium, 8 glass)"),
-                ("--square-u", "square_mm_uncertainty_um", "standard uncertainty of the board's square size, um (certificate)"),
+                ("--square-u", "square_mm_uncertainty_um", "standard uncertainty of the board's square size, µm (certificate)"),
                 ("--stage-temp", "stage_temperature_c", "stage temperature, deg C"),
                 ("--stage-cte", "stage_cte_ppm_per_k", "stage scale expansion coefficient, ppm/K (e.g. 11.5 steel screw)"),
                 ("--temp-u", "temperature_uncertainty_k", "standard uncertainty of the thermometers, K (default 0.5)"))

@@ -33,6 +33,6 @@ def run(args: argparse.Namespace) -> int:
         args.out = resolve_out(args.out, "as-found-as-left.pdf", args.after, (".pdf",), "lps compare")
     path = write_comparison(args.before, args.after, args.out)
     for name, b, a, factor in comparison_rows(load_results(args.before), load_results(args.after)):
-        print(f"{name}: {b} -> {a} um {factor}")
+        print(f"{name}: {b} -> {a} \u00b5m, improvement {factor}")
     print(f"report: {path}")
     return 0

@@ -33,10 +33,10 @@ def run(args: argparse.Namespace) -> int:
     worst = max(float(abs(table.offset_um(1)).max()), float(abs(table.offset_um(-1)).max()))
     kind = "bidirectional" if table.bidirectional else "one direction measured, its column repeated"
     print(f"{args.out}: {len(table.nominal_mm)} points {table.nominal_mm[0]:g}..{table.nominal_mm[-1]:g} mm ({kind}), "
-          f"largest offset {worst:.2f} um")
+          f"largest offset {worst:.2f} µm")
     if lines:
         b = table.backlash_um()
-        print("controller settings" + (f" (backlash {b:.2f} um)" if b is not None else "") + ":")
+        print("controller settings" + (f" (backlash {b:.2f} µm)" if b is not None else "") + ":")
         for line in lines:
             print(f"  {line}")
     return 0

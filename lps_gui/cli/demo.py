@@ -15,7 +15,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", type=Path, default=Path("demo-output"),
                         help="output folder (default demo-output): an existing or new folder; a name with a suffix is refused")
     parser.add_argument("--seed", type=nonnegative_int, default=0, help="random seed of the simulation")
-    parser.add_argument("--planar", action="store_true", help="the planar pipeline on a simulated XY gantry (SPEC 10)")
+    parser.add_argument("--planar", action="store_true", help="the planar pipeline on a simulated XY gantry (docs/planar.md)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -35,6 +35,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"demo stopped before the report; files so far in {res.out_dir}")
         return 1
     print(f"report:  {res.report_pdf}")
+    for path in res.reports:
+        print(f"report:  {path}")
     for path in res.csvs:
         print(f"csv:     {path}")
     print(f"session: {res.session_dir}")

@@ -18,7 +18,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", help="corners file for images (default corners.vnl here): an existing folder gets "
                         "corners.vnl inside; a name ending in .vnl is the file; a name without suffix is a new folder")
     parser.add_argument("--workers", type=workers, default=None, help="processes (default: one per core)")
-    parser.add_argument("--force", action="store_true", help="detect every view again, ignoring corners.vnl")
+    parser.add_argument("--force", action="store_true", help="detect every view again, ignoring corners.vnl (replaced images are detected again without it)")
     parser.add_argument("--no-track", action="store_true", help="detect every image from scratch (unrelated views)")
 
 

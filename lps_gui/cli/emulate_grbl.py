@@ -38,7 +38,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     import signal
     import sys
-    import threading
+    import time
 
     from lps_gui.errors import InputError
     from lps_gui.hardware.announce import announce
@@ -64,9 +64,9 @@ def run(args: argparse.Namespace) -> int:
         error_code=args.error_code, reply_delay_s=args.reply_delay, garbage_every=args.garbage_every,
         fail_homing=args.fail_homing,
     )
-    stop = threading.Event()
+    stop: list[int] = []  # a plain flag: a handler calling Event.set() can deadlock on the lock wait() holds
     try:  # SIGTERM (a service manager, `kill`) stops as cleanly as Ctrl-C; set before the path is announced
-        signal.signal(signal.SIGTERM, lambda *_: stop.set())
+        signal.signal(signal.SIGTERM, lambda signum, _frame: stop.append(signum))
     except ValueError:  # not the main thread (tests calling run() directly)
         pass
     emu = GrblEmulator(stage, faults=faults, time_scale=args.time_scale, homing_init_lock=not args.no_homing_lock)
@@ -76,14 +76,15 @@ def run(args: argparse.Namespace) -> int:
         withdraw = announce(path)  # the GUI's stage list shows it
         print(path, flush=True)
         print(f"GRBL 1.1h emulator on {path} (115200 baud, any rate works on a pty); Ctrl-C to stop", file=sys.stderr, flush=True)
-        while not stop.wait(0.2):
+        while not stop:
+            time.sleep(0.2)
             if emu.dropped:
                 print("emulator: connection dropped (fault injection); stopping", file=sys.stderr)
                 break
             if not emu.running:  # the serving thread died: its error is in the log
                 print("emulator: stopped unexpectedly (see the log)", file=sys.stderr)
                 return 1
-        else:
+        if stop:
             print("emulator: stopped", file=sys.stderr)
     except KeyboardInterrupt:
         print("emulator: stopped", file=sys.stderr)

@@ -82,27 +82,27 @@ def format_planar_summary(results: dict) -> str:
     lines = [
         f"method {results['method']} (planar X,Y): {p['n_used']}/{p['n_views']} views used, {p['n_outliers']} outlier(s), "
         f"corner noise {p['sigma_px']:.3f} px, {results['timings_s'].get('total', 0.0):.2f} s",
-        f"squareness {pl['squareness_urad']:+.1f} +- {pl['squareness_sigma_urad']:.1f} urad "
-        f"({pl['squareness_um_per_m']:+.1f} um/m), scale X {pl['scale_x_ppm']:+.1f} +- {pl['scale_x_sigma_ppm']:.1f} ppm, "
+        f"squareness {pl['squareness_urad']:+.1f} +- {pl['squareness_sigma_urad']:.1f} µrad "
+        f"({pl['squareness_um_per_m']:+.1f} µm/m), scale X {pl['scale_x_ppm']:+.1f} +- {pl['scale_x_sigma_ppm']:.1f} ppm, "
         f"Y {pl['scale_y_ppm']:+.1f} +- {pl['scale_y_sigma_ppm']:.1f} ppm (1 sigma)",
     ]
     sig = [(r["sigma_x_um"], r["sigma_y_um"]) for r in results["positions"] if r["used"] and r["sigma_x_um"]]
     if sig:
         sx, sy = sorted(s[0] for s in sig), sorted(s[1] for s in sig)
-        lines.append(f"position sigma median x {sx[len(sx) // 2]:.2f} um, y {sy[len(sy) // 2]:.2f} um (1 sigma, noise only)")
+        lines.append(f"position sigma median x {sx[len(sx) // 2]:.2f} µm, y {sy[len(sy) // 2]:.2f} µm (1 sigma, noise only)")
     from lps_gui.core.resolution import not_resolved_text
 
     def span_text(d: dict | None) -> str:
         if not d or d.get("span_um") is None:
             return "-"
-        return f"{d['span_um']:.2f} um" if d.get("resolved") else not_resolved_text(d.get("noise_span_um"), "um")
+        return f"{d['span_um']:.2f} µm" if d.get("resolved") else not_resolved_text(d.get("noise_span_um"), "µm")
 
     for axis, other in (("X", "Y"), ("Y", "X")):
         a = pl["per_axis"].get(axis)
         if a:
             iso = (a.get("iso230_2") or {}).get("iso230_2") or {}
-            extra = "".join(f", {k[:-3]} {iso[k]:.2f} um" for k in ("A_um", "R_um", "E_um") if iso.get(k) is not None)
-            straight = span_text(a.get("straightness")) if a.get("straightness") else f"{a['straightness_um_max']:.2f} um"
+            extra = "".join(f", {k[:-3]} {iso[k]:.2f} µm" for k in ("A_um", "R_um", "E_um") if iso.get(k) is not None)
+            straight = span_text(a.get("straightness")) if a.get("straightness") else f"{a['straightness_um_max']:.2f} µm"
             oop = f"; out of plane {span_text(a['out_of_plane'])}" if a.get("out_of_plane") else ""
             lines.append(f"{axis}: {a['lines']} line(s), straightness along {other} {straight}{oop}{extra}")
     for f in results["flags"]:
@@ -110,8 +110,8 @@ def format_planar_summary(results: dict) -> str:
     tc = results.get("truth_comparison") or {}
     if tc.get("per_coordinate_rms_error_um"):
         ex, ey = tc["per_coordinate_rms_error_um"]
-        lines.append(f"against truth ({tc['reference']}): RMS error x {ex:.2f} um, y {ey:.2f} um, mean reported sigma "
-                     f"{tc['mean_sigma_um']:.2f} um; squareness error {tc['squareness_error_urad']:+.1f} urad "
+        lines.append(f"against truth ({tc['reference']}): RMS error x {ex:.2f} µm, y {ey:.2f} µm, mean reported sigma "
+                     f"{tc['mean_sigma_um']:.2f} µm; squareness error {tc['squareness_error_urad']:+.1f} µrad "
                      f"({tc['squareness_z']:+.1f} sigma)")
     return "\n".join(lines)
 
@@ -128,27 +128,27 @@ def format_summary(results: dict) -> str:
     ]
     if single:
         lines.append(
-            f"mean step {_g(single.get('mean_step_mm'), '.5f')} mm (std {_g(single.get('step_std_um'), '.2f')} um), "
-            f"max |deviation| {_g(single.get('max_abs_deviation_um'), '.2f')} um, scale {_g(single.get('scale_ppm'), '+.1f')} ppm"
+            f"mean step {_g(single.get('mean_step_mm'), '.5f')} mm (std {_g(single.get('step_std_um'), '.2f')} µm), "
+            f"max |deviation| {_g(single.get('max_abs_deviation_um'), '.2f')} µm, scale {_g(single.get('scale_ppm'), '+.1f')} ppm"
         )
     sig = [r["sigma_total_um"] for r in results["positions"] if r.get("sigma_total_um") is not None and r["used"]]
     if sig:
-        lines.append(f"position sigma (total) median {_g(sorted(sig)[len(sig) // 2], '.2f')} um")
+        lines.append(f"position sigma (total) median {_g(sorted(sig)[len(sig) // 2], '.2f')} µm")
     iso = fig.get("iso230_2") or {}
     if iso.get("A_um") is not None or iso.get("E_um") is not None:
-        parts = [f"{k[:-3]} {_g(iso[k], '.2f')} um" for k in ("A_um", "R_um", "E_um", "B_um", "M_um") if iso.get(k) is not None]
+        parts = [f"{k[:-3]} {_g(iso[k], '.2f')} µm" for k in ("A_um", "R_um", "E_um", "B_um", "M_um") if iso.get(k) is not None]
         lines.append("ISO 230-2: " + ", ".join(parts))
     for f in results["flags"]:
         lines.append(f"outlier view {f['index']}: {f['message']}")
     tc = results.get("truth_comparison")
     if tc and tc.get("position_rms_error_um") is not None:
         lines.append(
-            f"against truth: position RMS error {_g(tc['position_rms_error_um'], '.2f')} um "
-            f"(max {_g(tc['position_max_abs_error_um'], '.2f')} um), mean reported sigma {_g(tc['mean_sigma_um'], '.2f')} um"
+            f"against truth: position RMS error {_g(tc['position_rms_error_um'], '.2f')} µm "
+            f"(max {_g(tc['position_max_abs_error_um'], '.2f')} µm), mean reported sigma {_g(tc['mean_sigma_um'], '.2f')} µm"
         )
     if tc and tc.get("board_plane_rms_error_um") is not None:
         lines.append(
-            f"against truth at the board plane (what a constant-orientation model sees; Abbe term RMS {_g(tc['abbe_rms_um'], '.2f')} um): "
-            f"RMS error {_g(tc['board_plane_rms_error_um'], '.2f')} um, mean (error/sigma)^2 {_g(tc['board_plane_z_mean_square'], '.2f')}"
+            f"against truth at the board plane (what a constant-orientation model sees; Abbe term RMS {_g(tc['abbe_rms_um'], '.2f')} µm): "
+            f"RMS error {_g(tc['board_plane_rms_error_um'], '.2f')} µm, mean (error/sigma)^2 {_g(tc['board_plane_z_mean_square'], '.2f')}"
         )
     return "\n".join(lines)

@@ -35,7 +35,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     cam = p.add_argument_group("camera (either --intrinsics or the lens and sensor)")
     cam.add_argument("--intrinsics", help="intrinsics.json or OpenCV YAML of the camera")
     cam.add_argument("--focal-mm", type=positive_finite, help="lens focal length, mm")
-    cam.add_argument("--pixel-um", type=positive_finite, help="pixel pitch, um")
+    cam.add_argument("--pixel-um", type=positive_finite, help="pixel pitch, µm")
     cam.add_argument("--image", type=_size, help="image size WIDTHxHEIGHT, px")
     p.add_argument("--board", help="board.json; or give --inner-corners and --square-mm")
     p.add_argument("--inner-corners", type=_size, help="inner corners COLSxROWS")
@@ -103,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
     axes = "X,Y" if len(rows[0].axes) == 2 else "X"
     print(f"plan: {rows[0].n_targets} targets on {axes}; corner noise {args.noise_px:g} px; "
           f"board {board.cols}x{board.rows} at {board.square_mm:g} mm")
-    print(f"{'distance mm':>12} {'board px':>12} {'in view':>8} {'sigma um (median / max)':>24}")
+    print(f"{'distance mm':>12} {'board px':>12} {'in view':>8} {'sigma µm (median / max)':>24}")
     for r in rows:
         sig = "-" if r.sigma_um_median is None else f"{r.sigma_um_median:.2f} / {r.sigma_um_max:.2f}"
         view = "yes" if r.board_in_view else f"no ({r.targets_losing_board})"

@@ -23,7 +23,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--preset", default=None,
                    help="paper-rig | paper-synthetic | small (default small); with --planar: paper-planar | small-planar")
     p.add_argument("--planar", action="store_true",
-                   help="an XY gantry (SPEC 10): a grid over both axes; with --points (default preset paper-planar)")
+                   help="an XY gantry (docs/planar.md): a grid over both axes; with --points (default preset paper-planar)")
     p.add_argument("--grid", help="planar grid X0,Y0:X1,Y1:DX,DY in mm (default the preset's 15 x 9 at 10 mm)")
     p.add_argument("--squareness-urad", type=float_range(-1e5, 1e5), help="planar: the gantry's squareness error (default 150)")
     p.add_argument("--rig", help="rig description JSON (board, intrinsics, camera pose, stage errors, plan, noise, outliers)")

@@ -105,3 +105,14 @@ def block_arrowhead_inverse(
         ) from None
     L_inv = np.linalg.inv(L)
     return BlockArrowheadInverse(L_inv.T @ L_inv, W, D_inv)
+
+
+def block_intrinsics_sensitivity(inverse: BlockArrowheadInverse, cross_theta: np.ndarray, cross_s: np.ndarray
+                                 ) -> np.ndarray:
+    """d s / d intrinsics = -(H^-1 J^T W J_I) of the positions, shape (K, b, m).
+
+    ``cross_theta``: J_theta^T W J_I, shape (p, m); ``cross_s``: J_s^T W J_I per view, shape (K, b, m).
+    The block twin of :func:`lps_gui.core.uncertainty.intrinsics_sensitivity`.
+    """
+    y_theta = inverse.S_inv @ (cross_theta - np.einsum("kbp,kbm->pm", inverse.W, cross_s))
+    return -(inverse.D_inv @ cross_s - inverse.W @ y_theta)

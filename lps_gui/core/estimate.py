@@ -1,6 +1,14 @@
-"""From corners to positions with error bars: the estimation procedure of SPEC 4.
+"""From corners to positions with error bars: one estimator for a stage of D = 1 or 2 axes.
 
-Methods: ``joint`` (default, SPEC 4.4), ``hybrid`` (the paper, SPEC 4.3),
+:func:`estimate` takes :class:`~lps_gui.core.observations.Observations` with
+targets of shape (K, D) and :class:`EstimateOptions` (whose
+:meth:`~EstimateOptions.selections` name the free parameter groups), checks
+the method against D and runs the solver family of D (:data:`SOLVERS`): the
+line of SPEC 4 here, the plane of SPEC 10 in :mod:`lps_gui.core.planar_estimate`.
+Both share the outlier rounds (:mod:`lps_gui.core.outlier_round`) and the
+covariance of the (block) arrowhead.
+
+Line methods: ``joint`` (default, SPEC 4.4), ``hybrid`` (the paper, SPEC 4.3),
 ``pnp`` (per-view baseline, Eq. 3) and ``calibrate`` (Eq. 2, intrinsics and
 all poses free: reference only). Every method reports positions relative to
 the first usable capture, per-position sigma from noise alone and total sigma
@@ -10,8 +18,8 @@ the solve, their own position still reported), and 6-DOF error motions.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, Callable
 
 import numpy as np
 
@@ -30,8 +38,10 @@ from lps_gui.core.joint_lm import (
     solve_positions_only,
 )
 from lps_gui.core.observations import Observations
-from lps_gui.core.outliers import position_outliers, reprojection_outliers
+from lps_gui.core.outlier_round import Solution, judge_views, solve_with_outliers
+from lps_gui.core.outliers import position_outliers
 from lps_gui.core.per_view import estimate_per_view
+from lps_gui.core.planar_estimate import PlanarEstimate, estimate_plane
 from lps_gui.core.pnp import solve_pnp
 from lps_gui.core.pose_normals import PoseNormals
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
@@ -42,39 +52,12 @@ from lps_gui.core.uncertainty import (
     noise_variance,
     propagated_variance,
 )
-from lps_gui.errors import DegenerateGeometryError, InputError
+from lps_gui.errors import DegenerateGeometryError
 
-__all__ = ["METHODS", "EstimateOptions", "LpsEstimate", "estimate"]
+__all__ = ["METHODS", "EstimateOptions", "LpsEstimate", "PlanarEstimate", "estimate"]
 
 INIT_VIEWS = 24  # per-view PnP on this many spread views initializes the joint LM
 N_INTRINSICS = len(INTRINSIC_NAMES)  # 9, after the pose parameters when self-calibrating
-MIN_VIEWS_LEFT = 3  # fewer views than this after removing outliers do not determine a line
-PRIOR_JITTER = 1e-18  # keeps an intrinsics covariance with exact zeros invertible
-
-
-@dataclass
-class _Solution:
-    """Where the solve and the outlier rounds ended: what the uncertainty step starts from."""
-
-    state: LpsState
-    ref: int  # the gauge view (s = 0): first usable view not flagged
-    usable: np.ndarray  # (K,) board found
-    outlier: np.ndarray  # (K,) flagged
-    reasons: list[str]
-    flags: list[dict[str, Any]] = field(default_factory=list)
-    iterations: int = 0
-    converged: bool = False
-    equations: NormalEquations | None = None  # the joint LM's, at ``state`` over the used views (None: hybrid)
-
-    @property
-    def used(self) -> np.ndarray:
-        return self.usable & ~self.outlier
-
-    def free(self) -> np.ndarray:
-        """Positions the solve moves: used views but the gauge view."""
-        free = self.used.copy()
-        free[self.ref] = False
-        return free
 
 
 def estimate(
@@ -82,10 +65,22 @@ def estimate(
     options: EstimateOptions | None = None,
     progress: ProgressFn = no_progress,
     cancel: CancelToken | None = None,
-) -> LpsEstimate:
-    """Estimate the LPS model and every position from the observed corners."""
+) -> LpsEstimate | PlanarEstimate:
+    """Estimate the stage model of ``obs.D`` axes and every position from the observed corners.
+
+    One problem for D = 1 (a line, SPEC 4) and D = 2 (a plane, SPEC 10): the
+    same options, selections, outlier rounds and covariance of the block
+    arrowhead; the solver family is chosen by D (:data:`SOLVERS`).
+    """
     opt = options or EstimateOptions()
+    opt.check_axes(obs.D)
     obs.validate()
+    return SOLVERS[obs.D](obs, opt, progress, cancel)
+
+
+def _estimate_line(obs: Observations, opt: EstimateOptions, progress: ProgressFn, cancel: CancelToken | None
+                   ) -> LpsEstimate:
+    """D = 1: Eq. 5 initialization, the joint LM or the hybrid, the line's covariances and 6-DOF motions."""
     timings: dict[str, float] = {}
     t_start = time.perf_counter()
     X = obs.board.object_points()
@@ -99,16 +94,14 @@ def estimate(
 
     state = _initial_state(obs, usable, ref, X, full_pnp=opt.method == "hybrid")
     timings["init"] = time.perf_counter() - t_start
-    sol = _Solution(state, ref, usable, np.zeros(obs.K, dtype=bool), [""] * obs.K)
-    for round_no in range(opt.max_outlier_rounds + 1):
-        if cancel is not None:
-            cancel.check("estimation")
-        t0 = time.perf_counter()
+    sol = Solution(state, ref, usable, np.zeros(obs.K, dtype=bool), [""] * obs.K)
+
+    def solve(sol: Solution) -> None:
         sol.state, sol.iterations, sol.converged, sol.equations = _solve(
             sol.state, obs, X, mask_all & sol.used[:, None], sol.used, sol.ref, opt, progress, cancel)
-        timings["solve"] = timings.get("solve", 0.0) + time.perf_counter() - t0
-        if not opt.detect_outliers or not _outlier_round(sol, obs, X, mask_all, opt.outlier_k, round_no + 1):
-            break
+
+    solve_with_outliers(sol, solve, lambda sol, round_no: _outlier_round(sol, obs, X, mask_all, opt.outlier_k, round_no),
+                        opt, timings, cancel)
 
     others = usable & ~sol.used
     if others.any():
@@ -163,11 +156,7 @@ def _solve(
     if opt.method == "hybrid":
         res = solve_hybrid(state, X, obs.corners_px, mask, used, opt.hybrid, progress, cancel)
         return _regauge(res.state, ref), res.rounds, res.converged, None
-    prior = None
-    if opt.self_calibrate:
-        if obs.intrinsics.covariance is None:
-            raise InputError("self-calibration needs the intrinsics' std or covariance in intrinsics.json")
-        prior = (obs.intrinsics.vector(), obs.intrinsics.covariance + PRIOR_JITTER * np.eye(N_INTRINSICS))
+    prior = opt.intrinsics_prior(obs.intrinsics)
     lm = solve_joint(
         state,
         X,
@@ -212,13 +201,9 @@ def _view_rms(state: LpsState, X: np.ndarray, corners: np.ndarray, mask: np.ndar
     return np.where(n > 0, np.sqrt(cost / np.maximum(2 * n, 1)), np.nan)
 
 
-def _outlier_round(sol: _Solution, obs: Observations, X: np.ndarray, mask_all: np.ndarray, k: float, round_no: int) -> bool:
-    """Judge the used views once (SPEC 4): flag bumped cameras and replaced images; True if any is new.
-
-    A bumped camera does not fit the common rotation (its RMS stands out); a
-    replaced image fits but its position leaves its run's local trend, judged
-    against each position's own sigma.
-    """
+def _outlier_round(sol: Solution, obs: Observations, X: np.ndarray, mask_all: np.ndarray, k: float, round_no: int) -> bool:
+    """One judgement of the used views (:func:`~lps_gui.core.outlier_round.judge_views`) with the line's
+    position test: a position off its run's local trend, judged against each position's own sigma."""
     used = sol.used
     mask = mask_all & used[:, None]
     eq = sol.equations  # the LM's last pass, when it was the plain one at this state
@@ -229,26 +214,13 @@ def _outlier_round(sol: _Solution, obs: Observations, X: np.ndarray, mask_all: n
     inv = arrowhead_inverse(eq.A, eq.B, eq.D, sol.free())
     sigma_um = 1e3 * np.sqrt(sigma2 * inv.var_s())
     dev = 1e3 * (sol.state.s - (obs.target_mm - obs.target_mm[sol.ref]))
-    bumped = reprojection_outliers(rms, used, k)
     groups = obs.run * 2 + (obs.direction > 0)
-    moved, resid = position_outliers(dev, obs.target_mm, groups, used & ~bumped, sigma_um, k)
-    new = (bumped | moved) & ~sol.outlier
-    for i in np.flatnonzero(new):
-        if bumped[i]:
-            sol.reasons[i] = f"reprojection RMS {rms[i]:.3f} px against a median of {np.median(rms[used]):.3f} px (camera bumped?)"
-            kind = "reprojection"
-        else:
-            sol.reasons[i] = f"position {resid[i]:+.1f} um off the local trend of its run (image replaced?)"
-            kind = "position"
-        sol.flags.append({"index": int(obs.index[i]), "kind": kind, "message": sol.reasons[i], "round": round_no})
-    if not new.any():
-        return False
-    sol.outlier |= new
-    if sol.outlier[sol.ref]:
-        sol.ref = int(np.flatnonzero(sol.used)[0])
-    if sol.used.sum() < MIN_VIEWS_LEFT:
-        raise DegenerateGeometryError(f"{obs.source}: fewer than {MIN_VIEWS_LEFT} views are left after removing outliers; check the capture")
-    return True
+
+    def position_test(valid: np.ndarray) -> tuple[np.ndarray, Callable[[int], str]]:
+        moved, resid = position_outliers(dev, obs.target_mm, groups, valid, sigma_um, k)
+        return moved, lambda i: f"position {resid[i]:+.1f} um off the local trend of its run (image replaced?)"
+
+    return judge_views(sol, rms, position_test, obs.index, k, round_no, obs.source)
 
 
 @dataclass
@@ -267,7 +239,7 @@ class _Uncertainty:
     poses: PoseNormals  # every usable view's pose blocks at the solution: the per-view fits start from them
 
 
-def _uncertainty(obs: Observations, opt: EstimateOptions, sol: _Solution, X: np.ndarray, mask_all: np.ndarray) -> _Uncertainty:
+def _uncertainty(obs: Observations, opt: EstimateOptions, sol: Solution, X: np.ndarray, mask_all: np.ndarray) -> _Uncertainty:
     """Cov = sigma^2 H^-1 by the arrowhead inverse; intrinsics propagated; excluded views on their own."""
     used, usable, free = sol.used, sol.usable, sol.free()
     have_cov = obs.intrinsics.covariance is not None
@@ -278,7 +250,7 @@ def _uncertainty(obs: Observations, opt: EstimateOptions, sol: _Solution, X: np.
     A, B = eq.A, eq.B
     if opt.self_calibrate:
         A = A.copy()
-        A[p:, p:] += np.linalg.inv(obs.intrinsics.covariance + PRIOR_JITTER * np.eye(N_INTRINSICS))
+        A[p:, p:] += np.linalg.inv(opt.intrinsics_prior(obs.intrinsics)[1])
         n_params = p + N_INTRINSICS + int(free.sum())
     else:
         A, B = A[:p, :p], B[:, :p]
@@ -313,7 +285,7 @@ def _uncertainty(obs: Observations, opt: EstimateOptions, sol: _Solution, X: np.
 
 
 
-def _finish(obs: Observations, opt: EstimateOptions, sol: _Solution, X: np.ndarray, mask_all: np.ndarray,
+def _finish(obs: Observations, opt: EstimateOptions, sol: Solution, X: np.ndarray, mask_all: np.ndarray,
             timings: dict[str, float]) -> LpsEstimate:
     """Uncertainty, per-view RMS, 6-DOF motions and board-plane straightness of the solution, as an :class:`LpsEstimate`."""
     t0 = time.perf_counter()
@@ -382,3 +354,4 @@ def _six_dof(
     return six
 
 
+SOLVERS = {1: _estimate_line, 2: estimate_plane}  # the solver family of a stage of D axes

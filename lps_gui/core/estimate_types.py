@@ -1,11 +1,12 @@
 """What the estimator takes and gives: options and the estimate with its covariance."""
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
 
+from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
 from lps_gui.core.constant_orientation import BoardPlaneMotion
 from lps_gui.core.hybrid import HybridOptions
 from lps_gui.core.joint_lm import LpsState
@@ -14,6 +15,21 @@ from lps_gui.core.uncertainty import ArrowheadInverse
 from lps_gui.errors import InputError
 
 METHODS = ("joint", "hybrid", "pnp", "calibrate")
+METHODS_BY_AXES = {1: METHODS, 2: ("joint", "pnp")}  # the hybrid grid search and Eq. 2 are 1-D by construction
+PRIOR_JITTER = 1e-18  # keeps an intrinsics covariance with exact zeros invertible
+
+
+@dataclass(frozen=True)
+class Selections:
+    """Which parameter groups a solve moves, as mrcal's problem selections (the others are held).
+
+    The shared stage parameters (rotation, line or plane) and every view's
+    position on its D axes are always free. The board's warp is held as the
+    intrinsics calibration found it; the target poses of SPEC 13 (rows,
+    constellations) join here as one more group.
+    """
+
+    intrinsics: bool = False  # the 9 intrinsics, with the calibration's covariance as prior (SPEC 4.6)
 
 
 @dataclass
@@ -36,9 +52,26 @@ class EstimateOptions:
             raise InputError("outlier_k must be positive (robust sigmas, default 5)")
 
     def to_dict(self) -> dict[str, Any]:
-        from dataclasses import asdict
-
         return asdict(self)
+
+    def selections(self) -> Selections:
+        """The parameter groups this estimation frees."""
+        return Selections(intrinsics=self.self_calibrate)
+
+    def intrinsics_prior(self, intrinsics: CameraIntrinsics) -> tuple[np.ndarray, np.ndarray] | None:
+        """(I0, Sigma_I) of the intrinsics when they are selected (free with their calibration as prior), else None."""
+        if not self.selections().intrinsics:
+            return None
+        if intrinsics.covariance is None:
+            raise InputError("self-calibration needs the intrinsics' std or covariance in intrinsics.json")
+        return intrinsics.vector(), intrinsics.covariance + PRIOR_JITTER * np.eye(len(INTRINSIC_NAMES))
+
+    def check_axes(self, D: int) -> None:
+        """InputError when the method or a selection does not exist for a stage of D axes."""
+        if self.method not in METHODS_BY_AXES[D]:
+            raise InputError(f"method {self.method!r} is not available for a stage of {D} axes; use one of "
+                             f"{', '.join(METHODS_BY_AXES[D])} (the hybrid grid search and the full calibration "
+                             "are 1-D only)")
 
 
 @dataclass

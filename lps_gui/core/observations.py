@@ -10,6 +10,11 @@ from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.errors import DegenerateGeometryError, InputError
 
 MIN_CORNERS_PER_VIEW = 6
+UNSPANNED = {  # targets that do not span the stage's D axes, by D
+    1: "all views are at one target position; the line direction is undetermined, capture along the axis",
+    2: "the usable targets lie on one line; a planar session needs targets spread over both axes "
+       "(or estimate it as 1-D)",
+}
 
 
 class CornerViews:
@@ -37,48 +42,61 @@ class CornerViews:
 
 @dataclass
 class Observations(CornerViews):
-    """Corners of K views (NaN where missing) and what the stage was told to do."""
+    """Corners of K views (NaN where missing) and what the stage was told to do, on D = 1 or 2 axes.
+
+    ``target_mm`` is shape (K,) for one axis and (K, 2) for an XY stage
+    (SPEC 10); :attr:`D` says which, :attr:`targets` is always (K, D).
+    ``approach`` is each axis' approach side (+1/-1, shape (K, D)); for one
+    axis it is the pass direction.
+    """
 
     board: Board
     intrinsics: CameraIntrinsics
     corners_px: np.ndarray  # shape (K, N, 2)
-    target_mm: np.ndarray  # shape (K,)
+    target_mm: np.ndarray  # shape (K,) for one axis, (K, 2) for two
     direction: np.ndarray  # shape (K,): +1 forward, -1 backward
     run: np.ndarray  # shape (K,) int
     index: np.ndarray  # shape (K,) int: capture index
     names: list[str] = field(default_factory=list)
     source: str = "observations"
     source_sha256: str | None = None  # of the corner file's bytes as they were read (results.json inputs)
+    approach: np.ndarray | None = None  # shape (K, D): +1/-1 per axis (default: the direction on every axis)
 
     def __post_init__(self) -> None:
         self.corners_px = np.asarray(self.corners_px, dtype=float)
         K = self.corners_px.shape[0]
-        self.target_mm = np.asarray(self.target_mm, dtype=float).reshape(K)
+        target = np.asarray(self.target_mm, dtype=float)
+        self.target_mm = target.reshape(K) if target.size == K else target.reshape(K, -1)  # (K, 1) is one axis
         self.direction = np.asarray(self.direction, dtype=float).reshape(K)
         self.run = np.asarray(self.run, dtype=int).reshape(K)
         self.index = np.asarray(self.index, dtype=int).reshape(K)
+        if self.approach is None:
+            self.approach = np.repeat(self.direction[:, None], self.D, axis=1)
+        else:
+            self.approach = np.asarray(self.approach, dtype=float).reshape(K, self.D)
         if not self.names:
             self.names = [f"view{i}" for i in self.index]
 
+    @property
+    def D(self) -> int:
+        """Number of stage axes: 1 (a line, SPEC 4) or 2 (a plane, SPEC 10)."""
+        return 1 if self.target_mm.ndim == 1 else int(self.target_mm.shape[1])
+
+    @property
+    def targets(self) -> np.ndarray:
+        """The targets as shape (K, D) whatever D is."""
+        return self.target_mm.reshape(self.K, self.D)
 
     def subset(self, keep: np.ndarray) -> "Observations":
         """The views selected by a boolean mask or an index array."""
         keep = np.asarray(keep)
         idx = np.flatnonzero(keep) if keep.dtype == bool else keep
-        return Observations(
-            self.board,
-            self.intrinsics,
-            self.corners_px[idx],
-            self.target_mm[idx],
-            self.direction[idx],
-            self.run[idx],
-            self.index[idx],
-            [self.names[i] for i in idx],
-            self.source,
-        )
+        return Observations(self.board, self.intrinsics, self.corners_px[idx], self.target_mm[idx],
+                            self.direction[idx], self.run[idx], self.index[idx], [self.names[i] for i in idx],
+                            self.source, approach=self.approach[idx])
 
     def validate(self) -> None:
-        """Raise a one-line error when the views cannot determine the LPS model."""
+        """Raise a one-line error when the views cannot determine the model of D axes."""
         if self.corners_px.ndim != 3 or self.corners_px.shape[2] != 2:
             raise InputError(f"{self.source}: corners must have shape (views, corners, 2)")
         if self.N != self.board.n_corners:
@@ -87,11 +105,11 @@ class Observations(CornerViews):
             )
         usable = self.usable_views()
         if usable.sum() < 3:
+            need = "at different positions" if self.D == 1 else "at targets not on one line"
             raise DegenerateGeometryError(
-                f"{self.source}: only {int(usable.sum())} views show the board; need at least 3 at different positions"
+                f"{self.source}: only {int(usable.sum())} views show the board; need at least 3 {need}"
             )
-        t = self.target_mm[usable]
-        if np.ptp(t) <= 0:
-            raise DegenerateGeometryError(
-                f"{self.source}: all views are at one target position; the line direction is undetermined, capture along the axis"
-            )
+        t = self.targets[usable]
+        sv = np.linalg.svd(t - t.mean(axis=0), compute_uv=False)  # the targets must span all D axes
+        if sv.size < self.D or sv[self.D - 1] <= 1e-9 * max(sv[0], 1e-300):
+            raise DegenerateGeometryError(f"{self.source}: {UNSPANNED[self.D]}")

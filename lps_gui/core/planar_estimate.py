@@ -1,29 +1,31 @@
-"""Planar (XY) estimation: the joint planar model, outlier views, the stage frame, covariances.
+"""Planar (XY) estimation, the D = 2 solver family of :func:`lps_gui.core.estimate.estimate`.
 
 Steps: per-view PnP -> initial plane (:func:`initial_planar_state`) -> joint
-LM (:func:`solve_planar`) -> outlier views flagged as in 1-D (reprojection
-RMS, or a position off the robust affine trend) and re-solved without them
--> the frame turned so +x is the fitted X-axis motion (SPEC 10) -> covariance
-of every position from the block arrowhead. The method names mirror the 1-D
-ones: ``joint`` (this), ``pnp`` (per-view poses projected on the plane: the
-baseline). The paper's hybrid grid search is 1-D by construction and not
-offered for planar sessions.
+LM (:func:`solve_planar`) inside the shared outlier rounds
+(:mod:`lps_gui.core.outlier_round`; the position test here is the robust
+affine trend of the grid) -> the frame turned so +x is the fitted X-axis
+motion (SPEC 10) -> covariance of every position from the block arrowhead,
+with the intrinsics' covariance propagated as for a line. Methods: ``joint``
+(this) and ``pnp`` (per-view poses projected on the plane: the baseline).
+The paper's hybrid grid search is 1-D by construction.
 """
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, Callable
 
 import numpy as np
 
-from lps_gui.core.block_arrowhead import BlockArrowheadInverse, block_arrowhead_inverse
-from lps_gui.core.board import Board
-from lps_gui.core.camera_model import CameraIntrinsics
-from lps_gui.core.observations import CornerViews
-from lps_gui.core.outliers import reprojection_outliers, robust_sigma
+from lps_gui.core.block_arrowhead import BlockArrowheadInverse, block_arrowhead_inverse, block_intrinsics_sensitivity
+from lps_gui.core.camera_model import project_board
+from lps_gui.core.estimate_types import EstimateOptions
+from lps_gui.core.observations import Observations
+from lps_gui.core.outlier_round import Solution, judge_views, solve_with_outliers
+from lps_gui.core.outliers import robust_sigma
 from lps_gui.core.planar_model import (
     N_PLANAR_SHARED,
+    PlanarEquations,
     PlanarState,
     initial_planar_state,
     linearize_planar,
@@ -34,55 +36,7 @@ from lps_gui.core.planar_model import (
 from lps_gui.core.pnp import solve_pnp
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.core.uncertainty import noise_variance
-from lps_gui.errors import DegenerateGeometryError, InputError
-
-PLANAR_METHODS = ("joint", "pnp")
-
-
-@dataclass
-class PlanarObservations(CornerViews):
-    """Corners of K views of one board taken on an XY stage."""
-
-    board: Board
-    intrinsics: CameraIntrinsics
-    corners_px: np.ndarray  # shape (K, N, 2)
-    target_mm: np.ndarray  # shape (K, 2)
-    approach: np.ndarray  # shape (K, 2): +1/-1 per axis
-    direction: np.ndarray  # shape (K,): +1 forward pass, -1 backward pass
-    run: np.ndarray  # shape (K,)
-    index: np.ndarray  # shape (K,)
-    names: list[str] = field(default_factory=list)
-    source: str = "planar observations"
-    source_sha256: str | None = None  # of the corner file's bytes as they were read (results.json inputs)
-
-    def __post_init__(self) -> None:
-        self.corners_px = np.asarray(self.corners_px, dtype=float)
-        K = self.corners_px.shape[0]
-        self.target_mm = np.asarray(self.target_mm, dtype=float).reshape(K, 2)
-        self.approach = np.asarray(self.approach, dtype=float).reshape(K, 2)
-        self.direction = np.asarray(self.direction, dtype=float).reshape(K)
-        self.run = np.asarray(self.run, dtype=int).reshape(K)
-        self.index = np.asarray(self.index, dtype=int).reshape(K)
-        if not self.names:
-            self.names = [f"view{i}" for i in self.index]
-
-    def validate(self) -> None:
-        """One-line errors for input that cannot determine a plane of motion."""
-        if self.corners_px.ndim != 3 or self.corners_px.shape[2] != 2:
-            raise InputError(f"{self.source}: corners must have shape (views, corners, 2)")
-        if self.corners_px.shape[1] != self.board.n_corners:
-            raise InputError(f"{self.source}: views have {self.corners_px.shape[1]} corners but the board has "
-                             f"{self.board.n_corners}; check inner_corners in board.json")
-        usable = self.usable_views()
-        if usable.sum() < 3:
-            raise DegenerateGeometryError(f"{self.source}: only {int(usable.sum())} views show the board; "
-                                          "need at least 3 at targets not on one line")
-        t = self.target_mm[usable]
-        centred = t - t.mean(axis=0)
-        sv = np.linalg.svd(centred, compute_uv=False)
-        if sv.size < 2 or sv[1] <= 1e-9 * max(sv[0], 1e-300):
-            raise DegenerateGeometryError(f"{self.source}: the usable targets lie on one line; a planar "
-                                          "session needs targets spread over both axes (or estimate it as 1-D)")
+from lps_gui.errors import DegenerateGeometryError
 
 
 @dataclass
@@ -117,6 +71,15 @@ class PlanarEstimate:
     timings_s: dict[str, float]
     inverse: BlockArrowheadInverse | None  # in units of sigma_px^2, stage frame
     fit: PlanarFit | None = None
+    options: EstimateOptions | None = None
+    cov_xy_total_mm2: np.ndarray | None = None  # shape (K, 2, 2): with the intrinsics' covariance (None: as cov_xy)
+    intrinsics_gradient: np.ndarray | None = None  # shape (K, 2, 9): d (x, y) / d intrinsics
+
+    @property
+    def sigma_total_xy_mm(self) -> np.ndarray:
+        """Per-view 1-sigma of x and y with the intrinsics' covariance, shape (K, 2) mm."""
+        cov = self.cov_xy_mm2 if self.cov_xy_total_mm2 is None else self.cov_xy_total_mm2
+        return np.sqrt(np.maximum(np.einsum("kii->ki", cov), 0.0))
 
     @property
     def sigma_xy_mm(self) -> np.ndarray:
@@ -136,27 +99,15 @@ class PlanarEstimate:
         return self.sigma_px**2 * self.inverse.functional_covariance(L)
 
 
-def estimate_planar(
-    obs: PlanarObservations,
-    method: str = "joint",
-    outlier_k: float = 5.0,
-    max_outlier_rounds: int = 3,
-    detect_outliers: bool = True,
-    robust: bool = False,
-    progress: ProgressFn = no_progress,
-    cancel: CancelToken | None = None,
-) -> PlanarEstimate:
-    """Estimate the planar model and every (x, y) position from the observed corners."""
-    if method not in PLANAR_METHODS:
-        raise InputError(f"planar estimation: method {method!r} is not available for planar sessions; "
-                         f"use one of {', '.join(PLANAR_METHODS)} (the hybrid grid search is 1-D only)")
-    obs.validate()
+def estimate_plane(obs: Observations, opt: EstimateOptions, progress: ProgressFn = no_progress,
+                   cancel: CancelToken | None = None) -> PlanarEstimate:
+    """D = 2: every (x, y) position and the plane of motion from the observed corners (called by
+    :func:`lps_gui.core.estimate.estimate`, which checks the options and the observations)."""
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
     X = obs.board.object_points()
     usable = obs.usable_views()
     mask_all = obs.mask() & usable[:, None]
-    ref = int(np.flatnonzero(usable)[0])
     progress(0, 4, "per-view poses")
     R_v, t_v, ok = solve_pnp(X, np.where(mask_all[..., None], obs.corners_px, np.nan), obs.intrinsics)
     usable &= ok
@@ -165,57 +116,25 @@ def estimate_planar(
     ref = int(np.flatnonzero(usable)[0])
     state = initial_planar_state(R_v, t_v, obs.target_mm, usable, ref, obs.intrinsics)
     timings["init"] = time.perf_counter() - t_start
-    if method == "pnp":
-        return _per_view_result(obs, state, R_v, t_v, usable, ref, X, mask_all, timings, t_start)
+    if opt.method == "pnp":
+        est = _per_view_result(obs, state, R_v, t_v, usable, ref, X, mask_all, timings, t_start)
+        est.options = opt
+        return est
 
-    outlier = np.zeros(obs.K, dtype=bool)
-    reasons = [""] * obs.K
-    flags: list[dict[str, Any]] = []
-    new = np.zeros(obs.K, dtype=bool)
+    sol = Solution(state, ref, usable, np.zeros(obs.K, dtype=bool), [""] * obs.K)
+    prior = opt.intrinsics_prior(obs.intrinsics)
     progress(1, 4, "joint planar solve")
-    for round_no in range(max_outlier_rounds + 1):
-        used = usable & ~outlier
-        mask = mask_all & used[:, None]
-        free = used & (np.arange(obs.K) != ref)
-        t0 = time.perf_counter()
-        res = solve_planar(state, X, obs.corners_px, mask, free, robust=robust, cancel=cancel)
-        timings["solve"] = timings.get("solve", 0.0) + time.perf_counter() - t0
-        state = res.state
-        if not detect_outliers:
-            break
-        rms = _view_rms(state, X, obs.corners_px, mask_all)
-        inv, sigma2 = _inverse(state, X, obs.corners_px, mask, free, used)
-        sig_um = 1e3 * np.sqrt(sigma2 * np.einsum("kii->ki", inv.cov_view()))
-        bumped = reprojection_outliers(rms, used, outlier_k)
-        resid = _affine_residual_um(state.xy, obs.target_mm, obs.approach, used & ~bumped)
-        scale = np.maximum(np.array([robust_sigma(resid[used & ~bumped, a]) for a in range(2)])[None, :], sig_um)
-        moved = used & ~bumped & np.any(np.abs(resid) > outlier_k * np.maximum(scale, 1e-9), axis=1)
-        new = (bumped | moved) & ~outlier
-        if not new.any():
-            break
-        for i in np.flatnonzero(new):
-            if bumped[i]:
-                reasons[i] = (f"reprojection RMS {rms[i]:.3f} px against a median of "
-                              f"{np.median(rms[used]):.3f} px (camera bumped?)")
-                kind = "reprojection"
-            else:
-                reasons[i] = (f"position ({resid[i, 0]:+.1f}, {resid[i, 1]:+.1f}) um off the trend of the grid "
-                              "(image replaced?)")
-                kind = "position"
-            flags.append({"index": int(obs.index[i]), "kind": kind, "message": reasons[i], "round": round_no + 1})
-        outlier |= new
-        if outlier[ref]:
-            ref = int(np.flatnonzero(usable & ~outlier)[0])
-            state.xy = state.xy - state.xy[ref]
-        if (usable & ~outlier).sum() < 3:
-            raise DegenerateGeometryError(f"{obs.source}: fewer than 3 views are left after removing outliers")
 
-    used = usable & ~outlier
+    def solve(sol: Solution) -> None:
+        res = solve_planar(sol.state, X, obs.corners_px, mask_all & sol.used[:, None], sol.free(), robust=opt.robust,
+                           cancel=cancel, intrinsics_prior=prior)
+        sol.state, sol.iterations, sol.converged = res.state, res.iterations, res.converged
+
+    solve_with_outliers(sol, solve, lambda sol, round_no: _outlier_round(sol, obs, X, mask_all, opt.outlier_k, round_no),
+                        opt, timings, cancel)
+    state, ref, used = sol.state, sol.ref, sol.used
     mask = mask_all & used[:, None]
-    free = used & (np.arange(obs.K) != ref)
-    if detect_outliers and new.any():  # the last round flagged views: solve once more without them
-        res = solve_planar(state, X, obs.corners_px, mask, free, robust=robust, cancel=cancel)
-        state = res.state
+    free = sol.free()
     others = usable & ~used
     if others.any():
         sub = state.copy()
@@ -224,20 +143,51 @@ def estimate_planar(
     progress(3, 4, "uncertainty")
     state = _regauge(state, ref)
     state, angle = _align_to_x_motion(state, obs.target_mm, obs.approach, used)
-    inv, sigma2 = _inverse(state, X, obs.corners_px, mask, free, used)
-    eq, _ = linearize_planar(state, X, obs.corners_px, mask)
-    n_params = N_PLANAR_SHARED + 2 * int(free.sum())
+    t0 = time.perf_counter()
+    inv, sigma2, G_s, n_params = _uncertainty(state, obs, X, mask, free, prior)
+    cov = sigma2 * inv.cov_view()
+    cov_total = cov
+    if G_s is not None:
+        cov_total = cov + np.einsum("kai,ij,kbj->kab", G_s, obs.intrinsics.covariance, G_s)
+    timings["uncertainty"] = time.perf_counter() - t0
+    eq_n_obs = int(2 * mask.sum())
     est = PlanarEstimate(
-        method=method, state=state, reference_view=ref, usable=usable, used=used, outlier=outlier,
-        outlier_reason=reasons, sigma_px=float(np.sqrt(sigma2)), cov_xy_mm2=sigma2 * inv.cov_view(),
+        method=opt.method, state=state, reference_view=ref, usable=usable, used=used, outlier=sol.outlier,
+        outlier_reason=sol.reasons, sigma_px=float(np.sqrt(sigma2)), cov_xy_mm2=cov,
         rms_px=_view_rms(state, X, obs.corners_px, mask_all), n_corners=mask_all.sum(axis=1),
-        iterations=res.iterations, converged=res.converged, n_observations=eq.n_obs, dof=eq.n_obs - n_params,
-        flags=flags, timings_s=timings, inverse=inv,
+        iterations=sol.iterations, converged=sol.converged, n_observations=eq_n_obs, dof=eq_n_obs - n_params,
+        flags=sol.flags, timings_s=timings, inverse=inv, options=opt, cov_xy_total_mm2=cov_total,
+        intrinsics_gradient=G_s,
     )
     est.fit = planar_fit(est, obs.target_mm, obs.approach)
     timings["total"] = time.perf_counter() - t_start
     progress(4, 4, "done")
     return est
+
+
+def _outlier_round(sol: Solution, obs: Observations, X: np.ndarray, mask_all: np.ndarray, k: float,
+                   round_no: int) -> bool:
+    """One judgement of the used views (:func:`~lps_gui.core.outlier_round.judge_views`) with the plane's
+    position test: a position off the robust affine trend of the grid, against its own sigma."""
+    used = sol.used
+    mask = mask_all & used[:, None]
+    rms = _view_rms(sol.state, X, obs.corners_px, mask_all)
+    eq, _ = linearize_planar(sol.state, X, obs.corners_px, mask)
+    inv, sigma2 = _inverse(eq, sol.free())
+    sig_um = 1e3 * np.sqrt(sigma2 * np.einsum("kii->ki", inv.cov_view()))
+
+    def position_test(valid: np.ndarray) -> tuple[np.ndarray, Callable[[int], str]]:
+        resid = _affine_residual_um(sol.state.xy, obs.target_mm, obs.approach, valid)
+        scale = np.maximum(np.array([robust_sigma(resid[valid, a]) for a in range(2)])[None, :], sig_um)
+        moved = valid & np.any(np.abs(resid) > k * np.maximum(scale, 1e-9), axis=1)
+        return moved, lambda i: (f"position ({resid[i, 0]:+.1f}, {resid[i, 1]:+.1f}) um off the trend of the grid "
+                                 "(image replaced?)")
+
+    ref = sol.ref
+    flagged = judge_views(sol, rms, position_test, obs.index, k, round_no, obs.source)
+    if sol.ref != ref:
+        sol.state.xy = sol.state.xy - sol.state.xy[sol.ref]
+    return flagged
 
 
 # ----------------------------------------------------------------------------- steps
@@ -250,9 +200,32 @@ def _view_rms(state: PlanarState, X: np.ndarray, corners: np.ndarray, mask: np.n
         return np.where(n > 0, np.sqrt(np.sum(r * r, axis=(1, 2)) / np.maximum(n, 1)), np.nan)
 
 
-def _inverse(state: PlanarState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray, free: np.ndarray,
-             used: np.ndarray) -> tuple[BlockArrowheadInverse, float]:
-    eq, _ = linearize_planar(state, X, corners, mask)
+def _uncertainty(state: PlanarState, obs: Observations, X: np.ndarray, mask: np.ndarray, free: np.ndarray,
+                 prior: tuple[np.ndarray, np.ndarray] | None
+                 ) -> tuple[BlockArrowheadInverse, float, np.ndarray | None, int]:
+    """H^-1 at the solution, the noise variance, d (x, y) / d intrinsics and the number of unknowns.
+
+    Intrinsics held: their covariance is propagated (when known) through the pose blocks' cross terms;
+    intrinsics free (self-calibration): the prior's information joins H and nothing is propagated.
+    """
+    with_intr = prior is not None or obs.intrinsics.covariance is not None
+    eq, _ = linearize_planar(state, X, obs.corners_px, mask, with_intrinsics=with_intr)
+    p = N_PLANAR_SHARED
+    n_params = p + 2 * int(free.sum())
+    if prior is not None:
+        A = eq.A.copy()
+        A[p:, p:] += np.linalg.inv(prior[1])
+        n_params += A.shape[0] - p
+        sigma2 = noise_variance(eq.ssr, eq.n_obs, n_params)
+        return block_arrowhead_inverse(A, eq.B, eq.D, free), sigma2, None, n_params
+    sigma2 = noise_variance(eq.ssr, eq.n_obs, n_params)
+    inv = block_arrowhead_inverse(eq.A[:p, :p], eq.B[..., :p], eq.D, free)
+    G_s = block_intrinsics_sensitivity(inv, eq.A[:p, p:], eq.B[..., p:]) if with_intr else None
+    return inv, sigma2, G_s, n_params
+
+
+def _inverse(eq: PlanarEquations, free: np.ndarray) -> tuple[BlockArrowheadInverse, float]:
+    """The factored H^-1 of the pose blocks (the intrinsics held) and the a-posteriori noise variance."""
     sigma2 = noise_variance(eq.ssr, eq.n_obs, N_PLANAR_SHARED + 2 * int(free.sum()))
     return block_arrowhead_inverse(eq.A, eq.B, eq.D, free), sigma2
 
@@ -320,12 +293,10 @@ def planar_fit(est: PlanarEstimate, target_mm: np.ndarray, approach: np.ndarray)
     return PlanarFit(G, cov_G, resid)
 
 
-def _per_view_result(obs: PlanarObservations, state: PlanarState, R_v: np.ndarray, t_v: np.ndarray,
+def _per_view_result(obs: Observations, state: PlanarState, R_v: np.ndarray, t_v: np.ndarray,
                      usable: np.ndarray, ref: int, X: np.ndarray, mask_all: np.ndarray,
                      timings: dict[str, float], t_start: float) -> PlanarEstimate:
     """The PnP baseline: every view's own translation projected on the initial plane."""
-    from lps_gui.core.camera_model import project_board
-
     K = obs.K
     state = _regauge(state, ref)
     state, _ = _align_to_x_motion(state, obs.target_mm, obs.approach, usable)

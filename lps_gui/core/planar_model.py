@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lps_gui.core.block_arrowhead import solve_block_arrowhead
-from lps_gui.core.camera_model import CameraIntrinsics, project_parts
+from lps_gui.core.camera_model import CameraIntrinsics, intrinsics_rows, project_parts
 from lps_gui.core.joint_lm import camera_points, huber_threshold, huber_weights, pose_residuals, robust_cost
 from lps_gui.core.progress import CancelToken
 from lps_gui.core.rotation import exp_so3
@@ -80,7 +80,7 @@ def planar_residuals(state: PlanarState, X: np.ndarray, corners: np.ndarray, mas
 class PlanarEquations:
     """Blocks of J^T W J and J^T W r at one linearization point."""
 
-    A: np.ndarray  # shape (p, p)
+    A: np.ndarray  # shape (p, p): p = 8, or 17 with the intrinsics after the 8 shared parameters
     B: np.ndarray  # shape (K, 2, p)
     D: np.ndarray  # shape (K, 2, 2)
     g_theta: np.ndarray  # shape (p,)
@@ -91,15 +91,18 @@ class PlanarEquations:
     weights: np.ndarray  # shape (K, N)
 
 
-def planar_jacobians(state: PlanarState, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def planar_jacobians(state: PlanarState, X: np.ndarray, with_intrinsics: bool = False
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
     """Projection and Jacobians of the planar model at ``state``.
 
     Returns uv shape (2, K, N), J_theta shape (8, 2, K, N) (left-perturbed
-    rotation, l0, plane tilts about n_x and n_y) and J_s shape (2, 2, K, N)
-    (d uv / d x_i and d uv / d y_i).
+    rotation, l0, plane tilts about n_x and n_y), J_s shape (2, 2, K, N)
+    (d uv / d x_i and d uv / d y_i) and, when asked, J_I shape (9, 2, K, N)
+    (d uv / d intrinsics, :data:`~lps_gui.core.camera_model.INTRINSIC_NAMES`).
     """
     x, y, z = _camera_points(state, X)
     parts = project_parts(x, y, z, state.intrinsics, want_jacobian=True)
+    J_I = np.stack(intrinsics_rows(parts, state.intrinsics), axis=1) if with_intrinsics else None
     Px = np.stack([parts.du[0], parts.dv[0]])  # shape (2, K, N)
     Py = np.stack([parts.du[1], parts.dv[1]])
     Pz = np.stack([parts.du[2], parts.dv[2]])
@@ -121,14 +124,18 @@ def planar_jacobians(state: PlanarState, X: np.ndarray) -> tuple[np.ndarray, np.
     J[7] = -state.xy[None, :, 0, None] * Pn_z
     Js = np.stack([P_dot(state.P[:, 0]), P_dot(state.P[:, 1])])
     uv = np.stack([parts.u, parts.v])
-    return uv, J, Js, RX
+    return uv, J, Js, J_I
 
 
 def linearize_planar(
-    state: PlanarState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray, huber_c: float | None = None
+    state: PlanarState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray, huber_c: float | None = None,
+    with_intrinsics: bool = False,
 ) -> tuple[PlanarEquations, np.ndarray]:
-    """Normal-equation blocks at ``state`` and the residuals (K, N, 2)."""
-    uv, J, Js, _ = planar_jacobians(state, X)
+    """Normal-equation blocks at ``state`` and the residuals (K, N, 2); ``with_intrinsics`` puts the 9
+    intrinsics after the 8 shared parameters (self-calibration, or propagating their covariance)."""
+    uv, J, Js, J_I = planar_jacobians(state, X, with_intrinsics)
+    if J_I is not None:
+        J = np.concatenate([J, J_I])
     m = np.nan_to_num(corners)
     r = np.empty_like(uv)  # shape (2, K, N)
     r[0] = np.where(mask, uv[0] - m[..., 0], 0.0)
@@ -166,11 +173,15 @@ def planar_positions_only(state: PlanarState, X: np.ndarray, corners: np.ndarray
 
 
 def apply_planar_step(state: PlanarState, d_theta: np.ndarray, d_s: np.ndarray) -> PlanarState:
+    """Move the state by a step of :func:`solve_block_arrowhead` (9 intrinsics after the 8 shared, when given)."""
     R = exp_so3(d_theta[0:3]) @ state.R
     l0 = state.l0 + d_theta[3:6]
     w = d_theta[6] * state.P[:, 0] + d_theta[7] * state.P[:, 1]
     P = exp_so3(w) @ state.P
-    return PlanarState(R, l0, P, state.xy + d_s, state.intrinsics)
+    intr = state.intrinsics
+    if d_theta.size > N_PLANAR_SHARED:
+        intr = intr.with_vector(intr.vector() + d_theta[N_PLANAR_SHARED:])
+    return PlanarState(R, l0, P, state.xy + d_s, intr)
 
 
 @dataclass
@@ -193,6 +204,7 @@ def solve_planar(
     huber_scale: float = 3.0,
     relative_tolerance: float = 1e-10,
     cancel: CancelToken | None = None,
+    intrinsics_prior: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> PlanarLmResult:
     """Minimize the reprojection error of the planar model by LM (Schur on the 2x2 blocks).
 
@@ -203,11 +215,28 @@ def solve_planar(
     corners : measured corners, shape (K, N, 2) px (NaN where missing)
     mask : corners to use, shape (K, N) bool
     free_s : views whose (x, y) are estimated, shape (K,) bool (gauge view False)
+    intrinsics_prior : (I0 (9,), Sigma_I (9, 9)): the intrinsics are free too, with this prior (SPEC 4.6)
     """
     huber_c = (huber_threshold(planar_residuals(state, X, corners, mask), mask, huber_scale)
                if robust else None)
-    eq, _ = linearize_planar(state, X, corners, mask, huber_c)
-    cost = eq.cost
+    with_intr = intrinsics_prior is not None
+    info = np.linalg.inv(intrinsics_prior[1]) if with_intr else None
+    p = N_PLANAR_SHARED
+
+    def prior(st: PlanarState) -> tuple[float, np.ndarray]:
+        """The prior's cost and gradient (zero without self-calibration)."""
+        if info is None:
+            return 0.0, 0.0
+        dI = st.intrinsics.vector() - intrinsics_prior[0]
+        return float(dI @ info @ dI), np.r_[np.zeros(p), info @ dI]
+
+    prior_A = 0.0
+    if info is not None:
+        prior_A = np.zeros((p + 9, p + 9))
+        prior_A[p:, p:] = info
+    eq, _ = linearize_planar(state, X, corners, mask, huber_c, with_intr)
+    prior_cost, prior_g = prior(state)
+    cost = eq.cost + prior_cost
     history = [cost]
     lam = 1e-4
     converged = False
@@ -215,14 +244,15 @@ def solve_planar(
     for it in range(1, max_iterations + 1):
         if cancel is not None:
             cancel.check("planar estimation")
-        d_theta, d_s = solve_block_arrowhead(eq.A, eq.B, eq.D, eq.g_theta, eq.g_s, free_s, lam)
+        d_theta, d_s = solve_block_arrowhead(eq.A + prior_A, eq.B, eq.D, eq.g_theta + prior_g, eq.g_s, free_s, lam)
         trial = apply_planar_step(state, d_theta, d_s)
-        trial_cost = robust_cost(planar_residuals(trial, X, corners, mask), mask, huber_c)
+        trial_prior, trial_prior_g = prior(trial)
+        trial_cost = robust_cost(planar_residuals(trial, X, corners, mask), mask, huber_c) + trial_prior
         if trial_cost <= cost:
             improvement = (cost - trial_cost) / max(cost, 1e-300)
-            state = trial
-            eq, _ = linearize_planar(state, X, corners, mask, huber_c)
-            cost = eq.cost
+            state, prior_g = trial, trial_prior_g
+            eq, _ = linearize_planar(state, X, corners, mask, huber_c, with_intr)
+            cost = eq.cost + trial_prior
             history.append(cost)
             lam = max(lam / 10.0, 1e-12)
             if improvement < relative_tolerance:

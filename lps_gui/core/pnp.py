@@ -8,7 +8,7 @@ from lps_gui.core.rotation import exp_so3
 
 
 def solve_pnp(
-    points_board: np.ndarray, corners_px: np.ndarray, intrinsics: CameraIntrinsics
+    points_board: np.ndarray, corners_px: np.ndarray, intrinsics: CameraIntrinsics, refine: bool = True
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Pose of every view by cv2.solvePnP (iterative LM after a planar init).
 
@@ -37,7 +37,7 @@ def solve_pnp(
         planar = obj * np.array([1.0, 1.0, 0.0])  # IPPE needs z = 0; a bowed board (Board.warp_mm) is refined below
         try:
             good, rvec, tvec = cv2.solvePnP(planar, img, Kmat, dist, flags=cv2.SOLVEPNP_IPPE)
-            if good:
+            if good and refine:
                 rvec, tvec = cv2.solvePnPRefineLM(obj, img, Kmat, dist, rvec, tvec)
         except cv2.error:
             good = False

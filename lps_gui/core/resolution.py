@@ -20,9 +20,9 @@ import numpy as np
 
 
 def chi2_sf(x: float, dof: float) -> float:
-    """Survival function of chi-square, P(X > x) (scipy.special's: importing scipy.stats costs 0.7 s).
+    """Survival function of chi-square, P(X > x) (scipy.special's: scipy.stats is far slower to import).
 
-    scipy.special (0.1 s to import) is imported here, where it is used, not
+    scipy.special (itself slow to import) is imported here, where it is used, not
     by everything that imports this module (`lps estimate` reads its inputs first).
     """
     from scipy.special import chdtrc
@@ -78,11 +78,16 @@ def is_resolved(value: float | None, sigma: float | None, limit: float | None = 
     return limit is None or sigma < limit
 
 
-def not_resolved_text(sigma: float | None, unit: str, digits: int = 2) -> str:
-    """``"not resolved (σ 12 µm)"``: the words every reader of an unresolved figure sees."""
-    if sigma is None or not math.isfinite(sigma):
+def not_resolved_text(bound: float | None, unit: str, digits: int = 2, what: str = "noise p-v") -> str:
+    """``"not resolved (noise p-v 12 µm)"``: the words every reader of an unresolved figure sees.
+
+    ``bound`` is what noise alone reaches (:func:`noise_peak_to_valley`, or
+    :func:`noise_max_abs` with ``what="noise max"``), not a 1-sigma: it is
+    named as such, the same words page 1's verdict notes use.
+    """
+    if bound is None or not math.isfinite(bound):
         return "not resolved"
-    return f"not resolved (\u03c3 {_short(sigma, digits)} {unit})"
+    return f"not resolved ({what} {_short(bound, digits)} {unit})"
 
 
 def _short(v: float, digits: int) -> str:

@@ -33,6 +33,7 @@ from lps_gui.core.environment import Environment
 COVERAGE_FACTOR = 2.0
 NOISE_SOURCES = ("corner noise", "reference view noise")
 TILT_DEGREE = 3  # a carriage's pitch and yaw along the travel: smooth, a cubic follows it
+TILT_K = 3.0  # a tilt spread counts when it exceeds the noise share by this many of its sd
 
 
 @dataclass(frozen=True)
@@ -145,6 +146,9 @@ def smooth_tilt_spread_urad(tilt: np.ndarray, sigma: np.ndarray, target_mm: np.n
     a polynomial of ``degree`` in the target is fitted to each angle, and the
     noise's share of the fitted curve's variance (sigma^2 (degree + 1) / n)
     is subtracted. Without targets, the raw variance minus sigma^2 is used.
+    What remains counts only above ``TILT_K`` standard deviations of that
+    noise share: a quick demo's per-view sigma of ~500 urad otherwise left a
+    random ~80 urad "tilt" (a 50 um Abbe term on a stage with none).
     """
     ok = np.all(np.isfinite(tilt), axis=1)
     tilt, sigma = tilt[ok], sigma[ok]
@@ -156,10 +160,14 @@ def smooth_tilt_spread_urad(tilt: np.ndarray, sigma: np.ndarray, target_mm: np.n
         A = np.vander(u, degree + 1)
         fit = A @ np.linalg.lstsq(A, tilt, rcond=None)[0]
         spread = np.var(fit, axis=0) - noise * (degree + 1) / n
+        scatter = noise * math.sqrt(2.0 * (degree + 1)) / n  # sd of that noise share (chi-square, degree + 1 dof)
     elif n > 1:
         spread = np.var(tilt, axis=0) - noise
+        scatter = noise * math.sqrt(2.0 / n)
     else:
         return np.zeros(tilt.shape[1])
+    # a tilt curve within TILT_K sd of what noise alone leaves is not resolved: no Abbe term from noise
+    spread = np.where(spread > TILT_K * scatter, spread, 0.0)
     return np.sqrt(np.clip(spread, 0.0, None))
 
 
@@ -185,8 +193,13 @@ def combine(rows: list[BudgetRow], k: float = COVERAGE_FACTOR) -> dict[str, Any]
 
 
 def figure_uncertainties(unc: dict[str, Any], figures: dict[str, Any], travel_mm: float,
-                         n_views: int = 0) -> dict[str, float | None]:
-    """U (k = 2) of each headline figure, keyed like the figures (um, ppm for the scale).
+                         n_views: int = 0, n_targets: int = 0,
+                         angle_sigma_urad: dict[str, float] | None = None) -> dict[str, float | None]:
+    """U (k = 2) of each headline figure, keyed like the figures (um, ppm for the scale, urad for angles).
+
+    The one source of every U the report, the GUI and the CLI print; the mean
+    step's is ``mean_step_um`` (U over the travel / (``n_targets`` - 1)), the
+    p-v and max |x| figures' come from :func:`extreme_uncertainties`.
 
     The periodic amplitude is a sinusoid fitted to ``n_views`` noisy positions:
     its 1-sigma is the per-view noise times sqrt(2 / n) (the reference view's
@@ -213,4 +226,39 @@ def figure_uncertainties(unc: dict[str, Any], figures: dict[str, Any], travel_mm
                                     else k * (u_noise / math.sqrt(2.0)) * math.sqrt(2.0 / n_views))  # per-view part
     s = figures.get("straightness_sigma_um")
     out["straightness_um_max"] = None if s is None else k * float(s)
+    out.update(extreme_uncertainties(figures, k, angle_sigma_urad or {}))
+    if n_targets >= 2 and U is not None:
+        out["mean_step_um"] = float(U) / (n_targets - 1)  # (last - first) / (n - 1): U over the travel shared out
+    return out
+
+
+def extreme_uncertainties(figures: dict[str, Any], k: float, angle_sigma_urad: dict[str, float]) -> dict[str, float]:
+    """U (k) of the peak-to-valley and max |x| figures, keyed like the report's rows (um, urad).
+
+    A p-v of per-target means is the difference of two of them: k sqrt 2 times
+    the sigma of one mean (``figures["straightness"]["v1"]["sigma_um"]``).
+    ``straightness_span_max`` is the U of the larger span, the one the
+    straight-line verdict compares with its limit. A max |angle| is one view's
+    angle: k times the median per-view sigma (``angle_sigma_urad``). Whether
+    noise alone could give the figure is a separate question
+    (:mod:`lps_gui.core.resolution`): an unresolved figure is printed without a value.
+    """
+    out: dict[str, float] = {}
+    st = figures.get("straightness")
+    if isinstance(st, dict):
+        spans = []
+        for j in (1, 2):
+            d = st.get(f"v{j}") or {}
+            if d.get("sigma_um") is not None:
+                out[f"straightness_span_{j}"] = k * math.sqrt(2.0) * float(d["sigma_um"])
+                if d.get("span_um") is not None:
+                    spans.append((float(d["span_um"]), out[f"straightness_span_{j}"]))
+        if spans:
+            out["straightness_span_max"] = max(spans)[1]
+    rot = figures.get("image_rotation")
+    if isinstance(rot, dict) and rot.get("sigma_urad") is not None:
+        out["image_rotation_span"] = k * math.sqrt(2.0) * float(rot["sigma_urad"])
+    for name, sigma in angle_sigma_urad.items():
+        if sigma is not None and math.isfinite(sigma):
+            out[f"max_abs_{name}"] = k * float(sigma)
     return out

@@ -13,7 +13,7 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6.QtCore import Qt
 
-from lps_gui.report.figures import OUTLIER_COLOR, FigureSpec, Series
+from lps_gui.report.figure_spec import OUTLIER_COLOR, FigureSpec, Series
 
 BAND_ALPHA = 50  # of 255: a 2-sigma band reads as a tint behind the curve
 MARKER_SIZE_PX = 6
@@ -171,11 +171,3 @@ def fit_range(plot: pg.PlotItem, drawn: DrawnFigure, pad_fraction: float = 0.08)
             cross.setData(x, np.clip(yo, lo - 0.5 * pad, hi + 0.5 * pad))
     plot.enableAutoRange(axis="x")
     plot.setYRange(lo - pad, hi + pad, padding=0.0)
-
-
-def draw_figure(plot: pg.PlotItem, fig: FigureSpec) -> DrawnFigure:
-    """Replace ``plot``'s contents by ``fig``: title, axis labels with units, legend, series."""
-    drawn, steps = figure_steps(plot, fig)
-    for step in steps:
-        step()
-    return drawn

@@ -89,6 +89,8 @@ def _parameters(fn: Callable[..., Any]) -> set[str] | None:
 
 
 _RUNNING: set["Job"] = set()  # strong references: a running job is never garbage-collected with its thread
+_UNENDED: list[QThread] = []  # threads that did not end after finished(): never destroyed while running
+THREAD_END_WAIT_MS = 10000
 
 
 def running_jobs() -> list["Job"]:
@@ -105,14 +107,23 @@ def stop_all_jobs(timeout_ms: int = 10000) -> bool:
 
 
 class _Thread(QThread):
-    """The thread body; all results leave through the owning Job's signals."""
+    """The thread body; all results leave through the owning Job's signals.
 
-    def __init__(self, job: "Job") -> None:
+    It drops its reference to the work when the work starts: no Job <-> thread
+    reference cycle, so the thread object is freed by reference counting on
+    the GUI thread, never by the cyclic collector on whatever thread happens
+    to trigger a collection (where ``~QThread`` of a thread still finishing
+    waits for it while holding the GIL).
+    """
+
+    def __init__(self, body: Callable[[], None]) -> None:
         super().__init__()
-        self._job = job
+        self._body: Callable[[], None] | None = body
 
     def run(self) -> None:  # runs in the worker thread
-        self._job._run_in_thread()
+        body, self._body = self._body, None
+        if body is not None:
+            body()
 
 
 class Job(QObject):
@@ -155,7 +166,7 @@ class Job(QObject):
         self._kwargs = kwargs
         self._pass_progress = pass_progress
         self._last_emit = 0.0
-        self._thread = _Thread(self)
+        self._thread = _Thread(self._run_in_thread)
         self._thread.finished.connect(self._on_thread_finished)
         self.result: Any = None
         self.error: str | None = None
@@ -176,9 +187,6 @@ class Job(QObject):
         if not self.token.cancelled:
             log.info("%s: cancel requested", self.name)
         self.token.cancel()
-
-    def is_running(self) -> bool:
-        return self._thread.isRunning()
 
     def wait(self, timeout_ms: int = 30000) -> bool:
         return self._thread.wait(timeout_ms)
@@ -214,6 +222,11 @@ class Job(QObject):
             self.succeeded.emit(result)
 
     def _on_thread_finished(self) -> None:  # GUI thread
+        # finished() comes from the thread's last steps: let them end (the GIL is released meanwhile) before the
+        # job, and with it the QThread, can be dropped; a thread that does not end is kept, never destroyed running
+        if not self._thread.wait(THREAD_END_WAIT_MS):
+            log.warning("%s: its thread did not end after finished(); kept", self.name)
+            _UNENDED.append(self._thread)
         _job_ended()
         _RUNNING.discard(self)
         if self.error is None:  # a failure or a cancel is reported by whoever shows it, without a duration

@@ -28,7 +28,7 @@ import numpy as np
 from lps_gui.core.clock import Clock, SimClock
 from lps_gui.core.stage_errors import PlanarErrorModel, PlanarTruePose, StageErrorModel, TruePose
 from lps_gui.errors import HardwareError
-from lps_gui.hardware.grbl.codes import SETTINGS, GrblError, check_setting, setting_info
+from lps_gui.hardware.grbl.codes import SETTINGS, GrblError, check_setting, setting_info, stored_settings
 from lps_gui.hardware.motion import Profile
 from lps_gui.hardware.planner import PLANNER_BLOCKS, HeldMove, MotionPlanner
 from lps_gui.hardware.stage import AXES, WORK_SYSTEMS, Stage, StageEvent, StageSetting, StageStatus
@@ -522,6 +522,6 @@ class SimulatedStage(Stage):
             if state not in ("Idle", "Alarm"):
                 raise GrblError("error", 8, f"${number}={value:g}")
             check_setting(self.settings, number, value)
-            self.settings[number] = float(value)
+            self.settings.update(stored_settings(number, value))
             if number == 130 + AXES.index(self.axis):
-                self.travel_mm = (self.travel_mm[0], self.travel_mm[0] + float(value))
+                self.travel_mm = (self.travel_mm[0], self.travel_mm[0] + self.settings[number])

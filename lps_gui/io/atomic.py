@@ -88,12 +88,20 @@ def remove_orphan_temps(folder: Path | str) -> list[Path]:
 
 
 def temp_path(path: Path) -> Path:
-    """A fresh temporary name beside ``path`` (same folder, so the rename is atomic)."""
+    """A fresh temporary name beside ``path`` (same folder, so the rename is atomic).
+
+    Its mode follows the user's umask (mkstemp makes 0600): a writer that fills
+    it (QPdfWriter keeps the mode of the file it opens) leaves a file that reads
+    like any other output.
+    """
     try:
         fd, tmp = tempfile.mkstemp(prefix=_temp_prefix(path), suffix=TEMP_SUFFIX, dir=path.parent)
     except OSError as exc:
         raise storage_error(path, exc) from exc
-    os.close(fd)
+    try:
+        os.fchmod(fd, 0o666 & ~_umask())
+    finally:
+        os.close(fd)
     return Path(tmp)
 
 

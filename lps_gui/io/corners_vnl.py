@@ -8,7 +8,7 @@ row, with the reason in a ``## failed <filename>: <reason>`` comment. Other
 A session of 1600 views holds 864k rows, so both directions work on numpy
 byte arrays, never one Python object per row. Reading first tries
 :mod:`lps_gui.io.corners_vnl_fast` (the file as the writer makes it, streamed
-in blocks and hashed on the way: about 0.1 s at K=1600); any other file, and
+in blocks and hashed on the way); any other file, and
 every error, goes to the general reader here (tokens found by whitespace
 masks, numbers parsed by one bytes-to-float cast, names grouped by runs),
 whose messages name the first offending line as a line-by-line reader would.

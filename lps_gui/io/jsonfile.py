@@ -38,8 +38,8 @@ def json_bytes(data: Any) -> bytes:
     strings stays on one line and a list of rows (objects, lists) gets one row
     per line, each row compact. The text still reads and diffs well (a
     results.json position is one line), and every row goes through the C
-    encoder: ``indent=`` falls back to the pure-Python encoder, 60 ms for the
-    260k items of a K = 1600 results.json. The values are the same (same
+    encoder: ``indent=`` falls back to the pure-Python encoder, slow for the
+    hundreds of thousands of items of a large results.json. The values are the same (same
     float repr); ``json.loads`` gives back what ``indent=2`` would.
     """
     parts: list[str] = []

@@ -2,7 +2,7 @@
 
 results.json is the complete, versioned record (schema in
 docs/ARCHITECTURE.md), assembled here only (:func:`assemble_results`); the
-CSVs are views of it for spreadsheets (:func:`summary_rows` gives summary.csv's
+CSVs are views of it for spreadsheets (:func:`summary_csv_rows` gives summary.csv's
 rows). All three are written as one set (:func:`lps_gui.io.file_set.write_file_set`):
 each to a checked temp file, then renamed together, results.json last, so a
 full disk leaves the old set whole and a reader never sees a results.json
@@ -121,7 +121,7 @@ def assemble_results(
     }
     if truth_comparison is not None:
         results["truth_comparison"] = truth_comparison
-    results["summary"] = summary_rows(results)
+    results["summary"] = summary_csv_rows(results)
     return results
 
 
@@ -134,7 +134,7 @@ class SummaryFigure:
     value: Any
     unit: str = ""
     digits: int = 3  # significant digits when printed
-    unresolved: str = ""  # "not resolved (σ X)": noise alone could give the value (core.resolution); no finding
+    unresolved: str = ""  # "not resolved (noise p-v X)": noise alone could give the value (core.resolution); no finding
 
 
 MU = "\u00b5"
@@ -207,8 +207,8 @@ def iso_figures(iso: dict[str, Any] | None) -> list[SummaryFigure]:
 def resolved_extreme_figures(results: dict[str, Any]) -> list[SummaryFigure] | None:
     """Straightness, image rotation and angles with their resolution (results with ``figures["straightness"]``).
 
-    A figure that noise alone could produce carries "not resolved (σ X)", X
-    its noise p-v (or noise max |x|): printed instead of the value, never a finding.
+    A figure that noise alone could produce carries "not resolved (noise p-v X)"
+    (or "noise max X" for a max |x|): printed instead of the value, never a finding.
     """
     from lps_gui.core.resolution import not_resolved_text
 
@@ -218,7 +218,8 @@ def resolved_extreme_figures(results: dict[str, Any]) -> list[SummaryFigure] | N
         return None
 
     def fig(key: str, label: str, d: dict[str, Any], value_key: str, noise_key: str, unit: str) -> SummaryFigure:
-        text = "" if d.get("resolved") else not_resolved_text(finite_number(d.get(noise_key)), unit)
+        what = "noise max" if noise_key.startswith("noise_max") else "noise p-v"
+        text = "" if d.get("resolved") else not_resolved_text(finite_number(d.get(noise_key)), unit, what=what)
         return SummaryFigure(key, label, finite_number(d.get(value_key)), unit, unresolved=text)
 
     out = [fig(f"straightness_span_{k}", f"Max straightness v{k} (peak-to-valley)", st.get(f"v{k}") or {}, "span_um",
@@ -293,7 +294,7 @@ def summary_figures(results: dict[str, Any]) -> list[SummaryFigure]:
     return out
 
 
-def summary_rows(results: dict[str, Any]) -> list[tuple[str, Any, str]]:
+def summary_csv_rows(results: dict[str, Any]) -> list[tuple[str, Any, str]]:
     """(name, value, unit) rows of summary.csv: every figure of :func:`summary_figures` with a value.
 
     An unresolved figure keeps its row with an empty value (noise alone could give it: no finding).

@@ -11,9 +11,10 @@ import os
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any
 
 from lps_gui.core.board import Board
+from lps_gui.core.targets import Target
 from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.plan import Plan, PlannedStop
 from lps_gui.errors import InputError, StorageError
@@ -22,6 +23,7 @@ from lps_gui.io.board_file import board_from_dict, board_to_dict
 from lps_gui.io.intrinsics_file import intrinsics_from_dict, intrinsics_to_dict, read_intrinsics
 from lps_gui.io.jsonfile import read_json, write_json
 from lps_gui.io.session_paths import resolve_in_session
+from lps_gui.io.targets_file import session_targets, targets_to_list
 
 FORMAT = "lps-session/1"
 SESSION_FILE = "session.json"
@@ -94,7 +96,7 @@ class Session:
     def create(
         cls,
         folder: Path | str,
-        board: Board,
+        board: Board | list[Target],
         plan: Plan,
         intrinsics: CameraIntrinsics | str | None = None,
         camera: dict[str, Any] | None = None,
@@ -102,7 +104,10 @@ class Session:
         truth: dict[str, Any] | None = None,
         extra: dict[str, Any] | None = None,
     ) -> "Session":
-        """Write session.json into ``folder`` (created); refuse to overwrite a session."""
+        """Write session.json into ``folder`` (created); refuse to overwrite a session.
+
+        ``board`` is the one board, or the list of targets of a row or constellation (SPEC 13).
+        """
         folder = Path(folder)
         if (folder.exists() or folder.is_symlink()) and not folder.is_dir():
             raise InputError(f"{folder}: exists and is not a folder; give a new or an empty folder for the session")
@@ -115,7 +120,7 @@ class Session:
         meta: dict[str, Any] = {
             "format": FORMAT,
             "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-            "board": board_to_dict(board),
+            **({"board": board_to_dict(board)} if isinstance(board, Board) else {"targets": targets_to_list(board)}),
             "intrinsics": intrinsics_to_dict(intrinsics) if isinstance(intrinsics, CameraIntrinsics) else intrinsics,
             "camera": camera or {},
             "stage": stage or {},
@@ -144,7 +149,14 @@ class Session:
 
     # -------------------------------------------------------------- contents
     def board(self) -> Board:
+        if "targets" in self.meta and not self.meta.get("board"):
+            raise InputError(f"{self.folder / SESSION_FILE}: names targets (a row or constellation, docs/targets.md), "
+                             "not one board; this command does not take such sessions yet")
         return board_from_dict(self.meta.get("board") or {}, str(self.folder / SESSION_FILE))
+
+    def targets(self) -> list[Target] | None:
+        """The session's targets (SPEC 13), or None for a single-board session."""
+        return session_targets(self.meta, str(self.folder / SESSION_FILE))
 
     @property
     def axes(self) -> list[str]:
@@ -225,7 +237,3 @@ class Session:
         """Planned frames not yet listed in captures.jsonl, in capture order."""
         done = {r.index for r in self.records()}
         return [s for s in self.plan().stops() if s.index not in done]
-
-    def add_records(self, records: Iterable[CaptureRecord]) -> None:
-        for r in records:
-            self.append(r)

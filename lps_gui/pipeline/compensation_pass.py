@@ -18,6 +18,7 @@ from lps_gui.io.session import Session
 from lps_gui.report.compare import session_E_um, true_E_um
 
 TABLE_FILE = "compensation.csv"
+CARRIED_META = ("stage_spec", "environment", "identification")  # as left is judged like as found
 
 
 @dataclass
@@ -35,15 +36,23 @@ class PassResult:
 
     @property
     def improvement(self) -> float:
+        """Of the true E (what the compensation achieved; the simulator knows it)."""
         return self.true_E_before_um / max(self.true_E_after_um, 1e-9)
+
+    @property
+    def measured_improvement(self) -> float:
+        """Of the measured E (what `lps compare` reports; it carries both measurements' noise)."""
+        return self.measured_E_before_um / max(self.measured_E_after_um, 1e-9)
 
     def lines(self) -> list[str]:
         return [
-            f"as found: E {self.measured_E_before_um:.2f} um measured, {self.true_E_before_um:.2f} um true",
-            f"  (true at the board plane {self.plane_E_before_um:.2f} um)",
-            f"as left (compensated): E {self.measured_E_after_um:.2f} um measured, {self.true_E_after_um:.2f} um true",
-            f"  (true at the board plane {self.plane_E_after_um:.2f} um)",
-            f"improvement {self.improvement:.1f}x; table entry sigma {self.entry_sigma_um:.2f} um",
+            f"as found: E {self.measured_E_before_um:.2f} \u00b5m measured, {self.true_E_before_um:.2f} \u00b5m true",
+            f"  (true at the board plane {self.plane_E_before_um:.2f} \u00b5m)",
+            f"as left (compensated): E {self.measured_E_after_um:.2f} \u00b5m measured, "
+            f"{self.true_E_after_um:.2f} \u00b5m true",
+            f"  (true at the board plane {self.plane_E_after_um:.2f} \u00b5m)",
+            f"improvement of true E {self.improvement:.1f}x, of measured E {self.measured_improvement:.1f}x; "
+            f"table entry sigma {self.entry_sigma_um:.2f} \u00b5m",
         ]
 
 
@@ -73,6 +82,10 @@ def compensation_pass(
     cam = truth.get("camera") or {}
     session, stage, camera = create_simulated_session(after_dir, spec, noise_grey=float(cam.get("noise_grey", 2.0)),
                                                       intrinsics=before.meta.get("intrinsics"))
+    carried = {k: before.meta[k] for k in CARRIED_META if k in before.meta}  # the same stage, board and room
+    if carried:
+        session.meta.update(carried)
+        session.save_meta()
     table_path = write_table(session.folder / TABLE_FILE, table, "csv")
     stage.connect()
     engine = simulated_engine(session, stage, camera)

@@ -65,6 +65,7 @@ class DemoResult:
     session_dir: Path | None = None
     report_pdf: Path | None = None
     csvs: list[Path] = field(default_factory=list)
+    reports: list[Path] = field(default_factory=list)  # the compensated session's report, the as-found/as-left PDF
     steps: list[DemoStep] = field(default_factory=list)
     summary: list[str] = field(default_factory=list)
     results: dict[str, Any] | None = None
@@ -180,6 +181,9 @@ def run_demo(
 
     t0 = time.monotonic()
     cp = compensation_pass(session.folder, out / "session-compensated", bar("compensated capture"), cancel)
+    from lps_gui.report.compare import write_comparison
+
+    res.reports = [write_report(cp.after_dir), write_comparison(session.folder, cp.after_dir)]
     step("compensate", "done", "; ".join(cp.lines()), t0)
     res.summary += cp.lines()
     return res

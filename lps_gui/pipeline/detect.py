@@ -29,7 +29,7 @@ from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import Cancelled, InputError
 from lps_gui.io.atomic import sha256_file
 from lps_gui.io.corners_vnl import CornerTable, read_corners_vnl, write_corners_vnl
-from lps_gui.io.corners_hashes import corners_current, hash_meta, image_hashes
+from lps_gui.io.corners_hashes import corners_current, hash_meta, image_hashes, image_unchanged, stat_meta
 from lps_gui.io.session import Session
 
 log = logging.getLogger(__name__)
@@ -257,10 +257,12 @@ def detect_session(
 ) -> CornerTable:
     """Detect every capture of a session and write ``corners.vnl`` (atomically).
 
-    If captures.jsonl is unchanged since the last run and every view is in
-    corners.vnl, nothing is detected. Otherwise views with corners are kept
-    and the others (new, or failed before) are detected; ``force`` redoes
-    all. Rows use captures.jsonl's ``file`` names.
+    If captures.jsonl is unchanged since the last run, every view is in
+    corners.vnl and no image file changed since its corners were detected
+    (size and mtime, else sha256: :func:`~lps_gui.io.corners_hashes.image_unchanged`),
+    nothing is detected. Otherwise views with corners from their current image
+    are kept and the others (new, replaced, or failed before) are detected;
+    ``force`` redoes all. Rows use captures.jsonl's ``file`` names.
     Cancelling writes what was finished, then raises :class:`Cancelled`.
     """
     session = Session.open(session_dir)
@@ -286,14 +288,23 @@ def detect_session(
         else:
             if old.meta.get("board", meta["board"]) == meta["board"]:
                 current = image_hashes(records)
+                replaced = []
                 for name, corners in zip(old.names, old.corners_px):
                     if name not in old.failed and np.isfinite(corners).any() and corners_current(old, name, current):
-                        kept[name] = ViewResult(name, corners, "kept")
-                if old.meta.get("captures_sha256") == captures_sha and all(n in kept or n in old.failed for n in names):
+                        if image_unchanged(old, name, session.folder):
+                            kept[name] = ViewResult(name, corners, "kept")
+                        else:
+                            replaced.append(name)
+                if replaced:
+                    log.warning("detect: %d image(s) changed since their corners were detected, detecting them "
+                                "again: %s", len(replaced), ", ".join(replaced[:5]) + (" ..." if len(replaced) > 5 else ""))
+                if (old.meta.get("captures_sha256") == captures_sha and not replaced
+                        and all(n in kept or n in old.failed for n in names)):
                     progress(len(names), len(names), "corners.vnl is up to date")
                     old.meta["up_to_date"] = "yes"  # for the caller; not written
                     return old
     jobs = [ViewJob(r.file, r.file, r.sha256, str(session.folder)) for r in records if r.file not in kept]
+    meta.update(stat_meta(session.folder, names))  # before reading: a file replaced meanwhile fails its hash check
     results = dict(kept)
     try:
         if jobs:

@@ -1,10 +1,15 @@
-"""Estimate a session: read its files, run the estimator, write results (SPEC 7).
+"""Estimate a session: read its files, run the estimator, write results (SPEC 7, SPEC 10).
 
-Reads session.json, captures.jsonl and corners.vnl, runs
-:func:`lps_gui.core.estimate.estimate`, adds the accuracy figures and, for a
-simulated session, the error against truth, and writes results.json,
-positions.csv and summary.csv. Everything is computed before anything is
-written, so a failure leaves the session as it was.
+The only way from a session to results, for a stage of one or two axes:
+reads session.json, captures.jsonl and corners.vnl (board at the session's
+temperature, with its warp; stale and collinear corners refused), runs
+:func:`lps_gui.core.estimate.estimate` (the solver chosen by the number of
+axes D), adds the accuracy figures (a line's here, a plane's in
+:mod:`lps_gui.pipeline.planar_results`), the environment and uncertainty
+budget and, for a simulated session, the error against truth, and writes
+results.json, positions.csv and summary.csv under the session lock.
+Everything is computed before anything is written, so a failure leaves the
+session as it was.
 """
 from __future__ import annotations
 
@@ -17,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
-from lps_gui.core.estimate import EstimateOptions, LpsEstimate, estimate
+from lps_gui.core.estimate import EstimateOptions, LpsEstimate, PlanarEstimate, estimate
 from lps_gui.core.hybrid import HybridOptions
 from lps_gui.core.observations import Observations
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
@@ -27,16 +32,17 @@ from lps_gui.gc_tuning import paused as paused_collections
 from lps_gui.io.board_file import board_to_dict
 from lps_gui.io.corners_vnl import read_corners_vnl
 from lps_gui.io.intrinsics_file import apply_board_warp, intrinsics_to_dict, read_intrinsics
-from lps_gui.io.results_file import assemble_results, summary_rows, write_results  # noqa: F401 (summary_rows re-exported)
+from lps_gui.io.results_file import assemble_results, write_results
 from lps_gui.io.results_file import json_floats, rows_from_columns
 from lps_gui.io.results_file import json_float as _f
 from lps_gui.io.results_history import commit_results
 from lps_gui.io.session import Session
 from lps_gui.io.session_lock import SessionLock
 from lps_gui.pipeline.board_plane_results import position_columns, straightness_figures
+from lps_gui.pipeline.planar_results import build_planar_results
 from lps_gui.pipeline.session_checks import check_corners_current, check_view_geometry, session_inputs
 from lps_gui.pipeline.uncertainty import add_uncertainty, session_board
-from lps_gui.sim.truth import session_truth, truth_comparison  # truth_comparison re-exported for callers
+from lps_gui.sim.truth import session_truth, truth_comparison
 
 HYBRID_KEYS = {"grid_window_mm": "window_mm", "grid_resolution_mm": "resolution_mm", "grid_points": "grid_points",
                "threshold_px": "threshold_rms_px", "max_rounds": "max_rounds"}
@@ -56,13 +62,23 @@ def make_options(method: str = "joint", options: dict[str, Any] | EstimateOption
 
 
 def observations_from_session(session: Session, intrinsics: CameraIntrinsics | None = None) -> Observations:
-    """Match every line of captures.jsonl to its corners in corners.vnl."""
+    """Match every line of captures.jsonl to its corners in corners.vnl, for a stage of one or two axes.
+
+    The board is the one at the session's temperature (environment), bowed as
+    the intrinsics calibration found it; corners of replaced images and views
+    whose corners lie on one line are refused. A planar session takes every
+    capture's per-axis approach side from its plan.
+    """
     intr = intrinsics or session.intrinsics()
-    # square size at the board's temperature (environment), bowed as the intrinsics calibration found it
     board = apply_board_warp(session_board(session), intr)
     records = session.records()
     if not records:
         raise InputError(f"{session.captures_path}: no captures listed; capture or simulate a session first")
+    if session.planar:
+        for r in records:
+            if not isinstance(r.target_mm, tuple):
+                raise InputError(f"{session.captures_path}: capture {r.index} has target_mm {r.target_mm!r}, "
+                                 "not [x, y]; a planar session (plan.axes [X, Y]) lists both coordinates")
     table = read_corners_vnl(session.corners_path, board.n_corners)
     check_corners_current(session, table, records)
     rows = table.index()
@@ -76,6 +92,10 @@ def observations_from_session(session: Session, intrinsics: CameraIntrinsics | N
     in_order = len(order) == len(table.names) and bool((order == np.arange(len(order))).all())
     corners = table.corners_px if in_order else table.corners_px[order]
     check_view_geometry(corners, [r.file for r in records], session.corners_path)
+    approach = None
+    if session.planar:
+        approach_by_index = {s.index: s.approach for s in session.plan().stops()}
+        approach = [approach_by_index.get(r.index, (1, 1)) for r in records]
     return Observations(
         board=board,
         intrinsics=intr,
@@ -87,6 +107,7 @@ def observations_from_session(session: Session, intrinsics: CameraIntrinsics | N
         names=[r.file for r in records],
         source=str(session.corners_path),
         source_sha256=table.sha256,
+        approach=approach,
     )
 
 
@@ -99,29 +120,21 @@ def estimate_session(
     progress: ProgressFn = no_progress,
     cancel: CancelToken | None = None,
 ) -> dict[str, Any]:
-    """Estimate a session folder and write results.json, positions.csv, summary.csv.
+    """Estimate a session folder of one or two axes and write results.json, positions.csv, summary.csv.
 
-    Returns the results.json content.
+    The one way from a session to its results: the board correction
+    (thermal, warp) and the input checks in :func:`observations_from_session`,
+    :func:`~lps_gui.core.estimate.estimate` with the solver of D axes, the
+    uncertainty budget, the session lock while writing. Returns the
+    results.json content.
     """
     t0 = time.perf_counter()
     session = Session.open(session_dir)
     intr = read_intrinsics(intrinsics_path) if intrinsics_path else None
-    if session.planar:  # SPEC 10: its own model, figures and CSV columns
-        from lps_gui.pipeline.estimate_planar import estimate_planar_session
-
-        opts = options.to_dict() if isinstance(options, EstimateOptions) else options
-        results = estimate_planar_session(session, method, opts, intr, str(intrinsics_path or "session.json"),
-                                          progress, cancel)
-        results["timings_s"]["pipeline_total"] = time.perf_counter() - t0
-        if cancel is not None:
-            cancel.check("estimation")
-        with paused_collections():
-            _write_keeping_history(session, out_dir, results)
-        return results
     opt = make_options(method, options)
     obs = observations_from_session(session, intr)
     est = estimate(obs, opt, progress, cancel)
-    with paused_collections():  # results are trees of dicts and lists: nothing for the cyclic collector (14 ms)
+    with paused_collections():  # results are trees of dicts and lists: nothing for the cyclic collector
         results = build_results(session, obs, est, intrinsics_source=str(intrinsics_path or "session.json"))
         results["timings_s"]["pipeline_total"] = time.perf_counter() - t0
         if cancel is not None:
@@ -142,8 +155,16 @@ def _write_keeping_history(session: Session, out_dir: Path | str | None, results
 
 # ----------------------------------------------------------------------------- results
 
-def build_results(session: Session, obs: Observations, est: LpsEstimate, intrinsics_source: str) -> dict[str, Any]:
-    """The results.json document: its parts computed here, assembled by :func:`lps_gui.io.results_file.assemble_results`."""
+def build_results(session: Session, obs: Observations, est: LpsEstimate | PlanarEstimate, intrinsics_source: str
+                  ) -> dict[str, Any]:
+    """The results.json document of an estimate of D axes, with its environment and uncertainty budget."""
+    results = RESULTS_BY_AXES[obs.D](session, obs, est, intrinsics_source)
+    return add_uncertainty(results, session)  # environment, GUM budget, U (k = 2) per figure
+
+
+def line_results(session: Session, obs: Observations, est: LpsEstimate, intrinsics_source: str) -> dict[str, Any]:
+    """The results.json document of one axis: its parts computed here, assembled by
+    :func:`lps_gui.io.results_file.assemble_results`."""
     positions = position_rows(obs, est)
     truth = session_truth(session)
     results = assemble_results(
@@ -160,14 +181,14 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate, intrins
         timings_s=dict(est.timings_s),
         truth_comparison=truth_comparison(obs, est, truth, positions) if truth is not None else None,
     )
-    return add_uncertainty(results, session)  # environment, GUM budget, U (k = 2) per figure
+    return results
 
 
 def position_rows(obs: Observations, est: LpsEstimate) -> list[dict[str, Any]]:
     """results.json ``positions``: one row per capture, in capture order.
 
     Built column by column (numpy, then one list per key) and zipped into
-    rows: a loop over K views x 40 fields of float() calls cost 20 ms at K = 1600.
+    rows: a loop over K views x 40 fields of float() calls is slow at large K.
     """
     dev_um = est.deviation_um(obs.target_mm)
     usable = np.asarray(est.usable, dtype=bool)
@@ -266,3 +287,6 @@ def scale_with_uncertainty(obs: Observations, est: LpsEstimate, valid: np.ndarra
     slope_row[valid] = row  # slope (mm/mm) = slope_row @ positions (mm); the nominal travel only shifts it
     sigma_noise, sigma_total = est.linear_functional_sigma(slope_row)
     return {"scale_sigma_ppm": _f(1e6 * sigma_noise), "scale_sigma_total_ppm": _f(1e6 * sigma_total)}
+
+
+RESULTS_BY_AXES = {1: line_results, 2: build_planar_results}  # the results.json parts of a stage of D axes

@@ -1,11 +1,11 @@
 """Environment and uncertainty of a session's results (results.json ``environment``, ``uncertainty``).
 
-Two hooks for :mod:`lps_gui.pipeline.estimate`: :func:`session_board`
-gives the board at the measurement temperature (the thermal correction of
-the length scale, :mod:`lps_gui.core.environment`), and
-:func:`add_uncertainty` adds the environment record, the GUM budget
-(:mod:`lps_gui.core.uncertainty_budget`) and U (k = 2) of every headline
-figure to a finished results dict. The budget is built from results.json
+Two hooks for :mod:`lps_gui.pipeline.estimate`, for one axis or two:
+:func:`session_board` gives the board at the measurement temperature (the
+thermal correction of the length scale, :mod:`lps_gui.core.environment`),
+and :func:`add_uncertainty` adds the environment record, the GUM budget
+(:mod:`lps_gui.core.uncertainty_budget`; one per axis of a plane) and U
+(k = 2) of every headline figure to a finished results dict. The budget is built from results.json
 alone, so it does not depend on how the estimate is assembled.
 """
 from __future__ import annotations
@@ -34,11 +34,16 @@ def _column(positions: list[dict[str, Any]], key: str) -> np.ndarray:
     return np.array([np.nan if r.get(key) is None else float(r[key]) for r in positions], dtype=float)
 
 
-def budget_inputs(results: dict[str, Any], square_mm: float) -> BudgetInputs:
-    """BudgetInputs from results.json: used views' sigmas, travel, board distance, pitch/yaw."""
+def budget_inputs(results: dict[str, Any], square_mm: float, axis: str = "") -> BudgetInputs:
+    """BudgetInputs from results.json: used views' sigmas, travel, board distance, pitch/yaw.
+
+    ``axis``: "" for a line's columns (``sigma_um``), "x" or "y" for one axis of a planar session's
+    (``sigma_x_um``); a plane has no per-view angles, so its Abbe row says so.
+    """
+    sfx = f"_{axis}" if axis else ""
     used = [r for r in results.get("positions") or []
-            if r.get("used", not r.get("outlier")) and r.get("deviation_um") is not None]
-    targets = _column(used, "target_mm")
+            if r.get("used", not r.get("outlier")) and r.get(f"deviation{sfx}_um") is not None]
+    targets = _column(used, f"target{sfx}_mm")
     travel = float(np.nanmax(targets) - np.nanmin(targets)) if targets.size else 0.0
     p = results.get("parameters") or {}
     tilt = np.stack([_column(used, "pitch_urad"), _column(used, "yaw_urad")], axis=1) if used else None
@@ -47,7 +52,7 @@ def budget_inputs(results: dict[str, Any], square_mm: float) -> BudgetInputs:
         tilt = tilt_sig = None
     return BudgetInputs(
         travel_mm=travel, square_mm=square_mm, sigma_px=float(p.get("sigma_px") or 0.0),
-        sigma_um=_column(used, "sigma_um"), sigma_total_um=_column(used, "sigma_total_um"),
+        sigma_um=_column(used, f"sigma{sfx}_um"), sigma_total_um=_column(used, f"sigma_total{sfx}_um"),
         abbe_lever_mm=abbe_lever_mm(results),
         tilt_urad=tilt, tilt_sigma_urad=tilt_sig, target_mm=targets)
 
@@ -89,9 +94,27 @@ def add_uncertainty(results: dict[str, Any], session: Session) -> dict[str, Any]
 
 
 def uncertainty_of(results: dict[str, Any], env: Environment, square_mm: float) -> dict[str, Any]:
-    """results.json ``uncertainty`` of a results dict: budget, U (k = 2), U per headline figure."""
-    x = budget_inputs(results, square_mm)
+    """results.json ``uncertainty``: budget, U (k = 2), U per headline figure; of each axis of a plane
+    (``per_axis``: X and Y, the same sources as a line's)."""
+    if len(results.get("axes") or ["X"]) == 1:
+        return _axis_uncertainty(results, env, square_mm, "", results.get("figures") or {})
+    planar = (results.get("figures") or {}).get("planar") or {}
+    return {"per_axis": {
+        name: _axis_uncertainty(results, env, square_mm, name.lower(),
+                                {"single_run": {"scale_sigma_total_ppm": planar.get(f"scale_{name.lower()}_sigma_ppm")}})
+        for name in ("X", "Y")}}
+
+
+def _axis_uncertainty(results: dict[str, Any], env: Environment, square_mm: float, axis: str,
+                      figures: dict[str, Any]) -> dict[str, Any]:
+    x = budget_inputs(results, square_mm, axis)
     unc = combine(budget_rows(x, env))
     unc["travel_mm"] = x.travel_mm
-    unc["figures_k2"] = figure_uncertainties(unc, results.get("figures") or {}, x.travel_mm, n_views=x.sigma_um.size)
+    used = [r for r in results.get("positions") or [] if not r.get("outlier")]
+    key = f"target_{axis}_mm" if axis else "target_mm"
+    targets = {round(float(r[key]), 6) for r in used if isinstance(r.get(key), (int, float))}
+    angle_sigma = {name: float(np.nanmedian(s)) for name in ("roll", "pitch", "yaw")
+                   if (s := _column(used, f"{name}_sigma_urad")).size and np.isfinite(s).any()}
+    unc["figures_k2"] = figure_uncertainties(unc, figures, x.travel_mm, n_views=x.sigma_um.size,
+                                             n_targets=len(targets), angle_sigma_urad=angle_sigma)
     return unc

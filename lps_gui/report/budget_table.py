@@ -31,10 +31,22 @@ def environment_rows(results: dict[str, Any]) -> list[tuple[str, str]]:
         rows.append(("Thermal correction applied", f"{corr:+.1f} ppm on the length scale (board at 20 \u00b0C "
                      f"{fmt(_num(env.get('square_mm_nominal')), 5)} mm, used {fmt(_num(env.get('square_mm_used')), 7)} mm)"))
     else:
-        rows.append(("Thermal correction applied", "none (board temperature or coefficient not recorded, or 20 \u00b0C)"))
+        rows.append(("Thermal correction applied", f"none: {_why_no_correction(env)}"))
     if env.get("notes"):
         rows.append(("Notes", str(env["notes"])))
     return rows
+
+
+def _why_no_correction(env: dict[str, Any]) -> str:
+    """Which of the three cases left the length scale uncorrected."""
+    t, a = _num(env.get("board_temperature_c")), _num(env.get("board_cte_ppm_per_k"))
+    if t is None and a is None:
+        return "board temperature and expansion coefficient not recorded"
+    if t is None:
+        return "board temperature not recorded"
+    if a is None:
+        return "board expansion coefficient not recorded"
+    return "the board was at 20 \u00b0C" if abs(t - 20.0) < 1e-9 else "the expansion coefficient is 0"
 
 
 def budget_rows(results: dict[str, Any]) -> list[list[str]]:

@@ -13,74 +13,15 @@ same way (linear trend / mean removed) before it is drawn.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import Any, Sequence
 
 import numpy as np
 
+from lps_gui.report.figure_spec import (BACKWARD_COLOR, COMPONENT_COLORS, DIRECTION_ARROWS, DIRECTION_NAMES,
+                                        FORWARD_COLOR, IMAGE_ROTATION_COLOR, SPEC_COLOR, TRUTH_COLOR,
+                                        TRUTH_COLORS, FigureSpec, Series, num_or_nan)
+from lps_gui.report.planar_figures import planar_figures_from_results
 from lps_gui.sim.truth import centred, residual_from_line, true_deviation_um
-
-# Colours that print and read in grey scale: blue / orange, black truth, red outliers.
-FORWARD_COLOR = "#1f5fa8"
-BACKWARD_COLOR = "#e07b00"
-TRUTH_COLOR = "#222222"
-TRUTH_COLORS = {"+": "#0d2747", "-": "#6b3500"}  # truth per direction: dark shades of the measured colours
-SPEC_COLOR = "#c00000"
-OUTLIER_COLOR = "#d00000"
-IMAGE_ROTATION_COLOR = "#111111"
-COMPONENT_COLORS = ("#1f5fa8", "#2a9d3c", "#a8326e")
-
-STYLES = ("line", "markers", "line+markers")
-DIRECTION_NAMES = {"+": "forward", "-": "backward"}
-DIRECTION_ARROWS = {"+": "\u2191", "-": "\u2193"}
-
-
-@dataclass(frozen=True)
-class Series:
-    """One curve: ``y`` against ``x``; bands and outlier marks are optional.
-
-    ``band_low``/``band_high`` (same shape as ``y``) bound a shaded band,
-    typically mean +- 2 sigma. ``marked`` (bool, same shape) picks the points
-    drawn as outliers (a red cross). ``dashed`` draws the line dashed (truth).
-    """
-
-    x: np.ndarray  # shape (n,)
-    y: np.ndarray  # shape (n,)
-    label: str
-    style: str = "line"  # one of STYLES
-    color: str = FORWARD_COLOR
-    band_low: np.ndarray | None = None  # shape (n,)
-    band_high: np.ndarray | None = None  # shape (n,)
-    marked: np.ndarray | None = None  # shape (n,), bool
-    dashed: bool = False
-
-    def finite(self) -> "Series":
-        """The same series without points whose x or y is not finite."""
-        ok = np.isfinite(self.x) & np.isfinite(self.y)
-        if ok.all():
-            return self
-
-        def pick(a: np.ndarray | None) -> np.ndarray | None:
-            return None if a is None else a[ok]
-
-        return Series(self.x[ok], self.y[ok], self.label, self.style, self.color,
-                      pick(self.band_low), pick(self.band_high), pick(self.marked), self.dashed)
-
-
-@dataclass(frozen=True)
-class FigureSpec:
-    """One plot: stable ``key`` (for tests and the GUI's tab names), labels with units."""
-
-    key: str
-    title: str
-    x_label: str
-    y_label: str
-    series: list[Series] = field(default_factory=list)
-    notes: str = ""
-    x_log: bool = False
-
-    def is_empty(self) -> bool:
-        return not any(np.isfinite(s.y).any() for s in self.series)
 
 
 TRUTH_KEYS = ("deviation_um", "straightness_um_1", "straightness_um_2", "roll_urad", "pitch_urad", "yaw_urad",
@@ -104,17 +45,12 @@ def position_columns(results: dict[str, Any]) -> dict[str, np.ndarray]:
                "pitch_sigma_urad", "yaw_sigma_urad", "image_rotation_urad", "image_rotation_sigma_urad")
     cols: dict[str, np.ndarray] = {}
     for name in numeric:
-        cols[name] = np.array([_num(r.get(name)) for r in rows], dtype=float)
+        cols[name] = np.array([num_or_nan(r.get(name)) for r in rows], dtype=float)
     cols["direction"] = np.array([str(r.get("direction", "+")) for r in rows], dtype=object)
     cols["outlier"] = np.array([bool(r.get("outlier", False)) for r in rows], dtype=bool)
     return cols
 
 
-def _num(v: Any) -> float:
-    try:
-        return float(v) if v is not None else np.nan
-    except (TypeError, ValueError):
-        return np.nan
 
 
 def directions_present(cols: dict[str, np.ndarray]) -> list[str]:
@@ -160,7 +96,7 @@ def truth_columns(results: dict[str, Any], truth: dict[str, Any] | None) -> dict
     """
     rows = sorted(results.get("positions") or [], key=lambda r: r.get("index", 0))
     if rows and any(r.get("truth_deviation_um") is not None for r in rows):
-        return {key: np.array([_num(r.get(f"truth_{key}")) for r in rows], dtype=float) for key in TRUTH_KEYS}
+        return {key: np.array([num_or_nan(r.get(f"truth_{key}")) for r in rows], dtype=float) for key in TRUTH_KEYS}
     if not truth or "positions_mm" not in truth:
         return None
     cols = position_columns(results)
@@ -197,8 +133,6 @@ def figures_from_results(results: dict[str, Any], truth: dict[str, Any] | None =
         the measurement. Without it, ``results["truth"]`` is used when present.
     """
     if len(results.get("axes") or ["X"]) == 2:  # a planar session (SPEC 10)
-        from lps_gui.report.planar_figures import planar_figures_from_results
-
         return planar_figures_from_results(results)
     cols = position_columns(results)
     truth = truth if truth is not None else results.get("truth")
@@ -232,7 +166,7 @@ def positions_figure(cols: dict[str, np.ndarray]) -> FigureSpec:
     for d, sel in _by_direction(cols):
         series.append(Series(cols["target_mm"][sel], cols["measured_mm"][sel], f"measured {_dir_label(d)}",
                              "markers", _color(d), marked=cols["outlier"][sel]))
-    return FigureSpec("positions", "Measured position vs target", "target position [mm]", "measured position d_i [mm]",
+    return FigureSpec("positions", "Measured position vs target", "target position [mm]", "measured position d\u1d62 [mm]",
                       series)
 
 

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from lps_gui.report.plot_painter import font
+from lps_gui.report.text_fit import TextLog, draw_text, font
 
 if TYPE_CHECKING:
     from lps_gui.core.intrinsics_calibration import IntrinsicsCalibration
@@ -43,13 +43,15 @@ def _viridis(values01: np.ndarray) -> np.ndarray:
 class _Canvas:
     """A white picture with a title, an image-shaped frame and room for a colour bar on the right."""
 
-    def __init__(self, title: str, image_size: tuple[int, int] | None, colour_bar: bool = False) -> None:
+    def __init__(self, title: str, image_size: tuple[int, int] | None, colour_bar: bool = False,
+                 log: TextLog | None = None) -> None:
         from PySide6.QtCore import QRectF
         from PySide6.QtGui import QColor, QImage, QPainter
 
         from lps_gui.report.layout import ensure_gui_app
 
         ensure_gui_app()
+        self.log = log
         w, h = PICTURE_PX
         self.image = QImage(w, h, QImage.Format.Format_RGB32)
         self.image.fill(QColor("#ffffff"))
@@ -74,7 +76,7 @@ class _Canvas:
         self.p.setFont(font(size * 1.5, bold))  # the pictures are shown ~8x smaller than their pixels
         self.p.setPen(QColor(color))
         flags = align if align is not None else (Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignVCenter)
-        self.p.drawText(rect, int(flags), s)
+        draw_text(self.p, rect, int(flags), s, self.log, "picture")
 
     def to_frame(self, uv: np.ndarray) -> np.ndarray:
         return np.column_stack([self.frame.left() + uv[:, 0] * self.scale, self.frame.top() + uv[:, 1] * self.scale])
@@ -160,13 +162,13 @@ class _Canvas:
         return self.image
 
 
-def residual_field(cal: "IntrinsicsCalibration") -> Any:
+def residual_field(cal: "IntrinsicsCalibration", log: TextLog | None = None) -> Any:
     """Arrows of every corner's reprojection error, magnified so the larger ones are ~4 % of the image."""
     from PySide6.QtCore import QLineF, QPointF
     from PySide6.QtGui import QColor, QPen
 
     size = cal.intrinsics.image_size
-    c = _Canvas("Reprojection residuals over the image", size)
+    c = _Canvas("Reprojection residuals over the image", size, log=log)
     rejected = {(r.view, r.corner) for r in cal.rejected_corners}
     pts, res, bad = [], [], []
     for k in cal.used_views:
@@ -196,14 +198,14 @@ def residual_field(cal: "IntrinsicsCalibration") -> Any:
     return c.done()
 
 
-def per_view_errors(cal: "IntrinsicsCalibration") -> Any:
+def per_view_errors(cal: "IntrinsicsCalibration", log: TextLog | None = None) -> Any:
     """Bars of each view's RMS error, a tick at its largest corner error; flagged views red."""
     from PySide6.QtCore import QLineF, QRectF, Qt
     from PySide6.QtGui import QColor, QPen
 
     from lps_gui.report.axes import nice_ticks
 
-    c = _Canvas("Residual magnitude per view", None)
+    c = _Canvas("Residual magnitude per view", None, log=log)
     V = len(cal.per_view_rms_px)
     rms = np.asarray(cal.per_view_rms_px, float)
     worst = np.array([np.nanmax(np.linalg.norm(r, axis=1)) if k in cal.used_views else np.nan
@@ -239,12 +241,12 @@ def per_view_errors(cal: "IntrinsicsCalibration") -> Any:
     return c.done()
 
 
-def uncertainty_picture(cal: "IntrinsicsCalibration", grid: tuple[int, int] = (32, 24)) -> Any:
+def uncertainty_picture(cal: "IntrinsicsCalibration", grid: tuple[int, int] = (32, 24), log: TextLog | None = None) -> Any:
     """Worst-direction projection sigma over the image (log colour scale)."""
     from lps_gui.core.intrinsics_crossval import uncertainty_map
 
     size = cal.intrinsics.image_size
-    c = _Canvas("Projection uncertainty (worst-direction sigma)", size, colour_bar=True)
+    c = _Canvas("Projection uncertainty (worst-direction sigma)", size, colour_bar=True, log=log)
     _, sigma = uncertainty_map(cal.intrinsics, grid)
     finite = sigma[np.isfinite(sigma)]
     lo = max(float(finite.min()), 1e-4) if finite.size else 0.01
@@ -259,10 +261,10 @@ def uncertainty_picture(cal: "IntrinsicsCalibration", grid: tuple[int, int] = (3
     return c.done()
 
 
-def coverage_picture(cal: "IntrinsicsCalibration") -> Any:
+def coverage_picture(cal: "IntrinsicsCalibration", log: TextLog | None = None) -> Any:
     """Corners per image cell with a colour bar."""
     size = cal.intrinsics.image_size
-    c = _Canvas("Coverage of the image by corners", size, colour_bar=True)
+    c = _Canvas("Coverage of the image by corners", size, colour_bar=True, log=log)
     counts = np.asarray(cal.coverage, float)
     hi = max(float(counts.max()), 1.0)
     c.heat(counts, 0.0, hi)
@@ -272,10 +274,10 @@ def coverage_picture(cal: "IntrinsicsCalibration") -> Any:
     return c.done()
 
 
-def crossval_picture(cv: "CrossValidation") -> Any:
+def crossval_picture(cv: "CrossValidation", log: TextLog | None = None) -> Any:
     """The two halves' projection difference in units of their combined sigma."""
     size = cv.even.intrinsics.image_size
-    c = _Canvas("Cross-validation: even views against odd views", size, colour_bar=True)
+    c = _Canvas("Cross-validation: even views against odd views", size, colour_bar=True, log=log)
     norm = np.where(cv.diff.judged, cv.diff.normalized, np.nan)
     hi = max(3.0, float(np.nanmax(norm)) if np.any(np.isfinite(norm)) else 3.0)
     c.heat(norm, 0.0, hi)
@@ -285,14 +287,15 @@ def crossval_picture(cv: "CrossValidation") -> Any:
     return c.done()
 
 
-def intrinsics_pictures(cal: "IntrinsicsCalibration", crossval: "CrossValidation | None" = None) -> list[tuple[str, Any]]:
-    """(caption, QImage) of every picture of a calibration, in the report's order."""
+def intrinsics_pictures(cal: "IntrinsicsCalibration", crossval: "CrossValidation | None" = None,
+                        log: TextLog | None = None) -> list[tuple[str, Any]]:
+    """(caption, QImage) of every picture of a calibration, in the report's order; strings drawn go to ``log``."""
     out = [
-        ("Residual vector field", residual_field(cal)),
-        ("Per-view residuals", per_view_errors(cal)),
-        ("Projection uncertainty", uncertainty_picture(cal)),
-        ("Coverage", coverage_picture(cal)),
+        ("Residual vector field", residual_field(cal, log=log)),
+        ("Per-view residuals", per_view_errors(cal, log=log)),
+        ("Projection uncertainty", uncertainty_picture(cal, log=log)),
+        ("Coverage", coverage_picture(cal, log=log)),
     ]
     if crossval is not None:
-        out.append(("Cross-validation", crossval_picture(crossval)))
+        out.append(("Cross-validation", crossval_picture(crossval, log=log)))
     return out

@@ -38,8 +38,11 @@ def parameter_rows(cal: "IntrinsicsCalibration") -> list[list[str]]:
 
 
 def write_intrinsics_report(cal: "IntrinsicsCalibration", out: Path | str, crossval: "CrossValidation | None" = None,
-                            title: str = "") -> int:
-    """Write the PDF; returns its number of pages. A failure leaves no partial file."""
+                            title: str = "", clipped: list[str] | None = None) -> int:
+    """Write the PDF; returns its number of pages. A failure leaves no partial file.
+
+    ``clipped``, when given, receives every string that does not fit its box (the layout check).
+    """
     from lps_gui import __version__
     from lps_gui.report.intrinsics_pictures import intrinsics_pictures
     from lps_gui.report.layout import ensure_gui_app, pdf_file
@@ -69,9 +72,11 @@ def write_intrinsics_report(cal: "IntrinsicsCalibration", out: Path | str, cross
             flow.table(["view", "corner", "residual px"], rows, [110, 25, 30], align_right_from=1)
             if len(cal.rejected_corners) > MAX_LISTED_CORNERS:
                 flow.paragraph(f"... and {len(cal.rejected_corners) - MAX_LISTED_CORNERS} more (all in intrinsics.json)")
-        for k, (caption, image) in enumerate(intrinsics_pictures(cal, crossval)):
+        for k, (caption, image) in enumerate(intrinsics_pictures(cal, crossval, flow.log.text)):
             if k % 2 == 0:
                 flow.new_page()
             flow.log.add(f"picture:{caption}")
             flow.space(flow.image(image, (180.0 - PICTURE_WIDTH_MM) / 2, PICTURE_WIDTH_MM, caption) + 4.0)
+    if clipped is not None:
+        clipped.extend(flow.log.clipped)
     return flow.page

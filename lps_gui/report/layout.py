@@ -11,8 +11,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterator, Sequence
 
-from lps_gui.report.figures import FigureSpec
-from lps_gui.report.plot_painter import font, paint_figure
+from lps_gui.report.figure_spec import FigureSpec
+from lps_gui.report.plot_painter import paint_figure
+from lps_gui.report.text_fit import DrawnText, TextLog, draw_text, fit_widths, font
 
 RESOLUTION_DPI = 600
 MARGIN_MM = 15.0
@@ -34,13 +35,18 @@ def ensure_gui_app() -> Any:
 
 @dataclass
 class PageLog:
-    """What went on which page (tests check the page plan against the PDF)."""
+    """What went on which page (tests check the page plan against the PDF), and every string drawn."""
 
     pages: list[list[str]] = field(default_factory=lambda: [[]])
-    clipped: list[str] = field(default_factory=list)  # table cells wider than their column ("page N: text")
+    text: TextLog = field(default_factory=TextLog)  # every drawn string with its box (text_fit)
 
     def add(self, what: str) -> None:
         self.pages[-1].append(what)
+
+    @property
+    def clipped(self) -> list[str]:
+        """``"page N: text"`` of every string wider or taller than its box: table cells, labels, headings."""
+        return self.text.clipped()
 
 
 class PdfFlow:
@@ -79,6 +85,7 @@ class PdfFlow:
         self.writer.newPage()
         self.page += 1
         self.log.pages.append([])
+        self.log.text.page = self.page
         self.y = MARGIN_MM * self.mm
         self._footer()
 
@@ -111,8 +118,11 @@ class PdfFlow:
         p.setPen(QColor("#555555"))
         r = QRectF(self.left, self.page_h - (MARGIN_MM + 4) * self.mm, self.width, 5 * self.mm)
         p.drawLine(r.topLeft(), r.topRight())
-        p.drawText(r, int(Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignVCenter), self.footer)
-        p.drawText(r, int(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter), f"page {self.page}")
+        number = QRectF(r.right() - 20 * self.mm, r.top(), 20 * self.mm, r.height())
+        draw_text(p, QRectF(r.left(), r.top(), r.width() - 21 * self.mm, r.height()),
+                  int(Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignVCenter), self.footer, self.log.text, "footer")
+        draw_text(p, number, int(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter), f"page {self.page}",
+                  self.log.text, "footer")
         p.restore()
 
     # ---------------------------------------------------------------- blocks
@@ -126,8 +136,8 @@ class PdfFlow:
         p = self.painter
         p.setFont(font(size_pt, bold=True))
         p.setPen(QColor("#000000"))
-        p.drawText(QRectF(self.left, self.y, self.width, h * self.mm),
-                   int(Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignBottom), text)
+        draw_text(p, QRectF(self.left, self.y, self.width, h * self.mm),
+                  int(Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignBottom), text, self.log.text, "heading")
         self.y += (h + 1.5) * self.mm
 
     def paragraph(self, text: str, size_pt: float = 8.5, color: str = "#000000") -> None:
@@ -141,42 +151,62 @@ class PdfFlow:
         bound = p.boundingRect(QRectF(self.left, 0, self.width, 1e6), flags, text)
         self.ensure(bound.height() / self.mm + 1.5)
         p.setPen(QColor(color))
-        p.drawText(QRectF(self.left, self.y, self.width, bound.height()), flags, text)
+        draw_text(p, QRectF(self.left, self.y, self.width, bound.height()), flags, text, self.log.text, "paragraph")
         self.y += bound.height() + 1.5 * self.mm
 
     def table(self, header: Sequence[str] | None, rows: Sequence[Sequence[str]], widths_mm: Sequence[float],
               size_pt: float = 8.0, row_mm: float = 4.2, align_right_from: int = 1,
               colors: Sequence[str | None] | None = None, x_mm: float = 0.0,
-              align_left: Sequence[int] = ()) -> None:
+              align_left: Sequence[int] = (), max_width_mm: float | None = None) -> None:
         """A ruled table; pages break between rows and repeat the header.
 
         Columns from ``align_right_from`` on are right-aligned (numbers), except
-        those in ``align_left``; a header cell may hold a line break.
+        those in ``align_left``; a header cell may hold a line break. A column
+        too narrow for its widest cell (measured with the painter's font) is
+        widened, first from other columns' slack, then up to ``max_width_mm``
+        (default: to the right margin); what still does not fit is wrapped
+        onto more lines (:func:`lps_gui.report.text_fit.fit_widths`).
         """
         from PySide6.QtCore import QLineF, QRectF, Qt
-        from PySide6.QtGui import QColor, QPen
+        from PySide6.QtGui import QColor, QFontMetricsF, QPen
 
         p = self.painter
         mm = self.mm
-        total_w = sum(widths_mm) * mm
         x_left = self.left + x_mm * mm
+        limit = (self.width / mm - x_mm) if max_width_mm is None else max_width_mm
+        body_fm = QFontMetricsF(font(size_pt), p.device())
+        head_fm = QFontMetricsF(font(size_pt, bold=True), p.device())
+        need = [0.0] * len(widths_mm)
+        for fm, cells in [(head_fm, header or [])] + [(body_fm, r) for r in rows]:
+            for i, cell in enumerate(cells[:len(need)]):
+                need[i] = max(need[i], max(fm.horizontalAdvance(line) for line in str(cell).split("\n")) / mm + 2.0)
+        widths = fit_widths(widths_mm, need, max(limit, sum(widths_mm)))
+        total_w = sum(widths) * mm
+        wrap = int(Qt.TextFlag.TextWordWrap)
+        first = str((header or (rows[0] if rows else [""]))[0])
+        self.log.text.texts.append(DrawnText(self.page, "table width", f"table \"{first}\"",
+                                             (self.left + self.width - x_left, row_mm * mm), (total_w, 0.0)))
 
-        header_lines = max((c.count("\n") + 1 for c in header), default=1) if header else 0
+        def lines_of(cells: Sequence[str], fm: Any) -> int:
+            n = 1
+            for cell, w in zip(cells, widths):
+                br = fm.boundingRect(QRectF(0, 0, w * mm - 2 * mm, 1e7), wrap, str(cell))
+                n = max(n, round(br.height() / fm.lineSpacing()) or 1)
+            return n
 
-        def draw_row(cells: Sequence[str], bold: bool, color: str | None, lines: int = 1) -> None:
+        def draw_row(cells: Sequence[str], bold: bool, color: str | None, lines: int) -> None:
             p.setFont(font(size_pt, bold=bold))
             x = x_left
-            for i, (cell, w) in enumerate(zip(cells, widths_mm)):
+            for i, (cell, w) in enumerate(zip(cells, widths)):
                 right = i >= align_right_from and i not in align_left
                 align = Qt.AlignmentFlag.AlignRight if right else Qt.AlignmentFlag.AlignLeft
                 p.setPen(QColor(color or "#000000"))
-                room = w * mm - 2 * mm
-                if any(p.fontMetrics().horizontalAdvance(line) > room + 0.5 for line in cell.split("\n")):
-                    self.log.clipped.append(f"page {self.page}: {cell}")
-                p.drawText(QRectF(x + 1 * mm, self.y, w * mm - 2 * mm, lines * row_mm * mm),
-                           int(align | Qt.AlignmentFlag.AlignVCenter), cell)
+                draw_text(p, QRectF(x + 1 * mm, self.y, w * mm - 2 * mm, lines * row_mm * mm),
+                          int(align | Qt.AlignmentFlag.AlignVCenter) | wrap, str(cell), self.log.text, "table")
                 x += w * mm
             self.y += lines * row_mm * mm
+
+        header_lines = lines_of(header, head_fm) if header else 0
 
         def draw_header() -> None:
             if header is None:
@@ -189,12 +219,13 @@ class PdfFlow:
         self.ensure(row_mm * (header_lines + 1) + 1)
         draw_header()
         for n, row in enumerate(rows):
-            if self.y + row_mm * mm > self.bottom:
+            lines = lines_of(row, body_fm)
+            if self.y + lines * row_mm * mm > self.bottom:
                 self.new_page()
                 draw_header()
             if n % 2 == 1:
-                p.fillRect(QRectF(x_left, self.y, total_w, row_mm * mm), QColor("#f6f6f6"))
-            draw_row(row, False, colors[n] if colors else None)
+                p.fillRect(QRectF(x_left, self.y, total_w, lines * row_mm * mm), QColor("#f6f6f6"))
+            draw_row(row, False, colors[n] if colors else None, lines)
         p.setPen(QPen(QColor("#000000"), 0.2 * mm))
         p.drawLine(QLineF(x_left, self.y, x_left + total_w, self.y))
         self.y += 2.0 * mm
@@ -204,7 +235,8 @@ class PdfFlow:
 
         self.ensure(height_mm)
         self.log.add(f"figure:{spec.key}")
-        paint_figure(self.painter, QRectF(self.left, self.y, self.width, height_mm * self.mm), spec, self.mm)
+        paint_figure(self.painter, QRectF(self.left, self.y, self.width, height_mm * self.mm), spec, self.mm,
+                     self.log.text)
         self.y += (height_mm + 3.0) * self.mm
 
     def image(self, image: Any, x_mm: float, width_mm: float, caption: str) -> float:
@@ -218,8 +250,8 @@ class PdfFlow:
         self.painter.setPen(QColor("#000000"))
         self.painter.drawRect(target)
         self.painter.setFont(font(7.0))
-        self.painter.drawText(QRectF(target.left(), target.bottom() + 0.5 * self.mm, target.width(), 4 * self.mm),
-                              int(Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignTop), caption)
+        draw_text(self.painter, QRectF(target.left(), target.bottom() + 0.5 * self.mm, target.width(), 4 * self.mm),
+                  int(Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignTop), caption, self.log.text, "caption")
         return h_mm + 5.0
 
     def space(self, mm: float) -> None:

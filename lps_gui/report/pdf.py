@@ -16,8 +16,10 @@ from typing import Any
 from lps_gui.core.progress import ProgressFn, no_progress
 from lps_gui.errors import InputError
 from lps_gui.io.jsonfile import read_json
+from lps_gui.report import sections as R
 from lps_gui.report import summary as S
-from lps_gui.report.figures import figures_from_results
+from lps_gui.report.figures import figure_by_key, figures_from_results, with_spec_band
+from lps_gui.report.planar_report import paint_planar_report
 
 log = logging.getLogger(__name__)
 
@@ -35,7 +37,8 @@ class ReportInfo:
     path: Path
     n_pages: int
     pages: list[list[str]]
-    clipped: tuple[str, ...] = ()  # table cells wider than their column (none in a good report)
+    clipped: tuple[str, ...] = ()  # "page N: text" of strings wider than their box (none in a good report)
+    texts: tuple[Any, ...] = ()  # every drawn string (lps_gui.report.text_fit.DrawnText), page by page
 
 
 def load_results(session_dir: Path) -> dict[str, Any]:
@@ -94,14 +97,12 @@ def render_report(session_dir: Path, results: dict | None = None, out: Path | No
     with pdf_file(out, f"LPS measurement report: {name}",
                   f"lps-calib {__version__} \u00b7 {name} \u00b7 {results.get('created', '')}") as flow:
         if len(results.get("axes") or ["X"]) == 2:  # a planar session (SPEC 10)
-            from lps_gui.report.planar_report import paint_planar_report
-
             progress(0, len(steps), "planar report")
             paint_planar_report(flow, meta, results, S.title_rows(meta, results, __version__), FIGURE_HEIGHT_MM)
         else:
             _paint_line_report(flow, session_dir, meta, results, __version__, progress, steps)
     progress(len(steps), len(steps), f"wrote {out}")
-    return ReportInfo(out, flow.page, flow.log.pages, tuple(flow.log.clipped))
+    return ReportInfo(out, flow.page, flow.log.pages, tuple(flow.log.clipped), tuple(flow.log.text.texts))
 
 
 def _paint_line_report(flow: Any, session_dir: Path, meta: dict[str, Any], results: dict[str, Any], version: str,
@@ -112,7 +113,7 @@ def _paint_line_report(flow: Any, session_dir: Path, meta: dict[str, Any], resul
     flow.new_page()
     _figures_page(flow, results)
     flow.new_page()
-    _uncertainty_page(flow, results)
+    R.uncertainty_sections(flow, results)
     flow.new_page()
     _method_page(flow, results)
     flow.heading("What limits this result", 11)
@@ -136,27 +137,9 @@ def _paint_line_report(flow: Any, session_dir: Path, meta: dict[str, Any], resul
 
 def _front_page(flow: Any, meta: dict[str, Any], results: dict[str, Any], version: str) -> None:
     """Page 1: the verdict with U (k = 2), the deviation plot with the limit drawn, the identification."""
-    from lps_gui.report.figures import figure_by_key, with_spec_band
-    from lps_gui.report.verdict import overall, verdicts
-
-    spec = meta.get("stage_spec") or results.get("stage_spec") or (results.get("session_meta") or {}).get("stage_spec")
+    spec = R.stage_spec(meta, results)
     flow.heading("Linear positioning stage \u2014 measurement report", 15)
-    rows = verdicts(results, spec)
-    flow.heading("Verdict", 11)
-    flow.paragraph(overall(rows), size_pt=10.0, color=_overall_color(rows))
-    if rows:
-        cells = [[v.name, _with_unit(v.measured, v.unit), "\u00b1 " + _with_unit(v.u_k2, v.unit) if v.u_k2 is not None
-                  else "not assessed", f"{S.fmt(v.limit)} {v.unit}", v.verdict] for v in rows]
-        flow.table(["criterion", "measured", "U (k = 2)", "limit", "verdict"], cells, [44, 26, 28, 26, 56],
-                   size_pt=8.5, row_mm=4.6, colors=[v.color for v in rows], align_left=(4,))
-        for v in rows:
-            flow.paragraph(f"{v.name}: {v.note}.", size_pt=7.0, color="#555555")
-        flow.paragraph("Decision rule ISO 14253-1: PASS when the figure plus U is within the limit, FAIL when the "
-                       "figure minus U is beyond it, otherwise not resolved. U covers the measurement (see the "
-                       "uncertainty budget), not the stage's own scatter.", size_pt=7.0, color="#555555")
-    else:
-        flow.paragraph("No stage specification in session.json (key \"stage_spec\"; enter it with lps capture "
-                       "--spec or in the capture panel): no verdict is given.", color="#555555")
+    R.verdict_section(flow, results, spec, [r for r in S.summary_rows(results) if r.key in R.FRONT_FIGURES])
     deviation = figure_by_key(figures_from_results(results, None), "deviation")
     deviation = replace(deviation, series=[s for s in deviation.series if not s.label.startswith("truth")])  # p. 1: measured only
     limit = (spec or {}).get("accuracy_um")
@@ -172,58 +155,23 @@ def _front_page(flow: Any, meta: dict[str, Any], results: dict[str, Any], versio
 DASH_TEXT = S.DASH
 
 
-def _with_unit(value: float | None, unit: str) -> str:
-    return S.DASH if value is None else f"{S.fmt(value)} {unit}"
-
-
-def _overall_color(rows: list[Any]) -> str:
-    words = [r.verdict for r in rows]
-    if rows and all(w == "PASS" for w in words):
-        return "#007a1f"
-    return "#c00000" if "FAIL" in words else "#333333"
-
-
 def _figures_page(flow: Any, results: dict[str, Any]) -> None:
     """Measured figures with U (k = 2), then the ISO 230-2 per-target table."""
-    from lps_gui.report.iso_table import iso_target_table
-
     flow.heading("Measured figures", 11)
-    rows = S.summary_rows(results)
-    flow.table(["figure", "value", "U (k = 2)", "unit"], [[r.name, r.text(), r.u_text(), r.unit] for r in rows],
-               [88, 26, 22, 16], colors=["#888888" if r.unresolved else None for r in rows])
+    R.figure_table(flow, S.summary_rows(results))
     for note in S.figure_notes(results):
         flow.paragraph(note, size_pt=7.5, color="#555555")
-    flow.paragraph("\u03c3 and s are 1-sigma. \u03c3 of a position is the measurement's noise only (corner noise); "
-                   "s is the scatter over runs (ISO 230-2). U (k = 2) is the expanded measurement uncertainty "
-                   "(see the uncertainty budget); figures of one target (R, B, step std) carry only the noise terms, which do not "
-                   "cancel there.", size_pt=7.5, color="#555555")
-    table = iso_target_table(results)
-    if table is not None:
-        header, body, widths = table
-        flow.heading("ISO 230-2 per target", 11)
-        flow.table(header, body, widths, size_pt=6.8, row_mm=3.4, align_right_from=0)
-        flow.paragraph("x\u0304: mean deviation over the runs; s: standard deviation over the runs (1-sigma, "
-                       "n \u2212 1); R = 4 s each way; B\u2c7c = x\u0304\u2191 \u2212 x\u0304\u2193; "
-                       "R\u2c7c = max(2s\u2191 + 2s\u2193 + |B\u2c7c|, R\u2191, R\u2193). Deviations are "
-                       "relative to the first capture.", size_pt=7.0, color="#555555")
+    flow.paragraph(U_NOTE, size_pt=7.5, color="#555555")
+    R.iso_section(flow, results)
 
 
-def _uncertainty_page(flow: Any, results: dict[str, Any]) -> None:
-    """Environment, then the GUM budget (ISO/TR 230-9 style)."""
-    from lps_gui.report import budget_table as B
-
-    flow.heading("Environment", 11)
-    flow.table(None, [list(r) for r in B.environment_rows(results)], [52, 128], size_pt=8.0, row_mm=4.2,
-               align_right_from=9)
-    flow.heading("Uncertainty budget (GUM, ISO/TR 230-9)", 11)
-    rows = B.budget_rows(results)
-    if not rows:
-        flow.paragraph("These results carry no uncertainty budget; re-run lps estimate.", color="#555555")
-        return
-    flow.table(B.BUDGET_HEADER, rows, B.BUDGET_WIDTHS, size_pt=7.5, row_mm=4.0, align_right_from=2,
-               align_left=(3, 5))
-    for note in B.budget_notes(results):
-        flow.paragraph(note, size_pt=7.5, color="#333333")
+U_NOTE = ("\u03c3 and s are 1-sigma. \u03c3 of a position is the measurement's noise only (corner noise); "
+          "s is the scatter over runs (ISO 230-2). U (k = 2) is the expanded measurement uncertainty of the "
+          "figure in its row (see the uncertainty budget): spans of positions (A, E, M, max |deviation|) carry "
+          "U of a displacement over the travel; figures of one target (R, B, step std) carry only the noise "
+          "terms, which do not cancel there; a p-v carries U of the difference of two per-target means. A "
+          "figure \"not resolved\" states no value and so no U: noise alone reaches the bound it names "
+          "(noise p-v, or noise max for a max |x|).")
 
 
 def _truth_page(flow: Any, results: dict[str, Any]) -> None:
@@ -248,7 +196,7 @@ def _method_page(flow: Any, results: dict[str, Any]) -> None:
     flow.heading("Method and camera", 11)
     flow.ensure(row_mm * (max(len(method), len(intr) + 1) + 1))
     top = flow.y
-    flow.table(None, method, [30, 70], size_pt=7.5, row_mm=row_mm, align_right_from=9)
+    flow.table(None, method, [30, 70], size_pt=7.5, row_mm=row_mm, align_right_from=9, max_width_mm=108)
     below_method = flow.y
     flow.y = top
     flow.table(["intrinsic", "value", "1\u03c3"], intr, [16, 30, 24], size_pt=7.5, row_mm=row_mm, x_mm=110)

@@ -13,18 +13,11 @@ from typing import Any
 
 import numpy as np
 
-from lps_gui.report.figures import BACKWARD_COLOR, FORWARD_COLOR, TRUTH_COLOR, FigureSpec, Series
+from lps_gui.report.figure_spec import FORWARD_COLOR, TRUTH_COLOR, FigureSpec, Series, num_or_nan
 
 PLANAR_FIGURE_KEYS = ("error_map", "deviation_x", "deviation_y", "straightness_x", "straightness_y", "residuals")
 LINE_COLORS = ("#1f5fbf", "#d4600a", "#2a9d3a", "#8e3bb5", "#b8860b", "#17a2b8", "#c0392b", "#555555")
 ARROW_FRACTION = 0.8  # the longest arrow spans this fraction of the grid step
-
-
-def _num(v: Any) -> float:
-    try:
-        return float(v) if v is not None else np.nan
-    except (TypeError, ValueError):
-        return np.nan
 
 
 def planar_columns(results: dict[str, Any]) -> dict[str, np.ndarray]:
@@ -32,7 +25,7 @@ def planar_columns(results: dict[str, Any]) -> dict[str, np.ndarray]:
     rows = sorted(results.get("positions") or [], key=lambda r: r.get("index", 0))
     names = ("index", "run", "target_x_mm", "target_y_mm", "deviation_x_um", "deviation_y_um", "sigma_x_um",
              "sigma_y_um", "rms_px", "truth_deviation_x_um", "truth_deviation_y_um")
-    cols = {n: np.array([_num(r.get(n)) for r in rows], dtype=float) for n in names}
+    cols = {n: np.array([num_or_nan(r.get(n)) for r in rows], dtype=float) for n in names}
     cols["direction"] = np.array([str(r.get("direction", "+")) for r in rows], dtype=object)
     cols["outlier"] = np.array([bool(r.get("outlier", False)) for r in rows], dtype=bool)
     return cols

@@ -10,32 +10,74 @@ so tests read exactly what is printed; Qt only where painting.
 """
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
+from lps_gui.report import sections as R
 from lps_gui.report.planar_figures import planar_figures_from_results
 from lps_gui.report.summary import Row, fmt, table_cells
+from lps_gui.report.verdict import overall, verdicts
 
 PLANAR_TABLE_COLUMNS = (  # key, header, decimals, width mm
-    ("index", "#", None, 9), ("run", "run", None, 8), ("direction", "dir", None, 8),
-    ("target_x_mm", "X target mm", 3, 19), ("target_y_mm", "Y target mm", 3, 19),
-    ("deviation_x_um", "dev X \u00b5m", 2, 17), ("deviation_y_um", "dev Y \u00b5m", 2, 17),
-    ("sigma_x_um", "1\u03c3 X \u00b5m", 2, 16), ("sigma_y_um", "1\u03c3 Y \u00b5m", 2, 16),
-    ("rms_px", "RMS px", 3, 14), ("truth_deviation_x_um", "truth X \u00b5m", 2, 16),
-    ("truth_deviation_y_um", "truth Y \u00b5m", 2, 16), ("outlier", "outlier", None, 12),
+    ("index", "#", None, 8), ("run", "run", None, 7), ("direction", "dir", None, 7),
+    ("target_x_mm", "X target\n[mm]", 3, 15), ("target_y_mm", "Y target\n[mm]", 3, 15),
+    ("deviation_x_um", "dev X\n[\u00b5m]", 2, 14), ("deviation_y_um", "dev Y\n[\u00b5m]", 2, 14),
+    ("sigma_x_um", "1\u03c3 X\n[\u00b5m]", 2, 13), ("sigma_y_um", "1\u03c3 Y\n[\u00b5m]", 2, 13),
+    ("rms_px", "RMS\n[px]", 3, 11), ("truth_deviation_x_um", "truth X\n[\u00b5m]", 2, 14),
+    ("truth_deviation_y_um", "truth Y\n[\u00b5m]", 2, 14), ("outlier", "outlier", None, 11),
 )
 
 
+def _u(k2: dict[str, Any], key: str, sigma: float | None) -> float | None:
+    """U (k = 2) of a planar figure: results.json ``uncertainty.figures_k2`` when it has it, else 2 sigma (noise)."""
+    from lps_gui.io.results_file import finite_number
+
+    u = finite_number(k2.get(key))
+    return u if u is not None else (None if sigma is None else 2.0 * float(sigma))
+
+
+def _trust_note(tc: dict[str, Any], error_key: str, z_key: str | None, u: float | None, unit: str) -> str:
+    """A figure the simulator's truth shows off by more than its U: "not trusted" with the numbers, else empty."""
+    from lps_gui.io.results_file import finite_number
+
+    err = finite_number(tc.get(error_key))
+    if err is None or u is None or abs(err) <= u:
+        return ""
+    z = finite_number(tc.get(z_key)) if z_key else None
+    return (f"not trusted: the truth is {fmt(abs(err))} {unit} off" + (f" ({fmt(abs(z), 2)} \u03c3)" if z is not None else "")
+            + ", beyond U; a source is missing from the budget")
+
+
 def planar_summary_rows(results: dict[str, Any]) -> list[Row]:
-    """Measured figures of a planar session, each with 1 sigma; U (k=2) is 2 sigma (noise only)."""
+    """Measured figures of a planar session with 1 sigma and U (k = 2).
+
+    U is read from results.json ``uncertainty.figures_k2`` (the one source the
+    line report uses) and is 2 sigma of corner noise where the results carry
+    no budget. A simulated session whose truth is off by more than U says so.
+    """
     pl = results["figures"]["planar"]
+    k2 = (results.get("uncertainty") or {}).get("figures_k2") or {}
+    tc = results.get("truth_comparison") or {}
+    u_sq = _u(k2, "squareness_urad", pl["squareness_sigma_urad"])
+    u_x = _u(k2, "scale_x_ppm", pl["scale_x_sigma_ppm"])
+    u_y = _u(k2, "scale_y_ppm", pl["scale_y_sigma_ppm"])
+
+    def note(sigma: float, unit: str, trust: str) -> str:
+        return "; ".join(t for t in (f"1\u03c3 {fmt(sigma)} {unit}", trust) if t)
+
     rows = [
         Row("Squareness (angle +X to +Y minus 90\u00b0)", pl["squareness_urad"], "\u00b5rad",
-            f"\u00b1{fmt(pl['squareness_sigma_urad'])} (1\u03c3), U(k=2) {fmt(2 * pl['squareness_sigma_urad'])}"),
-        Row("Squareness", pl["squareness_um_per_m"], "\u00b5m/m"),
+            note(pl["squareness_sigma_urad"], "\u00b5rad", _trust_note(tc, "squareness_error_urad", "squareness_z", u_sq,
+                                                                        "\u00b5rad")),
+            key="squareness_urad", u_k2=u_sq),
+        Row("Squareness", pl["squareness_um_per_m"], "\u00b5m/m", "the same angle: 1 \u00b5rad = 1 \u00b5m/m",
+            key="squareness_um_per_m", u_k2=u_sq),
         Row("Scale error X", pl["scale_x_ppm"], "ppm",
-            f"\u00b1{fmt(pl['scale_x_sigma_ppm'])} (1\u03c3), U(k=2) {fmt(2 * pl['scale_x_sigma_ppm'])}"),
+            note(pl["scale_x_sigma_ppm"], "ppm", _trust_note(tc, "scale_x_error_ppm", None, u_x, "ppm")),
+            key="scale_x_ppm", u_k2=u_x),
         Row("Scale error Y", pl["scale_y_ppm"], "ppm",
-            f"\u00b1{fmt(pl['scale_y_sigma_ppm'])} (1\u03c3), U(k=2) {fmt(2 * pl['scale_y_sigma_ppm'])}"),
+            note(pl["scale_y_sigma_ppm"], "ppm", _trust_note(tc, "scale_y_error_ppm", None, u_y, "ppm")),
+            key="scale_y_ppm", u_k2=u_y),
     ]
     for axis, other in (("X", "Y"), ("Y", "X")):
         a = (pl.get("per_axis") or {}).get(axis)
@@ -56,12 +98,30 @@ def planar_summary_rows(results: dict[str, Any]) -> list[Row]:
                 rows.append(Row(f"{axis} ISO 230-2 {name} (worst line)", iso[key], "\u00b5m"))
     p = results["parameters"]
     rows.append(Row("Corner noise (a posteriori)", p["sigma_px"], "px"))
-    rows.append(Row("Views used / outliers", float(p["n_used"]), "", f"{p['n_outliers']} outlier view(s)"))
+    rows.append(Row("Views used / total", float(p["n_used"]), "", f"{p['n_outliers']} outlier view(s)",
+                    shown=f"{p['n_used']} / {p.get('n_views', p['n_used'])}"))
     return rows
 
 
+def axis_results(results: dict[str, Any], axis: str) -> dict[str, Any] | None:
+    """One axis of a planar session shaped like a line session's results (its ISO 230-2 figures, its U), or None.
+
+    What the line report's verdict and per-target sections read: ``figures``
+    (that axis's ``iso230_2`` block plus its straightness) and ``uncertainty``
+    (``uncertainty.per_axis[axis]`` when the results carry one).
+    """
+    a = (((results.get("figures") or {}).get("planar") or {}).get("per_axis") or {}).get(axis) or {}
+    figures = a.get("iso230_2")
+    if not isinstance(figures, dict) or not figures.get("iso230_2"):
+        return None
+    unc = results.get("uncertainty") or {}
+    return {"figures": {**figures, "straightness_um_max": a.get("straightness_um_max"),
+                        "straightness_sigma_um": a.get("straightness_sigma_um")},
+            "uncertainty": (unc.get("per_axis") or {}).get(axis) or {}}
+
+
 def _unresolved(span: dict[str, Any]) -> str:
-    """"not resolved (σ X)" for a p-v that noise alone could give (core.resolution), else empty."""
+    """"not resolved (noise p-v X)" for a p-v that noise alone could give (core.resolution), else empty."""
     from lps_gui.core.resolution import not_resolved_text
 
     if not span or span.get("resolved", True):
@@ -98,28 +158,50 @@ def planar_position_table(results: dict[str, Any]) -> tuple[list[str], list[list
 
 def paint_planar_report(flow: Any, meta: dict[str, Any], results: dict[str, Any], title_rows: list[tuple[str, str]],
                         figure_height_mm: float) -> None:
-    """Every page of a planar session's report onto ``flow`` (a :class:`report.layout.PdfFlow`)."""
+    """Every page of a planar session's report onto ``flow`` (a :class:`report.layout.PdfFlow`).
+
+    The verdict, per-target, environment and budget sections are the line
+    report's (:mod:`lps_gui.report.sections`), painted per axis where the
+    results hold them.
+    """
     flow.heading("XY positioning stage \u2014 planar measurement report", 15)
-    flow.space(1)
-    flow.table(None, [[k, v] for k, v in title_rows], [32, 148], size_pt=8.5, row_mm=4.6, align_right_from=9)
+    spec = R.stage_spec(meta, results)
+    axes = {axis: ar for axis in "XY" if (ar := axis_results(results, axis)) is not None}
+    verdict_rows = [replace(v, name=f"{axis}: {v.name}") for axis, ar in axes.items() for v in verdicts(ar, spec)]
+    flow.heading("Verdict", 11)
+    flow.paragraph(overall(verdict_rows) if spec else R.NO_SPEC, size_pt=10.0 if spec else 8.5,
+                   color=R.overall_color(verdict_rows) if spec else R.GREY)
+    if verdict_rows:
+        R.verdict_table(flow, verdict_rows)
+        flow.paragraph(R.DECISION_RULE, size_pt=R.NOTE_SIZE, color=R.GREY)
+    elif spec:
+        flow.paragraph("The specification is given, but neither axis has ISO 230-2 figures to compare (they need "
+                       "both directions or two runs per line).", color=R.GREY)
     flow.heading("Axis geometry and per-axis figures (measured)", 11)
-    rows = planar_summary_rows(results)
-    flow.table(["figure", "value", "unit", "uncertainty / note"], [[r.name, r.text(), r.unit, r.note] for r in rows],
-               [78, 30, 12, 60], align_right_from=1, align_left=(3,),
-               colors=["#888888" if r.unresolved else None for r in rows])
-    flow.paragraph("Uncertainties are from corner noise alone (1\u03c3 and U with k = 2); a board square-size error is a "
-                   "common scale error of both axes and does not change squareness.", size_pt=7.5, color="#555555")
+    R.figure_table(flow, planar_summary_rows(results))
+    budget = bool((results.get("uncertainty") or {}).get("figures_k2"))
+    flow.paragraph(("U (k = 2) from the uncertainty budget of these results (see below). " if budget else
+                    "U (k = 2) is 2\u03c3 of corner noise alone: these results carry no uncertainty budget. ")
+                   + "A board square-size error is a common scale error of both axes and does not change squareness.",
+                   size_pt=7.5, color=R.GREY)
     for note in (results["figures"]["planar"].get("notes") or []):
-        flow.paragraph(note, size_pt=7.5, color="#555555")
+        flow.paragraph(note, size_pt=7.5, color=R.GREY)
     truth = planar_truth_rows(results)
     if truth:
         flow.heading("Simulation only: against the simulator's truth", 11)
         flow.table(["figure", "value", "unit", "note"], [[r.name, r.text(), r.unit, r.note] for r in truth],
-                   [78, 20, 14, 68], align_right_from=1, align_left=(3,), colors=["#555555"] * len(truth))
+                   [78, 20, 14, 68], align_right_from=1, align_left=(3,), colors=[R.GREY] * len(truth))
+    flow.heading("Identification", 11)
+    flow.table(None, [[k, v] for k, v in title_rows], [32, 148], size_pt=8.0, row_mm=4.2, align_right_from=9)
+    for axis, ar in axes.items():
+        R.iso_section(flow, ar, f"ISO 230-2 per target, {axis} axis (worst line)")
+    if results.get("environment") or results.get("uncertainty"):
+        flow.new_page()
+        R.uncertainty_sections(flow, results)
     flow.new_page()
     flow.heading("Plots")
-    for spec in planar_figures_from_results(results):
-        flow.figure(spec, figure_height_mm if spec.key != "error_map" else 1.6 * figure_height_mm)
+    for spec_fig in planar_figures_from_results(results):
+        flow.figure(spec_fig, figure_height_mm if spec_fig.key != "error_map" else 1.6 * figure_height_mm)
     flow.new_page()
     flow.heading("Per-position results (1\u03c3: noise only)")
     header, body, widths = planar_position_table(results)

@@ -13,21 +13,8 @@ from typing import Any
 import numpy as np
 
 from lps_gui.report.axes import data_range, log_ticks, nice_ticks, padded, tick_label
-from lps_gui.report.figures import OUTLIER_COLOR, FigureSpec, Series
-
-FONT_FAMILY = "DejaVu Sans"
-
-
-def font(size_pt: float, bold: bool = False) -> Any:
-    """The report's font at ``size_pt`` points (DejaVu Sans: full Unicode, prints well)."""
-    from PySide6.QtGui import QFont
-
-    f = QFont(FONT_FAMILY)
-    f.setPointSizeF(size_pt)
-    f.setBold(bold)
-    f.setStyleHint(QFont.StyleHint.SansSerif)
-    return f
-
+from lps_gui.report.figure_spec import OUTLIER_COLOR, FigureSpec, Series
+from lps_gui.report.text_fit import TextLog, draw_text, fitting_size, font
 
 def segments(x: np.ndarray, y: np.ndarray) -> list[np.ndarray]:
     """Index runs where both x and y are finite: a line breaks at a gap instead of jumping."""
@@ -56,7 +43,7 @@ class _Mapper:
         return self.rect.bottom() - (np.asarray(v, dtype=float) - lo) / (hi - lo) * self.rect.height()
 
 
-def paint_figure(painter: Any, rect: Any, figure: FigureSpec, px_per_mm: float) -> None:
+def paint_figure(painter: Any, rect: Any, figure: FigureSpec, px_per_mm: float, log: TextLog | None = None) -> None:
     """Draw ``figure`` inside ``rect`` (QRectF, device units): title, axes, series, legend.
 
     Parameters
@@ -67,20 +54,27 @@ def paint_figure(painter: Any, rect: Any, figure: FigureSpec, px_per_mm: float) 
         The whole figure area, title and legend included.
     px_per_mm : float
         Device units per millimetre (resolution / 25.4).
+    log : TextLog, optional
+        Where every drawn string is recorded with its box (the clipping check).
     """
     from PySide6.QtCore import QRectF, Qt
     from PySide6.QtGui import QColor, QPen
 
     mm = px_per_mm
     painter.save()
-    painter.setFont(font(9.0, bold=True))
     title_h = 5.5 * mm
+    painter.setFont(font(fitting_size(painter, figure.title, rect.width(), 9.0, 7.0, bold=True), bold=True))
     painter.setPen(QColor("#000000"))
-    painter.drawText(QRectF(rect.left(), rect.top(), rect.width(), title_h),
-                     int(Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignVCenter), figure.title)
+    draw_text(painter, QRectF(rect.left(), rect.top(), rect.width(), title_h),
+              int(Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignVCenter), figure.title, log, "title")
 
     legend_rows = _legend_layout(painter, figure, rect.width() - 16 * mm, mm)
-    legend_h = (len(legend_rows) * 4.0 + (4.0 if figure.notes else 0.0) + 1.0) * mm
+    notes_flags = int(Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignTop | Qt.TextFlag.TextWordWrap)
+    notes_h = 0.0
+    if figure.notes:
+        painter.setFont(font(7.0))
+        notes_h = painter.boundingRect(QRectF(0, 0, rect.width() - 18 * mm, 1e7), notes_flags, figure.notes).height()
+    legend_h = len(legend_rows) * 4.0 * mm + (notes_h + 0.5 * mm if figure.notes else 0.0) + 1.0 * mm
     plot = QRectF(rect.left() + 16 * mm, rect.top() + title_h + 1 * mm,
                   rect.width() - 18 * mm, rect.height() - title_h - 11 * mm - legend_h)
     xr0, yr0 = data_range(figure, "x"), data_range(figure, "y")
@@ -88,13 +82,13 @@ def paint_figure(painter: Any, rect: Any, figure: FigureSpec, px_per_mm: float) 
     if xr0 is None or yr0 is None:
         painter.drawRect(plot)
         painter.setFont(font(9.0))
-        painter.drawText(plot, int(Qt.AlignmentFlag.AlignCenter), "no data for this plot")
+        draw_text(painter, plot, int(Qt.AlignmentFlag.AlignCenter), "no data for this plot", log, "axis")
         painter.restore()
         return
     xr = padded(*xr0, fraction=0.02, log=figure.x_log)
     yr = padded(*yr0, fraction=0.08)
     m = _Mapper(plot, xr, yr, figure.x_log)
-    _paint_axes(painter, plot, m, figure, mm)
+    _paint_axes(painter, plot, m, figure, mm, log)
 
     painter.save()
     painter.setClipRect(plot)
@@ -116,14 +110,16 @@ def paint_figure(painter: Any, rect: Any, figure: FigureSpec, px_per_mm: float) 
         for s, w in row:
             _legend_swatch(painter, QRectF(x0, y0, 7 * mm, 3.5 * mm), s, mm)
             painter.setPen(QColor("#000000"))
-            painter.drawText(QRectF(x0 + 8 * mm, y0, w, 3.5 * mm), int(Qt.AlignmentFlag.AlignVCenter), s.label)
+            room = min(w, rect.right() - x0 - 8 * mm)
+            draw_text(painter, QRectF(x0 + 8 * mm, y0, room, 3.5 * mm), int(Qt.AlignmentFlag.AlignVCenter), s.label,
+                      log, "legend")
             x0 += w + 12 * mm
         y0 += 4.0 * mm
     if figure.notes:
         painter.setFont(font(7.0))
         painter.setPen(QColor("#444444"))
-        painter.drawText(QRectF(plot.left(), y0, plot.width(), 4 * mm), int(Qt.AlignmentFlag.AlignVCenter),
-                         figure.notes)
+        draw_text(painter, QRectF(plot.left(), y0, rect.width() - 18 * mm, notes_h + 0.5 * mm), notes_flags,
+                  figure.notes, log, "legend")
     painter.restore()
 
 
@@ -145,7 +141,8 @@ def _legend_layout(painter: Any, figure: FigureSpec, width: float, mm: float) ->
     return [r for r in rows if r]
 
 
-def _paint_axes(painter: Any, plot: Any, m: _Mapper, figure: FigureSpec, mm: float) -> None:
+def _paint_axes(painter: Any, plot: Any, m: _Mapper, figure: FigureSpec, mm: float, log: TextLog | None) -> None:
+    """Grid, tick labels and axis labels; a label too long for its axis is set smaller (down to 6 pt)."""
     from PySide6.QtCore import QLineF, QRectF, Qt
     from PySide6.QtGui import QColor, QPen
 
@@ -158,23 +155,25 @@ def _paint_axes(painter: Any, plot: Any, m: _Mapper, figure: FigureSpec, mm: flo
         painter.setPen(grid)
         painter.drawLine(QLineF(px, plot.top(), px, plot.bottom()))
         painter.setPen(QColor("#000000"))
-        painter.drawText(QRectF(px - 12 * mm, plot.bottom() + 0.8 * mm, 24 * mm, 3.5 * mm),
-                         int(Qt.AlignmentFlag.AlignHCenter | Qt.AlignmentFlag.AlignTop), tick_label(v, xt))
+        draw_text(painter, QRectF(px - 12 * mm, plot.bottom() + 0.8 * mm, 24 * mm, 3.5 * mm),
+                  int(Qt.AlignmentFlag.AlignHCenter | Qt.AlignmentFlag.AlignTop), tick_label(v, xt), log, "axis")
     for v in yt:
         py = float(m.y(np.array([v]))[0])
         painter.setPen(QPen(QColor("#909090"), 0.2 * mm) if v == 0 else grid)
         painter.drawLine(QLineF(plot.left(), py, plot.right(), py))
         painter.setPen(QColor("#000000"))
-        painter.drawText(QRectF(plot.left() - 15 * mm, py - 2 * mm, 14 * mm, 4 * mm),
-                         int(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter), tick_label(v, yt))
-    painter.setFont(font(8.0))
-    painter.drawText(QRectF(plot.left(), plot.bottom() + 5 * mm, plot.width(), 4.5 * mm),
-                     int(Qt.AlignmentFlag.AlignHCenter | Qt.AlignmentFlag.AlignVCenter), figure.x_label)
+        draw_text(painter, QRectF(plot.left() - 15 * mm, py - 2 * mm, 14 * mm, 4 * mm),
+                  int(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter), tick_label(v, yt), log, "axis")
+    centre = int(Qt.AlignmentFlag.AlignHCenter | Qt.AlignmentFlag.AlignVCenter)
+    painter.setFont(font(fitting_size(painter, figure.x_label, plot.width(), 8.0, 6.0)))
+    draw_text(painter, QRectF(plot.left(), plot.bottom() + 5 * mm, plot.width(), 4.5 * mm), centre, figure.x_label,
+              log, "axis")
     painter.save()
     painter.translate(plot.left() - 15.5 * mm, plot.center().y())
     painter.rotate(-90)
-    painter.drawText(QRectF(-plot.height() / 2, -1 * mm, plot.height(), 4.5 * mm),
-                     int(Qt.AlignmentFlag.AlignHCenter | Qt.AlignmentFlag.AlignVCenter), figure.y_label)
+    painter.setFont(font(fitting_size(painter, figure.y_label, plot.height(), 8.0, 6.0)))
+    draw_text(painter, QRectF(-plot.height() / 2, -1 * mm, plot.height(), 4.5 * mm), centre, figure.y_label, log,
+              "axis")
     painter.restore()
 
 

@@ -12,6 +12,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from lps_gui.core.camera_model import INTRINSIC_NAMES
 from lps_gui.io.results_file import SummaryFigure, extreme_figures, iso_figures, summary_figures
 from lps_gui.io.results_file import finite_number as _num
 from lps_gui.report.figures import position_columns
@@ -19,7 +20,6 @@ from lps_gui.report.figures import position_columns
 METHOD_NAMES = {"joint": "joint LM (all positions, orientation and line at once)",
                 "hybrid": "paper's hybrid algorithm (LM + per-view grid search)",
                 "pnp": "per-view PnP (baseline)", "calibrate": "full calibration (reference only)"}
-INTRINSIC_ORDER = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3")
 DASH = "\u2014"
 ZERO_BELOW = 1e-9  # |values| below this print as 0 (no unit of the report resolves them)
 
@@ -33,13 +33,14 @@ class Row:
     unit: str = ""
     note: str = ""
     digits: int = 3  # significant digits when printed
-    unresolved: str = ""  # "not resolved (σ X)": printed instead of a value, greyed (core.resolution)
+    unresolved: str = ""  # "not resolved (noise p-v X)": printed instead of a value, greyed (core.resolution)
     key: str = ""  # the figure's key in results.json (for its U)
     u_k2: float | None = None  # expanded uncertainty (k = 2) in ``unit``, None when not assessed
+    shown: str = ""  # printed instead of the number when a count reads better as text ("30 / 30")
 
     def text(self) -> str:
         """The value as printed: ``digits`` significant digits, a dash when absent."""
-        return self.unresolved or fmt(self.value, self.digits)
+        return self.unresolved or self.shown or fmt(self.value, self.digits)
 
     def u_text(self) -> str:
         """U (k = 2) as printed ("\u00b1 0.52"; with the value's decimals when it is far smaller), empty when not assessed."""
@@ -123,7 +124,10 @@ def title_rows(session_meta: dict[str, Any], results: dict[str, Any], version: s
                            ("name", "model", "driver", "kind"), DASH)
     if ident.get("stage_serial"):
         stage_text += f", serial {ident['stage_serial']}"
-    if stage.get("axis"):
+    axes = stage.get("axes") or results.get("axes") or []
+    if len(axes) > 1:
+        stage_text += f", axes {', '.join(str(a) for a in axes)}"
+    elif stage.get("axis"):
         stage_text += f", axis {stage['axis']}"
     controller = _describe(stage, ("controller", "firmware", "port"), "simulated (no controller)" if truth else DASH)
     if ident.get("controller_serial"):
@@ -178,7 +182,7 @@ def intrinsics_rows(results: dict[str, Any]) -> list[tuple[str, str, str]]:
               "p1": dist[2], "p2": dist[3], "k3": dist[4]}
     std = intr.get("std") or {}
     out = []
-    for name in INTRINSIC_ORDER:
+    for name in INTRINSIC_NAMES:
         unit = " px" if name in ("fx", "fy", "cx", "cy") else ""
         out.append((name, (f"{values[name]:.3f}" if unit else fmt(values[name], 4)) + unit, fmt(_num(std.get(name)), 2) + (unit if _num(std.get(name)) is not None else "")))
     return out
@@ -250,40 +254,28 @@ U_KEYS = {"step_std": "step_std_um", "max_abs_deviation": "max_abs_deviation_um"
           "periodic_amplitude": "periodic_amplitude_um"}  # summary figure -> results uncertainty.figures_k2
 
 
+def u_key(key: str) -> str:
+    """The ``uncertainty.figures_k2`` key of a summary figure (core.uncertainty_budget.figure_uncertainties)."""
+    if key.startswith("iso230_2_"):
+        return key.removeprefix("iso230_2_") + "_um"
+    if key.startswith(("straightness_span_", "max_abs_", "image_rotation_span")) and key != "max_abs_deviation":
+        return key
+    return U_KEYS.get(key, key)
+
+
 def _with_u(results: dict[str, Any], row: Row) -> Row:
-    """The row with its U (k = 2) from results ``uncertainty`` (None where not assessed)."""
-    unc = results.get("uncertainty") or {}
-    u = unc.get("figures_k2") or {}
-    if not unc:
+    """The row with its U (k = 2), read from results ``uncertainty.figures_k2`` and nowhere else.
+
+    The mean step's is stored in um and printed in the row's mm; a figure
+    printed as "not resolved" carries no U (it states no value to carry one).
+    """
+    u = (results.get("uncertainty") or {}).get("figures_k2") or {}
+    if row.unresolved:
         return row
-    key = row.key
-    if key == "mean_step":
-        value = _mean_step_u_mm(results)
-    elif key.startswith("iso230_2_"):
-        value = _num(u.get(key.removeprefix("iso230_2_") + "_um"))
-    elif key.startswith("straightness_span_"):
-        value = _median_sigma_u(results, f"straightness_sigma_um_{key[-1]}", views=2)
-    elif key.startswith("max_abs_") and key != "max_abs_deviation":
-        value = _median_sigma_u(results, f"{key.removeprefix('max_abs_')}_sigma_urad", views=1)
-    else:
-        value = _num(u.get(U_KEYS.get(key, "")))
-    return replace(row, u_k2=value)
-
-
-def _median_sigma_u(results: dict[str, Any], column: str, views: int) -> float | None:
-    """2 x the median per-view 1-sigma of ``column`` (x sqrt 2 for a peak-to-valley of two views)."""
-    s = [v for v in (_num(r.get(column)) for r in results.get("positions") or [] if not r.get("outlier")) if v is not None]
-    return float(2.0 * math.sqrt(views) * np.median(s)) if s else None
-
-
-def _mean_step_u_mm(results: dict[str, Any]) -> float | None:
-    """U of the mean step: U over the travel divided by the number of steps (in mm)."""
-    unc = results.get("uncertainty") or {}
-    n = ((results.get("figures") or {}).get("iso230_2") or {}).get("n_targets")
-    if n is None:
-        n = len({round(float(r["target_mm"]), 6) for r in results.get("positions") or [] if r.get("target_mm") is not None})
-    U = _num(unc.get("expanded_k2_um"))
-    return None if U is None or not n or n < 2 else 1e-3 * U / (n - 1)
+    if row.key == "mean_step":
+        value = _num(u.get("mean_step_um"))
+        return replace(row, u_k2=None if value is None else 1e-3 * value)
+    return replace(row, u_k2=_num(u.get(u_key(row.key))))
 
 
 def figure_notes(results: dict[str, Any]) -> list[str]:

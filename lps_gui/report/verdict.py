@@ -17,12 +17,14 @@ from typing import Any
 
 from lps_gui.core.iso230 import ISO_RUNS
 from lps_gui.core.resolution import runs_per_direction
-from lps_gui.report.summary import SpecCheck, spec_checks
+from lps_gui.report.summary import SpecCheck, fmt, spec_checks
 
 PASS_COLOR, FAIL_COLOR, INDICATIVE_COLOR, GREY = "#007a1f", "#c00000", "#a05a00", "#555555"
 # which U of results.json uncertainty.figures_k2 belongs to a check, and whether the check is a run statistic
 CHECK_FIGURES = {"Positional accuracy": ("A_um", True), "Repeatability": ("R_um", True),
-                 "Straight-line accuracy": ("straightness_um_max", False)}
+                 "Straight-line accuracy": ("straightness_span_max", False)}
+LEGACY_U_KEYS = {"straightness_span_max": "straightness_um_max"}  # results.json from before the per-span U
+QUANTITIES = {"Positional accuracy": "A", "Repeatability": "R"}  # ISO 230-2 symbol of a run statistic
 
 
 @dataclass(frozen=True)
@@ -31,12 +33,26 @@ class Verdict:
 
     name: str
     measured: float | None
-    u_k2: float | None  # expanded uncertainty of ``measured`` as compared with the limit
+    u_k2: float | None  # expanded uncertainty of ``measured`` (of ``quantity``) as compared with the limit
     limit: float
     unit: str
     verdict: str  # "PASS", "FAIL", "not resolved", "not measured", each optionally "(indicative)"
     color: str
     note: str
+    quantity: str = ""  # what ``measured`` and ``u_k2`` are: "A/2", "R/2", "p-v v2", ...
+
+    def measured_text(self) -> str:
+        """The compared quantity and its value, e.g. "A/2 = 13.1 µm" (the figure page 2 lists as A is twice it)."""
+        value = "\u2014" if self.measured is None else f"{fmt(self.measured)} {self.unit}"
+        return f"{self.quantity} = {value}" if self.quantity else value
+
+
+def _straightness_quantity(results: dict[str, Any]) -> str:
+    """"p-v v1" or "p-v v2": the larger per-target span, the one the straight-line check compares."""
+    st = (results.get("figures") or {}).get("straightness") or {}
+    spans = [(float(st[k]["span_um"]), k) for k in ("v1", "v2") if isinstance(st.get(k), dict)
+             and st[k].get("span_um") is not None]
+    return f"p-v {max(spans)[1]}" if spans else "p-v"
 
 
 def _decide(c: SpecCheck, u: float | None) -> str:
@@ -61,9 +77,12 @@ def verdicts(results: dict[str, Any], spec: dict[str, Any] | None) -> list[Verdi
     out = []
     for c in spec_checks(results, spec):
         key, run_statistic = CHECK_FIGURES.get(c.name, (None, False))
-        u = figures_k2.get(key) if key else None
+        u = figures_k2.get(key, figures_k2.get(LEGACY_U_KEYS.get(key, ""))) if key else None
         if u is not None and run_statistic:
-            u = float(u) * half  # the figure is compared as a half band against a +- limit
+            u = float(u) * half  # the figure is compared as a half band against a +- limit: U of A/2 is U(A)/2
+        symbol = QUANTITIES.get(c.name)
+        quantity = (symbol + ("/2" if half == 0.5 else "")) if symbol else (
+            _straightness_quantity(results) if c.name == "Straight-line accuracy" else "")
         word = _decide(c, u)
         indicative = c.indicative and word in ("PASS", "FAIL")  # core.iso230: a run statistic from < 5 runs
         color = {"PASS": PASS_COLOR, "FAIL": FAIL_COLOR}.get(word, GREY)
@@ -74,7 +93,7 @@ def verdicts(results: dict[str, Any], spec: dict[str, Any] | None) -> list[Verdi
             color = INDICATIVE_COLOR
             note = f"{runs} run(s) per direction, ISO 230-2 asks for {ISO_RUNS}; {note}"
             word += " (indicative)"
-        out.append(Verdict(c.name, c.measured, u, c.limit, c.unit, word, color, note))
+        out.append(Verdict(c.name, c.measured, u, c.limit, c.unit, word, color, note, quantity))
     return out
 
 

@@ -13,7 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from lps_gui.core.planar_estimate import PlanarEstimate, PlanarObservations, planar_truth_in_stage_frame
+from lps_gui.core.observations import Observations
+from lps_gui.core.planar_estimate import PlanarEstimate, planar_truth_in_stage_frame
 from lps_gui.core.planar_figures import axis_geometry, planar_figures
 from lps_gui.core.planar_estimate import affine_motion
 from lps_gui.io.session import Session
@@ -77,7 +78,7 @@ def _f(x: Any) -> float | None:
     return x if np.isfinite(x) else None
 
 
-def planar_truth_comparison(obs: PlanarObservations, est: PlanarEstimate, truth: dict[str, Any],
+def planar_truth_comparison(obs: Observations, est: PlanarEstimate, truth: dict[str, Any],
                             positions: list[dict]) -> dict[str, Any]:
     """results.json ``truth_comparison`` of a planar session; also puts truth beside each position."""
     by_index = {int(i): k for k, i in enumerate(truth["index"])}
@@ -124,7 +125,7 @@ def planar_truth_comparison(obs: PlanarObservations, est: PlanarEstimate, truth:
     return out
 
 
-def _out_of_plane_errors(obs: PlanarObservations, truth: dict[str, Any], rows: np.ndarray, ok: np.ndarray,
+def _out_of_plane_errors(obs: Observations, truth: dict[str, Any], rows: np.ndarray, ok: np.ndarray,
                          positions: list[dict]) -> dict[str, Any]:
     """The estimate's out-of-plane displacement against truth, both off their least-squares plane over ``ok``."""
     if "board_plane_normal_um" not in truth:

@@ -50,8 +50,7 @@ def test_colour_frames_when_asked(tmp_path):
 def test_video_file(tmp_path):
     path = tmp_path / "clip.avi"
     writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 10.0, (64, 48))
-    if not writer.isOpened():
-        pytest.skip("this OpenCV build cannot write MJPG .avi")
+    assert writer.isOpened(), "opencv-python-headless writes MJPG .avi with its own codec"
     for g in (40, 200):
         writer.write(np.full((48, 64, 3), g, np.uint8))
     writer.release()

@@ -95,3 +95,19 @@ def test_periodic_amplitude_uncertainty_matches_a_monte_carlo_fit():
     unc = {"coverage_factor": 2.0, "expanded_k2_um": 1.0, "noise_standard_um": sigma * math.sqrt(2)}
     U = figure_uncertainties(unc, {}, 100.0, n_views=n)["periodic_amplitude_um"]
     assert U / 2 == pytest.approx(np.std(amps), rel=0.15)
+
+
+def test_a_tilt_curve_within_the_noise_gives_no_abbe_term():
+    """A quick demo: 48 views, per-view pitch/yaw sigma 500 urad, no tilt at all; the cubic fit's noise is not a tilt."""
+    from lps_gui.core.uncertainty_budget import smooth_tilt_spread_urad
+
+    n = 48
+    t = np.repeat(np.linspace(0, 22, 12), 4)
+    found = 0
+    for seed in range(20):
+        tilt = np.random.default_rng(seed).normal(0, 500.0, (n, 2))
+        found += int(np.count_nonzero(smooth_tilt_spread_urad(tilt, np.full((n, 2), 500.0), t)))
+    assert found <= 2  # of 40 angle curves (without the significance rule 11 were counted)
+    tilt = np.stack([300.0 * (t / 22.0) ** 2 + np.random.default_rng(1).normal(0, 50.0, n), np.zeros(n)], axis=1)
+    assert smooth_tilt_spread_urad(tilt, np.full((n, 2), 50.0), t)[0] == pytest.approx(np.std(300.0 * (t / 22.0) ** 2),
+                                                                                       rel=0.15)

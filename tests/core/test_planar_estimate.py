@@ -5,9 +5,10 @@ import cv2
 import numpy as np
 import pytest
 
-from lps_gui.core.planar_estimate import PlanarObservations, estimate_planar, planar_truth_in_stage_frame
+from lps_gui.core.estimate import EstimateOptions, estimate
+from lps_gui.core.observations import Observations
+from lps_gui.core.planar_estimate import planar_truth_in_stage_frame
 from lps_gui.core.planar_figures import axis_geometry, planar_figures
-from lps_gui.core.planar_model import apply_planar_step, planar_jacobians
 from lps_gui.core.stage_errors import PlanarErrorModel
 from lps_gui.core.simulate import (
     nominal_planar_state,
@@ -20,11 +21,11 @@ from lps_gui.core.stage_errors import StageErrorModel
 from lps_gui.errors import DegenerateGeometryError, InputError
 
 
-def observations(spec, views) -> PlanarObservations:
+def observations(spec, views) -> Observations:
     st = views.stops
-    return PlanarObservations(spec.rig.board, spec.rig.intrinsics, views.corners_px, [s.target_mm for s in st],
-                              [s.approach for s in st], [1 if s.direction == "+" else -1 for s in st],
-                              [s.run for s in st], [s.index for s in st], source="simulated planar session")
+    return Observations(spec.rig.board, spec.rig.intrinsics, views.corners_px, [s.target_mm for s in st],
+                        [1 if s.direction == "+" else -1 for s in st], [s.run for s in st], [s.index for s in st],
+                        source="simulated planar session", approach=[s.approach for s in st])
 
 
 def true_stage_xy(est, obs, views) -> np.ndarray:
@@ -64,33 +65,11 @@ def crb_xy_sigma_mm(spec, views) -> np.ndarray:
     return np.sqrt(np.vstack([np.zeros((1, 2)), var]))
 
 
-def test_planar_jacobian_matches_central_differences():
-    spec = small_planar_spec(seed=3)
-    views = simulate_views(spec)
-    state = nominal_planar_state(spec.rig, views.board_plane_mm)
-    X = spec.rig.board.object_points()
-    uv, J, Js, _ = planar_jacobians(state, X)
-    h = 1e-6
-    for j in range(8):
-        d = np.zeros(8)
-        d[j] = h
-        up = planar_jacobians(apply_planar_step(state, d, np.zeros_like(state.xy)), X)[0]
-        dn = planar_jacobians(apply_planar_step(state, -d, np.zeros_like(state.xy)), X)[0]
-        num = (up - dn) / (2 * h)
-        assert np.allclose(J[j], num, rtol=1e-5, atol=1e-4 * np.abs(num).max()), f"shared column {j}"
-    for a in range(2):
-        ds = np.zeros_like(state.xy)
-        ds[:, a] = h
-        up = planar_jacobians(apply_planar_step(state, np.zeros(8), ds), X)[0]
-        dn = planar_jacobians(apply_planar_step(state, np.zeros(8), -ds), X)[0]
-        assert np.allclose(Js[a], (up - dn) / (2 * h), rtol=1e-5, atol=1e-6), f"per-view column {a}"
-
-
 def test_paper_planar_positions_reach_the_cramer_rao_bound_and_recover_squareness_and_scale():
     spec = paper_planar_spec(seed=11)  # 15 x 9 grid at 10 mm, 0.1 px, 150 urad, +80 / -50 ppm
     views = simulate_views(spec)
     obs = observations(spec, views)
-    est = estimate_planar(obs)
+    est = estimate(obs)
     assert est.converged and not est.outlier.any()
     truth = true_stage_xy(est, obs, views)
     err_um = 1e3 * (est.state.xy - truth)[est.used]
@@ -98,7 +77,7 @@ def test_paper_planar_positions_reach_the_cramer_rao_bound_and_recover_squarenes
     crb_um = 1e3 * np.sqrt(np.mean(crb_xy_sigma_mm(spec, views)[1:] ** 2))
     assert 0.5 < crb_um < 4.0  # about 2 um per coordinate on this rig
     assert rms < 1.3 * crb_um, (rms, crb_um)
-    pnp = estimate_planar(obs, method="pnp")  # the baseline: per-view poses, each with its own depth and tilt noise
+    pnp = estimate(obs, EstimateOptions(method="pnp"))  # the baseline: per-view poses, each with its own depth and tilt noise
     rms_pnp = 1e3 * np.sqrt(np.mean((pnp.state.xy - true_stage_xy(pnp, obs, views))[pnp.used] ** 2))
     assert rms_pnp > 1.5 * rms, (rms_pnp, rms)  # measured: 4.3 um against 2.0 um
     # reported sigmas agree with the bound
@@ -127,7 +106,7 @@ def test_square_error_model_without_straightness_gives_its_parameters():
     spec = small_planar_spec(seed=2, errors=errors, noise_px=0.02)
     views = simulate_views(spec)
     obs = observations(spec, views)
-    est = estimate_planar(obs)
+    est = estimate(obs)
     geo = axis_geometry(est.fit.G, est.fit.cov_G)
     for value, truth, sigma in ((geo.squareness_urad, 150.0, geo.squareness_sigma_urad),
                                 (geo.scale_x_ppm, 80.0, geo.scale_x_sigma_ppm),
@@ -142,7 +121,7 @@ def test_planar_sigmas_are_honest_over_monte_carlo_repetitions():
         spec = small_planar_spec(seed=100 + seed)
         views = simulate_views(spec)
         obs = observations(spec, views)
-        est = estimate_planar(obs, detect_outliers=False)
+        est = estimate(obs, EstimateOptions(detect_outliers=False))
         truth = true_stage_xy(est, obs, views)
         e = (est.state.xy - truth)[1:]
         z2.append(np.mean((e / est.sigma_xy_mm[1:]) ** 2))
@@ -157,7 +136,7 @@ def test_replaced_and_bumped_views_are_flagged_and_the_rest_unchanged():
     base = small_planar_spec(seed=5)
     spec = type(base)(**{**base.__dict__, "replaced_views": (7,), "bumped_views": (15,), "replaced_offset": 5})
     views = simulate_views(spec)
-    est = estimate_planar(observations(spec, views))
+    est = estimate(observations(spec, views))
     assert set(np.flatnonzero(est.outlier)) == {7, 15}
     kinds = {f["index"]: f["kind"] for f in est.flags}
     assert kinds[7] == "position"  # a bumped camera shows as either, depending on the bump's axis
@@ -168,14 +147,14 @@ def test_collinear_targets_are_refused_with_a_one_line_message():
     spec = small_planar_spec(plan=Plan.xy(start_mm=(0.0, 0.0), stop_mm=(50.0, 0.0), step_mm=(10.0, 10.0)))
     views = simulate_views(spec)
     with pytest.raises(DegenerateGeometryError, match="one line"):
-        estimate_planar(observations(spec, views))
+        estimate(observations(spec, views))
 
 
 def test_hybrid_is_refused_for_planar_sessions():
     spec = small_planar_spec()
     views = simulate_views(spec)
     with pytest.raises(InputError, match="1-D only"):
-        estimate_planar(observations(spec, views), method="hybrid")
+        estimate(observations(spec, views), EstimateOptions(method="hybrid"))
 
 
 def test_planar_figures_lines_and_nodes():
@@ -183,7 +162,7 @@ def test_planar_figures_lines_and_nodes():
                                                   directions="both", runs=2))
     views = simulate_views(spec)
     obs = observations(spec, views)
-    est = estimate_planar(obs)
+    est = estimate(obs)
     figs = planar_figures(obs.target_mm, obs.approach, obs.run, obs.direction, est.deviation_um(obs.target_mm),
                           1e3 * est.sigma_xy_mm, est.used, est.fit.G, est.fit.cov_G)
     assert {ln.axis for ln in figs.lines} == {"X", "Y"}
@@ -192,3 +171,27 @@ def test_planar_figures_lines_and_nodes():
     assert figs.per_axis["X"]["iso230_2"] is not None
     d = figs.to_dict()
     assert d["geometry"]["squareness_sigma_urad"] > 0
+
+
+def test_planar_self_calibration_frees_the_intrinsics_under_their_prior():
+    """The intrinsics selection for D = 2: the 9 intrinsics join the shared parameters with the calibration's
+    covariance as prior; the positions' sigma then carries their uncertainty and stays honest."""
+    from dataclasses import replace
+
+    spec = small_planar_spec(seed=5)
+    views = simulate_views(spec)
+    sd = np.r_[2.0, 2.0, 2.0, 2.0, 0.01, 0.01, 1e-4, 1e-4, 0.01]
+    obs = observations(spec, views)
+    obs.intrinsics = replace(obs.intrinsics, covariance=np.diag(sd**2))
+    held = estimate(obs, EstimateOptions())
+    free = estimate(obs, EstimateOptions(self_calibrate=True))
+    assert free.converged and free.dof == held.dof - 9
+    moved = (free.state.intrinsics.vector() - obs.intrinsics.vector()) / sd
+    assert 0 < np.max(np.abs(moved)) < 3.0
+    truth = true_stage_xy(free, obs, views)
+    rest = free.used & (np.arange(obs.K) != free.reference_view)
+    z2 = np.mean(((free.state.xy - truth)[rest] / free.sigma_total_xy_mm[rest]) ** 2)
+    assert 0.2 < z2 < 3.0, z2
+    # the corners inform the intrinsics too: the positions' total sigma is below the prior's propagation alone
+    assert np.median(free.sigma_total_xy_mm[1:]) < np.median(held.sigma_total_xy_mm[1:])
+    assert np.all(held.sigma_total_xy_mm[1:] >= held.sigma_xy_mm[1:])

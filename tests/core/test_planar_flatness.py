@@ -3,7 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from lps_gui.core.planar_estimate import PlanarObservations, estimate_planar
+from lps_gui.core.estimate import EstimateOptions, estimate
+from lps_gui.core.observations import Observations
 from lps_gui.core.planar_flatness import out_of_plane
 from lps_gui.core.stage_errors import PlanarErrorModel
 from lps_gui.core.simulate import paper_planar_spec, simulate_views
@@ -19,9 +20,9 @@ def test_out_of_plane_bow_is_recovered_with_honest_sigma():
         spec = paper_planar_spec(seed=seed, errors=errors)
         views = simulate_views(spec)
         st = views.stops
-        obs = PlanarObservations(spec.rig.board, spec.rig.intrinsics, views.corners_px, [s.target_mm for s in st],
-                                 [s.approach for s in st], [1] * len(st), [1] * len(st), [s.index for s in st])
-        est = estimate_planar(obs, detect_outliers=False)
+        obs = Observations(spec.rig.board, spec.rig.intrinsics, views.corners_px, [s.target_mm for s in st],
+                           [1] * len(st), [1] * len(st), [s.index for s in st], approach=[s.approach for s in st])
+        est = estimate(obs, EstimateOptions(detect_outliers=False))
         X = spec.rig.board.object_points()
         oop = out_of_plane(est.state, X, obs.corners_px, obs.mask(), obs.target_mm, est.used)
         T = obs.target_mm

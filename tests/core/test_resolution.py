@@ -22,7 +22,7 @@ def test_is_resolved_needs_sigma_below_value_and_limit():
     assert not is_resolved(10.0, 12.0)
     assert not is_resolved(10.0, 2.0, limit=1.5)
     assert not is_resolved(None, 1.0) and not is_resolved(1.0, float("nan"))
-    assert not_resolved_text(12.34, "\u00b5m") == "not resolved (\u03c3 12 \u00b5m)"
+    assert not_resolved_text(12.34, "\u00b5m") == "not resolved (noise p-v 12 \u00b5m)"
 
 
 def test_a_flat_noisy_profile_is_not_resolved_and_a_bow_is():

@@ -4,12 +4,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.core.planar_estimate import PlanarObservations, estimate_planar
+from lps_gui.core.estimate import estimate
+from lps_gui.core.observations import Observations
 from lps_gui.core.plan import Plan
 from lps_gui.core.simulate import simulate_views, small_planar_spec
 from lps_gui.core.rig_planning import intrinsics_from_lens, predict_rig
 from lps_gui.core.simulate import observations_of, simulate_views, small_spec
-from lps_gui.core.estimate import estimate
 from lps_gui.errors import InputError
 
 
@@ -19,9 +19,9 @@ def test_planar_prediction_within_20_percent_of_the_sigma_measured_on_a_simulate
     assert pred.board_in_view and pred.targets_losing_board == 0
     views = simulate_views(spec)
     st = views.stops
-    obs = PlanarObservations(spec.rig.board, spec.rig.intrinsics, views.corners_px, [s.target_mm for s in st],
-                             [s.approach for s in st], [1] * len(st), [1] * len(st), [s.index for s in st])
-    est = estimate_planar(obs)
+    obs = Observations(spec.rig.board, spec.rig.intrinsics, views.corners_px, [s.target_mm for s in st],
+                       [1] * len(st), [1] * len(st), [s.index for s in st], approach=[s.approach for s in st])
+    est = estimate(obs)
     measured = float(np.median(np.sqrt(np.mean((1e3 * est.sigma_xy_mm[1:]) ** 2, axis=1))))
     assert abs(pred.sigma_um_median / measured - 1.0) < 0.2, (pred.sigma_um_median, measured)
 

@@ -77,3 +77,24 @@ def test_noise_variance_counts_degrees_of_freedom():
     assert noise_variance(90.0, 100, 10) == pytest.approx(1.0)
     with pytest.raises(DegenerateGeometryError, match="no redundancy"):
         noise_variance(1.0, 10, 10)
+
+
+def test_the_line_inverse_is_the_block_inverse_with_one_unknown_per_view():
+    """One uncertainty for every D: the scalar arrowhead of a line is the block arrowhead of b = 1 (the
+    planar path's), for the covariances and the intrinsics' sensitivity alike."""
+    from lps_gui.core.block_arrowhead import block_arrowhead_inverse, block_intrinsics_sensitivity
+
+    rng = np.random.default_rng(7)
+    A, B, D = random_arrowhead(rng)
+    free = np.ones(D.size, bool)
+    free[[0, 5]] = False
+    line = arrowhead_inverse(A, B, D, free)
+    block = block_arrowhead_inverse(A, B[:, None, :], D[:, None, None], free)
+    assert np.allclose(block.cov_view()[:, 0, 0], line.var_s(), rtol=1e-12, atol=0)
+    L = rng.normal(size=(3, D.size))
+    direct = np.einsum("mk,k,nk->mn", L, line.D_inv, L) + (L @ line.W) @ line.S_inv @ (L @ line.W).T
+    assert np.allclose(block.functional_covariance(L[:, :, None]), direct, rtol=1e-12)
+    cross_theta, cross_s = rng.normal(size=(A.shape[0], 9)), rng.normal(size=(D.size, 9))
+    _, G_s = intrinsics_sensitivity(line, cross_theta, cross_s)
+    assert np.allclose(block_intrinsics_sensitivity(block, cross_theta, cross_s[:, None, :])[:, 0], G_s, rtol=1e-10,
+                       atol=1e-14 * np.abs(G_s).max())

@@ -6,11 +6,9 @@ import json
 import numpy as np
 import pytest
 
-pytest.importorskip("lps_gui.capture.engine")
-
-from lps_gui.core.compensation import CompensationTable  # noqa: E402
-from lps_gui.io.compensation_file import write_table  # noqa: E402
-from tests.gui.test_capture_flow import SMALL_PLAN, capture_window  # noqa: E402
+from lps_gui.core.compensation import CompensationTable
+from lps_gui.io.compensation_file import write_table
+from tests.gui.test_capture_flow import SMALL_PLAN, capture_window
 
 pytestmark = pytest.mark.gui
 

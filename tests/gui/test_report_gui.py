@@ -12,7 +12,6 @@ pytestmark = pytest.mark.gui
 
 
 def test_capture_panel_writes_spec_environment_identification(qtbot, make_window, tmp_path):
-    pytest.importorskip("lps_gui.capture.engine")
     from lps_gui.core.clock import SimClock
     from tests.gui.conftest import connect_sim
 

@@ -1,7 +1,9 @@
 """Jobs run blocking work in a thread, report progress, cancel, and turn errors into one line."""
 from __future__ import annotations
 
+import gc
 import threading
+import weakref
 
 import pytest
 
@@ -70,3 +72,18 @@ def test_functions_without_cancel_get_only_what_they_accept(qtbot):
         job.start()
     assert got.args[0] == 42
     job.wait()
+
+
+def test_a_finished_job_is_freed_with_its_thread_by_reference_counting(qtbot):
+    """No job <-> thread cycle: the QThread is never left to the cyclic collector (any thread's, at any time)."""
+    gc.disable()
+    try:
+        job = Job("nothing", lambda: None, pass_progress=False)
+        with qtbot.waitSignal(job.finished, timeout=10000):
+            job.start()
+        assert job._thread.isFinished()  # waited for on the GUI thread before finished() was passed on
+        thread = weakref.ref(job._thread)
+        del job
+        assert thread() is None
+    finally:
+        gc.enable()

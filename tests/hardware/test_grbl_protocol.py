@@ -4,7 +4,7 @@ from __future__ import annotations
 import pytest
 
 from lps_gui.hardware.grbl import codes
-from lps_gui.hardware.grbl.gcode import CodeError, clean_line, parse_block
+from lps_gui.hardware.grbl.gcode import CodeError, ParserState, check_block, clean_line
 from lps_gui.hardware.grbl.protocol import (
     StatusReport,
     classify,
@@ -112,27 +112,43 @@ def test_clean_line_like_protocol_c():
     assert clean_line("G1 X" + "1" * 100)[1] is True
 
 
+def _check(text: str, jog: bool = False):
+    """A block checked against the power-up parser state (G0 G54 G17 G21 G90 G94, at machine 0)."""
+    block = check_block(text, ParserState(), [[0.0, 0.0, 0.0] for _ in range(8)], jog=jog)
+    if jog:
+        block.check_jog()
+    return block
+
+
 @pytest.mark.parametrize(
     "text,jog,code",
-    [
-        ("1X", False, 1), ("GX", False, 2), ("G2X1Y1R1", False, 20), ("G0G1X1", False, 21),
-        ("G1X1X2", False, 25), ("G4", False, 28), ("G1X1I2", False, 36), ("G4P1X1", False, 31),
-        ("X1", True, 22), ("F100", True, 26), ("G1X1F100", True, 16), ("M3X1F10", True, 16),
-        ("X1F10S5", True, 36), ("A1", False, 20),
+    [  # gcode.c gc_execute_line(): the first check that fails names the error
+        ("1X", False, 1), ("GX", False, 2), ("G2X1Y1R1", False, 22), ("G2X1Y1F100", False, 35),
+        ("G2Z1F100", False, 32), ("G2X0Y0R1F100", False, 33), ("G2X10R1F100", False, 34),
+        ("G0G1X1", False, 24), ("G17G18", False, 21), ("M5.5", False, 23), ("M3M5", False, 21),
+        ("G10L20P1G0X1", False, 24), ("G1X1X2", False, 25), ("G4", False, 28), ("G1X1I2F1", False, 36),
+        ("G80X1", False, 31), ("G59.1", False, 23), ("G10L20P7X0", False, 29), ("G10P1X0", False, 20),
+        ("G10L2X0R1", False, 20), ("G10L20P1", False, 26), ("G92", False, 26), ("G53G2X1", False, 30),
+        ("T256", False, 38), ("N10000001", False, 27), ("F-1", False, 4), ("M7", False, 20),
+        ("X1", True, 22), ("G1X1F100", True, 16), ("M3X1F10", True, 16),
+        ("X1F10S5", True, 36), ("A1", False, 20), ("G43X1", False, 20), ("G43.1X1", False, 37),
     ],
 )
 def test_gcode_errors_match_grbl(text, jog, code):
     with pytest.raises(CodeError) as e:
-        parse_block(text, jog=jog)
+        _check(text, jog=jog)
     assert e.value.code == code
 
 
 def test_gcode_accepts_what_a_stage_needs():
-    b = parse_block("G90G21G1X10.5F600")
-    assert b.g == {"distance": 90.0, "units": 21.0, "motion": 1.0} and b.axes == {"X": 10.5}
-    j = parse_block("G91G21X-0.5F1000", jog=True)
-    assert j.axes == {"X": -0.5} and j.words["F"] == 1000.0
-    assert parse_block("G4P0.01").words["P"] == 0.01
+    b = _check("G90G21G1X10.5F600")
+    assert (b.modal.distance, b.modal.units, b.modal.motion) == (90, 21, 1) and b.axis_words == {0: 10.5}
+    assert b.xyz == [10.5, 0.0, 0.0] and b.f == 600.0
+    j = _check("G91G21X-0.5F1000", jog=True)
+    assert j.axis_words == {0: -0.5} and j.f == 1000.0 and j.xyz == [-0.5, 0.0, 0.0]
+    assert _check("G4P0.01").p == 0.01
+    assert _check("G4P0X441").xyz == [441.0, 0.0, 0.0]  # a dwell and a move in one block (G0 modal)
+    assert _check("G10L20P0X0").coord_index == 0 and _check("G10L20X0").coord_index == 0  # P0 / no P: the active system
 
 
 def test_offsets_and_the_active_work_system_are_parsed():

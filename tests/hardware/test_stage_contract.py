@@ -9,10 +9,11 @@ import pytest
 
 from lps_gui.errors import HardwareError
 from lps_gui.hardware.grbl.codes import GrblError
-from lps_gui.hardware.grbl.driver import GrblStage
 from lps_gui.hardware.grbl.emulator import GrblEmulator
 from lps_gui.hardware.sim_stage import SimulatedStage
 from lps_gui.hardware.stage import Stage, StageEvent
+
+from tests.hardware.grbl_port import stepped_stage
 
 TRAVEL = (0.0, 100.0)
 
@@ -25,8 +26,8 @@ def stage(request):
         yield st
         st.disconnect()
         return
-    with GrblEmulator(SimulatedStage(travel_mm=TRAVEL, start_mm=10.0), time_scale=50.0) as emu:
-        st = GrblStage(emu.path, timeout_s=1.0, poll_interval_s=0.01)
+    with GrblEmulator(SimulatedStage(travel_mm=TRAVEL, start_mm=10.0), stepped=True) as emu:
+        st = stepped_stage(emu, timeout_s=2.0, poll_interval_s=0.01)  # time passes only while a call waits
         st.connect()
         yield st
         st.disconnect()

@@ -78,6 +78,55 @@ def test_rerun_detects_only_new_views(session, monkeypatch):
     assert "images/extra.png" in table.names and not table.failed
 
 
+def _spy(monkeypatch) -> list[list[str]]:
+    calls: list[list[str]] = []
+    real = detect_mod.run_detection
+    monkeypatch.setattr(detect_mod, "run_detection", lambda jobs, *a, **k: calls.append([j.name for j in jobs]) or real(jobs, *a, **k))
+    return calls
+
+
+def test_a_replaced_image_is_detected_again_without_force(session, monkeypatch, capsys):
+    folder, truth = session
+    detect_session(folder, workers=1)
+    recs = Session.open(folder).records()
+    calls = _spy(monkeypatch)
+    shutil.copy(folder / recs[4].file, folder / recs[3].file)  # captures.jsonl unchanged, the image is not
+    assert lps_main(["detect", str(folder)]) == 3
+    assert calls == [[recs[3].file]]  # only the replaced view
+    assert "up to date" not in capsys.readouterr().out
+    table = read_corners_vnl(folder / "corners.vnl", SPEC.rig.board.n_corners)
+    assert "sha256" in table.failed[recs[3].file]  # the image differs from captures.jsonl: no corners from it
+    assert not np.isfinite(table.corners_px[3]).any()
+    ok = [i for i in range(12) if i != 3]
+    assert rms(table.corners_px[ok], truth[ok]) < 0.05
+
+
+def test_a_touched_image_with_the_same_bytes_keeps_its_corners(session, monkeypatch):
+    import os
+
+    folder, _ = session
+    detect_session(folder, workers=1)
+    recs = Session.open(folder).records()
+    st = os.stat(folder / recs[2].file)
+    os.utime(folder / recs[2].file, ns=(st.st_atime_ns, st.st_mtime_ns + 10**9))
+    calls = _spy(monkeypatch)
+    assert detect_session(folder, workers=1).meta.get("up_to_date") == "yes"  # hashed: the same image
+    assert calls == []
+
+
+def test_corners_without_stat_lines_are_checked_by_hash(session, monkeypatch):
+    folder, _ = session
+    detect_session(folder, workers=1)
+    path = folder / "corners.vnl"
+    path.write_text("".join(ln for ln in path.read_text().splitlines(True) if not ln.startswith("## stat ")))
+    recs = Session.open(folder).records()
+    calls = _spy(monkeypatch)
+    assert detect_session(folder, workers=1).meta.get("up_to_date") == "yes"  # an older corners.vnl: hashes agree
+    shutil.copy(folder / recs[1].file, folder / recs[6].file)
+    detect_session(folder, workers=1)
+    assert calls == [[recs[6].file]]
+
+
 def test_bad_images_are_listed_with_reasons_and_the_run_goes_on(session, capsys):
     folder, truth = session
     recs = Session.open(folder).records()

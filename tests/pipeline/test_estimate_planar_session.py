@@ -74,7 +74,8 @@ def test_report_text_holds_squareness(planar_session):
     rows = {row.name: row for row in planar_summary_rows(r)}
     sq = rows["Squareness (angle +X to +Y minus 90\u00b0)"]
     assert sq.value == pytest.approx(r["figures"]["planar"]["squareness_urad"])
-    assert "U(k=2)" in sq.note
+    k2 = (r.get("uncertainty") or {}).get("figures_k2") or {}
+    assert sq.u_k2 == pytest.approx(k2.get("squareness_urad", 2 * r["figures"]["planar"]["squareness_sigma_urad"]))
 
 
 def test_hybrid_on_a_planar_session_is_a_one_line_error(planar_session, capsys):

@@ -48,7 +48,7 @@ def test_fewer_runs_are_indicative_and_unresolved_figures_are_not_findings(tmp_p
     assert all("FAIL" not in c.verdict() for c in checks)
     rows = {r.name: r for r in extremes_rows(results)}
     # one run: v2 per-view sigma ~13 um over 21 targets cannot resolve the paper rig's few-um v2 straightness
-    assert rows["Max straightness v2 (peak-to-valley)"].text().startswith("not resolved (\u03c3")
+    assert rows["Max straightness v2 (peak-to-valley)"].text().startswith("not resolved (noise p-v")
     assert not rows["Max straightness v1 (peak-to-valley)"].unresolved
     for name in ("roll", "pitch"):
         assert rows[f"Max |{name}|"].text().startswith("not resolved")

@@ -15,6 +15,9 @@ from lps_gui.pipeline.uncertainty import uncertainty_of
 from lps_gui.core.simulate import small_spec, true_views
 
 
+ENVIRONMENT = {"board_temperature_c": 21.0, "board_cte_ppm_per_k": 10.0, "square_mm_uncertainty_um": 0.2}
+
+
 def make_results(runs: int = 2, directions: str = "both", views: int = 12, seed: int = 3) -> tuple[dict, dict]:
     """(results dict, session truth) for a small bidirectional simulated session."""
     spec = small_spec(seed=seed, views=views, directions=directions, runs=runs)
@@ -64,7 +67,7 @@ def make_results(runs: int = 2, directions: str = "both", views: int = 12, seed:
         "timings_s": {"total": 1.0},
         "truth_comparison": {"position_rms_error_um": 0.5},
     }
-    env = {"board_temperature_c": 21.0, "board_cte_ppm_per_k": 10.0, "square_mm_uncertainty_um": 0.2}
+    env = ENVIRONMENT
     results["environment"] = thermal_record(Board(9, 6, 20.0), Environment.from_dict(env))
     results["uncertainty"] = uncertainty_of(results, Environment.from_dict(env), 20.0)
     return results, truth
@@ -73,3 +76,41 @@ def make_results(runs: int = 2, directions: str = "both", views: int = 12, seed:
 @pytest.fixture
 def results_and_truth():
     return make_results()
+
+
+def with_unresolved_extremes(results: dict) -> dict:
+    """The results with straightness, image rotation and angles figures as `lps demo --quick` gives them.
+
+    Every one is "not resolved" with a wide noise bound: the longest cells of the
+    report's "Measured figures" table (the demo's page 2 cut them before the layout check).
+    """
+    figs = results["figures"]
+    figs["straightness"] = {"basis": "board plane, constant orientation (SPEC 11)",
+                            "v1": {"span_um": 3.53, "sigma_um": 1.33, "noise_span_um": 7.57, "n_targets": 12,
+                                   "resolved": False},
+                            "v2": {"span_um": 29.3, "sigma_um": 10.8, "noise_span_um": 61.4, "n_targets": 12,
+                                   "resolved": False}}
+    figs["image_rotation"] = {"span_urad": 63.9, "sigma_urad": 22.1, "noise_span_urad": 126.3, "n_targets": 12,
+                              "resolved": False}
+    figs["angles_resolution"] = {name: {"max_abs_urad": v, "noise_max_abs_urad": n, "resolved": False}
+                                 for name, v, n in (("roll", 1454.3, 2320.5), ("pitch", 704.5, 1671.2),
+                                                    ("yaw", 88.2, 168.4))}
+    figs["straightness"]["v1"].update(span_um=12.5, resolved=True)  # one resolved p-v: printed with its U
+    env = Environment.from_dict(ENVIRONMENT)
+    results["uncertainty"] = uncertainty_of(results, env, 20.0)  # the per-figure U of the figures just added
+    return results
+
+
+def write_session(folder, results: dict, truth: dict | None = None, spec: dict | None = None):
+    """A session folder holding session.json (truth, stage spec) and results.json: what the reports read."""
+    import json
+
+    folder.mkdir(parents=True)
+    meta = {"format": "lps-session/1", "camera": {"name": "simulated"}, "stage": {"name": "sim"}}
+    if truth:
+        meta["truth"] = truth
+    if spec:
+        meta["stage_spec"] = spec
+    (folder / "session.json").write_text(json.dumps(meta))
+    (folder / "results.json").write_text(json.dumps(results))
+    return folder

@@ -30,8 +30,11 @@ def pair(tmp_path_factory):
 def test_rows_figure_and_pdf(pair, tmp_path):
     (bdir, before), (adir, after) = pair
     rows = comparison_rows(before, after)
-    assert rows[0][0].startswith("positioning accuracy error E")
-    assert float(rows[0][3].rstrip("x")) == pytest.approx(improvement_factor(before, after), rel=0.06)
+    assert rows[0][0] == "ISO 230-2 Systematic deviation E (bidirectional)"  # the main report's name
+    ratio, u_ratio = rows[0][3].split(" \u00b1 ")
+    assert float(ratio.rstrip("x")) == pytest.approx(improvement_factor(before, after), rel=0.06)
+    assert float(u_ratio) > 0  # the improvement carries its U
+    assert all(" \u00b1 " in c for r in rows for c in r[1:3] if c != "\u2014")  # U on every figure
     assert improvement_factor(before, after) > 5 and true_E_um(before) > 5 * true_E_um(after)
     fig = comparison_figure(before, after)
     assert {s.label for s in fig.series} == {"as found forward \u2191", "as found backward \u2193",
@@ -40,3 +43,28 @@ def test_rows_figure_and_pdf(pair, tmp_path):
     assert path.read_bytes().startswith(b"%PDF")
     with pytest.raises(InputError, match="folder not found"):
         write_comparison(bdir, adir, tmp_path / "nope" / "c.pdf")
+
+
+def test_compare_names_u_verdicts_and_labels_true_against_measured(tmp_path):
+    import json
+
+    from tests.report.conftest import make_results
+    from tests.report.test_layout_fit import SPEC, _session
+
+    before, truth_b = make_results(seed=3)
+    after, truth_a = make_results(seed=4)
+    bdir = _session(tmp_path / "b", before, truth_b, SPEC)
+    adir = _session(tmp_path / "a", after, truth_a, SPEC)
+    from lps_gui.report.compare import compare_rows, verdict_rows
+
+    rows = {r.name: r for r in compare_rows(before, after)}
+    e = rows["ISO 230-2 Systematic deviation E (bidirectional)"]
+    assert e.u_before == before["uncertainty"]["figures_k2"]["E_um"] and e.u_after == after["uncertainty"]["figures_k2"]["E_um"]
+    assert e.u_ratio == pytest.approx(e.ratio * ((e.u_before / e.before) ** 2 + (e.u_after / e.after) ** 2) ** 0.5)
+    verdict = verdict_rows(before, after, SPEC, SPEC)
+    assert [r[0] for r in verdict] == ["Positional accuracy", "Repeatability", "Straight-line accuracy"]
+    assert verdict[0][1].startswith("A/2 = ") and " \u00b1 " in verdict[0][1] and verdict[0][2].startswith("A/2 = ")
+    clipped: list[str] = []
+    path = write_comparison(bdir, adir, tmp_path / "c.pdf", clipped)
+    assert clipped == [] and path.exists()
+    assert json.loads((bdir / "results.json").read_text())["figures"]  # inputs untouched

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from lps_gui.report.summary import (extremes_rows, fmt, intrinsics_rows, iso_rows, outlier_rows, position_table,
                                     spec_checks, summary_rows, title_rows, truth_rows)
@@ -142,3 +143,15 @@ def test_verdict_decision_rule_and_indicative_runs():
     fail = verdicts(results, {"accuracy_um": (a_half - U / 2) / 2})[0]
     assert fail.verdict == "FAIL" and fail.color == "#c00000"
     assert verdicts(results, None) == []
+
+
+@pytest.mark.parametrize("env, why", [({}, "board temperature and expansion coefficient not recorded"),
+                                      ({"board_temperature_c": 21.0}, "board expansion coefficient not recorded"),
+                                      ({"board_cte_ppm_per_k": 23.0}, "board temperature not recorded"),
+                                      ({"board_temperature_c": 20.0, "board_cte_ppm_per_k": 23.0},
+                                       "the board was at 20 \u00b0C")])
+def test_no_thermal_correction_says_which_case_applies(env, why):
+    from lps_gui.report.budget_table import environment_rows
+
+    rows = dict(environment_rows({"environment": env}))
+    assert rows["Thermal correction applied"] == f"none: {why}"

@@ -140,30 +140,43 @@ def format_setting(number: int, value: float) -> str:
     return f"${number}={int(round(value))}" if number in INTEGER_SETTINGS else f"${number}={value:.3f}"
 
 
-MAX_STEP_RATE_HZ = 30000  # config.h MAX_STEP_RATE_HZ: $100 x $110 beyond it is error:12
+BOOLEAN_SETTINGS = frozenset({4, 5, 6, 13, 20, 21, 22, 32})  # settings.c stores them as flags: any non-zero is 1
 
 
 def check_setting(settings: dict[int, float], number: int, value: float) -> None:
-    """Raise GrblError like ``settings_store_global_setting`` would for ``$number=value``.
+    """Raise GrblError like settings.c ``settings_store_global_setting`` would for ``$number=value``.
 
-    Unknown number: error:3; negative: error:4; ``$0`` < 3 us: error:6; a step
-    rate beyond 30 kHz: error:12; soft limits without homing: error:10.
+    Negative: error:4 (checked first); unknown number: error:3; ``$0`` below
+    3 us: error:6; soft limits without homing: error:10. The step-rate check
+    (error:12) is compiled only with MAX_STEP_RATE_HZ, which stock config.h
+    leaves commented out, so ``$110=100000`` is accepted like on the firmware.
     """
     context = f"${number}={value:g}"
-    if number not in SETTINGS:
-        raise GrblError("error", 3, context)
     if value < 0:
         raise GrblError("error", 4, context)
-    if number == 0 and value < 3:
+    if number not in SETTINGS:
+        raise GrblError("error", 3, context)
+    if number == 0 and int(value) < 3:
         raise GrblError("error", 6, context)
-    if 100 <= number <= 112:
-        axis = number % 10
-        steps = value if number < 110 else settings.get(100 + axis, 0.0)
-        rate = value if number >= 110 else settings.get(110 + axis, 0.0)
-        if steps * rate / 60.0 > MAX_STEP_RATE_HZ:
-            raise GrblError("error", 12, context)
-    if number == 20 and value and not settings.get(22):
+    if number == 20 and int(value) and not settings.get(22):
         raise GrblError("error", 10, context)
+
+
+def stored_settings(number: int, value: float) -> dict[int, float]:
+    """What settings.c stores for an accepted ``$number=value``: the value and the settings it forces.
+
+    Integer settings keep ``trunc(value)``, flags 0 or 1; ``$22=0`` also clears
+    ``$20`` ("Force disable soft-limits"). The emulator's stage and the
+    driver's cache both apply this, so they agree with the firmware.
+    """
+    if number in BOOLEAN_SETTINGS:
+        value = float(bool(int(value)))
+    elif number in INTEGER_SETTINGS - {30, 31}:  # $30/$31 are floats printed without decimals
+        value = float(int(value))
+    out = {number: float(value)}
+    if number == 22 and not value:
+        out[20] = 0.0
+    return out
 
 
 class GrblError(HardwareError):

@@ -28,7 +28,7 @@ import time
 from typing import Any
 
 from lps_gui.errors import HardwareError
-from lps_gui.hardware.grbl.codes import GrblError, format_setting, setting_info
+from lps_gui.hardware.grbl.codes import GrblError, format_setting, setting_info, stored_settings
 from lps_gui.hardware.grbl.link import ControllerReset, GrblLink, Pending
 from lps_gui.hardware.grbl.protocol import (
     MM_PER_INCH,
@@ -49,6 +49,7 @@ RESETS_AFTER_OK = ("[MSG:Disabled]", "[MSG:Restoring defaults]")  # system.c: mc
 CRITICAL_ALARMS = (1, 2)  # protocol_exec_rt_system(): hard/soft limit block everything until a reset
 SELF_RESET_ALARMS = (3, 6, 7, 8, 9, 10)  # raised with mc_reset(): GRBL re-initializes on its own
 HELD_STATES = ("Hold", "Door")  # protocol_exec_rt_suspend(): no line is read until resumed
+MOVING_STATES = ("Run", "Jog")  # a line may wait for planner space (mc_line) or the end of motion (G4)
 UNLOCK_MESSAGE = "'$H'|'$X' to unlock"
 __all__ = ["ControllerReset", "GrblStage"]
 
@@ -99,7 +100,10 @@ class GrblStage(Stage):
         self._held = False
         self._locked = False
         self._homing = False
+        self._reset_ready = False  # [MSG:Reset to continue] seen: a reset now is not lost
         self._last_state = ""
+        self._idle_since: float | None = None  # Idle seen while a dwell is in flight
+        self._last_busy_pos: tuple | None = None
 
     @property
     def port_name(self) -> str:
@@ -177,6 +181,7 @@ class GrblStage(Stage):
             self._alarm_code = code
             self._locked = True
             with self.link.cond:
+                self._reset_ready = self._reset_ready and code not in CRITICAL_ALARMS
                 self._critical = self._critical or code in CRITICAL_ALARMS
                 self._reset_due = self._reset_due or code in SELF_RESET_ALARMS
             err = GrblError("alarm", code, f"GRBL on {self.port_name}")
@@ -184,7 +189,7 @@ class GrblStage(Stage):
             self.events.emit(StageEvent("alarm", code=msg.code, text=str(err)))
         elif kind == "banner":
             self.version = msg.text
-            self._critical = self._reset_due = self._held = False
+            self._critical = self._reset_due = self._held = self._reset_ready = False
             self.link.fail_pending(ControllerReset(
                 f"GRBL on {self.port_name} was reset while a command was in flight; check the stage state"))
             with self.link.cond:
@@ -195,7 +200,7 @@ class GrblStage(Stage):
             if msg.text == UNLOCK_MESSAGE:
                 self._locked = True
             if msg.text == "Reset to continue":
-                self._critical = True
+                self._critical = self._reset_ready = True
                 with self.link.cond:
                     self.link.cond.notify_all()
             self.events.emit(StageEvent("message", text=msg.text))
@@ -231,23 +236,24 @@ class GrblStage(Stage):
             self.events.emit(StageEvent("state", text=r.state))
 
     # ------------------------------------------------------------------ lines
-    def send(self, line: str, timeout_s: float | None = None) -> Pending:
+    def send(self, line: str, timeout_s: float | None = None, refuse_in_hold: bool = True) -> Pending:
         """Queue a line with character counting; see :meth:`GrblLink.send`.
 
         Refused while GRBL would not read it: in a critical alarm (its reset flushes
-        the line unanswered) and in a feed hold (answered only after ``~``). After
-        an alarm that resets GRBL by itself, the line waits for the banner (sent
-        earlier, the reset would flush it).
+        the line unanswered) and, unless ``refuse_in_hold`` is off (the rest of a
+        stream that began before the hold), in a feed hold (answered only after
+        ``~``). After an alarm that resets GRBL by itself, the line waits for the
+        banner (sent earlier, the reset would flush it).
         """
         self.require_connected()
         self._refuse_if_critical(line)
         if self._reset_due:
             self.link.wait_for(lambda: not self._reset_due, self.timeout_s,
                                f"no reset banner within {self.timeout_s:g} s after ALARM:{self._alarm_code}; reset the controller")
-        if self._held and self.status().state in HELD_STATES:
+        if refuse_in_hold and self._held and self.status().state in HELD_STATES:
             raise HardwareError(f"GRBL on {self.port_name} is in a feed hold: {line.strip()!r} not sent; "
                                 f"resume (~) or reset the controller first")
-        return self.link.send(line, timeout_s)
+        return self.link.send(line, timeout_s, keep_waiting=self._still_busy)
 
     def _refuse_if_critical(self, what: str) -> None:
         if self._critical:
@@ -256,12 +262,36 @@ class GrblStage(Stage):
                 f"GRBL on {self.port_name}: {GrblError('alarm', code).args[0].split('.')[0]} needs a reset "
                 f"('Reset to continue'): {what.strip()!r} not sent; reset the controller, then unlock ($X) or home ($H)")
 
-    def _still_held(self) -> bool:
-        """A reply is overdue: is GRBL holding it back in a feed hold (not a cable fault)?"""
+    def _still_busy(self) -> bool:
+        """A reply is overdue: is GRBL alive and holding it back legitimately (not a cable fault)?
+
+        GRBL answers a line only once it is planned (mc_line() waits for a free
+        planner block), a dwell only after the planner empties and P seconds pass,
+        nothing during a feed hold. A controller that answers ``?`` with Hold or
+        Door, with Run or Jog while its position or feed says it moves, or with
+        Idle while a dwell is in flight (for that dwell's P), is alive: the line
+        waits. Only silence to ``?`` (or a controller idle with nothing to wait
+        for) is a fault.
+        """
         try:
-            return self.status().state in HELD_STATES
+            st = self.status()
         except HardwareError:
             return False
+        if st.state in HELD_STATES or st.state == "Home":
+            self._idle_since = None
+            return True
+        if st.state in MOVING_STATES:
+            moved = st.machine_mm != self._last_busy_pos
+            self._last_busy_pos = st.machine_mm
+            self._idle_since = None
+            return moved or st.feed_mm_min > 0
+        dwell = self.link.dwell_in_flight_s()
+        if st.state not in ("Idle", "Check") or dwell <= 0:
+            return False
+        now = time.monotonic()
+        if self._idle_since is None:
+            self._idle_since = now
+        return now - self._idle_since < dwell
 
     def command(self, line: str, timeout_s: float | None = None) -> list[str]:
         """Send one line and wait for its ``ok`` (send-response); return the lines it printed.
@@ -270,16 +300,23 @@ class GrblStage(Stage):
         ``ok``; then this also waits for the banner, so the next line is not lost.
         """
         n = self._banners
-        lines = self.link.wait_reply(self.send(line, timeout_s), timeout_s, keep_waiting=self._still_held)
+        self._idle_since = None
+        lines = self.link.wait_reply(self.send(line, timeout_s), timeout_s, keep_waiting=self._still_busy)
         if any(ln in RESETS_AFTER_OK for ln in lines):
             self.link.wait_for(lambda: self._banners > n, self.timeout_s, f"no banner after {line!r} within {self.timeout_s:g} s")
         return lines
 
     def stream(self, lines: list[str], timeout_s: float | None = None) -> None:
-        """Stream G-code with character counting; wait for every ``ok``; raise on the first error."""
-        sent = [self.send(ln, timeout_s) for ln in lines if ln.strip()]
+        """Stream G-code with character counting; wait for every ``ok``; raise on the first error.
+
+        A feed hold that begins mid-stream holds the stream (GRBL buffers the
+        rest and runs it after ``~``); a stream is refused only if it starts in a hold.
+        """
+        self._idle_since = None
+        todo = [ln for ln in lines if ln.strip()]
+        sent = [self.send(ln, timeout_s, refuse_in_hold=k == 0) for k, ln in enumerate(todo)]
         for p in sent:
-            self.link.wait_reply(p, timeout_s, keep_waiting=self._still_held)
+            self.link.wait_reply(p, timeout_s, keep_waiting=self._still_busy)
 
     def realtime(self, byte: bytes) -> None:
         """Send a real-time command byte (never counted, acted on at once)."""
@@ -323,10 +360,34 @@ class GrblStage(Stage):
         self._locked = False
 
     def soft_reset(self) -> None:
-        """Ctrl-X and wait for the banner (GRBL raises ALARM:3 if it was moving)."""
+        """Ctrl-X and wait for the banner (GRBL raises ALARM:3 if it was moving).
+
+        After ALARM:1/2, protocol_exec_rt_system() prints the alarm, waits 500 ms
+        (report.c), prints ``[MSG:Reset to continue]`` and then clears the reset
+        flag: a reset sent before that message is lost. So the reset goes out
+        once the message is in (or, if it never comes, after the timeout, and
+        once more if that one brought no banner).
+        """
         n = self._banners
+        if self._critical and not self._reset_ready:
+            try:
+                self.link.wait_for(lambda: self._reset_ready or self._banners > n, self.timeout_s, "")
+            except HardwareError:
+                if self.link.dead is not None:
+                    raise
+        if self._banners > n:
+            self._critical = False
+            return
+        blind = self._critical and not self._reset_ready  # the message never came: this reset may be cleared
+        what = f"no banner within {self.timeout_s:g} s after a soft reset"
         self.realtime(RT_RESET)
-        self.link.wait_for(lambda: self._banners > n, self.timeout_s, f"no banner within {self.timeout_s:g} s after a soft reset")
+        try:
+            self.link.wait_for(lambda: self._banners > n, self.timeout_s, what)
+        except HardwareError:
+            if not blind or self.link.dead is not None:
+                raise
+            self.realtime(RT_RESET)
+            self.link.wait_for(lambda: self._banners > n, self.timeout_s, what)
         self._critical = False
 
     def feed_hold(self) -> None:
@@ -418,7 +479,7 @@ class GrblStage(Stage):
         """``$N=value``, sent only with nothing in flight (EEPROM writes stall GRBL's serial)."""
         self.link.wait_for(lambda: not self.link.in_flight, self.timeout_s, "commands still unanswered before a settings write")
         self.command(format_setting(number, value))
-        self.settings[number] = float(value)
+        self.settings.update(stored_settings(number, value))  # settings.c: $22=0 also clears $20
 
     def describe(self) -> dict:
         d = {**super().describe(), "port": str(self.port_name), "baudrate": self.link.baudrate}

@@ -2,8 +2,11 @@
 
 The pty is raw and non-blocking; a thread reads bytes into the firmware,
 advances the simulated stage's clock ``time_scale`` times faster than real
-time (tests use ~50x; ``lps emulate-grbl`` defaults to 1x, GRBL's own timing)
-and writes what the firmware says. :class:`Faults` switches inject what goes
+time (``lps emulate-grbl`` defaults to 1x, GRBL's own timing) and writes what
+the firmware says. With ``stepped=True`` simulated time moves only when the
+caller says so (:meth:`GrblEmulator.advance`): a test then decides when a move
+ends, an alarm's 500 ms pass or a hold completes, and no outcome depends on
+how fast the machine runs the test. :class:`Faults` switches inject what goes
 wrong with real hardware: a dropped connection, an alarm in the middle of a
 move, error replies, slow replies and garbage bytes; tests flip them while
 the emulator runs.
@@ -39,10 +42,15 @@ class GrblEmulator:
     """
 
     def __init__(self, stage: SimulatedStage | None = None, faults: Faults | None = None, time_scale: float = 1.0,
-                 homing_init_lock: bool = False) -> None:
+                 homing_init_lock: bool = False, stepped: bool = False) -> None:
         self.stage = stage if stage is not None else SimulatedStage()
         self.faults = faults or Faults()
         self.time_scale = float(time_scale)
+        self.stepped = stepped
+        if stepped and not isinstance(self.stage.clock, SimClock):
+            raise ValueError("a stepped GRBL emulator needs a stage on a SimClock")
+        self._lock = threading.RLock()  # the firmware is driven by the serving thread and by advance()
+        self.bytes_in = 0  # bytes read from the port (a stepped test waits until its writes are in)
         self.path = ""
         self.dropped = False
         self.firmware = GrblFirmware(self.stage, self.faults, send=self._send, on_drop=self._drop_now,
@@ -157,20 +165,65 @@ class GrblEmulator:
     def _step(self) -> None:
         busy = self.firmware.busy or bool(self._out)
         r, _, _ = select.select([self._master], [], [], 0.002 if busy else 0.02)
-        if r:
+        with self._lock:
+            if r:
+                self._read_input()
+            now = time.monotonic()
+            if isinstance(self.stage.clock, SimClock) and not self.stepped:
+                self.stage.clock.advance((now - self._last_real) * self.time_scale)
+            self._last_real = now
+            if self._running:
+                self.firmware.poll()
+            self._flush_out()
+
+    def _read_input(self) -> None:
+        """Feed every byte waiting on the pty to the firmware's serial ISR."""
+        while self._master >= 0:
             try:
                 data = os.read(self._master, 4096)
-            except OSError:  # EAGAIN, EINTR, or the pty closing under us
-                data = b""
+            except OSError:  # EAGAIN (nothing left), EINTR, or the pty closing under us
+                return
+            if not data:
+                return
+            self.bytes_in += len(data)
             for b in data:
                 self.firmware.receive(b)
-        now = time.monotonic()
-        if isinstance(self.stage.clock, SimClock):
-            self.stage.clock.advance((now - self._last_real) * self.time_scale)
-        self._last_real = now
-        if self._running:
-            self.firmware.poll()
-        self._flush_out()
+
+    def advance(self, seconds: float, step_s: float = 0.01) -> None:
+        """Stepped clock: let ``seconds`` of simulated time pass, in steps of ``step_s``.
+
+        Bytes already written to the port are read first; after every step the
+        firmware runs (lines waiting for planner space, dwells, alarm delays) and
+        its output is written, as GRBL's main loop would between those instants.
+        """
+        if not self.stepped:
+            raise RuntimeError("advance() needs GrblEmulator(stepped=True)")
+        clock = self.stage.clock
+        end = clock.now() + max(float(seconds), 0.0)
+        with self._lock:
+            while True:
+                self._read_input()
+                if self._running:
+                    self.firmware.poll()
+                self._flush_out()
+                left = end - clock.now()
+                if left <= 1e-12 or not self._running:
+                    break
+                clock.advance(min(step_s, left))
+
+    def settle(self, until_bytes: int | None = None, limit_s: float = 10.0) -> None:
+        """Stepped clock: read what was written and run the firmware once, without time passing.
+
+        ``until_bytes``: first wait (``limit_s`` at most) until that many bytes came
+        in since start: a pty may hand a write to the other side a moment later.
+        """
+        deadline = time.monotonic() + limit_s
+        while until_bytes is not None and self.bytes_in < until_bytes and time.monotonic() < deadline:
+            with self._lock:
+                self._read_input()
+            if self.bytes_in < until_bytes:
+                time.sleep(0.001)
+        self.advance(0.0)
 
 
 def emulated_grbl_stage(time_scale: float = 1.0, faults: Faults | None = None, simulated: SimulatedStage | None = None,

@@ -1,17 +1,24 @@
 """GRBL 1.1h's behaviour, independent of the wire: RX buffer, real-time bytes, lines, states, reports.
 
 :class:`GrblFirmware` is what runs inside the controller, transcribed from
-gnea/grbl (report.c, protocol.c, system.c, gcode.c, jog.c): banner and
-homing-lock message after every reset, ``$``, ``$$``, ``$x=val``, ``$#``, ``$G``,
-``$I``, ``$N``, ``$C``, ``$X``, ``$H``, ``$SLP``, ``$RST=``, ``$J=``, G0/G1/G4 with
-G90/G91/G20/G21/G53, real-time ``?`` ``!`` ``~`` 0x18 0x85, status reports per
-``$10`` with GRBL's WCO/Ov refresh counters, a 128-byte RX buffer that drops
-overflowing bytes, a 15-block planner that makes a line wait, critical alarms
-(1, 2) that ignore everything but a reset. Motion happens in a
-:class:`SimulatedStage`. Machine coordinates are GRBL's homed space (0 at the
-top of the travel, negative below); the G54 offset makes work coordinates
-equal the stage's own coordinates. Multi-axis moves run one axis after the
-other; no arcs, probing, spindle or door.
+gnea/grbl (report.c, protocol.c, system.c, settings.c, gcode.c, jog.c,
+limits.c, motion_control.c; docs/hardware.md lists what was checked where):
+banner and homing-lock message after every reset, ``$``, ``$$``, ``$x=val``,
+``$#``, ``$G``, ``$I``, ``$N``, ``$C``, ``$X``, ``$H``, ``$SLP``, ``$RST=``,
+``$J=``, G-code as gcode.c checks and executes it (G0-G3, G4, G10 L2/L20,
+G17-G19, G20/G21, G28/G30 and their .1, G38.x, G43.1/G49, G53, G54-G59, G80,
+G90/G91, G92/G92.1, G93/G94, M0-M9 modal state), real-time ``?`` ``!`` ``~``
+0x18 0x85, status reports per ``$10`` with GRBL's WCO/Ov refresh counters, a
+128-byte RX buffer that drops overflowing bytes, a 15-block planner that
+makes a line wait, and alarms as protocol.c raises them: ``ALARM:N``, then
+report.c's 500 ms delay; critical ones (1, 2) then print ``[MSG:Reset to
+continue]``, drop any reset that came in the delay and ignore everything but
+a new reset. Motion happens in a :class:`SimulatedStage`. Machine
+coordinates are GRBL's homed space (0 at the top of the travel, negative
+below); G54 is stored as the base, so G54 work coordinates equal the stage's
+own coordinates. Multi-axis moves run one axis after the other; arcs are
+checked along mc_arc()'s segments and end at their target; no probe input
+(G38.2/G38.4 end in ALARM:5), spindle or door.
 
 It writes through a ``send(line)`` callback, so the pty transport
 (``emulator.py``) adds timing and fault injection around it.
@@ -19,12 +26,14 @@ It writes through a ``send(line)`` callback, so the pty transport
 from __future__ import annotations
 
 import logging
+import math
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, Iterator
 
 from lps_gui.hardware.grbl import codes
 from lps_gui.hardware.grbl.codes import GrblError, format_setting
-from lps_gui.hardware.grbl.gcode import Block, CodeError, clean_line, parse_block
+from lps_gui.hardware.grbl import gcode as gc
+from lps_gui.hardware.grbl.gcode import CodeError, ParserState, check_block, clean_line, read_float
 from lps_gui.hardware.grbl.protocol import MM_PER_INCH, StatusReport, format_axes, format_status
 from lps_gui.hardware.sim_stage import PLANNER_BLOCKS, RX_BUFFER_BYTES, SimulatedStage
 from lps_gui.hardware.stage import AXES
@@ -37,7 +46,10 @@ HELP = "[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X $H ~ ! ? ctrl-x]"
 RT_STATUS, RT_HOLD, RT_RESUME, RT_RESET, RT_JOG_CANCEL = 0x3F, 0x21, 0x7E, 0x18, 0x85
 BUSY = ("Run", "Hold", "Jog", "Home", "Door")
 ALARM_REPORT_DELAY_S = 0.5  # report.c report_alarm_message(): delay_ms(500) after ALARM:N
+CRITICAL_ALARMS = (1, 2)  # protocol_exec_rt_system(): hard and soft limit
 WCO_BUSY, WCO_IDLE, OVR_BUSY, OVR_IDLE = 30, 10, 20, 10  # config.h refresh counts
+TRAVEL_EPS_MM = 1e-6  # float noise of offset arithmetic, far below GRBL's step resolution
+Steps = Iterator[None]  # an executing line: each yield waits for simulated time to pass
 
 
 @dataclass
@@ -66,7 +78,7 @@ class GrblFirmware:
     """GRBL 1.1h's serial ISR and protocol loop over a :class:`SimulatedStage`.
 
     Feed received bytes to :meth:`receive`, call :meth:`poll` often (it runs
-    waiting actions and executes complete lines); output goes to ``send``.
+    the executing line and executes complete lines); output goes to ``send``.
     ``on_drop`` is called when the drop-after-lines fault fires.
     ``homing_init_lock`` is config.h's HOMING_INIT_LOCK (stock 1.1h: on): with
     ``$22=1`` the controller powers up in Alarm; off, ``[OPT:]`` carries ``L``.
@@ -81,42 +93,77 @@ class GrblFirmware:
         self._on_drop = on_drop
         self.rx_overflow_bytes = 0  # bytes dropped because the host overran the 128-byte RX buffer
         self.lines_received = 0
+        self.resets_received = 0  # Ctrl-X bytes, and those an alarm's delay swallowed
+        self.resets_lost = 0
         self.halted = False
         self._n_cmd = 0
         self._build_user = ""
         self._initial_settings = dict(stage.settings)
-        self._user = [0.0, 0.0, 0.0]  # G54 shift set by G10 (EEPROM in GRBL: survives resets)
+        self._coords = self._default_coords()  # EEPROM: G54-G59, G28, G30 (machine mm); survives resets
         self._reset_state()
 
     @property
     def busy(self) -> bool:
-        """Something waits on time (a line, a move): poll often."""
-        return self._pending is not None or self._abort_at is not None or self.stage.next_event_s() is not None
+        """Something waits on time (a line, a move, an alarm's delay): poll often."""
+        return (self._pending is not None or self._abort_at is not None or self._critical_msg_at is not None
+                or self.stage.next_event_s() is not None)
 
     @property
     def options(self) -> str:
         """``[OPT:]`` letters: V (variable spindle), L (built without HOMING_INIT_LOCK)."""
         return "V" + ("" if self.homing_init_lock else "L")
 
+    @property
+    def parser(self) -> ParserState:
+        """The G-code parser state (gcode.c gc_state), for tests and the docs' examples."""
+        return self._gc
+
     def poll(self) -> None:
-        """Run the waiting action, fire a due mid-move alarm, execute complete lines.
+        """Run the executing line, fire a due alarm message or self-reset, execute complete lines.
 
         During a feed hold nothing runs: protocol.c calls protocol_execute_realtime()
         at every line end (and mc_line() in its planner-full loop), and that stays
         in protocol_exec_rt_suspend() while sys.suspend is set, so no line is
-        answered until ``~`` (only ``?``, ``~``, ``!`` and Ctrl-X act).
+        answered until ``~`` (only ``?``, ``~``, ``!`` and Ctrl-X act). Asleep,
+        only real-time bytes act until a reset. After an alarm that resets GRBL
+        by itself, no line is read before the reset, which flushes them all.
         """
         self._check_mid_move_alarm()
+        now = self.stage.clock.now()
+        if self._critical_msg_at is not None and now >= self._critical_msg_at:
+            self._critical_msg_at = None
+            self._send("[MSG:Reset to continue]")
         if self._abort_at is not None:
-            if self.stage.clock.now() < self._abort_at:
+            if now < self._abort_at:
                 return
             self._finish_abort()
-        if self._critical or self.halted or self._held():
+        if self._critical or self.halted or self._sleep or self._held():
             return
-        if self._pending is not None and self._pending():
-            self._pending = None
-        while self._pending is None and not self._critical and not self.halted and b"\n" in self._rx.replace(b"\r", b"\n"):
+        if self._pending is not None:
+            self._step_pending()
+        while self._ready() and b"\n" in self._rx.replace(b"\r", b"\n"):
             self._next_line()
+
+    def _ready(self) -> bool:
+        return (self._pending is None and self._abort_at is None and not self._critical and not self.halted
+                and not self._sleep)
+
+    def _step_pending(self) -> None:
+        """Advance the executing line; its ``ok`` when it ends, its error or alarm when it fails."""
+        try:
+            next(self._pending)
+        except StopIteration:
+            self._pending = None
+            self._send("ok")
+        except CodeError as e:
+            self._pending = None
+            self._send(f"error:{e.code}")
+        except GrblError as e:
+            self._pending = None
+            if e.kind == "alarm":
+                self._alarm(e.code, line_open=True)
+            else:
+                self._send(f"error:{e.code}")
 
     def _held(self) -> bool:
         return self.stage.status().state == "Hold"
@@ -127,16 +174,24 @@ class GrblFirmware:
             self.stage.trigger_alarm(0)  # the silent homing lock (no ALARM:N line)
         self.welcome()
 
+    def _default_coords(self) -> list[list[float]]:
+        """What this emulator's EEPROM holds when new: G54 at the base, the rest zero (docs/hardware.md)."""
+        return [list(self._base())] + [[0.0, 0.0, 0.0] for _ in range(7)]
+
     def _reset_state(self) -> None:
+        """main.c's loop after every abort: flags cleared, RX flushed, gc_init(), positions synced."""
         self._rx = bytearray()
-        self._modal = {"motion": 0.0, "distance": 90.0, "units": 21.0, "feed": 0.0}
+        self._gc = ParserState(coord_system=list(self._coords[0]))
+        self._gc.position = self._machine_planned()
+        self._spindle_rpm = 0.0
         self._wco_counter = 0
         self._ovr_counter = 0
         self._critical = False
+        self._critical_msg_at: float | None = None  # report.c's delay before [MSG:Reset to continue]
         self._ok_on_reset = False  # a line was executing when a critical alarm hit: its ok follows the reset
         self._status_in_homing = False  # a '?' during homing is answered when the cycle ends
         self._abort_at: float | None = None  # an alarm's self-reset is due (after report.c's 500 ms delay)
-        self._pending: Callable[[], bool] | None = None
+        self._pending: Steps | None = None
         self._check = False
         self._sleep = False
 
@@ -152,20 +207,24 @@ class GrblFirmware:
             self._send("[MSG:'$H'|'$X' to unlock]")
 
     def _base(self) -> tuple[float, float, float]:
-        """Machine 0 sits at the top of the travel: machine = stage coordinate + base."""
+        """Machine 0 sits at the top of the travel: machine = stage coordinate + base.
+
+        The simulated stage's own work offsets stay zero under the emulator (its
+        coordinates are its machine ones); the firmware keeps GRBL's offsets itself.
+        """
         return (-self.stage.travel_mm[1],) * 3  # type: ignore[return-value]
 
-    def _wco(self) -> tuple[float, float, float]:
-        """G54 offset: the base (work = the stage's coordinates) plus what G10 set since (``_user``)."""
-        return tuple(b + u for b, u in zip(self._base(), self._user))  # type: ignore[return-value]
+    def _machine_planned(self) -> list[float]:
+        """Where the planner will leave each axis, in machine mm (the parser's position when synced)."""
+        return [self.stage.planned_mm(i) + b for i, b in enumerate(self._base())]
 
     def _status_line(self) -> str:
         st = self.stage.status()
         state = self._state()
         sub = st.substate if state == st.state else None
-        wco = self._wco()
+        wco = self._gc.wco()
         mask = int(self.stage.settings[10])
-        work = tuple(s - u for s, u in zip(st.work_mm, self._user))
+        mpos = tuple(p + b for p, b in zip(st.machine_mm, self._base()))
         busy = state in BUSY
         show_wco = self._wco_counter == 0
         if show_wco:
@@ -179,17 +238,20 @@ class GrblFirmware:
             self._ovr_counter = (OVR_BUSY if busy else OVR_IDLE) - 1
         else:
             self._ovr_counter -= 1
+        m = self._gc.modal
+        accessories = {3: "S", 4: "C"}.get(m.spindle, "") + ("F" if m.coolant == 8 else "")
         report = StatusReport(
             state=state,
             substate=sub,
-            mpos=tuple(w + o for w, o in zip(work, wco)) if mask & codes.STATUS_MASK_MPOS else None,
-            wpos=None if mask & codes.STATUS_MASK_MPOS else tuple(work),
+            mpos=mpos if mask & codes.STATUS_MASK_MPOS else None,
+            wpos=None if mask & codes.STATUS_MASK_MPOS else tuple(p - o for p, o in zip(mpos, wco)),
             wco=wco if show_wco else None,
             buffer=(st.buffer[0], RX_BUFFER_BYTES - len(self._rx)) if mask & codes.STATUS_MASK_BUFFER else None,
             feed=st.feed_mm_min,
-            spindle=0.0,
+            spindle=self._spindle_rpm,
             pins="X" if self._critical and self.stage.alarm_code == 1 else "",
             overrides=(100, 100, 100) if show_ovr else None,
+            accessories=accessories,
         )
         return format_status(report, inches=bool(self.stage.settings[13]))
 
@@ -197,13 +259,17 @@ class GrblFirmware:
     def receive(self, b: int) -> None:
         """GRBL's serial ISR: real-time bytes act at once, the rest goes to the RX buffer."""
         if b == RT_RESET:
-            self._soft_reset()
+            self.resets_received += 1
+            if self._abort_at is not None or self._critical_msg_at is not None:
+                self.resets_lost += 1  # mc_reset() already flagged the reset; protocol_exec_rt_system() clears it for 1/2
+            else:
+                self._soft_reset()
         elif b == RT_STATUS:
-            if self._abort_at is not None:
+            if self._abort_at is not None or self._critical:
                 pass  # the flag is set, then cleared by the reset (main.c): this '?' is lost
             elif self.stage.status().state == "Home":
                 self._status_in_homing = True  # flag kept; limits_go_home() never reports
-            elif not self._critical:
+            else:
                 self._send(self._status_line())
         elif b == RT_HOLD:
             if not self._critical and self.stage.status().state != "Home":
@@ -253,23 +319,26 @@ class GrblFirmware:
     def _alarm(self, code: int, line_open: bool) -> None:
         """An alarm as protocol_exec_rt_system() handles it; ``line_open``: a line is executing.
 
-        Every alarm but the probe ones comes with mc_reset() (limits.c, motion_control.c):
-        hard/soft limit (1, 2) are critical, everything but a reset is ignored and the
-        line's ``ok`` follows the user's reset; the others (3, 6-10) abort at once:
-        ``ALARM:N``, 500 ms (report.c) in which a ``?`` is lost, the executing line's
-        ``ok``, the banner and the unlock message.
+        ``ALARM:N``, then report.c's 500 ms delay. Every alarm but the probe ones
+        comes with mc_reset() (limits.c, motion_control.c). Hard/soft limit (1, 2)
+        are critical: after the delay ``[MSG:Reset to continue]``, the reset flag
+        is cleared (a reset sent in the delay is lost), and everything but a new
+        reset is ignored; the line's ``ok`` follows that reset. The others (3,
+        6-10) reset by themselves after the delay (a ``?`` in it is lost): the
+        executing line's ``ok``, the banner and the unlock message.
         """
         if self.stage.alarm_code != code:
             self.stage.trigger_alarm(code)
         self._pending = None
         self._send(f"ALARM:{code}")
-        if code in (1, 2):  # critical: ignore everything until a reset
+        due = self.stage.clock.now() + ALARM_REPORT_DELAY_S
+        if code in CRITICAL_ALARMS:
             self._critical = True
             self._ok_on_reset = line_open
-            self._send("[MSG:Reset to continue]")
+            self._critical_msg_at = due
         elif code not in (4, 5):  # probe failures alone do not reset
             self._ok_on_reset = line_open
-            self._abort_at = self.stage.clock.now() + ALARM_REPORT_DELAY_S
+            self._abort_at = due
 
     def _finish_abort(self) -> None:
         """The self-reset after an alarm: the executing line's ``ok``, then main() starts again."""
@@ -300,14 +369,20 @@ class GrblFirmware:
                 self._send(f"error:{f.error_code}")
                 return
         try:
-            self._execute(line)
+            steps = self._execute(line)
         except CodeError as e:
             self._send(f"error:{e.code}")
+            return
         except GrblError as e:
             if e.kind == "alarm":
                 self._alarm(e.code, line_open=True)
             else:
                 self._send(f"error:{e.code}")
+            return
+        if steps is None:
+            return  # answered already (a line followed by a reset)
+        self._pending = steps
+        self._step_pending()
 
     # ------------------------------------------------------------------ commands
     def _state(self) -> str:
@@ -317,241 +392,319 @@ class GrblFirmware:
             return "Sleep"
         return "Check" if self._check and state == "Idle" else state
 
-    def _execute(self, line: str) -> None:
+    def _execute(self, line: str) -> Steps | None:
+        """protocol_main_loop(): an empty line, a ``$`` command, or G-code (locked in Alarm and Jog)."""
         state = self._state()
         if not line:
-            self._send("ok")
-        elif line[0] == "$":
-            self._system(line, state)
-        elif state in ("Alarm", "Jog", "Sleep"):
+            return iter(())
+        if line[0] == "$":
+            return self._system(line, state)
+        if state in ("Alarm", "Jog"):
             raise CodeError(9)
-        else:
-            self._gcode(parse_block(line))
+        if not self._check:
+            self._gc.position = self._machine_planned()
+        block = check_block(line, self._gc, self._coords)
+        return self._run_block(block)
 
-    def _system(self, line: str, state: str) -> None:  # noqa: C901 - one branch per $ command, like system.c
+    def _system(self, line: str, state: str) -> Steps | None:  # noqa: C901 - one branch per $ command, like system.c
+        """system.c system_execute_line(): the ``$`` commands, their state rules and errors."""
         cmd = line[1:]
+        c = cmd[:1]
         if cmd == "":
             self._send(HELP)
-        elif cmd.startswith("J"):
+        elif c == "J":
             if state not in ("Idle", "Jog"):
                 raise CodeError(8)
-            if not cmd.startswith("J="):
+            if cmd[1:2] != "=":
                 raise CodeError(3)
-            self._jog(parse_block(cmd[2:], jog=True))
-            return  # the jog answers once it is planned
-        elif cmd[:1] in ("$", "G", "C", "X"):
+            return self._jog(cmd[2:])
+        elif c in ("$", "G", "C", "X"):
             if len(cmd) != 1:
                 raise CodeError(3)
-            if cmd == "$":
+            if c == "$":
                 if state in ("Run", "Hold"):
                     raise CodeError(8)
                 for n in sorted(self.stage.settings):
                     self._send(format_setting(n, self.stage.settings[n]))
-            elif cmd == "G":
-                m = self._modal
-                self._send(f"[GC:G{int(m['motion'])} G54 G17 G{int(m['units'])} G{int(m['distance'])} G94 M5 M9 T0 F{m['feed']:.0f} S0]")
-            elif cmd == "C":
+            elif c == "G":
+                self._send(self._gcode_modes())
+            elif c == "C":
                 if self._check:
-                    self._check = False
                     self._send("[MSG:Disabled]")
                     self._send("ok")
                     self._soft_reset()
-                    return
+                    return None
                 if state != "Idle":
                     raise CodeError(8)
                 self._check = True
                 self._send("[MSG:Enabled]")
-            elif cmd == "X":
-                if state == "Alarm":
-                    self.stage.unlock()
-                    self._send("[MSG:Caution: Unlocked]")
+            elif state == "Alarm":  # $X
+                self.stage.unlock()
+                self._send("[MSG:Caution: Unlocked]")
         else:
             if state not in ("Idle", "Alarm"):
                 raise CodeError(8)
-            self._system_idle(cmd)
-            return
-        self._send("ok")
+            return self._system_idle(cmd)
+        return iter(())
 
-    def _system_idle(self, cmd: str) -> None:
+    def _gcode_modes(self) -> str:
+        """report.c report_gcode_modes()."""
+        g, m = self._gc, self._gc.modal
+        motion = f"38.{m.motion - 138}" if m.motion in gc.PROBE_MODES else str(m.motion)
+        inches = bool(self.stage.settings[13])
+        feed = f"{g.feed_rate / MM_PER_INCH:.1f}" if inches else f"{g.feed_rate:.0f}"
+        return (f"[GC:G{motion} G{54 + m.coord_select} G{17 + m.plane} G{m.units} G{m.distance} G{m.feed_mode} "
+                f"M{m.spindle} M{m.coolant} T{g.tool} F{feed} S{g.spindle_speed:.0f}]")
+
+    def _system_idle(self, cmd: str) -> Steps | None:
         """``$`` commands allowed only in Idle or Alarm ($#, $H, $SLP, $I, $RST, $N, $x=val)."""
-        if cmd == "#":
-            wco = self._wco()
-            for name in ("G54",):
-                self._send(f"[{name}:{format_axes(wco)}]")
-            for name in ("G55", "G56", "G57", "G58", "G59", "G28", "G30", "G92"):
-                self._send(f"[{name}:0.000,0.000,0.000]")
-            self._send("[TLO:0.000]")
-            self._send("[PRB:0.000,0.000,0.000:0]")
-        elif cmd == "H":
-            self.stage.start_home()  # raises error:5 when $22=0
-            self._pending = self._homing_done
-            return
-        elif cmd == "SLP":  # the line's ok comes first; the sleep runs at the next real-time check
-            self.stage.soft_reset()
+        c = cmd[:1]
+        if c == "#":
+            if len(cmd) != 1:
+                raise CodeError(3)
+            self._ngc_parameters()
+        elif c == "H":
+            if not self.stage.homing_enabled:
+                raise CodeError(5)
+            if len(cmd) != 1:
+                raise CodeError(3)  # HOMING_SINGLE_AXIS_COMMANDS is off in stock config.h
+            self.stage.start_home()
+            return self._homing()
+        elif c == "S":
+            if cmd != "SLP":
+                raise CodeError(3)
+            self.stage.soft_reset()  # the line's ok comes first; the sleep runs at the next real-time check
             self._sleep = True
             self._send("ok")
             self._send("[MSG:Sleeping]")
-            return
-        elif cmd == "I":
-            self._send(f"[VER:{VERSION}.{BUILD}:{self._build_user}]")
-            self._send(f"[OPT:{self.options},{PLANNER_BLOCKS},{RX_BUFFER_BYTES}]")
-        elif cmd.startswith("I="):
-            if len(cmd) - 2 > 79 - 1:
+            return None
+        elif c == "I":
+            if cmd == "I":
+                self._send(f"[VER:{VERSION}.{BUILD}:{self._build_user}]")
+                self._send(f"[OPT:{self.options},{PLANNER_BLOCKS},{RX_BUFFER_BYTES}]")
+            elif cmd[1] != "=":
+                raise CodeError(3)
+            elif len(cmd) - 2 > 79 - 1:
                 raise CodeError(14)
-            self._build_user = cmd[2:]
-        elif cmd.startswith("RST="):
+            else:
+                self._build_user = cmd[2:]
+        elif c == "R":
             if cmd not in ("RST=$", "RST=#", "RST=*"):
                 raise CodeError(3)
             if cmd != "RST=#":
                 self.stage.settings.update(self._initial_settings)
             if cmd != "RST=$":
-                self._user = [0.0, 0.0, 0.0]
+                self._coords = self._default_coords()  # G54 back to the base, by design (docs/hardware.md)
             self._send("[MSG:Restoring defaults]")
             self._send("ok")
             self._soft_reset()
-            return
+            return None
         elif cmd == "N":
             self._send("$N0=")
             self._send("$N1=")
-        elif cmd[:1].isdigit():
-            name, eq, value = cmd.partition("=")
-            if not eq:
-                raise CodeError(3)
-            try:
-                number, val = int(float(name)), float(value)
-            except ValueError:
-                raise CodeError(2) from None
-            if number > 255:
-                raise CodeError(3)
-            self.stage.write_setting(number, val)
         else:
-            raise CodeError(3)
-        self._send("ok")
+            self._store_setting(cmd)
+        return iter(())
 
-    def _homing_done(self) -> bool:
-        """``$H`` ends: a held-back ``?`` is answered (state still Home), then ``ok``.
+    def _store_setting(self, cmd: str) -> None:
+        """system.c's default branch: ``$<number>=<value>`` with its read_float() errors (2, 3)."""
+        got = read_float(cmd, 0)
+        if got is None:
+            raise CodeError(2)
+        number, i = got
+        if cmd[i:i + 1] != "=":
+            raise CodeError(3)
+        got = read_float(cmd, i + 1)
+        if got is None:
+            raise CodeError(2)
+        value, end = got
+        if end != len(cmd) or number > 255:
+            raise CodeError(3)
+        self.stage.write_setting(int(number), value)
+        if int(number) == 13:
+            self._wco_counter = 0  # settings.c: system_flag_wco_change()
+
+    def _ngc_parameters(self) -> None:
+        """report.c report_ngc_parameters(): G54-G59, G28, G30 from EEPROM, G92, TLO, PRB."""
+        inches = bool(self.stage.settings[13])
+        names = ["G54", "G55", "G56", "G57", "G58", "G59", "G28", "G30"]
+        for name, data in zip(names, self._coords):
+            self._send(f"[{name}:{format_axes(tuple(data), inches)}]")
+        self._send(f"[G92:{format_axes(tuple(self._gc.coord_offset), inches)}]")
+        tlo = self._gc.tool_length_offset
+        self._send(f"[TLO:{tlo / MM_PER_INCH:.4f}]" if inches else f"[TLO:{tlo:.3f}]")
+        self._send("[PRB:0.000,0.000,0.000:0]")
+
+    def _homing(self) -> Steps:
+        """``$H`` runs: a held-back ``?`` is answered when it ends (state still Home), then ``ok``.
 
         With the fail-homing fault the cycle stops half-way with ALARM:8/9, and the
         ``ok`` of ``$H`` still comes (system.c returns STATUS_OK after the abort),
-        then the self-reset's banner (limits.c: mc_reset() on a homing failure).
+        after report.c's delay, then the self-reset's banner (limits.c: mc_reset()
+        on a homing failure). Lines sent meanwhile stay in RX and the reset flushes them.
         """
-        code = self.faults.fail_homing
-        progress = self.stage.motion_progress()
-        done = self.stage.status().state != "Home"  # a slow poll may find the cycle over: it fails all the same
-        if code and (done or (progress is not None and progress[0] == "Home" and progress[1] >= 0.5)):
-            self._status_in_homing = False  # the reset clears the pending report
-            self.stage.homed = False
-            self._alarm(int(code), line_open=True)
-            return True
-        if not done:
-            return False
+        while True:
+            code = self.faults.fail_homing
+            progress = self.stage.motion_progress()
+            done = self.stage.status().state != "Home"  # a slow poll may find the cycle over: it fails all the same
+            if code and (done or (progress is not None and progress[0] == "Home" and progress[1] >= 0.5)):
+                self._status_in_homing = False  # the reset clears the pending report
+                self.stage.homed = False
+                raise GrblError("alarm", int(code))
+            if done:
+                break
+            yield
         if self._status_in_homing:
             self._status_in_homing = False
             self._send(self._status_line().replace("<Idle", "<Home", 1))
-        self._send("ok")
-        return True
+        self._gc.position = self._machine_planned()
 
-    # ------------------------------------------------------------------ G-code
-    def _targets(self, block: Block, distance: float) -> dict[int, float]:
-        """Work-coordinate targets (mm) for the axis words of ``block``."""
-        scale = MM_PER_INCH if block.g.get("units", self._modal["units"]) == 20.0 else 1.0
-        out = {}
-        for letter, value in block.axes.items():
-            i = AXES.index(letter)
-            v = value * scale
-            if block.g.get("non_modal") == 53.0:
-                out[i] = v - self._base()[i]
-            elif distance == 91.0:
-                out[i] = self.stage.planned_mm(i) + v
-            else:
-                out[i] = v + self._user[i]
-        return out
+    # ------------------------------------------------------------------ G-code (gcode.c step 4)
+    def _run_block(self, b: gc.Block) -> Steps:  # noqa: C901 - gcode.c's order of execution
+        """Execute a checked block in gcode.c's order: modes, dwell, offsets, motion, program flow."""
+        g = self._gc
+        g.modal.feed_mode, g.feed_rate = b.modal.feed_mode, b.f
+        g.spindle_speed, g.tool = b.s, b.t
+        g.modal.spindle, g.modal.coolant = b.modal.spindle, b.modal.coolant
+        if not self._check:
+            self._spindle_rpm = self._rpm(g.spindle_speed) if g.modal.spindle in (3, 4) else 0.0
+        if b.non_modal == gc.DWELL and not self._check:  # mc_dwell(): sync, then wait P seconds
+            yield from self._synchronize()
+            end = self.stage.clock.now() + b.p
+            while self.stage.clock.now() < end:
+                yield
+        g.modal.plane, g.modal.units = b.modal.plane, b.modal.units
+        if b.axis_command == gc.AXIS_TLO:
+            g.modal.tool_length = b.modal.tool_length
+            tlo = 0.0 if b.modal.tool_length == "G49" else b.xyz[gc.Z]
+            if tlo != g.tool_length_offset:
+                g.tool_length_offset = tlo
+                yield from self._wco_changed()
+        if g.modal.coord_select != b.modal.coord_select:
+            g.modal.coord_select, g.coord_system = b.modal.coord_select, list(b.block_coord_system)
+            yield from self._wco_changed()
+        g.modal.distance = b.modal.distance
+        nm = b.non_modal
+        if nm == gc.SET_COORD_DATA:
+            yield from self._synchronize()  # FORCE_BUFFER_SYNC_DURING_EEPROM_WRITE
+            self._coords[b.coord_index] = list(b.ijk)
+            if g.modal.coord_select == b.coord_index:
+                g.coord_system = list(b.ijk)
+                yield from self._wco_changed()
+        elif nm in (gc.GO_HOME_0, gc.GO_HOME_1):
+            if b.axis_command:
+                yield from self._line(b.xyz, math.inf)
+            yield from self._line(b.ijk, math.inf)
+            g.position = list(b.ijk)
+        elif nm in (gc.SET_HOME_0, gc.SET_HOME_1):
+            yield from self._synchronize()
+            self._coords[6 if nm == gc.SET_HOME_0 else 7] = list(g.position)
+        elif nm == gc.SET_OFFSET:
+            g.coord_offset = list(b.xyz)
+            yield from self._wco_changed()
+        elif nm == gc.RESET_OFFSET:
+            g.coord_offset = [0.0, 0.0, 0.0]
+            yield from self._wco_changed()
+        g.modal.motion = b.modal.motion
+        if g.modal.motion != gc.MOTION_NONE and b.axis_command == gc.AXIS_MOTION:
+            yield from self._motion(b)
+            g.position = list(b.xyz)
+        if b.modal.program_flow:
+            yield from self._program_flow(b.modal.program_flow)
 
-    def _gcode(self, block: Block) -> None:
-        m = self._modal
-        for key in ("distance", "units"):
-            if key in block.g:
-                m[key] = block.g[key]
-        if "motion" in block.g:
-            m["motion"] = block.g["motion"]
-        if "F" in block.words:
-            m["feed"] = block.words["F"] * (MM_PER_INCH if m["units"] == 20.0 else 1.0)
-        if block.g.get("non_modal") == 4.0:
-            self._dwell(block.words["P"])
+    def _motion(self, b: gc.Block) -> Steps:
+        g = self._gc
+        motion = g.modal.motion
+        feed = math.inf if motion == gc.SEEK else g.feed_rate
+        if g.modal.feed_mode == 93 and motion != gc.SEEK:  # inverse time: F is 1/minutes for the block
+            dist = math.dist(b.xyz, g.position)
+            feed = dist * g.feed_rate if dist > 0 else math.inf
+        if motion in (gc.CW_ARC, gc.CCW_ARC):
+            for point in gc.arc_points(b, g.position, self.stage.settings[12])[:-1]:
+                self._soft_limit_check(point)
+        yield from self._line(b.xyz, feed)
+        if motion in gc.PROBE_MODES and not self._check:
+            yield from self._synchronize()  # the probe pin never triggers: no contact within the travel
+            if motion in (140, 142):  # G38.2 / G38.4
+                raise GrblError("alarm", 5)
+
+    def _program_flow(self, flow: int) -> Steps:
+        """gcode.c [21]: sync; M0 holds (not in check mode); M2/M30 reset some modes, print Pgm End."""
+        yield from self._synchronize()
+        g = self._gc
+        if flow == 3:
+            if not self._check:
+                self.stage.feed_hold()
             return
-        if block.g.get("non_modal") == 10.0:
-            self._set_offset(block)
-            return
-        targets = self._targets(block, m["distance"])
-        if targets and m["motion"] == 1.0 and m["feed"] <= 0:
-            raise CodeError(22)
-        if block.m.get("stop") in (2, 30):
-            self._send("[MSG:Pgm End]")
-        if not targets or self._check:
-            self._send("ok")
-            return
-        feed = float("inf") if m["motion"] == 0.0 else m["feed"]  # G0: each axis' max rate
-        self._plan_motion([(a, lambda a=a, t=t: self.stage.move_to(t, feed, AXES[a])) for a, t in targets.items()])
+        m = g.modal
+        m.motion, m.plane, m.distance, m.feed_mode, m.coord_select = gc.LINEAR, 0, 90, 94, 0
+        m.spindle, m.coolant = 5, 9
+        if not self._check:
+            g.coord_system = list(self._coords[0])
+            self._spindle_rpm = 0.0
+            self._wco_counter = 0
+        self._send("[MSG:Pgm End]")
 
-    def _plan_motion(self, moves: list[tuple[int, Callable[[], None]]]) -> None:
-        """Plan one block per axis; with the planner full the line waits (and RX fills), like GRBL."""
+    def _rpm(self, s: float) -> float:
+        """spindle_control.c: the speed reported for S, clamped to $31..$30 (S0 is off)."""
+        hi, lo = self.stage.settings[30], self.stage.settings[31]
+        if lo >= hi or s >= hi:
+            return hi
+        if s <= lo:
+            return 0.0 if s == 0 else lo
+        return s
 
-        def plan() -> bool:
-            try:
-                while moves and self.stage.planner_free() > 0:
-                    moves.pop(0)[1]()
-            except GrblError as e:
-                self._alarm(e.code, line_open=True) if e.kind == "alarm" else self._send(f"error:{e.code}")
-                return True
-            if moves:
-                return False
-            self._send("ok")
-            return True
+    def _synchronize(self) -> Steps:
+        """protocol_buffer_synchronize(): wait until the planner is empty and nothing moves."""
+        while self.stage.status().state != "Idle" and not self._check:
+            yield
 
-        if not plan():
-            self._pending = plan
-
-    def _set_offset(self, block: Block) -> None:
-        """G10 L2 P1 (offset = the values) / G10 L20 P1 (the current position becomes the values), G54 only.
-
-        gcode.c: G10 waits for the planner (protocol_buffer_synchronize via the
-        coordinate-change path) and GRBL reports the new WCO at once.
-        """
-        scale = MM_PER_INCH if block.g.get("units", self._modal["units"]) == 20.0 else 1.0
-        for letter, value in block.axes.items():
-            i = AXES.index(letter)
-            v = value * scale
-            if block.words["L"] == 20:
-                self._user[i] = self.stage.planned_mm(i) - v
-            else:
-                self._user[i] = v - self._base()[i]
+    def _wco_changed(self) -> Steps:
+        """system_flag_wco_change(): sync (FORCE_BUFFER_SYNC_DURING_WCO_CHANGE), then report WCO next."""
+        yield from self._synchronize()
         self._wco_counter = 0
-        self._send("ok")
 
-    def _dwell(self, seconds: float) -> None:
-        """G4: wait for the planner to empty, then dwell (simulated seconds), then ``ok``."""
-        end: list[float] = []
+    def _soft_limit_check(self, target: list[float]) -> None:
+        """limits.c limits_soft_check() via mc_line(): a target beyond the travel is ALARM:2, in check mode too."""
+        if not self.stage.soft_limits:
+            return
+        for i, (t, b) in enumerate(zip(target, self._base())):
+            lo, hi = self.stage.axis_travel_mm[i]
+            if not lo - TRAVEL_EPS_MM <= t - b <= hi + TRAVEL_EPS_MM:
+                raise GrblError("alarm", 2, f"{AXES[i]} target {t:.3f} (machine) beyond the travel")
 
-        def done() -> bool:
-            if self.stage.status().state != "Idle" and not self._check:
-                return False
-            if not end:
-                end.append(self.stage.clock.now() + seconds)
-            if self.stage.clock.now() < end[0]:
-                return False
-            self._send("ok")
-            return True
+    def _line(self, target: list[float], feed: float) -> Steps:
+        """motion_control.c mc_line(): soft limits, nothing more in check mode, then planner space per axis."""
+        self._soft_limit_check(target)
+        if self._check:
+            return
+        for i, (t, b) in enumerate(zip(target, self._base())):
+            if abs(self.stage.planned_mm(i) - (t - b)) <= TRAVEL_EPS_MM:
+                continue  # plan_buffer_line(): an empty block is not planned
+            while self.stage.planner_free() <= 0:
+                yield
+            self.stage.move_to(t - b, feed, AXES[i])
 
-        if not done():
-            self._pending = done
+    def _jog(self, text: str) -> Steps:
+        """``$J=``: gcode.c with G1/G94 enforced, the jog rules (16), jog.c's travel check (15)."""
+        self._gc.position = self._machine_planned()
+        b = check_block(text, self._gc, self._coords, jog=True)
+        b.check_jog()
+        if not b.axis_words:
+            raise CodeError(26)  # deliberate: 1.1h's source would jog to machine zero (docs/hardware.md)
+        if self.stage.soft_limits:
+            try:
+                self._soft_limit_check(b.xyz)
+            except GrblError:
+                raise CodeError(15) from None
+        self._gc.position = list(b.xyz)
+        return self._plan_jog(b.xyz, b.f)
 
-    def _jog(self, block: Block) -> None:
-        distance = block.g.get("distance", self._modal["distance"])
-        targets = self._targets(block, distance)
-        feed = block.words["F"] * (MM_PER_INCH if block.g.get("units", self._modal["units"]) == 20.0 else 1.0)
-        for axis, target in targets.items():
-            if self.stage.soft_limits and not self.stage.travel_mm[0] <= target <= self.stage.travel_mm[1]:
-                raise CodeError(15)
-        self._plan_motion(
-            [(a, lambda a=a, t=t: self.stage.jog(t - self.stage.planned_mm(a), feed, AXES[a])) for a, t in targets.items()]
-        )
+    def _plan_jog(self, target: list[float], feed: float) -> Steps:
+        for i, (t, base) in enumerate(zip(target, self._base())):
+            dist = (t - base) - self.stage.planned_mm(i)
+            if abs(dist) <= TRAVEL_EPS_MM:
+                continue
+            while self.stage.planner_free() <= 0:
+                yield
+            self.stage.jog(dist, feed, AXES[i])

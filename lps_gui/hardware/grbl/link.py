@@ -29,7 +29,7 @@ import serial
 
 from lps_gui.errors import HardwareError, InputError
 from lps_gui.hardware.grbl.codes import GrblError
-from lps_gui.hardware.grbl.protocol import Message, classify
+from lps_gui.hardware.grbl.protocol import Message, classify, dwell_seconds
 
 log = logging.getLogger(__name__)
 MAX_LINE_BYTES = 80  # GRBL's LINE_BUFFER_SIZE
@@ -49,6 +49,7 @@ class Pending:
     lines: list[str] = field(default_factory=list)
     error: Exception | None = None
     orphan: bool = False  # failed early (an alarm); its late answer is swallowed
+    dwell_s: float = 0.0  # a G4's P: GRBL answers it that long after the planner empties
 
 
 class GrblLink:
@@ -116,6 +117,11 @@ class GrblLink:
     def in_flight(self) -> int:
         """Lines sent and not yet answered."""
         return len(self._pending)
+
+    def dwell_in_flight_s(self) -> float:
+        """Seconds of G4 dwell among the unanswered lines."""
+        with self.cond:
+            return sum(p.dwell_s for p in self._pending if not p.done.is_set())
 
     @property
     def rx_used(self) -> int:
@@ -245,15 +251,26 @@ class GrblLink:
             retry()
             next_retry = time.monotonic() + retry_every_s
 
-    def send(self, line: str, timeout_s: float | None = None) -> Pending:
-        """Queue a line within the RX-buffer budget (character counting); return without its answer."""
+    def send(self, line: str, timeout_s: float | None = None,
+             keep_waiting: Callable[[], bool] | None = None) -> Pending:
+        """Queue a line within the RX-buffer budget (character counting); return without its answer.
+
+        While the buffer stays full past the deadline, ``keep_waiting()`` may
+        extend it (GRBL reads no line while its planner is full, which is no fault).
+        """
         data = (line.strip() + "\n").encode("ascii")
         if len(data) > min(self.rx_size - 1, MAX_LINE_BYTES):
             raise InputError(f"GRBL line too long ({len(data)} bytes > {MAX_LINE_BYTES}): {line!r}")
         timeout_s = self.timeout_s if timeout_s is None else timeout_s
-        self.wait_for(lambda: self._rx_used + len(data) <= self.rx_size - 1, timeout_s,
-                      f"RX buffer still full after {timeout_s:g} s; the controller stopped answering")
-        p = Pending(line.strip(), len(data))
+        while True:
+            try:
+                self.wait_for(lambda: self._rx_used + len(data) <= self.rx_size - 1, timeout_s,
+                              f"RX buffer still full after {timeout_s:g} s; the controller stopped answering")
+                break
+            except HardwareError:
+                if self.dead is not None or keep_waiting is None or not keep_waiting():
+                    raise
+        p = Pending(line.strip(), len(data), dwell_s=dwell_seconds(line))
         with self.cond:
             self._pending.append(p)
             self._rx_used += len(data)

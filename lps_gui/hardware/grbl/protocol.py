@@ -203,6 +203,15 @@ def _num(v: float) -> str:
     return f"{v:.4f}".rstrip("0").rstrip(".") if v != int(v) else f"{int(v)}"
 
 
+DWELL_RE = re.compile(r"G0*4(?![0-9.]).*?P([0-9]*\.?[0-9]+)")
+
+
+def dwell_seconds(line: str) -> float:
+    """P of a ``G4`` dwell in ``line`` (seconds), 0 for any other line."""
+    m = DWELL_RE.search(re.sub(r"\([^)]*\)|;.*|\s", "", line.upper()))
+    return float(m.group(1)) if m else 0.0
+
+
 def move_line(position_mm: float, feed_mm_min: float, axis: str = "X") -> str:
     """An absolute metric feed move, e.g. ``G90 G21 G1 X12.5 F600``."""
     return f"G90 G21 G1 {axis}{_num(position_mm)} F{_num(feed_mm_min)}"

@@ -1,10 +1,9 @@
-"""Estimate a planar (XY) session (SPEC 10) and assemble its results.
+"""The results.json document of a two-axis (planar) estimate (SPEC 10).
 
-Reads the session as the 1-D pipeline does, takes every capture's per-axis
-approach side from the plan, runs :func:`lps_gui.core.planar_estimate.estimate_planar`
-and builds results.json with ``axes: ["X", "Y"]``, the planar positions
-table and ``figures.planar``; the CSVs follow SPEC 10. Everything is computed
-before anything is written.
+:func:`lps_gui.pipeline.estimate.estimate_session` is the way here for every
+D; this module only assembles the planar parts: ``axes: ["X", "Y"]``, the
+planar positions table, ``figures.planar`` and the summary rows. The
+environment and the uncertainty budget are added by the caller as for a line.
 """
 from __future__ import annotations
 
@@ -14,66 +13,18 @@ from typing import Any
 import numpy as np
 
 from lps_gui import __version__
-from lps_gui.core.camera_model import CameraIntrinsics
-from lps_gui.core.planar_estimate import PlanarEstimate, PlanarObservations, estimate_planar
-from lps_gui.core.planar_figures import planar_figures
+from lps_gui.core.camera_model import INTRINSIC_NAMES
+from lps_gui.core.observations import Observations
+from lps_gui.core.planar_estimate import PlanarEstimate
+from lps_gui.core.planar_figures import node_errors, planar_figures
 from lps_gui.core.planar_flatness import out_of_plane
-from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.core.rotation import log_so3
-from lps_gui.errors import InputError
 from lps_gui.io.board_file import board_to_dict
-from lps_gui.io.corners_vnl import read_corners_vnl
-from lps_gui.io.intrinsics_file import apply_board_warp, intrinsics_to_dict
+from lps_gui.io.intrinsics_file import intrinsics_to_dict
 from lps_gui.io.results_file import FORMAT
 from lps_gui.io.session import Session
 from lps_gui.pipeline.session_checks import session_inputs
 from lps_gui.sim.planar_truth import planar_session_truth, planar_truth_comparison
-
-
-def planar_observations_from_session(session: Session, intrinsics: CameraIntrinsics | None = None) -> PlanarObservations:
-    """Match every line of captures.jsonl to its corners; approach sides from the plan."""
-    intr = intrinsics or session.intrinsics()
-    board = apply_board_warp(session.board(), intr)  # the bow found by the intrinsics calibration, if any
-    records = session.records()
-    if not records:
-        raise InputError(f"{session.captures_path}: no captures listed; capture or simulate a session first")
-    for r in records:
-        if not isinstance(r.target_mm, tuple):
-            raise InputError(f"{session.captures_path}: capture {r.index} has target_mm {r.target_mm!r}, "
-                             "not [x, y]; a planar session (plan.axes [X, Y]) lists both coordinates")
-    table = read_corners_vnl(session.corners_path, board.n_corners)
-    rows = table.index()
-    missing = [r.file for r in records if r.file not in rows]
-    if missing:
-        raise InputError(f"{session.corners_path}: {len(missing)} captured image(s) have no corners "
-                         f"(first: {missing[0]}); run `lps detect {session.folder}`")
-    approach_by_index = {s.index: s.approach for s in session.plan().stops()}
-    approach = [approach_by_index.get(r.index, (1, 1)) for r in records]
-    return PlanarObservations(
-        board=board, intrinsics=intr, corners_px=table.corners_px[[rows[r.file] for r in records]],
-        target_mm=[r.target_mm for r in records], approach=approach,
-        direction=[1.0 if r.direction == "+" else -1.0 for r in records], run=[r.run for r in records],
-        index=[r.index for r in records], names=[r.file for r in records], source=str(session.corners_path),
-        source_sha256=table.sha256,
-    )
-
-
-def estimate_planar_session(
-    session: Session,
-    method: str = "joint",
-    options: dict[str, Any] | None = None,
-    intrinsics: CameraIntrinsics | None = None,
-    intrinsics_source: str = "session.json",
-    progress: ProgressFn = no_progress,
-    cancel: CancelToken | None = None,
-) -> dict[str, Any]:
-    """Estimate a planar session; returns the results.json content (not written here)."""
-    opts = dict(options or {})
-    obs = planar_observations_from_session(session, intrinsics)
-    est = estimate_planar(obs, method=method, outlier_k=float(opts.get("outlier_k", 5.0)),
-                          detect_outliers=bool(opts.get("detect_outliers", True)), robust=bool(opts.get("robust", False)),
-                          progress=progress, cancel=cancel)
-    return build_planar_results(session, obs, est, intrinsics_source, opts)
 
 
 def _f(x: Any) -> float | None:
@@ -81,11 +32,12 @@ def _f(x: Any) -> float | None:
     return x if np.isfinite(x) else None
 
 
-def build_planar_results(session: Session, obs: PlanarObservations, est: PlanarEstimate, intrinsics_source: str,
-                         settings: dict[str, Any] | None = None) -> dict[str, Any]:
+def build_planar_results(session: Session, obs: Observations, est: PlanarEstimate, intrinsics_source: str
+                         ) -> dict[str, Any]:
     """The results.json document of a planar session (SPEC 10; schema in docs/ARCHITECTURE.md)."""
     dev = est.deviation_um(obs.target_mm)
     sig = 1e3 * est.sigma_xy_mm
+    sig_total = 1e3 * est.sigma_total_xy_mm
     ref_target = obs.target_mm[est.reference_view]
     positions = []
     for i in range(obs.K):
@@ -97,6 +49,8 @@ def build_planar_results(session: Session, obs: PlanarObservations, est: PlanarE
             "measured_y_mm": _f(est.state.xy[i, 1] + ref_target[1]) if ok else None,
             "deviation_x_um": _f(dev[i, 0]) if ok else None, "deviation_y_um": _f(dev[i, 1]) if ok else None,
             "sigma_x_um": _f(sig[i, 0]) if est.used[i] else None, "sigma_y_um": _f(sig[i, 1]) if est.used[i] else None,
+            "sigma_total_x_um": _f(sig_total[i, 0]) if est.used[i] else None,
+            "sigma_total_y_um": _f(sig_total[i, 1]) if est.used[i] else None,
             "rms_px": _f(est.rms_px[i]), "n_corners": int(est.n_corners[i]), "outlier": bool(est.outlier[i]),
             "outlier_reason": est.outlier_reason[i] or ("board not found" if not ok else ""),
             "used": bool(est.used[i]), "approach": [int(v) for v in obs.approach[i]], "file": obs.names[i],
@@ -124,11 +78,13 @@ def build_planar_results(session: Session, obs: PlanarObservations, est: PlanarE
         "n_observations": est.n_observations, "dof": est.dof, "iterations": est.iterations,
         "converged": est.converged, "reference_index": int(obs.index[est.reference_view]),
     }
+    if est.options.self_calibrate:
+        parameters["intrinsics_estimated"] = dict(zip(INTRINSIC_NAMES, st.intrinsics.vector().tolist()))
     inputs = session_inputs(session, intrinsics_source, {session.corners_path.name: obs.source_sha256})
     results: dict[str, Any] = {
         "format": FORMAT, "software": {"name": "lps-calib", "version": __version__},
         "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "method": est.method, "axes": ["X", "Y"],
-        "settings": dict(settings or {}), "inputs": inputs, "board": board_to_dict(obs.board),
+        "settings": est.options.to_dict(), "inputs": inputs, "board": board_to_dict(obs.board),
         "intrinsics": intrinsics_to_dict(obs.intrinsics),
         "session_meta": {k: session.meta.get(k) for k in ("camera", "stage", "plan", "stage_spec", "created")
                          if k in session.meta},
@@ -139,15 +95,13 @@ def build_planar_results(session: Session, obs: PlanarObservations, est: PlanarE
     if truth is not None:
         results["truth_comparison"] = planar_truth_comparison(obs, est, truth, positions)
         _add_truth_to_nodes(planar["nodes"], obs, positions, valid)
-    results["summary"] = planar_summary_rows(results)
+    results["summary"] = summary_csv_rows(results)
     return results
 
 
-def _add_truth_to_nodes(nodes: list[dict[str, Any]], obs: PlanarObservations, positions: list[dict],
+def _add_truth_to_nodes(nodes: list[dict[str, Any]], obs: Observations, positions: list[dict],
                         valid: np.ndarray) -> None:
     """The simulator's mean error vector at every node, beside the measured one (for the error map)."""
-    from lps_gui.core.planar_figures import node_errors
-
     true_dev = np.array([[_num(r.get("truth_deviation_x_um")), _num(r.get("truth_deviation_y_um"))] for r in positions])
     ok = valid & np.all(np.isfinite(true_dev), axis=1)
     for node, t in zip(nodes, node_errors(obs.target_mm, obs.direction, true_dev, np.ones_like(true_dev), ok)):
@@ -158,7 +112,7 @@ def _num(v: Any) -> float:
     return float("nan") if v is None else float(v)
 
 
-def planar_summary_rows(results: dict[str, Any]) -> list[tuple[str, Any, str]]:
+def summary_csv_rows(results: dict[str, Any]) -> list[tuple[str, Any, str]]:
     """(name, value, unit) rows for summary.csv of a planar session."""
     p = results["parameters"]
     pl = results["figures"]["planar"]

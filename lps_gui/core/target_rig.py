@@ -1,0 +1,105 @@
+"""A camera moving past fixed targets (SPEC 13): the geometry the simulator and the planner share.
+
+World frame = target 0's frame. The camera keeps one orientation R; its
+translation is t_i = l0 + N s_i (N: 3 x D, the motion directions in the camera
+frame, D = 1 for a line, 2 for a plane), and target j's corner X is seen at
+x_cam = R (Q_j X + p_j) + t_i. Pure math: no files, no images.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from lps_gui.core.camera_model import CameraIntrinsics, project
+from lps_gui.core.rotation import exp_so3
+from lps_gui.core.targets import Target
+
+
+@dataclass(frozen=True)
+class TargetLayout:
+    """Targets and their mounting poses in the world (target 0's) frame: X_w = Q_j X + p_j."""
+
+    targets: tuple[Target, ...]
+    Q: np.ndarray  # (T, 3, 3)
+    p: np.ndarray  # (T, 3) mm
+
+    def points(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Every target's corners laid end to end: own-frame X (N, 3), world X_w (N, 3), target index (N,)."""
+        own = np.concatenate([t.board.object_points() for t in self.targets])
+        which = np.repeat(np.arange(len(self.targets)), [t.board.n_corners for t in self.targets])
+        world = np.einsum("nij,nj->ni", self.Q[which], own) + self.p[which]
+        return own, world, which
+
+
+def row_layout(
+    targets: list[Target], pitch_mm: float, tilt_sigma_rad: float = 0.0, offset_sigma_mm: float = 0.0,
+    depth_mm: np.ndarray | None = None, seed: int = 0,
+) -> TargetLayout:
+    """Targets in a row along x of target 0 at ``pitch_mm``, each mounted with small random errors.
+
+    ``depth_mm`` (T,) moves targets along -z of target 0 (towards a camera looking at its front): a
+    two-depth constellation. Target 0 defines the world frame, so it has no mounting error.
+    """
+    rng = np.random.default_rng(seed)
+    T = len(targets)
+    Q = np.stack([np.eye(3)] + [exp_so3(rng.normal(0.0, tilt_sigma_rad, 3)) for _ in range(T - 1)])
+    p = np.zeros((T, 3))
+    p[:, 0] = pitch_mm * np.arange(T)
+    p[1:] += rng.normal(0.0, offset_sigma_mm, (T - 1, 3))
+    if depth_mm is not None:
+        p[:, 2] -= np.asarray(depth_mm, float)
+    return TargetLayout(tuple(targets), Q, p)
+
+
+def occluded(layout: TargetLayout, R: np.ndarray, t: np.ndarray, world: np.ndarray, which: np.ndarray,
+             margin_squares: float = 0.5) -> np.ndarray:
+    """(K, N) corners hidden behind another target's paper (a nearer row of a two-depth constellation).
+
+    ``R`` (3, 3) or (K, 3, 3), ``t`` (K, 3): camera from world. A corner is hidden when the segment from
+    the camera centre to it crosses another target's plane inside that target's paper.
+    """
+    Rk = np.broadcast_to(R, (len(t), 3, 3))
+    C = -np.einsum("kji,kj->ki", Rk, t)  # camera centres in the world
+    hidden = np.zeros((len(t), len(world)), bool)
+    ray = world[None, :, :] - C[:, None, :]  # (K, N, 3)
+    for k, tgt in enumerate(layout.targets):
+        n = layout.Q[k][:, 2]
+        denom = ray @ n
+        with np.errstate(divide="ignore", invalid="ignore"):
+            lam = ((layout.p[k] - C) @ n)[:, None] / denom
+        cross = (lam > 0) & (lam < 1 - 1e-9) & (which[None, :] != k)
+        if not cross.any():
+            continue
+        hit = C[:, None, :] + lam[..., None] * ray - layout.p[k]
+        local = hit @ layout.Q[k]  # in target k's frame
+        s, m = tgt.board.square_mm, 1.0 + margin_squares
+        inside = ((local[..., 0] > -m * s) & (local[..., 0] < (tgt.board.cols - 1 + m) * s)
+                  & (local[..., 1] > -m * s) & (local[..., 1] < (tgt.board.rows - 1 + m) * s))
+        hidden |= cross & inside
+    return hidden
+
+
+def observe(
+    layout: TargetLayout, intrinsics: CameraIntrinsics, R: np.ndarray, t: np.ndarray,
+    noise_px: float = 0.0, seed: int = 0, border_px: float = 2.0,
+) -> np.ndarray:
+    """Corners (K, N, 2) of every target seen from camera translations ``t`` (K, 3); NaN where not seen.
+
+    ``R`` is one orientation (3, 3) or one per view (K, 3, 3). A corner is seen when it is in front of
+    the camera, inside the image by ``border_px`` and not behind another target's paper (the targets
+    face the camera by construction); the noise is Gaussian, per coordinate.
+    """
+    _, world, which = layout.points()
+    R = np.asarray(R, float)
+    x_cam = (np.einsum("ij,nj->ni", R, world)[None] if R.ndim == 2 else np.einsum("kij,nj->kni", R, world))
+    x_cam = x_cam + t[:, None, :]
+    uv = project(x_cam, intrinsics).uv
+    w, h = intrinsics.image_size
+    inside = ((uv[..., 0] >= border_px) & (uv[..., 0] <= w - 1 - border_px)
+              & (uv[..., 1] >= border_px) & (uv[..., 1] <= h - 1 - border_px) & (x_cam[..., 2] > 0))
+    seen = inside & ~occluded(layout, R, t, world, which)
+    rng = np.random.default_rng(seed)
+    uv = uv + rng.normal(0.0, noise_px, uv.shape) if noise_px > 0 else uv
+    uv[~seen] = np.nan
+    return uv

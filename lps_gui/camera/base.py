@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import abc
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
@@ -33,6 +33,12 @@ class Camera(abc.ABC):
     """
 
     _open: bool = False
+    pose_source: Callable[[], Any] | None = None  # a simulated camera: the stage's true pose it renders
+
+    def property_device(self) -> Any:
+        """The device whose properties (exposure, gain, focus, white balance) can be read and set, with
+        ``get(prop)`` and ``set(prop, value)`` (``camera/controls.py``); None: the source has none."""
+        return None
 
     @abc.abstractmethod
     def open(self) -> None: ...

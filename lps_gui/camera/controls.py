@@ -13,8 +13,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Any, Protocol
+from typing import Protocol
 
+from lps_gui.camera.base import Camera
 from lps_gui.camera.control_surface import ControlSurface, Value
 
 
@@ -48,26 +49,24 @@ class PropertyDevice(Protocol):
     def set(self, prop: int, value: float) -> bool: ...
 
 
-def device_of(camera: Any) -> PropertyDevice | None:
-    """The ``cv2.VideoCapture`` (or alike) under a camera, if it has one (OpenCVCamera, while open)."""
-    cap = getattr(camera, "_cap", None)
-    return cap if cap is not None and hasattr(cap, "get") and hasattr(cap, "set") else None
+def device_of(camera: Camera) -> PropertyDevice | None:
+    """The ``cv2.VideoCapture`` (or alike) under a camera, if it has one (OpenCVCamera on a device, while open)."""
+    return camera.property_device()
 
 
-def surface_of(camera: Any) -> ControlSurface | None:
+def surface_of(camera: Camera) -> ControlSurface | None:
     """The SDK control surface of a camera, when it has one (open GenICam, pylon, gphoto2 cameras)."""
-    fn = getattr(camera, "control_surface", None)
-    return fn() if callable(fn) else None
+    return camera.control_surface()
 
 
-def available(camera: Any) -> dict[str, float]:
+def available(camera: Camera) -> dict[str, float]:
     """Numeric controls the device reports a value for: name -> current value (empty for simulated or file cameras)."""
     surface = surface_of(camera)
     if surface is not None:
         return {n: v for n, v in surface.values().items() if isinstance(v, float)}
     dev = device_of(camera)
-    if dev is None or not getattr(camera, "is_device", not isinstance(getattr(camera, "source", 0), str)):
-        return {}  # files and streams have no controls
+    if dev is None:  # simulated cameras, files and streams have no controls
+        return {}
     out = {}
     for c in all_controls():
         v = float(dev.get(c.prop))
@@ -76,7 +75,7 @@ def available(camera: Any) -> dict[str, float]:
     return out
 
 
-def auto_modes(camera: Any) -> dict[str, bool]:
+def auto_modes(camera: Camera) -> dict[str, bool]:
     """name -> automatic mode on, for the controls that have one and report it."""
     surface = surface_of(camera)
     if surface is not None:
@@ -93,7 +92,7 @@ def auto_modes(camera: Any) -> dict[str, bool]:
     return out
 
 
-def set_control(camera: Any, name: str, value: Value) -> bool:
+def set_control(camera: Camera, name: str, value: Value) -> bool:
     """Switch the control to manual and set it; False when the device refuses (strings: SDK enumerations)."""
     surface = surface_of(camera)
     if surface is not None:
@@ -107,7 +106,7 @@ def set_control(camera: Any, name: str, value: Value) -> bool:
     return bool(dev.set(c.prop, float(value)))
 
 
-def set_auto(camera: Any, name: str, on: bool) -> bool:
+def set_auto(camera: Camera, name: str, on: bool) -> bool:
     surface = surface_of(camera)
     if surface is not None:
         return surface.set_auto(name, on)

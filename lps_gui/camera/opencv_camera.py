@@ -85,6 +85,10 @@ class OpenCVCamera(Camera):
             self._cap.release()
             self._cap = None
 
+    def property_device(self) -> Any:
+        """The open ``cv2.VideoCapture`` of a device; None while closed and for files and streams (no controls)."""
+        return self._cap if self.is_device else None
+
     def grab(self) -> Frame:
         """The next frame; HardwareError when the device fails or a file has no more frames."""
         if self._cap is None:

@@ -13,16 +13,18 @@ whenever the engine does not know where the stage came from (first stop of a
 call, after a pause or an error), it first goes to the overshoot position
 beyond the target so the last move is in the run's direction.
 
-Deterministic simulators: before the move onto a stop the engine calls
-``stage.seed_capture(key)`` and before each grab ``camera.seed_capture(index)``
-when these optional hooks exist, so a simulated session resumed after a kill
-draws the same repeatability and image noise as an uninterrupted one.
+A simulated rig comes with one explicit hook, ``simulator`` (a
+:class:`SimulatorHook`): the engine tells it when to record the truth of a
+frame and when to seed its draws (before the move onto a stop, before each
+grab), so a simulated session resumed after a kill draws the same
+repeatability and image noise as an uninterrupted one. Everything else the
+engine needs from a device is declared on :class:`Stage` and :class:`Camera`.
 """
 from __future__ import annotations
 
 import threading
 import time
-from typing import Any, Callable, Protocol
+from typing import Callable, Protocol
 
 import numpy as np
 
@@ -32,9 +34,8 @@ from lps_gui.capture.camera_lock import check_frame, lock_camera
 from lps_gui.capture.settle import SettleOptions, Settler
 from lps_gui.capture.events import CaptureEvent, CaptureListener, CaptureProgress, CaptureSummary
 from lps_gui.core.clock import Clock, RealClock
-from lps_gui.capture.planar_moves import check_planar_plan_in_travel, format_target, go_to_planar
-from lps_gui.core.plan import Plan, PlannedStop
-from lps_gui.core.planar_plan import PlanarPlan, PlanarStop
+from lps_gui.capture.moves import approach_point_mm, check_plan_in_travel, format_target, go_to_planar
+from lps_gui.core.plan import PlannedStop
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import HardwareError, InputError
 from lps_gui.hardware.stage import EventSource, Stage
@@ -42,12 +43,14 @@ from lps_gui.io.atomic import check_writable
 from lps_gui.io.session import IMAGES_DIR, CaptureRecord, Session
 from lps_gui.io.session_lock import SessionLock
 
-class TruthRecorder(Protocol):
-    """What a simulated rig records beside the frames (``lps_gui.sim.truth.TruthRecorder``)."""
+class SimulatorHook(Protocol):
+    """What a simulated rig does beside the frames (``lps_gui.sim.session.SimulatedRigHook``)."""
 
     def prune(self, session: Session) -> None: ...  # before a (re)start: keep the truth of listed frames only
     def record(self, session: Session, index: int) -> None: ...  # durably, before the frame's capture line
     def finalize(self, session: Session) -> None: ...  # the plan is complete
+    def seed_stop(self, stop: PlannedStop) -> None: ...  # before the move onto ``stop``: the stage's draws
+    def seed_frame(self, index: int) -> None: ...  # before the grab of frame ``index``: the camera's noise
 
 
 class _Stop(Exception):
@@ -68,24 +71,6 @@ def encode_image(image: np.ndarray, ext: str) -> bytes:
 def image_name(index: int, ext: str) -> str:
     """File name of capture ``index`` inside images/ (sorts in capture order)."""
     return f"{index:06d}{ext}"
-
-
-def check_plan_in_travel(plan: Plan, stage: Stage) -> None:
-    """InputError before any move when a target or overshoot lies outside the stage's known travel.
-
-    Only stages that publish ``travel_mm`` (the simulated one) can be checked
-    here; on GRBL, soft limits ($20) raise an alarm at the offending move.
-    """
-    travel = getattr(stage, "travel_mm", None)
-    if travel is None:
-        return
-    t = plan.targets()
-    lo, hi = float(t[0]) - plan.overshoot_mm, float(t[-1]) + plan.overshoot_mm
-    if lo < travel[0] or hi > travel[1]:
-        raise InputError(
-            f"plan: moves from {lo:g} to {hi:g} mm (targets and overshoot) but the stage travels "
-            f"{travel[0]:g}..{travel[1]:g} mm; shorten the plan or the overshoot"
-        )
 
 
 LOSSLESS = (".png", ".tif", ".tiff", ".bmp", ".pgm", ".ppm")
@@ -120,8 +105,8 @@ class CaptureEngine:
     session : the session folder; its plan says what to capture.
     clock : settle time and ETA; the stage's clock when it has one, else real time.
     encode : image file extension, lossless (".png" default).
-    truth_recorder : for a simulated rig, records the true pose at each grab
-        (see :mod:`lps_gui.sim.truth`); the engine only says when.
+    simulator : for a simulated rig, records the true pose at each grab and
+        seeds its draws (see :mod:`lps_gui.sim.session`); the engine only says when.
     move_timeout_s : minimum time a move may take before it is an error.
     command_of : ``(nominal_mm, direction) -> commanded_mm``, a compensation
         table's inverse (``CompensationTable.command_mm``): the stage is sent
@@ -149,7 +134,7 @@ class CaptureEngine:
         clock: Clock | None = None,
         encode: str = ".png",
         *,
-        truth_recorder: TruthRecorder | None = None,
+        simulator: SimulatorHook | None = None,
         move_timeout_s: float = 60.0,
         command_of: Callable[[float, int], float] | None = None,
         position_tolerance_mm: float = POSITION_TOLERANCE_MM,
@@ -158,12 +143,12 @@ class CaptureEngine:
         self.stage = stage
         self.camera = camera
         self.session = session
-        self.clock: Clock = clock or getattr(stage, "clock", None) or RealClock()
+        self.clock: Clock = clock or stage.clock or RealClock()
         self.encode = encode if encode.startswith(".") else "." + encode
         if self.encode.lower() not in LOSSLESS:
             raise InputError(f"--encode {encode}: not a lossless format; use one of {', '.join(LOSSLESS)} "
                              "(lossy compression moves corners)")
-        self.truth_recorder = truth_recorder
+        self.simulator = simulator
         self.move_timeout_s = float(move_timeout_s)
         self.command_of = command_of
         self._commanded_mm: float | None = None
@@ -184,7 +169,6 @@ class CaptureEngine:
         self._last_move: tuple[int, str, float, int] | None = None  # (run, direction, target, stop's first index)
         self._reported_mm: float | tuple[float, float] | None = None
         self._axis_sides: list[int | None] = [None, None]  # planar: side of each axis' last approach
-        self._arrivals: dict[int, tuple[int, int]] | None = None  # planar: see PlanarPlan.arrival_indices
         self._active = False
         self.configure_settle(settle)
         self._locked: dict[str, Any] = {}
@@ -274,12 +258,9 @@ class CaptureEngine:
                 if self.settle is not None and self.session.meta.get("acquisition") != self.settle.to_dict():
                     self.session.meta["acquisition"] = self.settle.to_dict()
                     self.session.save_meta()
-                if isinstance(self._plan, PlanarPlan):
-                    check_planar_plan_in_travel(self._plan, self.stage)
-                else:
-                    check_plan_in_travel(self._plan, self.stage)
-            if self.truth_recorder is not None:
-                self.truth_recorder.prune(self.session)
+                check_plan_in_travel(self._plan, self.stage)
+            if self.simulator is not None:
+                self.simulator.prune(self.session)
             self._emit(CaptureEvent("started", f"{len(remaining)} of {self._total} frames to capture"))
             progress(self._total - len(remaining), self._total, "starting")
             for stop in remaining:
@@ -307,8 +288,8 @@ class CaptureEngine:
                 self._state = ev.PAUSED
             raise
         else:
-            if self.truth_recorder is not None:
-                self.truth_recorder.finalize(self.session)
+            if self.simulator is not None:
+                self.simulator.finalize(self.session)
             self._finish(ev.DONE, f"capture complete: {self._total} frames")
         finally:
             lock.__exit__(None, None, None)
@@ -325,16 +306,12 @@ class CaptureEngine:
         )
 
     # ------------------------------------------------------------------ steps
-    def _go_to(self, stop: PlannedStop | PlanarStop) -> None:
+    def _go_to(self, stop: PlannedStop) -> None:
         """Move onto ``stop``'s target from its own direction, wait, settle, read the position."""
-        if isinstance(stop, PlanarStop):
+        if self._plan.planar:
             self._last_move = None
-            _hook(self.stage, stop.index - stop.frame)
-            seed_axes = getattr(self.stage, "seed_axes", None)
-            if seed_axes is not None:  # the deterministic simulation's per-axis draws
-                if self._arrivals is None:
-                    self._arrivals = self._plan.arrival_indices()
-                seed_axes(*self._arrivals[stop.index])
+            if self.simulator is not None:
+                self.simulator.seed_stop(stop)
             self._emit(CaptureEvent("move", f"move to {format_target(stop.target_mm)}", stop.index))
             self._reported_mm = go_to_planar(self.stage, stop, self._plan, self._axis_sides, self._move)
             self.clock.sleep(self._plan.settle_s)
@@ -345,18 +322,13 @@ class CaptureEngine:
             return
         plan, feed = self._plan, self._plan.feed_mm_min
         sign = 1.0 if stop.direction == "+" else -1.0
-        last = self._last_move
-        continues_run = (
-            last is not None
-            and last[:2] == (stop.run, stop.direction)
-            and (stop.target_mm - last[2]) * sign > 0
-        )
+        start = approach_point_mm(plan, stop, self._last_move)
         self._last_move = None
-        if not continues_run and plan.overshoot_mm > 0:
-            start = plan.approach_start_mm(stop.direction, stop.target_mm)
+        if start is not None:
             self._emit(CaptureEvent("approach", f"approach from {start:g} mm", stop.index))
             self._move(start, feed)
-        _hook(self.stage, stop.index - stop.frame)
+        if self.simulator is not None:
+            self.simulator.seed_stop(stop)
         self._emit(CaptureEvent("move", f"move to {stop.target_mm:g} mm", stop.index))
         self._commanded_mm = None if self.command_of is None else float(self.command_of(stop.target_mm, int(sign)))
         self._move(stop.target_mm if self._commanded_mm is None else self._commanded_mm, feed)
@@ -374,7 +346,8 @@ class CaptureEngine:
 
     def _take(self, stop: PlannedStop) -> None:
         """Grab, write the image atomically, then list it (truth line first, capture line last)."""
-        _hook(self.camera, stop.index)
+        if self.simulator is not None:
+            self.simulator.seed_frame(stop.index)
         settle_s = None
         if self._settler is None:
             frame = self.camera.grab()
@@ -389,8 +362,8 @@ class CaptureEngine:
                                         f"{self.settle.timeout_s:g} s (last shift {got.shift_px} px); taken anyway", stop.index))
         data = encode_image(frame.image, self.encode)
         rel, sha = self.session.write_image(image_name(stop.index, self.encode), data)
-        if self.truth_recorder is not None:
-            self.truth_recorder.record(self.session, stop.index)
+        if self.simulator is not None:
+            self.simulator.record(self.session, stop.index)
         record = CaptureRecord(
             index=stop.index,
             run=stop.run,
@@ -459,10 +432,3 @@ class CaptureEngine:
 
     def _emit(self, event: CaptureEvent) -> None:
         self._events.emit(event)  # type: ignore[arg-type]  # a failing listener is logged, never stops the capture
-
-
-def _hook(device: object, key: int) -> None:
-    """Call the optional deterministic-simulation hook ``seed_capture(key)``."""
-    fn = getattr(device, "seed_capture", None)
-    if callable(fn):
-        fn(int(key))

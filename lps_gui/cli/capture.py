@@ -8,14 +8,27 @@ Examples::
                 --board board.json --intrinsics intrinsics.json --out run3
     lps capture --resume run3 [--stage grbl:/dev/ttyUSB0 --camera 0]
     lps capture --intrinsics-views 15 --camera 0 --board board.json --out intr   # hand-held board, guided
+    lps capture --planar --grid 0,0:40,20:10,10 --directions both --out xy1       # simulated XY gantry (SPEC 10)
+    lps capture --planar --preset paper-planar --out xy2                             # the paper's 15 x 9 grid
+    lps capture --planar --targets-xy "0,0;20,0;20,10;0,10" --stage emulator --out xy3
+    lps capture --planar --iso-lines --grid 0,0:40,20:10,10 --out xy4                # ISO 230-2 lines per axis
+    lps capture --planar --stage grbl:/dev/ttyUSB0 --camera 0 --board board.json --grid ... --out xy5
+
+One command for one axis and two: the plan comes from :mod:`lps_gui.cli.capture_plan`, the devices
+from :mod:`lps_gui.cli.capture_devices`; a plan with two axes runs on the simulated gantry (or the
+operator's XY stage) through the same engine.
 """
 from __future__ import annotations
 
 import argparse
 
+from lps_gui.cli.capture_devices import (
+    bind_simulated_stage, bind_stage, clock, close, device_session, open_devices, preflight, read_intrinsics, release_lock,
+)
+from lps_gui.cli.capture_plan import (
+    ISO_LEVELS, ISO_RUNS, build_planar_plan, describe, line_plan, planar_preset_name, wants_planar,
+)
 from lps_gui.cli.option_types import finite, float_range, int_range, nonnegative_finite, nonnegative_int, positive_finite
-
-from lps_gui.cli import planar_capture
 
 HELP = "capture a session: move the stage through a plan and store an image per stop (resumable)"
 
@@ -62,7 +75,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     a.add_argument("--settle-frames", type=int_range(2, 100), default=3, metavar="N", help="N consecutive frames must agree (default 3; 2: one pair)")
     a.add_argument("--average-frames", type=int_range(1, 1000), default=1, metavar="N", help="store the pixel mean of N frames per image (noise / sqrt(N))")
     s.add_argument("--compensation", metavar="FILE", help="command each target through this table's inverse (lps compensate --format csv|linuxcnc|linuxcnc-offsets)")
-    planar_capture.add_arguments(p)
+    g = p.add_argument_group("planar XY plans (docs/planar.md); --grid, --targets-xy or --iso-lines imply --planar")
+    g.add_argument("--planar", action="store_true",
+                   help="an XY gantry: a grid over both axes (simulated: presets small-planar, paper-planar)")
+    g.add_argument("--grid", metavar="X0,Y0:X1,Y1:DX,DY", help="planar grid: start, stop and step in mm")
+    g.add_argument("--pattern", choices=("serpentine", "raster"), help="planar grid order (default serpentine)")
+    g.add_argument("--targets-xy", metavar="X,Y;X,Y;...", help="explicit planar targets in mm, in visiting order")
+    g.add_argument("--iso-lines", action="store_true",
+                   help=f"ISO 230-2 lines on the grid: along X at {ISO_LEVELS} Y levels and along Y at {ISO_LEVELS} "
+                        f"X levels, forward and backward, {ISO_RUNS} runs")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -85,18 +106,17 @@ def run(args: argparse.Namespace) -> int:
         from lps_gui.io.compensation_file import read_table
 
         read_table(args.compensation)  # a bad table fails before a session is created
-    opened = planar_capture.open_planar_capture(args)  # None: a single-axis capture
-    session, stage, camera, engine = opened or (_resume(args) if args.resume else _start(args))
+    session, stage, camera, engine = _resume(args) if args.resume else _start(args)
     apply_setup(session, extra)
     try:
         from lps_gui.capture.compensated import apply_compensation
 
         apply_compensation(engine, session, args.compensation)
         engine.configure_settle(settle)
-        print(f"capturing into {session.folder}: {_describe(session)}", file=sys.stderr)
+        print(f"capturing into {session.folder}: {describe(session.plan())}", file=sys.stderr)
         summary = engine.run(progress=ProgressBar("capture"))
     finally:
-        _close(stage, camera)
+        close(stage, camera)
     if summary.state == "done":
         print(f"{summary.folder}: {summary.listed}/{summary.total} frames listed ({summary.captured} now)")
         return 0
@@ -184,183 +204,88 @@ def _intrinsics_mode(args: argparse.Namespace) -> int:
     return 0
 
 
-def _describe(session) -> str:
-    from lps_gui.capture.plans import describe_plan, plan_duration_s
-
-    plan = session.plan()
-    if session.planar:
-        return planar_capture.describe_planar(plan)
-    return f"{describe_plan(plan)}, about {plan_duration_s(plan) / 60:.1f} min of stage time"
-
-
-def _plan(args: argparse.Namespace, base=None):
-    from lps_gui.capture.plans import parse_targets, plan_with, read_plan
-
-    if args.plan:
-        base = read_plan(args.plan)
-    fields = {k: getattr(args, k) for k in ("start_mm", "stop_mm", "step_mm", "directions", "runs", "overshoot_mm", "settle_s", "frames_per_stop", "feed_mm_min")}
-    if args.targets:
-        fields["targets_mm"] = parse_targets(args.targets)
-    from lps_gui.cli.capture_setup import iso_plan_fields
-
-    fields.update(iso_plan_fields(args, base))
-    if base is None and not any(fields[k] is not None for k in ("start_mm", "stop_mm", "step_mm", "targets_mm") if k in fields):
-        from lps_gui.errors import InputError
-
-        raise InputError("no plan: give --plan FILE or --start/--stop/--step (or --targets)")
-    return plan_with(base, **fields)
-
-
 def _start(args: argparse.Namespace):
+    """(session, stage, camera, engine) of a new capture on one axis or, with a planar switch, on two."""
     from lps_gui.errors import InputError
 
+    planar = wants_planar(args)
+    if planar and args.compensation:
+        raise InputError("--compensation: a table corrects one axis; planar plans are captured without one")
+    if planar and args.iso_plan:
+        raise InputError("--iso-plan is the single-axis ISO 230-2 preset; a planar plan takes --iso-lines")
     stage_spec, camera_spec = args.stage or "sim", args.camera or "sim"
-    intr = _read_intrinsics(args.intrinsics)
-    _preflight(args, stage_spec, camera_spec)  # everything checkable before anything is created
+    intr = None if planar else read_intrinsics(args.intrinsics)
+    preflight(args, stage_spec, camera_spec)  # everything checkable before anything is created
+    axes = {"axes": ["X", "Y"]} if planar else {}
     if camera_spec == "sim":
-        from lps_gui.sim.rig import spec_for_plan
+        from lps_gui.core.simulate import PLANAR_PRESETS, preset
+        from lps_gui.sim.rig import check_board_in_view, spec_for_plan
         from lps_gui.sim.session import create_simulated_session, simulated_engine
-        from lps_gui.core.simulate import preset
 
         if args.board:
-            raise InputError("--board: the simulated rig's board comes from --preset; drop --board")
-        base = preset(args.preset).plan
-        spec = spec_for_plan(args.preset, _plan(args, base), seed=args.seed)
-        session, stage, camera = create_simulated_session(args.out, spec, clock=_clock(args), noise_grey=args.noise_grey, intrinsics=intr)
-        stage = bind_simulated_stage(args, session, stage, camera, stage_spec)
+            raise InputError(f"--board: the simulated {'gantry' if planar else 'rig'}'s board comes from --preset; "
+                             "drop --board")
+        if planar:
+            if stage_spec not in ("sim", "emulator"):
+                raise InputError(f"--stage {stage_spec}: the simulated camera rides only --stage sim or emulator")
+            make_spec = PLANAR_PRESETS[planar_preset_name(args.preset)]
+            spec = make_spec(seed=args.seed, plan=build_planar_plan(args, make_spec(seed=args.seed).plan))  # centred
+            check_board_in_view(spec)
+            intr = read_intrinsics(args.intrinsics)
+        else:
+            spec = spec_for_plan(args.preset, line_plan(args, preset(args.preset).plan), seed=args.seed)
+        session, stage, camera = create_simulated_session(args.out, spec, clock=clock(args), noise_grey=args.noise_grey,
+                                                          intrinsics=intr)
+        stage = bind_simulated_stage(args, session, stage, camera, stage_spec, **axes)
         return session, stage, camera, simulated_engine(session, stage, camera, args.encode)
     if not args.board:
         raise InputError("--board FILE is required with a real camera (board.json is described in docs/capture.md)")
     from lps_gui.io.board_file import read_board
 
-    return device_session(args, read_board(args.board), _plan(args), intr, stage_spec, camera_spec)
-
-
-def device_session(args: argparse.Namespace, board, plan, intr, stage_spec: str, camera_spec: str, **stage_meta):
-    """Open the operator's devices, unlock as asked and create the session on them (devices closed on failure)."""
-    from lps_gui.capture.engine import CaptureEngine
-    from lps_gui.io.session import Session
-
-    stage, camera = _open_devices(stage_spec, camera_spec, getattr(args, "cti", None))
-    try:
-        _release_lock(args, stage)
-        session = Session.create(
-            args.out, board, plan, intr,
-            camera={**camera.properties(), "spec": camera_spec},
-            stage={**stage.describe(), **stage_meta, "spec": stage_spec},
-            extra={"intrinsics_source": str(args.intrinsics)} if args.intrinsics else None,
-        )
-    except BaseException:
-        _close(stage, camera)
-        raise
-    return session, stage, camera, CaptureEngine(stage, camera, session, encode=args.encode)
+    if planar:
+        plan = build_planar_plan(args)
+        board, intr = read_board(args.board), read_intrinsics(args.intrinsics)
+    else:
+        board = read_board(args.board)
+        plan = line_plan(args)
+    return device_session(args, board, plan, intr, stage_spec, camera_spec, **axes)
 
 
 def _resume(args: argparse.Namespace):
+    """(session, stage, camera, engine) going on with a session: on the rebuilt simulated rig (or gantry),
+    or on the devices the operator names."""
     from lps_gui.capture.engine import CaptureEngine
+    from lps_gui.errors import InputError
     from lps_gui.io.session import Session
 
     session = Session.open(args.resume)
+    if session.planar:
+        given = [s for s, v in (("--grid", args.grid), ("--targets-xy", args.targets_xy), ("--iso-lines", args.iso_lines),
+                                ("--pattern", args.pattern), ("--plan", args.plan)) if v]
+        if given:
+            raise InputError(f"{' '.join(given)}: a resumed session keeps its own plan; drop {given[0]}")
+    elif wants_planar(args):
+        raise InputError(f"{session.folder}: a single-axis session; resume it without the planar switches")
     truth = session.truth or {}
     if truth.get("simulated") and (args.camera or "sim") == "sim":
         from lps_gui.sim.session import reopen_simulated_rig, simulated_engine
 
-        stage, camera = reopen_simulated_rig(session, clock=_clock(args))
-        stage = _bind_stage(args.stage or "sim", stage, args.time_scale)
+        stage, camera = reopen_simulated_rig(session, clock=clock(args))
+        stage = bind_stage(args.stage or "sim", stage, args.time_scale)
         if "spec" not in (session.meta.get("stage") or {}) or "spec" not in (session.meta.get("camera") or {}):
             # a kill between the start's two session.json writes left the devices unrecorded: record them now
-            session.meta["stage"] = {**stage.describe(), "spec": args.stage or "sim"}
+            axes = {"axes": ["X", "Y"]} if session.planar else {}
+            session.meta["stage"] = {**stage.describe(), **axes, "spec": args.stage or "sim"}
             session.meta["camera"] = {**camera.properties(), "spec": "sim"}
             session.save_meta()
         return session, stage, camera, simulated_engine(session, stage, camera, args.encode)
     from lps_gui.cli.resume_devices import devices_named_by_operator
 
     stage_spec, camera_spec = devices_named_by_operator(session, args.stage, args.camera)
-    stage, camera = _open_devices(stage_spec, camera_spec, getattr(args, "cti", None))
+    stage, camera = open_devices(stage_spec, camera_spec, getattr(args, "cti", None))
     try:
-        _release_lock(args, stage)
+        release_lock(args, stage)
     except BaseException:
-        _close(stage, camera)
+        close(stage, camera)
         raise
     return session, stage, camera, CaptureEngine(stage, camera, session, encode=args.encode)
-
-
-def _preflight(args: argparse.Namespace, stage_spec: str, camera_spec: str) -> None:
-    from lps_gui.cli.capture_preflight import check_capture_args
-
-    check_capture_args(args, stage_spec, camera_spec)
-
-
-def _release_lock(args: argparse.Namespace, stage) -> None:
-    import sys
-
-    from lps_gui.capture.stage_lock import release_lock
-
-    done = release_lock(stage, "home" if args.home else "unlock" if args.unlock else None)
-    if done:
-        print(f"lps capture: the stage was locked in Alarm; {done} it", file=sys.stderr)
-
-
-def _open_devices(stage_spec: str, camera_spec: str, cti: str | None = None):
-    from lps_gui.camera import open_camera
-    from lps_gui.errors import InputError
-    from lps_gui.hardware import open_stage
-
-    if camera_spec == "sim":
-        raise InputError("--camera sim follows only the simulated rig; use --stage sim or emulator")
-    stage = open_stage(stage_spec)
-    try:
-        camera = open_camera(camera_spec, **({"cti": cti} if cti else {}))
-    except BaseException:
-        stage.disconnect()
-        raise
-    return stage, camera
-
-
-def bind_simulated_stage(args: argparse.Namespace, session, rig_stage, camera, stage_spec: str, **stage_meta):
-    """The simulated rig's stage as the command line asked for it (direct or through the emulator), unlocked
-    as asked, and recorded in session.json with the camera and the intrinsics' source."""
-    stage = _bind_stage(stage_spec, rig_stage, args.time_scale)
-    _release_lock(args, stage)
-    session.meta["stage"] = {**stage.describe(), **stage_meta, "spec": stage_spec}
-    session.meta["camera"] = {**camera.properties(), "spec": "sim"}
-    if args.intrinsics:
-        session.meta["intrinsics_source"] = str(args.intrinsics)
-    session.save_meta()
-    return stage
-
-
-def _bind_stage(stage_spec: str, rig_stage, time_scale: float = 1.0):
-    """Connect the simulated rig's stage directly ("sim") or through the GRBL emulator ("emulator")."""
-    from lps_gui.errors import InputError
-
-    if stage_spec == "sim":
-        rig_stage.connect()
-        return rig_stage
-    if stage_spec == "emulator":
-        from lps_gui.sim.emulated import emulated_rig_stage
-
-        return emulated_rig_stage(rig_stage, time_scale=time_scale)
-    raise InputError(f"--stage {stage_spec}: the simulated camera rides only --stage sim or emulator")
-
-
-def _clock(args: argparse.Namespace):
-    from lps_gui.core.clock import RealClock, SimClock
-
-    return RealClock() if args.real_time else SimClock()
-
-
-def _read_intrinsics(path: str | None):
-    if not path:
-        return None
-    from lps_gui.io.intrinsics_file import read_intrinsics
-
-    return read_intrinsics(path)
-
-
-def _close(stage, camera) -> None:
-    for fn in (camera.close, stage.disconnect):
-        try:
-            fn()
-        except Exception:  # closing a vanished device must not hide the capture's own result
-            pass

@@ -27,10 +27,9 @@ def run(args: argparse.Namespace) -> int:
     if (args.out.suffix or args.out.exists() or args.out.is_symlink()) and not args.out.is_dir():
         raise InputError(f"--out {args.out}: lps demo writes a folder of files; give a folder name without a suffix")
 
-    if args.planar:
-        from lps_gui.pipeline.demo_planar import run_planar_demo as run_demo
     t0 = time.monotonic()
-    res = run_demo(args.out, quick=args.quick, bar=ProgressBar, say=lambda line: print(line, flush=True), seed=args.seed)
+    res = run_demo(args.out, quick=args.quick, bar=ProgressBar, say=lambda line: print(line, flush=True), seed=args.seed,
+                   planar=args.planar)
     print()
     if res.report_pdf is None:
         print(f"demo stopped before the report; files so far in {res.out_dir}")

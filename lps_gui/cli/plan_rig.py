@@ -79,7 +79,6 @@ def _board(args: argparse.Namespace):
 
 def _plan(args: argparse.Namespace):
     from lps_gui.core.plan import Plan
-    from lps_gui.core.planar_plan import PlanarPlan
     from lps_gui.errors import InputError
 
     dims = {len(args.start), len(args.stop), len(args.step)}
@@ -87,7 +86,7 @@ def _plan(args: argparse.Namespace):
         return Plan(start_mm=args.start[0], stop_mm=args.stop[0], step_mm=args.step[0], overshoot_mm=0.0)
     if dims <= {1, 2} and len(args.stop) == 2:
         pair = [(v * 2 if len(v) == 1 else v) for v in (args.start, args.stop, args.step)]
-        return PlanarPlan(start_mm=tuple(pair[0]), stop_mm=tuple(pair[1]), step_mm=tuple(pair[2]), overshoot_mm=0.0)
+        return Plan.xy(start_mm=tuple(pair[0]), stop_mm=tuple(pair[1]), step_mm=tuple(pair[2]), overshoot_mm=0.0)
     raise InputError("plan-rig: --start, --stop and --step take one value (a line) or two, X,Y (a planar grid)")
 
 

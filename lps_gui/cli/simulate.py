@@ -124,18 +124,18 @@ def build_planar_spec(args: argparse.Namespace):
     """The planar preset with the command line's overrides."""
     from dataclasses import replace
 
-    from lps_gui.core.planar_plan import PlanarPlan
-    from lps_gui.core.planar_simulate import paper_planar_errors, planar_preset
+    from lps_gui.core.plan import Plan
+    from lps_gui.core.simulate import paper_planar_errors, preset
     from lps_gui.errors import InputError
 
-    spec = planar_preset(args.preset or "paper-planar", seed=args.seed)
+    spec = preset(args.preset or "paper-planar", planar=True, seed=args.seed)
     plan = spec.plan
     if args.grid:
         try:
             (x0, y0), (x1, y1), (dx, dy) = (tuple(float(v) for v in part.split(",")) for part in args.grid.split(":"))
         except ValueError:
             raise InputError(f"simulate: --grid {args.grid!r} is not X0,Y0:X1,Y1:DX,DY (mm)") from None
-        plan = PlanarPlan(start_mm=(x0, y0), stop_mm=(x1, y1), step_mm=(dx, dy))
+        plan = Plan.xy(start_mm=(x0, y0), stop_mm=(x1, y1), step_mm=(dx, dy))
     if args.directions:
         plan = replace(plan, directions=args.directions)
     if args.runs:
@@ -149,7 +149,7 @@ def build_planar_spec(args: argparse.Namespace):
     elif spec.name == "paper-planar":
         overrides["rig"] = replace(spec.rig, errors=paper_planar_errors())
     if args.grid:  # re-centre the camera on the new grid
-        from lps_gui.core.planar_simulate import PLANAR_PRESETS
+        from lps_gui.core.simulate import PLANAR_PRESETS
 
         base = PLANAR_PRESETS[spec.name](seed=args.seed, plan=plan, errors=overrides.get("rig", spec.rig).errors)
         overrides["rig"] = base.rig
@@ -163,8 +163,8 @@ def _run_planar(args: argparse.Namespace, out) -> int:
         raise InputError("simulate --planar: only --points sessions yet; rendered planar images come from "
                          "`lps capture` on the simulated gantry")
     spec = build_planar_spec(args)
-    from lps_gui.sim.planar_points import simulate_planar_point_session
+    from lps_gui.sim.points import simulate_point_session
 
-    session = simulate_planar_point_session(spec, out)
+    session = simulate_point_session(spec, out)
     print(f"wrote planar point-level session ({spec.plan.n_frames()} views on X,Y, preset {spec.name}) to {session.folder}")
     return 0

@@ -1,11 +1,19 @@
-"""A simulated rig: board, camera, how the camera sits on the stage, and the stage's errors.
+"""A simulated rig: board, camera, how the camera sits on the stage (one axis or an XY gantry), and the stage's errors.
 
-The rig turns a :class:`TruePose` of the carriage into camera poses, so the
-point simulator, the image simulator and the simulated stage share one truth.
+The rig turns the carriage's true pose (:class:`TruePose` on one axis,
+:class:`PlanarTruePose` on two) into camera poses, so the point simulator,
+the image simulator and the simulated stage share one truth. One
+:class:`Rig` of one or two axes faces the board (:func:`facing_camera`) and
+carries the camera (:func:`carried_camera_poses`).
+
+On a gantry, stage-plane coordinates (mm) are in an orthonormal frame with x
+along the X-axis motion and y perpendicular to it in the plane of motion
+(SPEC 10); the axes are not square (``PlanarErrorModel.squareness_urad``).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -13,7 +21,7 @@ from lps_gui.core.board import Board
 from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.lps_model import motion_frame, unit
 from lps_gui.core.rotation import exp_so3
-from lps_gui.core.stage_errors import StageErrorModel, TruePose
+from lps_gui.core.stage_errors import PlanarErrorModel, PlanarTruePose, StageErrorModel, TruePose
 
 
 def carried_camera_poses(R_cam_board: np.ndarray, C_board: np.ndarray, w_board: np.ndarray
@@ -29,28 +37,62 @@ def carried_camera_poses(R_cam_board: np.ndarray, C_board: np.ndarray, w_board: 
     return R, t
 
 
+def facing_camera(board: Board, distance_mm: float, tilt_deg: tuple[float, float, float]
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """A camera slightly tilted by ``tilt_deg`` that sees the board centre from ``distance_mm``:
+    its orientation R_cam_board (3, 3) and its centre (3,) mm in the board frame."""
+    R = exp_so3(np.deg2rad(np.asarray(tilt_deg)))
+    optical_axis_board = R.T @ np.array([0.0, 0.0, 1.0])
+    return R, board.centre_mm() - distance_mm * optical_axis_board
+
+
 @dataclass(frozen=True)
 class Rig:
-    """Everything the simulators need to know about the physical set-up."""
+    """Everything the simulators need to know about the physical set-up, on one axis or an XY gantry.
+
+    ``axes_board`` says how the stage moves in the board frame: on one axis
+    the unit motion direction u, shape (3,); on a gantry the stage frame,
+    shape (3, 3), columns e_x, e_y, e_n (SPEC 10). ``errors`` is the stage's
+    error model of as many axes.
+    """
 
     board: Board
     intrinsics: CameraIntrinsics
     R_cam_board: np.ndarray  # shape (3, 3): camera orientation with no angular error
-    C0_board: np.ndarray  # shape (3,) mm: camera centre at commanded position 0
-    u_board: np.ndarray  # shape (3,): unit motion direction of the carriage
-    errors: StageErrorModel
+    C0_board: np.ndarray  # shape (3,) mm: camera centre at commanded position 0 (or (0, 0))
+    axes_board: np.ndarray  # shape (3,) on one axis, (3, 3) on a gantry
+    errors: StageErrorModel | PlanarErrorModel
+
+    @property
+    def planar(self) -> bool:
+        return np.ndim(self.axes_board) == 2
+
+    @property
+    def u_board(self) -> np.ndarray:
+        """One axis: the unit motion direction of the carriage, shape (3,)."""
+        return self.axes_board
 
     def frame(self) -> np.ndarray:
-        """Motion frame (u, v1, v2) as columns in the board frame."""
-        return motion_frame(self.R_cam_board, self.u_board)
+        """Columns (u, v1, v2) of the motion frame on one axis, (e_x, e_y, e_n) on a gantry, in the board frame."""
+        return self.axes_board if self.planar else motion_frame(self.R_cam_board, self.axes_board)
 
-    def camera_poses(self, pose: TruePose) -> tuple[np.ndarray, np.ndarray]:
+    def camera_centres(self, pose: PlanarTruePose) -> np.ndarray:
+        """A gantry's true camera centres in the board frame, shape (K, 3) mm."""
+        E = self.axes_board
+        return (self.C0_board[None, :] + pose.plane_mm @ E[:, :2].T
+                + 1e-3 * pose.normal_um[:, None] * E[None, :, 2])
+
+    def camera_poses(self, pose: TruePose | PlanarTruePose) -> tuple[np.ndarray, np.ndarray]:
         """Camera poses for true carriage poses.
 
         Returns R_cam_board shape (K, 3, 3) and t_cam_board shape (K, 3) mm.
-        The carriage rotates by Q = exp(roll u + pitch v1 + yaw v2) in the
-        board frame, so the camera's orientation becomes R Q^T.
+        The carriage rotates by Q = exp(w) in the board frame, w its angles
+        about the frame's axes (roll u + pitch v1 + yaw v2 on one axis), so the
+        camera's orientation becomes R Q^T.
         """
+        if isinstance(pose, PlanarTruePose):
+            return carried_camera_poses(self.R_cam_board, self.camera_centres(pose),
+                                        1e-6 * pose.angles_urad @ self.axes_board.T)
         F = self.frame()
         u, v1, v2 = F[:, 0], F[:, 1], F[:, 2]
         C = (
@@ -66,21 +108,36 @@ class Rig:
         board: Board,
         intrinsics: CameraIntrinsics,
         distance_mm: float,
-        travel_mm: tuple[float, float],
-        errors: StageErrorModel | None = None,
+        over_mm: tuple[float, float],
+        errors: StageErrorModel | PlanarErrorModel | None = None,
         tilt_deg: tuple[float, float, float] = (2.0, -3.0, 1.0),
-        axis_misalignment_deg: tuple[float, float] = (0.5, -0.3),
+        misalignment_deg: tuple[float, ...] | None = None,
+        planar: bool | None = None,
     ) -> "Rig":
-        """A camera looking at the board from ``distance_mm``, moving along the board's x.
+        """A camera looking at the board from ``distance_mm``, slightly tilted, the motion slightly misaligned,
+        as on any real rig.
 
-        The board centre is seen at mid-travel; the camera is slightly tilted
-        and the axis slightly misaligned, as on any real rig.
+        One axis: the camera moves along the board's x; ``over_mm`` is the
+        travel (lo, hi), whose middle sees the board centre; the axis is
+        misaligned by two angles (default (0.5, -0.3) deg). A gantry
+        (``planar``, or a :class:`PlanarErrorModel`): the stage plane nearly
+        parallel to the board, the board centre seen when the carriage is at
+        ``over_mm`` = (x, y); the plane is turned by three angles (default
+        (0.5, -0.3, 0.4) deg).
         """
-        R = exp_so3(np.deg2rad(np.asarray(tilt_deg)))
-        a, b = np.deg2rad(axis_misalignment_deg)
+        planar = isinstance(errors, PlanarErrorModel) if planar is None else planar
+        R, C_mid = facing_camera(board, distance_mm, tilt_deg)
+        if planar:
+            E = exp_so3(np.deg2rad(np.asarray(misalignment_deg or (0.5, -0.3, 0.4))))  # columns: e_x, e_y, e_n
+            C0 = C_mid - E[:, :2] @ np.asarray(over_mm, dtype=float)
+            return cls(board, intrinsics, R, C0, E, errors or PlanarErrorModel())
+        a, b = np.deg2rad(misalignment_deg or (0.5, -0.3))
         u = unit(np.array([np.cos(a) * np.cos(b), np.sin(a), np.sin(b)]))
-        mid = 0.5 * (travel_mm[0] + travel_mm[1])
-        optical_axis_board = R.T @ np.array([0.0, 0.0, 1.0])
-        C_mid = board.centre_mm() - distance_mm * optical_axis_board
+        mid = 0.5 * (over_mm[0] + over_mm[1])
         C0 = C_mid - mid * u
         return cls(board, intrinsics, R, C0, u, errors or StageErrorModel())
+
+    def to_dict(self) -> dict[str, Any]:
+        """A gantry's rig as session.json's truth holds it (SPEC 10)."""
+        return {"R_cam_board": self.R_cam_board.tolist(), "C0_board": self.C0_board.tolist(),
+                "axes_board": self.axes_board.tolist(), "stage_errors": self.errors.to_dict()}

@@ -19,7 +19,6 @@ from lps_gui.core.board import Board
 from lps_gui.core.camera_model import CameraIntrinsics, project_board
 from lps_gui.core.iso230_run import JsonDataclass
 from lps_gui.core.plan import Plan
-from lps_gui.core.planar_plan import PlanarPlan
 from lps_gui.errors import InputError
 
 EDGE_MARGIN_PX = 10.0  # corners closer to the image edge than this are not trusted to be detected
@@ -53,21 +52,22 @@ def intrinsics_from_lens(focal_mm: float, pixel_um: float, image_size: tuple[int
     return CameraIntrinsics.from_values((int(w), int(h)), f_px, f_px, (w - 1) / 2.0, (h - 1) / 2.0, dist=dist)
 
 
-def predict_rig(board: Board, intrinsics: CameraIntrinsics, distance_mm: float, plan: Plan | PlanarPlan,
+def predict_rig(board: Board, intrinsics: CameraIntrinsics, distance_mm: float, plan: Plan,
                 noise_px: float = 0.1) -> RigPrediction:
     """Project the board along the plan and compute the Cramér-Rao bound of every position."""
     if not distance_mm > 0:
         raise InputError(f"plan-rig: the camera distance must be positive, got {distance_mm}")
     if not noise_px > 0:
         raise InputError(f"plan-rig: the corner noise must be positive, got {noise_px}")
-    planar = isinstance(plan, PlanarPlan)
+    planar = plan.planar
     X = board.object_points()
     if planar:
-        from lps_gui.core.planar_rig import PlanarRig, PlanarTruePose
+        from lps_gui.core.rig import Rig
+        from lps_gui.core.stage_errors import PlanarTruePose
 
         targets = plan.targets()
         centre = (0.5 * (targets[:, 0].min() + targets[:, 0].max()), 0.5 * (targets[:, 1].min() + targets[:, 1].max()))
-        rig = PlanarRig.facing_board(board, intrinsics, distance_mm, centre)
+        rig = Rig.facing_board(board, intrinsics, distance_mm, centre, planar=True)
         K = targets.shape[0]
         R, t = rig.camera_poses(PlanarTruePose(targets, np.zeros(K), np.zeros((K, 3))))
         mid = rig.camera_poses(PlanarTruePose(np.array([centre]), np.zeros(1), np.zeros((1, 3))))
@@ -122,7 +122,7 @@ def _crb_sigma_um(rig: Any, planar: bool, targets: np.ndarray, R: np.ndarray, t:
     if planar:
         from lps_gui.core.block_arrowhead import block_arrowhead_inverse
         from lps_gui.core.planar_model import linearize_planar
-        from lps_gui.core.planar_simulate import nominal_planar_state
+        from lps_gui.core.simulate import nominal_planar_state
 
         st = nominal_planar_state(rig, targets - targets[0])
         st.l0 = st.l0 + st.basis @ targets[0]

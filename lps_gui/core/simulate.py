@@ -1,8 +1,12 @@
-"""Synthetic LPS sessions with known truth (point level), and the rig presets.
+"""Synthetic LPS sessions with known truth (point level), and the rig presets, on one axis or two.
 
 A :class:`SimulationSpec` is the whole description of a simulated experiment:
-rig, plan, corner noise, missing corners and injected outlier views. The
-image simulator renders the same spec; here we only project the corners.
+rig (a :class:`Rig` on one axis, a :class:`Rig` on an XY gantry), plan,
+corner noise, missing corners and injected outlier views. The image
+simulator renders the same spec; here we only project the corners. On a
+gantry the truth also holds the board-plane positions (what a
+constant-orientation model measures when the carriage tilts: the Abbe
+convention of the 1-D case).
 """
 from __future__ import annotations
 
@@ -14,9 +18,10 @@ import numpy as np
 from lps_gui.core.board import Board
 from lps_gui.core.camera_model import CameraIntrinsics, project_board
 from lps_gui.core.plan import Plan, PlannedStop
+from lps_gui.core.planar_model import PlanarState, planar_positions_only
 from lps_gui.core.rig import Rig
 from lps_gui.core.rotation import exp_so3
-from lps_gui.core.stage_errors import ErrorProfile, StageErrorModel, TruePose
+from lps_gui.core.stage_errors import ErrorProfile, PlanarErrorModel, PlanarTruePose, StageErrorModel, TruePose
 from lps_gui.errors import InputError
 
 
@@ -25,7 +30,7 @@ class SimulationSpec:
     """A simulated experiment; every random draw comes from ``seed``."""
 
     name: str
-    rig: Rig
+    rig: Rig  # as many axes as the plan
     plan: Plan
     noise_px: float = 0.1
     noise_clip_px: float | None = None  # paper's synthetic case: |noise| < 1 px
@@ -46,6 +51,30 @@ class SimulatedViews:
     R_cam_board: np.ndarray  # shape (K, 3, 3): true poses
     t_cam_board: np.ndarray  # shape (K, 3)
     truth: dict[str, Any] = field(default_factory=dict)
+    pose: PlanarTruePose | None = None  # a gantry's true poses
+    board_plane_mm: np.ndarray | None = None  # gantry, (K, 2): true positions as the constant-orientation model sees them
+
+
+def nominal_planar_state(rig: Rig, xy_mm: np.ndarray) -> PlanarState:
+    """The planar model of an error-free rig, positions ``xy_mm`` (K, 2) in the stage plane."""
+    R = rig.R_cam_board
+    l0 = -R @ rig.C0_board
+    P = R @ (-rig.axes_board)  # n_x = -R e_x, n_y = -R e_y; third column completes a rotation
+    P[:, 2] = np.cross(P[:, 0], P[:, 1])
+    return PlanarState(R.copy(), l0, P, np.asarray(xy_mm, dtype=float).copy(), rig.intrinsics)
+
+
+def bump_views(R: np.ndarray, views: tuple[int, ...], bump_mrad: float, rng: np.random.Generator, what: str) -> None:
+    """Knock the camera at ``views`` (in place): a rotation by ``bump_mrad``, mostly about the optical axis
+    (not absorbable by a shift)."""
+    K = len(R)
+    for i in views:
+        if not 0 <= i < K:
+            raise InputError(f"{what}: bumped view {i} is outside 0..{K - 1}")
+        axis = rng.normal(size=3)
+        axis[2] = abs(axis[2]) + 1.0
+        axis /= np.linalg.norm(axis)
+        R[i] = exp_so3(axis * bump_mrad * 1e-3) @ R[i]
 
 
 def true_views(spec: SimulationSpec, rng: np.random.Generator) -> tuple[list[PlannedStop], np.ndarray, np.ndarray, dict]:
@@ -61,14 +90,7 @@ def true_views(spec: SimulationSpec, rng: np.random.Generator) -> tuple[list[Pla
     direction = np.array([1.0 if s.direction == "+" else -1.0 for s in stops])
     pose = spec.rig.errors.true_pose(target, direction, rng)
     R, t = spec.rig.camera_poses(pose)
-    K = len(stops)
-    for i in spec.bumped_views:
-        if not 0 <= i < K:
-            raise InputError(f"simulation: bumped view {i} is outside 0..{K - 1}")
-        axis = rng.normal(size=3)
-        axis[2] = abs(axis[2]) + 1.0  # mostly about the optical axis: not absorbable by a shift
-        axis /= np.linalg.norm(axis)
-        R[i] = exp_so3(axis * spec.bump_mrad * 1e-3) @ R[i]
+    bump_views(R, spec.bumped_views, spec.bump_mrad, rng, "simulation")
     s_true = pose.axis_mm - pose.axis_mm[0]
     truth = {
         "positions_mm": s_true.tolist(),
@@ -91,27 +113,66 @@ def true_views(spec: SimulationSpec, rng: np.random.Generator) -> tuple[list[Pla
     return stops, R, t, truth
 
 
+def planar_true_views(spec: SimulationSpec, rng: np.random.Generator
+                      ) -> tuple[list[PlannedStop], np.ndarray, np.ndarray, PlanarTruePose]:
+    """A gantry's :func:`true_views`: per-axis approach sides (backlash), repeatability once per stop."""
+    stops = list(spec.plan.stops())
+    if not stops:
+        raise InputError("planar simulation: the plan has no targets")
+    target = np.array([s.target_mm for s in stops])
+    approach = np.array([s.approach for s in stops], dtype=float)
+    pose = spec.rig.errors.true_pose(target, approach, rng)
+    R, t = spec.rig.camera_poses(pose)
+    bump_views(R, spec.bumped_views, spec.bump_mrad, rng, "planar simulation")
+    return stops, R, t, pose
+
+
 def simulate_views(spec: SimulationSpec) -> SimulatedViews:
-    """Project the board through every true pose, add noise, drop and swap views."""
+    """Project the board through every true pose, add noise, drop and swap views (one or two axes)."""
     rng = np.random.default_rng(spec.seed)
-    stops, R, t, truth = true_views(spec, rng)
+    pose = board_plane = None
+    if spec.plan.planar:
+        stops, R, t, pose = planar_true_views(spec, rng)
+    else:
+        stops, R, t, truth = true_views(spec, rng)
     X = spec.rig.board.object_points()
     uv = project_board(R, t, X, spec.rig.intrinsics)  # shape (K, N, 2)
+    if pose is not None:
+        board_plane = planar_positions_only(nominal_planar_state(spec.rig, pose.plane_mm), X, uv,
+                                            np.ones(uv.shape[:2], bool))
+        truth = planar_truth(spec, pose, board_plane)
     noise = rng.normal(0.0, spec.noise_px, size=uv.shape)
     if spec.noise_clip_px is not None:
         noise = np.clip(noise, -spec.noise_clip_px, spec.noise_clip_px)
     corners = uv + noise
     K = len(stops)
+    what = "planar simulation" if spec.plan.planar else "simulation"
     for i in spec.replaced_views:
         if not 0 <= i < K:
-            raise InputError(f"simulation: replaced view {i} is outside 0..{K - 1}")
+            raise InputError(f"{what}: replaced view {i} is outside 0..{K - 1}")
         j = (i + spec.replaced_offset) % K
         corners[i] = uv[j] + rng.normal(0.0, spec.noise_px, size=uv[j].shape)
     w, h = spec.rig.intrinsics.image_size
     outside = (corners[..., 0] < 0) | (corners[..., 0] > w - 1) | (corners[..., 1] < 0) | (corners[..., 1] > h - 1)
     missing = outside | (rng.random(corners.shape[:2]) < spec.missing_fraction)
     corners[missing] = np.nan
-    return SimulatedViews(stops, corners, R, t, truth)
+    return SimulatedViews(stops, corners, R, t, truth, pose, board_plane)
+
+
+def planar_truth(spec: SimulationSpec, pose: PlanarTruePose, board_plane_mm: np.ndarray) -> dict[str, Any]:
+    """The truth record of a simulated gantry session (session.json ``truth``, SPEC 10)."""
+    return {
+        "axes": ["X", "Y"],
+        "plane_mm": pose.plane_mm.tolist(),
+        "board_plane_mm": board_plane_mm.tolist(),
+        "normal_um": pose.normal_um.tolist(),
+        "angles_urad": pose.angles_urad.tolist(),
+        "replaced_views": list(spec.replaced_views),
+        "bumped_views": list(spec.bumped_views),
+        "rig": spec.rig.to_dict(),
+        "noise_px": spec.noise_px,
+        "seed": spec.seed,
+    }
 
 
 # ----------------------------------------------------------------------------- presets
@@ -184,18 +245,55 @@ def small_spec(
     return SimulationSpec("small", rig, plan, noise_px=noise_px, seed=seed)
 
 
+def paper_planar_errors(squareness_urad: float = 150.0, scale_x_ppm: float = 80.0,
+                        scale_y_ppm: float = -50.0) -> PlanarErrorModel:
+    """The paper's XY gantry as we assume it: lead screws with periodic error, out of square."""
+    x = StageErrorModel(scale_ppm=scale_x_ppm, periodic_um=3.0, pitch_mm=5.0, backlash_um=5.0, repeatability_um=0.5,
+                        straightness_um=(ErrorProfile(poly=(0.0, 0.0, -60.0)), ErrorProfile(poly=(0.0, 10.0))))
+    y = StageErrorModel(scale_ppm=scale_y_ppm, periodic_um=2.0, pitch_mm=4.0, periodic_phase_rad=1.0, backlash_um=4.0,
+                        repeatability_um=0.5,
+                        straightness_um=(ErrorProfile(amplitude=2.0, period_mm=70.0), ErrorProfile()))
+    return PlanarErrorModel(x=x, y=y, squareness_urad=squareness_urad)
+
+
+def paper_planar_spec(seed: int = 0, noise_px: float = 0.1, errors: PlanarErrorModel | None = None,
+                      plan: Plan | None = None, distance_mm: float = 600.0) -> SimulationSpec:
+    """The paper's camera and board on an XY gantry: a 15 x 9 grid at 10 mm, 600 mm from the board."""
+    board = Board(cols=30, rows=18, square_mm=10.0)
+    plan = plan or Plan.xy(start_mm=(0.0, 0.0), stop_mm=(140.0, 80.0), step_mm=(10.0, 10.0))
+    t = plan.targets()
+    centre = (0.5 * (t[:, 0].min() + t[:, 0].max()), 0.5 * (t[:, 1].min() + t[:, 1].max()))
+    rig = Rig.facing_board(board, PAPER_INTRINSICS, distance_mm, centre,
+                                 errors=errors if errors is not None else paper_planar_errors())
+    return SimulationSpec("paper-planar", rig, plan, noise_px=noise_px, seed=seed)
+
+
+def small_planar_spec(seed: int = 0, noise_px: float = 0.2, errors: PlanarErrorModel | None = None,
+                      plan: Plan | None = None) -> SimulationSpec:
+    """A small, fast planar case for tests: 640x480, 9x6 board, a 6 x 4 grid."""
+    one_d = small_spec()
+    plan = plan or Plan.xy(start_mm=(0.0, 0.0), stop_mm=(50.0, 30.0), step_mm=(10.0, 10.0))
+    t = plan.targets()
+    centre = (0.5 * (t[:, 0].min() + t[:, 0].max()), 0.5 * (t[:, 1].min() + t[:, 1].max()))
+    rig = Rig.facing_board(one_d.rig.board, one_d.rig.intrinsics, 500.0, centre,
+                                 errors=errors if errors is not None else paper_planar_errors())
+    return SimulationSpec("small-planar", rig, plan, noise_px=noise_px, seed=seed)
+
+
 PRESETS = {
     "paper-rig": paper_rig_spec,
     "paper-synthetic": paper_synthetic_spec,
     "small": small_spec,
 }
+PLANAR_PRESETS = {"paper-planar": paper_planar_spec, "small-planar": small_planar_spec}
 
 
-def preset(name: str, **overrides: Any) -> SimulationSpec:
-    """A named preset; keyword overrides replace fields of the spec."""
-    if name not in PRESETS:
-        raise InputError(f"simulation: unknown preset {name!r}; choose one of {', '.join(PRESETS)}")
-    spec = PRESETS[name]()
+def preset(name: str, planar: bool = False, **overrides: Any) -> SimulationSpec:
+    """A named preset (of an XY gantry when ``planar``); keyword overrides replace fields of the spec."""
+    table, what = (PLANAR_PRESETS, "planar simulation") if planar else (PRESETS, "simulation")
+    if name not in table:
+        raise InputError(f"{what}: unknown preset {name!r}; choose one of {', '.join(table)}")
+    spec = table[name]()
     return replace(spec, **overrides) if overrides else spec
 
 

@@ -6,6 +6,11 @@ truth a test compares against is one object. Error motions follow ISO 230-1
 vocabulary: positioning error along the axis (scale, lead-screw periodic
 error, backlash, repeatability), two straightness errors and three angular
 errors (roll, pitch, yaw).
+
+An XY gantry (SPEC 10) is two such axes, each a function of its own
+commanded position, plus squareness: :class:`PlanarErrorModel`. Straightness
+profile 0 of an axis is in the plane (X's along y, Y's along x), profile 1
+out of the plane (along the plane normal).
 """
 from __future__ import annotations
 
@@ -130,3 +135,48 @@ class StageErrorModel:
             **angles,
             **scalars,
         )
+
+
+@dataclass(frozen=True)
+class PlanarTruePose:
+    """Where the carriage really is, for K commanded (x, y) positions."""
+
+    plane_mm: np.ndarray  # shape (K, 2): true position in the stage plane
+    normal_um: np.ndarray  # shape (K,): out-of-plane displacement
+    angles_urad: np.ndarray  # shape (K, 3): rotation about stage x, y and the plane normal
+
+
+@dataclass(frozen=True)
+class PlanarErrorModel:
+    """Errors of an XY gantry: one :class:`StageErrorModel` per axis plus squareness."""
+
+    x: StageErrorModel = field(default_factory=StageErrorModel)
+    y: StageErrorModel = field(default_factory=StageErrorModel)
+    squareness_urad: float = 0.0  # angle between +X and +Y motion minus 90 deg
+
+    def true_pose(self, commanded_mm: np.ndarray, direction: np.ndarray,
+                  rng: np.random.Generator | None = None) -> PlanarTruePose:
+        """True pose for commanded (x, y) (shape (K, 2)) approached in ``direction`` (K, 2) of +-1."""
+        c = np.atleast_2d(np.asarray(commanded_mm, dtype=float))
+        d = np.broadcast_to(np.asarray(direction, dtype=float), c.shape)
+        px = self.x.true_pose(c[:, 0], d[:, 0], rng)
+        py = self.y.true_pose(c[:, 1], d[:, 1], rng)
+        g = self.squareness_urad * 1e-6
+        # the Y carriage moves along (-sin g, cos g); each axis' in-plane straightness is across its motion
+        x_true = px.axis_mm - np.sin(g) * py.axis_mm + 1e-3 * py.straightness_um[:, 0]
+        y_true = np.cos(g) * py.axis_mm + 1e-3 * px.straightness_um[:, 0]
+        normal = px.straightness_um[:, 1] + py.straightness_um[:, 1]
+        # X's roll is about x, Y's about y; pitch of X is about y (its v1 ~ y), of Y about x
+        angles = np.stack([px.angles_urad[:, 0] + py.angles_urad[:, 1],
+                           px.angles_urad[:, 1] + py.angles_urad[:, 0],
+                           px.angles_urad[:, 2] + py.angles_urad[:, 2]], axis=-1)
+        return PlanarTruePose(np.stack([x_true, y_true], axis=-1), normal, angles)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"x": self.x.to_dict(), "y": self.y.to_dict(), "squareness_urad": self.squareness_urad}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any] | None) -> "PlanarErrorModel":
+        d = d or {}
+        return cls(StageErrorModel.from_dict(d.get("x")), StageErrorModel.from_dict(d.get("y")),
+                   float(d.get("squareness_urad", 0.0)))

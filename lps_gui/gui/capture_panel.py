@@ -39,7 +39,7 @@ PLAN_FIELDS = ("start_mm", "stop_mm", "step_mm", "directions", "runs", "overshoo
 
 def is_simulated_rig(stage: Any, camera: Any) -> bool:
     """Whether ``camera`` renders what ``stage`` (a simulated rig) really does: truth can be recorded."""
-    return getattr(camera, "pose_source", None) == getattr(stage, "true_pose", object()) and hasattr(stage, "seed_capture")
+    return camera.pose_source is not None and camera.pose_source == stage.true_pose
 
 
 def sim_spec() -> Any:
@@ -254,10 +254,10 @@ class CapturePanel(QWidget):
             self.run_requested.emit(exc)
             return
         if gantry:  # the simulated XY gantry built for this plan, its truth recorded
-            from lps_gui.sim.planar_rig import start_gantry_session
+            from lps_gui.sim.session import start_rig_session
 
             self.set_board(gantry[0].rig.board)
-            self._run(folder, lambda: start_gantry_session(folder, gantry[0], stage, camera, extra=extra), stage, camera)
+            self._run(folder, lambda: start_rig_session(folder, gantry[0], stage, camera, extra=extra), stage, camera)
             return
         simulated = is_simulated_rig(stage, camera)
         if simulated:

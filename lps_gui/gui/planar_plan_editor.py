@@ -24,7 +24,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from lps_gui.core.planar_plan import PATTERNS, PlanarPlan, iso_lines_on_grid
+from lps_gui.core.plan import PATTERNS, Plan, iso_lines_on_grid
 from lps_gui.errors import InputError
 from lps_gui.gui.widgets import add_rows, double_spin
 
@@ -41,7 +41,7 @@ ISO_LEVELS, ISO_RUNS = 3, 5  # the ISO 230-2 lines preset: 3 lines per axis, 5 r
 SHARED_FIELDS = ("directions", "runs", "overshoot_mm", "settle_s", "frames_per_stop", "feed_mm_min")
 
 
-def planar_duration_s(plan: PlanarPlan, accel_mm_s2: float = 200.0, grab_s: float = 0.05) -> float:
+def planar_duration_s(plan: Plan, accel_mm_s2: float = 200.0, grab_s: float = 0.05) -> float:
     """Rough stage time of a planar plan (s): each axis moves on its own at the feed, plus settles and grabs."""
     from lps_gui.hardware.motion import duration_s
 
@@ -54,7 +54,7 @@ def planar_duration_s(plan: PlanarPlan, accel_mm_s2: float = 200.0, grab_s: floa
     return plan.runs * (total + n_stops * (plan.settle_s + plan.frames_per_stop * grab_s))
 
 
-def visiting_path(plan: PlanarPlan) -> np.ndarray:
+def visiting_path(plan: Plan) -> np.ndarray:
     """The forward pass' targets in visiting order, shape (m, 2) mm."""
     return plan.targets()
 
@@ -151,18 +151,18 @@ class PlanarPlanEditor(QGroupBox):
     def gantry_preset(self) -> str:
         return str(self.gantry.currentData() or GANTRY_OFF)
 
-    def plan(self, **shared: Any) -> PlanarPlan:
+    def plan(self, **shared: Any) -> Plan:
         """The planar plan of the fields, with the shared fields (``shared`` or the panel's); InputError if invalid."""
         fields = {k: v for k, v in {**self.shared(), **shared}.items() if k in SHARED_FIELDS}
-        grid = PlanarPlan(start_mm=(self.start_x.value(), self.start_y.value()),
-                          stop_mm=(self.stop_x.value(), self.stop_y.value()),
-                          step_mm=(self.step_x.value(), self.step_y.value()),
-                          pattern=str(self.pattern.currentData()), **fields)
+        grid = Plan.xy(start_mm=(self.start_x.value(), self.start_y.value()),
+                       stop_mm=(self.stop_x.value(), self.stop_y.value()),
+                       step_mm=(self.step_x.value(), self.step_y.value()),
+                       pattern=str(self.pattern.currentData()), **fields)
         if not self.iso_lines.isChecked():
             return grid
         return iso_lines_on_grid(grid, ISO_LEVELS, ISO_RUNS)
 
-    def set_plan(self, plan: PlanarPlan) -> None:
+    def set_plan(self, plan: Plan) -> None:
         """Show ``plan`` (e.g. of a session being resumed); explicit target lists show their extent."""
         t = plan.targets()
         start = plan.start_mm if plan.targets_mm is None else (float(t[:, 0].min()), float(t[:, 1].min()))
@@ -190,25 +190,25 @@ class PlanarPlanEditor(QGroupBox):
         self.refresh()
 
     # ------------------------------------------------------------------ the simulated gantry
-    def gantry_spec(self, plan: PlanarPlan) -> Any:
+    def gantry_spec(self, plan: Plan) -> Any:
         """The simulated gantry's spec for ``plan`` (camera centred over it), or None when a real stage is used."""
         name = self.gantry_preset()
         if not name:
             return None
-        from lps_gui.core.planar_simulate import PLANAR_PRESETS
+        from lps_gui.core.simulate import PLANAR_PRESETS
 
         return PLANAR_PRESETS[name](plan=plan)
 
-    def build_gantry(self, plan: PlanarPlan) -> tuple[Any, Any, Any] | None:
+    def build_gantry(self, plan: Plan) -> tuple[Any, Any, Any] | None:
         """(spec, stage, camera) of the simulated gantry for ``plan``, the stage connected; None: no gantry chosen."""
         spec = self.gantry_spec(plan)
         if spec is None:
             return None
         from lps_gui.core.clock import RealClock
-        from lps_gui.sim.planar_rig import check_board_in_view, make_simulated_gantry
+        from lps_gui.sim.rig import check_board_in_view, make_simulated_rig
 
         check_board_in_view(spec)
-        stage, camera = make_simulated_gantry(spec, clock=self.clock or RealClock())
+        stage, camera = make_simulated_rig(spec, clock=self.clock or RealClock())
         stage.connect()
         return spec, stage, camera
 
@@ -230,9 +230,9 @@ class PlanarPlanEditor(QGroupBox):
         if not (truth.get("simulated") and truth.get("axes") == ["X", "Y"]):
             return None
         from lps_gui.core.clock import RealClock
-        from lps_gui.sim.planar_rig import reopen_simulated_gantry
+        from lps_gui.sim.session import reopen_simulated_rig
 
-        stage, camera = reopen_simulated_gantry(session, clock=self.clock or RealClock())
+        stage, camera = reopen_simulated_rig(session, clock=self.clock or RealClock())
         stage.connect()
         return stage, camera
 
@@ -295,7 +295,7 @@ class PlanarPlanEditor(QGroupBox):
             pi.addItem(label)
         pi.autoRange(padding=0.12)
 
-    def prediction_text(self, plan: PlanarPlan) -> str:
+    def prediction_text(self, plan: Plan) -> str:
         """The rig prediction as one or two lines (board in view, sigma to expect)."""
         if len(plan.targets()) > MAX_PREDICTED_TARGETS:
             return f"not computed for more than {MAX_PREDICTED_TARGETS} targets: run `lps plan-rig`"
@@ -336,9 +336,9 @@ def planar_engine(session: Any, stage: Any, camera: Any) -> Any:
     truth = session.truth or {}
     if not (truth.get("simulated") and truth.get("axes") == ["X", "Y"] and hasattr(camera, "rig")):
         return None
-    from lps_gui.sim.planar_rig import gantry_engine
+    from lps_gui.sim.session import simulated_engine
 
-    return gantry_engine(session, stage, camera)
+    return simulated_engine(session, stage, camera)
 
 
 def apply_shared_to_panel(panel: Any, fields: dict[str, Any]) -> None:

@@ -28,8 +28,7 @@ from typing import Iterator
 import numpy as np
 
 from lps_gui.core.clock import Clock, SimClock
-from lps_gui.core.stage_errors import StageErrorModel, TruePose
-from lps_gui.core.planar_rig import PlanarErrorModel, PlanarTruePose
+from lps_gui.core.stage_errors import PlanarErrorModel, PlanarTruePose, StageErrorModel, TruePose
 from lps_gui.errors import HardwareError
 from lps_gui.hardware.grbl.codes import SETTINGS, GrblError, check_setting, setting_info, stored_settings
 from lps_gui.hardware.motion import Profile

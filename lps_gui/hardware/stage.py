@@ -9,8 +9,9 @@ from __future__ import annotations
 import abc
 import threading
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Any, Callable
 
+from lps_gui.core.clock import Clock
 from lps_gui.errors import HardwareError
 
 AXES = ("X", "Y", "Z")
@@ -91,9 +92,24 @@ class EventSource:
 
 
 class Stage(abc.ABC):
-    """A motorized stage. Methods block until the controller acknowledged the command."""
+    """A motorized stage. Methods block until the controller acknowledged the command.
+
+    What a driver may know beyond the commands is declared here with the
+    default of a driver that does not: the capture engine and the GUI read
+    these, never probe for them.
+    """
 
     axis: str = "X"  # the axis the LPS measurement moves along
+    travel_mm: tuple[float, float] | None = None  # soft-limit range of ``axis`` when known (the simulated stage);
+    #   None: the controller guards its limits itself (GRBL's $20 alarms at the offending move)
+    axis_travel_mm: list[tuple[float, float]] | None = None  # the range of each of X, Y, Z when known
+    clock: Clock | None = None  # the stage's own clock (simulated time); None: real time
+    simulated: "Stage | None" = None  # a driver in front of a simulated stage (the GRBL emulator): that stage
+
+    def true_pose(self) -> Any:
+        """Where the carriage really is, where a simulator knows it (the camera of a simulated rig renders
+        it); None on a real stage."""
+        return None
 
     def __init__(self) -> None:
         self.events = EventSource()

@@ -17,7 +17,6 @@ from lps_gui.core.board import Board
 from lps_gui.core.targets import Target
 from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.plan import Plan, PlannedStop
-from lps_gui.core.planar_plan import PlanarPlan, PlanarStop
 from lps_gui.errors import InputError, StorageError
 from lps_gui.io.atomic import append_line_durable, sha256_bytes, write_bytes_atomic
 from lps_gui.io.board_file import board_from_dict, board_to_dict
@@ -100,7 +99,7 @@ class Session:
         cls,
         folder: Path | str,
         board: Board | list[Target],
-        plan: Plan | PlanarPlan,
+        plan: Plan,
         intrinsics: CameraIntrinsics | str | None = None,
         camera: dict[str, Any] | None = None,
         stage: dict[str, Any] | None = None,
@@ -175,9 +174,9 @@ class Session:
     def planar(self) -> bool:
         return len(self.axes) == 2
 
-    def plan(self) -> Plan | PlanarPlan:
+    def plan(self) -> Plan:
         d = self.meta.get("plan") or {}
-        return PlanarPlan.from_dict(d) if self.planar else Plan.from_dict(d)
+        return Plan.from_dict(d)
 
     def has_intrinsics(self) -> bool:
         return bool(self.meta.get("intrinsics"))
@@ -236,7 +235,7 @@ class Session:
         write_bytes_atomic(self.folder / rel, data)
         return rel, sha256_bytes(data)
 
-    def remaining_stops(self) -> list[PlannedStop] | list[PlanarStop]:
+    def remaining_stops(self) -> list[PlannedStop]:
         """Planned frames not yet listed in captures.jsonl, in capture order."""
         done = {r.index for r in self.records()}
         return [s for s in self.plan().stops() if s.index not in done]

@@ -1,10 +1,14 @@
-"""`lps demo`: the whole simulated rig end to end, in one command.
+"""`lps demo [--planar]`: the whole simulated rig (one axis, or an XY gantry) end to end, in one command.
 
 Simulate an intrinsics set and calibrate it; capture a bidirectional session
-on the paper's rig with a realistic stage error through the capture engine
+on the paper's rig with a realistic stage error (on a gantry: squareness,
+per-axis scale, lead-screw errors and straightness per
+:func:`lps_gui.core.simulate.paper_planar_errors`) through the capture engine
 and the simulated camera; detect; estimate; write report.pdf and the CSVs;
-compare with the simulator's truth. The printed error against truth is
-results.json's ``truth_comparison`` (one reduction, :func:`lps_gui.sim.truth.reduce_truth`).
+compare with the simulator's truth; on one axis, close the loop with a
+compensated capture. The printed error against truth is results.json's
+``truth_comparison`` (one reduction, :func:`lps_gui.sim.truth.reduce_truth`;
+the lines are :mod:`lps_gui.pipeline.demo_summary`'s).
 """
 from __future__ import annotations
 
@@ -20,12 +24,13 @@ import numpy as np
 from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.plan import Plan
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
-from lps_gui.core.simulate import SimulationSpec, paper_rig_spec, small_spec
+from lps_gui.core.simulate import SimulationSpec, paper_planar_spec, paper_rig_spec, small_planar_spec, small_spec
 from lps_gui.errors import InputError
 from lps_gui.io.intrinsics_file import write_intrinsics
 from lps_gui.io.session import Session
 from lps_gui.pipeline.detect import detect_session
 from lps_gui.pipeline.estimate import estimate_session
+from lps_gui.pipeline.demo_summary import PAPER_SPEC, planar_summary_lines, summary_lines
 from lps_gui.pipeline.intrinsics import calibrate_images
 from lps_gui.sim.images import simulate_intrinsics_set
 from lps_gui.sim.session import create_simulated_session, simulated_engine
@@ -33,7 +38,6 @@ from lps_gui.sim.session import create_simulated_session, simulated_engine
 log = logging.getLogger(__name__)
 
 MARKER = ".lps-demo"  # a folder the demo made and may clear on the next run
-PAPER_SPEC = {"accuracy_um": 20.0, "repeatability_um": 5.0, "straightness_um": 38.0}  # the paper's stage table
 # the simulated board is exact at 20 C; the stage is a little warm (steel screw), as in a lab
 DEMO_ENVIRONMENT = {"board_temperature_c": 20.0, "board_cte_ppm_per_k": 23.0, "square_mm_uncertainty_um": 0.1,
                     "stage_temperature_c": 20.5, "stage_cte_ppm_per_k": 11.5,
@@ -67,14 +71,24 @@ class DemoResult:
     results: dict[str, Any] | None = None
 
 
-def demo_spec(quick: bool, seed: int = 0) -> SimulationSpec:
+def demo_spec(quick: bool, seed: int = 0, planar: bool = False) -> SimulationSpec:
     """The simulated experiment of the demo.
 
     Full: the paper's rig (1920x1080, 18x30 board 600 mm away, its lead-screw
     stage error) over 50 targets 2 mm apart, both directions, 2 runs (200
     frames: ISO 230-2 figures need two runs; 2 mm resolves the 5 mm screw
     pitch). Quick: the small 640x480 rig, 12 targets, both directions, 2 runs.
+
+    ``planar``, full: the paper's camera over a 7 x 5 grid at 10 mm, forward
+    and backward (70 frames: lines of 7 and 5 targets give ISO 230-2 figures
+    per axis). Quick: the small rig on a 5 x 3 grid at 10 mm, both directions
+    (30 frames).
     """
+    if planar:
+        stop = (40.0, 20.0) if quick else (60.0, 40.0)
+        plan = Plan.xy(start_mm=(0.0, 0.0), stop_mm=stop, step_mm=(10.0, 10.0), directions="both",
+                       settle_s=0.1, feed_mm_min=3000.0)
+        return small_planar_spec(seed=seed, plan=plan) if quick else paper_planar_spec(seed=seed, plan=plan)
     if quick:
         return small_spec(seed=seed, views=12, directions="both", runs=2)
     from lps_gui.core.simulate import paper_stage_errors
@@ -103,6 +117,7 @@ def run_demo(
     cancel: CancelToken | None = None,
     say: Callable[[str], None] = lambda line: None,
     seed: int = 0,
+    planar: bool = False,
 ) -> DemoResult:
     """Run the demo into ``out``; every step reports through ``bar(label)`` and ``say``.
 
@@ -112,10 +127,11 @@ def run_demo(
     quick : the small rig (seconds instead of minutes).
     bar : makes a progress callback per step (the CLI passes a ProgressBar).
     say : prints one line (what a step did or skipped).
+    planar : the planar pipeline (SPEC 10) on the simulated XY gantry.
     """
     out = Path(out)
     prepare_out(out)
-    spec = demo_spec(quick, seed)
+    spec = demo_spec(quick, seed, planar)
     res = DemoResult(out)
 
     def step(name: str, status: str, message: str, t0: float) -> None:
@@ -132,10 +148,11 @@ def run_demo(
     session, message, status = capture_step(out / "session", spec, intrinsics, bar("capture"), cancel)
     step("capture", status, message, t0)
     res.session_dir = session.folder
-    session.meta["stage_spec"] = dict(PAPER_SPEC)
-    session.meta.setdefault("environment", dict(DEMO_ENVIRONMENT))
-    session.meta.setdefault("identification", dict(DEMO_IDENTIFICATION))
-    session.save_meta()
+    if not planar:
+        session.meta["stage_spec"] = dict(PAPER_SPEC)
+        session.meta.setdefault("environment", dict(DEMO_ENVIRONMENT))
+        session.meta.setdefault("identification", dict(DEMO_IDENTIFICATION))
+        session.save_meta()
 
     t0 = time.monotonic()
     table = detect_session(session.folder, bar("detect"), cancel)
@@ -146,8 +163,8 @@ def run_demo(
     results = estimate_session(session.folder, method="joint", progress=bar("estimate"), cancel=cancel)
     res.results = results
     p = results.get("parameters") or {}
-    step("estimate", "done", f"joint LM on {p.get('n_used', '?')}/{p.get('n_views', '?')} views, "
-                             f"RMS {float(p.get('rms_px') or np.nan):.3f} px", t0)
+    step("estimate", "done", f"{'planar ' if planar else ''}joint LM on {p.get('n_used', '?')}/{p.get('n_views', '?')} "
+                             f"views, RMS {float(p.get('rms_px') or np.nan):.3f} px", t0)
 
     t0 = time.monotonic()
     from lps_gui.report.pdf import write_report
@@ -155,6 +172,9 @@ def run_demo(
     res.report_pdf = write_report(session.folder, results, progress=bar("report"))
     res.csvs = [session.folder / n for n in ("positions.csv", "summary.csv") if (session.folder / n).exists()]
     step("report", "done", f"{res.report_pdf}", t0)
+    if planar:
+        res.summary = planar_summary_lines(results)
+        return res
     res.summary = summary_lines(results, spec)
     # close the loop: compensate, re-capture, re-measure (pipeline/compensation_pass.py)
     from lps_gui.pipeline.compensation_pass import compensation_pass
@@ -195,7 +215,7 @@ def _second_half(progress: ProgressFn) -> ProgressFn:
 
 def capture_step(folder: Path, spec: SimulationSpec, intrinsics: CameraIntrinsics, progress: ProgressFn,
                  cancel: CancelToken | None) -> tuple[Session, str, str]:
-    """Drive the simulated stage (simulated time) and camera through the real capture engine.
+    """Drive the simulated stage or gantry (simulated time) and camera through the real capture engine.
 
     Returns (session, message, status).
     """
@@ -213,50 +233,7 @@ def capture_step(folder: Path, spec: SimulationSpec, intrinsics: CameraIntrinsic
         raise InputError(f"capture stopped after {summary.listed}/{summary.total} frames: {summary.error or summary.state}; "
                          f"the frames are kept in {folder}")
     session = Session.open(folder)  # the engine folded the per-capture truth into session.json
+    if spec.plan.planar:
+        return session, (f"captured {len(session.records())} frames on the simulated gantry through the capture engine "
+                         f"({session.folder})"), "done"
     return session, f"captured {summary.listed} frames through the capture engine on the simulated rig ({folder})", "done"
-
-
-# ----------------------------------------------------------------------------- summary
-
-
-def truth_errors(results: dict[str, Any]) -> dict[str, float] | None:
-    """results.json's ``truth_comparison`` in the demo's words: position error RMS and max, median sigma (um)."""
-    tc = results.get("truth_comparison") or {}
-    if tc.get("position_rms_error_um") is None:
-        return None
-    return {"rms_um": float(tc["position_rms_error_um"]), "max_um": float(tc["position_max_abs_error_um"]),
-            "median_sigma_um": float(tc.get("median_sigma_um") or np.nan)}
-
-
-def summary_lines(results: dict[str, Any], spec: SimulationSpec) -> list[str]:
-    """Five lines a newcomer reads first: what was measured, the stage figures, the verdict, the truth check."""
-    from lps_gui.report.summary import extremes_rows, fmt
-    from lps_gui.report.verdict import verdicts
-
-    p = results.get("parameters") or {}
-    single = (results.get("figures") or {}).get("single_run") or {}
-    n_out = sum(1 for r in results.get("positions") or [] if r.get("outlier"))
-    plan = spec.plan
-    ext = {r.name: r.text() if r.unresolved or r.value is None else f"{r.text()} {r.unit}" for r in extremes_rows(results)}
-    verdict = ", ".join(f"{v.name} {v.verdict}" for v in verdicts(results, PAPER_SPEC))
-    U = (results.get("uncertainty") or {}).get("expanded_k2_um")
-    te = truth_errors(results)
-    tc = results.get("truth_comparison") or {}
-    truth_line = ("error against truth: " + (f"position RMS {te['rms_um']:.2f} \u00b5m, max {te['max_um']:.2f} \u00b5m "
-                                             f"(median 1-sigma {te['median_sigma_um']:.2f} \u00b5m)" if te else "no truth"))
-    if te and tc.get("board_plane_rms_error_um") is not None:
-        truth_line += (f"; at the board plane RMS {tc['board_plane_rms_error_um']:.2f} \u00b5m "
-                       f"(camera-centre error includes the Abbe term distance x pitch/yaw, RMS {tc['abbe_rms_um']:.2f} \u00b5m)")
-    return [
-        f"views: {p.get('n_views', '?')} ({len(plan.targets())} targets x {len(plan.run_directions())} directions "
-        f"x {plan.runs} runs), {n_out} flagged outlier(s); RMS residual {fmt(p.get('rms_px'))} px",
-        f"positioning: scale {fmt(single.get('scale_ppm'))} ppm, periodic {fmt(single.get('periodic_amplitude_um'))} \u00b5m "
-        f"at {fmt(single.get('periodic_period_mm'))} mm, mean step {fmt(single.get('mean_step_mm'), 6)} mm",
-        f"straightness p-v (board plane) v1 {ext.get('Max straightness v1 (peak-to-valley)', '-')}, "
-        f"v2 {ext.get('Max straightness v2 (peak-to-valley)', '-')}; image rotation p-v "
-        f"{ext.get('Image rotation (peak-to-valley)', '-')}; max |roll| {ext.get('Max |roll|', '-')}, "
-        f"|pitch| {ext.get('Max |pitch|', '-')}, |yaw| {ext.get('Max |yaw|', '-')}",
-        f"paper's spec (\u00b120 \u00b5m, \u00b15 \u00b5m, 38 \u00b5m): {verdict}"
-        + (f"; U (k = 2) {fmt(U, 2)} \u00b5m over the travel" if U is not None else ""),
-        truth_line,
-    ]

@@ -1,4 +1,4 @@
-"""A point-level simulated session: corners with known truth, no images.
+"""A point-level simulated session (one axis or an XY gantry): corners with known truth, no images.
 
 Writes what a real capture plus detection would: session.json (with
 ``truth``), captures.jsonl, corners.vnl, board.json and intrinsics.json. The
@@ -37,10 +37,20 @@ def calibrated_intrinsics(true: CameraIntrinsics) -> CameraIntrinsics:
 
 
 def simulate_point_session(spec: SimulationSpec, out: Path | str) -> Session:
-    """Simulate ``spec`` at the corner level into a new session folder ``out``."""
+    """Simulate ``spec`` at the corner level into a new session folder ``out``.
+
+    On a gantry (SPEC 10) session.json has ``plan.axes`` and ``stage.axes``
+    ["X", "Y"] and captures.jsonl [x, y] targets.
+    """
     views = simulate_views(spec)
-    return write_point_session(out, spec, views.stops, views.corners_px, views.truth,
-                               {"driver": "simulated", "errors": spec.rig.errors.to_dict()})
+    if not spec.plan.planar:
+        return write_point_session(out, spec, views.stops, views.corners_px, views.truth,
+                                   {"driver": "simulated", "errors": spec.rig.errors.to_dict()})
+    board = spec.rig.board
+    truth = {**views.truth, "board": {"type": board.type, "inner_corners": [board.cols, board.rows],
+                                      "square_mm": board.square_mm}}
+    return write_point_session(out, spec, views.stops, views.corners_px, truth,
+                               {"driver": "simulated", "axes": ["X", "Y"], "errors": spec.rig.errors.to_dict()})
 
 
 def write_point_session(out: Path | str, spec: Any, stops: Sequence[Any], corners_px: np.ndarray,

@@ -8,6 +8,7 @@ records the rig itself (:func:`lps_gui.sim.rig.rig_truth`), so
 ``lps capture --resume`` rebuilds the same stage error model, mount and
 camera and goes on as if nothing happened; per-capture truth goes to
 a sidecar and, once complete, into session.json (:mod:`lps_gui.sim.truth`).
+A two-axis plan (SPEC 10) makes the same on the simulated XY gantry.
 """
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ from typing import Any
 from lps_gui.capture.engine import CaptureEngine
 from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.clock import Clock
+from lps_gui.core.plan import Plan, PlannedStop
 from lps_gui.core.simulate import SimulationSpec
 from lps_gui.errors import InputError
 from lps_gui.hardware.stage import Stage
@@ -60,10 +62,19 @@ def start_rig_session(
     stage: RigStage,
     camera: RigCamera,
     intrinsics: CameraIntrinsics | str | None = None,
+    extra: dict[str, Any] | None = None,
 ) -> Session:
-    """The session of a capture on an existing simulated rig (the GUI's rig, or :func:`create_simulated_session`'s)."""
-    return write_simulated_session(folder, spec, "capture", intrinsics=intrinsics, camera=camera.properties(),
-                                   stage=stage.describe(), truth=rig_truth(spec, camera))
+    """The session of a capture on an existing simulated rig or gantry (the GUI's, or :func:`create_simulated_session`'s).
+
+    ``extra``: further session.json entries (the GUI's specification, environment, identification).
+    """
+    described = {**stage.describe(), "axes": ["X", "Y"]} if spec.plan.planar else stage.describe()
+    session = write_simulated_session(folder, spec, "capture", intrinsics=intrinsics, camera=camera.properties(),
+                                      stage=described, truth=rig_truth(spec, camera))
+    if extra:
+        session.meta.update(extra)
+        session.save_meta()
+    return session
 
 
 def create_simulated_session(
@@ -74,7 +85,7 @@ def create_simulated_session(
     intrinsics: CameraIntrinsics | str | None = None,
     **options: Any,
 ) -> tuple[Session, RigStage, RigCamera]:
-    """Create a session for ``spec`` and its rig (stage not yet connected).
+    """Create a session for ``spec`` and its rig (stage not yet connected); a two-axis plan makes a gantry.
 
     ``intrinsics`` default to the rig's true intrinsics (a simulation knows
     them); pass calibrated ones to test the effect of calibration error.
@@ -85,18 +96,64 @@ def create_simulated_session(
 
 
 def reopen_simulated_rig(session: Session, clock: Clock | None = None) -> tuple[RigStage, RigCamera]:
-    """Rebuild the simulated rig a session was captured with (for ``--resume``)."""
-    truth = session.truth
-    if not truth or not truth.get("simulated"):
+    """Rebuild the simulated rig (or gantry) a session was captured with (for ``--resume``)."""
+    truth = session.truth or {}
+    if session.planar and (not truth.get("simulated") or truth.get("axes") != ["X", "Y"]):
+        raise InputError(f"{session.folder}: not captured on the simulated gantry; resume it with --stage and --camera")
+    if not truth.get("simulated"):
         raise InputError(f"{session.folder}: not captured on the simulated rig; resume it with --stage and --camera")
     spec = spec_from_truth(truth, session.plan(), str(session.folder / "session.json"))
     cam = truth.get("camera") or {}
     return make_simulated_rig(spec, clock=clock, noise_grey=float(cam.get("noise_grey", 2.0)), blur_px=float(cam.get("blur_px", 1.2)))
 
 
+class SimulatedRigHook:
+    """The capture engine's one hook on a simulated rig (``capture.engine.SimulatorHook``).
+
+    It records the pose the camera renders beside every frame (:class:`TruthRecorder`)
+    and seeds the draws: the stage's repeatability per stop (on a gantry per
+    axis, keyed on the frame each axis arrived at, ``Plan.arrival_indices``)
+    and the camera's image noise per frame, from (seed, capture index), so a
+    capture killed and resumed yields the same images as one that ran
+    straight through. ``stage``: the rig's stage, also when the engine drives
+    the GRBL driver in front of it; None: a stage whose draws are not seeded.
+    """
+
+    def __init__(self, plan: Plan, stage: RigStage | None, camera: RigCamera) -> None:
+        self.plan = plan
+        self.stage = stage
+        self.camera = camera
+        self.truth = TruthRecorder(camera.pose_source, camera.rig if camera.rig.planar else None)
+        self._arrivals: dict[int, tuple[int, ...]] | None = None
+
+    def prune(self, session: Session) -> None:
+        self.truth.prune(session)
+
+    def record(self, session: Session, index: int) -> None:
+        self.truth.record(session, index)
+
+    def finalize(self, session: Session) -> None:
+        self.truth.finalize(session)
+
+    def seed_stop(self, stop: PlannedStop) -> None:
+        if self.stage is None:
+            return
+        self.stage.seed_capture(stop.index - stop.frame)
+        if self.plan.planar:
+            if self._arrivals is None:
+                self._arrivals = self.plan.arrival_indices()
+            self.stage.seed_axes(*self._arrivals[stop.index])
+
+    def seed_frame(self, index: int) -> None:
+        self.camera.seed_capture(index)
+
+
 def simulated_engine(session: Session, stage: Stage, camera: RigCamera, encode: str = ".png") -> CaptureEngine:
-    """A :class:`CaptureEngine` that also records the true pose of every frame (the pose the camera renders).
+    """A :class:`CaptureEngine` that also records the true pose of every frame (the pose the camera renders)
+    and seeds the rig's draws (:class:`SimulatedRigHook`).
 
     ``stage`` is the rig's stage or a driver in front of it (the GRBL emulator).
     """
-    return CaptureEngine(stage, camera, session, encode=encode, truth_recorder=TruthRecorder(camera.pose_source))
+    rig_stage = stage if isinstance(stage, RigStage) else stage.simulated  # direct, or behind the GRBL emulator
+    hook = SimulatedRigHook(session.plan(), rig_stage if isinstance(rig_stage, RigStage) else None, camera)
+    return CaptureEngine(stage, camera, session, encode=encode, simulator=hook)

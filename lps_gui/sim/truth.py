@@ -38,11 +38,13 @@ from typing import Any, Callable
 
 import numpy as np
 
+from lps_gui.core.camera_model import project_board
 from lps_gui.core.estimate_types import LpsEstimate
 from lps_gui.core.observations import Observations
+from lps_gui.core.planar_model import planar_positions_only
 from lps_gui.core.rig import Rig
-from lps_gui.core.simulate import board_plane_positions, board_plane_straightness
-from lps_gui.core.stage_errors import StageErrorModel, TruePose
+from lps_gui.core.simulate import board_plane_positions, board_plane_straightness, nominal_planar_state
+from lps_gui.core.stage_errors import PlanarTruePose, StageErrorModel, TruePose
 from lps_gui.io.atomic import append_line_durable, write_text_atomic
 from lps_gui.io.board_file import board_from_dict
 from lps_gui.io.intrinsics_file import intrinsics_from_dict
@@ -65,6 +67,22 @@ def pose_truth(pose: TruePose) -> dict[str, Any]:
         "axis_mm": float(pose.axis_mm.ravel()[0]),
         "straightness_um": [float(v) for v in pose.straightness_um.reshape(-1)[:2]],
         "angles_urad": [float(v) for v in pose.angles_urad.reshape(-1)[:3]],
+    }
+
+
+def planar_pose_truth(rig: Rig, pose: PlanarTruePose) -> dict[str, Any]:
+    """A gantry's carriage pose (K=1) as a JSON-able dict; beside the true plane position the board-plane
+    position (what a constant-orientation model sees when the carriage tilts), so the comparison needs no
+    re-projection later."""
+    R, t = rig.camera_poses(pose)
+    X = rig.board.object_points()
+    uv = project_board(R, t, X, rig.intrinsics)
+    board_plane = planar_positions_only(nominal_planar_state(rig, pose.plane_mm), X, uv, np.ones(uv.shape[:2], bool))
+    return {
+        "plane_mm": [float(v) for v in pose.plane_mm[0]],
+        "board_plane_mm": [float(v) for v in board_plane[0]],
+        "normal_um": float(pose.normal_um[0]),
+        "angles_urad": [float(v) for v in pose.angles_urad[0]],
     }
 
 
@@ -119,8 +137,15 @@ def finalize_truth(session: Session) -> None:
     if not indices:
         return
     rows = [per_index[i] for i in indices]
-    axis = [float(r["axis_mm"]) for r in rows]
     truth = dict(session.meta.get("truth") or {})
+    if "plane_mm" in rows[0]:  # a gantry's (SPEC 10)
+        truth.update({"index": indices, "plane_mm": [r["plane_mm"] for r in rows],
+                      "board_plane_mm": [r["board_plane_mm"] for r in rows],
+                      "normal_um": [r["normal_um"] for r in rows], "angles_urad": [r["angles_urad"] for r in rows]})
+        session.meta["truth"] = truth
+        session.save_meta()
+        return
+    axis = [float(r["axis_mm"]) for r in rows]
     truth.update(
         {
             "index": indices,
@@ -135,16 +160,22 @@ def finalize_truth(session: Session) -> None:
 
 
 class TruthRecorder:
-    """The capture engine's truth hook on the simulated rig: the pose the camera renders, per frame."""
+    """The capture engine's truth hook on the simulated rig: the pose the camera renders, per frame.
 
-    def __init__(self, pose_source: Callable[[], TruePose]) -> None:
+    ``rig``: a gantry's :class:`Rig` (its rows also hold the board-plane
+    position, :func:`planar_pose_truth`); None on one axis.
+    """
+
+    def __init__(self, pose_source: Callable[[], Any], rig: Rig | None = None) -> None:
         self.pose_source = pose_source
+        self.rig = rig
 
     def prune(self, session: Session) -> None:
         prune_truth(session)
 
     def record(self, session: Session, index: int) -> None:
-        append_truth(session, index, pose_truth(self.pose_source()))
+        pose = self.pose_source()
+        append_truth(session, index, pose_truth(pose) if self.rig is None else planar_pose_truth(self.rig, pose))
 
     def finalize(self, session: Session) -> None:
         finalize_truth(session)

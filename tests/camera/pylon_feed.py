@@ -21,6 +21,7 @@ class FedPylonCamera(PylonCamera):
         super().__init__(serial, clock=sim.clock)
         self.sim, self.feed_dir = sim, Path(feed_dir)
         self.pose_source = sim.pose_source  # the truth recorder asks the fed camera for the true pose
+        self.rig = sim.rig  # the simulator hook (sim/session.SimulatedRigHook) takes the rig from its camera
         self._fed = 0
 
     def open(self) -> None:

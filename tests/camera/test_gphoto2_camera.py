@@ -15,7 +15,8 @@ from lps_gui.camera.gphoto2_camera import GPhoto2Camera, list_gphoto2_devices
 from lps_gui.capture.engine import CaptureEngine
 from lps_gui.core.plan import Plan
 from lps_gui.errors import HardwareError, InputError
-from lps_gui.sim.truth import TruthRecorder
+from lps_gui.sim.rig import RigStage
+from lps_gui.sim.session import SimulatedRigHook
 from tests.camera.fake_gphoto2 import FakeGPhoto2
 from tests.capture.helpers import assert_listed_frames_intact, start_capture
 
@@ -36,7 +37,8 @@ def rig(tmp_path, monkeypatch):
     fake = FakeGPhoto2(picture)
     monkeypatch.setitem(sys.modules, "gphoto2", fake)
     camera = GPhoto2Camera()
-    engine = CaptureEngine(stage, camera, session, truth_recorder=TruthRecorder(sim.pose_source))
+    hook = SimulatedRigHook(session.plan(), stage if isinstance(stage, RigStage) else None, sim)
+    engine = CaptureEngine(stage, camera, session, simulator=hook)
     return session, fake, camera, engine, delivered
 
 

@@ -1,7 +1,14 @@
 """Helpers for capture tests: start a simulated capture, compare sessions, check listed files."""
 from __future__ import annotations
 
+import signal
+import subprocess
 from dataclasses import asdict, replace
+from pathlib import Path
+from typing import Callable, Iterable
+
+import cv2
+import numpy as np
 
 from lps_gui.core.camera_model import CameraIntrinsics
 
@@ -55,3 +62,41 @@ def assert_listed_frames_intact(session: Session) -> None:
         path = session.folder / r.file
         assert path.is_file(), f"{r.file} is listed but missing"
         assert sha256_file(path) == r.sha256, f"{r.file} does not match its sha256"
+
+
+def replay_frames(tmp_path: Path, n: int = 3) -> tuple[Path, Path]:
+    """``n`` small grey frames for the folder-replay camera and a board.json: the non-simulated capture path."""
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    for i in range(n):
+        cv2.imwrite(str(frames / f"f{i}.png"), np.full((24, 32), 10 * i, np.uint8))
+    board = tmp_path / "board.json"
+    board.write_text('{"type": "chessboard", "inner_corners": [9, 6], "square_mm": 20}')
+    return frames, board
+
+
+def kill_when(child: subprocess.Popen, lines: Iterable[str], reached: Callable[[str], bool]) -> None:
+    """SIGKILL ``child`` at the first of its output ``lines`` that ``reached``; blocks on the output, never sleeps."""
+    try:
+        for line in lines:
+            if reached(line):
+                child.send_signal(signal.SIGKILL)  # mid-run: the child is already writing the next frames
+                break
+    finally:
+        child.kill()
+        child.wait(timeout=60)
+    assert child.returncode == -signal.SIGKILL
+
+
+def capture_through_emulator(folder: Path, spec, time_scale: float):
+    """A simulated session captured through the GRBL driver and emulator serving the rig's stage: (session, summary)."""
+    from lps_gui.sim.emulated import emulated_rig_stage
+
+    session, rig_stage, camera = create_simulated_session(folder, spec)
+    stage = emulated_rig_stage(rig_stage, time_scale=time_scale)
+    try:
+        summary = simulated_engine(session, stage, camera).run()
+    finally:
+        stage.disconnect()
+    assert summary.state == "done", summary.error
+    return session, summary

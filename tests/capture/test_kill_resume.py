@@ -3,14 +3,13 @@ from __future__ import annotations
 
 import json
 import os
-import signal
 import subprocess
 import sys
 from pathlib import Path
 
 from lps_gui.cli import main as lps_main
 from lps_gui.io.session import Session
-from tests.capture.helpers import assert_listed_frames_intact, image_bytes, records_without_time
+from tests.capture.helpers import assert_listed_frames_intact, image_bytes, kill_when, records_without_time
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -27,15 +26,7 @@ def test_sigkill_mid_run_then_resume_equals_uninterrupted(tmp_path, reference_ca
     folder = tmp_path / "killed"
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     child = subprocess.Popen([sys.executable, "-c", CHILD, str(folder)], cwd=ROOT, env=env, stdout=subprocess.PIPE, text=True)
-    try:
-        for line in child.stdout:  # blocks on the child's output, no sleeping
-            if int(line) >= 30:
-                child.send_signal(signal.SIGKILL)  # mid-run: the child is already writing the next frames
-                break
-    finally:
-        child.kill()
-        child.wait(timeout=60)
-    assert child.returncode == -signal.SIGKILL
+    kill_when(child, child.stdout, lambda line: int(line) >= 30)
     killed = Session.open(folder)
     listed = len(killed.records())
     assert 30 < listed + 1 < 80, listed

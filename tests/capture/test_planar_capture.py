@@ -8,15 +8,16 @@ import numpy as np
 import pytest
 
 from lps_gui.core.clock import SimClock
-from lps_gui.core.planar_plan import PlanarPlan
-from lps_gui.core.planar_simulate import small_planar_spec
+from lps_gui.core.plan import Plan
+from lps_gui.core.simulate import small_planar_spec
 from lps_gui.io.session import Session
 from lps_gui.pipeline.detect import detect_session
 from lps_gui.pipeline.estimate import estimate_session
-from lps_gui.sim.planar_rig import create_simulated_gantry_session, gantry_engine, reopen_simulated_gantry
+from lps_gui.sim.session import create_simulated_session, reopen_simulated_rig, simulated_engine
+from tests.capture.helpers import capture_through_emulator
 
-PLAN = PlanarPlan(start_mm=(0.0, 0.0), stop_mm=(40.0, 20.0), step_mm=(10.0, 10.0), directions="both",
-                  settle_s=0.1, overshoot_mm=1.0, feed_mm_min=3000.0)
+PLAN = Plan.xy(start_mm=(0.0, 0.0), stop_mm=(40.0, 20.0), step_mm=(10.0, 10.0), directions="both",
+               settle_s=0.1, overshoot_mm=1.0, feed_mm_min=3000.0)
 
 
 def spec():
@@ -24,9 +25,9 @@ def spec():
 
 
 def capture(folder, stop_after: int | None = None):
-    session, stage, camera = create_simulated_gantry_session(folder, spec(), clock=SimClock())
+    session, stage, camera = create_simulated_session(folder, spec(), clock=SimClock())
     stage.connect()
-    engine = gantry_engine(session, stage, camera)
+    engine = simulated_engine(session, stage, camera)
     if stop_after is not None:
         engine.subscribe(lambda e: engine.abort() if e.kind == "frame" and e.index + 1 >= stop_after else None)
     summary = engine.run()
@@ -75,9 +76,9 @@ def test_interrupted_and_resumed_on_a_rebuilt_rig_equals_uninterrupted(tmp_path,
     folder = tmp_path / "cut"
     cut, summary = capture(folder, stop_after=13)
     assert summary.state == "aborted" and 13 <= summary.listed < 30
-    stage, camera = reopen_simulated_gantry(cut, clock=SimClock())  # as after a crash: a new process
+    stage, camera = reopen_simulated_rig(cut, clock=SimClock())  # as after a crash: a new process
     stage.connect()
-    done = gantry_engine(cut, stage, camera).run()
+    done = simulated_engine(cut, stage, camera).run()
     stage.disconnect()
     assert done.state == "done"
     resumed = Session.open(folder)
@@ -99,18 +100,9 @@ def test_detect_and_estimate_the_captured_planar_session(reference):
 
 
 def test_planar_capture_through_the_grbl_emulator(tmp_path):
-    from lps_gui.sim.emulated import emulated_rig_stage
-
-    plan = PlanarPlan(start_mm=(0.0, 0.0), stop_mm=(10.0, 10.0), step_mm=(10.0, 10.0), settle_s=0.05,
-                      overshoot_mm=1.0, feed_mm_min=6000.0)
-    sp = small_planar_spec(seed=2, plan=plan)
-    session, rig_stage, camera = create_simulated_gantry_session(tmp_path / "grbl", sp)
-    stage = emulated_rig_stage(rig_stage, time_scale=20.0)
-    try:
-        summary = gantry_engine(session, stage, camera).run()
-    finally:
-        stage.disconnect()
-    assert summary.state == "done", summary.error
+    plan = Plan.xy(start_mm=(0.0, 0.0), stop_mm=(10.0, 10.0), step_mm=(10.0, 10.0), settle_s=0.05,
+                   overshoot_mm=1.0, feed_mm_min=6000.0)
+    capture_through_emulator(tmp_path / "grbl", small_planar_spec(seed=2, plan=plan), time_scale=20.0)
     recs = Session.open(tmp_path / "grbl").records()
     assert [r.target_mm for r in recs] == [(0.0, 0.0), (10.0, 0.0), (10.0, 10.0), (0.0, 10.0)]
     for r in recs:

@@ -4,7 +4,6 @@ from __future__ import annotations
 import json
 import os
 import re
-import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -16,6 +15,7 @@ import pytest
 from lps_gui.cli import main as lps_main
 from lps_gui.io.atomic import sha256_file
 from lps_gui.io.session import Session
+from tests.capture.helpers import kill_when, replay_frames
 
 ROOT = Path(__file__).resolve().parents[2]
 LPS = [str(Path(sys.executable).with_name("lps"))] if Path(sys.executable).with_name("lps").exists() else [
@@ -95,12 +95,7 @@ def test_existing_session_is_never_overwritten(tmp_path, capsys):
 
 def test_real_camera_path_pauses_when_images_run_out_and_resumes(tmp_path, capsys):
     """Stage "sim" + a folder-replay camera: the non-simulated code path, resumed with the devices named again."""
-    frames = tmp_path / "frames"
-    frames.mkdir()
-    for i in range(3):
-        cv2.imwrite(str(frames / f"f{i}.png"), np.full((24, 32), 10 * i, np.uint8))
-    board = tmp_path / "board.json"
-    board.write_text(json.dumps({"type": "chessboard", "inner_corners": [9, 6], "square_mm": 20}))
+    frames, board = replay_frames(tmp_path)
     out = tmp_path / "s"
     args = ["capture", "--out", str(out), "--stage", "sim", "--camera", str(frames), "--board", str(board), "--targets", "0,1,2,3", "--settle", "0"]
     assert lps_main(args) == 3
@@ -126,16 +121,9 @@ def test_sigkill_of_lps_capture_then_resume_equals_uninterrupted(tmp_path):
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     cmd = [*LPS, "capture", "--out", str(out), *PLAN_ARGS]
     child = subprocess.Popen(cmd, cwd=ROOT, env=env, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
-    try:
-        for line in child.stderr:  # the progress bar writes a line per 10 % when not on a terminal
-            m = re.search(r"\] (\d+)/(\d+)", line)
-            if m and int(m.group(1)) >= 4:
-                child.send_signal(signal.SIGKILL)
-                break
-    finally:
-        child.kill()
-        child.wait(timeout=60)
-    assert child.returncode == -signal.SIGKILL
+    # the progress bar writes a line per 10 % when not on a terminal
+    kill_when(child, child.stderr, lambda line: (m := re.search(r"\] (\d+)/(\d+)", line)) is not None
+              and int(m.group(1)) >= 4)
     assert 4 <= len(_records(out)) < 20
     resumed = subprocess.run([*LPS, "capture", "--resume", str(out)], cwd=ROOT, env=env, capture_output=True, text=True, timeout=120)
     assert resumed.returncode == 0, resumed.stderr

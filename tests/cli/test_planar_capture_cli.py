@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import os
 import re
-import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -15,10 +14,11 @@ import pytest
 
 from lps_gui.cli import capture as capture_cli
 from lps_gui.cli import main as lps_main
-from lps_gui.cli.planar_capture import build_planar_plan
-from lps_gui.core.planar_plan import PlanarPlan
+from lps_gui.cli.capture_plan import build_planar_plan
 from lps_gui.io.session import Session
-from tests.capture.helpers import assert_listed_frames_intact, image_bytes, records_without_time
+from tests.capture.helpers import (
+    assert_listed_frames_intact, image_bytes, kill_when, records_without_time, replay_frames,
+)
 
 ROOT = Path(__file__).resolve().parents[2]
 GRID = ["--planar", "--grid", "0,0:40,20:10,10", "--directions", "both", "--settle", "0.05", "--feed", "3000",
@@ -34,7 +34,7 @@ def parse(argv: list[str]) -> argparse.Namespace:
 def test_grid_switches_make_the_planar_plan():
     plan = build_planar_plan(parse(["--grid", "0,0:40,20:10,10", "--pattern", "raster", "--runs", "2",
                                     "--directions", "both", "--overshoot", "2"]))
-    assert isinstance(plan, PlanarPlan) and plan.pattern == "raster" and plan.runs == 2 and plan.overshoot_mm == 2
+    assert plan.planar and plan.pattern == "raster" and plan.runs == 2 and plan.overshoot_mm == 2
     t = plan.targets()
     assert t.shape == (15, 2) and tuple(t[5]) == (0.0, 10.0)  # raster: each row starts at X0
     assert plan.n_frames() == 60
@@ -107,16 +107,9 @@ def test_sigkill_mid_run_then_resume_equals_uninterrupted(tmp_path, reference):
     cmd = [sys.executable, "-c", "import sys; from lps_gui.cli import main; sys.exit(main())",
            "capture", *GRID, "--out", str(folder)]
     child = subprocess.Popen(cmd, cwd=ROOT, env=env, stderr=subprocess.PIPE, text=True)
-    try:
-        for line in child.stderr:  # the progress bar: a line per 10 % on a pipe; blocks, no sleeping
-            m = re.search(r"\] (\d+)/30", line)
-            if m and int(m.group(1)) >= 12:
-                child.send_signal(signal.SIGKILL)  # the child is already rendering the next frames
-                break
-    finally:
-        child.kill()
-        child.wait(timeout=60)
-    assert child.returncode == -signal.SIGKILL
+    # the progress bar: a line per 10 % on a pipe
+    kill_when(child, child.stderr, lambda line: (m := re.search(r"\] (\d+)/30", line)) is not None
+              and int(m.group(1)) >= 12)
     killed = Session.open(folder)
     assert 12 <= len(killed.records()) < 30
     assert_listed_frames_intact(killed)
@@ -135,12 +128,7 @@ def test_planar_plan_on_real_devices_moves_both_axes_and_resumes_from_the_sessio
     """Stage "sim" + a folder-replay camera: the non-simulated planar path, X and Y moves, resumed on named devices."""
     import cv2
 
-    frames = tmp_path / "frames"
-    frames.mkdir()
-    for i in range(3):
-        cv2.imwrite(str(frames / f"f{i}.png"), np.full((24, 32), 10 * i, np.uint8))
-    board = tmp_path / "board.json"
-    board.write_text('{"type": "chessboard", "inner_corners": [9, 6], "square_mm": 20}')
+    frames, board = replay_frames(tmp_path)
     out = tmp_path / "s"
     assert lps_main(["capture", "--targets-xy", "0,0;5,0;5,5;0,5", "--stage", "sim", "--camera", str(frames),
                      "--board", str(board), "--settle", "0", "--out", str(out)]) == 3  # the replay runs out

@@ -9,14 +9,14 @@ from lps_gui.core.estimate import EstimateOptions, estimate
 from lps_gui.core.observations import Observations
 from lps_gui.core.planar_estimate import planar_truth_in_stage_frame
 from lps_gui.core.planar_figures import axis_geometry, planar_figures
-from lps_gui.core.planar_rig import PlanarErrorModel
-from lps_gui.core.planar_simulate import (
+from lps_gui.core.stage_errors import PlanarErrorModel
+from lps_gui.core.simulate import (
     nominal_planar_state,
     paper_planar_spec,
-    simulate_planar_views,
+    simulate_views,
     small_planar_spec,
 )
-from lps_gui.core.planar_plan import PlanarPlan
+from lps_gui.core.plan import Plan
 from lps_gui.core.stage_errors import StageErrorModel
 from lps_gui.errors import DegenerateGeometryError, InputError
 
@@ -67,7 +67,7 @@ def crb_xy_sigma_mm(spec, views) -> np.ndarray:
 
 def test_paper_planar_positions_reach_the_cramer_rao_bound_and_recover_squareness_and_scale():
     spec = paper_planar_spec(seed=11)  # 15 x 9 grid at 10 mm, 0.1 px, 150 urad, +80 / -50 ppm
-    views = simulate_planar_views(spec)
+    views = simulate_views(spec)
     obs = observations(spec, views)
     est = estimate(obs)
     assert est.converged and not est.outlier.any()
@@ -104,7 +104,7 @@ def planar_truth_geometry(est, obs, truth_xy):
 def test_square_error_model_without_straightness_gives_its_parameters():
     errors = PlanarErrorModel(StageErrorModel(scale_ppm=80.0), StageErrorModel(scale_ppm=-50.0), squareness_urad=150.0)
     spec = small_planar_spec(seed=2, errors=errors, noise_px=0.02)
-    views = simulate_planar_views(spec)
+    views = simulate_views(spec)
     obs = observations(spec, views)
     est = estimate(obs)
     geo = axis_geometry(est.fit.G, est.fit.cov_G)
@@ -119,7 +119,7 @@ def test_planar_sigmas_are_honest_over_monte_carlo_repetitions():
     sq = []
     for seed in range(12):
         spec = small_planar_spec(seed=100 + seed)
-        views = simulate_planar_views(spec)
+        views = simulate_views(spec)
         obs = observations(spec, views)
         est = estimate(obs, EstimateOptions(detect_outliers=False))
         truth = true_stage_xy(est, obs, views)
@@ -135,7 +135,7 @@ def test_planar_sigmas_are_honest_over_monte_carlo_repetitions():
 def test_replaced_and_bumped_views_are_flagged_and_the_rest_unchanged():
     base = small_planar_spec(seed=5)
     spec = type(base)(**{**base.__dict__, "replaced_views": (7,), "bumped_views": (15,), "replaced_offset": 5})
-    views = simulate_planar_views(spec)
+    views = simulate_views(spec)
     est = estimate(observations(spec, views))
     assert set(np.flatnonzero(est.outlier)) == {7, 15}
     kinds = {f["index"]: f["kind"] for f in est.flags}
@@ -144,23 +144,23 @@ def test_replaced_and_bumped_views_are_flagged_and_the_rest_unchanged():
 
 
 def test_collinear_targets_are_refused_with_a_one_line_message():
-    spec = small_planar_spec(plan=PlanarPlan(start_mm=(0.0, 0.0), stop_mm=(50.0, 0.0), step_mm=(10.0, 10.0)))
-    views = simulate_planar_views(spec)
+    spec = small_planar_spec(plan=Plan.xy(start_mm=(0.0, 0.0), stop_mm=(50.0, 0.0), step_mm=(10.0, 10.0)))
+    views = simulate_views(spec)
     with pytest.raises(DegenerateGeometryError, match="one line"):
         estimate(observations(spec, views))
 
 
 def test_hybrid_is_refused_for_planar_sessions():
     spec = small_planar_spec()
-    views = simulate_planar_views(spec)
+    views = simulate_views(spec)
     with pytest.raises(InputError, match="1-D only"):
         estimate(observations(spec, views), EstimateOptions(method="hybrid"))
 
 
 def test_planar_figures_lines_and_nodes():
-    spec = small_planar_spec(seed=4, plan=PlanarPlan(start_mm=(0.0, 0.0), stop_mm=(50.0, 30.0), step_mm=(10.0, 10.0),
-                                                     directions="both", runs=2))
-    views = simulate_planar_views(spec)
+    spec = small_planar_spec(seed=4, plan=Plan.xy(start_mm=(0.0, 0.0), stop_mm=(50.0, 30.0), step_mm=(10.0, 10.0),
+                                                  directions="both", runs=2))
+    views = simulate_views(spec)
     obs = observations(spec, views)
     est = estimate(obs)
     figs = planar_figures(obs.target_mm, obs.approach, obs.run, obs.direction, est.deviation_um(obs.target_mm),
@@ -179,7 +179,7 @@ def test_planar_self_calibration_frees_the_intrinsics_under_their_prior():
     from dataclasses import replace
 
     spec = small_planar_spec(seed=5)
-    views = simulate_planar_views(spec)
+    views = simulate_views(spec)
     sd = np.r_[2.0, 2.0, 2.0, 2.0, 0.01, 0.01, 1e-4, 1e-4, 0.01]
     obs = observations(spec, views)
     obs.intrinsics = replace(obs.intrinsics, covariance=np.diag(sd**2))

@@ -6,8 +6,8 @@ import numpy as np
 from lps_gui.core.estimate import EstimateOptions, estimate
 from lps_gui.core.observations import Observations
 from lps_gui.core.planar_flatness import out_of_plane
-from lps_gui.core.planar_rig import PlanarErrorModel
-from lps_gui.core.planar_simulate import paper_planar_spec, simulate_planar_views
+from lps_gui.core.stage_errors import PlanarErrorModel
+from lps_gui.core.simulate import paper_planar_spec, simulate_views
 from lps_gui.core.stage_errors import ErrorProfile, StageErrorModel
 
 
@@ -18,7 +18,7 @@ def test_out_of_plane_bow_is_recovered_with_honest_sigma():
     z2, rms = [], []
     for seed in range(3):
         spec = paper_planar_spec(seed=seed, errors=errors)
-        views = simulate_planar_views(spec)
+        views = simulate_views(spec)
         st = views.stops
         obs = Observations(spec.rig.board, spec.rig.intrinsics, views.corners_px, [s.target_mm for s in st],
                            [1] * len(st), [1] * len(st), [s.index for s in st], approach=[s.approach for s in st])

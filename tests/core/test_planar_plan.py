@@ -4,19 +4,19 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.core.planar_plan import PlanarPlan, approach_directions, iso_lines_plan
+from lps_gui.core.plan import Plan, approach_directions, iso_lines_plan
 from lps_gui.errors import InputError
 
 
 def test_serpentine_and_raster_orders():
-    s = PlanarPlan(start_mm=(0, 0), stop_mm=(20, 10), step_mm=(10, 10), pattern="serpentine").targets()
+    s = Plan.xy(start_mm=(0, 0), stop_mm=(20, 10), step_mm=(10, 10), pattern="serpentine").targets()
     assert s.tolist() == [[0, 0], [10, 0], [20, 0], [20, 10], [10, 10], [0, 10]]
-    r = PlanarPlan(start_mm=(0, 0), stop_mm=(20, 10), step_mm=(10, 10), pattern="raster").targets()
+    r = Plan.xy(start_mm=(0, 0), stop_mm=(20, 10), step_mm=(10, 10), pattern="raster").targets()
     assert r.tolist() == [[0, 0], [10, 0], [20, 0], [0, 10], [10, 10], [20, 10]]
 
 
 def test_backward_pass_visits_the_grid_in_reverse():
-    plan = PlanarPlan(start_mm=(0, 0), stop_mm=(20, 10), step_mm=(10, 10), directions="both", runs=2)
+    plan = Plan.xy(start_mm=(0, 0), stop_mm=(20, 10), step_mm=(10, 10), directions="both", runs=2)
     stops = list(plan.stops())
     assert len(stops) == plan.n_frames() == 24
     fwd = [s.target_mm for s in stops if s.run == 1 and s.direction == "+"]
@@ -26,7 +26,7 @@ def test_backward_pass_visits_the_grid_in_reverse():
 
 
 def test_serpentine_rows_are_approached_from_their_own_side():
-    plan = PlanarPlan(start_mm=(0, 0), stop_mm=(20, 10), step_mm=(10, 10))
+    plan = Plan.xy(start_mm=(0, 0), stop_mm=(20, 10), step_mm=(10, 10))
     app = [s.approach[0] for s in plan.stops()]
     assert app == [1, 1, 1, -1, -1, -1]  # row 2 starts after an overshoot in x
 
@@ -48,31 +48,31 @@ def test_iso_lines_end_of_line_keeps_its_side():
 ])
 def test_bad_plans_give_one_line_errors(kw, match):
     with pytest.raises(InputError, match=match):
-        PlanarPlan(**kw)
+        Plan.xy(**kw)
 
 
 def test_round_trip_through_dict():
-    plan = PlanarPlan(start_mm=(0, 5), stop_mm=(30, 25), step_mm=(10, 10), directions="both", runs=3)
-    again = PlanarPlan.from_dict(plan.to_dict())
+    plan = Plan.xy(start_mm=(0, 5), stop_mm=(30, 25), step_mm=(10, 10), directions="both", runs=3)
+    again = Plan.from_dict(plan.to_dict())
     assert again == plan
-    t = PlanarPlan(targets_mm=((0, 0), (5, 0), (0, 5)))
-    assert PlanarPlan.from_dict(t.to_dict()).targets().tolist() == [[0, 0], [5, 0], [0, 5]]
+    t = Plan.xy(targets_mm=((0, 0), (5, 0), (0, 5)))
+    assert Plan.from_dict(t.to_dict()).targets().tolist() == [[0, 0], [5, 0], [0, 5]]
     with pytest.raises(InputError, match=r"targets_mm\[1\]"):
-        PlanarPlan.from_dict({"targets_mm": [[0, 0], [1, "a"], [2, 2]]})
+        Plan.from_dict({"targets_mm": [[0, 0], [1, "a"], [2, 2]]})
 
 
 def test_arrival_indices_follow_each_axis():
-    plan = PlanarPlan(start_mm=(0, 0), stop_mm=(20, 10), step_mm=(10, 10))
+    plan = Plan.xy(start_mm=(0, 0), stop_mm=(20, 10), step_mm=(10, 10))
     arr = plan.arrival_indices()
     # row 1: x moves every stop, y holds from stop 0; row 2 starts at stop 3 (y moved there)
     assert [arr[i] for i in range(6)] == [(0, 0), (1, 0), (2, 0), (3, 3), (4, 3), (5, 3)]
 
 
 def test_axis_moves_overshoot_only_where_an_axis_would_arrive_from_the_wrong_side():
-    from lps_gui.capture.planar_moves import axis_moves
-    from lps_gui.core.planar_plan import PlanarStop
+    from lps_gui.capture.moves import axis_moves
+    from lps_gui.core.plan import PlannedStop
 
-    stop = PlanarStop(0, 1, "+", (10.0, 5.0), 0, (1, -1))
+    stop = PlannedStop(0, 1, "+", (10.0, 5.0), 0, (1, -1))
     sides = [None, None]
     moves = axis_moves((0.0, 0.0), sides, stop, overshoot_mm=1.0)
     # X comes up from 0: straight there; Y must arrive from above: overshoot to 6 first

@@ -6,8 +6,8 @@ import pytest
 
 from lps_gui.core.estimate import estimate
 from lps_gui.core.observations import Observations
-from lps_gui.core.planar_plan import PlanarPlan
-from lps_gui.core.planar_simulate import simulate_planar_views, small_planar_spec
+from lps_gui.core.plan import Plan
+from lps_gui.core.simulate import simulate_views, small_planar_spec
 from lps_gui.core.rig_planning import intrinsics_from_lens, predict_rig
 from lps_gui.core.simulate import observations_of, simulate_views, small_spec
 from lps_gui.errors import InputError
@@ -17,7 +17,7 @@ def test_planar_prediction_within_20_percent_of_the_sigma_measured_on_a_simulate
     spec = small_planar_spec(seed=21, noise_px=0.2)
     pred = predict_rig(spec.rig.board, spec.rig.intrinsics, 500.0, spec.plan, noise_px=0.2)
     assert pred.board_in_view and pred.targets_losing_board == 0
-    views = simulate_planar_views(spec)
+    views = simulate_views(spec)
     st = views.stops
     obs = Observations(spec.rig.board, spec.rig.intrinsics, views.corners_px, [s.target_mm for s in st],
                        [1] * len(st), [1] * len(st), [s.index for s in st], approach=[s.approach for s in st])
@@ -36,7 +36,7 @@ def test_line_prediction_within_20_percent_of_the_sigma_measured_on_a_simulated_
 
 def test_a_camera_too_close_loses_the_board_and_says_so():
     spec = small_planar_spec()
-    plan = PlanarPlan(start_mm=(0.0, 0.0), stop_mm=(400.0, 300.0), step_mm=(50.0, 50.0))
+    plan = Plan.xy(start_mm=(0.0, 0.0), stop_mm=(400.0, 300.0), step_mm=(50.0, 50.0))
     pred = predict_rig(spec.rig.board, spec.rig.intrinsics, 300.0, plan)
     assert not pred.board_in_view
     assert pred.targets_losing_board > 0 and pred.first_target_losing_board is not None

@@ -11,7 +11,6 @@ import pytest
 
 from lps_gui.core.board import Board
 from lps_gui.core.clock import SimClock
-from lps_gui.core.planar_plan import PlanarPlan
 from lps_gui.gui.planar_plan_editor import PlanarPlanEditor, planar_duration_s
 
 pytestmark = pytest.mark.gui
@@ -43,7 +42,7 @@ def test_editor_builds_the_grid_and_draws_its_visiting_order(editor):
     editor.stop_y.setValue(10.0)
     editor.refresh()
     plan = editor.plan()
-    assert isinstance(plan, PlanarPlan) and plan.targets().tolist() == [
+    assert plan.planar and plan.targets().tolist() == [
         [0, 0], [10, 0], [20, 0], [30, 0], [30, 10], [20, 10], [10, 10], [0, 10]]  # serpentine
     numbers = sorted(int(t.textItem.toPlainText()) for t in items(editor, pg.TextItem))
     assert numbers == list(range(1, 9))

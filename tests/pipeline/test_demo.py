@@ -7,7 +7,7 @@ import re
 import pytest
 
 from lps_gui.errors import InputError
-from lps_gui.pipeline import demo
+from lps_gui.pipeline import demo, demo_summary
 from tests.report.conftest import make_results
 
 
@@ -42,15 +42,15 @@ def test_truth_errors_are_results_truth_comparison():
     """The printed error against truth is results.json's truth_comparison, not a second reduction."""
     results, _ = make_results(runs=2)
     results["truth_comparison"] = {"position_rms_error_um": 0.61, "position_max_abs_error_um": 1.7, "median_sigma_um": 0.4}
-    assert demo.truth_errors(results) == {"rms_um": 0.61, "max_um": 1.7, "median_sigma_um": 0.4}
-    assert demo.truth_errors({"truth_comparison": {}}) is None
+    assert demo_summary.truth_errors(results) == {"rms_um": 0.61, "max_um": 1.7, "median_sigma_um": 0.4}
+    assert demo_summary.truth_errors({"truth_comparison": {}}) is None
 
 
 def test_summary_is_five_lines_with_the_truth_check():
     results, _ = make_results(runs=2)
     results["truth_comparison"] = {"position_rms_error_um": 0.61, "position_max_abs_error_um": 1.7, "median_sigma_um": 0.4}
     spec = demo.demo_spec(quick=True)
-    lines = demo.summary_lines(results, spec)
+    lines = demo_summary.summary_lines(results, spec)
     assert len(lines) == 5
     assert lines[-1].startswith("error against truth: position RMS")
     assert "PASS" in lines[3] or "FAIL" in lines[3]
@@ -76,7 +76,7 @@ def test_quick_demo_end_to_end_through_images(tmp_path):
     res = demo.run_demo(tmp_path / "out", quick=True)
     assert [(s.name, s.status) for s in res.steps] == [(n, "done") for n in DEMO_STEPS], res.steps
     assert res.report_pdf.exists() and (res.out_dir / "intrinsics.json").exists()
-    te = demo.truth_errors(res.results)
+    te = demo_summary.truth_errors(res.results)
     assert te["rms_um"] < 4 * te["median_sigma_um"] + 1.0
 
 
@@ -123,6 +123,6 @@ def test_full_demo_on_the_paper_rig(tmp_path):
     spec = demo.demo_spec(quick=False)
     assert abs(single["periodic_period_mm"] - spec.rig.errors.pitch_mm) < 0.2
     assert abs(single["periodic_amplitude_um"] - spec.rig.errors.periodic_um) < 1.5
-    te = demo.truth_errors(res.results)
+    te = demo_summary.truth_errors(res.results)
     assert te["rms_um"] < 3.0
     assert elapsed < 300, f"demo took {elapsed:.0f} s (budget 5 minutes on 2 cores)"

@@ -7,17 +7,18 @@ import json
 import pytest
 
 from lps_gui.cli import main as lps_main
-from lps_gui.pipeline.demo_planar import planar_demo_spec, planar_summary_lines
+from lps_gui.pipeline.demo import demo_spec
+from lps_gui.pipeline.demo_summary import planar_summary_lines
 
 
 def test_demo_plans_have_lines_along_both_axes():
     for quick in (True, False):
-        plan = planar_demo_spec(quick).plan
+        plan = demo_spec(quick, planar=True).plan
         t = plan.targets()
         assert plan.directions == "both"
         assert len(set(t[:, 0])) >= 3 and len(set(t[:, 1])) >= 3  # ISO 230-2 lines and straightness per axis
-    assert planar_demo_spec(True).rig.intrinsics.image_size == (640, 480)
-    assert planar_demo_spec(False).plan.n_frames() <= 100  # well under a minute of rendering
+    assert demo_spec(True, planar=True).rig.intrinsics.image_size == (640, 480)
+    assert demo_spec(False, planar=True).plan.n_frames() <= 100  # well under a minute of rendering
 
 
 @pytest.fixture(scope="module")

@@ -5,7 +5,9 @@ from lps_gui.sim.emulated import emulated_rig_stage
 from lps_gui.sim.session import create_simulated_session, simulated_engine
 from lps_gui.core.plan import Plan
 from lps_gui.io.session import Session
-from tests.capture.helpers import assert_listed_frames_intact, image_bytes, records_without_time, start_capture, tiny_spec
+from tests.capture.helpers import (
+    assert_listed_frames_intact, capture_through_emulator, image_bytes, records_without_time, start_capture, tiny_spec,
+)
 
 PLAN = Plan(start_mm=0.0, stop_mm=4.0, step_mm=2.0, directions="both", overshoot_mm=1.0, settle_s=0.0, feed_mm_min=1200.0)
 
@@ -14,13 +16,7 @@ def test_capture_through_grbl_emulator_equals_direct_capture(tmp_path):
     direct, *_, engine = start_capture(tmp_path / "direct", plan=PLAN)
     assert engine.run().state == "done"
 
-    session, rig_stage, camera = create_simulated_session(tmp_path / "emulated", tiny_spec(PLAN))
-    stage = emulated_rig_stage(rig_stage, time_scale=50.0)
-    try:
-        summary = simulated_engine(session, stage, camera).run()
-    finally:
-        stage.disconnect()
-    assert summary.state == "done", summary.error
+    session, _ = capture_through_emulator(tmp_path / "emulated", tiny_spec(PLAN), time_scale=50.0)
     assert_listed_frames_intact(session)
     assert records_without_time(session) == records_without_time(direct)
     assert image_bytes(session) == image_bytes(direct)

@@ -233,9 +233,9 @@ def emulated_grbl_stage(time_scale: float = 1.0, faults: Faults | None = None, s
     The emulator serves ``simulated`` (e.g. the simulated rig's stage, whose
     true pose a simulated camera renders), else a new :class:`SimulatedStage`
     built from ``stage_options`` (``clock`` is replaced: the emulator owns
-    simulated time). The returned stage forwards the capture engine's
-    ``seed_capture`` hook to the simulated stage when it has one, and stops
-    the emulator when it disconnects.
+    simulated time). The returned stage names the simulated stage it serves
+    (``Stage.simulated``: a simulated rig's hook seeds its draws through the
+    driver) and stops the emulator when it disconnects.
     """
     from lps_gui.hardware.grbl.driver import GrblStage
 
@@ -247,16 +247,6 @@ def emulated_grbl_stage(time_scale: float = 1.0, faults: Faults | None = None, s
     class EmulatedGrblStage(GrblStage):
         emulator = emu
         simulated = served
-
-        def seed_capture(self, key: int) -> None:
-            hook = getattr(served, "seed_capture", None)
-            if hook is not None:
-                hook(key)
-
-        def seed_axes(self, key_x: int, key_y: int) -> None:
-            hook = getattr(served, "seed_axes", None)
-            if hook is not None:
-                hook(key_x, key_y)
 
         def disconnect(self) -> None:
             try:

@@ -1,7 +1,10 @@
-"""How the capture engine reaches a target of a planar (XY) plan (SPEC 10).
+"""How the capture engine reaches a stop, and whether a plan fits the stage's travel (one or two axes).
 
-Each axis is approached from the side the plan gives it
-(:attr:`PlanarStop.approach`, ISO 230-2 per axis): an axis that must move
+On one axis each run is approached from an overshoot beyond its first
+target, and again wherever the engine does not know where the stage came
+from (:func:`approach_point_mm`). On an XY gantry (SPEC 10)
+each axis is approached from the side the plan gives it
+(:attr:`PlannedStop.approach`, ISO 230-2 per axis): an axis that must move
 toward its target from that side moves straight there; one that would
 arrive from the other side, or whose last approach was from the other side,
 first goes to an overshoot point on its approach side. The axes move one
@@ -14,7 +17,7 @@ from typing import Callable
 
 import numpy as np
 
-from lps_gui.core.planar_plan import MOVE_TOL_MM, PlanarPlan, PlanarStop
+from lps_gui.core.plan import MOVE_TOL_MM, Plan, PlannedStop
 from lps_gui.errors import InputError
 from lps_gui.hardware.stage import Stage
 
@@ -28,7 +31,26 @@ def format_target(target_mm: float | tuple[float, float]) -> str:
     return f"{target_mm:g} mm"
 
 
-def axis_moves(here_mm: tuple[float, float], sides: list[int | None], stop: PlanarStop, overshoot_mm: float
+def approach_point_mm(plan: Plan, stop: PlannedStop, last_move: tuple | None) -> float | None:
+    """One axis: where to go before the move onto ``stop`` so it is approached from its run's direction.
+
+    None when the run goes on in its direction from the last stop
+    (``last_move``: (run, direction, target, first index) of the stop the
+    engine last reached, None after a pause, an error or at the start of a
+    call) or when the plan has no overshoot.
+    """
+    sign = 1.0 if stop.direction == "+" else -1.0
+    continues_run = (
+        last_move is not None
+        and last_move[:2] == (stop.run, stop.direction)
+        and (stop.target_mm - last_move[2]) * sign > 0
+    )
+    if continues_run or not plan.overshoot_mm > 0:
+        return None
+    return plan.approach_start_mm(stop.direction, stop.target_mm)
+
+
+def axis_moves(here_mm: tuple[float, float], sides: list[int | None], stop: PlannedStop, overshoot_mm: float
                ) -> list[tuple[str, float]]:
     """The single-axis moves that bring the carriage onto ``stop`` from its approach sides.
 
@@ -48,7 +70,7 @@ def axis_moves(here_mm: tuple[float, float], sides: list[int | None], stop: Plan
     return moves
 
 
-def go_to_planar(stage: Stage, stop: PlanarStop, plan: PlanarPlan, sides: list[int | None],
+def go_to_planar(stage: Stage, stop: PlannedStop, plan: Plan, sides: list[int | None],
                  move: Callable[[float, float, str], None]) -> tuple[float, float]:
     """Move onto ``stop`` (axis by axis, each from its side); returns the reported (x, y) in mm."""
     here = (float(stage.position_mm("X")), float(stage.position_mm("Y")))
@@ -57,15 +79,30 @@ def go_to_planar(stage: Stage, stop: PlanarStop, plan: PlanarPlan, sides: list[i
     return (float(stage.position_mm("X")), float(stage.position_mm("Y")))
 
 
-def check_planar_plan_in_travel(plan: PlanarPlan, stage: Stage) -> None:
-    """InputError before any move when a target or overshoot lies outside an axis' known travel."""
-    travel = getattr(stage, "axis_travel_mm", None)
-    if travel is None:
-        return
+def check_plan_in_travel(plan: Plan, stage: Stage) -> None:
+    """InputError before any move when a target or overshoot lies outside the stage's known travel.
+
+    Only stages that know their travel (``Stage.travel_mm``, ``axis_travel_mm``: the simulated one) can be
+    checked here; on GRBL, soft limits ($20) raise an alarm at the offending move.
+    """
     t = plan.targets()
+    if not plan.planar:
+        travel = stage.travel_mm
+        if travel is None:
+            return
+        lo, hi = float(t[0]) - plan.overshoot_mm, float(t[-1]) + plan.overshoot_mm
+        if lo < travel[0] or hi > travel[1]:
+            raise InputError(
+                f"plan: moves from {lo:g} to {hi:g} mm (targets and overshoot) but the stage travels "
+                f"{travel[0]:g}..{travel[1]:g} mm; shorten the plan or the overshoot"
+            )
+        return
+    axis_travel = stage.axis_travel_mm
+    if axis_travel is None:
+        return
     for a, name in enumerate(PLANAR_AXES):
         lo, hi = float(np.min(t[:, a])) - plan.overshoot_mm, float(np.max(t[:, a])) + plan.overshoot_mm
-        t_lo, t_hi = travel[a]
+        t_lo, t_hi = axis_travel[a]
         if lo < t_lo or hi > t_hi:
             raise InputError(f"plan: {name} moves from {lo:g} to {hi:g} mm (targets and overshoot) but the stage's {name} "
                              f"travels {t_lo:g}..{t_hi:g} mm; shorten the plan or the overshoot")

@@ -23,7 +23,7 @@ from lps_gui.core.planar_model import (
     linearize_planar,
     planar_residuals,
 )
-from lps_gui.core.planar_simulate import nominal_planar_state, simulate_planar_views, small_planar_spec
+from lps_gui.core.simulate import nominal_planar_state, simulate_views, small_planar_spec
 from lps_gui.core.simulate import simulate_views, small_spec
 from tests.core.finite_differences import central_jacobian, normalized_difference
 
@@ -63,7 +63,7 @@ def line_case(warp: bool) -> Case:
 
 def planar_case(warp: bool) -> Case:
     spec = small_planar_spec(seed=3, noise_px=0.3)
-    views = simulate_planar_views(spec)
+    views = simulate_views(spec)
     rng = np.random.default_rng(2)
     state = nominal_planar_state(spec.rig, views.board_plane_mm + rng.normal(0, 0.01, views.board_plane_mm.shape))
     state.l0 = state.l0 + 0.05

@@ -48,6 +48,21 @@ def _trust_note(tc: dict[str, Any], error_key: str, z_key: str | None, u: float 
             + ", beyond U; a source is missing from the budget")
 
 
+def planar_figures_k2(results: dict[str, Any]) -> dict[str, Any]:
+    """U (k = 2) of the planar figures: a top-level ``uncertainty.figures_k2``, or each axis's budget's scale U.
+
+    The estimate writes one budget per axis (``uncertainty.per_axis.X`` / ``.Y``); squareness has no budget
+    row of its own and keeps its noise U.
+    """
+    unc = results.get("uncertainty") or {}
+    k2 = dict(unc.get("figures_k2") or {})
+    for axis in ("X", "Y"):
+        axis_k2 = ((unc.get("per_axis") or {}).get(axis) or {}).get("figures_k2") or {}
+        if axis_k2.get("scale_ppm") is not None:
+            k2.setdefault(f"scale_{axis.lower()}_ppm", axis_k2["scale_ppm"])
+    return k2
+
+
 def planar_summary_rows(results: dict[str, Any]) -> list[Row]:
     """Measured figures of a planar session with 1 sigma and U (k = 2).
 
@@ -56,7 +71,7 @@ def planar_summary_rows(results: dict[str, Any]) -> list[Row]:
     no budget. A simulated session whose truth is off by more than U says so.
     """
     pl = results["figures"]["planar"]
-    k2 = (results.get("uncertainty") or {}).get("figures_k2") or {}
+    k2 = planar_figures_k2(results)
     tc = results.get("truth_comparison") or {}
     u_sq = _u(k2, "squareness_urad", pl["squareness_sigma_urad"])
     u_x = _u(k2, "scale_x_ppm", pl["scale_x_sigma_ppm"])
@@ -179,8 +194,9 @@ def paint_planar_report(flow: Any, meta: dict[str, Any], results: dict[str, Any]
                        "both directions or two runs per line).", color=R.GREY)
     flow.heading("Axis geometry and per-axis figures (measured)", 11)
     R.figure_table(flow, planar_summary_rows(results))
-    budget = bool((results.get("uncertainty") or {}).get("figures_k2"))
-    flow.paragraph(("U (k = 2) from the uncertainty budget of these results (see below). " if budget else
+    budget = bool(planar_figures_k2(results))
+    flow.paragraph(("U (k = 2) of the scales from each axis's uncertainty budget (see below); squareness: 2σ "
+                    "of corner noise. " if budget else
                     "U (k = 2) is 2\u03c3 of corner noise alone: these results carry no uncertainty budget. ")
                    + "A board square-size error is a common scale error of both axes and does not change squareness.",
                    size_pt=7.5, color=R.GREY)
@@ -197,7 +213,11 @@ def paint_planar_report(flow: Any, meta: dict[str, Any], results: dict[str, Any]
         R.iso_section(flow, ar, f"ISO 230-2 per target, {axis} axis (worst line)")
     if results.get("environment") or results.get("uncertainty"):
         flow.new_page()
-        R.uncertainty_sections(flow, results)
+        per_axis = (results.get("uncertainty") or {}).get("per_axis") or {}
+        if not per_axis:
+            R.uncertainty_sections(flow, results)
+        for i, (axis, unc) in enumerate(per_axis.items()):
+            R.uncertainty_sections(flow, {**results, "uncertainty": unc}, axis=axis, environment=i == 0)
     flow.new_page()
     flow.heading("Plots")
     for spec_fig in planar_figures_from_results(results):

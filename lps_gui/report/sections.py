@@ -92,12 +92,13 @@ def iso_section(flow: Any, results: dict[str, Any], title: str = "ISO 230-2 per 
     return True
 
 
-def uncertainty_sections(flow: Any, results: dict[str, Any]) -> None:
-    """Environment, then the GUM budget (ISO/TR 230-9 style)."""
-    flow.heading("Environment", 11)
-    flow.table(None, [list(r) for r in B.environment_rows(results)], [52, 128], size_pt=8.0, row_mm=4.2,
-               align_right_from=9)
-    flow.heading("Uncertainty budget (GUM, ISO/TR 230-9)", 11)
+def uncertainty_sections(flow: Any, results: dict[str, Any], axis: str | None = None, environment: bool = True) -> None:
+    """Environment, then the GUM budget (ISO/TR 230-9 style); ``axis`` names one axis's budget of a planar stage."""
+    if environment:
+        flow.heading("Environment", 11)
+        flow.table(None, [list(r) for r in B.environment_rows(results)], [52, 128], size_pt=8.0, row_mm=4.2,
+                   align_right_from=9)
+    flow.heading("Uncertainty budget (GUM, ISO/TR 230-9)" + (f", {axis} axis" if axis else ""), 11)
     rows = B.budget_rows(results)
     if not rows:
         flow.paragraph("These results carry no uncertainty budget; re-run lps estimate.", color=GREY)

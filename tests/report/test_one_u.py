@@ -138,3 +138,18 @@ def test_planar_u_without_a_budget_is_two_sigma_and_a_truth_beyond_u_is_not_trus
     sq = next(r for r in planar_summary_rows(results) if r.key == "squareness_urad")
     assert sq.u_k2 == pytest.approx(2 * pl["squareness_sigma_urad"])
     assert "not trusted" in sq.note and "5.0 \u03c3" in sq.note
+
+
+def test_the_planar_report_paints_each_axis_budget_the_one_path_writes(planar_session):  # noqa: F811
+    """The estimate writes one budget per axis (uncertainty.per_axis); the report shows both, and the scales' U."""
+    from lps_gui.report.planar_report import planar_summary_rows
+
+    results = json.loads((planar_session / "results.json").read_text())
+    per_axis = results["uncertainty"]["per_axis"]
+    assert set(per_axis) == {"X", "Y"} and "figures_k2" not in results["uncertainty"]
+    info = render_report(planar_session)
+    words = [w for page in info.pages for w in page]
+    assert {"Uncertainty budget (GUM, ISO/TR 230-9), X axis", "Uncertainty budget (GUM, ISO/TR 230-9), Y axis"} <= set(words)
+    rows = {r.key: r for r in planar_summary_rows(results) if r.key}
+    assert rows["scale_x_ppm"].u_k2 == pytest.approx(per_axis["X"]["figures_k2"]["scale_ppm"])
+    assert rows["scale_y_ppm"].u_k2 == pytest.approx(per_axis["Y"]["figures_k2"]["scale_ppm"])

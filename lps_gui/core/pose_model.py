@@ -18,7 +18,7 @@ from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.rotation import chordal_mean, exp_so3
 from lps_gui.core.target_arrowhead import (
     Linearization, PositionCovariance, levenberg_marquardt, project_residuals, retract_targets, view_rms)
-from lps_gui.core.target_model import TargetObservations, target_views
+from lps_gui.core.target_model import TargetObservations, origin_in_camera, target_views
 
 
 @dataclass
@@ -72,10 +72,9 @@ def solve_poses(obs: TargetObservations, intrinsics: CameraIntrinsics, max_itera
     K, T = len(obs.names), len(obs.targets)
     ok, used, Q, p = views["ok"], views["used"], views["Q"], views["p"]
     R = np.tile(np.eye(3), (K, 1, 1))
-    t = np.zeros((K, 3))
     for i in np.flatnonzero(used):
         R[i] = chordal_mean(views["R_world"][i, ok[i]])
-        t[i] = np.mean(views["tv"][i, ok[i]] - (R[i] @ p[ok[i]].T).T, axis=0)
+    t = origin_in_camera(views["tv"], ok, p, R)
     state = {"R": R, "t": t, "Q": Q, "p": p}
     seen = np.isfinite(obs.corners_px[..., 0]) & used[:, None]
     view, corner = np.nonzero(seen)

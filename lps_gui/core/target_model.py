@@ -136,16 +136,21 @@ def target_views(obs: TargetObservations, intrinsics: CameraIntrinsics) -> dict:
     return {"Rv": Rv, "tv": tv, "ok": ok, "Q": Q, "p": p, "ties": ties, "used": used, "R_world": R_world}
 
 
+def origin_in_camera(tv: np.ndarray, ok: np.ndarray, p: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """Each view's translation (K, 3) under orientations R (K, 3, 3): the mean over its seen targets of t_cj - R p_j."""
+    t = np.zeros((len(tv), 3))
+    for i in np.flatnonzero(ok.any(axis=1)):
+        t[i] = np.mean(tv[i, ok[i]] - p[ok[i]] @ R[i].T, axis=0)
+    return t
+
+
 def initial_solution(obs: TargetObservations, intrinsics: CameraIntrinsics) -> dict:
     """R, l0, frame F, s, Q, p from per-view PnP of every seen target, chained from target 0."""
     views = target_views(obs, intrinsics)
     K = len(obs.names)
     tv, ok, Q, p, ties, used = (views[k] for k in ("tv", "ok", "Q", "p", "ties", "used"))
     R = chordal_mean(views["R_world"][ok])
-    t = np.zeros((K, 3))
-    for i in np.flatnonzero(used):
-        # under the common R each seen target gives the world origin in the camera: t = t_cj - R p_j
-        t[i] = np.mean(tv[i, ok[i]] - (R @ p[ok[i]].T).T, axis=0)
+    t = origin_in_camera(tv, ok, p, np.broadcast_to(R, (K, 3, 3)))
     ref = int(np.flatnonzero(used)[0])
     dt = t[used] - t[ref]
     dx = obs.targets_mm[used] - obs.targets_mm[ref]

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from lps_gui.core.rotation import log_so3
-from lps_gui.core.targets import Target
+from lps_gui.core.targets import Target, target_offsets
 
 MIN_CORNERS = 6  # a view "saw" a target when it has at least this many of its corners
 
@@ -19,8 +19,7 @@ MIN_CORNERS = 6  # a view "saw" a target when it has at least this many of its c
 def target_rows(targets: list[Target], Q: np.ndarray, p: np.ndarray, sigma: np.ndarray, corners_px: np.ndarray,
                 targets_mm: np.ndarray, used: np.ndarray) -> list[dict[str, Any]]:
     """One dict per target: id, rvec_rad, rvec_sigma_rad, p_mm, p_sigma_mm, views, ties, stretch_mm."""
-    counts = np.diff(np.concatenate([[0], np.cumsum([t.board.n_corners for t in targets])]))
-    offsets = np.concatenate([[0], np.cumsum(counts)])
+    offsets = target_offsets(targets)
     seen = np.stack([np.isfinite(corners_px[:, offsets[j]: offsets[j + 1], 0]).sum(axis=1) >= MIN_CORNERS
                      for j in range(len(targets))], axis=1) & np.asarray(used, bool)[:, None]
     several = seen.sum(axis=1) >= 2

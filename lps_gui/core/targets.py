@@ -92,6 +92,11 @@ def check_targets(targets: list[Target], dictionary_size: dict[str, int] | None 
                              f"{name or 'the dictionary'} has {size}; use a larger dictionary or fewer markers")
 
 
+def target_offsets(targets: list[Target]) -> np.ndarray:
+    """Start of each target's corners when all targets' corners are laid end to end, and the total (T + 1,)."""
+    return np.concatenate([[0], np.cumsum([t.board.n_corners for t in targets])]).astype(int)
+
+
 def pack_targets(boards: list[Board], ids: list[str] | None = None) -> list[Target]:
     """Targets for ``boards`` with consecutive marker ranges (what ``lps make-targets`` prints)."""
     out: list[Target] = []

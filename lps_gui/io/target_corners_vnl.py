@@ -15,18 +15,13 @@ from pathlib import Path
 
 import numpy as np
 
-from lps_gui.core.targets import Target
+from lps_gui.core.targets import Target, target_offsets
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_bytes_atomic
 from lps_gui.io.corners_vnl_fast import comment_fields
 
 HEADER = "# filename target corner x y"
 MAX_FILE_BYTES = 2 << 30  # ~10^7 views x corners; past that the file is not a session's
-
-
-def target_offsets(targets: list[Target]) -> np.ndarray:
-    """Start of each target's corners in the concatenated layout, and the total (len(targets) + 1,)."""
-    return np.concatenate([[0], np.cumsum([t.board.n_corners for t in targets])]).astype(int)
 
 
 @dataclass

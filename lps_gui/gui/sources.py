@@ -96,7 +96,7 @@ def camera_choices(sim_available: bool, rescan: bool = False) -> list[tuple[str,
     """(label, spec) pairs for the camera panel: the simulated camera, device indices 0 and 1, the SDKs' devices."""
     out = []
     if sim_available:
-        out.append(("Simulated camera (on the stage)", CAMERA_FOLLOWS_STAGE))
+        out.append(("Simulated camera", CAMERA_FOLLOWS_STAGE))
     out += [("Camera device 0", "0"), ("Camera device 1", "1")]
     return out + sdk_devices(rescan)
 

@@ -49,7 +49,7 @@ def write_file_set(folder: Path | str, files: Mapping[str, bytes], last: str | N
     try:
         for name in order:
             temps[name] = write_temp(folder / name, files[name])
-        journal = [[str(temps[name].relative_to(folder)), name] for name in order]
+        journal = [[os.path.relpath(temps[name], folder), name] for name in order]  # temps are absolute
         write_bytes_atomic(folder / JOURNAL, json.dumps({"renames": journal}).encode("utf-8"))
     except BaseException:
         for tmp in temps.values():

@@ -42,3 +42,12 @@ def test_a_top_level_set_other_than_the_recorded_latest_is_kept_before_it_is_rep
     assert [h["method"] for h in history(folder)] == ["pnp", "hybrid", "joint"]
     estimate_session(folder, method="joint")  # the top level is the recorded latest: nothing copied twice
     assert [h["method"] for h in history(folder)] == ["pnp", "hybrid", "joint", "joint"]
+
+
+def test_estimate_of_a_session_named_by_a_relative_path(tmp_path, monkeypatch):
+    """`lps estimate s` from the session's parent: the history commit works on relative folders too."""
+    simulate_point_session(small_spec(seed=2, views=8, directions="+", runs=1), tmp_path / "s")
+    monkeypatch.chdir(tmp_path)
+    assert main(["estimate", "s"]) == 0
+    assert [h["latest"] for h in history("s")] == [True]
+    assert (tmp_path / "s" / "results.json").is_file()

@@ -21,7 +21,7 @@ from lps_gui.core.plan import Plan, PlannedStop
 from lps_gui.core.planar_model import PlanarState, planar_positions_only
 from lps_gui.core.rig import Rig
 from lps_gui.core.rotation import exp_so3
-from lps_gui.core.stage_errors import ErrorProfile, PlanarErrorModel, PlanarTruePose, StageErrorModel, TruePose
+from lps_gui.core.stage_errors import ErrorProfile, PlanarErrorModel, PlanarTruePose, StageErrorModel, TruePose, Vibration
 from lps_gui.errors import InputError
 
 
@@ -40,6 +40,8 @@ class SimulationSpec:
     bumped_views: tuple[int, ...] = ()  # camera knocked: rotated by bump_mrad
     bump_mrad: float = 3.0
     seed: int = 0
+    vibration: Vibration | None = None  # the carriage rings after each move (ASME B5.64 settling test)
+    frame_interval_s: float = 0.01  # time between the frames of a stop (the camera's exposure), s
 
 
 @dataclass
@@ -81,14 +83,29 @@ def true_views(spec: SimulationSpec, rng: np.random.Generator) -> tuple[list[Pla
     """True camera poses of every planned frame, and the truth record.
 
     The carriage's true pose depends on the approach direction (backlash) and
-    draws repeatability noise once per stop.
+    draws repeatability noise once per stop (the frames of a stop share it).
+    A command inside the stage's dead band leaves the carriage where the last
+    stop left it (:meth:`StageErrorModel.reached_mm`); with ``spec.vibration``
+    frame f of a stop sees the ringing at ``settle_s + f * frame_interval_s``
+    after the move (the frame's pose at the start of its exposure).
     """
     stops = list(spec.plan.stops())
     if not stops:
         raise InputError("simulation: the plan has no targets")
     target = np.array([s.target_mm for s in stops])
     direction = np.array([1.0 if s.direction == "+" else -1.0 for s in stops])
-    pose = spec.rig.errors.true_pose(target, direction, rng)
+    first = np.flatnonzero(np.array([s.frame == 0 for s in stops]))  # one move per stop
+    stop_of = np.cumsum([s.frame == 0 for s in stops]) - 1  # shape (K,): each frame's stop
+    errors = spec.rig.errors
+    reached, moved = errors.reached_mm(target[first])
+    at_stop = errors.true_pose(reached, direction[first], rng)
+    last_move = np.maximum.accumulate(np.where(moved, np.arange(first.size), 0))  # a stuck stop keeps the last pose
+    pick = last_move[stop_of]
+    pose = TruePose(at_stop.axis_mm[pick], at_stop.straightness_um[pick], at_stop.angles_urad[pick])
+    if spec.vibration is not None:
+        since_s = spec.plan.settle_s + spec.frame_interval_s * np.array([s.frame for s in stops], dtype=float)
+        ring_um = np.where(moved[stop_of], spec.vibration.offset_um(since_s, direction[first][pick]), 0.0)
+        pose = replace(pose, axis_mm=pose.axis_mm + 1e-3 * ring_um)
     R, t = spec.rig.camera_poses(pose)
     bump_views(R, spec.bumped_views, spec.bump_mrad, rng, "simulation")
     s_true = pose.axis_mm - pose.axis_mm[0]
@@ -110,6 +127,8 @@ def true_views(spec: SimulationSpec, rng: np.random.Generator) -> tuple[list[Pla
         "noise_px": spec.noise_px,
         "seed": spec.seed,
     }
+    if spec.vibration is not None:
+        truth["vibration"] = {**spec.vibration.to_dict(), "frame_interval_s": spec.frame_interval_s}
     return stops, R, t, truth
 
 

@@ -75,8 +75,10 @@ def write_point_session(out: Path | str, spec: Any, stops: Sequence[Any], corner
     write_intrinsics(out / "intrinsics.json", intr)
     names = [f"images/{s.index:06d}.png" for s in stops]
     now = time.time()
+    ringing = getattr(spec, "vibration", None) is not None  # a settling test: each frame's time after its move
     for stop, name in zip(stops, names):
+        since = round(spec.plan.settle_s + spec.frame_interval_s * (stop.frame + 1), 6) if ringing else None
         session.append(CaptureRecord(stop.index, stop.run, stop.direction, stop.target_mm, stop.target_mm, name, None,
-                                     now, stop.frame))
+                                     now, stop.frame, since_move_s=since))
     write_corners_vnl(session.corners_path, CornerTable(names, corners_px, meta={"source": "simulated points"}))
     return session

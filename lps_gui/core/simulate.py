@@ -227,13 +227,27 @@ def paper_rig_spec(
     noise_px: float = 0.1,
     errors: StageErrorModel | None = None,
     plan: Plan | None = None,
+    distance_mm: float = 600.0,
+    name: str = "paper-rig",
 ) -> SimulationSpec:
     """The paper's rig: 1920x1080, 18x30 board, 400 stops 1 mm apart, 600 mm away."""
     board = Board(cols=30, rows=18, square_mm=10.0)
     plan = plan or Plan(start_mm=0.0, stop_mm=399.0, step_mm=1.0, directions="+", runs=1)
     t = plan.targets()
-    rig = Rig.facing_board(board, PAPER_INTRINSICS, 600.0, (t[0], t[-1]), errors=errors)
-    return SimulationSpec("paper-rig", rig, plan, noise_px=noise_px, seed=seed)
+    rig = Rig.facing_board(board, PAPER_INTRINSICS, distance_mm, (t[0], t[-1]), errors=errors)
+    return SimulationSpec(name, rig, plan, noise_px=noise_px, seed=seed)
+
+
+CLOSEUP_DISTANCE_MM = 450.0  # the board fills the view: ~1.4 um per view, what micrometre steps need
+
+
+def paper_closeup_spec(seed: int = 0, noise_px: float = 0.1, errors: StageErrorModel | None = None,
+                       plan: Plan | None = None) -> SimulationSpec:
+    """The paper's camera and board 450 mm apart over 200 mm of travel: the set-up of the ASME B5.64
+    incremental-step and settling tests (a small stage, repeatability 0.1 um)."""
+    errors = errors if errors is not None else replace(paper_stage_errors(), repeatability_um=0.1)
+    plan = plan or Plan(start_mm=0.0, stop_mm=200.0, step_mm=10.0, directions="both", runs=1)
+    return paper_rig_spec(seed, noise_px, errors, plan, CLOSEUP_DISTANCE_MM, "paper-closeup")
 
 
 def paper_synthetic_spec(seed: int = 0) -> SimulationSpec:
@@ -303,6 +317,7 @@ PRESETS = {
     "paper-rig": paper_rig_spec,
     "paper-synthetic": paper_synthetic_spec,
     "small": small_spec,
+    "paper-closeup": paper_closeup_spec,
 }
 PLANAR_PRESETS = {"paper-planar": paper_planar_spec, "small-planar": small_planar_spec}
 

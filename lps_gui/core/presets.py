@@ -30,12 +30,15 @@ GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 
 
 def parse_spec(text: str) -> dict[str, float]:
-    """``"paper"`` or ``"accuracy=20,repeatability=5,straightness=38"`` (um) -> session.json ``stage_spec``."""
+    """``"paper"``, ``"accuracy=20,repeatability=5,straightness=38"`` (um) or both (``"paper,min_step=2"``) -> session.json ``stage_spec``."""
     text = text.strip()
     if text in SPEC_PRESETS:
         return dict(SPEC_PRESETS[text])
     spec: dict[str, float] = {}
     for part in filter(None, (p.strip() for p in text.split(","))):
+        if part in SPEC_PRESETS:  # a preset with more limits: "paper,min_step=2"
+            spec.update(SPEC_PRESETS[part])
+            continue
         key, sep, value = part.partition("=")
         key = key.strip().lower().removesuffix("_um").removesuffix("_s").replace("-", "_")
         if not sep or key not in SPEC_KEYS:

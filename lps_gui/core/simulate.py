@@ -132,6 +132,14 @@ def true_views(spec: SimulationSpec, rng: np.random.Generator) -> tuple[list[Pla
     return stops, R, t, truth
 
 
+def frame_since_move_s(spec: SimulationSpec, frame: int) -> float | None:
+    """captures.jsonl ``since_move_s`` of a simulated frame of a ringing stage (the engine's convention: after the
+    settle wait and the frame's exposure); None without ringing."""
+    if spec.vibration is None:
+        return None
+    return round(spec.plan.settle_s + spec.frame_interval_s * (frame + 1), 6)
+
+
 def planar_true_views(spec: SimulationSpec, rng: np.random.Generator
                       ) -> tuple[list[PlannedStop], np.ndarray, np.ndarray, PlanarTruePose]:
     """A gantry's :func:`true_views`: per-axis approach sides (backlash), repeatability once per stop."""

@@ -14,7 +14,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
-from lps_gui.core.simulate import SimulationSpec, simulate_views
+from lps_gui.core.simulate import SimulationSpec, frame_since_move_s, simulate_views
 from lps_gui.io.board_file import write_board
 from lps_gui.io.corners_vnl import CornerTable, write_corners_vnl
 from lps_gui.io.intrinsics_file import write_intrinsics
@@ -75,10 +75,8 @@ def write_point_session(out: Path | str, spec: Any, stops: Sequence[Any], corner
     write_intrinsics(out / "intrinsics.json", intr)
     names = [f"images/{s.index:06d}.png" for s in stops]
     now = time.time()
-    ringing = getattr(spec, "vibration", None) is not None  # a settling test: each frame's time after its move
     for stop, name in zip(stops, names):
-        since = round(spec.plan.settle_s + spec.frame_interval_s * (stop.frame + 1), 6) if ringing else None
         session.append(CaptureRecord(stop.index, stop.run, stop.direction, stop.target_mm, stop.target_mm, name, None,
-                                     now, stop.frame, since_move_s=since))
+                                     now, stop.frame, since_move_s=frame_since_move_s(spec, stop.frame)))
     write_corners_vnl(session.corners_path, CornerTable(names, corners_px, meta={"source": "simulated points"}))
     return session

@@ -20,6 +20,7 @@ from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.clock import Clock
 from lps_gui.core.plan import Plan, PlannedStop
 from lps_gui.core.simulate import SimulationSpec
+from lps_gui.core.stage_errors import Vibration
 from lps_gui.errors import InputError
 from lps_gui.hardware.stage import Stage
 from lps_gui.io.atomic import check_writable
@@ -104,7 +105,10 @@ def reopen_simulated_rig(session: Session, clock: Clock | None = None) -> tuple[
         raise InputError(f"{session.folder}: not captured on the simulated rig; resume it with --stage and --camera")
     spec = spec_from_truth(truth, session.plan(), str(session.folder / "session.json"))
     cam = truth.get("camera") or {}
-    return make_simulated_rig(spec, clock=clock, noise_grey=float(cam.get("noise_grey", 2.0)), blur_px=float(cam.get("blur_px", 1.2)))
+    ring = (session.meta.get("stage") or {}).get("vibration")  # the stage rang after each move (settling tests)
+    options = {"vibration": Vibration.from_dict(ring)} if isinstance(ring, dict) else {}
+    return make_simulated_rig(spec, clock=clock, noise_grey=float(cam.get("noise_grey", 2.0)),
+                              blur_px=float(cam.get("blur_px", 1.2)), **options)
 
 
 class SimulatedRigHook:

@@ -93,4 +93,5 @@ class SimulatedCamera(Camera):
             "noise_grey": self.noise_grey,
             "seed": self.seed,
             "blur_px": self.lighting.blur_px,
+            **({"exposure_s": self.exposure_s} if self.exposure_s else {}),  # a frame takes this (simulated) time
         }

@@ -14,6 +14,7 @@ from typing import Any
 
 from lps_gui.cli.option_types import int_range, nonnegative_finite, positive_finite
 
+SIM_FRAME_S = 0.01  # the simulated camera's frame time in a settling test (100 frames per second)
 TEST_PRESET = "paper-closeup"  # the simulated set-up of the tests when no --preset is given (simulate)
 
 
@@ -94,3 +95,9 @@ def simulated_stage(args: argparse.Namespace, spec: Any) -> tuple[Any, Any]:
     if ringing is None and getattr(args, "test", None) == "settling":
         ringing = Vibration()
     return spec, ringing
+
+
+def simulated_rig_options(ringing: Any) -> dict[str, Any]:
+    """make_simulated_rig's options of a ringing stage: the ringing, and a camera whose frames take
+    ``SIM_FRAME_S`` each (a simulated camera otherwise grabs every frame at one instant)."""
+    return {} if ringing is None else {"vibration": ringing, "exposure_s": SIM_FRAME_S}

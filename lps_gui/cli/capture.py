@@ -239,11 +239,11 @@ def _start(args: argparse.Namespace):
             intr = read_intrinsics(args.intrinsics)
         else:
             spec = spec_for_plan(args.preset, line_plan(args, preset(args.preset).plan), seed=args.seed)
-        from lps_gui.cli.asme_test import simulated_stage
+        from lps_gui.cli.asme_test import simulated_rig_options, simulated_stage
 
         spec, ringing = simulated_stage(args, spec)  # --dead-band-um, --ringing (a settling test rings by default)
         session, stage, camera = create_simulated_session(args.out, spec, clock=clock(args), noise_grey=args.noise_grey,
-                                                          intrinsics=intr, **({"vibration": ringing} if ringing else {}))
+                                                          intrinsics=intr, **simulated_rig_options(ringing))
         stage = bind_simulated_stage(args, session, stage, camera, stage_spec, **axes)
         return session, stage, camera, simulated_engine(session, stage, camera, args.encode)
     if not args.board:

@@ -86,7 +86,11 @@ def build_spec(args: argparse.Namespace):
     from lps_gui.cli.asme_test import simulated_stage
 
     spec, ringing = simulated_stage(args, spec)
-    return replace(spec, vibration=ringing) if ringing is not None else spec
+    if ringing is None:
+        return spec
+    from lps_gui.cli.asme_test import SIM_FRAME_S
+
+    return replace(spec, vibration=ringing, frame_interval_s=SIM_FRAME_S)
 
 
 def _record_setup(args: argparse.Namespace, session) -> None:

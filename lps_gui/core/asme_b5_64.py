@@ -2,7 +2,7 @@
 
 * The ISO 230-2 figures under both names (:data:`FIGURE_NAMES`): ASME B5.64
   reports the same bidirectional accuracy and repeatability as ISO 230-2.
-* The test uncertainty ratio :func:`test_uncertainty_ratio`: specification
+* The test uncertainty ratio :func:`tur`: specification
   tolerance over the expanded uncertainty U (k = 2) of the figure compared.
 * The incremental-step test (:func:`incremental_step_figures`): small
   commanded steps forward and back, several frames averaged per stop; each
@@ -43,7 +43,7 @@ STEP_TOLERANCE = 0.5  # a step is achieved within +-50 % of its command (contrac
 SETTLE_TAIL = 0.25  # the last quarter of a stop's frames is where the carriage rests
 
 
-def test_uncertainty_ratio(tolerance: float | None, u_k2: float | None) -> float | None:
+def tur(tolerance: float | None, u_k2: float | None) -> float | None:
     """Specification tolerance over U (k = 2); None when either is missing (never invented)."""
     if tolerance is None or u_k2 is None or not (u_k2 > 0) or not math.isfinite(float(tolerance)):
         return None

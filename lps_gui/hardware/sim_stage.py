@@ -109,7 +109,7 @@ class SimulatedStage(Stage):
         self._last_state = ""
         self.vibration = vibration
         self._stopped_at: float | None = None  # end of the last completed move of the measured axis
-        self._rest_mm: float | None = None  # where the carriage rests after its last move that moved it
+        self._rest_mm: float | None = float(start_mm)  # where the carriage rests (after its last move that moved it)
         self._stuck_mm = 0.0  # the carriage's offset from the commanded position after a move inside the dead band
         self._offsets = {name: [0.0, 0.0, 0.0] for name in WORK_SYSTEMS}  # GRBL's sign: work = machine - offset
         self._system = WORK_SYSTEMS[0]

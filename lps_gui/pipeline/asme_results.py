@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from lps_gui.core.asme_b5_64 import (StopMeans, incremental_step_figures, incremental_steps, named_figures,
-                                     settling_figures, test_uncertainty_ratio)
+                                     settling_figures, tur)
 from lps_gui.core.estimate import EstimateOptions, LpsEstimate
 from lps_gui.core.observations import Observations
 from lps_gui.core.stage_errors import StageErrorModel, Vibration
@@ -58,20 +58,20 @@ def tur_rows(results: dict[str, Any], spec: dict[str, Any]) -> list[dict[str, An
     from lps_gui.report.verdict import verdicts
 
     rows = [{"figure": v.name, "quantity": v.quantity, "tolerance": v.limit, "U": v.u_k2, "unit": v.unit,
-             "tur": test_uncertainty_ratio(v.limit, v.u_k2)} for v in verdicts(results, spec)]
+             "tur": tur(v.limit, v.u_k2)} for v in verdicts(results, spec)]
     section = results.get("asme_b5_64") or {}
     step = section.get("incremental_step") or {}
     limit = spec.get(SPEC_TOLERANCES["incremental_step"][0])
     if limit is not None and step:
         U = None if step.get("max_step_sigma_um") is None else 2.0 * float(step["max_step_sigma_um"])
         rows.append({"figure": "Minimum incremental motion", "quantity": "step", "tolerance": float(limit), "U": U,
-                     "unit": "\u00b5m", "tur": test_uncertainty_ratio(limit, U)})
+                     "unit": "\u00b5m", "tur": tur(limit, U)})
     settle = section.get("settling") or {}
     limit = spec.get(SPEC_TOLERANCES["settling"][0])
     if limit is not None and settle:
         U = settle.get("settling_time_U_s")
         rows.append({"figure": "Settling time", "quantity": f"\u00b1{settle.get('band_um'):g} \u00b5m band",
-                     "tolerance": float(limit), "U": U, "unit": "s", "tur": test_uncertainty_ratio(limit, U)})
+                     "tolerance": float(limit), "U": U, "unit": "s", "tur": tur(limit, U)})
     return rows
 
 

@@ -45,12 +45,12 @@ def overall_color(rows: Sequence[Verdict]) -> str:
 
 def verdict_table(flow: Any, rows: Sequence[Verdict]) -> None:
     """The verdict rows: the compared figure, its U (k = 2), the limit and the word, then their notes."""
-    from lps_gui.core.asme_b5_64 import test_uncertainty_ratio
+    from lps_gui.core.asme_b5_64 import tur
 
-    turs = [test_uncertainty_ratio(v.limit, v.u_k2) for v in rows]  # ASME B5.64: tolerance over U
+    ratios = [tur(v.limit, v.u_k2) for v in rows]  # ASME B5.64: tolerance over U
     cells = [[v.name, v.measured_text(), f"\u00b1 {S.fmt(v.u_k2)} {v.unit}" if v.u_k2 is not None else "not assessed",
-              f"{S.fmt(v.limit)} {v.unit}", "\u2014" if tur is None else f"{tur:.1f}", v.verdict]
-             for v, tur in zip(rows, turs)]
+              f"{S.fmt(v.limit)} {v.unit}", "\u2014" if ratio is None else f"{ratio:.1f}", v.verdict]
+             for v, ratio in zip(rows, ratios)]
     flow.table(["criterion", "compared figure", "U (k = 2)", "limit", "TUR", "verdict"], cells, [40, 34, 26, 22, 12, 46],
                size_pt=8.5, row_mm=4.6, colors=[v.color for v in rows], align_left=(5,))
     for v in rows:

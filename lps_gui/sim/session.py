@@ -106,7 +106,10 @@ def reopen_simulated_rig(session: Session, clock: Clock | None = None) -> tuple[
     spec = spec_from_truth(truth, session.plan(), str(session.folder / "session.json"))
     cam = truth.get("camera") or {}
     ring = (session.meta.get("stage") or {}).get("vibration")  # the stage rang after each move (settling tests)
-    options = {"vibration": Vibration.from_dict(ring)} if isinstance(ring, dict) else {}
+    options: dict[str, Any] = {"vibration": Vibration.from_dict(ring)} if isinstance(ring, dict) else {}
+    exposure = (session.meta.get("camera") or {}).get("exposure_s")  # its frames took time (frame times)
+    if exposure:
+        options["exposure_s"] = float(exposure)
     return make_simulated_rig(spec, clock=clock, noise_grey=float(cam.get("noise_grey", 2.0)),
                               blur_px=float(cam.get("blur_px", 1.2)), **options)
 

@@ -95,6 +95,7 @@ MIN_STEP_FRAMES = 8
 SETTLING_STOPS = 3
 SETTLING_FRAMES = 100
 SETTLING_BAND_UM = 5.0
+PAPER_SPEC_TEST_LIMITS = {"min_incremental_motion_um": 2.0, "settling_time_s": 1.0}  # the demo's data sheet for the tests
 
 
 def min_step_plan_fields(start_mm: float, stop_mm: float, step_um: float = MIN_STEP_UM, steps: int = MIN_STEP_COUNT,

@@ -123,6 +123,30 @@ def settling_section(flow: Any, settling: dict[str, Any]) -> None:
                        "(the truth; not part of the measurement).", size_pt=NOTE_SIZE, color=GREY)
 
 
+def settling_line(settling: dict[str, Any]) -> str:
+    t = settling.get("settling_time_s")
+    if t is None:
+        return "settling: no stop had enough timed frames to fit"
+    line = (f"settling time within \u00b1{fmt(settling['band_um'])} \u00b5m: {t:.3f} s \u00b1 "
+            f"{settling['settling_time_U_s']:.3f} s (k = 2)")
+    truth = settling.get("truth")
+    return line + (f"; true {truth['settling_time_s']:.3f} s" if truth else "")
+
+
+def test_lines(results: dict[str, Any]) -> list[str]:
+    """The ASME test's findings and the test uncertainty ratios, one line each (demo, CLI)."""
+    s = section(results)
+    lines = []
+    if s.get("incremental_step"):
+        lines.append(step_verdict(s["incremental_step"]))
+    if s.get("settling"):
+        lines.append(settling_line(s["settling"]))
+    for r in s.get("test_uncertainty_ratio") or []:
+        ratio = "\u2014" if r.get("tur") is None else f"{r['tur']:.1f}"
+        lines.append(f"TUR {r['figure']}: {ratio} (tolerance {fmt(r['tolerance'])} {r['unit']})")
+    return lines
+
+
 def _seconds(v: Any) -> str:
     return "never inside the band" if v is None else f"{float(v):.3f} s"
 

@@ -19,10 +19,20 @@ def test_simulate_min_step_with_a_dead_band_estimates_a_sticking_stage(tmp_path,
     assert session.meta["stage_spec"]["min_incremental_motion_um"] == 2.0
     plan = session.plan()
     assert plan.frames_per_stop == 8 and plan.directions == "both" and len(plan.targets()) == 15
+    capsys.readouterr()
     assert lps_main(["estimate", str(out.resolve())]) == 0
+    assert "ASME B5.64: The stage sticks" in capsys.readouterr().out
     section = json.loads((out / "results.json").read_text())["asme_b5_64"]
     assert section["incremental_step"]["sticks"] and section["incremental_step"]["truth"]["dead_band_um"] == 3.0
     assert "Minimum incremental motion" in [r["figure"] for r in section["test_uncertainty_ratio"]]
+    from lps_gui.report.pdf import render_report
+
+    info = render_report(out.resolve())
+    page = next(p for p in info.pages if "ASME B5.64 incremental-step test (minimum incremental motion)" in p)
+    assert page[1:] == ["figure:min_step", "Test uncertainty ratio", "ISO 230-2 and ASME B5.64 names"]
+    assert not info.clipped
+    texts = " ".join(t.text for t in info.texts)
+    assert "The stage sticks" in texts and "TUR" in texts
 
 
 @pytest.mark.parametrize("argv, message", [

@@ -130,7 +130,7 @@ class SimulatedRigHook:
         self.plan = plan
         self.stage = stage
         self.camera = camera
-        self.truth = TruthRecorder(camera.pose_source, camera.rig if camera.rig.planar else None)
+        self.truth = TruthRecorder(camera.rendered_pose, camera.rig if camera.rig.planar else None)
         self._arrivals: dict[int, tuple[int, ...]] | None = None
 
     def prune(self, session: Session) -> None:

@@ -130,7 +130,8 @@ class SimulatedRigHook:
         self.plan = plan
         self.stage = stage
         self.camera = camera
-        self.truth = TruthRecorder(camera.rendered_pose, camera.rig if camera.rig.planar else None)
+        rendered = getattr(camera, "rendered_pose", camera.pose_source)  # a camera feeding the rig's frames may not say
+        self.truth = TruthRecorder(rendered, camera.rig if camera.rig.planar else None)
         self._arrivals: dict[int, tuple[int, ...]] | None = None
 
     def prune(self, session: Session) -> None:

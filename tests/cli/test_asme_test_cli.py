@@ -64,3 +64,11 @@ def test_capture_settling_on_the_ringing_simulated_rig(tmp_path):
 
     info = render_report(out)
     assert any("ASME B5.64 settling test" in page for page in info.pages) and not info.clipped
+
+
+@pytest.mark.slow
+def test_demo_settling_prints_the_settling_time_against_the_truth(tmp_path, capsys):
+    assert lps_main(["demo", "--test", "settling", "--out", str(tmp_path / "d")]) == 0
+    out = capsys.readouterr().out
+    assert "settling time within \u00b15.00 \u00b5m" in out and "true 0.568 s" in out and "TUR Settling time" in out
+    assert (tmp_path / "d" / "session" / "report.pdf").is_file()

@@ -230,7 +230,7 @@ def settling_figures(t_s: np.ndarray, x_um: np.ndarray, band_um: float, k: float
     t = np.asarray(t_s, dtype=float)
     frames = settling_time_from_frames(t, np.asarray(x_um, dtype=float) - rest, band_um)
     return {
-        "band_um": float(band_um), "n_frames": int(t.size), "frame_interval_s": dt,
+        "band_um": float(band_um), "n_frames": int(t.size), "frame_interval_s": dt, "record_s": float(np.nanmax(t)),
         "settling_time_s": float(settle), "settling_time_U_s": float(k * math.sqrt(var_settle)),
         "settling_time_frames_s": frames, "residual_sigma_um": float(sigma),
         "rest_um": rest, "amplitude_um": amp, "decay_s": decay, "frequency_hz": freq, "phase_rad": phase,

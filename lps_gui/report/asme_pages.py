@@ -15,6 +15,7 @@ from lps_gui.report.summary import fmt
 GREY = "#555555"
 NOTE_SIZE = 7.5
 FIGURE_HEIGHT_MM = 78.0
+RECORD_MARGIN = 1.5  # a settling record should run this many times the settling time
 TUR_NOTE = ("Test uncertainty ratio (ASME B5.64): the specification's tolerance over the expanded uncertainty U "
             "(k = 2) of the figure as it is compared with it (a \u00b1 limit against half a band, as in the verdict). "
             "A figure without a tolerance in session.json stage_spec has no ratio; 4 or more is the usual aim.")
@@ -105,6 +106,11 @@ def settling_section(flow: Any, settling: dict[str, Any]) -> None:
                    f"{settling['settling_time_U_s']:.3f} s (U, k = 2), the longest of {settling['n_stops']} moves "
                    f"(median {settling['median_settling_time_s']:.3f} s); from the frames alone "
                    f"{_seconds(settling.get('settling_time_frames_s'))}.", size_pt=9.0)
+    short = [s for s in settling.get("stops") or [] if s.get("record_s") is not None
+             and s["record_s"] < RECORD_MARGIN * s["settling_time_s"]]
+    if short:
+        flow.paragraph(f"The frames of {len(short)} move(s) end within {RECORD_MARGIN:g} times the settling time: the "
+                       "fit extrapolates there; take more frames per stop (--frames).", size_pt=8.5, color="#a05a00")
     flow.figure(settling_figure(settling), FIGURE_HEIGHT_MM)
     cells = [[f"{s['target_mm']:g} mm {s['direction']}", f"{s['settling_time_s']:.3f}", f"{s['settling_time_U_s']:.3f}",
               _seconds(s.get("settling_time_frames_s")), f"{s['amplitude_um']:.1f}", f"{s['frequency_hz']:.2f}",

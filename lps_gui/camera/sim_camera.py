@@ -60,6 +60,7 @@ class SimulatedCamera(Camera):
         self._renderer: BoardRenderer | None = None
         self._rng = np.random.default_rng(self.seed)
         self._frame_no = 0
+        self.last_pose: Any = None  # the pose of the last frame rendered (its truth)
         self._open = False
 
     def open(self) -> None:
@@ -74,6 +75,7 @@ class SimulatedCamera(Camera):
         if not self._open or self._renderer is None:
             raise HardwareError("simulated camera: grab before open(); open the camera first")
         pose = self.pose_source()
+        self.last_pose = pose  # the truth of this frame: its exposure starts here (the stage may ring)
         R, t = self.rig.camera_poses(pose)
         self.clock.sleep(self.exposure_s)
         image = self._renderer.render(R[0], t[0], self._rng)
@@ -93,4 +95,5 @@ class SimulatedCamera(Camera):
             "noise_grey": self.noise_grey,
             "seed": self.seed,
             "blur_px": self.lighting.blur_px,
+            **({"exposure_s": self.exposure_s} if self.exposure_s else {}),  # a frame takes this (simulated) time
         }

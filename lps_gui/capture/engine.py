@@ -169,6 +169,7 @@ class CaptureEngine:
         self._last_move: tuple[int, str, float, int] | None = None  # (run, direction, target, stop's first index)
         self._reported_mm: float | tuple[float, float] | None = None
         self._axis_sides: list[int | None] = [None, None]  # planar: side of each axis' last approach
+        self._idle_s: float | None = None  # clock time the stage reported the last move onto a stop done
         self._active = False
         self.configure_settle(settle)
         self._locked: dict[str, Any] = {}
@@ -332,6 +333,7 @@ class CaptureEngine:
         self._emit(CaptureEvent("move", f"move to {stop.target_mm:g} mm", stop.index))
         self._commanded_mm = None if self.command_of is None else float(self.command_of(stop.target_mm, int(sign)))
         self._move(stop.target_mm if self._commanded_mm is None else self._commanded_mm, feed)
+        self._idle_s = self.clock.now()  # the move is done: frame times count from here (ASME B5.64 settling)
         self.clock.sleep(plan.settle_s)
         self._reported_mm = float(self.stage.position_mm())
         commanded = stop.target_mm if self._commanded_mm is None else self._commanded_mm
@@ -351,12 +353,13 @@ class CaptureEngine:
         settle_s = None
         if self._settler is None:
             frame = self.camera.grab()
+            since_move_s = self._since_move_s()
             check_frame(self._locked, frame, stop.index)
         else:
             got = self._settler.grab(self.camera, settle=stop.frame == 0)
             for f in got.grabbed:
                 check_frame(self._locked, f, stop.index)
-            frame, settle_s = got.frame, got.settle_s
+            frame, settle_s, since_move_s = got.frame, got.settle_s, self._since_move_s()
             if not got.settled:
                 self._emit(CaptureEvent("warning", f"frame {stop.index}: the picture did not settle within "
                                         f"{self.settle.timeout_s:g} s (last shift {got.shift_px} px); taken anyway", stop.index))
@@ -376,9 +379,14 @@ class CaptureEngine:
             frame=stop.frame,
             commanded_mm=self._commanded_mm,
             settle_s=None if settle_s is None else round(float(settle_s), 6),
+            since_move_s=since_move_s,
         )
         self.session.append(record)
         self._emit(CaptureEvent("frame", rel, stop.index, record.__dict__.copy()))
+
+    def _since_move_s(self) -> float | None:
+        """Now, after the grab, on the engine's clock since the stage reported the stop's move done."""
+        return None if self._idle_s is None else round(self.clock.now() - self._idle_s, 6)
 
     def _checkpoint(self, cancel: CancelToken | None) -> None:
         """Between frames: honour abort, cancel and pause (waiting here until resumed)."""

@@ -68,6 +68,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     from lps_gui.cli.capture_setup import add_setup_arguments
 
     add_setup_arguments(p)
+    from lps_gui.cli.asme_test import add_test_arguments
+
+    add_test_arguments(p)
     a = p.add_argument_group("settle detection and averaging")
     a.add_argument("--settle-px", type=positive_finite, metavar="PX", help="before each stop's frame, grab until consecutive frames show the "
                    "board within PX pixels (mean corner shift), e.g. 0.02")
@@ -211,6 +214,8 @@ def _start(args: argparse.Namespace):
     planar = wants_planar(args)
     if planar and args.compensation:
         raise InputError("--compensation: a table corrects one axis; planar plans are captured without one")
+    if planar and args.test:
+        raise InputError("--test: the ASME B5.64 tests are single-axis tests; drop the planar switches")
     if planar and args.iso_plan:
         raise InputError("--iso-plan is the single-axis ISO 230-2 preset; a planar plan takes --iso-lines")
     stage_spec, camera_spec = args.stage or "sim", args.camera or "sim"
@@ -234,8 +239,11 @@ def _start(args: argparse.Namespace):
             intr = read_intrinsics(args.intrinsics)
         else:
             spec = spec_for_plan(args.preset, line_plan(args, preset(args.preset).plan), seed=args.seed)
+        from lps_gui.cli.asme_test import simulated_rig_options, simulated_stage
+
+        spec, ringing = simulated_stage(args, spec)  # --dead-band-um, --ringing (a settling test rings by default)
         session, stage, camera = create_simulated_session(args.out, spec, clock=clock(args), noise_grey=args.noise_grey,
-                                                          intrinsics=intr)
+                                                          intrinsics=intr, **simulated_rig_options(ringing))
         stage = bind_simulated_stage(args, session, stage, camera, stage_spec, **axes)
         return session, stage, camera, simulated_engine(session, stage, camera, args.encode)
     if not args.board:

@@ -155,6 +155,10 @@ def line_plan(args: argparse.Namespace, base=None):
     from lps_gui.cli.capture_setup import iso_plan_fields
 
     fields.update(iso_plan_fields(args, base))
+    from lps_gui.cli.asme_test import test_plan_fields
+
+    start = args.start_mm if args.start_mm is not None else getattr(base, "start_mm", None)
+    fields.update(test_plan_fields(args, start, args.stop_mm if args.stop_mm is not None else getattr(base, "stop_mm", None)))
     if base is None and not any(fields[k] is not None for k in ("start_mm", "stop_mm", "step_mm", "targets_mm") if k in fields):
         from lps_gui.errors import InputError
 

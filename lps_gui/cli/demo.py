@@ -16,6 +16,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="output folder (default demo-output): an existing or new folder; a name with a suffix is refused")
     parser.add_argument("--seed", type=nonnegative_int, default=0, help="random seed of the simulation")
     parser.add_argument("--planar", action="store_true", help="the planar pipeline on a simulated XY gantry (docs/planar.md)")
+    parser.add_argument("--test", choices=("min-step", "settling"), help="an ASME B5.64 test on the simulated stage "
+                        "(docs/asme-b5.64.md): min-step on a 3 um dead band, settling of a ringing stage; seconds")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -28,7 +30,14 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--out {args.out}: lps demo writes a folder of files; give a folder name without a suffix")
 
     t0 = time.monotonic()
-    res = run_demo(args.out, quick=args.quick, bar=ProgressBar, say=lambda line: print(line, flush=True), seed=args.seed,
+    if args.test:
+        if args.planar:
+            raise InputError("--test: the ASME B5.64 tests are single-axis tests; drop --planar")
+        from lps_gui.pipeline.asme_demo import run_asme_demo
+
+        res = run_asme_demo(args.out, args.test, seed=args.seed, say=lambda line: print(line, flush=True))
+    else:
+        res = run_demo(args.out, quick=args.quick, bar=ProgressBar, say=lambda line: print(line, flush=True), seed=args.seed,
                    planar=args.planar)
     print()
     if res.report_pdf is None:

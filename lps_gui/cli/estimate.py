@@ -138,6 +138,11 @@ def format_summary(results: dict) -> str:
     if iso.get("A_um") is not None or iso.get("E_um") is not None:
         parts = [f"{k[:-3]} {_g(iso[k], '.2f')} µm" for k in ("A_um", "R_um", "E_um", "B_um", "M_um") if iso.get(k) is not None]
         lines.append("ISO 230-2: " + ", ".join(parts))
+    asme = results.get("asme_b5_64") or {}
+    if asme.get("incremental_step") or asme.get("settling"):  # an ASME B5.64 test session (docs/asme-b5.64.md)
+        from lps_gui.report.asme_pages import test_lines
+
+        lines += [f"ASME B5.64: {line}" for line in test_lines(results)]
     for f in results["flags"]:
         lines.append(f"outlier view {f['index']}: {f['message']}")
     tc = results.get("truth_comparison")

@@ -37,6 +37,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--replaced", type=_int_list, default=(), help="capture indices whose image is swapped for another position's")
     p.add_argument("--bumped", type=_int_list, default=(), help="capture indices where the camera is knocked")
     p.add_argument("--missing-fraction", type=float_range(0.0, 0.9), default=0.0, help="fraction of corners dropped at random")
+    p.add_argument("--spec", metavar="SPEC", help="stage data sheet into session.json (as lps capture --spec): a preset "
+                   "or accuracy=UM,repeatability=UM,straightness=UM,min_step=UM,settling=S")
+    from lps_gui.cli.asme_test import add_test_arguments
+
+    add_test_arguments(p)
 
 
 def build_spec(args: argparse.Namespace):
@@ -50,8 +55,15 @@ def build_spec(args: argparse.Namespace):
 
         spec = spec_from_dict(read_json(args.rig, "rig description"), args.rig)
     else:
-        spec = preset(args.preset or "small", seed=args.seed)
+        from lps_gui.cli.asme_test import TEST_PRESET
+
+        spec = preset(args.preset or (TEST_PRESET if getattr(args, "test", None) else "small"), seed=args.seed)
     plan = spec.plan
+    if getattr(args, "test", None):
+        from lps_gui.cli.asme_test import test_plan_fields
+
+        t = plan.targets()
+        plan = replace(plan, **test_plan_fields(args, float(t[0]), float(t[-1])))
     if args.directions:
         plan = replace(plan, directions=args.directions)
     if args.runs:
@@ -71,7 +83,28 @@ def build_spec(args: argparse.Namespace):
         overrides["noise_px"] = args.noise_px
     spec = replace(spec, **overrides)
     _check_noise(spec, "--noise-px" if args.noise_px is not None else (args.rig or "preset"))
-    return spec
+    from lps_gui.cli.asme_test import simulated_stage
+
+    spec, ringing = simulated_stage(args, spec)
+    if ringing is None:
+        return spec
+    from lps_gui.cli.asme_test import SIM_FRAME_S
+
+    return replace(spec, vibration=ringing, frame_interval_s=SIM_FRAME_S)
+
+
+def _record_setup(args: argparse.Namespace, session) -> None:
+    """--spec and --test into session.json (what lps capture records for the same switches)."""
+    from lps_gui.cli.asme_test import test_record
+    from lps_gui.core.presets import parse_spec
+
+    extra = {"stage_spec": parse_spec(args.spec)} if getattr(args, "spec", None) else {}
+    record = test_record(args)
+    if record:
+        extra["asme_test"] = record
+    if extra:
+        session.meta.update(extra)
+        session.save_meta()
 
 
 def _check_noise(spec, source: str) -> None:
@@ -111,11 +144,13 @@ def run(args: argparse.Namespace) -> int:
         from lps_gui.sim.points import simulate_point_session
 
         session = simulate_point_session(spec, out)
+        _record_setup(args, session)
         print(f"wrote point-level session ({spec.plan.n_frames()} views, preset {spec.name}) to {session.folder}")
         return 0
     from lps_gui.sim.images import simulate_image_session
 
     session = simulate_image_session(spec, out, progress=ProgressBar("render"))
+    _record_setup(args, session)
     print(f"wrote rendered session ({spec.plan.n_frames()} images, preset {spec.name}) to {session.folder}")
     return 0
 
@@ -159,6 +194,8 @@ def build_planar_spec(args: argparse.Namespace):
 def _run_planar(args: argparse.Namespace, out) -> int:
     from lps_gui.errors import InputError
 
+    if getattr(args, "test", None):
+        raise InputError("--test: the ASME B5.64 tests are single-axis tests; drop --planar")
     if not args.points:
         raise InputError("simulate --planar: only --points sessions yet; rendered planar images come from "
                          "`lps capture` on the simulated gantry")

@@ -21,7 +21,7 @@ from lps_gui.core.plan import Plan, PlannedStop
 from lps_gui.core.planar_model import PlanarState, planar_positions_only
 from lps_gui.core.rig import Rig
 from lps_gui.core.rotation import exp_so3
-from lps_gui.core.stage_errors import ErrorProfile, PlanarErrorModel, PlanarTruePose, StageErrorModel, TruePose
+from lps_gui.core.stage_errors import ErrorProfile, PlanarErrorModel, PlanarTruePose, StageErrorModel, TruePose, Vibration
 from lps_gui.errors import InputError
 
 
@@ -40,6 +40,8 @@ class SimulationSpec:
     bumped_views: tuple[int, ...] = ()  # camera knocked: rotated by bump_mrad
     bump_mrad: float = 3.0
     seed: int = 0
+    vibration: Vibration | None = None  # the carriage rings after each move (ASME B5.64 settling test)
+    frame_interval_s: float = 0.01  # time between the frames of a stop (the camera's exposure), s
 
 
 @dataclass
@@ -81,14 +83,29 @@ def true_views(spec: SimulationSpec, rng: np.random.Generator) -> tuple[list[Pla
     """True camera poses of every planned frame, and the truth record.
 
     The carriage's true pose depends on the approach direction (backlash) and
-    draws repeatability noise once per stop.
+    draws repeatability noise once per stop (the frames of a stop share it).
+    A command inside the stage's dead band leaves the carriage where the last
+    stop left it (:meth:`StageErrorModel.reached_mm`); with ``spec.vibration``
+    frame f of a stop sees the ringing at ``settle_s + f * frame_interval_s``
+    after the move (the frame's pose at the start of its exposure).
     """
     stops = list(spec.plan.stops())
     if not stops:
         raise InputError("simulation: the plan has no targets")
     target = np.array([s.target_mm for s in stops])
     direction = np.array([1.0 if s.direction == "+" else -1.0 for s in stops])
-    pose = spec.rig.errors.true_pose(target, direction, rng)
+    first = np.flatnonzero(np.array([s.frame == 0 for s in stops]))  # one move per stop
+    stop_of = np.cumsum([s.frame == 0 for s in stops]) - 1  # shape (K,): each frame's stop
+    errors = spec.rig.errors
+    reached, moved = errors.reached_mm(target[first])
+    at_stop = errors.true_pose(reached, direction[first], rng)
+    last_move = np.maximum.accumulate(np.where(moved, np.arange(first.size), 0))  # a stuck stop keeps the last pose
+    pick = last_move[stop_of]
+    pose = TruePose(at_stop.axis_mm[pick], at_stop.straightness_um[pick], at_stop.angles_urad[pick])
+    if spec.vibration is not None:
+        since_s = spec.plan.settle_s + spec.frame_interval_s * np.array([s.frame for s in stops], dtype=float)
+        ring_um = np.where(moved[stop_of], spec.vibration.offset_um(since_s, direction[first][pick]), 0.0)
+        pose = replace(pose, axis_mm=pose.axis_mm + 1e-3 * ring_um)
     R, t = spec.rig.camera_poses(pose)
     bump_views(R, spec.bumped_views, spec.bump_mrad, rng, "simulation")
     s_true = pose.axis_mm - pose.axis_mm[0]
@@ -110,7 +127,17 @@ def true_views(spec: SimulationSpec, rng: np.random.Generator) -> tuple[list[Pla
         "noise_px": spec.noise_px,
         "seed": spec.seed,
     }
+    if spec.vibration is not None:
+        truth["vibration"] = {**spec.vibration.to_dict(), "frame_interval_s": spec.frame_interval_s}
     return stops, R, t, truth
+
+
+def frame_since_move_s(spec: SimulationSpec, frame: int) -> float | None:
+    """captures.jsonl ``since_move_s`` of a simulated frame of a ringing stage (the engine's convention: after the
+    settle wait and the frame's exposure); None without ringing."""
+    if spec.vibration is None:
+        return None
+    return round(spec.plan.settle_s + spec.frame_interval_s * (frame + 1), 6)
 
 
 def planar_true_views(spec: SimulationSpec, rng: np.random.Generator
@@ -208,13 +235,27 @@ def paper_rig_spec(
     noise_px: float = 0.1,
     errors: StageErrorModel | None = None,
     plan: Plan | None = None,
+    distance_mm: float = 600.0,
+    name: str = "paper-rig",
 ) -> SimulationSpec:
     """The paper's rig: 1920x1080, 18x30 board, 400 stops 1 mm apart, 600 mm away."""
     board = Board(cols=30, rows=18, square_mm=10.0)
     plan = plan or Plan(start_mm=0.0, stop_mm=399.0, step_mm=1.0, directions="+", runs=1)
     t = plan.targets()
-    rig = Rig.facing_board(board, PAPER_INTRINSICS, 600.0, (t[0], t[-1]), errors=errors)
-    return SimulationSpec("paper-rig", rig, plan, noise_px=noise_px, seed=seed)
+    rig = Rig.facing_board(board, PAPER_INTRINSICS, distance_mm, (t[0], t[-1]), errors=errors)
+    return SimulationSpec(name, rig, plan, noise_px=noise_px, seed=seed)
+
+
+CLOSEUP_DISTANCE_MM = 450.0  # the board fills the view: ~1.4 um per view, what micrometre steps need
+
+
+def paper_closeup_spec(seed: int = 0, noise_px: float = 0.1, errors: StageErrorModel | None = None,
+                       plan: Plan | None = None) -> SimulationSpec:
+    """The paper's camera and board 450 mm apart over 200 mm of travel: the set-up of the ASME B5.64
+    incremental-step and settling tests (a small stage, repeatability 0.1 um)."""
+    errors = errors if errors is not None else replace(paper_stage_errors(), repeatability_um=0.1)
+    plan = plan or Plan(start_mm=0.0, stop_mm=200.0, step_mm=10.0, directions="both", runs=1)
+    return paper_rig_spec(seed, noise_px, errors, plan, CLOSEUP_DISTANCE_MM, "paper-closeup")
 
 
 def paper_synthetic_spec(seed: int = 0) -> SimulationSpec:
@@ -284,6 +325,7 @@ PRESETS = {
     "paper-rig": paper_rig_spec,
     "paper-synthetic": paper_synthetic_spec,
     "small": small_spec,
+    "paper-closeup": paper_closeup_spec,
 }
 PLANAR_PRESETS = {"paper-planar": paper_planar_spec, "small-planar": small_planar_spec}
 

@@ -5,7 +5,11 @@ the GRBL emulator all ask this model where the carriage really is, so the
 truth a test compares against is one object. Error motions follow ISO 230-1
 vocabulary: positioning error along the axis (scale, lead-screw periodic
 error, backlash, repeatability), two straightness errors and three angular
-errors (roll, pitch, yaw).
+errors (roll, pitch, yaw). Two effects of small and quick moves (the ASME B5.64
+incremental-step and settling tests): a dead band (stick-slip: a commanded
+move shorter than ``dead_band_um`` does not move the carriage,
+:meth:`StageErrorModel.reached_mm`) and the ringing after a move
+(:class:`Vibration`, with its true settling time).
 
 An XY gantry (SPEC 10) is two such axes, each a function of its own
 commanded position, plus squareness: :class:`PlanarErrorModel`. Straightness
@@ -14,6 +18,7 @@ out of the plane (along the plane normal).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -71,7 +76,8 @@ class StageErrorModel:
     Positioning error e(x) = scale_ppm*1e-6*x + periodic_um*sin(2 pi x/pitch_mm + phase)
     - backlash_um/2 * approach direction + N(0, repeatability_um): a target
     approached moving up (+1) stops short by half the backlash, moving down
-    (-1) overshoots by half.
+    (-1) overshoots by half. ``dead_band_um`` (stick-slip) acts on the
+    sequence of commands, not on one position: see :meth:`reached_mm`.
     """
 
     scale_ppm: float = 0.0
@@ -86,6 +92,25 @@ class StageErrorModel:
     roll_urad: ErrorProfile = field(default_factory=ErrorProfile)
     pitch_urad: ErrorProfile = field(default_factory=ErrorProfile)
     yaw_urad: ErrorProfile = field(default_factory=ErrorProfile)
+    dead_band_um: float = 0.0  # stick-slip: a move shorter than this leaves the carriage where it was
+
+    def reached_mm(self, commanded_mm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Where the carriage goes for a sequence of commands (mm, in the order sent), and which moved.
+
+        Stick-slip: the carriage follows a command only when it lies at least
+        ``dead_band_um`` from where the carriage rests; otherwise it stays
+        (2 um commands into a 3 um dead band: 0, 0, 4, 4, 8, ... um). The
+        first command is always reached. Returns (reached (K,), moved (K,) bool).
+        """
+        c = np.atleast_1d(np.asarray(commanded_mm, dtype=float))
+        moved = np.ones(c.shape, dtype=bool)
+        if not self.dead_band_um > 0 or c.size < 2:
+            return c.copy(), moved
+        reached, band_mm = c.copy(), 1e-3 * self.dead_band_um
+        for i in range(1, c.size):  # a sequence: each stop depends on where the last one left the carriage
+            if abs(c[i] - reached[i - 1]) < band_mm - 1e-12:
+                reached[i], moved[i] = reached[i - 1], False
+        return reached, moved
 
     def positioning_error_um(self, commanded_mm: np.ndarray, direction: np.ndarray) -> np.ndarray:
         """Systematic positioning error (no noise), shape like ``commanded_mm``."""
@@ -122,6 +147,8 @@ class StageErrorModel:
             d[key] = asdict(getattr(self, key))
         for p in [*d["straightness_um"], d["roll_urad"], d["pitch_urad"], d["yaw_urad"]]:
             p["poly"] = list(p["poly"])
+        if not self.dead_band_um:
+            del d["dead_band_um"]  # a stage without one is recorded as before
         return d
 
     @classmethod
@@ -135,6 +162,59 @@ class StageErrorModel:
             **angles,
             **scalars,
         )
+
+
+@dataclass(frozen=True)
+class Vibration:
+    """The carriage rings after each move: ``amplitude_um`` * exp(-t / ``decay_s``) * cos(2 pi ``frequency_hz`` t + ``phase_rad``).
+
+    t is the time since the move ended; with phase 0 the first swing is an
+    overshoot in the direction of the move. The simulated stage's camera sees
+    it; :meth:`settling_time_s` is the truth of the ASME B5.64 settling test.
+    """
+
+    amplitude_um: float = 50.0
+    frequency_hz: float = 8.0
+    decay_s: float = 0.25
+    phase_rad: float = 0.0
+
+    def offset_um(self, since_stop_s: Any, direction: Any = 1) -> Any:
+        """The ringing (um) ``since_stop_s`` after a move in ``direction`` (+1/-1); 0 before it ended."""
+        t = np.asarray(since_stop_s, dtype=float)
+        ring = self.amplitude_um * np.exp(-np.maximum(t, 0.0) / self.decay_s) * np.cos(
+            2.0 * math.pi * self.frequency_hz * t + self.phase_rad)
+        out = np.where(t < 0, 0.0, np.asarray(direction, dtype=float) * ring)
+        return float(out) if out.ndim == 0 else out
+
+    def settling_time_s(self, band_um: float) -> float:
+        """The last time the ringing is outside +-``band_um`` (0 when it starts inside): the time to settle.
+
+        Sampled finely (1/200 of a period) up to where the envelope is inside
+        the band, then refined by bisection on that last crossing.
+        """
+        if not band_um > 0:
+            raise ValueError("settling band must be positive (um)")
+        if abs(self.amplitude_um) <= band_um:
+            return 0.0
+        t_env = self.decay_s * math.log(abs(self.amplitude_um) / band_um)  # the envelope enters the band here
+        dt = 1.0 / (200.0 * max(self.frequency_hz, 1e-6))
+        t = np.arange(0.0, t_env + dt, dt)
+        outside = np.flatnonzero(np.abs(self.offset_um(t)) > band_um)
+        if outside.size == 0:
+            return 0.0
+        lo, hi = float(t[outside[-1]]), float(t[outside[-1]]) + dt
+        for _ in range(40):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if abs(self.offset_um(mid)) > band_um else (lo, mid)
+        return 0.5 * (lo + hi)
+
+    def to_dict(self) -> dict[str, float]:
+        d = {"amplitude_um": self.amplitude_um, "frequency_hz": self.frequency_hz, "decay_s": self.decay_s}
+        return {**d, "phase_rad": self.phase_rad} if self.phase_rad else d
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> "Vibration":
+        return cls(**{k: float(v) for k, v in d.items() if k in cls.__dataclass_fields__})
 
 
 @dataclass(frozen=True)

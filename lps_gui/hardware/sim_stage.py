@@ -19,16 +19,14 @@ system; moves, jogs and soft-limit messages are in work coordinates.
 """
 from __future__ import annotations
 
-import math
 import threading
 from contextlib import contextmanager
-from dataclasses import dataclass
 from typing import Iterator
 
 import numpy as np
 
 from lps_gui.core.clock import Clock, SimClock
-from lps_gui.core.stage_errors import PlanarErrorModel, PlanarTruePose, StageErrorModel, TruePose
+from lps_gui.core.stage_errors import PlanarErrorModel, PlanarTruePose, StageErrorModel, TruePose, Vibration
 from lps_gui.errors import HardwareError
 from lps_gui.hardware.grbl.codes import SETTINGS, GrblError, check_setting, setting_info, stored_settings
 from lps_gui.hardware.motion import Profile
@@ -36,30 +34,7 @@ from lps_gui.hardware.planner import PLANNER_BLOCKS, HeldMove, MotionPlanner
 from lps_gui.hardware.stage import AXES, WORK_SYSTEMS, Stage, StageEvent, StageSetting, StageStatus
 
 RX_BUFFER_BYTES = 128
-__all__ = ["PLANNER_BLOCKS", "RX_BUFFER_BYTES", "SimulatedStage"]
-
-
-@dataclass(frozen=True)
-class Vibration:
-    """The carriage rings after each move: ``amplitude_um`` * exp(-t / ``decay_s``) * cos(2 pi ``frequency_hz`` t).
-
-    t is the time since the move ended; the first swing is an overshoot in
-    the direction of the move. The camera sees it (:meth:`SimulatedStage.true_pose`);
-    :meth:`SimulatedStage.resting_pose` is where the carriage comes to rest.
-    """
-
-    amplitude_um: float = 50.0
-    frequency_hz: float = 8.0
-    decay_s: float = 0.25
-
-    def offset_um(self, since_stop_s: float, direction: int) -> float:
-        if since_stop_s < 0:
-            return 0.0
-        return direction * self.amplitude_um * math.exp(-since_stop_s / self.decay_s) * math.cos(
-            2.0 * math.pi * self.frequency_hz * since_stop_s)
-
-    def to_dict(self) -> dict[str, float]:
-        return {"amplitude_um": self.amplitude_um, "frequency_hz": self.frequency_hz, "decay_s": self.decay_s}
+__all__ = ["PLANNER_BLOCKS", "RX_BUFFER_BYTES", "SimulatedStage", "Vibration"]  # Vibration: core/stage_errors
 
 
 class SimulatedStage(Stage):
@@ -134,6 +109,8 @@ class SimulatedStage(Stage):
         self._last_state = ""
         self.vibration = vibration
         self._stopped_at: float | None = None  # end of the last completed move of the measured axis
+        self._rest_mm: float | None = float(start_mm)  # where the carriage rests (after its last move that moved it)
+        self._stuck_mm = 0.0  # the carriage's offset from the commanded position after a move inside the dead band
         self._offsets = {name: [0.0, 0.0, 0.0] for name in WORK_SYSTEMS}  # GRBL's sign: work = machine - offset
         self._system = WORK_SYSTEMS[0]
 
@@ -224,6 +201,12 @@ class SimulatedStage(Stage):
     def _complete(self, p: Profile) -> None:
         """A move ended: its direction sets the backlash side, and it gets its repeatability draw."""
         if p.axis == AXES.index(self.axis) and p.direction != 0 and self.planar_errors is None:
+            if self._rest_mm is not None:  # stick-slip (the error model's dead band): a short move leaves it there
+                reached, moved = self.errors.reached_mm(np.array([self._rest_mm, p.end_mm]))
+                if not moved[-1]:
+                    self._stuck_mm = float(reached[-1]) - p.end_mm
+                    return
+            self._rest_mm, self._stuck_mm = p.end_mm, 0.0
             self._last_dir = p.direction
             self._stopped_at = p.t_end
             rep = self.errors.repeatability_um
@@ -325,7 +308,8 @@ class SimulatedStage(Stage):
 
         Backlash follows the direction of the last approach; the repeatability
         draw of the last completed move is added to the axis position, and the
-        ringing of :attr:`vibration` while the stage stands.
+        ringing of :attr:`vibration` while the stage stands. A move shorter than
+        the error model's dead band leaves the carriage where it was (stick-slip).
         """
         return self.resting_pose(ringing=True)
 
@@ -338,7 +322,8 @@ class SimulatedStage(Stage):
             i = AXES.index(self.axis)
             p = self._motion.active()
             direction = p.direction if p is not None and p.direction else self._last_dir
-            pose = self.errors.true_pose(np.array([pos[i]]), np.array([float(direction)]))
+            stuck = self._stuck_mm if p is None else 0.0
+            pose = self.errors.true_pose(np.array([pos[i] + stuck]), np.array([float(direction)]))
             ring_um = 0.0
             if ringing and self.vibration is not None and p is None and self._stopped_at is not None:
                 ring_um = self.vibration.offset_um(t - self._stopped_at, self._last_dir)

@@ -96,6 +96,7 @@ def capture_fields(d: Any) -> dict[str, Any]:
         "frame": _int(d, "frame", 0),
         "commanded_mm": _position(d, "commanded_mm", optional=True),
         "settle_s": _float(d, "settle_s", optional=True),
+        "since_move_s": _float(d, "since_move_s", optional=True),
     }
 
 

@@ -38,6 +38,7 @@ from lps_gui.io.results_file import json_float as _f
 from lps_gui.io.results_history import commit_results
 from lps_gui.io.session import Session
 from lps_gui.io.session_lock import SessionLock
+from lps_gui.pipeline.asme_results import add_asme_results, test_options
 from lps_gui.pipeline.board_plane_results import position_columns, straightness_figures
 from lps_gui.pipeline.planar_results import build_planar_results
 from lps_gui.pipeline.session_checks import check_corners_current, check_view_geometry, session_inputs
@@ -131,7 +132,7 @@ def estimate_session(
     t0 = time.perf_counter()
     session = Session.open(session_dir)
     intr = read_intrinsics(intrinsics_path) if intrinsics_path else None
-    opt = make_options(method, options)
+    opt = test_options(session, make_options(method, options))  # a settling test's frames move by design
     obs = observations_from_session(session, intr)
     est = estimate(obs, opt, progress, cancel)
     with paused_collections():  # results are trees of dicts and lists: nothing for the cyclic collector
@@ -159,7 +160,8 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate | Planar
                   ) -> dict[str, Any]:
     """The results.json document of an estimate of D axes, with its environment and uncertainty budget."""
     results = RESULTS_BY_AXES[obs.D](session, obs, est, intrinsics_source)
-    return add_uncertainty(results, session)  # environment, GUM budget, U (k = 2) per figure
+    results = add_uncertainty(results, session)  # environment, GUM budget, U (k = 2) per figure
+    return add_asme_results(results, session, obs, est) if obs.D == 1 else results  # ASME B5.64 names, TUR, tests
 
 
 def line_results(session: Session, obs: Observations, est: LpsEstimate, intrinsics_source: str) -> dict[str, Any]:

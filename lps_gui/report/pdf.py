@@ -16,6 +16,7 @@ from typing import Any
 from lps_gui.core.progress import ProgressFn, no_progress
 from lps_gui.errors import InputError
 from lps_gui.io.jsonfile import read_json
+from lps_gui.report import asme_pages
 from lps_gui.report import sections as R
 from lps_gui.report import summary as S
 from lps_gui.report.figures import figure_by_key, figures_from_results, with_spec_band
@@ -112,6 +113,7 @@ def _paint_line_report(flow: Any, session_dir: Path, meta: dict[str, Any], resul
     _front_page(flow, meta, results, version)
     flow.new_page()
     _figures_page(flow, results)
+    asme_pages.test_pages(flow, results)  # a session of the ASME B5.64 incremental-step or settling test
     flow.new_page()
     R.uncertainty_sections(flow, results)
     flow.new_page()
@@ -163,6 +165,7 @@ def _figures_page(flow: Any, results: dict[str, Any]) -> None:
         flow.paragraph(note, size_pt=7.5, color="#555555")
     flow.paragraph(U_NOTE, size_pt=7.5, color="#555555")
     R.iso_section(flow, results)
+    asme_pages.names_note(flow, results)
 
 
 U_NOTE = ("\u03c3 and s are 1-sigma. \u03c3 of a position is the measurement's noise only (corner noise); "

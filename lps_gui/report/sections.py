@@ -45,10 +45,14 @@ def overall_color(rows: Sequence[Verdict]) -> str:
 
 def verdict_table(flow: Any, rows: Sequence[Verdict]) -> None:
     """The verdict rows: the compared figure, its U (k = 2), the limit and the word, then their notes."""
+    from lps_gui.core.asme_b5_64 import tur
+
+    ratios = [tur(v.limit, v.u_k2) for v in rows]  # ASME B5.64: tolerance over U
     cells = [[v.name, v.measured_text(), f"\u00b1 {S.fmt(v.u_k2)} {v.unit}" if v.u_k2 is not None else "not assessed",
-              f"{S.fmt(v.limit)} {v.unit}", v.verdict] for v in rows]
-    flow.table(["criterion", "compared figure", "U (k = 2)", "limit", "verdict"], cells, [40, 34, 26, 24, 56],
-               size_pt=8.5, row_mm=4.6, colors=[v.color for v in rows], align_left=(4,))
+              f"{S.fmt(v.limit)} {v.unit}", "\u2014" if ratio is None else f"{ratio:.1f}", v.verdict]
+             for v, ratio in zip(rows, ratios)]
+    flow.table(["criterion", "compared figure", "U (k = 2)", "limit", "TUR", "verdict"], cells, [40, 34, 26, 22, 12, 46],
+               size_pt=8.5, row_mm=4.6, colors=[v.color for v in rows], align_left=(5,))
     for v in rows:
         flow.paragraph(f"{v.name}: {v.note}.", size_pt=NOTE_SIZE, color=GREY)
 
@@ -57,7 +61,8 @@ DECISION_RULE = ("Decision rule ISO 14253-1: PASS when the figure plus U is with
                  "figure minus U is beyond it, otherwise not resolved. Each U is that of the figure compared: "
                  "against a \u00b1 limit the half band A/2 (or R/2) is compared, so its U is half the U of A "
                  "(or R) listed with the measured figures; a p-v's U is that of the larger per-target span. "
-                 "U covers the measurement (see the uncertainty budget), not the stage's own scatter.")
+                 "U covers the measurement (see the uncertainty budget), not the stage's own scatter. TUR (test "
+                 "uncertainty ratio, ASME B5.64): the limit over that U.")
 NO_SPEC = ("No stage specification in session.json (key \"stage_spec\"; enter it with lps capture --spec or in "
            "the capture panel): no verdict is given.")
 

@@ -25,7 +25,7 @@ from lps_gui.core.board import Board
 from lps_gui.core.camera_model import CameraIntrinsics, project_board
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.core.rotation import exp_so3
-from lps_gui.core.simulate import SimulationSpec, true_views
+from lps_gui.core.simulate import SimulationSpec, frame_since_move_s, true_views
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_bytes_atomic
 from lps_gui.io.board_file import write_board
@@ -159,7 +159,7 @@ def simulate_image_session(
             cancel.check("image simulation")
         rel, sha = session.write_image(f"{stop.index:06d}{image_ext}", data)
         session.append(CaptureRecord(stop.index, stop.run, stop.direction, stop.target_mm, stop.target_mm, rel, sha,
-                                     t0 + stop.index, stop.frame))
+                                     t0 + stop.index, stop.frame, since_move_s=frame_since_move_s(spec, stop.frame)))
         progress(stop.index + 1, K, rel)
     return session
 

@@ -14,7 +14,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
-from lps_gui.core.simulate import SimulationSpec, simulate_views
+from lps_gui.core.simulate import SimulationSpec, frame_since_move_s, simulate_views
 from lps_gui.io.board_file import write_board
 from lps_gui.io.corners_vnl import CornerTable, write_corners_vnl
 from lps_gui.io.intrinsics_file import write_intrinsics
@@ -77,6 +77,6 @@ def write_point_session(out: Path | str, spec: Any, stops: Sequence[Any], corner
     now = time.time()
     for stop, name in zip(stops, names):
         session.append(CaptureRecord(stop.index, stop.run, stop.direction, stop.target_mm, stop.target_mm, name, None,
-                                     now, stop.frame))
+                                     now, stop.frame, since_move_s=frame_since_move_s(spec, stop.frame)))
     write_corners_vnl(session.corners_path, CornerTable(names, corners_px, meta={"source": "simulated points"}))
     return session

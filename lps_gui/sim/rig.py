@@ -69,6 +69,10 @@ class RigCamera(SimulatedCamera):
         """Seed the noise of the next grab (capture ``key``)."""
         self._rng = np.random.default_rng([self.seed, int(key), _CAMERA_STREAM])
 
+    def rendered_pose(self) -> Any:
+        """The pose the last frame was rendered at (a ringing stage has moved on by the end of the exposure)."""
+        return self.pose_source() if self.last_pose is None else self.last_pose
+
 
 STAGE_MARGIN_MM = 5.0
 

@@ -20,6 +20,7 @@ from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.clock import Clock
 from lps_gui.core.plan import Plan, PlannedStop
 from lps_gui.core.simulate import SimulationSpec
+from lps_gui.core.stage_errors import Vibration
 from lps_gui.errors import InputError
 from lps_gui.hardware.stage import Stage
 from lps_gui.io.atomic import check_writable
@@ -104,7 +105,13 @@ def reopen_simulated_rig(session: Session, clock: Clock | None = None) -> tuple[
         raise InputError(f"{session.folder}: not captured on the simulated rig; resume it with --stage and --camera")
     spec = spec_from_truth(truth, session.plan(), str(session.folder / "session.json"))
     cam = truth.get("camera") or {}
-    return make_simulated_rig(spec, clock=clock, noise_grey=float(cam.get("noise_grey", 2.0)), blur_px=float(cam.get("blur_px", 1.2)))
+    ring = (session.meta.get("stage") or {}).get("vibration")  # the stage rang after each move (settling tests)
+    options: dict[str, Any] = {"vibration": Vibration.from_dict(ring)} if isinstance(ring, dict) else {}
+    exposure = (session.meta.get("camera") or {}).get("exposure_s")  # its frames took time (frame times)
+    if exposure:
+        options["exposure_s"] = float(exposure)
+    return make_simulated_rig(spec, clock=clock, noise_grey=float(cam.get("noise_grey", 2.0)),
+                              blur_px=float(cam.get("blur_px", 1.2)), **options)
 
 
 class SimulatedRigHook:
@@ -123,7 +130,8 @@ class SimulatedRigHook:
         self.plan = plan
         self.stage = stage
         self.camera = camera
-        self.truth = TruthRecorder(camera.pose_source, camera.rig if camera.rig.planar else None)
+        rendered = getattr(camera, "rendered_pose", camera.pose_source)  # a camera feeding the rig's frames may not say
+        self.truth = TruthRecorder(rendered, camera.rig if camera.rig.planar else None)
         self._arrivals: dict[int, tuple[int, ...]] | None = None
 
     def prune(self, session: Session) -> None:

@@ -206,3 +206,15 @@ def test_a_repeated_target_is_approached_again_from_its_own_side(tmp_path):
     engine.subscribe(lambda e: kinds.append((e.kind, e.index)) if e.kind in ("approach", "move") else None)
     assert engine.run().state == "done"
     assert kinds == [("approach", 0), ("move", 0), ("move", 2), ("approach", 4), ("move", 4), ("move", 6)]
+
+
+def test_frames_record_their_time_after_the_move(tmp_path):
+    """captures.jsonl since_move_s: the engine's clock from the stage reporting the move done (settling tests)."""
+    from lps_gui.core.plan import Plan
+    from tests.capture.helpers import start_capture
+
+    plan = Plan(start_mm=0.0, stop_mm=2.0, step_mm=2.0, directions="+", settle_s=0.05, frames_per_stop=3)
+    session, stage, camera, engine = start_capture(tmp_path / "s", plan, exposure_s=0.02)
+    assert engine.run().state == "done"
+    since = [r.since_move_s for r in session.records()]
+    assert since == pytest.approx([0.07, 0.09, 0.11] * 2)  # settle, then one exposure per frame

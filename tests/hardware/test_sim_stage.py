@@ -244,3 +244,17 @@ def test_six_work_systems_keep_their_own_offsets_and_limits_stay_in_machine_spac
     st.unlock()
     st.select_work_system("G54")
     assert st.status().work_mm[0] == pytest.approx(-10.0)
+
+
+def test_dead_band_moves_shorter_than_it_leave_the_carriage_there():
+    """Stick-slip (ASME B5.64 incremental-step test): 2 um commands into a 3 um dead band move every other time."""
+    clock = SimClock()
+    stage = SimulatedStage(errors=StageErrorModel(dead_band_um=3.0), clock=clock)
+    stage.connect()
+    true_um = []
+    for target in (0.0, 0.002, 0.004, 0.006, 0.008):
+        stage.move_to(target, 600.0)
+        stage.wait_idle()
+        assert stage.position_mm() == pytest.approx(target)  # the controller reports its steps, not the carriage
+        true_um.append(1e3 * float(stage.true_pose().axis_mm[0]))
+    assert np.allclose(true_um, [0.0, 0.0, 4.0, 4.0, 8.0], atol=1e-9)

@@ -23,6 +23,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from lps_gui.core.arrowhead import intrinsics_sensitivity
 from lps_gui.core.camera_model import INTRINSIC_NAMES
 from lps_gui.core.constant_orientation import board_plane_from_model
 from lps_gui.core.estimate_types import METHODS, EstimateOptions, LpsEstimate, step_pairs
@@ -32,6 +33,7 @@ from lps_gui.core.joint_lm import (
     LmOptions,
     LpsState,
     NormalEquations,
+    line_inverse,
     linearize,
     linearize_poses,
     solve_joint,
@@ -46,12 +48,7 @@ from lps_gui.core.pnp import solve_pnp
 from lps_gui.core.pose_normals import PoseNormals
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.core.six_dof import SixDof, refine_view_poses, six_dof_motion
-from lps_gui.core.uncertainty import (
-    arrowhead_inverse,
-    intrinsics_sensitivity,
-    noise_variance,
-    propagated_variance,
-)
+from lps_gui.core.uncertainty import noise_variance, propagated_variance
 from lps_gui.errors import DegenerateGeometryError
 
 __all__ = ["METHODS", "EstimateOptions", "LpsEstimate", "PlanarEstimate", "estimate"]
@@ -211,8 +208,8 @@ def _outlier_round(sol: Solution, obs: Observations, X: np.ndarray, mask_all: np
         eq, _ = linearize(sol.state, X, obs.corners_px, mask, want_residuals=False)
     rms = _view_rms(sol.state, X, obs.corners_px, mask_all, eq.view_ssr, used)
     sigma2 = noise_variance(eq.ssr, eq.n_obs, N_POSE_PARAMS + int(used.sum()) - 1)
-    inv = arrowhead_inverse(eq.A, eq.B, eq.D, sol.free())
-    sigma_um = 1e3 * np.sqrt(sigma2 * inv.var_s())
+    inv = line_inverse(eq.A, eq.B, eq.D, sol.free())
+    sigma_um = 1e3 * np.sqrt(sigma2 * inv.variances()[:, 0])
     dev = 1e3 * (sol.state.s - (obs.target_mm - obs.target_mm[sol.ref]))
     groups = obs.run * 2 + (obs.direction > 0)
 
@@ -232,7 +229,7 @@ class _Uncertainty:
     var_total: np.ndarray  # (K,) mm^2, with the intrinsics' covariance
     step_sigma: np.ndarray  # (K,) mm, of each step to the previous capture of its run
     parameter_sigmas: dict[str, list[float]]
-    inverse: Any  # ArrowheadInverse
+    inverse: Any  # ArrowheadInverse, one unknown per view
     intrinsics_gradient: np.ndarray | None  # d s / d intrinsics, (K, 9)
     n_obs: int
     n_params: int
@@ -256,12 +253,12 @@ def _uncertainty(obs: Observations, opt: EstimateOptions, sol: Solution, X: np.n
         A, B = A[:p, :p], B[:, :p]
         n_params = p + int(free.sum())
     sigma2 = noise_variance(eq.ssr, eq.n_obs, n_params)
-    inv = arrowhead_inverse(A, B, eq.D, free)
-    var_s = sigma2 * inv.var_s()
+    inv = line_inverse(A, B, eq.D, free)
+    var_s = sigma2 * inv.variances()[:, 0]
     var_total = var_s.copy()
     G_s = None
     if have_cov and not opt.self_calibrate:
-        _, G_s = intrinsics_sensitivity(inv, eq.A[:p, p:], eq.B[:, p:])
+        G_s = intrinsics_sensitivity(inv, eq.A[:p, p:], eq.B[:, None, p:])[:, 0]
         var_total = var_s + propagated_variance(G_s, obs.intrinsics.covariance)
     # positions of views outside the solve: their own 1-D sigma (noise only), n^T H_tt n of their pose blocks
     alone = usable & ~used
@@ -276,7 +273,7 @@ def _uncertainty(obs: Observations, opt: EstimateOptions, sol: Solution, X: np.n
     step_sigma = np.full(obs.K, np.nan)
     both = used[prev] & used[cur]
     if both.any():
-        step_sigma[cur[both]] = np.sqrt(sigma2 * inv.var_difference(prev[both], cur[both]))
+        step_sigma[cur[both]] = np.sqrt(sigma2 * inv.cov_difference(prev[both], cur[both])[:, 0, 0])
     sd = np.sqrt(np.diag(sigma2 * inv.S_inv))
     param_sigmas = {"rvec_sigma_rad": sd[0:3].tolist(), "l0_sigma_mm": sd[3:6].tolist(), "n_sigma_rad": sd[6:p].tolist()}
     if opt.self_calibrate:

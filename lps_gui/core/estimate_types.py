@@ -11,7 +11,7 @@ from lps_gui.core.constant_orientation import BoardPlaneMotion
 from lps_gui.core.hybrid import HybridOptions
 from lps_gui.core.joint_lm import LpsState
 from lps_gui.core.six_dof import SixDof
-from lps_gui.core.uncertainty import ArrowheadInverse
+from lps_gui.core.arrowhead import ArrowheadInverse
 from lps_gui.errors import InputError
 
 METHODS = ("joint", "hybrid", "pnp", "calibrate")
@@ -114,8 +114,7 @@ class LpsEstimate:
         if self.inverse is None:
             var = float(np.sum((a * self.sigma_s_mm) ** 2))
             return np.sqrt(var), np.sqrt(var)
-        wa = self.inverse.W.T @ a
-        var = self.sigma_px**2 * float(np.sum(a * a * self.inverse.D_inv) + wa @ self.inverse.S_inv @ wa)
+        var = self.sigma_px**2 * float(self.inverse.functional_covariance(a[None, :, None])[0, 0])
         total = var
         if self.intrinsics_gradient is not None and self.state.intrinsics.covariance is not None:
             ga = self.intrinsics_gradient.T @ a

@@ -17,7 +17,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from lps_gui.core.block_arrowhead import BlockArrowheadInverse, block_arrowhead_inverse, block_intrinsics_sensitivity
+from lps_gui.core.arrowhead import ArrowheadInverse, intrinsics_sensitivity
 from lps_gui.core.camera_model import project_board
 from lps_gui.core.estimate_types import EstimateOptions
 from lps_gui.core.observations import Observations
@@ -31,6 +31,7 @@ from lps_gui.core.planar_model import (
     linearize_planar,
     planar_positions_only,
     planar_residuals,
+    plane_inverse,
     solve_planar,
 )
 from lps_gui.core.pnp import solve_pnp
@@ -69,7 +70,7 @@ class PlanarEstimate:
     dof: int
     flags: list[dict[str, Any]]
     timings_s: dict[str, float]
-    inverse: BlockArrowheadInverse | None  # in units of sigma_px^2, stage frame
+    inverse: ArrowheadInverse | None  # in units of sigma_px^2, stage frame
     fit: PlanarFit | None = None
     options: EstimateOptions | None = None
     cov_xy_total_mm2: np.ndarray | None = None  # shape (K, 2, 2): with the intrinsics' covariance (None: as cov_xy)
@@ -202,7 +203,7 @@ def _view_rms(state: PlanarState, X: np.ndarray, corners: np.ndarray, mask: np.n
 
 def _uncertainty(state: PlanarState, obs: Observations, X: np.ndarray, mask: np.ndarray, free: np.ndarray,
                  prior: tuple[np.ndarray, np.ndarray] | None
-                 ) -> tuple[BlockArrowheadInverse, float, np.ndarray | None, int]:
+                 ) -> tuple[ArrowheadInverse, float, np.ndarray | None, int]:
     """H^-1 at the solution, the noise variance, d (x, y) / d intrinsics and the number of unknowns.
 
     Intrinsics held: their covariance is propagated (when known) through the pose blocks' cross terms;
@@ -217,17 +218,17 @@ def _uncertainty(state: PlanarState, obs: Observations, X: np.ndarray, mask: np.
         A[p:, p:] += np.linalg.inv(prior[1])
         n_params += A.shape[0] - p
         sigma2 = noise_variance(eq.ssr, eq.n_obs, n_params)
-        return block_arrowhead_inverse(A, eq.B, eq.D, free), sigma2, None, n_params
+        return plane_inverse(A, eq.B, eq.D, free), sigma2, None, n_params
     sigma2 = noise_variance(eq.ssr, eq.n_obs, n_params)
-    inv = block_arrowhead_inverse(eq.A[:p, :p], eq.B[..., :p], eq.D, free)
-    G_s = block_intrinsics_sensitivity(inv, eq.A[:p, p:], eq.B[..., p:]) if with_intr else None
+    inv = plane_inverse(eq.A[:p, :p], eq.B[..., :p], eq.D, free)
+    G_s = intrinsics_sensitivity(inv, eq.A[:p, p:], eq.B[..., p:]) if with_intr else None
     return inv, sigma2, G_s, n_params
 
 
-def _inverse(eq: PlanarEquations, free: np.ndarray) -> tuple[BlockArrowheadInverse, float]:
+def _inverse(eq: PlanarEquations, free: np.ndarray) -> tuple[ArrowheadInverse, float]:
     """The factored H^-1 of the pose blocks (the intrinsics held) and the a-posteriori noise variance."""
     sigma2 = noise_variance(eq.ssr, eq.n_obs, N_PLANAR_SHARED + 2 * int(free.sum()))
-    return block_arrowhead_inverse(eq.A, eq.B, eq.D, free), sigma2
+    return plane_inverse(eq.A, eq.B, eq.D, free), sigma2
 
 
 def _regauge(state: PlanarState, ref: int) -> PlanarState:

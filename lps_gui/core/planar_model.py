@@ -7,7 +7,7 @@ orientation (2: tilts of P about n_x and n_y; a rotation about the plane
 normal only relabels x and y and is fixed afterwards by the X motion
 direction), and (x_i, y_i) of every view but the gauge view. Every view's
 residuals depend on the 8 shared parameters and its own two coordinates: a
-block arrowhead, eliminated by :mod:`lps_gui.core.block_arrowhead`.
+block arrowhead (b = 2), eliminated by :mod:`lps_gui.core.arrowhead`.
 """
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lps_gui.core.block_arrowhead import solve_block_arrowhead
+from lps_gui.core.arrowhead import ArrowheadInverse, arrowhead_inverse, schur_step
 from lps_gui.core.camera_model import CameraIntrinsics, intrinsics_rows, project_parts
 from lps_gui.core.joint_lm import camera_points, huber_threshold, huber_weights, pose_residuals, robust_cost
 from lps_gui.core.progress import CancelToken
@@ -172,8 +172,13 @@ def planar_positions_only(state: PlanarState, X: np.ndarray, corners: np.ndarray
     return sub.xy
 
 
+def plane_inverse(A: np.ndarray, B: np.ndarray, D: np.ndarray, free_s: np.ndarray) -> ArrowheadInverse:
+    """H^-1 of the plane's blocks (B (K, 2, p), D (K, 2, 2)) at the solution, factored."""
+    return arrowhead_inverse(A, B, D, free_s, "the plane of motion", "capture a grid that spans both axes")
+
+
 def apply_planar_step(state: PlanarState, d_theta: np.ndarray, d_s: np.ndarray) -> PlanarState:
-    """Move the state by a step of :func:`solve_block_arrowhead` (9 intrinsics after the 8 shared, when given)."""
+    """Move the state by a step of :func:`~lps_gui.core.arrowhead.schur_step` (9 intrinsics after the 8 shared, when given)."""
     R = exp_so3(d_theta[0:3]) @ state.R
     l0 = state.l0 + d_theta[3:6]
     w = d_theta[6] * state.P[:, 0] + d_theta[7] * state.P[:, 1]
@@ -244,7 +249,7 @@ def solve_planar(
     for it in range(1, max_iterations + 1):
         if cancel is not None:
             cancel.check("planar estimation")
-        d_theta, d_s = solve_block_arrowhead(eq.A + prior_A, eq.B, eq.D, eq.g_theta + prior_g, eq.g_s, free_s, lam)
+        d_theta, d_s = schur_step(eq.A + prior_A, eq.B, eq.D, eq.g_theta + prior_g, eq.g_s, free_s, lam)
         trial = apply_planar_step(state, d_theta, d_s)
         trial_prior, trial_prior_g = prior(trial)
         trial_cost = robust_cost(planar_residuals(trial, X, corners, mask), mask, huber_c) + trial_prior

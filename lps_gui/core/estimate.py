@@ -43,7 +43,7 @@ from lps_gui.core.observations import Observations
 from lps_gui.core.outlier_round import Solution, judge_views, solve_with_outliers
 from lps_gui.core.outliers import position_outliers
 from lps_gui.core.per_view import estimate_per_view
-from lps_gui.core.planar_estimate import PlanarEstimate, estimate_plane
+from lps_gui.core.planar_estimate import estimate_plane
 from lps_gui.core.pnp import solve_pnp
 from lps_gui.core.pose_normals import PoseNormals
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
@@ -51,7 +51,7 @@ from lps_gui.core.six_dof import SixDof, refine_view_poses, six_dof_motion
 from lps_gui.core.uncertainty import noise_variance, propagated_variance
 from lps_gui.errors import DegenerateGeometryError
 
-__all__ = ["METHODS", "EstimateOptions", "LpsEstimate", "PlanarEstimate", "estimate"]
+__all__ = ["METHODS", "EstimateOptions", "LpsEstimate", "estimate"]
 
 INIT_VIEWS = 24  # per-view PnP on this many spread views initializes the joint LM
 N_INTRINSICS = len(INTRINSIC_NAMES)  # 9, after the pose parameters when self-calibrating
@@ -62,7 +62,7 @@ def estimate(
     options: EstimateOptions | None = None,
     progress: ProgressFn = no_progress,
     cancel: CancelToken | None = None,
-) -> LpsEstimate | PlanarEstimate:
+) -> LpsEstimate:
     """Estimate the stage model of ``obs.D`` axes and every position from the observed corners.
 
     One problem for D = 1 (a line, SPEC 4) and D = 2 (a plane, SPEC 10): the

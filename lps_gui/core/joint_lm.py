@@ -37,6 +37,11 @@ class LpsState:
     s: np.ndarray  # shape (K,) mm
     intrinsics: CameraIntrinsics
 
+    @property
+    def positions(self) -> np.ndarray:
+        """The views' positions as an estimate reports them, shape (K,)."""
+        return self.s
+
     def line(self) -> LpsLine:
         return LpsLine(self.R.copy(), self.l0.copy(), self.n.copy())
 

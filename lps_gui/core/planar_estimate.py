@@ -12,14 +12,13 @@ The paper's hybrid grid search is 1-D by construction.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Callable
 
 import numpy as np
 
 from lps_gui.core.arrowhead import ArrowheadInverse, intrinsics_sensitivity
 from lps_gui.core.camera_model import project_board
-from lps_gui.core.estimate_types import EstimateOptions
+from lps_gui.core.estimate_types import EstimateOptions, LpsEstimate, PlanarFit
 from lps_gui.core.observations import Observations
 from lps_gui.core.outlier_round import Solution, judge_views, solve_with_outliers
 from lps_gui.core.outliers import robust_sigma
@@ -40,68 +39,8 @@ from lps_gui.core.uncertainty import noise_variance
 from lps_gui.errors import DegenerateGeometryError
 
 
-@dataclass
-class PlanarFit:
-    """Affine fit measured = offset + G target (+ backlash offsets), stage frame."""
-
-    G: np.ndarray  # shape (2, 2): columns are the measured +X and +Y motion per commanded mm
-    cov_G: np.ndarray  # shape (4, 4): covariance of G.ravel() (row-major), from noise
-    residual_um: np.ndarray  # shape (K, 2): measured - fit (NaN for unused views)
-
-
-@dataclass
-class PlanarEstimate:
-    """Everything the planar estimator found; positions in the stage frame (SPEC 10)."""
-
-    method: str
-    state: PlanarState  # xy in the stage frame, zero at the reference view
-    reference_view: int
-    usable: np.ndarray  # shape (K,) bool
-    used: np.ndarray  # shape (K,) bool
-    outlier: np.ndarray  # shape (K,) bool
-    outlier_reason: list[str]
-    sigma_px: float
-    cov_xy_mm2: np.ndarray  # shape (K, 2, 2): each view's position covariance, from noise
-    rms_px: np.ndarray  # shape (K,)
-    n_corners: np.ndarray  # shape (K,)
-    iterations: int
-    converged: bool
-    n_observations: int
-    dof: int
-    flags: list[dict[str, Any]]
-    timings_s: dict[str, float]
-    inverse: ArrowheadInverse | None  # in units of sigma_px^2, stage frame
-    fit: PlanarFit | None = None
-    options: EstimateOptions | None = None
-    cov_xy_total_mm2: np.ndarray | None = None  # shape (K, 2, 2): with the intrinsics' covariance (None: as cov_xy)
-    intrinsics_gradient: np.ndarray | None = None  # shape (K, 2, 9): d (x, y) / d intrinsics
-
-    @property
-    def sigma_total_xy_mm(self) -> np.ndarray:
-        """Per-view 1-sigma of x and y with the intrinsics' covariance, shape (K, 2) mm."""
-        cov = self.cov_xy_mm2 if self.cov_xy_total_mm2 is None else self.cov_xy_total_mm2
-        return np.sqrt(np.maximum(np.einsum("kii->ki", cov), 0.0))
-
-    @property
-    def sigma_xy_mm(self) -> np.ndarray:
-        """Per-view 1-sigma of x and y, shape (K, 2) mm."""
-        return np.sqrt(np.maximum(np.einsum("kii->ki", self.cov_xy_mm2), 0.0))
-
-    def deviation_um(self, target_mm: np.ndarray) -> np.ndarray:
-        """measured - (target - target of the reference), um, shape (K, 2)."""
-        t = np.asarray(target_mm, dtype=float)
-        return 1e3 * (self.state.xy - (t - t[self.reference_view]))
-
-    def functional_covariance(self, L: np.ndarray) -> np.ndarray:
-        """Covariance (mm^2) of linear functionals of the positions, L shape (m, K, 2)."""
-        L = np.where(self.used[None, :, None], L, 0.0)
-        if self.inverse is None:
-            return np.einsum("mka,kab,nkb->mn", L, self.cov_xy_mm2, L)
-        return self.sigma_px**2 * self.inverse.functional_covariance(L)
-
-
 def estimate_plane(obs: Observations, opt: EstimateOptions, progress: ProgressFn = no_progress,
-                   cancel: CancelToken | None = None) -> PlanarEstimate:
+                   cancel: CancelToken | None = None) -> LpsEstimate:
     """D = 2: every (x, y) position and the plane of motion from the observed corners (called by
     :func:`lps_gui.core.estimate.estimate`, which checks the options and the observations)."""
     t_start = time.perf_counter()
@@ -118,9 +57,7 @@ def estimate_plane(obs: Observations, opt: EstimateOptions, progress: ProgressFn
     state = initial_planar_state(R_v, t_v, obs.target_mm, usable, ref, obs.intrinsics)
     timings["init"] = time.perf_counter() - t_start
     if opt.method == "pnp":
-        est = _per_view_result(obs, state, R_v, t_v, usable, ref, X, mask_all, timings, t_start)
-        est.options = opt
-        return est
+        return _per_view_result(obs, opt, state, R_v, t_v, usable, ref, X, mask_all, timings, t_start)
 
     sol = Solution(state, ref, usable, np.zeros(obs.K, dtype=bool), [""] * obs.K)
     prior = opt.intrinsics_prior(obs.intrinsics)
@@ -152,13 +89,13 @@ def estimate_plane(obs: Observations, opt: EstimateOptions, progress: ProgressFn
         cov_total = cov + np.einsum("kai,ij,kbj->kab", G_s, obs.intrinsics.covariance, G_s)
     timings["uncertainty"] = time.perf_counter() - t0
     eq_n_obs = int(2 * mask.sum())
-    est = PlanarEstimate(
-        method=opt.method, state=state, reference_view=ref, usable=usable, used=used, outlier=sol.outlier,
-        outlier_reason=sol.reasons, sigma_px=float(np.sqrt(sigma2)), cov_xy_mm2=cov,
-        rms_px=_view_rms(state, X, obs.corners_px, mask_all), n_corners=mask_all.sum(axis=1),
-        iterations=sol.iterations, converged=sol.converged, n_observations=eq_n_obs, dof=eq_n_obs - n_params,
-        flags=sol.flags, timings_s=timings, inverse=inv, options=opt, cov_xy_total_mm2=cov_total,
-        intrinsics_gradient=G_s,
+    est = LpsEstimate(
+        method=opt.method, options=opt, state=state, reference_view=ref, usable=usable, used=used,
+        outlier=sol.outlier, outlier_reason=sol.reasons, sigma_px=float(np.sqrt(sigma2)), sigma_s_mm=_sigmas(cov),
+        sigma_total_mm=_sigmas(cov_total), rms_px=_view_rms(state, X, obs.corners_px, mask_all),
+        n_corners=mask_all.sum(axis=1), iterations=sol.iterations, converged=sol.converged,
+        n_observations=eq_n_obs, dof=eq_n_obs - n_params, flags=sol.flags, timings_s=timings, inverse=inv,
+        intrinsics_gradient=G_s, cov_mm2=cov, cov_total_mm2=cov_total,
     )
     est.fit = planar_fit(est, obs.target_mm, obs.approach)
     timings["total"] = time.perf_counter() - t_start
@@ -192,6 +129,11 @@ def _outlier_round(sol: Solution, obs: Observations, X: np.ndarray, mask_all: np
 
 
 # ----------------------------------------------------------------------------- steps
+
+
+def _sigmas(cov: np.ndarray) -> np.ndarray:
+    """Per-view 1-sigma of x and y (K, 2) from their covariance blocks (K, 2, 2)."""
+    return np.sqrt(np.maximum(np.einsum("kii->ki", cov), 0.0))
 
 
 def _view_rms(state: PlanarState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray) -> np.ndarray:
@@ -276,7 +218,7 @@ def _align_to_x_motion(state: PlanarState, target_mm: np.ndarray, approach: np.n
     return out, angle
 
 
-def planar_fit(est: PlanarEstimate, target_mm: np.ndarray, approach: np.ndarray) -> PlanarFit:
+def planar_fit(est: LpsEstimate, target_mm: np.ndarray, approach: np.ndarray) -> PlanarFit:
     """Affine fit of the measured positions with the covariance of G from the full position covariance."""
     used = est.used
     Phi, coef = _affine_coefficients(est.state.xy, target_mm, approach, used)
@@ -294,9 +236,9 @@ def planar_fit(est: PlanarEstimate, target_mm: np.ndarray, approach: np.ndarray)
     return PlanarFit(G, cov_G, resid)
 
 
-def _per_view_result(obs: Observations, state: PlanarState, R_v: np.ndarray, t_v: np.ndarray,
-                     usable: np.ndarray, ref: int, X: np.ndarray, mask_all: np.ndarray,
-                     timings: dict[str, float], t_start: float) -> PlanarEstimate:
+def _per_view_result(obs: Observations, opt: EstimateOptions, state: PlanarState, R_v: np.ndarray,
+                     t_v: np.ndarray, usable: np.ndarray, ref: int, X: np.ndarray, mask_all: np.ndarray,
+                     timings: dict[str, float], t_start: float) -> LpsEstimate:
     """The PnP baseline: every view's own translation projected on the initial plane."""
     K = obs.K
     state = _regauge(state, ref)
@@ -315,9 +257,12 @@ def _per_view_result(obs: Observations, state: PlanarState, R_v: np.ndarray, t_v
     cov = np.zeros((K, 2, 2))
     cov[:, 0, 0], cov[:, 1, 1] = spread[0] ** 2, spread[1] ** 2  # the baseline's sigma is its own scatter
     timings["total"] = time.perf_counter() - t_start
-    est = PlanarEstimate("pnp", state, ref, usable, usable.copy(), np.zeros(K, bool), [""] * K,
-                         float(np.sqrt(sigma2)), cov, rms, n, 0, True, n_obs, n_obs - 6 * int(usable.sum()), [],
-                         timings, None)
+    est = LpsEstimate(
+        method="pnp", options=opt, state=state, reference_view=ref, usable=usable, used=usable.copy(),
+        outlier=np.zeros(K, bool), outlier_reason=[""] * K, sigma_px=float(np.sqrt(sigma2)), sigma_s_mm=_sigmas(cov),
+        sigma_total_mm=_sigmas(cov), rms_px=rms, n_corners=n, iterations=0, converged=True, n_observations=n_obs,
+        dof=n_obs - 6 * int(usable.sum()), flags=[], timings_s=timings, cov_mm2=cov, cov_total_mm2=cov,
+    )
     est.fit = planar_fit(est, obs.target_mm, obs.approach)
     return est
 
@@ -331,7 +276,7 @@ def affine_motion(xy: np.ndarray, target_mm: np.ndarray, approach: np.ndarray, u
 def planar_truth_in_stage_frame(true_xy_mm: np.ndarray, target_mm: np.ndarray, approach: np.ndarray,
                                 used: np.ndarray, ref: int) -> np.ndarray:
     """True positions under the estimate's own frame convention (zero at ``ref``, +x along the
-    fitted +X motion, +Y motion on the +y side), so they compare with ``PlanarEstimate.state.xy``."""
+    fitted +X motion, +Y motion on the +y side), so they compare with a plane's ``LpsEstimate.positions_mm``."""
     xy = np.asarray(true_xy_mm, dtype=float) - true_xy_mm[ref]
     G = affine_motion(xy, target_mm, approach, used)
     angle = float(np.arctan2(G[1, 0], G[0, 0]))

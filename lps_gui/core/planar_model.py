@@ -36,6 +36,11 @@ class PlanarState:
     intrinsics: CameraIntrinsics
 
     @property
+    def positions(self) -> np.ndarray:
+        """The views' positions as an estimate reports them, shape (K, 2)."""
+        return self.xy
+
+    @property
     def basis(self) -> np.ndarray:
         """(n_x, n_y) as columns, shape (3, 2)."""
         return self.P[:, :2]

@@ -14,7 +14,8 @@ from typing import Any
 import numpy as np
 
 from lps_gui.core.observations import Observations
-from lps_gui.core.planar_estimate import PlanarEstimate, planar_truth_in_stage_frame
+from lps_gui.core.estimate_types import LpsEstimate
+from lps_gui.core.planar_estimate import planar_truth_in_stage_frame
 from lps_gui.core.planar_figures import axis_geometry, planar_figures
 from lps_gui.core.planar_estimate import affine_motion
 from lps_gui.io.session import Session
@@ -78,7 +79,7 @@ def _f(x: Any) -> float | None:
     return x if np.isfinite(x) else None
 
 
-def planar_truth_comparison(obs: Observations, est: PlanarEstimate, truth: dict[str, Any],
+def planar_truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any],
                             positions: list[dict]) -> dict[str, Any]:
     """results.json ``truth_comparison`` of a planar session; also puts truth beside each position."""
     by_index = {int(i): k for k, i in enumerate(truth["index"])}
@@ -90,8 +91,8 @@ def planar_truth_comparison(obs: Observations, est: PlanarEstimate, truth: dict[
     ok = est.used & have
     key = "board_plane_mm" if "board_plane_mm" in truth else "plane_mm"
     true_xy = planar_truth_in_stage_frame(truth[key][rows], obs.target_mm, obs.approach, ok, ref)
-    pos = reduce_truth(est.state.xy, true_xy, ref, ok, est.sigma_xy_mm)
-    sig = 1e3 * est.sigma_xy_mm[ok]
+    pos = reduce_truth(est.state.xy, true_xy, ref, ok, est.sigma_s_mm)
+    sig = 1e3 * est.sigma_s_mm[ok]
     true_geo = axis_geometry(affine_motion(true_xy, obs.target_mm, obs.approach, ok), np.zeros((4, 4)))
     geo = axis_geometry(est.fit.G, est.fit.cov_G)
     out: dict[str, Any] = {

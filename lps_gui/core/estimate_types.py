@@ -10,7 +10,7 @@ from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
 from lps_gui.core.constant_orientation import BoardPlaneMotion
 from lps_gui.core.hybrid import HybridOptions
 from lps_gui.core.joint_lm import LpsState
-from lps_gui.core.planar_model import PlanarState
+from lps_gui.core.planar_model import PlanarState, affine_coefficients
 from lps_gui.core.six_dof import SixDof
 from lps_gui.core.arrowhead import ArrowheadInverse
 from lps_gui.errors import InputError
@@ -163,6 +163,29 @@ class LpsEstimate:
         """measured - (target - target of the reference), um, shaped as the positions; zero at the reference."""
         t = np.asarray(target_mm, dtype=float)
         return 1e3 * (self.positions_mm - (t - t[self.reference_view]))
+
+
+def sigmas_of(cov: np.ndarray) -> np.ndarray:
+    """Per-view 1-sigma of each coordinate (K, b) from their covariance blocks (K, b, b)."""
+    return np.sqrt(np.maximum(np.einsum("kii->ki", cov), 0.0))
+
+
+def planar_fit(est: LpsEstimate, target_mm: np.ndarray, approach: np.ndarray) -> PlanarFit:
+    """Affine fit of a plane's measured positions with the covariance of G from the full position covariance."""
+    used = est.used
+    Phi, coef = affine_coefficients(est.state.xy, target_mm, approach, used)
+    G = coef[1:3].T  # shape (2, 2): G[:, 0] is +X motion, G[:, 1] is +Y motion
+    pinv = np.zeros((Phi.shape[1], Phi.shape[0]))
+    pinv[:, used] = np.linalg.pinv(Phi[used])
+    # coef[j, a] = sum_k pinv[j, k] xy[k, a]; G[a, b] = coef[1 + b, a]
+    L = np.zeros((4, est.state.xy.shape[0], 2))
+    for a in range(2):
+        for b in range(2):
+            L[2 * a + b, :, a] = pinv[1 + b]
+    cov_G = est.functional_covariance(L)
+    resid = 1e3 * (est.state.xy - Phi @ coef)
+    resid[~used] = np.nan
+    return PlanarFit(G, cov_G, resid)
 
 
 def step_pairs(run: np.ndarray, direction: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

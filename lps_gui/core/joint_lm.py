@@ -45,6 +45,11 @@ class LpsState:
     def line(self) -> LpsLine:
         return LpsLine(self.R.copy(), self.l0.copy(), self.n.copy())
 
+    def regauged(self, ref: int) -> "LpsState":
+        """Zero at view ``ref``: l0 absorbs the shift of every position (the translations stay)."""
+        shift = self.s[ref]
+        return LpsState(self.R, self.l0 + shift * self.n, self.n, self.s - shift, self.intrinsics)
+
     def copy(self) -> "LpsState":
         return LpsState(self.R.copy(), self.l0.copy(), self.n.copy(), self.s.copy(), self.intrinsics)
 

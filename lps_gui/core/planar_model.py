@@ -52,6 +52,13 @@ class PlanarState:
     def copy(self) -> "PlanarState":
         return PlanarState(self.R.copy(), self.l0.copy(), self.P.copy(), self.xy.copy(), self.intrinsics)
 
+    def regauged(self, ref: int) -> "PlanarState":
+        """Zero at view ``ref``: l0 moves to it, every position shifts (the translations stay)."""
+        out = self.copy()
+        out.l0 = self.l0 + self.basis @ self.xy[ref]
+        out.xy = self.xy - self.xy[ref]
+        return out
+
     def motion_axes_board(self) -> np.ndarray:
         """Camera-centre motion directions of +x and +y in the board frame, shape (3, 2).
 
@@ -306,3 +313,62 @@ def initial_planar_state(
     xy = (t_views - t_ref) @ P[:, :2]
     xy[~use] = (T[~use] - T[ref]) if (~use).any() else xy[~use]
     return PlanarState(R, t_ref.copy(), P, xy, intrinsics)
+
+
+# ----------------------------------------------------------------------------- the grid's affine frame (SPEC 10)
+
+
+def grid_design(target_mm: np.ndarray, approach: np.ndarray, used: np.ndarray) -> np.ndarray:
+    """Columns: 1, target x, target y, and one backlash offset per axis when both sides occur."""
+    cols = [np.ones(target_mm.shape[0]), target_mm[:, 0], target_mm[:, 1]]
+    for a in range(2):
+        side = approach[:, a] < 0
+        if side[used].any() and (~side[used]).any():
+            cols.append(side.astype(float))
+    return np.column_stack(cols)
+
+
+def affine_coefficients(xy: np.ndarray, target_mm: np.ndarray, approach: np.ndarray, used: np.ndarray
+                        ) -> tuple[np.ndarray, np.ndarray]:
+    """Least-squares xy = Phi coef; returns (Phi (K, q), coef (q, 2)); one shared design for x and y."""
+    Phi = grid_design(target_mm, approach, used)
+    coef, *_ = np.linalg.lstsq(Phi[used], xy[used], rcond=None)
+    return Phi, coef
+
+
+def affine_residual_um(xy: np.ndarray, target_mm: np.ndarray, approach: np.ndarray, used: np.ndarray) -> np.ndarray:
+    """Positions off the affine trend of the grid, um (K, 2)."""
+    Phi, coef = affine_coefficients(xy, target_mm, approach, used)
+    return 1e3 * (xy - Phi @ coef)
+
+
+def affine_motion(xy: np.ndarray, target_mm: np.ndarray, approach: np.ndarray, used: np.ndarray) -> np.ndarray:
+    """G (2x2) of the least-squares fit xy = offset + G target (+ backlash offsets): columns +X, +Y motion."""
+    _, coef = affine_coefficients(xy, target_mm, approach, used)
+    return coef[1:3].T
+
+
+def align_to_x_motion(state: PlanarState, target_mm: np.ndarray, approach: np.ndarray, used: np.ndarray
+                      ) -> PlanarState:
+    """Turn the plane coordinates so the fitted +X motion is +x and +Y motion has y > 0 (SPEC 10)."""
+    gx, gy = affine_motion(state.xy, target_mm, approach, used).T  # measured motion per commanded mm of X, of Y
+    out = state.rotated_in_plane(float(np.arctan2(gx[1], gx[0])))
+    if (gx[0] * gy[1] - gx[1] * gy[0]) < 0:  # +Y motion on the -y side: flip y (and n_y) to keep y > 0
+        out.P[:, 1] *= -1.0
+        out.P[:, 2] *= -1.0
+        out.xy[:, 1] *= -1.0
+    return out
+
+
+def planar_truth_in_stage_frame(true_xy_mm: np.ndarray, target_mm: np.ndarray, approach: np.ndarray,
+                                used: np.ndarray, ref: int) -> np.ndarray:
+    """True positions under the estimate's own frame convention (zero at ``ref``, +x along the
+    fitted +X motion, +Y motion on the +y side), so they compare with a plane's ``LpsEstimate.positions_mm``."""
+    xy = np.asarray(true_xy_mm, dtype=float) - true_xy_mm[ref]
+    G = affine_motion(xy, target_mm, approach, used)
+    angle = float(np.arctan2(G[1, 0], G[0, 0]))
+    c, s = np.cos(angle), np.sin(angle)
+    out = xy @ np.array([[c, -s], [s, c]])
+    if np.linalg.det(G) < 0:
+        out[:, 1] *= -1.0
+    return out

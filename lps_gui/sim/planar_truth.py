@@ -5,7 +5,7 @@ stage-plane positions, ``board_plane_mm`` (K, 2) what a constant-orientation
 model sees). Before :func:`lps_gui.sim.truth.reduce_truth` compares it, truth
 is put in the estimate's frame convention (SPEC 10: origin at the reference
 capture, +x along the fitted +X motion), by the same rule the estimator
-applies to its own positions (:func:`core.planar_estimate.planar_truth_in_stage_frame`).
+applies to its own positions (:func:`core.planar_model.planar_truth_in_stage_frame`).
 """
 from __future__ import annotations
 
@@ -15,9 +15,8 @@ import numpy as np
 
 from lps_gui.core.observations import Observations
 from lps_gui.core.estimate_types import LpsEstimate
-from lps_gui.core.planar_estimate import planar_truth_in_stage_frame
+from lps_gui.core.planar_model import affine_motion, planar_truth_in_stage_frame
 from lps_gui.core.planar_figures import axis_geometry, planar_figures
-from lps_gui.core.planar_estimate import affine_motion
 from lps_gui.io.session import Session
 from lps_gui.sim.truth import read_truth, reduce_truth, true_deviation_um
 

@@ -24,7 +24,7 @@ from lps_gui.io.intrinsics_file import intrinsics_to_dict
 from lps_gui.io.results_file import FORMAT
 from lps_gui.io.session import Session
 from lps_gui.pipeline.session_checks import session_inputs
-from lps_gui.sim.planar_truth import planar_session_truth, planar_truth_comparison
+from lps_gui.sim.truth import session_truth, truth_comparison
 
 
 def _f(x: Any) -> float | None:
@@ -91,9 +91,9 @@ def build_planar_results(session: Session, obs: Observations, est: LpsEstimate, 
         "parameters": parameters, "positions": positions, "figures": {"planar": planar},
         "flags": est.flags, "timings_s": dict(est.timings_s),
     }
-    truth = planar_session_truth(session)
+    truth = session_truth(session)
     if truth is not None:
-        results["truth_comparison"] = planar_truth_comparison(obs, est, truth, positions)
+        results["truth_comparison"] = truth_comparison(obs, est, truth, positions)
         _add_truth_to_nodes(planar["nodes"], obs, positions, valid)
     results["summary"] = summary_csv_rows(results)
     return results

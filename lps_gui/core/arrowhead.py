@@ -46,6 +46,17 @@ def block_inverse(D: np.ndarray, free: np.ndarray) -> np.ndarray:
     return out
 
 
+def per_view(M: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """M_k X_k for every view: M (K, b, b), X (K, b, m); a broadcast product for b = 1 (batched 1x1 matrix
+    products cost more than the arithmetic)."""
+    return M * X if M.shape[1] == 1 else M @ X
+
+
+def stacked(X: np.ndarray) -> np.ndarray:
+    """(K, b, m) as the (K b, m) rows of one matrix, for one BLAS product over all views."""
+    return X.reshape(-1, X.shape[-1])
+
+
 def solve_spd(S: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Solve the small reduced system by Cholesky (numpy: scipy.linalg's import costs more than the solve)."""
     if S.size == 0:
@@ -75,8 +86,8 @@ def eliminate(A: np.ndarray, B: np.ndarray, D: np.ndarray, free: np.ndarray, dam
         D = D + damping * D * np.eye(D.shape[1])[None]
     free = determined_views(D, free) if screen else np.asarray(free, bool)
     D_inv = block_inverse(D, free)
-    W = D_inv @ B
-    return Schur(A - np.einsum("kbp,kbq->pq", B, W), W, D_inv)
+    W = per_view(D_inv, B)
+    return Schur(A - stacked(B).T @ stacked(W), W, D_inv)
 
 
 def schur_step(A: np.ndarray, B: np.ndarray, D: np.ndarray, g_theta: np.ndarray, g_s: np.ndarray, free: np.ndarray,
@@ -86,8 +97,8 @@ def schur_step(A: np.ndarray, B: np.ndarray, D: np.ndarray, g_theta: np.ndarray,
     Shapes: g_theta (p,), g_s (K, b); returns d_theta (p,), d_s (K, b) with zeros for held views.
     """
     sc = eliminate(A, B, D, free, damping, screen)
-    d_theta = -solve_spd(sc.S, g_theta - np.einsum("kbp,kb->p", sc.W, g_s))
-    d_s = -np.einsum("kab,kb->ka", sc.D_inv, g_s + B @ d_theta)
+    d_theta = -solve_spd(sc.S, g_theta - stacked(sc.W).T @ g_s.ravel())
+    d_s = -per_view(sc.D_inv, (g_s + B @ d_theta)[..., None])[..., 0]
     return d_theta, d_s
 
 
@@ -101,7 +112,7 @@ class ArrowheadInverse:
 
     def cov_view(self) -> np.ndarray:
         """Each view's own b x b covariance block, shape (K, b, b)."""
-        return self.D_inv + np.einsum("kap,pq,kbq->kab", self.W, self.S_inv, self.W)
+        return self.D_inv + np.einsum("kap,kbp->kab", self.W @ self.S_inv, self.W)
 
     def variances(self) -> np.ndarray:
         """The diagonal of every view's block, shape (K, b)."""
@@ -131,8 +142,8 @@ class ArrowheadInverse:
 
     def solve(self, rhs_theta: np.ndarray, rhs_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """H^-1 [rhs_theta; rhs_s] for right-hand sides of shapes (p, m) and (K, b, m)."""
-        y_theta = self.S_inv @ (rhs_theta - np.einsum("kbp,kbm->pm", self.W, rhs_s))
-        return y_theta, self.D_inv @ rhs_s - self.W @ y_theta
+        y_theta = self.S_inv @ (rhs_theta - stacked(self.W).T @ stacked(rhs_s))
+        return y_theta, per_view(self.D_inv, rhs_s) - self.W @ y_theta
 
 
 def arrowhead_inverse(A: np.ndarray, B: np.ndarray, D: np.ndarray, free: np.ndarray,

@@ -142,7 +142,8 @@ def levenberg_marquardt(
             progress(it, max_iterations, f"{label}: iteration {it}, rms {np.sqrt(lin.cost / max(len(view), 1)):.3f} px")
         exact = lin.cost < 1e-20 * len(view)  # noise-free views (a planner's): nothing left to gain
         if gain <= tolerance * max(lin.cost, 1e-300) or lam > 1e6 or exact:
-            converged = lam <= 1e6 or exact
+            # no step changes the cost by more than the tolerance, up or down: at the minimum to round-off
+            converged = lam <= 1e6 or exact or abs(gain) <= tolerance * max(lin.cost, 1e-300)
             break
     A_gg, A_gv, A_vv, *_ = normal_equations(lin, tj, view, K, T, free_view)
     inv = arrowhead_inverse(A_gg, np.swapaxes(A_gv, 1, 2), A_vv, free_view, "the targets' poses",

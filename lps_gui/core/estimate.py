@@ -52,7 +52,7 @@ from lps_gui.core.uncertainty import (
     noise_variance,
     propagated_variance,
 )
-from lps_gui.errors import DegenerateGeometryError
+from lps_gui.errors import DegenerateGeometryError, InputError
 
 __all__ = ["METHODS", "EstimateOptions", "LpsEstimate", "PlanarEstimate", "estimate"]
 
@@ -65,21 +65,30 @@ def estimate(
     options: EstimateOptions | None = None,
     progress: ProgressFn = no_progress,
     cancel: CancelToken | None = None,
+    *,
+    warm_start: LpsState | None = None,
 ) -> LpsEstimate | PlanarEstimate:
     """Estimate the stage model of ``obs.D`` axes and every position from the observed corners.
 
     One problem for D = 1 (a line, SPEC 4) and D = 2 (a plane, SPEC 10): the
     same options, selections, outlier rounds and covariance of the block
     arrowhead; the solver family is chosen by D (:data:`SOLVERS`).
+    ``warm_start``: the state of an estimate of the first views of ``obs``
+    (a live capture's last one), the start of the joint LM instead of the
+    per-view PnP initialization; the new views start at their targets.
     """
     opt = options or EstimateOptions()
     opt.check_axes(obs.D)
     obs.validate()
+    if warm_start is not None:
+        if obs.D != 1 or opt.method != "joint":
+            raise InputError("a warm start continues a joint estimate of one axis (the running estimate of a live capture)")
+        return _estimate_line(obs, opt, progress, cancel, warm_start)
     return SOLVERS[obs.D](obs, opt, progress, cancel)
 
 
-def _estimate_line(obs: Observations, opt: EstimateOptions, progress: ProgressFn, cancel: CancelToken | None
-                   ) -> LpsEstimate:
+def _estimate_line(obs: Observations, opt: EstimateOptions, progress: ProgressFn, cancel: CancelToken | None,
+                   warm_start: LpsState | None = None) -> LpsEstimate:
     """D = 1: Eq. 5 initialization, the joint LM or the hybrid, the line's covariances and 6-DOF motions."""
     timings: dict[str, float] = {}
     t_start = time.perf_counter()
@@ -92,7 +101,8 @@ def _estimate_line(obs: Observations, opt: EstimateOptions, progress: ProgressFn
     if opt.method in ("pnp", "calibrate"):
         return estimate_per_view(obs, opt, usable, ref, X, progress, cancel, timings, t_start)
 
-    state = _initial_state(obs, usable, ref, X, full_pnp=opt.method == "hybrid")
+    state = (_initial_state(obs, usable, ref, X, full_pnp=opt.method == "hybrid") if warm_start is None
+             else _warm_state(obs, warm_start, ref))
     timings["init"] = time.perf_counter() - t_start
     sol = Solution(state, ref, usable, np.zeros(obs.K, dtype=bool), [""] * obs.K)
 
@@ -138,6 +148,15 @@ def _initial_state(obs: Observations, usable: np.ndarray, ref: int, X: np.ndarra
     s_all = obs.target_mm - obs.target_mm[ref]
     l0 = np.mean(t - s_all[views, None] * init.n[None, :], axis=0)
     return LpsState(init.R, l0, init.n, s_all.astype(float), obs.intrinsics)
+
+
+def _warm_state(obs: Observations, warm: LpsState, ref: int) -> LpsState:
+    """The previous solution of the first views, regauged to ``ref``; the views added since at their targets."""
+    s_all = (obs.target_mm - obs.target_mm[ref]).astype(float)
+    known = min(len(warm.s), obs.K)
+    shift = float(warm.s[ref]) if ref < known else 0.0
+    s_all[:known] = warm.s[:known] - shift
+    return LpsState(warm.R, warm.l0 + shift * warm.n, warm.n, s_all, obs.intrinsics)
 
 
 def _solve(

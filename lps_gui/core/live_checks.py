@@ -112,10 +112,14 @@ class EstimateChecks:
             flags.append(LiveFlag("rms", at, f"frame {at}: residual RMS grew from {base:.2f} px to {now:.2f} px; "
                                              "the camera may have moved on its mount"))
             self._rms_grew = True
-        for i in np.flatnonzero(np.asarray(outlier, bool)):
+        out = np.asarray(outlier, bool)
+        for i in np.flatnonzero(out):
             key = ("outlier", int(index[i]))
-            if key not in self._flagged:
-                self._flagged.add(key)
-                flags.append(LiveFlag("outlier", int(index[i]), f"frame {int(index[i])}: view off the line "
-                                                                 f"({outlier_reason[i] or 'outlier'})"))
+            if key in self._flagged:
+                continue
+            self._flagged.add(key)
+            if i > 0 and ("outlier", int(index[i - 1])) in self._flagged:
+                continue  # one stretch of views off the line is one finding, at its first frame
+            flags.append(LiveFlag("outlier", int(index[i]), f"frame {int(index[i])}: view off the line "
+                                                             f"({outlier_reason[i] or 'outlier'})"))
         return flags

@@ -203,6 +203,25 @@ def _positions_alone(state: LpsState, X: np.ndarray, corners: np.ndarray, mask: 
     return solve_positions_only(_views_of(state, idx), X, corners[idx], mask[idx])
 
 
+def views_against(state: LpsState, obs: Observations, views: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(position s, reprojection RMS px) of each of ``views`` (indices into ``obs``) with the line and rotation of
+    ``state`` held: O(views), a live capture's test of its new frames against the solution so far."""
+    idx = np.asarray(views, int)
+    X = obs.board.object_points()
+    mask = obs.mask()
+    sel = np.zeros(obs.K, bool)
+    sel[idx] = True
+    sel &= mask.any(axis=1)
+    s = np.full(obs.K, np.nan)
+    s[idx] = (obs.target_mm[idx] - obs.target_mm[0]).astype(float)
+    if sel.any():
+        start = LpsState(state.R, state.l0, state.n, np.nan_to_num(s), state.intrinsics)
+        s[sel] = _positions_alone(start, X, obs.corners_px, mask, sel)
+    rms = _view_rms(LpsState(state.R, state.l0, state.n, np.nan_to_num(s), state.intrinsics), X, obs.corners_px,
+                    mask & sel[:, None], np.zeros(obs.K), np.zeros(obs.K, bool))
+    return s[idx], rms[idx]
+
+
 def _views_of(state: LpsState, idx: np.ndarray) -> LpsState:
     """The same line and rotation with only the positions of views ``idx``."""
     return LpsState(state.R, state.l0, state.n, state.s[idx].copy(), state.intrinsics)

@@ -2,9 +2,9 @@
 
 Per frame (:class:`FrameChecks`): the board found and clear of the image
 border, the exposure (mean grey) and the sharpness against the frames just
-before. Per running estimate (:class:`EstimateChecks`): views the
-estimator's outlier round rejects (off the line) and a residual RMS that
-grows against the views before (the camera moved on its mount). Each flag
+before. Per running estimate (:class:`EstimateChecks`): the new views' residual
+RMS with the solution so far held (it grows when the camera moved on its
+mount) and the views the estimator's outlier round rejects (off the line). Each flag
 names the capture index it happened at; a fault is flagged once, at its
 first frame, and the baseline starts again from the new level.
 """
@@ -88,30 +88,28 @@ class FrameChecks:
 
 @dataclass
 class EstimateChecks:
-    """Outliers and a growing residual RMS in each running estimate (each view flagged once)."""
+    """New views against the solution so far (a camera moving on its mount), and the estimator's outliers."""
 
     _flagged: set[tuple[str, int]] = field(default_factory=set)
-    _rms_grew: bool = False
+    _high: set[int] = field(default_factory=set)  # views whose RMS was high against the solution before them
 
-    def check(self, index: np.ndarray, outlier: np.ndarray, outlier_reason: list[str], rms_px: np.ndarray,
-              usable: np.ndarray) -> list[LiveFlag]:
-        """Flags of one estimate of the views ``index`` (capture indices, capture order)."""
-        flags: list[LiveFlag] = []
+    def check_new_views(self, index: np.ndarray, rms_px: np.ndarray, base_rms_px: float) -> list[LiveFlag]:
+        """``rms_px`` of the views ``index`` under the last solution, whose own views had ``base_rms_px``."""
         rms = np.asarray(rms_px, float)
-        ok = np.asarray(usable, bool) & np.isfinite(rms)
-        first_bad = None
-        for i in np.flatnonzero(ok):
-            before = rms[:i][ok[:i]]
-            if len(before) >= 4:
-                base = float(np.median(before))
-                if rms[i] > max(RMS_RATIO * base, base + RMS_FLOOR_PX):
-                    first_bad = (int(index[i]), float(rms[i]), base)
-                    break
-        if first_bad is not None and not self._rms_grew:
-            at, now, base = first_bad
-            flags.append(LiveFlag("rms", at, f"frame {at}: residual RMS grew from {base:.2f} px to {now:.2f} px; "
-                                             "the camera may have moved on its mount"))
-            self._rms_grew = True
+        high = np.isfinite(rms) & (rms > max(RMS_RATIO * base_rms_px, base_rms_px + RMS_FLOOR_PX))
+        flags = []
+        for i in range(len(rms)):
+            at = int(index[i])
+            if high[i] and at - 1 not in self._high:  # a stretch of views off the same way is one finding
+                flags.append(LiveFlag("rms", at, f"frame {at}: residual RMS grew from {base_rms_px:.2f} px to "
+                                                 f"{rms[i]:.2f} px; the camera may have moved on its mount"))
+            if high[i]:
+                self._high.add(at)
+        return flags
+
+    def check(self, index: np.ndarray, outlier: np.ndarray, outlier_reason: list[str]) -> list[LiveFlag]:
+        """The outliers of one estimate of the views ``index`` (capture indices, capture order)."""
+        flags: list[LiveFlag] = []
         out = np.asarray(outlier, bool)
         for i in np.flatnonzero(out):
             key = ("outlier", int(index[i]))

@@ -32,7 +32,7 @@ from typing import Any, Callable
 import numpy as np
 
 from lps_gui.capture.events import CaptureEvent, CaptureSummary
-from lps_gui.core.estimate import EstimateOptions, estimate
+from lps_gui.core.estimate import estimate, views_against
 from lps_gui.core.live_checks import EstimateChecks, FrameChecks, LiveFlag
 from lps_gui.errors import LpsError
 from lps_gui.hardware.stage import EventSource
@@ -106,8 +106,7 @@ class LiveCapture:
         self._frame_checks = FrameChecks()
         self._estimate_checks = EstimateChecks()
         self._warm = None
-        self._since_estimate = 0
-        self._finishing = False
+        self._base_rms: float | None = None
         self.flags: list[LiveFlag] = []
         self.last_estimate: dict[str, Any] | None = None
         self.error: str | None = None
@@ -143,7 +142,6 @@ class LiveCapture:
         ``lps detect`` does, estimate the session (and write the report): the results document, else None."""
         from lps_gui.core.progress import no_progress
 
-        self._finishing = True
         self._queue.put(None)
         if self._thread is not None:
             self._thread.join()
@@ -185,9 +183,10 @@ class LiveCapture:
         try:
             while (record := self._queue.get()) is not None:
                 self._detect(record)
-                self._since_estimate += 1
-                if self._since_estimate >= self.estimate_every and self._queue.empty() and not self._finishing:
-                    self._since_estimate = 0
+                # every few views, at the same views in every run (also a resumed one: flags are reproducible);
+                # not at the plan's last frame: the final estimate follows at once
+                done = len(self._views.results)
+                if done % self.estimate_every == 0 and done < self.total:
                     self._estimate()
         except Exception as exc:  # the capture goes on; corners.vnl is rewritten by lps detect afterwards
             log.exception("live results failed")
@@ -236,6 +235,11 @@ class LiveCapture:
         obs = observations_of_views(self.session, board, intr, list(views.records), corners)
         opt = make_options("joint", {**(self.options or {}), "six_dof": False})
         t0 = time.perf_counter()
+        if self._warm is not None and self._base_rms is not None:  # the new views against the solution so far
+            new = np.arange(len(self._warm.s), obs.K)
+            _, rms = views_against(self._warm, obs, new)
+            for flag in self._estimate_checks.check_new_views(np.asarray(obs.index)[new], rms, self._base_rms):
+                self._flag(flag)
         try:
             est = estimate(obs, opt, warm_start=self._warm)
         except LpsError as exc:  # too few or degenerate views so far: try again later
@@ -243,6 +247,7 @@ class LiveCapture:
             self._warm = None
             return
         self._warm = est.state
+        self._base_rms = float(np.nanmedian(np.where(est.used, est.rms_px, np.nan)))
         index = np.asarray(obs.index)
         dev = est.deviation_um(obs.target_mm)
         data = {"index": index.tolist(), "target_mm": np.asarray(obs.target_mm, float).tolist(),
@@ -251,7 +256,7 @@ class LiveCapture:
                 "sigma_px": float(est.sigma_px), "seconds": time.perf_counter() - t0}
         self.last_estimate = data
         self._emit(LiveEvent("estimate", f"{obs.K} views, sigma {est.sigma_px:.3f} px", int(index[-1]), data))
-        for flag in self._estimate_checks.check(index, est.outlier, est.outlier_reason, est.rms_px, est.usable):
+        for flag in self._estimate_checks.check(index, est.outlier, est.outlier_reason):
             self._flag(flag)
 
     def _flag(self, flag: LiveFlag) -> None:

@@ -7,7 +7,8 @@ image of that frame. From the fault's frame on:
 
 * ``"board_leaves_view"``: the camera shifted ``amount`` mm sideways (camera x), the board runs out of the image;
 * ``"exposure"``: the image's grey levels times ``amount`` (light or gain changed);
-* ``"bump"``: the camera turned ``amount`` mrad on its mount about its x axis (a knock, a loose screw).
+* ``"bump"``: the camera turned ``amount`` mrad on its mount about its x axis (a knock, a loose screw);
+* ``"jolt"``: that one frame only, the camera ``amount`` mm off across the motion (camera y): a view off the line.
 
 The truth stays the stage's: what the estimator sees is a fault, not a stage error.
 """
@@ -20,7 +21,7 @@ import numpy as np
 
 from lps_gui.core.rotation import exp_so3
 
-KINDS = ("board_leaves_view", "exposure", "bump")
+KINDS = ("board_leaves_view", "exposure", "bump", "jolt")
 
 
 @dataclass(frozen=True)
@@ -55,6 +56,9 @@ class InjectedFaults:
             R, t = Rb @ R, t @ Rb.T
         for f in self._active("board_leaves_view"):
             t = t - np.array([f.amount, 0.0, 0.0])
+        for f in self._active("jolt"):
+            if self._index == f.at_index:
+                t = t + np.array([0.0, f.amount, 0.0])
         return R, t
 
     def image(self, image: np.ndarray) -> np.ndarray:

@@ -55,7 +55,7 @@ MIN_VIEWS = 4  # a line needs a few views spread along it
 class LiveEvent:
     """What the live results tell a CLI or GUI; listeners run on the live thread and must return quickly.
 
-    ``kind``: "corners" (a view detected; ``data`` {method}), "estimate" (``data``: index, target_mm,
+    ``kind``: "corners" (a view detected; ``data`` {method}), "estimate" (``data``: index, target_mm, direction,
     deviation_um, sigma_um, outlier lists over the views so far, rms_px, n_views), "flag" (``data``: the
     :class:`LiveFlag`), "results" (``data``: the results document), "report" (``data``: the PDF path),
     "error" (the live path failed; the capture goes on).
@@ -153,6 +153,10 @@ class LiveCapture:
         if summary is None or not summary.complete:
             return None
         self.write_final_corners()
+        if not self.session.has_intrinsics():
+            self._emit(LiveEvent("error", f"{self.session.folder}: corners.vnl written; no intrinsics to estimate with "
+                                          "(give them with `lps estimate --intrinsics FILE`)"))
+            return None
         from lps_gui.pipeline.estimate import estimate_session
 
         results = estimate_session(self.session.folder, self.method, self.options, progress=progress or no_progress)
@@ -251,6 +255,7 @@ class LiveCapture:
         index = np.asarray(obs.index)
         dev = est.deviation_um(obs.target_mm)
         data = {"index": index.tolist(), "target_mm": np.asarray(obs.target_mm, float).tolist(),
+                "direction": [r.direction for r in views.records],
                 "deviation_um": np.where(est.usable, dev, np.nan).tolist(), "sigma_um": (1e3 * est.sigma_s_mm).tolist(),
                 "outlier": est.outlier.tolist(), "rms_px": est.rms_px.tolist(), "n_views": int(obs.K),
                 "sigma_px": float(est.sigma_px), "seconds": time.perf_counter() - t0}

@@ -37,6 +37,9 @@ def start_live(args: argparse.Namespace, engine: Any) -> Any:
     every = ESTIMATE_EVERY if args.live_every is None else args.live_every
     if every < 1:
         raise InputError(f"--live-every {every}: give 1 or more views between running estimates")
+    why = LiveCapture.unsupported(engine.session)
+    if why:
+        raise InputError(f"--live: {why}")
     live = LiveCapture(engine, estimate_every=every)
 
     def show(event: Any) -> None:

@@ -60,8 +60,12 @@ class LivePanel(QGroupBox):
         """A started LiveCapture on ``engine`` when ``on`` (the box, read on the GUI thread), else None (worker thread)."""
         if not on:
             return None
-        from lps_gui.pipeline.live import LiveCapture
+        from lps_gui.pipeline.live import LiveCapture, LiveEvent
 
+        why = LiveCapture.unsupported(engine.session)
+        if why:
+            self._bridge.event.emit(LiveEvent("error", why))
+            return None
         live = LiveCapture(engine)
         live.subscribe(self._bridge.event.emit)
         live.start()

@@ -112,6 +112,14 @@ class LiveCapture:
         self.error: str | None = None
         self._unsubscribe = engine.subscribe(self._on_capture_event)
 
+    @staticmethod
+    def unsupported(session: Session) -> str | None:
+        """Why ``session`` cannot have live results, or None: a row or constellation of targets (SPEC 13) not yet."""
+        if session.targets() is not None and not session.meta.get("board"):
+            return (f"{session.folder}: live results take a single-board session; this one names targets "
+                    "(run `lps detect` and `lps estimate` after the capture)")
+        return None
+
     # ------------------------------------------------------------------ control
     def subscribe(self, listener: LiveListener) -> Callable[[], None]:
         return self._events.subscribe(listener)  # type: ignore[arg-type]

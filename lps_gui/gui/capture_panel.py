@@ -150,10 +150,12 @@ class CapturePanel(QWidget):
         self.progress = QProgressBar()
         self.eta = QLabel("idle")
         self.eta.setWordWrap(True)  # a long error wraps; it does not widen the dock
+        self.eta.setMinimumHeight(2 * self.eta.fontMetrics().lineSpacing() + 2)  # "complete: ... folder" takes two lines
 
         from lps_gui.gui.live_panel import LivePanel
 
         self.live_panel = LivePanel()  # the deviation plot growing stop by stop, the live flags, the report
+        self.live_panel.flagged.connect(lambda _flag: self.pause() if self.live_panel.pause_on_flag.isChecked() else None)
         stack(self, [plan_box, (self.planar_editor, 1), self.report_setup, sess, row, self.progress, self.eta,
                      self.live_panel]).addStretch(1)
 

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 import pyqtgraph as pg
-from PySide6.QtCore import QObject, QTimer, Signal
+from PySide6.QtCore import QObject, Qt, QTimer, Signal
 from PySide6.QtWidgets import QCheckBox, QGroupBox, QLabel, QListWidget, QVBoxLayout, QWidget
 
 from lps_gui.gui.plot_adapter import DrawnFigure, figure_steps
@@ -31,21 +31,26 @@ class LivePanel(QGroupBox):
     """Live results of the running capture (detection, running estimate, checks) and its final report."""
 
     report_ready = Signal(object)  # Path of the PDF written when the capture completed
+    flagged = Signal(object)  # a LiveFlag, the moment it is found (the capture panel pauses on it when asked)
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__("Live results", parent)
         self.enabled = QCheckBox("Detect, estimate and check while capturing; end in the report")
         self.enabled.setChecked(True)
+        self.pause_on_flag = QCheckBox("Pause the capture at a flag")
+        self.pause_on_flag.setToolTip("Stop after the frame being taken when a check flags something: fix it, then Resume")
         self.enabled.setToolTip("Each frame is detected as it is written (corners.vnl), the positions estimated every "
                                 "few stops and checked; when the last frame is written, results.json and report.pdf follow")
         self.plot = pg.PlotWidget(background="w")
-        self.plot.setMinimumHeight(160)
+        self.plot.setFixedHeight(260)  # the panel sits in a dock under the plan: a fixed size, nothing squeezed
         self.flags = QListWidget()
         self.flags.setMaximumHeight(90)
+        self.flags.setWordWrap(True)  # a flag says what to check: the whole line, not a scroll bar
+        self.flags.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
         self.status = QLabel("")
         self.status.setWordWrap(True)
         lay = QVBoxLayout(self)
-        for w in (self.enabled, self.plot, self.flags, self.status):
+        for w in (self.enabled, self.pause_on_flag, self.plot, self.flags, self.status):
             lay.addWidget(w)
         self.drawn: DrawnFigure | None = None
         self.n_views = 0
@@ -97,6 +102,7 @@ class LivePanel(QGroupBox):
         if event.kind == "flag":
             self.flags.addItem(event.message)
             self.flags.scrollToBottom()
+            self.flagged.emit(event.data)
         elif event.kind == "estimate":
             data = event.data
             self.status.setText(f"running estimate: {data['n_views']} views, corner noise {data['sigma_px']:.3f} px")

@@ -33,4 +33,18 @@ def test_live_plot_grows_flags_a_fault_and_ends_in_the_report(qtbot, make_window
     texts = [live.flags.item(i).text() for i in range(live.flags.count())]
     assert any(t.startswith("frame 7: exposure jumped") for t in texts), texts
     qtbot.waitUntil(lambda: cap.start_btn.isEnabled(), timeout=5000)
-    live.grab().save("/tmp/live28/live_panel.png")
+
+
+def test_pause_at_a_flag_then_resume_completes(qtbot, make_window, tmp_path):
+    folder = tmp_path / "paused"
+    window, cap = capture_window(qtbot, make_window, LIVE_PLAN, folder)
+    window.camera_panel.sim_camera.faults = InjectedFaults([Fault("board_leaves_view", 5, 400.0)])
+    cap.live_panel.pause_on_flag.setChecked(True)
+    cap.start_btn.click()
+    qtbot.waitUntil(lambda: cap.engine is not None and cap.engine.state == "paused", timeout=60000)
+    assert cap.live_panel.flags.item(0).text().startswith("frame 5: board not found")
+    assert cap.resume_btn.isEnabled()
+    cap.live_panel.pause_on_flag.setChecked(False)  # "fixed": go on
+    with qtbot.waitSignal(cap.session_done, timeout=90000):
+        cap.resume_btn.click()
+    qtbot.waitUntil(lambda: cap.start_btn.isEnabled(), timeout=30000)

@@ -36,21 +36,25 @@ def printing(self, event):
     emit(self, event)
     if event.kind == "frame":
         print(event.index, flush=True)
+    elif event.kind == "done":  # the last frame is listed: the final corners and estimate follow
+        print("end", flush=True)
 eng.CaptureEngine._emit = printing
 from lps_gui.cli import main
 sys.exit(main(sys.argv[1:]))
 """
 
 
-def run_killed(folder: Path, resume: bool, kill_at: int, delay_s: float) -> None:
-    """One `lps capture --live` child, killed ``delay_s`` after it printed frame ``kill_at`` (or run to its end)."""
+def run_killed(folder: Path, resume: bool, kill_at: int | None, delay_s: float) -> None:
+    """One `lps capture --live` child, killed ``delay_s`` after it printed frame ``kill_at`` (None: after the
+    capture's end, in the final corners, estimate or exit), or run to its end."""
     env = {**os.environ, "PYTHONPATH": str(ROOT), "OMP_NUM_THREADS": "1"}
     cmd = [sys.executable, "-c", CHILD, "capture", *(["--resume", str(folder)] if resume else ["--out", str(folder), *ARGS[:4]]),
            "--live"]
     child = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
 
     def reached(line: str) -> bool:
-        if line.strip().isdigit() and int(line) >= kill_at:
+        word = line.strip()
+        if (word == "end" and kill_at is None) or (word.isdigit() and kill_at is not None and int(word) >= kill_at):
             time.sleep(delay_s)
             return True
         return False
@@ -69,12 +73,13 @@ def uninterrupted(tmp_path_factory):
 
 
 def kill_and_resume(folder: Path, kills: int, seed: int) -> None:
+    """``kills`` kills spread over the capture (random frames, random delays after them), the last after its end."""
     rng = random.Random(seed)
     total = 30  # the small preset: 30 stops
-    for k in range(kills):
-        listed = len(Session.open(folder).records()) if (folder / "session.json").exists() else 0
-        run_killed(folder, resume=(folder / "session.json").exists(), kill_at=min(rng.randrange(listed, total + 1), total - 1),
-                   delay_s=rng.uniform(0.0, 0.08))
+    targets: list[int | None] = [*sorted(rng.randrange(total) for _ in range(kills - 1)), None]
+    for kill_at in targets:
+        run_killed(folder, resume=(folder / "session.json").exists(), kill_at=kill_at,
+                   delay_s=rng.uniform(0.0, 0.4 if kill_at is None else 0.08))
         if (folder / "session.json").exists():
             assert_listed_frames_intact(Session.open(folder))
     assert lps_main(["capture", "--resume", str(folder), "--live"]) == 0

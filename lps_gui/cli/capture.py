@@ -104,6 +104,10 @@ def run(args: argparse.Namespace) -> int:
     from lps_gui.cli.capture_setup import apply_setup, setup_meta
 
     extra = setup_meta(args)  # --spec, environment, identification: checked before any device opens
+    from lps_gui.cli.capture_live import report_path
+
+    if args.report:
+        report_path(args, ".")  # a --report name that cannot be written is refused before the capture
     settle = settle_options(args)
     if args.compensation:
         from lps_gui.io.compensation_file import read_table

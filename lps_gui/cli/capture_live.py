@@ -12,6 +12,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from lps_gui.cli.option_types import int_range
+
 
 def add_live_arguments(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("live results (docs/capture.md)")
@@ -20,7 +22,17 @@ def add_live_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--report", nargs="?", const="", default=None, metavar="PDF",
                    help="implies --live: when the last frame is written, estimate and write the report "
                         "(default SESSION/report.pdf)")
-    g.add_argument("--live-every", type=int, default=None, metavar="N", help="views between running estimates (default 2)")
+    g.add_argument("--live-every", type=int_range(1, 100000), default=None, metavar="N",
+                   help="views between running estimates (default 2)")
+
+
+def report_path(args: argparse.Namespace, folder: Path | str) -> Path | None:
+    """Where --report writes (checked before anything is captured: a bad name must not cost a capture)."""
+    if args.report is None:
+        return None
+    from lps_gui.cli.out_path import resolve_out
+
+    return resolve_out(args.report or None, "report.pdf", folder, (".pdf",), "lps capture --report")
 
 
 def wants_live(args: argparse.Namespace) -> bool:
@@ -35,8 +47,6 @@ def start_live(args: argparse.Namespace, engine: Any) -> Any:
     from lps_gui.pipeline.live import ESTIMATE_EVERY, LiveCapture
 
     every = ESTIMATE_EVERY if args.live_every is None else args.live_every
-    if every < 1:
-        raise InputError(f"--live-every {every}: give 1 or more views between running estimates")
     why = LiveCapture.unsupported(engine.session)
     if why:
         raise InputError(f"--live: {why}")
@@ -55,11 +65,7 @@ def finish_live(args: argparse.Namespace, live: Any, summary: Any) -> None:
     """Wait for the live work; on a complete capture print where results.json and the report are."""
     if live is None:
         return
-    report: Path | bool = False
-    if args.report is not None:
-        from lps_gui.cli.out_path import resolve_out
-
-        report = resolve_out(args.report or None, "report.pdf", summary.folder, (".pdf",), "lps capture --report")
+    report = report_path(args, summary.folder) or False
     results = live.finish(summary, report=report)
     if results is not None:
         print(f"results: {Path(summary.folder) / 'results.json'} ({len(live.flags)} live flag(s))")

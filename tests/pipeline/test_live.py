@@ -114,3 +114,31 @@ def test_live_file_after_a_torn_block_continues(tmp_path):
     detect_session(folder)
     assert (folder / "corners.vnl").read_bytes() == got
     assert read_corners_vnl(folder / "corners.vnl", session.board().n_corners).meta["detection"].startswith("tracked")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("fault, kind", [
+    (Fault("board_leaves_view", 20, 400.0), "board"),
+    (Fault("exposure", 20, 1.3), "exposure"),
+    (Fault("bump", 20, 1.0), "rms"),
+    (Fault("jolt", 20, 0.3), "outlier"),
+], ids=lambda v: v.kind if isinstance(v, Fault) else "")
+def test_faults_on_the_rendered_paper_rig_flagged_within_two_frames(tmp_path, fault, kind):
+    """The paper rig's 1920x1080 images, 40 stops 1 mm apart; 1 mrad of bump is 1.4 px, 0.3 mm of jolt 0.7 px."""
+    from lps_gui.sim.rig import spec_for_plan
+    from lps_gui.sim.session import create_simulated_session, simulated_engine
+
+    plan = Plan(start_mm=0.0, stop_mm=39.0, step_mm=1.0, directions="+", runs=1)
+    session, stage, camera = create_simulated_session(tmp_path / "s", spec_for_plan("paper-rig", plan),
+                                                      faults=InjectedFaults([fault]))
+    stage.connect()
+    live = LiveCapture(simulated_engine(session, stage, camera))
+    seen = {"detected": -1}
+    flagged: dict[tuple[str, int], int] = {}
+    live.subscribe(lambda e: seen.update(detected=e.index) if e.kind == "corners" else (
+        flagged.setdefault((e.data.kind, e.index), seen["detected"]) if e.kind == "flag" else None))
+    live.start()
+    summary = live.engine.run()
+    live.finish(summary)
+    assert (kind, 20) in flagged and flagged[(kind, 20)] <= 22, flagged
+    assert all(index >= 20 for _, index in flagged), flagged

@@ -11,7 +11,7 @@ from lps_gui.cli import main as lps_main
 
 def test_capture_report_equals_separate_detect_and_estimate(tmp_path, capsys):
     folder = tmp_path / "s"
-    assert lps_main(["capture", "--out", str(folder), "--preset", "small", "--stop", "22", "--report"]) == 0
+    assert lps_main(["capture", "--out", str(folder), "--preset", "small", "--stop", "14", "--report"]) == 0
     out = capsys.readouterr().out
     assert f"results: {folder / 'results.json'}" in out and f"report: {folder / 'report.pdf'}" in out
     assert (folder / "report.pdf").read_bytes().startswith(b"%PDF")

@@ -97,6 +97,7 @@ def test_live_file_after_a_torn_block_continues(tmp_path):
     assert b"## live = " in data
     table = read_corners_vnl(folder / "corners.vnl", session.board().n_corners)  # lps estimate and detect read it
     assert table.names == [r.file for r in session.records()] and np.isfinite(table.corners_px).all()
+    assert len(estimate_session(folder)["positions"]) == len(table.names)  # check_corners_current takes it
     (folder / "corners.vnl").write_bytes(data[: len(data) - 700])  # tear the last block
     session = Session.open(folder)
     from lps_gui.sim.session import reopen_simulated_rig, simulated_engine

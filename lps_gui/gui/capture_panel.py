@@ -348,7 +348,11 @@ class CapturePanel(QWidget):
             if self._abort_early:
                 engine.abort()
             live = self.live_panel.attach(engine, live_on)
-            summary = engine.run(progress, cancel)
+            try:
+                summary = engine.run(progress, cancel)
+            except BaseException:
+                self.live_panel.finish(live, None)  # its thread ends, corners.vnl stays as far as detected
+                raise
             self.live_panel.finish(live, summary)
             return summary
 

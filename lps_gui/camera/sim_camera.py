@@ -62,6 +62,7 @@ class SimulatedCamera(Camera):
         self._frame_no = 0
         self.last_pose: Any = None  # the pose of the last frame rendered (its truth)
         self._open = False
+        self.faults: Any = None  # a simulator's injected faults (lps_gui.sim.faults): camera_pose(R, t), image(image)
 
     def open(self) -> None:
         if self._renderer is None:  # the per-pixel rays take a moment: build once
@@ -77,8 +78,12 @@ class SimulatedCamera(Camera):
         pose = self.pose_source()
         self.last_pose = pose  # the truth of this frame: its exposure starts here (the stage may ring)
         R, t = self.rig.camera_poses(pose)
+        if self.faults is not None:
+            R, t = self.faults.camera_pose(R, t)
         self.clock.sleep(self.exposure_s)
         image = self._renderer.render(R[0], t[0], self._rng)
+        if self.faults is not None:
+            image = self.faults.image(image)
         self._frame_no += 1
         meta = {
             "frame": self._frame_no,

@@ -71,6 +71,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     from lps_gui.cli.asme_test import add_test_arguments
 
     add_test_arguments(p)
+    from lps_gui.cli.capture_live import add_live_arguments
+
+    add_live_arguments(p)
     a = p.add_argument_group("settle detection and averaging")
     a.add_argument("--settle-px", type=positive_finite, metavar="PX", help="before each stop's frame, grab until consecutive frames show the "
                    "board within PX pixels (mean corner shift), e.g. 0.02")
@@ -104,6 +107,10 @@ def run(args: argparse.Namespace) -> int:
     from lps_gui.cli.capture_setup import apply_setup, setup_meta
 
     extra = setup_meta(args)  # --spec, environment, identification: checked before any device opens
+    from lps_gui.cli.capture_live import report_path
+
+    if args.report:
+        report_path(args, ".")  # a --report name that cannot be written is refused before the capture
     settle = settle_options(args)
     if args.compensation:
         from lps_gui.io.compensation_file import read_table
@@ -116,13 +123,18 @@ def run(args: argparse.Namespace) -> int:
 
         apply_compensation(engine, session, args.compensation)
         engine.configure_settle(settle)
+        from lps_gui.cli.capture_live import finish_live, start_live
+
+        live = start_live(args, engine)
         print(f"capturing into {session.folder}: {describe(session.plan())}", file=sys.stderr)
         summary = engine.run(progress=ProgressBar("capture"))
     finally:
         close(stage, camera)
     if summary.state == "done":
         print(f"{summary.folder}: {summary.listed}/{summary.total} frames listed ({summary.captured} now)")
+        finish_live(args, live, summary)
         return 0
+    finish_live(args, live, summary)
     print(
         f"lps capture: {summary.state}: {summary.error or 'stopped'}; {summary.listed}/{summary.total} frames kept, "
         f"continue with `lps capture --resume {summary.folder}{_resume_devices_hint(session)}`",

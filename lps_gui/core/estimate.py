@@ -61,7 +61,7 @@ from lps_gui.core.pose_normals import PoseNormals
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.core.six_dof import SixDof, refine_view_poses, six_dof_motion
 from lps_gui.core.uncertainty import noise_variance, propagated_variance
-from lps_gui.errors import DegenerateGeometryError
+from lps_gui.errors import DegenerateGeometryError, InputError
 
 __all__ = ["METHODS", "EstimateOptions", "LpsEstimate", "estimate"]
 
@@ -74,21 +74,30 @@ def estimate(
     options: EstimateOptions | None = None,
     progress: ProgressFn = no_progress,
     cancel: CancelToken | None = None,
+    *,
+    warm_start: LpsState | None = None,
 ) -> LpsEstimate:
     """Estimate the stage model of ``obs.D`` axes and every position from the observed corners.
 
     One problem for D = 1 (a line, SPEC 4) and D = 2 (a plane, SPEC 10): the
     same options, selections, outlier rounds and covariance of the block
     arrowhead; the solver family is chosen by D (:data:`SOLVERS`).
+    ``warm_start``: the state of an estimate of the first views of ``obs``
+    (a live capture's last one), the start of the joint LM instead of the
+    per-view PnP initialization; the new views start at their targets.
     """
     opt = options or EstimateOptions()
     opt.check_axes(obs.D)
     obs.validate()
+    if warm_start is not None:
+        if obs.D != 1 or opt.method != "joint":
+            raise InputError("a warm start continues a joint estimate of one axis (the running estimate of a live capture)")
+        return _estimate_line(obs, opt, progress, cancel, warm_start)
     return SOLVERS[obs.D](obs, opt, progress, cancel)
 
 
-def _estimate_line(obs: Observations, opt: EstimateOptions, progress: ProgressFn, cancel: CancelToken | None
-                   ) -> LpsEstimate:
+def _estimate_line(obs: Observations, opt: EstimateOptions, progress: ProgressFn, cancel: CancelToken | None,
+                   warm_start: LpsState | None = None) -> LpsEstimate:
     """D = 1: Eq. 5 initialization, the joint LM or the hybrid, the line's covariances and 6-DOF motions."""
     timings: dict[str, float] = {}
     t_start = time.perf_counter()
@@ -101,7 +110,8 @@ def _estimate_line(obs: Observations, opt: EstimateOptions, progress: ProgressFn
     if opt.method in ("pnp", "calibrate"):
         return estimate_per_view(obs, opt, usable, ref, X, progress, cancel, timings, t_start)
 
-    state = _initial_state(obs, usable, ref, X, full_pnp=opt.method == "hybrid")
+    state = (_initial_state(obs, usable, ref, X, full_pnp=opt.method == "hybrid") if warm_start is None
+             else _warm_state(obs, warm_start, ref))
     timings["init"] = time.perf_counter() - t_start
     sol = Solution(state, ref, usable, np.zeros(obs.K, dtype=bool), [""] * obs.K)
 
@@ -149,6 +159,15 @@ def _initial_state(obs: Observations, usable: np.ndarray, ref: int, X: np.ndarra
     return LpsState(init.R, l0, init.n, s_all.astype(float), obs.intrinsics)
 
 
+def _warm_state(obs: Observations, warm: LpsState, ref: int) -> LpsState:
+    """The previous solution of the first views, regauged to ``ref``; the views added since at their targets."""
+    s_all = (obs.target_mm - obs.target_mm[ref]).astype(float)
+    known = min(len(warm.s), obs.K)
+    shift = float(warm.s[ref]) if ref < known else 0.0
+    s_all[:known] = warm.s[:known] - shift
+    return LpsState(warm.R, warm.l0 + shift * warm.n, warm.n, s_all, obs.intrinsics)
+
+
 def _solve(
     state: LpsState,
     obs: Observations,
@@ -185,6 +204,25 @@ def _positions_alone(state: LpsState, X: np.ndarray, corners: np.ndarray, mask: 
     """Each selected view's own best position with the shared parameters fixed."""
     idx = np.flatnonzero(views)
     return solve_positions_only(_views_of(state, idx), X, corners[idx], mask[idx])
+
+
+def views_against(state: LpsState, obs: Observations, views: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(position s, reprojection RMS px) of each of ``views`` (indices into ``obs``) with the line and rotation of
+    ``state`` held: O(views), a live capture's test of its new frames against the solution so far."""
+    idx = np.asarray(views, int)
+    X = obs.board.object_points()
+    mask = obs.mask()
+    sel = np.zeros(obs.K, bool)
+    sel[idx] = True
+    sel &= mask.any(axis=1)
+    s = np.full(obs.K, np.nan)
+    s[idx] = (obs.target_mm[idx] - obs.target_mm[0]).astype(float)
+    if sel.any():
+        start = LpsState(state.R, state.l0, state.n, np.nan_to_num(s), state.intrinsics)
+        s[sel] = _positions_alone(start, X, obs.corners_px, mask, sel)
+    rms = _view_rms(LpsState(state.R, state.l0, state.n, np.nan_to_num(s), state.intrinsics), X, obs.corners_px,
+                    mask & sel[:, None], np.zeros(obs.K), np.zeros(obs.K, bool))
+    return s[idx], rms[idx]
 
 
 def _views_of(state: LpsState, idx: np.ndarray) -> LpsState:

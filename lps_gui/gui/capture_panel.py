@@ -150,8 +150,14 @@ class CapturePanel(QWidget):
         self.progress = QProgressBar()
         self.eta = QLabel("idle")
         self.eta.setWordWrap(True)  # a long error wraps; it does not widen the dock
+        self.eta.setMinimumHeight(2 * self.eta.fontMetrics().lineSpacing() + 2)  # "complete: ... folder" takes two lines
 
-        stack(self, [plan_box, (self.planar_editor, 1), self.report_setup, sess, row, self.progress, self.eta]).addStretch(1)
+        from lps_gui.gui.live_panel import LivePanel
+
+        self.live_panel = LivePanel()  # the deviation plot growing stop by stop, the live flags, the report
+        self.live_panel.flagged.connect(lambda _flag: self.pause() if self.live_panel.pause_on_flag.isChecked() else None)
+        stack(self, [plan_box, (self.planar_editor, 1), self.report_setup, sess, row, self.progress, self.eta,
+                     self.live_panel]).addStretch(1)
 
         for w in (self.start_mm, self.stop_mm, self.step_mm):
             w.valueChanged.connect(self._targets_edited)
@@ -322,6 +328,8 @@ class CapturePanel(QWidget):
         self.session_dir = Path(folder)
         self.camera_panel.pause(True)
         table_path = self.compensation.path()  # read on the GUI thread
+        live_on = self.live_panel.enabled.isChecked()
+        self.live_panel.clear()
 
         def work(progress: Any, cancel: Any) -> Any:
             session = make_session()
@@ -339,7 +347,14 @@ class CapturePanel(QWidget):
             self.engine = engine  # pause/abort from the GUI thread are thread-safe engine calls
             if self._abort_early:
                 engine.abort()
-            return engine.run(progress, cancel)
+            live = self.live_panel.attach(engine, live_on)
+            try:
+                summary = engine.run(progress, cancel)
+            except BaseException:
+                self.live_panel.finish(live, None)  # its thread ends, corners.vnl stays as far as detected
+                raise
+            self.live_panel.finish(live, summary)
+            return summary
 
         self._abort_early = False
         job = Job(f"capture {self.session_dir.name}", work)

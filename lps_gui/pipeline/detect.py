@@ -19,7 +19,7 @@ from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wai
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
@@ -31,6 +31,9 @@ from lps_gui.io.atomic import sha256_file
 from lps_gui.io.corners_vnl import CornerTable, read_corners_vnl, write_corners_vnl
 from lps_gui.io.corners_hashes import corners_current, hash_meta, image_hashes, image_unchanged, stat_meta
 from lps_gui.io.session import Session
+
+if TYPE_CHECKING:
+    from lps_gui.camera.detection import ChessboardTracker
 
 log = logging.getLogger(__name__)
 
@@ -95,35 +98,48 @@ def detect_chunk(
     jobs: Sequence[ViewJob], board: Board, image_size: tuple[int, int] | None = None, track: bool = True
 ) -> list[ViewResult]:
     """Track the board through ``jobs`` (capture order); runs in a worker process."""
-    from lps_gui.camera.charuco import detect_charuco
     from lps_gui.camera.detection import ChessboardTracker, DetectionOptions
 
     tracker = ChessboardTracker(board, DetectionOptions(track=track))
-    out: list[ViewResult] = []
-    for job in jobs:
-        image, reason = load_grey(job.path, job.sha256, image_size, job.session)
-        if image is None:
-            tracker.reset()
-            out.append(ViewResult(job.name, None, "failed", reason))
-            continue
-        if board.type == "charuco":
-            corners, reason = detect_charuco(image, board)
-            out.append(ViewResult(job.name, corners, "charuco" if corners is not None else "failed", reason))
-            continue
-        det = tracker.detect(image)
-        corners = None if det.corners_px is None else det.corners_px.astype(np.float32)
-        out.append(ViewResult(job.name, corners, det.method, det.reason if corners is None else ""))
-    return out
+    return [detect_view(tracker, job, image_size)[0] for job in jobs]
 
 
-def _chunks(jobs: list[ViewJob], workers: int) -> list[list[ViewJob]]:
-    """Contiguous chunks: long enough to amortize a full detection, enough to balance cores.
+def detect_view(tracker: "ChessboardTracker", job: ViewJob, image_size: tuple[int, int] | None = None
+                ) -> tuple[ViewResult, np.ndarray | None]:
+    """One image of a sequence through ``tracker`` (the chunk's, or a live capture's): its result and the image."""
+    from lps_gui.camera.charuco import detect_charuco
+
+    board = tracker.board
+    image, reason = load_grey(job.path, job.sha256, image_size, job.session)
+    if image is None:
+        tracker.reset()
+        return ViewResult(job.name, None, "failed", reason), None
+    if board.type == "charuco":
+        corners, reason = detect_charuco(image, board)
+        return ViewResult(job.name, corners, "charuco" if corners is not None else "failed", reason), image
+    det = tracker.detect(image)
+    corners = None if det.corners_px is None else det.corners_px.astype(np.float32)
+    return ViewResult(job.name, corners, det.method, det.reason if corners is None else ""), image
+
+
+def chunk_size(n_jobs: int, workers: int) -> int:
+    """Frames per chunk: long enough to amortize a full detection, enough to balance cores.
 
     Every chunk starts with a full detection (~15 tracked frames' worth), so
     there are few: about two per process (the workers and this one, which
-    takes chunks too), at most 64 frames each.
+    takes chunks too), at most 64 frames each. A live capture's detection
+    restarts its tracker at the same frames, so its corners are the bytes
+    ``lps detect`` writes.
     """
-    size = int(np.clip(np.ceil(len(jobs) / (2 * workers + 1)), 8, 64))
+    return int(np.clip(np.ceil(n_jobs / (2 * workers + 1)), 8, 64))
+
+
+def default_workers(workers: int | None = None) -> int:
+    return max(1, int(workers or os.cpu_count() or 1))
+
+
+def _chunks(jobs: list[ViewJob], workers: int) -> list[list[ViewJob]]:
+    size = chunk_size(len(jobs), workers)
     return [jobs[i : i + size] for i in range(0, len(jobs), size)]
 
 
@@ -141,7 +157,7 @@ def run_detection(
     On cancel, raises :class:`Cancelled` carrying the finished results as
     ``exc.partial`` so the caller can keep them.
     """
-    workers = max(1, int(workers or os.cpu_count() or 1))
+    workers = default_workers(workers)
     chunks = _chunks(jobs, workers)
     total = len(jobs)
     results: dict[str, ViewResult] = {}
@@ -278,7 +294,7 @@ def detect_session(
             image_size = session.intrinsics().image_size
         except InputError as exc:  # detection does not need intrinsics: go on without the size check
             log.warning("%s", exc)
-    meta = {"captures_sha256": captures_sha, "board": _board_key(board), **hash_meta(records)}
+    meta = session_corner_meta(session, records, captures_sha)
     kept: dict[str, ViewResult] = {}
     if not force and session.corners_path.exists():
         try:
@@ -314,17 +330,27 @@ def detect_session(
         table = _table(names, results, board.n_corners, {**meta, "captures_sha256": "partial"})
         table.names = [n for n in names if n in results]
         table.corners_px = table.corners_px[[i for i, n in enumerate(names) if n in results]]
-        _write_session_corners(session, table)
+        write_session_corners(session, table)
         raise
-    methods = [r.method for r in results.values()]
-    labels = {"track": "tracked", "full": "full", "charuco": "charuco", "kept": "kept", "failed": "failed"}
-    meta["detection"] = ", ".join(f"{label} {methods.count(m)}" for m, label in labels.items() if m == "track" or m in methods)
-    table = _table(names, results, board.n_corners, meta)
-    _write_session_corners(session, table)
+    table = session_corner_table(names, results, board.n_corners, meta)
+    write_session_corners(session, table)
     return table
 
 
-def _write_session_corners(session: Session, table: CornerTable) -> None:
+def session_corner_meta(session: Session, records: Sequence[Any], captures_sha: str) -> dict[str, str]:
+    """The head of a session's corners.vnl before the image stats: captures' hash, board, each view's image hash."""
+    return {"captures_sha256": captures_sha, "board": _board_key(session.board()), **hash_meta(records)}
+
+
+def session_corner_table(names: list[str], results: dict[str, ViewResult], n_corners: int, meta: dict[str, str]) -> CornerTable:
+    """The table ``lps detect`` writes: ``meta`` (with the image stats) and the count of each detection method."""
+    methods = [r.method for r in results.values()]
+    labels = {"track": "tracked", "full": "full", "charuco": "charuco", "kept": "kept", "failed": "failed"}
+    meta = {**meta, "detection": ", ".join(f"{label} {methods.count(m)}" for m, label in labels.items() if m == "track" or m in methods)}
+    return _table(names, results, n_corners, meta)
+
+
+def write_session_corners(session: Session, table: CornerTable) -> None:
     """corners.vnl under the session lock (a capture or another detection may be writing)."""
     from lps_gui.io.session_lock import SessionLock
 

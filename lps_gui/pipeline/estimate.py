@@ -93,6 +93,12 @@ def observations_from_session(session: Session, intrinsics: CameraIntrinsics | N
     in_order = len(order) == len(table.names) and bool((order == np.arange(len(order))).all())
     corners = table.corners_px if in_order else table.corners_px[order]
     check_view_geometry(corners, [r.file for r in records], session.corners_path)
+    return observations_of_views(session, board, intr, records, corners, table.sha256)
+
+
+def observations_of_views(session: Session, board: Any, intr: CameraIntrinsics, records: list[Any], corners: np.ndarray,
+                          sha256: str | None = None) -> Observations:
+    """The observations of ``records`` with their ``corners`` (K, N, 2): the file's, or a live capture's so far."""
     approach = None
     if session.planar:
         approach_by_index = {s.index: s.approach for s in session.plan().stops()}
@@ -107,7 +113,7 @@ def observations_from_session(session: Session, intrinsics: CameraIntrinsics | N
         index=[r.index for r in records],
         names=[r.file for r in records],
         source=str(session.corners_path),
-        source_sha256=table.sha256,
+        source_sha256=sha256,
         approach=approach,
     )
 

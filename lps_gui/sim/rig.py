@@ -63,11 +63,20 @@ class RigStage(SimulatedStage):
 
 
 class RigCamera(SimulatedCamera):
-    """A :class:`SimulatedCamera` whose image noise is seeded by the capture index."""
+    """A :class:`SimulatedCamera` whose image noise is seeded by the capture index.
+
+    ``faults``: an :class:`~lps_gui.sim.faults.InjectedFaults`, told the index of every grab.
+    """
+
+    def __init__(self, *args: Any, faults: Any = None, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.faults = faults
 
     def seed_capture(self, key: int) -> None:
         """Seed the noise of the next grab (capture ``key``)."""
         self._rng = np.random.default_rng([self.seed, int(key), _CAMERA_STREAM])
+        if self.faults is not None:
+            self.faults.at(key)
 
     def rendered_pose(self) -> Any:
         """The pose the last frame was rendered at (a ringing stage has moved on by the end of the exposure)."""
@@ -114,7 +123,7 @@ def make_simulated_rig(
         (``blur_px``, ``exposure_s``...) to the camera's renderer.
     """
     clock = clock if clock is not None else SimClock()
-    stage_keys = {"max_rate_mm_min", "accel_mm_s2", "homing_required", "soft_limits", "vibration"}
+    stage_keys = {"max_rate_mm_min", "accel_mm_s2", "homing_required", "soft_limits", "vibration"}  # "faults": the camera's
     stage_opts = {k: v for k, v in options.items() if k in stage_keys}
     camera_opts = {k: v for k, v in options.items() if k not in stage_keys}
     if spec.plan.planar:

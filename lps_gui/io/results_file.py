@@ -24,7 +24,6 @@ from lps_gui import __version__
 from lps_gui.errors import InputError, LpsError
 from lps_gui.io.file_set import JOURNAL, recover_file_set, write_file_set
 from lps_gui.io.jsonfile import json_bytes, read_json
-from lps_gui.io.results_checks import check_results
 
 FORMAT = "lps-results/1"
 RESULTS_FILE = "results.json"
@@ -385,8 +384,11 @@ def _result_names(path: Path) -> tuple[Path, dict[str, str]]:
                          "results": path.name}
 
 
-def read_results(path: Path | str) -> dict[str, Any]:
-    """Read results.json (a folder is taken to hold one)."""
+def read_results_document(path: Path | str) -> tuple[Path, dict[str, Any]]:
+    """(the file, its JSON object) of results.json (a folder is taken to hold one), after a killed commit is finished.
+
+    The file as data; :func:`lps_gui.io.results_model.read_results` reads it into typed sections (and checks them).
+    """
     path = Path(path)
     if path.is_dir():
         path = path / RESULTS_FILE
@@ -400,5 +402,4 @@ def read_results(path: Path | str) -> dict[str, Any]:
     data = read_json(path, "results file", follow_symlinks=False)  # lps writes it, never as a link
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise InputError(f"{path}: not an {FORMAT} file; re-run `lps estimate`")
-    check_results(data, str(path))
-    return data
+    return path, data

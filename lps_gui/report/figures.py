@@ -19,7 +19,8 @@ import numpy as np
 
 from lps_gui.report.figure_spec import (BACKWARD_COLOR, COMPONENT_COLORS, DIRECTION_ARROWS, DIRECTION_NAMES,
                                         FORWARD_COLOR, IMAGE_ROTATION_COLOR, SPEC_COLOR, TRUTH_COLOR,
-                                        TRUTH_COLORS, FigureSpec, Series, num_or_nan)
+                                        TRUTH_COLORS, FigureSpec, Series)
+from lps_gui.io.results_model import Results, as_results
 from lps_gui.report.planar_figures import planar_figures_from_results
 from lps_gui.sim.truth import centred, residual_from_line, true_deviation_um
 
@@ -32,22 +33,23 @@ FIGURE_KEYS = ("positions", "deviation", "step", "straightness", "angles", "resi
 # ----------------------------------------------------------------------------- table access
 
 
-def position_columns(results: dict[str, Any]) -> dict[str, np.ndarray]:
+def position_columns(results: Results | dict[str, Any]) -> dict[str, np.ndarray]:
     """The per-position table of a results dict as arrays (NaN where absent).
 
     Returns float arrays (shape (K,)) for every numeric column, ``direction``
     as a str array, ``outlier`` as bool, sorted by capture index.
     """
-    rows = sorted(results.get("positions") or [], key=lambda r: r.get("index", 0))
+    results = as_results(results)
+    rows = results.sorted_positions()
     numeric = ("index", "run", "target_mm", "measured_mm", "deviation_um", "sigma_um", "sigma_total_um",
                "rms_px", "n_corners", "straightness_um_1", "straightness_um_2", "straightness_sigma_um_1",
                "straightness_sigma_um_2", "roll_urad", "pitch_urad", "yaw_urad", "roll_sigma_urad",
                "pitch_sigma_urad", "yaw_sigma_urad", "image_rotation_urad", "image_rotation_sigma_urad")
     cols: dict[str, np.ndarray] = {}
     for name in numeric:
-        cols[name] = np.array([num_or_nan(r.get(name)) for r in rows], dtype=float)
-    cols["direction"] = np.array([str(r.get("direction", "+")) for r in rows], dtype=object)
-    cols["outlier"] = np.array([bool(r.get("outlier", False)) for r in rows], dtype=bool)
+        cols[name] = results.column(name, rows)
+    cols["direction"] = np.array([r.direction for r in rows], dtype=object)
+    cols["outlier"] = np.array([r.outlier for r in rows], dtype=bool)
     return cols
 
 
@@ -81,7 +83,7 @@ def per_target_stats(target_mm: np.ndarray, value: np.ndarray, keep: np.ndarray)
 # ----------------------------------------------------------------------------- truth
 
 
-def truth_columns(results: dict[str, Any], truth: dict[str, Any] | None) -> dict[str, np.ndarray] | None:
+def truth_columns(results: Results | dict[str, Any], truth: dict[str, Any] | None) -> dict[str, np.ndarray] | None:
     """Truth per capture, reduced like the measurement; None for a real session.
 
     The estimator puts truth beside each position (``truth_deviation_um``,
@@ -94,9 +96,10 @@ def truth_columns(results: dict[str, Any], truth: dict[str, Any] | None) -> dict
     (zero at the reference capture), ``straightness_um_1/2`` (linear trend
     removed), ``roll/pitch/yaw_urad`` (mean removed).
     """
-    rows = sorted(results.get("positions") or [], key=lambda r: r.get("index", 0))
+    results = as_results(results)
+    rows = results.sorted_positions()
     if rows and any(r.get("truth_deviation_um") is not None for r in rows):
-        return {key: np.array([num_or_nan(r.get(f"truth_{key}")) for r in rows], dtype=float) for key in TRUTH_KEYS}
+        return {key: results.column(f"truth_{key}", rows) for key in TRUTH_KEYS}
     if not truth or "positions_mm" not in truth:
         return None
     cols = position_columns(results)
@@ -107,7 +110,7 @@ def truth_columns(results: dict[str, Any], truth: dict[str, Any] | None) -> dict
     compared = ~cols["outlier"]
     if not compared.any():
         return None
-    ref_index = (results.get("parameters") or {}).get("reference_index")
+    ref_index = results.parameters.reference_index
     ref = int(np.flatnonzero(idx == ref_index)[0]) if ref_index in set(idx.tolist()) else int(np.flatnonzero(compared)[0])
     out: dict[str, np.ndarray] = {"deviation_um": true_deviation_um(s_true_mm[idx], cols["target_mm"], ref)}
     straight = np.asarray(truth.get("straightness_um") or np.zeros((s_true_mm.size, 2)), dtype=float)[idx]
@@ -121,21 +124,22 @@ def truth_columns(results: dict[str, Any], truth: dict[str, Any] | None) -> dict
 # ----------------------------------------------------------------------------- figures
 
 
-def figures_from_results(results: dict[str, Any], truth: dict[str, Any] | None = None) -> list[FigureSpec]:
+def figures_from_results(results: Results | dict[str, Any], truth: dict[str, Any] | None = None) -> list[FigureSpec]:
     """Every report figure of a results dict, in report order (keys: :data:`FIGURE_KEYS`).
 
     Parameters
     ----------
-    results : dict
-        results.json content.
+    results : Results
+        results.json read (a results dict is read into one).
     truth : dict, optional
         The session's ``truth`` record (simulated sessions); drawn dashed beside
-        the measurement. Without it, ``results["truth"]`` is used when present.
+        the measurement. Without it, a ``truth`` section of the results is used when present.
     """
-    if len(results.get("axes") or ["X"]) == 2:  # a planar session (SPEC 10)
+    results = as_results(results)
+    if results.planar:  # a planar session (SPEC 10)
         return planar_figures_from_results(results)
     cols = position_columns(results)
-    truth = truth if truth is not None else results.get("truth")
+    truth = truth if truth is not None else results.extra.get("truth")
     tcols = truth_columns(results, truth)
     return [
         positions_figure(cols),
@@ -310,18 +314,18 @@ def residuals_figure(cols: dict[str, np.ndarray]) -> FigureSpec:
                       f"{n_out} view(s) flagged as outliers (red crosses)" if n_out else "no view flagged")
 
 
-def spectrum_figure(results: dict[str, Any]) -> FigureSpec:
+def spectrum_figure(results: Results | dict[str, Any]) -> FigureSpec:
     """Amplitude spectrum of the deviation: a lead-screw pitch shows as a peak."""
-    single = ((results.get("figures") or {}).get("single_run") or {})
-    spec = single.get("spectrum") or {}
-    period = np.asarray(spec.get("period_mm") or [], dtype=float)
-    amp = np.asarray(spec.get("amplitude_um") or [], dtype=float)
+    single = as_results(results).figures.single_run
+    spec = single.spectrum if single else None
+    period = np.asarray(spec.period_mm if spec else [], dtype=float)
+    amp = np.asarray(spec.amplitude_um if spec else [], dtype=float)
     order = np.argsort(period)
     series = [Series(period[order], amp[order], "amplitude", "line+markers", FORWARD_COLOR)] if period.size else []
     notes = ""
-    if single.get("periodic_period_mm"):
-        notes = (f"strongest period {float(single['periodic_period_mm']):.3g} mm, "
-                 f"amplitude {float(single.get('periodic_amplitude_um') or 0):.3g} \u00b5m")
+    if single and single.periodic_period_mm:
+        notes = (f"strongest period {single.periodic_period_mm:.3g} mm, "
+                 f"amplitude {single.periodic_amplitude_um or 0:.3g} \u00b5m")
     return FigureSpec("spectrum", "Error spectrum of the deviation", "period [mm]", "amplitude [\u00b5m]", series,
                       notes, x_log=True)
 

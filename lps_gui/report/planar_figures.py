@@ -13,21 +13,23 @@ from typing import Any
 
 import numpy as np
 
-from lps_gui.report.figure_spec import FORWARD_COLOR, TRUTH_COLOR, FigureSpec, Series, num_or_nan
+from lps_gui.io.results_model import Results, as_results
+from lps_gui.report.figure_spec import FORWARD_COLOR, TRUTH_COLOR, FigureSpec, Series
 
 PLANAR_FIGURE_KEYS = ("error_map", "deviation_x", "deviation_y", "straightness_x", "straightness_y", "residuals")
 LINE_COLORS = ("#1f5fbf", "#d4600a", "#2a9d3a", "#8e3bb5", "#b8860b", "#17a2b8", "#c0392b", "#555555")
 ARROW_FRACTION = 0.8  # the longest arrow spans this fraction of the grid step
 
 
-def planar_columns(results: dict[str, Any]) -> dict[str, np.ndarray]:
+def planar_columns(results: Results | dict[str, Any]) -> dict[str, np.ndarray]:
     """The planar per-position table as arrays, sorted by capture index."""
-    rows = sorted(results.get("positions") or [], key=lambda r: r.get("index", 0))
+    results = as_results(results)
+    rows = results.sorted_positions()
     names = ("index", "run", "target_x_mm", "target_y_mm", "deviation_x_um", "deviation_y_um", "sigma_x_um",
              "sigma_y_um", "rms_px", "truth_deviation_x_um", "truth_deviation_y_um")
-    cols = {n: np.array([num_or_nan(r.get(n)) for r in rows], dtype=float) for n in names}
-    cols["direction"] = np.array([str(r.get("direction", "+")) for r in rows], dtype=object)
-    cols["outlier"] = np.array([bool(r.get("outlier", False)) for r in rows], dtype=bool)
+    cols = {n: results.column(n, rows) for n in names}
+    cols["direction"] = np.array([r.direction for r in rows], dtype=object)
+    cols["outlier"] = np.array([r.outlier for r in rows], dtype=bool)
     return cols
 
 
@@ -43,14 +45,15 @@ def nice_exaggeration(longest_um: float, step_mm: float) -> float:
     return float(10**k)
 
 
-def error_map_figure(results: dict[str, Any]) -> FigureSpec:
+def error_map_figure(results: Results | dict[str, Any]) -> FigureSpec:
     """Mean 2-D error vector at every grid node, exaggerated (scale in the title)."""
-    nodes = ((results.get("figures") or {}).get("planar") or {}).get("nodes") or []
-    have = [n for n in nodes if n.get("error_um")]
+    planar = as_results(results).figures.planar
+    nodes = planar.nodes if planar else ()
+    have = [n for n in nodes if n.error_um]
     if not have:
         return FigureSpec("error_map", "2-D error map", "X target [mm]", "Y target [mm]", [])
-    t = np.array([n["target_mm"] for n in have], dtype=float)  # shape (m, 2)
-    e = np.array([n["error_um"] for n in have], dtype=float)  # shape (m, 2) um
+    t = np.array([n.target_mm for n in have], dtype=float)  # shape (m, 2)
+    e = np.array([n.error_um for n in have], dtype=float)  # shape (m, 2) um
     steps = [np.min(np.diff(np.unique(t[:, a]))) for a in range(2) if np.unique(t[:, a]).size > 1]
     step = float(min(steps)) if steps else 1.0
     longest = float(np.max(np.hypot(e[:, 0], e[:, 1])))
@@ -60,10 +63,10 @@ def error_map_figure(results: dict[str, Any]) -> FigureSpec:
     y = np.column_stack([t[:, 1], tip[:, 1], np.full(len(t), np.nan)]).ravel()
     series = [Series(t[:, 0], t[:, 1], "grid node (target)", "markers", "#777777"),
               Series(x, y, "mean error", "line", FORWARD_COLOR)]
-    truth = [n for n in nodes if n.get("truth_error_um")]
+    truth = [n for n in nodes if n.truth_error_um]
     if truth:
-        tt = np.array([n["target_mm"] for n in truth], float)
-        te = np.array([n["truth_error_um"] for n in truth], float)
+        tt = np.array([n.target_mm for n in truth], float)
+        te = np.array([n.truth_error_um for n in truth], float)
         ttip = tt + k * te * 1e-3
         series.append(Series(np.column_stack([tt[:, 0], ttip[:, 0], np.full(len(tt), np.nan)]).ravel(),
                              np.column_stack([tt[:, 1], ttip[:, 1], np.full(len(tt), np.nan)]).ravel(),
@@ -121,8 +124,9 @@ def planar_residuals_figure(cols: dict[str, np.ndarray]) -> FigureSpec:
     return FigureSpec("residuals", "Reprojection error per view", "capture index", "RMS [px]", series)
 
 
-def planar_figures_from_results(results: dict[str, Any]) -> list[FigureSpec]:
+def planar_figures_from_results(results: Results | dict[str, Any]) -> list[FigureSpec]:
     """Every figure of a planar session, in report order (keys: :data:`PLANAR_FIGURE_KEYS`)."""
+    results = as_results(results)
     cols = planar_columns(results)
     return [error_map_figure(results), deviation_axis_figure(cols, 0), deviation_axis_figure(cols, 1),
             straightness_planar_figure(cols, 0), straightness_planar_figure(cols, 1), planar_residuals_figure(cols)]

@@ -494,7 +494,8 @@ class Results(Section):
 
     def column(self, key: str, rows: Any = None) -> np.ndarray:
         """One numeric column of the positions (``rows``, default all in file order), NaN where absent, shape (K,)."""
-        return np.array([np.nan if (v := r.number(key)) is None else v for r in (rows or self.positions)], dtype=float)
+        rows = self.positions if rows is None else rows
+        return np.array([np.nan if (v := r.number(key)) is None else v for r in rows], dtype=float)
 
     def to_dict(self) -> dict[str, Any]:
         """The document as JSON data: the sections' objects in the order read, unknown sections kept.

@@ -33,21 +33,21 @@ FIGURE_KEYS = ("positions", "deviation", "step", "straightness", "angles", "resi
 # ----------------------------------------------------------------------------- table access
 
 
-def position_columns(results: Results | dict[str, Any]) -> dict[str, np.ndarray]:
-    """The per-position table of a results dict as arrays (NaN where absent).
+def position_columns(results: Results | dict[str, Any] | None) -> dict[str, np.ndarray]:
+    """The per-position table of the results as arrays (NaN where absent; no rows without results).
 
     Returns float arrays (shape (K,)) for every numeric column, ``direction``
     as a str array, ``outlier`` as bool, sorted by capture index.
     """
-    results = as_results(results)
-    rows = results.sorted_positions()
+    results = None if results is None else as_results(results)
+    rows = results.sorted_positions() if results is not None else []
     numeric = ("index", "run", "target_mm", "measured_mm", "deviation_um", "sigma_um", "sigma_total_um",
                "rms_px", "n_corners", "straightness_um_1", "straightness_um_2", "straightness_sigma_um_1",
                "straightness_sigma_um_2", "roll_urad", "pitch_urad", "yaw_urad", "roll_sigma_urad",
                "pitch_sigma_urad", "yaw_sigma_urad", "image_rotation_urad", "image_rotation_sigma_urad")
     cols: dict[str, np.ndarray] = {}
     for name in numeric:
-        cols[name] = results.column(name, rows)
+        cols[name] = results.column(name, rows) if results is not None else np.zeros(0)
     cols["direction"] = np.array([r.direction for r in rows], dtype=object)
     cols["outlier"] = np.array([r.outlier for r in rows], dtype=bool)
     return cols
@@ -83,7 +83,7 @@ def per_target_stats(target_mm: np.ndarray, value: np.ndarray, keep: np.ndarray)
 # ----------------------------------------------------------------------------- truth
 
 
-def truth_columns(results: Results | dict[str, Any], truth: dict[str, Any] | None) -> dict[str, np.ndarray] | None:
+def truth_columns(results: Results | dict[str, Any] | None, truth: dict[str, Any] | None) -> dict[str, np.ndarray] | None:
     """Truth per capture, reduced like the measurement; None for a real session.
 
     The estimator puts truth beside each position (``truth_deviation_um``,
@@ -96,6 +96,8 @@ def truth_columns(results: Results | dict[str, Any], truth: dict[str, Any] | Non
     (zero at the reference capture), ``straightness_um_1/2`` (linear trend
     removed), ``roll/pitch/yaw_urad`` (mean removed).
     """
+    if results is None:
+        return None
     results = as_results(results)
     rows = results.sorted_positions()
     if rows and any(r.get("truth_deviation_um") is not None for r in rows):
@@ -124,22 +126,24 @@ def truth_columns(results: Results | dict[str, Any], truth: dict[str, Any] | Non
 # ----------------------------------------------------------------------------- figures
 
 
-def figures_from_results(results: Results | dict[str, Any], truth: dict[str, Any] | None = None) -> list[FigureSpec]:
+def figures_from_results(results: Results | dict[str, Any] | None, truth: dict[str, Any] | None = None
+                         ) -> list[FigureSpec]:
     """Every report figure of a results dict, in report order (keys: :data:`FIGURE_KEYS`).
 
     Parameters
     ----------
-    results : Results
-        results.json read (a results dict is read into one).
+    results : Results, optional
+        results.json read (a results dict is read into one); None: the empty figures (titles and axes).
     truth : dict, optional
         The session's ``truth`` record (simulated sessions); drawn dashed beside
         the measurement. Without it, a ``truth`` section of the results is used when present.
     """
-    results = as_results(results)
-    if results.planar:  # a planar session (SPEC 10)
+    results = None if results is None else as_results(results)
+    if results is not None and results.planar:  # a planar session (SPEC 10)
         return planar_figures_from_results(results)
     cols = position_columns(results)
-    truth = truth if truth is not None else results.extra.get("truth")
+    if truth is None and results is not None:
+        truth = results.extra.get("truth")
     tcols = truth_columns(results, truth)
     return [
         positions_figure(cols),
@@ -314,9 +318,9 @@ def residuals_figure(cols: dict[str, np.ndarray]) -> FigureSpec:
                       f"{n_out} view(s) flagged as outliers (red crosses)" if n_out else "no view flagged")
 
 
-def spectrum_figure(results: Results | dict[str, Any]) -> FigureSpec:
+def spectrum_figure(results: Results | dict[str, Any] | None) -> FigureSpec:
     """Amplitude spectrum of the deviation: a lead-screw pitch shows as a peak."""
-    single = as_results(results).figures.single_run
+    single = as_results(results).figures.single_run if results is not None else None
     spec = single.spectrum if single else None
     period = np.asarray(spec.period_mm if spec else [], dtype=float)
     amp = np.asarray(spec.amplitude_um if spec else [], dtype=float)

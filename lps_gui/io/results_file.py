@@ -400,6 +400,8 @@ def read_results_document(path: Path | str) -> tuple[Path, dict[str, Any]]:
         except LpsError:  # a read-only copy: read what is there
             pass
     data = read_json(path, "results file", follow_symlinks=False)  # lps writes it, never as a link
-    if not isinstance(data, dict) or data.get("format") != FORMAT:
-        raise InputError(f"{path}: not an {FORMAT} file; re-run `lps estimate`")
+    if not isinstance(data, dict):
+        raise InputError(f"{path}: not an {FORMAT} file (not a JSON object); re-run `lps estimate`")
+    if data.get("format") != FORMAT:
+        raise InputError(f"{path}: not an {FORMAT} file ('format' is {data.get('format')!r}); re-run `lps estimate`")
     return path, data

@@ -71,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
 
     if (stale := stale_report_message(args.session)) and not args.out:
         print(stale, file=sys.stderr)
-    doubts = result_doubts(results)
+    doubts = result_doubts(results.parameters)
     for doubt in doubts:
         print(f"lps estimate: warning: {doubt}", file=sys.stderr)
     return EXIT_DOUBTFUL if doubts else 0

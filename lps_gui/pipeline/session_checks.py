@@ -15,7 +15,7 @@ from lps_gui.errors import InputError
 from lps_gui.io.atomic import sha256_file
 from lps_gui.io.corners_hashes import image_hashes, stale_views
 from lps_gui.io.corners_vnl import CornerTable
-from lps_gui.io.results_model import Results, as_results
+from lps_gui.io.results_model import Parameters, Results, as_results
 from lps_gui.io.session import SESSION_FILE, Session
 
 
@@ -108,9 +108,8 @@ def require_current_results(session_dir: Path | str, results: Results, command: 
 MAX_PLAUSIBLE_NOISE_PX = 5.0  # sub-pixel corners scatter ~0.1 px; 5 px means the model or the corners are wrong
 
 
-def result_doubts(results: Results | dict[str, Any]) -> list[str]:
-    """Why a finished estimate must not be trusted (empty when nothing is wrong)."""
-    p = as_results(results).parameters
+def result_doubts(p: Parameters) -> list[str]:
+    """Why a finished estimate (its fit: results ``parameters``) must not be trusted (empty when nothing is wrong)."""
     doubts = []
     if p.converged is False:
         iterations = "?" if p.iterations is None else p.iterations

@@ -80,8 +80,9 @@ def corners_needed(session_dir: Path) -> bool:
 
 
 def detect_and_estimate(session_dir: Path, method: str, options: dict[str, Any], intrinsics_path: Path | None,
-                        progress: Any, cancel: Any) -> dict[str, Any]:
-    """What the Estimate button runs: detect corners where images lack them, then estimate.
+                        progress: Any, cancel: Any) -> Results:
+    """What the Estimate button runs: detect corners where images lack them, then estimate (results read here,
+    on the worker thread: the GUI thread only shows them).
 
     Detection is incremental (views already in corners.vnl are kept), so a
     resumed capture only detects its new frames.
@@ -95,8 +96,8 @@ def detect_and_estimate(session_dir: Path, method: str, options: dict[str, Any],
                        workers=None if n >= PARALLEL_DETECTION_MIN_VIEWS else 1)
     from lps_gui.pipeline.estimate import estimate_session
 
-    return estimate_session(session_dir, method=method, options=options, intrinsics_path=intrinsics_path,
-                            progress=progress, cancel=cancel)
+    return as_results(estimate_session(session_dir, method=method, options=options, intrinsics_path=intrinsics_path,
+                                       progress=progress, cancel=cancel), str(Path(session_dir) / "results.json"))
 
 
 class EstimationPanel(QWidget):
@@ -227,8 +228,7 @@ class EstimationPanel(QWidget):
         if message:
             self.message.setText(message)
 
-    def _on_done(self, document: dict[str, Any], session: Path | None) -> None:
-        results = as_results(document, str(session or "results"))  # read once: every panel shows this one
+    def _on_done(self, results: Results, session: Path | None) -> None:
         self.show_results(results)
         self.message.setText("done")
         self.results_ready.emit(results, session)

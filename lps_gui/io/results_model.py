@@ -29,7 +29,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
-from typing import Any, Union
+from typing import Any, Callable, Union
 
 import numpy as np
 
@@ -43,6 +43,8 @@ PLANAR_KEYS = ("target_x_mm", "target_y_mm", "measured_x_mm", "measured_y_mm", "
 
 def _number(value: Any) -> float | None:
     """A finite float, else None (null, strings, bools and NaN are no figure)."""
+    if type(value) is float:
+        return value if math.isfinite(value) else None
     if value is None or isinstance(value, bool) or not isinstance(value, numbers.Real):
         return None
     f = float(value)
@@ -72,21 +74,21 @@ class Section:
         if not isinstance(data, Mapping):
             raise _bad(source, where or cls.__name__, data, "a JSON object")
         values: dict[str, Any] = {"raw": data}
-        for name, kind, required in _fields(cls):
-            path = f"{where}.{name}" if where else name
-            if name not in data or (data[name] is None and not required):
+        for name, convert, required in _fields(cls):
+            value = data.get(name)
+            if value is None:
                 if required:
-                    raise InputError(f"{source}: has no '{path}'; {FIX}")
+                    raise InputError(f"{source}: has no '{f'{where}.{name}' if where else name}'; {FIX}")
                 continue
-            values[name] = _convert(data[name], kind, path, source)
+            values[name] = convert(value, f"{where}.{name}" if where else name, source)
         return cls(**values)
 
 
 @lru_cache(maxsize=None)
-def _fields(cls: type) -> tuple[tuple[str, Any, bool], ...]:
-    """(name, type, required) of a section's fields but ``raw``; types resolved once per class."""
+def _fields(cls: type) -> tuple[tuple[str, Converter, bool], ...]:
+    """(name, conversion, required) of a section's fields but ``raw``; types resolved once per class."""
     hints = typing.get_type_hints(cls)
-    return tuple((f.name, hints[f.name], f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING)
+    return tuple((f.name, _converter(hints[f.name]), f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING)
                  for f in dataclasses.fields(cls) if f.name != "raw" and not f.metadata.get("not_read"))
 
 
@@ -95,51 +97,74 @@ def _bad(source: str, path: str, value: Any, what: str) -> InputError:
     return InputError(f"{source}: '{path}' is {text if len(text) < 40 else text[:37] + '...'}, not {what}; {FIX}")
 
 
-def _convert(value: Any, kind: Any, path: str, source: str) -> Any:
-    """``value`` as ``kind`` (a field's type): scalars checked, objects and lists converted recursively."""
+Converter = Callable[[Any, str, str], Any]
+
+
+@lru_cache(maxsize=None)
+def _converter(kind: Any) -> Converter:
+    """The conversion of one field type, built once per type (a long session has thousands of rows)."""
     origin = typing.get_origin(kind)
     if origin in (Union, types.UnionType):
-        options = [k for k in typing.get_args(kind) if k is not type(None)]
-        if value is None:
-            return None
-        return _convert(value, options[0], path, source)
+        inner = _converter(next(k for k in typing.get_args(kind) if k is not type(None)))
+        return lambda v, path, source: None if v is None else inner(v, path, source)
     if kind is Any:
-        return value
-    if kind is float:
-        if value is None:
-            return None
-        if isinstance(value, bool) or not isinstance(value, numbers.Real):
-            raise _bad(source, path, value, "a number")
-        return float(value)
-    if kind is int:
-        if isinstance(value, bool) or not isinstance(value, numbers.Real) or float(value) != int(value):
-            raise _bad(source, path, value, "a whole number")
-        return int(value)
-    if kind is bool:
-        if not isinstance(value, (bool, np.bool_)):
-            raise _bad(source, path, value, "true or false")
-        return bool(value)
-    if kind is str:
-        if not isinstance(value, str):
-            raise _bad(source, path, value, "a text")
-        return value
+        return lambda v, path, source: v
+    if kind in (float, int, bool, str):
+        return _SCALARS[kind]
     if origin is tuple:
         item = typing.get_args(kind)[0]
-        if not isinstance(value, (list, tuple)):
-            raise _bad(source, path, value, "a JSON list")
-        if item is Any:
-            return tuple(value)
-        return tuple(_convert(v, item, f"{path}[{i}]", source) for i, v in enumerate(value))
+        each = None if item is Any else _converter(item)
+
+        def as_tuple(v: Any, path: str, source: str) -> tuple[Any, ...]:
+            if not isinstance(v, (list, tuple)):
+                raise _bad(source, path, v, "a JSON list")
+            return tuple(v) if each is None else tuple(each(x, f"{path}[{i}]", source) for i, x in enumerate(v))
+        return as_tuple
     if origin is Mapping:
-        if not isinstance(value, Mapping):
-            raise _bad(source, path, value, "a JSON object")
         item = typing.get_args(kind)[1]
-        if item is Any:
-            return value
-        return {k: _convert(v, item, f"{path}.{k}", source) for k, v in value.items()}
+        each = None if item is Any else _converter(item)
+
+        def as_mapping(v: Any, path: str, source: str) -> Mapping[str, Any]:
+            if not isinstance(v, Mapping):
+                raise _bad(source, path, v, "a JSON object")
+            return v if each is None else {k: each(x, f"{path}.{k}", source) for k, x in v.items()}
+        return as_mapping
     if isinstance(kind, type) and issubclass(kind, Section):
-        return kind.from_dict(value, path, source)
-    raise TypeError(f"results_model: no conversion for {kind!r} ({path})")  # a field declared with a new type
+        return kind.from_dict
+    raise TypeError(f"results_model: no conversion for {kind!r}")  # a field declared with a new type
+
+
+def _real(v: Any) -> bool:
+    return type(v) is float or type(v) is int or (not isinstance(v, bool) and isinstance(v, numbers.Real))
+
+
+def _as_float(v: Any, path: str, source: str) -> float:
+    if not _real(v):
+        raise _bad(source, path, v, "a number")
+    return float(v)
+
+
+def _as_int(v: Any, path: str, source: str) -> int:
+    if type(v) is int:
+        return v
+    if not _real(v) or float(v) != int(v):
+        raise _bad(source, path, v, "a whole number")
+    return int(v)
+
+
+def _as_bool(v: Any, path: str, source: str) -> bool:
+    if not isinstance(v, (bool, np.bool_)):
+        raise _bad(source, path, v, "true or false")
+    return bool(v)
+
+
+def _as_str(v: Any, path: str, source: str) -> str:
+    if not isinstance(v, str):
+        raise _bad(source, path, v, "a text")
+    return v
+
+
+_SCALARS: dict[type, Converter] = {float: _as_float, int: _as_int, bool: _as_bool, str: _as_str}
 
 
 # ----------------------------------------------------------------------------- sections

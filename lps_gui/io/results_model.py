@@ -8,7 +8,7 @@ naming the file and the field (``figures.single_run.scale_ppm``), and gives:
 * every section as a frozen dataclass whose fields are the keys readers use,
   typed (``float | None`` for a figure JSON may hold as null);
 * an optional section that the document lacks as ``None``, a list as a tuple
-  (empty when absent), never a dict to ``.get(..) or {}`` through;
+  (empty when absent), never a dict to chain ``.get`` calls through;
 * every key kept: a section's whole object in ``raw`` (``section.get(key)``
   for the keys of an open set, e.g. ISO 230-2 figures by name), and unknown
   top-level sections (``targets``, error motions, ...) in ``Results.extra``;

@@ -7,7 +7,8 @@ from typing import TYPE_CHECKING
 from lps_gui.cli.option_types import positive_finite
 
 if TYPE_CHECKING:  # the command's help stays instant: no numpy before run()
-    from lps_gui.io.results_model import Results, SpanResolution
+    from lps_gui.io.results_model import Results
+    from lps_gui.io.results_sections import SpanResolution
 
 HELP = "estimate the stage's true positions from a session's corners (joint LM by default)"
 

@@ -22,7 +22,8 @@ from lps_gui.gui.plot_adapter import DrawnFigure, ReadableAxis, figure_steps
 from lps_gui.gui.view_detail import ViewDetail
 from lps_gui.gui.widgets import TextTable, ValueTable
 from lps_gui.gui.workers import Job
-from lps_gui.io.results_model import Position, Results, as_results
+from lps_gui.io.results_model import Results, as_results
+from lps_gui.io.results_sections import Position
 from lps_gui.report.figures import figures_from_results, position_columns
 
 log = logging.getLogger(__name__)

@@ -24,6 +24,7 @@ from lps_gui import __version__
 from lps_gui.errors import InputError, LpsError
 from lps_gui.io.file_set import JOURNAL, recover_file_set, write_file_set
 from lps_gui.io.jsonfile import json_bytes, read_json
+from lps_gui.io.typed_json import finite_number
 
 FORMAT = "lps-results/1"
 RESULTS_FILE = "results.json"
@@ -161,17 +162,6 @@ TRUTH_FIGURES = {
     "image_rotation_rms_error_urad": ("truth_image_rotation_rms_error", "Truth: image rotation error RMS", MU + "rad"),
     "image_rotation_z_mean_square": ("truth_image_rotation_z_mean_square", "Truth: image rotation mean (error/\u03c3)\u00b2", ""),
 }
-
-
-def finite_number(v: Any) -> float | None:
-    """A finite float, else None (strings, bools, lists and NaN are not figures)."""
-    if isinstance(v, bool):
-        return None
-    try:
-        f = float(v)
-    except (TypeError, ValueError):
-        return None
-    return f if math.isfinite(f) else None
 
 
 def iso_label(key: str) -> str:

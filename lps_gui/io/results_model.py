@@ -14,450 +14,30 @@ naming the file and the field (``figures.single_run.scale_ppm``), and gives:
   top-level sections (``targets``, error motions, ...) in ``Results.extra``;
   :meth:`Results.to_dict` gives the document back as read.
 
-Adding a section: a :class:`Section` subclass with its fields (defaults for
-every optional key) and one field on :class:`Results` (``name: Cls | None =
-None``); the converter reads the types, nothing else is registered.
+Adding a section: a :class:`~lps_gui.io.typed_json.Section` subclass in
+:mod:`lps_gui.io.results_sections` with its fields (defaults for every
+optional key) and one field on :class:`Results` (``name: Cls | None = None``);
+the converter (:mod:`lps_gui.io.typed_json`) reads the types, nothing else is registered.
 """
 from __future__ import annotations
 
 import dataclasses
-import math
-import numbers
-import types
-import typing
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from functools import lru_cache
 from pathlib import Path
-from typing import Any, Callable, Union
+from typing import Any
 
 import numpy as np
 
 from lps_gui.errors import InputError
+from lps_gui.io.results_sections import (BoardRecord, EnvironmentRecord, Figures, Flag, Inputs, IntrinsicsRecord,
+                                         Parameters, Position, Software, TruthComparison, Uncertainty)
+from lps_gui.io.typed_json import Section, finite_number, section_fields
 
-FIX = "re-run `lps estimate` on the session"
+FIX = Section.fix
 MAX_ABS_VALUE = 1e9  # mm or um: no stage measured by a camera is a kilometre long or off by one
 LINE_KEYS = ("target_mm", "measured_mm", "deviation_um")
 PLANAR_KEYS = ("target_x_mm", "target_y_mm", "measured_x_mm", "measured_y_mm", "deviation_x_um", "deviation_y_um")
-
-
-def _number(value: Any) -> float | None:
-    """A finite float, else None (null, strings, bools and NaN are no figure)."""
-    if type(value) is float:
-        return value if math.isfinite(value) else None
-    if value is None or isinstance(value, bool) or not isinstance(value, numbers.Real):
-        return None
-    f = float(value)
-    return f if math.isfinite(f) else None
-
-
-# ----------------------------------------------------------------------------- the converter
-
-
-@dataclass(frozen=True, kw_only=True)
-class Section:
-    """A JSON object as typed fields; the object itself in ``raw`` (nothing read is lost)."""
-
-    raw: Mapping[str, Any] = field(default_factory=dict, repr=False, compare=False)
-
-    def get(self, key: str, default: Any = None) -> Any:
-        """A key of the object as written (for keys of an open set: figures by name, columns)."""
-        return self.raw.get(key, default)
-
-    def number(self, key: str) -> float | None:
-        """``key``'s value as a finite float, None when absent, null or not a number."""
-        return _number(self.raw.get(key))
-
-    @classmethod
-    def from_dict(cls, data: Mapping[str, Any], where: str = "", source: str = "results") -> Any:
-        """The section of a JSON object; InputError naming ``source`` and the field at ``where`` otherwise."""
-        if not isinstance(data, Mapping):
-            raise _bad(source, where or cls.__name__, data, "a JSON object")
-        values: dict[str, Any] = {"raw": data}
-        for name, convert, required in _fields(cls):
-            value = data.get(name)
-            if value is None:
-                if required:
-                    raise InputError(f"{source}: has no '{f'{where}.{name}' if where else name}'; {FIX}")
-                continue
-            values[name] = convert(value, f"{where}.{name}" if where else name, source)
-        return cls(**values)
-
-
-@lru_cache(maxsize=None)
-def _fields(cls: type) -> tuple[tuple[str, Converter, bool], ...]:
-    """(name, conversion, required) of a section's fields but ``raw``; types resolved once per class."""
-    hints = typing.get_type_hints(cls)
-    return tuple((f.name, _converter(hints[f.name]), f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING)
-                 for f in dataclasses.fields(cls) if f.name != "raw" and not f.metadata.get("not_read"))
-
-
-def _bad(source: str, path: str, value: Any, what: str) -> InputError:
-    text = repr(value)
-    return InputError(f"{source}: '{path}' is {text if len(text) < 40 else text[:37] + '...'}, not {what}; {FIX}")
-
-
-Converter = Callable[[Any, str, str], Any]
-
-
-@lru_cache(maxsize=None)
-def _converter(kind: Any) -> Converter:
-    """The conversion of one field type, built once per type (a long session has thousands of rows)."""
-    origin = typing.get_origin(kind)
-    if origin in (Union, types.UnionType):
-        inner = _converter(next(k for k in typing.get_args(kind) if k is not type(None)))
-        return lambda v, path, source: None if v is None else inner(v, path, source)
-    if kind is Any:
-        return lambda v, path, source: v
-    if kind in (float, int, bool, str):
-        return _SCALARS[kind]
-    if origin is tuple:
-        item = typing.get_args(kind)[0]
-        each = None if item is Any else _converter(item)
-
-        def as_tuple(v: Any, path: str, source: str) -> tuple[Any, ...]:
-            if not isinstance(v, (list, tuple)):
-                raise _bad(source, path, v, "a JSON list")
-            return tuple(v) if each is None else tuple(each(x, f"{path}[{i}]", source) for i, x in enumerate(v))
-        return as_tuple
-    if origin is Mapping:
-        item = typing.get_args(kind)[1]
-        each = None if item is Any else _converter(item)
-
-        def as_mapping(v: Any, path: str, source: str) -> Mapping[str, Any]:
-            if not isinstance(v, Mapping):
-                raise _bad(source, path, v, "a JSON object")
-            return v if each is None else {k: each(x, f"{path}.{k}", source) for k, x in v.items()}
-        return as_mapping
-    if isinstance(kind, type) and issubclass(kind, Section):
-        return kind.from_dict
-    raise TypeError(f"results_model: no conversion for {kind!r}")  # a field declared with a new type
-
-
-def _real(v: Any) -> bool:
-    return type(v) is float or type(v) is int or (not isinstance(v, bool) and isinstance(v, numbers.Real))
-
-
-def _as_float(v: Any, path: str, source: str) -> float:
-    if not _real(v):
-        raise _bad(source, path, v, "a number")
-    return float(v)
-
-
-def _as_int(v: Any, path: str, source: str) -> int:
-    if type(v) is int:
-        return v
-    if not _real(v) or float(v) != int(v):
-        raise _bad(source, path, v, "a whole number")
-    return int(v)
-
-
-def _as_bool(v: Any, path: str, source: str) -> bool:
-    if not isinstance(v, (bool, np.bool_)):
-        raise _bad(source, path, v, "true or false")
-    return bool(v)
-
-
-def _as_str(v: Any, path: str, source: str) -> str:
-    if not isinstance(v, str):
-        raise _bad(source, path, v, "a text")
-    return v
-
-
-_SCALARS: dict[type, Converter] = {float: _as_float, int: _as_int, bool: _as_bool, str: _as_str}
-
-
-# ----------------------------------------------------------------------------- sections
-
-
-@dataclass(frozen=True, kw_only=True)
-class Software(Section):
-    name: str | None = None
-    version: str | None = None
-
-
-@dataclass(frozen=True, kw_only=True)
-class Inputs(Section):
-    """What the estimate read: the session folder, the hashes of its files, where the intrinsics came from."""
-
-    session: str | None = None
-    intrinsics_source: str | None = None
-    sha256: Mapping[str, Any] = field(default_factory=dict)
-
-
-@dataclass(frozen=True, kw_only=True)
-class BoardRecord(Section):
-    """The board as the estimate used it (``square_mm`` nominal at 20 C; ``environment.square_mm_used``)."""
-
-    type: str | None = None
-    inner_corners: tuple[int, ...] = ()
-    square_mm: float | None = None
-
-
-@dataclass(frozen=True, kw_only=True)
-class IntrinsicsRecord(Section):
-    """The camera intrinsics the estimate used, with their 1-sigma (``std``, by name) when known."""
-
-    image_size: tuple[int, ...] = ()
-    camera_matrix: tuple[tuple[float, ...], ...] = ()
-    dist: tuple[float, ...] = ()
-    std: Mapping[str, float | None] = field(default_factory=dict)
-    rms_px: float | None = None
-    n_views: int | None = None
-
-    @property
-    def K(self) -> np.ndarray:
-        """The camera matrix, shape (3, 3); the identity when the record has none."""
-        return np.asarray(self.camera_matrix, dtype=float) if self.camera_matrix else np.eye(3)
-
-
-@dataclass(frozen=True, kw_only=True)
-class Parameters(Section):
-    """The fit: its statistics (the stage line's vectors stay in ``raw``: R_cam_board, l0_cam_mm, n_cam, ...)."""
-
-    sigma_px: float | None = None
-    rms_px: float | None = None
-    n_views: int | None = None
-    n_used: int | None = None
-    n_outliers: int | None = None
-    n_observations: int | None = None
-    dof: int | None = None
-    iterations: int | None = None
-    converged: bool | None = None
-    reference_index: int | None = None
-
-
-@dataclass(frozen=True, kw_only=True)
-class Position(Section):
-    """One capture's row: identity and flags typed; measured columns by name (:meth:`Section.number`)."""
-
-    index: int
-    run: int | None = None
-    direction: str = "+"
-    outlier: bool = False
-    outlier_reason: str | None = None
-    used: bool | None = None
-    file: str | None = None
-
-    @property
-    def usable(self) -> bool:
-        """The estimate used this view (``used``; older files: not an outlier)."""
-        return self.used if self.used is not None else not self.outlier
-
-
-@dataclass(frozen=True, kw_only=True)
-class Flag(Section):
-    index: int | None = None
-    kind: str | None = None
-    message: str | None = None
-
-
-@dataclass(frozen=True, kw_only=True)
-class Spectrum(Section):
-    period_mm: tuple[float | None, ...] = ()
-    amplitude_um: tuple[float | None, ...] = ()
-    method: str | None = None
-
-
-@dataclass(frozen=True, kw_only=True)
-class SingleRun(Section):
-    """``figures.single_run``: the figures of all captures as one run (SPEC 5)."""
-
-    mean_step_mm: float | None = None
-    step_std_um: float | None = None
-    max_abs_deviation_um: float | None = None
-    deviation_span_um: float | None = None
-    scale_ppm: float | None = None
-    scale_sigma_ppm: float | None = None
-    scale_sigma_total_ppm: float | None = None
-    periodic_amplitude_um: float | None = None
-    periodic_period_mm: float | None = None
-    spectrum: Spectrum | None = None
-    notes: tuple[str, ...] = ()
-
-
-@dataclass(frozen=True, kw_only=True)
-class Iso230(Section):
-    """``figures.iso230_2``: E/M/B/R/A by name (``get("A_um")``; an open set), per-target table, notes."""
-
-    n_targets: int | None = None
-    n_runs_up: int | None = None
-    n_runs_down: int | None = None
-    per_target: Mapping[str, Any] | None = None
-    notes: tuple[str, ...] = ()
-
-
-@dataclass(frozen=True, kw_only=True)
-class SpanResolution(Section):
-    """A peak-to-valley over the targets and what noise alone would span (core/resolution.py)."""
-
-    span_um: float | None = None
-    sigma_um: float | None = None
-    noise_span_um: float | None = None
-    n_targets: int | None = None
-    resolved: bool | None = None
-
-
-@dataclass(frozen=True, kw_only=True)
-class Straightness(Section):
-    basis: str | None = None
-    v1: SpanResolution | None = None
-    v2: SpanResolution | None = None
-
-
-@dataclass(frozen=True, kw_only=True)
-class ImageRotation(Section):
-    span_urad: float | None = None
-    sigma_urad: float | None = None
-    noise_span_urad: float | None = None
-    n_targets: int | None = None
-    resolved: bool | None = None
-
-
-@dataclass(frozen=True, kw_only=True)
-class AngleResolution(Section):
-    max_abs_urad: float | None = None
-    noise_max_abs_urad: float | None = None
-    resolved: bool | None = None
-
-
-@dataclass(frozen=True, kw_only=True)
-class PlanarNode(Section):
-    """One grid node of the planar error map: mean error vector (um) at its target (mm)."""
-
-    target_mm: tuple[float, ...] = ()
-    n: int | None = None
-    error_um: tuple[float | None, ...] | None = None
-    sigma_um: Any = None
-    truth_error_um: tuple[float | None, ...] | None = None
-
-
-@dataclass(frozen=True, kw_only=True)
-class Figures(Section):
-    """``figures``: single-run, per-run, ISO 230-2, straightness and angle figures; ``planar`` for SPEC 10."""
-
-    single_run: SingleRun | None = None
-    per_run: tuple[Any, ...] = ()
-    iso230_2: Iso230 | None = None
-    straightness_um_max: float | None = None
-    straightness_span_um: tuple[float | None, ...] = ()
-    straightness_sigma_um: float | None = None
-    straightness: Straightness | None = None
-    image_rotation: ImageRotation | None = None
-    angles_resolution: Mapping[str, AngleResolution] = field(default_factory=dict)
-    angles_span_urad: Mapping[str, float | None] = field(default_factory=dict)
-    planar: PlanarFigures | None = None
-
-
-@dataclass(frozen=True, kw_only=True)
-class PlanarAxis(Section):
-    """``figures.planar.per_axis[X|Y]``: the worst line's straightness and ISO 230-2 block of one axis."""
-
-    lines: int | None = None
-    straightness_um_max: float | None = None
-    straightness_sigma_um: float | None = None
-    straightness: SpanResolution | None = None
-    out_of_plane: SpanResolution | None = None
-    iso230_2: Figures | None = None  # that axis's figures shaped like a line session's ``figures``
-
-
-@dataclass(frozen=True, kw_only=True)
-class PlanarFigures(Section):
-    """``figures.planar`` (SPEC 10): squareness, per-axis scales, the axes' figures, the grid's nodes."""
-
-    squareness_urad: float | None = None
-    squareness_sigma_urad: float | None = None
-    squareness_um_per_m: float | None = None
-    scale_x_ppm: float | None = None
-    scale_x_sigma_ppm: float | None = None
-    scale_y_ppm: float | None = None
-    scale_y_sigma_ppm: float | None = None
-    per_axis: Mapping[str, PlanarAxis] = field(default_factory=dict)
-    lines: tuple[Any, ...] = ()
-    nodes: tuple[PlanarNode, ...] = ()
-    notes: tuple[str, ...] = ()
-
-
-@dataclass(frozen=True, kw_only=True)
-class TruthComparison(Section):
-    """``truth_comparison`` (simulated sessions): the estimate against the simulator's truth.
-
-    An open set of figures (:meth:`numbers`); those that readers name are typed.
-    """
-
-    position_rms_error_um: float | None = None
-    position_max_abs_error_um: float | None = None
-    mean_sigma_um: float | None = None
-    median_sigma_um: float | None = None
-    z_mean_square: float | None = None
-    injected_outliers: tuple[Any, ...] = ()
-    flagged_outliers: tuple[Any, ...] = ()
-    board_plane_rms_error_um: float | None = None
-    board_plane_z_mean_square: float | None = None
-    abbe_rms_um: float | None = None
-    reference: str | None = None  # planar: the frame the errors are taken in
-    per_coordinate_rms_error_um: tuple[float | None, ...] | None = None
-    squareness_urad: float | None = None
-    squareness_error_urad: float | None = None
-    squareness_z: float | None = None
-    scale_x_error_ppm: float | None = None
-    scale_y_error_ppm: float | None = None
-    out_of_plane_rms_error_um: float | None = None
-    out_of_plane_z_mean_square: float | None = None
-
-    def numbers(self) -> list[tuple[str, float]]:
-        """(key, value) of every finite numeric figure, in the document's order."""
-        return [(k, v) for k, v in ((k, _number(v)) for k, v in self.raw.items()) if v is not None]
-
-
-@dataclass(frozen=True, kw_only=True)
-class EnvironmentRecord(Section):
-    """``environment``: the temperatures and coefficients recorded, and the thermal correction applied."""
-
-    board_temperature_c: float | None = None
-    board_cte_ppm_per_k: float | None = None
-    square_mm_uncertainty_um: float | None = None
-    stage_temperature_c: float | None = None
-    stage_cte_ppm_per_k: float | None = None
-    temperature_uncertainty_k: float | None = None
-    notes: str | None = None
-    reference_temperature_c: float | None = None
-    board_scale_correction_ppm: float | None = None
-    square_mm_nominal: float | None = None
-    square_mm_used: float | None = None
-
-
-@dataclass(frozen=True, kw_only=True)
-class BudgetRow(Section):
-    """One source of the GUM budget (core/uncertainty_budget.py)."""
-
-    source: str
-    type: str | None = None
-    value: float | None = None
-    unit: str | None = None
-    sensitivity: float | None = None
-    contribution_um: float | None = None
-    note: str | None = None
-
-
-@dataclass(frozen=True, kw_only=True)
-class Uncertainty(Section):
-    """``uncertainty``: the budget, U (k = 2) of every figure; a planar session's in ``per_axis``."""
-
-    budget: tuple[BudgetRow, ...] = ()
-    combined_standard_um: float | None = None
-    coverage_factor: float | None = None
-    expanded_k2_um: float | None = None
-    noise_standard_um: float | None = None
-    not_in_u: tuple[str, ...] = ()
-    applies_to: str | None = None
-    travel_mm: float | None = None
-    figures_k2: Mapping[str, float | None] = field(default_factory=dict)
-    per_axis: Mapping[str, Uncertainty] = field(default_factory=dict)
-
-    def u_k2(self, key: str) -> float | None:
-        """U (k = 2) of the figure ``key`` of ``figures_k2``, None when not assessed."""
-        return _number(self.figures_k2.get(key))
 
 
 # ----------------------------------------------------------------------------- the document
@@ -497,7 +77,7 @@ class Results(Section):
         if not data.get("positions"):
             raise InputError(f"{source}: has no per-position table (no 'positions'); {FIX}")
         results = super().from_dict(data, where, source)
-        known = {name for name, _, _ in _fields(cls)}
+        known = {name for name, _, _ in section_fields(cls)}
         extra = {k: v for k, v in data.items() if k not in known}
         results = dataclasses.replace(results, extra=extra, source=source)
         _check_measured(results)
@@ -527,7 +107,7 @@ class Results(Section):
 
         A section replaced (``dataclasses.replace(results, uncertainty=...)``) is written as its own object.
         """
-        names = [name for name, _, _ in _fields(type(self))]
+        names = [name for name, _, _ in section_fields(type(self))]
         out: dict[str, Any] = {}
         for name in [*self.raw, *(n for n in names if n not in self.raw), *self.extra]:
             if name in out:
@@ -563,7 +143,7 @@ def _check_measured(results: Results) -> None:
             value = row.raw.get(key)
             if value is None:  # not estimated (a method without that figure)
                 continue
-            if _number(value) is None or abs(float(value)) > MAX_ABS_VALUE:
+            if isinstance(value, str) or finite_number(value) is None or abs(float(value)) > MAX_ABS_VALUE:
                 raise InputError(f"{results.source}: position {i} ({key}) is {value!r}, not a measured value; {FIX}")
             measured += key.startswith("measured")
     if not measured:

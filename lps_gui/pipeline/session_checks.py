@@ -15,7 +15,8 @@ from lps_gui.errors import InputError
 from lps_gui.io.atomic import sha256_file
 from lps_gui.io.corners_hashes import image_hashes, stale_views
 from lps_gui.io.corners_vnl import CornerTable
-from lps_gui.io.results_model import Parameters, Results, as_results
+from lps_gui.io.results_model import Results, as_results
+from lps_gui.io.results_sections import Parameters
 from lps_gui.io.session import SESSION_FILE, Session
 
 

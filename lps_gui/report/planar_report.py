@@ -15,7 +15,8 @@ from dataclasses import replace
 from typing import Any
 
 from lps_gui.errors import InputError
-from lps_gui.io.results_model import Figures, Results, SpanResolution, TruthComparison, as_results
+from lps_gui.io.results_model import Results, as_results
+from lps_gui.io.results_sections import Figures, SpanResolution, TruthComparison
 from lps_gui.report import sections as R
 from lps_gui.report.planar_figures import planar_figures_from_results
 from lps_gui.report.summary import DASH, Row, fmt, table_cells

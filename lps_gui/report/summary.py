@@ -15,7 +15,8 @@ import numpy as np
 from lps_gui.core.camera_model import INTRINSIC_NAMES
 from lps_gui.io.results_file import SummaryFigure, extreme_figures, iso_figures, summary_figures
 from lps_gui.io.results_file import finite_number as _num
-from lps_gui.io.results_model import Iso230, Results, as_results
+from lps_gui.io.results_model import Results, as_results
+from lps_gui.io.results_sections import Iso230
 from lps_gui.report.figures import position_columns
 
 METHOD_NAMES = {"joint": "joint LM (all positions, orientation and line at once)",

@@ -11,7 +11,8 @@ from lps_gui.cli import main as lps_main
 from lps_gui.core.simulate import small_spec
 from lps_gui.errors import InputError
 from lps_gui.io.jsonfile import json_bytes
-from lps_gui.io.results_model import Results, Uncertainty, as_results, read_results
+from lps_gui.io.results_model import Results, as_results, read_results
+from lps_gui.io.results_sections import Uncertainty
 from lps_gui.pipeline.estimate import estimate_session
 from lps_gui.sim.points import simulate_point_session
 

@@ -152,7 +152,7 @@ def test_item11_the_exit_status_is_documented(capsys):
 
 
 def test_item11_non_convergence_is_reported():
-    from lps_gui.io.results_model import Parameters
+    from lps_gui.io.results_sections import Parameters
     from lps_gui.pipeline.session_checks import result_doubts
 
     assert result_doubts(Parameters.from_dict({"converged": True, "sigma_px": 0.2})) == []

@@ -17,10 +17,9 @@ def run(args: argparse.Namespace) -> int:
     from lps_gui.errors import InputError
     from lps_gui.pipeline.compensate import session_results
     from lps_gui.report.compare import comparison_rows, write_comparison
-    from lps_gui.report.pdf import load_results
 
     before, after = (session_results(folder, "compare") for folder in (args.before, args.after))
-    axes = [",".join(r.get("axes") or ["X"]) for r in (before, after)]
+    axes = [",".join(r.axes) for r in (before, after)]
     if axes[0] != axes[1]:
         raise InputError(f"lps compare: {args.before} measured {axes[0]} and {args.after} {axes[1]} (one planar, one a "
                          "line); compare two sessions of the same stage and axes")
@@ -32,7 +31,7 @@ def run(args: argparse.Namespace) -> int:
 
         args.out = resolve_out(args.out, "as-found-as-left.pdf", args.after, (".pdf",), "lps compare")
     path = write_comparison(args.before, args.after, args.out)
-    for name, b, a, factor in comparison_rows(load_results(args.before), load_results(args.after)):
+    for name, b, a, factor in comparison_rows(before, after):
         print(f"{name}: {b} -> {a} \u00b5m, improvement {factor}")
     print(f"report: {path}")
     return 0

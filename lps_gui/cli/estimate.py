@@ -2,8 +2,13 @@
 from __future__ import annotations
 
 import argparse
+from typing import TYPE_CHECKING
 
 from lps_gui.cli.option_types import positive_finite
+
+if TYPE_CHECKING:  # the command's help stays instant: no numpy before run()
+    from lps_gui.io.results_model import Results
+    from lps_gui.io.results_sections import SpanResolution
 
 HELP = "estimate the stage's true positions from a session's corners (joint LM by default)"
 
@@ -37,6 +42,7 @@ def run(args: argparse.Namespace) -> int:
 
     from lps_gui.cli.out_path import resolve_out
     from lps_gui.cli.progress_bar import ProgressBar
+    from lps_gui.io.results_model import as_results
     from lps_gui.io.session_lock import SessionLock
     from lps_gui.pipeline.estimate import estimate_session
     from lps_gui.pipeline.session_checks import result_doubts
@@ -56,16 +62,17 @@ def run(args: argparse.Namespace) -> int:
     if lock is not None:
         lock.__enter__()  # refused at once when a capture or detection holds the session
     try:
-        results = estimate_session(args.session, args.method, options, args.intrinsics, out, progress=ProgressBar("estimate"))
+        document = estimate_session(args.session, args.method, options, args.intrinsics, out, progress=ProgressBar("estimate"))
     finally:
         if lock is not None:
             lock.__exit__(None, None, None)
+    results = as_results(document, str(out or Path(args.session) / "results.json"))  # read once for the lines below
     print(format_summary(results))
     from lps_gui.io.results_history import stale_report_message
 
     if (stale := stale_report_message(args.session)) and not args.out:
         print(stale, file=sys.stderr)
-    doubts = result_doubts(results)
+    doubts = result_doubts(results.parameters)
     for doubt in doubts:
         print(f"lps estimate: warning: {doubt}", file=sys.stderr)
     return EXIT_DOUBTFUL if doubts else 0
@@ -76,84 +83,90 @@ def _g(value: object, spec: str) -> str:
     return format(value, spec) if isinstance(value, (int, float)) else "n/a"
 
 
-def format_planar_summary(results: dict) -> str:
+def _fit_line(results: Results, kind: str) -> str:
+    """"method joint: 30/30 views used, 0 outlier(s), corner noise 0.200 px, 0.05 s" (``kind``: " (planar X,Y)")."""
+    p = results.parameters
+    return (f"method {results.method}{kind}: {p.n_used}/{p.n_views} views used, {p.n_outliers} outlier(s), "
+            f"corner noise {_g(p.sigma_px, '.3f')} px, {_g(results.timings_s.get('total', 0.0), '.2f')} s")
+
+
+def _median(values: list[float]) -> float:
+    return sorted(values)[len(values) // 2]
+
+
+def format_planar_summary(results: Results) -> str:
     """The first lines of a planar session: squareness, per-axis scale, straightness, truth."""
-    p, pl = results["parameters"], results["figures"]["planar"]
-    lines = [
-        f"method {results['method']} (planar X,Y): {p['n_used']}/{p['n_views']} views used, {p['n_outliers']} outlier(s), "
-        f"corner noise {p['sigma_px']:.3f} px, {results['timings_s'].get('total', 0.0):.2f} s",
-        f"squareness {pl['squareness_urad']:+.1f} +- {pl['squareness_sigma_urad']:.1f} µrad "
-        f"({pl['squareness_um_per_m']:+.1f} µm/m), scale X {pl['scale_x_ppm']:+.1f} +- {pl['scale_x_sigma_ppm']:.1f} ppm, "
-        f"Y {pl['scale_y_ppm']:+.1f} +- {pl['scale_y_sigma_ppm']:.1f} ppm (1 sigma)",
-    ]
-    sig = [(r["sigma_x_um"], r["sigma_y_um"]) for r in results["positions"] if r["used"] and r["sigma_x_um"]]
-    if sig:
-        sx, sy = sorted(s[0] for s in sig), sorted(s[1] for s in sig)
-        lines.append(f"position sigma median x {sx[len(sx) // 2]:.2f} µm, y {sy[len(sy) // 2]:.2f} µm (1 sigma, noise only)")
     from lps_gui.core.resolution import not_resolved_text
 
-    def span_text(d: dict | None) -> str:
-        if not d or d.get("span_um") is None:
+    pl = results.figures.planar
+    lines = [_fit_line(results, " (planar X,Y)")]
+    if pl is not None:
+        lines.append(f"squareness {_g(pl.squareness_urad, '+.1f')} +- {_g(pl.squareness_sigma_urad, '.1f')} µrad "
+                     f"({_g(pl.squareness_um_per_m, '+.1f')} µm/m), scale X {_g(pl.scale_x_ppm, '+.1f')} +- "
+                     f"{_g(pl.scale_x_sigma_ppm, '.1f')} ppm, Y {_g(pl.scale_y_ppm, '+.1f')} +- "
+                     f"{_g(pl.scale_y_sigma_ppm, '.1f')} ppm (1 sigma)")
+    used = [r for r in results.positions if r.used and r.number("sigma_x_um")]
+    if used:
+        sx, sy = (_median([r.number(k) for r in used]) for k in ("sigma_x_um", "sigma_y_um"))
+        lines.append(f"position sigma median x {sx:.2f} µm, y {sy:.2f} µm (1 sigma, noise only)")
+
+    def span_text(d: SpanResolution | None) -> str:
+        if d is None or d.span_um is None:
             return "-"
-        return f"{d['span_um']:.2f} µm" if d.get("resolved") else not_resolved_text(d.get("noise_span_um"), "µm")
+        return f"{d.span_um:.2f} µm" if d.resolved else not_resolved_text(d.noise_span_um, "µm")
 
     for axis, other in (("X", "Y"), ("Y", "X")):
-        a = pl["per_axis"].get(axis)
+        a = pl.per_axis.get(axis) if pl else None
         if a:
-            iso = (a.get("iso230_2") or {}).get("iso230_2") or {}
-            extra = "".join(f", {k[:-3]} {iso[k]:.2f} µm" for k in ("A_um", "R_um", "E_um") if iso.get(k) is not None)
-            straight = span_text(a.get("straightness")) if a.get("straightness") else f"{a['straightness_um_max']:.2f} µm"
-            oop = f"; out of plane {span_text(a['out_of_plane'])}" if a.get("out_of_plane") else ""
-            lines.append(f"{axis}: {a['lines']} line(s), straightness along {other} {straight}{oop}{extra}")
-    for f in results["flags"]:
-        lines.append(f"outlier view {f['index']}: {f['message']}")
-    tc = results.get("truth_comparison") or {}
-    if tc.get("per_coordinate_rms_error_um"):
-        ex, ey = tc["per_coordinate_rms_error_um"]
-        lines.append(f"against truth ({tc['reference']}): RMS error x {ex:.2f} µm, y {ey:.2f} µm, mean reported sigma "
-                     f"{tc['mean_sigma_um']:.2f} µm; squareness error {tc['squareness_error_urad']:+.1f} µrad "
-                     f"({tc['squareness_z']:+.1f} sigma)")
+            iso = a.iso230_2.iso230_2 if a.iso230_2 else None
+            extra = "".join(f", {k[:-3]} {iso.number(k):.2f} µm" for k in ("A_um", "R_um", "E_um")
+                            if iso and iso.number(k) is not None)
+            straight = span_text(a.straightness) if a.straightness else f"{_g(a.straightness_um_max, '.2f')} µm"
+            oop = f"; out of plane {span_text(a.out_of_plane)}" if a.out_of_plane else ""
+            lines.append(f"{axis}: {a.lines} line(s), straightness along {other} {straight}{oop}{extra}")
+    lines += [f"outlier view {f.index}: {f.message}" for f in results.flags]
+    tc = results.truth_comparison
+    if tc and tc.per_coordinate_rms_error_um:
+        ex, ey = tc.per_coordinate_rms_error_um
+        lines.append(f"against truth ({tc.reference}): RMS error x {_g(ex, '.2f')} µm, y {_g(ey, '.2f')} µm, mean "
+                     f"reported sigma {_g(tc.mean_sigma_um, '.2f')} µm; squareness error "
+                     f"{_g(tc.squareness_error_urad, '+.1f')} µrad ({_g(tc.squareness_z, '+.1f')} sigma)")
     return "\n".join(lines)
 
 
-def format_summary(results: dict) -> str:
+def format_summary(results: Results) -> str:
     """A few lines a person reads first: what was measured and how well."""
-    if len(results.get("axes") or ["X"]) == 2:
+    if results.planar:
         return format_planar_summary(results)
-    p, fig = results["parameters"], results["figures"]
-    single = fig.get("single_run") or {}
-    lines = [
-        f"method {results['method']}: {p['n_used']}/{p['n_views']} views used, {p['n_outliers']} outlier(s), "
-        f"corner noise {_g(p['sigma_px'], '.3f')} px, {_g(results['timings_s'].get('total', 0.0), '.2f')} s",
-    ]
+    single, iso = results.figures.single_run, results.figures.iso230_2
+    lines = [_fit_line(results, "")]
     if single:
         lines.append(
-            f"mean step {_g(single.get('mean_step_mm'), '.5f')} mm (std {_g(single.get('step_std_um'), '.2f')} µm), "
-            f"max |deviation| {_g(single.get('max_abs_deviation_um'), '.2f')} µm, scale {_g(single.get('scale_ppm'), '+.1f')} ppm"
+            f"mean step {_g(single.mean_step_mm, '.5f')} mm (std {_g(single.step_std_um, '.2f')} µm), "
+            f"max |deviation| {_g(single.max_abs_deviation_um, '.2f')} µm, scale {_g(single.scale_ppm, '+.1f')} ppm"
         )
-    sig = [r["sigma_total_um"] for r in results["positions"] if r.get("sigma_total_um") is not None and r["used"]]
+    sig = [v for r in results.positions if (v := r.number("sigma_total_um")) is not None and r.used]
     if sig:
-        lines.append(f"position sigma (total) median {_g(sorted(sig)[len(sig) // 2], '.2f')} µm")
-    iso = fig.get("iso230_2") or {}
-    if iso.get("A_um") is not None or iso.get("E_um") is not None:
-        parts = [f"{k[:-3]} {_g(iso[k], '.2f')} µm" for k in ("A_um", "R_um", "E_um", "B_um", "M_um") if iso.get(k) is not None]
+        lines.append(f"position sigma (total) median {_g(_median(sig), '.2f')} µm")
+    if iso and (iso.number("A_um") is not None or iso.number("E_um") is not None):
+        parts = [f"{k[:-3]} {_g(iso.number(k), '.2f')} µm" for k in ("A_um", "R_um", "E_um", "B_um", "M_um")
+                 if iso.number(k) is not None]
         lines.append("ISO 230-2: " + ", ".join(parts))
     asme = results.get("asme_b5_64") or {}
     if asme.get("incremental_step") or asme.get("settling"):  # an ASME B5.64 test session (docs/asme-b5.64.md)
         from lps_gui.report.asme_pages import test_lines
 
         lines += [f"ASME B5.64: {line}" for line in test_lines(results)]
-    for f in results["flags"]:
-        lines.append(f"outlier view {f['index']}: {f['message']}")
-    tc = results.get("truth_comparison")
-    if tc and tc.get("position_rms_error_um") is not None:
+    lines += [f"outlier view {f.index}: {f.message}" for f in results.flags]
+    tc = results.truth_comparison
+    if tc and tc.position_rms_error_um is not None:
         lines.append(
-            f"against truth: position RMS error {_g(tc['position_rms_error_um'], '.2f')} µm "
-            f"(max {_g(tc['position_max_abs_error_um'], '.2f')} µm), mean reported sigma {_g(tc['mean_sigma_um'], '.2f')} µm"
+            f"against truth: position RMS error {_g(tc.position_rms_error_um, '.2f')} µm "
+            f"(max {_g(tc.position_max_abs_error_um, '.2f')} µm), mean reported sigma {_g(tc.mean_sigma_um, '.2f')} µm"
         )
-    if tc and tc.get("board_plane_rms_error_um") is not None:
+    if tc and tc.board_plane_rms_error_um is not None:
         lines.append(
-            f"against truth at the board plane (what a constant-orientation model sees; Abbe term RMS {_g(tc['abbe_rms_um'], '.2f')} µm): "
-            f"RMS error {_g(tc['board_plane_rms_error_um'], '.2f')} µm, mean (error/sigma)^2 {_g(tc['board_plane_z_mean_square'], '.2f')}"
+            f"against truth at the board plane (what a constant-orientation model sees; Abbe term RMS {_g(tc.abbe_rms_um, '.2f')} µm): "
+            f"RMS error {_g(tc.board_plane_rms_error_um, '.2f')} µm, mean (error/sigma)^2 {_g(tc.board_plane_z_mean_square, '.2f')}"
         )
     return "\n".join(lines)

@@ -17,15 +17,17 @@ from PySide6.QtWidgets import (
 
 from lps_gui.gui.widgets import PathPicker, ValueTable, add_rows, double_spin, fmt, stack
 from lps_gui.gui.workers import Job
+from lps_gui.io.results_model import Results, as_results
 
 METHODS = (("Joint LM (all positions at once)", "joint"), ("Hybrid (paper: PnP + LM + grid search)", "hybrid"),
            ("Per-view PnP", "pnp"))
 
 
-def parameter_rows(results: dict[str, Any]) -> list[tuple[str, str, str, str]]:
-    """(name, value, sigma, unit) rows summarizing a results dict."""
-    p = results.get("parameters") or {}
-    rows: list[tuple[str, str, str, str]] = [("method", str(results.get("method", "")), "", "")]
+def parameter_rows(results: Results | dict[str, Any]) -> list[tuple[str, str, str, str]]:
+    """(name, value, sigma, unit) rows summarizing the results."""
+    results = as_results(results)
+    p = results.parameters.raw  # the line's vectors (l0, n, rvec) by name
+    rows: list[tuple[str, str, str, str]] = [("method", str(results.method or ""), "", "")]
     for name, key, sig, unit in (
         ("noise sigma (a posteriori)", "sigma_px", None, "px"),
         ("RMS reprojection", "rms_px", None, "px"),
@@ -48,14 +50,14 @@ def parameter_rows(results: dict[str, Any]) -> list[tuple[str, str, str, str]]:
     rvs = p.get("rvec_sigma_rad") or [None] * 3
     for i, ax in enumerate("xyz"):
         rows.append((f"rotation {ax}", fmt(rv[i], 7), fmt(rvs[i], 2), "rad"))
-    single = ((results.get("figures") or {}).get("single_run") or {})
+    single = results.figures.single_run
     for name, key, unit in (("mean step", "mean_step_mm", "mm"), ("step std", "step_std_um", "µm"),
                             ("max |deviation|", "max_abs_deviation_um", "µm"), ("scale error", "scale_ppm", "ppm")):
-        if key in single:
-            rows.append((name, fmt(single.get(key)), "", unit))
-    truth = results.get("truth_comparison") or {}
-    if "position_rms_error_um" in truth:
-        rows.append(("position error vs truth (RMS)", fmt(truth["position_rms_error_um"]), "", "µm"))
+        if single and key in single.raw:
+            rows.append((name, fmt(getattr(single, key)), "", unit))
+    truth = results.truth_comparison
+    if truth and "position_rms_error_um" in truth.raw:
+        rows.append(("position error vs truth (RMS)", fmt(truth.position_rms_error_um), "", "µm"))
     return rows
 
 
@@ -78,8 +80,9 @@ def corners_needed(session_dir: Path) -> bool:
 
 
 def detect_and_estimate(session_dir: Path, method: str, options: dict[str, Any], intrinsics_path: Path | None,
-                        progress: Any, cancel: Any) -> dict[str, Any]:
-    """What the Estimate button runs: detect corners where images lack them, then estimate.
+                        progress: Any, cancel: Any) -> Results:
+    """What the Estimate button runs: detect corners where images lack them, then estimate (results read here,
+    on the worker thread: the GUI thread only shows them).
 
     Detection is incremental (views already in corners.vnl are kept), so a
     resumed capture only detects its new frames.
@@ -93,8 +96,8 @@ def detect_and_estimate(session_dir: Path, method: str, options: dict[str, Any],
                        workers=None if n >= PARALLEL_DETECTION_MIN_VIEWS else 1)
     from lps_gui.pipeline.estimate import estimate_session
 
-    return estimate_session(session_dir, method=method, options=options, intrinsics_path=intrinsics_path,
-                            progress=progress, cancel=cancel)
+    return as_results(estimate_session(session_dir, method=method, options=options, intrinsics_path=intrinsics_path,
+                                       progress=progress, cancel=cancel), str(Path(session_dir) / "results.json"))
 
 
 class EstimationPanel(QWidget):
@@ -145,7 +148,7 @@ class EstimationPanel(QWidget):
         stack(self, [inputs, opts, row, self.message, (self.table, 1)])
 
         self.job: Job | None = None
-        self.last_results: dict[str, Any] | None = None
+        self.last_results: Results | None = None
         self.method.currentIndexChanged.connect(self._method_changed)
         self.run_btn.clicked.connect(self.start)
         self.cancel_btn.clicked.connect(self.cancel)
@@ -225,12 +228,13 @@ class EstimationPanel(QWidget):
         if message:
             self.message.setText(message)
 
-    def _on_done(self, results: dict[str, Any], session: Path | None) -> None:
+    def _on_done(self, results: Results, session: Path | None) -> None:
         self.show_results(results)
         self.message.setText("done")
         self.results_ready.emit(results, session)
 
-    def show_results(self, results: dict[str, Any]) -> None:
+    def show_results(self, results: Results | dict[str, Any]) -> None:
+        results = as_results(results)
         self.last_results = results
         self.table.set_rows(parameter_rows(results))
 

@@ -34,6 +34,7 @@ from lps_gui.gui.stage_controller import StageController
 from lps_gui.gui.stage_panel import StagePanel
 from lps_gui.gui.workers import Job, one_line, stop_all_jobs
 from lps_gui.hardware.stage import StageStatus
+from lps_gui.io.results_model import Results
 
 log = logging.getLogger("lps_gui.gui")
 
@@ -250,7 +251,7 @@ class MainWindow(QMainWindow):
         self.runner.show_error(title, message)
 
     # ------------------------------------------------------------------ results and sessions
-    def _on_results(self, results: dict, session_dir: Path | None) -> None:
+    def _on_results(self, results: Results, session_dir: Path | None) -> None:
         out = session_dir
         self.results_panel.set_results(results, session_dir, out)
         self.show_panel("results")
@@ -276,7 +277,7 @@ class MainWindow(QMainWindow):
             self.show_panel("estimation")
             return False
         try:
-            from lps_gui.io.results_file import read_results
+            from lps_gui.io.results_model import read_results
 
             results = read_results(results_path)
         except Exception as exc:

@@ -10,19 +10,17 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
-
-def is_planar(results: dict[str, Any]) -> bool:
-    return len(results.get("axes") or ["X"]) == 2
+from lps_gui.io.results_model import Results
 
 
-def planar_table_rows(results: dict[str, Any]) -> list[tuple[str, str, str]] | None:
+def planar_table_rows(results: Results) -> list[tuple[str, str, str]] | None:
     """(figure, value, U (k = 2), unit and note) rows of a planar session's figures and truth check; None for one axis."""
-    if not is_planar(results) or not (results.get("figures") or {}).get("planar"):
+    if not results.planar or results.figures.planar is None:
         return None
     from lps_gui.report.planar_report import planar_summary_rows, planar_truth_rows
 
     rows = planar_summary_rows(results)
-    if (results.get("truth_comparison") or {}).get("position_rms_error_um") is not None:
+    if results.truth_comparison and results.truth_comparison.position_rms_error_um is not None:
         rows += [replace(r, name=f"Truth: {r.name}") for r in planar_truth_rows(results)]
     return [(r.name, r.text(), _u_text(r), f"{r.unit}  {r.note}".strip()) for r in rows]
 
@@ -32,9 +30,9 @@ def _u_text(row: Any) -> str:
     return u() if callable(u) else ""
 
 
-def position_table_for(results: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
+def position_table_for(results: Results) -> tuple[list[str], list[list[str]]]:
     """Header and rows of the per-position table, planar or single-axis."""
-    if is_planar(results):
+    if results.planar:
         from lps_gui.report.planar_report import planar_position_table
 
         return planar_position_table(results)[:2]

@@ -22,6 +22,8 @@ from lps_gui.gui.plot_adapter import DrawnFigure, ReadableAxis, figure_steps
 from lps_gui.gui.view_detail import ViewDetail
 from lps_gui.gui.widgets import TextTable, ValueTable
 from lps_gui.gui.workers import Job
+from lps_gui.io.results_model import Results, as_results
+from lps_gui.io.results_sections import Position
 from lps_gui.report.figures import figures_from_results, position_columns
 
 log = logging.getLogger(__name__)
@@ -43,7 +45,7 @@ class ResultsPanel(QWidget):
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
-        self.results: dict[str, Any] | None = None
+        self.results: Results | None = None
         self.session_dir: Path | None = None
         self.results_dir: Path | None = None
         self.drawn: dict[str, DrawnFigure] = {}
@@ -107,7 +109,7 @@ class ResultsPanel(QWidget):
         lay.addLayout(top)
         lay.addWidget(self.verdict)
         lay.addWidget(split, 1)
-        empty = figures_from_results({})
+        empty = figures_from_results(None)
         self._build_tabs(empty)
         for fig in empty:  # titles and axis labels from the start: the operator sees what will come
             for step in figure_steps(self.plots[fig.key].getPlotItem(), replace(fig, series=[]))[1]:
@@ -117,7 +119,7 @@ class ResultsPanel(QWidget):
         self.open_report_btn.clicked.connect(self.open_report)
 
     # ------------------------------------------------------------------ showing
-    def set_results(self, results: dict[str, Any], session_dir: Path | None = None,
+    def set_results(self, results: Results | dict[str, Any], session_dir: Path | None = None,
                     results_dir: Path | None = None) -> None:
         """Show ``results``: header at once, then one figure per event-loop turn.
 
@@ -125,12 +127,13 @@ class ResultsPanel(QWidget):
         turns keeps the window responsive (:attr:`drawing_done` when all are up).
         ``session_dir`` gives images, corners and truth.
         """
+        results = as_results(results)
         self.results = results
         self.session_dir = Path(session_dir) if session_dir else None
         self.results_dir = Path(results_dir) if results_dir else self.session_dir
         self._corners = None
         meta = self._session_meta()
-        spec = meta.get("stage_spec") or (results.get("session_meta") or {}).get("stage_spec")
+        spec = meta.get("stage_spec") or results.stage_spec
         figures = with_limits(figures_from_results(results, meta.get("truth")), spec)
         self._build_tabs(figures)
         for page in set(self._pages.values()):
@@ -222,16 +225,15 @@ class ResultsPanel(QWidget):
 
         return steps + [done]
 
-    def _header(self, results: dict[str, Any]) -> None:
-        p = results.get("parameters") or {}
-        cols = position_columns(results)
-        n_out = int(cols["outlier"].sum())
-        single = ((results.get("figures") or {}).get("single_run") or {})
-        maxdev = single.get("max_abs_deviation_um")
+    def _header(self, results: Results) -> None:
+        p = results.parameters
+        n_out = sum(r.outlier for r in results.positions)
+        single = results.figures.single_run
+        maxdev = single.max_abs_deviation_um if single else None
         self.header.setText(
-            f"<b>{results.get('method', '?')}</b> on {self.session_dir.name if self.session_dir else 'results'}: "
-            f"{len(cols['index'])} positions, {p.get('n_used', '?')} used, {n_out} outlier view(s); "
-            f"RMS {_f(p.get('rms_px'))} px"
+            f"<b>{results.method or '?'}</b> on {self.session_dir.name if self.session_dir else 'results'}: "
+            f"{len(results.positions)} positions, {'?' if p.n_used is None else p.n_used} used, {n_out} outlier view(s); "
+            f"RMS {_f(p.rms_px)} px"
             + (f"; peak deviation {_f(maxdev)} µm" if maxdev is not None else "")
             + ("<br><i>outliers beyond an axis are drawn at its edge</i>" if n_out else ""))
 
@@ -269,7 +271,7 @@ class ResultsPanel(QWidget):
             return False
         return bool(QDesktopServices.openUrl(QUrl.fromLocalFile(str(self.report_path))))
 
-    def _fill_tables(self, results: dict[str, Any]) -> None:
+    def _fill_tables(self, results: Results) -> None:
         from lps_gui.gui.planar_results import planar_table_rows
         from lps_gui.report.summary import summary_rows
 
@@ -282,7 +284,7 @@ class ResultsPanel(QWidget):
         self.iso_table.set_rows([(r.name, r.text(), r.u_text(), r.unit) for r in rows])
         self._grey_unresolved(rows)
 
-    def _fill_targets(self, results: dict[str, Any]) -> None:
+    def _fill_targets(self, results: Results) -> None:
         """The ISO 230-2 per-target table of the report (mean, s, R each way, reversal B), hidden without one."""
         from lps_gui.report.iso_table import iso_target_table
 
@@ -307,7 +309,7 @@ class ResultsPanel(QWidget):
                         item.setForeground(grey)
                         item.setToolTip(r.unresolved)
 
-    def _fill_positions(self, results: dict[str, Any]) -> None:
+    def _fill_positions(self, results: Results) -> None:
         """Format the per-position table on a worker thread (hundreds of rows), then show it."""
         from lps_gui.gui.planar_results import position_table_for
 
@@ -317,7 +319,7 @@ class ResultsPanel(QWidget):
         job.finished.connect(lambda: setattr(self, "_pending_table", False))
         job.start()
 
-    def _show_positions(self, table: tuple[list[str], list[list[str]]], results: dict[str, Any]) -> None:
+    def _show_positions(self, table: tuple[list[str], list[list[str]]], results: Results) -> None:
         if results is self.results:
             header, body = table
             self.position_table.set_rows([h.replace("\n", " ") for h in header], body)
@@ -350,7 +352,7 @@ class ResultsPanel(QWidget):
         fills in when they arrive.
         """
         assert self.results is not None
-        rows = [r for r in self.results.get("positions") or [] if int(r.get("index", -1)) == index]
+        rows = [r for r in self.results.positions if r.index == index]
         if not rows:
             return None
         row = rows[0]
@@ -382,11 +384,11 @@ class ResultsPanel(QWidget):
     def _corners_job_done(self) -> None:
         self._corners_job = None
 
-    def _detected(self, row: dict[str, Any]) -> tuple[np.ndarray | None, np.ndarray | None]:
+    def _detected(self, row: Position) -> tuple[np.ndarray | None, np.ndarray | None]:
         if not isinstance(self._corners, tuple):
             return None, None
         table, X = self._corners
-        name = str(row.get("file", ""))
+        name = row.file or ""
         idx = table.index()
         i = idx.get(name, idx.get(Path(name).name))
         return (None, None) if i is None else (table.corners_px[i], X)
@@ -423,7 +425,7 @@ def with_limits(figures: list[Any], spec: dict[str, Any] | None) -> list[Any]:
     return [with_spec_band(f, float(limit), plus_minus) if f.key == "deviation" else f for f in figures]
 
 
-def verdict_html(results: dict[str, Any], spec: dict[str, Any] | None) -> str:
+def verdict_html(results: Results, spec: dict[str, Any] | None) -> str:
     """One line per specification row, coloured like the report's verdict."""
     from lps_gui.report.summary import fmt
     from lps_gui.report.verdict import overall, verdicts

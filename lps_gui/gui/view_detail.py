@@ -8,7 +8,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pyqtgraph as pg
@@ -17,7 +16,10 @@ from PySide6.QtWidgets import QLabel, QVBoxLayout, QWidget
 
 from lps_gui.core.camera_model import project_board
 from lps_gui.core.lps_model import LpsLine
+from lps_gui.errors import InputError
 from lps_gui.io.image_file import decode_image
+from lps_gui.io.results_model import Results
+from lps_gui.io.results_sections import Position
 
 ARROW_GAIN = 50.0  # residual vectors drawn this many times longer than they are
 
@@ -35,7 +37,7 @@ class ViewResiduals:
         return self.detected_px - self.predicted_px  # shape (N, 2)
 
 
-def view_residuals(results: dict[str, Any], row: dict[str, Any], detected_px: np.ndarray,
+def view_residuals(results: Results, row: Position, detected_px: np.ndarray,
                    object_points: np.ndarray) -> ViewResiduals | None:
     """Residuals of one view under the fitted line, or None when the results lack the line.
 
@@ -44,17 +46,16 @@ def view_residuals(results: dict[str, Any], row: dict[str, Any], detected_px: np
     """
     from lps_gui.io.intrinsics_file import intrinsics_from_dict
 
-    p = results.get("parameters") or {}
+    p = results.parameters.raw  # the fitted line's vectors
     try:
         line = LpsLine(np.asarray(p["R_cam_board"], float).reshape(3, 3), np.asarray(p["l0_cam_mm"], float),
                        np.asarray(p["n_cam"], float))
-        intr = intrinsics_from_dict(results["intrinsics"], "results.json")
-        s_mm = float(row["measured_mm"])
-    except (KeyError, TypeError, ValueError):
+        intr = intrinsics_from_dict(results.intrinsics.raw if results.intrinsics else {}, "results.json")
+        s_mm = float(row.raw["measured_mm"])
+    except (KeyError, TypeError, ValueError, InputError):
         return None
-    positions = results.get("positions") or []
-    first = min(positions, key=lambda r: r.get("index", 0)) if positions else row
-    candidates = {s_mm, s_mm - float(first.get("measured_mm") or 0.0)}
+    first = min(results.positions, key=lambda r: r.index)
+    candidates = {s_mm, s_mm - (first.number("measured_mm") or 0.0)}
     best: ViewResiduals | None = None
     for s in candidates:
         t = line.translations(np.array([s]))[0]
@@ -91,23 +92,27 @@ class ViewDetail(QWidget):
         lay.addWidget(self.view, 1)
         self.shown_index: int | None = None
 
-    def show_view(self, session_dir: Path | None, results: dict[str, Any], row: dict[str, Any],
+    def show_view(self, session_dir: Path | None, results: Results, row: Position,
                   detected_px: np.ndarray | None, object_points: np.ndarray | None) -> None:
-        self.shown_index = int(row.get("index", -1))
-        text = (f"view {row.get('index')}  run {row.get('run')} {row.get('direction')}  "
-                f"target {float(row.get('target_mm', np.nan)):.3f} mm  deviation {float(row.get('deviation_um') or np.nan):.2f} µm  "
-                f"RMS {float(row.get('rms_px') or np.nan):.3f} px")
-        if row.get("outlier"):
-            text += f"  — OUTLIER: {row.get('outlier_reason') or 'flagged'}"
+        self.shown_index = row.index
+
+        def value(key: str) -> float:
+            v = row.number(key)
+            return np.nan if v is None else v
+
+        text = (f"view {row.index}  run {row.run} {row.direction}  "
+                f"target {value('target_mm'):.3f} mm  deviation {value('deviation_um'):.2f} µm  "
+                f"RMS {value('rms_px'):.3f} px")
+        if row.outlier:
+            text += f"  — OUTLIER: {row.outlier_reason or 'flagged'}"
         image = None
-        if session_dir is not None and row.get("file"):
-            path = Path(session_dir) / str(row["file"])
+        if session_dir is not None and row.file:
+            path = Path(session_dir) / row.file
             if path.exists():
-                from lps_gui.errors import InputError
                 from lps_gui.io.session_paths import read_session_file
 
                 try:  # inside the session, size and pixel count checked before decoding
-                    image = decode_image(read_session_file(session_dir, str(row["file"])), str(path))
+                    image = decode_image(read_session_file(session_dir, row.file), str(path))
                 except InputError:
                     image = None
         self.sensor.setData([], [])
@@ -117,7 +122,7 @@ class ViewDetail(QWidget):
         else:
             self.image.clear()
             text += "  (image not in the session)"
-            size = (results.get("intrinsics") or {}).get("image_size")
+            size = results.intrinsics.image_size if results.intrinsics else ()
             if size:  # show where the corners sit on the sensor
                 w, h = float(size[0]), float(size[1])
                 self.sensor.setData([0, w, w, 0, 0], [0, 0, h, h, 0])

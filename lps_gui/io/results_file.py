@@ -24,7 +24,7 @@ from lps_gui import __version__
 from lps_gui.errors import InputError, LpsError
 from lps_gui.io.file_set import JOURNAL, recover_file_set, write_file_set
 from lps_gui.io.jsonfile import json_bytes, read_json
-from lps_gui.io.results_checks import check_results
+from lps_gui.io.typed_json import finite_number
 
 FORMAT = "lps-results/1"
 RESULTS_FILE = "results.json"
@@ -162,17 +162,6 @@ TRUTH_FIGURES = {
     "image_rotation_rms_error_urad": ("truth_image_rotation_rms_error", "Truth: image rotation error RMS", MU + "rad"),
     "image_rotation_z_mean_square": ("truth_image_rotation_z_mean_square", "Truth: image rotation mean (error/\u03c3)\u00b2", ""),
 }
-
-
-def finite_number(v: Any) -> float | None:
-    """A finite float, else None (strings, bools, lists and NaN are not figures)."""
-    if isinstance(v, bool):
-        return None
-    try:
-        f = float(v)
-    except (TypeError, ValueError):
-        return None
-    return f if math.isfinite(f) else None
 
 
 def iso_label(key: str) -> str:
@@ -385,8 +374,11 @@ def _result_names(path: Path) -> tuple[Path, dict[str, str]]:
                          "results": path.name}
 
 
-def read_results(path: Path | str) -> dict[str, Any]:
-    """Read results.json (a folder is taken to hold one)."""
+def read_results_document(path: Path | str) -> tuple[Path, dict[str, Any]]:
+    """(the file, its JSON object) of results.json (a folder is taken to hold one), after a killed commit is finished.
+
+    The file as data; :func:`lps_gui.io.results_model.read_results` reads it into typed sections (and checks them).
+    """
     path = Path(path)
     if path.is_dir():
         path = path / RESULTS_FILE
@@ -398,7 +390,8 @@ def read_results(path: Path | str) -> dict[str, Any]:
         except LpsError:  # a read-only copy: read what is there
             pass
     data = read_json(path, "results file", follow_symlinks=False)  # lps writes it, never as a link
-    if not isinstance(data, dict) or data.get("format") != FORMAT:
-        raise InputError(f"{path}: not an {FORMAT} file; re-run `lps estimate`")
-    check_results(data, str(path))
-    return data
+    if not isinstance(data, dict):
+        raise InputError(f"{path}: not an {FORMAT} file (not a JSON object); re-run `lps estimate`")
+    if data.get("format") != FORMAT:
+        raise InputError(f"{path}: not an {FORMAT} file ('format' is {data.get('format')!r}); re-run `lps estimate`")
+    return path, data

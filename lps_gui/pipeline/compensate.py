@@ -9,13 +9,13 @@ import numpy as np
 from lps_gui.core.compensation import CompensationTable, build_table, own_sigma_um
 from lps_gui.errors import InputError
 from lps_gui.io.compensation_file import backlash_lines, skew_lines, write_table
-from lps_gui.io.results_file import read_results
+from lps_gui.io.results_model import Results, as_results, read_results
 from lps_gui.pipeline.session_checks import require_current_results
 
 RESULTS_FILE = "results.json"
 
 
-def session_results(session_dir: Path | str, command: str = "compensate") -> dict[str, Any]:
+def session_results(session_dir: Path | str, command: str = "compensate") -> Results:
     """results.json of a session folder, computed from its current files; a one-line error otherwise."""
     folder = Path(session_dir)
     path = folder / RESULTS_FILE
@@ -28,7 +28,7 @@ def session_results(session_dir: Path | str, command: str = "compensate") -> dic
     return results
 
 
-def table_from_results(results: dict[str, Any], max_points: int = 256, axis: str = "X") -> CompensationTable:
+def table_from_results(results: Results | dict[str, Any], max_points: int = 256, axis: str = "X") -> CompensationTable:
     """The compensation table of an estimated session (outliers and unusable views left out).
 
     A planar session (SPEC 10) gives the table of ``axis``: its deviation
@@ -36,40 +36,30 @@ def table_from_results(results: dict[str, Any], max_points: int = 256, axis: str
     the other axis' squareness goes to the skew settings), each capture's
     direction being the side that axis was approached from.
     """
-    rows = results.get("positions") or []
-    if not rows:
-        raise InputError("results.json holds no positions; estimate the session again")
-    if len(results.get("axes") or ["X"]) == 2:
-        return _planar_axis_table(results, rows, axis, max_points)
-
-    def col(key: str) -> np.ndarray:
-        return np.array([np.nan if r.get(key) is None else float(r[key]) for r in rows])
-
-    ref = (results.get("parameters") or {}).get("reference_index")
-    is_ref = np.array([r.get("index") == ref for r in rows])
-    valid = np.array([bool(r.get("used", not r.get("outlier"))) and r.get("deviation_um") is not None for r in rows])
-    direction = np.array([1.0 if r.get("direction") == "+" else -1.0 for r in rows])
+    results = as_results(results)
+    if results.planar:
+        return _planar_axis_table(results, axis, max_points)
+    rows, col = results.positions, results.column
+    is_ref = np.array([r.index == results.parameters.reference_index for r in rows])
+    valid = np.array([r.usable and r.get("deviation_um") is not None for r in rows])
+    direction = np.array([1.0 if r.direction == "+" else -1.0 for r in rows])
     noise, total = col("sigma_um"), col("sigma_total_um")
     intrinsics_var = np.maximum(np.nan_to_num(total**2 - noise**2), 0.0)  # correlated, grows with the distance
     sigma = np.sqrt(own_sigma_um(noise, is_ref) ** 2 + intrinsics_var)
     return build_table(col("target_mm"), direction, col("run"), col("deviation_um"), sigma, valid, max_points)
 
 
-def _planar_axis_table(results: dict[str, Any], rows: list[dict[str, Any]], axis: str, max_points: int
-                       ) -> CompensationTable:
+def _planar_axis_table(results: Results, axis: str, max_points: int) -> CompensationTable:
     if axis not in ("X", "Y"):
         raise InputError(f"--axis {axis}: a planar session measured X and Y; choose one of them")
     a = "XY".index(axis)
     key = axis.lower()
 
-    def col(name: str) -> np.ndarray:
-        return np.array([np.nan if r.get(name) is None else float(r[name]) for r in rows])
-
-    ref = (results.get("parameters") or {}).get("reference_index")
-    is_ref = np.array([r.get("index") == ref for r in rows])
-    valid = np.array([bool(r.get("used")) and r.get(f"deviation_{key}_um") is not None for r in rows])
+    rows, col = results.positions, results.column
+    is_ref = np.array([r.index == results.parameters.reference_index for r in rows])
+    valid = np.array([bool(r.used) and r.get(f"deviation_{key}_um") is not None for r in rows])
     side = np.array([float((r.get("approach") or [1, 1])[a]) for r in rows])
-    passes = col("run") * 2 + np.array([r.get("direction") == "+" for r in rows])
+    passes = col("run") * 2 + np.array([r.direction == "+" for r in rows])
     sigma = own_sigma_um(col(f"sigma_{key}_um"), is_ref)
     return build_table(col(f"target_{key}_mm"), side, passes, col(f"deviation_{key}_um"), sigma, valid, max_points)
 
@@ -82,7 +72,7 @@ def compensate_session(session_dir: Path | str, fmt: str, out: Path | str, axis:
     write_table(out, table, fmt)
     b = table.backlash_um()
     lines = [] if b is None else backlash_lines(b, axis)
-    planar = (results.get("figures") or {}).get("planar")
-    if planar and planar.get("squareness_urad") is not None:
-        lines += skew_lines(float(planar["squareness_urad"]))
+    planar = results.figures.planar
+    if planar and planar.squareness_urad is not None:
+        lines += skew_lines(planar.squareness_urad)
     return table, lines

@@ -17,7 +17,7 @@ import shutil
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Callable
 
 import numpy as np
 
@@ -30,6 +30,7 @@ from lps_gui.io.intrinsics_file import write_intrinsics
 from lps_gui.io.session import Session
 from lps_gui.pipeline.detect import detect_session
 from lps_gui.pipeline.estimate import estimate_session
+from lps_gui.io.results_model import Results, as_results
 from lps_gui.pipeline.demo_summary import PAPER_SPEC, planar_summary_lines, summary_lines
 from lps_gui.pipeline.intrinsics import calibrate_images
 from lps_gui.sim.images import simulate_intrinsics_set
@@ -68,7 +69,7 @@ class DemoResult:
     reports: list[Path] = field(default_factory=list)  # the compensated session's report, the as-found/as-left PDF
     steps: list[DemoStep] = field(default_factory=list)
     summary: list[str] = field(default_factory=list)
-    results: dict[str, Any] | None = None
+    results: Results | None = None  # the session's results.json as read
 
 
 def demo_spec(quick: bool, seed: int = 0, planar: bool = False) -> SimulationSpec:
@@ -160,11 +161,12 @@ def run_demo(
     step("detect", "done", f"board found in {n_ok}/{len(table.names)} images", t0)
 
     t0 = time.monotonic()
-    results = estimate_session(session.folder, method="joint", progress=bar("estimate"), cancel=cancel)
+    results = as_results(estimate_session(session.folder, method="joint", progress=bar("estimate"), cancel=cancel),
+                         str(session.folder / "results.json"))
     res.results = results
-    p = results.get("parameters") or {}
-    step("estimate", "done", f"{'planar ' if planar else ''}joint LM on {p.get('n_used', '?')}/{p.get('n_views', '?')} "
-                             f"views, RMS {float(p.get('rms_px') or np.nan):.3f} px", t0)
+    p = results.parameters
+    step("estimate", "done", f"{'planar ' if planar else ''}joint LM on {p.n_used}/{p.n_views} "
+                             f"views, RMS {np.nan if p.rms_px is None else p.rms_px:.3f} px", t0)
 
     t0 = time.monotonic()
     from lps_gui.report.pdf import write_report

@@ -11,7 +11,6 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -20,6 +19,7 @@ from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_text_atomic
 from lps_gui.io.export_files import write_colmap, write_nerfstudio, write_poses_csv
 from lps_gui.io.intrinsics_file import intrinsics_from_dict
+from lps_gui.io.results_sections import Figures
 from lps_gui.io.session import Session
 from lps_gui.pipeline.compensate import session_results
 
@@ -34,7 +34,7 @@ class ExportResult:
     straightness_used: bool = False
 
 
-def straightness_resolved(results: dict[str, Any]) -> tuple[bool, bool]:
+def straightness_resolved(figures: Figures) -> tuple[bool, bool]:
     """Which straightness components (v1, v2) results.json calls resolved (``figures.straightness.v1/v2``).
 
     A span of per-view values is no test: the span of K noisy values is
@@ -43,10 +43,10 @@ def straightness_resolved(results: dict[str, Any]) -> tuple[bool, bool]:
     resolve (core.resolution: above what noise alone would span) moves the
     exported cameras off the fitted line.
     """
-    st = (results.get("figures") or {}).get("straightness")
-    if not isinstance(st, dict):
+    st = figures.straightness
+    if st is None:
         return (False, False)
-    return tuple(bool((st.get(f"v{k}") or {}).get("resolved")) for k in (1, 2))  # type: ignore[return-value]
+    return tuple(bool(v is not None and v.resolved) for v in (st.v1, st.v2))  # type: ignore[return-value]
 
 
 def export_session(session_dir: Path | str, fmt: str, out: Path | str, straightness: str = "auto") -> ExportResult:
@@ -55,18 +55,20 @@ def export_session(session_dir: Path | str, fmt: str, out: Path | str, straightn
         raise InputError(f"--format {fmt}: choose one of {', '.join(FORMATS)}")
     session = Session.open(session_dir)
     results = session_results(session.folder, "export")
-    if len(results.get("axes") or ["X"]) == 2:
+    if results.planar:
         raise InputError(f"{session.folder}: a planar (X,Y) session; lps export writes the poses of a line (1-D "
                          "sessions) only, so there is nothing to re-estimate: use results.json's positions instead")
-    p = results.get("parameters") or {}
+    p = results.parameters.raw
     try:
         R = np.asarray(p["R_cam_board"], dtype=float)
         l0, n = np.asarray(p["l0_cam_mm"], dtype=float), np.asarray(p["n_cam"], dtype=float)
     except KeyError as exc:
         raise InputError(f"{session.folder}/results.json: no {exc} in parameters; estimate the session again") from exc
-    intr = intrinsics_from_dict(results["intrinsics"], "results.json")
-    rows = results.get("positions") or []
-    ref = [r for r in rows if r.get("index") == p.get("reference_index")]
+    if results.intrinsics is None:
+        raise InputError(f"{session.folder}/results.json: no intrinsics; estimate the session again")
+    intr = intrinsics_from_dict(results.intrinsics.raw, "results.json")
+    rows = [r.raw for r in results.positions]
+    ref = [r for r in rows if r.get("index") == results.parameters.reference_index]
     if not ref:
         raise InputError(f"{session.folder}/results.json: the reference capture is missing; estimate the session again")
     t_ref = float(ref[0]["target_mm"])
@@ -75,7 +77,7 @@ def export_session(session_dir: Path | str, fmt: str, out: Path | str, straightn
     if not keep:
         raise InputError(f"{session.folder}: no usable capture to export")
     s = np.array([float(r["measured_mm"]) - t_ref for r in keep])
-    use = (True, True) if straightness == "on" else straightness_resolved(results) if straightness == "auto" else (False, False)
+    use = (True, True) if straightness == "on" else straightness_resolved(results.figures) if straightness == "auto" else (False, False)
     st = None
     if any(use):
         st = 1e-3 * np.array([[float(r.get(f"straightness_um_{k}") or 0.0) if use[k - 1] else 0.0 for k in (1, 2)]

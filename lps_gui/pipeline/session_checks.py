@@ -15,6 +15,8 @@ from lps_gui.errors import InputError
 from lps_gui.io.atomic import sha256_file
 from lps_gui.io.corners_hashes import image_hashes, stale_views
 from lps_gui.io.corners_vnl import CornerTable
+from lps_gui.io.results_model import Results, as_results
+from lps_gui.io.results_sections import Parameters
 from lps_gui.io.session import SESSION_FILE, Session
 
 
@@ -71,10 +73,11 @@ def session_inputs(session: Session, intrinsics_source: str, known: dict[str, st
     return inputs
 
 
-def stale_inputs(session_dir: Path | str, results: dict[str, Any]) -> list[str]:
+def stale_inputs(session_dir: Path | str, results: Results | dict[str, Any]) -> list[str]:
     """Session files whose sha256 differs from the one results.json was computed from."""
     folder = Path(session_dir)
-    recorded = ((results.get("inputs") or {}).get("sha256") or {})
+    inputs = as_results(results).inputs
+    recorded = inputs.sha256 if inputs else {}
     changed = []
     for name, digest in recorded.items():
         path = folder / str(name)
@@ -85,7 +88,7 @@ def stale_inputs(session_dir: Path | str, results: dict[str, Any]) -> list[str]:
     return changed
 
 
-def require_current_results(session_dir: Path | str, results: dict[str, Any], command: str) -> None:
+def require_current_results(session_dir: Path | str, results: Results, command: str) -> None:
     """InputError when results.json was not computed from this session's current files.
 
     The check `lps report` makes (exit 3 after writing), made before anything is written by the commands whose
@@ -93,8 +96,7 @@ def require_current_results(session_dir: Path | str, results: dict[str, Any], co
     session, or one older than the session's corners, would give a confident table of another stage.
     """
     folder = Path(session_dir)
-    recorded = (results.get("inputs") or {}).get("sha256") or {}
-    if not isinstance(recorded, dict) or not recorded:
+    if results.inputs is None or not results.inputs.sha256:
         raise InputError(f"{folder}/results.json: records no input hashes (made by another program or an old lps); "
                          f"run `lps estimate {folder}` before `lps {command}`")
     changed = stale_inputs(folder, results)
@@ -107,15 +109,15 @@ def require_current_results(session_dir: Path | str, results: dict[str, Any], co
 MAX_PLAUSIBLE_NOISE_PX = 5.0  # sub-pixel corners scatter ~0.1 px; 5 px means the model or the corners are wrong
 
 
-def result_doubts(results: dict[str, Any]) -> list[str]:
-    """Why a finished estimate must not be trusted (empty when nothing is wrong)."""
-    p = results.get("parameters") or {}
+def result_doubts(p: Parameters) -> list[str]:
+    """Why a finished estimate (its fit: results ``parameters``) must not be trusted (empty when nothing is wrong)."""
     doubts = []
-    if p.get("converged") is False:
-        doubts.append(f"the solver did not converge in {p.get('iterations', '?')} iterations; the positions are not "
+    if p.converged is False:
+        iterations = "?" if p.iterations is None else p.iterations
+        doubts.append(f"the solver did not converge in {iterations} iterations; the positions are not "
                       "a solution: check the corners (`lps detect --force`) and the intrinsics")
-    sigma = p.get("sigma_px")
-    if not isinstance(sigma, (int, float)) or not sigma == sigma or sigma > MAX_PLAUSIBLE_NOISE_PX:
+    sigma = p.sigma_px
+    if sigma is None or not sigma == sigma or sigma > MAX_PLAUSIBLE_NOISE_PX:
         doubts.append(f"corner noise {sigma if sigma is not None else 'unknown'} px is implausible (over "
                       f"{MAX_PLAUSIBLE_NOISE_PX:g} px); the corners or the intrinsics do not fit the images")
     return doubts

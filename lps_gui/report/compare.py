@@ -17,7 +17,8 @@ from typing import Any
 import numpy as np
 
 from lps_gui.errors import InputError
-from lps_gui.io.results_file import finite_number
+from lps_gui.io.results_model import Results, as_results
+from lps_gui.io.results_sections import Iso230
 from lps_gui.report.figure_spec import BACKWARD_COLOR, FORWARD_COLOR, FigureSpec, Series
 from lps_gui.report.figures import _by_direction, _dir_label, per_target_stats, position_columns
 from lps_gui.report.pdf import load_results, load_session_meta
@@ -61,7 +62,7 @@ class CompareRow:
         return [self.name, pm(self.before, self.u_before), pm(self.after, self.u_after), ratio]
 
 
-def comparison_figure(before: dict[str, Any], after: dict[str, Any]) -> FigureSpec:
+def comparison_figure(before: Results, after: Results) -> FigureSpec:
     """Mean deviation per target and direction, as found (blue/orange) and as left (green/purple)."""
     series = []
     for results, tag, dashed in ((before, "as found", True), (after, "as left", False)):
@@ -74,36 +75,38 @@ def comparison_figure(before: dict[str, Any], after: dict[str, Any]) -> FigureSp
                       "mean over runs per target and direction")
 
 
-def session_E_um(results: dict[str, Any], key: str = "deviation_um") -> float:
+def session_E_um(results: Results | dict[str, Any], key: str = "deviation_um") -> float:
     """E (ISO 230-2, um) of one deviation column of results.json: measured, or the simulator's truth."""
     from lps_gui.core.iso230 import figures_for_session
 
-    rows = [r for r in results.get("positions", []) if r.get(key) is not None and not r.get("outlier")]
+    results = as_results(results)
+    rows = [r for r in results.positions if r.get(key) is not None and not r.outlier]
     if not rows:
         raise InputError(f"results.json has no {key}; estimate a simulated session")
-    t = np.array([r["target_mm"] for r in rows])
-    d = np.array([1.0 if r["direction"] == "+" else -1.0 for r in rows])
-    run = np.array([r["run"] for r in rows])
-    iso = figures_for_session(t, d, run, np.array([r[key] for r in rows], dtype=float))["iso230_2"]
+    t = results.column("target_mm", rows)
+    d = np.array([1.0 if r.direction == "+" else -1.0 for r in rows])
+    run = np.array([r.run for r in rows])
+    iso = figures_for_session(t, d, run, results.column(key, rows))["iso230_2"]
     if not iso or iso.get("E_um") is None:
         raise InputError("E needs both directions or two runs; capture a bidirectional session")
     return float(iso["E_um"])
 
 
-def true_E_um(results: dict[str, Any]) -> float:
+def true_E_um(results: Results | dict[str, Any]) -> float:
     return session_E_um(results, "truth_deviation_um")
 
 
-def _iso(results: dict[str, Any]) -> dict[str, Any]:
-    return (results.get("figures") or {}).get("iso230_2") or {}
+def _iso(results: Results) -> Iso230 | None:
+    return results.figures.iso230_2
 
 
-def _u(results: dict[str, Any], key: str) -> float | None:
-    return finite_number(((results.get("uncertainty") or {}).get("figures_k2") or {}).get(u_key(key)))
+def _u(results: Results, key: str) -> float | None:
+    return results.uncertainty.u_k2(u_key(key)) if results.uncertainty else None
 
 
-def compare_rows(before: dict[str, Any], after: dict[str, Any]) -> list[CompareRow]:
+def compare_rows(before: Results | dict[str, Any], after: Results | dict[str, Any]) -> list[CompareRow]:
     """Every ISO 230-2 figure either session has, named as in the main report, with U from each results.json."""
+    before, after = as_results(before), as_results(after)
     b_rows = {r.key: r for r in iso_rows(_iso(before))}
     a_rows = {r.key: r for r in iso_rows(_iso(after))}
     out = []
@@ -117,12 +120,12 @@ def compare_rows(before: dict[str, Any], after: dict[str, Any]) -> list[CompareR
     return out
 
 
-def comparison_rows(before: dict[str, Any], after: dict[str, Any]) -> list[list[str]]:
+def comparison_rows(before: Results | dict[str, Any], after: Results | dict[str, Any]) -> list[list[str]]:
     """[name, as found ± U, as left ± U, improvement ± U] per ISO 230-2 figure (text cells, \u00b5m)."""
     return [r.cells() for r in compare_rows(before, after)]
 
 
-def true_E_rows(before: dict[str, Any], after: dict[str, Any]) -> list[list[str]]:
+def true_E_rows(before: Results, after: Results) -> list[list[str]]:
     """The simulator's true E before and after, when both sessions are simulated (known exactly: no U)."""
     try:
         b, a = true_E_um(before), true_E_um(after)
@@ -131,7 +134,7 @@ def true_E_rows(before: dict[str, Any], after: dict[str, Any]) -> list[list[str]
     return [CompareRow("True E (simulator; not a measurement)", b, None, a, None).cells()]
 
 
-def verdict_rows(before: dict[str, Any], after: dict[str, Any], spec_before: dict[str, Any] | None,
+def verdict_rows(before: Results, after: Results, spec_before: dict[str, Any] | None,
                  spec_after: dict[str, Any] | None) -> list[list[str]]:
     """[criterion, as found, as left]: each session against its stage spec (figure, U, word)."""
     def text(v: Any) -> str:
@@ -165,8 +168,8 @@ def write_comparison(before_dir: Path | str, after_dir: Path | str, out: Path | 
     ensure_gui_app()
     with pdf_file(out, "As found / as left", f"lps-calib {__version__} \u00b7 {Path(before_dir).name} -> {Path(after_dir).name}") as flow:
         flow.heading("Stage compensation: as found / as left", 15)
-        flow.paragraph(f"as found: {before.get('inputs', {}).get('session', before_dir)}  ({before.get('created', '')})")
-        flow.paragraph(f"as left: {after.get('inputs', {}).get('session', after_dir)}  ({after.get('created', '')})")
+        for tag, results, folder in (("as found", before, before_dir), ("as left", after, after_dir)):
+            flow.paragraph(f"{tag}: {(results.inputs and results.inputs.session) or folder}  ({results.created or ''})")
         flow.space(2)
         flow.heading("Verdict against the stage specification", 11)
         if any(specs):
@@ -193,7 +196,8 @@ def write_comparison(before_dir: Path | str, after_dir: Path | str, out: Path | 
     return out
 
 
-def improvement_factor(before: dict[str, Any], after: dict[str, Any], key: str = "E_um") -> float | None:
-    b, a = _iso(before).get(key), _iso(after).get(key)
-    return None if b is None or not a else float(b) / float(a)
+def improvement_factor(before: Results | dict[str, Any], after: Results | dict[str, Any], key: str = "E_um"
+                       ) -> float | None:
+    b, a = (iso.number(key) if (iso := _iso(as_results(r))) else None for r in (before, after))
+    return None if b is None or not a else b / a
 

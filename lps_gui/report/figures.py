@@ -19,7 +19,8 @@ import numpy as np
 
 from lps_gui.report.figure_spec import (BACKWARD_COLOR, COMPONENT_COLORS, DIRECTION_ARROWS, DIRECTION_NAMES,
                                         FORWARD_COLOR, IMAGE_ROTATION_COLOR, SPEC_COLOR, TRUTH_COLOR,
-                                        TRUTH_COLORS, FigureSpec, Series, num_or_nan)
+                                        TRUTH_COLORS, FigureSpec, Series)
+from lps_gui.io.results_model import Results, as_results
 from lps_gui.sim.truth import centred, residual_from_line, true_deviation_um
 
 
@@ -31,22 +32,23 @@ FIGURE_KEYS = ("positions", "deviation", "step", "straightness", "angles", "resi
 # ----------------------------------------------------------------------------- table access
 
 
-def position_columns(results: dict[str, Any]) -> dict[str, np.ndarray]:
-    """The per-position table of a results dict as arrays (NaN where absent).
+def position_columns(results: Results | dict[str, Any] | None) -> dict[str, np.ndarray]:
+    """The per-position table of the results as arrays (NaN where absent; no rows without results).
 
     Returns float arrays (shape (K,)) for every numeric column, ``direction``
     as a str array, ``outlier`` as bool, sorted by capture index.
     """
-    rows = sorted(results.get("positions") or [], key=lambda r: r.get("index", 0))
+    results = None if results is None else as_results(results)
+    rows = results.sorted_positions() if results is not None else []
     numeric = ("index", "run", "target_mm", "measured_mm", "deviation_um", "sigma_um", "sigma_total_um",
                "rms_px", "n_corners", "straightness_um_1", "straightness_um_2", "straightness_sigma_um_1",
                "straightness_sigma_um_2", "roll_urad", "pitch_urad", "yaw_urad", "roll_sigma_urad",
                "pitch_sigma_urad", "yaw_sigma_urad", "image_rotation_urad", "image_rotation_sigma_urad")
     cols: dict[str, np.ndarray] = {}
     for name in numeric:
-        cols[name] = np.array([num_or_nan(r.get(name)) for r in rows], dtype=float)
-    cols["direction"] = np.array([str(r.get("direction", "+")) for r in rows], dtype=object)
-    cols["outlier"] = np.array([bool(r.get("outlier", False)) for r in rows], dtype=bool)
+        cols[name] = results.column(name, rows) if results is not None else np.zeros(0)
+    cols["direction"] = np.array([r.direction for r in rows], dtype=object)
+    cols["outlier"] = np.array([r.outlier for r in rows], dtype=bool)
     return cols
 
 
@@ -80,7 +82,7 @@ def per_target_stats(target_mm: np.ndarray, value: np.ndarray, keep: np.ndarray)
 # ----------------------------------------------------------------------------- truth
 
 
-def truth_columns(results: dict[str, Any], truth: dict[str, Any] | None) -> dict[str, np.ndarray] | None:
+def truth_columns(results: Results | dict[str, Any] | None, truth: dict[str, Any] | None) -> dict[str, np.ndarray] | None:
     """Truth per capture, reduced like the measurement; None for a real session.
 
     The estimator puts truth beside each position (``truth_deviation_um``,
@@ -93,9 +95,12 @@ def truth_columns(results: dict[str, Any], truth: dict[str, Any] | None) -> dict
     (zero at the reference capture), ``straightness_um_1/2`` (linear trend
     removed), ``roll/pitch/yaw_urad`` (mean removed).
     """
-    rows = sorted(results.get("positions") or [], key=lambda r: r.get("index", 0))
+    if results is None:
+        return None
+    results = as_results(results)
+    rows = results.sorted_positions()
     if rows and any(r.get("truth_deviation_um") is not None for r in rows):
-        return {key: np.array([num_or_nan(r.get(f"truth_{key}")) for r in rows], dtype=float) for key in TRUTH_KEYS}
+        return {key: results.column(f"truth_{key}", rows) for key in TRUTH_KEYS}
     if not truth or "positions_mm" not in truth:
         return None
     cols = position_columns(results)
@@ -106,7 +111,7 @@ def truth_columns(results: dict[str, Any], truth: dict[str, Any] | None) -> dict
     compared = ~cols["outlier"]
     if not compared.any():
         return None
-    ref_index = (results.get("parameters") or {}).get("reference_index")
+    ref_index = results.parameters.reference_index
     ref = int(np.flatnonzero(idx == ref_index)[0]) if ref_index in set(idx.tolist()) else int(np.flatnonzero(compared)[0])
     out: dict[str, np.ndarray] = {"deviation_um": true_deviation_um(s_true_mm[idx], cols["target_mm"], ref)}
     straight = np.asarray(truth.get("straightness_um") or np.zeros((s_true_mm.size, 2)), dtype=float)[idx]
@@ -120,21 +125,24 @@ def truth_columns(results: dict[str, Any], truth: dict[str, Any] | None) -> dict
 # ----------------------------------------------------------------------------- figures
 
 
-def figures_from_results(results: dict[str, Any], truth: dict[str, Any] | None = None) -> list[FigureSpec]:
+def figures_from_results(results: Results | dict[str, Any] | None, truth: dict[str, Any] | None = None
+                         ) -> list[FigureSpec]:
     """Every report figure of a results dict, in report order (keys: :data:`FIGURE_KEYS`).
 
     Parameters
     ----------
-    results : dict
-        results.json content.
+    results : Results, optional
+        results.json read (a results dict is read into one); None: the empty figures (titles and axes).
     truth : dict, optional
         The session's ``truth`` record (simulated sessions); drawn dashed beside
-        the measurement. Without it, ``results["truth"]`` is used when present.
+        the measurement. Without it, a ``truth`` section of the results is used when present.
     """
-    if len(results.get("axes") or ["X"]) == 2:  # a planar session (SPEC 10)
+    results = None if results is None else as_results(results)
+    if results is not None and results.planar:  # a planar session (SPEC 10)
         return planar_figures_from_results(results)
     cols = position_columns(results)
-    truth = truth if truth is not None else results.get("truth")
+    if truth is None and results is not None:
+        truth = results.extra.get("truth")
     tcols = truth_columns(results, truth)
     return [
         positions_figure(cols),
@@ -309,18 +317,18 @@ def residuals_figure(cols: dict[str, np.ndarray]) -> FigureSpec:
                       f"{n_out} view(s) flagged as outliers (red crosses)" if n_out else "no view flagged")
 
 
-def spectrum_figure(results: dict[str, Any]) -> FigureSpec:
+def spectrum_figure(results: Results | dict[str, Any] | None) -> FigureSpec:
     """Amplitude spectrum of the deviation: a lead-screw pitch shows as a peak."""
-    single = ((results.get("figures") or {}).get("single_run") or {})
-    spec = single.get("spectrum") or {}
-    period = np.asarray(spec.get("period_mm") or [], dtype=float)
-    amp = np.asarray(spec.get("amplitude_um") or [], dtype=float)
+    single = as_results(results).figures.single_run if results is not None else None
+    spec = single.spectrum if single else None
+    period = np.asarray(spec.period_mm if spec else [], dtype=float)
+    amp = np.asarray(spec.amplitude_um if spec else [], dtype=float)
     order = np.argsort(period)
     series = [Series(period[order], amp[order], "amplitude", "line+markers", FORWARD_COLOR)] if period.size else []
     notes = ""
-    if single.get("periodic_period_mm"):
-        notes = (f"strongest period {float(single['periodic_period_mm']):.3g} mm, "
-                 f"amplitude {float(single.get('periodic_amplitude_um') or 0):.3g} \u00b5m")
+    if single and single.periodic_period_mm:
+        notes = (f"strongest period {single.periodic_period_mm:.3g} mm, "
+                 f"amplitude {single.periodic_amplitude_um or 0:.3g} \u00b5m")
     return FigureSpec("spectrum", "Error spectrum of the deviation", "period [mm]", "amplitude [\u00b5m]", series,
                       notes, x_log=True)
 
@@ -369,14 +377,15 @@ LINE_COLORS = ("#1f5fbf", "#d4600a", "#2a9d3a", "#8e3bb5", "#b8860b", "#17a2b8",
 ARROW_FRACTION = 0.8  # the longest arrow spans this fraction of the grid step
 
 
-def planar_columns(results: dict[str, Any]) -> dict[str, np.ndarray]:
+def planar_columns(results: Results | dict[str, Any]) -> dict[str, np.ndarray]:
     """The planar per-position table as arrays, sorted by capture index."""
-    rows = sorted(results.get("positions") or [], key=lambda r: r.get("index", 0))
+    results = as_results(results)
+    rows = results.sorted_positions()
     names = ("index", "run", "target_x_mm", "target_y_mm", "deviation_x_um", "deviation_y_um", "sigma_x_um",
              "sigma_y_um", "rms_px", "truth_deviation_x_um", "truth_deviation_y_um")
-    cols = {n: np.array([num_or_nan(r.get(n)) for r in rows], dtype=float) for n in names}
-    cols["direction"] = np.array([str(r.get("direction", "+")) for r in rows], dtype=object)
-    cols["outlier"] = np.array([bool(r.get("outlier", False)) for r in rows], dtype=bool)
+    cols = {n: results.column(n, rows) for n in names}
+    cols["direction"] = np.array([r.direction for r in rows], dtype=object)
+    cols["outlier"] = np.array([r.outlier for r in rows], dtype=bool)
     return cols
 
 
@@ -392,14 +401,15 @@ def nice_exaggeration(longest_um: float, step_mm: float) -> float:
     return float(10**k)
 
 
-def error_map_figure(results: dict[str, Any]) -> FigureSpec:
+def error_map_figure(results: Results | dict[str, Any]) -> FigureSpec:
     """Mean 2-D error vector at every grid node, exaggerated (scale in the title)."""
-    nodes = ((results.get("figures") or {}).get("planar") or {}).get("nodes") or []
-    have = [n for n in nodes if n.get("error_um")]
+    planar = as_results(results).figures.planar
+    nodes = planar.nodes if planar else ()
+    have = [n for n in nodes if n.error_um]
     if not have:
         return FigureSpec("error_map", "2-D error map", "X target [mm]", "Y target [mm]", [])
-    t = np.array([n["target_mm"] for n in have], dtype=float)  # shape (m, 2)
-    e = np.array([n["error_um"] for n in have], dtype=float)  # shape (m, 2) um
+    t = np.array([n.target_mm for n in have], dtype=float)  # shape (m, 2)
+    e = np.array([n.error_um for n in have], dtype=float)  # shape (m, 2) um
     steps = [np.min(np.diff(np.unique(t[:, a]))) for a in range(2) if np.unique(t[:, a]).size > 1]
     step = float(min(steps)) if steps else 1.0
     longest = float(np.max(np.hypot(e[:, 0], e[:, 1])))
@@ -409,10 +419,10 @@ def error_map_figure(results: dict[str, Any]) -> FigureSpec:
     y = np.column_stack([t[:, 1], tip[:, 1], np.full(len(t), np.nan)]).ravel()
     series = [Series(t[:, 0], t[:, 1], "grid node (target)", "markers", "#777777"),
               Series(x, y, "mean error", "line", FORWARD_COLOR)]
-    truth = [n for n in nodes if n.get("truth_error_um")]
+    truth = [n for n in nodes if n.truth_error_um]
     if truth:
-        tt = np.array([n["target_mm"] for n in truth], float)
-        te = np.array([n["truth_error_um"] for n in truth], float)
+        tt = np.array([n.target_mm for n in truth], float)
+        te = np.array([n.truth_error_um for n in truth], float)
         ttip = tt + k * te * 1e-3
         series.append(Series(np.column_stack([tt[:, 0], ttip[:, 0], np.full(len(tt), np.nan)]).ravel(),
                              np.column_stack([tt[:, 1], ttip[:, 1], np.full(len(tt), np.nan)]).ravel(),
@@ -470,8 +480,9 @@ def planar_residuals_figure(cols: dict[str, np.ndarray]) -> FigureSpec:
     return FigureSpec("residuals", "Reprojection error per view", "capture index", "RMS [px]", series)
 
 
-def planar_figures_from_results(results: dict[str, Any]) -> list[FigureSpec]:
+def planar_figures_from_results(results: Results | dict[str, Any]) -> list[FigureSpec]:
     """Every figure of a planar session, in report order (keys: :data:`PLANAR_FIGURE_KEYS`)."""
+    results = as_results(results)
     cols = planar_columns(results)
     return [error_map_figure(results), deviation_axis_figure(cols, 0), deviation_axis_figure(cols, 1),
             straightness_planar_figure(cols, 0), straightness_planar_figure(cols, 1), planar_residuals_figure(cols)]

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from lps_gui.io.results_model import Results, as_results
 from lps_gui.report.summary import DASH, _num
 
 UM = "\u00b5m"
@@ -22,11 +23,11 @@ COLUMNS = (("target_mm", "P\u2c7c\n[mm]", 16), ("n", "runs\n\u2191/\u2193", 12),
            ("mean_bi_um", f"(x\u0304\u2191+x\u0304\u2193)/2\n[{UM}]", 24))
 
 
-def iso_target_table(results: dict[str, Any]) -> tuple[list[str], list[list[str]], list[float]] | None:
+def iso_target_table(results: Results | dict[str, Any]) -> tuple[list[str], list[list[str]], list[float]] | None:
     """Header, rows and widths (mm) of the per-target table; None when the results have no ISO figures."""
-    iso = (results.get("figures") or {}).get("iso230_2") or {}
-    tab = iso.get("per_target") or {}
-    targets = tab.get("target_mm") or []
+    iso = as_results(results).figures.iso230_2
+    tab = iso.per_target if iso is not None else None
+    targets = tab.get("target_mm") if tab else None
     if not targets:
         return None
     rows = []

@@ -16,6 +16,7 @@ from typing import Any
 from lps_gui.core.progress import ProgressFn, no_progress
 from lps_gui.errors import InputError
 from lps_gui.io.jsonfile import read_json
+from lps_gui.io.results_model import Results, as_results, read_results
 from lps_gui.report import asme_pages
 from lps_gui.report import sections as R
 from lps_gui.report import summary as S
@@ -42,16 +43,11 @@ class ReportInfo:
     texts: tuple[Any, ...] = ()  # every drawn string (lps_gui.report.text_fit.DrawnText), page by page
 
 
-def load_results(session_dir: Path) -> dict[str, Any]:
+def load_results(session_dir: Path) -> Results:
     """results.json of a session, or a one-line error telling the user to estimate first."""
-    from lps_gui.io.results_file import read_results
-
     if not Path(session_dir).is_dir():
         raise InputError(f"{session_dir}: session folder not found; check the path")
-    results = read_results(Path(session_dir) / RESULTS_FILE)
-    if not isinstance(results.get("positions"), list):
-        raise InputError(f"{Path(session_dir) / RESULTS_FILE}: has no per-position table; re-run `lps estimate`")
-    return results
+    return read_results(Path(session_dir) / RESULTS_FILE)
 
 
 def load_session_meta(session_dir: Path) -> dict[str, Any]:
@@ -63,7 +59,7 @@ def load_session_meta(session_dir: Path) -> dict[str, Any]:
     return meta if isinstance(meta, dict) else {}
 
 
-def write_report(session_dir: Path, results: dict | None = None, out: Path | None = None,
+def write_report(session_dir: Path, results: Results | dict | None = None, out: Path | None = None,
                  progress: ProgressFn = no_progress) -> Path:
     """Write the PDF report of a session; returns its path (default SESSION/report.pdf).
 
@@ -72,32 +68,32 @@ def write_report(session_dir: Path, results: dict | None = None, out: Path | Non
     session_dir : Path
         The session folder (session.json for the title block, truth and stage
         spec; images for outlier thumbnails).
-    results : dict, optional
-        results.json content; read from the session folder when omitted.
+    results : Results, optional
+        results.json as read (or an estimate's dict); read from the session folder when omitted.
     out : Path, optional
         Where to write the PDF.
     """
     return render_report(session_dir, results, out, progress).path
 
 
-def render_report(session_dir: Path, results: dict | None = None, out: Path | None = None,
+def render_report(session_dir: Path, results: Results | dict | None = None, out: Path | None = None,
                   progress: ProgressFn = no_progress) -> ReportInfo:
     """:func:`write_report` that also returns the page plan (for tests and the GUI)."""
     from lps_gui import __version__
     from lps_gui.report.layout import ensure_gui_app, pdf_file
 
     session_dir = Path(session_dir)
-    results = results if results is not None else load_results(session_dir)
+    results = as_results(results) if results is not None else load_results(session_dir)
     meta = load_session_meta(session_dir)
     out = Path(out) if out is not None else session_dir / REPORT_FILE
     if not out.parent.is_dir():
         raise InputError(f"{out.parent}: folder not found; create it or choose another --out")
     ensure_gui_app()
-    name = (results.get("inputs") or {}).get("session") or session_dir.name
+    name = (results.inputs and results.inputs.session) or session_dir.name
     steps = ("front pages", "plots", "outliers", "table")
     with pdf_file(out, f"LPS measurement report: {name}",
-                  f"lps-calib {__version__} \u00b7 {name} \u00b7 {results.get('created', '')}") as flow:
-        if len(results.get("axes") or ["X"]) == 2:  # a planar session (SPEC 10)
+                  f"lps-calib {__version__} \u00b7 {name} \u00b7 {results.created or ''}") as flow:
+        if results.planar:  # a planar session (SPEC 10)
             progress(0, len(steps), "planar report")
             paint_planar_report(flow, meta, results, S.title_rows(meta, results, __version__), FIGURE_HEIGHT_MM)
         else:
@@ -106,7 +102,7 @@ def render_report(session_dir: Path, results: dict | None = None, out: Path | No
     return ReportInfo(out, flow.page, flow.log.pages, tuple(flow.log.clipped), tuple(flow.log.text.texts))
 
 
-def _paint_line_report(flow: Any, session_dir: Path, meta: dict[str, Any], results: dict[str, Any], version: str,
+def _paint_line_report(flow: Any, session_dir: Path, meta: dict[str, Any], results: Results, version: str,
                        progress: ProgressFn, steps: tuple[str, ...]) -> None:
     """Every page of a line (single-axis) session's report."""
     progress(0, len(steps), "front pages")
@@ -137,7 +133,7 @@ def _paint_line_report(flow: Any, session_dir: Path, meta: dict[str, Any], resul
     _truth_page(flow, results)
 
 
-def _front_page(flow: Any, meta: dict[str, Any], results: dict[str, Any], version: str) -> None:
+def _front_page(flow: Any, meta: dict[str, Any], results: Results, version: str) -> None:
     """Page 1: the verdict with U (k = 2), the deviation plot with the limit drawn, the identification."""
     spec = R.stage_spec(meta, results)
     flow.heading("Linear positioning stage \u2014 measurement report", 15)
@@ -150,14 +146,14 @@ def _front_page(flow: Any, meta: dict[str, Any], results: dict[str, Any], versio
     flow.figure(deviation, 100.0)
     flow.heading("Identification", 11)
     title = S.title_rows(meta, results, version)
-    title.append(("Results", f"{results.get('created', DASH_TEXT)}, method {results.get('method', DASH_TEXT)}"))
+    title.append(("Results", f"{results.created or DASH_TEXT}, method {results.method or DASH_TEXT}"))
     flow.table(None, [[k, v] for k, v in title], [30, 150], size_pt=8.0, row_mm=4.2, align_right_from=9)
 
 
 DASH_TEXT = S.DASH
 
 
-def _figures_page(flow: Any, results: dict[str, Any]) -> None:
+def _figures_page(flow: Any, results: Results) -> None:
     """Measured figures with U (k = 2), then the ISO 230-2 per-target table."""
     flow.heading("Measured figures", 11)
     R.figure_table(flow, S.summary_rows(results))
@@ -177,7 +173,7 @@ U_NOTE = ("\u03c3 and s are 1-sigma. \u03c3 of a position is the measurement's n
           "(noise p-v, or noise max for a max |x|).")
 
 
-def _truth_page(flow: Any, results: dict[str, Any]) -> None:
+def _truth_page(flow: Any, results: Results) -> None:
     """The simulator's truth on its own page: not part of the measurement."""
     rows = S.truth_rows(results)
     if not rows:
@@ -191,7 +187,7 @@ def _truth_page(flow: Any, results: dict[str, Any]) -> None:
 
 
 
-def _method_page(flow: Any, results: dict[str, Any]) -> None:
+def _method_page(flow: Any, results: Results) -> None:
     """Method and its settings beside the intrinsics used (with their std)."""
     method = [[k, v] for k, v in S.method_rows(results)]
     intr = [list(r) for r in S.intrinsics_rows(results)]
@@ -206,7 +202,7 @@ def _method_page(flow: Any, results: dict[str, Any]) -> None:
     flow.y = max(flow.y, below_method)
 
 
-def _outliers(flow: Any, session_dir: Path, results: dict[str, Any]) -> None:
+def _outliers(flow: Any, session_dir: Path, results: Results) -> None:
     """Flagged views: a table, and thumbnails of the first few when their images exist."""
     rows = S.outlier_rows(results)
     flow.heading("Outlier views", 11)

@@ -10,12 +10,16 @@ so tests read exactly what is printed; Qt only where painting.
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import replace
 from typing import Any
 
+from lps_gui.errors import InputError
+from lps_gui.io.results_model import Results, as_results
+from lps_gui.io.results_sections import Figures, SpanResolution, TruthComparison
 from lps_gui.report import sections as R
 from lps_gui.report.figures import planar_figures_from_results
-from lps_gui.report.summary import Row, fmt, table_cells
+from lps_gui.report.summary import DASH, Row, fmt, table_cells
 from lps_gui.report.verdict import overall, verdicts
 
 PLANAR_TABLE_COLUMNS = (  # key, header, decimals, width mm
@@ -28,7 +32,7 @@ PLANAR_TABLE_COLUMNS = (  # key, header, decimals, width mm
 )
 
 
-def _u(k2: dict[str, Any], key: str, sigma: float | None) -> float | None:
+def _u(k2: Mapping[str, Any], key: str, sigma: float | None) -> float | None:
     """U (k = 2) of a planar figure: results.json ``uncertainty.figures_k2`` when it has it, else 2 sigma (noise)."""
     from lps_gui.io.results_file import finite_number
 
@@ -36,142 +40,146 @@ def _u(k2: dict[str, Any], key: str, sigma: float | None) -> float | None:
     return u if u is not None else (None if sigma is None else 2.0 * float(sigma))
 
 
-def _trust_note(tc: dict[str, Any], error_key: str, z_key: str | None, u: float | None, unit: str) -> str:
+def _trust_note(tc: TruthComparison | None, error_key: str, z_key: str | None, u: float | None, unit: str) -> str:
     """A figure the simulator's truth shows off by more than its U: "not trusted" with the numbers, else empty."""
-    from lps_gui.io.results_file import finite_number
-
-    err = finite_number(tc.get(error_key))
+    err = tc.number(error_key) if tc else None
     if err is None or u is None or abs(err) <= u:
         return ""
-    z = finite_number(tc.get(z_key)) if z_key else None
+    z = tc.number(z_key) if z_key else None
     return (f"not trusted: the truth is {fmt(abs(err))} {unit} off" + (f" ({fmt(abs(z), 2)} \u03c3)" if z is not None else "")
             + ", beyond U; a source is missing from the budget")
 
 
-def planar_figures_k2(results: dict[str, Any]) -> dict[str, Any]:
+def planar_figures_k2(results: Results | dict[str, Any]) -> dict[str, Any]:
     """U (k = 2) of the planar figures: a top-level ``uncertainty.figures_k2``, or each axis's budget's scale U.
 
     The estimate writes one budget per axis (``uncertainty.per_axis.X`` / ``.Y``); squareness has no budget
     row of its own and keeps its noise U.
     """
-    unc = results.get("uncertainty") or {}
-    k2 = dict(unc.get("figures_k2") or {})
-    for axis in ("X", "Y"):
-        axis_k2 = ((unc.get("per_axis") or {}).get(axis) or {}).get("figures_k2") or {}
-        if axis_k2.get("scale_ppm") is not None:
-            k2.setdefault(f"scale_{axis.lower()}_ppm", axis_k2["scale_ppm"])
+    unc = as_results(results).uncertainty
+    if unc is None:
+        return {}
+    k2 = dict(unc.figures_k2)
+    for axis, axis_unc in unc.per_axis.items():
+        if axis in ("X", "Y") and axis_unc.figures_k2.get("scale_ppm") is not None:
+            k2.setdefault(f"scale_{axis.lower()}_ppm", axis_unc.figures_k2["scale_ppm"])
     return k2
 
 
-def planar_summary_rows(results: dict[str, Any]) -> list[Row]:
+def planar_summary_rows(results: Results | dict[str, Any]) -> list[Row]:
     """Measured figures of a planar session with 1 sigma and U (k = 2).
 
     U is read from results.json ``uncertainty.figures_k2`` (the one source the
     line report uses) and is 2 sigma of corner noise where the results carry
     no budget. A simulated session whose truth is off by more than U says so.
     """
-    pl = results["figures"]["planar"]
+    results = as_results(results)
+    pl = results.figures.planar
+    if pl is None:
+        raise InputError(f"{results.source}: a planar session without 'figures.planar'; re-run `lps estimate`")
     k2 = planar_figures_k2(results)
-    tc = results.get("truth_comparison") or {}
-    u_sq = _u(k2, "squareness_urad", pl["squareness_sigma_urad"])
-    u_x = _u(k2, "scale_x_ppm", pl["scale_x_sigma_ppm"])
-    u_y = _u(k2, "scale_y_ppm", pl["scale_y_sigma_ppm"])
+    tc = results.truth_comparison
+    u_sq = _u(k2, "squareness_urad", pl.squareness_sigma_urad)
+    u_x = _u(k2, "scale_x_ppm", pl.scale_x_sigma_ppm)
+    u_y = _u(k2, "scale_y_ppm", pl.scale_y_sigma_ppm)
 
-    def note(sigma: float, unit: str, trust: str) -> str:
+    def note(sigma: float | None, unit: str, trust: str) -> str:
         return "; ".join(t for t in (f"1\u03c3 {fmt(sigma)} {unit}", trust) if t)
 
     rows = [
-        Row("Squareness (angle +X to +Y minus 90\u00b0)", pl["squareness_urad"], "\u00b5rad",
-            note(pl["squareness_sigma_urad"], "\u00b5rad", _trust_note(tc, "squareness_error_urad", "squareness_z", u_sq,
+        Row("Squareness (angle +X to +Y minus 90\u00b0)", pl.squareness_urad, "\u00b5rad",
+            note(pl.squareness_sigma_urad, "\u00b5rad", _trust_note(tc, "squareness_error_urad", "squareness_z", u_sq,
                                                                         "\u00b5rad")),
             key="squareness_urad", u_k2=u_sq),
-        Row("Squareness", pl["squareness_um_per_m"], "\u00b5m/m", "the same angle: 1 \u00b5rad = 1 \u00b5m/m",
+        Row("Squareness", pl.squareness_um_per_m, "\u00b5m/m", "the same angle: 1 \u00b5rad = 1 \u00b5m/m",
             key="squareness_um_per_m", u_k2=u_sq),
-        Row("Scale error X", pl["scale_x_ppm"], "ppm",
-            note(pl["scale_x_sigma_ppm"], "ppm", _trust_note(tc, "scale_x_error_ppm", None, u_x, "ppm")),
+        Row("Scale error X", pl.scale_x_ppm, "ppm",
+            note(pl.scale_x_sigma_ppm, "ppm", _trust_note(tc, "scale_x_error_ppm", None, u_x, "ppm")),
             key="scale_x_ppm", u_k2=u_x),
-        Row("Scale error Y", pl["scale_y_ppm"], "ppm",
-            note(pl["scale_y_sigma_ppm"], "ppm", _trust_note(tc, "scale_y_error_ppm", None, u_y, "ppm")),
+        Row("Scale error Y", pl.scale_y_ppm, "ppm",
+            note(pl.scale_y_sigma_ppm, "ppm", _trust_note(tc, "scale_y_error_ppm", None, u_y, "ppm")),
             key="scale_y_ppm", u_k2=u_y),
     ]
     for axis, other in (("X", "Y"), ("Y", "X")):
-        a = (pl.get("per_axis") or {}).get(axis)
+        a = pl.per_axis.get(axis)
         if not a:
             continue
-        st = a.get("straightness") or {}
-        rows.append(Row(f"Straightness of {axis} (in the plane, along {other}), worst line", a["straightness_um_max"],
-                        "\u00b5m", f"{a['lines']} line(s); per-point 1\u03c3 {fmt(a['straightness_sigma_um'])} \u00b5m",
-                        unresolved=_unresolved(st)))
-        oop = a.get("out_of_plane")
+        rows.append(Row(f"Straightness of {axis} (in the plane, along {other}), worst line", a.straightness_um_max,
+                        "\u00b5m", f"{a.lines} line(s); per-point 1\u03c3 {fmt(a.straightness_sigma_um)} \u00b5m",
+                        unresolved=_unresolved(a.straightness)))
+        oop = a.out_of_plane
         if oop:
-            rows.append(Row(f"Straightness of {axis} out of the plane (along the normal), worst line", oop.get("span_um"),
-                            "\u00b5m", f"per-target 1\u03c3 {fmt(oop.get('sigma_um'))} \u00b5m", unresolved=_unresolved(oop)))
-        iso = (a.get("iso230_2") or {}).get("iso230_2") or {}
+            rows.append(Row(f"Straightness of {axis} out of the plane (along the normal), worst line", oop.span_um,
+                            "\u00b5m", f"per-target 1\u03c3 {fmt(oop.sigma_um)} \u00b5m", unresolved=_unresolved(oop)))
+        iso = a.iso230_2.iso230_2 if a.iso230_2 else None
         for key, name in (("A_um", "accuracy A"), ("R_um", "repeatability R"), ("E_um", "systematic E"),
                           ("B_um", "reversal B")):
-            if iso.get(key) is not None:
-                rows.append(Row(f"{axis} ISO 230-2 {name} (worst line)", iso[key], "\u00b5m"))
-    p = results["parameters"]
-    rows.append(Row("Corner noise (a posteriori)", p["sigma_px"], "px"))
-    rows.append(Row("Views used / total", float(p["n_used"]), "", f"{p['n_outliers']} outlier view(s)",
-                    shown=f"{p['n_used']} / {p.get('n_views', p['n_used'])}"))
+            if iso and iso.number(key) is not None:
+                rows.append(Row(f"{axis} ISO 230-2 {name} (worst line)", iso.number(key), "\u00b5m"))
+    p = results.parameters
+    n_used = p.n_used if p.n_used is not None else DASH
+    rows.append(Row("Corner noise (a posteriori)", p.sigma_px, "px"))
+    rows.append(Row("Views used / total", None if p.n_used is None else float(p.n_used), "",
+                    f"{p.n_outliers} outlier view(s)", shown=f"{n_used} / {p.n_views if p.n_views is not None else n_used}"))
     return rows
 
 
-def axis_results(results: dict[str, Any], axis: str) -> dict[str, Any] | None:
+def axis_results(results: Results | dict[str, Any], axis: str) -> Results | None:
     """One axis of a planar session shaped like a line session's results (its ISO 230-2 figures, its U), or None.
 
     What the line report's verdict and per-target sections read: ``figures``
     (that axis's ``iso230_2`` block plus its straightness) and ``uncertainty``
     (``uncertainty.per_axis[axis]`` when the results carry one).
     """
-    a = (((results.get("figures") or {}).get("planar") or {}).get("per_axis") or {}).get(axis) or {}
-    figures = a.get("iso230_2")
-    if not isinstance(figures, dict) or not figures.get("iso230_2"):
+    results = as_results(results)
+    pl = results.figures.planar
+    a = pl.per_axis.get(axis) if pl else None
+    if a is None or a.iso230_2 is None or a.iso230_2.iso230_2 is None:
         return None
-    unc = results.get("uncertainty") or {}
-    return {"figures": {**figures, "straightness_um_max": a.get("straightness_um_max"),
-                        "straightness_sigma_um": a.get("straightness_sigma_um")},
-            "uncertainty": (unc.get("per_axis") or {}).get(axis) or {}}
+    figures = Figures.from_dict({**a.iso230_2.raw, "straightness_um_max": a.straightness_um_max,
+                                 "straightness_sigma_um": a.straightness_sigma_um},
+                                f"figures.planar.per_axis.{axis}.iso230_2", results.source)
+    unc = results.uncertainty.per_axis.get(axis) if results.uncertainty else None
+    return replace(results, figures=figures, uncertainty=unc)
 
 
-def _unresolved(span: dict[str, Any]) -> str:
+def _unresolved(span: SpanResolution | None) -> str:
     """"not resolved (noise p-v X)" for a p-v that noise alone could give (core.resolution), else empty."""
     from lps_gui.core.resolution import not_resolved_text
 
-    if not span or span.get("resolved", True):
+    if span is None or span.resolved is None or span.resolved:
         return ""
-    return not_resolved_text(span.get("noise_span_um"), "\u00b5m")
+    return not_resolved_text(span.noise_span_um, "\u00b5m")
 
 
-def planar_truth_rows(results: dict[str, Any]) -> list[Row]:
-    tc = results.get("truth_comparison") or {}
-    if tc.get("per_coordinate_rms_error_um") is None:
+def planar_truth_rows(results: Results | dict[str, Any]) -> list[Row]:
+    tc = as_results(results).truth_comparison
+    if tc is None or tc.per_coordinate_rms_error_um is None:
         return []
-    ex, ey = tc["per_coordinate_rms_error_um"]
+    ex, ey = tc.per_coordinate_rms_error_um
     return [
-        Row(f"Position error RMS x ({tc['reference']})", ex, "\u00b5m"),
-        Row(f"Position error RMS y ({tc['reference']})", ey, "\u00b5m"),
-        Row("Mean reported 1\u03c3 per coordinate", tc["mean_sigma_um"], "\u00b5m"),
-        Row("Mean (error/\u03c3)\u00b2", tc["z_mean_square"], ""),
-        Row("True squareness (least-squares lines of the true path)", tc["squareness_urad"], "\u00b5rad"),
-        Row("Squareness error", tc["squareness_error_urad"], "\u00b5rad", f"{fmt(tc['squareness_z'])} \u03c3"),
-        Row("Scale X error", tc["scale_x_error_ppm"], "ppm"),
-        Row("Scale Y error", tc["scale_y_error_ppm"], "ppm"),
-    ] + ([Row("Out-of-plane displacement error RMS (board plane)", tc["out_of_plane_rms_error_um"], "\u00b5m",
-              f"mean (error/\u03c3)\u00b2 {fmt(tc.get('out_of_plane_z_mean_square'))}")]
-         if tc.get("out_of_plane_rms_error_um") is not None else [])
+        Row(f"Position error RMS x ({tc.reference})", ex, "\u00b5m"),
+        Row(f"Position error RMS y ({tc.reference})", ey, "\u00b5m"),
+        Row("Mean reported 1\u03c3 per coordinate", tc.mean_sigma_um, "\u00b5m"),
+        Row("Mean (error/\u03c3)\u00b2", tc.z_mean_square, ""),
+        Row("True squareness (least-squares lines of the true path)", tc.squareness_urad, "\u00b5rad"),
+        Row("Squareness error", tc.squareness_error_urad, "\u00b5rad", f"{fmt(tc.squareness_z)} \u03c3"),
+        Row("Scale X error", tc.scale_x_error_ppm, "ppm"),
+        Row("Scale Y error", tc.scale_y_error_ppm, "ppm"),
+    ] + ([Row("Out-of-plane displacement error RMS (board plane)", tc.out_of_plane_rms_error_um, "\u00b5m",
+              f"mean (error/\u03c3)\u00b2 {fmt(tc.out_of_plane_z_mean_square)}")]
+         if tc.out_of_plane_rms_error_um is not None else [])
 
 
-def planar_position_table(results: dict[str, Any]) -> tuple[list[str], list[list[str]], list[float]]:
-    positions = sorted(results.get("positions") or [], key=lambda r: r.get("index", 0))
+def planar_position_table(results: Results | dict[str, Any]) -> tuple[list[str], list[list[str]], list[float]]:
+    positions = as_results(results).sorted_positions()
     has_truth = any(r.get("truth_deviation_x_um") is not None for r in positions)
     columns = [c for c in PLANAR_TABLE_COLUMNS if has_truth or not c[0].startswith("truth_")]
     body = table_cells(positions, columns)
     return [c[1] for c in columns], body, [float(c[3]) for c in columns]
 
 
-def paint_planar_report(flow: Any, meta: dict[str, Any], results: dict[str, Any], title_rows: list[tuple[str, str]],
+def paint_planar_report(flow: Any, meta: dict[str, Any], results: Results, title_rows: list[tuple[str, str]],
                         figure_height_mm: float) -> None:
     """Every page of a planar session's report onto ``flow`` (a :class:`report.layout.PdfFlow`).
 
@@ -200,7 +208,7 @@ def paint_planar_report(flow: Any, meta: dict[str, Any], results: dict[str, Any]
                     "U (k = 2) is 2\u03c3 of corner noise alone: these results carry no uncertainty budget. ")
                    + "A board square-size error is a common scale error of both axes and does not change squareness.",
                    size_pt=7.5, color=R.GREY)
-    for note in (results["figures"]["planar"].get("notes") or []):
+    for note in results.figures.planar.notes if results.figures.planar else ():
         flow.paragraph(note, size_pt=7.5, color=R.GREY)
     truth = planar_truth_rows(results)
     if truth:
@@ -211,13 +219,13 @@ def paint_planar_report(flow: Any, meta: dict[str, Any], results: dict[str, Any]
     flow.table(None, [[k, v] for k, v in title_rows], [32, 148], size_pt=8.0, row_mm=4.2, align_right_from=9)
     for axis, ar in axes.items():
         R.iso_section(flow, ar, f"ISO 230-2 per target, {axis} axis (worst line)")
-    if results.get("environment") or results.get("uncertainty"):
+    if results.environment or results.uncertainty:
         flow.new_page()
-        per_axis = (results.get("uncertainty") or {}).get("per_axis") or {}
+        per_axis = results.uncertainty.per_axis if results.uncertainty else {}
         if not per_axis:
             R.uncertainty_sections(flow, results)
         for i, (axis, unc) in enumerate(per_axis.items()):
-            R.uncertainty_sections(flow, {**results, "uncertainty": unc}, axis=axis, environment=i == 0)
+            R.uncertainty_sections(flow, replace(results, uncertainty=unc), axis=axis, environment=i == 0)
     flow.new_page()
     flow.heading("Plots")
     for spec_fig in planar_figures_from_results(results):

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from typing import Any, Sequence
 
+from lps_gui.io.results_model import Results, as_results
 from lps_gui.report import budget_table as B
 from lps_gui.report import summary as S
 from lps_gui.report.iso_table import iso_target_table
@@ -21,9 +22,9 @@ NOTE_SIZE = 7.0
 GREY = "#555555"
 
 
-def stage_spec(meta: dict[str, Any], results: dict[str, Any]) -> dict[str, Any] | None:
+def stage_spec(meta: dict[str, Any], results: Results | dict[str, Any]) -> dict[str, Any] | None:
     """The stage specification: session.json's, else the one results.json carries."""
-    return meta.get("stage_spec") or results.get("stage_spec") or (results.get("session_meta") or {}).get("stage_spec")
+    return meta.get("stage_spec") or as_results(results).stage_spec
 
 
 def figure_table(flow: Any, rows: Sequence[S.Row]) -> None:
@@ -67,7 +68,7 @@ NO_SPEC = ("No stage specification in session.json (key \"stage_spec\"; enter it
            "the capture panel): no verdict is given.")
 
 
-def verdict_section(flow: Any, results: dict[str, Any], spec: dict[str, Any] | None,
+def verdict_section(flow: Any, results: Results, spec: dict[str, Any] | None,
                     front_rows: Sequence[S.Row] | None = None) -> None:
     """Heading, the overall word and the verdict table; without a spec, ``front_rows`` (the figures with U)."""
     rows = verdicts(results, spec)
@@ -82,7 +83,7 @@ def verdict_section(flow: Any, results: dict[str, Any], spec: dict[str, Any] | N
         figure_table(flow, front_rows)
 
 
-def iso_section(flow: Any, results: dict[str, Any], title: str = "ISO 230-2 per target") -> bool:
+def iso_section(flow: Any, results: Results, title: str = "ISO 230-2 per target") -> bool:
     """The ISO 230-2 per-target table with its legend; False (nothing painted) without one."""
     table = iso_target_table(results)
     if table is None:
@@ -97,7 +98,7 @@ def iso_section(flow: Any, results: dict[str, Any], title: str = "ISO 230-2 per 
     return True
 
 
-def uncertainty_sections(flow: Any, results: dict[str, Any], axis: str | None = None, environment: bool = True) -> None:
+def uncertainty_sections(flow: Any, results: Results, axis: str | None = None, environment: bool = True) -> None:
     """Environment, then the GUM budget (ISO/TR 230-9 style); ``axis`` names one axis's budget of a planar stage."""
     if environment:
         flow.heading("Environment", 11)

@@ -15,6 +15,8 @@ import numpy as np
 from lps_gui.core.camera_model import INTRINSIC_NAMES
 from lps_gui.io.results_file import SummaryFigure, extreme_figures, iso_figures, summary_figures
 from lps_gui.io.results_file import finite_number as _num
+from lps_gui.io.results_model import Results, as_results
+from lps_gui.io.results_sections import Iso230
 from lps_gui.report.figures import position_columns
 
 METHOD_NAMES = {"joint": "joint LM (all positions, orientation and line at once)",
@@ -98,33 +100,34 @@ def fmt(value: float | None, digits: int = 3) -> str:
 # ----------------------------------------------------------------------------- title block
 
 
-def title_rows(session_meta: dict[str, Any], results: dict[str, Any], version: str) -> list[tuple[str, str]]:
+def title_rows(session_meta: dict[str, Any], results: Results | dict[str, Any], version: str) -> list[tuple[str, str]]:
     """(label, text) pairs of the identification block: who, what, with which equipment and software.
 
     ``session_meta["identification"]`` holds what the operator typed (operator,
     customer, stage_model, stage_serial, controller_serial, location); a
     driver's class name ("RigStage") is printed as words ("simulated stage").
     """
+    results = as_results(results)
     camera = session_meta.get("camera") or {}
     stage = session_meta.get("stage") or {}
     ident = session_meta.get("identification") or {}
-    board = results.get("board") or session_meta.get("board") or {}
+    board = results.board.raw if results.board else session_meta.get("board") or {}
     corners = board.get("inner_corners") or ["?", "?"]
-    sha = ((results.get("inputs") or {}).get("sha256") or {})
+    sha = results.inputs.sha256 if results.inputs else {}
     session_hash = sha.get("session.json") or sha.get("session") or ""
     truth = session_meta.get("truth")
     rig = session_meta.get("rig") or stage.get("rig") or (f"simulated ({truth.get('preset', 'simulator')})" if truth else DASH)
-    intr = results.get("intrinsics") or {}
-    size = intr.get("image_size") or camera.get("image_size")
+    intr = results.intrinsics
+    size = (intr.image_size if intr else ()) or camera.get("image_size")
     if not size and camera.get("width") and camera.get("height"):
         size = [camera["width"], camera["height"]]
-    fx = (np.asarray(intr.get("camera_matrix") or np.zeros((3, 3)), dtype=float))[0, 0]
+    fx = float(intr.K[0, 0]) if intr and intr.camera_matrix else 0.0
     lens = _describe(camera, ("lens", "focal_length_mm"), "")
     stage_text = _describe({**stage, "model": ident.get("stage_model") or stage.get("model")},
                            ("name", "model", "driver", "kind"), DASH)
     if ident.get("stage_serial"):
         stage_text += f", serial {ident['stage_serial']}"
-    axes = stage.get("axes") or results.get("axes") or []
+    axes = stage.get("axes") or results.axes
     if len(axes) > 1:
         stage_text += f", axes {', '.join(str(a) for a in axes)}"
     elif stage.get("axis"):
@@ -133,15 +136,15 @@ def title_rows(session_meta: dict[str, Any], results: dict[str, Any], version: s
     if ident.get("controller_serial"):
         controller += f", serial {ident['controller_serial']}"
     board_text = f"chessboard {corners[0]}\u00d7{corners[1]} inner corners, square {fmt(board.get('square_mm'), 4)} mm at 20 \u00b0C"
-    u_sq = (results.get("environment") or {}).get("square_mm_uncertainty_um")
+    u_sq = results.environment.square_mm_uncertainty_um if results.environment else None
     if u_sq is not None:
-        board_text += f", u = {fmt(_num(u_sq), 2)} \u00b5m"
+        board_text += f", u = {fmt(u_sq, 2)} \u00b5m"
     return [
-        ("Date", str(results.get("created") or session_meta.get("created") or DASH)),
+        ("Date", str(results.created or session_meta.get("created") or DASH)),
         ("Customer", str(ident.get("customer") or "not recorded")),
         ("Operator", str(ident.get("operator") or "not recorded")),
         ("Location", str(ident.get("location") or "not recorded")),
-        ("Session", str((results.get("inputs") or {}).get("session") or DASH)),
+        ("Session", str((results.inputs and results.inputs.session) or DASH)),
         ("Rig", str(rig)),
         ("Stage", stage_text),
         ("Controller", controller),
@@ -173,14 +176,14 @@ def _describe(d: dict[str, Any], keys: Sequence[str], default: str) -> str:
     return ", ".join(parts) if parts else default
 
 
-def intrinsics_rows(results: dict[str, Any]) -> list[tuple[str, str, str]]:
+def intrinsics_rows(results: Results | dict[str, Any]) -> list[tuple[str, str, str]]:
     """(name, value, std) of the 9 intrinsics; std a dash when the file has none."""
-    intr = results.get("intrinsics") or {}
-    K = np.asarray(intr.get("camera_matrix") or np.eye(3), dtype=float)
-    dist = list(intr.get("dist") or []) + [0.0] * 5
+    intr = as_results(results).intrinsics
+    K = intr.K if intr else np.eye(3)
+    dist = list(intr.dist if intr else ()) + [0.0] * 5
     values = {"fx": K[0, 0], "fy": K[1, 1], "cx": K[0, 2], "cy": K[1, 2], "k1": dist[0], "k2": dist[1],
               "p1": dist[2], "p2": dist[3], "k3": dist[4]}
-    std = intr.get("std") or {}
+    std = intr.std if intr else {}
     out = []
     for name in INTRINSIC_NAMES:
         unit = " px" if name in ("fx", "fy", "cx", "cy") else ""
@@ -188,12 +191,13 @@ def intrinsics_rows(results: dict[str, Any]) -> list[tuple[str, str, str]]:
     return out
 
 
-def method_rows(results: dict[str, Any]) -> list[tuple[str, str]]:
+def method_rows(results: Results | dict[str, Any]) -> list[tuple[str, str]]:
     """Method, its settings and the fit statistics, as (label, text)."""
-    p = results.get("parameters") or {}
-    method = str(results.get("method") or DASH)
+    results = as_results(results)
+    p = results.parameters.raw
+    method = str(results.method or DASH)
     rows = [("Method", METHOD_NAMES.get(method, method))]
-    for k, v in (results.get("settings") or {}).items():
+    for k, v in results.settings.items():
         if k == "method" or (isinstance(v, dict) and k != method):
             continue  # the method is above; another method's options do not apply
         text = ", ".join(f"{a}={b}" for a, b in v.items()) if isinstance(v, dict) else str(v)
@@ -203,7 +207,7 @@ def method_rows(results: dict[str, Any]) -> list[tuple[str, str]]:
         ("Observations, dof", f"{p.get('n_observations', DASH)}, {p.get('dof', DASH)}"),
         ("RMS residual", f"{fmt(_num(p.get('rms_px')))} px (noise \u03c3 {fmt(_num(p.get('sigma_px')))} px)"),
         ("Iterations", f"{p.get('iterations', DASH)} ({'converged' if p.get('converged') else 'NOT converged'})"),
-        ("Intrinsics from", str((results.get("inputs") or {}).get("intrinsics_source") or DASH)),
+        ("Intrinsics from", str((results.inputs and results.inputs.intrinsics_source) or DASH)),
     ]
     return rows
 
@@ -222,7 +226,7 @@ def _row(f: SummaryFigure) -> Row:
                unresolved=f.unresolved)
 
 
-def iso_rows(iso: dict[str, Any] | None) -> list[Row]:
+def iso_rows(iso: Iso230 | dict[str, Any] | None) -> list[Row]:
     """ISO 230-2 figures of results.json (``core.iso230.Iso230Figures`` as a dict) as rows.
 
     Order A, R, E, B, M; each bidirectional, then forward and backward
@@ -230,10 +234,10 @@ def iso_rows(iso: dict[str, Any] | None) -> list[Row]:
     counts are left to the plots and the table; numeric keys we do not know
     are printed with their own words.
     """
-    return [_row(f) for f in iso_figures(iso)]
+    return [_row(f) for f in iso_figures(iso.raw if isinstance(iso, Iso230) else iso)]
 
 
-def summary_rows(results: dict[str, Any]) -> list[Row]:
+def summary_rows(results: Results | dict[str, Any]) -> list[Row]:
     """The summary figures of SPEC 5 as printed in the report, in report order.
 
     The figures of :func:`lps_gui.io.results_file.summary_figures` (the same
@@ -241,13 +245,15 @@ def summary_rows(results: dict[str, Any]) -> list[Row]:
     ISO 230-2 figures (absent with one run), maxima of straightness and
     angles over the positions not flagged; the truth comparison is :func:`truth_rows`, on its own page.
     """
-    return [_with_u(results, _row(f)) for f in summary_figures(results)
+    results = as_results(results)
+    return [_with_u(results, _row(f)) for f in summary_figures(results.to_dict())
             if f.label is not None and not f.key.startswith("truth_")]
 
 
-def truth_rows(results: dict[str, Any]) -> list[Row]:
+def truth_rows(results: Results | dict[str, Any]) -> list[Row]:
     """The simulator's truth comparison (simulated sessions only): printed on its own page, labelled."""
-    return [_row(f) for f in summary_figures(results) if f.label is not None and f.key.startswith("truth_")]
+    return [_row(f) for f in summary_figures(as_results(results).to_dict())
+            if f.label is not None and f.key.startswith("truth_")]
 
 
 U_KEYS = {"step_std": "step_std_um", "max_abs_deviation": "max_abs_deviation_um", "scale": "scale_ppm",
@@ -263,41 +269,41 @@ def u_key(key: str) -> str:
     return U_KEYS.get(key, key)
 
 
-def _with_u(results: dict[str, Any], row: Row) -> Row:
+def _with_u(results: Results, row: Row) -> Row:
     """The row with its U (k = 2), read from results ``uncertainty.figures_k2`` and nowhere else.
 
     The mean step's is stored in um and printed in the row's mm; a figure
     printed as "not resolved" carries no U (it states no value to carry one).
     """
-    u = (results.get("uncertainty") or {}).get("figures_k2") or {}
-    if row.unresolved:
+    unc = results.uncertainty
+    if row.unresolved or unc is None:
         return row
     if row.key == "mean_step":
-        value = _num(u.get("mean_step_um"))
+        value = unc.u_k2("mean_step_um")
         return replace(row, u_k2=None if value is None else 1e-3 * value)
-    return replace(row, u_k2=_num(u.get(u_key(row.key))))
+    return replace(row, u_k2=unc.u_k2(u_key(row.key)))
 
 
-def figure_notes(results: dict[str, Any]) -> list[str]:
+def figure_notes(results: Results | dict[str, Any]) -> list[str]:
     """The caveats the figures carry (e.g. ISO 230-2 asks for 5 runs), each once."""
-    figs = results.get("figures") or {}
+    figs = as_results(results).figures
     notes: list[str] = []
-    for part in (figs.get("single_run") or {}, figs.get("iso230_2") or {}):
-        for note in part.get("notes") or []:
+    for part in (figs.single_run, figs.iso230_2):
+        for note in part.notes if part else ():
             if str(note) not in notes:
                 notes.append(str(note))
     return notes
 
 
-def extremes_rows(results: dict[str, Any]) -> list[Row]:
+def extremes_rows(results: Results | dict[str, Any]) -> list[Row]:
     """Peak-to-valley straightness per direction v1/v2 and max |roll|, |pitch|, |yaw| (outliers excluded)."""
-    return [_row(f) for f in extreme_figures(results)]
+    return [_row(f) for f in extreme_figures(as_results(results).to_dict())]
 
 
 # ----------------------------------------------------------------------------- specification
 
 
-def spec_checks(results: dict[str, Any], spec: dict[str, Any] | None) -> list[SpecCheck]:
+def spec_checks(results: Results | dict[str, Any], spec: dict[str, Any] | None) -> list[SpecCheck]:
     """Pass/fail of the stage specification (session.json ``stage_spec``), by ``core.iso230.check_specification``.
 
     One source of truth for how a data sheet is read (+-limits against half
@@ -307,7 +313,7 @@ def spec_checks(results: dict[str, Any], spec: dict[str, Any] | None) -> list[Sp
         return []
     from lps_gui.core.iso230 import check_specification
 
-    return [_as_check(c) for c in check_specification(results.get("figures") or {}, spec)]
+    return [_as_check(c) for c in check_specification(dict(as_results(results).figures.raw), spec)]
 
 
 def _as_check(c: dict[str, Any]) -> SpecCheck:
@@ -320,15 +326,16 @@ def _as_check(c: dict[str, Any]) -> SpecCheck:
 # ----------------------------------------------------------------------------- limits
 
 
-def limits_notes(results: dict[str, Any]) -> list[str]:
+def limits_notes(results: Results | dict[str, Any]) -> list[str]:
     """What limits the result, in words a metrologist signs: board scale, intrinsics, noise."""
-    board = results.get("board") or {}
+    results = as_results(results)
+    square_mm = results.board.square_mm if results.board else None
     cols = position_columns(results)
     sig = cols["sigma_um"][np.isfinite(cols["sigma_um"])]
     tot = cols["sigma_total_um"][np.isfinite(cols["sigma_total_um"])]
     notes = [
         "Board scale: every length is measured in units of the board's square size "
-        f"({fmt(_num(board.get('square_mm')), 4)} mm as given). An error in the printed square size is a pure "
+        f"({fmt(square_mm, 4)} mm as given). An error in the printed square size is a pure "
         "scale error: a square 0.1 % too large makes every position and the scale error 1000 ppm too large, "
         "and leaves the shape of the deviation curve, the straightness and the angles unchanged. Measure the "
         "board with a calibrated instrument to remove it; its certified uncertainty (environment "
@@ -356,16 +363,16 @@ def limits_notes(results: dict[str, Any]) -> list[str]:
     return notes
 
 
-def straightness_notes(results: dict[str, Any], cols: dict[str, np.ndarray]) -> list[str]:
+def straightness_notes(results: Results, cols: dict[str, np.ndarray]) -> list[str]:
     """What one planar board resolves (SPEC 11): straightness and image rotation yes, the tilts hardly."""
     med = {k: fmt(float(np.median(v[np.isfinite(v)])), 2) if np.isfinite(v).any() else DASH
            for k, v in ((k, cols.get(k, np.array([np.nan]))) for k in (
                "straightness_sigma_um_1", "straightness_sigma_um_2", "roll_sigma_urad", "pitch_sigma_urad",
                "yaw_sigma_urad"))}
-    rot = np.array([_num(r.get("image_rotation_sigma_urad")) or np.nan for r in results.get("positions") or []], float)
+    rot = results.column("image_rotation_sigma_urad")
     rot_med = fmt(float(np.median(rot[np.isfinite(rot)])), 2) if np.isfinite(rot).any() else DASH
-    st = (results.get("figures") or {}).get("straightness") or {}
-    if "constant orientation" not in str(st.get("basis", "")):
+    st = results.figures.straightness
+    if st is None or "constant orientation" not in str(st.basis or ""):
         return ["Straightness and angles come from each view's own pose, which is far less certain than its "
                 f"position along the line: median 1\u03c3 is {med['straightness_sigma_um_1']} \u00b5m (v1) and "
                 f"{med['straightness_sigma_um_2']} \u00b5m (v2). Figures that noise alone could produce are shown "
@@ -389,21 +396,22 @@ def straightness_notes(results: dict[str, Any], cols: dict[str, np.ndarray]) -> 
     ]
 
 
-def outlier_rows(results: dict[str, Any]) -> list[dict[str, Any]]:
+def outlier_rows(results: Results | dict[str, Any]) -> list[dict[str, Any]]:
     """Flagged views: index, file, reason, RMS residual; flags without a position row are kept too."""
-    by_index = {int(r.get("index", -1)): r for r in results.get("positions") or []}
+    results = as_results(results)
+    by_index = {r.index: r for r in results.positions}
     rows = {}
     for r in by_index.values():
-        if r.get("outlier"):
-            rows[int(r["index"])] = {"index": int(r["index"]), "file": r.get("file") or "",
-                                     "reason": r.get("outlier_reason") or "flagged", "rms_px": _num(r.get("rms_px"))}
-    for f in results.get("flags") or []:
-        i = int(f.get("index", -1))
-        pos = by_index.get(i, {})
-        entry = rows.setdefault(i, {"index": i, "file": pos.get("file") or "", "reason": "",
-                                    "rms_px": _num(pos.get("rms_px"))})
-        msg = f.get("message") or f.get("kind") or ""
-        entry["reason"] = msg if not entry["reason"] or entry["reason"] in ("flagged", f.get("kind")) else entry["reason"]
+        if r.outlier:
+            rows[r.index] = {"index": r.index, "file": r.file or "", "reason": r.outlier_reason or "flagged",
+                             "rms_px": r.number("rms_px")}
+    for f in results.flags:
+        i = -1 if f.index is None else f.index
+        pos = by_index.get(i)
+        entry = rows.setdefault(i, {"index": i, "file": (pos and pos.file) or "", "reason": "",
+                                    "rms_px": pos.number("rms_px") if pos else None})
+        msg = f.message or f.kind or ""
+        entry["reason"] = msg if not entry["reason"] or entry["reason"] in ("flagged", f.kind) else entry["reason"]
     return [rows[k] for k in sorted(rows)]
 
 
@@ -418,9 +426,10 @@ POSITION_TABLE_COLUMNS = (  # (key, header, decimals or None for text, width in 
 )
 
 
-def table_cells(positions: Sequence[dict[str, Any]], columns: Sequence[tuple[str, str, int | None, float]]
+def table_cells(positions: Sequence[Any], columns: Sequence[tuple[str, str, int | None, float]]
                 ) -> list[list[str]]:
-    """Text cells of a per-position table: fixed decimals per column, a dash when absent, "yes" for outliers."""
+    """Text cells of a per-position table (rows with ``get``: :class:`Position`): fixed decimals per column,
+    a dash when absent, "yes" for outliers."""
     body = []
     for r in positions:
         row = []
@@ -437,12 +446,12 @@ def table_cells(positions: Sequence[dict[str, Any]], columns: Sequence[tuple[str
     return body
 
 
-def position_table(results: dict[str, Any]) -> tuple[list[str], list[list[str]], list[float]]:
+def position_table(results: Results | dict[str, Any]) -> tuple[list[str], list[list[str]], list[float]]:
     """Header, text rows and column widths (mm) of the per-position table (fixed decimals per column).
 
     The truth column appears only for simulated sessions (results carry ``truth_deviation_um``).
     """
-    positions = sorted(results.get("positions") or [], key=lambda r: r.get("index", 0))
+    positions = as_results(results).sorted_positions()
     has_truth = any(r.get("truth_deviation_um") is not None for r in positions)
     columns = [c for c in POSITION_TABLE_COLUMNS if has_truth or c[0] != "truth_deviation_um"]
     header = [c[1] for c in columns]

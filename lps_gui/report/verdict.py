@@ -17,6 +17,7 @@ from typing import Any
 
 from lps_gui.core.iso230 import ISO_RUNS
 from lps_gui.core.resolution import runs_per_direction
+from lps_gui.io.results_model import Results, as_results
 from lps_gui.report.summary import SpecCheck, fmt, spec_checks
 
 PASS_COLOR, FAIL_COLOR, INDICATIVE_COLOR, GREY = "#007a1f", "#c00000", "#a05a00", "#555555"
@@ -47,11 +48,11 @@ class Verdict:
         return f"{self.quantity} = {value}" if self.quantity else value
 
 
-def _straightness_quantity(results: dict[str, Any]) -> str:
+def _straightness_quantity(results: Results) -> str:
     """"p-v v1" or "p-v v2": the larger per-target span, the one the straight-line check compares."""
-    st = (results.get("figures") or {}).get("straightness") or {}
-    spans = [(float(st[k]["span_um"]), k) for k in ("v1", "v2") if isinstance(st.get(k), dict)
-             and st[k].get("span_um") is not None]
+    st = results.figures.straightness
+    spans = [(v.span_um, k) for k, v in (("v1", st.v1), ("v2", st.v2)) if v is not None and v.span_um is not None
+             ] if st else []
     return f"p-v {max(spans)[1]}" if spans else "p-v"
 
 
@@ -67,13 +68,14 @@ def _decide(c: SpecCheck, u: float | None) -> str:
     return "PASS" if c.passed else "FAIL"
 
 
-def verdicts(results: dict[str, Any], spec: dict[str, Any] | None) -> list[Verdict]:
-    """The verdict rows of a results dict against a stage specification (empty without one)."""
+def verdicts(results: Results | dict[str, Any], spec: dict[str, Any] | None) -> list[Verdict]:
+    """The verdict rows of results against a stage specification (empty without one)."""
     if not spec:
         return []
-    figures_k2 = (results.get("uncertainty") or {}).get("figures_k2") or {}
+    results = as_results(results)
+    figures_k2 = results.uncertainty.figures_k2 if results.uncertainty else {}
     half = 0.5 if str(spec.get("limits", "plus_minus")) == "plus_minus" else 1.0
-    runs = runs_per_direction(results.get("figures") or {})
+    runs = runs_per_direction(dict(results.figures.raw))
     out = []
     for c in spec_checks(results, spec):
         key, run_statistic = CHECK_FIGURES.get(c.name, (None, False))

@@ -93,9 +93,9 @@ def test_capture_then_detect_and_estimate(qtbot, make_window, tmp_path):
     assert rp.drawn["residuals"].point_count("RMS") == 12
     # against the simulator's truth (recorded per frame during the capture): the position error is
     # consistent with the uncertainty the estimate reports
-    truth = rp.results.get("truth_comparison") or {}
-    assert truth.get("position_rms_error_um") is not None
-    assert truth["position_rms_error_um"] < 3.0 * truth["mean_sigma_um"]
+    truth = rp.results.truth_comparison
+    assert truth is not None and truth.position_rms_error_um is not None
+    assert truth.position_rms_error_um < 3.0 * truth.mean_sigma_um
     # clicking a view shows its captured image with the residual vectors
     assert rp.show_view(5) == 5
     assert rp.detail.image.image is not None and rp.detail.image.image.shape == (480, 640)

@@ -49,7 +49,7 @@ def test_estimate_plots_click_and_export(qtbot, window, session_dir, tmp_path, g
 
     rp = window.results_panel
     K = 4 * 30
-    assert len(rp.results["positions"]) == K
+    assert len(rp.results.positions) == K
     drawn = rp.drawn
     assert drawn["positions"].point_count("measured") == K
     assert drawn["residuals"].point_count("RMS") == K
@@ -65,7 +65,7 @@ def test_estimate_plots_click_and_export(qtbot, window, session_dir, tmp_path, g
     assert window.estimation_panel.table.rowCount() > 5
 
     # clicking near the outlier in the residual plot shows that view with its residual vectors
-    rms = [r["rms_px"] for r in rp.results["positions"] if r["index"] == REPLACED_VIEW][0]
+    rms = [r.number("rms_px") for r in rp.results.positions if r.index == REPLACED_VIEW][0]
     assert rp.show_view_at("residuals", REPLACED_VIEW, rms) == REPLACED_VIEW
     assert "OUTLIER" in rp.detail.title.text()
     # the corners are read on a worker thread; the residual vectors appear when they arrive
@@ -96,8 +96,8 @@ def test_clicking_a_plotted_point_opens_its_view(qtbot, window, session_dir):
     plot = rp.plots["residuals"]
     rp.show_figure("residuals")
     qtbot.waitUntil(lambda: plot.isVisible(), timeout=5000)
-    row = [r for r in rp.results["positions"] if r["index"] == 40][0]
-    scene_pt = plot.getPlotItem().vb.mapViewToScene(QPointF(40.0, row["rms_px"]))
+    row = [r for r in rp.results.positions if r.index == 40][0]
+    scene_pt = plot.getPlotItem().vb.mapViewToScene(QPointF(40.0, row.number("rms_px")))
     qtbot.mouseClick(plot.viewport(), Qt.MouseButton.LeftButton, pos=plot.mapFromScene(scene_pt))
     qtbot.waitUntil(lambda: rp.detail.shown_index == 40, timeout=5000)
     assert rp.detail.title.text().startswith("view 40")
@@ -156,7 +156,7 @@ def test_hybrid_method_with_its_options(qtbot, window, session_dir, tmp_path):
     assert opts["grid_window_mm"] == 0.5 and opts["threshold_px"] is None
     run_estimation(qtbot, window, folder)
     res = window.results_panel.results
-    assert res["method"] == "hybrid" and len(res["positions"]) == 120
+    assert res.method == "hybrid" and len(res.positions) == 120
     assert window.last_error is None
 
 

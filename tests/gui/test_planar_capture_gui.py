@@ -105,7 +105,7 @@ def test_planar_capture_on_the_simulated_gantry_then_estimate_and_resume(qtbot, 
         est.run_btn.click()
     rp = window.results_panel
     qtbot.waitUntil(lambda: not rp.drawing and est.run_btn.isEnabled(), timeout=20000)
-    assert rp.results["axes"] == ["X", "Y"]
+    assert rp.results.axes == ("X", "Y")
     assert "error_map" in rp.drawn
     arrows = next(item for spec, item in zip(rp.drawn["error_map"].spec.series, rp.drawn["error_map"].items)
                   if spec.label == "mean error")

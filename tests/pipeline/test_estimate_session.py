@@ -6,7 +6,7 @@ import pytest
 
 from lps_gui.cli import main
 from lps_gui.core.simulate import small_spec
-from lps_gui.io.results_file import read_results
+from lps_gui.io.results_model import read_results
 from lps_gui.pipeline.estimate import estimate_session
 from lps_gui.sim.points import simulate_point_session
 
@@ -21,7 +21,7 @@ def session(tmp_path):
 def test_results_files_follow_spec(session):
     results = estimate_session(session)
     assert (session / "positions.csv").exists() and (session / "summary.csv").exists()
-    assert read_results(session) == json.loads(json.dumps(results))
+    assert read_results(session).to_dict() == json.loads(json.dumps(results))
     header = (session / "positions.csv").read_text().splitlines()[0].split(",")
     assert header == ["index", "run", "direction", "target_mm", "measured_mm", "deviation_um", "sigma_um", "rms_px",
                       "outlier", "straightness_um_1", "straightness_um_2", "roll_urad", "pitch_urad", "yaw_urad"]

@@ -129,8 +129,9 @@ def test_csv_has_nominal_and_measured_centres(session, tmp_path):
 
 
 def test_straightness_components_move_the_cameras_only_when_resolved():
+    from lps_gui.io.results_sections import Figures
     from lps_gui.pipeline.export import straightness_resolved
 
-    assert straightness_resolved({"figures": {}}) == (False, False)
+    assert straightness_resolved(Figures.from_dict({})) == (False, False)
     figs = {"straightness": {"v1": {"resolved": True}, "v2": {"resolved": False}}}
-    assert straightness_resolved({"figures": figs}) == (True, False)
+    assert straightness_resolved(Figures.from_dict(figs)) == (True, False)

@@ -152,11 +152,12 @@ def test_item11_the_exit_status_is_documented(capsys):
 
 
 def test_item11_non_convergence_is_reported():
+    from lps_gui.io.results_sections import Parameters
     from lps_gui.pipeline.session_checks import result_doubts
 
-    assert result_doubts({"parameters": {"converged": True, "sigma_px": 0.2}}) == []
-    assert "did not converge" in result_doubts({"parameters": {"converged": False, "sigma_px": 0.2, "iterations": 50}})[0]
-    assert "implausible" in result_doubts({"parameters": {"converged": True, "sigma_px": 1.2e13}})[0]
+    assert result_doubts(Parameters.from_dict({"converged": True, "sigma_px": 0.2})) == []
+    assert "did not converge" in result_doubts(Parameters.from_dict({"converged": False, "sigma_px": 0.2, "iterations": 50}))[0]
+    assert "implausible" in result_doubts(Parameters.from_dict({"converged": True, "sigma_px": 1.2e13}))[0]
 
 
 # ------------------------------------------------------------------ item 12: duplicate views in intrinsics

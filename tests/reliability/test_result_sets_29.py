@@ -95,7 +95,7 @@ def _kill_after_renames(monkeypatch, folder: Path, n_done: int) -> None:
 
 @pytest.mark.parametrize("n_done", [0, 1, 2, 3])
 def test_item6_a_kill_between_the_renames_is_finished_by_the_next_reader(estimated, monkeypatch, n_done):
-    from lps_gui.io.results_file import read_results
+    from lps_gui.io.results_model import read_results
 
     old = set_bytes(estimated)
     _kill_after_renames(monkeypatch, estimated, n_done)
@@ -106,7 +106,7 @@ def test_item6_a_kill_between_the_renames_is_finished_by_the_next_reader(estimat
     results = read_results(estimated)  # any reader finishes the commit first
     new = set_bytes(estimated)
     assert not (estimated / file_set.JOURNAL).exists()
-    assert results["method"] == "pnp" and new["results.json"] != old["results.json"]
+    assert results.method == "pnp" and new["results.json"] != old["results.json"]
     latest = (estimated / HISTORY_DIR / LATEST_FILE).read_text()
     entry = estimated / HISTORY_DIR / __import__("json").loads(latest)["latest"]
     for name in ("results.json", "positions.csv", "summary.csv"):  # one set: the history copy of the same estimate

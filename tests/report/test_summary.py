@@ -153,5 +153,5 @@ def test_verdict_decision_rule_and_indicative_runs():
 def test_no_thermal_correction_says_which_case_applies(env, why):
     from lps_gui.report.budget_table import environment_rows
 
-    rows = dict(environment_rows({"environment": env}))
+    rows = dict(environment_rows({**make_results()[0], "environment": env}))
     assert rows["Thermal correction applied"] == f"none: {why}"

@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from lps_gui.errors import InputError
-from lps_gui.io.results_sections import (BoardRecord, EnvironmentRecord, Figures, Flag, Inputs, IntrinsicsRecord,
+from lps_gui.io.results_sections import (AsmeB564, BoardRecord, EnvironmentRecord, Figures, Flag, Inputs, IntrinsicsRecord,
                                          Parameters, Position, Software, TruthComparison, Uncertainty)
 from lps_gui.io.typed_json import Section, finite_number, section_fields
 
@@ -66,6 +66,7 @@ class Results(Section):
     environment: EnvironmentRecord | None = None
     uncertainty: Uncertainty | None = None
     summary: tuple[Any, ...] = ()
+    asme_b5_64: AsmeB564 | None = None
     extra: Mapping[str, Any] = field(default_factory=dict, metadata={"not_read": True})  # sections not known here
     source: str = field(default="results", compare=False, metadata={"not_read": True})  # the file, for messages
 

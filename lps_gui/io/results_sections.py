@@ -303,3 +303,37 @@ class Uncertainty(Section):
     def u_k2(self, key: str) -> float | None:
         """U (k = 2) of the figure ``key`` of ``figures_k2``, None when not assessed."""
         return finite_number(self.figures_k2.get(key))
+
+
+@dataclass(frozen=True, kw_only=True)
+class AsmeFigure(Section):
+    """One ISO 230-2 figure under both names (``asme_b5_64.figures``, docs/asme-b5.64.md)."""
+
+    symbol: str | None = None
+    key: str | None = None
+    iso230_2: str | None = None
+    asme_b5_64: str | None = None
+    value_um: float | None = None
+    U_um: float | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class UncertaintyRatio(Section):
+    """Tolerance over U (k = 2) of one specified figure; ``tur`` None without U."""
+
+    figure: str | None = None
+    quantity: str | None = None
+    tolerance: float | None = None
+    U: float | None = None
+    unit: str | None = None
+    tur: float | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class AsmeB564(Section):
+    """``asme_b5_64``: the figures named both ways, the TURs and an ASME test's own section (steps, settling)."""
+
+    figures: tuple[AsmeFigure, ...] = ()
+    test_uncertainty_ratio: tuple[UncertaintyRatio, ...] = ()
+    incremental_step: Mapping[str, Any] | None = None
+    settling: Mapping[str, Any] | None = None

@@ -118,7 +118,7 @@ def test_a_rendered_row_is_detected_and_estimated_within_the_bound(tmp_path, cap
 
 def _rendered_row(folder, name: str, capsys, stops: str | None = None) -> None:
     assert lps_main(["simulate", "--preset", name, str(folder), *(["--stops", stops] if stops else [])]) == 0
-    assert lps_main(["detect", str(folder)]) == 0
+    assert lps_main(["detect", str(folder), "--workers", "1"]) == 0
     out = capsys.readouterr().out
     assert "targets:" in out and "T0:" in out and "partial" in out
     assert lps_main(["estimate", str(folder)]) == 0

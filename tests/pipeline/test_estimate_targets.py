@@ -144,3 +144,16 @@ def test_options_a_target_session_does_not_take_are_one_line_errors(tmp_path, me
     with pytest.raises(LpsError, match=words):
         estimate_session(session.folder, method=method, options=options)
     assert not (session.folder / "results.json").exists()
+
+
+@pytest.mark.slow
+def test_a_row_captured_on_the_simulated_rig_is_estimated_against_its_truth(tmp_path, capsys):
+    """lps capture on the simulated rig renders the row (the simulated camera) through the capture engine."""
+    folder = tmp_path / "cap"
+    assert lps_main(["capture", "--preset", "small-row", "--out", str(folder)]) == 0
+    session = Session.open(folder)
+    assert session.targets() is not None and len(session.truth["targets"]) == 3
+    assert lps_main(["detect", str(folder), "--workers", "1"]) == 0
+    assert lps_main(["estimate", str(folder)]) == 0
+    tc = json.loads((folder / "results.json").read_text())["truth_comparison"]
+    assert tc["position_rms_error_um"] < 1.5 * tc["mean_sigma_um"] and tc["targets"]["max_abs_z"] < 4.5

@@ -21,6 +21,8 @@ import numpy as np
 from lps_gui.core.estimate_types import EstimateOptions, LpsEstimate, Selections, step_pairs
 from lps_gui.core.joint_lm import LpsState
 from lps_gui.core.observations import Observations
+from lps_gui.core.outlier_round import Solution, judge_views, solve_with_outliers
+from lps_gui.core.outliers import position_outliers
 from lps_gui.core.planar_estimate import PlanarEstimate, planar_fit
 from lps_gui.core.planar_model import PlanarState
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
@@ -77,15 +79,46 @@ def estimate_with_targets(obs: Observations, opt: EstimateOptions, progress: Pro
     """Positions of every stop and the targets' poses (SPEC 13), as the estimate type of ``obs.D``."""
     check_target_options(opt)
     t0 = time.perf_counter()
-    tobs = TargetObservations(list(obs.mounted), obs.corners_px, obs.targets, list(obs.names))
-    sol = solve_targets(tobs, obs.intrinsics, progress=progress)
-    if cancel is not None:
-        cancel.check("estimation")
-    timings = {"solve": time.perf_counter() - t0}
+    timings: dict[str, float] = {}
+    rounds = Solution(None, 0, obs.usable_views(), np.zeros(obs.K, bool), [""] * obs.K)
+
+    def solve(r: Solution) -> None:
+        corners = np.where(r.used[:, None, None], obs.corners_px, np.nan)  # flagged views leave the solve
+        tobs = TargetObservations(list(obs.mounted), corners, obs.targets, list(obs.names))
+        r.state = solve_targets(tobs, obs.intrinsics, progress=progress)
+        r.ref, r.iterations, r.converged = r.state.reference, r.state.iterations, r.state.converged
+        if not r.flags:  # the first solve says which views see a target at all
+            r.usable = r.state.used.copy()
+
+    solve_with_outliers(rounds, solve, lambda r, round_no: _outlier_round(r, obs, opt.outlier_k, round_no), opt,
+                        timings, cancel)
+    sol = rounds.state
     common = _common_fields(obs, opt, sol, timings)
+    common.update(usable=rounds.usable.copy(), outlier=rounds.outlier.copy(), outlier_reason=list(rounds.reasons),
+                  flags=rounds.flags)
     est = _line_estimate(obs, sol, common) if obs.D == 1 else _plane_estimate(obs, sol, common)
     timings["total"] = time.perf_counter() - t0
     return est
+
+
+def _outlier_round(r: Solution, obs: Observations, k: float, round_no: int) -> bool:
+    """The one judgement of the used views (:func:`~lps_gui.core.outlier_round.judge_views`): a bumped camera by
+    its RMS; on a line also a replaced image by its position off its run's local trend (the plane's affine
+    trend test is its estimator's)."""
+    sol = r.state
+    rms = sol.rms_px / np.sqrt(2.0)
+    groups = obs.run * 2 + (obs.direction > 0)
+
+    def position_test(valid: np.ndarray):
+        if obs.D != 1:
+            return np.zeros(obs.K, bool), lambda i: ""
+        dev = 1e3 * (np.nan_to_num(sol.s[:, 0]) - (obs.target_mm - obs.target_mm[sol.reference]))
+        moved, resid = position_outliers(dev, obs.target_mm, groups, valid & sol.used,
+                                         1e3 * np.nan_to_num(sol.sigma_s[:, 0]), k)
+        return moved, lambda i: f"position {resid[i]:+.1f} um off the local trend of its run (image replaced?)"
+
+    r.usable &= sol.used | r.outlier  # a view that lost its tie when others left is not usable, not an outlier
+    return judge_views(r, rms, position_test, obs.index, k, round_no, obs.source)
 
 
 def _common_fields(obs: Observations, opt: EstimateOptions, sol: TargetSolution, timings: dict) -> dict:

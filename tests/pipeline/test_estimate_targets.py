@@ -157,3 +157,18 @@ def test_a_row_captured_on_the_simulated_rig_is_estimated_against_its_truth(tmp_
     assert lps_main(["estimate", str(folder)]) == 0
     tc = json.loads((folder / "results.json").read_text())["truth_comparison"]
     assert tc["position_rms_error_um"] < 1.5 * tc["mean_sigma_um"] and tc["targets"]["max_abs_z"] < 4.5
+
+
+def test_a_bumped_camera_and_a_replaced_image_are_flagged_and_left_out(tmp_path):
+    """The one outlier rule on a row: listed with their reasons, the others solved without them."""
+    spec = preset("paper-row", bumped_views=(40,), replaced_views=(70,))
+    session = simulate_point_session(spec, tmp_path / "row")
+    results = estimate_session(session.folder)
+    flags = {f["index"]: f["kind"] for f in results["flags"]}
+    assert flags == {40: "reprojection", 70: "position"}
+    rows = results["positions"]
+    assert rows[40]["outlier"] and not rows[40]["used"] and "bumped" in rows[40]["outlier_reason"]
+    assert results["parameters"]["n_used"] == 119
+    tc = results["truth_comparison"]
+    assert tc["flagged_outliers"] == tc["injected_outliers"] == [40, 70]
+    assert tc["position_rms_error_um"] < 2.0 * tc["mean_sigma_um"]

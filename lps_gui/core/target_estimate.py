@@ -29,7 +29,7 @@ from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.core.target_model import N_COMMON, TargetObservations, TargetSolution, solve_targets
 from lps_gui.errors import InputError
 
-SELECTIONS = Selections(intrinsics=False, target_poses=True)  # what a session with targets frees
+SELECTIONS = Selections(intrinsics=False, target_poses=True)  # what a session with targets frees (known intrinsics)
 
 
 @dataclass
@@ -69,7 +69,7 @@ def check_target_options(opt: EstimateOptions) -> None:
     """InputError for the options a session with targets does not take (yet)."""
     if opt.method != "joint":
         raise InputError(f"method {opt.method!r} is not available for a session with targets (SPEC 13); use joint")
-    if opt.self_calibrate or opt.robust:
+    if opt.selections().intrinsics != SELECTIONS.intrinsics or opt.robust:
         raise InputError("a session with targets is estimated with known intrinsics and the plain loss; "
                          "drop --self-calibrate / --robust")
 

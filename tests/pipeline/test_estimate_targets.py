@@ -172,3 +172,20 @@ def test_a_bumped_camera_and_a_replaced_image_are_flagged_and_left_out(tmp_path)
     tc = results["truth_comparison"]
     assert tc["flagged_outliers"] == tc["injected_outliers"] == [40, 70]
     assert tc["position_rms_error_um"] < 2.0 * tc["mean_sigma_um"]
+
+
+def test_a_constellation_session_gives_the_planar_figures_against_truth(tmp_path):
+    """The paper's 1524 x 1016 mm XY stage against 24 targets, through the one path (D = 2): positions at their
+    sigmas, squareness and scales within 3 sigma of the simulated gantry's, the targets section and its truth."""
+    spec = preset("paper-constellation", planar=True)
+    session = simulate_point_session(spec, tmp_path / "xy")
+    results = estimate_session(session.folder)
+    assert results["axes"] == ["X", "Y"] and len(results["targets"]) == 24
+    planar, tc = results["figures"]["planar"], results["truth_comparison"]
+    assert abs(planar["squareness_urad"] - tc["squareness_urad"]) < 3 * planar["squareness_sigma_urad"]
+    assert abs(planar["scale_x_ppm"] - tc["scale_x_ppm"]) < 3 * planar["scale_x_sigma_ppm"]
+    assert tc["position_rms_error_um"] < 1.3 * np.sqrt(2) * tc["mean_sigma_um"]  # error vector: two coordinates
+    assert 0.3 < tc["z_mean_square"] < 2.0
+    assert tc["targets"]["max_abs_z"] < 4.5
+    per_axis = results["uncertainty"]["per_axis"]
+    assert any(b["source"] == "target scale T23" for b in per_axis["Y"]["budget"])

@@ -4,9 +4,10 @@
 targets of shape (K, D) and :class:`EstimateOptions` (whose
 :meth:`~EstimateOptions.selections` name the free parameter groups), checks
 the method against D and runs the solver family of D (:data:`SOLVERS`): the
-line of SPEC 4 here, the plane of SPEC 10 in :mod:`lps_gui.core.planar_estimate`.
-Both share the outlier rounds (:mod:`lps_gui.core.outlier_round`) and the
-covariance of the (block) arrowhead.
+line of SPEC 4 (:mod:`lps_gui.core.joint_lm`, one unknown per view) and the
+plane of SPEC 10 (:mod:`lps_gui.core.planar_model`, two), both here. Both
+share the outlier rounds (:mod:`lps_gui.core.outlier_round`), the block
+arrowhead (:mod:`lps_gui.core.arrowhead`) and one result type.
 
 Line methods: ``joint`` (default, SPEC 4.4), ``hybrid`` (the paper, SPEC 4.3),
 ``pnp`` (per-view baseline, Eq. 3) and ``calibrate`` (Eq. 2, intrinsics and
@@ -23,15 +24,17 @@ from typing import Any, Callable
 
 import numpy as np
 
+from lps_gui.core.arrowhead import ArrowheadInverse, intrinsics_sensitivity
 from lps_gui.core.camera_model import INTRINSIC_NAMES
 from lps_gui.core.constant_orientation import board_plane_from_model
-from lps_gui.core.estimate_types import METHODS, EstimateOptions, LpsEstimate, step_pairs
+from lps_gui.core.estimate_types import METHODS, EstimateOptions, LpsEstimate, planar_fit, sigmas_of, step_pairs
 from lps_gui.core.hybrid import initial_line, solve_hybrid, view_costs
 from lps_gui.core.joint_lm import (
     N_POSE_PARAMS,
     LmOptions,
     LpsState,
     NormalEquations,
+    line_inverse,
     linearize,
     linearize_poses,
     solve_joint,
@@ -39,23 +42,29 @@ from lps_gui.core.joint_lm import (
 )
 from lps_gui.core.observations import Observations
 from lps_gui.core.outlier_round import Solution, judge_views, solve_with_outliers
-from lps_gui.core.outliers import position_outliers
-from lps_gui.core.per_view import estimate_per_view
-from lps_gui.core.planar_estimate import PlanarEstimate, estimate_plane
+from lps_gui.core.outliers import position_outliers, robust_sigma
+from lps_gui.core.per_view import estimate_per_view, plane_per_view
+from lps_gui.core.planar_model import (
+    N_PLANAR_SHARED,
+    PlanarState,
+    affine_residual_um,
+    align_to_x_motion,
+    initial_planar_state,
+    linearize_planar,
+    planar_positions_only,
+    planar_residuals,
+    plane_inverse,
+    solve_planar,
+)
 from lps_gui.core.pnp import solve_pnp
 from lps_gui.core.pose_normals import PoseNormals
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.core.six_dof import SixDof, refine_view_poses, six_dof_motion
 from lps_gui.core.target_estimate import estimate_with_targets
-from lps_gui.core.uncertainty import (
-    arrowhead_inverse,
-    intrinsics_sensitivity,
-    noise_variance,
-    propagated_variance,
-)
+from lps_gui.core.uncertainty import noise_variance, propagated_variance
 from lps_gui.errors import DegenerateGeometryError
 
-__all__ = ["METHODS", "EstimateOptions", "LpsEstimate", "PlanarEstimate", "estimate"]
+__all__ = ["METHODS", "EstimateOptions", "LpsEstimate", "estimate"]
 
 INIT_VIEWS = 24  # per-view PnP on this many spread views initializes the joint LM
 N_INTRINSICS = len(INTRINSIC_NAMES)  # 9, after the pose parameters when self-calibrating
@@ -66,7 +75,7 @@ def estimate(
     options: EstimateOptions | None = None,
     progress: ProgressFn = no_progress,
     cancel: CancelToken | None = None,
-) -> LpsEstimate | PlanarEstimate:
+) -> LpsEstimate:
     """Estimate the stage model of ``obs.D`` axes and every position from the observed corners.
 
     One problem for D = 1 (a line, SPEC 4) and D = 2 (a plane, SPEC 10): the
@@ -109,7 +118,7 @@ def _estimate_line(obs: Observations, opt: EstimateOptions, progress: ProgressFn
     others = usable & ~sol.used
     if others.any():
         sol.state.s[others] = _positions_alone(sol.state, X, obs.corners_px, mask_all, others)
-    sol.state = _regauge(sol.state, sol.ref)
+    sol.state = sol.state.regauged(sol.ref)
     progress(3, 4, "uncertainty")
     est = _finish(obs, opt, sol, X, mask_all, timings)
     timings["total"] = time.perf_counter() - t_start
@@ -158,7 +167,7 @@ def _solve(
     free[ref] = False
     if opt.method == "hybrid":
         res = solve_hybrid(state, X, obs.corners_px, mask, used, opt.hybrid, progress, cancel)
-        return _regauge(res.state, ref), res.rounds, res.converged, None
+        return res.state.regauged(ref), res.rounds, res.converged, None
     prior = opt.intrinsics_prior(obs.intrinsics)
     lm = solve_joint(
         state,
@@ -173,12 +182,6 @@ def _solve(
     progress(2, 4, f"joint LM: {lm.iterations} iterations")
     plain = not opt.robust and not opt.self_calibrate  # then lm.equations are the plain pose blocks the outlier round needs
     return lm.state, lm.iterations, lm.converged, lm.equations if plain else None
-
-
-def _regauge(state: LpsState, ref: int) -> LpsState:
-    """Shift positions so the reference view sits at s = 0 (l0 absorbs the shift)."""
-    shift = state.s[ref]
-    return LpsState(state.R, state.l0 + shift * state.n, state.n, state.s - shift, state.intrinsics)
 
 
 def _positions_alone(state: LpsState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray, views: np.ndarray) -> np.ndarray:
@@ -214,8 +217,8 @@ def _outlier_round(sol: Solution, obs: Observations, X: np.ndarray, mask_all: np
         eq, _ = linearize(sol.state, X, obs.corners_px, mask, want_residuals=False)
     rms = _view_rms(sol.state, X, obs.corners_px, mask_all, eq.view_ssr, used)
     sigma2 = noise_variance(eq.ssr, eq.n_obs, N_POSE_PARAMS + int(used.sum()) - 1)
-    inv = arrowhead_inverse(eq.A, eq.B, eq.D, sol.free())
-    sigma_um = 1e3 * np.sqrt(sigma2 * inv.var_s())
+    inv = line_inverse(eq.A, eq.B, eq.D, sol.free())
+    sigma_um = 1e3 * np.sqrt(sigma2 * inv.variances()[:, 0])
     dev = 1e3 * (sol.state.s - (obs.target_mm - obs.target_mm[sol.ref]))
     groups = obs.run * 2 + (obs.direction > 0)
 
@@ -235,7 +238,7 @@ class _Uncertainty:
     var_total: np.ndarray  # (K,) mm^2, with the intrinsics' covariance
     step_sigma: np.ndarray  # (K,) mm, of each step to the previous capture of its run
     parameter_sigmas: dict[str, list[float]]
-    inverse: Any  # ArrowheadInverse
+    inverse: Any  # ArrowheadInverse, one unknown per view
     intrinsics_gradient: np.ndarray | None  # d s / d intrinsics, (K, 9)
     n_obs: int
     n_params: int
@@ -259,12 +262,12 @@ def _uncertainty(obs: Observations, opt: EstimateOptions, sol: Solution, X: np.n
         A, B = A[:p, :p], B[:, :p]
         n_params = p + int(free.sum())
     sigma2 = noise_variance(eq.ssr, eq.n_obs, n_params)
-    inv = arrowhead_inverse(A, B, eq.D, free)
-    var_s = sigma2 * inv.var_s()
+    inv = line_inverse(A, B, eq.D, free)
+    var_s = sigma2 * inv.variances()[:, 0]
     var_total = var_s.copy()
     G_s = None
     if have_cov and not opt.self_calibrate:
-        _, G_s = intrinsics_sensitivity(inv, eq.A[:p, p:], eq.B[:, p:])
+        G_s = intrinsics_sensitivity(inv, eq.A[:p, p:], eq.B[:, None, p:])[:, 0]
         var_total = var_s + propagated_variance(G_s, obs.intrinsics.covariance)
     # positions of views outside the solve: their own 1-D sigma (noise only), n^T H_tt n of their pose blocks
     alone = usable & ~used
@@ -279,7 +282,7 @@ def _uncertainty(obs: Observations, opt: EstimateOptions, sol: Solution, X: np.n
     step_sigma = np.full(obs.K, np.nan)
     both = used[prev] & used[cur]
     if both.any():
-        step_sigma[cur[both]] = np.sqrt(sigma2 * inv.var_difference(prev[both], cur[both]))
+        step_sigma[cur[both]] = np.sqrt(sigma2 * inv.cov_difference(prev[both], cur[both])[:, 0, 0])
     sd = np.sqrt(np.diag(sigma2 * inv.S_inv))
     param_sigmas = {"rvec_sigma_rad": sd[0:3].tolist(), "l0_sigma_mm": sd[3:6].tolist(), "n_sigma_rad": sd[6:p].tolist()}
     if opt.self_calibrate:
@@ -357,4 +360,125 @@ def _six_dof(
     return six
 
 
-SOLVERS = {1: _estimate_line, 2: estimate_plane}  # the solver family of a stage of D axes
+# ----------------------------------------------------------------------------- D = 2: the plane (SPEC 10)
+
+
+def _estimate_plane(obs: Observations, opt: EstimateOptions, progress: ProgressFn, cancel: CancelToken | None
+                    ) -> LpsEstimate:
+    """D = 2: per-view PnP -> initial plane -> joint LM on the block arrowhead (b = 2) inside the outlier
+    rounds (the position test: the robust affine trend of the grid) -> the frame turned so +x is the fitted
+    X motion (SPEC 10) -> covariance with the intrinsics' propagated. ``pnp``: the per-view baseline."""
+    t_start = time.perf_counter()
+    timings: dict[str, float] = {}
+    X = obs.board.object_points()
+    usable = obs.usable_views()
+    mask_all = obs.mask() & usable[:, None]
+    progress(0, 4, "per-view poses")
+    R_v, t_v, ok = solve_pnp(X, np.where(mask_all[..., None], obs.corners_px, np.nan), obs.intrinsics)
+    usable &= ok
+    if usable.sum() < 3:
+        raise DegenerateGeometryError(f"{obs.source}: only {int(usable.sum())} views give a pose; check the intrinsics")
+    ref = int(np.flatnonzero(usable)[0])
+    state = initial_planar_state(R_v, t_v, obs.target_mm, usable, ref, obs.intrinsics)
+    timings["init"] = time.perf_counter() - t_start
+    if opt.method == "pnp":
+        return plane_per_view(obs, opt, state, R_v, t_v, usable, ref, X, mask_all, timings, t_start)
+
+    sol = Solution(state, ref, usable, np.zeros(obs.K, dtype=bool), [""] * obs.K)
+    prior = opt.intrinsics_prior(obs.intrinsics)
+    progress(1, 4, "joint planar solve")
+
+    def solve(sol: Solution) -> None:
+        res = solve_planar(sol.state, X, obs.corners_px, mask_all & sol.used[:, None], sol.free(), robust=opt.robust,
+                           cancel=cancel, intrinsics_prior=prior)
+        sol.state, sol.iterations, sol.converged = res.state, res.iterations, res.converged
+
+    solve_with_outliers(sol, solve, lambda sol, round_no: _plane_outlier_round(sol, obs, X, mask_all, opt.outlier_k,
+                                                                               round_no), opt, timings, cancel)
+    state, used = sol.state, sol.used
+    others = usable & ~used
+    if others.any():
+        sub = state.copy()
+        sub.xy = state.xy[others]
+        state.xy[others] = planar_positions_only(sub, X, obs.corners_px[others], mask_all[others])
+    progress(3, 4, "uncertainty")
+    state = align_to_x_motion(state.regauged(sol.ref), obs.target_mm, obs.approach, used)
+    t0 = time.perf_counter()
+    mask = mask_all & used[:, None]
+    inv, sigma2, G_s, n_params = _plane_uncertainty(state, obs, X, mask, sol.free(), prior)
+    cov = sigma2 * inv.cov_view()
+    cov_total = cov
+    if G_s is not None:
+        cov_total = cov + np.einsum("kai,ij,kbj->kab", G_s, obs.intrinsics.covariance, G_s)
+    timings["uncertainty"] = time.perf_counter() - t0
+    n_obs = int(2 * mask.sum())
+    est = LpsEstimate(
+        method=opt.method, options=opt, state=state, reference_view=sol.ref, usable=usable, used=used,
+        outlier=sol.outlier, outlier_reason=sol.reasons, sigma_px=float(np.sqrt(sigma2)), sigma_s_mm=sigmas_of(cov),
+        sigma_total_mm=sigmas_of(cov_total), rms_px=_plane_view_rms(state, X, obs.corners_px, mask_all),
+        n_corners=mask_all.sum(axis=1), iterations=sol.iterations, converged=sol.converged, n_observations=n_obs,
+        dof=n_obs - n_params, flags=sol.flags, timings_s=timings, inverse=inv, intrinsics_gradient=G_s, cov_mm2=cov,
+        cov_total_mm2=cov_total,
+    )
+    est.fit = planar_fit(est, obs.target_mm, obs.approach)
+    timings["total"] = time.perf_counter() - t_start
+    progress(4, 4, "done")
+    return est
+
+
+def _plane_outlier_round(sol: Solution, obs: Observations, X: np.ndarray, mask_all: np.ndarray, k: float,
+                         round_no: int) -> bool:
+    """One judgement of the used views (:func:`~lps_gui.core.outlier_round.judge_views`) with the plane's
+    position test: a position off the robust affine trend of the grid, against its own sigma."""
+    rms = _plane_view_rms(sol.state, X, obs.corners_px, mask_all)
+    eq, _ = linearize_planar(sol.state, X, obs.corners_px, mask_all & sol.used[:, None])
+    free = sol.free()
+    sigma2 = noise_variance(eq.ssr, eq.n_obs, N_PLANAR_SHARED + 2 * int(free.sum()))
+    sig_um = 1e3 * np.sqrt(sigma2 * plane_inverse(eq.A, eq.B, eq.D, free).variances())
+
+    def position_test(valid: np.ndarray) -> tuple[np.ndarray, Callable[[int], str]]:
+        resid = affine_residual_um(sol.state.xy, obs.target_mm, obs.approach, valid)
+        scale = np.maximum(np.array([robust_sigma(resid[valid, a]) for a in range(2)])[None, :], sig_um)
+        moved = valid & np.any(np.abs(resid) > k * np.maximum(scale, 1e-9), axis=1)
+        return moved, lambda i: (f"position ({resid[i, 0]:+.1f}, {resid[i, 1]:+.1f}) um off the trend of the grid "
+                                 "(image replaced?)")
+
+    ref = sol.ref
+    flagged = judge_views(sol, rms, position_test, obs.index, k, round_no, obs.source)
+    if sol.ref != ref:
+        sol.state.xy = sol.state.xy - sol.state.xy[sol.ref]
+    return flagged
+
+
+def _plane_view_rms(state: PlanarState, X: np.ndarray, corners: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    r = planar_residuals(state, X, corners, mask)
+    n = mask.sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(n > 0, np.sqrt(np.sum(r * r, axis=(1, 2)) / np.maximum(n, 1)), np.nan)
+
+
+def _plane_uncertainty(state: PlanarState, obs: Observations, X: np.ndarray, mask: np.ndarray, free: np.ndarray,
+                       prior: tuple[np.ndarray, np.ndarray] | None
+                       ) -> tuple[ArrowheadInverse, float, np.ndarray | None, int]:
+    """H^-1 at the solution, the noise variance, d (x, y) / d intrinsics and the number of unknowns.
+
+    Intrinsics held: their covariance is propagated (when known) through the pose blocks' cross terms;
+    intrinsics free (self-calibration): the prior's information joins H and nothing is propagated.
+    """
+    with_intr = prior is not None or obs.intrinsics.covariance is not None
+    eq, _ = linearize_planar(state, X, obs.corners_px, mask, with_intrinsics=with_intr)
+    p = N_PLANAR_SHARED
+    n_params = p + 2 * int(free.sum())
+    if prior is not None:
+        A = eq.A.copy()
+        A[p:, p:] += np.linalg.inv(prior[1])
+        n_params += A.shape[0] - p
+        sigma2 = noise_variance(eq.ssr, eq.n_obs, n_params)
+        return plane_inverse(A, eq.B, eq.D, free), sigma2, None, n_params
+    sigma2 = noise_variance(eq.ssr, eq.n_obs, n_params)
+    inv = plane_inverse(eq.A[:p, :p], eq.B[..., :p], eq.D, free)
+    G_s = intrinsics_sensitivity(inv, eq.A[:p, p:], eq.B[..., p:]) if with_intr else None
+    return inv, sigma2, G_s, n_params
+
+
+SOLVERS = {1: _estimate_line, 2: _estimate_plane}  # the solver family of a stage of D axes

@@ -7,8 +7,8 @@ we accumulate the normal equations blockwise
 
     H = [[A, B^T], [B, diag(D)]],  A: (p, p), B: (K, p), D: (K,)
 
-and eliminate the diagonal s-block by a Schur complement, so one iteration
-costs O(K N) and the linear solve is p x p. Residual weights come from the
+and eliminate the diagonal s-block by a Schur complement (:mod:`lps_gui.core.arrowhead`,
+b = 1), so one iteration costs O(K N) and the linear solve is p x p. Residual weights come from the
 corner mask and, optionally, a Huber loss (iteratively reweighted).
 """
 from __future__ import annotations
@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from lps_gui.core.arrowhead import ArrowheadInverse, arrowhead_inverse, schur_step
 from lps_gui.core.camera_model import CameraIntrinsics, project_parts
 from lps_gui.core.lps_model import LpsLine, sphere_retract, sphere_tangent_basis
 from lps_gui.core.pose_normals import PoseNormals, pose_normals
@@ -36,8 +37,18 @@ class LpsState:
     s: np.ndarray  # shape (K,) mm
     intrinsics: CameraIntrinsics
 
+    @property
+    def positions(self) -> np.ndarray:
+        """The views' positions as an estimate reports them, shape (K,)."""
+        return self.s
+
     def line(self) -> LpsLine:
         return LpsLine(self.R.copy(), self.l0.copy(), self.n.copy())
+
+    def regauged(self, ref: int) -> "LpsState":
+        """Zero at view ``ref``: l0 absorbs the shift of every position (the translations stay)."""
+        shift = self.s[ref]
+        return LpsState(self.R, self.l0 + shift * self.n, self.n, self.s - shift, self.intrinsics)
 
     def copy(self) -> "LpsState":
         return LpsState(self.R.copy(), self.l0.copy(), self.n.copy(), self.s.copy(), self.intrinsics)
@@ -223,23 +234,21 @@ def solve_arrowhead(
     prior_A: np.ndarray | None = None,
     prior_g: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Gauss-Newton / LM step by Schur complement on the diagonal s-block.
+    """Gauss-Newton / LM step (:func:`lps_gui.core.arrowhead.schur_step`, one unknown per view).
 
     Solves (H + damping * diag(H)) [d_theta; d_s] = -[g_theta; g_s] with the
     positions not in ``free_s`` held fixed. Returns d_theta (p,), d_s (K,).
     """
     A = eq.A + (prior_A if prior_A is not None else 0.0)
     g = eq.g_theta + (prior_g if prior_g is not None else 0.0)
-    A = A + damping * np.diag(np.diag(A))
-    D = eq.D * (1.0 + damping)
-    free = free_s & (D > 0)
-    Dinv = np.where(free, 1.0 / np.where(free, D, 1.0), 0.0)
-    Bf = eq.B * Dinv[:, None]  # shape (K, p): w_i = B_i / D_i
-    S = A - eq.B.T @ Bf
-    rhs = g - Bf.T @ eq.g_s
-    d_theta = -solve_spd(S, rhs)
-    d_s = np.where(free, -(eq.g_s + eq.B @ d_theta) * Dinv, 0.0)
-    return d_theta, d_s
+    d_theta, d_s = schur_step(A, eq.B[:, None, :], eq.D[:, None, None], g, eq.g_s[:, None], free_s, damping)
+    return d_theta, d_s[:, 0]
+
+
+def line_inverse(A: np.ndarray, B: np.ndarray, D: np.ndarray, free_s: np.ndarray) -> ArrowheadInverse:
+    """H^-1 of the line's blocks (B (K, p), D (K,)) at the solution, factored with one unknown per view."""
+    return arrowhead_inverse(A, B[:, None, :], D[:, None, None], free_s, "the line",
+                             "capture over a longer travel or more positions")
 
 
 def predicted_decrease(
@@ -251,15 +260,6 @@ def predicted_decrease(
     g = eq.g_theta + (prior_g if prior_g is not None else 0.0)
     quad = d_theta @ A @ d_theta + 2.0 * d_theta @ (eq.B.T @ d_s) + d_s @ (eq.D * d_s)
     return float(-(2.0 * (g @ d_theta + eq.g_s @ d_s) + quad))
-
-
-def solve_spd(S: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Solve the small reduced system by Cholesky (numpy: scipy.linalg's import costs more than the solve)."""
-    try:
-        L = np.linalg.cholesky(S)
-    except np.linalg.LinAlgError:
-        return np.linalg.lstsq(S, b, rcond=None)[0]
-    return np.linalg.solve(L.T, np.linalg.solve(L, b))
 
 
 def apply_step(state: LpsState, d_theta: np.ndarray, d_s: np.ndarray, basis: np.ndarray) -> LpsState:

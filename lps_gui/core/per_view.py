@@ -1,8 +1,10 @@
-"""Independent per-view poses as position estimates: Eq. 3 (``pnp``) and Eq. 2 (``calibrate``).
+"""Independent per-view poses as position estimates: Eq. 3 (``pnp``) and Eq. 2 (``calibrate``), D = 1 or 2.
 
 The baselines the LPS model is measured against: every view's pose on its
-own, positions along the PCA line of the camera centres, sigmas from each
-view's 6x6 covariance (the reference view's noise included).
+own; on a line, positions along the PCA line of the camera centres with
+sigmas from each view's 6x6 covariance (the reference view's noise
+included); on a plane, the translations projected on the initial plane, with
+their scatter about the grid's affine trend as sigma.
 """
 from __future__ import annotations
 
@@ -11,10 +13,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from lps_gui.core.camera_model import CameraIntrinsics
-from lps_gui.core.estimate_types import EstimateOptions, LpsEstimate, step_pairs
+from lps_gui.core.camera_model import CameraIntrinsics, project_board
+from lps_gui.core.estimate_types import EstimateOptions, LpsEstimate, planar_fit, sigmas_of, step_pairs
 from lps_gui.core.joint_lm import LpsState
 from lps_gui.core.observations import Observations
+from lps_gui.core.planar_model import PlanarState, affine_residual_um, align_to_x_motion
 from lps_gui.core.pnp import solve_pnp
 from lps_gui.core.progress import CancelToken, ProgressFn
 from lps_gui.core.rotation import chordal_mean, skew
@@ -112,3 +115,33 @@ def calibrate_all(obs: Observations, idx: np.ndarray, X: np.ndarray) -> CameraIn
         objs, imgs, intr.image_size, intr.camera_matrix.copy(), intr.dist.copy(), flags=cv2.CALIB_USE_INTRINSIC_GUESS
     )
     return replace(intr, camera_matrix=K, dist=dist.ravel()[:5])
+
+
+def plane_per_view(obs: Observations, opt: EstimateOptions, state: PlanarState, R_v: np.ndarray, t_v: np.ndarray,
+                   usable: np.ndarray, ref: int, X: np.ndarray, mask_all: np.ndarray, timings: dict[str, float],
+                   t_start: float) -> LpsEstimate:
+    """The PnP baseline: every view's own translation projected on the initial plane."""
+    K = obs.K
+    state = align_to_x_motion(state.regauged(ref), obs.target_mm, obs.approach, usable)
+    xy = (t_v - t_v[ref]) @ state.basis
+    state.xy = np.where(usable[:, None], xy, np.nan)
+    uv = project_board(R_v, t_v, X, obs.intrinsics)
+    r = np.where(mask_all[..., None], uv - np.nan_to_num(obs.corners_px), 0.0)
+    n = mask_all.sum(axis=1)
+    rms = np.sqrt(np.sum(r * r, axis=(1, 2)) / np.maximum(n, 1))
+    ssr = float(np.sum(r * r))
+    n_obs = int(2 * mask_all.sum())
+    sigma2 = noise_variance(ssr, n_obs, 6 * int(usable.sum()))
+    spread = np.nanstd(affine_residual_um(np.nan_to_num(state.xy), obs.target_mm, obs.approach, usable)[usable],
+                       axis=0) * 1e-3
+    cov = np.zeros((K, 2, 2))
+    cov[:, 0, 0], cov[:, 1, 1] = spread[0] ** 2, spread[1] ** 2  # the baseline's sigma is its own scatter
+    timings["total"] = time.perf_counter() - t_start
+    est = LpsEstimate(
+        method="pnp", options=opt, state=state, reference_view=ref, usable=usable, used=usable.copy(),
+        outlier=np.zeros(K, bool), outlier_reason=[""] * K, sigma_px=float(np.sqrt(sigma2)), sigma_s_mm=sigmas_of(cov),
+        sigma_total_mm=sigmas_of(cov), rms_px=rms, n_corners=n, iterations=0, converged=True, n_observations=n_obs,
+        dof=n_obs - 6 * int(usable.sum()), flags=[], timings_s=timings, cov_mm2=cov, cov_total_mm2=cov,
+    )
+    est.fit = planar_fit(est, obs.target_mm, obs.approach)
+    return est

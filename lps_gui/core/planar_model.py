@@ -7,7 +7,7 @@ orientation (2: tilts of P about n_x and n_y; a rotation about the plane
 normal only relabels x and y and is fixed afterwards by the X motion
 direction), and (x_i, y_i) of every view but the gauge view. Every view's
 residuals depend on the 8 shared parameters and its own two coordinates: a
-block arrowhead, eliminated by :mod:`lps_gui.core.block_arrowhead`.
+block arrowhead (b = 2), eliminated by :mod:`lps_gui.core.arrowhead`.
 """
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lps_gui.core.block_arrowhead import solve_block_arrowhead
+from lps_gui.core.arrowhead import ArrowheadInverse, arrowhead_inverse, schur_step
 from lps_gui.core.camera_model import CameraIntrinsics, intrinsics_rows, project_parts
 from lps_gui.core.joint_lm import camera_points, huber_threshold, huber_weights, pose_residuals, robust_cost
 from lps_gui.core.progress import CancelToken
@@ -36,6 +36,11 @@ class PlanarState:
     intrinsics: CameraIntrinsics
 
     @property
+    def positions(self) -> np.ndarray:
+        """The views' positions as an estimate reports them, shape (K, 2)."""
+        return self.xy
+
+    @property
     def basis(self) -> np.ndarray:
         """(n_x, n_y) as columns, shape (3, 2)."""
         return self.P[:, :2]
@@ -46,6 +51,13 @@ class PlanarState:
 
     def copy(self) -> "PlanarState":
         return PlanarState(self.R.copy(), self.l0.copy(), self.P.copy(), self.xy.copy(), self.intrinsics)
+
+    def regauged(self, ref: int) -> "PlanarState":
+        """Zero at view ``ref``: l0 moves to it, every position shifts (the translations stay)."""
+        out = self.copy()
+        out.l0 = self.l0 + self.basis @ self.xy[ref]
+        out.xy = self.xy - self.xy[ref]
+        return out
 
     def motion_axes_board(self) -> np.ndarray:
         """Camera-centre motion directions of +x and +y in the board frame, shape (3, 2).
@@ -172,8 +184,13 @@ def planar_positions_only(state: PlanarState, X: np.ndarray, corners: np.ndarray
     return sub.xy
 
 
+def plane_inverse(A: np.ndarray, B: np.ndarray, D: np.ndarray, free_s: np.ndarray) -> ArrowheadInverse:
+    """H^-1 of the plane's blocks (B (K, 2, p), D (K, 2, 2)) at the solution, factored."""
+    return arrowhead_inverse(A, B, D, free_s, "the plane of motion", "capture a grid that spans both axes")
+
+
 def apply_planar_step(state: PlanarState, d_theta: np.ndarray, d_s: np.ndarray) -> PlanarState:
-    """Move the state by a step of :func:`solve_block_arrowhead` (9 intrinsics after the 8 shared, when given)."""
+    """Move the state by a step of :func:`~lps_gui.core.arrowhead.schur_step` (9 intrinsics after the 8 shared, when given)."""
     R = exp_so3(d_theta[0:3]) @ state.R
     l0 = state.l0 + d_theta[3:6]
     w = d_theta[6] * state.P[:, 0] + d_theta[7] * state.P[:, 1]
@@ -244,7 +261,7 @@ def solve_planar(
     for it in range(1, max_iterations + 1):
         if cancel is not None:
             cancel.check("planar estimation")
-        d_theta, d_s = solve_block_arrowhead(eq.A + prior_A, eq.B, eq.D, eq.g_theta + prior_g, eq.g_s, free_s, lam)
+        d_theta, d_s = schur_step(eq.A + prior_A, eq.B, eq.D, eq.g_theta + prior_g, eq.g_s, free_s, lam)
         trial = apply_planar_step(state, d_theta, d_s)
         trial_prior, trial_prior_g = prior(trial)
         trial_cost = robust_cost(planar_residuals(trial, X, corners, mask), mask, huber_c) + trial_prior
@@ -296,3 +313,62 @@ def initial_planar_state(
     xy = (t_views - t_ref) @ P[:, :2]
     xy[~use] = (T[~use] - T[ref]) if (~use).any() else xy[~use]
     return PlanarState(R, t_ref.copy(), P, xy, intrinsics)
+
+
+# ----------------------------------------------------------------------------- the grid's affine frame (SPEC 10)
+
+
+def grid_design(target_mm: np.ndarray, approach: np.ndarray, used: np.ndarray) -> np.ndarray:
+    """Columns: 1, target x, target y, and one backlash offset per axis when both sides occur."""
+    cols = [np.ones(target_mm.shape[0]), target_mm[:, 0], target_mm[:, 1]]
+    for a in range(2):
+        side = approach[:, a] < 0
+        if side[used].any() and (~side[used]).any():
+            cols.append(side.astype(float))
+    return np.column_stack(cols)
+
+
+def affine_coefficients(xy: np.ndarray, target_mm: np.ndarray, approach: np.ndarray, used: np.ndarray
+                        ) -> tuple[np.ndarray, np.ndarray]:
+    """Least-squares xy = Phi coef; returns (Phi (K, q), coef (q, 2)); one shared design for x and y."""
+    Phi = grid_design(target_mm, approach, used)
+    coef, *_ = np.linalg.lstsq(Phi[used], xy[used], rcond=None)
+    return Phi, coef
+
+
+def affine_residual_um(xy: np.ndarray, target_mm: np.ndarray, approach: np.ndarray, used: np.ndarray) -> np.ndarray:
+    """Positions off the affine trend of the grid, um (K, 2)."""
+    Phi, coef = affine_coefficients(xy, target_mm, approach, used)
+    return 1e3 * (xy - Phi @ coef)
+
+
+def affine_motion(xy: np.ndarray, target_mm: np.ndarray, approach: np.ndarray, used: np.ndarray) -> np.ndarray:
+    """G (2x2) of the least-squares fit xy = offset + G target (+ backlash offsets): columns +X, +Y motion."""
+    _, coef = affine_coefficients(xy, target_mm, approach, used)
+    return coef[1:3].T
+
+
+def align_to_x_motion(state: PlanarState, target_mm: np.ndarray, approach: np.ndarray, used: np.ndarray
+                      ) -> PlanarState:
+    """Turn the plane coordinates so the fitted +X motion is +x and +Y motion has y > 0 (SPEC 10)."""
+    gx, gy = affine_motion(state.xy, target_mm, approach, used).T  # measured motion per commanded mm of X, of Y
+    out = state.rotated_in_plane(float(np.arctan2(gx[1], gx[0])))
+    if (gx[0] * gy[1] - gx[1] * gy[0]) < 0:  # +Y motion on the -y side: flip y (and n_y) to keep y > 0
+        out.P[:, 1] *= -1.0
+        out.P[:, 2] *= -1.0
+        out.xy[:, 1] *= -1.0
+    return out
+
+
+def planar_truth_in_stage_frame(true_xy_mm: np.ndarray, target_mm: np.ndarray, approach: np.ndarray,
+                                used: np.ndarray, ref: int) -> np.ndarray:
+    """True positions under the estimate's own frame convention (zero at ``ref``, +x along the
+    fitted +X motion, +Y motion on the +y side), so they compare with a plane's ``LpsEstimate.positions_mm``."""
+    xy = np.asarray(true_xy_mm, dtype=float) - true_xy_mm[ref]
+    G = affine_motion(xy, target_mm, approach, used)
+    angle = float(np.arctan2(G[1, 0], G[0, 0]))
+    c, s = np.cos(angle), np.sin(angle)
+    out = xy @ np.array([[c, -s], [s, c]])
+    if np.linalg.det(G) < 0:
+        out[:, 1] *= -1.0
+    return out

@@ -120,22 +120,20 @@ def _crb_sigma_um(rig: Any, planar: bool, targets: np.ndarray, R: np.ndarray, t:
     free = np.ones(targets.shape[0], bool)
     free[0] = False
     if planar:
-        from lps_gui.core.block_arrowhead import block_arrowhead_inverse
-        from lps_gui.core.planar_model import linearize_planar
+        from lps_gui.core.planar_model import linearize_planar, plane_inverse
         from lps_gui.core.simulate import nominal_planar_state
 
         st = nominal_planar_state(rig, targets - targets[0])
         st.l0 = st.l0 + st.basis @ targets[0]
         eq, _ = linearize_planar(st, X, corners, mask)
-        inv = block_arrowhead_inverse(eq.A, eq.B, eq.D, free)
+        inv = plane_inverse(eq.A, eq.B, eq.D, free)
         var = np.einsum("kii->ki", inv.cov_view())
         return 1e3 * noise_px * np.sqrt(var.mean(axis=1))
-    from lps_gui.core.joint_lm import LpsState, linearize
-    from lps_gui.core.uncertainty import arrowhead_inverse
+    from lps_gui.core.joint_lm import LpsState, line_inverse, linearize
 
     s = targets[:, 0] - targets[0, 0]
     C0 = rig.C0_board + targets[0, 0] * rig.u_board
     st = LpsState(rig.R_cam_board, -rig.R_cam_board @ C0, -rig.R_cam_board @ rig.u_board, s, intrinsics)
     eq, _ = linearize(st, X, corners, mask)
-    inv = arrowhead_inverse(eq.A, eq.B, eq.D, free)
-    return 1e3 * noise_px * np.sqrt(inv.var_s())
+    inv = line_inverse(eq.A, eq.B, eq.D, free)
+    return 1e3 * noise_px * np.sqrt(inv.variances()[:, 0])

@@ -5,8 +5,8 @@ them: the line model's R, l0 and tilt of N; none for free per-view poses),
 on its own target's 6 (rotation, translation; target 0 is the world frame
 and has none) and on its view's own P. So J^T J is an arrowhead: a dense
 global block of G = C + 6 (T - 1) columns and a P x P block per view. The
-views are eliminated by a Schur complement; a step costs O(corners) plus a
-G x G solve, and the covariance stays factored:
+views are eliminated by the Schur complement of :mod:`lps_gui.core.arrowhead` (b = P);
+a step costs O(corners) plus a G x G solve, and the covariance stays factored:
 Cov(v_i, v_k) = A_i^-1 [i = k] + W_i^T S^-1 W_k.
 """
 from __future__ import annotations
@@ -16,6 +16,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from lps_gui.core.arrowhead import arrowhead_inverse, schur_step
 from lps_gui.core.camera_model import CameraIntrinsics, project_parts
 from lps_gui.core.rotation import exp_so3
 
@@ -93,19 +94,9 @@ def normal_equations(lin: Linearization, tj: np.ndarray, view: np.ndarray, K: in
     return A_gg, A_gv, A_vv, b_g, b_v
 
 
-def schur_step(A_gg, A_gv, A_vv, b_g, b_v, lam: float, free_view: np.ndarray):
-    """Damped step (globals, views), and S, W = A_gv A_vv^-1, A_vv^-1 for the covariance."""
-    P = A_vv.shape[1]
-    eye = np.eye(P)
-    Avv = A_vv + lam * (A_vv * eye) + np.where(free_view, 0.0, 1.0)[:, None, None] * eye  # fixed views: identity
-    Avv_inv = np.linalg.inv(Avv)
-    W = np.einsum("kgd,kde->kge", A_gv, Avv_inv)
-    S = A_gg + lam * np.diag(np.diag(A_gg)) - np.einsum("kgd,khd->gh", W, A_gv)
-    rhs = b_g - np.einsum("kgd,kd->g", W, b_v)
-    dg = -np.linalg.solve(S, rhs) if len(S) else np.zeros(0)
-    dv = -np.einsum("kde,ke->kd", Avv_inv, b_v + np.einsum("kgd,g->kd", A_gv, dg))
-    dv[~free_view] = 0.0
-    return dg, dv, S, W, Avv_inv
+def damped_step(A_gg, A_gv, A_vv, b_g, b_v, lam: float, free_view: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Damped step (globals, views) by :func:`lps_gui.core.arrowhead.schur_step` (A_gv is B^T per view)."""
+    return schur_step(A_gg, np.swapaxes(A_gv, 1, 2), A_vv, b_g, b_v, free_view, lam, screen=False)
 
 
 def retract_targets(Q: np.ndarray, p: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -140,7 +131,7 @@ def levenberg_marquardt(
     for it in range(1, max_iterations + 1):
         blocks = normal_equations(lin, tj, view, K, T, free_view)
         while True:
-            dg, dv, *_ = schur_step(*blocks, lam, free_view)
+            dg, dv = damped_step(*blocks, lam, free_view)
             trial = retract(state, dg, dv)
             cost_t = linearize(trial, False).cost  # the Jacobian only for a step that is taken
             if cost_t <= lin.cost or lam > 1e6:
@@ -156,10 +147,10 @@ def levenberg_marquardt(
         if gain <= tolerance * max(lin.cost, 1e-300) or lam > 1e6 or exact:
             converged = lam <= 1e6 or exact
             break
-    blocks = normal_equations(lin, tj, view, K, T, free_view)
-    _, _, S, W, Avv_inv = schur_step(*blocks, 0.0, free_view)
-    S_inv = np.linalg.inv(S) if len(S) else S
-    return Fit(state, lin, it, converged, S_inv, W, Avv_inv)
+    A_gg, A_gv, A_vv, *_ = normal_equations(lin, tj, view, K, T, free_view)
+    inv = arrowhead_inverse(A_gg, np.swapaxes(A_gv, 1, 2), A_vv, free_view, "the targets' poses",
+                            "add stops where two targets are in view", screen=False)
+    return Fit(state, lin, it, converged, inv.S_inv, np.swapaxes(inv.W, 1, 2), inv.D_inv)
 
 
 def view_covariances(Avv_inv, W, S_inv, free_view, used):

@@ -4,9 +4,9 @@
 targets (``Observations.mounted``) here. The row / constellation model of
 :mod:`lps_gui.core.target_model` solves the line (D = 1) or the plane (D = 2)
 jointly with the mounting poses of every target but the first, and the
-solution is returned as the estimate type of D (:class:`TargetLineEstimate`,
-:class:`TargetPlaneEstimate`), so the results, figures, budget and report of
-a single-board session take it as they are. The position covariance stays the
+solution is returned as the one estimate type (:class:`TargetEstimate`, an
+:class:`~lps_gui.core.estimate_types.LpsEstimate` of D axes), so the results,
+figures, budget and report of a single-board session take it as they are. The position covariance stays the
 factored block-arrowhead one (:class:`~lps_gui.core.target_arrowhead.PositionCovariance`):
 every linear functional of the positions (scale, steps, the plane's motion
 matrix) gets its variance from it with the correlations through the targets.
@@ -18,12 +18,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lps_gui.core.estimate_types import EstimateOptions, LpsEstimate, Selections, step_pairs
+from lps_gui.core.estimate_types import (
+    EstimateOptions, LpsEstimate, Selections, planar_fit, sigmas_of, step_pairs)
 from lps_gui.core.joint_lm import LpsState
 from lps_gui.core.observations import Observations
 from lps_gui.core.outlier_round import Solution, judge_views, solve_with_outliers
 from lps_gui.core.outliers import position_outliers
-from lps_gui.core.planar_estimate import PlanarEstimate, planar_fit
 from lps_gui.core.planar_model import PlanarState
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.core.target_model import N_COMMON, TargetObservations, TargetSolution, solve_targets
@@ -33,36 +33,25 @@ SELECTIONS = Selections(intrinsics=False, target_poses=True)  # what a session w
 
 
 @dataclass
-class TargetLineEstimate(LpsEstimate):
-    """A line against a row of targets: an :class:`LpsEstimate` with the targets' solution beside it."""
-
-    fit: TargetSolution | None = None
-
-    def linear_functional_sigma(self, a: np.ndarray) -> tuple[float, float]:
-        """Sigma (mm) of sum_i a_i s_i under the full covariance (the targets' poses included), from
-        noise alone and with the intrinsics' covariance."""
-        a = np.where(self.used, np.asarray(a, dtype=float), 0.0)
-        var = max(self.fit.covariance.variance(a[:, None]), 0.0)
-        total = var
-        cov_i = self.state.intrinsics.covariance
-        if self.intrinsics_gradient is not None and cov_i is not None:
-            ga = self.intrinsics_gradient.T @ a
-            total += float(ga @ cov_i @ ga)
-        return float(np.sqrt(var)), float(np.sqrt(total))
-
-
-@dataclass
-class TargetPlaneEstimate(PlanarEstimate):
-    """A plane against a constellation: a :class:`PlanarEstimate` with the targets' solution beside it."""
+class TargetEstimate(LpsEstimate):
+    """An estimate against targets (D = 1 or 2): an :class:`LpsEstimate` with the targets' solution beside it,
+    whose functionals of the positions take the full covariance through the targets' poses."""
 
     fit_targets: TargetSolution | None = None
 
-    def functional_covariance(self, L: np.ndarray) -> np.ndarray:
-        """Covariance (mm^2) of linear functionals of the positions, L shape (m, K, 2), targets included."""
+    def functional_covariance(self, L: np.ndarray, with_intrinsics: bool = False) -> np.ndarray:
+        """Covariance (mm^2) of m linear functionals of the positions, L shape (m, K) or (m, K, D) -> (m, m)."""
         c = self.fit_targets.covariance
-        gs = np.where(self.used[None, :, None], L, 0.0) @ c.turn.T
+        L = np.asarray(L, dtype=float)
+        L = np.where(self.used[None, :, None], L.reshape(L.shape[0], self.used.size, -1), 0.0)
+        gs = L @ c.turn.T
         wg = np.einsum("kgp,mkp->mg", c.W, gs)
-        return c.sigma2 * (np.einsum("mkp,kpr,nkr->mn", gs, c.A_inv, gs) + wg @ c.S_inv @ wg.T)
+        out = c.sigma2 * (np.einsum("mkp,kpr,nkr->mn", gs, c.A_inv, gs) + wg @ c.S_inv @ wg.T)
+        cov_I = self.state.intrinsics.covariance
+        if with_intrinsics and self.intrinsics_gradient is not None and cov_I is not None:
+            GL = np.einsum("mka,kai->mi", L, self.intrinsics_gradient.reshape(L.shape[1], L.shape[2], -1))
+            out = out + GL @ cov_I @ GL.T
+        return out
 
 
 def check_target_options(opt: EstimateOptions) -> None:
@@ -75,7 +64,7 @@ def check_target_options(opt: EstimateOptions) -> None:
 
 
 def estimate_with_targets(obs: Observations, opt: EstimateOptions, progress: ProgressFn = no_progress,
-                          cancel: CancelToken | None = None) -> TargetLineEstimate | TargetPlaneEstimate:
+                          cancel: CancelToken | None = None) -> TargetEstimate:
     """Positions of every stop and the targets' poses (SPEC 13), as the estimate type of ``obs.D``."""
     check_target_options(opt)
     t0 = time.perf_counter()
@@ -134,19 +123,19 @@ def _common_fields(obs: Observations, opt: EstimateOptions, sol: TargetSolution,
                 n_observations=n_obs, dof=n_obs - n_params, flags=[], timings_s=timings, options=opt)
 
 
-def _line_estimate(obs: Observations, sol: TargetSolution, common: dict) -> TargetLineEstimate:
+def _line_estimate(obs: Observations, sol: TargetSolution, common: dict) -> TargetEstimate:
     s = np.where(sol.used, sol.s[:, 0], np.nan)
     sigma = sol.sigma_s[:, 0]
     gradient = None if sol.intrinsics_gradient is None else np.where(sol.used[:, None], sol.intrinsics_gradient[:, 0], 0.0)
     total = sigma if gradient is None else np.sqrt(sigma ** 2 + np.einsum("ki,ij,kj->k", gradient,
                                                                            obs.intrinsics.covariance, gradient))
     sd = np.sqrt(np.maximum(np.diag(sol.covariance.S_inv)[:N_COMMON], 0.0) * sol.covariance.sigma2)
-    est = TargetLineEstimate(
+    est = TargetEstimate(
         state=LpsState(sol.R, sol.l0, sol.N[:, 0].copy(), s, obs.intrinsics),
         sigma_s_mm=sigma, sigma_total_mm=total, step_sigma_mm=_step_sigma(obs, sol), intrinsics_gradient=gradient,
         parameter_sigmas={"rvec_sigma_rad": sd[0:3].tolist(), "l0_sigma_mm": sd[3:6].tolist(),
                           "n_sigma_rad": sd[6:8].tolist()},
-        six_dof=None, fit=sol, **common)
+        six_dof=None, fit_targets=sol, **common)
     return est
 
 
@@ -164,7 +153,7 @@ def _step_sigma(obs: Observations, sol: TargetSolution) -> np.ndarray:
     return out
 
 
-def _plane_estimate(obs: Observations, sol: TargetSolution, common: dict) -> TargetPlaneEstimate:
+def _plane_estimate(obs: Observations, sol: TargetSolution, common: dict) -> TargetEstimate:
     N = sol.N
     P = np.stack([N[:, 0], N[:, 1], np.cross(N[:, 0], N[:, 1])], axis=1)
     xy = np.where(sol.used[:, None], sol.s, np.nan)
@@ -176,8 +165,9 @@ def _plane_estimate(obs: Observations, sol: TargetSolution, common: dict) -> Tar
     if gradient is not None:
         gradient = np.where(sol.used[:, None, None], gradient, 0.0)
         total = cov + np.einsum("kai,ij,kbj->kab", gradient, obs.intrinsics.covariance, gradient)
-    est = TargetPlaneEstimate(state=PlanarState(sol.R, sol.l0, P, xy, obs.intrinsics), cov_xy_mm2=cov,
-                              inverse=None, fit_targets=sol, cov_xy_total_mm2=total, intrinsics_gradient=gradient,
-                              **common)
+    sigma = sigmas_of(cov)
+    est = TargetEstimate(state=PlanarState(sol.R, sol.l0, P, xy, obs.intrinsics), cov_mm2=cov, sigma_s_mm=sigma,
+                         sigma_total_mm=sigma if total is None else sigmas_of(total), inverse=None,
+                         fit_targets=sol, cov_total_mm2=total, intrinsics_gradient=gradient, **common)
     est.fit = planar_fit(est, obs.target_mm, obs.approach)
     return est

@@ -1,7 +1,7 @@
 """What the results panel shows for a planar (XY) session: the report's own rows and table (SPEC 10).
 
 The figures tabs already come from :func:`lps_gui.report.figures.figures_from_results`
-(which hands planar results to :mod:`lps_gui.report.planar_figures`); the
+(a planar session's are the planar section there); the
 figures table and the per-position table come from
 :mod:`lps_gui.report.planar_report`, so the screen and the PDF show the same numbers.
 """

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
-from lps_gui.core.estimate import EstimateOptions, LpsEstimate, PlanarEstimate, estimate
+from lps_gui.core.estimate import EstimateOptions, LpsEstimate, estimate
 from lps_gui.core.hybrid import HybridOptions
 from lps_gui.core.observations import Observations
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
@@ -151,7 +151,7 @@ def _write_keeping_history(session: Session, out_dir: Path | str | None, results
 
 # ----------------------------------------------------------------------------- results
 
-def build_results(session: Session, obs: Observations, est: LpsEstimate | PlanarEstimate, intrinsics_source: str
+def build_results(session: Session, obs: Observations, est: LpsEstimate, intrinsics_source: str
                   ) -> dict[str, Any]:
     """The results.json document of an estimate of D axes, with its environment and uncertainty budget."""
     results = RESULTS_BY_AXES[obs.D](session, obs, est, intrinsics_source)

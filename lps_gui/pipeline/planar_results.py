@@ -15,7 +15,7 @@ import numpy as np
 from lps_gui import __version__
 from lps_gui.core.camera_model import INTRINSIC_NAMES
 from lps_gui.core.observations import Observations
-from lps_gui.core.planar_estimate import PlanarEstimate
+from lps_gui.core.estimate_types import LpsEstimate
 from lps_gui.core.planar_figures import node_errors, planar_figures
 from lps_gui.core.planar_flatness import out_of_plane
 from lps_gui.core.rotation import log_so3
@@ -24,7 +24,7 @@ from lps_gui.io.intrinsics_file import intrinsics_to_dict
 from lps_gui.io.results_file import FORMAT
 from lps_gui.io.session import Session
 from lps_gui.pipeline.session_checks import session_inputs
-from lps_gui.sim.planar_truth import planar_session_truth, planar_truth_comparison
+from lps_gui.sim.truth import session_truth, truth_comparison
 
 
 def _f(x: Any) -> float | None:
@@ -32,12 +32,12 @@ def _f(x: Any) -> float | None:
     return x if np.isfinite(x) else None
 
 
-def build_planar_results(session: Session, obs: Observations, est: PlanarEstimate, intrinsics_source: str
+def build_planar_results(session: Session, obs: Observations, est: LpsEstimate, intrinsics_source: str
                          ) -> dict[str, Any]:
     """The results.json document of a planar session (SPEC 10; schema in docs/ARCHITECTURE.md)."""
     dev = est.deviation_um(obs.target_mm)
-    sig = 1e3 * est.sigma_xy_mm
-    sig_total = 1e3 * est.sigma_total_xy_mm
+    sig = 1e3 * est.sigma_s_mm
+    sig_total = 1e3 * est.sigma_total_mm
     ref_target = obs.target_mm[est.reference_view]
     positions = []
     for i in range(obs.K):
@@ -92,9 +92,9 @@ def build_planar_results(session: Session, obs: Observations, est: PlanarEstimat
         "parameters": parameters, "positions": positions, "figures": {"planar": planar},
         "flags": est.flags, "timings_s": dict(est.timings_s),
     }
-    truth = planar_session_truth(session)
+    truth = session_truth(session)
     if truth is not None:
-        results["truth_comparison"] = planar_truth_comparison(obs, est, truth, positions)
+        results["truth_comparison"] = truth_comparison(obs, est, truth, positions)
         _add_truth_to_nodes(planar["nodes"], obs, positions, valid)
     results["summary"] = summary_csv_rows(results)
     return results

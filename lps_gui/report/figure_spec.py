@@ -1,9 +1,8 @@
 """What a plot is, as plain data: :class:`Series`, :class:`FigureSpec` and the report's colours.
 
-The line figures (:mod:`lps_gui.report.figures`) and the planar figures
-(:mod:`lps_gui.report.planar_figures`) both build these, and the painters
-(PDF and GUI) draw them; neither figure module imports the other's
-internals. No Qt here.
+The figures of a line and of a plane (:mod:`lps_gui.report.figures`, the planar
+pages a section there) build these, and the painters (PDF and GUI) draw them.
+No Qt here.
 """
 from __future__ import annotations
 

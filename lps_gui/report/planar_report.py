@@ -14,7 +14,7 @@ from dataclasses import replace
 from typing import Any
 
 from lps_gui.report import sections as R
-from lps_gui.report.planar_figures import planar_figures_from_results
+from lps_gui.report.figures import planar_figures_from_results
 from lps_gui.report.summary import Row, fmt, table_cells
 from lps_gui.report.verdict import overall, verdicts
 

@@ -7,7 +7,7 @@ import pytest
 
 from lps_gui.core.estimate import EstimateOptions, estimate
 from lps_gui.core.observations import Observations
-from lps_gui.core.planar_estimate import planar_truth_in_stage_frame
+from lps_gui.core.planar_model import planar_truth_in_stage_frame
 from lps_gui.core.planar_figures import axis_geometry, planar_figures
 from lps_gui.core.stage_errors import PlanarErrorModel
 from lps_gui.core.simulate import (
@@ -81,7 +81,7 @@ def test_paper_planar_positions_reach_the_cramer_rao_bound_and_recover_squarenes
     rms_pnp = 1e3 * np.sqrt(np.mean((pnp.state.xy - true_stage_xy(pnp, obs, views))[pnp.used] ** 2))
     assert rms_pnp > 1.5 * rms, (rms_pnp, rms)  # measured: 4.3 um against 2.0 um
     # reported sigmas agree with the bound
-    assert np.isclose(np.sqrt(np.mean((1e3 * est.sigma_xy_mm[1:]) ** 2)), crb_um, rtol=0.15)
+    assert np.isclose(np.sqrt(np.mean((1e3 * est.sigma_s_mm[1:]) ** 2)), crb_um, rtol=0.15)
     geo = axis_geometry(est.fit.G, est.fit.cov_G)
     # truth of the figures: the same least-squares fit of the true trajectory (ISO 230-1 reference lines)
     true_est = planar_truth_geometry(est, obs, truth)
@@ -95,7 +95,7 @@ def test_paper_planar_positions_reach_the_cramer_rao_bound_and_recover_squarenes
 
 
 def planar_truth_geometry(est, obs, truth_xy):
-    from lps_gui.core.planar_estimate import affine_motion
+    from lps_gui.core.planar_model import affine_motion
 
     G = affine_motion(truth_xy, obs.target_mm, obs.approach, est.used)
     return axis_geometry(G, np.zeros((4, 4)))
@@ -124,7 +124,7 @@ def test_planar_sigmas_are_honest_over_monte_carlo_repetitions():
         est = estimate(obs, EstimateOptions(detect_outliers=False))
         truth = true_stage_xy(est, obs, views)
         e = (est.state.xy - truth)[1:]
-        z2.append(np.mean((e / est.sigma_xy_mm[1:]) ** 2))
+        z2.append(np.mean((e / est.sigma_s_mm[1:]) ** 2))
         geo = axis_geometry(est.fit.G, est.fit.cov_G)
         tg = planar_truth_geometry(est, obs, truth)
         sq.append(((geo.squareness_urad - tg.squareness_urad) / geo.squareness_sigma_urad) ** 2)
@@ -164,7 +164,7 @@ def test_planar_figures_lines_and_nodes():
     obs = observations(spec, views)
     est = estimate(obs)
     figs = planar_figures(obs.target_mm, obs.approach, obs.run, obs.direction, est.deviation_um(obs.target_mm),
-                          1e3 * est.sigma_xy_mm, est.used, est.fit.G, est.fit.cov_G)
+                          1e3 * est.sigma_s_mm, est.used, est.fit.G, est.fit.cov_G)
     assert {ln.axis for ln in figs.lines} == {"X", "Y"}
     assert len([ln for ln in figs.lines if ln.axis == "X"]) == 4  # one per y level
     assert len(figs.nodes) == 24 and all(n["n"] == 4 for n in figs.nodes)
@@ -190,8 +190,8 @@ def test_planar_self_calibration_frees_the_intrinsics_under_their_prior():
     assert 0 < np.max(np.abs(moved)) < 3.0
     truth = true_stage_xy(free, obs, views)
     rest = free.used & (np.arange(obs.K) != free.reference_view)
-    z2 = np.mean(((free.state.xy - truth)[rest] / free.sigma_total_xy_mm[rest]) ** 2)
+    z2 = np.mean(((free.state.xy - truth)[rest] / free.sigma_total_mm[rest]) ** 2)
     assert 0.2 < z2 < 3.0, z2
     # the corners inform the intrinsics too: the positions' total sigma is below the prior's propagation alone
-    assert np.median(free.sigma_total_xy_mm[1:]) < np.median(held.sigma_total_xy_mm[1:])
-    assert np.all(held.sigma_total_xy_mm[1:] >= held.sigma_xy_mm[1:])
+    assert np.median(free.sigma_total_mm[1:]) < np.median(held.sigma_total_mm[1:])
+    assert np.all(held.sigma_total_mm[1:] >= held.sigma_s_mm[1:])

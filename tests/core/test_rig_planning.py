@@ -22,7 +22,7 @@ def test_planar_prediction_within_20_percent_of_the_sigma_measured_on_a_simulate
     obs = Observations(spec.rig.board, spec.rig.intrinsics, views.corners_px, [s.target_mm for s in st],
                        [1] * len(st), [1] * len(st), [s.index for s in st], approach=[s.approach for s in st])
     est = estimate(obs)
-    measured = float(np.median(np.sqrt(np.mean((1e3 * est.sigma_xy_mm[1:]) ** 2, axis=1))))
+    measured = float(np.median(np.sqrt(np.mean((1e3 * est.sigma_s_mm[1:]) ** 2, axis=1))))
     assert abs(pred.sigma_um_median / measured - 1.0) < 0.2, (pred.sigma_um_median, measured)
 
 

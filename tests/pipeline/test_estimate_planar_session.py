@@ -85,7 +85,7 @@ def test_hybrid_on_a_planar_session_is_a_one_line_error(planar_session, capsys):
 
 
 def test_error_map_exaggeration_is_stated_and_round():
-    from lps_gui.report.planar_figures import nice_exaggeration
+    from lps_gui.report.figures import nice_exaggeration
 
     assert nice_exaggeration(10.0, 10.0) == 500.0  # 0.8 * 10 mm / 10 um = 800 -> 500
     assert nice_exaggeration(0.0, 10.0) == 1.0

@@ -36,13 +36,13 @@ SELECTIONS = Selections(intrinsics=False, target_poses=True)  # what a session w
 class TargetLineEstimate(LpsEstimate):
     """A line against a row of targets: an :class:`LpsEstimate` with the targets' solution beside it."""
 
-    fit: TargetSolution | None = None
+    fit_targets: TargetSolution | None = None
 
     def linear_functional_sigma(self, a: np.ndarray) -> tuple[float, float]:
         """Sigma (mm) of sum_i a_i s_i under the full covariance (the targets' poses included), from
         noise alone and with the intrinsics' covariance."""
         a = np.where(self.used, np.asarray(a, dtype=float), 0.0)
-        var = max(self.fit.covariance.variance(a[:, None]), 0.0)
+        var = max(self.fit_targets.covariance.variance(a[:, None]), 0.0)
         total = var
         cov_i = self.state.intrinsics.covariance
         if self.intrinsics_gradient is not None and cov_i is not None:
@@ -146,7 +146,7 @@ def _line_estimate(obs: Observations, sol: TargetSolution, common: dict) -> Targ
         sigma_s_mm=sigma, sigma_total_mm=total, step_sigma_mm=_step_sigma(obs, sol), intrinsics_gradient=gradient,
         parameter_sigmas={"rvec_sigma_rad": sd[0:3].tolist(), "l0_sigma_mm": sd[3:6].tolist(),
                           "n_sigma_rad": sd[6:8].tolist()},
-        six_dof=None, fit=sol, **common)
+        six_dof=None, fit_targets=sol, **common)
     return est
 
 

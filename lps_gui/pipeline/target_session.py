@@ -83,7 +83,7 @@ def seen_by_target(obs: Observations, used: np.ndarray) -> np.ndarray:
 
 def targets_section(obs: Observations, est: Any, session: Session) -> list[dict[str, Any]]:
     """results.json ``targets`` (SPEC 13)."""
-    fit = getattr(est, "fit", None) if obs.D == 1 else getattr(est, "fit_targets", None)
+    fit = est.fit_targets
     rows = target_rows(list(obs.mounted), fit.Q, fit.p, fit.target_sigma, obs.corners_px, obs.targets, est.used)
     seen = seen_by_target(obs, est.used)
     several = seen.sum(axis=1) >= 2

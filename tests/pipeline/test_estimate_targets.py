@@ -89,7 +89,7 @@ def _paper_row_figures(folder, seed: int) -> tuple[float, float, float]:
     ok = est.used
     err = (est.state.s - est.state.s[est.reference_view]) - (truth - truth[est.reference_view])
     err = err[ok] - err[ok].mean()
-    sigma = est.fit.sigma_centred[ok, 0]
+    sigma = est.fit_targets.sigma_centred[ok, 0]
     tobs = TargetObservations(list(obs.mounted), obs.corners_px, obs.targets, list(obs.names))
     crb = crb_centred(tobs, spec.layout, truth - truth[0], 1, spec.noise_px, obs.intrinsics)[ok, 0]
     return float(np.sqrt(np.mean(err ** 2))), float(np.sqrt(np.mean(crb ** 2))), float(np.mean((err / sigma) ** 2))

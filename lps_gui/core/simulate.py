@@ -22,26 +22,9 @@ from lps_gui.core.planar_model import PlanarState, planar_positions_only
 from lps_gui.core.rig import Rig
 from lps_gui.core.rotation import exp_so3
 from lps_gui.core.stage_errors import ErrorProfile, PlanarErrorModel, PlanarTruePose, StageErrorModel, TruePose
+from lps_gui.core.simulation_spec import SimulationSpec
 from lps_gui.core.target_rig import TargetLayout, observe
 from lps_gui.errors import InputError
-
-
-@dataclass(frozen=True)
-class SimulationSpec:
-    """A simulated experiment; every random draw comes from ``seed``."""
-
-    name: str
-    rig: Rig  # as many axes as the plan
-    plan: Plan
-    noise_px: float = 0.1
-    noise_clip_px: float | None = None  # paper's synthetic case: |noise| < 1 px
-    missing_fraction: float = 0.0
-    replaced_views: tuple[int, ...] = ()  # images swapped for another position's
-    replaced_offset: int = 37  # ... the one this many captures away
-    bumped_views: tuple[int, ...] = ()  # camera knocked: rotated by bump_mrad
-    bump_mrad: float = 3.0
-    seed: int = 0
-    layout: TargetLayout | None = None  # a row or constellation of targets (SPEC 13); the rig's board is its first
 
 
 def layout_truth(layout: TargetLayout) -> list[dict[str, Any]]:

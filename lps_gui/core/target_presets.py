@@ -13,13 +13,11 @@ the positioning error along the travel. The camera faces the middle of the
 layout when the stage is in the middle of its travel; the views at the ends
 see the outer targets cut by the image border.
 
-SimulationSpec is imported where a preset is built: :mod:`lps_gui.core.simulate`
-registers these presets in its tables at import.
+:mod:`lps_gui.core.simulate` registers these presets in its tables at import.
 """
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any
 
 import numpy as np
 
@@ -29,6 +27,7 @@ from lps_gui.core.lps_model import unit
 from lps_gui.core.plan import Plan
 from lps_gui.core.rig import Rig
 from lps_gui.core.rotation import exp_so3
+from lps_gui.core.simulation_spec import SimulationSpec
 from lps_gui.core.stage_errors import PlanarErrorModel, StageErrorModel
 from lps_gui.core.target_rig import TargetLayout, row_layout
 from lps_gui.core.targets import pack_targets
@@ -67,9 +66,8 @@ def row_rig(layout: TargetLayout, intrinsics: CameraIntrinsics, distance_mm: flo
 
 
 def row_spec(name: str, board: Board, intrinsics: CameraIntrinsics, n_targets: int, pitch_mm: float,
-             distance_mm: float, plan: Plan, seed: int, noise_px: float, errors: StageErrorModel | None) -> Any:
-    from lps_gui.core.simulate import SimulationSpec
-
+             distance_mm: float, plan: Plan, seed: int, noise_px: float, errors: StageErrorModel | None
+             ) -> SimulationSpec:
     layout = row_layout(pack_targets([board] * n_targets), pitch_mm, MOUNT_TILT_RAD, MOUNT_OFFSET_MM, seed=seed)
     t = plan.targets()
     rig = row_rig(layout, intrinsics, distance_mm, (float(t[0]), float(t[-1])), errors or row_errors())
@@ -77,14 +75,14 @@ def row_spec(name: str, board: Board, intrinsics: CameraIntrinsics, n_targets: i
 
 
 def paper_row_spec(seed: int = 0, noise_px: float = 0.1, errors: StageErrorModel | None = None,
-                   plan: Plan | None = None, n_targets: int = 6) -> Any:
+                   plan: Plan | None = None, n_targets: int = 6) -> SimulationSpec:
     """The paper's X axis against a row of six targets (SPEC 13)."""
     plan = plan or Plan(start_mm=0.0, stop_mm=1524.0, step_mm=12.7)
     return row_spec("paper-row", ROW_BOARD, ROW_CAMERA, n_targets, 340.0, 800.0, plan, seed, noise_px, errors)
 
 
 def small_row_spec(seed: int = 0, noise_px: float = 0.1, errors: StageErrorModel | None = None,
-                   plan: Plan | None = None) -> Any:
+                   plan: Plan | None = None) -> SimulationSpec:
     """A fast row for tests: three 7x5 targets of 20 mm at 170 mm pitch, 300 mm away, 18 stops over 340 mm."""
     plan = plan or Plan(start_mm=0.0, stop_mm=340.0, step_mm=20.0)
     return row_spec("small-row", SMALL_BOARD, SMALL_CAMERA, 3, 170.0, 300.0, plan, seed, noise_px, errors)
@@ -98,10 +96,8 @@ def constellation_errors(squareness_urad: float = 150.0) -> PlanarErrorModel:
 
 
 def paper_constellation_spec(seed: int = 0, noise_px: float = 0.1, errors: PlanarErrorModel | None = None,
-                             plan: Plan | None = None, grid: tuple[int, int] = (6, 4)) -> Any:
+                             plan: Plan | None = None, grid: tuple[int, int] = (6, 4)) -> SimulationSpec:
     """The paper's 1524 x 1016 mm XY stage (13 x 9 stops) against a 6 x 4 constellation, 800 mm away."""
-    from lps_gui.core.simulate import SimulationSpec
-
     plan = plan or Plan.xy(start_mm=(0.0, 0.0), stop_mm=(1524.0, 1016.0), step_mm=(127.0, 127.0))
     n = grid[0] * grid[1]
     half = n // 2  # 24 targets of 44 markers need two dictionaries of 1000 ids

@@ -152,7 +152,7 @@ def run_demo(
     if row:
         from lps_gui.pipeline.demo_targets import run_row_demo
 
-        return run_row_demo(out, spec, res, step, bar, cancel, seed)
+        return run_row_demo(out, spec, res, step, bar, cancel, seed, calibrate_step)
     t0 = time.monotonic()
     intrinsics, message, status = calibrate_step(out, spec, quick, bar("intrinsics"), cancel, seed)
     step("intrinsics", status, message, t0)

@@ -66,9 +66,9 @@ def calibration_board(spec: SimulationSpec) -> Board:
 
 
 def run_row_demo(out: Path, spec: SimulationSpec, res: Any, step: Callable[[str, str, str, float], None],
-                 bar: Callable[[str], Any], cancel: CancelToken | None, seed: int) -> Any:
-    """The demo's steps on a row of targets, into ``res`` (a :class:`~lps_gui.pipeline.demo.DemoResult`)."""
-    from lps_gui.pipeline.demo import calibrate_step
+                 bar: Callable[[str], Any], cancel: CancelToken | None, seed: int, calibrate_step: Callable) -> Any:
+    """The demo's steps on a row of targets, into ``res`` (a :class:`~lps_gui.pipeline.demo.DemoResult`);
+    ``calibrate_step`` is the one-board demo's (passed in: the demo imports this module)."""
     from lps_gui.pipeline.detect import detect_session
     from lps_gui.pipeline.estimate import estimate_session
     from lps_gui.report.pdf import write_report

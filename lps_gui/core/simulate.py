@@ -15,7 +15,6 @@ from typing import Any
 
 import numpy as np
 
-from lps_gui.core import target_presets
 from lps_gui.core.board import Board
 from lps_gui.core.camera_model import CameraIntrinsics, project_board
 from lps_gui.core.plan import Plan, PlannedStop
@@ -23,26 +22,9 @@ from lps_gui.core.planar_model import PlanarState, planar_positions_only
 from lps_gui.core.rig import Rig
 from lps_gui.core.rotation import exp_so3
 from lps_gui.core.stage_errors import ErrorProfile, PlanarErrorModel, PlanarTruePose, StageErrorModel, TruePose
+from lps_gui.core.simulation_spec import SimulationSpec
 from lps_gui.core.target_rig import TargetLayout, observe
 from lps_gui.errors import InputError
-
-
-@dataclass(frozen=True)
-class SimulationSpec:
-    """A simulated experiment; every random draw comes from ``seed``."""
-
-    name: str
-    rig: Rig  # as many axes as the plan
-    plan: Plan
-    noise_px: float = 0.1
-    noise_clip_px: float | None = None  # paper's synthetic case: |noise| < 1 px
-    missing_fraction: float = 0.0
-    replaced_views: tuple[int, ...] = ()  # images swapped for another position's
-    replaced_offset: int = 37  # ... the one this many captures away
-    bumped_views: tuple[int, ...] = ()  # camera knocked: rotated by bump_mrad
-    bump_mrad: float = 3.0
-    seed: int = 0
-    layout: TargetLayout | None = None  # a row or constellation of targets (SPEC 13); the rig's board is its first
 
 
 def layout_truth(layout: TargetLayout) -> list[dict[str, Any]]:
@@ -311,26 +293,10 @@ PRESETS = {
 PLANAR_PRESETS = {"paper-planar": paper_planar_spec, "small-planar": small_planar_spec}
 
 
-def paper_row_spec(seed: int = 0, noise_px: float = 0.1, errors: StageErrorModel | None = None,
-                   plan: Plan | None = None, n_targets: int = 6) -> SimulationSpec:
-    """The paper's X axis against a row of six targets (SPEC 13; :mod:`lps_gui.core.target_presets`)."""
-    return SimulationSpec(**target_presets.paper_row_parts(seed, noise_px, errors, plan, n_targets))
+from lps_gui.core.target_presets import PLANAR_TARGET_PRESETS, TARGET_PRESETS  # noqa: E402 (rows of targets; they import core/simulation_spec, not this module)
 
-
-def small_row_spec(seed: int = 0, noise_px: float = 0.1, errors: StageErrorModel | None = None,
-                   plan: Plan | None = None) -> SimulationSpec:
-    """A fast row of three targets for tests (:mod:`lps_gui.core.target_presets`)."""
-    return SimulationSpec(**target_presets.small_row_parts(seed, noise_px, errors, plan))
-
-
-def paper_constellation_spec(seed: int = 0, noise_px: float = 0.1, errors: PlanarErrorModel | None = None,
-                             plan: Plan | None = None) -> SimulationSpec:
-    """The paper's XY stage against a 6 x 4 constellation (:mod:`lps_gui.core.target_presets`)."""
-    return SimulationSpec(**target_presets.paper_constellation_parts(seed, noise_px, errors, plan))
-
-
-PRESETS.update({"paper-row": paper_row_spec, "small-row": small_row_spec})
-PLANAR_PRESETS["paper-constellation"] = paper_constellation_spec
+PRESETS.update(TARGET_PRESETS)
+PLANAR_PRESETS.update(PLANAR_TARGET_PRESETS)
 
 
 def preset(name: str, planar: bool = False, **overrides: Any) -> SimulationSpec:

@@ -13,8 +13,7 @@ the positioning error along the travel. The camera faces the middle of the
 layout when the stage is in the middle of its travel; the views at the ends
 see the outer targets cut by the image border.
 
-Each function here gives the fields of a :class:`~lps_gui.core.simulate.SimulationSpec`;
-:mod:`lps_gui.core.simulate` builds the specs from them and lists the presets in its tables.
+:mod:`lps_gui.core.simulate` registers these presets in its tables at import.
 """
 from __future__ import annotations
 
@@ -28,6 +27,7 @@ from lps_gui.core.lps_model import unit
 from lps_gui.core.plan import Plan
 from lps_gui.core.rig import Rig
 from lps_gui.core.rotation import exp_so3
+from lps_gui.core.simulation_spec import SimulationSpec
 from lps_gui.core.stage_errors import PlanarErrorModel, StageErrorModel
 from lps_gui.core.target_rig import TargetLayout, row_layout
 from lps_gui.core.targets import pack_targets
@@ -65,26 +65,27 @@ def row_rig(layout: TargetLayout, intrinsics: CameraIntrinsics, distance_mm: flo
     return Rig(layout.targets[0].board, intrinsics, R, C_mid - 0.5 * (travel_mm[0] + travel_mm[1]) * u, u, errors)
 
 
-def row_parts(name: str, board: Board, intrinsics: CameraIntrinsics, n_targets: int, pitch_mm: float,
-              distance_mm: float, plan: Plan, seed: int, noise_px: float, errors: StageErrorModel | None) -> dict:
+def row_spec(name: str, board: Board, intrinsics: CameraIntrinsics, n_targets: int, pitch_mm: float,
+             distance_mm: float, plan: Plan, seed: int, noise_px: float, errors: StageErrorModel | None
+             ) -> SimulationSpec:
     layout = row_layout(pack_targets([board] * n_targets), pitch_mm, MOUNT_TILT_RAD, MOUNT_OFFSET_MM, seed=seed)
     t = plan.targets()
     rig = row_rig(layout, intrinsics, distance_mm, (float(t[0]), float(t[-1])), errors or row_errors())
-    return {"name": name, "rig": rig, "plan": plan, "noise_px": noise_px, "seed": seed, "layout": layout}
+    return SimulationSpec(name, rig, plan, noise_px=noise_px, seed=seed, layout=layout)
 
 
-def paper_row_parts(seed: int = 0, noise_px: float = 0.1, errors: StageErrorModel | None = None,
-                    plan: Plan | None = None, n_targets: int = 6) -> dict:
+def paper_row_spec(seed: int = 0, noise_px: float = 0.1, errors: StageErrorModel | None = None,
+                   plan: Plan | None = None, n_targets: int = 6) -> SimulationSpec:
     """The paper's X axis against a row of six targets (SPEC 13)."""
     plan = plan or Plan(start_mm=0.0, stop_mm=1524.0, step_mm=12.7)
-    return row_parts("paper-row", ROW_BOARD, ROW_CAMERA, n_targets, 340.0, 800.0, plan, seed, noise_px, errors)
+    return row_spec("paper-row", ROW_BOARD, ROW_CAMERA, n_targets, 340.0, 800.0, plan, seed, noise_px, errors)
 
 
-def small_row_parts(seed: int = 0, noise_px: float = 0.1, errors: StageErrorModel | None = None,
-                    plan: Plan | None = None) -> dict:
+def small_row_spec(seed: int = 0, noise_px: float = 0.1, errors: StageErrorModel | None = None,
+                   plan: Plan | None = None) -> SimulationSpec:
     """A fast row for tests: three 7x5 targets of 20 mm at 170 mm pitch, 300 mm away, 18 stops over 340 mm."""
     plan = plan or Plan(start_mm=0.0, stop_mm=340.0, step_mm=20.0)
-    return row_parts("small-row", SMALL_BOARD, SMALL_CAMERA, 3, 170.0, 300.0, plan, seed, noise_px, errors)
+    return row_spec("small-row", SMALL_BOARD, SMALL_CAMERA, 3, 170.0, 300.0, plan, seed, noise_px, errors)
 
 
 def constellation_errors(squareness_urad: float = 150.0) -> PlanarErrorModel:
@@ -94,8 +95,8 @@ def constellation_errors(squareness_urad: float = 150.0) -> PlanarErrorModel:
                             squareness_urad=squareness_urad)
 
 
-def paper_constellation_parts(seed: int = 0, noise_px: float = 0.1, errors: PlanarErrorModel | None = None,
-                              plan: Plan | None = None, grid: tuple[int, int] = (6, 4)) -> dict:
+def paper_constellation_spec(seed: int = 0, noise_px: float = 0.1, errors: PlanarErrorModel | None = None,
+                             plan: Plan | None = None, grid: tuple[int, int] = (6, 4)) -> SimulationSpec:
     """The paper's 1524 x 1016 mm XY stage (13 x 9 stops) against a 6 x 4 constellation, 800 mm away."""
     plan = plan or Plan.xy(start_mm=(0.0, 0.0), stop_mm=(1524.0, 1016.0), step_mm=(127.0, 127.0))
     n = grid[0] * grid[1]
@@ -115,5 +116,8 @@ def paper_constellation_parts(seed: int = 0, noise_px: float = 0.1, errors: Plan
     t = plan.targets()
     centre = 0.5 * (t.min(axis=0) + t.max(axis=0))
     rig = Rig(ROW_BOARD, ROW_CAMERA, R, C_mid - E[:, :2] @ centre, E, errors or constellation_errors())
-    return {"name": "paper-constellation", "rig": rig, "plan": plan, "noise_px": noise_px, "seed": seed,
-            "layout": layout}
+    return SimulationSpec("paper-constellation", rig, plan, noise_px=noise_px, seed=seed, layout=layout)
+
+
+TARGET_PRESETS = {"paper-row": paper_row_spec, "small-row": small_row_spec}
+PLANAR_TARGET_PRESETS = {"paper-constellation": paper_constellation_spec}

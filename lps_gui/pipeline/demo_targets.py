@@ -20,7 +20,8 @@ import numpy as np
 from lps_gui.core.board import Board
 from lps_gui.core.plan import Plan
 from lps_gui.core.progress import CancelToken
-from lps_gui.core.simulate import SimulationSpec, paper_row_spec
+from lps_gui.core.simulate import SimulationSpec
+from lps_gui.core.target_presets import paper_row_spec
 from lps_gui.errors import InputError
 
 ROW_STEP_MM = 12.7  # the paper's X axis: 1524 mm in 120 steps

@@ -189,3 +189,16 @@ def test_a_constellation_session_gives_the_planar_figures_against_truth(tmp_path
     assert tc["targets"]["max_abs_z"] < 4.5
     per_axis = results["uncertainty"]["per_axis"]
     assert any(b["source"] == "target scale T23" for b in per_axis["Y"]["budget"])
+
+
+@pytest.mark.slow
+def test_the_row_demo_writes_its_report_and_csvs(tmp_path):
+    """lps demo --preset small-row: calibrate, render, detect, estimate, report; the figures beside the truth."""
+    from lps_gui.pipeline.demo import run_demo
+
+    res = run_demo(tmp_path / "demo", preset="small-row")
+    assert res.report_pdf is not None and res.report_pdf.exists()
+    assert [p.name for p in res.csvs] == ["positions.csv", "summary.csv"]
+    assert [s.name for s in res.steps] == ["intrinsics", "capture", "detect", "estimate", "report"]
+    assert any("target poses within" in line for line in res.summary)
+    assert res.results["truth_comparison"]["position_rms_error_um"] < 1.5 * res.results["truth_comparison"]["mean_sigma_um"]

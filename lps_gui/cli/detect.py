@@ -78,6 +78,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"failed: {name}: {reason}", file=sys.stderr)
     if table.meta.get("up_to_date"):
         print(f"{out} is up to date ({len(table.names)} views, {len(table.failed)} failed); use --force to detect again")
+        if hasattr(table, "seen"):
+            print(target_counts(table))
         return EXIT_SOME_FAILED if table.failed else 0
     elapsed = time.monotonic() - t0
     n = len(table.names)

@@ -372,7 +372,9 @@ def detect_session(
     methods = [r.method for r in results.values()]
     labels = {"track": "tracked", "full": "full", "charuco": "charuco", "targets": "targets", "kept": "kept",
               "failed": "failed"}
-    meta["detection"] = ", ".join(f"{label} {methods.count(m)}" for m, label in labels.items() if m == "track" or m in methods)
+    tracked = layout.targets is None  # a board is tracked from frame to frame; targets are found in every image
+    meta["detection"] = ", ".join(f"{label} {methods.count(m)}" for m, label in labels.items()
+                                  if m in methods or m == "track" and tracked)
     table = _table(names, results, layout.n_corners, meta, layout)
     _write_session_corners(session, table, layout)
     return table

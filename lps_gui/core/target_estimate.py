@@ -29,7 +29,9 @@ from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.core.target_model import N_COMMON, TargetObservations, TargetSolution, solve_targets
 from lps_gui.errors import InputError
 
-SELECTIONS = Selections(intrinsics=False, target_poses=True)  # what a session with targets frees (known intrinsics)
+def target_selections(opt: EstimateOptions) -> Selections:
+    """What a session with targets frees: the target poses, and the intrinsics when self-calibrating."""
+    return Selections(intrinsics=opt.selections().intrinsics, target_poses=True)
 
 
 @dataclass
@@ -58,9 +60,8 @@ def check_target_options(opt: EstimateOptions) -> None:
     """InputError for the options a session with targets does not take (yet)."""
     if opt.method != "joint":
         raise InputError(f"method {opt.method!r} is not available for a session with targets (SPEC 13); use joint")
-    if opt.selections().intrinsics != SELECTIONS.intrinsics or opt.robust:
-        raise InputError("a session with targets is estimated with known intrinsics and the plain loss; "
-                         "drop --self-calibrate / --robust")
+    if opt.robust:
+        raise InputError("a session with targets is estimated with the plain loss; drop --robust")
 
 
 def estimate_with_targets(obs: Observations, opt: EstimateOptions, progress: ProgressFn = no_progress,
@@ -70,11 +71,12 @@ def estimate_with_targets(obs: Observations, opt: EstimateOptions, progress: Pro
     t0 = time.perf_counter()
     timings: dict[str, float] = {}
     rounds = Solution(None, 0, obs.usable_views(), np.zeros(obs.K, bool), [""] * obs.K)
+    prior = opt.intrinsics_prior(obs.intrinsics) if target_selections(opt).intrinsics else None
 
     def solve(r: Solution) -> None:
         corners = np.where(r.used[:, None, None], obs.corners_px, np.nan)  # flagged views leave the solve
         tobs = TargetObservations(list(obs.mounted), corners, obs.targets, list(obs.names))
-        r.state = solve_targets(tobs, obs.intrinsics, progress=progress)
+        r.state = solve_targets(tobs, obs.intrinsics, progress=progress, intrinsics_prior=prior)
         r.ref, r.iterations, r.converged = r.state.reference, r.state.iterations, r.state.converged
         if not r.flags:  # the first solve says which views see a target at all
             r.usable = r.state.used.copy()
@@ -130,11 +132,14 @@ def _line_estimate(obs: Observations, sol: TargetSolution, common: dict) -> Targ
     total = sigma if gradient is None else np.sqrt(sigma ** 2 + np.einsum("ki,ij,kj->k", gradient,
                                                                            obs.intrinsics.covariance, gradient))
     sd = np.sqrt(np.maximum(np.diag(sol.covariance.S_inv)[:N_COMMON], 0.0) * sol.covariance.sigma2)
+    sigmas = {"rvec_sigma_rad": sd[0:3].tolist(), "l0_sigma_mm": sd[3:6].tolist(), "n_sigma_rad": sd[6:8].tolist()}
+    if sol.intrinsics_estimated is not None:  # self-calibrated: their sigmas after the prior and the corners
+        sigmas["intrinsics_sigma"] = np.sqrt(np.maximum(
+            np.diag(sol.covariance.S_inv)[N_COMMON: N_COMMON + 9], 0.0) * sol.covariance.sigma2).tolist()
     est = TargetEstimate(
-        state=LpsState(sol.R, sol.l0, sol.N[:, 0].copy(), s, obs.intrinsics),
+        state=LpsState(sol.R, sol.l0, sol.N[:, 0].copy(), s, _intrinsics_of(sol, obs)),
         sigma_s_mm=sigma, sigma_total_mm=total, step_sigma_mm=_step_sigma(obs, sol), intrinsics_gradient=gradient,
-        parameter_sigmas={"rvec_sigma_rad": sd[0:3].tolist(), "l0_sigma_mm": sd[3:6].tolist(),
-                          "n_sigma_rad": sd[6:8].tolist()},
+        parameter_sigmas=sigmas,
         six_dof=None, fit_targets=sol, **common)
     return est
 
@@ -166,8 +171,13 @@ def _plane_estimate(obs: Observations, sol: TargetSolution, common: dict) -> Tar
         gradient = np.where(sol.used[:, None, None], gradient, 0.0)
         total = cov + np.einsum("kai,ij,kbj->kab", gradient, obs.intrinsics.covariance, gradient)
     sigma = sigmas_of(cov)
-    est = TargetEstimate(state=PlanarState(sol.R, sol.l0, P, xy, obs.intrinsics), cov_mm2=cov, sigma_s_mm=sigma,
-                         sigma_total_mm=sigma if total is None else sigmas_of(total), inverse=None,
+    est = TargetEstimate(state=PlanarState(sol.R, sol.l0, P, xy, _intrinsics_of(sol, obs)), cov_mm2=cov,
+                         sigma_s_mm=sigma, sigma_total_mm=sigma if total is None else sigmas_of(total), inverse=None,
                          fit_targets=sol, cov_total_mm2=total, intrinsics_gradient=gradient, **common)
     est.fit = planar_fit(est, obs.target_mm, obs.approach)
     return est
+
+
+def _intrinsics_of(sol: TargetSolution, obs: Observations):
+    """The intrinsics at the solution: self-calibrated, or the given ones."""
+    return obs.intrinsics if sol.intrinsics_estimated is None else sol.intrinsics_estimated

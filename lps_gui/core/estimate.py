@@ -60,6 +60,7 @@ from lps_gui.core.pnp import solve_pnp
 from lps_gui.core.pose_normals import PoseNormals
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.core.six_dof import SixDof, refine_view_poses, six_dof_motion
+from lps_gui.core.target_estimate import estimate_with_targets
 from lps_gui.core.uncertainty import noise_variance, propagated_variance
 from lps_gui.errors import DegenerateGeometryError, InputError
 
@@ -89,6 +90,10 @@ def estimate(
     opt = options or EstimateOptions()
     opt.check_axes(obs.D)
     obs.validate()
+    if obs.mounted is not None:  # a row or constellation (SPEC 13): the target poses are one more selection
+        if warm_start is not None:
+            raise InputError("a warm start continues a joint estimate of one board on one axis; a target session has none")
+        return estimate_with_targets(obs, opt, progress, cancel)
     if warm_start is not None:
         if obs.D != 1 or opt.method != "joint":
             raise InputError("a warm start continues a joint estimate of one axis (the running estimate of a live capture)")

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lps_gui.core.camera_model import CameraIntrinsics
+from lps_gui.core.camera_model import CameraIntrinsics, intrinsics_rows, project_parts
 from lps_gui.core.pnp import solve_pnp
 from lps_gui.core.rotation import chordal_mean, exp_so3
 from lps_gui.core.target_arrowhead import (
@@ -31,6 +31,7 @@ from lps_gui.core.targets import Target
 from lps_gui.errors import DegenerateGeometryError
 
 N_COMMON = 8  # R (3), l0 (3), tilt of the motion frame (2)
+N_INTRINSICS = 9  # after them when self-calibrating (SPEC 4.6)
 MIN_CORNERS = 6
 
 
@@ -71,6 +72,9 @@ class TargetSolution:
     iterations: int
     converged: bool
     covariance: "PositionCovariance"
+    intrinsics_gradient: np.ndarray | None = None  # (K, D, 9): d s / d intrinsics (reported coordinates), when
+    # the intrinsics have a covariance to propagate
+    intrinsics_estimated: CameraIntrinsics | None = None  # self-calibration: the intrinsics at the solution
 
     def planar_axes(self, targets_mm: np.ndarray) -> dict[str, float]:
         """Scales of X and Y (ppm) and the squareness of Y to X (urad), with sigmas (SPEC 10 names).
@@ -167,15 +171,23 @@ def initial_solution(obs: TargetObservations, intrinsics: CameraIntrinsics) -> d
 # ----------------------------------------------------------------------------- linearization
 
 
-def _linearize(state: dict, X: np.ndarray, tj: np.ndarray, view: np.ndarray, uv: np.ndarray,
-               intrinsics: CameraIntrinsics, D: int, want_jacobian: bool = True) -> Linearization:
+def _camera_points(state: dict, X: np.ndarray, tj: np.ndarray, view: np.ndarray, D: int):
+    """Every corner in the camera frame P (M, 3), with the parts its Jacobian needs (Q X, R X_w, N s)."""
     R, l0, F, s, Q, p = state["R"], state["l0"], state["F"], state["s"], state["Q"], state["p"]
     QX = np.einsum("mij,mj->mi", Q[tj], X)
-    Xw = QX + p[tj]
+    ts = s[view] @ F[:, :D].T  # (M, 3)
+    RXw = (QX + p[tj]) @ R.T
+    return RXw + l0 + ts, QX, RXw, ts
+
+
+def _linearize(state: dict, X: np.ndarray, tj: np.ndarray, view: np.ndarray, uv: np.ndarray,
+               intrinsics: CameraIntrinsics, D: int, want_jacobian: bool = True) -> Linearization:
+    R, F = state["R"], state["F"]
     N = F[:, :D]
-    ts = s[view] @ N.T  # (M, 3)
-    RXw = Xw @ R.T
-    P = RXw + l0 + ts
+    free_intrinsics = "I" in state  # self-calibration: the 9 intrinsics are shared columns after the 8
+    if free_intrinsics:
+        intrinsics = intrinsics.with_vector(state["I"])
+    P, QX, RXw, ts = _camera_points(state, X, tj, view, D)
     cost, r, dP = project_residuals(P, uv, intrinsics, want_jacobian)
     if dP is None:
         return Linearization(cost, r, None, None, None)  # type: ignore[arg-type]
@@ -191,6 +203,9 @@ def _linearize(state: dict, X: np.ndarray, tj: np.ndarray, view: np.ndarray, uv:
     Jt[:, :, 3:6] = dPR
     Jt[tj == 0] = 0.0
     Jv = dP @ N
+    if free_intrinsics:
+        du, dv = intrinsics_rows(project_parts(P[:, 0], P[:, 1], P[:, 2], intrinsics), intrinsics)
+        Jc = np.concatenate([Jc, np.stack([du.T, dv.T], axis=1)], axis=2)
     return Linearization(cost, r, Jc, Jt, Jv)
 
 
@@ -202,7 +217,11 @@ def _retract(state: dict, dg: np.ndarray, dv: np.ndarray, D: int, T: int) -> dic
     new["l0"] = state["l0"] + dg[3:6]
     new["F"] = exp_so3(B @ dg[6:8]) @ F
     new["s"] = state["s"] + dv
-    new["Q"], new["p"] = retract_targets(state["Q"], state["p"], dg[N_COMMON:])
+    C = N_COMMON
+    if "I" in state:
+        new["I"] = state["I"] + dg[C: C + N_INTRINSICS]
+        C += N_INTRINSICS
+    new["Q"], new["p"] = retract_targets(state["Q"], state["p"], dg[C:])
     return new
 
 
@@ -211,12 +230,14 @@ def _retract(state: dict, dg: np.ndarray, dv: np.ndarray, D: int, T: int) -> dic
 
 def solve_targets(
     obs: TargetObservations, intrinsics: CameraIntrinsics, max_iterations: int = 50, tolerance: float = 1e-10,
-    progress=None, noise_px: float | None = None,
+    progress=None, noise_px: float | None = None, intrinsics_prior: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> TargetSolution:
     """Positions of every stop and the targets' poses, jointly; sigmas from (J^T J)^-1 at the solution.
 
     ``noise_px``: the corner noise to scale the sigmas with (a planner's noise-free views); None takes
-    the a-posteriori noise of the fit.
+    the a-posteriori noise of the fit. ``intrinsics_prior`` (I0, Sigma_I): the intrinsics are free with
+    their calibration as a Gaussian prior (SPEC 4.6), nine shared columns; the prior enters as nine
+    residuals L^T (I - I0) (L L^T = Sigma_I^-1) on the reference view, so the sigmas include it.
     """
     state = initial_solution(obs, intrinsics)
     K, T, D = len(obs.names), len(obs.targets), obs.targets_mm.shape[1]
@@ -227,22 +248,33 @@ def solve_targets(
     X, tj, uv = obs.own_points[corner], obs.which[corner], obs.corners_px[view, corner]
     free_view = used.copy()
     free_view[ref] = False
-    fit = levenberg_marquardt(
-        state, lambda st, jac=True: _linearize(st, X, tj, view, uv, intrinsics, D, jac),
-        lambda st, dg, dv: _retract(st, dg, dv, D, T), tj, view, K, T, free_view, max_iterations, tolerance,
-        progress, "target model")
+    M = len(view)
+    linearize = lambda st, jac=True: _linearize(st, X, tj, view, uv, intrinsics, D, jac)  # noqa: E731
+    tj_all, view_all = tj, view
+    if intrinsics_prior is not None:
+        # the prior weighs against corners of the fit's noise (MAP: |r|^2 + sigma^2 dI' Sigma^-1 dI), so the fit
+        # with the intrinsics held comes first and gives sigma; the covariance is then the posterior's
+        held = levenberg_marquardt(state, linearize, lambda st, dg, dv: _retract(st, dg, dv, D, T), tj, view, K, T,
+                                   free_view, max_iterations, tolerance, progress, "target model")
+        dof_held = max(2 * M - (N_COMMON + 6 * (T - 1) + D * int(free_view.sum())), 1)
+        state = dict(held.state, I=np.asarray(intrinsics_prior[0], float).copy())
+        linearize = _with_prior(linearize, intrinsics_prior, D, np.sqrt(held.lin.cost / dof_held))
+        tj_all, view_all = np.r_[tj, np.zeros(PRIOR_ROWS, int)], np.r_[view, np.full(PRIOR_ROWS, ref)]
+    fit = levenberg_marquardt(state, linearize, lambda st, dg, dv: _retract(st, dg, dv, D, T), tj_all, view_all, K, T,
+                              free_view, max_iterations, tolerance, progress, "target model")
     state, lin, it, converged = fit.state, fit.lin, fit.iterations, fit.converged
+    C = N_COMMON + (N_INTRINSICS if "I" in state else 0)
     n_params = N_COMMON + 6 * (T - 1) + D * int(free_view.sum())
-    dof = max(2 * len(view) - n_params, 1)
-    sigma2 = lin.cost / dof if noise_px is None else float(noise_px) ** 2
+    dof = max(2 * M - n_params, 1)
+    sigma2 = float(np.sum(lin.r[:M] ** 2)) / dof if noise_px is None else float(noise_px) ** 2
     S_inv, W, Avv_inv = fit.S_inv, fit.W, fit.Avv_inv
     cov_s, cov_c = view_covariances(Avv_inv, W, S_inv, free_view, used)
     cov_s, cov_c = cov_s * sigma2, cov_c * sigma2
     target_sigma = np.zeros((T, 6))
     if T > 1:
-        target_sigma[1:] = np.sqrt(np.maximum(np.diag(S_inv)[N_COMMON:], 0.0) * sigma2).reshape(T - 1, 6)
-    rms = view_rms(lin.r, view, K)
-    s = np.where(used[:, None], state["s"], np.nan)
+        target_sigma[1:] = np.sqrt(np.maximum(np.diag(S_inv)[C:], 0.0) * sigma2).reshape(T - 1, 6)
+    rms = view_rms(lin.r[:M], view, K)
+    s_solver = s = np.where(used[:, None], state["s"], np.nan)
     F = state["F"]
     N = F[:, :D]
     turn = np.eye(D)
@@ -252,10 +284,81 @@ def solve_targets(
         cov_s, cov_c = (np.einsum("dx,kde,ey->kxy", G, c, G) for c in (cov_s, cov_c))
     sigma_s, sigma_c = (np.sqrt(np.maximum(np.einsum("kdd->kd", c), 0.0)) for c in (cov_s, cov_c))
     sigma_s[~used] = sigma_c[~used] = np.nan
+    gradient = None
+    if intrinsics.covariance is not None and "I" not in state:  # free intrinsics are in the covariance already
+        grad = _intrinsics_gradient(state, fit, X, tj, view, intrinsics, D, free_view)
+        gradient = np.einsum("de,kdi->kei", turn, grad)  # reported coordinates: v turn
+        if D == 2:  # the turn follows the positions: its change enters every position
+            gradient += _turn_change(s_solver, obs.targets_mm, used, ref, turn, grad)
     return TargetSolution(state["R"], state["l0"], N, s, state["Q"], state["p"], sigma_s, sigma_c, target_sigma,
                           float(np.sqrt(sigma2)), rms, used, ref, state["ties"], it, converged,
                           PositionCovariance(Avv_inv * free_view[:, None, None], W * free_view[:, None, None],
-                                             S_inv, sigma2, turn))
+                                             S_inv, sigma2, turn), gradient,
+                          intrinsics.with_vector(state["I"]) if "I" in state else None)
+
+
+def _intrinsics_gradient(state: dict, fit, X: np.ndarray, tj: np.ndarray, view: np.ndarray,
+                         intrinsics: CameraIntrinsics, D: int, free_view: np.ndarray) -> np.ndarray:
+    """d s / d intrinsics (K, D, 9) in the solver's coordinates: -H^-1 J^T J_I by the same Schur complement.
+
+    With W_k = A_gv,k A_vv,k^-1: y_g = S^-1 (C_g - sum_k W_k C_v,k), y_v,k = A_vv,k^-1 C_v,k - W_k^T y_g.
+    """
+    lin = fit.lin
+    P, *_ = _camera_points(state, X, tj, view, D)
+    du, dv = intrinsics_rows(project_parts(P[:, 0], P[:, 1], P[:, 2], intrinsics), intrinsics)
+    JI = np.stack([du.T, dv.T], axis=1)  # (M, 2, 9)
+    K, T = len(free_view), len(state["Q"])
+    G = N_COMMON + 6 * (T - 1)
+    C_g = np.zeros((G, JI.shape[2]))
+    C_g[:N_COMMON] = np.einsum("mac,mai->ci", lin.Jc, JI)
+    for j in range(1, T):
+        on = tj == j
+        C_g[N_COMMON + 6 * (j - 1): N_COMMON + 6 * j] = np.einsum("mac,mai->ci", lin.Jt[on], JI[on])
+    C_v = np.zeros((K, D, JI.shape[2]))
+    np.add.at(C_v, view, np.einsum("map,mai->mpi", lin.Jv * free_view[view][:, None, None], JI))
+    y_g = fit.S_inv @ (C_g - np.einsum("kgp,kpi->gi", fit.W, C_v))
+    y_v = np.einsum("kpq,kqi->kpi", fit.Avv_inv, C_v) - np.einsum("kgp,gi->kpi", fit.W, y_g)
+    return -y_v * free_view[:, None, None]
+
+
+PRIOR_ROWS = 5  # pseudo-corners carrying the nine prior residuals (and one zero)
+
+
+def _with_prior(linearize, prior: tuple[np.ndarray, np.ndarray], D: int, sigma_px: float):
+    """The linearization with the intrinsics' prior appended as PRIOR_ROWS pseudo-corners of target 0, in
+    units of the corners' noise ``sigma_px``."""
+    I0, cov = np.asarray(prior[0], float), np.asarray(prior[1], float)
+    Lt = sigma_px * np.linalg.cholesky(np.linalg.inv(cov)).T  # |L^T d|^2 = sigma^2 d^T Sigma^-1 d
+    J_prior = np.zeros((2 * PRIOR_ROWS, N_COMMON + N_INTRINSICS))
+    J_prior[:N_INTRINSICS, N_COMMON:] = Lt
+
+    def augmented(state: dict, jac: bool = True) -> Linearization:
+        lin = linearize(state, jac)
+        rp = np.zeros(2 * PRIOR_ROWS)
+        rp[:N_INTRINSICS] = Lt @ (state["I"] - I0)
+        r = np.concatenate([lin.r, rp.reshape(PRIOR_ROWS, 2)])
+        cost = lin.cost + float(rp @ rp)
+        if lin.Jc is None:
+            return Linearization(cost, r, None, None, None)  # type: ignore[arg-type]
+        Jc = np.concatenate([lin.Jc, J_prior.reshape(PRIOR_ROWS, 2, -1)])
+        Jt = np.concatenate([lin.Jt, np.zeros((PRIOR_ROWS, 2, 6))])
+        Jv = np.concatenate([lin.Jv, np.zeros((PRIOR_ROWS, 2, D))])
+        return Linearization(cost, r, Jc, Jt, Jv)
+
+    return augmented
+
+
+def _turn_change(s: np.ndarray, targets_mm: np.ndarray, used: np.ndarray, ref: int, turn: np.ndarray,
+                 ds: np.ndarray) -> np.ndarray:
+    """s dG/dtheta dtheta of :func:`_x_along_motion`'s turn G for position changes ``ds`` (K, 2, m), (K, 2, m)."""
+    dx = targets_mm[used] - targets_mm[ref]
+    L = np.linalg.pinv(dx)[0]  # row 0 of A = pinv(dx) (s_used - s_ref): where +X moves
+    a = L @ (s[used] - s[ref])
+    da = np.einsum("n,ndm->dm", L, ds[used] - ds[ref])  # (2, m)
+    dtheta = (a[0] * da[1] - a[1] * da[0]) / (a @ a)
+    c, sn = turn[0, 0], turn[1, 0]
+    dG = np.array([[-sn, -c], [c, -sn]])
+    return np.where(used[:, None], np.nan_to_num(s) @ dG, 0.0)[:, :, None] * dtheta[None, None, :]
 
 
 def _x_along_motion(s: np.ndarray, targets_mm: np.ndarray, used: np.ndarray, ref: int) -> np.ndarray:

@@ -9,7 +9,10 @@ unreadable, truncated or changed image, wrong size, board not found) is
 listed with its reason and the run goes on.
 
 ``detect_session`` writes ``corners.vnl`` atomically, keyed by the sha256 of
-captures.jsonl: a re-run detects only the views not yet in it.
+captures.jsonl: a re-run detects only the views not yet in it. A session with
+targets (SPEC 13) gets one ArUco pass per image for all of them
+(:func:`lps_gui.camera.charuco_targets.detect_targets`, partial targets kept)
+and the SPEC 13 corners.vnl (:class:`CornerLayout`).
 """
 from __future__ import annotations
 
@@ -31,11 +34,14 @@ from lps_gui.io.atomic import sha256_file
 from lps_gui.io.corners_vnl import CornerTable, read_corners_vnl, write_corners_vnl
 from lps_gui.io.corners_hashes import corners_current, hash_meta, image_hashes, image_unchanged, stat_meta
 from lps_gui.io.session import Session
+from lps_gui.io.target_corners_vnl import TargetCornerTable, read_target_corners, write_target_corners
+from lps_gui.core.targets import Target, target_offsets
 
 if TYPE_CHECKING:
     from lps_gui.camera.detection import ChessboardTracker
 
 log = logging.getLogger(__name__)
+Scene = Board | tuple[Target, ...]  # one board, or the targets of a row or constellation (SPEC 13)
 
 
 @dataclass(frozen=True)
@@ -95,13 +101,30 @@ def _init_worker() -> None:
 
 
 def detect_chunk(
-    jobs: Sequence[ViewJob], board: Board, image_size: tuple[int, int] | None = None, track: bool = True
+    jobs: Sequence[ViewJob], board: Scene, image_size: tuple[int, int] | None = None, track: bool = True
 ) -> list[ViewResult]:
-    """Track the board through ``jobs`` (capture order); runs in a worker process."""
+    """Track the board through ``jobs`` (capture order), or find every target of a tuple of them in each
+    image; runs in a worker process."""
     from lps_gui.camera.detection import ChessboardTracker, DetectionOptions
 
+    if isinstance(board, tuple):  # a row or constellation (SPEC 13)
+        return [detect_targets_view(job, board, image_size) for job in jobs]
     tracker = ChessboardTracker(board, DetectionOptions(track=track))
     return [detect_view(tracker, job, image_size)[0] for job in jobs]
+
+
+def detect_targets_view(job: ViewJob, targets: tuple[Target, ...], image_size: tuple[int, int] | None = None
+                        ) -> ViewResult:
+    """Every target of a row or constellation in one image: one ArUco pass, partial targets kept."""
+    from lps_gui.camera.charuco_targets import detect_targets_dense
+
+    image, reason = load_grey(job.path, job.sha256, image_size, job.session)
+    if image is None:
+        return ViewResult(job.name, None, "failed", reason)
+    corners = detect_targets_dense(image, list(targets))
+    if corners is None:
+        return ViewResult(job.name, None, "failed", "no target found")
+    return ViewResult(job.name, corners, "targets", "")
 
 
 def detect_view(tracker: "ChessboardTracker", job: ViewJob, image_size: tuple[int, int] | None = None
@@ -145,7 +168,7 @@ def _chunks(jobs: list[ViewJob], workers: int) -> list[list[ViewJob]]:
 
 def run_detection(
     jobs: list[ViewJob],
-    board: Board,
+    board: Scene,
     progress: ProgressFn = no_progress,
     cancel: CancelToken | None = None,
     workers: int | None = None,
@@ -161,13 +184,14 @@ def run_detection(
     chunks = _chunks(jobs, workers)
     total = len(jobs)
     results: dict[str, ViewResult] = {}
-    counts = {"track": 0, "full": 0, "failed": 0, "charuco": 0}
+    counts = {"track": 0, "full": 0, "failed": 0, "charuco": 0, "targets": 0}
 
     def take(chunk_results: list[ViewResult]) -> None:
         for r in chunk_results:
             results[r.name] = r
             counts[r.method] = counts.get(r.method, 0) + 1
-        msg = f"tracked {counts['track']}, full {counts['full'] + counts['charuco']}, failed {counts['failed']}"
+        msg = (f"tracked {counts['track']}, full {counts['full'] + counts['charuco'] + counts['targets']}, "
+               f"failed {counts['failed']}")
         progress(len(results), total, msg)
 
     def check_cancel() -> None:
@@ -225,7 +249,42 @@ def run_detection(
     return results
 
 
-def _table(names: list[str], results: dict[str, ViewResult], n_corners: int, meta: dict[str, str]) -> CornerTable:
+@dataclass(frozen=True)
+class CornerLayout:
+    """What a session's corners.vnl holds: one board's corners (SPEC 7) or every target's (SPEC 13)."""
+
+    scene: Scene
+    n_corners: int
+    key: str  # corners.vnl ``board`` meta: corners detected for another board or targets are not kept
+
+    @property
+    def targets(self) -> list[Target] | None:
+        return list(self.scene) if isinstance(self.scene, tuple) else None
+
+    def read(self, path: Path):
+        return read_corners_vnl(path, self.n_corners) if self.targets is None else read_target_corners(path, self.targets)
+
+    def table(self, names: list[str], corners: np.ndarray, failed: dict[str, str], meta: dict[str, str]):
+        if self.targets is None:
+            return CornerTable(names, corners, failed, meta)
+        return TargetCornerTable(names, [t.id for t in self.targets], target_offsets(self.targets), corners, failed, meta)
+
+    def write(self, path: Path, table) -> None:
+        (write_corners_vnl if self.targets is None else write_target_corners)(path, table)
+
+
+def corner_layout(session: Session) -> CornerLayout:
+    """The session's board, or its targets laid end to end."""
+    targets = session.targets()
+    if targets is None:
+        board = session.board()
+        return CornerLayout(board, board.n_corners, _board_key(board))
+    key = "targets:" + ",".join(f"{t.id}/{_board_key(t.board)}/{t.first_marker}" for t in targets)
+    return CornerLayout(tuple(targets), int(target_offsets(targets)[-1]), key)
+
+
+def _table(names: list[str], results: dict[str, ViewResult], n_corners: int, meta: dict[str, str],
+           layout: CornerLayout | None = None):
     corners = np.full((len(names), n_corners, 2), np.nan)
     failed: dict[str, str] = {}
     for i, name in enumerate(names):
@@ -236,7 +295,7 @@ def _table(names: list[str], results: dict[str, ViewResult], n_corners: int, met
             failed[name] = r.reason or "board not found"
         else:
             corners[i] = r.corners_px
-    return CornerTable(names, corners, failed, meta)
+    return CornerTable(names, corners, failed, meta) if layout is None else layout.table(names, corners, failed, meta)
 
 
 def detect_images(
@@ -282,7 +341,8 @@ def detect_session(
     Cancelling writes what was finished, then raises :class:`Cancelled`.
     """
     session = Session.open(session_dir)
-    board = session.board()
+    layout = corner_layout(session)
+    board = layout.scene
     records = session.records()
     if not records:
         raise InputError(f"{session.captures_path}: no captures listed; capture or simulate images first")
@@ -298,7 +358,7 @@ def detect_session(
     kept: dict[str, ViewResult] = {}
     if not force and session.corners_path.exists():
         try:
-            old = read_corners_vnl(session.corners_path, board.n_corners)
+            old = layout.read(session.corners_path)
         except InputError as exc:
             log.warning("ignoring unusable %s: %s", session.corners_path, exc)
         else:
@@ -327,32 +387,39 @@ def detect_session(
             results.update(run_detection(jobs, board, progress, cancel, workers, image_size, track))
     except Cancelled as exc:
         results.update(getattr(exc, "partial", {}))
-        table = _table(names, results, board.n_corners, {**meta, "captures_sha256": "partial"})
+        table = _table(names, results, layout.n_corners, {**meta, "captures_sha256": "partial"}, layout)
         table.names = [n for n in names if n in results]
         table.corners_px = table.corners_px[[i for i, n in enumerate(names) if n in results]]
-        write_session_corners(session, table)
+        write_session_corners(session, table, layout)
         raise
-    table = session_corner_table(names, results, board.n_corners, meta)
-    write_session_corners(session, table)
+    table = session_corner_table(names, results, layout.n_corners, meta, layout)
+    write_session_corners(session, table, layout)
     return table
 
 
 def session_corner_meta(session: Session, records: Sequence[Any], captures_sha: str) -> dict[str, str]:
-    """The head of a session's corners.vnl before the image stats: captures' hash, board, each view's image hash."""
-    return {"captures_sha256": captures_sha, "board": _board_key(session.board()), **hash_meta(records)}
+    """The head of a session's corners.vnl before the image stats: captures' hash, board or targets, image hashes."""
+    return {"captures_sha256": captures_sha, "board": corner_layout(session).key, **hash_meta(records)}
 
 
-def session_corner_table(names: list[str], results: dict[str, ViewResult], n_corners: int, meta: dict[str, str]) -> CornerTable:
+def session_corner_table(names: list[str], results: dict[str, ViewResult], n_corners: int, meta: dict[str, str],
+                         layout: CornerLayout | None = None) -> CornerTable:
     """The table ``lps detect`` writes: ``meta`` (with the image stats) and the count of each detection method."""
     methods = [r.method for r in results.values()]
-    labels = {"track": "tracked", "full": "full", "charuco": "charuco", "kept": "kept", "failed": "failed"}
-    meta = {**meta, "detection": ", ".join(f"{label} {methods.count(m)}" for m, label in labels.items() if m == "track" or m in methods)}
-    return _table(names, results, n_corners, meta)
+    labels = {"track": "tracked", "full": "full", "charuco": "charuco", "targets": "targets", "kept": "kept",
+              "failed": "failed"}
+    tracked = layout is None or layout.targets is None  # a board is tracked from frame to frame; targets are found in every image
+    meta = {**meta, "detection": ", ".join(f"{label} {methods.count(m)}" for m, label in labels.items()
+                                           if m in methods or m == "track" and tracked)}
+    return _table(names, results, n_corners, meta, layout)
 
 
-def write_session_corners(session: Session, table: CornerTable) -> None:
+def write_session_corners(session: Session, table: CornerTable, layout: CornerLayout | None = None) -> None:
     """corners.vnl under the session lock (a capture or another detection may be writing)."""
     from lps_gui.io.session_lock import SessionLock
 
     with SessionLock(session.folder):
-        write_corners_vnl(session.corners_path, table)
+        if layout is None:
+            write_corners_vnl(session.corners_path, table)
+        else:
+            layout.write(session.corners_path, table)

@@ -75,3 +75,20 @@ def test_the_results_panel_shows_the_targets_and_their_stretches(qtbot, tmp_path
     assert panel.mounted_targets.table.model_.rows[1][2] == str(results["targets"][1]["views"])
     labels = [item.opts.get("name") for item in panel.plots["deviation"].getPlotItem().listDataItems()]
     assert [n for n in labels if n and n.startswith("seen by")] == ["seen by T0", "seen by T1", "seen by T2", "seen by T3"]
+
+
+def test_a_stitched_plan_pauses_to_move_the_board_and_resume_continues(qtbot, make_window, tmp_path):
+    from lps_gui.core.plan import Plan
+
+    folder = tmp_path / "stitched"
+    plan = Plan(start_mm=0.0, stop_mm=16.0, step_mm=2.0, directions="+", runs=1, settle_s=0.0, overshoot_mm=1.0)
+    window, cap = capture_window(qtbot, make_window, plan, folder)
+    cap.stitch.segment_stops.setValue(5)
+    cap.stitch.overlap_stops.setValue(2)
+    assert cap.plan().segments == ((0.0, 8.0), (6.0, 14.0), (12.0, 16.0)) and "13 frames" in cap.summary.text()
+    moves = []
+    cap.board_move.connect(lambda message: (moves.append(message), cap.resume_btn.click()))
+    with qtbot.waitSignal(cap.session_done, timeout=60000):
+        cap.start_btn.click()
+    assert len(moves) == 2 and moves[0].startswith("segment 2 of 3: move the board 6 mm")
+    assert [r["segment"] for r in records(folder)] == [0] * 5 + [1] * 5 + [2] * 3

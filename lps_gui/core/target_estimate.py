@@ -37,11 +37,16 @@ class TargetLineEstimate(LpsEstimate):
     fit: TargetSolution | None = None
 
     def linear_functional_sigma(self, a: np.ndarray) -> tuple[float, float]:
-        """Sigma (mm) of sum_i a_i s_i under the full covariance (the targets' poses included); known
-        intrinsics, so noise and total agree."""
-        g = np.where(self.used, np.asarray(a, dtype=float), 0.0)[:, None]
-        sd = float(np.sqrt(max(self.fit.covariance.variance(g), 0.0)))
-        return sd, sd
+        """Sigma (mm) of sum_i a_i s_i under the full covariance (the targets' poses included), from
+        noise alone and with the intrinsics' covariance."""
+        a = np.where(self.used, np.asarray(a, dtype=float), 0.0)
+        var = max(self.fit.covariance.variance(a[:, None]), 0.0)
+        total = var
+        cov_i = self.state.intrinsics.covariance
+        if self.intrinsics_gradient is not None and cov_i is not None:
+            ga = self.intrinsics_gradient.T @ a
+            total += float(ga @ cov_i @ ga)
+        return float(np.sqrt(var)), float(np.sqrt(total))
 
 
 @dataclass
@@ -99,10 +104,13 @@ def _common_fields(obs: Observations, opt: EstimateOptions, sol: TargetSolution,
 def _line_estimate(obs: Observations, sol: TargetSolution, common: dict) -> TargetLineEstimate:
     s = np.where(sol.used, sol.s[:, 0], np.nan)
     sigma = sol.sigma_s[:, 0]
+    gradient = None if sol.intrinsics_gradient is None else np.where(sol.used[:, None], sol.intrinsics_gradient[:, 0], 0.0)
+    total = sigma if gradient is None else np.sqrt(sigma ** 2 + np.einsum("ki,ij,kj->k", gradient,
+                                                                           obs.intrinsics.covariance, gradient))
     sd = np.sqrt(np.maximum(np.diag(sol.covariance.S_inv)[:N_COMMON], 0.0) * sol.covariance.sigma2)
     est = TargetLineEstimate(
         state=LpsState(sol.R, sol.l0, sol.N[:, 0].copy(), s, obs.intrinsics),
-        sigma_s_mm=sigma, sigma_total_mm=sigma.copy(), step_sigma_mm=_step_sigma(obs, sol),
+        sigma_s_mm=sigma, sigma_total_mm=total, step_sigma_mm=_step_sigma(obs, sol), intrinsics_gradient=gradient,
         parameter_sigmas={"rvec_sigma_rad": sd[0:3].tolist(), "l0_sigma_mm": sd[3:6].tolist(),
                           "n_sigma_rad": sd[6:8].tolist()},
         six_dof=None, fit=sol, **common)
@@ -130,7 +138,13 @@ def _plane_estimate(obs: Observations, sol: TargetSolution, common: dict) -> Tar
     cov = np.zeros((obs.K, 2, 2))
     for i in np.flatnonzero(sol.used):
         cov[i] = sol.covariance.turn.T @ sol.covariance.cross(i, i) @ sol.covariance.turn
+    gradient = sol.intrinsics_gradient
+    total = None
+    if gradient is not None:
+        gradient = np.where(sol.used[:, None, None], gradient, 0.0)
+        total = cov + np.einsum("kai,ij,kbj->kab", gradient, obs.intrinsics.covariance, gradient)
     est = TargetPlaneEstimate(state=PlanarState(sol.R, sol.l0, P, xy, obs.intrinsics), cov_xy_mm2=cov,
-                              inverse=None, fit_targets=sol, **common)
+                              inverse=None, fit_targets=sol, cov_xy_total_mm2=total, intrinsics_gradient=gradient,
+                              **common)
     est.fit = planar_fit(est, obs.target_mm, obs.approach)
     return est

@@ -103,7 +103,10 @@ def targets_section(obs: Observations, est: Any, session: Session) -> list[dict[
 
 
 def add_targets_section(results: dict[str, Any], obs: Observations, est: Any, session: Session) -> None:
-    """Put ``targets`` into results (after ``board``, in schema order)."""
+    """Put ``targets`` into results (after ``board``, in schema order); a simulated session's
+    ``truth_comparison.targets`` compares each pose with the simulator's."""
+    from lps_gui.sim.truth import target_truth_comparison
+
     section = targets_section(obs, est, session)
     ordered: dict[str, Any] = {}
     for key, value in results.items():
@@ -113,3 +116,6 @@ def add_targets_section(results: dict[str, Any], obs: Observations, est: Any, se
     ordered.setdefault("targets", section)
     results.clear()
     results.update(ordered)
+    truth = target_truth_comparison(session, section)
+    if truth is not None:
+        results.setdefault("truth_comparison", {})["targets"] = truth

@@ -68,3 +68,14 @@ def test_the_report_has_the_targets_page_and_nothing_of_it_is_clipped(row):
     front, text = pages
     assert "T2" in text and "world frame" in text
     assert f"{TARGET_LABEL} T0" in front and "3 ChArUco targets" in front
+
+
+def test_a_constellation_lists_both_axes_scale_terms_and_its_stretch_in_the_plane():
+    def target(j):
+        return {"id": f"T{j}", "first_marker": 44 * j, "views": 10, "ties": 8, "rvec_sigma_rad": [1e-4] * 3,
+                "p_sigma_mm": [0.004, 0.005, 0.02], "stretch_mm": [[0.0, 0.0], [381.0, 254.0]], "covered_fraction": 0.5}
+
+    budget = {axis: {"budget": [{"source": f"target scale T{j}", "contribution_um": 0.5 + j + k}
+                                for j in range(2)]} for k, axis in enumerate("XY")}
+    _, rows, _ = target_table({"targets": [target(0), target(1)], "uncertainty": {"per_axis": budget}})
+    assert rows[1][4] == "(0, 0) \u2013 (381.0, 254.0)" and rows[1][8] == "1.5 / 2.5" and rows[1][5] == "50 %"

@@ -78,4 +78,4 @@ def test_a_constellation_lists_both_axes_scale_terms_and_its_stretch_in_the_plan
     budget = {axis: {"budget": [{"source": f"target scale T{j}", "contribution_um": 0.5 + j + k}
                                 for j in range(2)]} for k, axis in enumerate("XY")}
     _, rows, _ = target_table({"targets": [target(0), target(1)], "uncertainty": {"per_axis": budget}})
-    assert rows[1][4] == "(0, 0) \u2013 (381.0, 254.0)" and rows[1][8] == "1.5 / 2.5" and rows[1][5] == "50 %"
+    assert rows[1][4] == "(0, 0) \u2013 (381.0, 254.0)" and rows[1][8] == "1.50 / 2.50" and rows[1][5] == "50 %"

@@ -191,7 +191,7 @@ def stitched_target_solution(obs: TargetObservations, segment: np.ndarray, intri
 
 def stitch_budget_row(ties: list[np.ndarray], repeatability_um: float | None) -> BudgetRow:
     """The ties' term of the budget for a displacement over the whole travel (every boundary crossed)."""
-    c = float(np.sqrt(np.sum([2.0 / len(p) for p in ties])))  # um of the travel per um of repeatability
+    c = float(np.sqrt(np.sum([2.0 / max(len(p), 1) for p in ties])))  # um of the travel per um of repeatability
     where = f"{len(ties)} boundaries, {', '.join(str(len(p)) for p in ties)} tied stops"
     if repeatability_um is None:
         return BudgetRow(TIE_SOURCE, "B", None, "\u00b5m", c, None,

@@ -78,7 +78,12 @@ def estimate_with_targets(obs: Observations, opt: EstimateOptions, progress: Pro
     check_target_options(opt)
     t0 = time.perf_counter()
     tobs = TargetObservations(list(obs.mounted), obs.corners_px, obs.targets, list(obs.names))
-    sol = solve_targets(tobs, obs.intrinsics, progress=progress)
+    if obs.segment is not None:  # one board moved between segments, tied by the overlap (core/stitching)
+        from lps_gui.core.stitching import stitched_target_solution
+
+        sol, _ = stitched_target_solution(tobs, obs.segment, obs.intrinsics, obs.repeatability_mm or 0.0, progress)
+    else:
+        sol = solve_targets(tobs, obs.intrinsics, progress=progress)
     if cancel is not None:
         cancel.check("estimation")
     timings = {"solve": time.perf_counter() - t0}

@@ -84,7 +84,7 @@ def observations_from_session(session: Session, intrinsics: CameraIntrinsics | N
     board = apply_board_warp(session_board(session), intr)
     table = read_corners_vnl(session.corners_path, board.n_corners)
     corners = corners_of_records(session, table, records)
-    return Observations(
+    obs = Observations(
         board=board,
         intrinsics=intr,
         corners_px=corners,
@@ -97,6 +97,11 @@ def observations_from_session(session: Session, intrinsics: CameraIntrinsics | N
         source_sha256=table.sha256,
         approach=approach_of(session, records),
     )
+    if not session.planar and session.plan().segments:  # one board moved between segments (SPEC 13 stitching)
+        from lps_gui.pipeline.stitched_session import stitched_observations
+
+        return stitched_observations(session, obs, records)
+    return obs
 
 
 def approach_of(session: Session, records: list) -> list | None:
@@ -157,6 +162,10 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate | Planar
     results = RESULTS_BY_AXES[obs.D](session, obs, est, intrinsics_source)
     if obs.mounted is not None:
         add_targets_section(results, obs, est, session)  # SPEC 13: each target's pose, sigma, views, ties
+    if obs.segment is not None:
+        from lps_gui.pipeline.stitched_session import add_stitch_ties
+
+        add_stitch_ties(results, obs)  # a stitched session's placements are tied by their repeated stops
     return add_uncertainty(results, session)  # environment, GUM budget, U (k = 2) per figure
 
 

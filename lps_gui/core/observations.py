@@ -68,6 +68,8 @@ class Observations(CornerViews):
     source_sha256: str | None = None  # of the corner file's bytes as they were read (results.json inputs)
     approach: np.ndarray | None = None  # shape (K, D): +1/-1 per axis (default: the direction on every axis)
     mounted: tuple[Target, ...] | None = None  # SPEC 13 targets (None: one board)
+    segment: np.ndarray | None = None  # (K,) int: a stitched capture's segment, one mounted target each (one board moved)
+    repeatability_mm: float | None = None  # a stitched capture: the stage's repeatability (1 sigma) that ties segments
     corner_target: np.ndarray | None = None  # shape (N,) int: each corner's target (derived from ``mounted``)
 
     def __post_init__(self) -> None:
@@ -109,7 +111,9 @@ class Observations(CornerViews):
         idx = np.flatnonzero(keep) if keep.dtype == bool else keep
         return Observations(self.board, self.intrinsics, self.corners_px[idx], self.target_mm[idx],
                             self.direction[idx], self.run[idx], self.index[idx], [self.names[i] for i in idx],
-                            self.source, approach=self.approach[idx], mounted=self.mounted)
+                            self.source, approach=self.approach[idx], mounted=self.mounted,
+                            segment=None if self.segment is None else self.segment[idx],
+                            repeatability_mm=self.repeatability_mm)
 
     def validate(self) -> None:
         """Raise a one-line error when the views cannot determine the model of D axes."""

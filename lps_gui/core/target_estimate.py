@@ -72,11 +72,20 @@ def estimate_with_targets(obs: Observations, opt: EstimateOptions, progress: Pro
     timings: dict[str, float] = {}
     rounds = Solution(None, 0, obs.usable_views(), np.zeros(obs.K, bool), [""] * obs.K)
     prior = opt.intrinsics_prior(obs.intrinsics) if target_selections(opt).intrinsics else None
+    if obs.segment is not None and prior is not None:
+        raise InputError("--self-calibrate: a stitched capture (one board moved between segments) holds the "
+                         "intrinsics; calibrate them first (lps intrinsics) and drop --self-calibrate")
 
     def solve(r: Solution) -> None:
         corners = np.where(r.used[:, None, None], obs.corners_px, np.nan)  # flagged views leave the solve
         tobs = TargetObservations(list(obs.mounted), corners, obs.targets, list(obs.names))
-        r.state = solve_targets(tobs, obs.intrinsics, progress=progress, intrinsics_prior=prior)
+        if obs.segment is not None:  # one board moved between segments, tied by the overlap (core/stitching)
+            from lps_gui.core.stitching import stitched_target_solution
+
+            r.state, _ = stitched_target_solution(tobs, obs.segment, obs.intrinsics, obs.repeatability_mm or 0.0,
+                                                  progress)
+        else:
+            r.state = solve_targets(tobs, obs.intrinsics, progress=progress, intrinsics_prior=prior)
         r.ref, r.iterations, r.converged = r.state.reference, r.state.iterations, r.state.converged
         if not r.flags:  # the first solve says which views see a target at all
             r.usable = r.state.used.copy()

@@ -97,6 +97,7 @@ def capture_fields(d: Any) -> dict[str, Any]:
         "commanded_mm": _position(d, "commanded_mm", optional=True),
         "settle_s": _float(d, "settle_s", optional=True),
         "since_move_s": _float(d, "since_move_s", optional=True),
+        "segment": None if d.get("segment") is None else _int(d, "segment"),  # a stitched capture's (SPEC 13)
     }
 
 

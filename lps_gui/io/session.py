@@ -48,13 +48,14 @@ class CaptureRecord:
     commanded_mm: float | None = None  # sent to the stage through a compensation table; absent without one
     settle_s: float | None = None  # settle detection: time until two frames agreed; absent without it
     since_move_s: float | None = None  # the frame's time after the stage reported its move done (capture clock)
+    segment: int | None = None  # a stitched capture: which placement of the moved board; absent otherwise
 
     def to_json(self) -> str:
         d = asdict(self)
         for key in ("target_mm", "reported_mm"):
             if isinstance(d[key], tuple):
                 d[key] = list(d[key])
-        for key in ("commanded_mm", "settle_s", "since_move_s"):
+        for key in ("commanded_mm", "settle_s", "since_move_s", "segment"):
             if d[key] is None:
                 del d[key]
         return json.dumps(d, separators=(",", ":"))

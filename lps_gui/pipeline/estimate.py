@@ -85,7 +85,12 @@ def observations_from_session(session: Session, intrinsics: CameraIntrinsics | N
     board = apply_board_warp(session_board(session), intr)
     table = read_corners_vnl(session.corners_path, board.n_corners)
     corners = corners_of_records(session, table, records)
-    return observations_of_views(session, board, intr, records, corners, table.sha256)
+    obs = observations_of_views(session, board, intr, records, corners, table.sha256)
+    if not session.planar and session.plan().segments:  # one board moved between segments (SPEC 13 stitching)
+        from lps_gui.pipeline.stitched_session import stitched_observations
+
+        return stitched_observations(session, obs, records)
+    return obs
 
 
 def observations_of_views(session: Session, board: Any, intr: CameraIntrinsics, records: list[Any], corners: np.ndarray,
@@ -164,6 +169,10 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate, intrins
     results = RESULTS_BY_AXES[obs.D](session, obs, est, intrinsics_source)
     if obs.mounted is not None:
         add_targets_section(results, obs, est, session)  # SPEC 13: each target's pose, sigma, views, ties
+    if obs.segment is not None:
+        from lps_gui.pipeline.stitched_session import add_stitch_ties
+
+        add_stitch_ties(results, obs)  # a stitched session's placements are tied by their repeated stops
     results = add_uncertainty(results, session)  # environment, GUM budget, U (k = 2) per figure
     return add_asme_results(results, session, obs, est) if obs.D == 1 else results  # ASME B5.64 names, TUR, tests
 

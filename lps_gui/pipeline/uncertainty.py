@@ -110,7 +110,12 @@ def _axis_uncertainty(results: dict[str, Any], env: Environment, square_mm: floa
                       figures: dict[str, Any]) -> dict[str, Any]:
     x = budget_inputs(results, square_mm, axis)
     rows = budget_rows(x, env)
-    if results.get("targets"):  # each target's print enters the stretch measured against it (SPEC 13)
+    stitched = bool(((results.get("session_meta") or {}).get("plan") or {}).get("segments"))
+    if stitched:  # one board moved: its one print is one scale (the board's row); the ties add repeatability
+        from lps_gui.pipeline.stitched_session import stitch_row
+
+        rows.append(stitch_row(results))
+    elif results.get("targets"):  # each target's print enters the stretch measured against it (SPEC 13)
         from lps_gui.core.target_scale import target_scale_rows
 
         scale = target_scale_rows(results["targets"], x.travel_mm, env.square_mm_uncertainty_um)

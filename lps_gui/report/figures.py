@@ -21,6 +21,7 @@ from lps_gui.report.figure_spec import (BACKWARD_COLOR, COMPONENT_COLORS, DIRECT
                                         FORWARD_COLOR, IMAGE_ROTATION_COLOR, SPEC_COLOR, TRUTH_COLOR,
                                         TRUTH_COLORS, FigureSpec, Series)
 from lps_gui.io.results_model import Results, as_results
+from lps_gui.report.target_figures import with_target_stretches
 from lps_gui.sim.truth import centred, residual_from_line, true_deviation_um
 
 
@@ -146,7 +147,7 @@ def figures_from_results(results: Results | dict[str, Any] | None, truth: dict[s
     tcols = truth_columns(results, truth)
     return [
         positions_figure(cols),
-        deviation_figure(cols, tcols),
+        with_target_stretches(deviation_figure(cols, tcols), results),  # a row's targets (SPEC 13)
         step_figure(cols, tcols),
         straightness_figure(cols, tcols),
         angles_figure(cols, tcols),

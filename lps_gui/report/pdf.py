@@ -22,6 +22,7 @@ from lps_gui.report import sections as R
 from lps_gui.report import summary as S
 from lps_gui.report.figures import figure_by_key, figures_from_results, with_spec_band
 from lps_gui.report.planar_report import paint_planar_report
+from lps_gui.report.targets_report import targets_section
 
 log = logging.getLogger(__name__)
 
@@ -109,6 +110,7 @@ def _paint_line_report(flow: Any, session_dir: Path, meta: dict[str, Any], resul
     _front_page(flow, meta, results, version)
     flow.new_page()
     _figures_page(flow, results)
+    targets_section(flow, results)  # a row of targets (SPEC 13)
     asme_pages.test_pages(flow, results)  # a session of the ASME B5.64 incremental-step or settling test
     flow.new_page()
     R.uncertainty_sections(flow, results)

@@ -168,6 +168,11 @@ class StitchedCovariance:
         offsets = g[..., 0] @ self.crossing  # (Q, B)
         return self.merged.variances(self._merge(g)) + offsets ** 2 @ self.var_b
 
+    def covariance(self, g: np.ndarray) -> np.ndarray:
+        """Covariance (Q, Q) of Q functionals, weights g (Q, K, P)."""
+        offsets = g[..., 0] @ self.crossing  # (Q, B)
+        return self.merged.covariance(self._merge(g)) + (offsets * self.var_b) @ offsets.T
+
     def cross(self, i: int, k: int) -> np.ndarray:
         """Cov(v_i, v_k) (P, P) of two original views."""
         shared = float(self.crossing[i] * self.crossing[k] @ self.var_b)

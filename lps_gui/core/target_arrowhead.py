@@ -203,6 +203,12 @@ class PositionCovariance:
         own = np.einsum("qkp,kpr,qkr->q", gs, self.A_inv, gs)
         return self.sigma2 * (own + np.einsum("qg,gh,qh->q", wg, self.S_inv, wg))
 
+    def covariance(self, g: np.ndarray) -> np.ndarray:
+        """Covariance (Q, Q) of Q linear functionals, weights g (Q, K, P) on the reported coordinates."""
+        gs = g @ self.turn.T
+        wg = np.einsum("kgp,qkp->qg", self.W, gs)
+        return self.sigma2 * (np.einsum("qkp,kpr,nkr->qn", gs, self.A_inv, gs) + wg @ self.S_inv @ wg.T)
+
     def cross(self, i: int, k: int) -> np.ndarray:
         """Cov(v_i, v_k) (P, P) in the solver's coordinates, scaled."""
         c = self.W[i].T @ self.S_inv @ self.W[k]

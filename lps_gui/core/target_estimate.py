@@ -46,9 +46,7 @@ class TargetEstimate(LpsEstimate):
         c = self.fit_targets.covariance
         L = np.asarray(L, dtype=float)
         L = np.where(self.used[None, :, None], L.reshape(L.shape[0], self.used.size, -1), 0.0)
-        gs = L @ c.turn.T
-        wg = np.einsum("kgp,mkp->mg", c.W, gs)
-        out = c.sigma2 * (np.einsum("mkp,kpr,nkr->mn", gs, c.A_inv, gs) + wg @ c.S_inv @ wg.T)
+        out = c.covariance(L)
         cov_I = self.state.intrinsics.covariance
         if with_intrinsics and self.intrinsics_gradient is not None and cov_I is not None:
             GL = np.einsum("mka,kai->mi", L, self.intrinsics_gradient.reshape(L.shape[1], L.shape[2], -1))

@@ -99,3 +99,26 @@ def test_the_one_estimators_view_of_a_stitched_capture_agrees_with_its_covarianc
     merged = st.solution.covariance.variances(sol.covariance._merge(g))
     assert var - merged == pytest.approx([st.boundary_variance_mm2.sum(), 0.0], abs=1e-15)
     assert sol.ties[0, 1] == 3 and sol.ties[1, 2] == 3 and sol.ties[0, 2] == 0
+
+
+def test_the_functionals_covariance_has_the_variances_on_its_diagonal():
+    """covariance(g) (Q, Q) of the factored and the stitched covariance against their own variances(g)."""
+    import numpy as np
+
+    from lps_gui.core.stitching import StitchedCovariance
+    from lps_gui.core.target_arrowhead import PositionCovariance
+
+    rng = np.random.default_rng(3)
+    K, G, P, Q = 7, 5, 1, 4
+    a = rng.normal(size=(K, P, P))
+    s = rng.normal(size=(G, G))
+    merged = PositionCovariance(np.einsum("kpq,krq->kpr", a, a) + np.eye(P), rng.normal(size=(K, G, P)),
+                                s @ s.T + np.eye(G), 0.7, np.eye(P))
+    g = rng.normal(size=(Q, K, P))
+    assert np.allclose(np.diag(merged.covariance(g)), merged.variances(g))
+    stitched = StitchedCovariance(merged, np.array([0, 1, 2, 2, 3, 4, 5, 6, 6])[: K + 2],
+                                  rng.integers(0, 2, size=(K + 2, 2)).astype(float), np.array([1e-3, 2e-3]))
+    g9 = rng.normal(size=(Q, K + 2, P))
+    c = stitched.covariance(g9)
+    assert np.allclose(np.diag(c), stitched.variances(g9)) and np.allclose(c, c.T)
+    assert not np.allclose(c, np.diag(np.diag(c)))  # the correlations are there, not only the variances

@@ -71,7 +71,9 @@ class StageErrorModel:
     Positioning error e(x) = scale_ppm*1e-6*x + periodic_um*sin(2 pi x/pitch_mm + phase)
     - backlash_um/2 * approach direction + N(0, repeatability_um): a target
     approached moving up (+1) stops short by half the backlash, moving down
-    (-1) overshoots by half.
+    (-1) overshoots by half. The angles are smooth profiles plus, per stop,
+    N(0, angle_noise_urad) about each axis (a carriage settling on its
+    bearings a little differently every time).
     """
 
     scale_ppm: float = 0.0
@@ -86,6 +88,7 @@ class StageErrorModel:
     roll_urad: ErrorProfile = field(default_factory=ErrorProfile)
     pitch_urad: ErrorProfile = field(default_factory=ErrorProfile)
     yaw_urad: ErrorProfile = field(default_factory=ErrorProfile)
+    angle_noise_urad: float = 0.0
 
     def positioning_error_um(self, commanded_mm: np.ndarray, direction: np.ndarray) -> np.ndarray:
         """Systematic positioning error (no noise), shape like ``commanded_mm``."""
@@ -113,6 +116,8 @@ class StageErrorModel:
             e_um = e_um + rng.normal(0.0, self.repeatability_um, size=x.shape)
         straight = np.stack([p(x) for p in self.straightness_um], axis=-1)
         angles = np.stack([self.roll_urad(x), self.pitch_urad(x), self.yaw_urad(x)], axis=-1)
+        if rng is not None and self.angle_noise_urad > 0:  # drawn after the positions: older seeds stay the same
+            angles = angles + rng.normal(0.0, self.angle_noise_urad, size=angles.shape)
         return TruePose(axis_mm=x + e_um * 1e-3, straightness_um=straight, angles_urad=angles)
 
     def to_dict(self) -> dict[str, Any]:
@@ -122,6 +127,8 @@ class StageErrorModel:
             d[key] = asdict(getattr(self, key))
         for p in [*d["straightness_um"], d["roll_urad"], d["pitch_urad"], d["yaw_urad"]]:
             p["poly"] = list(p["poly"])
+        if not self.angle_noise_urad:
+            del d["angle_noise_urad"]  # the truth records of sessions without it stay as they were
         return d
 
     @classmethod

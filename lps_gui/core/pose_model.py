@@ -93,3 +93,20 @@ def solve_poses(obs: TargetObservations, intrinsics: CameraIntrinsics, max_itera
     return PoseSolution(fit.state["R"], fit.state["t"], fit.state["Q"], fit.state["p"], used,
                         float(np.sqrt(sigma2)), view_rms(fit.lin.r, view, K), cov, fit.Avv_inv * sigma2,
                         target_sigma, fit.iterations, fit.converged)
+
+
+def pose_solution_from_views(R: np.ndarray, t: np.ndarray, cov_unit: np.ndarray, used: np.ndarray,
+                             sigma2_px: float) -> PoseSolution:
+    """Per-view poses against one board (the world, known) as a :class:`PoseSolution`: no target columns.
+
+    ``cov_unit`` (K, 6, 6): each view's (rotation, translation) covariance per unit noise variance, the
+    left perturbation of :func:`solve_poses`, so :mod:`core.error_motions` reads one board's poses
+    (the 6-DOF fit of a single-board session) as it reads a constellation's.
+    """
+    used = np.asarray(used, bool)
+    K = len(used)
+    cov = PositionCovariance(cov_unit * used[:, None, None], np.zeros((K, 0, 6)), np.zeros((0, 0)), float(sigma2_px),
+                             np.eye(6))
+    return PoseSolution(np.asarray(R, float), np.asarray(t, float), np.eye(3)[None], np.zeros((1, 3)), used,
+                        float(np.sqrt(sigma2_px)), np.full(K, np.nan), cov, cov_unit * sigma2_px, np.zeros((1, 6)), 0,
+                        True)

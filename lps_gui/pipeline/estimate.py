@@ -39,6 +39,7 @@ from lps_gui.io.results_history import commit_results
 from lps_gui.io.session import Session
 from lps_gui.io.session_lock import SessionLock
 from lps_gui.pipeline.board_plane_results import position_columns, straightness_figures
+from lps_gui.pipeline.error_motion_results import add_columns, board_session_error_motions
 from lps_gui.pipeline.planar_results import build_planar_results
 from lps_gui.pipeline.session_checks import check_corners_current, check_view_geometry, session_inputs
 from lps_gui.pipeline.uncertainty import add_uncertainty, session_board
@@ -167,6 +168,9 @@ def line_results(session: Session, obs: Observations, est: LpsEstimate, intrinsi
     :func:`lps_gui.io.results_file.assemble_results`."""
     positions = position_rows(obs, est)
     truth = session_truth(session)
+    motions = board_session_error_motions(session.meta, str(session.folder / "session.json"), obs, est, truth)  # SPEC 14
+    if motions is not None:
+        add_columns(positions, motions.columns)
     results = assemble_results(
         method=est.method,
         settings=est.options.to_dict(),
@@ -181,6 +185,8 @@ def line_results(session: Session, obs: Observations, est: LpsEstimate, intrinsi
         timings_s=dict(est.timings_s),
         truth_comparison=truth_comparison(obs, est, truth, positions) if truth is not None else None,
     )
+    if motions is not None:
+        results["error_motions"] = motions.section
     return results
 
 

@@ -112,3 +112,16 @@ def test_the_tool_point_carries_the_abbe_error():
     assert np.all(np.abs(e - e.mean()) < 4 * em.tool_positioning_sigma_um.max())
     # the Abbe term is real: the tool and the camera centre differ by about 100 mm x pitch
     assert np.abs(em.tool_positioning_um - em.values["positioning"]).max() > 5.0
+
+
+def test_weighted_variances_are_the_variances_of_the_weighted_functionals():
+    from lps_gui.core.target_arrowhead import PositionCovariance
+
+    rng = np.random.default_rng(4)
+    K, G, P = 7, 5, 6
+    M = rng.normal(size=(K, P, P))
+    S = rng.normal(size=(G, G))
+    cov = PositionCovariance(M @ np.swapaxes(M, 1, 2), rng.normal(size=(K, G, P)), S @ S.T, 0.3,
+                             np.linalg.qr(rng.normal(size=(P, P)))[0])
+    w, g = rng.normal(size=(4, K)), rng.normal(size=(K, P))
+    assert np.allclose(cov.weighted_variances(w, g), cov.variances(w[:, :, None] * g[None]), rtol=1e-12)

@@ -114,7 +114,8 @@ def error_motions(sol: PoseSolution, targets_mm: np.ndarray, axis: str = "X",
         resid = np.full(K, np.nan)
         resid[rows] = coord[rows] - hat @ coord[rows]
         comps[name] = (1e3 * resid, np.einsum("i,kip->kp", axis_vec, dC), line, 1e3)
-    theta = np.array([log_so3(A[i] @ A[ref].T) for i in range(K)])
+    theta = log_so3(np.einsum("kij,lj->kil", A, A[ref]))  # A_i A_ref^T
+    theta[ref] = 0.0  # exactly, not log_so3's rounding
     for k, name in enumerate(ANGULAR):
         comps[name] = (1e6 * theta @ S[:, k], np.einsum("i,kip->kp", S[:, k], dth), rel, 1e6)
     for name, (val, grad, weights, unit) in comps.items():

@@ -70,3 +70,13 @@ def dense_corners(found: list[TargetCorners], targets: list[Target]) -> dict[str
     for f in found:
         out[f.target][f.corner] = f.xy
     return out
+
+
+def detect_targets_dense(image: np.ndarray, targets: list[Target]) -> np.ndarray | None:
+    """Every target's corners laid end to end (sum of n_corners, 2), NaN where not seen; None when no target
+    was found (what a corners.vnl row of a session with targets holds)."""
+    found = detect_targets(image, targets)
+    if not found:
+        return None
+    per = dense_corners(found, targets)
+    return np.concatenate([per[t.id] for t in targets]).astype(np.float32)

@@ -2,9 +2,9 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from lps_gui.cli.option_types import workers
-import sys
 
 HELP = "detect the board's corners in a session (writes corners.vnl) or in images"
 
@@ -84,4 +84,20 @@ def run(args: argparse.Namespace) -> int:
     ok = n - len(table.failed)
     how = f" ({table.meta['detection']})" if table.meta.get("detection") else ""
     print(f"{ok}/{n} views detected{how} in {elapsed:.1f} s ({n / max(elapsed, 1e-9):.0f} images/s); corners in {out}")
+    if hasattr(table, "seen"):  # a session with targets (SPEC 13): what each target gave
+        print(target_counts(table))
     return EXIT_SOME_FAILED if table.failed else 0
+
+
+def target_counts(table) -> str:
+    """One line per target: the views it was found in (partial ones among them) and its corners."""
+    import numpy as np
+
+    seen = table.seen()  # (K, T) corners per view and target
+    full = np.diff(table.offsets)
+    lines = []
+    for j, name in enumerate(table.targets):
+        views = int((seen[:, j] > 0).sum())
+        partial = int(((seen[:, j] > 0) & (seen[:, j] < full[j])).sum())
+        lines.append(f"  {name}: {views} views ({partial} partial), {int(seen[:, j].sum())} corners")
+    return "targets:\n" + "\n".join(lines)

@@ -21,7 +21,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     mode.add_argument("--points", action="store_true", help="corners only (corners.vnl), no images: fast")
     mode.add_argument("--intrinsics-set", action="store_true", help="varied-pose views for intrinsics calibration")
     p.add_argument("--preset", default=None,
-                   help="paper-rig | paper-synthetic | small (default small); with --planar: paper-planar | small-planar")
+                   help="paper-rig | paper-synthetic | small (default small), or a target row (docs/targets.md): paper-row | "
+                        "small-row; with --planar: paper-planar | small-planar | paper-constellation")
     p.add_argument("--planar", action="store_true",
                    help="an XY gantry (docs/planar.md): a grid over both axes; with --points (default preset paper-planar)")
     p.add_argument("--grid", help="planar grid X0,Y0:X1,Y1:DX,DY in mm (default the preset's 15 x 9 at 10 mm)")
@@ -58,6 +59,10 @@ def build_spec(args: argparse.Namespace):
         plan = replace(plan, runs=args.runs)
     if args.stops:
         plan = replace(plan, stop_mm=plan.start_mm + (args.stops - 1) * plan.step_mm)
+    if spec.layout is not None and plan != spec.plan:  # a row faces the middle of its travel: build it for the new plan
+        from lps_gui.core.simulate import PRESETS
+
+        spec = PRESETS[spec.name](seed=args.seed, plan=plan)
     overrides = {"plan": plan}
     if args.replaced or not args.rig:
         overrides["replaced_views"] = tuple(args.replaced)
@@ -95,6 +100,11 @@ def run(args: argparse.Namespace) -> int:
     spec = build_spec(args)
     if args.write_rig:
         from lps_gui.core.simulate import spec_to_dict
+        from lps_gui.errors import InputError
+
+        if spec.layout is not None:
+            raise InputError(f"simulate --write-rig: preset {spec.name} is a row of targets, which a rig description "
+                             "does not hold yet; use --preset with --stops, --noise-px and --seed")
         from lps_gui.io.jsonfile import write_json
 
         write_json(out, spec_to_dict(spec))

@@ -46,6 +46,7 @@ from lps_gui.core.pnp import solve_pnp
 from lps_gui.core.pose_normals import PoseNormals
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.core.six_dof import SixDof, refine_view_poses, six_dof_motion
+from lps_gui.core.target_estimate import estimate_with_targets
 from lps_gui.core.uncertainty import (
     arrowhead_inverse,
     intrinsics_sensitivity,
@@ -75,6 +76,8 @@ def estimate(
     opt = options or EstimateOptions()
     opt.check_axes(obs.D)
     obs.validate()
+    if obs.mounted is not None:  # a row or constellation (SPEC 13): the target poses are one more selection
+        return estimate_with_targets(obs, opt, progress, cancel)
     return SOLVERS[obs.D](obs, opt, progress, cancel)
 
 

@@ -26,10 +26,12 @@ class Selections:
     The shared stage parameters (rotation, line or plane) and every view's
     position on its D axes are always free. The board's warp is held as the
     intrinsics calibration found it; the target poses of SPEC 13 (rows,
-    constellations) join here as one more group.
+    constellations) are one more group, free whenever the observations name
+    targets (:mod:`lps_gui.core.target_estimate`).
     """
 
     intrinsics: bool = False  # the 9 intrinsics, with the calibration's covariance as prior (SPEC 4.6)
+    target_poses: bool = False  # the mounting poses of every target but the first (SPEC 13)
 
 
 @dataclass

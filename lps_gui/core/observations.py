@@ -7,6 +7,7 @@ import numpy as np
 
 from lps_gui.core.board import Board
 from lps_gui.core.camera_model import CameraIntrinsics
+from lps_gui.core.targets import Target, target_offsets
 from lps_gui.errors import DegenerateGeometryError, InputError
 
 MIN_CORNERS_PER_VIEW = 6
@@ -48,6 +49,11 @@ class Observations(CornerViews):
     (SPEC 10); :attr:`D` says which, :attr:`targets` is always (K, D).
     ``approach`` is each axis' approach side (+1/-1, shape (K, D)); for one
     axis it is the pass direction.
+
+    A session with targets (SPEC 13: a row or constellation) names them in
+    ``mounted``: the corners of every target laid end to end (target j's at
+    ``target_offsets(mounted)[j]`` ...), ``corner_target`` (N,) the target of
+    each corner, and ``board`` the first target's board (the world frame).
     """
 
     board: Board
@@ -61,6 +67,8 @@ class Observations(CornerViews):
     source: str = "observations"
     source_sha256: str | None = None  # of the corner file's bytes as they were read (results.json inputs)
     approach: np.ndarray | None = None  # shape (K, D): +1/-1 per axis (default: the direction on every axis)
+    mounted: tuple[Target, ...] | None = None  # SPEC 13 targets (None: one board)
+    corner_target: np.ndarray | None = None  # shape (N,) int: each corner's target (derived from ``mounted``)
 
     def __post_init__(self) -> None:
         self.corners_px = np.asarray(self.corners_px, dtype=float)
@@ -76,6 +84,14 @@ class Observations(CornerViews):
             self.approach = np.asarray(self.approach, dtype=float).reshape(K, self.D)
         if not self.names:
             self.names = [f"view{i}" for i in self.index]
+        if self.mounted is not None:
+            self.mounted = tuple(self.mounted)
+            self.corner_target = np.repeat(np.arange(len(self.mounted)), np.diff(target_offsets(list(self.mounted))))
+
+    @property
+    def n_corners_expected(self) -> int:
+        """Corners of one view: the board's, or every target's laid end to end."""
+        return self.board.n_corners if self.mounted is None else int(target_offsets(list(self.mounted))[-1])
 
     @property
     def D(self) -> int:
@@ -93,13 +109,16 @@ class Observations(CornerViews):
         idx = np.flatnonzero(keep) if keep.dtype == bool else keep
         return Observations(self.board, self.intrinsics, self.corners_px[idx], self.target_mm[idx],
                             self.direction[idx], self.run[idx], self.index[idx], [self.names[i] for i in idx],
-                            self.source, approach=self.approach[idx])
+                            self.source, approach=self.approach[idx], mounted=self.mounted)
 
     def validate(self) -> None:
         """Raise a one-line error when the views cannot determine the model of D axes."""
         if self.corners_px.ndim != 3 or self.corners_px.shape[2] != 2:
             raise InputError(f"{self.source}: corners must have shape (views, corners, 2)")
-        if self.N != self.board.n_corners:
+        if self.mounted is not None and self.N != self.n_corners_expected:
+            raise InputError(f"{self.source}: views have {self.N} corners but the targets have "
+                             f"{self.n_corners_expected}; check the targets in session.json")
+        if self.mounted is None and self.N != self.board.n_corners:
             raise InputError(
                 f"{self.source}: views have {self.N} corners but the board has {self.board.n_corners}; check inner_corners in board.json"
             )

@@ -22,6 +22,7 @@ from lps_gui.core.planar_model import PlanarState, planar_positions_only
 from lps_gui.core.rig import Rig
 from lps_gui.core.rotation import exp_so3
 from lps_gui.core.stage_errors import ErrorProfile, PlanarErrorModel, PlanarTruePose, StageErrorModel, TruePose
+from lps_gui.core.target_rig import TargetLayout, observe
 from lps_gui.errors import InputError
 
 
@@ -40,6 +41,23 @@ class SimulationSpec:
     bumped_views: tuple[int, ...] = ()  # camera knocked: rotated by bump_mrad
     bump_mrad: float = 3.0
     seed: int = 0
+    layout: TargetLayout | None = None  # a row or constellation of targets (SPEC 13); the rig's board is its first
+
+
+def layout_truth(layout: TargetLayout) -> list[dict[str, Any]]:
+    """session.json ``truth.targets``: every target's true pose in the world (target 0's) frame."""
+    from lps_gui.core.rotation import log_so3
+
+    return [{"id": t.id, "rvec_rad": log_so3(layout.Q[j]).tolist(), "p_mm": layout.p[j].tolist()}
+            for j, t in enumerate(layout.targets)]
+
+
+def project_scene(spec: SimulationSpec, R: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Noise-free corners (K, N, 2) of the board, or of every target laid end to end (NaN where a target's
+    corner is outside the image or behind another target)."""
+    if spec.layout is None:
+        return project_board(R, t, spec.rig.board.object_points(), spec.rig.intrinsics)
+    return observe(spec.layout, spec.rig.intrinsics, R, t, border_px=0.0)
 
 
 @dataclass
@@ -110,6 +128,8 @@ def true_views(spec: SimulationSpec, rng: np.random.Generator) -> tuple[list[Pla
         "noise_px": spec.noise_px,
         "seed": spec.seed,
     }
+    if spec.layout is not None:
+        truth["targets"] = layout_truth(spec.layout)
     return stops, R, t, truth
 
 
@@ -136,8 +156,10 @@ def simulate_views(spec: SimulationSpec) -> SimulatedViews:
     else:
         stops, R, t, truth = true_views(spec, rng)
     X = spec.rig.board.object_points()
-    uv = project_board(R, t, X, spec.rig.intrinsics)  # shape (K, N, 2)
-    if pose is not None:
+    uv = project_scene(spec, R, t)  # shape (K, N, 2)
+    if pose is not None and spec.layout is not None:  # a constellation: no one board's plane; the stage plane
+        truth = {**planar_truth(spec, pose, pose.plane_mm), "targets": layout_truth(spec.layout)}
+    elif pose is not None:
         board_plane = planar_positions_only(nominal_planar_state(spec.rig, pose.plane_mm), X, uv,
                                             np.ones(uv.shape[:2], bool))
         truth = planar_truth(spec, pose, board_plane)
@@ -288,6 +310,12 @@ PRESETS = {
 PLANAR_PRESETS = {"paper-planar": paper_planar_spec, "small-planar": small_planar_spec}
 
 
+from lps_gui.core.target_presets import PLANAR_TARGET_PRESETS, TARGET_PRESETS  # noqa: E402 (they build SimulationSpecs)
+
+PRESETS.update(TARGET_PRESETS)
+PLANAR_PRESETS.update(PLANAR_TARGET_PRESETS)
+
+
 def preset(name: str, planar: bool = False, **overrides: Any) -> SimulationSpec:
     """A named preset (of an XY gantry when ``planar``); keyword overrides replace fields of the spec."""
     table, what = (PLANAR_PRESETS, "planar simulation") if planar else (PRESETS, "simulation")
@@ -303,6 +331,7 @@ def observations_of(spec: SimulationSpec, views: SimulatedViews, intrinsics: Cam
 
     return Observations(
         board=spec.rig.board,
+        mounted=None if spec.layout is None else spec.layout.targets,
         intrinsics=intrinsics or spec.rig.intrinsics,
         corners_px=views.corners_px,
         target_mm=[s.target_mm for s in views.stops],

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lps_gui.core.camera_model import CameraIntrinsics
+from lps_gui.core.camera_model import CameraIntrinsics, intrinsics_rows, project_parts
 from lps_gui.core.pnp import solve_pnp
 from lps_gui.core.rotation import chordal_mean, exp_so3
 from lps_gui.core.target_arrowhead import (
@@ -71,6 +71,8 @@ class TargetSolution:
     iterations: int
     converged: bool
     covariance: "PositionCovariance"
+    intrinsics_gradient: np.ndarray | None = None  # (K, D, 9): d s / d intrinsics (reported coordinates), when
+    # the intrinsics have a covariance to propagate
 
     def planar_axes(self, targets_mm: np.ndarray) -> dict[str, float]:
         """Scales of X and Y (ppm) and the squareness of Y to X (urad), with sigmas (SPEC 10 names).
@@ -167,15 +169,20 @@ def initial_solution(obs: TargetObservations, intrinsics: CameraIntrinsics) -> d
 # ----------------------------------------------------------------------------- linearization
 
 
-def _linearize(state: dict, X: np.ndarray, tj: np.ndarray, view: np.ndarray, uv: np.ndarray,
-               intrinsics: CameraIntrinsics, D: int, want_jacobian: bool = True) -> Linearization:
+def _camera_points(state: dict, X: np.ndarray, tj: np.ndarray, view: np.ndarray, D: int):
+    """Every corner in the camera frame P (M, 3), with the parts its Jacobian needs (Q X, R X_w, N s)."""
     R, l0, F, s, Q, p = state["R"], state["l0"], state["F"], state["s"], state["Q"], state["p"]
     QX = np.einsum("mij,mj->mi", Q[tj], X)
-    Xw = QX + p[tj]
+    ts = s[view] @ F[:, :D].T  # (M, 3)
+    RXw = (QX + p[tj]) @ R.T
+    return RXw + l0 + ts, QX, RXw, ts
+
+
+def _linearize(state: dict, X: np.ndarray, tj: np.ndarray, view: np.ndarray, uv: np.ndarray,
+               intrinsics: CameraIntrinsics, D: int, want_jacobian: bool = True) -> Linearization:
+    R, F = state["R"], state["F"]
     N = F[:, :D]
-    ts = s[view] @ N.T  # (M, 3)
-    RXw = Xw @ R.T
-    P = RXw + l0 + ts
+    P, QX, RXw, ts = _camera_points(state, X, tj, view, D)
     cost, r, dP = project_residuals(P, uv, intrinsics, want_jacobian)
     if dP is None:
         return Linearization(cost, r, None, None, None)  # type: ignore[arg-type]
@@ -242,7 +249,7 @@ def solve_targets(
     if T > 1:
         target_sigma[1:] = np.sqrt(np.maximum(np.diag(S_inv)[N_COMMON:], 0.0) * sigma2).reshape(T - 1, 6)
     rms = view_rms(lin.r, view, K)
-    s = np.where(used[:, None], state["s"], np.nan)
+    s_solver = s = np.where(used[:, None], state["s"], np.nan)
     F = state["F"]
     N = F[:, :D]
     turn = np.eye(D)
@@ -252,10 +259,53 @@ def solve_targets(
         cov_s, cov_c = (np.einsum("dx,kde,ey->kxy", G, c, G) for c in (cov_s, cov_c))
     sigma_s, sigma_c = (np.sqrt(np.maximum(np.einsum("kdd->kd", c), 0.0)) for c in (cov_s, cov_c))
     sigma_s[~used] = sigma_c[~used] = np.nan
+    gradient = None
+    if intrinsics.covariance is not None:
+        grad = _intrinsics_gradient(state, fit, X, tj, view, intrinsics, D, free_view)
+        gradient = np.einsum("de,kdi->kei", turn, grad)  # reported coordinates: v turn
+        if D == 2:  # the turn follows the positions: its change enters every position
+            gradient += _turn_change(s_solver, obs.targets_mm, used, ref, turn, grad)
     return TargetSolution(state["R"], state["l0"], N, s, state["Q"], state["p"], sigma_s, sigma_c, target_sigma,
                           float(np.sqrt(sigma2)), rms, used, ref, state["ties"], it, converged,
                           PositionCovariance(Avv_inv * free_view[:, None, None], W * free_view[:, None, None],
-                                             S_inv, sigma2, turn))
+                                             S_inv, sigma2, turn), gradient)
+
+
+def _intrinsics_gradient(state: dict, fit, X: np.ndarray, tj: np.ndarray, view: np.ndarray,
+                         intrinsics: CameraIntrinsics, D: int, free_view: np.ndarray) -> np.ndarray:
+    """d s / d intrinsics (K, D, 9) in the solver's coordinates: -H^-1 J^T J_I by the same Schur complement.
+
+    With W_k = A_gv,k A_vv,k^-1: y_g = S^-1 (C_g - sum_k W_k C_v,k), y_v,k = A_vv,k^-1 C_v,k - W_k^T y_g.
+    """
+    lin = fit.lin
+    P, *_ = _camera_points(state, X, tj, view, D)
+    du, dv = intrinsics_rows(project_parts(P[:, 0], P[:, 1], P[:, 2], intrinsics), intrinsics)
+    JI = np.stack([du.T, dv.T], axis=1)  # (M, 2, 9)
+    K, T = len(free_view), len(state["Q"])
+    G = N_COMMON + 6 * (T - 1)
+    C_g = np.zeros((G, JI.shape[2]))
+    C_g[:N_COMMON] = np.einsum("mac,mai->ci", lin.Jc, JI)
+    for j in range(1, T):
+        on = tj == j
+        C_g[N_COMMON + 6 * (j - 1): N_COMMON + 6 * j] = np.einsum("mac,mai->ci", lin.Jt[on], JI[on])
+    C_v = np.zeros((K, D, JI.shape[2]))
+    np.add.at(C_v, view, np.einsum("map,mai->mpi", lin.Jv * free_view[view][:, None, None], JI))
+    y_g = fit.S_inv @ (C_g - np.einsum("kgp,kpi->gi", fit.W, C_v))
+    y_v = np.einsum("kpq,kqi->kpi", fit.Avv_inv, C_v) - np.einsum("kgp,gi->kpi", fit.W, y_g)
+    return -y_v * free_view[:, None, None]
+
+
+def _turn_change(s: np.ndarray, targets_mm: np.ndarray, used: np.ndarray, ref: int, turn: np.ndarray,
+                 ds: np.ndarray) -> np.ndarray:
+    """s dG/dtheta dtheta of :func:`_x_along_motion`'s turn G for position changes ``ds`` (K, 2, m), (K, 2, m)."""
+    dx = targets_mm[used] - targets_mm[ref]
+    L = np.linalg.pinv(dx)[0]  # row 0 of A = pinv(dx) (s_used - s_ref): where +X moves
+    a = L @ (s[used] - s[ref])
+    da = np.einsum("n,ndm->dm", L, ds[used] - ds[ref])  # (2, m)
+    dtheta = (a[0] * da[1] - a[1] * da[0]) / (a @ a)
+    c, sn = turn[0, 0], turn[1, 0]
+    dG = np.array([[-sn, -c], [c, -sn]])
+    return np.where(used[:, None], np.nan_to_num(s) @ dG, 0.0)[:, :, None] * dtheta[None, None, :]
 
 
 def _x_along_motion(s: np.ndarray, targets_mm: np.ndarray, used: np.ndarray, ref: int) -> np.ndarray:

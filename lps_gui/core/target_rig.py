@@ -105,6 +105,19 @@ def occluded(layout: TargetLayout, R: np.ndarray, t: np.ndarray, world: np.ndarr
     return hidden
 
 
+def field_radius2(intrinsics: CameraIntrinsics) -> float:
+    """The squared normalized radius (x/z)^2 + (y/z)^2 up to which the radial distortion still grows outwards.
+
+    Beyond its first turning point the OpenCV polynomial folds points from far outside the field of view
+    back into the image (the paper's lens at about 1.8); no real lens images them, so no corner there is seen.
+    """
+    k1, k2, _, _, k3 = intrinsics.dist
+    r2 = np.linspace(0.0, 100.0, 20001)
+    slope = 1.0 + 3.0 * k1 * r2 + 5.0 * k2 * r2 ** 2 + 7.0 * k3 * r2 ** 3  # d (r radial(r)) / d r
+    turning = np.flatnonzero(slope <= 0)
+    return float(r2[turning[0]]) if turning.size else float("inf")
+
+
 def observe(
     layout: TargetLayout, intrinsics: CameraIntrinsics, R: np.ndarray, t: np.ndarray,
     noise_px: float = 0.0, seed: int = 0, border_px: float = 2.0,
@@ -112,8 +125,9 @@ def observe(
     """Corners (K, N, 2) of every target seen from camera translations ``t`` (K, 3); NaN where not seen.
 
     ``R`` is one orientation (3, 3) or one per view (K, 3, 3). A corner is seen when it is in front of
-    the camera, inside the image by ``border_px`` and not behind another target's paper (the targets
-    face the camera by construction); the noise is Gaussian, per coordinate.
+    the camera, inside the lens's field (:func:`field_radius2`) and the image by ``border_px`` and not
+    behind another target's paper (the targets face the camera by construction); the noise is Gaussian,
+    per coordinate.
     """
     _, world, which = layout.points()
     R = np.asarray(R, float)
@@ -121,8 +135,11 @@ def observe(
     x_cam = x_cam + t[:, None, :]
     uv = project(x_cam, intrinsics).uv
     w, h = intrinsics.image_size
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r2 = (x_cam[..., 0] ** 2 + x_cam[..., 1] ** 2) / x_cam[..., 2] ** 2
     inside = ((uv[..., 0] >= border_px) & (uv[..., 0] <= w - 1 - border_px)
-              & (uv[..., 1] >= border_px) & (uv[..., 1] <= h - 1 - border_px) & (x_cam[..., 2] > 0))
+              & (uv[..., 1] >= border_px) & (uv[..., 1] <= h - 1 - border_px) & (x_cam[..., 2] > 0)
+              & (r2 < field_radius2(intrinsics)))
     seen = inside & ~occluded(layout, R, t, world, which)
     rng = np.random.default_rng(seed)
     uv = uv + rng.normal(0.0, noise_px, uv.shape) if noise_px > 0 else uv

@@ -9,7 +9,10 @@ unreadable, truncated or changed image, wrong size, board not found) is
 listed with its reason and the run goes on.
 
 ``detect_session`` writes ``corners.vnl`` atomically, keyed by the sha256 of
-captures.jsonl: a re-run detects only the views not yet in it.
+captures.jsonl: a re-run detects only the views not yet in it. A session with
+targets (SPEC 13) gets one ArUco pass per image for all of them
+(:func:`lps_gui.camera.charuco_targets.detect_targets`, partial targets kept)
+and the SPEC 13 corners.vnl (:class:`CornerLayout`).
 """
 from __future__ import annotations
 
@@ -31,8 +34,11 @@ from lps_gui.io.atomic import sha256_file
 from lps_gui.io.corners_vnl import CornerTable, read_corners_vnl, write_corners_vnl
 from lps_gui.io.corners_hashes import corners_current, hash_meta, image_hashes, image_unchanged, stat_meta
 from lps_gui.io.session import Session
+from lps_gui.io.target_corners_vnl import TargetCornerTable, read_target_corners, write_target_corners
+from lps_gui.core.targets import Target, target_offsets
 
 log = logging.getLogger(__name__)
+Scene = Board | tuple[Target, ...]  # one board, or the targets of a row or constellation (SPEC 13)
 
 
 @dataclass(frozen=True)
@@ -92,19 +98,29 @@ def _init_worker() -> None:
 
 
 def detect_chunk(
-    jobs: Sequence[ViewJob], board: Board, image_size: tuple[int, int] | None = None, track: bool = True
+    jobs: Sequence[ViewJob], board: Scene, image_size: tuple[int, int] | None = None, track: bool = True
 ) -> list[ViewResult]:
-    """Track the board through ``jobs`` (capture order); runs in a worker process."""
+    """Track the board through ``jobs`` (capture order), or find every target of a tuple of them in each
+    image; runs in a worker process."""
     from lps_gui.camera.charuco import detect_charuco
     from lps_gui.camera.detection import ChessboardTracker, DetectionOptions
 
-    tracker = ChessboardTracker(board, DetectionOptions(track=track))
+    targets = board if isinstance(board, tuple) else None  # a row or constellation (SPEC 13)
+    tracker = None if targets else ChessboardTracker(board, DetectionOptions(track=track))
     out: list[ViewResult] = []
     for job in jobs:
         image, reason = load_grey(job.path, job.sha256, image_size, job.session)
         if image is None:
-            tracker.reset()
+            if tracker is not None:
+                tracker.reset()
             out.append(ViewResult(job.name, None, "failed", reason))
+            continue
+        if targets:  # one ArUco pass for every target in the image; partial targets kept
+            from lps_gui.camera.charuco_targets import detect_targets_dense
+
+            corners = detect_targets_dense(image, list(targets))
+            out.append(ViewResult(job.name, corners, "targets" if corners is not None else "failed",
+                                  "" if corners is not None else "no target found"))
             continue
         if board.type == "charuco":
             corners, reason = detect_charuco(image, board)
@@ -129,7 +145,7 @@ def _chunks(jobs: list[ViewJob], workers: int) -> list[list[ViewJob]]:
 
 def run_detection(
     jobs: list[ViewJob],
-    board: Board,
+    board: Scene,
     progress: ProgressFn = no_progress,
     cancel: CancelToken | None = None,
     workers: int | None = None,
@@ -145,13 +161,14 @@ def run_detection(
     chunks = _chunks(jobs, workers)
     total = len(jobs)
     results: dict[str, ViewResult] = {}
-    counts = {"track": 0, "full": 0, "failed": 0, "charuco": 0}
+    counts = {"track": 0, "full": 0, "failed": 0, "charuco": 0, "targets": 0}
 
     def take(chunk_results: list[ViewResult]) -> None:
         for r in chunk_results:
             results[r.name] = r
             counts[r.method] = counts.get(r.method, 0) + 1
-        msg = f"tracked {counts['track']}, full {counts['full'] + counts['charuco']}, failed {counts['failed']}"
+        msg = (f"tracked {counts['track']}, full {counts['full'] + counts['charuco'] + counts['targets']}, "
+               f"failed {counts['failed']}")
         progress(len(results), total, msg)
 
     def check_cancel() -> None:
@@ -209,7 +226,42 @@ def run_detection(
     return results
 
 
-def _table(names: list[str], results: dict[str, ViewResult], n_corners: int, meta: dict[str, str]) -> CornerTable:
+@dataclass(frozen=True)
+class CornerLayout:
+    """What a session's corners.vnl holds: one board's corners (SPEC 7) or every target's (SPEC 13)."""
+
+    scene: Scene
+    n_corners: int
+    key: str  # corners.vnl ``board`` meta: corners detected for another board or targets are not kept
+
+    @property
+    def targets(self) -> list[Target] | None:
+        return list(self.scene) if isinstance(self.scene, tuple) else None
+
+    def read(self, path: Path):
+        return read_corners_vnl(path, self.n_corners) if self.targets is None else read_target_corners(path, self.targets)
+
+    def table(self, names: list[str], corners: np.ndarray, failed: dict[str, str], meta: dict[str, str]):
+        if self.targets is None:
+            return CornerTable(names, corners, failed, meta)
+        return TargetCornerTable(names, [t.id for t in self.targets], target_offsets(self.targets), corners, failed, meta)
+
+    def write(self, path: Path, table) -> None:
+        (write_corners_vnl if self.targets is None else write_target_corners)(path, table)
+
+
+def corner_layout(session: Session) -> CornerLayout:
+    """The session's board, or its targets laid end to end."""
+    targets = session.targets()
+    if targets is None:
+        board = session.board()
+        return CornerLayout(board, board.n_corners, _board_key(board))
+    key = "targets:" + ",".join(f"{t.id}/{_board_key(t.board)}/{t.first_marker}" for t in targets)
+    return CornerLayout(tuple(targets), int(target_offsets(targets)[-1]), key)
+
+
+def _table(names: list[str], results: dict[str, ViewResult], n_corners: int, meta: dict[str, str],
+           layout: CornerLayout | None = None):
     corners = np.full((len(names), n_corners, 2), np.nan)
     failed: dict[str, str] = {}
     for i, name in enumerate(names):
@@ -220,7 +272,7 @@ def _table(names: list[str], results: dict[str, ViewResult], n_corners: int, met
             failed[name] = r.reason or "board not found"
         else:
             corners[i] = r.corners_px
-    return CornerTable(names, corners, failed, meta)
+    return CornerTable(names, corners, failed, meta) if layout is None else layout.table(names, corners, failed, meta)
 
 
 def detect_images(
@@ -266,7 +318,8 @@ def detect_session(
     Cancelling writes what was finished, then raises :class:`Cancelled`.
     """
     session = Session.open(session_dir)
-    board = session.board()
+    layout = corner_layout(session)
+    board = layout.scene
     records = session.records()
     if not records:
         raise InputError(f"{session.captures_path}: no captures listed; capture or simulate images first")
@@ -278,11 +331,11 @@ def detect_session(
             image_size = session.intrinsics().image_size
         except InputError as exc:  # detection does not need intrinsics: go on without the size check
             log.warning("%s", exc)
-    meta = {"captures_sha256": captures_sha, "board": _board_key(board), **hash_meta(records)}
+    meta = {"captures_sha256": captures_sha, "board": layout.key, **hash_meta(records)}
     kept: dict[str, ViewResult] = {}
     if not force and session.corners_path.exists():
         try:
-            old = read_corners_vnl(session.corners_path, board.n_corners)
+            old = layout.read(session.corners_path)
         except InputError as exc:
             log.warning("ignoring unusable %s: %s", session.corners_path, exc)
         else:
@@ -311,22 +364,23 @@ def detect_session(
             results.update(run_detection(jobs, board, progress, cancel, workers, image_size, track))
     except Cancelled as exc:
         results.update(getattr(exc, "partial", {}))
-        table = _table(names, results, board.n_corners, {**meta, "captures_sha256": "partial"})
+        table = _table(names, results, layout.n_corners, {**meta, "captures_sha256": "partial"}, layout)
         table.names = [n for n in names if n in results]
         table.corners_px = table.corners_px[[i for i, n in enumerate(names) if n in results]]
-        _write_session_corners(session, table)
+        _write_session_corners(session, table, layout)
         raise
     methods = [r.method for r in results.values()]
-    labels = {"track": "tracked", "full": "full", "charuco": "charuco", "kept": "kept", "failed": "failed"}
+    labels = {"track": "tracked", "full": "full", "charuco": "charuco", "targets": "targets", "kept": "kept",
+              "failed": "failed"}
     meta["detection"] = ", ".join(f"{label} {methods.count(m)}" for m, label in labels.items() if m == "track" or m in methods)
-    table = _table(names, results, board.n_corners, meta)
-    _write_session_corners(session, table)
+    table = _table(names, results, layout.n_corners, meta, layout)
+    _write_session_corners(session, table, layout)
     return table
 
 
-def _write_session_corners(session: Session, table: CornerTable) -> None:
+def _write_session_corners(session: Session, table: CornerTable, layout: CornerLayout) -> None:
     """corners.vnl under the session lock (a capture or another detection may be writing)."""
     from lps_gui.io.session_lock import SessionLock
 
     with SessionLock(session.folder):
-        write_corners_vnl(session.corners_path, table)
+        layout.write(session.corners_path, table)

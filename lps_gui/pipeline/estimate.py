@@ -41,7 +41,8 @@ from lps_gui.io.session_lock import SessionLock
 from lps_gui.pipeline.board_plane_results import position_columns, straightness_figures
 from lps_gui.pipeline.error_motion_results import add_columns, board_session_error_motions
 from lps_gui.pipeline.planar_results import build_planar_results
-from lps_gui.pipeline.session_checks import check_corners_current, check_view_geometry, session_inputs
+from lps_gui.pipeline.session_checks import corners_of_records, session_inputs
+from lps_gui.pipeline.target_session import add_targets_section, target_observations
 from lps_gui.pipeline.uncertainty import add_uncertainty, session_board
 from lps_gui.sim.truth import session_truth, truth_comparison
 
@@ -71,7 +72,6 @@ def observations_from_session(session: Session, intrinsics: CameraIntrinsics | N
     capture's per-axis approach side from its plan.
     """
     intr = intrinsics or session.intrinsics()
-    board = apply_board_warp(session_board(session), intr)
     records = session.records()
     if not records:
         raise InputError(f"{session.captures_path}: no captures listed; capture or simulate a session first")
@@ -80,23 +80,11 @@ def observations_from_session(session: Session, intrinsics: CameraIntrinsics | N
             if not isinstance(r.target_mm, tuple):
                 raise InputError(f"{session.captures_path}: capture {r.index} has target_mm {r.target_mm!r}, "
                                  "not [x, y]; a planar session (plan.axes [X, Y]) lists both coordinates")
+    if session.meta.get("targets") is not None:  # a row or constellation (SPEC 13)
+        return target_observations(session, intr, records, approach_of(session, records))
+    board = apply_board_warp(session_board(session), intr)
     table = read_corners_vnl(session.corners_path, board.n_corners)
-    check_corners_current(session, table, records)
-    rows = table.index()
-    missing = [r.file for r in records if r.file not in rows]
-    if missing:
-        raise InputError(
-            f"{session.corners_path}: {len(missing)} captured image(s) have no corners (first: {missing[0]}); run `lps detect {session.folder}`"
-        )
-    order = np.array([rows[r.file] for r in records])
-    # captures.jsonl and corners.vnl list the views in one order when detection wrote the file: no copy then
-    in_order = len(order) == len(table.names) and bool((order == np.arange(len(order))).all())
-    corners = table.corners_px if in_order else table.corners_px[order]
-    check_view_geometry(corners, [r.file for r in records], session.corners_path)
-    approach = None
-    if session.planar:
-        approach_by_index = {s.index: s.approach for s in session.plan().stops()}
-        approach = [approach_by_index.get(r.index, (1, 1)) for r in records]
+    corners = corners_of_records(session, table, records)
     return Observations(
         board=board,
         intrinsics=intr,
@@ -108,8 +96,16 @@ def observations_from_session(session: Session, intrinsics: CameraIntrinsics | N
         names=[r.file for r in records],
         source=str(session.corners_path),
         source_sha256=table.sha256,
-        approach=approach,
+        approach=approach_of(session, records),
     )
+
+
+def approach_of(session: Session, records: list) -> list | None:
+    """Every capture's per-axis approach side from a planar session's plan (None on one axis)."""
+    if not session.planar:
+        return None
+    approach_by_index = {s.index: s.approach for s in session.plan().stops()}
+    return [approach_by_index.get(r.index, (1, 1)) for r in records]
 
 
 def estimate_session(
@@ -160,6 +156,8 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate | Planar
                   ) -> dict[str, Any]:
     """The results.json document of an estimate of D axes, with its environment and uncertainty budget."""
     results = RESULTS_BY_AXES[obs.D](session, obs, est, intrinsics_source)
+    if obs.mounted is not None:
+        add_targets_section(results, obs, est, session)  # SPEC 13: each target's pose, sigma, views, ties
     return add_uncertainty(results, session)  # environment, GUM budget, U (k = 2) per figure
 
 

@@ -58,7 +58,8 @@ def build_planar_results(session: Session, obs: Observations, est: PlanarEstimat
     valid = est.used & np.all(np.isfinite(dev), axis=1)
     sig_fig = np.where(sig > 0, sig, np.nanmedian(sig[valid & (sig[:, 0] > 0)], axis=0) if valid.any() else 1.0)
     oop = None
-    if est.method == "joint":  # the displacement along the plane normal at the board plane (core/planar_flatness)
+    if est.method == "joint" and obs.mounted is None:  # the displacement along the plane normal at the board plane
+        # (core/planar_flatness; of one board: a constellation has no one board plane)
         oop = out_of_plane(est.state, obs.board.object_points(), obs.corners_px, obs.mask() & est.usable[:, None],
                            obs.target_mm, est.used)
         for row, v, sv in zip(positions, oop.normal_um, oop.sigma_um):

@@ -18,6 +18,32 @@ from lps_gui.io.corners_vnl import CornerTable
 from lps_gui.io.session import SESSION_FILE, Session
 
 
+def corners_of_records(session: Session, table: Any, records: Sequence[Any], views_whole: bool = True) -> Any:
+    """The corners (K, N, 2) of every capture in captures.jsonl order, checked (stale images, views missing,
+    collinear views); ``table`` a corners.vnl of one board or of targets (names, meta, corners_px).
+
+    ``views_whole`` False (targets): only the corner values are checked here, the caller judges the
+    geometry of each target in a view.
+    """
+    import numpy as np
+
+    check_corners_current(session, table, records)
+    rows = table.index() if hasattr(table, "index") else {name: i for i, name in enumerate(table.names)}
+    missing = [r.file for r in records if r.file not in rows]
+    if missing:
+        raise InputError(f"{session.corners_path}: {len(missing)} captured image(s) have no corners (first: "
+                         f"{missing[0]}); run `lps detect {session.folder}`")
+    order = np.array([rows[r.file] for r in records])
+    # captures.jsonl and corners.vnl list the views in one order when detection wrote the file: no copy then
+    in_order = len(order) == len(table.names) and bool((order == np.arange(len(order))).all())
+    corners = table.corners_px if in_order else table.corners_px[order]
+    if views_whole:
+        check_view_geometry(corners, [r.file for r in records], session.corners_path)
+    else:
+        check_corner_values(corners, [r.file for r in records], session.corners_path)
+    return corners
+
+
 def check_corners_current(session: Session, table: CornerTable, records: Sequence[Any]) -> None:
     """InputError when corners.vnl holds corners of images that were replaced since detection."""
     stale = stale_views(table, image_hashes(records))
@@ -36,12 +62,7 @@ def check_view_geometry(corners_px: Any, names: Sequence[str], source: Path | st
 
     import numpy as np
 
-    xy = np.asarray(corners_px, float)
-    absurd = ~(np.isnan(xy) | (np.abs(xy) <= MAX_CORNER_PX))
-    if absurd.any():
-        view = int(np.argwhere(absurd)[0][0])
-        raise InputError(f"{source}: view {names[view]} has a corner at {xy[absurd][0]:g} px (over {MAX_CORNER_PX:g}); "
-                         "the corners are corrupt: delete corners.vnl and run `lps detect` again")
+    check_corner_values(corners_px, names, source)
     bad = collinear_views(corners_px)
     if bad:
         seen = np.all(np.isfinite(np.asarray(corners_px, float)[bad]), axis=-1).sum(axis=1)
@@ -52,6 +73,18 @@ def check_view_geometry(corners_px: Any, names: Sequence[str], source: Path | st
                              "camera back or shorten the travel (`lps plan-rig` checks a plan before capture)")
         raise InputError(f"{source}: {len(bad)} view(s) have all corners on one line (first: {names[bad[0]]}); "
                          "the board is edge-on or the corners are corrupt: re-run `lps detect` or remove the view")
+
+
+def check_corner_values(corners_px: Any, names: Sequence[str], source: Path | str) -> None:
+    """InputError naming a view with a corner no camera can see (1e308 overflows the solver's sums)."""
+    import numpy as np
+
+    xy = np.asarray(corners_px, float)
+    absurd = ~(np.isnan(xy) | (np.abs(xy) <= MAX_CORNER_PX))
+    if absurd.any():
+        view = int(np.argwhere(absurd)[0][0])
+        raise InputError(f"{source}: view {names[view]} has a corner at {xy[absurd][0]:g} px (over {MAX_CORNER_PX:g}); "
+                         "the corners are corrupt: delete corners.vnl and run `lps detect` again")
 
 
 def session_inputs(session: Session, intrinsics_source: str, known: dict[str, str | None] | None = None

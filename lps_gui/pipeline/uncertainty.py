@@ -85,7 +85,8 @@ def add_uncertainty(results: dict[str, Any], session: Session) -> dict[str, Any]
     ``environment.square_mm_used``.
     """
     env = session_environment(session)
-    nominal = session.board()
+    targets = session.targets()
+    nominal = session.board() if targets is None else targets[0].board  # a row's world frame is its first target
     results["environment"] = thermal_record(nominal, env)
     if isinstance(results.get("board"), dict):
         results["board"]["square_mm"] = nominal.square_mm
@@ -108,7 +109,14 @@ def uncertainty_of(results: dict[str, Any], env: Environment, square_mm: float) 
 def _axis_uncertainty(results: dict[str, Any], env: Environment, square_mm: float, axis: str,
                       figures: dict[str, Any]) -> dict[str, Any]:
     x = budget_inputs(results, square_mm, axis)
-    unc = combine(budget_rows(x, env))
+    rows = budget_rows(x, env)
+    if results.get("targets"):  # each target's print enters the stretch measured against it (SPEC 13)
+        from lps_gui.core.target_scale import target_scale_rows
+
+        scale = target_scale_rows(results["targets"], x.travel_mm, env.square_mm_uncertainty_um)
+        at = next(k for k, r in enumerate(rows) if r.source == "board square size")
+        rows[at:at + 1] = scale
+    unc = combine(rows)
     unc["travel_mm"] = x.travel_mm
     used = [r for r in results.get("positions") or [] if not r.get("outlier")]
     key = f"target_{axis}_mm" if axis else "target_mm"

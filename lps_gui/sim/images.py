@@ -26,6 +26,7 @@ from lps_gui.core.camera_model import CameraIntrinsics, project_board
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.core.rotation import exp_so3
 from lps_gui.core.simulate import SimulationSpec, true_views
+from lps_gui.core.target_rig import TargetLayout
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_bytes_atomic
 from lps_gui.io.board_file import write_board
@@ -34,20 +35,32 @@ from lps_gui.io.jsonfile import write_json
 from lps_gui.io.session import CaptureRecord, Session
 from lps_gui.sim.session import write_simulated_session
 
-_RENDERERS: dict[Any, BoardRenderer] = {}
+_RENDERERS: dict[Any, Any] = {}
+Scene = Board | TargetLayout  # one board, or a row / constellation of targets (SPEC 13)
 
 
-def _renderer(board: Board, intrinsics: CameraIntrinsics, lighting: Lighting, noise_grey: float) -> BoardRenderer:
+def _scene_key(scene: Scene) -> Any:
+    if isinstance(scene, Board):
+        return scene
+    return (scene.targets, scene.Q.tobytes(), scene.p.tobytes())
+
+
+def _renderer(board: Scene, intrinsics: CameraIntrinsics, lighting: Lighting, noise_grey: float) -> Any:
     """One renderer per process and camera: the per-pixel rays take seconds to build."""
-    key = (board, intrinsics.image_size, intrinsics.vector().tobytes(), lighting, noise_grey)
+    key = (_scene_key(board), intrinsics.image_size, intrinsics.vector().tobytes(), lighting, noise_grey)
     if key not in _RENDERERS:
         _RENDERERS.clear()
-        _RENDERERS[key] = BoardRenderer(board, intrinsics, lighting=lighting, noise_grey=noise_grey)
+        if isinstance(board, Board):
+            _RENDERERS[key] = BoardRenderer(board, intrinsics, lighting=lighting, noise_grey=noise_grey)
+        else:
+            from lps_gui.camera.render_targets import TargetsRenderer
+
+            _RENDERERS[key] = TargetsRenderer(board, intrinsics, lighting=lighting, noise_grey=noise_grey)
     return _RENDERERS[key]
 
 
 def render_encoded(
-    board: Board,
+    board: Scene,
     intrinsics: CameraIntrinsics,
     lighting: Lighting,
     noise_grey: float,
@@ -71,7 +84,7 @@ def render_encoded(
 
 
 def _render_stream(
-    board: Board,
+    board: Scene,
     intrinsics: CameraIntrinsics,
     lighting: Lighting,
     noise_grey: float,
@@ -153,7 +166,8 @@ def simulate_image_session(
     workers = max(1, int(workers or os.cpu_count() or 1))
     progress(0, K, "rendering")
     t0 = time.time()
-    frames = _render_stream(rig.board, rig.intrinsics, lighting, noise_grey, poses, image_ext, workers if K > 16 else 1)
+    scene = rig.board if spec.layout is None else spec.layout
+    frames = _render_stream(scene, rig.intrinsics, lighting, noise_grey, poses, image_ext, workers if K > 16 else 1)
     for stop, data in zip(stops, frames):
         if cancel is not None:
             cancel.check("image simulation")

@@ -15,10 +15,12 @@ import numpy as np
 
 from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
 from lps_gui.core.simulate import SimulationSpec, simulate_views
+from lps_gui.core.targets import target_offsets
 from lps_gui.io.board_file import write_board
 from lps_gui.io.corners_vnl import CornerTable, write_corners_vnl
 from lps_gui.io.intrinsics_file import write_intrinsics
 from lps_gui.io.session import CaptureRecord, Session
+from lps_gui.io.target_corners_vnl import TargetCornerTable, write_target_corners
 from lps_gui.sim.session import write_simulated_session
 
 # 1-sigma of a good 20-view calibration (relative for focal lengths)
@@ -71,12 +73,20 @@ def write_point_session(out: Path | str, spec: Any, stops: Sequence[Any], corner
         camera={"driver": "simulated (points)", "image_size": list(true.image_size)},
         stage=stage, truth=truth, noise_px=spec.noise_px,
     )
-    write_board(out / "board.json", spec.rig.board)
+    layout = getattr(spec, "layout", None)
+    if layout is None:
+        write_board(out / "board.json", spec.rig.board)
     write_intrinsics(out / "intrinsics.json", intr)
     names = [f"images/{s.index:06d}.png" for s in stops]
     now = time.time()
     for stop, name in zip(stops, names):
         session.append(CaptureRecord(stop.index, stop.run, stop.direction, stop.target_mm, stop.target_mm, name, None,
                                      now, stop.frame))
-    write_corners_vnl(session.corners_path, CornerTable(names, corners_px, meta={"source": "simulated points"}))
+    meta = {"source": "simulated points"}
+    if layout is None:
+        write_corners_vnl(session.corners_path, CornerTable(names, corners_px, meta=meta))
+    else:  # SPEC 13: one row per corner of each target seen
+        targets = list(layout.targets)
+        write_target_corners(session.corners_path, TargetCornerTable(names, [t.id for t in targets],
+                                                                     target_offsets(targets), corners_px, meta=meta))
     return session

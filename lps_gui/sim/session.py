@@ -42,11 +42,12 @@ def write_simulated_session(
     """Create the session folder of a simulated experiment (session.json only; captures follow).
 
     ``level`` says how it was made (``"points"``, ``"images"``, ``"capture"``);
-    ``simulation`` adds fields to session.json's ``simulation`` record.
+    ``simulation`` adds fields to session.json's ``simulation`` record. A spec
+    with a layout of targets (SPEC 13) names its ``targets`` instead of a board.
     """
     return Session.create(
         folder,
-        board=spec.rig.board,
+        board=spec.rig.board if spec.layout is None else list(spec.layout.targets),
         plan=spec.plan,
         intrinsics=intrinsics if intrinsics is not None else spec.rig.intrinsics,
         camera=camera,

@@ -419,3 +419,30 @@ def truth_errors(est: LpsEstimate, straight_truth: np.ndarray | None, rotation_t
             out["image_rotation_rms_error_urad"] = _f(np.sqrt(np.mean(e**2)))
             out["image_rotation_z_mean_square"] = _f(np.mean((e / bp.image_rotation_sigma_urad[keep]) ** 2))
     return out
+
+
+def target_truth_comparison(session: Session, section: list[dict[str, Any]]) -> dict[str, Any] | None:
+    """results.json ``truth_comparison.targets``: each estimated target pose against the simulator's
+    (session.json ``truth.targets``, world = target 0's frame), the rotation error as the left
+    perturbation the sigmas are of; None for a real session."""
+    from lps_gui.core.rotation import exp_so3, log_so3
+
+    truth = (session.meta.get("truth") or {}).get("targets")
+    if not truth:
+        return None
+    by_id = {t["id"]: t for t in truth}
+    rows, z = [], []
+    for r in section:
+        t = by_id.get(r["id"])
+        if t is None:
+            continue
+        d_rot = log_so3(exp_so3(np.asarray(r["rvec_rad"], float)) @ exp_so3(np.asarray(t["rvec_rad"], float)).T)
+        d_p = np.asarray(r["p_mm"], float) - np.asarray(t["p_mm"], float)
+        err = np.r_[d_rot, d_p]
+        sigma = np.r_[np.asarray(r["rvec_sigma_rad"], float), np.asarray(r["p_sigma_mm"], float)]
+        zs = np.abs(err[sigma > 0]) / sigma[sigma > 0]
+        z += zs.tolist()
+        rows.append({"id": r["id"], "rvec_error_rad": json_floats(d_rot), "p_error_mm": json_floats(d_p),
+                     "max_abs_z": _f(zs.max()) if zs.size else None})
+    return {"per_target": rows, "max_abs_z": _f(max(z)) if z else None,
+            "z_mean_square": _f(np.mean(np.square(z))) if z else None}

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from lps_gui.core.board import Board
-from lps_gui.core.camera_model import CameraIntrinsics
+from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
 from lps_gui.core.rotation import exp_so3, log_so3
 from lps_gui.core.target_model import (
     N_COMMON, TargetObservations, _linearize, _retract, initial_solution, solve_targets)
@@ -219,3 +219,21 @@ def test_the_targets_section_names_poses_sigmas_views_ties_and_stretch():
     starts = [r["stretch_mm"][0][0] for r in rows]
     assert starts == sorted(starts) and rows[0]["stretch_mm"][0][0] == 0.0
     assert rows[-1]["stretch_mm"][1][0] == pytest.approx(120 * 12.7)
+
+
+@pytest.mark.parametrize("D", [1, 2])
+def test_the_intrinsics_gradient_matches_central_differences_of_the_solution(D):
+    """d s / d intrinsics (what the total sigma propagates) against re-solving with moved intrinsics; on a
+    plane the in-plane turn of the stage frame follows the positions, and its change is part of it."""
+    obs, _, _ = (paper_x_axis(0, n_targets=3, stops=15, pitch_mm=40.0, noise_px=0.05) if D == 1
+                 else planar_constellation(0, cols=3, rows=2, travel_mm=(400.0, 200.0), grid=(4, 3), noise_px=0.05))
+    intr = CameraIntrinsics(PAPER_CAMERA.image_size, PAPER_CAMERA.camera_matrix, PAPER_CAMERA.dist,
+                            covariance=np.eye(9))
+    sol = solve_targets(obs, intr, tolerance=1e-15)
+    v = intr.vector()
+    for i, h in ((0, 0.5), (2, 0.2), (4, 1e-4)):
+        moved = [solve_targets(obs, intr.with_vector(v + sign * h * np.eye(9)[i]), tolerance=1e-15).s
+                 for sign in (1, -1)]
+        num = (moved[0] - moved[1]) / (2 * h)
+        ana = sol.intrinsics_gradient[:, :, i]
+        assert np.nanmax(np.abs(num - ana)) < 1e-3 * np.nanmax(np.abs(ana)), INTRINSIC_NAMES[i]

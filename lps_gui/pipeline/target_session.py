@@ -1,0 +1,121 @@
+"""A session with targets (SPEC 13) on the one estimation path: its observations and its results section.
+
+:func:`lps_gui.pipeline.estimate.observations_from_session` comes here for a
+session.json that names ``targets``: the SPEC 13 corners.vnl is read, checked
+like a board's (stale images, missing views, collinear views) and laid out as
+one set of corners per view with each corner's target
+(``Observations.mounted``). :func:`add_targets_section` adds results.json
+``targets``: each target's pose in the world frame (target 0's) with its
+sigma, the views that saw it and that tie it, and its share of the travel
+(what its print's scale enters in the budget, :mod:`lps_gui.core.target_scale`).
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from lps_gui.core.camera_model import CameraIntrinsics
+from lps_gui.core.environment import corrected_board
+from lps_gui.core.observations import Observations
+from lps_gui.core.target_scale import covered_fractions
+from lps_gui.core.target_summary import MIN_CORNERS, target_rows
+from lps_gui.core.targets import Target, target_offsets
+from lps_gui.errors import InputError
+from lps_gui.io.session import Session
+from lps_gui.io.target_corners_vnl import read_target_corners
+from lps_gui.pipeline.session_checks import corners_of_records
+from lps_gui.pipeline.uncertainty import session_environment
+
+
+def measured_targets(session: Session) -> list[Target]:
+    """The session's targets as the estimator uses them: each square at its certified scale
+    (``scale_ppm``) and at the session's temperature (environment)."""
+    env = session_environment(session)
+    out = []
+    for t in session.targets() or []:
+        board = t.board
+        if t.scale_ppm:
+            board = replace(board, square_mm=board.square_mm * (1.0 + 1e-6 * t.scale_ppm))
+        out.append(replace(t, board=corrected_board(board, env)))
+    return out
+
+
+def target_observations(session: Session, intrinsics: CameraIntrinsics, records: list, approach: list | None
+                        ) -> Observations:
+    """Observations of every capture against the session's targets (corners laid end to end)."""
+    targets = measured_targets(session)
+    if not session.corners_path.is_file():
+        raise InputError(f"{session.corners_path}: corners file not found; run `lps detect` first")
+    table = read_target_corners(session.corners_path, targets)
+    corners = without_collinear_targets(corners_of_records(session, table, records, views_whole=False),
+                                        target_offsets(targets))
+    return Observations(
+        board=targets[0].board, intrinsics=intrinsics, corners_px=corners,
+        target_mm=[r.target_mm for r in records],
+        direction=[1.0 if r.direction == "+" else -1.0 for r in records],
+        run=[r.run for r in records], index=[r.index for r in records], names=[r.file for r in records],
+        source=str(session.corners_path), source_sha256=table.sha256, approach=approach, mounted=tuple(targets))
+
+
+def without_collinear_targets(corners_px: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """The corners with each target's dropped from the views where they lie on one line (a target cut by
+    the image border to one row or column fixes no pose of its own); the rest of those views is kept."""
+    from lps_gui.core.view_geometry import collinear_views
+
+    out = corners_px
+    for a, b in zip(offsets[:-1], offsets[1:]):
+        bad = collinear_views(corners_px[:, a:b])
+        if bad:
+            out = out.copy() if out is corners_px else out
+            out[np.ix_(bad, np.arange(a, b))] = np.nan
+    return out
+
+
+def seen_by_target(obs: Observations, used: np.ndarray) -> np.ndarray:
+    """(K, T) bool: the used views that saw each target (at least MIN_CORNERS of its corners)."""
+    offsets = target_offsets(list(obs.mounted))
+    ok = np.isfinite(obs.corners_px[..., 0])
+    counts = np.add.reduceat(ok, offsets[:-1], axis=1)
+    return (counts >= MIN_CORNERS) & np.asarray(used, bool)[:, None]
+
+
+def targets_section(obs: Observations, est: Any, session: Session) -> list[dict[str, Any]]:
+    """results.json ``targets`` (SPEC 13)."""
+    fit = getattr(est, "fit", None) if obs.D == 1 else getattr(est, "fit_targets", None)
+    rows = target_rows(list(obs.mounted), fit.Q, fit.p, fit.target_sigma, obs.corners_px, obs.targets, est.used)
+    seen = seen_by_target(obs, est.used)
+    several = seen.sum(axis=1) >= 2
+    share = covered_fractions(seen)
+    nominal = {t.id: t for t in session.targets() or []}
+    for j, (row, t) in enumerate(zip(rows, obs.mounted)):
+        printed = nominal.get(t.id, t)
+        row["square_mm"] = printed.board.square_mm
+        if printed.square_mm_uncertainty_um is not None:
+            row["square_mm_uncertainty_um"] = printed.square_mm_uncertainty_um
+        if printed.scale_ppm is not None:
+            row["scale_ppm"] = printed.scale_ppm
+        row["covered_fraction"] = float(share[j])
+        row["seen_by"] = obs.index[seen[:, j]].astype(int).tolist()  # capture indices
+        row["tied_by"] = obs.index[seen[:, j] & several].astype(int).tolist()
+    return rows
+
+
+def add_targets_section(results: dict[str, Any], obs: Observations, est: Any, session: Session) -> None:
+    """Put ``targets`` into results (after ``board``, in schema order); a simulated session's
+    ``truth_comparison.targets`` compares each pose with the simulator's."""
+    from lps_gui.sim.truth import target_truth_comparison
+
+    section = targets_section(obs, est, session)
+    ordered: dict[str, Any] = {}
+    for key, value in results.items():
+        ordered[key] = value
+        if key == "board":
+            ordered["targets"] = section
+    ordered.setdefault("targets", section)
+    results.clear()
+    results.update(ordered)
+    truth = target_truth_comparison(session, section)
+    if truth is not None:
+        results.setdefault("truth_comparison", {})["targets"] = truth

@@ -18,7 +18,7 @@ from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.rotation import chordal_mean, exp_so3
 from lps_gui.core.target_arrowhead import (
     Linearization, PositionCovariance, levenberg_marquardt, project_residuals, retract_targets, view_rms)
-from lps_gui.core.target_model import TargetObservations, origin_in_camera, target_views
+from lps_gui.core.target_model import TargetObservations, TargetSolution, origin_in_camera, target_views
 
 
 @dataclass
@@ -66,15 +66,25 @@ def _retract(state: dict, dg: np.ndarray, dv: np.ndarray) -> dict:
 
 
 def solve_poses(obs: TargetObservations, intrinsics: CameraIntrinsics, max_iterations: int = 50,
-                tolerance: float = 1e-10, progress=None, noise_px: float | None = None) -> PoseSolution:
-    """Every view's pose and the targets' poses, jointly; sigmas from (J^T J)^-1 at the solution."""
-    views = target_views(obs, intrinsics)
+                tolerance: float = 1e-10, progress=None, noise_px: float | None = None,
+                start: TargetSolution | None = None) -> PoseSolution:
+    """Every view's pose and the targets' poses, jointly; sigmas from (J^T J)^-1 at the solution.
+
+    ``start``: the row model's solution of the same views (one orientation, a line), whose target
+    poses and per-view translations are a close start: no PnP per view and target, a few iterations.
+    """
     K, T = len(obs.names), len(obs.targets)
-    ok, used, Q, p = views["ok"], views["used"], views["Q"], views["p"]
-    R = np.tile(np.eye(3), (K, 1, 1))
-    for i in np.flatnonzero(used):
-        R[i] = chordal_mean(views["R_world"][i, ok[i]])
-    t = origin_in_camera(views["tv"], ok, p, R)
+    if start is None:
+        views = target_views(obs, intrinsics)
+        ok, used, Q, p = views["ok"], views["used"], views["Q"], views["p"]
+        R = np.tile(np.eye(3), (K, 1, 1))
+        for i in np.flatnonzero(used):
+            R[i] = chordal_mean(views["R_world"][i, ok[i]])
+        t = origin_in_camera(views["tv"], ok, p, R)
+    else:
+        used, Q, p = start.used.copy(), start.Q.copy(), start.p.copy()
+        R = np.tile(start.R, (K, 1, 1))
+        t = start.l0[None, :] + np.where(used[:, None], start.s, 0.0) @ start.N.T
     state = {"R": R, "t": t, "Q": Q, "p": p}
     seen = np.isfinite(obs.corners_px[..., 0]) & used[:, None]
     view, corner = np.nonzero(seen)

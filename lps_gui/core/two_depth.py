@@ -12,7 +12,8 @@ from those poses.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -116,3 +117,28 @@ def observe_stops(tr: TwoDepthRig, targets_mm: np.ndarray, noise_px: float = 0.1
     obs = TargetObservations(list(tr.layout.targets), uv, x[:, None], [f"stop{i:04d}.png" for i in range(len(x))])
     C = -np.einsum("kji,kj->ki", R, t)
     return TwoDepthViews(obs, tr.rig.carriage_rotations(pose), C, pose.axis_mm)
+
+
+def two_depth_spec(seed: int = 0, noise_px: float = 0.1, errors: StageErrorModel | None = None,
+                   plan: Any = None, near_mm: float = 300.0, name: str = "paper-two-depth") -> Any:
+    """A simulation of :func:`two_depth_rig` (SPEC 14's case): the paper's 1524 mm X axis in 241 stops of 6.35 mm.
+
+    ``near_mm=0``: both rows in one plane (preset ``paper-one-plane``: the tilts are not resolved).
+    """
+    from lps_gui.core.plan import Plan
+    from lps_gui.core.simulate import SimulationSpec
+
+    plan = plan or Plan(start_mm=0.0, stop_mm=1524.0, step_mm=6.35)
+    t = plan.targets()
+    travel = float(t[-1] - t[0])
+    tr = two_depth_rig(travel, near_mm=near_mm, errors=errors, seed=seed)
+    rig = replace(tr.rig, C0_board=tr.rig.C0_board - float(t[0]) * tr.rig.u_board)  # commanded t[0] at the start
+    return SimulationSpec(name, rig, plan, noise_px=noise_px, seed=seed, layout=tr.layout)
+
+
+def one_plane_spec(seed: int = 0, noise_px: float = 0.1, errors: StageErrorModel | None = None, plan: Any = None) -> Any:
+    """:func:`two_depth_spec` with both rows in one plane: what one depth resolves of the tilts (SPEC 11)."""
+    return two_depth_spec(seed, noise_px, errors, plan, near_mm=0.0, name="paper-one-plane")
+
+
+TWO_DEPTH_PRESETS = {"paper-two-depth": two_depth_spec, "paper-one-plane": one_plane_spec}

@@ -131,7 +131,8 @@ def _truth(em: ErrorMotions, w_world: np.ndarray) -> dict[str, Any]:
 
 def board_truth_rotations(truth_meta: dict[str, Any] | None, truth: dict[str, Any] | None,
                           index: np.ndarray) -> np.ndarray | None:
-    """A simulated single-board session's carriage rotations (K, 3) rad in the board frame, by capture index."""
+    """A simulated session's carriage rotations (K, 3) rad in the world frame (the board's, or target
+    0's), by capture index; None for a real session."""
     if not truth or not truth_meta or "angles_urad" not in truth:
         return None
     if not all(k in truth_meta for k in ("R_cam_board", "u_board")):
@@ -150,11 +151,25 @@ def add_columns(positions: list[dict[str, Any]], columns: dict[str, list[Any]]) 
             row[key] = values[i]
 
 
-def board_session_error_motions(meta: dict[str, Any], where: str, obs: Any, est: Any,
-                                truth: dict[str, Any] | None) -> ErrorMotionResults | None:
-    """A single-board line session's error motions from its 6-DOF poses (None when the method has none)."""
-    sol = board_pose_solution(est)
-    if sol is None or int(np.asarray(est.used).sum()) < 3:
+def target_pose_solution(obs: Any, est: Any) -> PoseSolution:
+    """Every stop's full pose against the session's targets, started from the row model's solution."""
+    from lps_gui.core.pose_model import solve_poses
+    from lps_gui.core.target_model import TargetObservations
+
+    tobs = TargetObservations(list(obs.mounted), obs.corners_px, obs.targets, list(obs.names))
+    return solve_poses(tobs, obs.intrinsics, start=getattr(est, "fit", None))
+
+
+def session_error_motions(meta: dict[str, Any], where: str, obs: Any, est: Any,
+                          truth: dict[str, Any] | None) -> ErrorMotionResults | None:
+    """A line session's error motions: from the full poses against its targets, or a single board's
+    6-DOF poses (None when the method has none)."""
+    tool = tool_point(meta, where)
+    if obs.mounted is not None:
+        sol, basis = target_pose_solution(obs, est), BASIS_TARGETS
+    else:
+        sol, basis = board_pose_solution(est), BASIS_BOARD
+    if sol is None or int(np.asarray(sol.used).sum()) < 3:
         return None
     w = board_truth_rotations(meta.get("truth"), truth, np.asarray(obs.index))
-    return error_motion_results(sol, obs.target_mm, BASIS_BOARD, tool_point(meta, where), w)
+    return error_motion_results(sol, obs.target_mm, basis, tool, w)

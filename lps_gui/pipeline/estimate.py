@@ -39,7 +39,7 @@ from lps_gui.io.results_history import commit_results
 from lps_gui.io.session import Session
 from lps_gui.io.session_lock import SessionLock
 from lps_gui.pipeline.board_plane_results import position_columns, straightness_figures
-from lps_gui.pipeline.error_motion_results import add_columns, board_session_error_motions
+from lps_gui.pipeline.error_motion_results import add_columns, session_error_motions
 from lps_gui.pipeline.planar_results import build_planar_results
 from lps_gui.pipeline.session_checks import corners_of_records, session_inputs
 from lps_gui.pipeline.target_session import add_targets_section, target_observations
@@ -166,7 +166,7 @@ def line_results(session: Session, obs: Observations, est: LpsEstimate, intrinsi
     :func:`lps_gui.io.results_file.assemble_results`."""
     positions = position_rows(obs, est)
     truth = session_truth(session)
-    motions = board_session_error_motions(session.meta, str(session.folder / "session.json"), obs, est, truth)  # SPEC 14
+    motions = session_error_motions(session.meta, str(session.folder / "session.json"), obs, est, truth)  # SPEC 14
     if motions is not None:
         add_columns(positions, motions.columns)
     results = assemble_results(

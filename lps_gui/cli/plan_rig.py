@@ -5,7 +5,8 @@ import argparse
 
 from lps_gui.cli.option_types import positive_finite
 
-HELP = "check a rig before capturing: board in view over the whole plan, and the position sigma to expect"
+HELP = ("check a rig before capturing: board in view over the whole plan, and the position sigma to expect; "
+        "--travel proposes a row of targets for a travel longer than the view")
 
 
 MAX_SIZE = 100_000  # px of an image; inner corners are held to 1000 by the board check
@@ -40,11 +41,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--board", help="board.json; or give --inner-corners and --square-mm")
     p.add_argument("--inner-corners", type=_size, help="inner corners COLSxROWS")
     p.add_argument("--square-mm", type=positive_finite, help="square size, mm")
-    p.add_argument("--distance-mm", type=_numbers, required=True,
+    p.add_argument("--distance-mm", type=_numbers,
                    help="camera-to-board distance(s), mm; several (400,500,600) print one row each")
     p.add_argument("--start", type=_numbers, default=(0.0,), help="first target: X or X,Y (mm)")
-    p.add_argument("--stop", type=_numbers, required=True, help="last target: X or X,Y (mm); X,Y plans a planar grid")
-    p.add_argument("--step", type=_numbers, required=True, help="step: X or X,Y (mm)")
+    p.add_argument("--stop", type=_numbers, help="last target: X or X,Y (mm); X,Y plans a planar grid")
+    p.add_argument("--step", type=_numbers, help="step: X or X,Y (mm); with --travel, the stops' spacing")
+    row = p.add_argument_group("a row of targets (SPEC 13, docs/targets.md) instead of one board")
+    row.add_argument("--travel", type=positive_finite, help="travel of X, mm: propose a row of targets along it")
+    row.add_argument("--travel-y", type=positive_finite, help="travel of Y, mm: a constellation over the XY plane")
+    row.add_argument("--sigma-um", type=positive_finite,
+                     help="wanted sigma per stop, µm (median): the distance is proposed; or give --distance-mm")
     p.add_argument("--noise-px", type=positive_finite, default=0.1, help="corner noise to expect, px (default 0.1)")
     p.add_argument("--json", action="store_true", help="print the predictions as JSON")
 
@@ -94,7 +100,15 @@ def run(args: argparse.Namespace) -> int:
     import json
 
     from lps_gui.core.rig_planning import predict_rig
+    from lps_gui.errors import InputError
 
+    if args.travel is not None or args.travel_y is not None:
+        from lps_gui.cli.plan_row import run_row
+
+        return run_row(args, _camera(args))
+    if args.distance_mm is None or args.stop is None or args.step is None:
+        raise InputError("plan-rig: give --distance-mm, --stop and --step for one board, "
+                         "or --travel (and --sigma-um) for a row of targets")
     intrinsics, board, plan = _camera(args), _board(args), _plan(args)
     rows = [predict_rig(board, intrinsics, d, plan, args.noise_px) for d in args.distance_mm]
     if args.json:

@@ -92,14 +92,14 @@ def predict_rig(board: Board, intrinsics: CameraIntrinsics, distance_mm: float, 
     notes: list[str] = []
     sig_med = sig_max = None
     full = frac == 1.0
-    if full.sum() >= 3:
-        sig = _crb_sigma_um(rig if planar else rig1, planar, targets, R, t, X, inside, intrinsics, noise_px)
+    if full.sum() >= 3:  # a chessboard is detected whole or not at all: the other stops measure nothing
+        sig = _crb_sigma_um(rig if planar else rig1, planar, targets[full], R[full], t[full], X, inside[full],
+                            intrinsics, noise_px)
         sig_med, sig_max = float(np.median(sig[1:])), float(np.max(sig[1:]))
     else:
         notes.append("fewer than 3 targets see the whole board: no sigma predicted; move the camera back")
     if losing.size:
-        notes.append(f"the board leaves the view at {losing.size} of {K} targets; move the camera back "
-                     "or use a shorter travel")
+        notes.append(leaves_view_note(losing.size, K, targets, full))
     return RigPrediction(
         axes=["X", "Y"] if planar else ["X"], distance_mm=float(distance_mm), n_targets=int(K),
         board_in_view=bool(losing.size == 0), targets_losing_board=int(losing.size),
@@ -107,6 +107,17 @@ def predict_rig(board: Board, intrinsics: CameraIntrinsics, distance_mm: float, 
         min_corner_fraction=float(frac.min()), board_size_px=[float(np.ptp(uv_mid[:, 0])), float(np.ptp(uv_mid[:, 1]))],
         sigma_um_median=sig_med, sigma_um_max=sig_max, noise_px=float(noise_px), notes=notes,
     )
+
+
+def leaves_view_note(losing: int, n_stops: int, targets: np.ndarray, full: np.ndarray) -> str:
+    """One line: where the board leaves the view, and the row of targets that measures the whole travel."""
+    travel = np.ptp(targets, axis=0)
+    covered = np.ptp(targets[full], axis=0) if full.any() else np.zeros_like(travel)
+    row = f"--travel {travel[0]:g}" + (f" --travel-y {travel[1]:g}" if len(travel) == 2 else "")
+    span = " x ".join(f"{v:.0f}" for v in covered)
+    return (f"the board leaves the view at {losing} of {n_stops} targets (it stays whole in view over {span} mm of "
+            f"the travel): measure the whole travel against a row of targets (lps plan-rig {row} --sigma-um S, "
+            "same camera) or move the camera back")
 
 
 def _crb_sigma_um(rig: Any, planar: bool, targets: np.ndarray, R: np.ndarray, t: np.ndarray, X: np.ndarray,

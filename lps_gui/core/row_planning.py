@@ -49,10 +49,21 @@ class RowPlan:
     centred_sigma_um_median: float  # without the first stop's own noise
     square_px: float
     notes: list[str] = field(default_factory=list)
+    stops_per_axis: tuple[int, ...] = ()
 
     @property
     def n_targets(self) -> int:
         return self.grid[0] * self.grid[1]
+
+    def geometry(self) -> tuple[TargetLayout, np.ndarray, np.ndarray, np.ndarray]:
+        """The nominal layout and views of this plan: layout, R (3, 3), t (K, 3) and the stops' coordinates (K, D)."""
+        return row_geometry(self.board, self.grid, self.pitch_mm, self.distance_mm, self.travel_mm, self.stops_per_axis)
+
+    def make_targets_command(self) -> str:
+        """The `lps make-targets` line that prints this layout's targets."""
+        b = self.board
+        return (f"lps make-targets row --count {self.n_targets} --inner-corners {b.cols}x{b.rows} "
+                f"--square-mm {b.square_mm:g} --marker-mm {b.marker_mm:g}")
 
     def to_dict(self) -> dict:
         b = self.board
@@ -99,9 +110,10 @@ def plan_row(intrinsics: CameraIntrinsics, distance_mm: float, travel_mm: tuple[
     grid = (_count(travel_mm[0], W, bw, pitch[0]), _count(travel_mm[1], H, bh, pitch[1]) if D == 2 else 1)
     if grid[0] * grid[1] > 400:
         raise InputError(f"plan-rig: {grid[0] * grid[1]} targets would be needed; move the camera back or use a longer lens")
-    stops = stops or ((121,) if D == 1 else (13, 9))
-    layout = _layout(board, grid, pitch)
-    t, R, targets_mm = _views(layout, board, grid, pitch, distance_mm, travel_mm, stops)
+    stops = tuple(stops or ((121,) if D == 1 else (13, 9)))
+    if len(stops) != D or min(stops) < 3:
+        raise InputError("plan-rig: give at least 3 stops along each travelled axis")
+    layout, R, t, targets_mm = row_geometry(board, grid, pitch, distance_mm, travel_mm, stops)
     uv = observe(layout, intrinsics, R, t, border_px=EDGE_MARGIN_PX)
     obs = TargetObservations(list(layout.targets), uv, targets_mm, [f"stop{i}" for i in range(len(t))])
     try:
@@ -119,7 +131,15 @@ def plan_row(intrinsics: CameraIntrinsics, distance_mm: float, travel_mm: tuple[
                      "move the camera closer (the layout shrinks with it) or use a longer lens")
     return RowPlan(float(distance_mm), tuple(float(v) for v in travel_mm), (W, H), board, grid, pitch,
                    int(np.prod(stops)), float(np.median(sig)), float(np.max(sig)),
-                   float(np.median(sol.sigma_centred) * 1e3), float(square_px), notes)
+                   float(np.median(sol.sigma_centred) * 1e3), float(square_px), notes, stops)
+
+
+def row_geometry(board: Board, grid: tuple[int, int], pitch: tuple[float, float], distance_mm: float,
+                 travel_mm: tuple[float, ...], stops: tuple[int, ...]) -> tuple[TargetLayout, np.ndarray, np.ndarray, np.ndarray]:
+    """The nominal layout of a plan and its views (R, t, stop coordinates): what the planner and its tests observe."""
+    layout = _layout(board, grid, pitch)
+    t, R, targets_mm = _views(layout, board, grid, pitch, distance_mm, travel_mm, stops)
+    return layout, R, t, targets_mm
 
 
 def _layout(board: Board, grid: tuple[int, int], pitch: tuple[float, float]) -> TargetLayout:
@@ -144,3 +164,55 @@ def _views(layout: TargetLayout, board: Board, grid, pitch, distance_mm, travel_
     C = np.c_[centre + xy, np.full(len(xy), -float(distance_mm))]
     R = np.eye(3)
     return -C @ R.T, R, targets_mm
+
+
+MIN_DISTANCE_MM, MAX_DISTANCE_MM, DISTANCE_STEP_MM = 200.0, 5000.0, 50.0
+
+
+def propose_row(intrinsics: CameraIntrinsics, travel_mm: tuple[float, ...], wanted_sigma_um: float,
+                stops: tuple[int, ...] | None = None, noise_px: float = 0.1, start_mm: float = 800.0) -> RowPlan:
+    """The farthest camera distance (in steps of 50 mm) whose layout meets the wanted median sigma per stop.
+
+    Farther means larger and fewer targets; the sigma grows with the distance (the view covers more
+    travel per pixel), so the answer is the end of a bracket. The next distance is the secant of the
+    two latest predictions (the sigma is close to affine in the distance), kept inside the bracket.
+    """
+    if not wanted_sigma_um > 0:
+        raise InputError(f"plan-rig: the wanted sigma must be positive, got {wanted_sigma_um}")
+    plans: dict[float, RowPlan] = {}
+
+    def at(d: float) -> RowPlan:
+        d = float(np.clip(DISTANCE_STEP_MM * round(d / DISTANCE_STEP_MM), MIN_DISTANCE_MM, MAX_DISTANCE_MM))
+        if d not in plans:
+            plans[d] = plan_row(intrinsics, d, travel_mm, stops, noise_px)
+        return plans[d]
+
+    ok, bad = 0.0, math.inf  # the farthest distance meeting the wanted sigma, the nearest missing it
+    d = start_mm
+    for _ in range(12):
+        p = at(d)
+        d = p.distance_mm
+        if p.sigma_um_median <= wanted_sigma_um:
+            ok = max(ok, d)
+        else:
+            bad = min(bad, d)
+        if bad - ok <= DISTANCE_STEP_MM or (ok >= MAX_DISTANCE_MM) or bad <= MIN_DISTANCE_MM:
+            break
+        tried = list(plans)  # in the order evaluated
+        if len(tried) >= 2:
+            d0, d1 = tried[-2:]
+            s0, s1 = plans[d0].sigma_um_median, plans[d1].sigma_um_median
+            guess = d1 + (wanted_sigma_um - s1) * (d1 - d0) / (s1 - s0) if s1 != s0 else 0.5 * (d0 + d1)
+        else:
+            guess = d * wanted_sigma_um / p.sigma_um_median
+        lo, hi = ok + DISTANCE_STEP_MM, (bad - DISTANCE_STEP_MM) if bad < math.inf else MAX_DISTANCE_MM
+        d = float(np.clip(guess, lo, hi)) if lo <= hi else lo
+    if ok == 0.0:
+        nearest = plans[min(plans)]
+        raise InputError(f"plan-rig: {nearest.distance_mm:g} mm away (the nearest tried) the median sigma per stop is "
+                         f"{nearest.sigma_um_median:.2f} um, more than the wanted {wanted_sigma_um:g} um; "
+                         "use a longer lens or a camera with more pixels")
+    best = plans[ok]
+    if ok >= MAX_DISTANCE_MM:
+        best.notes.append(f"the wanted sigma is met {MAX_DISTANCE_MM:g} mm away, the farthest distance proposed")
+    return best

@@ -26,6 +26,7 @@ from lps_gui.errors import InputError
 from lps_gui.gui.planar_plan_editor import (
     PlanarPlanEditor, apply_shared_to_panel, planar_duration_s, planar_engine, shared_from_panel,
 )
+from lps_gui.gui.targets_editor import TargetsEditor
 from lps_gui.gui.widgets import PathPicker, add_rows, double_spin, stack
 from lps_gui.gui.workers import Job, one_line
 
@@ -128,6 +129,8 @@ class CapturePanel(QWidget):
         self.planar_editor.enabled.toggled.connect(
             lambda on: [w.setEnabled(not on) for w in (self.start_mm, self.stop_mm, self.step_mm, self.iso_btn)])
 
+        self.targets_editor = TargetsEditor(self.start_dir)  # a row of targets instead of the board (SPEC 13)
+
         self.folder = PathPicker("empty: a new dated folder beside the last one", folder=True, start_dir=self.start_dir)
         sess = QGroupBox("Session")
         sl = QVBoxLayout(sess)
@@ -151,7 +154,8 @@ class CapturePanel(QWidget):
         self.eta = QLabel("idle")
         self.eta.setWordWrap(True)  # a long error wraps; it does not widen the dock
 
-        stack(self, [plan_box, (self.planar_editor, 1), self.report_setup, sess, row, self.progress, self.eta]).addStretch(1)
+        stack(self, [plan_box, (self.planar_editor, 1), self.targets_editor, self.report_setup, sess, row, self.progress,
+                     self.eta]).addStretch(1)
 
         for w in (self.start_mm, self.stop_mm, self.step_mm):
             w.valueChanged.connect(self._targets_edited)
@@ -250,6 +254,10 @@ class CapturePanel(QWidget):
             if self.planar_editor.active() and not gantry:
                 self.planar_editor.check_connected_rig(is_simulated_rig(stage, camera))
             extra = self.report_setup.meta()  # spec, environment, identification for session.json
+            targets = self.targets_editor.targets()
+            if targets and (gantry or is_simulated_rig(stage, camera)):
+                raise InputError("targets: the simulated rig renders one board; uncheck Targets, or simulate a row "
+                                 "with lps simulate")
         except Exception as exc:
             self.run_requested.emit(exc)
             return
@@ -262,7 +270,7 @@ class CapturePanel(QWidget):
         simulated = is_simulated_rig(stage, camera)
         if simulated:
             self.set_board(sim_spec().rig.board)
-        board = self.board()
+        board = targets or self.board()
         intrinsics = self.intrinsics()
 
         def create() -> Any:
@@ -449,9 +457,11 @@ class CapturePanel(QWidget):
                 s.setValue(f"plan/{k}", v)
         s.setValue("capture/frame_s", self.frame_s)
         self.report_setup.save(s)
+        self.targets_editor.save(s)
 
     def restore(self, s: QSettings) -> None:
         self.report_setup.restore(s)
+        self.targets_editor.restore(s)
         try:
             self.frame_s = float(s.value("capture/frame_s") or DEFAULT_FRAME_S)
         except (TypeError, ValueError):

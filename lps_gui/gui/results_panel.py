@@ -18,6 +18,7 @@ from PySide6.QtWidgets import (
     QHBoxLayout, QLabel, QPushButton, QSplitter, QTabWidget, QVBoxLayout, QWidget,
 )
 
+from lps_gui.gui.mounted_targets import MountedTargetsView
 from lps_gui.gui.plot_adapter import DrawnFigure, ReadableAxis, figure_steps
 from lps_gui.gui.view_detail import ViewDetail
 from lps_gui.gui.widgets import TextTable, ValueTable
@@ -91,7 +92,9 @@ class ResultsPanel(QWidget):
         tl.addWidget(self.target_table, 1)
         self.accuracy_page.addWidget(self.iso_table)
         self.accuracy_page.addWidget(targets)
-        self.accuracy_page.setSizes([300, 200])
+        self.mounted_targets = MountedTargetsView()  # a row's targets (SPEC 13)
+        self.accuracy_page.addWidget(self.mounted_targets)
+        self.accuracy_page.setSizes([300, 200, 150])
         for w in (self.target_label, self.target_table):
             w.setVisible(False)  # until results with ISO 230-2 figures come
         self.position_table = TextTable(numeric=range(1, 30))
@@ -274,6 +277,7 @@ class ResultsPanel(QWidget):
         from lps_gui.report.summary import summary_rows
 
         self._fill_targets(results)
+        self.mounted_targets.set_results(results)
         planar_rows = planar_table_rows(results)  # None: a single-axis session
         if planar_rows is not None:
             self.iso_table.set_rows(planar_rows)

@@ -21,6 +21,7 @@ from lps_gui.report.figure_spec import (BACKWARD_COLOR, COMPONENT_COLORS, DIRECT
                                         FORWARD_COLOR, IMAGE_ROTATION_COLOR, SPEC_COLOR, TRUTH_COLOR,
                                         TRUTH_COLORS, FigureSpec, Series, num_or_nan)
 from lps_gui.report.planar_figures import planar_figures_from_results
+from lps_gui.report.target_figures import with_target_stretches
 from lps_gui.sim.truth import centred, residual_from_line, true_deviation_um
 
 
@@ -139,7 +140,7 @@ def figures_from_results(results: dict[str, Any], truth: dict[str, Any] | None =
     tcols = truth_columns(results, truth)
     return [
         positions_figure(cols),
-        deviation_figure(cols, tcols),
+        with_target_stretches(deviation_figure(cols, tcols), results),  # a row's targets (SPEC 13)
         step_figure(cols, tcols),
         straightness_figure(cols, tcols),
         angles_figure(cols, tcols),

@@ -21,6 +21,7 @@ from lps_gui.report import summary as S
 from lps_gui.report.error_motions_report import paint_error_motions_page
 from lps_gui.report.figures import figure_by_key, figures_from_results, with_spec_band
 from lps_gui.report.planar_report import paint_planar_report
+from lps_gui.report.targets_report import targets_section
 
 log = logging.getLogger(__name__)
 
@@ -113,6 +114,7 @@ def _paint_line_report(flow: Any, session_dir: Path, meta: dict[str, Any], resul
     _front_page(flow, meta, results, version)
     flow.new_page()
     _figures_page(flow, results)
+    targets_section(flow, results)  # a row of targets (SPEC 13)
     flow.new_page()
     R.uncertainty_sections(flow, results)
     flow.new_page()

@@ -16,6 +16,7 @@ from typing import Any
 from lps_gui.report import sections as R
 from lps_gui.report.planar_figures import planar_figures_from_results
 from lps_gui.report.summary import Row, fmt, table_cells
+from lps_gui.report.targets_report import targets_section
 from lps_gui.report.verdict import overall, verdicts
 
 PLANAR_TABLE_COLUMNS = (  # key, header, decimals, width mm
@@ -211,6 +212,7 @@ def paint_planar_report(flow: Any, meta: dict[str, Any], results: dict[str, Any]
     flow.table(None, [[k, v] for k, v in title_rows], [32, 148], size_pt=8.0, row_mm=4.2, align_right_from=9)
     for axis, ar in axes.items():
         R.iso_section(flow, ar, f"ISO 230-2 per target, {axis} axis (worst line)")
+    targets_section(flow, results)  # a constellation of targets (SPEC 13)
     if results.get("environment") or results.get("uncertainty"):
         flow.new_page()
         per_axis = (results.get("uncertainty") or {}).get("per_axis") or {}

@@ -133,6 +133,8 @@ def title_rows(session_meta: dict[str, Any], results: dict[str, Any], version: s
     if ident.get("controller_serial"):
         controller += f", serial {ident['controller_serial']}"
     board_text = f"chessboard {corners[0]}\u00d7{corners[1]} inner corners, square {fmt(board.get('square_mm'), 4)} mm at 20 \u00b0C"
+    if results.get("targets"):  # a row or constellation (SPEC 13): the table of targets lists each
+        board_text = f"{len(results['targets'])} ChArUco targets (table of targets); T0 " + board_text.split(" ", 1)[1]
     u_sq = (results.get("environment") or {}).get("square_mm_uncertainty_um")
     if u_sq is not None:
         board_text += f", u = {fmt(_num(u_sq), 2)} \u00b5m"

@@ -28,3 +28,28 @@ def test_missing_camera_is_a_one_line_error(capsys):
                    "--stop", "50", "--step", "5"])
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1 and "--focal-mm" in err[0]
+
+
+PAPER_CAMERA = ["--focal-mm", "8", "--pixel-um", "3.45", "--image", "1920x1080"]
+
+
+def test_one_board_over_the_paper_travel_says_it_leaves_the_view_and_suggests_a_row(capsys):
+    rc = lps_main(["plan-rig", *PAPER_CAMERA, "--inner-corners", "9x6", "--square-mm", "25", "--distance-mm", "1000",
+                   "--stop", "1524", "--step", "12.7"])
+    captured = capsys.readouterr()
+    notes = [line for line in captured.out.splitlines() if "leaves the view" in line]
+    assert rc == 3 and not captured.err and len(notes) == 1
+    assert "lps plan-rig --travel 1524" in notes[0] and "singular" not in captured.out
+
+
+def test_travel_proposes_a_row_for_the_wanted_sigma(capsys):
+    rc = lps_main(["plan-rig", *PAPER_CAMERA, "--travel", "1524", "--sigma-um", "6", "--json"])
+    [plan] = json.loads(capsys.readouterr().out)
+    assert rc == 0 and plan["sigma_um_median"] <= 6.0 and plan["n_targets"] >= 3 and plan["stops"] == 121
+    assert plan["make_targets"].startswith(f"lps make-targets row --count {plan['n_targets']}")
+
+
+def test_travel_without_sigma_or_distance_is_a_one_line_error(capsys):
+    rc = lps_main(["plan-rig", *PAPER_CAMERA, "--travel", "1524"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and "--sigma-um" in err[0]

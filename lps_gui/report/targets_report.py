@@ -1,0 +1,75 @@
+"""The targets of a row or constellation in the report (SPEC 13): one table and what it means.
+
+Each row: the target, its marker ids, the views that saw it and that tie it to
+another target, the stretch of travel it was seen over and its share of the
+travel (the length its print's scale enters), the pose sigma (rotation and
+position in the world frame of target 0) and its scale term of the
+uncertainty budget (``target scale <id>``, the same number the budget table
+lists; X / Y for a planar stage's per-axis budgets). No Qt here.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+from lps_gui.core.target_scale import SOURCE_PREFIX
+from lps_gui.io.results_file import finite_number as _num
+from lps_gui.report.summary import DASH, fmt
+
+TARGET_HEADER = ["target", "markers", "views", "ties", "seen over\n[mm]", "share", "\u03c3 rotation\n[\u00b5rad]",
+                 "\u03c3 position\n[\u00b5m]", "scale term\nu [\u00b5m]"]
+TARGET_WIDTHS = [14.0, 16.0, 11.0, 10.0, 26.0, 12.0, 33.0, 33.0, 19.0]
+WORLD_FRAME = "world frame"
+NOTE = ("Target 0 defines the world frame (its pose is fixed, no sigma). \u03c3 rotation: the three components of the "
+        "rotation vector, \u03c3 position: of p in x, y, z of the world frame (1-sigma, corner noise). A view that sees "
+        "two targets ties them; a target's print scale enters the share of the travel measured against it: its "
+        "scale term is that share in squares times the print's u (\"{prefix} <id>\" in the uncertainty budget; "
+        "a dash where the print's uncertainty is not stated).").format(prefix=SOURCE_PREFIX)
+
+
+def _triple(values: Any, scale: float) -> str:
+    nums = [_num(v) for v in values or []]
+    if len(nums) != 3 or any(v is None for v in nums):
+        return DASH
+    return " / ".join(fmt(scale * v, 2) for v in nums)
+
+
+def _stretch(t: dict[str, Any]) -> str:
+    s = t.get("stretch_mm")
+    if not s or len(s) != 2 or not s[0] or not s[1]:
+        return "not seen"
+    return " \u2013 ".join(" , ".join(fmt(_num(v), 4) for v in end) for end in s)
+
+
+def target_table(results: dict[str, Any]) -> tuple[list[str], list[list[str]], list[float]] | None:
+    """The table of results.json ``targets``; None for a single-board session."""
+    targets = [t for t in results.get("targets") or [] if isinstance(t, dict)]
+    if not targets:
+        return None
+    unc = results.get("uncertainty") or {}
+    budgets = [unc.get("budget") or []] if unc.get("budget") else [a.get("budget") or [] for a in
+                                                                    (unc.get("per_axis") or {}).values()]
+    rows = []
+    for j, t in enumerate(targets):
+        markers = t.get("first_marker")
+        terms = [_num(b.get("contribution_um")) for budget in budgets for b in budget
+                 if b.get("source") == f"{SOURCE_PREFIX} {t.get('id')}"]  # one per axis of a planar budget
+        share = _num(t.get("covered_fraction"))
+        rows.append([
+            str(t.get("id")), f"from {markers}" if markers is not None else DASH, str(t.get("views", DASH)),
+            str(t.get("ties", DASH)), _stretch(t), DASH if share is None else f"{100 * share:.0f} %",
+            WORLD_FRAME if j == 0 else _triple(t.get("rvec_sigma_rad"), 1e6),
+            WORLD_FRAME if j == 0 else _triple(t.get("p_sigma_mm"), 1e3),
+            " / ".join(fmt(v) for v in terms) if terms and None not in terms else DASH])
+    return TARGET_HEADER, rows, TARGET_WIDTHS
+
+
+def targets_section(flow: Any, results: dict[str, Any]) -> bool:
+    """Heading, the table of targets and its note; False (nothing painted) for a single-board session."""
+    table = target_table(results)
+    if table is None:
+        return False
+    header, rows, widths = table
+    flow.heading(f"Targets ({len(rows)}, SPEC 13)", 11)
+    flow.table(header, rows, widths, size_pt=7.5, row_mm=4.0, align_right_from=1, align_left=(4,))
+    flow.paragraph(NOTE, size_pt=7.0, color="#555555")
+    return True

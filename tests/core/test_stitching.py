@@ -1,0 +1,82 @@
+"""Stitching segments of one moved board against simulator truth (SPEC 13, the user with one board)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from lps_gui.core.board import Board
+from lps_gui.core.camera_model import CameraIntrinsics
+from lps_gui.core.rotation import exp_so3
+from lps_gui.core.stitching import merged_observations, segment_ties, solve_stitched, stitch_budget_row
+from lps_gui.core.target_model import TargetObservations
+from lps_gui.core.target_rig import TargetLayout, observe
+from lps_gui.core.targets import Target
+from lps_gui.errors import InputError
+
+CAMERA = CameraIntrinsics.from_values((1920, 1080), 2319.0, 2319.0, 960.0, 540.0)  # the paper's 8 mm, 3.45 um
+BOARD = Board(10, 7, 30.0, type="charuco", marker_mm=22.0)
+R_TRUE = exp_so3(np.array([0.01, -0.02, 0.005]))
+
+
+def segmented_capture(seed: int, segments: int = 5, stops: int = 25, overlap: int = 3, step_mm: float = 12.7,
+                      repeatability_mm: float = 0.003, noise_px: float = 0.1):
+    """One board moved along by (stops - overlap) steps after each segment; the next segment repeats ``overlap`` stops.
+
+    The stage's true position at each visit is the commanded one plus a smooth error and a fresh repeatability
+    draw, so the two visits of a tied stop differ as on a real stage.
+    """
+    rng = np.random.default_rng(seed)
+    advance = (stops - overlap) * step_mm
+    commanded = np.concatenate([(k * (stops - overlap) + np.arange(stops)) * step_mm for k in range(segments)])
+    segment = np.repeat(np.arange(segments), stops)
+    x_true = commanded + 0.004 * np.sin(2 * np.pi * commanded / 300.0) + rng.normal(0, repeatability_mm, commanded.size)
+    targets = [Target(f"S{k}", BOARD, 0) for k in range(segments)]  # the same physical board each time
+    Q = np.stack([np.eye(3)] + [exp_so3(rng.normal(0, 0.01, 3)) for _ in range(segments - 1)])
+    p = np.c_[advance * np.arange(segments), np.zeros((segments, 2))]
+    p[1:] += rng.normal(0, 2.0, (segments - 1, 3))  # moved by hand: a few mm and mrad off
+    layout = TargetLayout(tuple(targets), Q, p)
+    centre = np.array([BOARD.size_mm[0] / 2 - (stops - 1) * step_mm / 2, BOARD.size_mm[1] / 2, 0.0])
+    t = R_TRUE @ -centre + np.array([0, 0, 800.0]) + x_true[:, None] * (R_TRUE @ [-1.0, 0, 0])
+    uv = observe(layout, CAMERA, R_TRUE, t, noise_px=noise_px, seed=seed)
+    which = np.repeat(np.arange(segments), BOARD.n_corners)
+    uv[segment[:, None] != which[None, :]] = np.nan  # during segment k only board k is there
+    names = [f"images/{i:06d}.png" for i in range(len(commanded))]
+    return TargetObservations(targets, uv, commanded[:, None], names), segment, x_true
+
+
+@pytest.mark.parametrize("repeatability_mm", [0.003, 0.010])
+def test_stitched_positions_are_within_their_sigma_with_the_repeatability_term(repeatability_mm):
+    z2, z2_noise_only = [], []
+    for seed in range(4):
+        obs, segment, x_true = segmented_capture(seed, repeatability_mm=repeatability_mm)
+        st = solve_stitched(obs, segment, CAMERA, repeatability_mm=repeatability_mm)
+        tied = np.zeros(len(segment), bool)
+        tied[np.concatenate(st.ties).ravel()] = True
+        ref = np.flatnonzero(st.view_of == st.solution.reference)[0]
+        free = ~tied & (np.arange(len(segment)) != ref)  # a tied stop's position blends its two visits
+        error = st.s[:, 0] - (x_true - x_true[ref])
+        z2.append((error[free] / st.sigma_total[free, 0]) ** 2)
+        z2_noise_only.append((error[free] / st.sigma_noise[free, 0]) ** 2)
+    z2, z2_noise_only = np.concatenate(z2), np.concatenate(z2_noise_only)
+    assert 0.5 < z2.mean() < 2.0, z2.mean()
+    if repeatability_mm >= 0.01:  # a hobby stage: the ties' repeatability dominates, the noise alone is far off
+        assert z2_noise_only.mean() > 1.6, z2_noise_only.mean()
+
+
+def test_ties_pair_the_repeated_stops_and_merged_views_see_both_boards():
+    obs, segment, _ = segmented_capture(0, segments=3, stops=10, overlap=2)
+    ties = segment_ties(obs.targets_mm, segment)
+    assert [p.tolist() for p in ties] == [[[8, 10], [9, 11]], [[18, 20], [19, 21]]]
+    merged, view_of = merged_observations(obs, ties)
+    assert len(merged.names) == 30 - 4 and view_of[10] == view_of[8] and merged.names[8].endswith("+images/000010.png")
+    seen = np.isfinite(merged.corners_px[view_of[10], :, 0]).reshape(3, -1).any(axis=1)
+    assert seen.tolist() == [True, True, False]
+    row = stitch_budget_row(ties, 2.0)
+    assert row.contribution_um == pytest.approx(2.0 * np.sqrt(2 / 2 + 2 / 2))
+
+
+def test_segments_without_a_common_stop_are_a_one_line_error():
+    obs, segment, _ = segmented_capture(0, segments=2, stops=10, overlap=0)
+    with pytest.raises(InputError, match="segment 1 has no stop in common with segment 0") as exc:
+        solve_stitched(obs, segment, CAMERA, repeatability_mm=0.002)
+    assert "\n" not in str(exc.value)

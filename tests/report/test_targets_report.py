@@ -1,0 +1,68 @@
+"""A target session's report (SPEC 13): the targets' stretches on the deviation, the table of targets, their scale terms."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from pypdf import PdfReader
+
+from lps_gui.pipeline.estimate import estimate_session
+from lps_gui.report.figures import figure_by_key, figures_from_results
+from lps_gui.report.pdf import render_report
+from lps_gui.report.target_figures import TARGET_LABEL, lanes
+from lps_gui.report.targets_report import WORLD_FRAME, target_table
+from tests.pipeline.test_estimate_targets import row_session
+
+pytestmark = pytest.mark.gui
+
+
+@pytest.fixture(scope="module")
+def row(tmp_path_factory):
+    session, _, x = row_session(tmp_path_factory.mktemp("row") / "row", n_targets=4, stops=61, step_mm=12.7)
+    session.meta["targets"][2]["square_mm_uncertainty_um"] = 2.0
+    session.save_meta()
+    return session.folder, estimate_session(session.folder), x
+
+
+def test_the_deviation_marks_the_stretch_each_target_was_seen_over(row):
+    _, results, x = row
+    figure = figure_by_key(figures_from_results(results), "deviation")
+    bars = [s for s in figure.series if s.label.startswith(TARGET_LABEL)]
+    assert [s.label for s in bars] == [f"{TARGET_LABEL} T{j}" for j in range(4)]
+    for bar, target in zip(bars, results["targets"]):
+        seen = x[np.isin(np.arange(len(x)), target["seen_by"])]
+        assert bar.x.tolist() == [seen.min(), seen.max()] and bar.y[0] == bar.y[1]
+    data_low = min(np.nanmin(s.band_low) for s in figure.series if s.band_low is not None)
+    assert all(bar.y[0] < data_low for bar in bars)  # below the data, never over it
+    plain = figure_by_key(figures_from_results({k: v for k, v in results.items() if k != "targets"}), "deviation")
+    assert [s.label for s in plain.series] == [s.label for s in figure.series[: len(figure.series) - len(bars)]]
+
+
+def test_overlapping_stretches_get_their_own_lanes():
+    assert lanes([("T0", 0, 340), ("T1", 0, 670), ("T2", 160, 1010), ("T3", 500, 1360), ("T4", 830, 1524)]) == [
+        0, 1, 2, 0, 1]
+
+
+def test_the_table_lists_views_ties_pose_sigma_and_the_budgets_scale_term(row):
+    _, results, _ = row
+    header, rows, widths = target_table(results)
+    assert len(header) == len(widths) and [r[0] for r in rows] == ["T0", "T1", "T2", "T3"]
+    budget = {b["source"]: b for b in results["uncertainty"]["budget"]}
+    for cells, target in zip(rows, results["targets"]):
+        assert cells[2:4] == [str(target["views"]), str(target["ties"])]
+    assert rows[0][6] == rows[0][7] == WORLD_FRAME
+    sigma = [float(v) for v in rows[1][7].split(" / ")]
+    assert sigma == pytest.approx(1e3 * np.array(results["targets"][1]["p_sigma_mm"]), rel=0.05)  # 2 digits
+    assert float(rows[2][8]) == pytest.approx(budget["target scale T2"]["contribution_um"], rel=1e-3)
+    assert rows[1][8] == "\u2014"  # its print's uncertainty is not stated: no term
+    assert target_table({"positions": []}) is None
+
+
+def test_the_report_has_the_targets_page_and_nothing_is_clipped(row):
+    folder, results, _ = row
+    info = render_report(folder, results)
+    assert info.clipped == ()
+    assert "Targets (4, SPEC 13)" in info.pages[1]
+    pages = [p.extract_text().replace("\t", " ") for p in PdfReader(info.path).pages[:2]]  # Qt's word gaps
+    front, text = pages
+    assert "T3" in text and "world frame" in text
+    assert f"{TARGET_LABEL} T0" in front and "4 ChArUco targets" in front

@@ -66,9 +66,9 @@ def two_depth_rig(travel_mm: float = 1524.0, distance_mm: float = 800.0, near_mm
                   seed: int = 0) -> TwoDepthRig:
     """The paper's two-depth case: a far row at ``distance_mm`` and a near row ``near_mm`` nearer (0: one plane).
 
-    Far targets at a pitch of their width plus 70 mm (340 mm for 30 mm
-    squares), as many as cover the travel and the view at its ends; the near
-    row beside it in the image at the pitch of its own width plus 45 mm, over
+    Far targets at a pitch of their width plus a gap of 3 % (at least 10 mm:
+    340 mm for 30 mm squares), as many as cover the travel and the view at its
+    ends; the near row beside it in the image at the same rule's pitch, over
     the same span; the camera centre 44 mm above the far row's first corner
     row, so each row fills about half the image height. ``near_mm=0`` moves
     the near row into the far plane, 150 mm beside the far row.
@@ -76,10 +76,10 @@ def two_depth_rig(travel_mm: float = 1524.0, distance_mm: float = 800.0, near_mm
     """
     view_w = intrinsics.image_size[0] / intrinsics.fx * distance_mm
     far_w, near_w = (far.cols + 1) * far.square_mm, (near.cols + 1) * near.square_mm
-    far_pitch = far_w + 70.0
+    far_pitch = far_w + max(10.0, 0.03 * far_w)  # gaps as a row's (core/row_planning)
     n_far = max(2, math.ceil((travel_mm + 0.5 * view_w - far_w) / far_pitch) + 1)
     span = (n_far - 1) * far_pitch + (far.cols - 1) * far.square_mm  # first to last inner corner
-    near_pitch = near_w + 45.0
+    near_pitch = near_w + max(10.0, 0.03 * near_w)
     n_near = max(2, math.ceil((span - (near.cols - 1) * near.square_mm) / near_pitch) + 1)
     near_span = (n_near - 1) * near_pitch + (near.cols - 1) * near.square_mm
     # the far row fills the lower half of the image, the near row the upper half (image y grows with world y)

@@ -7,6 +7,7 @@ import pytest
 
 from lps_gui.core.plan import Plan
 from lps_gui.core.two_depth import one_plane_spec, two_depth_spec
+from lps_gui.core.two_depth_planning import plan_two_depth
 from lps_gui.pipeline.estimate import estimate_session
 from lps_gui.sim.points import simulate_point_session
 
@@ -45,6 +46,10 @@ def test_two_depths_through_the_session_pipeline(tmp_path):
                                       "ecx_sigma_urad"]
     assert all(all(cell != "" for cell in row.split(",")[-6:]) for row in rows[1:])
     assert results["error_motions"]["basis"].startswith("every stop's full pose")
+    # plan-rig's prediction for this layout (noise-free corners, the estimator's model) within 20 %
+    plan = plan_two_depth(spec.rig.intrinsics, 800.0, 600.0, 300.0, stops=61)
+    for name, (_, _, _, sigma) in angles.items():
+        assert abs(plan.angle_sigma_urad[name] / sigma - 1.0) < 0.2, name
 
 
 def test_with_both_rows_in_one_plane_the_tilts_are_not_resolved(tmp_path):

@@ -33,6 +33,7 @@ UNITS = {"positioning": "um", "straightness_y": "um", "straightness_z": "um", "r
          "yaw": "urad"}
 BASIS_BOARD = "per-view 6-DOF poses against one board (SPEC 11: the tilts need targets at two depths)"
 BASIS_TARGETS = "every stop's full pose, jointly with the targets (SPEC 14)"
+WARM_START_MAX_PX = 2.0  # the row model's residual up to which its solution starts the pose solve
 
 
 @dataclass(frozen=True)
@@ -157,7 +158,10 @@ def target_pose_solution(obs: Any, est: Any) -> PoseSolution:
     from lps_gui.core.target_model import TargetObservations
 
     tobs = TargetObservations(list(obs.mounted), obs.corners_px, obs.targets, list(obs.names))
-    return solve_poses(tobs, obs.intrinsics, start=getattr(est, "fit", None))
+    start = getattr(est, "fit_targets", None) if obs.D == 2 else getattr(est, "fit", None)  # the row model's solution
+    if start is not None and not (start.converged and start.sigma_px < WARM_START_MAX_PX):
+        start = None  # a row model that did not fit these views is no start: per-view PnP instead
+    return solve_poses(tobs, obs.intrinsics, start=start)
 
 
 def session_error_motions(meta: dict[str, Any], where: str, obs: Any, est: Any,
@@ -173,3 +177,82 @@ def session_error_motions(meta: dict[str, Any], where: str, obs: Any, est: Any,
         return None
     w = board_truth_rotations(meta.get("truth"), truth, np.asarray(obs.index))
     return error_motion_results(sol, obs.target_mm, basis, tool, w)
+
+
+def planar_error_motion_results(sol: PoseSolution, targets_mm: np.ndarray,
+                                truth_rotations: np.ndarray | None = None) -> ErrorMotionResults:
+    """A planar stage's section: both axes' six error motions over their own positions, the per-stop angles
+    about the stage X, Y, Z (positions.csv, empty where neither axis' motion about it is resolved)."""
+    from lps_gui.core.planar_error_motions import ANGLE_NAMES, MOTIONS, _additive, planar_error_motions
+
+    pm = planar_error_motions(sol, targets_mm)
+    motions: dict[str, Any] = {}
+    for name, along, kind, _ in MOTIONS:
+        unit = "urad" if kind == "angle" else "um"
+        motions[name] = {"motion": kind, "along": "XY"[along], "unit": unit,
+                         "positions_mm": json_floats(pm.axis_positions[along]), "values": json_floats(pm.values[name]),
+                         "sigma": json_floats(pm.sigmas[name]), "centred_sigma": json_floats(pm.centred_sigmas[name]),
+                         "median_centred_sigma": json_float(np.nanmedian(pm.centred_sigmas[name])),
+                         **pm.profiles[name].to_dict(unit)}
+    section: dict[str, Any] = {"basis": BASIS_TARGETS, "axes": ["X", "Y"], "reference_index": pm.reference,
+                               "frame_world": pm.frame.tolist(), "motions": motions, "resolved": dict(pm.resolved)}
+    if truth_rotations is not None:
+        used = np.isfinite(pm.per_stop_urad[:, 0])
+        true = 1e6 * (truth_rotations - truth_rotations[pm.reference]) @ pm.frame
+        keys, W = _additive(np.asarray(targets_mm, float), np.flatnonzero(used), pm.reference)
+        parts = {0: slice(0, len(keys[0])), 1: slice(len(keys[0]), None)}
+        truth = {}
+        for name, along, kind, comp in MOTIONS:
+            if kind != "angle":
+                continue
+            w = W[parts[along]]
+            tv = (w - w[pm.reference_positions[along]]) @ np.where(used, true[:, comp], 0.0)
+            e = pm.values[name] - tv
+            e = e - e.mean()
+            truth[name] = {"true_values": json_floats(tv), "rms_error_urad": json_float(np.sqrt(np.mean(e**2))),
+                           "z_mean_square": json_float(np.mean((e / pm.centred_sigmas[name]) ** 2))}
+        section["truth"] = truth
+    columns: dict[str, list[Any]] = {}
+    about = {0: ("EAX", "EAY"), 1: ("EBX", "EBY"), 2: ("ECX", "ECY")}
+    for comp, name in enumerate(ANGLE_NAMES):
+        keep = any(pm.resolved[n] for n in about[comp])
+        columns[f"{name.lower()}_urad"] = json_floats(pm.per_stop_urad[:, comp]) if keep else [None] * len(pm.per_stop_urad)
+    for comp, name in enumerate(ANGLE_NAMES):
+        keep = any(pm.resolved[n] for n in about[comp])
+        columns[f"{name.lower()}_sigma_urad"] = (json_floats(pm.per_stop_sigma_urad[:, comp]) if keep
+                                                 else [None] * len(pm.per_stop_urad))
+    return ErrorMotionResults(section, columns, pm)
+
+
+def planar_truth_rotations(truth_meta: dict[str, Any] | None, index: np.ndarray) -> np.ndarray | None:
+    """A simulated gantry's carriage rotations (K, 3) rad in the world frame (session.json truth, by capture index)."""
+    if not truth_meta or "angles_urad" not in truth_meta or "axes_board" not in (truth_meta.get("rig") or {}):
+        return None
+    angles = np.asarray(truth_meta["angles_urad"], float)
+    if angles.ndim != 2 or angles.shape[1] != 3 or not np.all((index >= 0) & (index < len(angles))):
+        return None
+    return 1e-6 * angles[index] @ np.asarray(truth_meta["rig"]["axes_board"], float).T
+
+
+def add_error_motions(results: dict[str, Any], session: Any, obs: Any, est: Any) -> None:
+    """results.json ``error_motions`` and the positions' SPEC 14 columns, where the poses allow (in place).
+
+    A line: from the targets' joint pose solve or a single board's 6-DOF poses; a plane: from the
+    targets' joint pose solve (a single board's planar fit keeps one orientation and has no per-view poses).
+    """
+    from lps_gui.sim.truth import session_truth
+
+    meta, where = session.meta, str(session.folder / "session.json")
+    if obs.D == 1:
+        motions = session_error_motions(meta, where, obs, est, session_truth(session))
+    elif obs.mounted is not None:
+        tool_point(meta, where)  # checked alike, used by one axis only
+        sol = target_pose_solution(obs, est)
+        w = planar_truth_rotations(meta.get("truth"), np.asarray(obs.index))
+        motions = planar_error_motion_results(sol, obs.target_mm, w) if int(sol.used.sum()) >= 3 else None
+    else:
+        motions = None
+    if motions is None:
+        return
+    add_columns(results["positions"], motions.columns)
+    results["error_motions"] = motions.section

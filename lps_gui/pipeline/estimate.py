@@ -39,7 +39,7 @@ from lps_gui.io.results_history import commit_results
 from lps_gui.io.session import Session
 from lps_gui.io.session_lock import SessionLock
 from lps_gui.pipeline.board_plane_results import position_columns, straightness_figures
-from lps_gui.pipeline.error_motion_results import add_columns, session_error_motions
+from lps_gui.pipeline.error_motion_results import add_error_motions
 from lps_gui.pipeline.planar_results import build_planar_results
 from lps_gui.pipeline.session_checks import corners_of_records, session_inputs
 from lps_gui.pipeline.target_session import add_targets_section, target_observations
@@ -158,6 +158,7 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate | Planar
     results = RESULTS_BY_AXES[obs.D](session, obs, est, intrinsics_source)
     if obs.mounted is not None:
         add_targets_section(results, obs, est, session)  # SPEC 13: each target's pose, sigma, views, ties
+    add_error_motions(results, session, obs, est)  # SPEC 14: the six error motions per axis, where poses allow
     return add_uncertainty(results, session)  # environment, GUM budget, U (k = 2) per figure
 
 
@@ -166,9 +167,6 @@ def line_results(session: Session, obs: Observations, est: LpsEstimate, intrinsi
     :func:`lps_gui.io.results_file.assemble_results`."""
     positions = position_rows(obs, est)
     truth = session_truth(session)
-    motions = session_error_motions(session.meta, str(session.folder / "session.json"), obs, est, truth)  # SPEC 14
-    if motions is not None:
-        add_columns(positions, motions.columns)
     results = assemble_results(
         method=est.method,
         settings=est.options.to_dict(),
@@ -183,8 +181,6 @@ def line_results(session: Session, obs: Observations, est: LpsEstimate, intrinsi
         timings_s=dict(est.timings_s),
         truth_comparison=truth_comparison(obs, est, truth, positions) if truth is not None else None,
     )
-    if motions is not None:
-        results["error_motions"] = motions.section
     return results
 
 

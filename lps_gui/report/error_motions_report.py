@@ -21,15 +21,28 @@ from lps_gui.report.figure_spec import COMPONENT_COLORS, FigureSpec, Series, num
 MU = "\u00b5"
 LINEAR = ("EXX", "EYX", "EZX")
 ANGULAR = ("EAX", "EBX", "ECX")
-WORDS = {"positioning": "positioning", "straightness_y": "straightness along Y", "straightness_z": "straightness along Z",
-         "roll": "roll (about X)", "pitch": "pitch (about Y)", "yaw": "yaw (about Z)"}
+ROTATION_AXES = {"A": "X", "B": "Y", "C": "Z"}
+
+
+def what(iso: str) -> str:
+    """Words for an ISO 230-1 name E<motion><axis>: EXX positioning, EYX straightness along Y, EAX roll (about X)."""
+    motion, axis = iso[1], iso[2]
+    if motion == axis:
+        return "positioning"
+    if motion in "XYZ":
+        return f"straightness along {motion}"
+    about = ROTATION_AXES[motion]
+    if about == axis:
+        return f"roll (about {about})"
+    return f"{'yaw' if about == 'Z' else 'pitch'} (about {about})"
 UNRESOLVED_COLOR = "#9a9a9a"
 
 
-def _names(section: dict[str, Any]) -> tuple[tuple[str, ...], tuple[str, ...]]:
-    """The axis's linear and angular ISO names, in SPEC 14's order (EXX EYX EZX | EAX EBX ECX for X)."""
+def _axes(section: dict[str, Any]) -> list[tuple[str, tuple[str, ...], tuple[str, ...]]]:
+    """Per axis, its linear and angular ISO names in SPEC 14's order (X: EXX EYX EZX | EAX EBX ECX)."""
     names = list(section.get("motions") or {})
-    return tuple(names[:3]), tuple(names[3:6])
+    axes = section.get("axes") or [section.get("axis", "X")]
+    return [(a, tuple(names[6 * k: 6 * k + 3]), tuple(names[6 * k + 3: 6 * k + 6])) for k, a in enumerate(axes)]
 
 
 def _array(values: Any) -> np.ndarray:
@@ -37,7 +50,7 @@ def _array(values: Any) -> np.ndarray:
 
 
 def _label(iso: str, m: dict[str, Any], resolved: bool) -> str:
-    words = f"{iso} {WORDS.get(str(m.get('motion')), '')}".strip()
+    words = f"{iso} {what(iso)}"
     if resolved:
         return words
     u = m.get("unit")
@@ -47,19 +60,21 @@ def _label(iso: str, m: dict[str, Any], resolved: bool) -> str:
 
 def _figure(results: dict[str, Any], names: tuple[str, ...], key: str, title: str, unit: str) -> FigureSpec:
     section = results["error_motions"]
-    x = _array([r.get("target_mm") for r in results.get("positions") or []])
+    stops = _array([r.get("target_mm") for r in results.get("positions") or []])
     truth = section.get("truth") or {}
     series = []
     for k, iso in enumerate(names):
         m = section["motions"][iso]
+        x = _array(m["positions_mm"]) if "positions_mm" in m else stops  # a plane's: over its own axis
         resolved = bool(section["resolved"].get(iso))
         y, s = _array(m.get("values")), _array(m.get("sigma"))
         color = COMPONENT_COLORS[k] if resolved else UNRESOLVED_COLOR
         series.append(Series(x, y, _label(iso, m, resolved), "line", color, y - 2 * s, y + 2 * s))
         if iso in truth:
             series.append(Series(x, _array(truth[iso].get("true_values")), f"truth {iso}", "line", color, dashed=True))
-    note = ("relative to the first stop; band \u00b12\u03c3; stage frame: X along the motion, Z towards the "
-            "targets, Y = Z \u00d7 X; grey: not resolved")
+    frame = ("X, Y in the plane of motion, Z = X \u00d7 Y" if section.get("axes") else
+             "X along the motion, Z towards the targets, Y = Z \u00d7 X")
+    note = f"relative to the first stop; band \u00b12\u03c3; stage frame: {frame}; grey: not resolved"
     return FigureSpec(key, title, "target position [mm]", f"[{unit}]", series, note)
 
 
@@ -68,12 +83,14 @@ def error_motion_figures(results: dict[str, Any]) -> list[FigureSpec]:
     section = results.get("error_motions")
     if not section or not section.get("motions"):
         return []
-    linear, angular = _names(section)
-    axis = section.get("axis", "X")
-    figures = [_figure(results, angular, "error_motions_angular", f"Angular error motions of {axis}: "
-                       + ", ".join(angular), f"{MU}rad"),
-               _figure(results, linear, "error_motions_linear", f"Linear error motions of {axis}: "
-                       + ", ".join(linear), f"{MU}m")]
+    figures = []
+    for axis, linear, angular in _axes(section):
+        suffix = "" if axis == "X" else f"_{axis.lower()}"
+        figures += [_figure(results, angular, f"error_motions_angular{suffix}", f"Angular error motions of {axis}: "
+                            + ", ".join(angular), f"{MU}rad"),
+                    _figure(results, linear, f"error_motions_linear{suffix}", f"Linear error motions of {axis}: "
+                            + ", ".join(linear), f"{MU}m")]
+    linear = _axes(section)[0][1]
     tool = section.get("tool_point")
     if tool:
         x = _array([r.get("target_mm") for r in results.get("positions") or []])
@@ -99,7 +116,7 @@ def error_motion_rows(results: dict[str, Any]) -> list[list[str]]:
         u = m.get("unit", "")
         unit = f"{MU}m" if u == "um" else f"{MU}rad"
         resolved = bool((section.get("resolved") or {}).get(iso))
-        rows.append([iso, WORDS.get(str(m.get("motion")), ""), _fmt(m.get(f"span_{u}")), _fmt(m.get(f"noise_span_{u}")),
+        rows.append([iso, what(iso), _fmt(m.get(f"span_{u}")), _fmt(m.get(f"noise_span_{u}")),
                      _fmt(m.get("median_centred_sigma")), unit, "resolved" if resolved else "not resolved"])
     return rows
 
@@ -116,7 +133,8 @@ def paint_error_motions_page(flow: Any, results: dict[str, Any], figure_height_m
         return False
     section = results["error_motions"]
     flow.new_page()
-    flow.heading(f"Error motions of the {section.get('axis', 'X')} axis (ISO 230-1, SPEC 14)", 12)
+    axes = " and ".join(section.get("axes") or [section.get("axis", "X")])
+    flow.heading(f"Error motions of the {axes} ax{'es' if ' and ' in axes else 'is'} (ISO 230-1, SPEC 14)", 12)
     flow.paragraph(f"From {section.get('basis', '')}. Each motion is resolved when its profile over the targets "
                    "differs from zero beyond what noise alone gives (chi-square, p < 0.001) and its p-v exceeds "
                    "the noise p-v; positions.csv carries eax/ebx/ecx only where resolved.", size_pt=7.5,

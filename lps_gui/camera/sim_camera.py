@@ -32,6 +32,8 @@ class SimulatedCamera(Camera):
     noise_grey : Gaussian noise sigma in grey levels.
     seed : seeds the image noise; frames are reproducible in grab order.
     clock : timestamps frames and spends ``exposure_s`` per grab.
+    layout : a row or constellation of targets (SPEC 13) rendered instead of the rig's board
+        (the rig's board frame is then the first target's, the world frame).
     render_options : ``margin_squares``, ``exposure_s`` and any
         :class:`Lighting` field (``blur_px``, ``vignetting``, ``texture``...).
     """
@@ -43,26 +45,33 @@ class SimulatedCamera(Camera):
         noise_grey: float = 2.0,
         seed: int = 0,
         clock: Clock | None = None,
+        layout: Any = None,
         **render_options: Any,
     ) -> None:
         self.rig = rig
+        self.layout = layout
         self.pose_source = pose_source
         self.noise_grey = float(noise_grey)
         self.seed = int(seed)
         self.clock = clock or RealClock()
         opts = dict(render_options)
         self.exposure_s = float(opts.pop("exposure_s", 0.0))
-        self.margin_squares = float(opts.pop("margin_squares", 1.0))
+        self.margin_squares = float(opts.pop("margin_squares", 1.0 if layout is None else 0.5))  # rows: papers abut
         unknown = set(opts) - set(LIGHTING_KEYS)
         if unknown:
             raise TypeError(f"SimulatedCamera: unknown render options {sorted(unknown)}")
         self.lighting = Lighting(**opts)
-        self._renderer: BoardRenderer | None = None
+        self._renderer: Any = None
         self._rng = np.random.default_rng(self.seed)
         self._frame_no = 0
         self._open = False
 
     def open(self) -> None:
+        if self._renderer is None and self.layout is not None:  # every target of the row in one scene
+            from lps_gui.camera.render_targets import TargetsRenderer
+
+            self._renderer = TargetsRenderer(self.layout, self.rig.intrinsics, self.lighting, self.noise_grey,
+                                             self.margin_squares)
         if self._renderer is None:  # the per-pixel rays take a moment: build once
             self._renderer = BoardRenderer(
                 self.rig.board, self.rig.intrinsics, self.margin_squares, self.lighting, self.noise_grey
@@ -70,7 +79,7 @@ class SimulatedCamera(Camera):
         self._open = True
 
     def grab(self) -> Frame:
-        """Render the board at the stage's true pose now; 8-bit grey (H, W)."""
+        """Render the board (or the targets) at the stage's true pose now; 8-bit grey (H, W)."""
         if not self._open or self._renderer is None:
             raise HardwareError("simulated camera: grab before open(); open the camera first")
         pose = self.pose_source()

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import argparse
 
-from lps_gui.cli.option_types import nonnegative_int
+from lps_gui.cli.option_types import nonnegative_int, positive_finite
 import time
 from pathlib import Path
 
@@ -16,6 +16,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="output folder (default demo-output): an existing or new folder; a name with a suffix is refused")
     parser.add_argument("--seed", type=nonnegative_int, default=0, help="random seed of the simulation")
     parser.add_argument("--planar", action="store_true", help="the planar pipeline on a simulated XY gantry (docs/planar.md)")
+    row = parser.add_mutually_exclusive_group()
+    row.add_argument("--travel", type=positive_finite, metavar="MM",
+                     help="the whole travel against a row of targets (docs/targets.md): the paper's X axis is 1524")
+    row.add_argument("--preset", choices=("paper-row", "small-row"),
+                     help="a row of targets from a simulation preset (paper-row: the paper's X axis)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -28,8 +33,10 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--out {args.out}: lps demo writes a folder of files; give a folder name without a suffix")
 
     t0 = time.monotonic()
+    if args.planar and (args.travel or args.preset):
+        raise InputError("--planar with --travel/--preset: a row of targets is one axis; drop --planar")
     res = run_demo(args.out, quick=args.quick, bar=ProgressBar, say=lambda line: print(line, flush=True), seed=args.seed,
-                   planar=args.planar)
+                   planar=args.planar, travel_mm=args.travel, preset=args.preset)
     print()
     if res.report_pdf is None:
         print(f"demo stopped before the report; files so far in {res.out_dir}")

@@ -55,9 +55,12 @@ def normal_equations(lin: Linearization, tj: np.ndarray, view: np.ndarray, K: in
     starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
     pv, pt = view[starts], tj[starts]
     # one pass: every corner's J^T J and J^T r over its C + 6 + P columns (two residual rows), summed per run
-    J = np.concatenate([Jc, Jt, Jv], axis=2)
-    runs = np.add.reduceat(np.einsum("mai,maj->mij", J, J), starts, axis=0)
-    rhs = np.add.reduceat(np.einsum("mai,ma->mi", J, r), starts, axis=0)
+    J = np.concatenate([Jc, Jt, Jv], axis=2).reshape(2 * len(r), -1)  # two residual rows per corner
+    rr = r.reshape(-1)
+    ends = np.r_[starts[1:], len(r)]
+    # a run is a few dozen corners: one small product per run beats outer products of every corner summed
+    runs = np.stack([J[2 * a: 2 * b].T @ J[2 * a: 2 * b] for a, b in zip(starts.tolist(), ends.tolist())])
+    rhs = np.stack([J[2 * a: 2 * b].T @ rr[2 * a: 2 * b] for a, b in zip(starts.tolist(), ends.tolist())])
     c, t6 = slice(0, C), slice(C, C + 6)
     v = slice(C + 6, C + 6 + P)
     tt, tv, vv = runs[:, t6, t6], runs[:, t6, v], runs[:, v, v]

@@ -77,10 +77,10 @@ def row_spec(name: str, board: Board, intrinsics: CameraIntrinsics, n_targets: i
 
 
 def paper_row_spec(seed: int = 0, noise_px: float = 0.1, errors: StageErrorModel | None = None,
-                   plan: Plan | None = None) -> Any:
+                   plan: Plan | None = None, n_targets: int = 6) -> Any:
     """The paper's X axis against a row of six targets (SPEC 13)."""
     plan = plan or Plan(start_mm=0.0, stop_mm=1524.0, step_mm=12.7)
-    return row_spec("paper-row", ROW_BOARD, ROW_CAMERA, 6, 340.0, 800.0, plan, seed, noise_px, errors)
+    return row_spec("paper-row", ROW_BOARD, ROW_CAMERA, n_targets, 340.0, 800.0, plan, seed, noise_px, errors)
 
 
 def small_row_spec(seed: int = 0, noise_px: float = 0.1, errors: StageErrorModel | None = None,

@@ -64,8 +64,7 @@ def compensation_pass(
 ) -> PassResult:
     """Re-capture ``before_dir``'s plan on its simulated rig through its compensation table into ``after_dir``."""
     from lps_gui.capture.compensated import apply_compensation
-    from lps_gui.sim.session import create_simulated_session, simulated_engine
-    from lps_gui.sim.rig import spec_from_truth
+    from lps_gui.sim.session import create_simulated_session, simulated_engine, spec_of_session
     from lps_gui.io.compensation_file import write_table
     from lps_gui.pipeline.compensate import session_results, table_from_results
     from lps_gui.pipeline.detect import detect_session
@@ -77,8 +76,7 @@ def compensation_pass(
         raise InputError(f"{before.folder}: not captured on the simulated rig; re-capture a real stage with `lps capture --compensation`")
     results_before = session_results(before.folder)
     table = table_from_results(results_before)
-    spec = spec_from_truth(truth, before.plan(), str(before.folder / "session.json"))
-    spec = replace(spec, seed=spec.seed + 1)  # a new capture: its own image noise and repeatability draws
+    spec = replace(spec_of_session(before), seed=spec_of_session(before).seed + 1)  # a new capture: its own image noise and repeatability draws
     cam = truth.get("camera") or {}
     session, stage, camera = create_simulated_session(after_dir, spec, noise_grey=float(cam.get("noise_grey", 2.0)),
                                                       intrinsics=before.meta.get("intrinsics"))

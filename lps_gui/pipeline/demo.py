@@ -118,6 +118,8 @@ def run_demo(
     say: Callable[[str], None] = lambda line: None,
     seed: int = 0,
     planar: bool = False,
+    travel_mm: float | None = None,
+    preset: str | None = None,
 ) -> DemoResult:
     """Run the demo into ``out``; every step reports through ``bar(label)`` and ``say``.
 
@@ -128,10 +130,17 @@ def run_demo(
     bar : makes a progress callback per step (the CLI passes a ProgressBar).
     say : prints one line (what a step did or skipped).
     planar : the planar pipeline (SPEC 10) on the simulated XY gantry.
+    travel_mm, preset : the whole travel against a row of targets (SPEC 13, :mod:`lps_gui.pipeline.demo_targets`).
     """
     out = Path(out)
+    row = travel_mm is not None or preset is not None
+    if row:
+        from lps_gui.pipeline.demo_targets import row_demo_spec
+
+        spec = row_demo_spec(travel_mm, preset, seed)
+    else:
+        spec = demo_spec(quick, seed, planar)
     prepare_out(out)
-    spec = demo_spec(quick, seed, planar)
     res = DemoResult(out)
 
     def step(name: str, status: str, message: str, t0: float) -> None:
@@ -140,6 +149,10 @@ def run_demo(
         if cancel is not None:
             cancel.check("demo")
 
+    if row:
+        from lps_gui.pipeline.demo_targets import run_row_demo
+
+        return run_row_demo(out, spec, res, step, bar, cancel, seed)
     t0 = time.monotonic()
     intrinsics, message, status = calibrate_step(out, spec, quick, bar("intrinsics"), cancel, seed)
     step("intrinsics", status, message, t0)

@@ -28,7 +28,7 @@ from lps_gui.core.camera_model import project_board
 from lps_gui.core.clock import Clock, SimClock
 from lps_gui.core.plan import Plan
 from lps_gui.core.rig import Rig
-from lps_gui.core.simulate import SimulationSpec, preset
+from lps_gui.core.simulate import SimulationSpec, layout_truth, preset
 from lps_gui.core.stage_errors import PlanarErrorModel, PlanarTruePose, StageErrorModel
 from lps_gui.errors import InputError
 from lps_gui.hardware.sim_stage import SimulatedStage
@@ -122,7 +122,8 @@ def make_simulated_rig(
         stage = RigStage(errors=spec.rig.errors, seed=spec.seed, clock=clock, travel_mm=stage_travel_mm(spec.plan),
                          **stage_opts)
         pose_source = stage.true_pose
-    camera = RigCamera(spec.rig, pose_source=pose_source, noise_grey=noise_grey, seed=spec.seed, clock=clock, **camera_opts)
+    camera = RigCamera(spec.rig, pose_source=pose_source, noise_grey=noise_grey, seed=spec.seed, clock=clock,
+                       layout=spec.layout, **camera_opts)
     return stage, camera
 
 
@@ -156,7 +157,7 @@ def rig_truth(spec: SimulationSpec, camera: SimulatedCamera) -> dict[str, Any]:
             "simulated": True, "axes": ["X", "Y"], "preset": spec.name, "seed": spec.seed, "rig": spec.rig.to_dict(),
             "board": board_to_dict(spec.rig.board), "intrinsics": intrinsics_to_dict(spec.rig.intrinsics),
             "camera": {"noise_grey": camera.noise_grey, "blur_px": camera.lighting.blur_px}, "per_capture": TRUTH_FILE,
-            "noise_px": None,
+            "noise_px": None, **({} if spec.layout is None else {"targets": layout_truth(spec.layout)}),
         }
     return {
         "simulated": True,
@@ -170,6 +171,7 @@ def rig_truth(spec: SimulationSpec, camera: SimulatedCamera) -> dict[str, Any]:
         "intrinsics": intrinsics_to_dict(spec.rig.intrinsics),
         "camera": {"noise_grey": camera.noise_grey, "blur_px": camera.lighting.blur_px},
         "per_capture": TRUTH_FILE,
+        **({} if spec.layout is None else {"targets": layout_truth(spec.layout)}),
     }
 
 

@@ -103,9 +103,38 @@ def reopen_simulated_rig(session: Session, clock: Clock | None = None) -> tuple[
         raise InputError(f"{session.folder}: not captured on the simulated gantry; resume it with --stage and --camera")
     if not truth.get("simulated"):
         raise InputError(f"{session.folder}: not captured on the simulated rig; resume it with --stage and --camera")
-    spec = spec_from_truth(truth, session.plan(), str(session.folder / "session.json"))
+    spec = spec_of_session(session)
     cam = truth.get("camera") or {}
     return make_simulated_rig(spec, clock=clock, noise_grey=float(cam.get("noise_grey", 2.0)), blur_px=float(cam.get("blur_px", 1.2)))
+
+
+def spec_of_session(session: Session) -> SimulationSpec:
+    """The :class:`SimulationSpec` a capture on the simulated rig recorded (:func:`spec_from_truth`), with a
+    session's targets (SPEC 13) at their true poses."""
+    truth = session.truth or {}
+    spec = spec_from_truth(truth, session.plan(), str(session.folder / "session.json"))
+    targets = session.targets()
+    if targets is None:
+        return spec
+    from dataclasses import replace
+
+    return replace(spec, layout=layout_from_truth(targets, truth, str(session.folder / "session.json")))
+
+
+def layout_from_truth(targets: list, truth: dict[str, Any], source: str):
+    """The targets at the poses session.json ``truth.targets`` records (a capture on the simulated rig)."""
+    import numpy as np
+
+    from lps_gui.core.rotation import exp_so3
+    from lps_gui.core.target_rig import TargetLayout
+
+    poses = {t.get("id"): t for t in truth.get("targets") or []}
+    missing = [t.id for t in targets if t.id not in poses]
+    if missing:
+        raise InputError(f"{source}: the simulated row's truth has no pose of target {missing[0]}; start a new session")
+    Q = np.stack([exp_so3(np.asarray(poses[t.id]["rvec_rad"], float)) for t in targets])
+    p = np.array([poses[t.id]["p_mm"] for t in targets], float)
+    return TargetLayout(tuple(targets), Q, p)
 
 
 class SimulatedRigHook:

@@ -12,6 +12,7 @@ from lps_gui.core.target_model import (
 from lps_gui.core.target_rig import TargetLayout, observe, row_layout
 from lps_gui.core.targets import pack_targets
 from lps_gui.errors import DegenerateGeometryError
+from tests.core.target_crb import crb_centred
 
 PAPER_CAMERA = CameraIntrinsics.from_values((1920, 1080), 2319.0, 2319.0, 960.0, 540.0)  # 8 mm, 3.45 um pixels
 ROW_BOARD = Board(10, 7, 30.0, type="charuco", marker_mm=22.0)
@@ -92,54 +93,10 @@ def test_the_jacobian_blocks_match_central_differences(D):
     assert np.abs(1.01 * lin.Jc[:, :, 6] - lin.Jc[:, :, 6]).max() > 1e-5 * np.abs(lin.Jc[:, :, 6]).max()
 
 
-def _crb_centred(obs, layout, s_true, D: int, noise_px: float) -> np.ndarray:
-    """Cramer-Rao bound of every centred position, from central differences of the simulator's projection."""
-    K, T = len(obs.names), len(obs.targets)
-    seen = np.isfinite(obs.corners_px[..., 0])
-    state = initial_solution(obs, PAPER_CAMERA)
-    # linearize at the truth: the true layout and positions with the solver's parametrization (R, l0, N fitted)
-    state["Q"], state["p"] = layout.Q.copy(), layout.p.copy()
-    state["s"] = s_true.reshape(K, D) - s_true.reshape(K, D)[state["ref"]]
-    view, corner = np.nonzero(seen)
-    X, tj, uv = obs.own_points[corner], obs.which[corner], obs.corners_px[view, corner]
-    G = N_COMMON + 6 * (T - 1)
-    cols = []
-    h = 1e-6
-
-    def residual(dg, dv):
-        return _linearize(_retract(state, dg, dv, D, T), X, tj, view, uv, PAPER_CAMERA, D, False).r.ravel()
-
-    zero_v = np.zeros((K, D))
-    for g in range(G):
-        e = np.zeros(G)
-        e[g] = h
-        cols.append((residual(e, zero_v) - residual(-e, zero_v)) / (2 * h))
-    for i in range(K):
-        for d in range(D):
-            if i == state["ref"]:
-                continue
-            dv = zero_v.copy()
-            dv[i, d] = h
-            cols.append((residual(np.zeros(G), dv) - residual(np.zeros(G), -dv)) / (2 * h))
-    J = np.stack(cols, axis=1)
-    cov = noise_px ** 2 * np.linalg.inv(J.T @ J)
-    free = [(i, d) for i in range(K) for d in range(D) if i != state["ref"]]
-    C = np.zeros((K * D, K * D))
-    idx = [i * D + d for i, d in free]
-    C[np.ix_(idx, idx)] = cov[G:, G:]
-    Cm = C.reshape(K, D, K, D)
-    out = np.zeros((K, D))
-    for d in range(D):
-        c = Cm[:, d, :, d]
-        centring = np.eye(K) - 1.0 / K
-        out[:, d] = np.sqrt(np.diag(centring @ c @ centring))
-    return out
-
-
 def test_the_reported_sigmas_are_the_cramer_rao_bound_of_the_row_model():
     obs, layout, s_true = paper_x_axis(1, n_targets=3, stops=31, pitch_mm=20.0)
     sol = solve_targets(obs, PAPER_CAMERA)
-    crb = _crb_centred(obs, layout, s_true, 1, 0.1)
+    crb = crb_centred(obs, layout, s_true, 1, 0.1, PAPER_CAMERA)
     ratio = sol.sigma_centred[:, 0] / crb[:, 0] * (0.1 / sol.sigma_px)
     assert np.all(np.abs(ratio - 1) < 0.05), ratio
 

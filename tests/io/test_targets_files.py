@@ -121,3 +121,17 @@ def test_a_session_names_its_targets_instead_of_a_board(tmp_path):
     with pytest.raises(InputError, match="names targets"):
         again.board()
     assert s.targets() == targets
+
+
+def test_the_fast_reader_gives_what_the_line_by_line_reader_gives(tmp_path, monkeypatch):
+    """Hand-edited files (views interleaved, extra spaces, comments between rows) read alike both ways."""
+    import lps_gui.io.target_corners_vnl as module
+
+    path = tmp_path / "corners.vnl"
+    path.write_text(f"{HEADER}\n## failed c.png: no target found\nb.png  T1 3 10.5 20.25\na.png T0 0 1 2\n"
+                    "# a comment\nc.png - - - -\nb.png T0 11 5 6\na.png T1 14 7.5 8.5\n")
+    fast = read_target_corners(path, _targets())
+    monkeypatch.setattr(module, "_regular_rows", lambda *args: None)
+    slow = read_target_corners(path, _targets())
+    assert fast.names == slow.names == ["b.png", "a.png", "c.png"] and fast.failed == slow.failed
+    np.testing.assert_array_equal(fast.corners_px, slow.corners_px)

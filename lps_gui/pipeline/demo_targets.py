@@ -1,0 +1,138 @@
+"""`lps demo --travel MM` / `--preset paper-row`: the paper's whole X axis against a row of targets (SPEC 13).
+
+The steps of the one-board demo on a row: calibrate the camera from a
+simulated intrinsics set (a chessboard of the targets' squares), render every
+stop of the row session (the simulator's truth: mounting errors, targets cut
+by the image border at the ends of the travel), detect every target in one
+ArUco pass per image, estimate through the one path, write report.pdf and the
+CSVs, print the figures beside the truth (positions and target poses).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import replace
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from lps_gui.core.board import Board
+from lps_gui.core.plan import Plan
+from lps_gui.core.progress import CancelToken
+from lps_gui.core.simulate import SimulationSpec
+from lps_gui.core.target_presets import paper_row_spec
+from lps_gui.errors import InputError
+
+ROW_STEP_MM = 12.7  # the paper's X axis: 1524 mm in 120 steps
+# a printed target checked with a steel rule over its 330 mm: 20 um, i.e. 2 um per 30 mm square
+ROW_ENVIRONMENT = {"board_temperature_c": 20.0, "board_cte_ppm_per_k": 23.0, "square_mm_uncertainty_um": 2.0,
+                   "stage_temperature_c": 20.5, "stage_cte_ppm_per_k": 11.5,
+                   "notes": "simulated row; prints on aluminium composite, scale checked with a steel rule"}
+
+
+def row_demo_spec(travel_mm: float | None, preset: str | None, seed: int = 0) -> SimulationSpec:
+    """The paper-row preset, or its geometry over ``travel_mm`` (stops of 12.7 mm, as many targets as the
+    planner's rule needs: the views at either end three-quarters covered)."""
+    from lps_gui.core.simulate import PRESETS
+
+    if travel_mm is None:
+        spec = PRESETS[preset or "paper-row"](seed=seed)
+        if spec.layout is None:
+            raise InputError(f"demo --preset {preset}: not a row of targets; use paper-row or small-row (or lps demo "
+                             "without --preset for the one-board demo)")
+        return spec
+    if not 0 < travel_mm <= 20000:
+        raise InputError(f"demo --travel {travel_mm:g}: give a travel between 0 and 20000 mm")
+    stops = max(3, round(travel_mm / ROW_STEP_MM) + 1)
+    plan = Plan(start_mm=0.0, stop_mm=float(travel_mm), step_mm=float(travel_mm) / (stops - 1))
+    return paper_row_spec(seed=seed, plan=plan, n_targets=targets_for_travel(travel_mm))
+
+
+def targets_for_travel(travel_mm: float, distance_mm: float = 800.0, pitch_mm: float = 340.0,
+                       width_mm: float = 330.0) -> int:
+    """How many of the paper-row targets cover ``travel_mm`` (core/row_planning's rule)."""
+    from lps_gui.core.row_planning import view_mm
+    from lps_gui.core.target_presets import ROW_CAMERA
+
+    view = view_mm(ROW_CAMERA, distance_mm)[0]
+    return max(2, math.ceil((travel_mm + 0.5 * view - width_mm) / pitch_mm) + 1)
+
+
+def calibration_board(spec: SimulationSpec) -> Board:
+    """A chessboard of the targets' squares for the intrinsics set (the set renders plain chessboards)."""
+    b = spec.rig.board
+    return Board(b.cols, b.rows, b.square_mm)
+
+
+def run_row_demo(out: Path, spec: SimulationSpec, res: Any, step: Callable[[str, str, str, float], None],
+                 bar: Callable[[str], Any], cancel: CancelToken | None, seed: int) -> Any:
+    """The demo's steps on a row of targets, into ``res`` (a :class:`~lps_gui.pipeline.demo.DemoResult`)."""
+    from lps_gui.pipeline.demo import calibrate_step
+    from lps_gui.pipeline.detect import detect_session
+    from lps_gui.pipeline.estimate import estimate_session
+    from lps_gui.report.pdf import write_report
+    from lps_gui.sim.images import simulate_image_session
+
+    t0 = time.monotonic()
+    cal_spec = replace(spec, rig=replace(spec.rig, board=calibration_board(spec)))
+    intrinsics, message, status = calibrate_step(out, cal_spec, False, bar("intrinsics"), cancel, seed)
+    step("intrinsics", status, message, t0)
+
+    t0 = time.monotonic()
+    session = simulate_image_session(spec, out / "session", progress=bar("render"), cancel=cancel, intrinsics=intrinsics)
+    session.meta.setdefault("environment", dict(ROW_ENVIRONMENT))
+    session.save_meta()
+    res.session_dir = session.folder
+    T = len(spec.layout.targets)
+    step("capture", "done", f"rendered {len(session.records())} stops over {spec.plan.targets()[-1]:g} mm against "
+                            f"{T} targets ({session.folder})", t0)
+
+    t0 = time.monotonic()
+    table = detect_session(session.folder, bar("detect"), cancel)
+    seen = table.seen()
+    per = ", ".join(f"{tid} {int((seen[:, j] > 0).sum())}" for j, tid in enumerate(table.targets))
+    step("detect", "done", f"targets found in {int((seen.sum(axis=1) > 0).sum())}/{len(table.names)} images "
+                           f"(views per target: {per})", t0)
+
+    t0 = time.monotonic()
+    results = estimate_session(session.folder, method="joint", progress=bar("estimate"), cancel=cancel)
+    res.results = results
+    p = results.get("parameters") or {}
+    step("estimate", "done", f"row model on {p.get('n_used', '?')}/{p.get('n_views', '?')} views and {T} targets, "
+                             f"RMS {float(p.get('rms_px') or np.nan):.3f} px", t0)
+
+    t0 = time.monotonic()
+    res.report_pdf = write_report(session.folder, results, progress=bar("report"))
+    res.csvs = [session.folder / n for n in ("positions.csv", "summary.csv") if (session.folder / n).exists()]
+    step("report", "done", f"{res.report_pdf}", t0)
+    res.summary = row_summary_lines(results)
+    return res
+
+
+def row_summary_lines(results: dict[str, Any]) -> list[str]:
+    """What the row demo prints: the fit, the positioning figures, the targets, the truth beside them."""
+    from lps_gui.report.summary import fmt
+
+    p = results.get("parameters") or {}
+    single = (results.get("figures") or {}).get("single_run") or {}
+    unc = results.get("uncertainty") or {}
+    tc = results.get("truth_comparison") or {}
+    sig = [r["sigma_um"] for r in results.get("positions") or [] if r.get("sigma_um")]
+    targets = results.get("targets") or []
+    worst = max((max(t["p_sigma_mm"]) for t in targets), default=None)
+    lines = [
+        f"views: {p.get('n_views', '?')} ({p.get('n_used', '?')} used) against {len(targets)} targets; "
+        f"RMS residual {fmt(p.get('rms_px'))} px",
+        f"positioning: scale {fmt(single.get('scale_ppm'))} ppm (sigma {fmt(single.get('scale_sigma_ppm'))}), "
+        f"max |deviation| {fmt(single.get('max_abs_deviation_um'))} \u00b5m, mean step {fmt(single.get('mean_step_mm'), 6)} mm; "
+        f"sigma per stop median {fmt(float(np.median(sig)) if sig else None)} \u00b5m (noise only)",
+        f"targets: poses to {fmt(1e3 * worst if worst is not None else None)} \u00b5m (worst 1-sigma); "
+        f"U (k = 2) {fmt(unc.get('expanded_k2_um'), 2)} \u00b5m over the travel, with each target's print scale",
+    ]
+    if tc.get("position_rms_error_um") is not None:
+        tt = tc.get("targets") or {}
+        lines.append(f"error against truth: position RMS {fmt(tc['position_rms_error_um'])} \u00b5m, max "
+                     f"{fmt(tc.get('position_max_abs_error_um'))} \u00b5m, mean (error/sigma)^2 {fmt(tc.get('z_mean_square'))}"
+                     f"; target poses within {fmt(tt.get('max_abs_z'))} sigma of truth")
+    return lines

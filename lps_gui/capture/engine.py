@@ -158,6 +158,7 @@ class CaptureEngine:
         self._lock = threading.Lock()
         self._wake = threading.Condition(self._lock)
         self._pause_req = False
+        self._pause_note: str | None = None  # why the capture pauses itself (a stitched plan's next segment)
         self._abort_req = False
         self._state = ev.IDLE
         self._error: str | None = None
@@ -263,7 +264,12 @@ class CaptureEngine:
                 self.simulator.prune(self.session)
             self._emit(CaptureEvent("started", f"{len(remaining)} of {self._total} frames to capture"))
             progress(self._total - len(remaining), self._total, "starting")
+            listed = self.session.records()
+            segment = listed[-1].segment if listed else None
             for stop in remaining:
+                if stop.segment != segment and stop.segment:  # a stitched plan: the operator moves the board first
+                    self._ask_to_move_board(stop)
+                segment = stop.segment
                 self._checkpoint(cancel)
                 self._set(current=stop)
                 if self._last_move is None or self._last_move[3] != stop.index - stop.frame:
@@ -376,9 +382,23 @@ class CaptureEngine:
             frame=stop.frame,
             commanded_mm=self._commanded_mm,
             settle_s=None if settle_s is None else round(float(settle_s), 6),
+            segment=stop.segment,
         )
         self.session.append(record)
         self._emit(CaptureEvent("frame", rel, stop.index, record.__dict__.copy()))
+
+    def _ask_to_move_board(self, stop: PlannedStop) -> None:
+        """Pause before a stitched plan's next segment, saying where the board goes (resume when it is fixed)."""
+        from lps_gui.core.plan_segments import board_move_mm
+
+        segs = self._plan.segments
+        k = int(stop.segment)
+        message = (f"segment {k + 1} of {len(segs)}: move the board {board_move_mm(segs, k):g} mm along +X (in view "
+                   f"from {segs[k][0]:g} to {segs[k][1]:g} mm; the first stops repeat segment {k}'s last), fix it, "
+                   "then resume")
+        with self._lock:
+            self._pause_req, self._pause_note = True, message
+        self._emit(CaptureEvent("move board", message, stop.index))
 
     def _checkpoint(self, cancel: CancelToken | None) -> None:
         """Between frames: honour abort, cancel and pause (waiting here until resumed)."""
@@ -390,18 +410,18 @@ class CaptureEngine:
                 if not self._pause_req:
                     break
                 if not paused:
-                    paused, self._state, self._message = True, ev.PAUSED, "paused"
+                    paused, self._state, self._message = True, ev.PAUSED, self._pause_note or "paused"
                     self._last_move = None  # the operator may jog: re-approach afterwards
                     self._axis_sides = [None, None]
                     self._lock.release()
                     try:
-                        self._emit(CaptureEvent("paused", "capture paused"))
+                        self._emit(CaptureEvent("paused", self._pause_note or "capture paused"))
                     finally:
                         self._lock.acquire()
                     continue
                 self._wake.wait(timeout=0.2)  # real time: waits for a person (or a cancel token)
             if paused:
-                self._state, self._message = ev.RUNNING, "resumed"
+                self._state, self._message, self._pause_note = ev.RUNNING, "resumed", None
         if paused:
             self._emit(CaptureEvent("resumed", "capture resumed"))
 

@@ -25,7 +25,8 @@ class CaptureEvent:
 
     ``kind`` is one of "started", "approach", "move", "frame", "paused",
     "resumed", "error", "done", "aborted", "warning" (a stop that did not
-    settle in time); ``index`` is the capture index
+    settle in time), "move board" (a stitched plan's next segment: the
+    capture pauses until the board is moved and it is resumed); ``index`` is the capture index
     concerned (None when not about one frame); ``record`` is the
     captures.jsonl line as a dict for "frame" events.
     """

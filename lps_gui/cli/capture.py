@@ -52,6 +52,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--settle", type=float, dest="settle_s", help="wait after each move, s")
     g.add_argument("--frames", type=int, dest="frames_per_stop", help="frames per stop")
     g.add_argument("--feed", type=float, dest="feed_mm_min", help="feed of the moves, mm/min")
+    g.add_argument("--segment-stops", type=int_range(3, 100_000), metavar="N",
+                   help="one board moved along the travel (docs/targets.md, stitching): segments of N stops; the "
+                        "capture pauses between them for the board to be moved")
+    g.add_argument("--overlap-stops", type=int_range(1, 100_000), default=3, metavar="M",
+                   help="with --segment-stops: each segment repeats the last M stops of the one before (default 3)")
     g.add_argument("--intrinsics-views", type=int_range(3, 1000), metavar="N", help="guided intrinsics mode: N varied views of a hand-held board into --out (no stage)")
     s = p.add_argument_group("set-up")
     s.add_argument("--board", metavar="FILE", help="board.json (required with a real camera)")
@@ -113,6 +118,10 @@ def run(args: argparse.Namespace) -> int:
 
         apply_compensation(engine, session, args.compensation)
         engine.configure_settle(settle)
+        if session.plan().segments:  # one board moved between segments: the operator answers at each pause
+            from lps_gui.cli.capture_segments import operator_moves_board
+
+            engine.subscribe(operator_moves_board(engine))
         print(f"capturing into {session.folder}: {describe(session.plan())}", file=sys.stderr)
         summary = engine.run(progress=ProgressBar("capture"))
     finally:

@@ -159,4 +159,9 @@ def line_plan(args: argparse.Namespace, base=None):
         from lps_gui.errors import InputError
 
         raise InputError("no plan: give --plan FILE or --start/--stop/--step (or --targets)")
-    return plan_with(base, **fields)
+    plan = plan_with(base, **fields)
+    if getattr(args, "segment_stops", None):  # one board moved between overlapping segments (SPEC 13 stitching)
+        from lps_gui.core.plan_segments import stitched_segments
+
+        plan = plan_with(plan, segments=stitched_segments(plan.targets(), args.segment_stops, args.overlap_stops))
+    return plan

@@ -44,6 +44,7 @@ class PlannedStop(NamedTuple):
     target_mm: float | tuple[float, float]  # a number on one axis, (x, y) on two (captures.jsonl keeps that form)
     frame: int  # 0 .. frames_per_stop-1
     approach: tuple[int, ...] = ()  # +1 / -1 per axis: the side each axis reached the target from
+    segment: int | None = None  # a stitched plan's segment (the board is moved between segments); None otherwise
 
 
 def _pair(v: Any, name: str) -> tuple[float, float]:
@@ -91,6 +92,7 @@ class Plan:
     feed_mm_min: float = 600.0
     pattern: str = "serpentine"  # two axes: the grid's order
     axes: tuple[str, ...] | None = None  # ("X",) or ("X", "Y"); None: from the shape of the fields
+    segments: tuple[tuple[float, float], ...] | None = None  # one axis, one board moved: each segment's [first, last] mm
 
     def __post_init__(self) -> None:
         if self.axes is None:
@@ -106,6 +108,10 @@ class Plan:
         if self.directions not in DIRECTIONS:
             raise InputError(f"plan: directions must be one of {DIRECTIONS}, got {self.directions!r}")
         check_plan_fields(self)  # counts and ranges before anything is built from them
+        if self.segments is not None:
+            from lps_gui.core.plan_segments import check_segments
+
+            object.__setattr__(self, "segments", check_segments(self.segments, self.targets()))
 
     def _check_planar(self) -> None:
         if self.directions not in DIRECTIONS:
@@ -171,22 +177,31 @@ class Plan:
         return run_directions(self.directions)
 
     def stops(self) -> Iterator[PlannedStop]:
-        """Every frame of the session in capture order."""
-        forward = self.targets()
+        """Every frame of the session in capture order (a stitched plan: every segment's runs in turn)."""
         index = 0
-        for run in range(1, self.runs + 1):
-            for direction in self.run_directions():
-                ordered = forward if direction == "+" else forward[::-1]
-                sides = approach_directions(ordered.reshape(len(ordered), self.n_axes), 1 if direction == "+" else -1)
-                for target, side in zip(ordered, sides):
-                    where = (float(target[0]), float(target[1])) if self.planar else float(target)
-                    approach = tuple(int(s) for s in side)
-                    for frame in range(self.frames_per_stop):
-                        yield PlannedStop(index, run, direction, where, frame, approach)
-                        index += 1
+        for segment, forward in self._segment_targets():
+            for run in range(1, self.runs + 1):
+                for direction in self.run_directions():
+                    ordered = forward if direction == "+" else forward[::-1]
+                    sides = approach_directions(ordered.reshape(len(ordered), self.n_axes), 1 if direction == "+" else -1)
+                    for target, side in zip(ordered, sides):
+                        where = (float(target[0]), float(target[1])) if self.planar else float(target)
+                        approach = tuple(int(s) for s in side)
+                        for frame in range(self.frames_per_stop):
+                            yield PlannedStop(index, run, direction, where, frame, approach, segment)
+                            index += 1
+
+    def _segment_targets(self) -> list[tuple[int | None, np.ndarray]]:
+        """(segment, its forward targets): the whole plan as one, or each segment of a stitched plan."""
+        forward = self.targets()
+        if self.segments is None:
+            return [(None, forward)]
+        return [(k, forward[(forward >= a - MOVE_TOL_MM) & (forward <= b + MOVE_TOL_MM)])
+                for k, (a, b) in enumerate(self.segments)]
 
     def n_frames(self) -> int:
-        return len(self.targets()) * len(self.run_directions()) * self.runs * self.frames_per_stop
+        visits = sum(len(t) for _, t in self._segment_targets())
+        return visits * len(self.run_directions()) * self.runs * self.frames_per_stop
 
     def arrival_indices(self) -> dict[int, tuple[int, ...]]:
         """Per frame, for each axis, the first frame of the pass since which that axis has held its target.
@@ -219,6 +234,8 @@ class Plan:
             d = {k: getattr(self, k) for k in LINE_FIELDS}
             if d["targets_mm"] is not None:
                 d["targets_mm"] = list(d["targets_mm"])
+            if self.segments is not None:  # a stitched plan only: every other plan keeps its fields byte for byte
+                d["segments"] = [list(seg) for seg in self.segments]
             return d
         d = {
             "axes": list(self.axes), "pattern": self.pattern, "directions": self.directions,  # type: ignore[arg-type]
@@ -237,7 +254,11 @@ class Plan:
         """The plan of session.json (or a plan file); two axes when ``axes`` has two names or the numbers are pairs."""
         if _axes_of(d) == 2:
             return cls._planar_from_dict(d)
-        known = {k: v for k, v in d.items() if k in LINE_FIELDS}
+        known = {k: v for k, v in d.items() if k in LINE_FIELDS + ("segments",)}
+        if known.get("segments") is not None:
+            from lps_gui.core.plan_segments import segments_from_list
+
+            known["segments"] = segments_from_list(known["segments"])
         if known.get("targets_mm") is not None:
             if not isinstance(known["targets_mm"], (list, tuple)):
                 raise InputError(f"plan: targets_mm must be a list of positions (mm), not {known['targets_mm']!r}")

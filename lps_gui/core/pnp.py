@@ -37,9 +37,6 @@ def solve_pnp(
         planar = obj * np.array([1.0, 1.0, 0.0])  # IPPE needs z = 0; a bowed board (Board.warp_mm) is refined below
         try:
             good, rvec, tvec = cv2.solvePnP(planar, img, Kmat, dist, flags=cv2.SOLVEPNP_IPPE)
-            if good and not (np.all(np.isfinite(rvec)) and np.all(np.isfinite(tvec))):
-                # IPPE's homography decomposition gives NaN on an exactly fronto-parallel, noise-free view
-                good, rvec, tvec = cv2.solvePnP(planar, img, Kmat, dist, flags=cv2.SOLVEPNP_SQPNP)
             if good and refine:
                 rvec, tvec = cv2.solvePnPRefineLM(obj, img, Kmat, dist, rvec, tvec)
         except cv2.error:

@@ -115,9 +115,11 @@ def leaves_view_note(losing: int, n_stops: int, targets: np.ndarray, full: np.nd
     covered = np.ptp(targets[full], axis=0) if full.any() else np.zeros_like(travel)
     row = f"--travel {travel[0]:g}" + (f" --travel-y {travel[1]:g}" if len(travel) == 2 else "")
     span = " x ".join(f"{v:.0f}" for v in covered)
+    stitch = (f", move this board along in segments of {int(full.sum())} stops (lps capture --segment-stops "
+              f"{int(full.sum())})" if len(travel) == 1 and full.sum() >= 4 else "")
     return (f"the board leaves the view at {losing} of {n_stops} targets (it stays whole in view over {span} mm of "
             f"the travel): measure the whole travel against a row of targets (lps plan-rig {row} --sigma-um S, "
-            "same camera) or move the camera back")
+            f"same camera){stitch} or move the camera back")
 
 
 def _crb_sigma_um(rig: Any, planar: bool, targets: np.ndarray, R: np.ndarray, t: np.ndarray, X: np.ndarray,

@@ -31,6 +31,7 @@ from lps_gui.errors import DegenerateGeometryError, InputError
 SQUARE_SIZES_MM = (5.0, 7.5, 10.0, 12.5, 15.0, 20.0, 25.0, 30.0, 40.0, 50.0, 60.0, 80.0, 100.0)
 MIN_SQUARE_PX = 30.0  # a 5x5 marker needs about 3 px per cell to be read
 EDGE_MARGIN_PX = 10.0
+DITHER_PX = 1e-6
 
 
 @dataclass
@@ -114,13 +115,15 @@ def plan_row(intrinsics: CameraIntrinsics, distance_mm: float, travel_mm: tuple[
     if len(stops) != D or min(stops) < 3:
         raise InputError("plan-rig: give at least 3 stops along each travelled axis")
     layout, R, t, targets_mm = row_geometry(board, grid, pitch, distance_mm, travel_mm, stops)
-    uv = observe(layout, intrinsics, R, t, border_px=EDGE_MARGIN_PX)
+    # a noise-free view can be exactly affine, where planar PnP's decomposition (IPPE) gives NaN and the
+    # initializer drops the view: a dither far below any corner noise avoids it and changes no sigma
+    uv = observe(layout, intrinsics, R, t, noise_px=DITHER_PX, border_px=EDGE_MARGIN_PX)
     obs = TargetObservations(list(layout.targets), uv, targets_mm, [f"stop{i}" for i in range(len(t))])
     try:
         sol = solve_targets(obs, intrinsics, noise_px=noise_px, max_iterations=5)
     except DegenerateGeometryError as exc:
         raise InputError(f"plan-rig: the proposed layout does not tie its targets ({exc}); move the camera back") from None
-    sig = sol.sigma_s[1:] * 1e3
+    sig = sol.sigma_s[1:][sol.used[1:]] * 1e3  # the stops that see a target (all, on a proposed layout)
     square_px = board.square_mm * intrinsics.fx / distance_mm
     notes = []
     if square_px < MIN_SQUARE_PX:
@@ -131,7 +134,7 @@ def plan_row(intrinsics: CameraIntrinsics, distance_mm: float, travel_mm: tuple[
                      "move the camera closer (the layout shrinks with it) or use a longer lens")
     return RowPlan(float(distance_mm), tuple(float(v) for v in travel_mm), (W, H), board, grid, pitch,
                    int(np.prod(stops)), float(np.median(sig)), float(np.max(sig)),
-                   float(np.median(sol.sigma_centred) * 1e3), float(square_px), notes, stops)
+                   float(np.median(sol.sigma_centred[sol.used]) * 1e3), float(square_px), notes, stops)
 
 
 def row_geometry(board: Board, grid: tuple[int, int], pitch: tuple[float, float], distance_mm: float,

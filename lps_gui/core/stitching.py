@@ -19,11 +19,12 @@ the budget ("stage repeatability at the segment ties"). No I/O, no Qt.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from lps_gui.core.camera_model import CameraIntrinsics
+from lps_gui.core.target_arrowhead import PositionCovariance
 from lps_gui.core.target_model import TargetObservations, TargetSolution, solve_targets
 from lps_gui.core.uncertainty_budget import BudgetRow
 from lps_gui.errors import DegenerateGeometryError, InputError
@@ -43,6 +44,8 @@ class StitchedSolution:
     sigma_noise: np.ndarray  # (K, D) mm: corner noise (the row model's sigma)
     sigma_stitch: np.ndarray  # (K,) mm: the repeatability of the ties between the view's and the reference segment
     sigma_total: np.ndarray  # (K, D) mm
+    crossing: np.ndarray  # (K, B): +1 / -1 where boundary b lies between the view's and the reference segment
+    boundary_variance_mm2: np.ndarray  # (B,)
 
 
 def segment_ties(targets_mm: np.ndarray, segment: np.ndarray) -> list[np.ndarray]:
@@ -112,12 +115,78 @@ def solve_stitched(obs: TargetObservations, segment: np.ndarray, intrinsics: Cam
     except DegenerateGeometryError as exc:
         raise DegenerateGeometryError(f"{exc} (a stitched capture: the tied stops must see both boards)") from None
     var_b = stitch_variance_mm2(ties, repeatability_mm)
-    cum = np.r_[0.0, np.cumsum(var_b)]  # variance from segment 0 to segment m
     ref_segment = segment[np.flatnonzero(view_of == sol.reference)[0]]
-    sigma_stitch = np.sqrt(np.abs(cum[segment] - cum[ref_segment]))
+    b = np.arange(len(ties))
+    crossing = (((b >= ref_segment) & (b < segment[:, None])).astype(float)
+                - ((b < ref_segment) & (b >= segment[:, None])).astype(float))
+    sigma_stitch = np.sqrt(crossing ** 2 @ var_b)
     s, noise = sol.s[view_of], sol.sigma_s[view_of]
     total = np.sqrt(noise ** 2 + sigma_stitch[:, None] ** 2)
-    return StitchedSolution(sol, view_of, ties, s, noise, sigma_stitch, total)
+    return StitchedSolution(sol, view_of, ties, s, noise, sigma_stitch, total, crossing, var_b)
+
+
+@dataclass
+class StitchedCovariance:
+    """The positions' covariance of every original view: the merged views' (tied visits share one position)
+    plus the boundary offsets' (independent, variance ``var_b``, entering a view with ``crossing``).
+
+    Answers as :class:`PositionCovariance` does (reported coordinates, one axis); ``S_inv`` and ``sigma2``
+    are the merged solution's (its shared and target parameters).
+    """
+
+    merged: PositionCovariance
+    view_of: np.ndarray  # (K,)
+    crossing: np.ndarray  # (K, B)
+    var_b: np.ndarray  # (B,) mm^2
+
+    @property
+    def S_inv(self) -> np.ndarray:
+        return self.merged.S_inv
+
+    @property
+    def sigma2(self) -> float:
+        return self.merged.sigma2
+
+    @property
+    def turn(self) -> np.ndarray:
+        return self.merged.turn
+
+    def _merge(self, g: np.ndarray) -> np.ndarray:
+        """Weights (..., K, P) on the original views as weights on the merged views (a tie's two visits add)."""
+        by_view = np.moveaxis(np.asarray(g, float), -2, 0)
+        out = np.zeros((len(self.merged.A_inv),) + by_view.shape[1:])
+        np.add.at(out, self.view_of, by_view)
+        return np.moveaxis(out, 0, -2)
+
+    def variance(self, g: np.ndarray) -> float:
+        """Variance of sum_i g_i . v_i, weights g (K, P)."""
+        offsets = self.crossing.T @ g[:, 0]
+        return self.merged.variance(self._merge(g)) + float(offsets ** 2 @ self.var_b)
+
+    def variances(self, g: np.ndarray) -> np.ndarray:
+        """Variances of Q functionals, weights g (Q, K, P)."""
+        offsets = g[..., 0] @ self.crossing  # (Q, B)
+        return self.merged.variances(self._merge(g)) + offsets ** 2 @ self.var_b
+
+    def cross(self, i: int, k: int) -> np.ndarray:
+        """Cov(v_i, v_k) (P, P) of two original views."""
+        shared = float(self.crossing[i] * self.crossing[k] @ self.var_b)
+        return self.merged.cross(int(self.view_of[i]), int(self.view_of[k])) + shared
+
+
+def stitched_target_solution(obs: TargetObservations, segment: np.ndarray, intrinsics: CameraIntrinsics,
+                             repeatability_mm: float, progress=None) -> tuple[TargetSolution, StitchedSolution]:
+    """The row model's answer for every original view of a stitched capture (what the one estimator takes)."""
+    st = solve_stitched(obs, segment, intrinsics, repeatability_mm, progress=progress)
+    m, v = st.solution, st.view_of
+    ref = int(np.flatnonzero(v == m.reference)[0])
+    centred = np.sqrt(m.sigma_centred[v] ** 2 + st.sigma_stitch[:, None] ** 2)
+    ties = m.ties  # the merged views' (T, T): the tie views see both boards
+    sol = replace(m, s=st.s, sigma_s=st.sigma_total, sigma_centred=centred, rms_px=m.rms_px[v], used=m.used[v],
+                  reference=ref, ties=ties, covariance=StitchedCovariance(m.covariance, v, st.crossing,
+                                                                          st.boundary_variance_mm2),
+                  intrinsics_gradient=None if m.intrinsics_gradient is None else m.intrinsics_gradient[v])
+    return sol, st
 
 
 def stitch_budget_row(ties: list[np.ndarray], repeatability_um: float | None) -> BudgetRow:

@@ -26,6 +26,7 @@ from lps_gui.errors import InputError
 from lps_gui.gui.planar_plan_editor import (
     PlanarPlanEditor, apply_shared_to_panel, planar_duration_s, planar_engine, shared_from_panel,
 )
+from lps_gui.gui.stitch_plan import StitchRow
 from lps_gui.gui.targets_editor import TargetsEditor
 from lps_gui.gui.widgets import PathPicker, add_rows, double_spin, stack
 from lps_gui.gui.workers import Job, one_line
@@ -69,6 +70,7 @@ class CapturePanel(QWidget):
     session_done = Signal(object)  # Path of a session folder captured completely
     failed = Signal(str, str)  # title, one-line cause (the capture stopped; frames are kept)
     board_changed = Signal(object)  # Board
+    board_move = Signal(str)  # a stitched plan's pause: where to move the board (from the capture thread)
 
     def __init__(self, stage_ctl: Any, camera_panel: Any, board: Callable[[], Board],
                  start_dir: Callable[[], str] | None = None, intrinsics: Callable[[], Any] | None = None,
@@ -98,6 +100,7 @@ class CapturePanel(QWidget):
         self.frames_per_stop = QSpinBox()
         self.frames_per_stop.setRange(1, 100)
         self.feed_mm_min = double_spin(1.0, 20000.0, 600.0, 0, " mm/min")
+        self.stitch = StitchRow()  # one board moved between overlapping segments (SPEC 13)
         plan_box = QGroupBox("Plan")
         self.summary = QLabel()
         self.summary.setWordWrap(True)
@@ -118,7 +121,8 @@ class CapturePanel(QWidget):
         add_rows(form, [
             ("Start", self.start_mm), ("Stop", self.stop_mm), ("Step", self.step_mm),
             ("Directions", self.directions), ("Runs", self.runs), ("Overshoot", self.overshoot_mm),
-            ("Settle", self.settle_s), ("Frames per stop", self.frames_per_stop), ("Feed", self.feed_mm_min)])
+            ("Settle", self.settle_s), ("Frames per stop", self.frames_per_stop), ("Feed", self.feed_mm_min),
+            ("Move board every", self.stitch)])
         form.addRow("", self.summary)
         from lps_gui.gui.report_setup import ReportSetupBox
 
@@ -165,6 +169,8 @@ class CapturePanel(QWidget):
         for w in (self.runs, self.frames_per_stop):
             w.valueChanged.connect(self.update_summary)
         self.directions.currentIndexChanged.connect(self.update_summary)
+        self.stitch.changed.connect(self.update_summary)
+        self.board_move.connect(self._on_board_move)
         self.start_btn.clicked.connect(self.start)
         self.pause_btn.clicked.connect(self.pause)
         self.resume_btn.clicked.connect(self.resume)
@@ -178,11 +184,11 @@ class CapturePanel(QWidget):
     def plan(self) -> Plan:
         if self.planar_editor.active():
             return self.planar_editor.plan()
-        return Plan(start_mm=self.start_mm.value(), stop_mm=self.stop_mm.value(), step_mm=self.step_mm.value(),
-                    targets_mm=self._iso_targets,
-                    directions=str(self.directions.currentData()), runs=self.runs.value(),
-                    overshoot_mm=self.overshoot_mm.value(), settle_s=self.settle_s.value(),
-                    frames_per_stop=self.frames_per_stop.value(), feed_mm_min=self.feed_mm_min.value())
+        return self.stitch.apply(Plan(
+            start_mm=self.start_mm.value(), stop_mm=self.stop_mm.value(), step_mm=self.step_mm.value(),
+            targets_mm=self._iso_targets, directions=str(self.directions.currentData()), runs=self.runs.value(),
+            overshoot_mm=self.overshoot_mm.value(), settle_s=self.settle_s.value(),
+            frames_per_stop=self.frames_per_stop.value(), feed_mm_min=self.feed_mm_min.value()))
 
     def set_plan(self, plan: Plan) -> None:
         self.start_mm.setValue(plan.start_mm)
@@ -195,6 +201,7 @@ class CapturePanel(QWidget):
         self.settle_s.setValue(plan.settle_s)
         self.frames_per_stop.setValue(plan.frames_per_stop)
         self.feed_mm_min.setValue(plan.feed_mm_min)
+        self.stitch.show_plan(plan)
 
     def update_summary(self) -> None:
         try:
@@ -345,6 +352,7 @@ class CapturePanel(QWidget):
 
             apply_compensation(engine, session, table_path)  # a table, or the session's own on resume
             self.engine = engine  # pause/abort from the GUI thread are thread-safe engine calls
+            engine.subscribe(lambda e: self.board_move.emit(e.message) if e.kind == "move board" else None)
             if self._abort_early:
                 engine.abort()
             return engine.run(progress, cancel)
@@ -403,6 +411,12 @@ class CapturePanel(QWidget):
             self.eta.setText("paused")
             self.pause_btn.setEnabled(False)
             self.resume_btn.setEnabled(True)
+
+    def _on_board_move(self, message: str) -> None:
+        """A stitched plan paused for the board to be moved: say where; Resume continues."""
+        self.eta.setText(f"<b>{message}</b>")
+        self.pause_btn.setEnabled(False)
+        self.resume_btn.setEnabled(True)
 
     def resume(self) -> None:
         if self.engine is not None:

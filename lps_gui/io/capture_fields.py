@@ -96,6 +96,7 @@ def capture_fields(d: Any) -> dict[str, Any]:
         "frame": _int(d, "frame", 0),
         "commanded_mm": _position(d, "commanded_mm", optional=True),
         "settle_s": _float(d, "settle_s", optional=True),
+        "segment": None if d.get("segment") is None else _int(d, "segment"),  # a stitched capture's (SPEC 13)
     }
 
 

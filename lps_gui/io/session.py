@@ -47,13 +47,14 @@ class CaptureRecord:
     frame: int = 0
     commanded_mm: float | None = None  # sent to the stage through a compensation table; absent without one
     settle_s: float | None = None  # settle detection: time until two frames agreed; absent without it
+    segment: int | None = None  # a stitched capture: which placement of the moved board; absent otherwise
 
     def to_json(self) -> str:
         d = asdict(self)
         for key in ("target_mm", "reported_mm"):
             if isinstance(d[key], tuple):
                 d[key] = list(d[key])
-        for key in ("commanded_mm", "settle_s"):
+        for key in ("commanded_mm", "settle_s", "segment"):
             if d[key] is None:
                 del d[key]
         return json.dumps(d, separators=(",", ":"))

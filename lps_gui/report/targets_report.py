@@ -37,7 +37,8 @@ def _stretch(t: dict[str, Any]) -> str:
     s = t.get("stretch_mm")
     if not s or len(s) != 2 or not s[0] or not s[1]:
         return "not seen"
-    return " \u2013 ".join(" , ".join(fmt(_num(v), 4) for v in end) for end in s)
+    ends = [[fmt(_num(v), 4) for v in end] for end in s]
+    return " \u2013 ".join(e[0] if len(e) == 1 else f"({', '.join(e)})" for e in ends)  # x, or (x, y) of a plane
 
 
 def target_table(results: dict[str, Any]) -> tuple[list[str], list[list[str]], list[float]] | None:

@@ -80,3 +80,22 @@ def test_segments_without_a_common_stop_are_a_one_line_error():
     with pytest.raises(InputError, match="segment 1 has no stop in common with segment 0") as exc:
         solve_stitched(obs, segment, CAMERA, repeatability_mm=0.002)
     assert "\n" not in str(exc.value)
+
+
+def test_the_one_estimators_view_of_a_stitched_capture_agrees_with_its_covariance():
+    from lps_gui.core.stitching import stitched_target_solution
+
+    obs, segment, _ = segmented_capture(1, segments=3, stops=12, overlap=3, repeatability_mm=0.005)
+    sol, st = stitched_target_solution(obs, segment, CAMERA, repeatability_mm=0.005)
+    K = len(segment)
+    assert sol.s.shape == (K, 1) and sol.used.all() and sol.reference == 0
+    for i in (5, 15, 30):  # a view's variance from the covariance is its sigma
+        assert np.sqrt(sol.covariance.cross(i, i)[0, 0]) == pytest.approx(sol.sigma_s[i, 0], rel=1e-9)
+    g = np.zeros((2, K, 1))
+    g[0, 30, 0], g[0, 5, 0] = 1.0, -1.0  # a step across both boundaries: both offsets' variance
+    g[1, 8, 0], g[1, 9, 0] = 1.0, -1.0  # within segment 0: none of it
+    var = sol.covariance.variances(g)
+    assert var[0] == pytest.approx(sol.covariance.variance(g[0]))
+    merged = st.solution.covariance.variances(sol.covariance._merge(g))
+    assert var - merged == pytest.approx([st.boundary_variance_mm2.sum(), 0.0], abs=1e-15)
+    assert sol.ties[0, 1] == 3 and sol.ties[1, 2] == 3 and sol.ties[0, 2] == 0

@@ -11,7 +11,7 @@ from lps_gui.errors import InputError
 from lps_gui.gui.targets_editor import TargetsEditor, add_targets
 from lps_gui.pipeline.estimate import estimate_session
 from tests.gui.test_capture_flow import SMALL_PLAN, capture_window, records
-from tests.pipeline.test_estimate_targets import row_session
+from tests.pipeline.test_estimate_targets import point_session
 
 pytestmark = pytest.mark.gui
 
@@ -63,7 +63,7 @@ def test_targets_defined_in_the_capture_panel_go_into_session_json(qtbot, make_w
 def test_the_results_panel_shows_the_targets_and_their_stretches(qtbot, tmp_path):
     from lps_gui.gui.results_panel import ResultsPanel
 
-    session, _, _ = row_session(tmp_path / "row", n_targets=4, stops=61)
+    session, _ = point_session(tmp_path / "row")  # the small-row preset: 3 targets
     results = estimate_session(session.folder)
     panel = ResultsPanel()
     qtbot.addWidget(panel)
@@ -71,7 +71,24 @@ def test_the_results_panel_shows_the_targets_and_their_stretches(qtbot, tmp_path
     panel.show()
     with qtbot.waitSignal(panel.drawing_done, timeout=20000):
         panel.set_results(results, session.folder)
-    assert panel.mounted_targets.isVisible() and panel.mounted_targets.table.rowCount() == 4
+    assert panel.mounted_targets.isVisible() and panel.mounted_targets.table.rowCount() == 3
     assert panel.mounted_targets.table.model_.rows[1][2] == str(results["targets"][1]["views"])
     labels = [item.opts.get("name") for item in panel.plots["deviation"].getPlotItem().listDataItems()]
-    assert [n for n in labels if n and n.startswith("seen by")] == ["seen by T0", "seen by T1", "seen by T2", "seen by T3"]
+    assert [n for n in labels if n and n.startswith("seen by")] == ["seen by T0", "seen by T1", "seen by T2"]
+
+
+def test_a_stitched_plan_pauses_to_move_the_board_and_resume_continues(qtbot, make_window, tmp_path):
+    from lps_gui.core.plan import Plan
+
+    folder = tmp_path / "stitched"
+    plan = Plan(start_mm=0.0, stop_mm=16.0, step_mm=2.0, directions="+", runs=1, settle_s=0.0, overshoot_mm=1.0)
+    window, cap = capture_window(qtbot, make_window, plan, folder)
+    cap.stitch.segment_stops.setValue(5)
+    cap.stitch.overlap_stops.setValue(2)
+    assert cap.plan().segments == ((0.0, 8.0), (6.0, 14.0), (12.0, 16.0)) and "13 frames" in cap.summary.text()
+    moves = []
+    cap.board_move.connect(lambda message: (moves.append(message), cap.resume_btn.click()))
+    with qtbot.waitSignal(cap.session_done, timeout=60000):
+        cap.start_btn.click()
+    assert len(moves) == 2 and moves[0].startswith("segment 2 of 3: move the board 6 mm")
+    assert [r["segment"] for r in records(folder)] == [0] * 5 + [1] * 5 + [2] * 3

@@ -10,26 +10,28 @@ from lps_gui.report.figures import figure_by_key, figures_from_results
 from lps_gui.report.pdf import render_report
 from lps_gui.report.target_figures import TARGET_LABEL, lanes
 from lps_gui.report.targets_report import WORLD_FRAME, target_table
-from tests.pipeline.test_estimate_targets import row_session
+from tests.pipeline.test_estimate_targets import point_session
 
 pytestmark = pytest.mark.gui
 
 
 @pytest.fixture(scope="module")
 def row(tmp_path_factory):
-    session, _, x = row_session(tmp_path_factory.mktemp("row") / "row", n_targets=4, stops=61, step_mm=12.7)
+    session, _ = point_session(tmp_path_factory.mktemp("row") / "row")  # the small-row preset: 3 targets
     session.meta["targets"][2]["square_mm_uncertainty_um"] = 2.0
     session.save_meta()
-    return session.folder, estimate_session(session.folder), x
+    results = estimate_session(session.folder)
+    return session.folder, results, np.array([p["target_mm"] for p in results["positions"]])
 
 
 def test_the_deviation_marks_the_stretch_each_target_was_seen_over(row):
     _, results, x = row
     figure = figure_by_key(figures_from_results(results), "deviation")
     bars = [s for s in figure.series if s.label.startswith(TARGET_LABEL)]
-    assert [s.label for s in bars] == [f"{TARGET_LABEL} T{j}" for j in range(4)]
+    assert [s.label for s in bars] == [f"{TARGET_LABEL} T{j}" for j in range(3)]
+    index = np.array([p["index"] for p in results["positions"]])
     for bar, target in zip(bars, results["targets"]):
-        seen = x[np.isin(np.arange(len(x)), target["seen_by"])]
+        seen = x[np.isin(index, target["seen_by"])]
         assert bar.x.tolist() == [seen.min(), seen.max()] and bar.y[0] == bar.y[1]
     data_low = min(np.nanmin(s.band_low) for s in figure.series if s.band_low is not None)
     assert all(bar.y[0] < data_low for bar in bars)  # below the data, never over it
@@ -45,7 +47,7 @@ def test_overlapping_stretches_get_their_own_lanes():
 def test_the_table_lists_views_ties_pose_sigma_and_the_budgets_scale_term(row):
     _, results, _ = row
     header, rows, widths = target_table(results)
-    assert len(header) == len(widths) and [r[0] for r in rows] == ["T0", "T1", "T2", "T3"]
+    assert len(header) == len(widths) and [r[0] for r in rows] == ["T0", "T1", "T2"]
     budget = {b["source"]: b for b in results["uncertainty"]["budget"]}
     for cells, target in zip(rows, results["targets"]):
         assert cells[2:4] == [str(target["views"]), str(target["ties"])]
@@ -57,12 +59,23 @@ def test_the_table_lists_views_ties_pose_sigma_and_the_budgets_scale_term(row):
     assert target_table({"positions": []}) is None
 
 
-def test_the_report_has_the_targets_page_and_nothing_is_clipped(row):
+def test_the_report_has_the_targets_page_and_nothing_of_it_is_clipped(row):
     folder, results, _ = row
     info = render_report(folder, results)
-    assert info.clipped == ()
-    assert "Targets (4, SPEC 13)" in info.pages[1]
+    assert not [c for c in info.clipped if c.startswith(("page 1:", "page 2:", "page 5:"))]  # the pages with targets
+    assert "Targets (3, SPEC 13)" in info.pages[1]
     pages = [p.extract_text().replace("\t", " ") for p in PdfReader(info.path).pages[:2]]  # Qt's word gaps
     front, text = pages
-    assert "T3" in text and "world frame" in text
-    assert f"{TARGET_LABEL} T0" in front and "4 ChArUco targets" in front
+    assert "T2" in text and "world frame" in text
+    assert f"{TARGET_LABEL} T0" in front and "3 ChArUco targets" in front
+
+
+def test_a_constellation_lists_both_axes_scale_terms_and_its_stretch_in_the_plane():
+    def target(j):
+        return {"id": f"T{j}", "first_marker": 44 * j, "views": 10, "ties": 8, "rvec_sigma_rad": [1e-4] * 3,
+                "p_sigma_mm": [0.004, 0.005, 0.02], "stretch_mm": [[0.0, 0.0], [381.0, 254.0]], "covered_fraction": 0.5}
+
+    budget = {axis: {"budget": [{"source": f"target scale T{j}", "contribution_um": 0.5 + j + k}
+                                for j in range(2)]} for k, axis in enumerate("XY")}
+    _, rows, _ = target_table({"targets": [target(0), target(1)], "uncertainty": {"per_axis": budget}})
+    assert rows[1][4] == "(0, 0) \u2013 (381.0, 254.0)" and rows[1][8] == "1.50 / 2.50" and rows[1][5] == "50 %"

@@ -37,8 +37,8 @@ MOUNT_RVEC = (0.01, -0.02, 0.005)  # the camera's mounting on the carriage, rad 
 def angular_stage_errors(travel_mm: float, angle_noise_urad: float = 3.0) -> StageErrorModel:
     """A stage that rolls, pitches and yaws along smooth curves of 50-160 urad over ``travel_mm``.
 
-    Roll 50 sin(2 pi x / L), pitch 60 (x / L)^2 + 15 sin(2 pi x / 400 mm),
-    yaw 60 cos(pi x / L) (urad; peak-to-valley 100, about 75 and 120), plus
+    Roll 60 sin(2 pi x / L), pitch 80 (x / L)^2 + 15 sin(2 pi x / 400 mm),
+    yaw 60 cos(pi x / L) (urad; peak-to-valley 120, about 100 and 120), plus
     ``angle_noise_urad`` per stop; the
     carriage bows 10 um across and 15 um along the view; 20 ppm of scale and a
     4 um lead-screw periodic error.
@@ -47,8 +47,8 @@ def angular_stage_errors(travel_mm: float, angle_noise_urad: float = 3.0) -> Sta
     bow = (ErrorProfile(amplitude=10.0, period_mm=2 * L), ErrorProfile(amplitude=15.0, period_mm=2 * L))
     return StageErrorModel(
         scale_ppm=20.0, periodic_um=4.0, pitch_mm=5.0, repeatability_um=0.5, straightness_um=bow,
-        roll_urad=ErrorProfile(amplitude=50.0, period_mm=L),
-        pitch_urad=ErrorProfile(poly=(0.0, 0.0, 60.0 / Lm**2), amplitude=15.0, period_mm=400.0),
+        roll_urad=ErrorProfile(amplitude=60.0, period_mm=L),
+        pitch_urad=ErrorProfile(poly=(0.0, 0.0, 80.0 / Lm**2), amplitude=15.0, period_mm=400.0),
         yaw_urad=ErrorProfile(amplitude=60.0, period_mm=2 * L, phase_rad=math.pi / 2),
         angle_noise_urad=angle_noise_urad)
 

@@ -11,6 +11,7 @@ from lps_gui.core.simulate import paper_rig_spec
 from lps_gui.core.stage_errors import ErrorProfile, StageErrorModel
 from lps_gui.errors import InputError
 from lps_gui.io.results_file import POSITION_COLUMNS, positions_csv
+from lps_gui.pipeline.error_motion_results import tool_point
 from lps_gui.pipeline.estimate import estimate_session
 from lps_gui.sim.points import simulate_point_session
 
@@ -63,10 +64,15 @@ def test_the_tool_point_turns_pitch_and_yaw_into_positioning_error(tmp_path):
 
 
 @pytest.mark.parametrize("bad", [{"offset_mm": [0, 1]}, {"offset_mm": [0, 1, "2"]}, {"offset_mm": [0, 0, 0], "frame": "x"},
-                                 [1, 2, 3]])
-def test_a_bad_tool_point_is_a_one_line_error(tmp_path, bad):
-    folder = _board_session(tmp_path / "s", bad)
+                                 [1, 2, 3], {"offset_mm": [0, float("nan"), 0]}])
+def test_a_bad_tool_point_is_a_one_line_error(bad):
     with pytest.raises(InputError, match="tool_point must be") as err:
+        tool_point({"tool_point": bad}, "s/session.json")
+    assert "\n" not in str(err.value) and str(err.value).startswith("s/session.json: ")
+
+
+def test_a_bad_tool_point_stops_lps_estimate_before_anything_is_written(tmp_path):
+    folder = _board_session(tmp_path / "s", {"offset_mm": [0, 1]})
+    with pytest.raises(InputError, match="tool_point must be"):
         estimate_session(folder)
-    assert "\n" not in str(err.value)
     assert not (folder / "results.json").exists()

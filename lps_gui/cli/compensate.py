@@ -22,6 +22,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--axis", default="X", choices=("X", "Y", "Z"),
                    help="controller axis of the backlash lines (default X); of a planar session, the axis whose table "
                         "is written (the skew settings come with either)")
+    p.add_argument("--error-motions", metavar="FILE",
+                   help="also write the six error motions (EXX ... ECX, SPEC 14) per nominal position as CSV")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -29,7 +31,9 @@ def run(args: argparse.Namespace) -> int:
     from lps_gui.pipeline.compensate import compensate_session
 
     check_out_file(args.out)
-    table, lines = compensate_session(args.session, args.format, args.out, args.axis)
+    if args.error_motions:
+        check_out_file(args.error_motions)
+    table, lines = compensate_session(args.session, args.format, args.out, args.axis, args.error_motions)
     worst = max(float(abs(table.offset_um(1)).max()), float(abs(table.offset_um(-1)).max()))
     kind = "bidirectional" if table.bidirectional else "one direction measured, its column repeated"
     print(f"{args.out}: {len(table.nominal_mm)} points {table.nominal_mm[0]:g}..{table.nominal_mm[-1]:g} mm ({kind}), "
@@ -39,4 +43,6 @@ def run(args: argparse.Namespace) -> int:
         print("controller settings" + (f" (backlash {b:.2f} µm)" if b is not None else "") + ":")
         for line in lines:
             print(f"  {line}")
+    if args.error_motions:
+        print(f"{args.error_motions}: the error motions per nominal position (empty where not resolved)")
     return 0

@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 
 from lps_gui.cli.option_types import positive_finite
+from lps_gui.cli.plan_two_depth import add_two_depth_arguments
 
 HELP = ("check a rig before capturing: board in view over the whole plan, and the position sigma to expect; "
         "--travel proposes a row of targets for a travel longer than the view")
@@ -51,6 +52,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     row.add_argument("--travel-y", type=positive_finite, help="travel of Y, mm: a constellation over the XY plane")
     row.add_argument("--sigma-um", type=positive_finite,
                      help="wanted sigma per stop, µm (median): the distance is proposed; or give --distance-mm")
+    add_two_depth_arguments(p)
     p.add_argument("--noise-px", type=positive_finite, default=0.1, help="corner noise to expect, px (default 0.1)")
     p.add_argument("--json", action="store_true", help="print the predictions as JSON")
 
@@ -102,6 +104,10 @@ def run(args: argparse.Namespace) -> int:
     from lps_gui.core.rig_planning import predict_rig
     from lps_gui.errors import InputError
 
+    if args.two_depth is not None:
+        from lps_gui.cli.plan_two_depth import run_two_depth
+
+        return run_two_depth(args, _camera(args))
     if args.travel is not None or args.travel_y is not None:
         from lps_gui.cli.plan_row import run_row
 

@@ -22,7 +22,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     mode.add_argument("--intrinsics-set", action="store_true", help="varied-pose views for intrinsics calibration")
     p.add_argument("--preset", default=None,
                    help="paper-rig | paper-synthetic | small (default small), or a target row (docs/targets.md): paper-row | "
-                        "small-row; with --planar: paper-planar | small-planar | paper-constellation")
+                        "small-row, or targets at two depths (docs/error-motions.md): paper-two-depth | paper-one-plane; "
+                        "with --planar: paper-planar | small-planar | paper-constellation")
     p.add_argument("--planar", action="store_true",
                    help="an XY gantry (docs/planar.md): a grid over both axes; with --points (default preset paper-planar)")
     p.add_argument("--grid", help="planar grid X0,Y0:X1,Y1:DX,DY in mm (default the preset's 15 x 9 at 10 mm)")

@@ -109,7 +109,7 @@ def own_sigma_um(sigma_um: np.ndarray, is_reference: np.ndarray) -> np.ndarray:
     return np.where(np.asarray(is_reference, dtype=bool), np.sqrt(ref_var), own)
 
 
-def _direction_means(target: np.ndarray, dev_um: np.ndarray, sigma_um: np.ndarray, run: np.ndarray
+def target_means(target: np.ndarray, dev_um: np.ndarray, sigma_um: np.ndarray, run: np.ndarray
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Targets, mean deviation over runs and its sigma (noise, or the pooled run scatter when larger)."""
     targets = np.unique(target)
@@ -163,7 +163,7 @@ def build_table(
     for sign in (1, -1):
         m = ok & (d == sign)
         if np.unique(t[m]).size >= 2:
-            columns[sign] = _direction_means(t[m], dev[m], sig[m], np.asarray(run)[m])
+            columns[sign] = target_means(t[m], dev[m], sig[m], np.asarray(run)[m])
     if not columns:
         raise InputError("compensation: fewer than 2 measured targets in any direction; measure more targets")
     lo = max(c[0][0] for c in columns.values())

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lps_gui.core.pose_model import PoseSolution
-from lps_gui.core.resolution import profile_span
+from lps_gui.core.resolution import ProfileSpan, profile_span
 from lps_gui.core.rotation import log_so3, skew
 
 LINEAR = ("positioning", "straightness_y", "straightness_z")
@@ -51,31 +51,40 @@ class ErrorMotions:
     tool_positioning_um: np.ndarray | None = None  # EXX at the tool point (Abbe), when a tool offset is given
     tool_positioning_sigma_um: np.ndarray | None = None
     names: dict[str, str] = field(default_factory=dict)
+    profiles: dict[str, ProfileSpan] = field(default_factory=dict)  # p-v over the targets, its noise p-v
+    tool_cam_mm: np.ndarray | None = None  # the tool point's offset from the camera centre, camera frame
 
 
-def _grads(sol: PoseSolution, tool_cam_mm: np.ndarray | None):
-    """Centres C (K, 3), attitudes A (K, 3, 3), and d C / d v, d theta / d v, d tool / d v (K, 3, 6)."""
+def _grads(sol: PoseSolution):
+    """Centres C (K, 3), attitudes A (K, 3, 3), and d C / d v, d theta / d v (K, 3, 6)."""
     R, t = sol.R, sol.t
     A = np.swapaxes(R, 1, 2)  # camera-to-world
     C = -np.einsum("kij,kj->ki", A, t)
     dC = np.concatenate([-np.einsum("kij,kjl->kil", A, skew(t)), -A], axis=2)
     dth = np.concatenate([-A, np.zeros_like(A)], axis=2)  # attitude A <- exp(-A w) A for R <- exp(w) R
-    dtool = None
-    if tool_cam_mm is not None:
-        Ao = np.einsum("kij,j->ki", A, tool_cam_mm)
-        dtool = dC + np.concatenate([np.einsum("kij,kjl->kil", skew(Ao), A), np.zeros_like(A)], axis=2)
-    return C, A, dC, dth, dtool
+    return C, A, dC, dth
+
+
+def _tool_grad(A: np.ndarray, dC: np.ndarray, tool_cam_mm: np.ndarray) -> np.ndarray:
+    """d (tool point in the world) / d v (K, 3, 6) for a tool offset fixed in the camera frame."""
+    Ao = np.einsum("kij,j->ki", A, tool_cam_mm)
+    return dC + np.concatenate([np.einsum("kij,kjl->kil", skew(Ao), A), np.zeros_like(A)], axis=2)
 
 
 def error_motions(sol: PoseSolution, targets_mm: np.ndarray, axis: str = "X",
-                  tool_cam_mm: np.ndarray | None = None) -> ErrorMotions:
-    """EXX ... ECX of a line axis at every stop, with sigmas, from the poses of :func:`solve_poses`."""
+                  tool_cam_mm: np.ndarray | None = None, tool_stage_mm: np.ndarray | None = None) -> ErrorMotions:
+    """EXX ... ECX of a line axis at every stop, with sigmas, from the poses of :func:`solve_poses`.
+
+    The tool point is an offset from the camera centre fixed to the carriage: in
+    the camera frame (``tool_cam_mm``), or in the stage frame at the reference stop
+    (``tool_stage_mm``: along X, Y, Z of the axis, as a user measures it).
+    """
     used = sol.used
     K = len(used)
     rows = np.flatnonzero(used)
     ref = int(rows[0])
     x = np.asarray(targets_mm, float).reshape(K, -1)[:, 0]
-    C, A, dC, dth, dtool = _grads(sol, tool_cam_mm)
+    C, A, dC, dth = _grads(sol)
     Cu = C[used] - C[used].mean(axis=0)
     X = np.linalg.svd(Cu, full_matrices=False)[2][0]
     if (C[rows[-1]] - C[ref]) @ X * (x[rows[-1]] - x[ref]) < 0:
@@ -105,29 +114,33 @@ def error_motions(sol: PoseSolution, targets_mm: np.ndarray, axis: str = "X",
         resid = np.full(K, np.nan)
         resid[rows] = coord[rows] - hat @ coord[rows]
         comps[name] = (1e3 * resid, np.einsum("i,kip->kp", axis_vec, dC), line, 1e3)
-    theta = np.array([log_so3(A[i] @ A[ref].T) for i in range(K)])
+    theta = log_so3(np.einsum("kij,lj->kil", A, A[ref]))  # A_i A_ref^T
+    theta[ref] = 0.0  # exactly, not log_so3's rounding
     for k, name in enumerate(ANGULAR):
         comps[name] = (1e6 * theta @ S[:, k], np.einsum("i,kip->kp", S[:, k], dth), rel, 1e6)
     for name, (val, grad, weights, unit) in comps.items():
         val = np.where(used, val, np.nan)
         values[name] = val
-        g = weights[:, :, None] * grad[None, :, :]
-        sig[name] = np.where(used, unit * np.sqrt(np.maximum(sol.covariance.variances(g), 0.0)), np.nan)
-        gc = (centred if name in ANGULAR or name == "positioning" else line)[:, :, None] * grad[None, :, :]
-        csig[name] = np.where(used, unit * np.sqrt(np.maximum(sol.covariance.variances(gc), 0.0)), np.nan)
+        var = sol.covariance.weighted_variances(weights, grad)
+        sig[name] = np.where(used, unit * np.sqrt(np.maximum(var, 0.0)), np.nan)
+        var = sol.covariance.weighted_variances(centred if name in ANGULAR or name == "positioning" else line, grad)
+        csig[name] = np.where(used, unit * np.sqrt(np.maximum(var, 0.0)), np.nan)
     single = np.full((K, 3), np.nan)
     for i in rows:
         Om = sol.single_view[i, 0:3, 0:3]
         cov_world = A[i] @ Om @ A[i].T
         single[i] = 1e6 * np.sqrt(np.diag(S.T @ cov_world @ S))
-    resolved = {}
-    for name in values:
-        prof = profile_span(values[name], csig[name], x, used)
-        resolved[name] = bool(prof.resolved)
+    profiles = {name: profile_span(values[name], csig[name], x, used) for name in values}
+    resolved = {name: bool(prof.resolved) for name, prof in profiles.items()}
     tool = tool_sig = None
+    if tool_stage_mm is not None:
+        tool_cam_mm = sol.R[ref] @ S @ np.asarray(tool_stage_mm, float)
     if tool_cam_mm is not None:
+        tool_cam_mm = np.asarray(tool_cam_mm, float)
+        dtool = _tool_grad(A, dC, tool_cam_mm)
         T_world = C + np.einsum("kij,j->ki", A, tool_cam_mm)
         tool = np.where(used, 1e3 * ((T_world - T_world[ref]) @ X - (x - x[ref])), np.nan)
-        gt = rel[:, :, None] * np.einsum("i,kip->kp", X, dtool)[None, :, :]
-        tool_sig = np.where(used, 1e3 * np.sqrt(np.maximum(sol.covariance.variances(gt), 0.0)), np.nan)
-    return ErrorMotions(axis, S, ref, values, sig, csig, single, resolved, m, tool, tool_sig, iso_names(axis))
+        var = sol.covariance.weighted_variances(rel, np.einsum("i,kip->kp", X, dtool))
+        tool_sig = np.where(used, 1e3 * np.sqrt(np.maximum(var, 0.0)), np.nan)
+    return ErrorMotions(axis, S, ref, values, sig, csig, single, resolved, m, tool, tool_sig, iso_names(axis),
+                        profiles, tool_cam_mm)

@@ -18,7 +18,7 @@ from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.rotation import chordal_mean, exp_so3
 from lps_gui.core.target_arrowhead import (
     Linearization, PositionCovariance, levenberg_marquardt, project_residuals, retract_targets, view_rms)
-from lps_gui.core.target_model import TargetObservations, origin_in_camera, target_views
+from lps_gui.core.target_model import TargetObservations, TargetSolution, origin_in_camera, target_views
 
 
 @dataclass
@@ -66,15 +66,25 @@ def _retract(state: dict, dg: np.ndarray, dv: np.ndarray) -> dict:
 
 
 def solve_poses(obs: TargetObservations, intrinsics: CameraIntrinsics, max_iterations: int = 50,
-                tolerance: float = 1e-10, progress=None, noise_px: float | None = None) -> PoseSolution:
-    """Every view's pose and the targets' poses, jointly; sigmas from (J^T J)^-1 at the solution."""
-    views = target_views(obs, intrinsics)
+                tolerance: float = 1e-10, progress=None, noise_px: float | None = None,
+                start: TargetSolution | None = None) -> PoseSolution:
+    """Every view's pose and the targets' poses, jointly; sigmas from (J^T J)^-1 at the solution.
+
+    ``start``: the row model's solution of the same views (one orientation, a line), whose target
+    poses and per-view translations are a close start: no PnP per view and target, a few iterations.
+    """
     K, T = len(obs.names), len(obs.targets)
-    ok, used, Q, p = views["ok"], views["used"], views["Q"], views["p"]
-    R = np.tile(np.eye(3), (K, 1, 1))
-    for i in np.flatnonzero(used):
-        R[i] = chordal_mean(views["R_world"][i, ok[i]])
-    t = origin_in_camera(views["tv"], ok, p, R)
+    if start is None:
+        views = target_views(obs, intrinsics)
+        ok, used, Q, p = views["ok"], views["used"], views["Q"], views["p"]
+        R = np.tile(np.eye(3), (K, 1, 1))
+        for i in np.flatnonzero(used):
+            R[i] = chordal_mean(views["R_world"][i, ok[i]])
+        t = origin_in_camera(views["tv"], ok, p, R)
+    else:
+        used, Q, p = start.used.copy(), start.Q.copy(), start.p.copy()
+        R = np.tile(start.R, (K, 1, 1))
+        t = start.l0[None, :] + np.where(used[:, None], start.s, 0.0) @ start.N.T
     state = {"R": R, "t": t, "Q": Q, "p": p}
     seen = np.isfinite(obs.corners_px[..., 0]) & used[:, None]
     view, corner = np.nonzero(seen)
@@ -93,3 +103,20 @@ def solve_poses(obs: TargetObservations, intrinsics: CameraIntrinsics, max_itera
     return PoseSolution(fit.state["R"], fit.state["t"], fit.state["Q"], fit.state["p"], used,
                         float(np.sqrt(sigma2)), view_rms(fit.lin.r, view, K), cov, fit.Avv_inv * sigma2,
                         target_sigma, fit.iterations, fit.converged)
+
+
+def pose_solution_from_views(R: np.ndarray, t: np.ndarray, cov_unit: np.ndarray, used: np.ndarray,
+                             sigma2_px: float) -> PoseSolution:
+    """Per-view poses against one board (the world, known) as a :class:`PoseSolution`: no target columns.
+
+    ``cov_unit`` (K, 6, 6): each view's (rotation, translation) covariance per unit noise variance, the
+    left perturbation of :func:`solve_poses`, so :mod:`core.error_motions` reads one board's poses
+    (the 6-DOF fit of a single-board session) as it reads a constellation's.
+    """
+    used = np.asarray(used, bool)
+    K = len(used)
+    cov = PositionCovariance(cov_unit * used[:, None, None], np.zeros((K, 0, 6)), np.zeros((0, 0)), float(sigma2_px),
+                             np.eye(6))
+    return PoseSolution(np.asarray(R, float), np.asarray(t, float), np.eye(3)[None], np.zeros((1, 3)), used,
+                        float(np.sqrt(sigma2_px)), np.full(K, np.nan), cov, cov_unit * sigma2_px, np.zeros((1, 6)), 0,
+                        True)

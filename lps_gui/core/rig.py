@@ -82,6 +82,10 @@ class Rig:
         return (self.C0_board[None, :] + pose.plane_mm @ E[:, :2].T
                 + 1e-3 * pose.normal_um[:, None] * E[None, :, 2])
 
+    def carriage_rotations(self, pose: TruePose | PlanarTruePose) -> np.ndarray:
+        """The carriage's rotation vectors w (K, 3) rad in the board frame: its angles about the frame's axes."""
+        return 1e-6 * np.asarray(pose.angles_urad, dtype=float) @ self.frame().T
+
     def camera_poses(self, pose: TruePose | PlanarTruePose) -> tuple[np.ndarray, np.ndarray]:
         """Camera poses for true carriage poses.
 
@@ -91,8 +95,7 @@ class Rig:
         camera's orientation becomes R Q^T.
         """
         if isinstance(pose, PlanarTruePose):
-            return carried_camera_poses(self.R_cam_board, self.camera_centres(pose),
-                                        1e-6 * pose.angles_urad @ self.axes_board.T)
+            return carried_camera_poses(self.R_cam_board, self.camera_centres(pose), self.carriage_rotations(pose))
         F = self.frame()
         u, v1, v2 = F[:, 0], F[:, 1], F[:, 2]
         C = (
@@ -100,7 +103,7 @@ class Rig:
             + pose.axis_mm[:, None] * u[None, :]
             + 1e-3 * (pose.straightness_um[:, :1] * v1[None, :] + pose.straightness_um[:, 1:2] * v2[None, :])
         )
-        return carried_camera_poses(self.R_cam_board, C, 1e-6 * pose.angles_urad @ F.T)
+        return carried_camera_poses(self.R_cam_board, C, self.carriage_rotations(pose))
 
     @classmethod
     def facing_board(

@@ -35,6 +35,8 @@ class SixDof:
     angles_urad: np.ndarray  # shape (K, 3): roll (u), pitch (v1), yaw (v2)
     angles_sigma_urad: np.ndarray  # shape (K, 3)
     frame: np.ndarray  # shape (3, 3): (u, v1, v2) columns, board frame
+    poses: ViewPoses | None = None  # the per-view poses behind the figures (SPEC 14's error motions start here)
+    sigma2_px: float = 0.0  # the noise variance the sigmas are scaled with
 
 
 def refine_view_poses(
@@ -92,4 +94,4 @@ def six_dof_motion(poses: ViewPoses, R_common: np.ndarray, valid: np.ndarray, si
     angles_urad = 1e6 * log_so3(Q) @ frame
     Ja = -np.einsum("ia,kji->kaj", frame, poses.R)  # d angles / d w = -F^T R_i^T, shape (K, 3, 3)
     angles_sigma_urad = 1e6 * np.sqrt(np.einsum("kab,kbc,kac->ka", Ja, cov[:, :3, :3], Ja))
-    return SixDof(straight_um, straight_sigma_um, angles_urad, angles_sigma_urad, frame)
+    return SixDof(straight_um, straight_sigma_um, angles_urad, angles_sigma_urad, frame, poses, float(sigma2_px))

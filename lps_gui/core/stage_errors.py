@@ -76,7 +76,9 @@ class StageErrorModel:
     Positioning error e(x) = scale_ppm*1e-6*x + periodic_um*sin(2 pi x/pitch_mm + phase)
     - backlash_um/2 * approach direction + N(0, repeatability_um): a target
     approached moving up (+1) stops short by half the backlash, moving down
-    (-1) overshoots by half. ``dead_band_um`` (stick-slip) acts on the
+    (-1) overshoots by half. The angles are smooth profiles plus, per stop,
+    N(0, angle_noise_urad) about each axis (a carriage settling on its
+    bearings a little differently every time). ``dead_band_um`` (stick-slip) acts on the
     sequence of commands, not on one position: see :meth:`reached_mm`.
     """
 
@@ -92,6 +94,7 @@ class StageErrorModel:
     roll_urad: ErrorProfile = field(default_factory=ErrorProfile)
     pitch_urad: ErrorProfile = field(default_factory=ErrorProfile)
     yaw_urad: ErrorProfile = field(default_factory=ErrorProfile)
+    angle_noise_urad: float = 0.0
     dead_band_um: float = 0.0  # stick-slip: a move shorter than this leaves the carriage where it was
 
     def reached_mm(self, commanded_mm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -138,6 +141,8 @@ class StageErrorModel:
             e_um = e_um + rng.normal(0.0, self.repeatability_um, size=x.shape)
         straight = np.stack([p(x) for p in self.straightness_um], axis=-1)
         angles = np.stack([self.roll_urad(x), self.pitch_urad(x), self.yaw_urad(x)], axis=-1)
+        if rng is not None and self.angle_noise_urad > 0:  # drawn after the positions: older seeds stay the same
+            angles = angles + rng.normal(0.0, self.angle_noise_urad, size=angles.shape)
         return TruePose(axis_mm=x + e_um * 1e-3, straightness_um=straight, angles_urad=angles)
 
     def to_dict(self) -> dict[str, Any]:
@@ -149,6 +154,8 @@ class StageErrorModel:
             p["poly"] = list(p["poly"])
         if not self.dead_band_um:
             del d["dead_band_um"]  # a stage without one is recorded as before
+        if not self.angle_noise_urad:
+            del d["angle_noise_urad"]  # the truth records of sessions without it stay as they were
         return d
 
     @classmethod

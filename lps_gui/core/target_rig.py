@@ -52,6 +52,31 @@ def row_layout(
     return TargetLayout(tuple(targets), Q, p)
 
 
+def two_depth_layout(
+    far: list[Target], near: list[Target], far_pitch_mm: float, near_pitch_mm: float, depth_mm: float,
+    near_offset_mm: tuple[float, float], tilt_sigma_rad: float = 0.0, offset_sigma_mm: float = 0.0, seed: int = 0,
+) -> TargetLayout:
+    """A far row and, ``depth_mm`` nearer the camera, a near row of (smaller) targets: a two-depth constellation.
+
+    A rotation of the camera moves near and far corners alike in the image, a
+    translation in proportion to 1/depth, so the two rows separate the tilts
+    from the translations (SPEC 14). The far row is laid out as
+    :func:`row_layout`; the near row starts at ``near_offset_mm`` (x, y) in target
+    0's frame (y: beside the far row in the image, so that it hides little of
+    it) and runs along x at ``near_pitch_mm``. ``depth_mm=0`` puts both rows in
+    one plane (the tilts then stay unresolved). Every target but target 0
+    gets the random mounting errors.
+    """
+    T = len(far) + len(near)
+    base = row_layout(list(far) + list(near), 0.0, tilt_sigma_rad, offset_sigma_mm, seed=seed)
+    nominal = np.zeros((T, 3))
+    nominal[: len(far), 0] = far_pitch_mm * np.arange(len(far))
+    nominal[len(far):, 0] = near_offset_mm[0] + near_pitch_mm * np.arange(len(near))
+    nominal[len(far):, 1] = near_offset_mm[1]
+    nominal[len(far):, 2] = -float(depth_mm)
+    return TargetLayout(base.targets, base.Q, base.p + nominal)
+
+
 def occluded(layout: TargetLayout, R: np.ndarray, t: np.ndarray, world: np.ndarray, which: np.ndarray,
              margin_squares: float = 0.5) -> np.ndarray:
     """(K, N) corners hidden behind another target's paper (a nearer row of a two-depth constellation).

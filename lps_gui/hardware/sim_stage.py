@@ -100,6 +100,7 @@ class SimulatedStage(Stage):
         self._alarm: int | None = 0 if homing_required else None  # 0: GRBL's homing lock, no code
         self._last_dir = 1
         self._noise_um = 0.0
+        self._angle_noise_urad = np.zeros(3)  # the angles' draw of the last move (StageErrorModel.angle_noise_urad)
         self.planar_errors = planar_errors
         self._axis_dir = [1, 1, 1]  # per axis: side of the last approach (planar truth)
         self._axis_noise_um = [0.0, 0.0, 0.0]  # per axis: repeatability draw of its last move
@@ -211,6 +212,8 @@ class SimulatedStage(Stage):
             self._stopped_at = p.t_end
             rep = self.errors.repeatability_um
             self._noise_um = float(self._rng.normal(0.0, rep)) if rep > 0 else 0.0
+            if self.errors.angle_noise_urad > 0:
+                self._angle_noise_urad = self._rng.normal(0.0, self.errors.angle_noise_urad, 3)
         if self.planar_errors is not None and p.axis in (0, 1) and p.direction != 0:
             self._axis_dir[p.axis] = p.direction
             rep = (self.planar_errors.x, self.planar_errors.y)[p.axis].repeatability_um
@@ -330,7 +333,7 @@ class SimulatedStage(Stage):
             return TruePose(
                 axis_mm=pose.axis_mm + 1e-3 * (self._noise_um + ring_um),
                 straightness_um=pose.straightness_um,
-                angles_urad=pose.angles_urad,
+                angles_urad=pose.angles_urad + self._angle_noise_urad,
             )
 
     def true_planar_pose(self) -> PlanarTruePose:

@@ -61,6 +61,14 @@ PLANAR_POSITION_COLUMNS = (  # SPEC 10
     "rms_px",
     "outlier",
 )
+ERROR_MOTION_COLUMNS = (  # SPEC 14: after the columns above, in results that have error_motions
+    "eax_urad",
+    "ebx_urad",
+    "ecx_urad",
+    "eax_sigma_urad",
+    "ebx_sigma_urad",
+    "ecx_sigma_urad",
+)
 
 
 def json_float(x: Any) -> float | None:
@@ -303,8 +311,12 @@ def _fmt(value: Any) -> str:
 
 
 def position_columns(results: dict[str, Any]) -> tuple[str, ...]:
-    """The positions.csv columns: SPEC 7 for a line, SPEC 10 for a planar session."""
-    return PLANAR_POSITION_COLUMNS if len(results.get("axes") or ["X"]) == 2 else POSITION_COLUMNS
+    """The positions.csv columns: SPEC 7 for a line, SPEC 10 for a planar session, then SPEC 14's angles.
+
+    Results from before the error motions (no ``error_motions``) keep their columns.
+    """
+    base = PLANAR_POSITION_COLUMNS if len(results.get("axes") or ["X"]) == 2 else POSITION_COLUMNS
+    return base + ERROR_MOTION_COLUMNS if "error_motions" in results else base
 
 
 _CSV_SPECIAL = frozenset(',"\r\n')

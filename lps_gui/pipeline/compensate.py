@@ -64,12 +64,22 @@ def _planar_axis_table(results: Results, axis: str, max_points: int) -> Compensa
     return build_table(col(f"target_{key}_mm"), side, passes, col(f"deviation_{key}_um"), sigma, valid, max_points)
 
 
-def compensate_session(session_dir: Path | str, fmt: str, out: Path | str, axis: str = "X") -> tuple[CompensationTable, list[str]]:
+def compensate_session(session_dir: Path | str, fmt: str, out: Path | str, axis: str = "X",
+                       error_motions_out: Path | str | None = None) -> tuple[CompensationTable, list[str]]:
     """Write the table of ``session_dir`` as ``fmt`` to ``out``; return it and the settings lines to print
-    (backlash; for a planar session also the skew correction from the measured squareness)."""
+    (backlash; for a planar session also the skew correction from the measured squareness).
+    ``error_motions_out``: also the six error motions per nominal position as CSV (SPEC 14)."""
     results = session_results(session_dir)
     table = table_from_results(results, axis=axis)
+    if error_motions_out is not None:
+        from lps_gui.pipeline.error_motion_table import error_motion_table
+
+        error_motion_table(results)  # refused before anything is written
     write_table(out, table, fmt)
+    if error_motions_out is not None:
+        from lps_gui.pipeline.error_motion_table import write_error_motion_table
+
+        write_error_motion_table(error_motions_out, results)
     b = table.backlash_um()
     lines = [] if b is None else backlash_lines(b, axis)
     planar = results.figures.planar

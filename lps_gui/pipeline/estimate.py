@@ -40,6 +40,7 @@ from lps_gui.io.session import Session
 from lps_gui.io.session_lock import SessionLock
 from lps_gui.pipeline.asme_results import add_asme_results, test_options
 from lps_gui.pipeline.board_plane_results import position_columns, straightness_figures
+from lps_gui.pipeline.error_motion_results import add_error_motions
 from lps_gui.pipeline.planar_results import build_planar_results
 from lps_gui.pipeline.session_checks import corners_of_records, session_inputs
 from lps_gui.pipeline.target_session import add_targets_section, target_observations
@@ -173,6 +174,7 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate, intrins
         from lps_gui.pipeline.stitched_session import add_stitch_ties
 
         add_stitch_ties(results, obs)  # a stitched session's placements are tied by their repeated stops
+    add_error_motions(results, session, obs, est)  # SPEC 14: the six error motions per axis, where poses allow
     results = add_uncertainty(results, session)  # environment, GUM budget, U (k = 2) per figure
     return add_asme_results(results, session, obs, est) if obs.D == 1 else results  # ASME B5.64 names, TUR, tests
 

@@ -20,6 +20,7 @@ from lps_gui.io.results_model import Results, as_results, read_results
 from lps_gui.report import asme_pages
 from lps_gui.report import sections as R
 from lps_gui.report import summary as S
+from lps_gui.report.error_motions_report import paint_error_motions_page
 from lps_gui.report.figures import figure_by_key, figures_from_results, with_spec_band
 from lps_gui.report.planar_report import paint_planar_report
 from lps_gui.report.targets_report import targets_section
@@ -124,6 +125,7 @@ def _paint_line_report(flow: Any, session_dir: Path, meta: dict[str, Any], resul
     flow.heading("Plots")
     for spec in figures_from_results(results, meta.get("truth")):
         flow.figure(spec, FIGURE_HEIGHT_MM)
+    paint_error_motions_page(flow, results, FIGURE_HEIGHT_MM)  # SPEC 14, when the results have them
     progress(2, len(steps), "outliers")
     _outliers(flow, session_dir, results)
     progress(3, len(steps), "table")

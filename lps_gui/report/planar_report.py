@@ -18,6 +18,7 @@ from lps_gui.errors import InputError
 from lps_gui.io.results_model import Results, as_results
 from lps_gui.io.results_sections import Figures, SpanResolution, TruthComparison
 from lps_gui.report import sections as R
+from lps_gui.report.error_motions_report import paint_error_motions_page
 from lps_gui.report.figures import planar_figures_from_results
 from lps_gui.report.summary import DASH, Row, fmt, table_cells
 from lps_gui.report.targets_report import targets_section
@@ -232,6 +233,7 @@ def paint_planar_report(flow: Any, meta: dict[str, Any], results: Results, title
     flow.heading("Plots")
     for spec_fig in planar_figures_from_results(results):
         flow.figure(spec_fig, figure_height_mm if spec_fig.key != "error_map" else 1.6 * figure_height_mm)
+    paint_error_motions_page(flow, results, figure_height_mm)  # SPEC 14, when the results have them
     flow.new_page()
     flow.heading("Per-position results (1\u03c3: noise only)")
     header, body, widths = planar_position_table(results)

@@ -77,3 +77,24 @@ def test_the_marker_mask_only_darkens_white_squares():
     squares = mask.reshape(BOARD.rows + 1, 20, BOARD.cols + 1, 20).max(axis=(1, 3))
     r, c = np.mgrid[0:BOARD.rows + 1, 0:BOARD.cols + 1]
     assert np.all(squares[(r + c) % 2 == 0] == 0) and np.all(squares[(r + c) % 2 == 1] > 0.9)
+
+
+def test_a_two_depth_constellation_renders_both_rows_where_the_model_projects_them():
+    """SPEC 14's layout (core/two_depth) at half the paper camera's resolution: near row on top, far row below."""
+    from lps_gui.core.two_depth import two_depth_rig
+
+    half = CameraIntrinsics.from_values((960, 540), 1159.5, 1159.5, 480.0, 270.0)
+    tr = two_depth_rig(600.0, intrinsics=half, seed=2)
+    pose = tr.rig.errors.true_pose(np.array([300.0]), np.ones(1))
+    Rv, tv = tr.rig.camera_poses(pose)
+    truth = observe(tr.layout, half, Rv, tv)[0]
+    image = TargetsRenderer(tr.layout, half, noise_grey=1.0).render(Rv[0], tv[0], np.random.default_rng(0))
+    found = detect_targets(image, list(tr.layout.targets))
+    ids = [t.id for t in tr.layout.targets]
+    start = np.cumsum([0] + [t.board.n_corners for t in tr.layout.targets])
+    rows = {f.target[0] for f in found if len(f.corner) >= 20}
+    assert rows == {"F", "N"}  # both depths found in one view
+    for f in found:
+        ref = truth[start[ids.index(f.target)] + f.corner]
+        assert np.isfinite(ref).all()  # nothing found that the model hides (behind the near row, outside)
+        assert np.sqrt(np.mean((f.xy - ref) ** 2)) < 0.05

@@ -4,47 +4,26 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.core.board import Board
-from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.error_motions import error_motions, iso_names
 from lps_gui.core.pose_model import _linearize, _retract, solve_poses
 from lps_gui.core.rotation import exp_so3
-from lps_gui.core.target_model import TargetObservations
-from lps_gui.core.target_rig import TargetLayout, observe
-from lps_gui.core.targets import Target, pack_targets
+from lps_gui.core.two_depth import PAPER_CAMERA, observe_stops, two_depth_rig
 
-CAMERA = CameraIntrinsics.from_values((1920, 1080), 2319.0, 2319.0, 960.0, 540.0)  # 8 mm, 3.45 um pixels
-FAR = Board(10, 7, 30.0, type="charuco", marker_mm=22.0)
-NEAR = Board(10, 7, 15.0, type="charuco", marker_mm=11.0)
-L = 1524.0
+CAMERA = PAPER_CAMERA  # 8 mm lens, 3.45 um pixels, 1920 x 1080
 
 
-def two_depth_scene(seed: int, two_depth: bool = True, stops: int = 121, noise_px: float = 0.1):
-    """The paper's X axis 800 mm from a row of 30 mm targets and, 300 mm nearer, a row of 15 mm targets.
+def two_depth_scene(seed: int, two_depth: bool = True, stops: int = 121, noise_px: float = 0.1,
+                    travel_mm: float = 600.0):
+    """The paper camera 800 mm from a row of 30 mm targets and, 300 mm nearer, a row of 15 mm targets.
 
-    The camera's attitude follows smooth roll, pitch and yaw of 50-160 urad (plus 3 urad noise); its centre
-    bows 10 um across and 15 um along the view. ``two_depth=False`` puts the small targets in the far plane.
+    The stage rolls, pitches and yaws along smooth curves of 50-160 urad (plus 3 urad per stop) and bows
+    10 um across and 15 um along the view (core/two_depth). ``two_depth=False`` puts the small targets in
+    the far plane.
     """
-    rng = np.random.default_rng(seed)
-    far = pack_targets([FAR] * 6)
-    near = [Target(f"N{j}", NEAR, 264 + 44 * j) for j in range(10)]
-    Q = [np.eye(3)] + [exp_so3(rng.normal(0, 0.01, 3)) for _ in range(15)]
-    p = [np.array([340.0 * j, 0, 0]) + (rng.normal(0, 2, 3) if j else 0) for j in range(6)]
-    p += [np.array([-20 + 180.0 * j, -52.0 if two_depth else -150.0, -300.0 if two_depth else 0.0])
-          + rng.normal(0, 2, 3) for j in range(10)]
-    layout = TargetLayout(tuple(far + near), np.stack(Q), np.stack(p))
-    x = np.linspace(0, L, stops)
-    s = x + rng.normal(0, 0.003, stops)
-    theta = np.stack([80e-6 * np.sin(2 * np.pi * x / L), 120e-6 * (x / L) ** 2 + 30e-6 * np.sin(2 * np.pi * x / 400),
-                      60e-6 * np.cos(np.pi * x / L)], axis=1) + rng.normal(0, 3e-6, (stops, 3))
-    A = np.einsum("kij,jl->kil", exp_so3(theta), exp_so3(np.array([0.01, -0.02, 0.005])).T)  # camera-to-world
-    R = np.swapaxes(A, 1, 2)
-    bow = np.sin(np.pi * x / L)
-    C = np.stack([(5 * 340 + 270 - L) / 2 + s, 44.0 + 10e-3 * bow, -800.0 + 15e-3 * bow], axis=1)
-    t = -np.einsum("kij,kj->ki", R, C)
-    uv = observe(layout, CAMERA, R, t, noise_px=noise_px, seed=seed)
-    obs = TargetObservations(list(layout.targets), uv, x[:, None], [f"v{i:03d}.png" for i in range(stops)])
-    return obs, {"theta": theta, "s": s, "C": C, "layout": layout}
+    tr = two_depth_rig(travel_mm, near_mm=300.0 if two_depth else 0.0, seed=seed)
+    views = observe_stops(tr, np.linspace(0.0, travel_mm, stops), noise_px, seed)
+    return views.observations, {"theta": views.rotations_world, "s": views.axis_mm, "C": views.centres_world,
+                                "layout": tr.layout, "rig": tr.rig}
 
 
 def test_iso_names():
@@ -107,8 +86,8 @@ def _check(seeds, two_depth=True):
 def test_two_depths_resolve_roll_pitch_and_yaw_at_every_stop(seeds):
     z2, ratio, resolved, sig = _check(seeds)
     assert 0.5 < z2.mean() < 2.0
-    assert ratio.max() < 1.3  # each stop's angles within 1.3x of what one view alone resolves (targets known)
-    assert np.all(sig < 20.0)  # SPEC 14: about 11, 11, 8 urad from one view
+    assert ratio.max() < 1.2  # each stop's angles within 1.2x of what one view alone resolves (targets known)
+    assert np.all(sig < 15.0)  # SPEC 14: about 11, 11, 8 urad from one view
     assert resolved.all()
 
 
@@ -125,7 +104,7 @@ def test_the_tool_point_carries_the_abbe_error():
     sol = solve_poses(obs, CAMERA)
     offset = np.array([0.0, 100.0, 0.0])  # 100 mm below the camera centre, camera frame
     em = error_motions(sol, obs.targets_mm, "X", tool_cam_mm=offset)
-    A = exp_so3(truth["theta"]) @ exp_so3(np.array([0.01, -0.02, 0.005])).T  # camera-to-world, as the scene
+    A = exp_so3(truth["theta"]) @ truth["rig"].R_cam_board.T  # camera-to-world, as the rig carries it
     tool = truth["C"] + np.einsum("kij,j->ki", A, offset)
     X = em.frame[:, 0]
     true_tool = 1e3 * ((tool - tool[em.reference]) @ X - (obs.targets_mm[:, 0] - obs.targets_mm[em.reference, 0]))
@@ -133,3 +112,16 @@ def test_the_tool_point_carries_the_abbe_error():
     assert np.all(np.abs(e - e.mean()) < 4 * em.tool_positioning_sigma_um.max())
     # the Abbe term is real: the tool and the camera centre differ by about 100 mm x pitch
     assert np.abs(em.tool_positioning_um - em.values["positioning"]).max() > 5.0
+
+
+def test_weighted_variances_are_the_variances_of_the_weighted_functionals():
+    from lps_gui.core.target_arrowhead import PositionCovariance
+
+    rng = np.random.default_rng(4)
+    K, G, P = 7, 5, 6
+    M = rng.normal(size=(K, P, P))
+    S = rng.normal(size=(G, G))
+    cov = PositionCovariance(M @ np.swapaxes(M, 1, 2), rng.normal(size=(K, G, P)), S @ S.T, 0.3,
+                             np.linalg.qr(rng.normal(size=(P, P)))[0])
+    w, g = rng.normal(size=(4, K)), rng.normal(size=(K, P))
+    assert np.allclose(cov.weighted_variances(w, g), cov.variances(w[:, :, None] * g[None]), rtol=1e-12)

@@ -51,3 +51,15 @@ def test_dict_round_trip_is_exact():
 def test_a_scalar_commanded_position_gives_one_pose(direction):
     pose = StageErrorModel(backlash_um=2.0).true_pose(10.0, direction)
     assert pose.axis_mm.shape == (1,) and pose.axis_mm[0] == pytest.approx(10.0 - direction * 1e-3)
+
+
+def test_angle_noise_is_drawn_per_stop_and_kept_out_of_older_truth_records():
+    smooth = StageErrorModel(roll_urad=ErrorProfile(amplitude=80.0, period_mm=600.0))
+    noisy = StageErrorModel(roll_urad=ErrorProfile(amplitude=80.0, period_mm=600.0), angle_noise_urad=3.0)
+    x = np.linspace(0.0, 600.0, 2000)
+    d = np.ones_like(x)
+    e = noisy.true_pose(x, d, np.random.default_rng(1)).angles_urad - smooth.true_pose(x, d).angles_urad
+    assert np.allclose(e.std(axis=0), 3.0, rtol=0.1) and np.abs(e.mean(axis=0)).max() < 0.3
+    assert np.array_equal(noisy.true_pose(x, d).angles_urad, smooth.true_pose(x, d).angles_urad)  # no rng: systematic
+    assert "angle_noise_urad" not in smooth.to_dict()
+    assert StageErrorModel.from_dict(noisy.to_dict()) == noisy

@@ -24,7 +24,8 @@ def test_results_files_follow_spec(session):
     assert read_results(session).to_dict() == json.loads(json.dumps(results))
     header = (session / "positions.csv").read_text().splitlines()[0].split(",")
     assert header == ["index", "run", "direction", "target_mm", "measured_mm", "deviation_um", "sigma_um", "rms_px",
-                      "outlier", "straightness_um_1", "straightness_um_2", "roll_urad", "pitch_urad", "yaw_urad"]
+                      "outlier", "straightness_um_1", "straightness_um_2", "roll_urad", "pitch_urad", "yaw_urad",
+                      "eax_urad", "ebx_urad", "ecx_urad", "eax_sigma_urad", "ebx_sigma_urad", "ecx_sigma_urad"]  # SPEC 14
     assert len(results["positions"]) == 48
     assert results["figures"]["iso230_2"] is not None  # 2 runs in both directions
     tc = results["truth_comparison"]

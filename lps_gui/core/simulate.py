@@ -335,7 +335,7 @@ PLANAR_PRESETS = {"paper-planar": paper_planar_spec, "small-planar": small_plana
 
 from lps_gui.core.target_presets import PLANAR_TARGET_PRESETS, TARGET_PRESETS  # noqa: E402 (rows of targets; they import core/simulation_spec, not this module)
 
-from lps_gui.core.two_depth import TWO_DEPTH_PRESETS  # noqa: E402 (SPEC 14: targets at two depths)
+from lps_gui.core.two_depth import TWO_DEPTH_PRESETS  # noqa: E402 (SPEC 14: targets at two depths; imports core/simulation_spec too)
 
 PRESETS.update(TARGET_PRESETS)
 PRESETS.update(TWO_DEPTH_PRESETS)

@@ -20,8 +20,10 @@ import numpy as np
 from lps_gui.core.board import Board
 from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.lps_model import unit
+from lps_gui.core.plan import Plan
 from lps_gui.core.rig import Rig
 from lps_gui.core.rotation import exp_so3
+from lps_gui.core.simulation_spec import SimulationSpec
 from lps_gui.core.stage_errors import ErrorProfile, StageErrorModel
 from lps_gui.core.target_model import TargetObservations
 from lps_gui.core.target_rig import TargetLayout, observe, two_depth_layout
@@ -121,14 +123,11 @@ def observe_stops(tr: TwoDepthRig, targets_mm: np.ndarray, noise_px: float = 0.1
 
 
 def two_depth_spec(seed: int = 0, noise_px: float = 0.1, errors: StageErrorModel | None = None,
-                   plan: Any = None, near_mm: float = 300.0, name: str = "paper-two-depth") -> Any:
+                   plan: Any = None, near_mm: float = 300.0, name: str = "paper-two-depth") -> SimulationSpec:
     """A simulation of :func:`two_depth_rig` (SPEC 14's case): the paper's 1524 mm X axis in 241 stops of 6.35 mm.
 
     ``near_mm=0``: both rows in one plane (preset ``paper-one-plane``: the tilts are not resolved).
     """
-    from lps_gui.core.plan import Plan
-    from lps_gui.core.simulate import SimulationSpec
-
     plan = plan or Plan(start_mm=0.0, stop_mm=1524.0, step_mm=6.35)
     t = plan.targets()
     travel = float(t[-1] - t[0])

@@ -67,6 +67,8 @@ class Results(Section):
     uncertainty: Uncertainty | None = None
     summary: tuple[Any, ...] = ()
     asme_b5_64: AsmeB564 | None = None
+    targets: tuple[Mapping[str, Any], ...] = ()  # SPEC 13: each target's pose and sigma (docs/targets.md)
+    error_motions: Mapping[str, Any] | None = None  # SPEC 14: per axis, six motions per stop (docs/error-motions.md)
     extra: Mapping[str, Any] = field(default_factory=dict, metadata={"not_read": True})  # sections not known here
     source: str = field(default="results", compare=False, metadata={"not_read": True})  # the file, for messages
 

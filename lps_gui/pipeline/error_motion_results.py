@@ -243,6 +243,8 @@ def add_error_motions(results: dict[str, Any], session: Any, obs: Any, est: Any)
     from lps_gui.sim.truth import session_truth
 
     meta, where = session.meta, str(session.folder / "session.json")
+    if obs.segment is not None:
+        return  # one board moved between segments: its placements are tied by repeated stops, never seen together
     if obs.D == 1:
         motions = session_error_motions(meta, where, obs, est, session_truth(session))
     elif obs.mounted is not None:

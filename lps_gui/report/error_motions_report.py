@@ -59,7 +59,7 @@ def _label(iso: str, m: dict[str, Any], resolved: bool) -> str:
 
 
 def _figure(results: dict[str, Any], names: tuple[str, ...], key: str, title: str, unit: str) -> FigureSpec:
-    section = results["error_motions"]
+    section = results.get("error_motions")
     stops = _array([r.get("target_mm") for r in results.get("positions") or []])
     truth = section.get("truth") or {}
     series = []
@@ -131,7 +131,7 @@ def paint_error_motions_page(flow: Any, results: dict[str, Any], figure_height_m
     figures = error_motion_figures(results)
     if not figures:
         return False
-    section = results["error_motions"]
+    section = results.get("error_motions")
     flow.new_page()
     axes = " and ".join(section.get("axes") or [section.get("axis", "X")])
     flow.heading(f"Error motions of the {axes} ax{'es' if ' and ' in axes else 'is'} (ISO 230-1, SPEC 14)", 12)

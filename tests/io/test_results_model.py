@@ -112,11 +112,11 @@ def test_no_positions_is_refused(estimated):
 
 def test_unknown_sections_and_keys_are_kept(estimated):
     d = _document(estimated["planar"])
-    d["targets"] = {"count": 3, "per_target": [{"name": "T1", "scale_ppm": 1.5}]}  # a section from a later version
+    d["thermal_drift"] = {"count": 3, "per_target": [{"name": "T1", "scale_ppm": 1.5}]}  # a section from a later version
     d["figures"]["error_motions"] = {"roll_urad": [1.0, 2.0]}
     d["positions"][0]["pitch_urad"] = 4.0
     results = as_results(copy.deepcopy(d))
-    assert results.extra == {"targets": d["targets"]}
+    assert results.extra == {"thermal_drift": d["thermal_drift"]}
     assert results.figures.get("error_motions") == {"roll_urad": [1.0, 2.0]}
     assert results.positions[0].number("pitch_urad") == 4.0
     assert json_bytes(results.to_dict()) == json_bytes(d)

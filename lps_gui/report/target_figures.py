@@ -22,10 +22,10 @@ LANE_FRACTION = 0.08  # lane spacing as a fraction of the deviation's span
 TARGET_LABEL = "seen by"  # legend: "seen by T0"
 
 
-def target_stretches(results: dict[str, Any]) -> list[tuple[str, float, float]]:
-    """(id, first, last) X of the stops that saw each target; targets never seen are left out."""
+def target_stretches(results: Any) -> list[tuple[str, float, float]]:
+    """(id, first, last) X of the stops that saw each target (none without results); targets never seen are left out."""
     out = []
-    for t in results.get("targets") or []:
+    for t in (results.get("targets") if results is not None else None) or []:
         stretch = t.get("stretch_mm") if isinstance(t, dict) else None
         if stretch and len(stretch) == 2 and stretch[0] and stretch[1]:
             lo, hi = float(stretch[0][0]), float(stretch[1][0])
@@ -48,7 +48,7 @@ def lanes(stretches: list[tuple[str, float, float]]) -> list[int]:
     return out
 
 
-def with_target_stretches(figure: FigureSpec, results: dict[str, Any]) -> FigureSpec:
+def with_target_stretches(figure: FigureSpec, results: Any) -> FigureSpec:
     """``figure`` (the deviation vs target) with each target's stretch as a bar below the data."""
     stretches = target_stretches(results)
     if not stretches:

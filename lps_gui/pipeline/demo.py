@@ -29,8 +29,8 @@ from lps_gui.errors import InputError
 from lps_gui.io.intrinsics_file import write_intrinsics
 from lps_gui.io.session import Session
 from lps_gui.pipeline.detect import detect_session
-from lps_gui.pipeline.estimate import estimate_session
-from lps_gui.io.results_model import Results, as_results
+from lps_gui.pipeline.demo_steps import estimate_and_report
+from lps_gui.io.results_model import Results
 from lps_gui.pipeline.demo_summary import PAPER_SPEC, planar_summary_lines, summary_lines
 from lps_gui.pipeline.intrinsics import calibrate_images
 from lps_gui.sim.images import simulate_intrinsics_set
@@ -173,20 +173,9 @@ def run_demo(
     n_ok = int(np.isfinite(table.corners_px).any(axis=(1, 2)).sum())
     step("detect", "done", f"board found in {n_ok}/{len(table.names)} images", t0)
 
-    t0 = time.monotonic()
-    results = as_results(estimate_session(session.folder, method="joint", progress=bar("estimate"), cancel=cancel),
-                         str(session.folder / "results.json"))
-    res.results = results
-    p = results.parameters
-    step("estimate", "done", f"{'planar ' if planar else ''}joint LM on {p.n_used}/{p.n_views} "
-                             f"views, RMS {np.nan if p.rms_px is None else p.rms_px:.3f} px", t0)
-
-    t0 = time.monotonic()
-    from lps_gui.report.pdf import write_report
-
-    res.report_pdf = write_report(session.folder, results, progress=bar("report"))
-    res.csvs = [session.folder / n for n in ("positions.csv", "summary.csv") if (session.folder / n).exists()]
-    step("report", "done", f"{res.report_pdf}", t0)
+    results = estimate_and_report(session.folder, res, step, bar, cancel, lambda p: (
+        f"{'planar ' if planar else ''}joint LM on {p.n_used}/{p.n_views} views, "
+        f"RMS {np.nan if p.rms_px is None else p.rms_px:.3f} px"))
     if planar:
         res.summary = planar_summary_lines(results)
         return res
@@ -197,6 +186,7 @@ def run_demo(
     t0 = time.monotonic()
     cp = compensation_pass(session.folder, out / "session-compensated", bar("compensated capture"), cancel)
     from lps_gui.report.compare import write_comparison
+    from lps_gui.report.pdf import write_report
 
     res.reports = [write_report(cp.after_dir), write_comparison(session.folder, cp.after_dir)]
     step("compensate", "done", "; ".join(cp.lines()), t0)

@@ -23,6 +23,8 @@ from lps_gui.core.progress import CancelToken
 from lps_gui.core.simulate import SimulationSpec
 from lps_gui.core.target_presets import paper_row_spec
 from lps_gui.errors import InputError
+from lps_gui.io.results_model import Results
+from lps_gui.pipeline.demo_steps import estimate_and_report
 
 ROW_STEP_MM = 12.7  # the paper's X axis: 1524 mm in 120 steps
 # a printed target checked with a steel rule over its 330 mm: 20 um, i.e. 2 um per 30 mm square
@@ -70,8 +72,6 @@ def run_row_demo(out: Path, spec: SimulationSpec, res: Any, step: Callable[[str,
     """The demo's steps on a row of targets, into ``res`` (a :class:`~lps_gui.pipeline.demo.DemoResult`);
     ``calibrate_step`` is the one-board demo's (passed in: the demo imports this module)."""
     from lps_gui.pipeline.detect import detect_session
-    from lps_gui.pipeline.estimate import estimate_session
-    from lps_gui.report.pdf import write_report
     from lps_gui.sim.images import simulate_image_session
 
     t0 = time.monotonic()
@@ -95,44 +95,33 @@ def run_row_demo(out: Path, spec: SimulationSpec, res: Any, step: Callable[[str,
     step("detect", "done", f"targets found in {int((seen.sum(axis=1) > 0).sum())}/{len(table.names)} images "
                            f"(views per target: {per})", t0)
 
-    t0 = time.monotonic()
-    results = estimate_session(session.folder, method="joint", progress=bar("estimate"), cancel=cancel)
-    res.results = results
-    p = results.get("parameters") or {}
-    step("estimate", "done", f"row model on {p.get('n_used', '?')}/{p.get('n_views', '?')} views and {T} targets, "
-                             f"RMS {float(p.get('rms_px') or np.nan):.3f} px", t0)
-
-    t0 = time.monotonic()
-    res.report_pdf = write_report(session.folder, results, progress=bar("report"))
-    res.csvs = [session.folder / n for n in ("positions.csv", "summary.csv") if (session.folder / n).exists()]
-    step("report", "done", f"{res.report_pdf}", t0)
+    results = estimate_and_report(session.folder, res, step, bar, cancel, lambda p: (
+        f"row model on {p.n_used}/{p.n_views} views and {T} targets, "
+        f"RMS {np.nan if p.rms_px is None else p.rms_px:.3f} px"))
     res.summary = row_summary_lines(results)
     return res
 
 
-def row_summary_lines(results: dict[str, Any]) -> list[str]:
+def row_summary_lines(results: Results) -> list[str]:
     """What the row demo prints: the fit, the positioning figures, the targets, the truth beside them."""
     from lps_gui.report.summary import fmt
 
-    p = results.get("parameters") or {}
-    single = (results.get("figures") or {}).get("single_run") or {}
-    unc = results.get("uncertainty") or {}
-    tc = results.get("truth_comparison") or {}
-    sig = [r["sigma_um"] for r in results.get("positions") or [] if r.get("sigma_um")]
-    targets = results.get("targets") or []
-    worst = max((max(t["p_sigma_mm"]) for t in targets), default=None)
+    p, single, unc, tc = results.parameters, results.figures.single_run, results.uncertainty, results.truth_comparison
+    sig = [v for r in results.positions if (v := r.number("sigma_um"))]
+    worst = max((max(t["p_sigma_mm"]) for t in results.targets), default=None)
     lines = [
-        f"views: {p.get('n_views', '?')} ({p.get('n_used', '?')} used) against {len(targets)} targets; "
-        f"RMS residual {fmt(p.get('rms_px'))} px",
-        f"positioning: scale {fmt(single.get('scale_ppm'))} ppm (sigma {fmt(single.get('scale_sigma_ppm'))}), "
-        f"max |deviation| {fmt(single.get('max_abs_deviation_um'))} \u00b5m, mean step {fmt(single.get('mean_step_mm'), 6)} mm; "
+        f"views: {p.n_views} ({p.n_used} used) against {len(results.targets)} targets; RMS residual {fmt(p.rms_px)} px",
+        f"positioning: scale {fmt(single.scale_ppm if single else None)} ppm (sigma "
+        f"{fmt(single.scale_sigma_ppm if single else None)}), max |deviation| "
+        f"{fmt(single.max_abs_deviation_um if single else None)} \u00b5m, mean step "
+        f"{fmt(single.mean_step_mm if single else None, 6)} mm; "
         f"sigma per stop median {fmt(float(np.median(sig)) if sig else None)} \u00b5m (noise only)",
         f"targets: poses to {fmt(1e3 * worst if worst is not None else None)} \u00b5m (worst 1-sigma); "
-        f"U (k = 2) {fmt(unc.get('expanded_k2_um'), 2)} \u00b5m over the travel, with each target's print scale",
+        f"U (k = 2) {fmt(unc.expanded_k2_um if unc else None, 2)} \u00b5m over the travel, with each target's print scale",
     ]
-    if tc.get("position_rms_error_um") is not None:
+    if tc is not None and tc.position_rms_error_um is not None:
         tt = tc.get("targets") or {}
-        lines.append(f"error against truth: position RMS {fmt(tc['position_rms_error_um'])} \u00b5m, max "
-                     f"{fmt(tc.get('position_max_abs_error_um'))} \u00b5m, mean (error/sigma)^2 {fmt(tc.get('z_mean_square'))}"
+        lines.append(f"error against truth: position RMS {fmt(tc.position_rms_error_um)} \u00b5m, max "
+                     f"{fmt(tc.position_max_abs_error_um)} \u00b5m, mean (error/sigma)^2 {fmt(tc.z_mean_square)}"
                      f"; target poses within {fmt(tt.get('max_abs_z'))} sigma of truth")
     return lines

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 from typing import Any, Sequence
 
+from dataclasses import replace
+
 import numpy as np
 
 from lps_gui.report.figure_spec import (BACKWARD_COLOR, COMPONENT_COLORS, DIRECTION_ARROWS, DIRECTION_NAMES,
@@ -145,15 +147,23 @@ def figures_from_results(results: Results | dict[str, Any] | None, truth: dict[s
     if truth is None and results is not None:
         truth = results.extra.get("truth")
     tcols = truth_columns(results, truth)
+    row = results is not None and bool(results.targets)  # a row of targets (SPEC 13): no per-view board-plane figures
     return [
         positions_figure(cols),
-        with_target_stretches(deviation_figure(cols, tcols), results),  # a row's targets (SPEC 13)
+        with_target_stretches(deviation_figure(cols, tcols), results),
         step_figure(cols, tcols),
-        straightness_figure(cols, tcols),
-        angles_figure(cols, tcols),
+        for_row(straightness_figure(cols, None)) if row else straightness_figure(cols, tcols),
+        for_row(angles_figure(cols, None)) if row else angles_figure(cols, tcols),
         residuals_figure(cols),
         spectrum_figure(results),
     ]
+
+
+def for_row(figure: FigureSpec) -> FigureSpec:
+    """A board-plane figure of a session with targets: empty (the row model fits no per-view orientation),
+    with a note pointing to the error motions (SPEC 14), which give straightness and angles at the camera."""
+    return replace(figure, series=[], notes="a row of targets: the model fits one camera orientation and no per-view "
+                   "offsets, so straightness and angles come from the error motions (their page, SPEC 14)")
 
 
 def _by_direction(cols: dict[str, np.ndarray]) -> list[tuple[str, np.ndarray]]:

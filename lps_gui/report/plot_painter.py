@@ -82,7 +82,8 @@ def paint_figure(painter: Any, rect: Any, figure: FigureSpec, px_per_mm: float, 
     if xr0 is None or yr0 is None:
         painter.drawRect(plot)
         painter.setFont(font(9.0))
-        draw_text(painter, plot, int(Qt.AlignmentFlag.AlignCenter), "no data for this plot", log, "axis")
+        draw_text(painter, plot, int(Qt.AlignmentFlag.AlignCenter | Qt.TextFlag.TextWordWrap),
+                  f"no data for this plot: {figure.notes}" if figure.notes else "no data for this plot", log, "axis")
         painter.restore()
         return
     xr = padded(*xr0, fraction=0.02, log=figure.x_log)

@@ -79,3 +79,15 @@ def test_a_constellation_lists_both_axes_scale_terms_and_its_stretch_in_the_plan
                                 for j in range(2)]} for k, axis in enumerate("XY")}
     _, rows, _ = target_table({"targets": [target(0), target(1)], "uncertainty": {"per_axis": budget}})
     assert rows[1][4] == "(0, 0) \u2013 (381.0, 254.0)" and rows[1][8] == "1.50 / 2.50" and rows[1][5] == "50 %"
+
+
+def test_a_row_has_no_board_plane_curves_only_the_pointer_to_the_error_motions(row):
+    """No per-view straightness or angles from the row model: the truth's 1e-10 curves are not drawn either."""
+    from lps_gui.report.figures import figure_by_key, figures_from_results
+
+    _, results, _ = row
+    figures = figures_from_results(results)
+    for key in ("straightness", "angles"):
+        f = figure_by_key(figures, key)
+        assert f.series == [] and "error motions" in f.notes
+    assert figure_by_key(figures, "deviation").series  # the positions are drawn

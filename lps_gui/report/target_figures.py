@@ -50,7 +50,7 @@ def lanes(stretches: list[tuple[str, float, float]]) -> list[int]:
     return out
 
 
-def with_target_stretches(figure: FigureSpec, results: Any) -> FigureSpec:
+def with_target_stretches(figure: FigureSpec, results: Results | Mapping[str, Any] | None) -> FigureSpec:
     """``figure`` (the deviation vs target) with each target's stretch as a bar below the data."""
     stretches = target_stretches(results)
     if not stretches:

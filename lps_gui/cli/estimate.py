@@ -152,8 +152,7 @@ def format_summary(results: Results) -> str:
         parts = [f"{k[:-3]} {_g(iso.number(k), '.2f')} µm" for k in ("A_um", "R_um", "E_um", "B_um", "M_um")
                  if iso.number(k) is not None]
         lines.append("ISO 230-2: " + ", ".join(parts))
-    asme = results.get("asme_b5_64") or {}
-    if asme.get("incremental_step") or asme.get("settling"):  # an ASME B5.64 test session (docs/asme-b5.64.md)
+    if results.asme_b5_64 is not None and results.asme_b5_64.has_test:  # an ASME B5.64 test session (docs/asme-b5.64.md)
         from lps_gui.report.asme_pages import test_lines
 
         lines += [f"ASME B5.64: {line}" for line in test_lines(results)]

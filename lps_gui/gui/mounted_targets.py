@@ -6,11 +6,13 @@ term; hidden for a single-board session.
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 from PySide6.QtWidgets import QLabel, QVBoxLayout, QWidget
 
 from lps_gui.gui.widgets import TextTable
+from lps_gui.io.results_model import Results
 
 
 class MountedTargetsView(QWidget):
@@ -26,7 +28,7 @@ class MountedTargetsView(QWidget):
         lay.addWidget(self.table, 1)
         self.setVisible(False)
 
-    def set_results(self, results: dict[str, Any]) -> None:
+    def set_results(self, results: Results | Mapping[str, Any]) -> None:
         from lps_gui.report.targets_report import target_table
 
         table = target_table(results)

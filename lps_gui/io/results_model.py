@@ -11,7 +11,7 @@ naming the file and the field (``figures.single_run.scale_ppm``), and gives:
   (empty when absent), never a dict to chain ``.get`` calls through;
 * every key kept: a section's whole object in ``raw`` (``section.get(key)``
   for the keys of an open set, e.g. ISO 230-2 figures by name), and unknown
-  top-level sections (``targets``, error motions, ...) in ``Results.extra``;
+  top-level sections (from a later version) in ``Results.extra``;
   :meth:`Results.to_dict` gives the document back as read.
 
 Adding a section: a :class:`~lps_gui.io.typed_json.Section` subclass in
@@ -30,8 +30,9 @@ from typing import Any
 import numpy as np
 
 from lps_gui.errors import InputError
-from lps_gui.io.results_sections import (AsmeB564, BoardRecord, EnvironmentRecord, Figures, Flag, Inputs, IntrinsicsRecord,
-                                         Parameters, Position, Software, TruthComparison, Uncertainty)
+from lps_gui.io.results_sections import (AsmeB564, BoardRecord, EnvironmentRecord, ErrorMotions, Figures, Flag, Inputs,
+                                         IntrinsicsRecord, Parameters, Position, Software, TargetRecord, TruthComparison,
+                                         Uncertainty)
 from lps_gui.io.typed_json import Section, finite_number, section_fields
 
 FIX = Section.fix
@@ -67,8 +68,8 @@ class Results(Section):
     uncertainty: Uncertainty | None = None
     summary: tuple[Any, ...] = ()
     asme_b5_64: AsmeB564 | None = None
-    targets: tuple[Mapping[str, Any], ...] = ()  # SPEC 13: each target's pose and sigma (docs/targets.md)
-    error_motions: Mapping[str, Any] | None = None  # SPEC 14: per axis, six motions per stop (docs/error-motions.md)
+    targets: tuple[TargetRecord, ...] = ()  # SPEC 13: each target's pose and sigma (docs/targets.md)
+    error_motions: ErrorMotions | None = None  # SPEC 14: per axis, six motions per stop (docs/error-motions.md)
     extra: Mapping[str, Any] = field(default_factory=dict, metadata={"not_read": True})  # sections not known here
     source: str = field(default="results", compare=False, metadata={"not_read": True})  # the file, for messages
 

@@ -249,10 +249,30 @@ class TruthComparison(Section):
     scale_y_error_ppm: float | None = None
     out_of_plane_rms_error_um: float | None = None
     out_of_plane_z_mean_square: float | None = None
+    targets: TargetsTruth | None = None  # a row's or constellation's target poses (SPEC 13)
 
     def numbers(self) -> list[tuple[str, float]]:
         """(key, value) of every finite numeric figure, in the document's order."""
         return [(k, v) for k, v in ((k, finite_number(v)) for k, v in self.raw.items()) if v is not None]
+
+
+@dataclass(frozen=True, kw_only=True)
+class TargetTruth(Section):
+    """One target's pose against the simulator's: the errors and the largest |error| / sigma (None for target 0)."""
+
+    id: str | None = None
+    rvec_error_rad: tuple[float | None, ...] = ()
+    p_error_mm: tuple[float | None, ...] = ()
+    max_abs_z: float | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class TargetsTruth(Section):
+    """``truth_comparison.targets``: every target's pose against the truth, the worst |error| / sigma."""
+
+    per_target: tuple[TargetTruth, ...] = ()
+    max_abs_z: float | None = None
+    z_mean_square: float | None = None
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -335,5 +355,227 @@ class AsmeB564(Section):
 
     figures: tuple[AsmeFigure, ...] = ()
     test_uncertainty_ratio: tuple[UncertaintyRatio, ...] = ()
-    incremental_step: Mapping[str, Any] | None = None
-    settling: Mapping[str, Any] | None = None
+    incremental_step: IncrementalStep | None = None  # asme_test min-step only
+    settling: Settling | None = None  # asme_test settling only
+
+    @property
+    def has_test(self) -> bool:
+        """The session ran the incremental-step or the settling test (not just the names of the figures)."""
+        return bool(self.incremental_step and self.incremental_step.raw) or bool(self.settling and self.settling.raw)
+
+
+# ----------------------------------------------------------------------------- SPEC 13: targets
+
+
+@dataclass(frozen=True, kw_only=True)
+class TargetRecord(Section):
+    """One target of a row or constellation (results.json ``targets``, docs/targets.md); target 0 is the world frame.
+
+    ``stretch_mm`` is [first, last] stop that saw it, each (x,) on a line or (x, y) on a plane; a
+    stitched session's placements carry ``stitch_ties``.
+    """
+
+    id: str | None = None
+    first_marker: int | None = None
+    rvec_rad: tuple[float | None, ...] = ()
+    rvec_sigma_rad: tuple[float | None, ...] = ()
+    p_mm: tuple[float | None, ...] = ()
+    p_sigma_mm: tuple[float | None, ...] = ()
+    views: int | None = None
+    ties: int | None = None
+    stitch_ties: int | None = None
+    seen_by: tuple[int, ...] = ()
+    tied_by: tuple[int, ...] = ()
+    stretch_mm: tuple[tuple[float | None, ...] | None, ...] = ()
+    square_mm: float | None = None
+    square_mm_uncertainty_um: float | None = None
+    scale_ppm: float | None = None
+    covered_fraction: float | None = None
+
+    @property
+    def stretch(self) -> tuple[tuple[float | None, ...], tuple[float | None, ...]] | None:
+        """(first, last) stop that saw the target, None when it was never seen."""
+        s = self.stretch_mm
+        return (s[0], s[1]) if len(s) == 2 and s[0] and s[1] else None
+
+
+# ----------------------------------------------------------------------------- SPEC 14: error motions
+
+
+@dataclass(frozen=True, kw_only=True)
+class Motion(Section):
+    """One error motion over the stops (``error_motions.motions[EXX]``): values and sigmas relative to the first stop.
+
+    The profile's span keys carry the unit (``span_um`` / ``span_urad``): :meth:`span`, :meth:`noise_span`.
+    """
+
+    motion: str | None = None
+    unit: str | None = None
+    along: str | None = None  # a plane's: the axis whose positions it runs over
+    positions_mm: tuple[float | None, ...] | None = None  # a plane's: its own axis' positions
+    values: tuple[float | None, ...] = ()
+    sigma: tuple[float | None, ...] = ()
+    centred_sigma: tuple[float | None, ...] = ()
+    median_centred_sigma: float | None = None
+    n_targets: int | None = None
+    resolved: bool | None = None
+    single_view_sigma: tuple[float | None, ...] = ()
+
+    def span(self) -> float | None:
+        """The p-v over the targets, in ``unit``."""
+        return self.number(f"span_{self.unit}")
+
+    def noise_span(self) -> float | None:
+        """The p-v noise alone would give, in ``unit``."""
+        return self.number(f"noise_span_{self.unit}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class ToolPoint(Section):
+    """``error_motions.tool_point``: the positioning error at the user's tool point and the Abbe term."""
+
+    offset_mm: tuple[float, ...] = ()
+    frame: str | None = None
+    offset_cam_mm: tuple[float, ...] = ()
+    positioning_um: tuple[float | None, ...] = ()
+    sigma_um: tuple[float | None, ...] = ()
+    abbe_um: tuple[float | None, ...] = ()
+    max_abs_abbe_um: float | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class MotionTruth(Section):
+    """A simulated session's true motion and the estimate's error against it."""
+
+    true_values: tuple[float | None, ...] = ()
+    rms_error_urad: float | None = None
+    z_mean_square: float | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class ErrorMotions(Section):
+    """``error_motions`` (SPEC 14, docs/error-motions.md): six motions per axis, by ISO 230-1 name, in SPEC 14's order."""
+
+    basis: str | None = None
+    axis: str | None = None  # a line's
+    axes: tuple[str, ...] = ()  # a plane's: ("X", "Y"), twelve motions
+    reference_index: int | None = None
+    frame_world: tuple[tuple[float, ...], ...] = ()
+    motions: Mapping[str, Motion] = field(default_factory=dict)
+    resolved: Mapping[str, bool | None] = field(default_factory=dict)
+    tool_point: ToolPoint | None = None
+    truth: Mapping[str, MotionTruth] = field(default_factory=dict)
+
+    @property
+    def axis_names(self) -> tuple[str, ...]:
+        """The stage axes the motions are of: a plane's two, else the line's one."""
+        return self.axes or (self.axis or "X",)
+
+    def is_resolved(self, iso: str) -> bool:
+        """The motion ``iso`` differs from zero beyond noise."""
+        return bool(self.resolved.get(iso))
+
+
+# ----------------------------------------------------------------------------- ASME B5.64 tests
+
+
+@dataclass(frozen=True, kw_only=True)
+class StepSize(Section):
+    """One commanded step size of the incremental-step test."""
+
+    commanded_um: float | None = None
+    n_steps: int = 0
+    n_resolved: int = 0
+    n_achieved: int = 0
+    n_stuck: int = 0
+    n_stuck_by_noise: float | None = None
+    sticks: bool = False
+    scatter_z2: float | None = None
+    mean_achieved_um: float | None = None
+    all_achieved: bool | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class Step(Section):
+    """One step between two stop means: what it achieved and its sigma."""
+
+    commanded_um: float
+    achieved_um: float
+    sigma_um: float
+    resolved: bool | None = None
+    achieved: bool | None = None
+    stuck: bool = False
+    from_mm: float | None = None
+    to_mm: float | None = None
+    direction: str = "+"
+
+
+@dataclass(frozen=True, kw_only=True)
+class StepTruth(Section):
+    dead_band_um: float | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class IncrementalStep(Section):
+    """``asme_b5_64.incremental_step``: the minimum-incremental-motion test's figures, per size and per step."""
+
+    n_steps: int = 0
+    n_resolved: int = 0
+    n_achieved: int = 0
+    n_stuck: int = 0
+    sticks: bool = False
+    tolerance: float | None = None
+    max_step_sigma_um: float | None = None
+    median_step_sigma_um: float | None = None
+    minimum_incremental_motion_um: float | None = None
+    frames_per_stop: int | None = None
+    planned_step_um: float | None = None
+    sizes: tuple[StepSize, ...] = ()
+    steps: tuple[Step, ...] = ()
+    truth: StepTruth | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class SettlingStop(Section):
+    """One move of the settling test: its frames from rest along the move and the damped-cosine fit."""
+
+    target_mm: float
+    direction: str = "+"
+    since_move_s: tuple[float | None, ...] = ()
+    position_um: tuple[float | None, ...] = ()
+    settling_time_s: float | None = None
+    settling_time_U_s: float | None = None
+    settling_time_frames_s: float | None = None
+    rest_um: float | None = None
+    amplitude_um: float | None = None
+    decay_s: float | None = None
+    frequency_hz: float | None = None
+    phase_rad: float | None = None
+    sigmas: Mapping[str, Any] = field(default_factory=dict)
+    residual_sigma_um: float | None = None
+    n_frames: int | None = None
+    record_s: float | None = None
+    frame_interval_s: float | None = None
+    band_um: float | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class SettlingTruth(Section):
+    amplitude_um: float | None = None
+    frequency_hz: float | None = None
+    decay_s: float | None = None
+    settling_time_s: float | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class Settling(Section):
+    """``asme_b5_64.settling``: the settling time (the longest over the moves) and each move's fit."""
+
+    band_um: float | None = None
+    n_stops: int | None = None
+    settling_time_s: float | None = None
+    settling_time_U_s: float | None = None
+    settling_time_frames_s: float | None = None
+    median_settling_time_s: float | None = None
+    stops: tuple[SettlingStop, ...] = ()
+    truth: SettlingTruth | None = None

@@ -108,7 +108,7 @@ def row_summary_lines(results: Results) -> list[str]:
 
     p, single, unc, tc = results.parameters, results.figures.single_run, results.uncertainty, results.truth_comparison
     sig = [v for r in results.positions if (v := r.number("sigma_um"))]
-    worst = max((max(t["p_sigma_mm"]) for t in results.targets), default=None)
+    worst = max((max(t.p_sigma_mm) for t in results.targets if t.p_sigma_mm), default=None)
     lines = [
         f"views: {p.n_views} ({p.n_used} used) against {len(results.targets)} targets; RMS residual {fmt(p.rms_px)} px",
         f"positioning: scale {fmt(single.scale_ppm if single else None)} ppm (sigma "
@@ -120,8 +120,7 @@ def row_summary_lines(results: Results) -> list[str]:
         f"U (k = 2) {fmt(unc.expanded_k2_um if unc else None, 2)} \u00b5m over the travel, with each target's print scale",
     ]
     if tc is not None and tc.position_rms_error_um is not None:
-        tt = tc.get("targets") or {}
         lines.append(f"error against truth: position RMS {fmt(tc.position_rms_error_um)} \u00b5m, max "
                      f"{fmt(tc.position_max_abs_error_um)} \u00b5m, mean (error/sigma)^2 {fmt(tc.z_mean_square)}"
-                     f"; target poses within {fmt(tt.get('max_abs_z'))} sigma of truth")
+                     f"; target poses within {fmt(tc.targets.max_abs_z if tc.targets else None)} sigma of truth")
     return lines

@@ -11,6 +11,7 @@ A motion the data do not resolve (core/resolution) has empty cells.
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -19,30 +20,30 @@ import numpy as np
 from lps_gui.core.compensation import target_means
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_bytes_atomic
-from lps_gui.io.results_file import finite_number
+from lps_gui.io.results_model import Results, as_results
 
 UNIT_SUFFIX = {"um": "um", "urad": "urad"}
 
 
-def error_motion_table(results: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
+def error_motion_table(results: Results | Mapping[str, Any]) -> tuple[list[str], list[list[str]]]:
     """(header, rows): ``nominal_mm`` then, per motion, ``<iso>_<unit>`` and ``<iso>_sigma_<unit>``."""
-    section = results.get("error_motions")
-    if not section or not section.get("motions"):
+    results = as_results(results)
+    section = results.error_motions
+    if section is None or not section.motions:
         raise InputError("results.json has no error_motions; estimate the session again with this version "
                          "(lps estimate SESSION)")
-    rows = results.get("positions") or []
-    target = np.array([float(r["target_mm"]) for r in rows])
+    target = results.column("target_mm")
     header, columns = ["nominal_mm"], []
     nominal = None
-    for iso, m in section["motions"].items():
-        unit = UNIT_SUFFIX[m["unit"]]
+    for iso, m in section.motions.items():
+        unit = UNIT_SUFFIX[m.unit]
         header += [f"{iso.lower()}_{unit}", f"{iso.lower()}_sigma_{unit}"]
-        v = np.array([np.nan if finite_number(x) is None else float(x) for x in m["values"]])
-        s = np.array([np.nan if finite_number(x) is None else float(x) for x in m["centred_sigma"]])
+        v = np.array(m.values, dtype=float)
+        s = np.array(m.centred_sigma, dtype=float)
         ok = np.isfinite(v) & np.isfinite(s)
         t, mean, sigma = target_means(target[ok], v[ok], s[ok], np.zeros(int(ok.sum())))
         nominal = t if nominal is None else nominal
-        if not section["resolved"].get(iso) or len(t) != len(nominal):
+        if not section.is_resolved(iso) or len(t) != len(nominal):
             mean = sigma = np.full(len(nominal), np.nan)
         columns += [mean, sigma]
     body = [[f"{nominal[i]:.6f}"] + ["" if not np.isfinite(c[i]) else f"{c[i]:.4f}" for c in columns]
@@ -50,7 +51,7 @@ def error_motion_table(results: dict[str, Any]) -> tuple[list[str], list[list[st
     return header, body
 
 
-def write_error_motion_table(path: Path | str, results: dict[str, Any]) -> Path:
+def write_error_motion_table(path: Path | str, results: Results | Mapping[str, Any]) -> Path:
     header, body = error_motion_table(results)
     text = ",".join(header) + "\n" + "".join(",".join(r) + "\n" for r in body)
     path = Path(path)

@@ -136,7 +136,7 @@ def title_rows(session_meta: dict[str, Any], results: Results | dict[str, Any], 
     if ident.get("controller_serial"):
         controller += f", serial {ident['controller_serial']}"
     board_text = f"chessboard {corners[0]}\u00d7{corners[1]} inner corners, square {fmt(board.get('square_mm'), 4)} mm at 20 \u00b0C"
-    targets = results.get("targets")
+    targets = results.targets
     if targets:  # a row or constellation (SPEC 13), or one board moved: the table of targets lists each
         stitched = ((results.session_meta or {}).get("plan") or {}).get("segments")
         board_text = (f"one board in {len(targets)} placements (table of targets): " + board_text if stitched

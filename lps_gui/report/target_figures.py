@@ -10,11 +10,13 @@ target boundaries. No Qt here.
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
+from lps_gui.io.results_model import Results, as_results
 from lps_gui.report.figure_spec import FigureSpec, Series
 
 TARGET_COLORS = ("#3b3b3b", "#2a9d3c", "#c2185b", "#1b8a8a", "#b5651d", "#6a4c93")  # read in grey scale too
@@ -22,15 +24,15 @@ LANE_FRACTION = 0.08  # lane spacing as a fraction of the deviation's span
 TARGET_LABEL = "seen by"  # legend: "seen by T0"
 
 
-def target_stretches(results: Any) -> list[tuple[str, float, float]]:
+def target_stretches(results: Results | Mapping[str, Any] | None) -> list[tuple[str, float, float]]:
     """(id, first, last) X of the stops that saw each target (none without results); targets never seen are left out."""
     out = []
-    for t in (results.get("targets") if results is not None else None) or []:
-        stretch = t.get("stretch_mm") if isinstance(t, dict) else None
-        if stretch and len(stretch) == 2 and stretch[0] and stretch[1]:
+    for t in as_results(results).targets if results is not None else ():
+        stretch = t.stretch
+        if stretch is not None and stretch[0][0] is not None and stretch[1][0] is not None:
             lo, hi = float(stretch[0][0]), float(stretch[1][0])
             if np.isfinite(lo) and np.isfinite(hi):
-                out.append((str(t.get("id")), lo, hi))
+                out.append((str(t.id), lo, hi))
     return out
 
 
@@ -48,7 +50,7 @@ def lanes(stretches: list[tuple[str, float, float]]) -> list[int]:
     return out
 
 
-def with_target_stretches(figure: FigureSpec, results: Any) -> FigureSpec:
+def with_target_stretches(figure: FigureSpec, results: Results | Mapping[str, Any] | None) -> FigureSpec:
     """``figure`` (the deviation vs target) with each target's stretch as a bar below the data."""
     stretches = target_stretches(results)
     if not stretches:

@@ -9,10 +9,12 @@ lists; X / Y for a planar stage's per-axis budgets). No Qt here.
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 from lps_gui.core.target_scale import SOURCE_PREFIX
-from lps_gui.io.results_file import finite_number as _num
+from lps_gui.io.results_model import Results, as_results
+from lps_gui.io.results_sections import TargetRecord
 from lps_gui.report.summary import DASH, fmt
 
 TARGET_HEADER = ["target", "markers", "views", "ties", "seen over\n[mm]", "share", "\u03c3 rotation\n[\u00b5rad]",
@@ -26,45 +28,42 @@ NOTE = ("Target 0 defines the world frame (its pose is fixed, no sigma). \u03c3 
         "a dash where the print's uncertainty is not stated).").format(prefix=SOURCE_PREFIX)
 
 
-def _triple(values: Any, scale: float) -> str:
-    nums = [_num(v) for v in values or []]
-    if len(nums) != 3 or any(v is None for v in nums):
+def _triple(values: tuple[float | None, ...], scale: float) -> str:
+    if len(values) != 3 or None in values:
         return DASH
-    return " / ".join(fmt(scale * v, 2) for v in nums)
+    return " / ".join(fmt(scale * v, 2) for v in values)
 
 
-def _stretch(t: dict[str, Any]) -> str:
-    s = t.get("stretch_mm")
-    if not s or len(s) != 2 or not s[0] or not s[1]:
+def _stretch(t: TargetRecord) -> str:
+    if t.stretch is None:
         return "not seen"
-    ends = [[fmt(_num(v), 4) for v in end] for end in s]
+    ends = [[fmt(v, 4) for v in end] for end in t.stretch]
     return " \u2013 ".join(e[0] if len(e) == 1 else f"({', '.join(e)})" for e in ends)  # x, or (x, y) of a plane
 
 
-def target_table(results: dict[str, Any]) -> tuple[list[str], list[list[str]], list[float]] | None:
+def target_table(results: Results | Mapping[str, Any]) -> tuple[list[str], list[list[str]], list[float]] | None:
     """The table of results.json ``targets``; None for a single-board session."""
-    targets = [t for t in results.get("targets") or [] if isinstance(t, dict)]
-    if not targets:
+    results = as_results(results)
+    if not results.targets:
         return None
-    unc = results.get("uncertainty") or {}
-    budgets = [unc.get("budget") or []] if unc.get("budget") else [a.get("budget") or [] for a in
-                                                                    (unc.get("per_axis") or {}).values()]
+    unc = results.uncertainty
+    budgets = [] if unc is None else [unc.budget] if unc.budget else [a.budget for a in unc.per_axis.values()]
     rows = []
-    for j, t in enumerate(targets):
-        markers = t.get("first_marker")
-        terms = [_num(b.get("contribution_um")) for budget in budgets for b in budget
-                 if b.get("source") == f"{SOURCE_PREFIX} {t.get('id')}"]  # one per axis of a planar budget
-        share = _num(t.get("covered_fraction"))
+    for j, t in enumerate(results.targets):
+        terms = [b.contribution_um for budget in budgets for b in budget
+                 if b.source == f"{SOURCE_PREFIX} {t.id}"]  # one per axis of a planar budget
+        share = t.covered_fraction
         rows.append([
-            str(t.get("id")), f"from {markers}" if markers is not None else DASH, str(t.get("views", DASH)),
-            str(t.get("ties", DASH)), _stretch(t), DASH if share is None else f"{100 * share:.0f} %",
-            WORLD_FRAME if j == 0 else _triple(t.get("rvec_sigma_rad"), 1e6),
-            WORLD_FRAME if j == 0 else _triple(t.get("p_sigma_mm"), 1e3),
+            str(t.id), DASH if t.first_marker is None else f"from {t.first_marker}",
+            DASH if t.views is None else str(t.views), DASH if t.ties is None else str(t.ties), _stretch(t),
+            DASH if share is None else f"{100 * share:.0f} %",
+            WORLD_FRAME if j == 0 else _triple(t.rvec_sigma_rad, 1e6),
+            WORLD_FRAME if j == 0 else _triple(t.p_sigma_mm, 1e3),
             " / ".join(fmt(v) for v in terms) if terms and None not in terms else DASH])
     return TARGET_HEADER, rows, TARGET_WIDTHS
 
 
-def targets_section(flow: Any, results: dict[str, Any]) -> bool:
+def targets_section(flow: Any, results: Results | Mapping[str, Any]) -> bool:
     """Heading, the table of targets and its note; False (nothing painted) for a single-board session."""
     table = target_table(results)
     if table is None:

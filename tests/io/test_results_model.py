@@ -128,3 +128,83 @@ def test_a_replaced_section_is_written_as_its_own_object(estimated):
     one_axis = dataclasses.replace(results, uncertainty=x)
     assert isinstance(one_axis.uncertainty, Uncertainty) and one_axis.to_dict()["uncertainty"] is x.raw
     assert as_results(results) is results  # typed once: no second read
+
+
+@pytest.fixture(scope="module")
+def sections(tmp_path_factory):
+    """Sessions whose results carry the newer sections: a row of targets with a tool point (targets, error_motions
+    and its tool point, truth_comparison.targets), a planar constellation (both axes' error motions, (x, y)
+    stretches), the ASME min-step and settling tests; simulated points, estimated by the one path (seconds)."""
+    root = tmp_path_factory.mktemp("results-sections")
+    assert lps_main(["simulate", str(root / "row"), "--points", "--preset", "small-row", "--seed", "2"]) == 0
+    meta_path = root / "row" / "session.json"
+    meta = json.loads(meta_path.read_text())
+    meta["tool_point"] = {"offset_mm": [0.0, 40.0, -25.0], "frame": "stage"}
+    meta_path.write_text(json.dumps(meta, indent=2))
+    from lps_gui.core.plan import Plan
+    from lps_gui.core.target_presets import paper_constellation_spec
+
+    plan = Plan.xy(start_mm=(0.0, 0.0), stop_mm=(1524.0, 1016.0), step_mm=(254.0, 254.0))
+    simulate_point_session(paper_constellation_spec(seed=0, plan=plan), root / "constellation")
+    assert lps_main(["simulate", str(root / "min-step"), "--points", "--test", "min-step", "--test-steps", "4",
+                     "--dead-band-um", "3", "--spec", "paper,min_step=2"]) == 0
+    assert lps_main(["simulate", str(root / "settling"), "--points", "--test", "settling",
+                     "--spec", "paper,settling=0.5"]) == 0
+    for name in ("row", "constellation", "min-step", "settling"):
+        estimate_session(root / name)
+    return root
+
+
+@pytest.mark.parametrize("kind", ["row", "constellation", "min-step", "settling"])
+def test_the_newer_sections_round_trip_byte_for_byte(sections, kind):
+    path = sections / kind / "results.json"
+    results = read_results(path)
+    assert json_bytes(results.to_dict()) == path.read_bytes()
+    assert results.extra == {}  # targets, error_motions, asme_b5_64: typed, not unknown extras
+    d = _document(sections / kind)
+    if kind in ("row", "constellation"):
+        assert [t.id for t in results.targets] == [t["id"] for t in d["targets"]]
+        last, first = results.targets[-1], d["targets"][-1]
+        assert last.p_sigma_mm == tuple(first["p_sigma_mm"]) and last.seen_by == tuple(first["seen_by"])
+        assert last.stretch == tuple(tuple(end) for end in first["stretch_mm"])
+        assert len(last.stretch[0]) == (2 if kind == "constellation" else 1)
+        assert last.covered_fraction == first["covered_fraction"] and last.views == first["views"]
+        assert results.truth_comparison.targets.max_abs_z == d["truth_comparison"]["targets"]["max_abs_z"]
+    em, raw = results.error_motions, d["error_motions"]
+    assert list(em.motions) == list(raw["motions"])
+    assert em.axis_names == tuple(raw.get("axes") or [raw["axis"]])
+    for iso, m in em.motions.items():
+        unit = raw["motions"][iso]["unit"]
+        assert m.unit == unit and m.span() == raw["motions"][iso][f"span_{unit}"]
+        assert m.values == tuple(raw["motions"][iso]["values"]) and em.is_resolved(iso) == raw["resolved"][iso]
+    if kind == "row":
+        assert em.tool_point.offset_mm == (0.0, 40.0, -25.0)
+        assert em.tool_point.max_abs_abbe_um == raw["tool_point"]["max_abs_abbe_um"]
+    if kind == "constellation":
+        assert em.motions["ECY"].along == "Y" and em.motions["ECY"].positions_mm == tuple(
+            raw["motions"]["ECY"]["positions_mm"])
+    asme = results.asme_b5_64  # line sessions only
+    assert (asme is not None) == (kind != "constellation")
+    assert (asme is not None and asme.has_test) == (kind in ("min-step", "settling"))
+    if kind == "min-step":
+        step, rs = asme.incremental_step, d["asme_b5_64"]["incremental_step"]
+        assert step.sticks == rs["sticks"] and step.truth.dead_band_um == 3.0
+        assert [s.achieved_um for s in step.steps] == [s["achieved_um"] for s in rs["steps"]]
+        assert step.sizes[0].n_stuck_by_noise == rs["sizes"][0]["n_stuck_by_noise"]
+    if kind == "settling":
+        settling, rs = asme.settling, d["asme_b5_64"]["settling"]
+        assert settling.settling_time_s == rs["settling_time_s"] and len(settling.stops) == rs["n_stops"]
+        assert settling.stops[0].position_um == tuple(rs["stops"][0]["position_um"])
+        assert settling.stops[0].sigmas == rs["stops"][0]["sigmas"]
+        assert "Settling time" in [r.figure for r in asme.test_uncertainty_ratio]
+
+
+def test_a_wrong_value_in_a_newer_section_names_its_field(sections):
+    d = _document(sections / "row")
+    d["targets"][1]["p_sigma_mm"][2] = "small"
+    with pytest.raises(InputError, match=r"'targets\[1\]\.p_sigma_mm\[2\]'"):
+        Results.from_dict(d, source="r.json")
+    d = _document(sections / "row")
+    d["error_motions"]["motions"]["EAX"]["values"] = 3.0
+    with pytest.raises(InputError, match=r"'error_motions\.motions\.EAX\.values'"):
+        Results.from_dict(d, source="r.json")

@@ -201,7 +201,8 @@ def test_the_row_demo_writes_its_report_and_csvs(tmp_path):
     assert [p.name for p in res.csvs] == ["positions.csv", "summary.csv"]
     assert [s.name for s in res.steps] == ["intrinsics", "capture", "detect", "estimate", "report"]
     assert any("target poses within" in line for line in res.summary)
-    assert res.results["truth_comparison"]["position_rms_error_um"] < 1.5 * res.results["truth_comparison"]["mean_sigma_um"]
+    tc = res.results.truth_comparison  # the demo's results are read typed (Results)
+    assert tc.position_rms_error_um < 1.5 * tc.mean_sigma_um
 
 
 def test_self_calibration_recovers_a_pixel_aspect_error_the_row_is_sensitive_to(tmp_path):

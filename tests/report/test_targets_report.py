@@ -56,7 +56,7 @@ def test_the_table_lists_views_ties_pose_sigma_and_the_budgets_scale_term(row):
     assert sigma == pytest.approx(1e3 * np.array(results["targets"][1]["p_sigma_mm"]), rel=0.05)  # 2 digits
     assert float(rows[2][8]) == pytest.approx(budget["target scale T2"]["contribution_um"], rel=1e-3)
     assert rows[1][8] == "\u2014"  # its print's uncertainty is not stated: no term
-    assert target_table({"positions": []}) is None
+    assert target_table({k: v for k, v in results.items() if k != "targets"}) is None  # one board: no table
 
 
 def test_the_report_has_the_targets_page_and_nothing_of_it_is_clipped(row):
@@ -77,7 +77,9 @@ def test_a_constellation_lists_both_axes_scale_terms_and_its_stretch_in_the_plan
 
     budget = {axis: {"budget": [{"source": f"target scale T{j}", "contribution_um": 0.5 + j + k}
                                 for j in range(2)]} for k, axis in enumerate("XY")}
-    _, rows, _ = target_table({"targets": [target(0), target(1)], "uncertainty": {"per_axis": budget}})
+    positions = [{"index": 0, "target_x_mm": 0.0, "target_y_mm": 0.0, "measured_x_mm": 0.0, "measured_y_mm": 0.0}]
+    _, rows, _ = target_table({"format": "lps-results/1", "axes": ["X", "Y"], "positions": positions,
+                               "targets": [target(0), target(1)], "uncertainty": {"per_axis": budget}})
     assert rows[1][4] == "(0, 0) \u2013 (381.0, 254.0)" and rows[1][8] == "1.50 / 2.50" and rows[1][5] == "50 %"
 
 

@@ -35,7 +35,7 @@ def names_note(flow: Any, results: Results | Mapping[str, Any]) -> None:
     if not rows:
         return
     parts = [f"{r.symbol} = {r.asme_b5_64}" for r in rows]
-    flow.paragraph("ASME B5.64 names the same figures: " + "; ".join(parts) + ".", size_pt=NOTE_SIZE, color=GREY)
+    note(flow, "ASME B5.64 names the same figures: " + "; ".join(parts) + ".")
 
 
 def has_test(results: Results | Mapping[str, Any]) -> bool:
@@ -87,14 +87,18 @@ def incremental_step_section(flow: Any, step: IncrementalStep) -> None:
               str(z.n_stuck), f"{z.n_stuck_by_noise:.1f}", f"{fmt(z.mean_achieved_um)} \u00b5m",
               f"{fmt(step.median_step_sigma_um)} \u00b5m"] for z in step.sizes]
     flow.table(header, cells, [24, 16, 20, 20, 16, 20, 30, 30], size_pt=8.0)
-    flow.paragraph("Each stop is the mean of its frames; a step's \u03c3 is that of the difference of two stop means "
+    note(flow, "Each stop is the mean of its frames; a step's \u03c3 is that of the difference of two stop means "
                    "from the estimate's full covariance. Resolved: U (k = 2) below the command. Achieved: within "
-                   "the tolerance unless outside it by more than U. Stuck: moved less than half the command.",
-                   size_pt=NOTE_SIZE, color=GREY)
+                   "the tolerance unless outside it by more than U. Stuck: moved less than half the command.")
     truth = step.truth
     if truth is not None:
-        flow.paragraph(f"Simulated stage: dead band {fmt(truth.dead_band_um)} \u00b5m (the truth; not part "
-                       "of the measurement).", size_pt=NOTE_SIZE, color=GREY)
+        note(flow, f"Simulated stage: dead band {fmt(truth.dead_band_um)} \u00b5m (the truth; not part "
+                       "of the measurement).")
+
+
+def note(flow: Any, text: str) -> None:
+    """A grey note under a figure or table (how it was made, the simulator's truth)."""
+    flow.paragraph(text, size_pt=NOTE_SIZE, color=GREY)
 
 
 def settling_section(flow: Any, settling: Settling) -> None:
@@ -117,16 +121,15 @@ def settling_section(flow: Any, settling: Settling) -> None:
               f"{s.decay_s:.3f}", f"{s.residual_sigma_um:.2f}"] for s in settling.stops]
     flow.table(["move to", "settled [s]", "U [s]", "frames [s]", "A [\u00b5m]", "f [Hz]", "\u03c4 [s]", "\u03c3 [\u00b5m]"],
                cells, [26, 22, 18, 22, 22, 20, 20, 20], size_pt=8.0)
-    flow.paragraph("Time counts from the stage reporting the move done (captures.jsonl since_move_s, at the end of "
+    note(flow, "Time counts from the stage reporting the move done (captures.jsonl since_move_s, at the end of "
                    "each frame's exposure). A damped cosine rest + A e^(\u2212t/\u03c4) cos(2\u03c0ft + \u03c6) is "
                    "fitted to each move's frames; the settling time is the last time the fit is outside the band. "
-                   "\"frames\": the first frame after which every frame is inside the band (noise makes it later).",
-                   size_pt=NOTE_SIZE, color=GREY)
+                   "\"frames\": the first frame after which every frame is inside the band (noise makes it later).")
     truth = settling.truth
     if truth is not None:
-        flow.paragraph(f"Simulated stage: rings {fmt(truth.amplitude_um)} \u00b5m at {fmt(truth.frequency_hz)} Hz, "
+        note(flow, f"Simulated stage: rings {fmt(truth.amplitude_um)} \u00b5m at {fmt(truth.frequency_hz)} Hz, "
                        f"decay {fmt(truth.decay_s)} s; true settling time {truth.settling_time_s:.3f} s "
-                       "(the truth; not part of the measurement).", size_pt=NOTE_SIZE, color=GREY)
+                       "(the truth; not part of the measurement).")
 
 
 def settling_line(settling: Settling) -> str:
@@ -167,7 +170,7 @@ def tur_section(flow: Any, rows: tuple[UncertaintyRatio, ...]) -> None:
               "\u2014" if r.U is None else f"{fmt(r.U)} {r.unit}",
               "\u2014" if r.tur is None else f"{r.tur:.1f}"] for r in rows]
     flow.table(["figure", "compared", "tolerance", "U (k = 2)", "TUR"], cells, [56, 30, 30, 30, 20], size_pt=8.0)
-    flow.paragraph(TUR_NOTE, size_pt=NOTE_SIZE, color=GREY)
+    note(flow, TUR_NOTE)
 
 
 def names_table(flow: Any, rows: tuple[AsmeFigure, ...]) -> None:

@@ -20,6 +20,7 @@ from PySide6.QtWidgets import (
 
 from lps_gui.gui.mounted_targets import MountedTargetsView
 from lps_gui.gui.plot_adapter import DrawnFigure, ReadableAxis, figure_steps
+from lps_gui.gui.section_tabs import SectionContent, SectionPage, section_contents, tab_tip
 from lps_gui.gui.view_detail import ViewDetail
 from lps_gui.gui.widgets import TextTable, ValueTable
 from lps_gui.gui.workers import Job
@@ -56,6 +57,7 @@ class ResultsPanel(QWidget):
         self._queue: list[Any] = []
         self._pending_table = False
         self._tab_keys: list[str] = []
+        self.section_pages: dict[str, SectionPage] = {}  # tab title -> page, built on first use
         self._generation = 0
 
         self.header = QLabel("No results yet: run an estimation or open a session with results.json.")
@@ -78,8 +80,8 @@ class ResultsPanel(QWidget):
 
         self.tabs = QTabWidget()
         self.tabs.setDocumentMode(True)
-        self.tabs.setUsesScrollButtons(False)  # every tab in sight; a narrow panel elides titles instead
-        self.tabs.tabBar().setElideMode(Qt.TextElideMode.ElideRight)
+        self.tabs.setUsesScrollButtons(True)  # whole titles; a narrow panel scrolls the bar instead of eliding
+        self.tabs.tabBar().setElideMode(Qt.TextElideMode.ElideNone)
         self.plots: dict[str, pg.PlotWidget] = {}
         self._pages: dict[str, QWidget] = {}  # figure key -> the tab page showing its plot
         self._groups: dict[str, QSplitter] = {}
@@ -156,6 +158,7 @@ class ResultsPanel(QWidget):
         self._queue = []
         for i in order:
             self._queue += self._draw_steps(figures[i])
+        self._queue += self._show_sections(section_contents(results))
         self._queue += [lambda: self._fill_tables(results), lambda: self._fill_positions(results)]
         self._generation += 1
         generation = self._generation
@@ -214,9 +217,27 @@ class ResultsPanel(QWidget):
         self.tabs.addTab(self.position_table, "Table")
         self._tab_keys = keys
 
+    def _show_sections(self, contents: list[SectionContent]) -> list[Any]:
+        """The tabs of the sections these results have (error motions, an ASME test), before "Table".
+
+        Results without them keep the tab bar as it was; the steps returned draw their figures.
+        """
+        for page in self.section_pages.values():
+            if (i := self.tabs.indexOf(page)) >= 0:
+                self.tabs.removeTab(i)
+        steps: list[Any] = []
+        for content in contents:
+            page = self.section_pages.setdefault(content.title, SectionPage())
+            at = self.tabs.indexOf(self.position_table)
+            self.tabs.setTabToolTip(self.tabs.insertTab(at, page, content.title), tab_tip(content))
+            for key, drawn, fig_steps in page.show_content(content):
+                steps += fig_steps + [lambda key=key, drawn=drawn: self.drawn.__setitem__(key, drawn)]
+        return steps
+
     def show_figure(self, key: str) -> None:
         """Bring the tab holding figure ``key`` to the front."""
-        self.tabs.setCurrentWidget(self._pages[key])
+        page = self._pages.get(key) or next(p for p in self.section_pages.values() if key in p.plots)
+        self.tabs.setCurrentWidget(page)
 
     def _draw_steps(self, fig: Any) -> list[Any]:
         drawn, steps = figure_steps(self.plots[fig.key].getPlotItem(), fig)

@@ -158,7 +158,7 @@ class ResultsPanel(QWidget):
         self._queue = []
         for i in order:
             self._queue += self._draw_steps(figures[i])
-        self._queue += self._show_sections(section_contents(results))
+        self._queue += self._section_steps(results)
         self._queue += [lambda: self._fill_tables(results), lambda: self._fill_positions(results)]
         self._generation += 1
         generation = self._generation
@@ -217,22 +217,39 @@ class ResultsPanel(QWidget):
         self.tabs.addTab(self.position_table, "Table")
         self._tab_keys = keys
 
-    def _show_sections(self, contents: list[SectionContent]) -> list[Any]:
-        """The tabs of the sections these results have (error motions, an ASME test), before "Table".
+    def _section_steps(self, results: Results) -> list[Any]:
+        """Steps adding the tabs of the sections these results have (error motions, an ASME test) before "Table".
 
-        Results without them keep the tab bar as it was; the steps returned draw their figures.
+        The old section tabs go at once; results without the sections keep the tab bar as it was.
+        Reading the sections, each tab and each plot are steps of their own (the window stays responsive).
         """
         for page in self.section_pages.values():
             if (i := self.tabs.indexOf(page)) >= 0:
                 self.tabs.removeTab(i)
-        steps: list[Any] = []
-        for content in contents:
-            page = self.section_pages.setdefault(content.title, SectionPage())
-            at = self.tabs.indexOf(self.position_table)
-            self.tabs.setTabToolTip(self.tabs.insertTab(at, page, content.title), tab_tip(content))
-            for key, drawn, fig_steps in page.show_content(content):
-                steps += fig_steps + [lambda key=key, drawn=drawn: self.drawn.__setitem__(key, drawn)]
-        return steps
+
+        def expand() -> None:
+            steps: list[Any] = []
+            for content in section_contents(results):
+                steps.append(lambda c=content: self._add_section(c))
+                steps += [lambda c=content, i=i, fig=fig: self._run_next(self._section_figure_steps(c, i, fig))
+                          for i, fig in enumerate(content.figures)]
+            self._run_next(steps)
+
+        return [expand]
+
+    def _run_next(self, steps: list[Any]) -> None:
+        self._queue[0:0] = steps
+
+    def _add_section(self, content: SectionContent) -> None:
+        page = self.section_pages.setdefault(content.title, SectionPage())
+        page.set_content(content)
+        index = self.tabs.insertTab(self.tabs.indexOf(self.position_table), page, content.title)
+        self.tabs.setTabToolTip(index, tab_tip(content))
+
+    def _section_figure_steps(self, content: SectionContent, index: int, fig: Any) -> list[Any]:
+        plot = self.section_pages[content.title].plot_for(index, fig.key)
+        drawn, steps = figure_steps(plot.getPlotItem(), fig)
+        return steps + [lambda: self.drawn.__setitem__(fig.key, drawn)]
 
     def show_figure(self, key: str) -> None:
         """Bring the tab holding figure ``key`` to the front."""

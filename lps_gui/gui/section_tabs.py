@@ -14,7 +14,7 @@ import pyqtgraph as pg
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QLabel, QSplitter, QVBoxLayout, QWidget
 
-from lps_gui.gui.plot_adapter import DrawnFigure, ReadableAxis, figure_steps
+from lps_gui.gui.plot_adapter import ReadableAxis
 from lps_gui.gui.widgets import TextTable
 from lps_gui.io.results_model import Results
 from lps_gui.report.figure_spec import FigureSpec
@@ -93,26 +93,24 @@ class SectionPage(QSplitter):
         self.bottom = bottom
         self.addWidget(bottom)
 
-    def show_content(self, content: SectionContent) -> list[tuple[str, DrawnFigure, list[Callable[[], None]]]]:
-        """Lay out ``content``'s plots and fill the text now; the figures' drawing steps to run later."""
+    def set_content(self, content: SectionContent) -> None:
+        """The findings and the table now; the plots come one by one (:meth:`plot_for`)."""
         for plot in self.plots.values():
             plot.setVisible(False)
-        drawing = []
-        for i, fig in enumerate(content.figures):
-            plot = self.plots.get(fig.key)
-            if plot is None:
-                plot = self.plots[fig.key] = pg.PlotWidget(background="w",
-                                                           axisItems={"bottom": ReadableAxis("bottom")})
-            self.insertWidget(i, plot)
-            plot.setVisible(True)
-            drawing.append((fig.key, *figure_steps(plot.getPlotItem(), fig)))
         self.lines.setText("\n".join(content.lines))
         self.lines.setVisible(bool(content.lines))
         self.table.set_rows(content.header, content.rows, content.colors)
         self.table.setVisible(bool(content.rows))
-        n = len(content.figures)
-        self.setSizes([300] * n + [160])  # the figures get the room; the table below them
-        return drawing
+        self.setSizes([300] * len(content.figures) + [160])  # the figures get the room; the table below them
+
+    def plot_for(self, index: int, key: str) -> pg.PlotWidget:
+        """The plot of figure ``key`` at place ``index`` (built on first use, reused by later results)."""
+        plot = self.plots.get(key)
+        if plot is None:
+            plot = self.plots[key] = pg.PlotWidget(background="w", axisItems={"bottom": ReadableAxis("bottom")})
+        self.insertWidget(index, plot)
+        plot.setVisible(True)
+        return plot
 
 
 def tab_tip(content: SectionContent) -> str:

@@ -58,6 +58,16 @@ def _describe(stage: Any) -> dict[str, Any]:
         return {}
 
 
+def asme_test_tip() -> str:
+    """The test combo's tooltip, from the presets' own numbers (the same words as lps capture --help)."""
+    from lps_gui.core.presets import MIN_STEP_COUNT, MIN_STEP_FRAMES, MIN_STEP_LOCATIONS, MIN_STEP_UM, SETTLING_FRAMES
+
+    return (f"ASME B5.64 test: min-step takes {MIN_STEP_COUNT} steps of {MIN_STEP_UM:g} \u00b5m forward and back at "
+            f"{MIN_STEP_LOCATIONS} places, {MIN_STEP_FRAMES} frames per stop averaged; settling takes "
+            f"{SETTLING_FRAMES} frames back to back after each move. The plan covers start..stop; the test goes "
+            "into session.json asme_test for the estimate")
+
+
 def fmt_duration(seconds: float) -> str:
     s = int(round(seconds))
     return f"{s // 3600} h {s % 3600 // 60:02d} min" if s >= 3600 else (f"{s // 60} min {s % 60:02d} s" if s >= 60 else f"{s} s")
@@ -117,9 +127,7 @@ class CapturePanel(QWidget):
         self.asme_test = QComboBox()  # an ASME B5.64 test's plan preset (docs/asme-b5.64.md), as lps capture --test
         for label, key in (("none", None), ("min-step (incremental steps)", "min-step"), ("settling", "settling")):
             self.asme_test.addItem(label, key)
-        self.asme_test.setToolTip("ASME B5.64 test: min-step takes 2 \u00b5m steps forward and back at 5 places, "
-                                  "8 frames per stop averaged; settling takes 100 frames back to back after each "
-                                  "move. The plan covers start..stop; the test goes into session.json asme_test")
+        self.asme_test.setToolTip(asme_test_tip())
         self.frame_s = DEFAULT_FRAME_S
         self._frames_at_start = 0
         form = QFormLayout(plan_box)

@@ -39,6 +39,6 @@ def test_the_min_step_preset_sets_the_plan_and_goes_into_session_json(qtbot, mak
 def test_a_test_that_does_not_fit_the_travel_is_a_one_line_refusal(qtbot, make_window, tmp_path):
     window, cap = capture_window(qtbot, make_window, SMALL_PLAN, tmp_path / "s")
     cap.step_mm.setValue(0.01)
-    cap.stop_mm.setValue(0.05)  # 5 places of 10 steps of 2 um do not fit 0..0.05 mm
+    cap.stop_mm.setValue(0.05)  # 3 places of 10 steps of 2 um do not fit 0..0.05 mm
     cap.asme_test.setCurrentIndex(cap.asme_test.findData("min-step"))
     assert cap.test_name() is None and "do not fit" in cap.summary.text()

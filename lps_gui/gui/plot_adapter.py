@@ -39,6 +39,15 @@ def component_name(label: str) -> str:
     return re.sub(r"\s*\b(forward|backward)\b\s*[\u2191\u2193]?", "", label.replace("truth ", "")).strip()
 
 
+def wants_compact_legend(fig: FigureSpec) -> bool:
+    """Many series sharing colours (components drawn per direction and as truth): name each colour once.
+
+    Series of colours of their own (the settling test's moves) keep their labels.
+    """
+    colors = {s.color for s in fig.series}
+    return len(fig.series) >= COMPACT_LEGEND_AT and 2 * len(colors) <= len(fig.series)
+
+
 def compact_legend(legend: pg.LegendItem, fig: FigureSpec) -> None:
     """One entry per colour (the component) and one per line style (direction, truth): 12 entries become 7."""
     seen: dict[str, str] = {}
@@ -130,7 +139,7 @@ def figure_steps(plot: pg.PlotItem, fig: FigureSpec) -> tuple[DrawnFigure, list[
     event-loop turns and the window never freezes while results come up.
     """
     drawn = DrawnFigure(fig)
-    compact = len(fig.series) >= COMPACT_LEGEND_AT
+    compact = wants_compact_legend(fig)
 
     def setup() -> None:
         plot.disableAutoRange()  # no range update per added item

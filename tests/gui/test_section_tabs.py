@@ -87,3 +87,20 @@ def test_results_without_the_sections_keep_the_tab_layout(qtbot, min_step_sessio
     assert _tab_names(panel) == PLAIN_TABS
     bar = panel.tabs.tabBar()
     assert bar.elideMode() == Qt.TextElideMode.ElideNone and panel.tabs.usesScrollButtons()  # whole tab names
+
+
+def test_legends_keep_labels_of_distinct_colours_and_fit_long_labels():
+    import numpy as np
+
+    from lps_gui.gui.plot_adapter import legend_columns, wants_compact_legend
+    from lps_gui.report.figure_spec import FigureSpec, Series
+
+    x = np.arange(3.0)
+    moves = FigureSpec("settling", "t", "x", "y", [Series(x, x, f"{k} mm", "line", f"#00000{k}") for k in range(8)])
+    shared = FigureSpec("angles", "t", "x", "y", [Series(x, x, f"c{k % 4} {d}", "line", f"#00000{k % 4}")
+                                                  for k, d in enumerate(["forward"] * 4 + ["backward"] * 4 + ["truth"] * 4)])
+    assert not wants_compact_legend(moves) and wants_compact_legend(shared)  # each move's colour keeps its label
+    unresolved = FigureSpec("error_motions_linear", "t", "x", "y",
+                            [Series(x, x, f"EYX straightness along Y: not resolved (noise p-v {k} \u00b5m)", "line", "#888")
+                             for k in range(3)])
+    assert legend_columns(unresolved, False) == 1 and legend_columns(moves, False) == 3

@@ -58,6 +58,16 @@ def _describe(stage: Any) -> dict[str, Any]:
         return {}
 
 
+def asme_test_tip() -> str:
+    """The test combo's tooltip, from the presets' own numbers (the same words as lps capture --help)."""
+    from lps_gui.core.presets import MIN_STEP_COUNT, MIN_STEP_FRAMES, MIN_STEP_LOCATIONS, MIN_STEP_UM, SETTLING_FRAMES
+
+    return (f"ASME B5.64 test: min-step takes {MIN_STEP_COUNT} steps of {MIN_STEP_UM:g} \u00b5m forward and back at "
+            f"{MIN_STEP_LOCATIONS} places, {MIN_STEP_FRAMES} frames per stop averaged; settling takes "
+            f"{SETTLING_FRAMES} frames back to back after each move. The plan covers start..stop; the test goes "
+            "into session.json asme_test for the estimate")
+
+
 def fmt_duration(seconds: float) -> str:
     s = int(round(seconds))
     return f"{s // 3600} h {s % 3600 // 60:02d} min" if s >= 3600 else (f"{s // 60} min {s % 60:02d} s" if s >= 60 else f"{s} s")
@@ -114,10 +124,15 @@ class CapturePanel(QWidget):
         iso_row.addWidget(self.iso_btn)
         iso_row.addWidget(self.pitch_mm)
         self._iso_targets: tuple[float, ...] | None = None
+        self.asme_test = QComboBox()  # an ASME B5.64 test's plan preset (docs/asme-b5.64.md), as lps capture --test
+        for label, key in (("none", None), ("min-step (incremental steps)", "min-step"), ("settling", "settling")):
+            self.asme_test.addItem(label, key)
+        self.asme_test.setToolTip(asme_test_tip())
         self.frame_s = DEFAULT_FRAME_S
         self._frames_at_start = 0
         form = QFormLayout(plan_box)
         form.addRow("Preset", iso_row)  # first: the plan a standard calibration needs
+        form.addRow("ASME B5.64 test", self.asme_test)
         add_rows(form, [
             ("Start", self.start_mm), ("Stop", self.stop_mm), ("Step", self.step_mm),
             ("Directions", self.directions), ("Runs", self.runs), ("Overshoot", self.overshoot_mm),
@@ -131,7 +146,8 @@ class CapturePanel(QWidget):
                                               lambda fields: apply_shared_to_panel(self, fields))
         self.planar_editor.changed.connect(self.update_summary)
         self.planar_editor.enabled.toggled.connect(
-            lambda on: [w.setEnabled(not on) for w in (self.start_mm, self.stop_mm, self.step_mm, self.iso_btn)])
+            lambda on: [w.setEnabled(not on) for w in (self.start_mm, self.stop_mm, self.step_mm, self.iso_btn,
+                                                       self.asme_test)])
 
         self.targets_editor = TargetsEditor(self.start_dir)  # a row of targets instead of the board (SPEC 13)
 
@@ -169,6 +185,7 @@ class CapturePanel(QWidget):
         for w in (self.start_mm, self.stop_mm, self.step_mm):
             w.valueChanged.connect(self._targets_edited)
         self.iso_btn.clicked.connect(self.apply_iso_plan)
+        self.asme_test.currentIndexChanged.connect(self.apply_asme_test)
         for w in (self.start_mm, self.stop_mm, self.step_mm, self.overshoot_mm, self.settle_s, self.feed_mm_min):
             w.valueChanged.connect(self.update_summary)
         for w in (self.runs, self.frames_per_stop):
@@ -207,6 +224,7 @@ class CapturePanel(QWidget):
         self.frames_per_stop.setValue(plan.frames_per_stop)
         self.feed_mm_min.setValue(plan.feed_mm_min)
         self.stitch.show_plan(plan)
+        self._set_test(None)  # a plan set from outside is no ASME test
 
     def update_summary(self) -> None:
         try:
@@ -217,7 +235,8 @@ class CapturePanel(QWidget):
             return
         self.summary.setText(f"{len(plan.targets())} targets, {plan.n_frames()} frames, "
                              f"about {fmt_duration(self.estimate_s(plan))}"
-                             + (" (ISO 230-2 targets, non-uniform)" if self._iso_targets else ""))
+                             + (f" (ASME B5.64 {self.test_name()} test)" if self.test_name() else
+                                " (ISO 230-2 targets, non-uniform)" if self._iso_targets else ""))
         self.start_btn.setEnabled(self.job is None)
 
     def estimate_s(self, plan: Plan) -> float:
@@ -238,16 +257,59 @@ class CapturePanel(QWidget):
         except InputError as exc:
             self.summary.setText(f"<span style='color:#b00020'>{one_line(exc)}</span>")
             return
+        self._set_test(None)
+        self._apply_fields(fields)
+
+    def _apply_fields(self, fields: dict[str, Any]) -> None:
+        """A preset's plan fields (:mod:`lps_gui.core.presets`) into the plan's widgets."""
         self.directions.setCurrentIndex(self.directions.findData(fields["directions"]))
         self.runs.setValue(fields["runs"])
+        if "frames_per_stop" in fields:
+            self.frames_per_stop.setValue(fields["frames_per_stop"])
+        if "settle_s" in fields:
+            self.settle_s.setValue(fields["settle_s"])
         self._iso_targets = fields["targets_mm"]
         self.update_summary()
+
+    def test_name(self) -> str | None:
+        """The ASME B5.64 test the plan is ("min-step", "settling") or None."""
+        return self.asme_test.currentData()
+
+    def _set_test(self, test: str | None) -> None:
+        self.asme_test.blockSignals(True)
+        self.asme_test.setCurrentIndex(max(0, self.asme_test.findData(test)))
+        self.asme_test.blockSignals(False)
+
+    def apply_asme_test(self) -> None:
+        """The chosen ASME B5.64 test's plan over [start, stop] (the presets of lps capture --test)."""
+        from lps_gui.core.presets import min_step_plan_fields, settling_plan_fields
+
+        test = self.test_name()
+        if test is None:
+            self.apply_iso_plan()  # back to the standard plan
+            return
+        start, stop = self.start_mm.value(), self.stop_mm.value()
+        try:
+            fields = min_step_plan_fields(start, stop) if test == "min-step" else settling_plan_fields(start, stop)
+        except InputError as exc:
+            self._set_test(None)
+            self.summary.setText(f"<span style='color:#b00020'>{one_line(exc)}</span>")
+            return
+        self._apply_fields(fields)
+
+    def asme_test_meta(self) -> dict[str, Any]:
+        """session.json ``asme_test`` of the chosen test (what lps estimate computes for it); {} for none."""
+        from lps_gui.core.presets import asme_test_record
+
+        test = self.test_name()
+        return {"asme_test": asme_test_record(test)} if test else {}
 
     def _targets_edited(self) -> None:
         if self._iso_targets is not None and not self.signalsBlocked():
             plan_targets = self._iso_targets
             if (self.start_mm.value(), self.stop_mm.value()) != (plan_targets[0], plan_targets[-1]):
                 self._iso_targets = None  # the range changed by hand: uniform targets again
+                self._set_test(None)  # and no longer the test's plan
 
     # ------------------------------------------------------------------ running
     def start(self) -> None:
@@ -265,7 +327,7 @@ class CapturePanel(QWidget):
             stage, camera = gantry[1:] if gantry else self._rig()
             if self.planar_editor.active() and not gantry:
                 self.planar_editor.check_connected_rig(is_simulated_rig(stage, camera))
-            extra = self.report_setup.meta()  # spec, environment, identification for session.json
+            extra = self.report_setup.meta() | self.asme_test_meta()  # spec, environment, identification, test
             targets = self.targets_editor.targets()
             if targets and (gantry or is_simulated_rig(stage, camera)):
                 raise InputError("targets: the simulated rig renders one board; uncheck Targets, or simulate a row "

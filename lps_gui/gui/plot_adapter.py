@@ -19,6 +19,7 @@ BAND_ALPHA = 50  # of 255: a 2-sigma band reads as a tint behind the curve
 MARKER_SIZE_PX = 6
 LEGEND_ROW = 4  # PlotItem layout rows: 0 title, 1 top axis, 2 view, 3 bottom axis; the legend goes under
 COMPACT_LEGEND_AT = 7  # series: from here the legend names each colour once and each line style once
+LEGEND_ROW_CHARS = 100  # a legend row longer than this widens the plot beyond a half-screen panel
 STYLE_GREY = "#555555"
 
 
@@ -36,6 +37,15 @@ class ReadableAxis(pg.AxisItem):
 def component_name(label: str) -> str:
     """"roll forward ↑" / "truth roll" -> "roll": what a colour stands for in a compact legend."""
     return re.sub(r"\s*\b(forward|backward)\b\s*[\u2191\u2193]?", "", label.replace("truth ", "")).strip()
+
+
+def wants_compact_legend(fig: FigureSpec) -> bool:
+    """Many series sharing colours (components drawn per direction and as truth): name each colour once.
+
+    Series of colours of their own (the settling test's moves) keep their labels.
+    """
+    colors = {s.color for s in fig.series}
+    return len(fig.series) >= COMPACT_LEGEND_AT and 2 * len(colors) <= len(fig.series)
 
 
 def compact_legend(legend: pg.LegendItem, fig: FigureSpec) -> None:
@@ -115,6 +125,13 @@ def draw_series(plot: pg.PlotItem, s: Series, drawn: DrawnFigure, named: bool = 
         drawn.outliers.append(cross)
 
 
+def legend_columns(fig: FigureSpec, compact: bool) -> int:
+    """Columns of the legend: more for many series, fewer for long labels ("... not resolved (noise p-v ...)")."""
+    columns = 4 if compact else (3 if len(fig.series) > 4 else 2)
+    longest = max((len(s.label) for s in fig.series), default=0)
+    return columns if compact else max(1, min(columns, LEGEND_ROW_CHARS // max(longest, 1)))
+
+
 def figure_steps(plot: pg.PlotItem, fig: FigureSpec) -> tuple[DrawnFigure, list[Callable[[], None]]]:
     """Drawing ``fig`` into ``plot`` as small steps (set-up, one per series, finish).
 
@@ -122,7 +139,7 @@ def figure_steps(plot: pg.PlotItem, fig: FigureSpec) -> tuple[DrawnFigure, list[
     event-loop turns and the window never freezes while results come up.
     """
     drawn = DrawnFigure(fig)
-    compact = len(fig.series) >= COMPACT_LEGEND_AT
+    compact = wants_compact_legend(fig)
 
     def setup() -> None:
         plot.disableAutoRange()  # no range update per added item
@@ -134,7 +151,7 @@ def figure_steps(plot: pg.PlotItem, fig: FigureSpec) -> tuple[DrawnFigure, list[
             plot.legend = pg.LegendItem(labelTextSize="8pt", labelTextColor="#202020",
                                         brush=pg.mkBrush(255, 255, 255, 0), pen=pg.mkPen(None))
             plot.layout.addItem(plot.legend, LEGEND_ROW, 1)
-        plot.legend.setColumnCount(4 if compact else (3 if len(fig.series) > 4 else 2))
+        plot.legend.setColumnCount(legend_columns(fig, compact))
         plot.setTitle(fig.title, color="#202020", size="11pt")
         plot.setLabel("bottom", fig.x_label)
         plot.setLabel("left", fig.y_label)

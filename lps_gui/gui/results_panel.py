@@ -20,6 +20,7 @@ from PySide6.QtWidgets import (
 
 from lps_gui.gui.mounted_targets import MountedTargetsView
 from lps_gui.gui.plot_adapter import DrawnFigure, ReadableAxis, figure_steps
+from lps_gui.gui.section_tabs import SectionContent, SectionPage, section_contents, tab_tip
 from lps_gui.gui.view_detail import ViewDetail
 from lps_gui.gui.widgets import TextTable, ValueTable
 from lps_gui.gui.workers import Job
@@ -56,6 +57,7 @@ class ResultsPanel(QWidget):
         self._queue: list[Any] = []
         self._pending_table = False
         self._tab_keys: list[str] = []
+        self.section_pages: dict[str, SectionPage] = {}  # tab title -> page, built on first use
         self._generation = 0
 
         self.header = QLabel("No results yet: run an estimation or open a session with results.json.")
@@ -78,8 +80,8 @@ class ResultsPanel(QWidget):
 
         self.tabs = QTabWidget()
         self.tabs.setDocumentMode(True)
-        self.tabs.setUsesScrollButtons(False)  # every tab in sight; a narrow panel elides titles instead
-        self.tabs.tabBar().setElideMode(Qt.TextElideMode.ElideRight)
+        self.tabs.setUsesScrollButtons(True)  # whole titles; a narrow panel scrolls the bar instead of eliding
+        self.tabs.tabBar().setElideMode(Qt.TextElideMode.ElideNone)
         self.plots: dict[str, pg.PlotWidget] = {}
         self._pages: dict[str, QWidget] = {}  # figure key -> the tab page showing its plot
         self._groups: dict[str, QSplitter] = {}
@@ -156,6 +158,7 @@ class ResultsPanel(QWidget):
         self._queue = []
         for i in order:
             self._queue += self._draw_steps(figures[i])
+        self._queue += self._section_steps(results)
         self._queue += [lambda: self._fill_tables(results), lambda: self._fill_positions(results)]
         self._generation += 1
         generation = self._generation
@@ -214,9 +217,44 @@ class ResultsPanel(QWidget):
         self.tabs.addTab(self.position_table, "Table")
         self._tab_keys = keys
 
+    def _section_steps(self, results: Results) -> list[Any]:
+        """Steps adding the tabs of the sections these results have (error motions, an ASME test) before "Table".
+
+        The old section tabs go at once; results without the sections keep the tab bar as it was.
+        Reading the sections, each tab and each plot are steps of their own (the window stays responsive).
+        """
+        for page in self.section_pages.values():
+            if (i := self.tabs.indexOf(page)) >= 0:
+                self.tabs.removeTab(i)
+
+        def expand() -> None:
+            steps: list[Any] = []
+            for content in section_contents(results):
+                steps.append(lambda c=content: self._add_section(c))
+                steps += [lambda c=content, i=i, fig=fig: self._run_next(self._section_figure_steps(c, i, fig))
+                          for i, fig in enumerate(content.figures)]
+            self._run_next(steps)
+
+        return [expand]
+
+    def _run_next(self, steps: list[Any]) -> None:
+        self._queue[0:0] = steps
+
+    def _add_section(self, content: SectionContent) -> None:
+        page = self.section_pages.setdefault(content.title, SectionPage())
+        page.set_content(content)
+        index = self.tabs.insertTab(self.tabs.indexOf(self.position_table), page, content.title)
+        self.tabs.setTabToolTip(index, tab_tip(content))
+
+    def _section_figure_steps(self, content: SectionContent, index: int, fig: Any) -> list[Any]:
+        plot = self.section_pages[content.title].plot_for(index, fig.key)
+        drawn, steps = figure_steps(plot.getPlotItem(), fig)
+        return steps + [lambda: self.drawn.__setitem__(fig.key, drawn)]
+
     def show_figure(self, key: str) -> None:
         """Bring the tab holding figure ``key`` to the front."""
-        self.tabs.setCurrentWidget(self._pages[key])
+        page = self._pages.get(key) or next(p for p in self.section_pages.values() if key in p.plots)
+        self.tabs.setCurrentWidget(page)
 
     def _draw_steps(self, fig: Any) -> list[Any]:
         drawn, steps = figure_steps(self.plots[fig.key].getPlotItem(), fig)

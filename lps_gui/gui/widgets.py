@@ -5,6 +5,7 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 from PySide6.QtCore import QAbstractTableModel, QModelIndex, Qt, Signal
+from PySide6.QtGui import QColor
 from PySide6.QtWidgets import (
     QDoubleSpinBox, QFileDialog, QFormLayout, QLayout, QTableView, QVBoxLayout, QHBoxLayout, QHeaderView, QLineEdit, QPushButton, QTableWidget, QTableWidgetItem, QWidget,
 )
@@ -137,11 +138,15 @@ class TextTableModel(QAbstractTableModel):
         super().__init__()
         self.header: list[str] = []
         self.rows: list[Sequence[str]] = []
+        self.colors: list[str | None] = []
         self.numeric = set(numeric)
 
-    def set_rows(self, header: Sequence[str], rows: Sequence[Sequence[str]]) -> None:
+    def set_rows(self, header: Sequence[str], rows: Sequence[Sequence[str]],
+                 colors: Sequence[str | None] | None = None) -> None:
+        """``colors``: a text colour per row (None: the default), e.g. grey for what is not resolved."""
         self.beginResetModel()
         self.header, self.rows = list(header), list(rows)
+        self.colors = list(colors) if colors is not None else []
         self.endResetModel()
 
     def rowCount(self, parent: QModelIndex = QModelIndex()) -> int:  # noqa: B008 (Qt signature)
@@ -155,6 +160,8 @@ class TextTableModel(QAbstractTableModel):
             return str(self.rows[index.row()][index.column()])
         if role == Qt.ItemDataRole.TextAlignmentRole and index.column() in self.numeric:
             return int(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
+        if role == Qt.ItemDataRole.ForegroundRole and index.row() < len(self.colors) and self.colors[index.row()]:
+            return QColor(self.colors[index.row()])
         return None
 
     def headerData(self, section: int, orientation: Qt.Orientation, role: int = Qt.ItemDataRole.DisplayRole) -> object:
@@ -175,8 +182,9 @@ class TextTable(QTableView):
         self.horizontalHeader().setStretchLastSection(True)
         self.horizontalHeader().setResizeContentsPrecision(40)  # size columns from 40 rows, not all
 
-    def set_rows(self, header: Sequence[str], rows: Sequence[Sequence[str]]) -> None:
-        self.model_.set_rows(header, rows)
+    def set_rows(self, header: Sequence[str], rows: Sequence[Sequence[str]],
+                 colors: Sequence[str | None] | None = None) -> None:
+        self.model_.set_rows(header, rows, colors)
         for c in range(len(header)):  # width from the header and the first rows only: cheap for any length
             self.resizeColumnToContents(c)
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from lps_gui.io.results_sections import IncrementalStep, Settling
+from lps_gui.io.results_sections import AsmeB564, IncrementalStep, Settling
 from lps_gui.report.figure_spec import (BACKWARD_COLOR, FORWARD_COLOR, OUTLIER_COLOR, SPEC_COLOR, TRUTH_COLOR,
                                         FigureSpec, Series)
 
@@ -53,3 +53,15 @@ def settling_figure(settling: Settling) -> FigureSpec:
                              "line", OUTLIER_COLOR))
     return FigureSpec("settling", "Settling: position after each move against time", "time after the move [s]",
                       "position \u2212 rest, along the move [\u00b5m]", series)
+
+
+def test_figures(section: AsmeB564 | None) -> list[FigureSpec]:
+    """The figures of the tests a session ran (steps, settling), in the report's order; [] for none."""
+    if section is None:
+        return []
+    figures = []
+    if section.incremental_step and section.incremental_step.raw:
+        figures.append(step_figure(section.incremental_step))
+    if section.settling and section.settling.raw:
+        figures.append(settling_figure(section.settling))
+    return figures

@@ -142,14 +142,21 @@ def settling_line(settling: Settling) -> str:
     return line + (f"; true {truth.settling_time_s:.3f} s" if truth and truth.raw else "")
 
 
-def test_lines(results: Results | Mapping[str, Any]) -> list[str]:
-    """The ASME test's findings and the test uncertainty ratios, one line each (demo, CLI)."""
+def finding_lines(results: Results | Mapping[str, Any]) -> list[str]:
+    """The ASME test's findings, one line per test that ran (demo, CLI, the GUI's ASME tab)."""
     s = section(results)
     lines = []
     if s.incremental_step and s.incremental_step.raw:
         lines.append(step_verdict(s.incremental_step))
     if s.settling and s.settling.raw:
         lines.append(settling_line(s.settling))
+    return lines
+
+
+def test_lines(results: Results | Mapping[str, Any]) -> list[str]:
+    """The ASME test's findings and the test uncertainty ratios, one line each (demo, CLI)."""
+    s = section(results)
+    lines = finding_lines(results)
     for r in s.test_uncertainty_ratio:
         ratio = "\u2014" if r.tur is None else f"{r.tur:.1f}"
         lines.append(f"TUR {r.figure}: {ratio} (tolerance {fmt(r.tolerance)} {r.unit})")
@@ -160,16 +167,23 @@ def _seconds(v: Any) -> str:
     return "never inside the band" if v is None else f"{float(v):.3f} s"
 
 
+TUR_HEADER = ["figure", "compared", "tolerance", "U (k = 2)", "TUR"]
+
+
+def tur_cells(rows: tuple[UncertaintyRatio, ...]) -> list[list[str]]:
+    """One row of :data:`TUR_HEADER` per specified figure (the report's table and the GUI's)."""
+    return [[r.figure, r.quantity or "", f"{fmt(r.tolerance)} {r.unit}",
+             "\u2014" if r.U is None else f"{fmt(r.U)} {r.unit}",
+             "\u2014" if r.tur is None else f"{r.tur:.1f}"] for r in rows]
+
+
 def tur_section(flow: Any, rows: tuple[UncertaintyRatio, ...]) -> None:
     flow.heading("Test uncertainty ratio", 11)
     if not rows:
         flow.paragraph("No tolerance in session.json stage_spec (lps capture --spec ...,min_step=UM,settling=S): "
                        "no ratio is stated.", color=GREY)
         return
-    cells = [[r.figure, r.quantity or "", f"{fmt(r.tolerance)} {r.unit}",
-              "\u2014" if r.U is None else f"{fmt(r.U)} {r.unit}",
-              "\u2014" if r.tur is None else f"{r.tur:.1f}"] for r in rows]
-    flow.table(["figure", "compared", "tolerance", "U (k = 2)", "TUR"], cells, [56, 30, 30, 30, 20], size_pt=8.0)
+    flow.table(TUR_HEADER, tur_cells(rows), [56, 30, 30, 30, 20], size_pt=8.0)
     note(flow, TUR_NOTE)
 
 

@@ -59,8 +59,9 @@ def test_estimate_plots_click_and_export(qtbot, window, session_dir, tmp_path, g
     assert len(crosses) == 1
     x, _ = crosses[0].getData()
     assert REPLACED_VIEW in set(int(v) for v in x)
-    assert rp.tabs.count() == 6  # accuracy, three pairs of figures, residuals, positions table
-    assert not rp.tabs.usesScrollButtons() and rp.target_table.rowCount() > 0
+    # accuracy, three pairs of figures, residuals, error motions (SPEC 14), positions table
+    assert [rp.tabs.tabText(i) for i in range(rp.tabs.count())][-2:] == ["Error motions", "Table"]
+    assert rp.tabs.count() == 7 and rp.tabs.usesScrollButtons() and rp.target_table.rowCount() > 0
     assert rp.position_table.rowCount() == K
     assert window.estimation_panel.table.rowCount() > 5
 

@@ -106,7 +106,7 @@ def error_motions(sol: PoseSolution, targets_mm: np.ndarray, axis: str = "X",
     n = len(rows)
     centred = np.zeros((K, K))
     centred[np.ix_(rows, rows)] = np.eye(n) - 1.0 / n
-    values, sig, csig = {}, {}, {}
+    values, sig, csig, cov_args, unit_sq = {}, {}, {}, {}, {}
     grad_x = np.einsum("i,kip->kp", X, dC)
     comps = {"positioning": (1e3 * (m - (x - x[ref])), grad_x, rel, 1e3)}
     for name, axis_vec in (("straightness_y", Y), ("straightness_z", Z)):
@@ -121,6 +121,7 @@ def error_motions(sol: PoseSolution, targets_mm: np.ndarray, axis: str = "X",
     for name, (val, grad, weights, unit) in comps.items():
         val = np.where(used, val, np.nan)
         values[name] = val
+        cov_args[name], unit_sq[name] = (weights, grad), unit**2
         var = sol.covariance.weighted_variances(weights, grad)
         sig[name] = np.where(used, unit * np.sqrt(np.maximum(var, 0.0)), np.nan)
         var = sol.covariance.weighted_variances(centred if name in ANGULAR or name == "positioning" else line, grad)
@@ -130,7 +131,11 @@ def error_motions(sol: PoseSolution, targets_mm: np.ndarray, axis: str = "X",
         Om = sol.single_view[i, 0:3, 0:3]
         cov_world = A[i] @ Om @ A[i].T
         single[i] = 1e6 * np.sqrt(np.diag(S.T @ cov_world @ S))
-    profiles = {name: profile_span(values[name], csig[name], x, used) for name in values}
+    # a constellation's stops share the targets' poses: their errors correlate along the travel
+    shared = sol.covariance.shares_targets
+    profiles = {name: profile_span(values[name], csig[name], x, used,
+                                   covariance=unit_sq[name] * sol.covariance.weighted_covariance(*cov_args[name])
+                                   if shared else None) for name in values}
     resolved = {name: bool(prof.resolved) for name, prof in profiles.items()}
     tool = tool_sig = None
     if tool_stage_mm is not None:

@@ -11,7 +11,8 @@ Y = Z x X. Per stop, relative to the first usable stop:
 
 Every figure is linear in the views' pose perturbations to first order, so its
 sigma is that functional's variance under the poses' full (factored)
-covariance; a profile is *resolved* by the one rule of :mod:`core.resolution`.
+covariance; a profile is *resolved* by the one rule of :mod:`core.resolution`, given the motion's
+covariance over the stops when they share estimated targets (their errors then correlate).
 The Abbe effect at a tool point (an offset from the camera centre, in the
 camera frame) turns the angles into the positioning error there.
 """
@@ -106,7 +107,8 @@ def error_motions(sol: PoseSolution, targets_mm: np.ndarray, axis: str = "X",
     n = len(rows)
     centred = np.zeros((K, K))
     centred[np.ix_(rows, rows)] = np.eye(n) - 1.0 / n
-    values, sig, csig = {}, {}, {}
+    values, sig, csig, profiles = {}, {}, {}, {}
+    shared = sol.covariance.shares_targets  # a constellation's stops share the targets: correlated errors
     grad_x = np.einsum("i,kip->kp", X, dC)
     comps = {"positioning": (1e3 * (m - (x - x[ref])), grad_x, rel, 1e3)}
     for name, axis_vec in (("straightness_y", Y), ("straightness_z", Z)):
@@ -125,12 +127,13 @@ def error_motions(sol: PoseSolution, targets_mm: np.ndarray, axis: str = "X",
         sig[name] = np.where(used, unit * np.sqrt(np.maximum(var, 0.0)), np.nan)
         var = sol.covariance.weighted_variances(centred if name in ANGULAR or name == "positioning" else line, grad)
         csig[name] = np.where(used, unit * np.sqrt(np.maximum(var, 0.0)), np.nan)
+        cov = unit**2 * sol.covariance.weighted_covariance(weights, grad) if shared else None
+        profiles[name] = profile_span(val, csig[name], x, used, covariance=cov)
     single = np.full((K, 3), np.nan)
     for i in rows:
         Om = sol.single_view[i, 0:3, 0:3]
         cov_world = A[i] @ Om @ A[i].T
         single[i] = 1e6 * np.sqrt(np.diag(S.T @ cov_world @ S))
-    profiles = {name: profile_span(values[name], csig[name], x, used) for name in values}
     resolved = {name: bool(prof.resolved) for name, prof in profiles.items()}
     tool = tool_sig = None
     if tool_stage_mm is not None:

@@ -125,7 +125,9 @@ def planar_error_motions(sol: PoseSolution, targets_mm: np.ndarray) -> PlanarErr
         values[name] = w @ np.where(used, per_stop, 0.0)
         sigmas[name] = unit * np.sqrt(np.maximum(sol.covariance.weighted_variances(w, grad), 0.0))
         centred[name] = unit * np.sqrt(np.maximum(sol.covariance.weighted_variances(wc, grad), 0.0))
-        profiles[name] = profile_span(values[name], centred[name], keys[along], np.ones(len(keys[along]), bool))
+        cov = unit**2 * sol.covariance.weighted_covariance(w, grad) if sol.covariance.shares_targets else None
+        profiles[name] = profile_span(values[name], centred[name], keys[along], np.ones(len(keys[along]), bool),
+                                      covariance=cov)
     stop_sig[~used] = np.nan
     angle[~used] = np.nan
     return PlanarErrorMotions(S, ref, angle, np.where(used[:, None], stop_sig, np.nan), {0: keys[0], 1: keys[1]},

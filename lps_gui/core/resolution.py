@@ -40,6 +40,7 @@ def _ndtri(p: float) -> float:
 ISO_RUNS_PER_DIRECTION = 5
 NOISE_K = 3.0  # a p-v is a finding only when 3 sd above what noise alone gives
 PROFILE_P_VALUE = 1e-3  # ... and its profile is not flat at this significance
+NOISE_DRAWS = 400  # draws of correlated noise whose p-v give the noise p-v (no closed form)
 
 
 def expected_max_normal(n: int) -> float:
@@ -112,8 +113,28 @@ class ProfileSpan:
                 "n_targets": self.n_targets, "resolved": self.resolved}
 
 
+def _correlated_noise(mean: np.ndarray, cov: np.ndarray) -> tuple[float, int, float]:
+    """Chi-square of ``mean`` against its full covariance (its constant taken out), its dof, and the noise p-v.
+
+    Generalized: (P v)^T (P C P)^+ (P v) with P removing the mean (the gauge: every profile is relative to a
+    reference) and the rank of P C P as the dof; the noise p-v is mean + NOISE_K sd of the p-v of
+    NOISE_DRAWS seeded draws of N(0, C) (deterministic; the range of correlated noise has no closed form).
+    """
+    m = mean.size
+    P = np.eye(m) - 1.0 / m
+    lam, U = np.linalg.eigh(P @ cov @ P)
+    keep = lam > max(float(lam[-1]), 0.0) * 1e-9
+    if not keep.any():
+        return 0.0, 0, 0.0
+    lam, U = lam[keep], U[:, keep]
+    chi2 = float(np.sum((U.T @ (P @ mean)) ** 2 / lam))
+    draws = (np.random.default_rng(0).standard_normal((NOISE_DRAWS, lam.size)) * np.sqrt(lam)) @ U.T
+    spans = np.ptp(draws, axis=1)
+    return chi2, int(lam.size), float(spans.mean() + NOISE_K * spans.std(ddof=1))
+
+
 def profile_span(values: np.ndarray, sigma: np.ndarray, target: np.ndarray, valid: np.ndarray,
-                 limit: float | None = None) -> ProfileSpan:
+                 limit: float | None = None, covariance: np.ndarray | None = None) -> ProfileSpan:
     """P-v of the per-target means of ``values`` (all runs and directions averaged).
 
     Averaging the captures of one target divides their independent noise by
@@ -123,6 +144,11 @@ def profile_span(values: np.ndarray, sigma: np.ndarray, target: np.ndarray, vali
     differences of neighbouring targets (a smooth profile has none). Resolved: the per-target means differ from zero (they are already
     off a least-squares line) at p < 0.001 by a chi-square test, and the p-v
     exceeds the noise p-v of that many targets (and the limit, if given).
+
+    ``covariance`` (n, n), of ``values``: when the values' errors are correlated (the angles of a
+    constellation's stops share the targets' relative poses, which chain along the row), the
+    independent test understates what noise alone produces; with it both the chi-square and the
+    noise p-v come from the per-target means' full covariance (:func:`_correlated_noise`).
     """
     v = np.asarray(values, float)
     s = np.asarray(sigma, float)
@@ -139,11 +165,22 @@ def profile_span(values: np.ndarray, sigma: np.ndarray, target: np.ndarray, vali
         sig_mean = np.maximum(sig_mean, empirical)
     span = float(np.ptp(mean))
     sig = float(np.median(sig_mean))
-    noise = noise_peak_to_valley(float(np.sqrt(np.mean(sig_mean**2))), m)
-    # a profile is a finding when it is significantly not flat (chi-square of the per-target means
-    # against their sigma, two dof taken by the reference line), not merely when its range is large
-    chi2 = float(np.sum((mean / np.maximum(sig_mean, 1e-300)) ** 2))
-    significant = m > 2 and float(chi2_sf(chi2, m - 2)) < PROFILE_P_VALUE
+    if covariance is None:
+        noise = noise_peak_to_valley(float(np.sqrt(np.mean(sig_mean**2))), m)
+        # a profile is a finding when it is significantly not flat (chi-square of the per-target means
+        # against their sigma, two dof taken by the reference line), not merely when its range is large
+        chi2 = float(np.sum((mean / np.maximum(sig_mean, 1e-300)) ** 2))
+        dof = m - 2
+    else:
+        avg = np.zeros((m, inv.size))
+        avg[inv, np.arange(inv.size)] = 1.0 / count[inv]
+        idx = np.flatnonzero(ok)
+        cov = avg @ np.asarray(covariance, float)[np.ix_(idx, idx)] @ avg.T
+        centred_var = np.diag(cov) - 2.0 * cov.mean(axis=1) + cov.mean()  # of mean_i - mean over the targets
+        # the scatter seen in the data beyond the covariance's (sig_mean's floor above): independent per target
+        cov = cov + np.diag(np.maximum(sig_mean**2 - centred_var, 0.0))
+        chi2, dof, noise = _correlated_noise(mean, cov)
+    significant = m > 2 and dof > 0 and float(chi2_sf(chi2, dof)) < PROFILE_P_VALUE
     return ProfileSpan(span, sig, noise, int(m), significant and is_resolved(span, noise, limit))
 
 

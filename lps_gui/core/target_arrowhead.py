@@ -219,6 +219,18 @@ class PositionCovariance:
         wg = w @ np.einsum("kgp,kp->kg", self.W, gs)
         return self.sigma2 * ((w * w) @ own + np.einsum("qg,gh,qh->q", wg, self.S_inv, wg))
 
+    def weighted_covariance(self, w: np.ndarray, g: np.ndarray) -> np.ndarray:
+        """The (Q, Q) covariance whose diagonal is :meth:`weighted_variances`: correlated through the targets."""
+        gs = g @ self.turn.T
+        own = np.einsum("kp,kpr,kr->k", gs, self.A_inv, gs)
+        wg = w @ np.einsum("kgp,kp->kg", self.W, gs)
+        return self.sigma2 * ((w * own) @ w.T + wg @ self.S_inv @ wg.T)
+
+    @property
+    def shares_targets(self) -> bool:
+        """True when the views' errors are correlated through estimated targets (not one known board)."""
+        return self.S_inv.size > 0 and bool(np.any(self.W))
+
     def cross(self, i: int, k: int) -> np.ndarray:
         """Cov(v_i, v_k) (P, P) in the solver's coordinates, scaled."""
         c = self.W[i].T @ self.S_inv @ self.W[k]

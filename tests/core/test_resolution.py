@@ -48,6 +48,30 @@ def test_pose_repeatable_errors_raise_the_per_target_sigma():
     assert span.sigma > 2.0 and not span.resolved
 
 
+def test_correlated_noise_is_not_a_finding_and_independent_noise_reads_as_before():
+    """A tilt common to the stops' references (a ramp along the travel, as a row of targets' relative tilts
+    chain) plus independent noise: a 2.2-sigma ramp reads as a finding to the independent rule, as noise with
+    the values' full covariance."""
+    n = 60
+    target = np.arange(n, dtype=float)
+    ramp = (target - target.mean()) / (0.5 * np.ptp(target))
+    cov = np.outer(ramp, ramp) + 0.2**2 * np.eye(n)
+    sigma = np.sqrt(np.diag(cov))
+    values = 2.2 * ramp + np.random.default_rng(4).normal(0, 0.2, n)
+    ok = np.ones(n, bool)
+    assert profile_span(values, sigma, target, ok).resolved
+    correlated = profile_span(values, sigma, target, ok, covariance=cov)
+    assert not correlated.resolved and correlated.noise_span > correlated.span
+    # negative control: independent noise and a bow give the same answers with their (diagonal) covariance
+    rng = np.random.default_rng(2)
+    for truth in (np.zeros(n), 30.0 * ((target - 30.0) / 30.0) ** 2):
+        v = truth + rng.normal(0, 3.0, n)
+        s = np.full(n, 3.0)
+        before, after = profile_span(v, s, target, ok), profile_span(v, s, target, ok, covariance=np.diag(s**2))
+        assert before.resolved == after.resolved == bool(truth.any())
+        assert abs(after.noise_span / before.noise_span - 1.0) < 0.1
+
+
 def straightness(v1, n1, v2, n2, r1=True, r2=True):
     return {"straightness": {"basis": "board plane, x", "v1": {"span_um": v1, "noise_span_um": n1, "n_targets": 21,
                                                              "resolved": r1},

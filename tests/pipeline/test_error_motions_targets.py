@@ -53,7 +53,9 @@ def test_two_depths_through_the_session_pipeline(tmp_path):
 
 
 def test_with_both_rows_in_one_plane_the_tilts_are_not_resolved(tmp_path):
-    spec = one_plane_spec(seed=1, plan=Plan(start_mm=0.0, stop_mm=600.0, step_mm=10.0))
+    """Seed 8: the independent-noise rule calls EBX resolved (p-v 281 urad over a noise p-v of 274); the
+    stops' angles correlate through the targets' chained tilts, and their full covariance's noise p-v is 318."""
+    spec = one_plane_spec(seed=8, plan=Plan(start_mm=0.0, stop_mm=600.0, step_mm=10.0))
     results = _estimate(tmp_path / "s", spec)
     angles = _angles(results)
     assert not angles["EAX"][2] and not angles["EBX"][2]
@@ -67,11 +69,23 @@ def test_with_both_rows_in_one_plane_the_tilts_are_not_resolved(tmp_path):
 @pytest.mark.slow
 def test_the_paper_axis_at_two_depths_over_ten_seeds(tmp_path):
     """The paper's 1524 mm X axis in 241 stops (preset paper-two-depth), 10 seeds."""
-    ratios, z2 = [], []
+    ratios, z2, resolved = [], [], []
     for seed in range(10):
         angles = _angles(_estimate(tmp_path / f"s{seed}", two_depth_spec(seed=seed)))
-        assert all(a[2] for a in angles.values()), seed
+        resolved.append([a[2] for a in angles.values()])
         ratios += [a[0] for a in angles.values()]
         z2 += [a[1] for a in angles.values()]
+    # 29 of 30 with the stops' full covariance: seed 6's ECX (p-v 137 urad over a noise p-v of 89) lies along
+    # the targets' chained mode, and its chi-square over 240 dof is p = 0.0014, not below 1e-3
+    assert np.all(np.sum(resolved, axis=0) >= 9), resolved
     assert max(ratios) < 1.2
     assert 0.5 < np.mean(z2) < 2.0
+
+
+@pytest.mark.slow
+def test_the_paper_axis_in_one_plane_over_ten_seeds(tmp_path):
+    """Preset paper-one-plane, 10 seeds: the tilts never reported resolved, the rotation about the view always."""
+    for seed in range(10):
+        angles = _angles(_estimate(tmp_path / f"s{seed}", one_plane_spec(seed=seed)))
+        assert not angles["EAX"][2] and not angles["EBX"][2], seed
+        assert angles["ECX"][2], seed

@@ -359,9 +359,14 @@ class AsmeB564(Section):
     settling: Settling | None = None  # asme_test settling only
 
     @property
+    def tests_run(self) -> tuple[IncrementalStep | Settling, ...]:
+        """The sections of the tests the session ran, incremental step first (not just the names of the figures)."""
+        return tuple(t for t in (self.incremental_step, self.settling) if t is not None and t.raw)
+
+    @property
     def has_test(self) -> bool:
-        """The session ran the incremental-step or the settling test (not just the names of the figures)."""
-        return bool(self.incremental_step and self.incremental_step.raw) or bool(self.settling and self.settling.raw)
+        """The session ran the incremental-step or the settling test."""
+        return bool(self.tests_run)
 
 
 # ----------------------------------------------------------------------------- SPEC 13: targets

@@ -59,9 +59,4 @@ def test_figures(section: AsmeB564 | None) -> list[FigureSpec]:
     """The figures of the tests a session ran (steps, settling), in the report's order; [] for none."""
     if section is None:
         return []
-    figures = []
-    if section.incremental_step and section.incremental_step.raw:
-        figures.append(step_figure(section.incremental_step))
-    if section.settling and section.settling.raw:
-        figures.append(settling_figure(section.settling))
-    return figures
+    return [step_figure(t) if isinstance(t, IncrementalStep) else settling_figure(t) for t in section.tests_run]

@@ -144,13 +144,7 @@ def settling_line(settling: Settling) -> str:
 
 def finding_lines(results: Results | Mapping[str, Any]) -> list[str]:
     """The ASME test's findings, one line per test that ran (demo, CLI, the GUI's ASME tab)."""
-    s = section(results)
-    lines = []
-    if s.incremental_step and s.incremental_step.raw:
-        lines.append(step_verdict(s.incremental_step))
-    if s.settling and s.settling.raw:
-        lines.append(settling_line(s.settling))
-    return lines
+    return [step_verdict(t) if isinstance(t, IncrementalStep) else settling_line(t) for t in section(results).tests_run]
 
 
 def test_lines(results: Results | Mapping[str, Any]) -> list[str]:

@@ -22,7 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from lps_gui.core.error_motions import ANGULAR, ErrorMotions, error_motions
+from lps_gui.core.error_motions import (ANGULAR, PLANAR_ANGLE_NAMES, PLANAR_MOTIONS, ErrorMotions, error_motions,
+                                        planar_error_motions)
 from lps_gui.core.lps_model import motion_frame
 from lps_gui.core.pose_model import PoseSolution, pose_solution_from_views
 from lps_gui.errors import InputError
@@ -183,11 +184,9 @@ def planar_error_motion_results(sol: PoseSolution, targets_mm: np.ndarray,
                                 truth_rotations: np.ndarray | None = None) -> ErrorMotionResults:
     """A planar stage's section: both axes' six error motions over their own positions, the per-stop angles
     about the stage X, Y, Z (positions.csv, empty where neither axis' motion about it is resolved)."""
-    from lps_gui.core.planar_error_motions import ANGLE_NAMES, MOTIONS, _additive, planar_error_motions
-
     pm = planar_error_motions(sol, targets_mm)
     motions: dict[str, Any] = {}
-    for name, along, kind, _ in MOTIONS:
+    for name, along, kind, _ in PLANAR_MOTIONS:
         unit = "urad" if kind == "angle" else "um"
         motions[name] = {"motion": kind, "along": "XY"[along], "unit": unit,
                          "positions_mm": json_floats(pm.axis_positions[along]), "values": json_floats(pm.values[name]),
@@ -199,14 +198,11 @@ def planar_error_motion_results(sol: PoseSolution, targets_mm: np.ndarray,
     if truth_rotations is not None:
         used = np.isfinite(pm.per_stop_urad[:, 0])
         true = 1e6 * (truth_rotations - truth_rotations[pm.reference]) @ pm.frame
-        keys, W = _additive(np.asarray(targets_mm, float), np.flatnonzero(used), pm.reference)
-        parts = {0: slice(0, len(keys[0])), 1: slice(len(keys[0]), None)}
         truth = {}
-        for name, along, kind, comp in MOTIONS:
+        for name, along, kind, comp in PLANAR_MOTIONS:
             if kind != "angle":
                 continue
-            w = W[parts[along]]
-            tv = (w - w[pm.reference_positions[along]]) @ np.where(used, true[:, comp], 0.0)
+            tv = pm.weights[name] @ np.where(used, true[:, comp], 0.0)
             e = pm.values[name] - tv
             e = e - e.mean()
             truth[name] = {"true_values": json_floats(tv), "rms_error_urad": json_float(np.sqrt(np.mean(e**2))),
@@ -214,13 +210,10 @@ def planar_error_motion_results(sol: PoseSolution, targets_mm: np.ndarray,
         section["truth"] = truth
     columns: dict[str, list[Any]] = {}
     about = {0: ("EAX", "EAY"), 1: ("EBX", "EBY"), 2: ("ECX", "ECY")}
-    for comp, name in enumerate(ANGLE_NAMES):
-        keep = any(pm.resolved[n] for n in about[comp])
-        columns[f"{name.lower()}_urad"] = json_floats(pm.per_stop_urad[:, comp]) if keep else [None] * len(pm.per_stop_urad)
-    for comp, name in enumerate(ANGLE_NAMES):
-        keep = any(pm.resolved[n] for n in about[comp])
-        columns[f"{name.lower()}_sigma_urad"] = (json_floats(pm.per_stop_sigma_urad[:, comp]) if keep
-                                                 else [None] * len(pm.per_stop_urad))
+    for kind, per_stop in (("urad", pm.per_stop_urad), ("sigma_urad", pm.per_stop_sigma_urad)):  # values, then sigmas
+        for comp, name in enumerate(PLANAR_ANGLE_NAMES):
+            keep = any(pm.resolved[n] for n in about[comp])
+            columns[f"{name.lower()}_{kind}"] = json_floats(per_stop[:, comp]) if keep else [None] * len(per_stop)
     return ErrorMotionResults(section, columns, pm)
 
 

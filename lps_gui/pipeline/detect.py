@@ -278,8 +278,8 @@ def corner_layout(session: Session) -> CornerLayout:
     targets = session.targets()
     if targets is None:
         board = session.board()
-        return CornerLayout(board, board.n_corners, _board_key(board))
-    key = "targets:" + ",".join(f"{t.id}/{_board_key(t.board)}/{t.first_marker}" for t in targets)
+        return CornerLayout(board, board.n_corners, board_key(board))
+    key = "targets:" + ",".join(f"{t.id}/{board_key(t.board)}/{t.first_marker}" for t in targets)
     return CornerLayout(tuple(targets), int(target_offsets(targets)[-1]), key)
 
 
@@ -315,10 +315,11 @@ def detect_images(
         raise InputError("detect: no images given; pass image files or a session folder")
     jobs = [ViewJob(str(p), str(p)) for p in paths]
     results = run_detection(jobs, board, progress, cancel, workers, track=track)
-    return _table([j.name for j in jobs], results, board.n_corners, {"board": _board_key(board)})
+    return _table([j.name for j in jobs], results, board.n_corners, {"board": board_key(board)})
 
 
-def _board_key(board: Board) -> str:
+def board_key(board: Board) -> str:
+    """corners.vnl's ``board`` key of one board: corners detected for another board are not kept."""
     return f"{board.type}:{board.cols}x{board.rows}:{board.square_mm:g}"
 
 

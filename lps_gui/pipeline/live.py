@@ -41,7 +41,7 @@ from lps_gui.io.corners_hashes import stat_meta
 from lps_gui.io.live_corners import LiveView, open_live_corners
 from lps_gui.io.session import CaptureRecord, Session
 from lps_gui.pipeline.detect import (
-    ViewJob, ViewResult, _board_key, chunk_size, default_workers, detect_view, session_corner_meta,
+    ViewJob, ViewResult, board_key, chunk_size, default_workers, detect_view, session_corner_meta,
     session_corner_table, write_session_corners,
 )
 
@@ -128,13 +128,13 @@ class LiveCapture:
         """Open corners.vnl (continuing a killed capture's), queue the listed frames it lacks, start the thread."""
         records = self.session.records()
         names = [r.file for r in records]
-        self._file = open_live_corners(self.session.corners_path, _board_key(self.board), self.board.n_corners, names)
+        key = board_key(self.board)
+        self._file = open_live_corners(self.session.corners_path, key, self.board.n_corners, names)
         kept = len(self._file.views)
         restart = kept - kept % self.chunk  # the tracker of `lps detect` restarts only at a chunk's first frame
         if restart != kept:
             self._file.close()
-            self._file = open_live_corners(self.session.corners_path, _board_key(self.board), self.board.n_corners,
-                                           names, keep=restart)
+            self._file = open_live_corners(self.session.corners_path, key, self.board.n_corners, names, keep=restart)
         by_name = {r.file: r for r in records}
         for view in self._file.views:
             self._views.records.append(by_name[view.name])

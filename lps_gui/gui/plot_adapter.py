@@ -120,7 +120,7 @@ def draw_series(plot: pg.PlotItem, s: Series, drawn: DrawnFigure, named: bool = 
         m = np.asarray(s.marked, bool)
         cross = pg.PlotDataItem(s.x[m], s.y[m], pen=None, symbol="x", symbolSize=14,
                                 symbolBrush=pg.mkBrush(OUTLIER_COLOR), symbolPen=pg.mkPen(OUTLIER_COLOR, width=2),
-                                name="outlier")
+                                name=s.marked_label)
         plot.addItem(cross)
         drawn.outliers.append(cross)
 

@@ -24,7 +24,8 @@ def step_figure(step: IncrementalStep) -> FigureSpec:
     for sel, label, color in ((forward, "forward steps", FORWARD_COLOR), (~forward, "backward steps", BACKWARD_COLOR)):
         if sel.any():
             series.append(Series(n[sel], achieved[sel], f"{label} achieved \u00b1 2\u03c3", "markers", color,
-                                 achieved[sel] - 2 * sigma[sel], achieved[sel] + 2 * sigma[sel], stuck[sel]))
+                                 achieved[sel] - 2 * sigma[sel], achieved[sel] + 2 * sigma[sel], stuck[sel],
+                                 marked_label="stuck step"))
     series.append(Series(n, commanded, "commanded", "line", TRUTH_COLOR, dashed=True))
     return FigureSpec("min_step", "Incremental steps: achieved against commanded (stops averaged)", "step number",
                       "step along the command [\u00b5m]", series,

@@ -32,7 +32,7 @@ class Series:
 
     ``band_low``/``band_high`` (same shape as ``y``) bound a shaded band,
     typically mean +- 2 sigma. ``marked`` (bool, same shape) picks the points
-    drawn as outliers (a red cross). ``dashed`` draws the line dashed (truth).
+    drawn as outliers (a red cross), named ``marked_label`` in a legend. ``dashed`` draws the line dashed (truth).
     """
 
     x: np.ndarray  # shape (n,)
@@ -44,6 +44,7 @@ class Series:
     band_high: np.ndarray | None = None  # shape (n,)
     marked: np.ndarray | None = None  # shape (n,), bool
     dashed: bool = False
+    marked_label: str = "outlier"  # what a red cross means here (the ASME step figure: a stuck step)
 
     def finite(self) -> "Series":
         """The same series without points whose x or y is not finite."""
@@ -55,7 +56,7 @@ class Series:
             return None if a is None else a[ok]
 
         return Series(self.x[ok], self.y[ok], self.label, self.style, self.color,
-                      pick(self.band_low), pick(self.band_high), pick(self.marked), self.dashed)
+                      pick(self.band_low), pick(self.band_high), pick(self.marked), self.dashed, self.marked_label)
 
 
 @dataclass(frozen=True)

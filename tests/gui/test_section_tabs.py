@@ -66,6 +66,7 @@ def test_error_motions_and_asme_tabs_show_the_reports_figures_and_rows(qtbot, mi
 
     asme = panel.section_pages["ASME B5.64"]
     assert "min_step" in panel.drawn and panel.drawn["min_step"].outliers  # the stuck steps crossed
+    assert {c.name() for c in panel.drawn["min_step"].outliers} == {"stuck step"}  # not "outlier"
     assert asme.lines.text().startswith("The stage sticks:")
     assert asme.lines.text().splitlines() == finding_lines(results)
     assert asme.table.model_.rows == tur_cells(section(results).test_uncertainty_ratio)

@@ -97,7 +97,7 @@ def digest(folder: Path, skip: tuple[str, ...] = ()) -> dict[str, str]:
 
 
 def point_session(tmp: Path, name: str = "s") -> Path:
-    from lps_gui.core.simulate import small_spec
+    from lps_gui.core.truth.simulate import small_spec
     from lps_gui.sim.points import simulate_point_session
 
     simulate_point_session(small_spec(seed=3, views=10, directions="+", runs=1), tmp / name)
@@ -280,7 +280,7 @@ def _(tmp: Path) -> Outcome:
 
 @case("input", "stage URL in session.json on --resume", "exit 2, nothing opened")
 def _(tmp: Path) -> Outcome:
-    from lps_gui.core.plan import Plan
+    from lps_gui.core.planning.plan import Plan
     from lps_gui.io.board_file import board_from_dict
     from lps_gui.io.session import Session
 

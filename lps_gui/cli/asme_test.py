@@ -1,6 +1,6 @@
 """`--test min-step|settling`: the ASME B5.64 test plans for `lps capture` and `lps simulate`.
 
-The switch replaces the targets by the test's preset (:mod:`lps_gui.core.presets`)
+The switch replaces the targets by the test's preset (:mod:`lps_gui.core.planning.presets`)
 over the travel (--start/--stop or the preset's), records the test in
 session.json ``asme_test`` (what `lps estimate` computes for it, docs/asme-b5.64.md)
 and, on a simulated rig, gives the stage what the test looks for: a dead
@@ -19,7 +19,7 @@ TEST_PRESET = "paper-closeup"  # the simulated set-up of the tests when no --pre
 
 
 def _ringing(text: str):
-    from lps_gui.core.stage_errors import Vibration
+    from lps_gui.core.truth.stage_errors import Vibration
 
     try:
         amp, freq, decay = (float(v) for v in text.split(","))
@@ -32,8 +32,14 @@ def _ringing(text: str):
 
 def add_test_arguments(p: argparse.ArgumentParser) -> None:
     """The test switches, in their own help group."""
-    from lps_gui.core.presets import (ASME_TESTS, MIN_STEP_FRAMES, MIN_STEP_LOCATIONS, MIN_STEP_UM, SETTLING_BAND_UM,
-                                      SETTLING_FRAMES)
+    from lps_gui.core.planning.presets import (
+        ASME_TESTS,
+        MIN_STEP_FRAMES,
+        MIN_STEP_LOCATIONS,
+        MIN_STEP_UM,
+        SETTLING_BAND_UM,
+        SETTLING_FRAMES,
+    )
 
     g = p.add_argument_group("ASME B5.64 tests (docs/asme-b5.64.md)")
     g.add_argument("--test", choices=ASME_TESTS, help=f"min-step: incremental steps ({MIN_STEP_UM:g} um) forward and "
@@ -54,7 +60,7 @@ def test_plan_fields(args: argparse.Namespace, start_mm: float | None, stop_mm: 
     test = getattr(args, "test", None)
     if not test:
         return {}
-    from lps_gui.core.presets import min_step_plan_fields, settling_plan_fields
+    from lps_gui.core.planning.presets import min_step_plan_fields, settling_plan_fields
     from lps_gui.errors import InputError
 
     if getattr(args, "iso_plan", False):
@@ -78,7 +84,7 @@ def test_record(args: argparse.Namespace) -> dict[str, Any] | None:
     """session.json ``asme_test`` of the switches (None without --test)."""
     if not getattr(args, "test", None):
         return None
-    from lps_gui.core.presets import asme_test_record
+    from lps_gui.core.planning.presets import asme_test_record
 
     if args.test == "min-step":
         return asme_test_record("min-step", step_um=args.test_step_um)
@@ -87,7 +93,7 @@ def test_record(args: argparse.Namespace) -> dict[str, Any] | None:
 
 def simulated_stage(args: argparse.Namespace, spec: Any) -> tuple[Any, Any]:
     """(spec with the dead band in its stage errors, the ringing or None) for a simulated rig."""
-    from lps_gui.core.stage_errors import Vibration
+    from lps_gui.core.truth.stage_errors import Vibration
 
     if getattr(args, "dead_band_um", None):
         spec = replace(spec, rig=replace(spec.rig, errors=replace(spec.rig.errors, dead_band_um=args.dead_band_um)))

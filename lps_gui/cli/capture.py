@@ -23,12 +23,33 @@ from __future__ import annotations
 import argparse
 
 from lps_gui.cli.capture_devices import (
-    bind_simulated_stage, bind_stage, clock, close, device_session, open_devices, preflight, read_intrinsics, release_lock,
+    bind_simulated_stage,
+    bind_stage,
+    clock,
+    close,
+    device_session,
+    open_devices,
+    preflight,
+    read_intrinsics,
+    release_lock,
 )
 from lps_gui.cli.capture_plan import (
-    ISO_LEVELS, ISO_RUNS, build_planar_plan, describe, line_plan, planar_preset_name, wants_planar,
+    ISO_LEVELS,
+    ISO_RUNS,
+    build_planar_plan,
+    describe,
+    line_plan,
+    planar_preset_name,
+    wants_planar,
 )
-from lps_gui.cli.option_types import finite, float_range, int_range, nonnegative_finite, nonnegative_int, positive_finite
+from lps_gui.cli.option_types import (
+    finite,
+    float_range,
+    int_range,
+    nonnegative_finite,
+    nonnegative_int,
+    positive_finite,
+)
 
 HELP = "capture a session: move the stage through a plan and store an image per stop (resumable)"
 
@@ -183,7 +204,7 @@ def _intrinsics_mode(args: argparse.Namespace) -> int:
     simulated = (args.camera or "sim") == "sim"
     if simulated:
         from lps_gui.capture.handheld_sim import HandHeldBoardCamera
-        from lps_gui.core.simulate import preset
+        from lps_gui.core.truth.simulate import preset
 
         rig = preset(args.preset).rig
         board = rig.board
@@ -244,7 +265,7 @@ def _start(args: argparse.Namespace):
     preflight(args, stage_spec, camera_spec)  # everything checkable before anything is created
     axes = {"axes": ["X", "Y"]} if planar else {}
     if camera_spec == "sim":
-        from lps_gui.core.simulate import PLANAR_PRESETS, preset
+        from lps_gui.core.truth.simulate import PLANAR_PRESETS, preset
         from lps_gui.sim.rig import check_board_in_view, spec_for_plan
         from lps_gui.sim.session import create_simulated_session, simulated_engine
 

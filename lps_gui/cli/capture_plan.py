@@ -76,7 +76,7 @@ def parse_targets_xy(text: str) -> tuple[tuple[float, float], ...]:
 
 def build_planar_plan(args: argparse.Namespace, base=None):
     """The planar plan of the command line: --plan FILE, --grid / --targets-xy / --iso-lines, then the switches."""
-    from lps_gui.core.plan import Plan
+    from lps_gui.core.planning.plan import Plan
     from lps_gui.errors import InputError
 
     for name in ("start_mm", "stop_mm", "step_mm"):
@@ -107,7 +107,7 @@ def build_planar_plan(args: argparse.Namespace, base=None):
     if args.iso_lines:
         if plan.targets_mm is not None:
             raise InputError("--iso-lines needs a grid: give --grid X0,Y0:X1,Y1:DX,DY")
-        from lps_gui.core.plan import iso_lines_on_grid
+        from lps_gui.core.planning.plan import iso_lines_on_grid
 
         plan = iso_lines_on_grid(plan, ISO_LEVELS, ISO_RUNS)
     if args.directions:
@@ -120,7 +120,7 @@ def build_planar_plan(args: argparse.Namespace, base=None):
 
 def read_planar_plan(path: str):
     """A planar plan file (fields at the top level or under "plan", SPEC 10)."""
-    from lps_gui.core.plan import Plan
+    from lps_gui.core.planning.plan import Plan
     from lps_gui.errors import InputError
 
     d = _plan_fields(path)
@@ -134,7 +134,7 @@ def read_planar_plan(path: str):
 
 def planar_preset_name(preset: str | None) -> str:
     """The simulated gantry's preset (the 1-D default "small" means small-planar)."""
-    from lps_gui.core.simulate import PLANAR_PRESETS
+    from lps_gui.core.truth.simulate import PLANAR_PRESETS
     from lps_gui.errors import InputError
 
     name = PLANAR_PRESET_DEFAULT if preset in (None, "small") else preset
@@ -165,7 +165,7 @@ def line_plan(args: argparse.Namespace, base=None):
         raise InputError("no plan: give --plan FILE or --start/--stop/--step (or --targets)")
     plan = plan_with(base, **fields)
     if getattr(args, "segment_stops", None):  # one board moved between overlapping segments (SPEC 13 stitching)
-        from lps_gui.core.plan_segments import stitched_segments
+        from lps_gui.core.planning.segments import stitched_segments
 
         plan = plan_with(plan, segments=stitched_segments(plan.targets(), args.segment_stops, args.overlap_stops))
     return plan

@@ -3,14 +3,14 @@
 They go into session.json (``stage_spec``, ``environment``, ``identification``)
 when a session is created or resumed, so nobody edits session.json by hand.
 ``--iso-plan`` replaces the targets by the ISO 230-2 preset (5 runs both ways,
-non-uniform spacing; :mod:`lps_gui.core.presets`).
+non-uniform spacing; :mod:`lps_gui.core.planning.presets`).
 """
 from __future__ import annotations
 
 import argparse
+from typing import Any
 
 from lps_gui.cli.option_types import finite, int_range, positive_finite
-from typing import Any
 
 ENV_SWITCHES = (("--board-temp", "board_temperature_c", "board temperature, deg C (corrects the length scale to 20 C)"),
                 ("--board-cte", "board_cte_ppm_per_k", "board expansion coefficient, ppm/K (e.g. 23 aluminium, 8 glass)"),
@@ -24,7 +24,7 @@ ID_SWITCHES = (("--operator", "operator"), ("--customer", "customer"), ("--stage
 
 def add_setup_arguments(p: argparse.ArgumentParser) -> None:
     """The report's switches, in their own help groups."""
-    from lps_gui.core.presets import SPEC_PRESETS
+    from lps_gui.core.planning.presets import SPEC_PRESETS
 
     r = p.add_argument_group("specification and ISO 230-2 plan")
     r.add_argument("--spec", metavar="SPEC", help=f"stage data sheet: a preset ({', '.join(SPEC_PRESETS)}; paper = "
@@ -46,7 +46,7 @@ def iso_plan_fields(args: argparse.Namespace, base: Any) -> dict[str, Any]:
     """Plan fields of ``--iso-plan`` (empty without it); the range from --start/--stop or the base plan."""
     if not getattr(args, "iso_plan", False):
         return {}
-    from lps_gui.core.presets import iso230_plan_fields
+    from lps_gui.core.planning.presets import iso230_plan_fields
     from lps_gui.errors import InputError
 
     start = args.start_mm if args.start_mm is not None else getattr(base, "start_mm", None)
@@ -60,8 +60,8 @@ def iso_plan_fields(args: argparse.Namespace, base: Any) -> dict[str, Any]:
 
 def setup_meta(args: argparse.Namespace) -> dict[str, Any]:
     """session.json entries from the switches given (only those given)."""
-    from lps_gui.core.environment import Environment
-    from lps_gui.core.presets import parse_spec
+    from lps_gui.core.metrology.environment import Environment
+    from lps_gui.core.planning.presets import parse_spec
 
     out: dict[str, Any] = {}
     if getattr(args, "spec", None):

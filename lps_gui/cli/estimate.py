@@ -96,7 +96,7 @@ def _median(values: list[float]) -> float:
 
 def format_planar_summary(results: Results) -> str:
     """The first lines of a planar session: squareness, per-axis scale, straightness, truth."""
-    from lps_gui.core.resolution import not_resolved_text
+    from lps_gui.core.metrology.resolution import not_resolved_text
 
     pl = results.figures.planar
     lines = [_fit_line(results, " (planar X,Y)")]

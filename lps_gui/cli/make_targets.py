@@ -41,8 +41,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from lps_gui.core.board import Board
-    from lps_gui.core.targets import Target, check_targets
+    from lps_gui.core.geometry.board import Board
+    from lps_gui.core.geometry.targets import Target, check_targets
     from lps_gui.errors import InputError
     from lps_gui.io.jsonfile import write_json
     from lps_gui.io.targets_file import dictionary_sizes, targets_to_list

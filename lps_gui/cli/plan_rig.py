@@ -58,7 +58,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _camera(args: argparse.Namespace):
-    from lps_gui.core.rig_planning import intrinsics_from_lens
+    from lps_gui.core.planning.rig import intrinsics_from_lens
     from lps_gui.errors import InputError
 
     if args.intrinsics:
@@ -86,7 +86,7 @@ def _board(args: argparse.Namespace):
 
 
 def _plan(args: argparse.Namespace):
-    from lps_gui.core.plan import Plan
+    from lps_gui.core.planning.plan import Plan
     from lps_gui.errors import InputError
 
     dims = {len(args.start), len(args.stop), len(args.step)}
@@ -101,7 +101,7 @@ def _plan(args: argparse.Namespace):
 def run(args: argparse.Namespace) -> int:
     import json
 
-    from lps_gui.core.rig_planning import predict_rig
+    from lps_gui.core.planning.rig import predict_rig
     from lps_gui.errors import InputError
 
     if args.two_depth is not None:

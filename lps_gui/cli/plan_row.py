@@ -7,7 +7,6 @@ import math
 from typing import Any
 
 
-
 def _stops(args: argparse.Namespace, travel: tuple[float, ...]) -> tuple[int, ...]:
     """Stops per axis: from --step when given, else 121 along a line (the paper's X axis), 13 x 9 over a plane."""
     if args.step is None:
@@ -21,7 +20,7 @@ def _stops(args: argparse.Namespace, travel: tuple[float, ...]) -> tuple[int, ..
 
 
 def run_row(args: argparse.Namespace, intrinsics: Any) -> int:
-    from lps_gui.core.row_planning import plan_row, propose_row
+    from lps_gui.core.planning.rows import plan_row, propose_row
     from lps_gui.errors import InputError
 
     if args.travel is None:

@@ -17,7 +17,7 @@ def add_two_depth_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run_two_depth(args: argparse.Namespace, intrinsics: Any) -> int:
-    from lps_gui.core.two_depth_planning import plan_two_depth
+    from lps_gui.core.planning.two_depth import plan_two_depth
     from lps_gui.errors import InputError
 
     if args.travel is None or args.distance_mm is None or args.travel_y is not None:

@@ -20,8 +20,8 @@ def preload_backends() -> None:
 
     import lps_gui.camera.detection  # noqa: F401
     import lps_gui.capture.engine  # noqa: F401
-    import lps_gui.core.estimate  # noqa: F401
-    import lps_gui.core.iso230  # noqa: F401
+    import lps_gui.core.estimator.estimate  # noqa: F401
+    import lps_gui.core.metrology.iso230  # noqa: F401
     import lps_gui.io.results_file  # noqa: F401
     import lps_gui.pipeline.detect  # noqa: F401
     import lps_gui.pipeline.estimate  # noqa: F401

@@ -60,7 +60,7 @@ def source_from_text(text: str) -> str | None:
 
 def simulated_rig(clock: Clock | None = None) -> tuple[Stage, Camera]:
     """The simulated stage and the camera riding it, on ``clock`` (real time by default)."""
-    from lps_gui.core.simulate import preset
+    from lps_gui.core.truth.simulate import preset
     from lps_gui.sim.rig import make_simulated_rig
 
     return make_simulated_rig(preset(SIM_PRESET), clock=clock or RealClock())

@@ -207,7 +207,7 @@ def resolved_extreme_figures(results: dict[str, Any]) -> list[SummaryFigure] | N
     A figure that noise alone could produce carries "not resolved (noise p-v X)"
     (or "noise max X" for a max |x|): printed instead of the value, never a finding.
     """
-    from lps_gui.core.resolution import not_resolved_text
+    from lps_gui.core.metrology.resolution import not_resolved_text
 
     figs = results.get("figures") or {}
     st = figs.get("straightness")

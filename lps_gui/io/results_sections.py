@@ -134,7 +134,7 @@ class Iso230(Section):
 
 @dataclass(frozen=True, kw_only=True)
 class SpanResolution(Section):
-    """A peak-to-valley over the targets and what noise alone would span (core/resolution.py)."""
+    """A peak-to-valley over the targets and what noise alone would span (core/metrology/resolution.py)."""
 
     span_um: float | None = None
     sigma_um: float | None = None
@@ -294,7 +294,7 @@ class EnvironmentRecord(Section):
 
 @dataclass(frozen=True, kw_only=True)
 class BudgetRow(Section):
-    """One source of the GUM budget (core/uncertainty_budget.py)."""
+    """One source of the GUM budget (core/metrology/uncertainty_budget.py)."""
 
     source: str
     type: str | None = None

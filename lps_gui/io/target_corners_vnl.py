@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from lps_gui.core.targets import Target, target_offsets
+from lps_gui.core.geometry.targets import Target, target_offsets
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_bytes_atomic
 from lps_gui.io.corners_vnl_fast import comment_fields

@@ -13,11 +13,15 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Callable
 
-from lps_gui.core.plan import Plan
-from lps_gui.core.presets import (PAPER_SPEC_TEST_LIMITS, asme_test_record, min_step_plan_fields,
-                                  settling_plan_fields)
-from lps_gui.core.simulate import preset
-from lps_gui.core.stage_errors import Vibration
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.planning.presets import (
+    PAPER_SPEC_TEST_LIMITS,
+    asme_test_record,
+    min_step_plan_fields,
+    settling_plan_fields,
+)
+from lps_gui.core.truth.simulate import preset
+from lps_gui.core.truth.stage_errors import Vibration
 from lps_gui.pipeline.demo import DemoResult, DemoStep, prepare_out
 from lps_gui.pipeline.demo_summary import PAPER_SPEC
 from lps_gui.pipeline.estimate import estimate_session

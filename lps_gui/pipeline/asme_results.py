@@ -5,7 +5,7 @@ uncertainty ratio (the data sheet's tolerance, session.json ``stage_spec``,
 over U of the figure as the verdict compares it: one rule,
 :func:`lps_gui.report.verdict.verdicts`; no tolerance, no ratio). A session
 whose ``asme_test`` names the incremental-step or the settling test (the
-plan presets of :mod:`lps_gui.core.presets`) also gets that test's figures:
+plan presets of :mod:`lps_gui.core.planning.presets`) also gets that test's figures:
 stops averaged over their frames, each step's sigma from the estimate's full
 covariance; position against each frame's time after its move
 (captures.jsonl ``since_move_s``).
@@ -17,11 +17,17 @@ from typing import Any
 
 import numpy as np
 
-from lps_gui.core.asme_b5_64 import (StopMeans, incremental_step_figures, incremental_steps, named_figures,
-                                     settling_figures, tur)
-from lps_gui.core.estimate import EstimateOptions, LpsEstimate
-from lps_gui.core.observations import Observations
-from lps_gui.core.stage_errors import StageErrorModel, Vibration
+from lps_gui.core.estimator.estimate import EstimateOptions, LpsEstimate
+from lps_gui.core.estimator.observations import Observations
+from lps_gui.core.metrology.asme_b5_64 import (
+    StopMeans,
+    incremental_step_figures,
+    incremental_steps,
+    named_figures,
+    settling_figures,
+    tur,
+)
+from lps_gui.core.truth.stage_errors import StageErrorModel, Vibration
 from lps_gui.io.session import Session
 
 SPEC_TOLERANCES = {"incremental_step": ("min_incremental_motion_um", "\u00b5m"),

@@ -4,7 +4,7 @@
 figures (resolved to micrometres in the board plane); the per-view 6-DOF
 pose's straightness stays in results.json as ``pose_straightness_um_1/_2``
 for comparison. Figures carry their noise p-v and a ``resolved`` flag from
-:mod:`lps_gui.core.resolution`, so report and GUI show only resolved ones.
+:mod:`lps_gui.core.metrology.resolution`, so report and GUI show only resolved ones.
 """
 from __future__ import annotations
 
@@ -12,8 +12,8 @@ from typing import Any
 
 import numpy as np
 
-from lps_gui.core.estimate_types import LpsEstimate
-from lps_gui.core.resolution import is_resolved, noise_max_abs, profile_span
+from lps_gui.core.estimator.estimate_types import LpsEstimate
+from lps_gui.core.metrology.resolution import is_resolved, noise_max_abs, profile_span
 from lps_gui.io.results_file import json_floats
 
 

@@ -3,7 +3,7 @@
 Simulate an intrinsics set and calibrate it; capture a bidirectional session
 on the paper's rig with a realistic stage error (on a gantry: squareness,
 per-axis scale, lead-screw errors and straightness per
-:func:`lps_gui.core.simulate.paper_planar_errors`) through the capture engine
+:func:`lps_gui.core.truth.simulate.paper_planar_errors`) through the capture engine
 and the simulated camera; detect; estimate; write report.pdf and the CSVs;
 compare with the simulator's truth; on one axis, close the loop with a
 compensated capture. The printed error against truth is results.json's
@@ -21,17 +21,17 @@ from typing import Callable
 
 import numpy as np
 
-from lps_gui.core.camera_model import CameraIntrinsics
-from lps_gui.core.plan import Plan
+from lps_gui.core.geometry.camera_model import CameraIntrinsics
+from lps_gui.core.planning.plan import Plan
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
-from lps_gui.core.simulate import SimulationSpec, paper_planar_spec, paper_rig_spec, small_planar_spec, small_spec
+from lps_gui.core.truth.simulate import SimulationSpec, paper_planar_spec, paper_rig_spec, small_planar_spec, small_spec
 from lps_gui.errors import InputError
 from lps_gui.io.intrinsics_file import write_intrinsics
-from lps_gui.io.session import Session
-from lps_gui.pipeline.detect import detect_session
-from lps_gui.pipeline.demo_steps import estimate_and_report
 from lps_gui.io.results_model import Results
+from lps_gui.io.session import Session
+from lps_gui.pipeline.demo_steps import estimate_and_report
 from lps_gui.pipeline.demo_summary import PAPER_SPEC, planar_summary_lines, summary_lines
+from lps_gui.pipeline.detect import detect_session
 from lps_gui.pipeline.intrinsics import calibrate_images
 from lps_gui.sim.images import simulate_intrinsics_set
 from lps_gui.sim.session import create_simulated_session, simulated_engine
@@ -92,7 +92,7 @@ def demo_spec(quick: bool, seed: int = 0, planar: bool = False) -> SimulationSpe
         return small_planar_spec(seed=seed, plan=plan) if quick else paper_planar_spec(seed=seed, plan=plan)
     if quick:
         return small_spec(seed=seed, views=12, directions="both", runs=2)
-    from lps_gui.core.simulate import paper_stage_errors
+    from lps_gui.core.truth.simulate import paper_stage_errors
 
     plan = Plan(start_mm=0.0, stop_mm=98.0, step_mm=2.0, directions="both", runs=2)
     return paper_rig_spec(seed=seed, errors=paper_stage_errors(), plan=plan)

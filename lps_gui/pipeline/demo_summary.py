@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from lps_gui.core.simulate import SimulationSpec
+from lps_gui.core.truth.simulate import SimulationSpec
 from lps_gui.io.results_model import Results, as_results
 from lps_gui.io.results_sections import PlanarAxis, PlanarFigures, SingleRun, TruthComparison
 
@@ -91,7 +91,7 @@ def planar_summary_lines(results: Results | dict[str, Any]) -> list[str]:
     for axis in ("x", "y"):
         lines.append(f"scale {axis.upper()} {_v(pl.number(f'scale_{axis}_ppm'))} \u00b1 "
                      f"{_s(pl.number(f'scale_{axis}_sigma_ppm'))} ppm; truth {_v(tc.number(f'scale_{axis}_ppm'))} ppm")
-    from lps_gui.core.resolution import not_resolved_text
+    from lps_gui.core.metrology.resolution import not_resolved_text
 
     for axis, other in (("X", "Y"), ("Y", "X")):
         a = pl.per_axis.get(axis) or PlanarAxis()

@@ -17,11 +17,11 @@ from typing import Any, Callable
 
 import numpy as np
 
-from lps_gui.core.board import Board
-from lps_gui.core.plan import Plan
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.planning.target_presets import paper_row_spec
 from lps_gui.core.progress import CancelToken
-from lps_gui.core.simulate import SimulationSpec
-from lps_gui.core.target_presets import paper_row_spec
+from lps_gui.core.truth.simulate import SimulationSpec
 from lps_gui.errors import InputError
 from lps_gui.io.results_model import Results
 from lps_gui.pipeline.demo_steps import estimate_and_report
@@ -36,7 +36,7 @@ ROW_ENVIRONMENT = {"board_temperature_c": 20.0, "board_cte_ppm_per_k": 23.0, "sq
 def row_demo_spec(travel_mm: float | None, preset: str | None, seed: int = 0) -> SimulationSpec:
     """The paper-row preset, or its geometry over ``travel_mm`` (stops of 12.7 mm, as many targets as the
     planner's rule needs: the views at either end three-quarters covered)."""
-    from lps_gui.core.simulate import PRESETS
+    from lps_gui.core.truth.simulate import PRESETS
 
     if travel_mm is None:
         spec = PRESETS[preset or "paper-row"](seed=seed)
@@ -53,9 +53,9 @@ def row_demo_spec(travel_mm: float | None, preset: str | None, seed: int = 0) ->
 
 def targets_for_travel(travel_mm: float, distance_mm: float = 800.0, pitch_mm: float = 340.0,
                        width_mm: float = 330.0) -> int:
-    """How many of the paper-row targets cover ``travel_mm`` (core/row_planning's rule)."""
-    from lps_gui.core.row_planning import view_mm
-    from lps_gui.core.target_presets import ROW_CAMERA
+    """How many of the paper-row targets cover ``travel_mm`` (core/planning/rows's rule)."""
+    from lps_gui.core.planning.rows import view_mm
+    from lps_gui.core.planning.target_presets import ROW_CAMERA
 
     view = view_mm(ROW_CAMERA, distance_mm)[0]
     return max(2, math.ceil((travel_mm + 0.5 * view - width_mm) / pitch_mm) + 1)

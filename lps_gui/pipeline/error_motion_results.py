@@ -1,11 +1,11 @@
 """results.json ``error_motions`` and the SPEC 14 columns of positions.csv, from every stop's full pose.
 
 The six error motions of an axis (ISO 230-1: EXX, EYX, EZX, EAX, EBX, ECX) come
-from one place, :func:`lps_gui.core.error_motions.error_motions`, whatever gave
+from one place, :func:`lps_gui.core.metrology.error_motions.error_motions`, whatever gave
 the poses: a constellation's joint pose solve (targets at two depths resolve
 all three angles) or a single board's per-view 6-DOF fit (the rotation about the
 viewing direction resolved, the two tilts not: SPEC 11). Each motion is marked
-resolved or not by :mod:`lps_gui.core.resolution`'s profile rule; positions.csv
+resolved or not by :mod:`lps_gui.core.metrology.resolution`'s profile rule; positions.csv
 carries the angles only where resolved. A tool point in session.json turns the
 angles into the positioning error there (Abbe).
 
@@ -22,10 +22,16 @@ from typing import Any
 
 import numpy as np
 
-from lps_gui.core.error_motions import (ANGULAR, PLANAR_ANGLE_NAMES, PLANAR_MOTIONS, ErrorMotions, error_motions,
-                                        planar_error_motions)
-from lps_gui.core.lps_model import motion_frame
-from lps_gui.core.pose_model import PoseSolution, pose_solution_from_views
+from lps_gui.core.metrology.error_motions import (
+    ANGULAR,
+    PLANAR_ANGLE_NAMES,
+    PLANAR_MOTIONS,
+    ErrorMotions,
+    error_motions,
+    planar_error_motions,
+)
+from lps_gui.core.models.lps_model import motion_frame
+from lps_gui.core.models.pose_model import PoseSolution, pose_solution_from_views
 from lps_gui.errors import InputError
 from lps_gui.io.results_file import json_float, json_floats
 
@@ -155,8 +161,8 @@ def add_columns(positions: list[dict[str, Any]], columns: dict[str, list[Any]]) 
 
 def target_pose_solution(obs: Any, est: Any) -> PoseSolution:
     """Every stop's full pose against the session's targets, started from the row model's solution."""
-    from lps_gui.core.pose_model import solve_poses
-    from lps_gui.core.target_model import TargetObservations
+    from lps_gui.core.models.pose_model import solve_poses
+    from lps_gui.core.models.target_model import TargetObservations
 
     tobs = TargetObservations(list(obs.mounted), obs.corners_px, obs.targets, list(obs.names))
     start = getattr(est, "fit_targets", None) if obs.D == 2 else getattr(est, "fit", None)  # the row model's solution

@@ -8,9 +8,9 @@ frame events and works on one thread beside it (cv2 releases the GIL):
   a chunk) and its block appended to corners.vnl (:mod:`lps_gui.io.live_corners`,
   fsynced; a resumed capture re-detects from the start of the killed chunk);
 * every ``estimate_every`` views the views so far go through the one
-  estimator (:func:`lps_gui.core.estimate.estimate`, warm-started from the
+  estimator (:func:`lps_gui.core.estimator.estimate.estimate`, warm-started from the
   previous solution) for the live deviation plot;
-* the checks of :mod:`lps_gui.core.live_checks` run on every frame and every
+* the checks of :mod:`lps_gui.core.estimator.live_checks` run on every frame and every
   estimate; each finding is a :class:`LiveEvent` ("flag") at once.
 
 When the plan completes, :meth:`LiveCapture.finish` writes corners.vnl in
@@ -32,8 +32,8 @@ from typing import Any, Callable
 import numpy as np
 
 from lps_gui.capture.events import CaptureEvent, CaptureSummary
-from lps_gui.core.estimate import estimate, views_against
-from lps_gui.core.live_checks import EstimateChecks, FrameChecks, LiveFlag
+from lps_gui.core.estimator.estimate import estimate, views_against
+from lps_gui.core.estimator.live_checks import EstimateChecks, FrameChecks, LiveFlag
 from lps_gui.errors import LpsError
 from lps_gui.hardware.stage import EventSource
 from lps_gui.io.atomic import sha256_file
@@ -41,8 +41,15 @@ from lps_gui.io.corners_hashes import stat_meta
 from lps_gui.io.live_corners import LiveView, open_live_corners
 from lps_gui.io.session import CaptureRecord, Session
 from lps_gui.pipeline.detect import (
-    ViewJob, ViewResult, board_key, chunk_size, default_workers, detect_view, session_corner_meta,
-    session_corner_table, write_session_corners,
+    ViewJob,
+    ViewResult,
+    board_key,
+    chunk_size,
+    default_workers,
+    detect_view,
+    session_corner_meta,
+    session_corner_table,
+    write_session_corners,
 )
 
 log = logging.getLogger(__name__)

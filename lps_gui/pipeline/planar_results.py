@@ -13,12 +13,12 @@ from typing import Any
 import numpy as np
 
 from lps_gui import __version__
-from lps_gui.core.camera_model import INTRINSIC_NAMES
-from lps_gui.core.observations import Observations
-from lps_gui.core.estimate_types import LpsEstimate
-from lps_gui.core.planar_figures import node_errors, planar_figures
-from lps_gui.core.planar_flatness import out_of_plane
-from lps_gui.core.rotation import log_so3
+from lps_gui.core.estimator.estimate_types import LpsEstimate
+from lps_gui.core.estimator.observations import Observations
+from lps_gui.core.geometry.camera_model import INTRINSIC_NAMES
+from lps_gui.core.geometry.rotation import log_so3
+from lps_gui.core.metrology.planar_figures import node_errors, planar_figures
+from lps_gui.core.metrology.planar_flatness import out_of_plane
 from lps_gui.io.board_file import board_to_dict
 from lps_gui.io.intrinsics_file import intrinsics_to_dict
 from lps_gui.io.results_file import FORMAT
@@ -59,7 +59,7 @@ def build_planar_results(session: Session, obs: Observations, est: LpsEstimate, 
     sig_fig = np.where(sig > 0, sig, np.nanmedian(sig[valid & (sig[:, 0] > 0)], axis=0) if valid.any() else 1.0)
     oop = None
     if est.method == "joint" and obs.mounted is None:  # the displacement along the plane normal at the board plane
-        # (core/planar_flatness; of one board: a constellation has no one board plane)
+        # (core/metrology/planar_flatness; of one board: a constellation has no one board plane)
         oop = out_of_plane(est.state, obs.board.object_points(), obs.corners_px, obs.mask() & est.usable[:, None],
                            obs.target_mm, est.used)
         for row, v, sv in zip(positions, oop.normal_um, oop.sigma_um):

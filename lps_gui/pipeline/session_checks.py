@@ -60,9 +60,9 @@ MAX_CORNER_PX = 1e6  # no camera is a million pixels across
 def check_view_geometry(corners_px: Any, names: Sequence[str], source: Path | str) -> None:
     """InputError naming the views whose corners lie on one line (they would give a silent wrong position)
     or that hold a corner no camera can see (1e308 overflows the solver's sums)."""
-    from lps_gui.core.view_geometry import collinear_views
-
     import numpy as np
+
+    from lps_gui.core.geometry.view_geometry import collinear_views
 
     check_corner_values(corners_px, names, source)
     bad = collinear_views(corners_px)

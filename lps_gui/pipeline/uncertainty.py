@@ -2,9 +2,9 @@
 
 Two hooks for :mod:`lps_gui.pipeline.estimate`, for one axis or two:
 :func:`session_board` gives the board at the measurement temperature (the
-thermal correction of the length scale, :mod:`lps_gui.core.environment`),
+thermal correction of the length scale, :mod:`lps_gui.core.metrology.environment`),
 and :func:`add_uncertainty` adds the environment record, the GUM budget
-(:mod:`lps_gui.core.uncertainty_budget`; one per axis of a plane) and U
+(:mod:`lps_gui.core.metrology.uncertainty_budget`; one per axis of a plane) and U
 (k = 2) of every headline figure to a finished results dict. The budget is built from results.json
 alone, so it does not depend on how the estimate is assembled.
 """
@@ -14,9 +14,9 @@ from typing import Any
 
 import numpy as np
 
-from lps_gui.core.board import Board
-from lps_gui.core.environment import Environment, corrected_board, thermal_record
-from lps_gui.core.uncertainty_budget import BudgetInputs, budget_rows, combine, figure_uncertainties
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.metrology.environment import Environment, corrected_board, thermal_record
+from lps_gui.core.metrology.uncertainty_budget import BudgetInputs, budget_rows, combine, figure_uncertainties
 from lps_gui.io.session import SESSION_FILE, Session
 
 
@@ -62,7 +62,7 @@ def abbe_lever_mm(results: dict[str, Any]) -> tuple[float, float] | None:
 
     From the fitted line (results ``parameters``: R_cam_board, l0_cam_mm, u_board) and the board's size.
     """
-    from lps_gui.core.lps_model import motion_frame
+    from lps_gui.core.models.lps_model import motion_frame
 
     p = results.get("parameters") or {}
     board = results.get("board") or {}
@@ -116,7 +116,7 @@ def _axis_uncertainty(results: dict[str, Any], env: Environment, square_mm: floa
 
         rows.append(stitch_row(results))
     elif results.get("targets"):  # each target's print enters the stretch measured against it (SPEC 13)
-        from lps_gui.core.target_scale import target_scale_rows
+        from lps_gui.core.metrology.target_scale import target_scale_rows
 
         scale = target_scale_rows(results["targets"], x.travel_mm, env.square_mm_uncertainty_um)
         at = next(k for k, r in enumerate(rows) if r.source == "board square size")

@@ -77,7 +77,7 @@ def comparison_figure(before: Results, after: Results) -> FigureSpec:
 
 def session_E_um(results: Results | dict[str, Any], key: str = "deviation_um") -> float:
     """E (ISO 230-2, um) of one deviation column of results.json: measured, or the simulator's truth."""
-    from lps_gui.core.iso230 import figures_for_session
+    from lps_gui.core.metrology.iso230 import figures_for_session
 
     results = as_results(results)
     rows = [r for r in results.positions if r.get(key) is not None and not r.outlier]

@@ -4,7 +4,7 @@ Built from results.json ``error_motions`` (:mod:`lps_gui.pipeline.error_motion_r
 the three angular motions in one figure and the three linear ones in another,
 each curve with its +-2 sigma band (relative to the first stop, as the values
 and positions.csv are) and labelled "not resolved" by the profile rule of
-:mod:`lps_gui.core.resolution`; the simulator's truth dashed in the curve's colour; a table of the
+:mod:`lps_gui.core.metrology.resolution`; the simulator's truth dashed in the curve's colour; a table of the
 profiles; the positioning error at the user's tool point (the Abbe effect).
 The figures are plain :class:`FigureSpec` data, so the GUI can draw them too.
 No Qt here.
@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from lps_gui.core.resolution import not_resolved_text
+from lps_gui.core.metrology.resolution import not_resolved_text
 from lps_gui.io.results_model import Results, as_results
 from lps_gui.io.results_sections import ErrorMotions, Motion
 from lps_gui.report.figure_spec import COMPONENT_COLORS, FigureSpec, Series, num_or_nan

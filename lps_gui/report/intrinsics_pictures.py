@@ -22,8 +22,8 @@ import numpy as np
 from lps_gui.report.text_fit import TextLog, draw_text, font
 
 if TYPE_CHECKING:
-    from lps_gui.core.intrinsics_calibration import IntrinsicsCalibration
-    from lps_gui.core.intrinsics_crossval import CrossValidation
+    from lps_gui.core.intrinsics.calibration import IntrinsicsCalibration
+    from lps_gui.core.intrinsics.crossval import CrossValidation
 
 PICTURE_PX = (1500, 1000)  # width, height of every picture
 BLUE, RED, GREY = "#1f5fa8", "#d00000", "#808080"
@@ -150,9 +150,7 @@ class _Canvas:
         self.p.restore()
 
     def note(self, s: str) -> None:
-        from PySide6.QtCore import QRectF
-
-        from PySide6.QtCore import Qt
+        from PySide6.QtCore import QRectF, Qt
 
         self.text(QRectF(20, PICTURE_PX[1] - 70, PICTURE_PX[0] - 40, 64), s, 11, color="#333333",
                   align=Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignTop | Qt.TextFlag.TextWordWrap)
@@ -243,7 +241,7 @@ def per_view_errors(cal: "IntrinsicsCalibration", log: TextLog | None = None) ->
 
 def uncertainty_picture(cal: "IntrinsicsCalibration", grid: tuple[int, int] = (32, 24), log: TextLog | None = None) -> Any:
     """Worst-direction projection sigma over the image (log colour scale)."""
-    from lps_gui.core.intrinsics_crossval import uncertainty_map
+    from lps_gui.core.intrinsics.crossval import uncertainty_map
 
     size = cal.intrinsics.image_size
     c = _Canvas("Projection uncertainty (worst-direction sigma)", size, colour_bar=True, log=log)

@@ -9,12 +9,12 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from lps_gui.core.camera_model import INTRINSIC_NAMES
+from lps_gui.core.geometry.camera_model import INTRINSIC_NAMES
 from lps_gui.errors import InputError
 
 if TYPE_CHECKING:
-    from lps_gui.core.intrinsics_calibration import IntrinsicsCalibration
-    from lps_gui.core.intrinsics_crossval import CrossValidation
+    from lps_gui.core.intrinsics.calibration import IntrinsicsCalibration
+    from lps_gui.core.intrinsics.crossval import CrossValidation
 
 PICTURE_WIDTH_MM = 165.0
 MAX_LISTED_CORNERS = 40

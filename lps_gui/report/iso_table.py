@@ -4,7 +4,7 @@ Per target P_j: mean deviation each way, standard deviation s each way
 (over the runs, ddof 1), unidirectional repeatability R = 4 s each way,
 reversal B_j, bidirectional repeatability R_j and the mean bidirectional
 deviation. Values come from results.json ``figures.iso230_2.per_target``
-(:class:`lps_gui.core.iso230.TargetTable`). No Qt here.
+(:class:`lps_gui.core.metrology.iso230.TargetTable`). No Qt here.
 """
 from __future__ import annotations
 

@@ -147,7 +147,7 @@ def axis_results(results: Results | dict[str, Any], axis: str) -> Results | None
 
 def _unresolved(span: SpanResolution | None) -> str:
     """"not resolved (noise p-v X)" for a p-v that noise alone could give (core.resolution), else empty."""
-    from lps_gui.core.resolution import not_resolved_text
+    from lps_gui.core.metrology.resolution import not_resolved_text
 
     if span is None or span.resolved is None or span.resolved:
         return ""

@@ -46,7 +46,7 @@ def overall_color(rows: Sequence[Verdict]) -> str:
 
 def verdict_table(flow: Any, rows: Sequence[Verdict]) -> None:
     """The verdict rows: the compared figure, its U (k = 2), the limit and the word, then their notes."""
-    from lps_gui.core.asme_b5_64 import tur
+    from lps_gui.core.metrology.asme_b5_64 import tur
 
     ratios = [tur(v.limit, v.u_k2) for v in rows]  # ASME B5.64: tolerance over U
     cells = [[v.name, v.measured_text(), f"\u00b1 {S.fmt(v.u_k2)} {v.unit}" if v.u_k2 is not None else "not assessed",

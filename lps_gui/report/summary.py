@@ -12,7 +12,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from lps_gui.core.camera_model import INTRINSIC_NAMES
+from lps_gui.core.geometry.camera_model import INTRINSIC_NAMES
 from lps_gui.io.results_file import SummaryFigure, extreme_figures, iso_figures, summary_figures
 from lps_gui.io.results_file import finite_number as _num
 from lps_gui.io.results_model import Results, as_results
@@ -316,7 +316,7 @@ def spec_checks(results: Results | dict[str, Any], spec: dict[str, Any] | None) 
     """
     if not spec:
         return []
-    from lps_gui.core.iso230 import check_specification
+    from lps_gui.core.metrology.iso230 import check_specification
 
     return [_as_check(c) for c in check_specification(dict(as_results(results).figures.raw), spec)]
 

@@ -16,7 +16,7 @@ import cv2
 import numpy as np
 
 from lps_gui.camera.charuco import DEFAULT_DICTIONARY
-from lps_gui.core.targets import Target
+from lps_gui.core.geometry.targets import Target
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import commit_temp, temp_path
 from lps_gui.report.layout import ensure_gui_app

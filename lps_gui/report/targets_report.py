@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from lps_gui.core.target_scale import SOURCE_PREFIX
+from lps_gui.core.metrology.target_scale import SOURCE_PREFIX
 from lps_gui.io.results_model import Results, as_results
 from lps_gui.io.results_sections import TargetRecord
 from lps_gui.report.summary import DASH, fmt

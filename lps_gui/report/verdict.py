@@ -15,8 +15,8 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from lps_gui.core.iso230 import ISO_RUNS
-from lps_gui.core.resolution import runs_per_direction
+from lps_gui.core.metrology.iso230 import ISO_RUNS
+from lps_gui.core.metrology.resolution import runs_per_direction
 from lps_gui.io.results_model import Results, as_results
 from lps_gui.report.summary import SpecCheck, fmt, spec_checks
 

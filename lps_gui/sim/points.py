@@ -13,9 +13,9 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
-from lps_gui.core.simulate import SimulationSpec, frame_since_move_s, simulate_views
-from lps_gui.core.targets import target_offsets
+from lps_gui.core.geometry.camera_model import INTRINSIC_NAMES, CameraIntrinsics
+from lps_gui.core.geometry.targets import target_offsets
+from lps_gui.core.truth.simulate import SimulationSpec, frame_since_move_s, simulate_views
 from lps_gui.io.board_file import write_board
 from lps_gui.io.corners_vnl import CornerTable, write_corners_vnl
 from lps_gui.io.intrinsics_file import write_intrinsics

@@ -5,9 +5,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from lps_gui.core.plan import Plan
-from lps_gui.core.stage_errors import ErrorProfile, PlanarErrorModel
-from lps_gui.core.target_presets import constellation_errors, paper_constellation_spec
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.planning.target_presets import constellation_errors, paper_constellation_spec
+from lps_gui.core.truth.stage_errors import ErrorProfile, PlanarErrorModel
 from lps_gui.pipeline.estimate import estimate_session
 from lps_gui.sim.points import simulate_point_session
 

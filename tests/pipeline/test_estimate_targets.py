@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from lps_gui.cli import main as lps_main
-from lps_gui.core.estimate import estimate
-from lps_gui.core.simulate import preset
-from lps_gui.core.target_model import TargetObservations
+from lps_gui.core.estimator.estimate import estimate
+from lps_gui.core.models.target_model import TargetObservations
+from lps_gui.core.truth.simulate import preset
 from lps_gui.errors import LpsError
 from lps_gui.io.session import Session
 from lps_gui.io.target_corners_vnl import read_target_corners, write_target_corners
@@ -211,7 +211,7 @@ def test_self_calibration_recovers_a_pixel_aspect_error_the_row_is_sensitive_to(
     calibration as prior (SPEC 4.6) the row's views fix the aspect and the positions come back to the noise."""
     from dataclasses import replace
 
-    from lps_gui.core.estimate_types import EstimateOptions
+    from lps_gui.core.estimator.estimate_types import EstimateOptions
 
     session, _ = point_session(tmp_path / "row", "paper-row")
     obs = observations_from_session(session)

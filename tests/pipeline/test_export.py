@@ -14,8 +14,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from lps_gui.core.plan import Plan
-from lps_gui.core.simulate import paper_rig_spec
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.truth.simulate import paper_rig_spec
 from lps_gui.io.corners_vnl import read_corners_vnl
 from lps_gui.pipeline.estimate import estimate_session
 from lps_gui.pipeline.export import export_session

@@ -183,7 +183,7 @@ def test_item12_copies_of_one_image_are_refused_for_intrinsics(tmp_path, capsys)
 
 
 def test_item12_duplicate_views_are_found():
-    from lps_gui.core.view_geometry import duplicate_views
+    from lps_gui.core.geometry.view_geometry import duplicate_views
 
     rng = np.random.default_rng(1)
     a = rng.uniform(0, 600, (54, 2))

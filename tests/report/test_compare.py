@@ -5,13 +5,13 @@ from dataclasses import replace
 
 import pytest
 
-from lps_gui.core.plan import Plan
-from lps_gui.core.simulate import paper_rig_spec
-from lps_gui.core.stage_errors import StageErrorModel
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.truth.simulate import paper_rig_spec
+from lps_gui.core.truth.stage_errors import StageErrorModel
 from lps_gui.errors import InputError
 from lps_gui.pipeline.estimate import estimate_session
-from lps_gui.sim.points import simulate_point_session
 from lps_gui.report.compare import comparison_figure, comparison_rows, improvement_factor, true_E_um, write_comparison
+from lps_gui.sim.points import simulate_point_session
 
 
 @pytest.fixture(scope="module")

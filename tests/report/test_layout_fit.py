@@ -106,8 +106,8 @@ def test_no_string_of_a_compare_report_is_clipped(tmp_path):
 
 
 def test_no_string_of_an_intrinsics_report_is_clipped(corners, tmp_path):  # noqa: F811
-    from lps_gui.core.intrinsics_calibration import calibrate_intrinsics
-    from lps_gui.core.intrinsics_crossval import cross_validate
+    from lps_gui.core.intrinsics.calibration import calibrate_intrinsics
+    from lps_gui.core.intrinsics.crossval import cross_validate
     from lps_gui.report.intrinsics_report import write_intrinsics_report
 
     cal = calibrate_intrinsics(BOARD.flat_points(), corners, INTR.image_size)

@@ -89,8 +89,8 @@ def _planar_with_budget(folder, tmp_path, spec=None):
     """The planar session's results with an ``environment`` and an ``uncertainty`` section (as the one estimation path gives)."""
     import shutil
 
-    from lps_gui.core.board import Board
-    from lps_gui.core.environment import Environment, thermal_record
+    from lps_gui.core.geometry.board import Board
+    from lps_gui.core.metrology.environment import Environment, thermal_record
     from tests.report.conftest import ENVIRONMENT
 
     out = tmp_path / "planar"

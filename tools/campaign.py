@@ -66,7 +66,6 @@ def case(kind: str, name: str, expected: str, fast: bool = True):
 def lps(*args: str) -> tuple[int, str, str]:
     """Run ``lps args`` in this process: (exit code, stdout, stderr)."""
     from lps_gui.cli import main
-
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         try:
@@ -388,7 +387,7 @@ def _(tmp: Path) -> Outcome:
 
 @case("input", "corners of one view on one row", "exit 2, names the view")
 def _(tmp: Path) -> Outcome:
-    from lps_gui.io.corners_vnl import read_corners_vnl, write_corners_vnl
+    from lps_gui.io.corners.vnl import read_corners_vnl, write_corners_vnl
 
     s = point_session(tmp)
     t = read_corners_vnl(s / "corners.vnl", 54)
@@ -399,7 +398,7 @@ def _(tmp: Path) -> Outcome:
 
 @case("input", "corners scaled x1e12", "exit 2 (corners refused) or 4, loud")
 def _(tmp: Path) -> Outcome:
-    from lps_gui.io.corners_vnl import read_corners_vnl, write_corners_vnl
+    from lps_gui.io.corners.vnl import read_corners_vnl, write_corners_vnl
 
     s = point_session(tmp)
     t = read_corners_vnl(s / "corners.vnl", 54)

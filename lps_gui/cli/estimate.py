@@ -7,8 +7,8 @@ from typing import TYPE_CHECKING
 from lps_gui.cli.option_types import positive_finite
 
 if TYPE_CHECKING:  # the command's help stays instant: no numpy before run()
-    from lps_gui.io.results_model import Results
-    from lps_gui.io.results_sections import SpanResolution
+    from lps_gui.io.results.model import Results
+    from lps_gui.io.results.sections import SpanResolution
 
 HELP = "estimate the stage's true positions from a session's corners (joint LM by default)"
 
@@ -42,7 +42,7 @@ def run(args: argparse.Namespace) -> int:
 
     from lps_gui.cli.out_path import resolve_out
     from lps_gui.cli.progress_bar import ProgressBar
-    from lps_gui.io.results_model import as_results
+    from lps_gui.io.results.model import as_results
     from lps_gui.io.session_lock import SessionLock
     from lps_gui.pipeline.estimate import estimate_session
     from lps_gui.pipeline.session_checks import result_doubts
@@ -68,7 +68,7 @@ def run(args: argparse.Namespace) -> int:
             lock.__exit__(None, None, None)
     results = as_results(document, str(out or Path(args.session) / "results.json"))  # read once for the lines below
     print(format_summary(results))
-    from lps_gui.io.results_history import stale_report_message
+    from lps_gui.io.results.history import stale_report_message
 
     if (stale := stale_report_message(args.session)) and not args.out:
         print(stale, file=sys.stderr)

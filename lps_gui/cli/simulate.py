@@ -41,7 +41,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--missing-fraction", type=float_range(0.0, 0.9), default=0.0, help="fraction of corners dropped at random")
     p.add_argument("--spec", metavar="SPEC", help="stage data sheet into session.json (as lps capture --spec): a preset "
                    "or accuracy=UM,repeatability=UM,straightness=UM,min_step=UM,settling=S")
-    from lps_gui.cli.asme_test import add_test_arguments
+    from lps_gui.cli.capture.asme_test import add_test_arguments
 
     add_test_arguments(p)
 
@@ -57,12 +57,12 @@ def build_spec(args: argparse.Namespace):
 
         spec = spec_from_dict(read_json(args.rig, "rig description"), args.rig)
     else:
-        from lps_gui.cli.asme_test import TEST_PRESET
+        from lps_gui.cli.capture.asme_test import TEST_PRESET
 
         spec = preset(args.preset or (TEST_PRESET if getattr(args, "test", None) else "small"), seed=args.seed)
     plan = spec.plan
     if getattr(args, "test", None):
-        from lps_gui.cli.asme_test import test_plan_fields
+        from lps_gui.cli.capture.asme_test import test_plan_fields
 
         t = plan.targets()
         plan = replace(plan, **test_plan_fields(args, float(t[0]), float(t[-1])))
@@ -89,19 +89,19 @@ def build_spec(args: argparse.Namespace):
         overrides["noise_px"] = args.noise_px
     spec = replace(spec, **overrides)
     _check_noise(spec, "--noise-px" if args.noise_px is not None else (args.rig or "preset"))
-    from lps_gui.cli.asme_test import simulated_stage
+    from lps_gui.cli.capture.asme_test import simulated_stage
 
     spec, ringing = simulated_stage(args, spec)
     if ringing is None:
         return spec
-    from lps_gui.cli.asme_test import SIM_FRAME_S
+    from lps_gui.cli.capture.asme_test import SIM_FRAME_S
 
     return replace(spec, vibration=ringing, frame_interval_s=SIM_FRAME_S)
 
 
 def _record_setup(args: argparse.Namespace, session) -> None:
     """--spec and --test into session.json (what lps capture records for the same switches)."""
-    from lps_gui.cli.asme_test import test_record
+    from lps_gui.cli.capture.asme_test import test_record
     from lps_gui.core.planning.presets import parse_spec
 
     extra = {"stage_spec": parse_spec(args.spec)} if getattr(args, "spec", None) else {}

@@ -12,7 +12,7 @@ from typing import Any
 from PySide6.QtWidgets import QLabel, QVBoxLayout, QWidget
 
 from lps_gui.gui.widgets import TextTable
-from lps_gui.io.results_model import Results
+from lps_gui.io.results.model import Results
 
 
 class MountedTargetsView(QWidget):

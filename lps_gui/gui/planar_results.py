@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
-from lps_gui.io.results_model import Results
+from lps_gui.io.results.model import Results
 
 
 def planar_table_rows(results: Results) -> list[tuple[str, str, str]] | None:

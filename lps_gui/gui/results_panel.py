@@ -15,7 +15,13 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtWidgets import (
-    QHBoxLayout, QLabel, QPushButton, QSplitter, QTabWidget, QVBoxLayout, QWidget,
+    QHBoxLayout,
+    QLabel,
+    QPushButton,
+    QSplitter,
+    QTabWidget,
+    QVBoxLayout,
+    QWidget,
 )
 
 from lps_gui.gui.mounted_targets import MountedTargetsView
@@ -24,8 +30,8 @@ from lps_gui.gui.section_tabs import SectionContent, SectionPage, section_conten
 from lps_gui.gui.view_detail import ViewDetail
 from lps_gui.gui.widgets import TextTable, ValueTable
 from lps_gui.gui.workers import Job
-from lps_gui.io.results_model import Results, as_results
-from lps_gui.io.results_sections import Position
+from lps_gui.io.results.model import Results, as_results
+from lps_gui.io.results.sections import Position
 from lps_gui.report.figures import figures_from_results, position_columns
 
 log = logging.getLogger(__name__)
@@ -295,7 +301,7 @@ class ResultsPanel(QWidget):
         self.open_report_btn.setEnabled(self.report_path is not None)
         tip = "Open the exported PDF report in the system's viewer"
         if self.report_path is not None and self.session_dir is not None:
-            from lps_gui.io.results_history import stale_report_message
+            from lps_gui.io.results.history import stale_report_message
 
             if self.report_path == self.session_dir / "report.pdf" and (stale := stale_report_message(self.session_dir)):
                 tip = stale
@@ -483,7 +489,7 @@ def verdict_html(results: Results, spec: dict[str, Any] | None) -> str:
 
 def load_corners(session_dir: Path) -> tuple[Any, np.ndarray]:
     """The session's corner table and board points (shape (N, 3) mm), for the view detail."""
-    from lps_gui.io.corners_vnl import read_corners_vnl
+    from lps_gui.io.corners.vnl import read_corners_vnl
     from lps_gui.io.session import Session
 
     session = Session.open(session_dir)

@@ -16,7 +16,7 @@ from PySide6.QtWidgets import QLabel, QSplitter, QVBoxLayout, QWidget
 
 from lps_gui.gui.plot_adapter import ReadableAxis
 from lps_gui.gui.widgets import TextTable
-from lps_gui.io.results_model import Results
+from lps_gui.io.results.model import Results
 from lps_gui.report.figure_spec import FigureSpec
 
 MOTION_HEADER = ["motion", "what", "p-v", "noise p-v", "median \u03c3", "unit", ""]

@@ -20,7 +20,7 @@ import numpy as np
 from lps_gui.core.metrology.compensation import target_means
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_bytes_atomic
-from lps_gui.io.results_model import Results, as_results
+from lps_gui.io.results.model import Results, as_results
 
 UNIT_SUFFIX = {"um": "um", "urad": "urad"}
 

@@ -5,7 +5,7 @@ reads session.json, captures.jsonl and corners.vnl (board at the session's
 temperature, with its warp; stale and collinear corners refused), runs
 :func:`lps_gui.core.estimator.estimate.estimate` (the solver chosen by the number of
 axes D), adds the accuracy figures (a line's here, a plane's in
-:mod:`lps_gui.pipeline.planar_results`), the environment and uncertainty
+:mod:`lps_gui.pipeline.results.planar`), the environment and uncertainty
 budget and, for a simulated session, the error against truth, and writes
 results.json, positions.csv and summary.csv under the session lock.
 Everything is computed before anything is written, so a failure leaves the
@@ -30,20 +30,20 @@ from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import InputError
 from lps_gui.gc_tuning import paused as paused_collections
 from lps_gui.io.board_file import board_to_dict
-from lps_gui.io.corners_vnl import read_corners_vnl
+from lps_gui.io.corners.vnl import read_corners_vnl
 from lps_gui.io.intrinsics_file import apply_board_warp, intrinsics_to_dict, read_intrinsics
-from lps_gui.io.results_file import assemble_results, json_floats, rows_from_columns, write_results
-from lps_gui.io.results_file import json_float as _f
-from lps_gui.io.results_history import commit_results
+from lps_gui.io.results.document import assemble_results, json_floats, rows_from_columns, write_results
+from lps_gui.io.results.document import json_float as _f
+from lps_gui.io.results.history import commit_results
 from lps_gui.io.session import Session
 from lps_gui.io.session_lock import SessionLock
-from lps_gui.pipeline.asme_results import add_asme_results, test_options
-from lps_gui.pipeline.board_plane_results import position_columns, straightness_figures
-from lps_gui.pipeline.error_motion_results import add_error_motions
-from lps_gui.pipeline.planar_results import build_planar_results
+from lps_gui.pipeline.results.asme import add_asme_results, test_options
+from lps_gui.pipeline.results.board_plane import position_columns, straightness_figures
+from lps_gui.pipeline.results.error_motions import add_error_motions
+from lps_gui.pipeline.results.planar import build_planar_results
+from lps_gui.pipeline.results.uncertainty import add_uncertainty, session_board
 from lps_gui.pipeline.session_checks import corners_of_records, session_inputs
 from lps_gui.pipeline.target_session import add_targets_section, target_observations
-from lps_gui.pipeline.uncertainty import add_uncertainty, session_board
 from lps_gui.sim.truth import session_truth, truth_comparison
 
 HYBRID_KEYS = {"grid_window_mm": "window_mm", "grid_resolution_mm": "resolution_mm", "grid_points": "grid_points",
@@ -180,7 +180,7 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate, intrins
 
 def line_results(session: Session, obs: Observations, est: LpsEstimate, intrinsics_source: str) -> dict[str, Any]:
     """The results.json document of one axis: its parts computed here, assembled by
-    :func:`lps_gui.io.results_file.assemble_results`."""
+    :func:`lps_gui.io.results.document.assemble_results`."""
     positions = position_rows(obs, est)
     truth = session_truth(session)
     results = assemble_results(

@@ -11,7 +11,7 @@ from lps_gui.core.intrinsics.calibration import IntrinsicsCalibration, calibrate
 from lps_gui.core.intrinsics.crossval import CrossValidation, cross_validate
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import InputError
-from lps_gui.io.corners_vnl import CornerTable
+from lps_gui.io.corners.vnl import CornerTable
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".pgm")
 

@@ -5,7 +5,7 @@ frame events and works on one thread beside it (cv2 releases the GIL):
 
 * each listed frame is detected as ``lps detect`` would (the tracker starts
   again at the frames where :func:`~lps_gui.pipeline.detect.chunk_size` starts
-  a chunk) and its block appended to corners.vnl (:mod:`lps_gui.io.live_corners`,
+  a chunk) and its block appended to corners.vnl (:mod:`lps_gui.io.corners.live`,
   fsynced; a resumed capture re-detects from the start of the killed chunk);
 * every ``estimate_every`` views the views so far go through the one
   estimator (:func:`lps_gui.core.estimator.estimate.estimate`, warm-started from the
@@ -37,8 +37,8 @@ from lps_gui.core.estimator.live_checks import EstimateChecks, FrameChecks, Live
 from lps_gui.errors import LpsError
 from lps_gui.hardware.stage import EventSource
 from lps_gui.io.atomic import sha256_file
-from lps_gui.io.corners_hashes import stat_meta
-from lps_gui.io.live_corners import LiveView, open_live_corners
+from lps_gui.io.corners.hashes import stat_meta
+from lps_gui.io.corners.live import LiveView, open_live_corners
 from lps_gui.io.session import CaptureRecord, Session
 from lps_gui.pipeline.detect import (
     ViewJob,
@@ -238,7 +238,7 @@ class LiveCapture:
         """The views so far through the one estimator, warm-started; its checks."""
         from lps_gui.io.intrinsics_file import apply_board_warp
         from lps_gui.pipeline.estimate import make_options, observations_of_views
-        from lps_gui.pipeline.uncertainty import session_board
+        from lps_gui.pipeline.results.uncertainty import session_board
 
         if self.session.planar or self.method != "joint" or not self.session.has_intrinsics():
             return

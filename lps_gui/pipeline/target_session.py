@@ -22,11 +22,11 @@ from lps_gui.core.geometry.targets import Target, target_offsets
 from lps_gui.core.metrology.environment import corrected_board
 from lps_gui.core.metrology.target_scale import covered_fractions
 from lps_gui.errors import InputError
+from lps_gui.io.corners.target_vnl import read_target_corners
 from lps_gui.io.session import Session
-from lps_gui.io.target_corners_vnl import read_target_corners
+from lps_gui.pipeline.results.targets import MIN_CORNERS, target_rows
+from lps_gui.pipeline.results.uncertainty import session_environment
 from lps_gui.pipeline.session_checks import corners_of_records
-from lps_gui.pipeline.target_summary import MIN_CORNERS, target_rows
-from lps_gui.pipeline.uncertainty import session_environment
 
 
 def measured_targets(session: Session) -> list[Target]:

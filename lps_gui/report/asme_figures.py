@@ -3,9 +3,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from lps_gui.io.results_sections import AsmeB564, IncrementalStep, Settling
-from lps_gui.report.figure_spec import (BACKWARD_COLOR, FORWARD_COLOR, OUTLIER_COLOR, SPEC_COLOR, TRUTH_COLOR,
-                                        FigureSpec, Series)
+from lps_gui.io.results.sections import AsmeB564, IncrementalStep, Settling
+from lps_gui.report.figure_spec import (
+    BACKWARD_COLOR,
+    FORWARD_COLOR,
+    OUTLIER_COLOR,
+    SPEC_COLOR,
+    TRUTH_COLOR,
+    FigureSpec,
+    Series,
+)
 
 STOP_COLORS = ("#1f5fa8", "#e07b00", "#2a9d3c", "#a8326e", "#6b3500", "#0d2747")
 

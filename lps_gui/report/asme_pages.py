@@ -10,8 +10,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from lps_gui.io.results_model import Results, as_results
-from lps_gui.io.results_sections import AsmeB564, AsmeFigure, IncrementalStep, Settling, UncertaintyRatio
+from lps_gui.io.results.model import Results, as_results
+from lps_gui.io.results.sections import AsmeB564, AsmeFigure, IncrementalStep, Settling, UncertaintyRatio
 from lps_gui.report.asme_figures import settling_figure, step_figure
 from lps_gui.report.summary import fmt
 

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from lps_gui.io.results_model import Results, as_results
-from lps_gui.io.results_sections import EnvironmentRecord
+from lps_gui.io.results.model import Results, as_results
+from lps_gui.io.results.sections import EnvironmentRecord
 from lps_gui.report.summary import DASH, fmt
 
 NOT_RECORDED = "not recorded"

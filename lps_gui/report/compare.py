@@ -17,8 +17,8 @@ from typing import Any
 import numpy as np
 
 from lps_gui.errors import InputError
-from lps_gui.io.results_model import Results, as_results
-from lps_gui.io.results_sections import Iso230
+from lps_gui.io.results.model import Results, as_results
+from lps_gui.io.results.sections import Iso230
 from lps_gui.report.figure_spec import BACKWARD_COLOR, FORWARD_COLOR, FigureSpec, Series
 from lps_gui.report.figures import _by_direction, _dir_label, per_target_stats, position_columns
 from lps_gui.report.pdf import load_results, load_session_meta

@@ -1,6 +1,6 @@
 """The error-motions page (SPEC 14): the six ISO 230-1 error motions of the axis per stop, and the tool point.
 
-Built from results.json ``error_motions`` (:mod:`lps_gui.pipeline.error_motion_results`):
+Built from results.json ``error_motions`` (:mod:`lps_gui.pipeline.results.error_motions`):
 the three angular motions in one figure and the three linear ones in another,
 each curve with its +-2 sigma band (relative to the first stop, as the values
 and positions.csv are) and labelled "not resolved" by the profile rule of
@@ -17,8 +17,8 @@ from typing import Any
 import numpy as np
 
 from lps_gui.core.metrology.resolution import not_resolved_text
-from lps_gui.io.results_model import Results, as_results
-from lps_gui.io.results_sections import ErrorMotions, Motion
+from lps_gui.io.results.model import Results, as_results
+from lps_gui.io.results.sections import ErrorMotions, Motion
 from lps_gui.report.figure_spec import COMPONENT_COLORS, FigureSpec, Series, num_or_nan
 
 MU = "\u00b5"

@@ -13,19 +13,27 @@ same way (linear trend / mean removed) before it is drawn.
 """
 from __future__ import annotations
 
-from typing import Any, Sequence
-
 from dataclasses import replace
+from typing import Any, Sequence
 
 import numpy as np
 
-from lps_gui.report.figure_spec import (BACKWARD_COLOR, COMPONENT_COLORS, DIRECTION_ARROWS, DIRECTION_NAMES,
-                                        FORWARD_COLOR, IMAGE_ROTATION_COLOR, SPEC_COLOR, TRUTH_COLOR,
-                                        TRUTH_COLORS, FigureSpec, Series)
-from lps_gui.io.results_model import Results, as_results
+from lps_gui.io.results.model import Results, as_results
+from lps_gui.report.figure_spec import (
+    BACKWARD_COLOR,
+    COMPONENT_COLORS,
+    DIRECTION_ARROWS,
+    DIRECTION_NAMES,
+    FORWARD_COLOR,
+    IMAGE_ROTATION_COLOR,
+    SPEC_COLOR,
+    TRUTH_COLOR,
+    TRUTH_COLORS,
+    FigureSpec,
+    Series,
+)
 from lps_gui.report.target_figures import with_target_stretches
 from lps_gui.sim.truth import centred, residual_from_line, true_deviation_um
-
 
 TRUTH_KEYS = ("deviation_um", "straightness_um_1", "straightness_um_2", "roll_urad", "pitch_urad", "yaw_urad",
               "image_rotation_urad")

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from lps_gui.io.results_model import Results, as_results
+from lps_gui.io.results.model import Results, as_results
 from lps_gui.report.summary import DASH, _num
 
 UM = "\u00b5m"

@@ -16,7 +16,7 @@ from typing import Any
 from lps_gui.core.progress import ProgressFn, no_progress
 from lps_gui.errors import InputError
 from lps_gui.io.jsonfile import read_json
-from lps_gui.io.results_model import Results, as_results, read_results
+from lps_gui.io.results.model import Results, as_results, read_results
 from lps_gui.report import asme_pages
 from lps_gui.report import sections as R
 from lps_gui.report import summary as S

@@ -15,8 +15,8 @@ from dataclasses import replace
 from typing import Any
 
 from lps_gui.errors import InputError
-from lps_gui.io.results_model import Results, as_results
-from lps_gui.io.results_sections import Figures, SpanResolution, TruthComparison
+from lps_gui.io.results.model import Results, as_results
+from lps_gui.io.results.sections import Figures, SpanResolution, TruthComparison
 from lps_gui.report import sections as R
 from lps_gui.report.error_motions_report import paint_error_motions_page
 from lps_gui.report.figures import planar_figures_from_results
@@ -36,7 +36,7 @@ PLANAR_TABLE_COLUMNS = (  # key, header, decimals, width mm
 
 def _u(k2: Mapping[str, Any], key: str, sigma: float | None) -> float | None:
     """U (k = 2) of a planar figure: results.json ``uncertainty.figures_k2`` when it has it, else 2 sigma (noise)."""
-    from lps_gui.io.results_file import finite_number
+    from lps_gui.io.results.document import finite_number
 
     u = finite_number(k2.get(key))
     return u if u is not None else (None if sigma is None else 2.0 * float(sigma))

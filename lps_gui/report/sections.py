@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Any, Sequence
 
-from lps_gui.io.results_model import Results, as_results
+from lps_gui.io.results.model import Results, as_results
 from lps_gui.report import budget_table as B
 from lps_gui.report import summary as S
 from lps_gui.report.iso_table import iso_target_table

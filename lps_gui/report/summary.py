@@ -13,10 +13,10 @@ from typing import Any, Sequence
 import numpy as np
 
 from lps_gui.core.geometry.camera_model import INTRINSIC_NAMES
-from lps_gui.io.results_file import SummaryFigure, extreme_figures, iso_figures, summary_figures
-from lps_gui.io.results_file import finite_number as _num
-from lps_gui.io.results_model import Results, as_results
-from lps_gui.io.results_sections import Iso230
+from lps_gui.io.results.document import SummaryFigure, extreme_figures, iso_figures, summary_figures
+from lps_gui.io.results.document import finite_number as _num
+from lps_gui.io.results.model import Results, as_results
+from lps_gui.io.results.sections import Iso230
 from lps_gui.report.figures import position_columns
 
 METHOD_NAMES = {"joint": "joint LM (all positions, orientation and line at once)",
@@ -235,7 +235,7 @@ def iso_rows(iso: Iso230 | dict[str, Any] | None) -> list[Row]:
     """ISO 230-2 figures of results.json (``core.iso230.Iso230Figures`` as a dict) as rows.
 
     Order A, R, E, B, M; each bidirectional, then forward and backward
-    (:func:`lps_gui.io.results_file.iso_figures`). Per-target tables and run
+    (:func:`lps_gui.io.results.document.iso_figures`). Per-target tables and run
     counts are left to the plots and the table; numeric keys we do not know
     are printed with their own words.
     """
@@ -245,7 +245,7 @@ def iso_rows(iso: Iso230 | dict[str, Any] | None) -> list[Row]:
 def summary_rows(results: Results | dict[str, Any]) -> list[Row]:
     """The summary figures of SPEC 5 as printed in the report, in report order.
 
-    The figures of :func:`lps_gui.io.results_file.summary_figures` (the same
+    The figures of :func:`lps_gui.io.results.document.summary_figures` (the same
     builder as summary.csv) that have a report label: single-run figures,
     ISO 230-2 figures (absent with one run), maxima of straightness and
     angles over the positions not flagged; the truth comparison is :func:`truth_rows`, on its own page.

@@ -17,7 +17,7 @@ from typing import Any
 
 from lps_gui.core.metrology.iso230 import ISO_RUNS
 from lps_gui.core.metrology.resolution import runs_per_direction
-from lps_gui.io.results_model import Results, as_results
+from lps_gui.io.results.model import Results, as_results
 from lps_gui.report.summary import SpecCheck, fmt, spec_checks
 
 PASS_COLOR, FAIL_COLOR, INDICATIVE_COLOR, GREY = "#007a1f", "#c00000", "#a05a00", "#555555"

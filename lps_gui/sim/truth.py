@@ -51,8 +51,8 @@ from lps_gui.errors import InputError
 from lps_gui.io.atomic import append_line_durable, write_text_atomic
 from lps_gui.io.board_file import board_from_dict
 from lps_gui.io.intrinsics_file import intrinsics_from_dict
-from lps_gui.io.results_file import json_float as _f
-from lps_gui.io.results_file import json_floats
+from lps_gui.io.results.document import json_float as _f
+from lps_gui.io.results.document import json_floats
 from lps_gui.io.session import Session
 from lps_gui.io.session_paths import read_session_file
 

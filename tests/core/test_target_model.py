@@ -175,7 +175,7 @@ def test_an_untied_target_is_a_one_line_error():
 
 
 def test_the_targets_section_names_poses_sigmas_views_ties_and_stretch():
-    from lps_gui.pipeline.target_summary import target_rows
+    from lps_gui.pipeline.results.targets import target_rows
 
     obs, layout, _ = paper_x_axis(2)
     sol = solve_targets(obs, PAPER_CAMERA)

@@ -7,7 +7,7 @@ import pytest
 from PySide6.QtCore import Qt
 
 from lps_gui.cli import main as lps_main
-from lps_gui.io.results_model import as_results
+from lps_gui.io.results.model import as_results
 from lps_gui.report.asme_pages import finding_lines, section, tur_cells
 from lps_gui.report.error_motions_report import error_motion_rows
 

@@ -11,8 +11,8 @@ from lps_gui.cli import main as lps_main
 from lps_gui.core.truth.simulate import small_spec
 from lps_gui.errors import InputError
 from lps_gui.io.jsonfile import json_bytes
-from lps_gui.io.results_model import Results, as_results, read_results
-from lps_gui.io.results_sections import Uncertainty
+from lps_gui.io.results.model import Results, as_results, read_results
+from lps_gui.io.results.sections import Uncertainty
 from lps_gui.pipeline.estimate import estimate_session
 from lps_gui.sim.points import simulate_point_session
 
@@ -65,7 +65,7 @@ def test_round_trip_gives_the_file_back_byte_for_byte(estimated, kind):
 @pytest.mark.slow
 @pytest.mark.parametrize("planar", [False, True])
 def test_round_trip_of_the_quick_demo(tmp_path, planar):
-    from lps_gui.pipeline.demo import run_demo
+    from lps_gui.pipeline.demos.run import run_demo
 
     res = run_demo(tmp_path / "out", quick=True, planar=planar)
     path = res.session_dir / "results.json"

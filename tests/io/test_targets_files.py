@@ -7,7 +7,7 @@ import pytest
 from lps_gui.core.geometry.board import Board
 from lps_gui.core.geometry.targets import Target, pack_targets
 from lps_gui.errors import InputError
-from lps_gui.io.target_corners_vnl import (
+from lps_gui.io.corners.target_vnl import (
     HEADER,
     empty_table,
     is_target_layout,
@@ -131,7 +131,7 @@ def test_a_session_names_its_targets_instead_of_a_board(tmp_path):
 
 def test_the_fast_reader_gives_what_the_line_by_line_reader_gives(tmp_path, monkeypatch):
     """Hand-edited files (views interleaved, extra spaces, comments between rows) read alike both ways."""
-    import lps_gui.io.target_corners_vnl as module
+    import lps_gui.io.corners.target_vnl as module
 
     path = tmp_path / "corners.vnl"
     path.write_text(f"{HEADER}\n## failed c.png: no target found\nb.png  T1 3 10.5 20.25\na.png T0 0 1 2\n"

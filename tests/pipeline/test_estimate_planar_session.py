@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from lps_gui.cli import main as lps_main
-from lps_gui.io.results_file import PLANAR_POSITION_COLUMNS
+from lps_gui.io.results.document import PLANAR_POSITION_COLUMNS
 from lps_gui.io.session import Session
 
 

@@ -13,7 +13,7 @@ from lps_gui.core.geometry.target_rig import TargetLayout, observe
 from lps_gui.core.geometry.targets import Target
 from lps_gui.core.planning.plan import Plan
 from lps_gui.core.planning.segments import stitched_segments
-from lps_gui.io.corners_vnl import CornerTable, write_corners_vnl
+from lps_gui.io.corners.vnl import CornerTable, write_corners_vnl
 from lps_gui.io.session import CaptureRecord, Session
 from lps_gui.pipeline.estimate import estimate_session
 

@@ -116,7 +116,7 @@ def _replace_image(session_dir: Path, index: int) -> str:
 
 
 def test_item5_a_replaced_image_is_detected_again(imaged_session, capsys):
-    from lps_gui.io.corners_vnl import read_corners_vnl
+    from lps_gui.io.corners.vnl import read_corners_vnl
 
     assert main(["detect", str(imaged_session), "--workers", "1"]) == 0
     n = Session.open(imaged_session).board().n_corners

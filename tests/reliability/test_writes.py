@@ -12,8 +12,9 @@ import pytest
 from lps_gui.cli import main
 from lps_gui.errors import LpsError
 from lps_gui.io import atomic
-from lps_gui.io.results_file import write_results
+from lps_gui.io.results.document import write_results
 from tests.report.conftest import make_results
+
 
 def last_line(stderr: str) -> str:
     """The error line (progress bars come before it)."""

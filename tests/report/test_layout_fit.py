@@ -65,7 +65,6 @@ def test_a_long_axis_label_is_set_smaller_to_fit(tmp_path):
 @pytest.fixture(scope="module")
 def planar_session(tmp_path_factory):
     from lps_gui.cli import main as lps_main
-
     folder = tmp_path_factory.mktemp("planar") / "s"
     assert lps_main(["simulate", "--planar", "--points", str(folder), "--preset", "small-planar", "--directions",
                      "both", "--runs", "2", "--seed", "3"]) == 0

@@ -43,7 +43,7 @@ MIN_CORNERS = 6
 
 @dataclass
 class TargetObservations:
-    """Corners of K views of T targets, laid end to end (see io/target_corners_vnl)."""
+    """Corners of K views of T targets, laid end to end (see io/corners/target_vnl)."""
 
     targets: list[Target]
     corners_px: np.ndarray  # (K, N, 2), NaN where not seen

@@ -24,7 +24,7 @@ from lps_gui import __version__
 from lps_gui.errors import InputError, LpsError
 from lps_gui.io.file_set import JOURNAL, recover_file_set, write_file_set
 from lps_gui.io.jsonfile import json_bytes, read_json
-from lps_gui.io.typed_json import finite_number
+from lps_gui.io.results.typed_json import finite_number
 
 FORMAT = "lps-results/1"
 RESULTS_FILE = "results.json"
@@ -389,7 +389,7 @@ def _result_names(path: Path) -> tuple[Path, dict[str, str]]:
 def read_results_document(path: Path | str) -> tuple[Path, dict[str, Any]]:
     """(the file, its JSON object) of results.json (a folder is taken to hold one), after a killed commit is finished.
 
-    The file as data; :func:`lps_gui.io.results_model.read_results` reads it into typed sections (and checks them).
+    The file as data; :func:`lps_gui.io.results.model.read_results` reads it into typed sections (and checks them).
     """
     path = Path(path)
     if path.is_dir():

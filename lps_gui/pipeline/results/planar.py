@@ -21,7 +21,7 @@ from lps_gui.core.metrology.planar_figures import node_errors, planar_figures
 from lps_gui.core.metrology.planar_flatness import out_of_plane
 from lps_gui.io.board_file import board_to_dict
 from lps_gui.io.intrinsics_file import intrinsics_to_dict
-from lps_gui.io.results_file import FORMAT
+from lps_gui.io.results.document import FORMAT
 from lps_gui.io.session import Session
 from lps_gui.pipeline.session_checks import session_inputs
 from lps_gui.sim.truth import session_truth, truth_comparison

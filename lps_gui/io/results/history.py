@@ -17,7 +17,7 @@ from typing import Any
 from lps_gui.io.atomic import write_bytes_atomic
 from lps_gui.io.file_set import write_file_set
 from lps_gui.io.jsonfile import json_bytes, read_json
-from lps_gui.io.results_file import POSITIONS_FILE, RESULTS_FILE, SUMMARY_FILE, result_set_bytes
+from lps_gui.io.results.document import POSITIONS_FILE, RESULTS_FILE, SUMMARY_FILE, result_set_bytes
 
 HISTORY_DIR = "results"
 LATEST_FILE = "latest.json"

@@ -11,8 +11,8 @@ from typing import Any
 import numpy as np
 
 from lps_gui.core.truth.simulate import SimulationSpec
-from lps_gui.io.results_model import Results, as_results
-from lps_gui.io.results_sections import PlanarAxis, PlanarFigures, SingleRun, TruthComparison
+from lps_gui.io.results.model import Results, as_results
+from lps_gui.io.results.sections import PlanarAxis, PlanarFigures, SingleRun, TruthComparison
 
 PAPER_SPEC = {"accuracy_um": 20.0, "repeatability_um": 5.0, "straightness_um": 38.0}  # the paper's stage table
 

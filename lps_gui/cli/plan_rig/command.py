@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 
 from lps_gui.cli.option_types import positive_finite
-from lps_gui.cli.plan_two_depth import add_two_depth_arguments
+from lps_gui.cli.plan_rig.two_depth import add_two_depth_arguments
 
 HELP = ("check a rig before capturing: board in view over the whole plan, and the position sigma to expect; "
         "--travel proposes a row of targets for a travel longer than the view")
@@ -105,11 +105,11 @@ def run(args: argparse.Namespace) -> int:
     from lps_gui.errors import InputError
 
     if args.two_depth is not None:
-        from lps_gui.cli.plan_two_depth import run_two_depth
+        from lps_gui.cli.plan_rig.two_depth import run_two_depth
 
         return run_two_depth(args, _camera(args))
     if args.travel is not None or args.travel_y is not None:
-        from lps_gui.cli.plan_row import run_row
+        from lps_gui.cli.plan_rig.row import run_row
 
         return run_row(args, _camera(args))
     if args.distance_mm is None or args.stop is None or args.step is None:

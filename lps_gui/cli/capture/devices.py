@@ -20,13 +20,12 @@ def read_intrinsics(path: str | None):
     if not path:
         return None
     from lps_gui.io import intrinsics_file
-
     return intrinsics_file.read_intrinsics(path)
 
 
 def preflight(args: argparse.Namespace, stage_spec: str, camera_spec: str) -> None:
     """Everything checkable before anything is created: the stage against the camera, the image format."""
-    from lps_gui.cli.capture_preflight import check_capture_args
+    from lps_gui.cli.capture.preflight import check_capture_args
 
     check_capture_args(args, stage_spec, camera_spec)
 

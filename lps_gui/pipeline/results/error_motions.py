@@ -33,7 +33,7 @@ from lps_gui.core.metrology.error_motions import (
 from lps_gui.core.models.lps_model import motion_frame
 from lps_gui.core.models.pose_model import PoseSolution, pose_solution_from_views
 from lps_gui.errors import InputError
-from lps_gui.io.results_file import json_float, json_floats
+from lps_gui.io.results.document import json_float, json_floats
 
 ANGLE_COLUMNS = {"roll": "eax", "pitch": "ebx", "yaw": "ecx"}  # SPEC 14's column stems (for every axis)
 UNITS = {"positioning": "um", "straightness_y": "um", "straightness_z": "um", "roll": "urad", "pitch": "urad",

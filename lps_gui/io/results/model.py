@@ -1,6 +1,6 @@
 """results.json read once into typed, frozen sections: what report, GUI and CLI read instead of dicts.
 
-:func:`lps_gui.io.results_file.assemble_results` stays the one builder of the
+:func:`lps_gui.io.results.document.assemble_results` stays the one builder of the
 document (a dict, written as it is); this module is its one reader.
 :meth:`Results.from_dict` validates once, with a one-line :class:`InputError`
 naming the file and the field (``figures.single_run.scale_ppm``), and gives:
@@ -14,10 +14,10 @@ naming the file and the field (``figures.single_run.scale_ppm``), and gives:
   top-level sections (from a later version) in ``Results.extra``;
   :meth:`Results.to_dict` gives the document back as read.
 
-Adding a section: a :class:`~lps_gui.io.typed_json.Section` subclass in
-:mod:`lps_gui.io.results_sections` with its fields (defaults for every
+Adding a section: a :class:`~lps_gui.io.results.typed_json.Section` subclass in
+:mod:`lps_gui.io.results.sections` with its fields (defaults for every
 optional key) and one field on :class:`Results` (``name: Cls | None = None``);
-the converter (:mod:`lps_gui.io.typed_json`) reads the types, nothing else is registered.
+the converter (:mod:`lps_gui.io.results.typed_json`) reads the types, nothing else is registered.
 """
 from __future__ import annotations
 
@@ -30,10 +30,23 @@ from typing import Any
 import numpy as np
 
 from lps_gui.errors import InputError
-from lps_gui.io.results_sections import (AsmeB564, BoardRecord, EnvironmentRecord, ErrorMotions, Figures, Flag, Inputs,
-                                         IntrinsicsRecord, Parameters, Position, Software, TargetRecord, TruthComparison,
-                                         Uncertainty)
-from lps_gui.io.typed_json import Section, finite_number, section_fields
+from lps_gui.io.results.sections import (
+    AsmeB564,
+    BoardRecord,
+    EnvironmentRecord,
+    ErrorMotions,
+    Figures,
+    Flag,
+    Inputs,
+    IntrinsicsRecord,
+    Parameters,
+    Position,
+    Software,
+    TargetRecord,
+    TruthComparison,
+    Uncertainty,
+)
+from lps_gui.io.results.typed_json import Section, finite_number, section_fields
 
 FIX = Section.fix
 MAX_ABS_VALUE = 1e9  # mm or um: no stage measured by a camera is a kilometre long or off by one
@@ -161,7 +174,7 @@ def as_results(results: Results | Mapping[str, Any], source: str = "results") ->
 
 def read_results(path: Path | str) -> Results:
     """results.json (a folder is taken to hold one) as :class:`Results`: the one reader of the file."""
-    from lps_gui.io.results_file import read_results_document
+    from lps_gui.io.results.document import read_results_document
 
     path, data = read_results_document(path)
     return Results.from_dict(data, source=str(path))

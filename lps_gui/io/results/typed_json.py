@@ -8,7 +8,7 @@ one-line :class:`InputError` naming the source and the field's path
 (``figures.single_run.scale_ppm``) with the section's ``fix``. The object itself
 stays in ``raw``: keys no field names are read with :meth:`Section.get` /
 :meth:`Section.number` and nothing read is lost. The results.json sections are
-in :mod:`lps_gui.io.results_sections`.
+in :mod:`lps_gui.io.results.sections`.
 """
 from __future__ import annotations
 

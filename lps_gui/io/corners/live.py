@@ -2,7 +2,7 @@
 
 A live capture (:mod:`lps_gui.pipeline.live`) detects each frame as soon as
 it is listed and appends its block: the view's image hash and stat comments
-(:mod:`lps_gui.io.corners_hashes`), its detection method, the failure
+(:mod:`lps_gui.io.corners.hashes`), its detection method, the failure
 reason of a view without a board, then its rows in the writer's number form.
 Both readers take the file as it is (comments anywhere are the general
 reader's), so ``lps detect`` keeps its current views and ``lps estimate``
@@ -27,8 +27,8 @@ import numpy as np
 
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import fsync_dir, storage_error
-from lps_gui.io.corners_hashes import PREFIX, STAT_PREFIX
-from lps_gui.io.corners_vnl import HEADER, CornerTable, corners_vnl_bytes
+from lps_gui.io.corners.hashes import PREFIX, STAT_PREFIX
+from lps_gui.io.corners.vnl import HEADER, CornerTable, corners_vnl_bytes
 
 LIVE_KEY = "live"
 LIVE_NOTE = "capture in progress (blocks appended per view; rewritten as by lps detect when the capture completes)"

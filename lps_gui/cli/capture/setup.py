@@ -71,7 +71,7 @@ def setup_meta(args: argparse.Namespace) -> dict[str, Any]:
         env["notes"] = args.env_notes
     if env:
         out["environment"] = Environment.from_dict(env, "environment switches").to_dict()
-    from lps_gui.cli.asme_test import test_record
+    from lps_gui.cli.capture.asme_test import test_record
 
     if test_record(args):
         out["asme_test"] = test_record(args)

@@ -23,8 +23,8 @@ from lps_gui.core.planning.target_presets import paper_row_spec
 from lps_gui.core.progress import CancelToken
 from lps_gui.core.truth.simulate import SimulationSpec
 from lps_gui.errors import InputError
-from lps_gui.io.results_model import Results
-from lps_gui.pipeline.demo_steps import estimate_and_report
+from lps_gui.io.results.model import Results
+from lps_gui.pipeline.demos.steps import estimate_and_report
 
 ROW_STEP_MM = 12.7  # the paper's X axis: 1524 mm in 120 steps
 # a printed target checked with a steel rule over its 330 mm: 20 um, i.e. 2 um per 30 mm square
@@ -69,7 +69,7 @@ def calibration_board(spec: SimulationSpec) -> Board:
 
 def run_row_demo(out: Path, spec: SimulationSpec, res: Any, step: Callable[[str, str, str, float], None],
                  bar: Callable[[str], Any], cancel: CancelToken | None, seed: int, calibrate_step: Callable) -> Any:
-    """The demo's steps on a row of targets, into ``res`` (a :class:`~lps_gui.pipeline.demo.DemoResult`);
+    """The demo's steps on a row of targets, into ``res`` (a :class:`~lps_gui.pipeline.demos.run.DemoResult`);
     ``calibrate_step`` is the one-board demo's (passed in: the demo imports this module)."""
     from lps_gui.pipeline.detect import detect_session
     from lps_gui.sim.images import simulate_image_session

@@ -1,7 +1,7 @@
 """The demo's last two steps, shared by the one-board demo and the row demo: estimate, then the report.
 
-Its own module so that :mod:`lps_gui.pipeline.demo` and
-:mod:`lps_gui.pipeline.demo_targets` both use it without importing each other.
+Its own module so that :mod:`lps_gui.pipeline.demos.run` and
+:mod:`lps_gui.pipeline.demos.targets` both use it without importing each other.
 """
 from __future__ import annotations
 
@@ -10,8 +10,8 @@ from pathlib import Path
 from typing import Any, Callable
 
 from lps_gui.core.progress import CancelToken
-from lps_gui.io.results_model import Results, as_results
-from lps_gui.io.results_sections import Parameters
+from lps_gui.io.results.model import Results, as_results
+from lps_gui.io.results.sections import Parameters
 from lps_gui.pipeline.estimate import estimate_session
 
 StepFn = Callable[[str, str, str, float], None]

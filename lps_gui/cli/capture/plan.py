@@ -152,10 +152,10 @@ def line_plan(args: argparse.Namespace, base=None):
     fields = {k: getattr(args, k) for k in ("start_mm", "stop_mm", "step_mm", "directions", "runs", "overshoot_mm", "settle_s", "frames_per_stop", "feed_mm_min")}
     if args.targets:
         fields["targets_mm"] = parse_targets(args.targets)
-    from lps_gui.cli.capture_setup import iso_plan_fields
+    from lps_gui.cli.capture.setup import iso_plan_fields
 
     fields.update(iso_plan_fields(args, base))
-    from lps_gui.cli.asme_test import test_plan_fields
+    from lps_gui.cli.capture.asme_test import test_plan_fields
 
     start = args.start_mm if args.start_mm is not None else getattr(base, "start_mm", None)
     fields.update(test_plan_fields(args, start, args.stop_mm if args.stop_mm is not None else getattr(base, "stop_mm", None)))

@@ -1,8 +1,8 @@
 """The sections of results.json (docs/ARCHITECTURE.md) as typed, frozen dataclasses: what readers name.
 
 Each field is a key the report, GUI, CLI or pipeline reads; every other key
-stays in the section's ``raw`` (:class:`lps_gui.io.typed_json.Section`). The
-document itself is :class:`lps_gui.io.results_model.Results`.
+stays in the section's ``raw`` (:class:`lps_gui.io.results.typed_json.Section`). The
+document itself is :class:`lps_gui.io.results.model.Results`.
 """
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from lps_gui.io.typed_json import Section, finite_number
+from lps_gui.io.results.typed_json import Section, finite_number
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -14,7 +14,7 @@ import numpy as np
 
 from lps_gui.core.estimator.estimate_types import LpsEstimate
 from lps_gui.core.metrology.resolution import is_resolved, noise_max_abs, profile_span
-from lps_gui.io.results_file import json_floats
+from lps_gui.io.results.document import json_floats
 
 
 def _f(x: Any) -> float | None:

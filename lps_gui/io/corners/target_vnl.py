@@ -18,7 +18,7 @@ import numpy as np
 from lps_gui.core.geometry.targets import Target, target_offsets
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_bytes_atomic
-from lps_gui.io.corners_vnl_fast import comment_fields
+from lps_gui.io.corners.vnl_fast import comment_fields
 
 HEADER = "# filename target corner x y"
 MAX_FILE_BYTES = 2 << 30  # ~10^7 views x corners; past that the file is not a session's

@@ -7,7 +7,7 @@ row, with the reason in a ``## failed <filename>: <reason>`` comment. Other
 
 A session of 1600 views holds 864k rows, so both directions work on numpy
 byte arrays, never one Python object per row. Reading first tries
-:mod:`lps_gui.io.corners_vnl_fast` (the file as the writer makes it, streamed
+:mod:`lps_gui.io.corners.vnl_fast` (the file as the writer makes it, streamed
 in blocks and hashed on the way); any other file, and
 every error, goes to the general reader here (tokens found by whitespace
 masks, numbers parsed by one bytes-to-float cast, names grouped by runs),
@@ -26,7 +26,7 @@ import numpy as np
 
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_bytes_atomic
-from lps_gui.io.corners_vnl_fast import comment_fields, read_simple
+from lps_gui.io.corners.vnl_fast import comment_fields, read_simple
 
 MAX_CORNERS_BYTES = 2 << 30  # 100000 views (the plan limit) of 54 corners: ~2 GB; the fast reader sizes its table by the file
 MAX_GENERAL_BYTES = 256 << 20  # hand-edited files (CR line ends, tabs, odd spaces) go through the general parser

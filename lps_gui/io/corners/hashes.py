@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Iterable, Protocol
 
 from lps_gui.io.atomic import sha256_file
-from lps_gui.io.corners_vnl import CornerTable
+from lps_gui.io.corners.vnl import CornerTable
 
 PREFIX = "sha256 "
 STAT_PREFIX = "stat "

@@ -8,7 +8,7 @@ and the simulated camera; detect; estimate; write report.pdf and the CSVs;
 compare with the simulator's truth; on one axis, close the loop with a
 compensated capture. The printed error against truth is results.json's
 ``truth_comparison`` (one reduction, :func:`lps_gui.sim.truth.reduce_truth`;
-the lines are :mod:`lps_gui.pipeline.demo_summary`'s).
+the lines are :mod:`lps_gui.pipeline.demos.summary`'s).
 """
 from __future__ import annotations
 
@@ -27,10 +27,10 @@ from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.core.truth.simulate import SimulationSpec, paper_planar_spec, paper_rig_spec, small_planar_spec, small_spec
 from lps_gui.errors import InputError
 from lps_gui.io.intrinsics_file import write_intrinsics
-from lps_gui.io.results_model import Results
+from lps_gui.io.results.model import Results
 from lps_gui.io.session import Session
-from lps_gui.pipeline.demo_steps import estimate_and_report
-from lps_gui.pipeline.demo_summary import PAPER_SPEC, planar_summary_lines, summary_lines
+from lps_gui.pipeline.demos.steps import estimate_and_report
+from lps_gui.pipeline.demos.summary import PAPER_SPEC, planar_summary_lines, summary_lines
 from lps_gui.pipeline.detect import detect_session
 from lps_gui.pipeline.intrinsics import calibrate_images
 from lps_gui.sim.images import simulate_intrinsics_set
@@ -131,12 +131,12 @@ def run_demo(
     bar : makes a progress callback per step (the CLI passes a ProgressBar).
     say : prints one line (what a step did or skipped).
     planar : the planar pipeline (SPEC 10) on the simulated XY gantry.
-    travel_mm, preset : the whole travel against a row of targets (SPEC 13, :mod:`lps_gui.pipeline.demo_targets`).
+    travel_mm, preset : the whole travel against a row of targets (SPEC 13, :mod:`lps_gui.pipeline.demos.targets`).
     """
     out = Path(out)
     row = travel_mm is not None or preset is not None
     if row:
-        from lps_gui.pipeline.demo_targets import row_demo_spec
+        from lps_gui.pipeline.demos.targets import row_demo_spec
 
         spec = row_demo_spec(travel_mm, preset, seed)
     else:
@@ -151,7 +151,7 @@ def run_demo(
             cancel.check("demo")
 
     if row:
-        from lps_gui.pipeline.demo_targets import run_row_demo
+        from lps_gui.pipeline.demos.targets import run_row_demo
 
         return run_row_demo(out, spec, res, step, bar, cancel, seed, calibrate_step)
     t0 = time.monotonic()

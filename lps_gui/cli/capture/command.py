@@ -14,15 +14,15 @@ Examples::
     lps capture --planar --iso-lines --grid 0,0:40,20:10,10 --out xy4                # ISO 230-2 lines per axis
     lps capture --planar --stage grbl:/dev/ttyUSB0 --camera 0 --board board.json --grid ... --out xy5
 
-One command for one axis and two: the plan comes from :mod:`lps_gui.cli.capture_plan`, the devices
-from :mod:`lps_gui.cli.capture_devices`; a plan with two axes runs on the simulated gantry (or the
+One command for one axis and two: the plan comes from :mod:`lps_gui.cli.capture.plan`, the devices
+from :mod:`lps_gui.cli.capture.devices`; a plan with two axes runs on the simulated gantry (or the
 operator's XY stage) through the same engine.
 """
 from __future__ import annotations
 
 import argparse
 
-from lps_gui.cli.capture_devices import (
+from lps_gui.cli.capture.devices import (
     bind_simulated_stage,
     bind_stage,
     clock,
@@ -33,7 +33,7 @@ from lps_gui.cli.capture_devices import (
     read_intrinsics,
     release_lock,
 )
-from lps_gui.cli.capture_plan import (
+from lps_gui.cli.capture.plan import (
     ISO_LEVELS,
     ISO_RUNS,
     build_planar_plan,
@@ -91,13 +91,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     lock = s.add_mutually_exclusive_group()
     lock.add_argument("--home", action="store_true", help="a stage locked in Alarm (GRBL powers up so with homing on) is homed ($H) first")
     lock.add_argument("--unlock", action="store_true", help="a stage locked in Alarm is unlocked ($X) first, without homing")
-    from lps_gui.cli.capture_setup import add_setup_arguments
+    from lps_gui.cli.capture.setup import add_setup_arguments
 
     add_setup_arguments(p)
-    from lps_gui.cli.asme_test import add_test_arguments
+    from lps_gui.cli.capture.asme_test import add_test_arguments
 
     add_test_arguments(p)
-    from lps_gui.cli.capture_live import add_live_arguments
+    from lps_gui.cli.capture.live import add_live_arguments
 
     add_live_arguments(p)
     a = p.add_argument_group("settle detection and averaging")
@@ -130,10 +130,10 @@ def run(args: argparse.Namespace) -> int:
         return _intrinsics_mode(args)
     if bool(args.out) == bool(args.resume):
         raise InputError("give either --out SESSION (new capture) or --resume SESSION")
-    from lps_gui.cli.capture_setup import apply_setup, setup_meta
+    from lps_gui.cli.capture.setup import apply_setup, setup_meta
 
     extra = setup_meta(args)  # --spec, environment, identification: checked before any device opens
-    from lps_gui.cli.capture_live import report_path
+    from lps_gui.cli.capture.live import report_path
 
     if args.report:
         report_path(args, ".")  # a --report name that cannot be written is refused before the capture
@@ -150,10 +150,10 @@ def run(args: argparse.Namespace) -> int:
         apply_compensation(engine, session, args.compensation)
         engine.configure_settle(settle)
         if session.plan().segments:  # one board moved between segments: the operator answers at each pause
-            from lps_gui.cli.capture_segments import operator_moves_board
+            from lps_gui.cli.capture.segments import operator_moves_board
 
             engine.subscribe(operator_moves_board(engine))
-        from lps_gui.cli.capture_live import finish_live, start_live
+        from lps_gui.cli.capture.live import finish_live, start_live
 
         live = start_live(args, engine)
         print(f"capturing into {session.folder}: {describe(session.plan())}", file=sys.stderr)
@@ -281,7 +281,7 @@ def _start(args: argparse.Namespace):
             intr = read_intrinsics(args.intrinsics)
         else:
             spec = spec_for_plan(args.preset, line_plan(args, preset(args.preset).plan), seed=args.seed)
-        from lps_gui.cli.asme_test import simulated_rig_options, simulated_stage
+        from lps_gui.cli.capture.asme_test import simulated_rig_options, simulated_stage
 
         spec, ringing = simulated_stage(args, spec)  # --dead-band-um, --ringing (a settling test rings by default)
         session, stage, camera = create_simulated_session(args.out, spec, clock=clock(args), noise_grey=args.noise_grey,
@@ -329,7 +329,7 @@ def _resume(args: argparse.Namespace):
             session.meta["camera"] = {**camera.properties(), "spec": "sim"}
             session.save_meta()
         return session, stage, camera, simulated_engine(session, stage, camera, args.encode)
-    from lps_gui.cli.resume_devices import devices_named_by_operator
+    from lps_gui.cli.capture.resume_devices import devices_named_by_operator
 
     stage_spec, camera_spec = devices_named_by_operator(session, args.stage, args.camera)
     stage, camera = open_devices(stage_spec, camera_spec, getattr(args, "cti", None))

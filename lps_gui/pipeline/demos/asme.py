@@ -22,8 +22,8 @@ from lps_gui.core.planning.presets import (
 )
 from lps_gui.core.truth.simulate import preset
 from lps_gui.core.truth.stage_errors import Vibration
-from lps_gui.pipeline.demo import DemoResult, DemoStep, prepare_out
-from lps_gui.pipeline.demo_summary import PAPER_SPEC
+from lps_gui.pipeline.demos.run import DemoResult, DemoStep, prepare_out
+from lps_gui.pipeline.demos.summary import PAPER_SPEC
 from lps_gui.pipeline.estimate import estimate_session
 from lps_gui.sim.points import simulate_point_session
 

@@ -655,7 +655,6 @@ def _(tmp: Path) -> Outcome:
 @case("fault", "stage stops 0.5 mm short", "capture pauses (exit 3), frame not listed")
 def _(tmp: Path) -> Outcome:
     from lps_gui.capture import engine
-
     real = engine.CaptureEngine._go_to
 
     def short(self, stop):

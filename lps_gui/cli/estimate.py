@@ -153,7 +153,7 @@ def format_summary(results: Results) -> str:
                  if iso.number(k) is not None]
         lines.append("ISO 230-2: " + ", ".join(parts))
     if results.asme_b5_64 is not None and results.asme_b5_64.has_test:  # an ASME B5.64 test session (docs/asme-b5.64.md)
-        from lps_gui.report.asme_pages import test_lines
+        from lps_gui.report.pages.asme import test_lines
 
         lines += [f"ASME B5.64: {line}" for line in test_lines(results)]
     lines += [f"outlier view {f.index}: {f.message}" for f in results.flags]

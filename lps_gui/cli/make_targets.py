@@ -46,7 +46,7 @@ def run(args: argparse.Namespace) -> int:
     from lps_gui.errors import InputError
     from lps_gui.io.jsonfile import write_json
     from lps_gui.io.targets_file import dictionary_sizes, targets_to_list
-    from lps_gui.report.targets_pdf import write_targets_pdf
+    from lps_gui.report.pdf.targets import write_targets_pdf
 
     out = Path(args.out)
     if out.exists() and not out.is_dir():

@@ -3,7 +3,7 @@
 Calibration is :func:`lps_gui.pipeline.intrinsics.calibrate_images` (what
 ``lps intrinsics`` runs). The panel shows each parameter with its standard
 deviation (and the board's bow), thumbnails of the images with each one's
-RMS, and the pictures of :mod:`lps_gui.report.intrinsics_pictures`
+RMS, and the pictures of :mod:`lps_gui.report.pdf.intrinsics_pictures`
 (per-view residuals, residual vector field, projection-uncertainty and
 coverage maps with colour bars, the cross-validation map), the same ones the
 intrinsics report prints. "Cross-validate" calibrates the even and the odd
@@ -278,7 +278,7 @@ class IntrinsicsPanel(QWidget):
         self.run_requested.emit(job)
 
     def show_cross_validation(self, crossval: Any) -> None:
-        from lps_gui.report.intrinsics_pictures import crossval_picture
+        from lps_gui.report.pdf.intrinsics_pictures import crossval_picture
 
         self.crossval = crossval
         self.pictures["Cross-validation"].set_image(crossval_picture(crossval))
@@ -308,7 +308,7 @@ class IntrinsicsPanel(QWidget):
             + ("  " + " ".join(warnings) if warnings else ""))
 
     def _show_pictures(self, calib: Any) -> None:
-        from lps_gui.report.intrinsics_pictures import (
+        from lps_gui.report.pdf.intrinsics_pictures import (
             coverage_picture,
             per_view_errors,
             residual_field,

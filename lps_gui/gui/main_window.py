@@ -309,7 +309,7 @@ class MainWindow(QMainWindow):
 
     def export_pdf(self, path: Path) -> Job | None:
         """Write the PDF report in a worker thread."""
-        from lps_gui.report.pdf import write_report
+        from lps_gui.report.pdf.document import write_report
 
         panel = self.results_panel
         job = Job(f"report {path.name}", write_report, panel.session_dir or path.parent, panel.results, path)

@@ -1,7 +1,7 @@
 """Results panel: the report's figures drawn live, tables, the clicked view, export.
 
-Figures come from :func:`lps_gui.report.figures.figures_from_results` (the
-same definitions the PDF paints) and tables from ``lps_gui.report.summary``,
+Figures come from :func:`lps_gui.report.figures.plots.figures_from_results` (the
+same definitions the PDF paints) and tables from ``lps_gui.report.pages.summary``,
 so the screen and the paper show the same numbers.
 """
 from __future__ import annotations
@@ -32,7 +32,7 @@ from lps_gui.gui.widgets import TextTable, ValueTable
 from lps_gui.gui.workers import Job
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import Position
-from lps_gui.report.figures import figures_from_results, position_columns
+from lps_gui.report.figures.plots import figures_from_results, position_columns
 
 log = logging.getLogger(__name__)
 
@@ -320,7 +320,7 @@ class ResultsPanel(QWidget):
 
     def _fill_tables(self, results: Results) -> None:
         from lps_gui.gui.planar_results import planar_table_rows
-        from lps_gui.report.summary import summary_rows
+        from lps_gui.report.pages.summary import summary_rows
 
         self._fill_targets(results)
         self.mounted_targets.set_results(results)
@@ -334,7 +334,7 @@ class ResultsPanel(QWidget):
 
     def _fill_targets(self, results: Results) -> None:
         """The ISO 230-2 per-target table of the report (mean, s, R each way, reversal B), hidden without one."""
-        from lps_gui.report.iso_table import iso_target_table
+        from lps_gui.report.pages.iso_table import iso_target_table
 
         table = iso_target_table(results)
         for w in (self.target_label, self.target_table):
@@ -464,7 +464,7 @@ class ResultsPanel(QWidget):
 
 def with_limits(figures: list[Any], spec: dict[str, Any] | None) -> list[Any]:
     """The figures with the accuracy limit drawn on the deviation plot (as on the report's page 1)."""
-    from lps_gui.report.figures import with_spec_band
+    from lps_gui.report.figures.plots import with_spec_band
 
     limit = (spec or {}).get("accuracy_um")
     if limit is None:
@@ -475,8 +475,8 @@ def with_limits(figures: list[Any], spec: dict[str, Any] | None) -> list[Any]:
 
 def verdict_html(results: Results, spec: dict[str, Any] | None) -> str:
     """One line per specification row, coloured like the report's verdict."""
-    from lps_gui.report.summary import fmt
-    from lps_gui.report.verdict import overall, verdicts
+    from lps_gui.report.pages.summary import fmt
+    from lps_gui.report.pages.verdict import overall, verdicts
 
     rows = verdicts(results, spec)
     parts = [f"<b>{overall(rows)}</b>"]

@@ -26,5 +26,5 @@ def preload_backends() -> None:
     import lps_gui.pipeline.detect  # noqa: F401
     import lps_gui.pipeline.estimate  # noqa: F401
     import lps_gui.pipeline.intrinsics  # noqa: F401
-    import lps_gui.report.summary  # noqa: F401
+    import lps_gui.report.pages.summary  # noqa: F401
     import lps_gui.sim.session  # noqa: F401

@@ -24,7 +24,6 @@ def stage_choices() -> list[tuple[str, str]]:
     """(label, source) pairs: simulated, emulator, then every serial port found."""
     out = [("Simulated stage", SIM), ("GRBL emulator (pty)", EMULATOR)]
     from lps_gui.hardware import list_serial_ports
-
     try:
         ports = list_serial_ports()
     except Exception:  # no port listing yet (or no serial support): offer the two simulations
@@ -44,7 +43,6 @@ def stage_choices() -> list[tuple[str, str]]:
 def by_id_choices() -> list[tuple[str, str]]:
     """The stable /dev/serial/by-id names of the serial adapters (they survive replugging)."""
     from lps_gui.hardware import serial_ports_by_id
-
     return [(f"{link} ({device.rsplit('/', 1)[-1]})", f"grbl:{link}") for link, device in serial_ports_by_id()]
 
 
@@ -71,7 +69,6 @@ def open_stage_source(source: str, baud: int = 115200, clock: Clock | None = Non
     if source == SIM:
         return simulated_rig(clock)
     from lps_gui.hardware import open_stage
-
     if source == EMULATOR:
         return open_stage(EMULATOR), None
     if source.startswith("grbl:"):
@@ -104,5 +101,4 @@ def camera_choices(sim_available: bool, rescan: bool = False) -> list[tuple[str,
 def open_camera_source(spec: str) -> Camera:
     """Open a non-simulated camera (device index, SDK source, file or URL) through the camera layer."""
     from lps_gui.camera import open_camera
-
     return open_camera(spec)

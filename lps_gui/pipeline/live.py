@@ -177,7 +177,7 @@ class LiveCapture:
         results = estimate_session(self.session.folder, self.method, self.options, progress=progress or no_progress)
         self._emit(LiveEvent("results", f"{self.session.folder / 'results.json'}", data=results))
         if report:
-            from lps_gui.report.pdf import write_report
+            from lps_gui.report.pdf.document import write_report
 
             out = None if report is True else Path(report)
             path = write_report(self.session.folder, results=results, out=out)

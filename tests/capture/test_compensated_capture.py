@@ -74,7 +74,7 @@ def test_compensated_recapture_reduces_true_E_5x(tmp_path):
     estimate_session(before.folder)
     res = compensation_pass(before.folder, tmp_path / "after")
     print(*res.lines(), sep="\n")
-    from lps_gui.report.compare import write_comparison
+    from lps_gui.report.pdf.compare import write_comparison
 
     assert write_comparison(before.folder, res.after_dir).stat().st_size > 1000  # the as-found/as-left PDF
     assert res.true_E_before_um > 20.0

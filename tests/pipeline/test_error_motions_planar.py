@@ -38,7 +38,7 @@ def test_a_constellation_gives_both_axes_yaw_and_not_their_tilts(tmp_path):
                                       "ecx_sigma_urad"]
     cells = [r.split(",")[-6:] for r in rows]
     assert all(c[0] == c[1] == "" and c[2] != "" for c in cells)
-    from lps_gui.report.error_motions_report import error_motion_figures, error_motion_rows
+    from lps_gui.report.pages.error_motions import error_motion_figures, error_motion_rows
 
     assert [f.key for f in error_motion_figures(results)] == ["error_motions_angular", "error_motions_linear",
                                                               "error_motions_angular_y", "error_motions_linear_y"]

@@ -9,7 +9,7 @@ from lps_gui.core.truth.simulate import paper_rig_spec, paper_stage_errors
 from lps_gui.io.results.document import POSITION_COLUMNS
 from lps_gui.pipeline.demos.run import PAPER_SPEC
 from lps_gui.pipeline.estimate import estimate_session
-from lps_gui.report.summary import extremes_rows, spec_checks
+from lps_gui.report.pages.summary import extremes_rows, spec_checks
 from lps_gui.sim.points import simulate_point_session
 
 

@@ -29,7 +29,7 @@ def corners():
 
 
 def test_pictures_show_the_data(corners):
-    from lps_gui.report.intrinsics_pictures import PICTURE_PX, intrinsics_pictures
+    from lps_gui.report.pdf.intrinsics_pictures import PICTURE_PX, intrinsics_pictures
 
     cal = calibrate_intrinsics(BOARD.flat_points(), corners, INTR.image_size)
     pics = intrinsics_pictures(cal, cross_validate(BOARD.flat_points(), corners, INTR.image_size))
@@ -46,7 +46,7 @@ def test_pictures_show_the_data(corners):
 
 
 def test_report_pdf(corners, tmp_path):
-    from lps_gui.report.intrinsics_report import parameter_rows, write_intrinsics_report
+    from lps_gui.report.pdf.intrinsics import parameter_rows, write_intrinsics_report
 
     cal = calibrate_intrinsics(BOARD.flat_points(), corners, INTR.image_size)
     assert [(c.view, c.corner) for c in cal.rejected_corners] == [(5, 20)]

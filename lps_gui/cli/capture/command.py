@@ -215,7 +215,6 @@ def _intrinsics_mode(args: argparse.Namespace) -> int:
         if not args.board:
             raise InputError("--board FILE is required with a real camera (board.json is described in docs/capture.md)")
         from lps_gui.camera import open_camera
-
         board = read_board(args.board)
         camera = open_camera(args.camera, **({"cti": args.cti} if args.cti else {}))
     try:

@@ -66,7 +66,6 @@ def open_devices(stage_spec: str, camera_spec: str, cti: str | None = None):
     from lps_gui.camera import open_camera
     from lps_gui.errors import InputError
     from lps_gui.hardware import open_stage
-
     if camera_spec == "sim":
         raise InputError("--camera sim follows only the simulated rig; use --stage sim or emulator")
     stage = open_stage(stage_spec)

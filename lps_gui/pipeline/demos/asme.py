@@ -33,8 +33,8 @@ DEMO_FRAME_S = 0.01
 
 def run_asme_demo(out: Path, test: str, seed: int = 0, say: Callable[[str], None] = lambda line: None) -> DemoResult:
     """Simulate, estimate and report one ASME B5.64 test into ``out`` (cleared if a previous demo made it)."""
-    from lps_gui.report.asme_pages import test_lines
-    from lps_gui.report.pdf import write_report
+    from lps_gui.report.pages.asme import test_lines
+    from lps_gui.report.pdf.document import write_report
 
     out = Path(out).resolve()  # the result set's journal names its files relative to an absolute folder
     prepare_out(out)

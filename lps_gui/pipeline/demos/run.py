@@ -185,8 +185,8 @@ def run_demo(
 
     t0 = time.monotonic()
     cp = compensation_pass(session.folder, out / "session-compensated", bar("compensated capture"), cancel)
-    from lps_gui.report.compare import write_comparison
-    from lps_gui.report.pdf import write_report
+    from lps_gui.report.pdf.compare import write_comparison
+    from lps_gui.report.pdf.document import write_report
 
     res.reports = [write_report(cp.after_dir), write_comparison(session.folder, cp.after_dir)]
     step("compensate", "done", "; ".join(cp.lines()), t0)

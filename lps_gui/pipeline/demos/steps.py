@@ -21,7 +21,7 @@ def estimate_and_report(folder: Path, res: Any, step: StepFn, bar: Callable[[str
                         describe: Callable[[Parameters], str]) -> Results:
     """Estimate the session through the one path, then write report.pdf; ``res`` (a DemoResult) gets the results,
     the PDF and the CSVs; ``describe`` says what the estimate fitted (the step's line)."""
-    from lps_gui.report.pdf import write_report
+    from lps_gui.report.pdf.document import write_report
 
     t0 = time.monotonic()
     results = as_results(estimate_session(folder, method="joint", progress=bar("estimate"), cancel=cancel),

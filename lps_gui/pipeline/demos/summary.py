@@ -32,8 +32,8 @@ def _or_nan(x: float | None) -> float:
 
 def summary_lines(results: Results | dict[str, Any], spec: SimulationSpec) -> list[str]:
     """Five lines a newcomer reads first: what was measured, the stage figures, the verdict, the truth check."""
-    from lps_gui.report.summary import extremes_rows, fmt
-    from lps_gui.report.verdict import verdicts
+    from lps_gui.report.pages.summary import extremes_rows, fmt
+    from lps_gui.report.pages.verdict import verdicts
 
     results = as_results(results)
     p = results.parameters

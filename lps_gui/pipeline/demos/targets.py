@@ -104,7 +104,7 @@ def run_row_demo(out: Path, spec: SimulationSpec, res: Any, step: Callable[[str,
 
 def row_summary_lines(results: Results) -> list[str]:
     """What the row demo prints: the fit, the positioning figures, the targets, the truth beside them."""
-    from lps_gui.report.summary import fmt
+    from lps_gui.report.pages.summary import fmt
 
     p, single, unc, tc = results.parameters, results.figures.single_run, results.uncertainty, results.truth_comparison
     sig = [v for r in results.positions if (v := r.number("sigma_um"))]

@@ -19,7 +19,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from lps_gui.io.results.model import Results, as_results
-from lps_gui.report.figure_spec import (
+from lps_gui.report.figures.spec import (
     BACKWARD_COLOR,
     COMPONENT_COLORS,
     DIRECTION_ARROWS,
@@ -32,7 +32,7 @@ from lps_gui.report.figure_spec import (
     FigureSpec,
     Series,
 )
-from lps_gui.report.target_figures import with_target_stretches
+from lps_gui.report.figures.targets import with_target_stretches
 from lps_gui.sim.truth import centred, residual_from_line, true_deviation_um
 
 TRUTH_KEYS = ("deviation_um", "straightness_um_1", "straightness_um_2", "roll_urad", "pitch_urad", "yaw_urad",

@@ -10,7 +10,7 @@ from typing import Iterable
 
 import numpy as np
 
-from lps_gui.report.figure_spec import FigureSpec
+from lps_gui.report.figures.spec import FigureSpec
 
 
 def data_range(figure: FigureSpec, axis: str) -> tuple[float, float] | None:

@@ -1,6 +1,6 @@
 """The environment and the uncertainty budget as report rows (results.json ``environment``, ``uncertainty``).
 
-No Qt here: plain strings for :class:`lps_gui.report.layout.PdfFlow` tables.
+No Qt here: plain strings for :class:`lps_gui.report.pdf.layout.PdfFlow` tables.
 """
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from typing import Any
 
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import EnvironmentRecord
-from lps_gui.report.summary import DASH, fmt
+from lps_gui.report.pages.summary import DASH, fmt
 
 NOT_RECORDED = "not recorded"
 BUDGET_HEADER = ["source", "type", "u(x\u1d62)", "unit", "c\u1d62", "unit of c\u1d62", "u\u1d62(y) [\u00b5m]"]

@@ -1,6 +1,6 @@
 """What a plot is, as plain data: :class:`Series`, :class:`FigureSpec` and the report's colours.
 
-The figures of a line and of a plane (:mod:`lps_gui.report.figures`, the planar
+The figures of a line and of a plane (:mod:`lps_gui.report.figures.plots`, the planar
 pages a section there) build these, and the painters (PDF and GUI) draw them.
 No Qt here.
 """

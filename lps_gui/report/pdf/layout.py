@@ -11,9 +11,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterator, Sequence
 
-from lps_gui.report.figure_spec import FigureSpec
-from lps_gui.report.plot_painter import paint_figure
-from lps_gui.report.text_fit import DrawnText, TextLog, draw_text, fit_widths, font
+from lps_gui.report.figures.spec import FigureSpec
+from lps_gui.report.pdf.plot_painter import paint_figure
+from lps_gui.report.pdf.text_fit import DrawnText, TextLog, draw_text, fit_widths, font
 
 RESOLUTION_DPI = 600
 MARGIN_MM = 15.0
@@ -165,7 +165,7 @@ class PdfFlow:
         too narrow for its widest cell (measured with the painter's font) is
         widened, first from other columns' slack, then up to ``max_width_mm``
         (default: to the right margin); what still does not fit is wrapped
-        onto more lines (:func:`lps_gui.report.text_fit.fit_widths`).
+        onto more lines (:func:`lps_gui.report.pdf.text_fit.fit_widths`).
         """
         from PySide6.QtCore import QLineF, QRectF, Qt
         from PySide6.QtGui import QColor, QFontMetricsF, QPen

@@ -15,7 +15,7 @@ from typing import Any
 from lps_gui.core.metrology.target_scale import SOURCE_PREFIX
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import TargetRecord
-from lps_gui.report.summary import DASH, fmt
+from lps_gui.report.pages.summary import DASH, fmt
 
 TARGET_HEADER = ["target", "markers", "views", "ties", "seen over\n[mm]", "share", "\u03c3 rotation\n[\u00b5rad]",
                  "\u03c3 position\n[\u00b5m]", "scale term\nu [\u00b5m]"]

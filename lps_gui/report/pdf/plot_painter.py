@@ -12,9 +12,10 @@ from typing import Any
 
 import numpy as np
 
-from lps_gui.report.axes import data_range, log_ticks, nice_ticks, padded, tick_label
-from lps_gui.report.figure_spec import OUTLIER_COLOR, FigureSpec, Series
-from lps_gui.report.text_fit import TextLog, draw_text, fitting_size, font
+from lps_gui.report.figures.axes import data_range, log_ticks, nice_ticks, padded, tick_label
+from lps_gui.report.figures.spec import OUTLIER_COLOR, FigureSpec, Series
+from lps_gui.report.pdf.text_fit import TextLog, draw_text, fitting_size, font
+
 
 def segments(x: np.ndarray, y: np.ndarray) -> list[np.ndarray]:
     """Index runs where both x and y are finite: a line breaks at a gap instead of jumping."""

@@ -17,7 +17,7 @@ from lps_gui.io.results.document import SummaryFigure, extreme_figures, iso_figu
 from lps_gui.io.results.document import finite_number as _num
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import Iso230
-from lps_gui.report.figures import position_columns
+from lps_gui.report.figures.plots import position_columns
 
 METHOD_NAMES = {"joint": "joint LM (all positions, orientation and line at once)",
                 "hybrid": "paper's hybrid algorithm (LM + per-view grid search)",

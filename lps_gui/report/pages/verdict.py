@@ -6,7 +6,7 @@ beyond it, and is "not resolved" when the limit lies inside the
 uncertainty zone (or the check itself says so). Figures from fewer runs than
 ISO 230-2 asks (5 per direction) are "indicative": the word is printed and
 the colour is amber, never a red FAIL. Rows come from
-:func:`lps_gui.report.summary.spec_checks`, whichever rows the results carry.
+:func:`lps_gui.report.pages.summary.spec_checks`, whichever rows the results carry.
 No Qt here.
 """
 from __future__ import annotations
@@ -18,7 +18,7 @@ from typing import Any
 from lps_gui.core.metrology.iso230 import ISO_RUNS
 from lps_gui.core.metrology.resolution import runs_per_direction
 from lps_gui.io.results.model import Results, as_results
-from lps_gui.report.summary import SpecCheck, fmt, spec_checks
+from lps_gui.report.pages.summary import SpecCheck, fmt, spec_checks
 
 PASS_COLOR, FAIL_COLOR, INDICATIVE_COLOR, GREY = "#007a1f", "#c00000", "#a05a00", "#555555"
 # which U of results.json uncertainty.figures_k2 belongs to a check, and whether the check is a run statistic

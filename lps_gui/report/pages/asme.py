@@ -12,8 +12,8 @@ from typing import Any
 
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import AsmeB564, AsmeFigure, IncrementalStep, Settling, UncertaintyRatio
-from lps_gui.report.asme_figures import settling_figure, step_figure
-from lps_gui.report.summary import fmt
+from lps_gui.report.figures.asme import settling_figure, step_figure
+from lps_gui.report.pages.summary import fmt
 
 GREY = "#555555"
 NOTE_SIZE = 7.5

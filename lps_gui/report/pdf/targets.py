@@ -19,7 +19,7 @@ from lps_gui.camera.charuco import DEFAULT_DICTIONARY
 from lps_gui.core.geometry.targets import Target
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import commit_temp, temp_path
-from lps_gui.report.layout import ensure_gui_app
+from lps_gui.report.pdf.layout import ensure_gui_app
 
 MARGIN_MM = 15.0  # white around the board: the detector needs a quiet zone, the printer a border
 CAPTION_MM = 22.0  # below the board: id, ids, scale bar

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from lps_gui.io.results.model import Results, as_results
-from lps_gui.report.figure_spec import FigureSpec, Series
+from lps_gui.report.figures.spec import FigureSpec, Series
 
 TARGET_COLORS = ("#3b3b3b", "#2a9d3c", "#c2185b", "#1b8a8a", "#b5651d", "#6a4c93")  # read in grey scale too
 LANE_FRACTION = 0.08  # lane spacing as a fraction of the deviation's span

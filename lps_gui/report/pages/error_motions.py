@@ -19,7 +19,7 @@ import numpy as np
 from lps_gui.core.metrology.resolution import not_resolved_text
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import ErrorMotions, Motion
-from lps_gui.report.figure_spec import COMPONENT_COLORS, FigureSpec, Series, num_or_nan
+from lps_gui.report.figures.spec import COMPONENT_COLORS, FigureSpec, Series, num_or_nan
 
 MU = "\u00b5"
 LINEAR = ("EXX", "EYX", "EZX")

@@ -19,12 +19,12 @@ import numpy as np
 from lps_gui.errors import InputError
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import Iso230
-from lps_gui.report.figure_spec import BACKWARD_COLOR, FORWARD_COLOR, FigureSpec, Series
-from lps_gui.report.figures import _by_direction, _dir_label, per_target_stats, position_columns
-from lps_gui.report.pdf import load_results, load_session_meta
-from lps_gui.report.sections import NO_SPEC, stage_spec
-from lps_gui.report.summary import fmt, iso_rows, u_key
-from lps_gui.report.verdict import verdicts
+from lps_gui.report.figures.plots import _by_direction, _dir_label, per_target_stats, position_columns
+from lps_gui.report.figures.spec import BACKWARD_COLOR, FORWARD_COLOR, FigureSpec, Series
+from lps_gui.report.pages.sections import NO_SPEC, stage_spec
+from lps_gui.report.pages.summary import fmt, iso_rows, u_key
+from lps_gui.report.pages.verdict import verdicts
+from lps_gui.report.pdf.document import load_results, load_session_meta
 
 COMPARE_FILE = "as-found-as-left.pdf"
 AFTER_COLORS = {"+": "#2a9d3c", "-": "#a8326e"}
@@ -154,7 +154,7 @@ def write_comparison(before_dir: Path | str, after_dir: Path | str, out: Path | 
     ``clipped``, when given, receives every string that does not fit its box (the layout check).
     """
     from lps_gui import __version__
-    from lps_gui.report.layout import ensure_gui_app, pdf_file
+    from lps_gui.report.pdf.layout import ensure_gui_app, pdf_file
 
     before, after = load_results(Path(before_dir)), load_results(Path(after_dir))
     out = Path(out) if out is not None else Path(after_dir) / COMPARE_FILE

@@ -17,12 +17,12 @@ from typing import Any
 from lps_gui.errors import InputError
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import Figures, SpanResolution, TruthComparison
-from lps_gui.report import sections as R
-from lps_gui.report.error_motions_report import paint_error_motions_page
-from lps_gui.report.figures import planar_figures_from_results
-from lps_gui.report.summary import DASH, Row, fmt, table_cells
-from lps_gui.report.targets_report import targets_section
-from lps_gui.report.verdict import overall, verdicts
+from lps_gui.report.figures.plots import planar_figures_from_results
+from lps_gui.report.pages import sections as R
+from lps_gui.report.pages.error_motions import paint_error_motions_page
+from lps_gui.report.pages.summary import DASH, Row, fmt, table_cells
+from lps_gui.report.pages.targets import targets_section
+from lps_gui.report.pages.verdict import overall, verdicts
 
 PLANAR_TABLE_COLUMNS = (  # key, header, decimals, width mm
     ("index", "#", None, 8), ("run", "run", None, 7), ("direction", "dir", None, 7),
@@ -186,7 +186,7 @@ def paint_planar_report(flow: Any, meta: dict[str, Any], results: Results, title
     """Every page of a planar session's report onto ``flow`` (a :class:`report.layout.PdfFlow`).
 
     The verdict, per-target, environment and budget sections are the line
-    report's (:mod:`lps_gui.report.sections`), painted per axis where the
+    report's (:mod:`lps_gui.report.pages.sections`), painted per axis where the
     results hold them.
     """
     flow.heading("XY positioning stage \u2014 planar measurement report", 15)

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from lps_gui.io.results.sections import AsmeB564, IncrementalStep, Settling
-from lps_gui.report.figure_spec import (
+from lps_gui.report.figures.spec import (
     BACKWARD_COLOR,
     FORWARD_COLOR,
     OUTLIER_COLOR,

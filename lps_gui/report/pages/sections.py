@@ -1,8 +1,8 @@
 """Report sections both report kinds paint: verdict, figures with U, environment and budget, ISO per target.
 
-The line report (:mod:`lps_gui.report.pdf`) and the planar report
-(:mod:`lps_gui.report.planar_report`) call the same painters, so a section
-looks and reads the same in both; each takes a :class:`~lps_gui.report.layout.PdfFlow`
+The line report (:mod:`lps_gui.report.pdf.document`) and the planar report
+(:mod:`lps_gui.report.pages.planar`) call the same painters, so a section
+looks and reads the same in both; each takes a :class:`~lps_gui.report.pdf.layout.PdfFlow`
 and the results dict and paints nothing when the results lack the section.
 No Qt here.
 """
@@ -11,10 +11,10 @@ from __future__ import annotations
 from typing import Any, Sequence
 
 from lps_gui.io.results.model import Results, as_results
-from lps_gui.report import budget_table as B
-from lps_gui.report import summary as S
-from lps_gui.report.iso_table import iso_target_table
-from lps_gui.report.verdict import Verdict, overall, verdicts
+from lps_gui.report.pages import budget as B
+from lps_gui.report.pages import summary as S
+from lps_gui.report.pages.iso_table import iso_target_table
+from lps_gui.report.pages.verdict import Verdict, overall, verdicts
 
 FRONT_FIGURES = ("iso230_2_A", "iso230_2_R", "iso230_2_E", "iso230_2_B", "max_abs_deviation", "scale",
                  "straightness_span_1", "straightness_span_2")  # page 1 without a stage spec

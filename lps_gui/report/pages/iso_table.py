@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import Any
 
 from lps_gui.io.results.model import Results, as_results
-from lps_gui.report.summary import DASH, _num
+from lps_gui.report.pages.summary import DASH, _num
 
 UM = "\u00b5m"
 # (key of per_target or a derived name, header, width mm)

@@ -2,7 +2,7 @@
 
 Page 1 says what was measured with what, and the verdict: title block,
 summary figures, pass/fail against the stage specification, method and
-intrinsics. Then the plots (the same :mod:`lps_gui.report.figures`
+intrinsics. Then the plots (the same :mod:`lps_gui.report.figures.plots`
 definitions the GUI shows), outlier views with thumbnails, what limits the
 result, and the per-position table. Qt is imported inside functions only.
 """
@@ -17,13 +17,13 @@ from lps_gui.core.progress import ProgressFn, no_progress
 from lps_gui.errors import InputError
 from lps_gui.io.jsonfile import read_json
 from lps_gui.io.results.model import Results, as_results, read_results
-from lps_gui.report import asme_pages
-from lps_gui.report import sections as R
-from lps_gui.report import summary as S
-from lps_gui.report.error_motions_report import paint_error_motions_page
-from lps_gui.report.figures import figure_by_key, figures_from_results, with_spec_band
-from lps_gui.report.planar_report import paint_planar_report
-from lps_gui.report.targets_report import targets_section
+from lps_gui.report.figures.plots import figure_by_key, figures_from_results, with_spec_band
+from lps_gui.report.pages import asme as asme_pages
+from lps_gui.report.pages import sections as R
+from lps_gui.report.pages import summary as S
+from lps_gui.report.pages.error_motions import paint_error_motions_page
+from lps_gui.report.pages.planar import paint_planar_report
+from lps_gui.report.pages.targets import targets_section
 
 log = logging.getLogger(__name__)
 
@@ -42,7 +42,7 @@ class ReportInfo:
     n_pages: int
     pages: list[list[str]]
     clipped: tuple[str, ...] = ()  # "page N: text" of strings wider than their box (none in a good report)
-    texts: tuple[Any, ...] = ()  # every drawn string (lps_gui.report.text_fit.DrawnText), page by page
+    texts: tuple[Any, ...] = ()  # every drawn string (lps_gui.report.pdf.text_fit.DrawnText), page by page
 
 
 def load_results(session_dir: Path) -> Results:
@@ -82,7 +82,7 @@ def render_report(session_dir: Path, results: Results | dict | None = None, out:
                   progress: ProgressFn = no_progress) -> ReportInfo:
     """:func:`write_report` that also returns the page plan (for tests and the GUI)."""
     from lps_gui import __version__
-    from lps_gui.report.layout import ensure_gui_app, pdf_file
+    from lps_gui.report.pdf.layout import ensure_gui_app, pdf_file
 
     session_dir = Path(session_dir)
     results = as_results(results) if results is not None else load_results(session_dir)

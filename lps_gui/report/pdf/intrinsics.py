@@ -44,8 +44,8 @@ def write_intrinsics_report(cal: "IntrinsicsCalibration", out: Path | str, cross
     ``clipped``, when given, receives every string that does not fit its box (the layout check).
     """
     from lps_gui import __version__
-    from lps_gui.report.intrinsics_pictures import intrinsics_pictures
-    from lps_gui.report.layout import ensure_gui_app, pdf_file
+    from lps_gui.report.pdf.intrinsics_pictures import intrinsics_pictures
+    from lps_gui.report.pdf.layout import ensure_gui_app, pdf_file
 
     out = Path(out)
     if not out.parent.is_dir():

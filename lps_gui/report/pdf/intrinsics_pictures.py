@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from lps_gui.report.text_fit import TextLog, draw_text, font
+from lps_gui.report.pdf.text_fit import TextLog, draw_text, font
 
 if TYPE_CHECKING:
     from lps_gui.core.intrinsics.calibration import IntrinsicsCalibration
@@ -48,7 +48,7 @@ class _Canvas:
         from PySide6.QtCore import QRectF
         from PySide6.QtGui import QColor, QImage, QPainter
 
-        from lps_gui.report.layout import ensure_gui_app
+        from lps_gui.report.pdf.layout import ensure_gui_app
 
         ensure_gui_app()
         self.log = log
@@ -86,7 +86,7 @@ class _Canvas:
         from PySide6.QtCore import QLineF, QRectF, Qt
         from PySide6.QtGui import QColor, QPen
 
-        from lps_gui.report.axes import nice_ticks
+        from lps_gui.report.figures.axes import nice_ticks
 
         self.p.setPen(QPen(QColor("#000000"), 2))
         self.p.setBrush(Qt.BrushStyle.NoBrush)
@@ -127,7 +127,7 @@ class _Canvas:
         from PySide6.QtCore import QLineF, QRectF, Qt
         from PySide6.QtGui import QColor, QImage, QPen
 
-        from lps_gui.report.axes import log_ticks, nice_ticks
+        from lps_gui.report.figures.axes import log_ticks, nice_ticks
 
         r = self.bar
         ramp = np.ascontiguousarray(np.repeat(_viridis(np.linspace(1, 0, 256))[:, None, :], 8, axis=1))
@@ -201,7 +201,7 @@ def per_view_errors(cal: "IntrinsicsCalibration", log: TextLog | None = None) ->
     from PySide6.QtCore import QLineF, QRectF, Qt
     from PySide6.QtGui import QColor, QPen
 
-    from lps_gui.report.axes import nice_ticks
+    from lps_gui.report.figures.axes import nice_ticks
 
     c = _Canvas("Residual magnitude per view", None, log=log)
     V = len(cal.per_view_rms_px)

@@ -33,7 +33,7 @@ from typing import Callable, Iterator
 from lps_gui.hardware.grbl import codes
 from lps_gui.hardware.grbl.codes import GrblError, format_setting
 from lps_gui.hardware.grbl import gcode as gc
-from lps_gui.hardware.grbl.gcode import CodeError, ParserState, check_block, clean_line, read_float
+from lps_gui.hardware.grbl.gcode import CodeError, ParserState, check_block, read_float
 from lps_gui.hardware.grbl.protocol import MM_PER_INCH, StatusReport, format_axes, format_status
 from lps_gui.hardware.sim_stage import PLANNER_BLOCKS, RX_BUFFER_BYTES, SimulatedStage
 from lps_gui.hardware.stage import AXES
@@ -59,7 +59,7 @@ class Faults:
     drop_after_lines : close the port after this many received lines (None: never).
     alarm_mid_move : raise ALARM:<code> half-way through the next move or jog, once (None: never).
     error_every : answer every Nth command line with ``error:<error_code>`` instead of executing it.
-    reply_delay_s : delay everything the emulator sends by this many real seconds.
+    reply_delay_s : delay everything the emulator sends by this many seconds (simulated ones when stepped).
     garbage_every : send a line of garbage bytes before every Nth message.
     fail_homing : every ``$H`` fails half-way with ``ALARM:<code>`` (8: pull-off did not clear
         the switch, 9: switch not found), then the ``ok`` of ``$H`` and a self-reset (limits.c).
@@ -96,6 +96,7 @@ class GrblFirmware:
         self.resets_received = 0  # Ctrl-X bytes, and those an alarm's delay swallowed
         self.resets_lost = 0
         self.halted = False
+        self._booting = False
         self._n_cmd = 0
         self._build_user = ""
         self._initial_settings = dict(stage.settings)
@@ -141,12 +142,37 @@ class GrblFirmware:
             return
         if self._pending is not None:
             self._step_pending()
-        while self._ready() and b"\n" in self._rx.replace(b"\r", b"\n"):
-            self._next_line()
+        self.drain()
 
     def _ready(self) -> bool:
         return (self._pending is None and self._abort_at is None and not self._critical and not self.halted
                 and not self._sleep)
+
+    def drain(self) -> None:
+        """protocol_main_loop(): take bytes out of the RX buffer while no line executes; run each line at its end.
+
+        The loop filters as it reads (whitespace and control characters, ``(...)``
+        and ``;`` comments, ``/`` dropped, letters upcased, characters past the
+        80-byte line buffer flagged as overflow), so a long line with a comment
+        never needs to fit in the 128-byte RX buffer.
+        """
+        while self._rx and self._ready() and not self._held():
+            c = chr(self._rx.pop(0))
+            if c in "\r\n":
+                line, overflow = "".join(self._linebuf), self._line_overflow
+                self._linebuf, self._line_comment, self._line_overflow = [], "", False
+                self._end_of_line(line, overflow)
+            elif self._line_comment or self._line_overflow:
+                if c == ")" and self._line_comment == "(":
+                    self._line_comment = ""
+            elif c <= " " or c == "/":
+                pass
+            elif c in "(;":
+                self._line_comment = c
+            elif len(self._linebuf) >= gc.LINE_BUFFER_SIZE - 1:
+                self._line_overflow = True
+            else:
+                self._linebuf.append(c.upper())
 
     def _step_pending(self) -> None:
         """Advance the executing line; its ``ok`` when it ends, its error or alarm when it fails."""
@@ -168,11 +194,18 @@ class GrblFirmware:
     def _held(self) -> bool:
         return self.stage.status().state == "Hold"
 
-    def power_up(self) -> None:
-        """main.c at power-up: with HOMING_INIT_LOCK and ``$22=1`` the state is Alarm, then the welcome."""
+    def power_up(self, boot_race: bool = False) -> None:
+        """main.c at power-up: with HOMING_INIT_LOCK and ``$22=1`` the state is Alarm, then the welcome.
+
+        ``boot_race``: the board boots as the host opens the port, so the welcome
+        waits for the host's first byte; a reset byte that came during init is
+        acted on right after it (a second banner).
+        """
         if self.homing_init_lock and self.stage.homing_enabled and self.stage.alarm_code is None:
             self.stage.trigger_alarm(0)  # the silent homing lock (no ALARM:N line)
-        self.welcome()
+        self._booting = boot_race
+        if not boot_race:
+            self.welcome()
 
     def _default_coords(self) -> list[list[float]]:
         """What this emulator's EEPROM holds when new: G54 at the base, the rest zero (docs/hardware.md)."""
@@ -180,7 +213,10 @@ class GrblFirmware:
 
     def _reset_state(self) -> None:
         """main.c's loop after every abort: flags cleared, RX flushed, gc_init(), positions synced."""
-        self._rx = bytearray()
+        self._rx = bytearray()  # serial.c's RX ring: bytes the main loop has not read yet
+        self._linebuf: list[str] = []  # protocol_main_loop()'s line buffer, filtered as it is read
+        self._line_comment = ""
+        self._line_overflow = False
         self._gc = ParserState(coord_system=list(self._coords[0]))
         self._gc.position = self._machine_planned()
         self._spindle_rpm = 0.0
@@ -258,6 +294,9 @@ class GrblFirmware:
     # ------------------------------------------------------------------ serial ISR and real-time bytes
     def receive(self, b: int) -> None:
         """GRBL's serial ISR: real-time bytes act at once, the rest goes to the RX buffer."""
+        if self._booting:  # main.c: report_init_message() of the boot, then the flags set during init act
+            self._booting = False
+            self.welcome()
         if b == RT_RESET:
             self.resets_received += 1
             if self._abort_at is not None or self._critical_msg_at is not None:
@@ -347,11 +386,8 @@ class GrblFirmware:
         self._reset_state()
         self.welcome()
 
-    def _next_line(self) -> None:
-        buf = self._rx.replace(b"\r", b"\n")
-        end = buf.index(b"\n")
-        raw = self._rx[:end].decode("latin-1")
-        del self._rx[: end + 1]
+    def _end_of_line(self, line: str, overflow: bool) -> None:
+        """A line end in protocol_main_loop(): overflow is error:11, the rest is executed and answered."""
         self.lines_received += 1
         f = self.faults
         if f.drop_after_lines is not None and self.lines_received >= f.drop_after_lines:
@@ -359,7 +395,6 @@ class GrblFirmware:
             self.halted = True
             self._on_drop()
             return
-        line, overflow = clean_line(raw)
         if overflow:
             self._send("error:11")
             return

@@ -72,7 +72,7 @@ class GrblEmulator:
         self._master = self._slave = -1
         self._thread: threading.Thread | None = None
         self._running = False
-        self._out: list[tuple[float, bytes]] = []  # (due on _now(), bytes), in the order GRBL printed them
+        self._out: list[tuple[float, float, bytes]] = []  # (wall due, due on _now(), bytes), in the order GRBL printed them
         self._n_out = 0
 
     @property
@@ -140,9 +140,10 @@ class GrblEmulator:
         self.stop()
 
     @property
-    def undelivered(self) -> int:
-        """Lines printed by the firmware that the link has not delivered yet (latency, slow replies)."""
-        return len(self._out)
+    def undelivered(self) -> list[str]:
+        """Lines the firmware printed that the link has not delivered yet (latency, slow replies)."""
+        with self._lock:
+            return [data.decode("latin-1").rstrip("\r\n") for _, _, data in self._out]
 
     # ------------------------------------------------------------------ output
     def _now(self) -> float:
@@ -150,26 +151,26 @@ class GrblEmulator:
         return self.stage.clock.now() if self.stepped else time.monotonic()
 
     def _send(self, text: str) -> None:
-        """Queue a message (CR LF added) line by line, with latency, the slow-reply delay and garbage applied."""
+        """Queue a message (CR LF added) line by line: slow-reply delay (wall seconds), latency and garbage applied."""
         f = self.faults
         self._n_out += 1
         data = b""
         if f.garbage_every and self._n_out % f.garbage_every == 0:
             data += GARBAGE + b"\r\n"
         data += (text if text.endswith("\r\n") else text + "\r\n").encode("ascii")
-        now = self._now()
+        wall, now = time.monotonic(), self._now()
         for line in data.splitlines(keepends=True):
-            due = now + f.reply_delay_s
+            wall_due, link_due = wall + f.reply_delay_s, now
+            if self._out:
+                wall_due, link_due = max(wall_due, self._out[-1][0]), max(link_due, self._out[-1][1])
             if self.line_latency_s > 0:
-                due = max(due, self._out[-1][0] if self._out else now) + self.line_latency_s
-            elif self._out:
-                due = max(due, self._out[-1][0])
-            self._out.append((due, line))
+                link_due += self.line_latency_s
+            self._out.append((wall_due, link_due, line))
 
     def _flush_out(self) -> None:
-        now = self._now()
-        while self._out and self._out[0][0] <= now and self._master >= 0:
-            _, data = self._out.pop(0)
+        wall, now = time.monotonic(), self._now()
+        while self._out and self._out[0][0] <= wall and self._out[0][1] <= now and self._master >= 0:
+            _, _, data = self._out.pop(0)
             try:
                 os.write(self._master, data)
             except BlockingIOError:  # nobody reads the port: bytes are lost like on a wire

@@ -59,7 +59,7 @@ class Faults:
     drop_after_lines : close the port after this many received lines (None: never).
     alarm_mid_move : raise ALARM:<code> half-way through the next move or jog, once (None: never).
     error_every : answer every Nth command line with ``error:<error_code>`` instead of executing it.
-    reply_delay_s : delay everything the emulator sends by this many seconds (simulated ones when stepped).
+    reply_delay_s : delay everything the emulator sends by this many real seconds.
     garbage_every : send a line of garbage bytes before every Nth message.
     fail_homing : every ``$H`` fails half-way with ``ALARM:<code>`` (8: pull-off did not clear
         the switch, 9: switch not found), then the ``ok`` of ``$H`` and a self-reset (limits.c).

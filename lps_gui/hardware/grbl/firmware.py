@@ -50,6 +50,7 @@ CRITICAL_ALARMS = (1, 2)  # protocol_exec_rt_system(): hard and soft limit
 WCO_BUSY, WCO_IDLE, OVR_BUSY, OVR_IDLE = 30, 10, 20, 10  # config.h refresh counts
 TRAVEL_EPS_MM = 1e-6  # float noise of offset arithmetic, far below GRBL's step resolution
 Steps = Iterator[None]  # an executing line: each yield waits for simulated time to pass
+SILENT = object()  # returned by steps that print no 'ok' when they end (startup lines after a reset)
 
 
 @dataclass
@@ -99,6 +100,7 @@ class GrblFirmware:
         self._booting = False
         self._n_cmd = 0
         self._build_user = ""
+        self._startup = ["", ""]  # EEPROM startup lines $N0, $N1 (N_STARTUP_LINE 2)
         self._initial_settings = dict(stage.settings)
         self._coords = self._default_coords()  # EEPROM: G54-G59, G28, G30 (machine mm); survives resets
         self._reset_state()
@@ -178,9 +180,10 @@ class GrblFirmware:
         """Advance the executing line; its ``ok`` when it ends, its error or alarm when it fails."""
         try:
             next(self._pending)
-        except StopIteration:
+        except StopIteration as stop:
             self._pending = None
-            self._send("ok")
+            if stop.value is not SILENT:
+                self._send("ok")
         except CodeError as e:
             self._pending = None
             self._send(f"error:{e.code}")
@@ -230,6 +233,9 @@ class GrblFirmware:
         self._pending: Steps | None = None
         self._check = False
         self._sleep = False
+        self._stuck_homing = False  # system.c '$H' sets STATE_HOMING before it rejects '$HX'
+        self._probe_mpos = [0.0, 0.0, 0.0]  # sys_probe_position: cleared by main() on every reset
+        self._probe_ok = False
 
     def welcome(self) -> None:
         """What GRBL prints at power-up and after every reset (main.c, protocol_main_loop()).
@@ -241,6 +247,26 @@ class GrblFirmware:
         self._send(BANNER)
         if self.stage.alarm_code is not None:
             self._send("[MSG:'$H'|'$X' to unlock]")
+        elif any(self._startup):
+            self._pending = self._after_welcome()
+
+    def _after_welcome(self) -> Steps:
+        yield from self._startup_lines()
+        return SILENT
+
+    def _startup_lines(self) -> Steps:
+        """system.c system_execute_startup(): each stored line through gc_execute_line(), ``>line:ok`` or ``>line:error:N``."""
+        for text in self._startup:
+            if not text:
+                continue
+            try:
+                if not self._check:
+                    self._gc.position = self._machine_planned()
+                yield from self._run_block(check_block(text, self._gc, self._coords))
+            except CodeError as e:
+                self._send(f">{text}:error:{e.code}")
+            else:
+                self._send(f">{text}:ok")
 
     def _base(self) -> tuple[float, float, float]:
         """Machine 0 sits at the top of the travel: machine = stage coordinate + base.
@@ -285,11 +311,23 @@ class GrblFirmware:
             buffer=(st.buffer[0], RX_BUFFER_BYTES - len(self._rx)) if mask & codes.STATUS_MASK_BUFFER else None,
             feed=st.feed_mm_min,
             spindle=self._spindle_rpm,
-            pins="X" if self._critical and self.stage.alarm_code == 1 else "",
+            pins=self._pins(),
             overrides=(100, 100, 100) if show_ovr else None,
             accessories=accessories,
         )
         return format_status(report, inches=bool(self.stage.settings[13]))
+
+    def _pins(self) -> str:
+        """report.c ``Pn:``: the probe pin, then the limit pins, as read through ``$6`` and ``$5`` (no switch wired).
+
+        Unwired inputs are pulled up and read open; an inverted pin then reads
+        triggered, so ``$5=1`` shows ``XYZ`` and ``$6=1`` shows ``P``. A hard limit
+        (ALARM:1) leaves its switch pressed.
+        """
+        pressed = {"X"} if self._critical and self.stage.alarm_code == 1 else set()
+        if self.stage.settings[5]:
+            pressed = {"X", "Y", "Z"} - pressed
+        return ("P" if self.stage.settings[6] else "") + "".join(a for a in "XYZ" if a in pressed)
 
     # ------------------------------------------------------------------ serial ISR and real-time bytes
     def receive(self, b: int) -> None:
@@ -336,8 +374,13 @@ class GrblFirmware:
         before = self.stage.alarm_code
         line_open = self._pending is not None or self._ok_on_reset
         self.stage.soft_reset()
+        if self._stuck_homing:  # motion_control.c mc_reset(): STATE_HOMING -> EXEC_ALARM_HOMING_FAIL_RESET
+            self.stage.trigger_alarm(6)
         if self.stage.alarm_code != before and self.stage.alarm_code:
-            self._send(f"ALARM:{self.stage.alarm_code}")
+            # mc_reset() sets the alarm with the reset: protocol_exec_rt_system() prints ALARM:N and waits
+            # report.c's 500 ms before it acts on the reset (a '?' or a line sent meanwhile is lost)
+            self._alarm(self.stage.alarm_code, line_open)
+            return
         if line_open:
             self._send("ok")
         if self._sleep and self.stage.alarm_code is None:
@@ -421,10 +464,12 @@ class GrblFirmware:
 
     # ------------------------------------------------------------------ commands
     def _state(self) -> str:
-        """GRBL's state: the stage's motion state, overlaid by check mode and sleep."""
+        """GRBL's state: the stage's motion state, overlaid by check mode, sleep and a '$HX' left in Home."""
         state = self.stage.status().state
         if self._sleep:
             return "Sleep"
+        if self._stuck_homing:
+            return "Home"
         return "Check" if self._check and state == "Idle" else state
 
     def _execute(self, line: str) -> Steps | None:
@@ -501,8 +546,9 @@ class GrblFirmware:
         elif c == "H":
             if not self.stage.homing_enabled:
                 raise CodeError(5)
-            if len(cmd) != 1:
-                raise CodeError(3)  # HOMING_SINGLE_AXIS_COMMANDS is off in stock config.h
+            if len(cmd) != 1:  # HOMING_SINGLE_AXIS_COMMANDS is off in stock config.h
+                self._stuck_homing = True  # sys.state = STATE_HOMING came first: it stays until a reset
+                raise CodeError(3)
             self.stage.start_home()
             return self._homing()
         elif c == "S":
@@ -526,20 +572,42 @@ class GrblFirmware:
         elif c == "R":
             if cmd not in ("RST=$", "RST=#", "RST=*"):
                 raise CodeError(3)
-            if cmd != "RST=#":
-                self.stage.settings.update(self._initial_settings)
+            if cmd != "RST=#":  # settings.c settings_restore(): settings = defaults (defaults.h DEFAULTS_GENERIC)
+                self.stage.settings.update(codes.DEFAULT_SETTINGS)
             if cmd != "RST=$":
                 self._coords = self._default_coords()  # G54 back to the base, by design (docs/hardware.md)
+            if cmd == "RST=*":  # SETTINGS_RESTORE_ALL also wipes the startup lines and the build info
+                self._startup = ["", ""]
+                self._build_user = ""
             self._send("[MSG:Restoring defaults]")
             self._send("ok")
             self._soft_reset()
             return None
         elif cmd == "N":
-            self._send("$N0=")
-            self._send("$N1=")
+            for n, text in enumerate(self._startup):
+                self._send(f"$N{n}={text}")
+        elif c == "N":
+            return self._store_startup(cmd)
         else:
             self._store_setting(cmd)
         return iter(())
+
+    def _store_startup(self, cmd: str) -> Steps:
+        """system.c ``$Nx=line`` (Idle only): the line runs through gc_execute_line(); stored if it is ok."""
+        if self._state() != "Idle":
+            raise CodeError(8)
+        got = read_float(cmd, 1)
+        if got is None:
+            raise CodeError(2)
+        number, i = got
+        if cmd[i:i + 1] != "=":
+            raise CodeError(3)
+        text = cmd[i + 1:]
+        if not self._check:
+            self._gc.position = self._machine_planned()
+        yield from self._run_block(check_block(text, self._gc, self._coords))
+        if 0 <= int(number) < len(self._startup):  # settings_store_startup_line(): other numbers go unread
+            self._startup[int(number)] = text
 
     def _store_setting(self, cmd: str) -> None:
         """system.c's default branch: ``$<number>=<value>`` with its read_float() errors (2, 3)."""
@@ -568,7 +636,11 @@ class GrblFirmware:
         self._send(f"[G92:{format_axes(tuple(self._gc.coord_offset), inches)}]")
         tlo = self._gc.tool_length_offset
         self._send(f"[TLO:{tlo / MM_PER_INCH:.4f}]" if inches else f"[TLO:{tlo:.3f}]")
-        self._send("[PRB:0.000,0.000,0.000:0]")
+        self._send(self._probe_line())
+
+    def _probe_line(self) -> str:
+        """report.c report_probe_parameters(): the last probe position (machine) and whether it succeeded."""
+        return f"[PRB:{format_axes(tuple(self._probe_mpos), bool(self.stage.settings[13]))}:{int(self._probe_ok)}]"
 
     def _homing(self) -> Steps:
         """``$H`` runs: a held-back ``?`` is answered when it ends (state still Home), then ``ok``.
@@ -657,19 +729,51 @@ class GrblFirmware:
         if motion in (gc.CW_ARC, gc.CCW_ARC):
             for point in gc.arc_points(b, g.position, self.stage.settings[12])[:-1]:
                 self._soft_limit_check(point)
-        yield from self._line(b.xyz, feed)
         if motion in gc.PROBE_MODES and not self._check:
-            yield from self._synchronize()  # the probe pin never triggers: no contact within the travel
-            if motion in (140, 142):  # G38.2 / G38.4
-                raise GrblError("alarm", 5)
+            yield from self._probe_cycle(b.xyz, feed, motion)
+            return
+        yield from self._line(b.xyz, feed)
+
+    def _probe_cycle(self, target: list[float], feed: float, motion: int) -> Steps:
+        """motion_control.c mc_probe_cycle() with no probe wired (the pin never changes).
+
+        Toward (G38.2/3) the pin never triggers: the whole move runs; G38.2 then
+        raises ALARM:5, G38.3 stores where it stopped. Away (G38.4/5) the inverted
+        pin reads triggered before any motion: ALARM:4. Probe alarms do not reset;
+        report.c's 500 ms follow the alarm; ``[PRB:]`` (MESSAGE_PROBE_COORDINATES)
+        comes after a probing motion, then the line's ``ok`` (gcode.c returns STATUS_OK).
+        """
+        yield from self._synchronize()
+        self._probe_ok = False
+        away = motion in (142, 143)
+        if away != bool(self.stage.settings[6]):  # PROBE_FAIL_INITIAL: mc_probe_cycle() bails out at once
+            yield from self._probe_alarm(4)
+            return
+        yield from self._line(target, feed)
+        yield from self._synchronize()
+        if motion in (140, 142):
+            yield from self._probe_alarm(5)
+        else:
+            self._probe_mpos = self._machine_planned()
+        self._gc.position = self._machine_planned()
+        self._send(self._probe_line())
+
+    def _probe_alarm(self, code: int) -> Steps:
+        """A probe alarm: ALARM:N, state Alarm, report.c's 500 ms inside the line (no reset)."""
+        self.stage.trigger_alarm(code)
+        self._send(f"ALARM:{code}")
+        end = self.stage.clock.now() + ALARM_REPORT_DELAY_S
+        while self.stage.clock.now() < end:
+            yield
 
     def _program_flow(self, flow: int) -> Steps:
         """gcode.c [21]: sync; M0 holds (not in check mode); M2/M30 reset some modes, print Pgm End."""
         yield from self._synchronize()
         g = self._gc
         if flow == 3:
-            if not self._check:
+            if not self._check:  # EXEC_FEED_HOLD, then protocol_execute_realtime() suspends until '~'
                 self.stage.feed_hold()
+                yield  # poll() runs nothing while held: the ok follows the resume
             return
         m = g.modal
         m.motion, m.plane, m.distance, m.feed_mode, m.coord_select = gc.LINEAR, 0, 90, 94, 0
@@ -725,8 +829,8 @@ class GrblFirmware:
         self._gc.position = self._machine_planned()
         b = check_block(text, self._gc, self._coords, jog=True)
         b.check_jog()
-        if not b.axis_words:
-            raise CodeError(26)  # deliberate: 1.1h's source would jog to machine zero (docs/hardware.md)
+        if not b.axis_words:  # gcode.c: the jog's target array is never filled: machine zero
+            b.xyz = [0.0, 0.0, 0.0]
         if self.stage.soft_limits:
             try:
                 self._soft_limit_check(b.xyz)

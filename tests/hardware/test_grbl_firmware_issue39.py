@@ -48,6 +48,27 @@ EXCHANGES = {
     # R6 gcode.c [21] PROGRAM_FLOW_PAUSED: EXEC_FEED_HOLD then protocol_execute_realtime() suspends until '~'
     "R6_m0_answers_after_cycle_start": UNLOCKED + [
         ("silent", b"M0\n"), ("status", "<Hold:0|"), ("ask", b"~", ["ok"]), ("status", "<Idle|")],
+    # R7 spindle_control.c spindle_set_state(): report_ovr_counter = 0 on every change; report.c: Ov: (one report
+    # after a WCO), A:S only while spindle_get_state() sees the PWM on (S0 is off); FS: sys.spindle_speed ($30 clamp)
+    "R7_spindle_reports_ov_and_accessories_at_once": UNLOCKED + [
+        ("ask", b"M3 S2000\n", ["ok"]),
+        ("status", "<Idle|MPos:0.000,-500.000,-500.000|FS:0,1000|WCO:-500.000,-500.000,-500.000>"),
+        ("status", "<Idle|MPos:0.000,-500.000,-500.000|FS:0,1000|Ov:100,100,100|A:S>"),
+        ("ask", b"S0\n", ["ok"]), ("status", "<Idle|MPos:0.000,-500.000,-500.000|FS:0,0|Ov:100,100,100>")],
+    # R8 protocol.c protocol_exec_rt_system(): overrides change sys.f_override / r_override (FS: is the real rate),
+    # report_ovr_counter = 0; 0xA0 toggles flood in gc_state.modal.coolant (coolant_set_state())
+    "R8_overrides_and_coolant_toggle": UNLOCKED + [
+        ("silent", b"\x91"), ("status", "<Idle|MPos:0.000,-500.000,-500.000|FS:0,0|WCO:"),
+        ("status", "<Idle|MPos:0.000,-500.000,-500.000|FS:0,0|Ov:110,100,100>"),
+        ("ask", b"G91 G1 X-50 F1000\n", ["ok"]), ("wait", 1.0, []), ("report", "|FS:1100,0"),
+        ("wait", 3.0, []), ("silent", b"\x96"), ("ask", b"G91 G0 X-100\n", ["ok"]), ("wait", 0.5, []),
+        ("report", "|FS:1500,0"), ("wait", 5.0, []), ("silent", b"\xa0"),
+        ("ask", b"$G\n", ["[GC:G0 G54 G17 G21 G91 G94 M5 M8 T0 F1000 S0]", "ok"]), ("report", "|Ov:110,50,100|A:F>")],
+    # R9 protocol.c EXEC_SAFETY_DOOR: [MSG:Check Door], state Door; protocol_exec_rt_suspend(): no door switch wired,
+    # so the door reads closed (Door:0) and no line is read until '~'
+    "R9_safety_door_command": UNLOCKED + [
+        ("ask", b"\x84", ["[MSG:Check Door]"]), ("status", "<Door:0|MPos:0.000,"), ("silent", b"$G\n"),
+        ("ask", b"~", ["[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]", "ok"]), ("status", "<Idle|")],
     # R10 system.c '$Nx=line': runs the line through gc_execute_line(), stores it; '$N' lists it (report_startup_line());
     # protocol_main_loop() runs it after the banner: report_execute_startup_message() '>G21:ok'
     "R10_startup_lines_are_stored_and_run_after_a_reset": UNLOCKED + [
@@ -84,6 +105,17 @@ EXCHANGES = {
 }
 
 
+def _steps(port: SteppedPort, steps: list[tuple]) -> None:
+    """test_grbl_firmware_source's steps, and ``("report", text)``: a ``?`` answered with a report containing ``text``."""
+    for step in steps:
+        if step[0] == "report":
+            report = port.ask(b"?")[0]
+            assert step[1] in report, (step, report)
+            assert port.pending() == [], step
+        else:
+            _run(port, [step])
+
+
 def _rig() -> GrblEmulator:
     stage = SimulatedStage(travel_mm=(-5.0, 500.0), start_mm=500.0, max_rate_mm_min=3000.0)
     return GrblEmulator(stage, homing_init_lock=True, stepped=True)
@@ -94,6 +126,6 @@ def test_exchange_answers_as_grbl_1_1h_source(name):
     with _rig() as emu:
         port = SteppedPort(emu)
         try:
-            _run(port, EXCHANGES[name])
+            _steps(port, EXCHANGES[name])
         finally:
             port.close()

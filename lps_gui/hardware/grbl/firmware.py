@@ -43,7 +43,8 @@ log = logging.getLogger(__name__)
 VERSION, BUILD = "1.1h", "20190830"
 BANNER = f"\r\nGrbl {VERSION} ['$' for help]\r\n"
 HELP = "[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X $H ~ ! ? ctrl-x]"
-RT_STATUS, RT_HOLD, RT_RESUME, RT_RESET, RT_JOG_CANCEL = 0x3F, 0x21, 0x7E, 0x18, 0x85
+RT_STATUS, RT_HOLD, RT_RESUME, RT_RESET, RT_JOG_CANCEL, RT_DOOR = 0x3F, 0x21, 0x7E, 0x18, 0x85, 0x84
+FEED_OVR_RANGE, SPINDLE_OVR_RANGE = (10, 200), (10, 200)  # config.h MIN/MAX_FEED_RATE_OVERRIDE, ..._SPINDLE_SPEED_...
 BUSY = ("Run", "Hold", "Jog", "Home", "Door")
 ALARM_REPORT_DELAY_S = 0.5  # report.c report_alarm_message(): delay_ms(500) after ALARM:N
 CRITICAL_ALARMS = (1, 2)  # protocol_exec_rt_system(): hard and soft limit
@@ -195,7 +196,7 @@ class GrblFirmware:
                 self._send(f"error:{e.code}")
 
     def _held(self) -> bool:
-        return self.stage.status().state == "Hold"
+        return self.stage.status().state == "Hold" or self._door
 
     def power_up(self, boot_race: bool = False) -> None:
         """main.c at power-up: with HOMING_INIT_LOCK and ``$22=1`` the state is Alarm, then the welcome.
@@ -236,6 +237,10 @@ class GrblFirmware:
         self._stuck_homing = False  # system.c '$H' sets STATE_HOMING before it rejects '$HX'
         self._probe_mpos = [0.0, 0.0, 0.0]  # sys_probe_position: cleared by main() on every reset
         self._probe_ok = False
+        self._ovr = [100, 100, 100]  # main(): feed, rapid, spindle overrides back to 100 % on every reset
+        self._flood = False
+        self._door = False  # 0x84 came: Door until '~'
+        self._door_in_homing = False
 
     def welcome(self) -> None:
         """What GRBL prints at power-up and after every reset (main.c, protocol_main_loop()).
@@ -284,6 +289,8 @@ class GrblFirmware:
         st = self.stage.status()
         state = self._state()
         sub = st.substate if state == st.state else None
+        if state == "Door":  # report.c: 2 while the hold stops the motion, 0 once stopped with the door closed
+            sub = 2 if st.state == "Hold" and st.substate == 1 else 0
         wco = self._gc.wco()
         mask = int(self.stage.settings[10])
         mpos = tuple(p + b for p, b in zip(st.machine_mm, self._base()))
@@ -301,7 +308,7 @@ class GrblFirmware:
         else:
             self._ovr_counter -= 1
         m = self._gc.modal
-        accessories = {3: "S", 4: "C"}.get(m.spindle, "") + ("F" if m.coolant == 8 else "")
+        accessories = ({3: "S", 4: "C"}.get(m.spindle, "") if self._spindle_rpm > 0 else "") + ("F" if self._flood else "")
         report = StatusReport(
             state=state,
             substate=sub,
@@ -312,7 +319,7 @@ class GrblFirmware:
             feed=st.feed_mm_min,
             spindle=self._spindle_rpm,
             pins=self._pins(),
-            overrides=(100, 100, 100) if show_ovr else None,
+            overrides=tuple(self._ovr) if show_ovr else None,
             accessories=accessories,
         )
         return format_status(report, inches=bool(self.stage.settings[13]))
@@ -349,20 +356,63 @@ class GrblFirmware:
             else:
                 self._send(self._status_line())
         elif b == RT_HOLD:
-            if not self._critical and self.stage.status().state != "Home":
+            if not self._critical and self._state() not in ("Home", "Alarm", "Check", "Sleep"):
                 self.stage.feed_hold()
         elif b == RT_RESUME:
-            if not self._critical:
+            if not self._critical and not (self._door and self.stage.status().state == "Jog"):
+                self._door = False
                 self.stage.resume()
         elif b == RT_JOG_CANCEL:
             if not self._critical:
                 self.stage.jog_cancel()
         elif b >= 0x80:
-            pass  # other real-time commands (overrides, door) have no effect here
+            if not self._critical:
+                self._extended_realtime(b)
         elif len(self._rx) >= RX_BUFFER_BYTES - 1:
             self.rx_overflow_bytes += 1  # GRBL drops the byte: the host broke character counting
         else:
             self._rx.append(b)
+
+    def _extended_realtime(self, b: int) -> None:
+        """serial.c's extended real-time bytes, acted on as protocol_exec_rt_system() does.
+
+        0x84 safety door: ``[MSG:Check Door]``, a hold (a jog is cancelled), state
+        Door (Door:2 while stopping, Door:0 once stopped: no door switch is wired, so
+        the door reads closed and ``~`` resumes); during homing ALARM:7. Feed (0x90-0x94),
+        rapid (0x95-0x97) and spindle (0x99-0x9D) overrides within config.h's limits,
+        reported at once (``Ov:``); 0xA0 toggles flood coolant. 0xA1 (mist) needs
+        ENABLE_M7, off in config.h: ignored, as 0x9E (spindle stop) outside a hold.
+        """
+        state = self._state()
+        f, r, sp = self._ovr
+        if b == RT_DOOR:
+            if state == "Home":
+                self._door_in_homing = True
+            elif state not in ("Alarm", "Check", "Sleep"):
+                self._send("[MSG:Check Door]")
+                if state == "Jog":
+                    self.stage.jog_cancel()
+                elif not self._door:
+                    self.stage.feed_hold()
+                self._door = True
+        elif 0x90 <= b <= 0x94:
+            f = 100 if b == 0x90 else f + {0x91: 10, 0x92: -10, 0x93: 1, 0x94: -1}[b]
+            f = min(max(f, FEED_OVR_RANGE[0]), FEED_OVR_RANGE[1])
+        elif 0x95 <= b <= 0x97:
+            r = {0x95: 100, 0x96: 50, 0x97: 25}[b]
+        elif 0x99 <= b <= 0x9D:
+            sp = 100 if b == 0x99 else sp + {0x9A: 10, 0x9B: -10, 0x9C: 1, 0x9D: -1}[b]
+            sp = min(max(sp, SPINDLE_OVR_RANGE[0]), SPINDLE_OVR_RANGE[1])
+        elif b == 0xA0 and (state in ("Idle", "Run", "Hold", "Jog")):
+            m = self._gc.modal
+            m.coolant = 9 if m.coolant == 8 else 8
+            self._flood = m.coolant == 8
+            self._ovr_counter = 0  # coolant_set_state()
+        if [f, r, sp] != self._ovr:
+            self._ovr = [f, r, sp]
+            if self._spindle_on:
+                self._spindle_rpm = self._rpm(self._gc.spindle_speed)
+            self._ovr_counter = 0  # "report change immediately"
 
     def _soft_reset(self) -> None:
         """Ctrl-X: stop at once (ALARM:3 in motion, ALARM:6 while homing), flush RX, banner again.
@@ -470,6 +520,8 @@ class GrblFirmware:
             return "Sleep"
         if self._stuck_homing:
             return "Home"
+        if self._door and state in ("Hold", "Idle"):
+            return "Door"
         return "Check" if self._check and state == "Idle" else state
 
     def _execute(self, line: str) -> Steps | None:
@@ -654,6 +706,9 @@ class GrblFirmware:
             code = self.faults.fail_homing
             progress = self.stage.motion_progress()
             done = self.stage.status().state != "Home"  # a slow poll may find the cycle over: it fails all the same
+            if self._door_in_homing:  # limits.c limits_go_home(): EXEC_SAFETY_DOOR -> EXEC_ALARM_HOMING_FAIL_DOOR
+                self.stage.soft_reset()
+                code, done = 7, True
             if code and (done or (progress is not None and progress[0] == "Home" and progress[1] >= 0.5)):
                 self._status_in_homing = False  # the reset clears the pending report
                 self.stage.homed = False
@@ -671,10 +726,15 @@ class GrblFirmware:
         """Execute a checked block in gcode.c's order: modes, dwell, offsets, motion, program flow."""
         g = self._gc
         g.modal.feed_mode, g.feed_rate = b.modal.feed_mode, b.f
+        spindle_sync = g.modal.spindle != b.modal.spindle or (g.spindle_speed != b.s and g.modal.spindle != 5)
+        coolant_sync = g.modal.coolant != b.modal.coolant
         g.spindle_speed, g.tool = b.s, b.t
         g.modal.spindle, g.modal.coolant = b.modal.spindle, b.modal.coolant
-        if not self._check:
-            self._spindle_rpm = self._rpm(g.spindle_speed) if g.modal.spindle in (3, 4) else 0.0
+        if not self._check and (spindle_sync or coolant_sync):  # spindle_sync(), coolant_sync(): [4], [7], [8]
+            yield from self._synchronize()
+            self._spindle_rpm = self._rpm(g.spindle_speed) if self._spindle_on else 0.0
+            self._flood = g.modal.coolant == 8
+            self._ovr_counter = 0  # spindle_set_state() / coolant_set_state(): report at once
         if b.non_modal == gc.DWELL and not self._check:  # mc_dwell(): sync, then wait P seconds
             yield from self._synchronize()
             end = self.stage.clock.now() + b.p
@@ -778,14 +838,21 @@ class GrblFirmware:
         m = g.modal
         m.motion, m.plane, m.distance, m.feed_mode, m.coord_select = gc.LINEAR, 0, 90, 94, 0
         m.spindle, m.coolant = 5, 9
+        self._ovr = [100, 100, 100]  # RESTORE_OVERRIDES_AFTER_PROGRAM_END
         if not self._check:
             g.coord_system = list(self._coords[0])
             self._spindle_rpm = 0.0
-            self._wco_counter = 0
+            self._flood = False
+            self._wco_counter = self._ovr_counter = 0
         self._send("[MSG:Pgm End]")
 
+    @property
+    def _spindle_on(self) -> bool:
+        return self._gc.modal.spindle in (3, 4)
+
     def _rpm(self, s: float) -> float:
-        """spindle_control.c: the speed reported for S, clamped to $31..$30 (S0 is off)."""
+        """spindle_control.c spindle_compute_pwm_value(): S times the override, clamped to $31..$30 (0 is off)."""
+        s *= 0.01 * self._ovr[2]
         hi, lo = self.stage.settings[30], self.stage.settings[31]
         if lo >= hi or s >= hi:
             return hi
@@ -822,7 +889,8 @@ class GrblFirmware:
                 continue  # plan_buffer_line(): an empty block is not planned
             while self.stage.planner_free() <= 0:
                 yield
-            self.stage.move_to(t - b, feed, AXES[i])
+            rate = (feed * self._ovr[0] if math.isfinite(feed) else self.stage.max_rate_mm_min(i) * self._ovr[1]) / 100
+            self.stage.move_to(t - b, rate, AXES[i])  # planned with the overrides in force (not re-planned later)
 
     def _jog(self, text: str) -> Steps:
         """``$J=``: gcode.c with G1/G94 enforced, the jog rules (16), jog.c's travel check (15)."""

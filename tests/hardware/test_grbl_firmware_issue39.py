@@ -17,7 +17,7 @@ from lps_gui.hardware.grbl.emulator import GrblEmulator
 from lps_gui.hardware.sim_stage import SimulatedStage
 
 from tests.hardware.grbl_port import SteppedPort
-from tests.hardware.test_grbl_firmware_source import BANNER, UNLOCK, UNLOCKED, _run
+from tests.hardware.test_grbl_firmware_source import BANNER, RESET_TO_CONTINUE, UNLOCK, UNLOCKED, _run
 
 ZERO_IN = "0.0000,0.0000,0.0000"
 
@@ -27,6 +27,14 @@ EXCHANGES = {
         ("ask", b"$5=1\n", ["ok"]),
         ("status", "<Idle|MPos:0.000,-500.000,-500.000|FS:0,0|Pn:XYZ|"),
         ("ask", b"$6=1\n", ["ok"]), ("status", "<Idle|MPos:0.000,-500.000,-500.000|FS:0,0|Pn:PXYZ")],
+    # R2 limits.c ISR(LIMIT_INT_vect): with $21=1 reaching a switch is mc_reset() + ALARM:1 (critical, report.c's
+    # 500 ms, [MSG:Reset to continue], no '?' answered); protocol.c CHECK_LIMITS_AT_INIT: the switch still pressed
+    # at the reset -> [MSG:Check Limits] and Alarm; report.c Pn:X
+    "R2_hard_limit_switch_at_the_end_of_the_travel": UNLOCKED + [
+        ("ask", b"G91 G0 X-10\n", ["ok"]), ("wait", 2.0, []), ("ask", b"$20=0\n", ["ok"]), ("ask", b"$21=1\n", ["ok"]),
+        ("ask", b"G0 X20\n", ["ok"]), ("wait", 2.0, ["ALARM:1", RESET_TO_CONTINUE]), ("silent", b"?"),
+        ("ask", b"\x18", BANNER + ["[MSG:Check Limits]", UNLOCK]),
+        ("status", "<Alarm|MPos:0.000,-500.000,-500.000|FS:0,0|Pn:X|WCO:")],
     # R3 system.c case 'H': sys.state = STATE_HOMING before line[2] is checked -> error:3, the state stays Home;
     # '$X' only acts in Alarm (ok, no effect); '$#' needs Idle or Alarm; motion_control.c mc_reset(): a reset in STATE_HOMING is EXEC_ALARM_HOMING_FAIL_RESET (ALARM:6)
     "R3_dollar_hx_stays_in_home_and_a_reset_is_alarm_6": UNLOCKED + [
@@ -97,6 +105,11 @@ EXCHANGES = {
     "R15_jog_without_axis_words_goes_to_machine_zero": UNLOCKED + [
         ("ask", b"G91 G0 X-50\n", ["ok"]), ("wait", 5.0, []), ("status", "<Idle|MPos:-50.000,-500.000,-500.000"),
         ("ask", b"$J=F3000\n", ["ok"]), ("wait", 25.0, []), ("status", "<Idle|MPos:0.000,0.000,0.000")],
+    # R16 limits.c limits_go_home(): a reset in the pull-off sets ALARM:6, then the still-engaged switch
+    # EXEC_ALARM_HOMING_FAIL_PULLOFF replaces it; report.c's 500 ms, system.c's ok of $H, main()'s re-init
+    "R16_reset_during_the_homing_pull_off_is_alarm_8": [
+        ("silent", b"$H\n"), ("wait", 10.4, []), ("ask", b"\x18", ["ALARM:8"]),
+        ("wait", 0.6, ["ok"] + BANNER + [UNLOCK]), ("status", "<Alarm|")],
     # R17 motion_control.c mc_reset(): in a cycle EXEC_ALARM_ABORT_CYCLE; protocol_exec_rt_system() prints ALARM:3 and
     # waits report.c's 500 ms before it acts on the reset; main() then clears the '?' flag and flushes RX
     "R17_reset_in_motion_alarm_3_then_the_banner_500_ms_later": UNLOCKED + [

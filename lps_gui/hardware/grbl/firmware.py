@@ -101,6 +101,7 @@ class GrblFirmware:
         self._booting = False
         self._n_cmd = 0
         self._build_user = ""
+        self._limit_hit: set[int] = set()  # axes whose hard-limit switch is pressed (physical: survives resets)
         self._startup = ["", ""]  # EEPROM startup lines $N0, $N1 (N_STARTUP_LINE 2)
         self._initial_settings = dict(stage.settings)
         self._coords = self._default_coords()  # EEPROM: G54-G59, G28, G30 (machine mm); survives resets
@@ -133,6 +134,7 @@ class GrblFirmware:
         by itself, no line is read before the reset, which flushes them all.
         """
         self._check_mid_move_alarm()
+        self._check_hard_limit()
         now = self.stage.clock.now()
         if self._critical_msg_at is not None and now >= self._critical_msg_at:
             self._critical_msg_at = None
@@ -241,6 +243,8 @@ class GrblFirmware:
         self._flood = False
         self._door = False  # 0x84 came: Door until '~'
         self._door_in_homing = False
+        self._hard_limit_at: tuple[int, float] | None = None  # a move planned into a switch: (axis, where)
+        self._homing_pulloff = False  # the homing cycle pulls off its switch (limits.c: !approach)
 
     def welcome(self) -> None:
         """What GRBL prints at power-up and after every reset (main.c, protocol_main_loop()).
@@ -250,6 +254,10 @@ class GrblFirmware:
         power-up with the homing lock, and after a reset out of an alarm.
         """
         self._send(BANNER)
+        if self.stage.settings[21] and self._limits_pressed():  # protocol.c CHECK_LIMITS_AT_INIT
+            if self.stage.alarm_code is None:
+                self.stage.trigger_alarm(0)  # sys.state = STATE_ALARM, no ALARM:N line
+            self._send("[MSG:Check Limits]")
         if self.stage.alarm_code is not None:
             self._send("[MSG:'$H'|'$X' to unlock]")
         elif any(self._startup):
@@ -331,7 +339,9 @@ class GrblFirmware:
         triggered, so ``$5=1`` shows ``XYZ`` and ``$6=1`` shows ``P``. A hard limit
         (ALARM:1) leaves its switch pressed.
         """
-        pressed = {"X"} if self._critical and self.stage.alarm_code == 1 else set()
+        pressed = set(self._limits_pressed())
+        if not pressed and self._critical and self.stage.alarm_code == 1:
+            pressed = {"X"}  # a hard limit injected by the alarm_mid_move fault
         if self.stage.settings[5]:
             pressed = {"X", "Y", "Z"} - pressed
         return ("P" if self.stage.settings[6] else "") + "".join(a for a in "XYZ" if a in pressed)
@@ -426,6 +436,10 @@ class GrblFirmware:
         self.stage.soft_reset()
         if self._stuck_homing:  # motion_control.c mc_reset(): STATE_HOMING -> EXEC_ALARM_HOMING_FAIL_RESET
             self.stage.trigger_alarm(6)
+        elif self.stage.alarm_code == 6 and self._homing_pulloff:
+            # limits.c limits_go_home(): after the reset's ALARM:6, a pull-off whose switch is still engaged
+            # sets EXEC_ALARM_HOMING_FAIL_PULLOFF, which replaces it
+            self.stage.trigger_alarm(8)
         if self.stage.alarm_code != before and self.stage.alarm_code:
             # mc_reset() sets the alarm with the reset: protocol_exec_rt_system() prints ALARM:N and waits
             # report.c's 500 ms before it acts on the reset (a '?' or a line sent meanwhile is lost)
@@ -702,7 +716,13 @@ class GrblFirmware:
         after report.c's delay, then the self-reset's banner (limits.c: mc_reset()
         on a homing failure). Lines sent meanwhile stay in RX and the reset flushes them.
         """
+        axis = AXES.index(self.stage.axis)
+        switch, last = self.stage.travel_mm[0], self.stage.status().machine_mm[axis]
         while True:
+            pos = self.stage.status().machine_mm[axis]
+            if pos != last:  # moving up off the low switch, not yet the pull-off away: it may still be engaged
+                self._homing_pulloff = pos > last and pos < switch + self.stage.settings[27] - TRAVEL_EPS_MM
+                last = pos
             code = self.faults.fail_homing
             progress = self.stage.motion_progress()
             done = self.stage.status().state != "Home"  # a slow poll may find the cycle over: it fails all the same
@@ -885,12 +905,40 @@ class GrblFirmware:
         if self._check:
             return
         for i, (t, b) in enumerate(zip(target, self._base())):
+            t = self._hard_limit_stop(i, t - b) + b
             if abs(self.stage.planned_mm(i) - (t - b)) <= TRAVEL_EPS_MM:
                 continue  # plan_buffer_line(): an empty block is not planned
             while self.stage.planner_free() <= 0:
                 yield
             rate = (feed * self._ovr[0] if math.isfinite(feed) else self.stage.max_rate_mm_min(i) * self._ovr[1]) / 100
             self.stage.move_to(t - b, rate, AXES[i])  # planned with the overrides in force (not re-planned later)
+
+    def _hard_limit_stop(self, axis: int, target_mm: float) -> float:
+        """With ``$21=1`` a switch sits at each end of the travel: a move beyond it stops there and limits.c's
+        ISR raises ALARM:1 when the carriage gets there (:meth:`_check_hard_limit`); otherwise the target."""
+        lo, hi = self.stage.axis_travel_mm[axis]
+        if not self.stage.settings[21] or lo - TRAVEL_EPS_MM <= target_mm <= hi + TRAVEL_EPS_MM:
+            return target_mm
+        end = min(max(target_mm, lo), hi)
+        self._hard_limit_at = (axis, end)
+        return end
+
+    def _check_hard_limit(self) -> None:
+        """limits.c ISR(LIMIT_INT_vect): the switch closes, mc_reset() and EXEC_ALARM_HARD_LIMIT (critical)."""
+        if self._hard_limit_at is None or self._critical:
+            return
+        axis, end = self._hard_limit_at
+        if abs(self.stage.status().machine_mm[axis] - end) <= TRAVEL_EPS_MM:
+            self._hard_limit_at = None
+            self._limit_hit.add(axis)
+            self._alarm(1, line_open=self._pending is not None)
+
+    def _limits_pressed(self) -> str:
+        """The switches a hard limit left pressed (the carriage still at that end of the travel)."""
+        pos = self.stage.status().machine_mm
+        self._limit_hit = {i for i in self._limit_hit
+                           if min(abs(pos[i] - e) for e in self.stage.axis_travel_mm[i]) <= TRAVEL_EPS_MM}
+        return "".join(AXES[i] for i in sorted(self._limit_hit))
 
     def _jog(self, text: str) -> Steps:
         """``$J=``: gcode.c with G1/G94 enforced, the jog rules (16), jog.c's travel check (15)."""

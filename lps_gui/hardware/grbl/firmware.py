@@ -4,21 +4,24 @@
 gnea/grbl (report.c, protocol.c, system.c, settings.c, gcode.c, jog.c,
 limits.c, motion_control.c; docs/hardware.md lists what was checked where):
 banner and homing-lock message after every reset, ``$``, ``$$``, ``$x=val``,
-``$#``, ``$G``, ``$I``, ``$N``, ``$C``, ``$X``, ``$H``, ``$SLP``, ``$RST=``,
-``$J=``, G-code as gcode.c checks and executes it (G0-G3, G4, G10 L2/L20,
-G17-G19, G20/G21, G28/G30 and their .1, G38.x, G43.1/G49, G53, G54-G59, G80,
-G90/G91, G92/G92.1, G93/G94, M0-M9 modal state), real-time ``?`` ``!`` ``~``
-0x18 0x85, status reports per ``$10`` with GRBL's WCO/Ov refresh counters, a
-128-byte RX buffer that drops overflowing bytes, a 15-block planner that
-makes a line wait, and alarms as protocol.c raises them: ``ALARM:N``, then
+``$#``, ``$G``, ``$I``, ``$N`` and startup lines, ``$C``, ``$X``, ``$H``,
+``$SLP``, ``$RST=`` (defaults.h), ``$J=``, G-code as gcode.c checks and
+executes it (G0-G3, G4, G10 L2/L20, G17-G19, G20/G21, G28/G30 and their .1,
+G38.x probing with no probe wired, G43.1/G49, G53, G54-G59, G80, G90/G91,
+G92/G92.1, G93/G94, M0-M9), real-time ``?`` ``!`` ``~`` 0x18 0x85, the safety
+door 0x84, feed/rapid/spindle overrides and the flood toggle, status reports
+per ``$10`` with GRBL's WCO/Ov refresh counters and ``Pn:``, a 128-byte RX
+buffer that protocol_main_loop() drains as bytes arrive (overflowing bytes
+dropped while a line executes), a 15-block planner that makes a line wait,
+hard-limit switches at the travel ends (``$21``), and alarms as protocol.c raises them: ``ALARM:N``, then
 report.c's 500 ms delay; critical ones (1, 2) then print ``[MSG:Reset to
 continue]``, drop any reset that came in the delay and ignore everything but
 a new reset. Motion happens in a :class:`SimulatedStage`. Machine
 coordinates are GRBL's homed space (0 at the top of the travel, negative
 below); G54 is stored as the base, so G54 work coordinates equal the stage's
 own coordinates. Multi-axis moves run one axis after the other; arcs are
-checked along mc_arc()'s segments and end at their target; no probe input
-(G38.2/G38.4 end in ALARM:5), spindle or door.
+checked along mc_arc()'s segments and end at their target; the probe never
+touches and the door switch reads closed (docs/hardware.md: by design).
 
 It writes through a ``send(line)`` callback, so the pty transport
 (``emulator.py``) adds timing and fault injection around it.

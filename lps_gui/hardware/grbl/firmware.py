@@ -57,6 +57,20 @@ Steps = Iterator[None]  # an executing line: each yield waits for simulated time
 SILENT = object()  # returned by steps that print no 'ok' when they end (startup lines after a reset)
 
 
+def _parameter(cmd: str, start: int) -> tuple[float, int]:
+    """system.c's default branch: the number read_float() finds at ``start`` (error:2), then '=' (error:3).
+
+    Returns the number and the index after the '='.
+    """
+    got = read_float(cmd, start)
+    if got is None:
+        raise CodeError(2)
+    number, i = got
+    if cmd[i:i + 1] != "=":
+        raise CodeError(3)
+    return number, i + 1
+
+
 @dataclass
 class Faults:
     """Fault-injection switches (read on every step; flip them any time).
@@ -276,9 +290,7 @@ class GrblFirmware:
             if not text:
                 continue
             try:
-                if not self._check:
-                    self._gc.position = self._machine_planned()
-                yield from self._run_block(check_block(text, self._gc, self._coords))
+                yield from self._gcode(text)
             except CodeError as e:
                 self._send(f">{text}:error:{e.code}")
             else:
@@ -550,10 +562,13 @@ class GrblFirmware:
             return self._system(line, state)
         if state in ("Alarm", "Jog"):
             raise CodeError(9)
+        return self._gcode(line)
+
+    def _gcode(self, text: str) -> Steps:
+        """gc_execute_line(): the parser's position synced to the planner (not in check mode), checked, then run."""
         if not self._check:
             self._gc.position = self._machine_planned()
-        block = check_block(line, self._gc, self._coords)
-        return self._run_block(block)
+        return self._run_block(check_block(text, self._gc, self._coords))
 
     def _system(self, line: str, state: str) -> Steps | None:  # noqa: C901 - one branch per $ command, like system.c
         """system.c system_execute_line(): the ``$`` commands, their state rules and errors."""
@@ -665,28 +680,16 @@ class GrblFirmware:
         """system.c ``$Nx=line`` (Idle only): the line runs through gc_execute_line(); stored if it is ok."""
         if self._state() != "Idle":
             raise CodeError(8)
-        got = read_float(cmd, 1)
-        if got is None:
-            raise CodeError(2)
-        number, i = got
-        if cmd[i:i + 1] != "=":
-            raise CodeError(3)
-        text = cmd[i + 1:]
-        if not self._check:
-            self._gc.position = self._machine_planned()
-        yield from self._run_block(check_block(text, self._gc, self._coords))
+        number, i = _parameter(cmd, 1)
+        text = cmd[i:]
+        yield from self._gcode(text)
         if 0 <= int(number) < len(self._startup):  # settings_store_startup_line(): other numbers go unread
             self._startup[int(number)] = text
 
     def _store_setting(self, cmd: str) -> None:
         """system.c's default branch: ``$<number>=<value>`` with its read_float() errors (2, 3)."""
-        got = read_float(cmd, 0)
-        if got is None:
-            raise CodeError(2)
-        number, i = got
-        if cmd[i:i + 1] != "=":
-            raise CodeError(3)
-        got = read_float(cmd, i + 1)
+        number, i = _parameter(cmd, 0)
+        got = read_float(cmd, i)
         if got is None:
             raise CodeError(2)
         value, end = got

@@ -37,13 +37,15 @@ def _wait_bytes(emu: GrblEmulator, n: int) -> None:
 
 @contextlib.contextmanager
 def _rig(timeout_s: float = 2.0, boot_race: bool = False, connect: bool = True):
+    """A stepped emulator and a driver; the latency starts after ``connect`` (defects 2-4 are not about connecting)."""
     emu = GrblEmulator(SimulatedStage(travel_mm=(0.0, 100.0), start_mm=10.0), stepped=True,
-                       line_latency_s=LATENCY_S, boot_race=boot_race)
+                       line_latency_s=0.0 if connect else LATENCY_S, boot_race=boot_race)
     emu.start()
     stage = GrblStage(emu.path, timeout_s=timeout_s, poll_interval_s=0.01)
     try:
         if connect:
             drive(emu, stage.connect, sim_step_s=0.05)
+            emu.line_latency_s = LATENCY_S
         yield emu, stage
     finally:
         stage.disconnect()
@@ -84,7 +86,7 @@ def test_a_reply_that_arrives_while_asking_status_after_the_timeout_is_taken():
         dwell = Background(lambda: stage.command("G4 P0"))
         _wait_bytes(emu, before + len(b"G4 P0\n"))
         emu.settle()
-        assert emu.undelivered == ["ok"]  # GRBL answered at once; the link holds it
+        assert emu.undelivered[0] == "ok"  # GRBL answered at once; the link holds it
         _wait_bytes(emu, before + len(b"G4 P0\n") + 1)  # the deadline passed: the driver asks '?'
         emu.settle()
         assert emu.undelivered[0] == "ok" and emu.undelivered[1].startswith("<Idle|")

@@ -384,7 +384,8 @@ class GrblFirmware:
             if not self._critical and self._state() not in ("Home", "Alarm", "Check", "Sleep"):
                 self.stage.feed_hold()
         elif b == RT_RESUME:
-            if not self._critical and not (self._door and self.stage.status().state == "Jog"):
+            st = self.stage.status()  # a door resumes only once stopped (Door:0): EXEC_CYCLE_START needs HOLD_COMPLETE
+            if not self._critical and not (self._door and (st.state == "Jog" or st.substate == 1)):
                 self._door = False
                 self.stage.resume()
         elif b == RT_JOG_CANCEL:

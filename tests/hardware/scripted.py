@@ -20,7 +20,7 @@ SETTINGS = (
     b"$0=10\r\n$1=25\r\n$10=1\r\n$13=0\r\n$20=1\r\n$22=1\r\n$110=3000.000\r\n$120=200.000\r\n$130=505.000\r\nok\r\n"
 )
 IDLE = b"<Idle|MPos:-500.000,0.000,0.000|FS:0,0|WCO:-500.000,0.000,0.000>\r\n"
-CONNECT = [(b"\x18", BANNER), (b"$I\n", VERSION), (b"$$\n", SETTINGS), (b"?", IDLE)]
+CONNECT = [(b"\x18", BANNER), (b"?", IDLE), (b"$I\n", VERSION), (b"$$\n", SETTINGS), (b"?", IDLE)]
 
 
 class ScriptedSerial:

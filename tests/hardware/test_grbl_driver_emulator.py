@@ -154,6 +154,7 @@ def test_fault_slow_replies_within_and_beyond_the_timeout(rig):
     emu.faults.reply_delay_s = 0.2
     assert stage.status().state == "Alarm"  # slow but within the 2 s timeout
     stage.timeout_s = 0.1
+    emu.faults.reply_delay_s = 5.0  # beyond the timeout and the '?' asked after it (the reply is looked for again then)
     with pytest.raises(HardwareError, match=r"no reply to '\$X' within 0.1 s"):
         stage.unlock()
 

@@ -70,7 +70,12 @@ def test_home_unlock_hold_resume_reset():
         (b"$H\n", b"ok\r\n"),
         (b"$X\n", b"[MSG:Caution: Unlocked]\r\nok\r\n"),
         (b"!", b""),
+        (b"?", b"<Hold:1|MPos:-500.000,0.000,0.000|FS:0,0>\r\n"),  # feed_hold() waits until the hold is reported
+        (b"?", b"<Hold:1|MPos:-500.000,0.000,0.000|FS:0,0>\r\n"),  # resume() waits until it is complete...
+        (b"?", b"<Hold:0|MPos:-500.000,0.000,0.000|FS:0,0>\r\n"),
         (b"~", b""),
+        (b"?", b"<Hold:0|MPos:-500.000,0.000,0.000|FS:0,0>\r\n"),  # ...and until a report has left it
+        (b"?", IDLE),
         (b"\x18", b"ALARM:3\r\n" + BANNER + b"[MSG:'$H'|'$X' to unlock]\r\n"),
     ]
     messages = []

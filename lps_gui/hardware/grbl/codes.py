@@ -114,6 +114,13 @@ SETTINGS: dict[int, Setting] = {s.number: s for s in (
 
 # settings printed as integers by $$ (GRBL prints masks, booleans, ms and us without decimals)
 INTEGER_SETTINGS = frozenset({0, 1, 2, 3, 4, 5, 6, 10, 13, 20, 21, 22, 23, 26, 30, 31, 32})
+# defaults.h DEFAULTS_GENERIC (config.h's choice): what settings.c settings_restore() writes for '$RST=$' and '$RST=*'
+DEFAULT_SETTINGS: dict[int, float] = {
+    0: 10.0, 1: 25.0, 2: 0.0, 3: 0.0, 4: 0.0, 5: 0.0, 6: 0.0, 10: 1.0, 11: 0.010, 12: 0.002, 13: 0.0,
+    20: 0.0, 21: 0.0, 22: 0.0, 23: 0.0, 24: 25.0, 25: 500.0, 26: 250.0, 27: 1.0, 30: 1000.0, 31: 0.0, 32: 0.0,
+    **{100 + i: 250.0 for i in range(3)}, **{110 + i: 500.0 for i in range(3)},
+    **{120 + i: 10.0 for i in range(3)}, **{130 + i: 200.0 for i in range(3)},
+}
 STATUS_MASK_MPOS = 1  # $10 bit 0: report MPos (else WPos)
 STATUS_MASK_BUFFER = 2  # $10 bit 1: report Bf:planner,rx
 

@@ -49,7 +49,8 @@ RESETS_AFTER_OK = ("[MSG:Disabled]", "[MSG:Restoring defaults]")  # system.c: mc
 CRITICAL_ALARMS = (1, 2)  # protocol_exec_rt_system(): hard/soft limit block everything until a reset
 SELF_RESET_ALARMS = (3, 6, 7, 8, 9, 10)  # raised with mc_reset(): GRBL re-initializes on its own
 HELD_STATES = ("Hold", "Door")  # protocol_exec_rt_suspend(): no line is read until resumed
-MOVING_STATES = ("Run", "Jog")  # a line may wait for planner space (mc_line) or the end of motion (G4)
+MOVING_STATES = ("Run", "Jog")
+HOLD_IGNORED_STATES = ("Alarm", "Check", "Sleep", "Home")  # protocol_exec_rt_system(): no hold there  # a line may wait for planner space (mc_line) or the end of motion (G4)
 UNLOCK_MESSAGE = "'$H'|'$X' to unlock"
 __all__ = ["ControllerReset", "GrblStage"]
 
@@ -141,15 +142,16 @@ class GrblStage(Stage):
                 self.link.wait_for(lambda: self._banners > n, self.timeout_s,
                                    f"no GRBL startup banner within {self.timeout_s:g} s; "
                                    f"is a GRBL 1.1 controller on this port at {self.link.baudrate} baud?")
-            for attempt in range(3):  # a boot banner may follow our reset banner (Arduino auto-reset)
-                try:
-                    self.build_info = parse_build_info(self.command("$I"))
-                    break
-                except ControllerReset:
-                    if attempt == 2:
-                        raise
+                # The banner may be the boot banner of a board that reset as the port opened, with our
+                # reset byte still to act on (a second banner). protocol_exec_rt_system() acts on a reset
+                # before it reports, and our '?' follows the reset byte: once a report is in, every banner
+                # our reset causes is in, and no line is lost in it.
+                self.status()
+            self.build_info = parse_build_info(self.command("$I"))
             self.link.rx_size = self.build_info.rx_buffer_bytes
             self.settings = parse_settings(self.command("$$"))
+            if not self.settings:
+                raise HardwareError(f"GRBL on {self.port_name}: '$$' listed no settings; reset the controller and connect again")
             self.status()
         except Exception:
             self.link.close()
@@ -391,11 +393,56 @@ class GrblStage(Stage):
         self._critical = False
 
     def feed_hold(self) -> None:
+        """``!`` and wait until GRBL reports the hold (or that it ignores or only cancels it).
+
+        A report asked for before the ``!`` may arrive after it (a poll from
+        another thread, a USB adapter's latency): protocol_exec_rt_system() even
+        reports before it acts on a hold that came with the ``?``. Such a report
+        says Idle or Run; believed, the next line would be sent into the hold and
+        wait for ``~`` forever. So only a report that shows the hold ends the wait;
+        a jog that the hold cancels ends Idle.
+        """
         self.realtime(RT_HOLD)
         self._held = True  # until a status report says otherwise (a hold in Jog only cancels it)
+        jogging = False
+
+        def held(st: StageStatus) -> bool:
+            nonlocal jogging
+            jogging = jogging or st.state == "Jog"
+            return st.state in HELD_STATES or st.state in HOLD_IGNORED_STATES or (jogging and st.state == "Idle")
+
+        self._await_report(held, "did not report the feed hold")
 
     def resume(self) -> None:
+        """``~`` once the hold is complete, then wait until GRBL reports it left the hold.
+
+        protocol_exec_rt_system() ignores a cycle start while a hold still
+        decelerates (Hold:1), and a report asked before the ``~`` still says Hold:
+        a line sent on it would be refused as "in a feed hold".
+        """
+        st = self.status()
+        if st.state == "Door" and st.substate == 1:
+            raise HardwareError(f"GRBL on {self.port_name}: the safety door is open (Door:1); close it, then resume")
+        if st.state == "Hold" and st.substate == 1:
+            self._await_report(lambda s: not (s.state == "Hold" and s.substate == 1), "did not complete the feed hold")
         self.realtime(RT_RESUME)
+        if self._held or st.state in HELD_STATES:
+            self._await_report(lambda s: s.state not in HELD_STATES, "is still in a hold after '~'")
+
+    def _await_report(self, done, what: str) -> None:
+        """Poll ``?`` until a report satisfies ``done``; the deadline moves while the carriage moves."""
+        deadline = time.monotonic() + self.timeout_s
+        last = None
+        while True:
+            st = self.status()
+            if done(st):
+                return
+            if st.machine_mm != last:
+                last, deadline = st.machine_mm, time.monotonic() + self.timeout_s
+            if time.monotonic() >= deadline:
+                raise HardwareError(f"GRBL on {self.port_name} {what} within {self.timeout_s:g} s "
+                                    f"(state {st.state}); reset the controller")
+            time.sleep(self.poll_interval_s)
 
     # ------------------------------------------------------------------ Stage: motion
     def move_to(self, position_mm: float, feed_mm_min: float, axis: str | None = None) -> None:

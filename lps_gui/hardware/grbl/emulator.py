@@ -10,6 +10,17 @@ how fast the machine runs the test. :class:`Faults` switches inject what goes
 wrong with real hardware: a dropped connection, an alarm in the middle of a
 move, error replies, slow replies and garbage bytes; tests flip them while
 the emulator runs.
+
+Two transport switches reproduce what a real board's link does to timing:
+``line_latency_s`` delivers every line that long after the one before it (or
+after it was printed), like a USB adapter's latency timer (16 ms on FTDI
+chips): a report asked for before a real-time byte can then arrive after it.
+``boot_race=True`` is a board that boots as the port opens (an Arduino's DTR
+reset): the host's first reset byte arrives during GRBL's init, so the boot
+banner comes first and the reset's banner after it (main.c enables the serial
+interrupt before ``report_init_message()``). Bytes are read at wire speed:
+GRBL's main loop takes each byte out of the 128-byte RX buffer as it arrives,
+so only bytes that come while a line executes fill it.
 """
 from __future__ import annotations
 
@@ -42,11 +53,14 @@ class GrblEmulator:
     """
 
     def __init__(self, stage: SimulatedStage | None = None, faults: Faults | None = None, time_scale: float = 1.0,
-                 homing_init_lock: bool = False, stepped: bool = False) -> None:
+                 homing_init_lock: bool = False, stepped: bool = False, line_latency_s: float = 0.0,
+                 boot_race: bool = False) -> None:
         self.stage = stage if stage is not None else SimulatedStage()
         self.faults = faults or Faults()
         self.time_scale = float(time_scale)
         self.stepped = stepped
+        self.line_latency_s = float(line_latency_s)
+        self.boot_race = boot_race
         if stepped and not isinstance(self.stage.clock, SimClock):
             raise ValueError("a stepped GRBL emulator needs a stage on a SimClock")
         self._lock = threading.RLock()  # the firmware is driven by the serving thread and by advance()
@@ -58,7 +72,7 @@ class GrblEmulator:
         self._master = self._slave = -1
         self._thread: threading.Thread | None = None
         self._running = False
-        self._out: list[tuple[float, bytes]] = []
+        self._out: list[tuple[float, float, bytes]] = []  # (wall due, due on _now(), bytes), in the order GRBL printed them
         self._n_out = 0
 
     @property
@@ -86,7 +100,7 @@ class GrblEmulator:
             self.stage.connect()
         self._running = True
         self._last_real = time.monotonic()
-        self.firmware.power_up()  # the homing lock (if built with it), then what a reset prints
+        self.firmware.power_up(boot_race=self.boot_race)  # the homing lock (if built with it), then the welcome
         self._flush_out()
         self._thread = threading.Thread(target=self._serve, name="grbl-emulator", daemon=True)
         self._thread.start()
@@ -125,24 +139,38 @@ class GrblEmulator:
     def __exit__(self, *exc: object) -> None:
         self.stop()
 
+    @property
+    def undelivered(self) -> list[str]:
+        """Lines the firmware printed that the link has not delivered yet (latency, slow replies)."""
+        with self._lock:
+            return [data.decode("latin-1").rstrip("\r\n") for _, _, data in self._out]
+
     # ------------------------------------------------------------------ output
+    def _now(self) -> float:
+        """The link's clock: simulated time when stepped (a test decides when a line arrives), else wall time."""
+        return self.stage.clock.now() if self.stepped else time.monotonic()
+
     def _send(self, text: str) -> None:
-        """Queue a message (CR LF added) with the slow-reply delay and garbage faults applied."""
+        """Queue a message (CR LF added) line by line: slow-reply delay (wall seconds), latency and garbage applied."""
         f = self.faults
         self._n_out += 1
         data = b""
         if f.garbage_every and self._n_out % f.garbage_every == 0:
             data += GARBAGE + b"\r\n"
         data += (text if text.endswith("\r\n") else text + "\r\n").encode("ascii")
-        due = time.monotonic() + f.reply_delay_s
-        if self._out:
-            due = max(due, self._out[-1][0])
-        self._out.append((due, data))
+        wall, now = time.monotonic(), self._now()
+        for line in data.splitlines(keepends=True):
+            wall_due, link_due = wall + f.reply_delay_s, now
+            if self._out:
+                wall_due, link_due = max(wall_due, self._out[-1][0]), max(link_due, self._out[-1][1])
+            if self.line_latency_s > 0:
+                link_due += self.line_latency_s
+            self._out.append((wall_due, link_due, line))
 
     def _flush_out(self) -> None:
-        now = time.monotonic()
-        while self._out and self._out[0][0] <= now and self._master >= 0:
-            _, data = self._out.pop(0)
+        wall, now = time.monotonic(), self._now()
+        while self._out and self._out[0][0] <= wall and self._out[0][1] <= now and self._master >= 0:
+            _, _, data = self._out.pop(0)
             try:
                 os.write(self._master, data)
             except BlockingIOError:  # nobody reads the port: bytes are lost like on a wire
@@ -186,8 +214,9 @@ class GrblEmulator:
             if not data:
                 return
             self.bytes_in += len(data)
-            for b in data:
+            for b in data:  # wire speed: the main loop keeps up with every byte unless a line executes
                 self.firmware.receive(b)
+                self.firmware.drain()
 
     def advance(self, seconds: float, step_s: float = 0.01) -> None:
         """Stepped clock: let ``seconds`` of simulated time pass, in steps of ``step_s``.

@@ -4,21 +4,24 @@
 gnea/grbl (report.c, protocol.c, system.c, settings.c, gcode.c, jog.c,
 limits.c, motion_control.c; docs/hardware.md lists what was checked where):
 banner and homing-lock message after every reset, ``$``, ``$$``, ``$x=val``,
-``$#``, ``$G``, ``$I``, ``$N``, ``$C``, ``$X``, ``$H``, ``$SLP``, ``$RST=``,
-``$J=``, G-code as gcode.c checks and executes it (G0-G3, G4, G10 L2/L20,
-G17-G19, G20/G21, G28/G30 and their .1, G38.x, G43.1/G49, G53, G54-G59, G80,
-G90/G91, G92/G92.1, G93/G94, M0-M9 modal state), real-time ``?`` ``!`` ``~``
-0x18 0x85, status reports per ``$10`` with GRBL's WCO/Ov refresh counters, a
-128-byte RX buffer that drops overflowing bytes, a 15-block planner that
-makes a line wait, and alarms as protocol.c raises them: ``ALARM:N``, then
+``$#``, ``$G``, ``$I``, ``$N`` and startup lines, ``$C``, ``$X``, ``$H``,
+``$SLP``, ``$RST=`` (defaults.h), ``$J=``, G-code as gcode.c checks and
+executes it (G0-G3, G4, G10 L2/L20, G17-G19, G20/G21, G28/G30 and their .1,
+G38.x probing with no probe wired, G43.1/G49, G53, G54-G59, G80, G90/G91,
+G92/G92.1, G93/G94, M0-M9), real-time ``?`` ``!`` ``~`` 0x18 0x85, the safety
+door 0x84, feed/rapid/spindle overrides and the flood toggle, status reports
+per ``$10`` with GRBL's WCO/Ov refresh counters and ``Pn:``, a 128-byte RX
+buffer that protocol_main_loop() drains as bytes arrive (overflowing bytes
+dropped while a line executes), a 15-block planner that makes a line wait,
+hard-limit switches at the travel ends (``$21``), and alarms as protocol.c raises them: ``ALARM:N``, then
 report.c's 500 ms delay; critical ones (1, 2) then print ``[MSG:Reset to
 continue]``, drop any reset that came in the delay and ignore everything but
 a new reset. Motion happens in a :class:`SimulatedStage`. Machine
 coordinates are GRBL's homed space (0 at the top of the travel, negative
 below); G54 is stored as the base, so G54 work coordinates equal the stage's
 own coordinates. Multi-axis moves run one axis after the other; arcs are
-checked along mc_arc()'s segments and end at their target; no probe input
-(G38.2/G38.4 end in ALARM:5), spindle or door.
+checked along mc_arc()'s segments and end at their target; the probe never
+touches and the door switch reads closed (docs/hardware.md: by design).
 
 It writes through a ``send(line)`` callback, so the pty transport
 (``emulator.py``) adds timing and fault injection around it.
@@ -33,7 +36,7 @@ from typing import Callable, Iterator
 from lps_gui.hardware.grbl import codes
 from lps_gui.hardware.grbl.codes import GrblError, format_setting
 from lps_gui.hardware.grbl import gcode as gc
-from lps_gui.hardware.grbl.gcode import CodeError, ParserState, check_block, clean_line, read_float
+from lps_gui.hardware.grbl.gcode import CodeError, ParserState, check_block, read_float
 from lps_gui.hardware.grbl.protocol import MM_PER_INCH, StatusReport, format_axes, format_status
 from lps_gui.hardware.sim_stage import PLANNER_BLOCKS, RX_BUFFER_BYTES, SimulatedStage
 from lps_gui.hardware.stage import AXES
@@ -43,13 +46,29 @@ log = logging.getLogger(__name__)
 VERSION, BUILD = "1.1h", "20190830"
 BANNER = f"\r\nGrbl {VERSION} ['$' for help]\r\n"
 HELP = "[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X $H ~ ! ? ctrl-x]"
-RT_STATUS, RT_HOLD, RT_RESUME, RT_RESET, RT_JOG_CANCEL = 0x3F, 0x21, 0x7E, 0x18, 0x85
+RT_STATUS, RT_HOLD, RT_RESUME, RT_RESET, RT_JOG_CANCEL, RT_DOOR = 0x3F, 0x21, 0x7E, 0x18, 0x85, 0x84
+FEED_OVR_RANGE, SPINDLE_OVR_RANGE = (10, 200), (10, 200)  # config.h MIN/MAX_FEED_RATE_OVERRIDE, ..._SPINDLE_SPEED_...
 BUSY = ("Run", "Hold", "Jog", "Home", "Door")
 ALARM_REPORT_DELAY_S = 0.5  # report.c report_alarm_message(): delay_ms(500) after ALARM:N
 CRITICAL_ALARMS = (1, 2)  # protocol_exec_rt_system(): hard and soft limit
 WCO_BUSY, WCO_IDLE, OVR_BUSY, OVR_IDLE = 30, 10, 20, 10  # config.h refresh counts
 TRAVEL_EPS_MM = 1e-6  # float noise of offset arithmetic, far below GRBL's step resolution
 Steps = Iterator[None]  # an executing line: each yield waits for simulated time to pass
+SILENT = object()  # returned by steps that print no 'ok' when they end (startup lines after a reset)
+
+
+def _parameter(cmd: str, start: int) -> tuple[float, int]:
+    """system.c's default branch: the number read_float() finds at ``start`` (error:2), then '=' (error:3).
+
+    Returns the number and the index after the '='.
+    """
+    got = read_float(cmd, start)
+    if got is None:
+        raise CodeError(2)
+    number, i = got
+    if cmd[i:i + 1] != "=":
+        raise CodeError(3)
+    return number, i + 1
 
 
 @dataclass
@@ -96,8 +115,11 @@ class GrblFirmware:
         self.resets_received = 0  # Ctrl-X bytes, and those an alarm's delay swallowed
         self.resets_lost = 0
         self.halted = False
+        self._booting = False
         self._n_cmd = 0
         self._build_user = ""
+        self._limit_hit: set[int] = set()  # axes whose hard-limit switch is pressed (physical: survives resets)
+        self._startup = ["", ""]  # EEPROM startup lines $N0, $N1 (N_STARTUP_LINE 2)
         self._initial_settings = dict(stage.settings)
         self._coords = self._default_coords()  # EEPROM: G54-G59, G28, G30 (machine mm); survives resets
         self._reset_state()
@@ -129,6 +151,7 @@ class GrblFirmware:
         by itself, no line is read before the reset, which flushes them all.
         """
         self._check_mid_move_alarm()
+        self._check_hard_limit()
         now = self.stage.clock.now()
         if self._critical_msg_at is not None and now >= self._critical_msg_at:
             self._critical_msg_at = None
@@ -141,20 +164,46 @@ class GrblFirmware:
             return
         if self._pending is not None:
             self._step_pending()
-        while self._ready() and b"\n" in self._rx.replace(b"\r", b"\n"):
-            self._next_line()
+        self.drain()
 
     def _ready(self) -> bool:
         return (self._pending is None and self._abort_at is None and not self._critical and not self.halted
                 and not self._sleep)
 
+    def drain(self) -> None:
+        """protocol_main_loop(): take bytes out of the RX buffer while no line executes; run each line at its end.
+
+        The loop filters as it reads (whitespace and control characters, ``(...)``
+        and ``;`` comments, ``/`` dropped, letters upcased, characters past the
+        80-byte line buffer flagged as overflow), so a long line with a comment
+        never needs to fit in the 128-byte RX buffer.
+        """
+        while self._rx and self._ready() and not self._held():
+            c = chr(self._rx.pop(0))
+            if c in "\r\n":
+                line, overflow = "".join(self._linebuf), self._line_overflow
+                self._linebuf, self._line_comment, self._line_overflow = [], "", False
+                self._end_of_line(line, overflow)
+            elif self._line_comment or self._line_overflow:
+                if c == ")" and self._line_comment == "(":
+                    self._line_comment = ""
+            elif c <= " " or c == "/":
+                pass
+            elif c in "(;":
+                self._line_comment = c
+            elif len(self._linebuf) >= gc.LINE_BUFFER_SIZE - 1:
+                self._line_overflow = True
+            else:
+                self._linebuf.append(c.upper())
+
     def _step_pending(self) -> None:
         """Advance the executing line; its ``ok`` when it ends, its error or alarm when it fails."""
         try:
             next(self._pending)
-        except StopIteration:
+        except StopIteration as stop:
             self._pending = None
-            self._send("ok")
+            if stop.value is not SILENT:
+                self._send("ok")
         except CodeError as e:
             self._pending = None
             self._send(f"error:{e.code}")
@@ -166,13 +215,20 @@ class GrblFirmware:
                 self._send(f"error:{e.code}")
 
     def _held(self) -> bool:
-        return self.stage.status().state == "Hold"
+        return self.stage.status().state == "Hold" or self._door
 
-    def power_up(self) -> None:
-        """main.c at power-up: with HOMING_INIT_LOCK and ``$22=1`` the state is Alarm, then the welcome."""
+    def power_up(self, boot_race: bool = False) -> None:
+        """main.c at power-up: with HOMING_INIT_LOCK and ``$22=1`` the state is Alarm, then the welcome.
+
+        ``boot_race``: the board boots as the host opens the port, so the welcome
+        waits for the host's first byte; a reset byte that came during init is
+        acted on right after it (a second banner).
+        """
         if self.homing_init_lock and self.stage.homing_enabled and self.stage.alarm_code is None:
             self.stage.trigger_alarm(0)  # the silent homing lock (no ALARM:N line)
-        self.welcome()
+        self._booting = boot_race
+        if not boot_race:
+            self.welcome()
 
     def _default_coords(self) -> list[list[float]]:
         """What this emulator's EEPROM holds when new: G54 at the base, the rest zero (docs/hardware.md)."""
@@ -180,7 +236,10 @@ class GrblFirmware:
 
     def _reset_state(self) -> None:
         """main.c's loop after every abort: flags cleared, RX flushed, gc_init(), positions synced."""
-        self._rx = bytearray()
+        self._rx = bytearray()  # serial.c's RX ring: bytes the main loop has not read yet
+        self._linebuf: list[str] = []  # protocol_main_loop()'s line buffer, filtered as it is read
+        self._line_comment = ""
+        self._line_overflow = False
         self._gc = ParserState(coord_system=list(self._coords[0]))
         self._gc.position = self._machine_planned()
         self._spindle_rpm = 0.0
@@ -194,6 +253,15 @@ class GrblFirmware:
         self._pending: Steps | None = None
         self._check = False
         self._sleep = False
+        self._stuck_homing = False  # system.c '$H' sets STATE_HOMING before it rejects '$HX'
+        self._probe_mpos = [0.0, 0.0, 0.0]  # sys_probe_position: cleared by main() on every reset
+        self._probe_ok = False
+        self._ovr = [100, 100, 100]  # main(): feed, rapid, spindle overrides back to 100 % on every reset
+        self._flood = False
+        self._door = False  # 0x84 came: Door until '~'
+        self._door_in_homing = False
+        self._hard_limit_at: tuple[int, float] | None = None  # a move planned into a switch: (axis, where)
+        self._homing_pulloff = False  # the homing cycle pulls off its switch (limits.c: !approach)
 
     def welcome(self) -> None:
         """What GRBL prints at power-up and after every reset (main.c, protocol_main_loop()).
@@ -203,8 +271,30 @@ class GrblFirmware:
         power-up with the homing lock, and after a reset out of an alarm.
         """
         self._send(BANNER)
+        if self.stage.settings[21] and self._limits_pressed():  # protocol.c CHECK_LIMITS_AT_INIT
+            if self.stage.alarm_code is None:
+                self.stage.trigger_alarm(0)  # sys.state = STATE_ALARM, no ALARM:N line
+            self._send("[MSG:Check Limits]")
         if self.stage.alarm_code is not None:
             self._send("[MSG:'$H'|'$X' to unlock]")
+        elif any(self._startup):
+            self._pending = self._after_welcome()
+
+    def _after_welcome(self) -> Steps:
+        yield from self._startup_lines()
+        return SILENT
+
+    def _startup_lines(self) -> Steps:
+        """system.c system_execute_startup(): each stored line through gc_execute_line(), ``>line:ok`` or ``>line:error:N``."""
+        for text in self._startup:
+            if not text:
+                continue
+            try:
+                yield from self._gcode(text)
+            except CodeError as e:
+                self._send(f">{text}:error:{e.code}")
+            else:
+                self._send(f">{text}:ok")
 
     def _base(self) -> tuple[float, float, float]:
         """Machine 0 sits at the top of the travel: machine = stage coordinate + base.
@@ -222,6 +312,8 @@ class GrblFirmware:
         st = self.stage.status()
         state = self._state()
         sub = st.substate if state == st.state else None
+        if state == "Door":  # report.c: 2 while the hold stops the motion, 0 once stopped with the door closed
+            sub = 2 if st.state == "Hold" and st.substate == 1 else 0
         wco = self._gc.wco()
         mask = int(self.stage.settings[10])
         mpos = tuple(p + b for p, b in zip(st.machine_mm, self._base()))
@@ -239,7 +331,7 @@ class GrblFirmware:
         else:
             self._ovr_counter -= 1
         m = self._gc.modal
-        accessories = {3: "S", 4: "C"}.get(m.spindle, "") + ("F" if m.coolant == 8 else "")
+        accessories = ({3: "S", 4: "C"}.get(m.spindle, "") if self._spindle_rpm > 0 else "") + ("F" if self._flood else "")
         report = StatusReport(
             state=state,
             substate=sub,
@@ -249,15 +341,32 @@ class GrblFirmware:
             buffer=(st.buffer[0], RX_BUFFER_BYTES - len(self._rx)) if mask & codes.STATUS_MASK_BUFFER else None,
             feed=st.feed_mm_min,
             spindle=self._spindle_rpm,
-            pins="X" if self._critical and self.stage.alarm_code == 1 else "",
-            overrides=(100, 100, 100) if show_ovr else None,
+            pins=self._pins(),
+            overrides=tuple(self._ovr) if show_ovr else None,
             accessories=accessories,
         )
         return format_status(report, inches=bool(self.stage.settings[13]))
 
+    def _pins(self) -> str:
+        """report.c ``Pn:``: the probe pin, then the limit pins, as read through ``$6`` and ``$5`` (no switch wired).
+
+        Unwired inputs are pulled up and read open; an inverted pin then reads
+        triggered, so ``$5=1`` shows ``XYZ`` and ``$6=1`` shows ``P``. A hard limit
+        (ALARM:1) leaves its switch pressed.
+        """
+        pressed = set(self._limits_pressed())
+        if not pressed and self._critical and self.stage.alarm_code == 1:
+            pressed = {"X"}  # a hard limit injected by the alarm_mid_move fault
+        if self.stage.settings[5]:
+            pressed = {"X", "Y", "Z"} - pressed
+        return ("P" if self.stage.settings[6] else "") + "".join(a for a in "XYZ" if a in pressed)
+
     # ------------------------------------------------------------------ serial ISR and real-time bytes
     def receive(self, b: int) -> None:
         """GRBL's serial ISR: real-time bytes act at once, the rest goes to the RX buffer."""
+        if self._booting:  # main.c: report_init_message() of the boot, then the flags set during init act
+            self._booting = False
+            self.welcome()
         if b == RT_RESET:
             self.resets_received += 1
             if self._abort_at is not None or self._critical_msg_at is not None:
@@ -272,20 +381,64 @@ class GrblFirmware:
             else:
                 self._send(self._status_line())
         elif b == RT_HOLD:
-            if not self._critical and self.stage.status().state != "Home":
+            if not self._critical and self._state() not in ("Home", "Alarm", "Check", "Sleep"):
                 self.stage.feed_hold()
         elif b == RT_RESUME:
-            if not self._critical:
+            st = self.stage.status()  # a door resumes only once stopped (Door:0): EXEC_CYCLE_START needs HOLD_COMPLETE
+            if not self._critical and not (self._door and (st.state == "Jog" or st.substate == 1)):
+                self._door = False
                 self.stage.resume()
         elif b == RT_JOG_CANCEL:
             if not self._critical:
                 self.stage.jog_cancel()
         elif b >= 0x80:
-            pass  # other real-time commands (overrides, door) have no effect here
+            if not self._critical:
+                self._extended_realtime(b)
         elif len(self._rx) >= RX_BUFFER_BYTES - 1:
             self.rx_overflow_bytes += 1  # GRBL drops the byte: the host broke character counting
         else:
             self._rx.append(b)
+
+    def _extended_realtime(self, b: int) -> None:
+        """serial.c's extended real-time bytes, acted on as protocol_exec_rt_system() does.
+
+        0x84 safety door: ``[MSG:Check Door]``, a hold (a jog is cancelled), state
+        Door (Door:2 while stopping, Door:0 once stopped: no door switch is wired, so
+        the door reads closed and ``~`` resumes); during homing ALARM:7. Feed (0x90-0x94),
+        rapid (0x95-0x97) and spindle (0x99-0x9D) overrides within config.h's limits,
+        reported at once (``Ov:``); 0xA0 toggles flood coolant. 0xA1 (mist) needs
+        ENABLE_M7, off in config.h: ignored, as 0x9E (spindle stop) outside a hold.
+        """
+        state = self._state()
+        f, r, sp = self._ovr
+        if b == RT_DOOR:
+            if state == "Home":
+                self._door_in_homing = True
+            elif state not in ("Alarm", "Check", "Sleep"):
+                self._send("[MSG:Check Door]")
+                if state == "Jog":
+                    self.stage.jog_cancel()
+                elif not self._door:
+                    self.stage.feed_hold()
+                self._door = True
+        elif 0x90 <= b <= 0x94:
+            f = 100 if b == 0x90 else f + {0x91: 10, 0x92: -10, 0x93: 1, 0x94: -1}[b]
+            f = min(max(f, FEED_OVR_RANGE[0]), FEED_OVR_RANGE[1])
+        elif 0x95 <= b <= 0x97:
+            r = {0x95: 100, 0x96: 50, 0x97: 25}[b]
+        elif 0x99 <= b <= 0x9D:
+            sp = 100 if b == 0x99 else sp + {0x9A: 10, 0x9B: -10, 0x9C: 1, 0x9D: -1}[b]
+            sp = min(max(sp, SPINDLE_OVR_RANGE[0]), SPINDLE_OVR_RANGE[1])
+        elif b == 0xA0 and (state in ("Idle", "Run", "Hold", "Jog")):
+            m = self._gc.modal
+            m.coolant = 9 if m.coolant == 8 else 8
+            self._flood = m.coolant == 8
+            self._ovr_counter = 0  # coolant_set_state()
+        if [f, r, sp] != self._ovr:
+            self._ovr = [f, r, sp]
+            if self._spindle_on:
+                self._spindle_rpm = self._rpm(self._gc.spindle_speed)
+            self._ovr_counter = 0  # "report change immediately"
 
     def _soft_reset(self) -> None:
         """Ctrl-X: stop at once (ALARM:3 in motion, ALARM:6 while homing), flush RX, banner again.
@@ -297,8 +450,17 @@ class GrblFirmware:
         before = self.stage.alarm_code
         line_open = self._pending is not None or self._ok_on_reset
         self.stage.soft_reset()
+        if self._stuck_homing:  # motion_control.c mc_reset(): STATE_HOMING -> EXEC_ALARM_HOMING_FAIL_RESET
+            self.stage.trigger_alarm(6)
+        elif self.stage.alarm_code == 6 and self._homing_pulloff:
+            # limits.c limits_go_home(): after the reset's ALARM:6, a pull-off whose switch is still engaged
+            # sets EXEC_ALARM_HOMING_FAIL_PULLOFF, which replaces it
+            self.stage.trigger_alarm(8)
         if self.stage.alarm_code != before and self.stage.alarm_code:
-            self._send(f"ALARM:{self.stage.alarm_code}")
+            # mc_reset() sets the alarm with the reset: protocol_exec_rt_system() prints ALARM:N and waits
+            # report.c's 500 ms before it acts on the reset (a '?' or a line sent meanwhile is lost)
+            self._alarm(self.stage.alarm_code, line_open)
+            return
         if line_open:
             self._send("ok")
         if self._sleep and self.stage.alarm_code is None:
@@ -347,11 +509,8 @@ class GrblFirmware:
         self._reset_state()
         self.welcome()
 
-    def _next_line(self) -> None:
-        buf = self._rx.replace(b"\r", b"\n")
-        end = buf.index(b"\n")
-        raw = self._rx[:end].decode("latin-1")
-        del self._rx[: end + 1]
+    def _end_of_line(self, line: str, overflow: bool) -> None:
+        """A line end in protocol_main_loop(): overflow is error:11, the rest is executed and answered."""
         self.lines_received += 1
         f = self.faults
         if f.drop_after_lines is not None and self.lines_received >= f.drop_after_lines:
@@ -359,7 +518,6 @@ class GrblFirmware:
             self.halted = True
             self._on_drop()
             return
-        line, overflow = clean_line(raw)
         if overflow:
             self._send("error:11")
             return
@@ -386,10 +544,14 @@ class GrblFirmware:
 
     # ------------------------------------------------------------------ commands
     def _state(self) -> str:
-        """GRBL's state: the stage's motion state, overlaid by check mode and sleep."""
+        """GRBL's state: the stage's motion state, overlaid by check mode, sleep and a '$HX' left in Home."""
         state = self.stage.status().state
         if self._sleep:
             return "Sleep"
+        if self._stuck_homing:
+            return "Home"
+        if self._door and state in ("Hold", "Idle"):
+            return "Door"
         return "Check" if self._check and state == "Idle" else state
 
     def _execute(self, line: str) -> Steps | None:
@@ -401,10 +563,13 @@ class GrblFirmware:
             return self._system(line, state)
         if state in ("Alarm", "Jog"):
             raise CodeError(9)
+        return self._gcode(line)
+
+    def _gcode(self, text: str) -> Steps:
+        """gc_execute_line(): the parser's position synced to the planner (not in check mode), checked, then run."""
         if not self._check:
             self._gc.position = self._machine_planned()
-        block = check_block(line, self._gc, self._coords)
-        return self._run_block(block)
+        return self._run_block(check_block(text, self._gc, self._coords))
 
     def _system(self, line: str, state: str) -> Steps | None:  # noqa: C901 - one branch per $ command, like system.c
         """system.c system_execute_line(): the ``$`` commands, their state rules and errors."""
@@ -466,8 +631,9 @@ class GrblFirmware:
         elif c == "H":
             if not self.stage.homing_enabled:
                 raise CodeError(5)
-            if len(cmd) != 1:
-                raise CodeError(3)  # HOMING_SINGLE_AXIS_COMMANDS is off in stock config.h
+            if len(cmd) != 1:  # HOMING_SINGLE_AXIS_COMMANDS is off in stock config.h
+                self._stuck_homing = True  # sys.state = STATE_HOMING came first: it stays until a reset
+                raise CodeError(3)
             self.stage.start_home()
             return self._homing()
         elif c == "S":
@@ -491,30 +657,40 @@ class GrblFirmware:
         elif c == "R":
             if cmd not in ("RST=$", "RST=#", "RST=*"):
                 raise CodeError(3)
-            if cmd != "RST=#":
-                self.stage.settings.update(self._initial_settings)
+            if cmd != "RST=#":  # settings.c settings_restore(): settings = defaults (defaults.h DEFAULTS_GENERIC)
+                self.stage.settings.update(codes.DEFAULT_SETTINGS)
             if cmd != "RST=$":
                 self._coords = self._default_coords()  # G54 back to the base, by design (docs/hardware.md)
+            if cmd == "RST=*":  # SETTINGS_RESTORE_ALL also wipes the startup lines and the build info
+                self._startup = ["", ""]
+                self._build_user = ""
             self._send("[MSG:Restoring defaults]")
             self._send("ok")
             self._soft_reset()
             return None
         elif cmd == "N":
-            self._send("$N0=")
-            self._send("$N1=")
+            for n, text in enumerate(self._startup):
+                self._send(f"$N{n}={text}")
+        elif c == "N":
+            return self._store_startup(cmd)
         else:
             self._store_setting(cmd)
         return iter(())
 
+    def _store_startup(self, cmd: str) -> Steps:
+        """system.c ``$Nx=line`` (Idle only): the line runs through gc_execute_line(); stored if it is ok."""
+        if self._state() != "Idle":
+            raise CodeError(8)
+        number, i = _parameter(cmd, 1)
+        text = cmd[i:]
+        yield from self._gcode(text)
+        if 0 <= int(number) < len(self._startup):  # settings_store_startup_line(): other numbers go unread
+            self._startup[int(number)] = text
+
     def _store_setting(self, cmd: str) -> None:
         """system.c's default branch: ``$<number>=<value>`` with its read_float() errors (2, 3)."""
-        got = read_float(cmd, 0)
-        if got is None:
-            raise CodeError(2)
-        number, i = got
-        if cmd[i:i + 1] != "=":
-            raise CodeError(3)
-        got = read_float(cmd, i + 1)
+        number, i = _parameter(cmd, 0)
+        got = read_float(cmd, i)
         if got is None:
             raise CodeError(2)
         value, end = got
@@ -533,7 +709,11 @@ class GrblFirmware:
         self._send(f"[G92:{format_axes(tuple(self._gc.coord_offset), inches)}]")
         tlo = self._gc.tool_length_offset
         self._send(f"[TLO:{tlo / MM_PER_INCH:.4f}]" if inches else f"[TLO:{tlo:.3f}]")
-        self._send("[PRB:0.000,0.000,0.000:0]")
+        self._send(self._probe_line())
+
+    def _probe_line(self) -> str:
+        """report.c report_probe_parameters(): the last probe position (machine) and whether it succeeded."""
+        return f"[PRB:{format_axes(tuple(self._probe_mpos), bool(self.stage.settings[13]))}:{int(self._probe_ok)}]"
 
     def _homing(self) -> Steps:
         """``$H`` runs: a held-back ``?`` is answered when it ends (state still Home), then ``ok``.
@@ -543,10 +723,19 @@ class GrblFirmware:
         after report.c's delay, then the self-reset's banner (limits.c: mc_reset()
         on a homing failure). Lines sent meanwhile stay in RX and the reset flushes them.
         """
+        axis = AXES.index(self.stage.axis)
+        switch, last = self.stage.travel_mm[0], self.stage.status().machine_mm[axis]
         while True:
+            pos = self.stage.status().machine_mm[axis]
+            if pos != last:  # moving up off the low switch, not yet the pull-off away: it may still be engaged
+                self._homing_pulloff = pos > last and pos < switch + self.stage.settings[27] - TRAVEL_EPS_MM
+                last = pos
             code = self.faults.fail_homing
             progress = self.stage.motion_progress()
             done = self.stage.status().state != "Home"  # a slow poll may find the cycle over: it fails all the same
+            if self._door_in_homing:  # limits.c limits_go_home(): EXEC_SAFETY_DOOR -> EXEC_ALARM_HOMING_FAIL_DOOR
+                self.stage.soft_reset()
+                code, done = 7, True
             if code and (done or (progress is not None and progress[0] == "Home" and progress[1] >= 0.5)):
                 self._status_in_homing = False  # the reset clears the pending report
                 self.stage.homed = False
@@ -564,10 +753,15 @@ class GrblFirmware:
         """Execute a checked block in gcode.c's order: modes, dwell, offsets, motion, program flow."""
         g = self._gc
         g.modal.feed_mode, g.feed_rate = b.modal.feed_mode, b.f
+        spindle_sync = g.modal.spindle != b.modal.spindle or (g.spindle_speed != b.s and g.modal.spindle != 5)
+        coolant_sync = g.modal.coolant != b.modal.coolant
         g.spindle_speed, g.tool = b.s, b.t
         g.modal.spindle, g.modal.coolant = b.modal.spindle, b.modal.coolant
-        if not self._check:
-            self._spindle_rpm = self._rpm(g.spindle_speed) if g.modal.spindle in (3, 4) else 0.0
+        if not self._check and (spindle_sync or coolant_sync):  # spindle_sync(), coolant_sync(): [4], [7], [8]
+            yield from self._synchronize()
+            self._spindle_rpm = self._rpm(g.spindle_speed) if self._spindle_on else 0.0
+            self._flood = g.modal.coolant == 8
+            self._ovr_counter = 0  # spindle_set_state() / coolant_set_state(): report at once
         if b.non_modal == gc.DWELL and not self._check:  # mc_dwell(): sync, then wait P seconds
             yield from self._synchronize()
             end = self.stage.clock.now() + b.p
@@ -622,31 +816,70 @@ class GrblFirmware:
         if motion in (gc.CW_ARC, gc.CCW_ARC):
             for point in gc.arc_points(b, g.position, self.stage.settings[12])[:-1]:
                 self._soft_limit_check(point)
-        yield from self._line(b.xyz, feed)
         if motion in gc.PROBE_MODES and not self._check:
-            yield from self._synchronize()  # the probe pin never triggers: no contact within the travel
-            if motion in (140, 142):  # G38.2 / G38.4
-                raise GrblError("alarm", 5)
+            yield from self._probe_cycle(b.xyz, feed, motion)
+            return
+        yield from self._line(b.xyz, feed)
+
+    def _probe_cycle(self, target: list[float], feed: float, motion: int) -> Steps:
+        """motion_control.c mc_probe_cycle() with no probe wired (the pin never changes).
+
+        Toward (G38.2/3) the pin never triggers: the whole move runs; G38.2 then
+        raises ALARM:5, G38.3 stores where it stopped. Away (G38.4/5) the inverted
+        pin reads triggered before any motion: ALARM:4. Probe alarms do not reset;
+        report.c's 500 ms follow the alarm; ``[PRB:]`` (MESSAGE_PROBE_COORDINATES)
+        comes after a probing motion, then the line's ``ok`` (gcode.c returns STATUS_OK).
+        """
+        yield from self._synchronize()
+        self._probe_ok = False
+        away = motion in (142, 143)
+        if away != bool(self.stage.settings[6]):  # PROBE_FAIL_INITIAL: mc_probe_cycle() bails out at once
+            yield from self._probe_alarm(4)
+            return
+        yield from self._line(target, feed)
+        yield from self._synchronize()
+        if motion in (140, 142):
+            yield from self._probe_alarm(5)
+        else:
+            self._probe_mpos = self._machine_planned()
+        self._gc.position = self._machine_planned()
+        self._send(self._probe_line())
+
+    def _probe_alarm(self, code: int) -> Steps:
+        """A probe alarm: ALARM:N, state Alarm, report.c's 500 ms inside the line (no reset)."""
+        self.stage.trigger_alarm(code)
+        self._send(f"ALARM:{code}")
+        end = self.stage.clock.now() + ALARM_REPORT_DELAY_S
+        while self.stage.clock.now() < end:
+            yield
 
     def _program_flow(self, flow: int) -> Steps:
         """gcode.c [21]: sync; M0 holds (not in check mode); M2/M30 reset some modes, print Pgm End."""
         yield from self._synchronize()
         g = self._gc
         if flow == 3:
-            if not self._check:
+            if not self._check:  # EXEC_FEED_HOLD, then protocol_execute_realtime() suspends until '~'
                 self.stage.feed_hold()
+                yield  # poll() runs nothing while held: the ok follows the resume
             return
         m = g.modal
         m.motion, m.plane, m.distance, m.feed_mode, m.coord_select = gc.LINEAR, 0, 90, 94, 0
         m.spindle, m.coolant = 5, 9
+        self._ovr = [100, 100, 100]  # RESTORE_OVERRIDES_AFTER_PROGRAM_END
         if not self._check:
             g.coord_system = list(self._coords[0])
             self._spindle_rpm = 0.0
-            self._wco_counter = 0
+            self._flood = False
+            self._wco_counter = self._ovr_counter = 0
         self._send("[MSG:Pgm End]")
 
+    @property
+    def _spindle_on(self) -> bool:
+        return self._gc.modal.spindle in (3, 4)
+
     def _rpm(self, s: float) -> float:
-        """spindle_control.c: the speed reported for S, clamped to $31..$30 (S0 is off)."""
+        """spindle_control.c spindle_compute_pwm_value(): S times the override, clamped to $31..$30 (0 is off)."""
+        s *= 0.01 * self._ovr[2]
         hi, lo = self.stage.settings[30], self.stage.settings[31]
         if lo >= hi or s >= hi:
             return hi
@@ -679,19 +912,48 @@ class GrblFirmware:
         if self._check:
             return
         for i, (t, b) in enumerate(zip(target, self._base())):
+            t = self._hard_limit_stop(i, t - b) + b
             if abs(self.stage.planned_mm(i) - (t - b)) <= TRAVEL_EPS_MM:
                 continue  # plan_buffer_line(): an empty block is not planned
             while self.stage.planner_free() <= 0:
                 yield
-            self.stage.move_to(t - b, feed, AXES[i])
+            rate = (feed * self._ovr[0] if math.isfinite(feed) else self.stage.max_rate_mm_min(i) * self._ovr[1]) / 100
+            self.stage.move_to(t - b, rate, AXES[i])  # planned with the overrides in force (not re-planned later)
+
+    def _hard_limit_stop(self, axis: int, target_mm: float) -> float:
+        """With ``$21=1`` a switch sits at each end of the travel: a move beyond it stops there and limits.c's
+        ISR raises ALARM:1 when the carriage gets there (:meth:`_check_hard_limit`); otherwise the target."""
+        lo, hi = self.stage.axis_travel_mm[axis]
+        if not self.stage.settings[21] or lo - TRAVEL_EPS_MM <= target_mm <= hi + TRAVEL_EPS_MM:
+            return target_mm
+        end = min(max(target_mm, lo), hi)
+        self._hard_limit_at = (axis, end)
+        return end
+
+    def _check_hard_limit(self) -> None:
+        """limits.c ISR(LIMIT_INT_vect): the switch closes, mc_reset() and EXEC_ALARM_HARD_LIMIT (critical)."""
+        if self._hard_limit_at is None or self._critical:
+            return
+        axis, end = self._hard_limit_at
+        if abs(self.stage.status().machine_mm[axis] - end) <= TRAVEL_EPS_MM:
+            self._hard_limit_at = None
+            self._limit_hit.add(axis)
+            self._alarm(1, line_open=self._pending is not None)
+
+    def _limits_pressed(self) -> str:
+        """The switches a hard limit left pressed (the carriage still at that end of the travel)."""
+        pos = self.stage.status().machine_mm
+        self._limit_hit = {i for i in self._limit_hit
+                           if min(abs(pos[i] - e) for e in self.stage.axis_travel_mm[i]) <= TRAVEL_EPS_MM}
+        return "".join(AXES[i] for i in sorted(self._limit_hit))
 
     def _jog(self, text: str) -> Steps:
         """``$J=``: gcode.c with G1/G94 enforced, the jog rules (16), jog.c's travel check (15)."""
         self._gc.position = self._machine_planned()
         b = check_block(text, self._gc, self._coords, jog=True)
         b.check_jog()
-        if not b.axis_words:
-            raise CodeError(26)  # deliberate: 1.1h's source would jog to machine zero (docs/hardware.md)
+        if not b.axis_words:  # gcode.c: the jog's target array is never filled: machine zero
+            b.xyz = [0.0, 0.0, 0.0]
         if self.stage.soft_limits:
             try:
                 self._soft_limit_check(b.xyz)

@@ -262,13 +262,19 @@ class GrblLink:
         if len(data) > min(self.rx_size - 1, MAX_LINE_BYTES):
             raise InputError(f"GRBL line too long ({len(data)} bytes > {MAX_LINE_BYTES}): {line!r}")
         timeout_s = self.timeout_s if timeout_s is None else timeout_s
+        def fits() -> bool:
+            return self._rx_used + len(data) <= self.rx_size - 1
+
         while True:
             try:
-                self.wait_for(lambda: self._rx_used + len(data) <= self.rx_size - 1, timeout_s,
-                              f"RX buffer still full after {timeout_s:g} s; the controller stopped answering")
+                self.wait_for(fits, timeout_s, f"RX buffer still full after {timeout_s:g} s; the controller stopped answering")
                 break
             except HardwareError:
-                if self.dead is not None or keep_waiting is None or not keep_waiting():
+                if self.dead is not None:
+                    raise
+                if keep_waiting is None or not keep_waiting():
+                    if fits():  # an answer came while keep_waiting() asked '?'
+                        break
                     raise
         p = Pending(line.strip(), len(data), dwell_s=dwell_seconds(line))
         with self.cond:
@@ -282,7 +288,9 @@ class GrblLink:
         """Wait for the answer of a sent line; return its push lines or raise GrblError/HardwareError.
 
         When the deadline passes, ``keep_waiting()`` may extend it (a feed hold:
-        GRBL answers no line until ``~``, which is no cable fault).
+        GRBL answers no line until ``~``, which is no cable fault). The answer
+        may arrive while ``keep_waiting()`` asks GRBL (its ``?`` is answered after
+        the ``ok`` already on its way), so it is looked for once more before failing.
         """
         timeout_s = self.timeout_s if timeout_s is None else timeout_s
         while not p.done.wait(timeout_s):
@@ -290,6 +298,8 @@ class GrblLink:
                 raise self.dead
             if keep_waiting is not None and keep_waiting():
                 continue
+            if p.done.is_set():
+                break
             raise HardwareError(
                 f"GRBL on {self.port_name}: no reply to {p.line!r} within {timeout_s:g} s; check the cable or reset the controller"
             )

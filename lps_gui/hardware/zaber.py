@@ -97,21 +97,29 @@ class ZaberStage(Stage):
                                 "the port name") from None
         self._dead = None
         self._conn.default_request_timeout = int(self.timeout_s * 1000)
-        with self._talk("device scan"):
-            found = [d.device_address for d in self._conn.detect_devices(identify_devices=False)]
-        if self.device_address not in found:
+        device = self._conn.get_device(self.device_address)
+        try:
+            with self._talk("reading the serial number"):
+                self.serial_number = int(device.settings.get("system.serial"))
+        except HardwareError:
+            found = self._scan()
             self.disconnect()
             raise HardwareError(f"Zaber on {self.port}: no device {self.device_address} (found {found}); "
-                                "give the device number of the stage")
-        device = self._conn.get_device(self.device_address)
+                                "give the device number of the stage") from None
         self._axis = device.get_axis(self.axis_number)
         with self._talk("reading the device"):
-            self.serial_number = int(device.settings.get("system.serial"))
             resolution = int(self._axis.settings.get("resolution"))
             self.microstep_mm = self.full_step_um / resolution / 1000.0
             lo, hi = (self._axis.settings.get(n) for n in ("limit.min", "limit.max"))
         self.travel_mm = (lo * self.microstep_mm, hi * self.microstep_mm)
         self.events.emit(StageEvent("connected", text=f"Zaber device {self.device_address} on {self.port}"))
+
+    def _scan(self) -> list[int]:
+        """Addresses of the devices that answer on the port (all answer an empty command to device 0)."""
+        try:
+            return [d.device_address for d in self._conn.detect_devices(identify_devices=False)]
+        except Exception:  # nothing answers, or the port is gone: nothing found
+            return []
 
     def disconnect(self) -> None:
         conn, self._conn, self._axis = self._conn, None, None

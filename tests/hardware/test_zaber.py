@@ -25,16 +25,14 @@ def rig():
 
 
 def test_connect_exchange_is_what_the_library_sends(rig):
-    """PyMeasure-style record: zaber-motion scans with an empty command to all devices, then the driver reads
-    the serial number, the resolution and the travel limits; message ids and checksums are the library's."""
+    """PyMeasure-style record: the driver reads the serial number (which also proves the device is there), the
+    resolution and the travel limits; message ids and checksums are the library's, WR until homed."""
     emu, stage = rig
     assert emu.device.log == [
-        ("/0 0 00:00", "@01 0 00 OK IDLE WR 0"),
-        ("/1 0 01 get comm.packet.size.max:CF", "@01 0 01 RJ IDLE WR BADCOMMAND"),
-        ("/1 0 02 get system.serial:2A", "@01 0 02 OK IDLE WR 36036"),
-        ("/1 1 03 get resolution:27", "@01 1 03 OK IDLE WR 64"),
-        ("/1 1 04 get limit.min:E9", "@01 1 04 OK IDLE WR 0"),
-        ("/1 1 05 get limit.max:E6", "@01 1 05 OK IDLE WR 2099738"),
+        ("/1 0 00 get system.serial:2C", "@01 0 00 OK IDLE WR 36036"),
+        ("/1 1 01 get resolution:29", "@01 1 01 OK IDLE WR 64"),
+        ("/1 1 02 get limit.min:EB", "@01 1 02 OK IDLE WR 0"),
+        ("/1 1 03 get limit.max:E8", "@01 1 03 OK IDLE WR 2099738"),
     ]
     assert stage.serial_number == 36036 and stage.microstep_mm == pytest.approx(STEP_MM, rel=1e-12)
     assert stage.travel_mm == pytest.approx((0.0, 2099738 * STEP_MM))
@@ -113,6 +111,6 @@ def test_port_vanishing_mid_move_is_one_line_error(rig):
 
 def test_wrong_device_number_is_named():
     with ZaberEmulator(SimulatedStage(travel_mm=TRAVEL), time_scale=200.0) as emu:
-        stage = ZaberStage(emu.path, device=3, timeout_s=2.0)
+        stage = ZaberStage(emu.path, device=3, timeout_s=0.5)
         with pytest.raises(HardwareError, match=r"no device 3 \(found \[1\]\)"):
             stage.connect()

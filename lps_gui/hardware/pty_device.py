@@ -144,3 +144,32 @@ class PtyServer:
             os.write(self._master, data)
         except OSError:  # host not reading, or closing: lost like bytes on a wire
             log.debug("%s: output dropped", self.name)
+
+
+def connect_emulated(driver_cls: type, server: PtyServer, **driver_options):
+    """A ``driver_cls`` connected to ``server`` (started here), naming the simulated stage it serves
+    (``Stage.simulated``: the simulated camera renders its true pose); disconnecting stops the server."""
+    served = server.stage
+    path = server.start()
+
+    class Emulated(driver_cls):
+        emulator = server
+        simulated = served
+
+        def disconnect(self) -> None:
+            try:
+                super().disconnect()
+            finally:
+                server.stop()
+
+        def describe(self) -> dict:
+            return {**super().describe(), "emulated": served.describe()}
+
+    Emulated.__name__ = Emulated.__qualname__ = f"Emulated{driver_cls.__name__}"
+    stage = Emulated(path, **driver_options)
+    try:
+        stage.connect()
+    except BaseException:
+        server.stop()
+        raise
+    return stage

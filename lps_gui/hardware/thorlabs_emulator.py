@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import struct
 
-from lps_gui.hardware.pty_device import PtyServer
+from lps_gui.hardware.pty_device import PtyServer, connect_emulated
 from lps_gui.hardware.sim_stage import SimulatedStage
 from lps_gui.hardware.stage import AXES
 
@@ -193,3 +193,13 @@ class ThorlabsEmulator(PtyServer):
         stage = stage if stage is not None else SimulatedStage()
         self.device = AptKdc101(stage, **device_options)
         super().__init__(self.device, stage, time_scale=time_scale, name="thorlabs-emulator")
+
+
+def emulated_thorlabs_stage(time_scale: float = 1.0, simulated: SimulatedStage | None = None, **stage_options):
+    """A :class:`~lps_gui.hardware.thorlabs.ThorlabsStage` connected to a fresh KDC101 emulator serving
+    ``simulated`` (else a new :class:`SimulatedStage` from ``stage_options``); disconnecting stops it."""
+    from lps_gui.hardware.thorlabs import ThorlabsStage
+
+    stage_options.pop("clock", None)
+    served = simulated if simulated is not None else SimulatedStage(**stage_options)
+    return connect_emulated(ThorlabsStage, ThorlabsEmulator(served, time_scale=time_scale))

@@ -78,6 +78,9 @@ class ZaberStage(Stage):
                                        "reconnect the stage and resume")
             self.events.emit(StageEvent("disconnected", text=str(self._dead)))
             raise self._dead from None
+        except zx.RequestTimeoutException:
+            raise HardwareError(f"Zaber on {self.port}: no answer to {what} within {self.timeout_s:g} s; the port "
+                                "vanished or the device is off: reconnect the stage and resume") from None
         except zx.CommandFailedException as exc:
             raise HardwareError(f"Zaber device {self.device_address} axis {self.axis_number} rejected {what}: "
                                 f"{exc.details.response_data}") from None

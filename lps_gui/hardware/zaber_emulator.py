@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from lps_gui.hardware.pty_device import PtyServer
+from lps_gui.hardware.pty_device import PtyServer, connect_emulated
 from lps_gui.hardware.sim_stage import SimulatedStage
 from lps_gui.hardware.stage import AXES
 
@@ -225,6 +225,7 @@ class ZaberEmulator(PtyServer):
         super().__init__(self.device, stage, time_scale=time_scale, name="zaber-emulator")
 
 
+
 def emulated_zaber_stage(time_scale: float = 1.0, simulated: SimulatedStage | None = None, **stage_options):
     """A :class:`~lps_gui.hardware.zaber.ZaberStage` connected to a fresh emulator that serves ``simulated``
     (else a new :class:`SimulatedStage` from ``stage_options``); disconnecting stops the emulator."""
@@ -232,26 +233,4 @@ def emulated_zaber_stage(time_scale: float = 1.0, simulated: SimulatedStage | No
 
     stage_options.pop("clock", None)
     served = simulated if simulated is not None else SimulatedStage(**stage_options)
-    emu = ZaberEmulator(served, time_scale=time_scale)
-    path = emu.start()
-
-    class EmulatedZaberStage(ZaberStage):
-        emulator = emu
-        simulated = served
-
-        def disconnect(self) -> None:
-            try:
-                super().disconnect()
-            finally:
-                emu.stop()
-
-        def describe(self) -> dict:
-            return {**super().describe(), "emulated": served.describe()}
-
-    stage = EmulatedZaberStage(path)
-    try:
-        stage.connect()
-    except BaseException:
-        emu.stop()
-        raise
-    return stage
+    return connect_emulated(ZaberStage, ZaberEmulator(served, time_scale=time_scale))

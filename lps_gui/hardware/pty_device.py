@@ -146,10 +146,19 @@ class PtyServer:
             log.debug("%s: output dropped", self.name)
 
 
-def connect_emulated(driver_cls: type, server: PtyServer, **driver_options):
-    """A ``driver_cls`` connected to ``server`` (started here), naming the simulated stage it serves
-    (``Stage.simulated``: the simulated camera renders its true pose); disconnecting stops the server."""
-    served = server.stage
+
+def emulated_stage(driver_cls: type, emulator_cls: type, simulated: SimulatedStage | None = None,
+                   stage_options: dict | None = None, **emulator_options):
+    """A ``driver_cls`` connected to a fresh ``emulator_cls`` serving ``simulated`` (else a new
+    :class:`SimulatedStage` from ``stage_options``; its ``clock`` is dropped: the emulator owns simulated time).
+
+    The stage names the simulated stage it serves (``Stage.simulated``: the simulated camera renders its
+    true pose, the rig seeds its draws through it); disconnecting stops the emulator.
+    """
+    options = dict(stage_options or {})
+    options.pop("clock", None)
+    served = simulated if simulated is not None else SimulatedStage(**options)
+    server = emulator_cls(served, **emulator_options)
     path = server.start()
 
     class Emulated(driver_cls):
@@ -166,7 +175,7 @@ def connect_emulated(driver_cls: type, server: PtyServer, **driver_options):
             return {**super().describe(), "emulated": served.describe()}
 
     Emulated.__name__ = Emulated.__qualname__ = f"Emulated{driver_cls.__name__}"
-    stage = Emulated(path, **driver_options)
+    stage = Emulated(path)
     try:
         stage.connect()
     except BaseException:

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import struct
 
-from lps_gui.hardware.pty_device import PtyServer, connect_emulated
+from lps_gui.hardware.pty_device import PtyServer, emulated_stage
 from lps_gui.hardware.sim_stage import SimulatedStage
 from lps_gui.hardware.stage import AXES
 
@@ -200,6 +200,4 @@ def emulated_thorlabs_stage(time_scale: float = 1.0, simulated: SimulatedStage |
     ``simulated`` (else a new :class:`SimulatedStage` from ``stage_options``); disconnecting stops it."""
     from lps_gui.hardware.thorlabs import ThorlabsStage
 
-    stage_options.pop("clock", None)
-    served = simulated if simulated is not None else SimulatedStage(**stage_options)
-    return connect_emulated(ThorlabsStage, ThorlabsEmulator(served, time_scale=time_scale))
+    return emulated_stage(ThorlabsStage, ThorlabsEmulator, simulated, stage_options, time_scale=time_scale)

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from lps_gui.hardware.pty_device import PtyServer, connect_emulated
+from lps_gui.hardware.pty_device import PtyServer, emulated_stage
 from lps_gui.hardware.sim_stage import SimulatedStage
 from lps_gui.hardware.stage import AXES
 
@@ -231,6 +231,4 @@ def emulated_zaber_stage(time_scale: float = 1.0, simulated: SimulatedStage | No
     (else a new :class:`SimulatedStage` from ``stage_options``); disconnecting stops the emulator."""
     from lps_gui.hardware.zaber import ZaberStage
 
-    stage_options.pop("clock", None)
-    served = simulated if simulated is not None else SimulatedStage(**stage_options)
-    return connect_emulated(ZaberStage, ZaberEmulator(served, time_scale=time_scale))
+    return emulated_stage(ZaberStage, ZaberEmulator, simulated, stage_options, time_scale=time_scale)

@@ -38,23 +38,19 @@ def test_connect_exchange_is_what_the_library_sends(rig):
     assert stage.travel_mm == pytest.approx((0.0, 2099738 * STEP_MM))
 
 
-def test_home_then_move_reaches_the_target_in_microsteps(rig):
+
+def test_home_clears_wr_and_move_is_sent_in_microsteps_and_native_speed(rig):
     emu, stage = rig
     stage.home()
     assert "WR" not in emu.device.warnings
     n = len(emu.device.log)
     stage.move_to(42.5, 3000.0)
     sent, answer = emu.device.log[n]
-    speed = 3000.0 / 60.0 / STEP_MM * 1.6384
-    assert re.fullmatch(r"/1 1 \d\d move abs 892388 (\d+(\.\d+)?):[0-9A-F]{2}", sent), sent
+    assert re.fullmatch(r"/1 1 \d\d move abs 892388 \d+(\.\d+)?:[0-9A-F]{2}", sent), sent
+    speed = 3000.0 / 60.0 / STEP_MM * 1.6384  # microsteps/s x 1.6384
     assert float(sent.split()[6].split(":")[0]) == pytest.approx(speed, rel=1e-6)
     assert re.fullmatch(r"@01 1 \d\d OK BUSY -- 0", answer), answer
-    st = stage.wait_idle(timeout_s=30.0)
-    assert st.idle and st.work_mm[0] == pytest.approx(892388 * STEP_MM, abs=1e-12)
-    # the simulated carriage is where the device says: the emulator converts nothing but microsteps
-    assert emu.stage.status().work_mm[0] == pytest.approx(892388 * STEP_MM, abs=1e-12)
-    assert abs(stage.position_mm() - 42.5) <= STEP_MM / 2
-
+    assert stage.wait_idle(timeout_s=30.0).work_mm[0] == 892388 * STEP_MM
 
 def test_every_command_is_checksummed_and_answered_by_id(rig):
     emu, stage = rig
@@ -74,18 +70,6 @@ def test_move_outside_travel_is_a_one_line_rejection(rig):
     assert stage.wait_idle(timeout_s=5.0).work_mm[0] == pytest.approx(round(10.0 / STEP_MM) * STEP_MM, abs=1e-9)
 
 
-def test_hold_then_resume_reaches_the_target(rig):
-    emu, stage = rig
-    emu.time_scale = 1.0  # slow enough to stop before the end
-    stage.move_to(90.0, 600.0)
-    stage.feed_hold()
-    with pytest.raises(HardwareError, match="Hold"):
-        stage.wait_idle(timeout_s=5.0)
-    emu.time_scale = 200.0
-    stage.resume()
-    assert stage.wait_idle(timeout_s=30.0).work_mm[0] == pytest.approx(round(90.0 / STEP_MM) * STEP_MM, abs=1e-9)
-
-
 def test_settings_read_in_mm_and_write_back(rig):
     emu, stage = rig
     settings = {s.number: s for s in stage.read_settings()}
@@ -94,19 +78,6 @@ def test_settings_read_in_mm_and_write_back(rig):
     assert {s.number: s.value for s in stage.read_settings()}[1] == pytest.approx(1500.0, rel=1e-5)
     with pytest.raises(HardwareError, match="no setting 9"):
         stage.write_setting(9, 1.0)
-
-
-def test_port_vanishing_mid_move_is_one_line_error(rig):
-    emu, stage = rig
-    emu.time_scale = 1.0
-    stage.move_to(90.0, 300.0)
-    emu.drop()
-    with pytest.raises(LpsError) as e:
-        stage.wait_idle(timeout_s=10.0)
-    msg = str(e.value)
-    assert "\n" not in msg and "Zaber on" in msg and "reconnect" in msg
-    with pytest.raises(LpsError, match="vanished"):  # and every later call says the same
-        stage.status()
 
 
 def test_wrong_device_number_is_named():

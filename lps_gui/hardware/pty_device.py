@@ -34,18 +34,19 @@ class PtyProtocol(Protocol):
         """The clock moved: what the controller says on its own (a move completed...)."""
 
 
-class PtyServer:
-    """One emulated controller on a fresh pty; ``start()`` returns the path a client opens."""
+class PtyEndpoint:
+    """The pty and the serving thread of an emulated controller: open, serve, stop, or vanish like a cable.
 
-    def __init__(self, protocol: PtyProtocol, stage: SimulatedStage, time_scale: float = 1.0, name: str = "emulator") -> None:
-        self.protocol = protocol
+    Subclasses implement :meth:`_step` (one turn of the serving loop) and may
+    say what the controller prints on power-up in :meth:`_opened`.
+    """
+
+    def __init__(self, stage: SimulatedStage, time_scale: float = 1.0, name: str = "emulator") -> None:
         self.stage = stage
         self.time_scale = float(time_scale)
         self.name = name
         self.path = ""
         self.dropped = False
-        self.drop_when: Callable[[bytes], bool] | None = None  # fault: drop the port when it returns True for received bytes
-        self._lock = threading.RLock()
         self._master = self._slave = -1
         self._thread: threading.Thread | None = None
         self._running = False
@@ -53,9 +54,11 @@ class PtyServer:
 
     @property
     def running(self) -> bool:
+        """The serving thread is up (False after stop, a drop, or a crash logged as an error)."""
         return self._running
 
     def start(self) -> str:
+        """Open the pty, power the controller up, serve in a thread; return the slave's path."""
         self._master, self._slave = os.openpty()
         tty.setraw(self._slave)
         os.set_blocking(self._master, False)
@@ -64,9 +67,13 @@ class PtyServer:
             self.stage.connect()
         self._running = True
         self._last_real = time.monotonic()
-        self._thread = threading.Thread(target=self._serve, name=f"{self.name} {self.path}", daemon=True)
+        self._opened()
+        self._thread = threading.Thread(target=self._serve, name=self.name, daemon=True)
         self._thread.start()
         return self.path
+
+    def _opened(self) -> None:
+        """What the controller does at power-up, before serving (nothing by default)."""
 
     def stop(self) -> None:
         self._running = False
@@ -79,7 +86,13 @@ class PtyServer:
         self.dropped = True
         self.stop()
 
-    def __enter__(self) -> "PtyServer":
+    def _drop_now(self) -> None:
+        """Drop from inside the serving thread (fault injection)."""
+        self.dropped = True
+        self._running = False
+        self._close()
+
+    def __enter__(self):
         self.start()
         return self
 
@@ -101,12 +114,23 @@ class PtyServer:
                 self._step()
         except HardwareError as exc:  # the simulated stage vanished (SimulatedStage.disconnect_fault)
             log.info("%s: stage gone (%s); dropping the port", self.name, exc)
-            self.dropped, self._running = True, False
-            self._close()
-        except Exception:  # an emulator bug shows in the log and closes the port: the client never hangs
+            self._drop_now()
+        except Exception:  # an emulator bug shows in the log and stops serving: the client never hangs
             log.exception("%s stopped", self.name)
             self._running = False
-            self._close()
+
+    def _step(self) -> None:
+        raise NotImplementedError
+
+
+class PtyServer(PtyEndpoint):
+    """One controller speaking :class:`PtyProtocol` on a fresh pty; ``start()`` returns the path a client opens."""
+
+    def __init__(self, protocol: PtyProtocol, stage: SimulatedStage, time_scale: float = 1.0, name: str = "emulator") -> None:
+        super().__init__(stage, time_scale, name)
+        self.protocol = protocol
+        self.drop_when: Callable[[bytes], bool] | None = None  # fault: drop the port when it returns True for received bytes
+        self._lock = threading.RLock()
 
     def _step(self) -> None:
         r, _, _ = select.select([self._master], [], [], 0.002)
@@ -120,8 +144,7 @@ class PtyServer:
                 data = self._read()
                 if data:
                     if self.drop_when is not None and self.drop_when(data):
-                        self.dropped, self._running = True, False
-                        self._close()
+                        self._drop_now()
                         return
                     out += self.protocol.receive(data)
             if out:
@@ -144,7 +167,6 @@ class PtyServer:
             os.write(self._master, data)
         except OSError:  # host not reading, or closing: lost like bytes on a wire
             log.debug("%s: output dropped", self.name)
-
 
 
 def emulated_stage(driver_cls: type, emulator_cls: type, simulated: SimulatedStage | None = None,

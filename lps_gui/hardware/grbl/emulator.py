@@ -18,12 +18,10 @@ import os
 import select
 import threading
 import time
-import tty
 
 from lps_gui.core.clock import SimClock
-from lps_gui.errors import HardwareError
 from lps_gui.hardware.grbl.firmware import BANNER, Faults, GrblFirmware
-from lps_gui.hardware.pty_device import emulated_stage
+from lps_gui.hardware.pty_device import PtyEndpoint, emulated_stage
 from lps_gui.hardware.sim_stage import SimulatedStage
 
 log = logging.getLogger(__name__)
@@ -32,7 +30,7 @@ GARBAGE = b"\x00\xff\xfe#%\x07garbage\x1b[0m"
 __all__ = ["BANNER", "Faults", "GrblEmulator", "emulated_grbl_stage"]
 
 
-class GrblEmulator:
+class GrblEmulator(PtyEndpoint):
     """GRBL 1.1 on a pty. ``start()`` returns the device path a serial client opens.
 
     Use as a context manager in tests: ``with GrblEmulator(...) as emu: GrblStage(emu.path)``.
@@ -44,21 +42,15 @@ class GrblEmulator:
 
     def __init__(self, stage: SimulatedStage | None = None, faults: Faults | None = None, time_scale: float = 1.0,
                  homing_init_lock: bool = False, stepped: bool = False) -> None:
-        self.stage = stage if stage is not None else SimulatedStage()
+        super().__init__(stage if stage is not None else SimulatedStage(), time_scale, "grbl-emulator")
         self.faults = faults or Faults()
-        self.time_scale = float(time_scale)
         self.stepped = stepped
         if stepped and not isinstance(self.stage.clock, SimClock):
             raise ValueError("a stepped GRBL emulator needs a stage on a SimClock")
         self._lock = threading.RLock()  # the firmware is driven by the serving thread and by advance()
         self.bytes_in = 0  # bytes read from the port (a stepped test waits until its writes are in)
-        self.path = ""
-        self.dropped = False
         self.firmware = GrblFirmware(self.stage, self.faults, send=self._send, on_drop=self._drop_now,
                                      homing_init_lock=homing_init_lock)
-        self._master = self._slave = -1
-        self._thread: threading.Thread | None = None
-        self._running = False
         self._out: list[tuple[float, bytes]] = []
         self._n_out = 0
 
@@ -68,63 +60,14 @@ class GrblEmulator:
         return self.firmware.rx_overflow_bytes
 
     @property
-    def running(self) -> bool:
-        """The serving thread is up (False after stop, a drop, or a crash logged as an error)."""
-        return self._running
-
-    @property
     def lines_received(self) -> int:
         return self.firmware.lines_received
 
     # ------------------------------------------------------------------ lifecycle
-    def start(self) -> str:
-        """Open the pty, print the banner, serve in a thread; return the slave's path."""
-        self._master, self._slave = os.openpty()
-        tty.setraw(self._slave)
-        os.set_blocking(self._master, False)
-        self.path = os.ttyname(self._slave)
-        if not self.stage.connected:
-            self.stage.connect()
-        self._running = True
-        self._last_real = time.monotonic()
-        self.firmware.power_up()  # the homing lock (if built with it), then what a reset prints
+    def _opened(self) -> None:
+        """Power-up: the homing lock (if built with it), then what a reset prints."""
+        self.firmware.power_up()
         self._flush_out()
-        self._thread = threading.Thread(target=self._serve, name="grbl-emulator", daemon=True)
-        self._thread.start()
-        return self.path
-
-    def stop(self) -> None:
-        self._running = False
-        if self._thread is not None and threading.current_thread() is not self._thread:
-            self._thread.join(timeout=2.0)
-        self._close()
-
-    def drop(self) -> None:
-        """Vanish like an unplugged USB cable: close both ends of the pty."""
-        self.dropped = True
-        self.stop()
-
-    def _drop_now(self) -> None:
-        """Drop from inside the serving thread (fault injection)."""
-        self.dropped = True
-        self._running = False
-        self._close()
-
-    def _close(self) -> None:
-        for fd in (self._master, self._slave):
-            if fd >= 0:
-                try:
-                    os.close(fd)
-                except OSError:
-                    pass
-        self._master = self._slave = -1
-
-    def __enter__(self) -> "GrblEmulator":
-        self.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.stop()
 
     # ------------------------------------------------------------------ output
     def _send(self, text: str) -> None:
@@ -152,17 +95,6 @@ class GrblEmulator:
                 return
 
     # ------------------------------------------------------------------ serving loop
-    def _serve(self) -> None:
-        try:
-            while self._running:
-                self._step()
-        except HardwareError as exc:  # the stage under us vanished (SimulatedStage.disconnect_fault)
-            log.info("GRBL emulator: stage gone (%s); dropping the port", exc)
-            self._drop_now()
-        except Exception:  # an emulator bug must show in the log, not hang the client
-            log.exception("GRBL emulator stopped")
-            self._running = False
-
     def _step(self) -> None:
         busy = self.firmware.busy or bool(self._out)
         r, _, _ = select.select([self._master], [], [], 0.002 if busy else 0.02)

@@ -110,14 +110,18 @@ class ThorlabsStage(Stage):
             raise HardwareError(f"Thorlabs: cannot open port {self.port!r} ({exc}); check the cable and the port "
                                 "name") from None
         self._dead = None
-        self._dev.send(apt.hw_no_flash_programming(dest=USB, source=HOST))
-        self._dev.send(apt.hw_req_info(dest=USB, source=HOST))
-        self._wait(lambda: self._dev.info is not None, self.timeout_s, "no answer to HW_REQ_INFO; is it a KDC101 "
-                   "and powered?")
-        self.model = self._dev.info["model_number"].split(b"\0")[0].decode("ascii", "replace")
-        self.serial_number = int(self._dev.info["serial_number"])
-        self._dev.set_enabled(True)
-        self._wait(lambda: self._dev.status["channel_enabled"], self.timeout_s, "the channel did not enable")
+        try:
+            self._dev.send(apt.hw_no_flash_programming(dest=USB, source=HOST))
+            self._dev.send(apt.hw_req_info(dest=USB, source=HOST))
+            self._wait(lambda: self._dev.info is not None, self.timeout_s, "no answer to HW_REQ_INFO; is it a "
+                       "KDC101 and powered?")
+            self.model = self._dev.info["model_number"].split(b"\0")[0].decode("ascii", "replace")
+            self.serial_number = int(self._dev.info["serial_number"])
+            self._dev.set_enabled(True)
+            self._wait(lambda: self._dev.status["channel_enabled"], self.timeout_s, "the channel did not enable")
+        except BaseException:
+            self.disconnect()  # the library's thread and port go with the failed connection
+            raise
         self.events.emit(StageEvent("connected", text=f"Thorlabs {self.model} {self.serial_number} on {self.port}"))
 
     def disconnect(self) -> None:

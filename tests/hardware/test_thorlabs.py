@@ -105,3 +105,21 @@ def test_emulator_frames_split_messages_and_ignores_moves_while_disabled():
     assert not dev.busy() and dev.position() == 10 * COUNTS  # channel disabled: the motor is not driven
     dev.receive(msg(0x0210, 1, 0x01) + msg(0x0453, data=struct.pack("<Hl", 1, 20 * COUNTS)))
     assert dev.busy()
+
+
+def test_a_port_with_no_controller_is_one_line_and_leaves_no_thread():
+    import os
+    import pty
+    import threading
+
+    master, slave = pty.openpty()  # a serial port where nothing answers
+    try:
+        stage = ThorlabsStage(os.ttyname(slave), timeout_s=0.5)
+        before = threading.active_count()
+        with pytest.raises(HardwareError, match="no answer to HW_REQ_INFO") as e:
+            stage.connect()
+        assert "\n" not in str(e.value) and not stage.connected
+        assert threading.active_count() <= before  # the library's event-loop thread ended with the failure
+    finally:
+        os.close(master)
+        os.close(slave)

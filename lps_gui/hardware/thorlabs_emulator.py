@@ -19,7 +19,8 @@ USB unit 0x50. The messages served:
   MOT_REQ_STATUSBITS 0x0429 -> 0x042A; MOT_REQ/SET VELPARAMS 0x0414/0x0413 (-> 0x0415), GENMOVEPARAMS
   0x043B (-> 0x043C), JOGPARAMS 0x0417 (-> 0x0418), HOMEPARAMS 0x0441 (-> 0x0442).
 
-Units: positions in encoder counts (34304 per mm for the Z8 actuators and MTS stages); velocity and
+Homing (MOT_MOVE_HOME) drives to the home switch and zeroes the position counter there; until then count 0 is
+the simulated stage's 0 mm. Units: positions in encoder counts (34304 per mm for the Z8 actuators and MTS stages); velocity and
 acceleration in the manual's DC-servo units, counts x T x 65536 per second and counts x T^2 x 65536 per
 second squared with T = 2048 / 6e6 s. Unknown messages are ignored, as the controller does.
 """
@@ -63,6 +64,7 @@ class AptKdc101:
         self.moving = False  # a move whose MOVE_COMPLETED is still due
         self.stopping = False
         self.updates = False
+        self.origin_mm = 0.0  # where count 0 is on the simulated stage: the home position once homed
         self.vel = (0, round(self.counts_per_mm * 1.5 * ACC_SCALE), round(self.counts_per_mm * 2.0 * VEL_SCALE))
         self.backlash = round(0.02 * self.counts_per_mm)
         self.home_params = (2, 1, round(self.counts_per_mm * 2.0 * VEL_SCALE), round(0.1 * self.counts_per_mm))
@@ -71,7 +73,7 @@ class AptKdc101:
 
     # ------------------------------------------------------------------ state
     def position(self) -> int:
-        return round(self.stage.status().work_mm[self.axis] * self.counts_per_mm)
+        return round((self.stage.status().work_mm[self.axis] - self.origin_mm) * self.counts_per_mm)
 
     def busy(self) -> bool:
         return self.stage.status().state != "Idle"
@@ -110,6 +112,7 @@ class AptKdc101:
         if self.homing:
             msg = header(0x0444, HOST, USB, param1=1)
             self.homing, self.homed = False, True
+            self.origin_mm = self.stage.status().work_mm[self.axis]  # homing zeroes the position counter
         elif self.stopping:
             msg = header(0x0466, HOST, USB, data=self.dc_status())
         else:
@@ -169,7 +172,7 @@ class AptKdc101:
 
     def _move_to(self, target_counts: int) -> None:
         lo, hi = self.stage.axis_travel_mm[self.axis]
-        target_mm = min(max(target_counts / self.counts_per_mm, lo), hi)  # the stage's end stops bound the travel
+        target_mm = min(max(self.origin_mm + target_counts / self.counts_per_mm, lo), hi)  # the end stops bound it
         speed_mm_s = max(self.vel[2], 1) / VEL_SCALE / self.counts_per_mm
         self._interrupt()
         start = self.stage.planned_mm(self.axis)

@@ -113,9 +113,13 @@ class ZaberStage(Stage):
         with self._talk("reading the device"):
             resolution = int(self._axis.settings.get("resolution"))
             self.microstep_mm = self.full_step_um / resolution / 1000.0
+        self._read_travel()
+        self.events.emit(StageEvent("connected", text=f"Zaber device {self.device_address} on {self.port}"))
+
+    def _read_travel(self) -> None:
+        with self._talk("reading the travel limits"):
             lo, hi = (self._axis.settings.get(n) for n in ("limit.min", "limit.max"))
         self.travel_mm = (lo * self.microstep_mm, hi * self.microstep_mm)
-        self.events.emit(StageEvent("connected", text=f"Zaber device {self.device_address} on {self.port}"))
 
     def _scan(self) -> list[int]:
         """Addresses of the devices that answer on the port (all answer an empty command to device 0)."""
@@ -166,6 +170,7 @@ class ZaberStage(Stage):
         with self._talk("home"):
             self._axis.home(wait_until_idle=False)
         self.wait_idle(timeout_s=max(self.timeout_s, 120.0))
+        self._read_travel()  # homing resets the position to 0 and the limits with it
 
     def unlock(self) -> None:
         """Clear the device's warning flags (Zaber has no alarm lock; a fault shows as a warning)."""

@@ -16,7 +16,10 @@ Units are the device's own: positions in microsteps; ``maxspeed`` and the
 speed of ``move abs N speed accel`` in microsteps/s x 1.6384; ``accel`` in
 microsteps/s^2 x 1.6384 / 10000 (the manual's unit conversion appendix).
 The emulated product has the X-LSM series' 3.048 um full step at the default
-64 microsteps (0.047625 um per microstep).
+64 microsteps (0.047625 um per microstep). Position 0 is where the simulated
+stage starts at 0 mm until ``home``, which (as the manual says) retracts to
+the home sensor, backs off and resets the position to 0 there; then
+``limit.min`` is 0 and ``limit.max`` the rest of the travel.
 """
 from __future__ import annotations
 
@@ -97,6 +100,7 @@ class ZaberAsciiDevice:
         }
         self.warnings: set[str] = {"WR"}  # no reference position until homed
         self.homing = False
+        self.origin_mm = 0.0  # where position 0 is on the simulated stage: the home position once homed
         self.log: list[tuple[str, str]] = []  # (command line, reply line) as the device saw them
         self._buf = b""
 
@@ -107,8 +111,11 @@ class ZaberAsciiDevice:
     def _mm_min(self, native_speed: float) -> float:
         return native_speed / VELOCITY_SCALE * self.microstep_mm * 60.0
 
+    def _sim_mm(self) -> float:
+        return self.stage.status().work_mm[AXES.index(self.axis_name)]
+
     def position(self) -> int:
-        return round(self.stage.status().work_mm[AXES.index(self.axis_name)] / self.microstep_mm)
+        return round((self._sim_mm() - self.origin_mm) / self.microstep_mm)
 
     def busy(self) -> bool:
         return self.stage.status().state != "Idle"
@@ -132,9 +139,12 @@ class ZaberAsciiDevice:
         return "".join(out).encode("ascii")
 
     def poll(self) -> bytes:
-        if self.homing and not self.busy():
+        if self.homing and not self.busy():  # the manual: homing ends by resetting the position to 0
             self.homing = False
             self.warnings.discard("WR")
+            self.origin_mm = self._sim_mm()
+            hi = self.stage.axis_travel_mm[AXES.index(self.axis_name)][1]
+            self.settings["limit.min"], self.settings["limit.max"] = 0, round((hi - self.origin_mm) / self.microstep_mm)
         return b""
 
     # ------------------------------------------------------------------ commands
@@ -179,7 +189,7 @@ class ZaberAsciiDevice:
             speed = float(args[2]) if len(args) > 2 and float(args[2]) > 0 else float(self.settings["maxspeed"])
             self._interrupt()
             start = self.stage.planned_mm(AXES.index(self.axis_name))
-            self.stage.jog(target * self.microstep_mm - start, self._mm_min(speed), self.axis_name)
+            self.stage.jog(self.origin_mm + target * self.microstep_mm - start, self._mm_min(speed), self.axis_name)
             return "OK", "0"
         if verb == "stop" and not args:
             self.stage.jog_cancel()

@@ -40,9 +40,12 @@ def test_move_lands_on_whole_device_units_where_the_simulated_carriage_is(rig):
 def test_home_then_move(rig):
     emu, stage, unit = rig
     stage.home()
-    assert stage.position_mm() == pytest.approx(TRAVEL[0] + 1.0, abs=unit)  # the simulated home: switch + pull-off
+    assert stage.position_mm() == 0.0  # homing resets the position to 0 at the home switch (both manuals)
+    home_mm = emu.stage.status().work_mm[0]
+    assert home_mm == pytest.approx(TRAVEL[0] + 1.0)  # the simulated stage's switch + pull-off
     stage.move_to(20.0, 6000.0)
     assert stage.wait_idle(timeout_s=30.0).work_mm[0] == pytest.approx(round(20.0 / unit) * unit, abs=1e-12)
+    assert emu.stage.status().work_mm[0] == pytest.approx(home_mm + round(20.0 / unit) * unit, abs=1e-12)
 
 
 def test_hold_then_resume_reaches_the_target(rig):

@@ -110,10 +110,14 @@ class ZaberStage(Stage):
             raise HardwareError(f"Zaber on {self.port}: no device {self.device_address} (found {found}); "
                                 "give the device number of the stage") from None
         self._axis = device.get_axis(self.axis_number)
-        with self._talk("reading the device"):
-            resolution = int(self._axis.settings.get("resolution"))
-            self.microstep_mm = self.full_step_um / resolution / 1000.0
-        self._read_travel()
+        try:
+            with self._talk("reading the device"):
+                resolution = int(self._axis.settings.get("resolution"))
+                self.microstep_mm = self.full_step_um / resolution / 1000.0
+            self._read_travel()
+        except BaseException:
+            self.disconnect()  # a half-read device is not connected
+            raise
         self.events.emit(StageEvent("connected", text=f"Zaber device {self.device_address} on {self.port}"))
 
     def _read_travel(self) -> None:

@@ -85,3 +85,11 @@ def test_wrong_device_number_is_named():
         stage = ZaberStage(emu.path, device=3, timeout_s=0.5)
         with pytest.raises(HardwareError, match=r"no device 3 \(found \[1\]\)"):
             stage.connect()
+
+
+def test_an_axis_the_device_does_not_have_is_a_one_line_rejection():
+    with ZaberEmulator(SimulatedStage(travel_mm=TRAVEL), time_scale=200.0) as emu:
+        stage = ZaberStage(emu.path, axis_number=2, timeout_s=1.0)
+        with pytest.raises(HardwareError, match="axis 2 rejected reading the device: BADAXIS") as e:
+            stage.connect()
+        assert "\n" not in str(e.value) and not stage.connected

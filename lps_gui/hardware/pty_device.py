@@ -15,7 +15,7 @@ import select
 import threading
 import time
 import tty
-from typing import Callable, Protocol
+from typing import Any, Callable, Protocol
 
 from lps_gui.core.clock import SimClock
 from lps_gui.errors import HardwareError
@@ -26,6 +26,8 @@ log = logging.getLogger(__name__)
 
 class PtyProtocol(Protocol):
     """A controller's protocol: bytes in, bytes out, and time passing."""
+
+    received: int  # commands (lines, messages) received so far
 
     def receive(self, data: bytes) -> bytes:
         """Bytes from the host; returns the bytes the controller answers at once."""
@@ -126,10 +128,14 @@ class PtyEndpoint:
 class PtyServer(PtyEndpoint):
     """One controller speaking :class:`PtyProtocol` on a fresh pty; ``start()`` returns the path a client opens."""
 
-    def __init__(self, protocol: PtyProtocol, stage: SimulatedStage, time_scale: float = 1.0, name: str = "emulator") -> None:
+    def __init__(self, protocol: PtyProtocol, stage: SimulatedStage, time_scale: float = 1.0, name: str = "emulator",
+                 faults: Any = None) -> None:
         super().__init__(stage, time_scale, name)
         self.protocol = protocol
         self.drop_when: Callable[[bytes], bool] | None = None  # fault: drop the port when it returns True for received bytes
+        # fault shared with the GRBL emulator's switches (``lps emulate KIND --drop-after-lines N``): the cable goes
+        # when the Nth command arrives; the other GRBL faults mean nothing to these controllers
+        self.drop_after: int | None = getattr(faults, "drop_after_lines", None)
         self._lock = threading.RLock()
 
     def _step(self) -> None:
@@ -146,7 +152,11 @@ class PtyServer(PtyEndpoint):
                     if self.drop_when is not None and self.drop_when(data):
                         self._drop_now()
                         return
-                    out += self.protocol.receive(data)
+                    answer = self.protocol.receive(data)
+                    if self.drop_after and self.protocol.received >= self.drop_after:
+                        self._drop_now()
+                        return
+                    out += answer
             if out:
                 self._write(out)
 

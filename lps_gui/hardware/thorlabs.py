@@ -237,6 +237,11 @@ class ThorlabsStage(Stage):
         self._check()
         self._dev.stop()
 
+    def stop(self) -> None:
+        """A profiled stop (MOT_MOVE_STOP); a held target is forgotten."""
+        self._held_target = None
+        self.jog_cancel()
+
     def wait_idle(self, timeout_s: float = 60.0) -> StageStatus:
         """Wait for the controller's completion message of the last command, then its settled status."""
         if self._held_target is not None and self._expect_done is not None:

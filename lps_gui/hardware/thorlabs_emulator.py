@@ -27,6 +27,7 @@ second squared with T = 2048 / 6e6 s. Unknown messages are ignored, as the contr
 from __future__ import annotations
 
 import struct
+from typing import Any
 
 from lps_gui.hardware.pty_device import PtyServer, emulated_stage
 from lps_gui.hardware.sim_stage import SimulatedStage
@@ -68,6 +69,7 @@ class AptKdc101:
         self.vel = (0, round(self.counts_per_mm * 1.5 * ACC_SCALE), round(self.counts_per_mm * 2.0 * VEL_SCALE))
         self.backlash = round(0.02 * self.counts_per_mm)
         self.home_params = (2, 1, round(self.counts_per_mm * 2.0 * VEL_SCALE), round(0.1 * self.counts_per_mm))
+        self.received = 0  # commands received (the drop-after fault counts them)
         self.log: list[tuple[bytes, bytes]] = []  # (message received or b"" when spontaneous, bytes answered)
         self._buf = b""
 
@@ -100,6 +102,7 @@ class AptKdc101:
             if len(self._buf) < size:
                 break
             msg, self._buf = self._buf[:size], self._buf[size:]
+            self.received += 1
             answer = self.handle(msg_id, p1, p2, msg[6:])
             self.log.append((msg, answer))
             out += answer
@@ -192,10 +195,11 @@ class AptKdc101:
 class ThorlabsEmulator(PtyServer):
     """A KDC101 on a pty: ``with ThorlabsEmulator(stage) as emu: ThorlabsStage(emu.path)``."""
 
-    def __init__(self, stage: SimulatedStage | None = None, time_scale: float = 1.0, **device_options) -> None:
+    def __init__(self, stage: SimulatedStage | None = None, faults: Any = None, time_scale: float = 1.0,
+                 **device_options) -> None:
         stage = stage if stage is not None else SimulatedStage()
         self.device = AptKdc101(stage, **device_options)
-        super().__init__(self.device, stage, time_scale=time_scale, name="thorlabs-emulator")
+        super().__init__(self.device, stage, time_scale=time_scale, name="thorlabs-emulator", faults=faults)
 
 
 def emulated_thorlabs_stage(time_scale: float = 1.0, simulated: SimulatedStage | None = None, **stage_options):

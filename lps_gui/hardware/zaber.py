@@ -219,6 +219,11 @@ class ZaberStage(Stage):
         with self._talk("stop"):
             self._axis.stop(wait_until_idle=False)
 
+    def stop(self) -> None:
+        """Decelerate to a stop now (Zaber's ``stop``); a held target is forgotten."""
+        self._held_target = None
+        self.jog_cancel()
+
     def wait_idle(self, timeout_s: float = 60.0) -> StageStatus:
         """Poll the axis until IDLE (the device answers BUSY while it moves); a fault flag (F*) is an error."""
         deadline = time.monotonic() + timeout_s
@@ -250,6 +255,18 @@ class ZaberStage(Stage):
         name, _, kind = SETTINGS[number]
         with self._talk(f"set {name}"):
             self._axis.settings.set(name, round(self._to_native(value, kind)))
+
+    settings_title = "Zaber settings"
+
+    def setting_label(self, setting: StageSetting) -> str:
+        """The device's own name of the setting (``get maxspeed``)."""
+        return setting.name
+
+    def travel_text(self, settings: list[StageSetting]) -> str:
+        by_name = {st.name: st.value for st in settings}
+        if "limit.min" not in by_name or "limit.max" not in by_name:
+            return "travel: unknown"
+        return f"travel: {by_name['limit.min']:g} .. {by_name['limit.max']:g} mm (limit.min, limit.max; the device refuses moves beyond)"
 
     def _from_native(self, v: float, kind: str) -> float:
         return {"speed": v / VELOCITY_SCALE * self.microstep_mm * 60.0, "accel": v / ACCEL_SCALE * self.microstep_mm,

@@ -23,7 +23,8 @@ the home sensor, backs off and resets the position to 0 there; then
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from typing import Any
 
 from lps_gui.hardware.pty_device import PtyServer, emulated_stage
 from lps_gui.hardware.sim_stage import SimulatedStage
@@ -72,15 +73,6 @@ def parse_command(line: str) -> Command | None:
     return Command(device, axis, msg_id, " ".join(tokens), ok)
 
 
-@dataclass
-class ZaberSettings:
-    """The settings the emulated device knows, in native units."""
-
-    values: dict[str, float] = field(default_factory=dict)
-    device_scope: frozenset[str] = frozenset({"system.serial", "version", "version.build", "deviceid",
-                                              "system.axiscount", "comm.checksum", "comm.alert"})
-
-
 class ZaberAsciiDevice:
     """The device's side of the ASCII protocol: lines in, replies out, motion on ``stage``."""
 
@@ -101,6 +93,7 @@ class ZaberAsciiDevice:
         self.warnings: set[str] = {"WR"}  # no reference position until homed
         self.homing = False
         self.origin_mm = 0.0  # where position 0 is on the simulated stage: the home position once homed
+        self.received = 0  # commands received (the drop-after fault counts them)
         self.log: list[tuple[str, str]] = []  # (command line, reply line) as the device saw them
         self._buf = b""
 
@@ -133,6 +126,7 @@ class ZaberAsciiDevice:
             cmd = parse_command(line)
             if cmd is None:
                 continue
+            self.received += 1
             for reply in self.handle(cmd):
                 self.log.append((line.strip(), reply))
                 out.append(reply + "\r\n")
@@ -229,10 +223,11 @@ class ZaberAsciiDevice:
 class ZaberEmulator(PtyServer):
     """A Zaber device on a pty: ``with ZaberEmulator(stage) as emu: ZaberStage(emu.path)``."""
 
-    def __init__(self, stage: SimulatedStage | None = None, time_scale: float = 1.0, **device_options) -> None:
+    def __init__(self, stage: SimulatedStage | None = None, faults: Any = None, time_scale: float = 1.0,
+                 **device_options) -> None:
         stage = stage if stage is not None else SimulatedStage()
         self.device = ZaberAsciiDevice(stage, **device_options)
-        super().__init__(self.device, stage, time_scale=time_scale, name="zaber-emulator")
+        super().__init__(self.device, stage, time_scale=time_scale, name="zaber-emulator", faults=faults)
 
 
 

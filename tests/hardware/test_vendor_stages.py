@@ -72,3 +72,31 @@ def test_port_vanishing_mid_move_is_one_line_error(rig):
     with pytest.raises(LpsError, match="vanished"):  # and every later call says the same
         stage.status()
     assert not stage.connected
+
+
+@pytest.mark.parametrize("kind", sorted(KINDS))
+def test_drop_after_fault_of_lps_emulate_unplugs_the_cable(kind):
+    """`lps emulate KIND --drop-after-lines N` builds the emulator with the GRBL fault switches; these
+    controllers honour the cable drop (after N commands received) and ignore the rest."""
+    from lps_gui.hardware.grbl.firmware import Faults
+
+    emulator_cls, driver, unit_mm = KINDS[kind]
+    emu = emulator_cls(SimulatedStage(travel_mm=TRAVEL, start_mm=10.0), faults=Faults(drop_after_lines=40),
+                       time_scale=1.0)
+    with emu:
+        stage = driver(emu.path)
+        with pytest.raises(LpsError) as e:  # at connect or during the move, wherever the 40th command falls
+            stage.connect()
+            stage.move_to(90.0, 300.0)
+            stage.wait_idle(timeout_s=30.0)
+        stage.disconnect()
+    assert emu.dropped and "\n" not in str(e.value)
+
+
+def test_stop_ends_the_move_short_of_the_target(rig):
+    emu, stage, unit = rig
+    emu.time_scale = 1.0
+    stage.move_to(90.0, 600.0)
+    stage.stop()
+    x = stage.wait_idle(timeout_s=10.0).work_mm[0]
+    assert 10.0 <= x < 90.0 and stage.status().idle  # stopped, not held: nothing to resume

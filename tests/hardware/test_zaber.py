@@ -74,6 +74,8 @@ def test_settings_read_in_mm_and_write_back(rig):
     emu, stage = rig
     settings = {s.number: s for s in stage.read_settings()}
     assert settings[4].name == "limit.max" and settings[4].value == pytest.approx(2099738 * STEP_MM)
+    assert stage.setting_label(settings[1]) == "maxspeed"
+    assert stage.travel_text(list(settings.values())).startswith("travel: 0 .. 100 mm")
     stage.write_setting(1, 1500.0)
     assert {s.number: s.value for s in stage.read_settings()}[1] == pytest.approx(1500.0, rel=1e-5)
     with pytest.raises(HardwareError, match="no setting 9"):

@@ -269,6 +269,11 @@ class ThorlabsStage(Stage):
             StageSetting(4, self.counts_per_mm, "encoder counts per mm", "counts/mm"),
         ]
 
+    settings_title = "Thorlabs KDC101 parameters"
+
+    def setting_label(self, setting: StageSetting) -> str:
+        return setting.name
+
     def write_setting(self, number: int, value: float) -> None:
         self._check()
         if number == 3:

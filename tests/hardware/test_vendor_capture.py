@@ -4,12 +4,18 @@ from __future__ import annotations
 
 import pytest
 
-from lps_gui.core.plan import Plan
-from lps_gui.io.session import Session
-from lps_gui.sim.session import create_simulated_session, simulated_engine
+from lps_gui.core.planning.plan import Plan
 from lps_gui.hardware.thorlabs_emulator import emulated_thorlabs_stage
 from lps_gui.hardware.zaber_emulator import emulated_zaber_stage
-from tests.capture.helpers import assert_listed_frames_intact, image_bytes, records_without_time, start_capture, tiny_spec
+from lps_gui.io.session import Session
+from lps_gui.sim.session import create_simulated_session, simulated_engine
+from tests.capture.helpers import (
+    assert_listed_frames_intact,
+    image_bytes,
+    records_without_time,
+    start_capture,
+    tiny_spec,
+)
 
 # stops each device reaches exactly: whole microsteps for Zaber (3.048 mm = 64000 of 0.047625 um), whole encoder
 # counts for Thorlabs (1 mm = 34304)

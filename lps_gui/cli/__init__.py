@@ -13,8 +13,8 @@ import logging
 import sys
 from typing import NoReturn
 
-from lps_gui.cli import (capture, compare, compensate, demo, detect, emulate_grbl, estimate, export, intrinsics,
-                         make_targets, plan_rig, report, simulate)
+from lps_gui.cli import (capture, compare, compensate, demo, detect, emulate, emulate_grbl, estimate, export,
+                         intrinsics, make_targets, plan_rig, report, simulate)
 
 COMMANDS = {
     "demo": demo,
@@ -24,7 +24,8 @@ COMMANDS = {
     "estimate": estimate,
     "report": report,
     "capture": capture,
-    "emulate-grbl": emulate_grbl,
+    "emulate": emulate,
+    "emulate-grbl": emulate_grbl,  # the same as `lps emulate grbl`
     "plan-rig": plan_rig,
     "compensate": compensate,
     "export": export,

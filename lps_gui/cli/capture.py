@@ -23,7 +23,8 @@ from __future__ import annotations
 import argparse
 
 from lps_gui.cli.capture_devices import (
-    bind_simulated_stage, bind_stage, clock, close, device_session, open_devices, preflight, read_intrinsics, release_lock,
+    bind_simulated_stage, bind_stage, clock, close, device_session, open_devices, open_operator_stage, preflight,
+    read_intrinsics, release_lock,
 )
 from lps_gui.cli.capture_plan import (
     ISO_LEVELS, ISO_RUNS, build_planar_plan, describe, line_plan, planar_preset_name, wants_planar,
@@ -34,7 +35,10 @@ HELP = "capture a session: move the stage through a plan and store an image per 
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--stage", default=None, help="sim | emulator | grbl:PORT (default sim)")
+    from lps_gui.hardware.registry import specs_help
+
+    p.add_argument("--stage", default=None, help=f"{specs_help()} (default sim; with --camera sim any stage moves "
+                   "the simulated rig too)")
     p.add_argument("--camera", default=None, help="sim | N (device index) | genicam:SERIAL | pylon:SERIAL | gphoto2:[PORT] | "
                    "v4l2:/dev/videoN | DIR (replay a folder) | FILE | URL (default sim)")
     p.add_argument("--cti", metavar="PATH", help="genicam: the GenTL producer (.cti) of the camera vendor (default: GENICAM_GENTL64_PATH)")
@@ -252,8 +256,8 @@ def _start(args: argparse.Namespace):
             raise InputError(f"--board: the simulated {'gantry' if planar else 'rig'}'s board comes from --preset; "
                              "drop --board")
         if planar:
-            if stage_spec not in ("sim", "emulator"):
-                raise InputError(f"--stage {stage_spec}: the simulated camera rides only --stage sim or emulator")
+            if stage_spec not in ("sim", "emulator"):  # a followed stage moves one axis at a time
+                raise InputError(f"--stage {stage_spec}: the simulated gantry rides only --stage sim or emulator")
             make_spec = PLANAR_PRESETS[planar_preset_name(args.preset)]
             spec = make_spec(seed=args.seed, plan=build_planar_plan(args, make_spec(seed=args.seed).plan))  # centred
             check_board_in_view(spec)
@@ -263,9 +267,15 @@ def _start(args: argparse.Namespace):
         from lps_gui.cli.asme_test import simulated_rig_options, simulated_stage
 
         spec, ringing = simulated_stage(args, spec)  # --dead-band-um, --ringing (a settling test rings by default)
-        session, stage, camera = create_simulated_session(args.out, spec, clock=clock(args), noise_grey=args.noise_grey,
-                                                          intrinsics=intr, **simulated_rig_options(ringing))
-        stage = bind_simulated_stage(args, session, stage, camera, stage_spec, **axes)
+        driver = None if stage_spec in ("sim", "emulator") else open_operator_stage(stage_spec)  # fails before the session
+        try:
+            session, stage, camera = create_simulated_session(args.out, spec, clock=clock(args), noise_grey=args.noise_grey,
+                                                              intrinsics=intr, **simulated_rig_options(ringing))
+            stage = bind_simulated_stage(args, session, stage, camera, stage_spec, driver=driver, **axes)
+        except BaseException:
+            if driver is not None:
+                driver.disconnect()
+            raise
         return session, stage, camera, simulated_engine(session, stage, camera, args.encode)
     if not args.board:
         raise InputError("--board FILE is required with a real camera (board.json is described in docs/capture.md)")
@@ -300,7 +310,7 @@ def _resume(args: argparse.Namespace):
         from lps_gui.sim.session import reopen_simulated_rig, simulated_engine
 
         stage, camera = reopen_simulated_rig(session, clock=clock(args))
-        stage = bind_stage(args.stage or "sim", stage, args.time_scale)
+        stage = bind_stage(args.stage or "sim", stage, args.time_scale, args)
         if "spec" not in (session.meta.get("stage") or {}) or "spec" not in (session.meta.get("camera") or {}):
             # a kill between the start's two session.json writes left the devices unrecorded: record them now
             axes = {"axes": ["X", "Y"]} if session.planar else {}

@@ -41,6 +41,8 @@ class GrblEmulator:
     in-process rigs of tests and demos unlocked; ``lps emulate-grbl`` is stock.
     """
 
+    firmware_class: type = GrblFirmware  # what answers on the pty (another controller's emulator names its own)
+
     def __init__(self, stage: SimulatedStage | None = None, faults: Faults | None = None, time_scale: float = 1.0,
                  homing_init_lock: bool = False, stepped: bool = False) -> None:
         self.stage = stage if stage is not None else SimulatedStage()
@@ -53,7 +55,7 @@ class GrblEmulator:
         self.bytes_in = 0  # bytes read from the port (a stepped test waits until its writes are in)
         self.path = ""
         self.dropped = False
-        self.firmware = GrblFirmware(self.stage, self.faults, send=self._send, on_drop=self._drop_now,
+        self.firmware = self.firmware_class(self.stage, self.faults, send=self._send, on_drop=self._drop_now,
                                      homing_init_lock=homing_init_lock)
         self._master = self._slave = -1
         self._thread: threading.Thread | None = None

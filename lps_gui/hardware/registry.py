@@ -71,6 +71,16 @@ def _grbl_emulator():
     return GrblEmulator
 
 
+def _marlin():
+    from lps_gui.hardware.marlin.driver import MarlinStage
+    return MarlinStage
+
+
+def _marlin_emulator():
+    from lps_gui.hardware.marlin.emulator import MarlinEmulator
+    return MarlinEmulator
+
+
 def _manual():
     from lps_gui.hardware.manual import ManualStage
     return ManualStage
@@ -85,6 +95,7 @@ KINDS: tuple[StageKind, ...] = (
     StageKind("sim", "sim", _sim, "sim: simulated stage"),
     StageKind("emulator", "emulator", _emulator, "emulator: GRBL emulator (pty)", connects=True),
     StageKind("grbl:", "grbl", _grbl, "grbl:PORT: GRBL 1.1 (e.g. grbl:/dev/ttyUSB0, grbl:COM3)", serial=True, emulator=_grbl_emulator),
+    StageKind("marlin:", "marlin", _marlin, "marlin:PORT: Marlin 2.x G-code (e.g. marlin:/dev/ttyACM0)", serial=True, emulator=_marlin_emulator),
     StageKind("manual", "manual", _manual, "manual: manual stage (you move it and confirm each stop)"),
     StageKind("command:", "command", _command, "command:'./move.sh {mm}': a program moves the stage, one run per move"),
 )

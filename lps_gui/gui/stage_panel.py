@@ -186,7 +186,7 @@ class StagePanel(QWidget):
         sett = QGroupBox("Controller settings ($$)")
         sl = QVBoxLayout(sett)
         self.settings_table = QTableWidget(0, 4)
-        self.settings_table.setHorizontalHeaderLabels(["$", "Setting", "Value", "Unit"])
+        self.settings_table.setHorizontalHeaderLabels(["#", "Setting", "Value", "Unit"])
         self.settings_table.verticalHeader().setVisible(False)
         self.settings_table.setSelectionBehavior(QAbstractItemView.SelectionBehavior.SelectRows)
         hh = self.settings_table.horizontalHeader()
@@ -194,7 +194,7 @@ class StagePanel(QWidget):
         for col in (0, 2, 3):
             hh.setSectionResizeMode(col, QHeaderView.ResizeMode.ResizeToContents)
         row = QHBoxLayout()
-        self.read_settings_btn = QPushButton("Read $$")
+        self.read_settings_btn = QPushButton("Read")
         self.write_settings_btn = QPushButton("Write changes")
         row.addWidget(self.read_settings_btn)
         row.addWidget(self.write_settings_btn)
@@ -526,7 +526,8 @@ class StagePanel(QWidget):
         t = self.settings_table
         t.setRowCount(len(settings))
         for r, s in enumerate(settings):
-            for c, text in enumerate((f"${s.number}", s.name, f"{s.value:g}", s.unit)):
+            label = stage.setting_label(s) if isinstance(stage, Settings) else str(s.number)
+            for c, text in enumerate((label, s.name, f"{s.value:g}", s.unit)):
                 item = QTableWidgetItem(text)
                 if c != 2:
                     item.setFlags(item.flags() & ~Qt.ItemFlag.ItemIsEditable)

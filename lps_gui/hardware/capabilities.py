@@ -26,6 +26,10 @@ class Settings(abc.ABC):
     @abc.abstractmethod
     def write_setting(self, number: int, value: float) -> None: ...
 
+    def setting_label(self, setting: StageSetting) -> str:
+        """How the controller names the setting (GRBL ``$110``, Marlin ``M203 X``)."""
+        return str(setting.number)
+
     def travel_text(self, settings: list[StageSetting]) -> str:
         """One line on the axes' travel and limits as these settings say (the driver knows their meaning)."""
         return "travel: unknown"

@@ -551,6 +551,9 @@ class SimulatedStage(Stage, Settings, WorkCoordinates, Jogging, FeedHold, Alarms
     settings_title = "Controller settings ($$)"
     lock_hint = "home it ($H) or unlock it ($X)"
 
+    def setting_label(self, setting: StageSetting) -> str:
+        return f"${setting.number}"
+
     def travel_text(self, settings: list[StageSetting]) -> str:
         return travel_text({st.number: st.value for st in settings})
 

@@ -484,6 +484,9 @@ class GrblStage(Stage, Settings, Console, WorkCoordinates, Jogging, FeedHold, Al
             out.append(StageSetting(n, v, info.name, info.unit, info.description))
         return out
 
+    def setting_label(self, setting: StageSetting) -> str:
+        return f"${setting.number}"
+
     def travel_text(self, settings: list[StageSetting]) -> str:
         return travel_text({st.number: st.value for st in settings})
 

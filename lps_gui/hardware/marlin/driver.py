@@ -228,6 +228,9 @@ class MarlinStage(Stage, Settings, Console):
         self._exchange(f"M{code} {AXES[axis]}{value:g}")
         self.settings[number] = float(value)
 
+    def setting_label(self, setting: StageSetting) -> str:
+        return f"M{setting.number // 10} {AXES[setting.number % 10]}"
+
     def travel_text(self, settings: list[StageSetting]) -> str:
         return "travel: Marlin's soft endstops clamp moves to the bed size (Configuration.h X_MAX_POS...)"
 

@@ -11,19 +11,19 @@ from __future__ import annotations
 
 import shlex
 import subprocess
-import time
 
 from lps_gui.errors import HardwareError, InputError
-from lps_gui.hardware.stage import AXES, Stage, StageStatus
+from lps_gui.hardware.stage import StageStatus
+from lps_gui.hardware.told_position import ToldPositionStage
 
 
-class CommandStage(Stage):
+class CommandStage(ToldPositionStage):
     """Runs ``template`` for every move; it has no other capability."""
 
-    can_home = False
+    name = "command stage"
 
     def __init__(self, template: str, axis: str = "X", timeout_s: float = 120.0, start_mm: float = 0.0) -> None:
-        super().__init__()
+        super().__init__(axis, start_mm)
         try:
             self.argv = shlex.split(template)
         except ValueError as exc:
@@ -32,33 +32,11 @@ class CommandStage(Stage):
             raise InputError(f"command:{template}: give the program and {{mm}} where the position goes, "
                              "e.g. command:'./move.sh {mm}'")
         self.template = template
-        self.axis = axis
         self.timeout_s = float(timeout_s)
-        self._pos = [0.0, 0.0, 0.0]
-        self._pos[AXES.index(axis)] = float(start_mm)
-        self._connected = False
-
-    def connect(self) -> None:
-        self._connected = True
-
-    def disconnect(self) -> None:
-        self._connected = False
-
-    @property
-    def connected(self) -> bool:
-        return self._connected
-
-    def status(self) -> StageStatus:
-        self.require_connected()
-        pos = tuple(self._pos)
-        return StageStatus("Idle", machine_mm=pos, work_mm=pos, time=time.monotonic())  # type: ignore[arg-type]
 
     def move_to(self, position_mm: float, feed_mm_min: float, axis: str | None = None) -> None:
         """Run the program for this move and wait for it (the move is over when it exits 0)."""
-        self.require_connected()
-        ax = (axis or self.axis).upper()
-        if ax not in AXES:
-            raise HardwareError(f"command stage: axis {ax!r} unknown; use X, Y or Z")
+        ax = self._axis(axis)
         values = {"mm": f"{position_mm:.6f}", "axis": ax, "feed": f"{feed_mm_min:g}"}
         argv = [a.format(**values) for a in self.argv]
         shown = shlex.join(argv)
@@ -72,7 +50,7 @@ class CommandStage(Stage):
             said = (done.stderr or done.stdout or "").strip().splitlines()
             raise HardwareError(f"command stage: `{shown}` exited with status {done.returncode}"
                                 + (f": {said[-1]}" if said else ""))
-        self._pos[AXES.index(ax)] = float(position_mm)
+        self._reached(ax, position_mm)
 
     def wait_idle(self, timeout_s: float = 60.0) -> StageStatus:
         return self.status()

@@ -10,55 +10,38 @@ that reads a line. Declares :class:`~lps_gui.hardware.capabilities.OperatorMoved
 from __future__ import annotations
 
 import threading
-import time
 from typing import Callable
 
 from lps_gui.errors import HardwareError
 from lps_gui.hardware.capabilities import OperatorMoved
-from lps_gui.hardware.stage import AXES, Stage, StageEvent, StageStatus
+from lps_gui.hardware.stage import StageEvent, StageStatus
+from lps_gui.hardware.told_position import ToldPositionStage
 
 
-class ManualStage(Stage, OperatorMoved):
+class ManualStage(ToldPositionStage, OperatorMoved):
     """Positions are what the operator confirmed; nothing moves by itself."""
 
-    can_home = False
+    name = "manual stage"
 
     def __init__(self, axis: str = "X", start_mm: float = 0.0) -> None:
-        super().__init__()
-        self.axis = axis
-        self._pos = [0.0, 0.0, 0.0]
-        self._pos[AXES.index(axis)] = float(start_mm)
+        super().__init__(axis, start_mm)
         self._pending: tuple[str, float] | None = None
         self._confirmed = threading.Event()
         self._stopped = False
-        self._connected = False
         self._ask: Callable[[str], None] | None = None
 
     def attach_prompt(self, ask: Callable[[str], None]) -> None:
         self._ask = ask
 
-    def connect(self) -> None:
-        self._connected = True
-
     def disconnect(self) -> None:
-        self._connected = False
+        super().disconnect()
         self.stop()
 
-    @property
-    def connected(self) -> bool:
-        return self._connected
-
     def status(self) -> StageStatus:
-        self.require_connected()
-        pos = tuple(self._pos)
-        return StageStatus("Run" if self._pending else "Idle", machine_mm=pos, work_mm=pos, time=time.monotonic())  # type: ignore[arg-type]
+        return self._status("Run" if self._pending else "Idle")
 
     def move_to(self, position_mm: float, feed_mm_min: float, axis: str | None = None) -> None:
-        self.require_connected()
-        ax = (axis or self.axis).upper()
-        if ax not in AXES:
-            raise HardwareError(f"manual stage: axis {ax!r} unknown; use X, Y or Z")
-        self._pending = (ax, float(position_mm))
+        self._pending = (self._axis(axis), float(position_mm))
         self._confirmed.clear()
         self._stopped = False
 
@@ -81,7 +64,7 @@ class ManualStage(Stage, OperatorMoved):
             while not self._confirmed.wait(0.1):
                 if self._stopped or not self._connected:
                     raise HardwareError(f"manual stage: stopped before the operator confirmed {ax} at {mm:.4f} mm")
-        self._pos[AXES.index(ax)] = mm
+        self._reached(ax, mm)
         self._pending = None
         return self.status()
 

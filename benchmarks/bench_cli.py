@@ -94,7 +94,7 @@ def calibrate_camera_s(folder: Path) -> tuple[float, float]:
     import cv2
 
     from lps_gui.io.board_file import read_board
-    from lps_gui.io.corners_vnl import read_corners_vnl
+    from lps_gui.io.corners.vnl import read_corners_vnl
     from lps_gui.io.intrinsics_file import read_intrinsics
 
     board = read_board(folder / "board.json")

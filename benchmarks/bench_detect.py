@@ -24,12 +24,12 @@ import cv2
 import numpy as np
 
 from lps_gui.camera.detection import orient, refine, subpix_half_window
-from lps_gui.core.board import Board
-from lps_gui.core.camera_model import project_board
-from lps_gui.core.plan import Plan
-from lps_gui.core.simulate import paper_rig_spec, true_views
-from lps_gui.io.session import SESSION_FILE, Session
 from lps_gui.camera.processes import process_context
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.geometry.camera_model import project_board
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.truth.simulate import paper_rig_spec, true_views
+from lps_gui.io.session import SESSION_FILE, Session
 from lps_gui.pipeline.detect import detect_session
 from lps_gui.sim.images import simulate_image_session
 
@@ -138,7 +138,7 @@ def main() -> int:
 def _positions_vs_bound(session: Session) -> None:
     """LPS positions from these corners (joint LM) against truth, in units of their sigma (the CRB at the fitted noise)."""
     try:
-        from lps_gui.core.estimate import estimate
+        from lps_gui.core.estimator.estimate import estimate
         from lps_gui.pipeline.estimate import make_options, observations_from_session
 
         obs = observations_from_session(session)

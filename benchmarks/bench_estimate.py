@@ -22,9 +22,9 @@ limit_blas_threads()  # as lps does, before numpy loads
 import numpy as np  # noqa: E402
 
 from lps_gui.allocator import tune_allocator  # noqa: E402
-from lps_gui.core.estimate import EstimateOptions, estimate  # noqa: E402
-from lps_gui.core.simulate import observations_of, paper_rig_spec, simulate_views  # noqa: E402
-from lps_gui.core.stage_errors import StageErrorModel  # noqa: E402
+from lps_gui.core.estimator.estimate import EstimateOptions, estimate  # noqa: E402
+from lps_gui.core.truth.simulate import observations_of, paper_rig_spec, simulate_views  # noqa: E402
+from lps_gui.core.truth.stage_errors import StageErrorModel  # noqa: E402
 
 ERRORS = StageErrorModel(scale_ppm=25.0, periodic_um=4.0, pitch_mm=5.0, backlash_um=6.0, repeatability_um=1.0)
 

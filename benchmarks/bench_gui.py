@@ -22,10 +22,9 @@ from PySide6.QtCore import QEventLoop, QSettings, QTimer  # noqa: E402
 from PySide6.QtWidgets import QApplication  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from tests.gui.conftest import GapMeter  # noqa: E402
-
 from lps_gui.core.clock import SimClock  # noqa: E402
-from lps_gui.core.plan import Plan  # noqa: E402
+from lps_gui.core.planning.plan import Plan  # noqa: E402
+from tests.gui.conftest import GapMeter  # noqa: E402
 
 
 def spin_until(app: QApplication, done, timeout_s: float) -> None:

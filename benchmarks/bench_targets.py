@@ -28,8 +28,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests" / "core"
 from test_error_motions import CAMERA, two_depth_scene  # noqa: E402
 from test_target_model import PAPER_CAMERA, paper_x_axis  # noqa: E402
 
-from lps_gui.core.pose_model import solve_poses  # noqa: E402
-from lps_gui.core.target_model import solve_targets  # noqa: E402
+from lps_gui.core.models.pose_model import solve_poses  # noqa: E402
+from lps_gui.core.models.target_model import solve_targets  # noqa: E402
 
 
 def calibrate_time(obs, layout, intrinsics) -> float:

@@ -36,9 +36,9 @@ def calibrate_camera_s(folder: Path) -> tuple[float, int]:
     """Wall seconds of cv2.calibrateCamera on the session's corners (USE_INTRINSIC_GUESS), and the corners."""
     import cv2
 
-    from lps_gui.core.rotation import exp_so3
+    from lps_gui.core.geometry.rotation import exp_so3
+    from lps_gui.io.corners.target_vnl import read_target_corners
     from lps_gui.io.session import Session
-    from lps_gui.io.target_corners_vnl import read_target_corners
 
     session = Session.open(folder)
     targets = session.targets()

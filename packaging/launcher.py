@@ -24,7 +24,6 @@ def main() -> int:
 
         return int(gui_main() or 0)
     from lps_gui.cli import main as cli_main
-
     return int(cli_main() or 0)
 
 

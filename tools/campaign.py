@@ -66,7 +66,6 @@ def case(kind: str, name: str, expected: str, fast: bool = True):
 def lps(*args: str) -> tuple[int, str, str]:
     """Run ``lps args`` in this process: (exit code, stdout, stderr)."""
     from lps_gui.cli import main
-
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         try:
@@ -97,7 +96,7 @@ def digest(folder: Path, skip: tuple[str, ...] = ()) -> dict[str, str]:
 
 
 def point_session(tmp: Path, name: str = "s") -> Path:
-    from lps_gui.core.simulate import small_spec
+    from lps_gui.core.truth.simulate import small_spec
     from lps_gui.sim.points import simulate_point_session
 
     simulate_point_session(small_spec(seed=3, views=10, directions="+", runs=1), tmp / name)
@@ -280,7 +279,7 @@ def _(tmp: Path) -> Outcome:
 
 @case("input", "stage URL in session.json on --resume", "exit 2, nothing opened")
 def _(tmp: Path) -> Outcome:
-    from lps_gui.core.plan import Plan
+    from lps_gui.core.planning.plan import Plan
     from lps_gui.io.board_file import board_from_dict
     from lps_gui.io.session import Session
 
@@ -388,7 +387,7 @@ def _(tmp: Path) -> Outcome:
 
 @case("input", "corners of one view on one row", "exit 2, names the view")
 def _(tmp: Path) -> Outcome:
-    from lps_gui.io.corners_vnl import read_corners_vnl, write_corners_vnl
+    from lps_gui.io.corners.vnl import read_corners_vnl, write_corners_vnl
 
     s = point_session(tmp)
     t = read_corners_vnl(s / "corners.vnl", 54)
@@ -399,7 +398,7 @@ def _(tmp: Path) -> Outcome:
 
 @case("input", "corners scaled x1e12", "exit 2 (corners refused) or 4, loud")
 def _(tmp: Path) -> Outcome:
-    from lps_gui.io.corners_vnl import read_corners_vnl, write_corners_vnl
+    from lps_gui.io.corners.vnl import read_corners_vnl, write_corners_vnl
 
     s = point_session(tmp)
     t = read_corners_vnl(s / "corners.vnl", 54)
@@ -656,7 +655,6 @@ def _(tmp: Path) -> Outcome:
 @case("fault", "stage stops 0.5 mm short", "capture pauses (exit 3), frame not listed")
 def _(tmp: Path) -> Outcome:
     from lps_gui.capture import engine
-
     real = engine.CaptureEngine._go_to
 
     def short(self, stop):

@@ -11,7 +11,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from lps_gui.core.board import Board
+from lps_gui.core.geometry.board import Board
 from lps_gui.errors import InputError
 
 DEFAULT_DICTIONARY = "DICT_5X5_1000"

@@ -14,7 +14,7 @@ import cv2
 import numpy as np
 
 from lps_gui.camera.charuco import DEFAULT_DICTIONARY, MIN_CORNERS, aruco_board, grey, refined_corners
-from lps_gui.core.targets import Target
+from lps_gui.core.geometry.targets import Target
 
 
 @dataclass(frozen=True)

@@ -21,8 +21,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from lps_gui.core.board import Board
-from lps_gui.core.camera_model import CameraIntrinsics, project
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.geometry.camera_model import CameraIntrinsics, project
 
 
 @dataclass(frozen=True)

@@ -15,9 +15,9 @@ import numpy as np
 
 from lps_gui.camera.charuco import aruco_board
 from lps_gui.camera.render import BoardRenderer, Lighting
-from lps_gui.core.camera_model import CameraIntrinsics, project
-from lps_gui.core.target_rig import TargetLayout
-from lps_gui.core.targets import Target
+from lps_gui.core.geometry.camera_model import CameraIntrinsics, project
+from lps_gui.core.geometry.target_rig import TargetLayout
+from lps_gui.core.geometry.targets import Target
 
 TEXELS_PER_SQUARE = 96
 

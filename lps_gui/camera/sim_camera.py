@@ -15,8 +15,8 @@ import numpy as np
 from lps_gui.camera.base import Camera, Frame
 from lps_gui.camera.render import BoardRenderer, Lighting
 from lps_gui.core.clock import Clock, RealClock
-from lps_gui.core.rig import Rig
-from lps_gui.core.stage_errors import TruePose
+from lps_gui.core.truth.rig import Rig
+from lps_gui.core.truth.stage_errors import TruePose
 from lps_gui.errors import HardwareError
 
 LIGHTING_KEYS = tuple(Lighting.__dataclass_fields__)

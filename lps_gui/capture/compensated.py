@@ -10,7 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from lps_gui.capture.engine import CaptureEngine
-from lps_gui.core.compensation import CompensationTable
+from lps_gui.core.metrology.compensation import CompensationTable
 from lps_gui.io.compensation_file import read_table
 from lps_gui.io.session import Session
 

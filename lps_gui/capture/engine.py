@@ -31,17 +31,18 @@ import numpy as np
 from lps_gui.camera.base import Camera
 from lps_gui.capture import events as ev
 from lps_gui.capture.camera_lock import check_frame, lock_camera
-from lps_gui.capture.settle import SettleOptions, Settler
 from lps_gui.capture.events import CaptureEvent, CaptureListener, CaptureProgress, CaptureSummary
-from lps_gui.core.clock import Clock, RealClock
 from lps_gui.capture.moves import approach_point_mm, check_plan_in_travel, format_target, go_to_planar
-from lps_gui.core.plan import PlannedStop
+from lps_gui.capture.settle import SettleOptions, Settler
+from lps_gui.core.clock import Clock, RealClock
+from lps_gui.core.planning.plan import PlannedStop
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import HardwareError, InputError
 from lps_gui.hardware.stage import EventSource, Stage
 from lps_gui.io.atomic import check_writable
 from lps_gui.io.session import IMAGES_DIR, CaptureRecord, Session
 from lps_gui.io.session_lock import SessionLock
+
 
 class SimulatorHook(Protocol):
     """What a simulated rig does beside the frames (``lps_gui.sim.session.SimulatedRigHook``)."""
@@ -397,7 +398,7 @@ class CaptureEngine:
 
     def _ask_to_move_board(self, stop: PlannedStop) -> None:
         """Pause before a stitched plan's next segment, saying where the board goes (resume when it is fixed)."""
-        from lps_gui.core.plan_segments import board_move_mm
+        from lps_gui.core.planning.segments import board_move_mm
 
         segs = self._plan.segments
         k = int(stop.segment)

@@ -15,10 +15,10 @@ import numpy as np
 from lps_gui.camera.base import Camera, Frame
 from lps_gui.camera.render import BoardRenderer
 from lps_gui.capture.intrinsics_plan import PoseGoal, goal_pose
-from lps_gui.core.board import Board
-from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.clock import Clock, RealClock
-from lps_gui.core.rotation import exp_so3
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.geometry.camera_model import CameraIntrinsics
+from lps_gui.core.geometry.rotation import exp_so3
 from lps_gui.errors import HardwareError
 
 

@@ -19,9 +19,9 @@ from typing import Any, Callable
 import numpy as np
 
 from lps_gui.camera.base import Camera
-from lps_gui.core.board import Board
-from lps_gui.core.camera_model import CameraIntrinsics
-from lps_gui.core.rotation import exp_so3
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.geometry.camera_model import CameraIntrinsics
+from lps_gui.core.geometry.rotation import exp_so3
 from lps_gui.io.atomic import append_line_durable, check_writable, sha256_bytes, write_bytes_atomic
 
 LIST_FILE = "intrinsics_captures.jsonl"

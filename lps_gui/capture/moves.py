@@ -17,7 +17,7 @@ from typing import Callable
 
 import numpy as np
 
-from lps_gui.core.plan import MOVE_TOL_MM, Plan, PlannedStop
+from lps_gui.core.planning.plan import MOVE_TOL_MM, Plan, PlannedStop
 from lps_gui.errors import InputError
 from lps_gui.hardware.stage import Stage
 

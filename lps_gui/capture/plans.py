@@ -1,6 +1,6 @@
 """Plan files and plan options: the ``--plan plan.json`` file and the ``--start/--stop/...`` switches.
 
-A plan file holds the fields of :class:`~lps_gui.core.plan.Plan` at the top
+A plan file holds the fields of :class:`~lps_gui.core.planning.plan.Plan` at the top
 level or under ``"plan"`` (so a session.json is a valid plan file too):
 ``{"start_mm": 0, "stop_mm": 38, "step_mm": 2, "directions": "both", "runs": 2,
 "overshoot_mm": 1, "settle_s": 0.2, "frames_per_stop": 1, "feed_mm_min": 600}``
@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from lps_gui.core.plan import Plan
+from lps_gui.core.planning.plan import Plan
 from lps_gui.errors import InputError
 from lps_gui.io.jsonfile import read_json
 

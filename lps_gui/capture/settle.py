@@ -24,8 +24,8 @@ import numpy as np
 
 from lps_gui.camera.base import Camera, Frame
 from lps_gui.camera.detection import detect_chessboard
-from lps_gui.core.board import Board
 from lps_gui.core.clock import Clock
+from lps_gui.core.geometry.board import Board
 from lps_gui.errors import InputError
 
 MAX_GRABS = 500  # a camera whose clock does not advance must not loop forever

@@ -13,8 +13,10 @@ import logging
 import sys
 from typing import NoReturn
 
-from lps_gui.cli import (capture, compare, compensate, demo, detect, emulate, emulate_grbl, estimate, export,
-                         intrinsics, make_targets, plan_rig, report, simulate)
+from lps_gui.cli import (compare, compensate, demo, detect, emulate, emulate_grbl, estimate, export, intrinsics,
+                         make_targets, report, simulate)
+from lps_gui.cli.capture import command as capture
+from lps_gui.cli.plan_rig import command as plan_rig
 
 COMMANDS = {
     "demo": demo,
@@ -86,9 +88,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _main(argv: list[str] | None) -> int:
-    from lps_gui.errors import LpsError
-
     from lps_gui.allocator import tune_allocator
+    from lps_gui.errors import LpsError
 
     parser = build_parser()
     args = parser.parse_args(argv)

@@ -16,7 +16,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from lps_gui.errors import InputError
     from lps_gui.pipeline.compensate import session_results
-    from lps_gui.report.compare import comparison_rows, write_comparison
+    from lps_gui.report.pdf.compare import comparison_rows, write_comparison
 
     before, after = (session_results(folder, "compare") for folder in (args.before, args.after))
     axes = [",".join(r.axes) for r in (before, after)]

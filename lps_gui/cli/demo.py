@@ -2,10 +2,10 @@
 from __future__ import annotations
 
 import argparse
-
-from lps_gui.cli.option_types import nonnegative_int, positive_finite
 import time
 from pathlib import Path
+
+from lps_gui.cli.option_types import nonnegative_int, positive_finite
 
 HELP = "run the whole simulated rig end to end and write report.pdf and the CSVs"
 
@@ -27,9 +27,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from lps_gui.cli.progress_bar import ProgressBar
-    from lps_gui.pipeline.demo import run_demo
-
     from lps_gui.errors import InputError
+    from lps_gui.pipeline.demos.run import run_demo
 
     if (args.out.suffix or args.out.exists() or args.out.is_symlink()) and not args.out.is_dir():
         raise InputError(f"--out {args.out}: lps demo writes a folder of files; give a folder name without a suffix")
@@ -40,7 +39,7 @@ def run(args: argparse.Namespace) -> int:
     if args.test:
         if args.planar or args.travel or args.preset:
             raise InputError("--test: the ASME B5.64 tests are single-axis tests of one board; drop --planar/--travel/--preset")
-        from lps_gui.pipeline.asme_demo import run_asme_demo
+        from lps_gui.pipeline.demos.asme import run_asme_demo
 
         res = run_asme_demo(args.out, args.test, seed=args.seed, say=lambda line: print(line, flush=True))
     else:

@@ -48,12 +48,11 @@ def run(args: argparse.Namespace) -> int:
             table = detect_session(inputs[0], bar, workers=args.workers, force=args.force, track=not args.no_track)
         out = inputs[0] / "corners.vnl"
     else:
+        from lps_gui.cli.out_path import resolve_out
         from lps_gui.io.board_file import read_board
-        from lps_gui.io.corners_vnl import write_corners_vnl
+        from lps_gui.io.corners.vnl import write_corners_vnl
         from lps_gui.pipeline.detect import detect_images
         from lps_gui.pipeline.intrinsics import expand_image_paths
-
-        from lps_gui.cli.out_path import resolve_out
 
         paths = expand_image_paths(inputs)
         if not paths:

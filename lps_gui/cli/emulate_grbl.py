@@ -58,7 +58,7 @@ def serve(args: argparse.Namespace, kind: str) -> int:
         raise InputError(f"--time-scale {args.time_scale:g}: must be positive")
     errors = None
     if args.errors == "paper":
-        from lps_gui.core.simulate import paper_stage_errors
+        from lps_gui.core.truth.simulate import paper_stage_errors
 
         errors = paper_stage_errors()
     stage = SimulatedStage(

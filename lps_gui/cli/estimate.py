@@ -7,8 +7,8 @@ from typing import TYPE_CHECKING
 from lps_gui.cli.option_types import positive_finite
 
 if TYPE_CHECKING:  # the command's help stays instant: no numpy before run()
-    from lps_gui.io.results_model import Results
-    from lps_gui.io.results_sections import SpanResolution
+    from lps_gui.io.results.model import Results
+    from lps_gui.io.results.sections import SpanResolution
 
 HELP = "estimate the stage's true positions from a session's corners (joint LM by default)"
 
@@ -19,8 +19,10 @@ EXIT_DOUBTFUL = 4
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.epilog = ("exit status: 0 estimated, 4 results written but not trustworthy (the solver did not converge or the "
                 "corner noise is implausible; the reason is printed), 2 bad input or the results could not be written")
+    from lps_gui.core.estimator.methods import DEFAULT, METHODS  # no numpy: --help stays instant
+
     p.add_argument("session", help="session folder (session.json, captures.jsonl, corners.vnl)")
-    p.add_argument("--method", default="joint", choices=("joint", "hybrid", "pnp", "calibrate"),
+    p.add_argument("--method", default=DEFAULT, choices=METHODS,
                    help="joint LM (default), the paper's hybrid, per-view PnP, or full calibration (reference)")
     p.add_argument("--intrinsics", help="intrinsics JSON/YAML instead of the session's")
     p.add_argument("--out", help="where to write (default the session folder): an existing folder gets results.json "
@@ -42,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
 
     from lps_gui.cli.out_path import resolve_out
     from lps_gui.cli.progress_bar import ProgressBar
-    from lps_gui.io.results_model import as_results
+    from lps_gui.io.results.model import as_results
     from lps_gui.io.session_lock import SessionLock
     from lps_gui.pipeline.estimate import estimate_session
     from lps_gui.pipeline.session_checks import result_doubts
@@ -68,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
             lock.__exit__(None, None, None)
     results = as_results(document, str(out or Path(args.session) / "results.json"))  # read once for the lines below
     print(format_summary(results))
-    from lps_gui.io.results_history import stale_report_message
+    from lps_gui.io.results.history import stale_report_message
 
     if (stale := stale_report_message(args.session)) and not args.out:
         print(stale, file=sys.stderr)
@@ -96,7 +98,7 @@ def _median(values: list[float]) -> float:
 
 def format_planar_summary(results: Results) -> str:
     """The first lines of a planar session: squareness, per-axis scale, straightness, truth."""
-    from lps_gui.core.resolution import not_resolved_text
+    from lps_gui.core.metrology.resolution import not_resolved_text
 
     pl = results.figures.planar
     lines = [_fit_line(results, " (planar X,Y)")]
@@ -153,7 +155,7 @@ def format_summary(results: Results) -> str:
                  if iso.number(k) is not None]
         lines.append("ISO 230-2: " + ", ".join(parts))
     if results.asme_b5_64 is not None and results.asme_b5_64.has_test:  # an ASME B5.64 test session (docs/asme-b5.64.md)
-        from lps_gui.report.asme_pages import test_lines
+        from lps_gui.report.pages.asme import test_lines
 
         lines += [f"ASME B5.64: {line}" for line in test_lines(results)]
     lines += [f"outlier view {f.index}: {f.message}" for f in results.flags]

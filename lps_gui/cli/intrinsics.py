@@ -2,9 +2,9 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from lps_gui.cli.option_types import workers
-import sys
 
 HELP = "calibrate camera intrinsics (with each parameter's std) from varied-pose board images"
 
@@ -36,12 +36,11 @@ def run(args: argparse.Namespace) -> int:
 
     import cv2
 
+    from lps_gui.cli.out_path import check_out_file, resolve_out
     from lps_gui.cli.progress_bar import ProgressBar
     from lps_gui.io.board_file import read_board
     from lps_gui.io.intrinsics_file import write_intrinsics
     from lps_gui.pipeline.intrinsics import calibrate_images, cross_validate_calibration
-
-    from lps_gui.cli.out_path import check_out_file, resolve_out
 
     board = read_board(args.board)
     args.out = resolve_out(args.out, "intrinsics.json", None, (".json", ".yaml", ".yml"), "lps intrinsics")
@@ -62,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
     if crossval is not None:
         print(crossval.summary())
     if args.report:
-        from lps_gui.report.intrinsics_report import write_intrinsics_report
+        from lps_gui.report.pdf.intrinsics import write_intrinsics_report
 
         write_intrinsics_report(cal, args.report, crossval, title=Path(args.out).name)
     print("wrote " + ", ".join(str(p) for p in (args.out, args.yaml, args.cameramodel, args.report) if p))

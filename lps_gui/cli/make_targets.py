@@ -41,12 +41,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from lps_gui.core.board import Board
-    from lps_gui.core.targets import Target, check_targets
+    from lps_gui.core.geometry.board import Board
+    from lps_gui.core.geometry.targets import Target, check_targets
     from lps_gui.errors import InputError
     from lps_gui.io.jsonfile import write_json
     from lps_gui.io.targets_file import dictionary_sizes, targets_to_list
-    from lps_gui.report.targets_pdf import write_targets_pdf
+    from lps_gui.report.pdf.targets import write_targets_pdf
 
     out = Path(args.out)
     if out.exists() and not out.is_dir():

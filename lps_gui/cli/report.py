@@ -25,7 +25,7 @@ def run(args: argparse.Namespace) -> int:
     from lps_gui.cli.progress_bar import ProgressBar
     from lps_gui.errors import InputError
     from lps_gui.pipeline.session_checks import stale_inputs
-    from lps_gui.report.pdf import load_results, write_report
+    from lps_gui.report.pdf.document import load_results, write_report
 
     folder = args.session
     if not folder.is_dir():

@@ -41,7 +41,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--missing-fraction", type=float_range(0.0, 0.9), default=0.0, help="fraction of corners dropped at random")
     p.add_argument("--spec", metavar="SPEC", help="stage data sheet into session.json (as lps capture --spec): a preset "
                    "or accuracy=UM,repeatability=UM,straightness=UM,min_step=UM,settling=S")
-    from lps_gui.cli.asme_test import add_test_arguments
+    from lps_gui.cli.capture.asme_test import add_test_arguments
 
     add_test_arguments(p)
 
@@ -49,20 +49,20 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def build_spec(args: argparse.Namespace):
     from dataclasses import replace
 
-    from lps_gui.core.simulate import preset
+    from lps_gui.core.truth.simulate import preset
 
     if args.rig:
-        from lps_gui.core.simulate import spec_from_dict
+        from lps_gui.core.truth.simulate import spec_from_dict
         from lps_gui.io.jsonfile import read_json
 
         spec = spec_from_dict(read_json(args.rig, "rig description"), args.rig)
     else:
-        from lps_gui.cli.asme_test import TEST_PRESET
+        from lps_gui.cli.capture.asme_test import TEST_PRESET
 
         spec = preset(args.preset or (TEST_PRESET if getattr(args, "test", None) else "small"), seed=args.seed)
     plan = spec.plan
     if getattr(args, "test", None):
-        from lps_gui.cli.asme_test import test_plan_fields
+        from lps_gui.cli.capture.asme_test import test_plan_fields
 
         t = plan.targets()
         plan = replace(plan, **test_plan_fields(args, float(t[0]), float(t[-1])))
@@ -73,7 +73,7 @@ def build_spec(args: argparse.Namespace):
     if args.stops:
         plan = replace(plan, stop_mm=plan.start_mm + (args.stops - 1) * plan.step_mm)
     if spec.layout is not None and plan != spec.plan:  # a row faces the middle of its travel: build it for the new plan
-        from lps_gui.core.simulate import PRESETS
+        from lps_gui.core.truth.simulate import PRESETS
 
         spec = PRESETS[spec.name](seed=args.seed, plan=plan)
     overrides = {"plan": plan}
@@ -89,20 +89,20 @@ def build_spec(args: argparse.Namespace):
         overrides["noise_px"] = args.noise_px
     spec = replace(spec, **overrides)
     _check_noise(spec, "--noise-px" if args.noise_px is not None else (args.rig or "preset"))
-    from lps_gui.cli.asme_test import simulated_stage
+    from lps_gui.cli.capture.asme_test import simulated_stage
 
     spec, ringing = simulated_stage(args, spec)
     if ringing is None:
         return spec
-    from lps_gui.cli.asme_test import SIM_FRAME_S
+    from lps_gui.cli.capture.asme_test import SIM_FRAME_S
 
     return replace(spec, vibration=ringing, frame_interval_s=SIM_FRAME_S)
 
 
 def _record_setup(args: argparse.Namespace, session) -> None:
     """--spec and --test into session.json (what lps capture records for the same switches)."""
-    from lps_gui.cli.asme_test import test_record
-    from lps_gui.core.presets import parse_spec
+    from lps_gui.cli.capture.asme_test import test_record
+    from lps_gui.core.planning.presets import parse_spec
 
     extra = {"stage_spec": parse_spec(args.spec)} if getattr(args, "spec", None) else {}
     record = test_record(args)
@@ -133,7 +133,7 @@ def run(args: argparse.Namespace) -> int:
         return _run_planar(args, out)
     spec = build_spec(args)
     if args.write_rig:
-        from lps_gui.core.simulate import spec_to_dict
+        from lps_gui.core.truth.simulate import spec_to_dict
         from lps_gui.errors import InputError
 
         if spec.layout is not None:
@@ -170,8 +170,8 @@ def build_planar_spec(args: argparse.Namespace):
     """The planar preset with the command line's overrides."""
     from dataclasses import replace
 
-    from lps_gui.core.plan import Plan
-    from lps_gui.core.simulate import paper_planar_errors, preset
+    from lps_gui.core.planning.plan import Plan
+    from lps_gui.core.truth.simulate import paper_planar_errors, preset
     from lps_gui.errors import InputError
 
     spec = preset(args.preset or "paper-planar", planar=True, seed=args.seed)
@@ -195,7 +195,7 @@ def build_planar_spec(args: argparse.Namespace):
     elif spec.name == "paper-planar":
         overrides["rig"] = replace(spec.rig, errors=paper_planar_errors())
     if args.grid:  # re-centre the camera on the new grid
-        from lps_gui.core.simulate import PLANAR_PRESETS
+        from lps_gui.core.truth.simulate import PLANAR_PRESETS
 
         base = PLANAR_PRESETS[spec.name](seed=args.seed, plan=plan, errors=overrides.get("rig", spec.rig).errors)
         overrides["rig"] = base.rig

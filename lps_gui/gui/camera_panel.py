@@ -18,14 +18,24 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6.QtCore import QTimer, Signal
 from PySide6.QtWidgets import (
-    QCheckBox, QComboBox, QDoubleSpinBox, QFileDialog, QGridLayout, QGroupBox, QHBoxLayout, QLabel, QProgressBar,
-    QPushButton, QVBoxLayout, QWidget,
+    QCheckBox,
+    QComboBox,
+    QDoubleSpinBox,
+    QFileDialog,
+    QGridLayout,
+    QGroupBox,
+    QHBoxLayout,
+    QLabel,
+    QProgressBar,
+    QPushButton,
+    QVBoxLayout,
+    QWidget,
 )
 
 from lps_gui.camera import controls
 from lps_gui.camera.base import Camera
 from lps_gui.camera.frame_watch import FrameWatch
-from lps_gui.core.board import Board
+from lps_gui.core.geometry.board import Board
 from lps_gui.gui.fit import guard_wheel
 from lps_gui.gui.preview import PreviewGrabber
 from lps_gui.gui.sources import CAMERA_FOLLOWS_STAGE, camera_choices, open_camera_source

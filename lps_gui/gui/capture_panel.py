@@ -8,23 +8,36 @@ what was captured, and "Resume session…" continues at the first missing stop.
 from __future__ import annotations
 
 import logging
-from dataclasses import replace
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Callable
 
 from PySide6.QtCore import QSettings, Signal
 from PySide6.QtWidgets import (
-    QComboBox, QFileDialog, QFormLayout, QGroupBox, QHBoxLayout, QLabel, QProgressBar, QPushButton,
-    QSpinBox, QVBoxLayout, QWidget,
+    QComboBox,
+    QFileDialog,
+    QFormLayout,
+    QGroupBox,
+    QHBoxLayout,
+    QLabel,
+    QProgressBar,
+    QPushButton,
+    QSpinBox,
+    QVBoxLayout,
+    QWidget,
 )
 
-from lps_gui.core.board import Board
 from lps_gui.capture.plans import plan_duration_s
-from lps_gui.core.plan import Plan
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.planning.plan import Plan
 from lps_gui.errors import InputError
 from lps_gui.gui.planar_plan_editor import (
-    PlanarPlanEditor, apply_shared_to_panel, planar_duration_s, planar_engine, shared_from_panel,
+    PlanarPlanEditor,
+    apply_shared_to_panel,
+    planar_duration_s,
+    planar_engine,
+    shared_from_panel,
 )
 from lps_gui.gui.stitch_plan import StitchRow
 from lps_gui.gui.targets_editor import TargetsEditor
@@ -45,7 +58,7 @@ def is_simulated_rig(stage: Any, camera: Any) -> bool:
 
 
 def sim_spec() -> Any:
-    from lps_gui.core.simulate import preset
+    from lps_gui.core.truth.simulate import preset
     from lps_gui.gui.sources import SIM_PRESET
 
     return preset(SIM_PRESET)
@@ -60,7 +73,13 @@ def _describe(stage: Any) -> dict[str, Any]:
 
 def asme_test_tip() -> str:
     """The test combo's tooltip, from the presets' own numbers (the same words as lps capture --help)."""
-    from lps_gui.core.presets import MIN_STEP_COUNT, MIN_STEP_FRAMES, MIN_STEP_LOCATIONS, MIN_STEP_UM, SETTLING_FRAMES
+    from lps_gui.core.planning.presets import (
+        MIN_STEP_COUNT,
+        MIN_STEP_FRAMES,
+        MIN_STEP_LOCATIONS,
+        MIN_STEP_UM,
+        SETTLING_FRAMES,
+    )
 
     return (f"ASME B5.64 test: min-step takes {MIN_STEP_COUNT} steps of {MIN_STEP_UM:g} \u00b5m forward and back at "
             f"{MIN_STEP_LOCATIONS} places, {MIN_STEP_FRAMES} frames per stop averaged; settling takes "
@@ -248,7 +267,7 @@ class CapturePanel(QWidget):
 
     def apply_iso_plan(self) -> None:
         """The ISO 230-2 preset: 5 runs both ways, non-uniform targets over [start, stop] (step as spacing)."""
-        from lps_gui.core.presets import iso230_plan_fields
+        from lps_gui.core.planning.presets import iso230_plan_fields
 
         start, stop = self.start_mm.value(), self.stop_mm.value()
         n = max(5, int(round((stop - start) / max(self.step_mm.value(), 1e-9))) + 1)
@@ -261,7 +280,7 @@ class CapturePanel(QWidget):
         self._apply_fields(fields)
 
     def _apply_fields(self, fields: dict[str, Any]) -> None:
-        """A preset's plan fields (:mod:`lps_gui.core.presets`) into the plan's widgets."""
+        """A preset's plan fields (:mod:`lps_gui.core.planning.presets`) into the plan's widgets."""
         self.directions.setCurrentIndex(self.directions.findData(fields["directions"]))
         self.runs.setValue(fields["runs"])
         if "frames_per_stop" in fields:
@@ -282,7 +301,7 @@ class CapturePanel(QWidget):
 
     def apply_asme_test(self) -> None:
         """The chosen ASME B5.64 test's plan over [start, stop] (the presets of lps capture --test)."""
-        from lps_gui.core.presets import min_step_plan_fields, settling_plan_fields
+        from lps_gui.core.planning.presets import min_step_plan_fields, settling_plan_fields
 
         test = self.test_name()
         if test is None:
@@ -299,7 +318,7 @@ class CapturePanel(QWidget):
 
     def asme_test_meta(self) -> dict[str, Any]:
         """session.json ``asme_test`` of the chosen test (what lps estimate computes for it); {} for none."""
-        from lps_gui.core.presets import asme_test_record
+        from lps_gui.core.planning.presets import asme_test_record
 
         test = self.test_name()
         return {"asme_test": asme_test_record(test)} if test else {}

@@ -3,11 +3,11 @@
 Calibration is :func:`lps_gui.pipeline.intrinsics.calibrate_images` (what
 ``lps intrinsics`` runs). The panel shows each parameter with its standard
 deviation (and the board's bow), thumbnails of the images with each one's
-RMS, and the pictures of :mod:`lps_gui.report.intrinsics_pictures`
+RMS, and the pictures of :mod:`lps_gui.report.pdf.intrinsics_pictures`
 (per-view residuals, residual vector field, projection-uncertainty and
 coverage maps with colour bars, the cross-validation map), the same ones the
 intrinsics report prints. "Cross-validate" calibrates the even and the odd
-images apart and compares the two (:mod:`lps_gui.core.intrinsics_crossval`).
+images apart and compares the two (:mod:`lps_gui.core.intrinsics.crossval`).
 """
 from __future__ import annotations
 
@@ -19,12 +19,23 @@ import numpy as np
 from PySide6.QtCore import QSize, Qt, Signal
 from PySide6.QtGui import QBrush, QColor, QIcon, QImage, QImageReader, QPixmap
 from PySide6.QtWidgets import (
-    QDoubleSpinBox, QFileDialog, QGroupBox, QHBoxLayout, QLabel, QListWidget, QListWidgetItem,
-    QPushButton, QSpinBox, QSplitter, QTabWidget, QVBoxLayout, QWidget,
+    QDoubleSpinBox,
+    QFileDialog,
+    QGroupBox,
+    QHBoxLayout,
+    QLabel,
+    QListWidget,
+    QListWidgetItem,
+    QPushButton,
+    QSpinBox,
+    QSplitter,
+    QTabWidget,
+    QVBoxLayout,
+    QWidget,
 )
 
-from lps_gui.core.board import Board
-from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.geometry.camera_model import INTRINSIC_NAMES, CameraIntrinsics
 from lps_gui.gui.widgets import ValueTable, fmt
 from lps_gui.gui.workers import Job, one_line
 
@@ -267,7 +278,7 @@ class IntrinsicsPanel(QWidget):
         self.run_requested.emit(job)
 
     def show_cross_validation(self, crossval: Any) -> None:
-        from lps_gui.report.intrinsics_pictures import crossval_picture
+        from lps_gui.report.pdf.intrinsics_pictures import crossval_picture
 
         self.crossval = crossval
         self.pictures["Cross-validation"].set_image(crossval_picture(crossval))
@@ -297,7 +308,12 @@ class IntrinsicsPanel(QWidget):
             + ("  " + " ".join(warnings) if warnings else ""))
 
     def _show_pictures(self, calib: Any) -> None:
-        from lps_gui.report.intrinsics_pictures import coverage_picture, per_view_errors, residual_field, uncertainty_picture
+        from lps_gui.report.pdf.intrinsics_pictures import (
+            coverage_picture,
+            per_view_errors,
+            residual_field,
+            uncertainty_picture,
+        )
 
         if not getattr(calib, "residuals_px", None):
             return

@@ -3,7 +3,7 @@
 :class:`LivePanel` attaches a :class:`lps_gui.pipeline.live.LiveCapture` to
 the capture's engine on the worker thread; its events cross to the GUI
 thread through a queued signal. The plot is the report's deviation figure
-(:func:`lps_gui.report.figures.deviation_figure`, mean with its +-2 sigma
+(:func:`lps_gui.report.figures.plots.deviation_figure`, mean with its +-2 sigma
 band) drawn by :mod:`lps_gui.gui.plot_adapter` in small steps, one
 event-loop turn each, so the window stays responsive while the estimate
 grows. Each flag is listed with its frame the moment it is found; the
@@ -110,7 +110,7 @@ class LivePanel(QGroupBox):
             if not self._steps:
                 self._draw_next()
         elif event.kind == "results":  # the final estimate's positions replace the running one's
-            from lps_gui.report.figures import position_columns
+            from lps_gui.report.figures.plots import position_columns
 
             cols = position_columns(event.data)
             self.status.setText(f"results: {event.message}")
@@ -129,7 +129,7 @@ class LivePanel(QGroupBox):
     def _draw_next(self) -> None:
         """The latest estimate's figure, one drawing step per event-loop turn (a newer one replaces the rest)."""
         if not self._steps and self._pending is not None:
-            from lps_gui.report.figures import deviation_figure
+            from lps_gui.report.figures.plots import deviation_figure
 
             data, self._pending = self._pending, None
             cols = {"target_mm": np.asarray(data["target_mm"], float), "deviation_um": np.asarray(data["deviation_um"], float),

@@ -15,7 +15,12 @@ from typing import Any, Callable
 from PySide6.QtCore import QSettings, Qt
 from PySide6.QtGui import QAction, QCloseEvent, QKeySequence
 from PySide6.QtWidgets import (
-    QDockWidget, QFileDialog, QLabel, QMainWindow, QMessageBox, QWidget,
+    QDockWidget,
+    QFileDialog,
+    QLabel,
+    QMainWindow,
+    QMessageBox,
+    QWidget,
 )
 
 from lps_gui import __version__
@@ -34,7 +39,7 @@ from lps_gui.gui.stage_controller import StageController
 from lps_gui.gui.stage_panel import StagePanel
 from lps_gui.gui.workers import Job, one_line, stop_all_jobs
 from lps_gui.hardware.stage import StageStatus
-from lps_gui.io.results_model import Results
+from lps_gui.io.results.model import Results
 
 log = logging.getLogger("lps_gui.gui")
 
@@ -277,7 +282,7 @@ class MainWindow(QMainWindow):
             self.show_panel("estimation")
             return False
         try:
-            from lps_gui.io.results_model import read_results
+            from lps_gui.io.results.model import read_results
 
             results = read_results(results_path)
         except Exception as exc:
@@ -304,7 +309,7 @@ class MainWindow(QMainWindow):
 
     def export_pdf(self, path: Path) -> Job | None:
         """Write the PDF report in a worker thread."""
-        from lps_gui.report.pdf import write_report
+        from lps_gui.report.pdf.document import write_report
 
         panel = self.results_panel
         job = Job(f"report {path.name}", write_report, panel.session_dir or path.parent, panel.results, path)

@@ -1,6 +1,6 @@
 """The results panel's table of a row's targets (SPEC 13): the report's table, in the GUI.
 
-Same rows as the PDF (:func:`lps_gui.report.targets_report.target_table`):
+Same rows as the PDF (:func:`lps_gui.report.pages.targets.target_table`):
 views, ties, the stretch each target was seen over, pose sigma and its scale
 term; hidden for a single-board session.
 """
@@ -12,7 +12,7 @@ from typing import Any
 from PySide6.QtWidgets import QLabel, QVBoxLayout, QWidget
 
 from lps_gui.gui.widgets import TextTable
-from lps_gui.io.results_model import Results
+from lps_gui.io.results.model import Results
 
 
 class MountedTargetsView(QWidget):
@@ -29,7 +29,7 @@ class MountedTargetsView(QWidget):
         self.setVisible(False)
 
     def set_results(self, results: Results | Mapping[str, Any]) -> None:
-        from lps_gui.report.targets_report import target_table
+        from lps_gui.report.pages.targets import target_table
 
         table = target_table(results)
         self.setVisible(table is not None)

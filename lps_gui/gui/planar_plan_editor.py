@@ -5,7 +5,7 @@ raster) or the ISO 230-2 lines preset on that grid; directions, runs,
 overshoot, settle, frames and feed are the capture panel's shared fields.
 The plot shows the grid nodes and the order the forward pass visits them
 (a path with arrows and the first stops numbered; a backward pass runs it in
-reverse). The readout below is :func:`lps_gui.core.rig_planning.predict_rig`
+reverse). The readout below is :func:`lps_gui.core.planning.rig.predict_rig`
 for the plan: whether the board stays in view everywhere and the position
 sigma to expect, before anything moves. "Simulated gantry" captures on a
 simulated XY stage built for the plan (its camera centred over the grid),
@@ -20,11 +20,21 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtWidgets import (
-    QCheckBox, QComboBox, QFormLayout, QFrame, QGroupBox, QHBoxLayout, QLabel, QPushButton, QScrollArea, QSizePolicy, QVBoxLayout,
+    QCheckBox,
+    QComboBox,
+    QFormLayout,
+    QFrame,
+    QGroupBox,
+    QHBoxLayout,
+    QLabel,
+    QPushButton,
+    QScrollArea,
+    QSizePolicy,
+    QVBoxLayout,
     QWidget,
 )
 
-from lps_gui.core.plan import PATTERNS, Plan, iso_lines_on_grid
+from lps_gui.core.planning.plan import PATTERNS, Plan, iso_lines_on_grid
 from lps_gui.errors import InputError
 from lps_gui.gui.widgets import add_rows, double_spin
 
@@ -195,7 +205,7 @@ class PlanarPlanEditor(QGroupBox):
         name = self.gantry_preset()
         if not name:
             return None
-        from lps_gui.core.simulate import PLANAR_PRESETS
+        from lps_gui.core.truth.simulate import PLANAR_PRESETS
 
         return PLANAR_PRESETS[name](plan=plan)
 
@@ -299,7 +309,7 @@ class PlanarPlanEditor(QGroupBox):
         """The rig prediction as one or two lines (board in view, sigma to expect)."""
         if len(plan.targets()) > MAX_PREDICTED_TARGETS:
             return f"not computed for more than {MAX_PREDICTED_TARGETS} targets: run `lps plan-rig`"
-        from lps_gui.core.rig_planning import predict_rig
+        from lps_gui.core.planning.rig import predict_rig
 
         spec = self.gantry_spec(plan)
         if spec is not None:

@@ -1,4 +1,4 @@
-"""Draw the shared plot definitions (lps_gui.report.figures) with pyqtgraph.
+"""Draw the shared plot definitions (lps_gui.report.figures.plots) with pyqtgraph.
 
 The PDF paints the same :class:`FigureSpec` objects with QPainter, so the
 screen and the report cannot disagree; this module only maps styles.
@@ -13,7 +13,7 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6.QtCore import Qt
 
-from lps_gui.report.figure_spec import OUTLIER_COLOR, FigureSpec, Series
+from lps_gui.report.figures.spec import OUTLIER_COLOR, FigureSpec, Series
 
 BAND_ALPHA = 50  # of 255: a 2-sigma band reads as a tint behind the curve
 MARKER_SIZE_PX = 6

@@ -15,9 +15,9 @@ from typing import Callable
 import numpy as np
 
 from lps_gui.camera.base import Camera
-from lps_gui.errors import LpsError
-from lps_gui.core.board import Board
 from lps_gui.camera.detection import detect_chessboard, sharpness
+from lps_gui.core.geometry.board import Board
+from lps_gui.errors import LpsError
 from lps_gui.gui.workers import one_line
 
 log = logging.getLogger(__name__)

@@ -11,11 +11,19 @@ from typing import Any
 
 from PySide6.QtCore import QSettings, Qt, Signal
 from PySide6.QtWidgets import (
-    QComboBox, QDoubleSpinBox, QFormLayout, QGroupBox, QLabel, QLineEdit, QToolButton, QVBoxLayout, QWidget,
+    QComboBox,
+    QDoubleSpinBox,
+    QFormLayout,
+    QGroupBox,
+    QLabel,
+    QLineEdit,
+    QToolButton,
+    QVBoxLayout,
+    QWidget,
 )
 
-from lps_gui.core.environment import Environment
-from lps_gui.core.presets import SPEC_PRESETS
+from lps_gui.core.metrology.environment import Environment
+from lps_gui.core.planning.presets import SPEC_PRESETS
 from lps_gui.gui.widgets import add_rows, double_spin
 
 NOT_RECORDED = "not recorded"

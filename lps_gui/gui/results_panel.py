@@ -1,7 +1,7 @@
 """Results panel: the report's figures drawn live, tables, the clicked view, export.
 
-Figures come from :func:`lps_gui.report.figures.figures_from_results` (the
-same definitions the PDF paints) and tables from ``lps_gui.report.summary``,
+Figures come from :func:`lps_gui.report.figures.plots.figures_from_results` (the
+same definitions the PDF paints) and tables from ``lps_gui.report.pages.summary``,
 so the screen and the paper show the same numbers.
 """
 from __future__ import annotations
@@ -15,7 +15,13 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtWidgets import (
-    QHBoxLayout, QLabel, QPushButton, QSplitter, QTabWidget, QVBoxLayout, QWidget,
+    QHBoxLayout,
+    QLabel,
+    QPushButton,
+    QSplitter,
+    QTabWidget,
+    QVBoxLayout,
+    QWidget,
 )
 
 from lps_gui.gui.mounted_targets import MountedTargetsView
@@ -24,9 +30,9 @@ from lps_gui.gui.section_tabs import SectionContent, SectionPage, section_conten
 from lps_gui.gui.view_detail import ViewDetail
 from lps_gui.gui.widgets import TextTable, ValueTable
 from lps_gui.gui.workers import Job
-from lps_gui.io.results_model import Results, as_results
-from lps_gui.io.results_sections import Position
-from lps_gui.report.figures import figures_from_results, position_columns
+from lps_gui.io.results.model import Results, as_results
+from lps_gui.io.results.sections import Position
+from lps_gui.report.figures.plots import figures_from_results, position_columns
 
 log = logging.getLogger(__name__)
 
@@ -295,7 +301,7 @@ class ResultsPanel(QWidget):
         self.open_report_btn.setEnabled(self.report_path is not None)
         tip = "Open the exported PDF report in the system's viewer"
         if self.report_path is not None and self.session_dir is not None:
-            from lps_gui.io.results_history import stale_report_message
+            from lps_gui.io.results.history import stale_report_message
 
             if self.report_path == self.session_dir / "report.pdf" and (stale := stale_report_message(self.session_dir)):
                 tip = stale
@@ -314,7 +320,7 @@ class ResultsPanel(QWidget):
 
     def _fill_tables(self, results: Results) -> None:
         from lps_gui.gui.planar_results import planar_table_rows
-        from lps_gui.report.summary import summary_rows
+        from lps_gui.report.pages.summary import summary_rows
 
         self._fill_targets(results)
         self.mounted_targets.set_results(results)
@@ -328,7 +334,7 @@ class ResultsPanel(QWidget):
 
     def _fill_targets(self, results: Results) -> None:
         """The ISO 230-2 per-target table of the report (mean, s, R each way, reversal B), hidden without one."""
-        from lps_gui.report.iso_table import iso_target_table
+        from lps_gui.report.pages.iso_table import iso_target_table
 
         table = iso_target_table(results)
         for w in (self.target_label, self.target_table):
@@ -458,7 +464,7 @@ class ResultsPanel(QWidget):
 
 def with_limits(figures: list[Any], spec: dict[str, Any] | None) -> list[Any]:
     """The figures with the accuracy limit drawn on the deviation plot (as on the report's page 1)."""
-    from lps_gui.report.figures import with_spec_band
+    from lps_gui.report.figures.plots import with_spec_band
 
     limit = (spec or {}).get("accuracy_um")
     if limit is None:
@@ -469,8 +475,8 @@ def with_limits(figures: list[Any], spec: dict[str, Any] | None) -> list[Any]:
 
 def verdict_html(results: Results, spec: dict[str, Any] | None) -> str:
     """One line per specification row, coloured like the report's verdict."""
-    from lps_gui.report.summary import fmt
-    from lps_gui.report.verdict import overall, verdicts
+    from lps_gui.report.pages.summary import fmt
+    from lps_gui.report.pages.verdict import overall, verdicts
 
     rows = verdicts(results, spec)
     parts = [f"<b>{overall(rows)}</b>"]
@@ -483,7 +489,7 @@ def verdict_html(results: Results, spec: dict[str, Any] | None) -> str:
 
 def load_corners(session_dir: Path) -> tuple[Any, np.ndarray]:
     """The session's corner table and board points (shape (N, 3) mm), for the view detail."""
-    from lps_gui.io.corners_vnl import read_corners_vnl
+    from lps_gui.io.corners.vnl import read_corners_vnl
     from lps_gui.io.session import Session
 
     session = Session.open(session_dir)

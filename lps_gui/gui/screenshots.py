@@ -32,7 +32,7 @@ def wait_until(cond: Callable[[], bool], timeout_s: float = 30.0) -> bool:
 
 def prepare(window, work: Path) -> None:
     """Bring every panel into a state worth showing."""
-    from lps_gui.core.simulate import preset
+    from lps_gui.core.truth.simulate import preset
     from lps_gui.pipeline.estimate import estimate_session
     from lps_gui.pipeline.intrinsics import calibrate_images
     from lps_gui.sim.images import simulate_intrinsics_set

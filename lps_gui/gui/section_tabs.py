@@ -1,8 +1,8 @@
 """The results tabs of the sections only some sessions have: error motions (SPEC 14) and an ASME B5.64 test.
 
 The figures are the report's own :class:`FigureSpec` definitions
-(:func:`lps_gui.report.error_motions_report.error_motion_figures`,
-:func:`lps_gui.report.asme_figures.test_figures`) and the tables its rows, so
+(:func:`lps_gui.report.pages.error_motions.error_motion_figures`,
+:func:`lps_gui.report.figures.asme.test_figures`) and the tables its rows, so
 screen and paper agree; a session without the section gets no tab.
 """
 from __future__ import annotations
@@ -16,8 +16,8 @@ from PySide6.QtWidgets import QLabel, QSplitter, QVBoxLayout, QWidget
 
 from lps_gui.gui.plot_adapter import ReadableAxis
 from lps_gui.gui.widgets import TextTable
-from lps_gui.io.results_model import Results
-from lps_gui.report.figure_spec import FigureSpec
+from lps_gui.io.results.model import Results
+from lps_gui.report.figures.spec import FigureSpec
 
 MOTION_HEADER = ["motion", "what", "p-v", "noise p-v", "median \u03c3", "unit", ""]
 UNRESOLVED_ROW = "#888888"  # as the report's table: not resolved reads grey, never as a finding
@@ -37,7 +37,7 @@ class SectionContent:
 
 def error_motions_content(results: Results) -> SectionContent | None:
     """The "Error motions" tab: angular and linear figures (and the tool point), the table of motions."""
-    from lps_gui.report.error_motions_report import error_motion_figures, error_motion_rows
+    from lps_gui.report.pages.error_motions import error_motion_figures, error_motion_rows
 
     figures = error_motion_figures(results)
     if not figures:
@@ -55,8 +55,8 @@ def error_motions_content(results: Results) -> SectionContent | None:
 
 def asme_content(results: Results) -> SectionContent | None:
     """The "ASME B5.64" tab, for a session that ran the incremental-step or the settling test."""
-    from lps_gui.report.asme_figures import test_figures
-    from lps_gui.report.asme_pages import TUR_HEADER, finding_lines, section, tur_cells
+    from lps_gui.report.figures.asme import test_figures
+    from lps_gui.report.pages.asme import TUR_HEADER, finding_lines, section, tur_cells
 
     s = section(results)
     if not s.has_test:

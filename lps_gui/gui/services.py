@@ -20,11 +20,11 @@ def preload_backends() -> None:
 
     import lps_gui.camera.detection  # noqa: F401
     import lps_gui.capture.engine  # noqa: F401
-    import lps_gui.core.estimate  # noqa: F401
-    import lps_gui.core.iso230  # noqa: F401
-    import lps_gui.io.results_file  # noqa: F401
+    import lps_gui.core.estimator.estimate  # noqa: F401
+    import lps_gui.core.metrology.iso230  # noqa: F401
+    import lps_gui.io.results.document  # noqa: F401
     import lps_gui.pipeline.detect  # noqa: F401
     import lps_gui.pipeline.estimate  # noqa: F401
     import lps_gui.pipeline.intrinsics  # noqa: F401
-    import lps_gui.report.summary  # noqa: F401
+    import lps_gui.report.pages.summary  # noqa: F401
     import lps_gui.sim.session  # noqa: F401

@@ -40,7 +40,7 @@ def source_from_text(text: str) -> str | None:
 
 def simulated_rig(clock: Clock | None = None) -> tuple[Stage, Camera]:
     """The simulated stage and the camera riding it, on ``clock`` (real time by default)."""
-    from lps_gui.core.simulate import preset
+    from lps_gui.core.truth.simulate import preset
     from lps_gui.sim.rig import make_simulated_rig
 
     return make_simulated_rig(preset(SIM_PRESET), clock=clock or RealClock())
@@ -83,5 +83,4 @@ def camera_choices(sim_available: bool, rescan: bool = False) -> list[tuple[str,
 def open_camera_source(spec: str) -> Camera:
     """Open a non-simulated camera (device index, SDK source, file or URL) through the camera layer."""
     from lps_gui.camera import open_camera
-
     return open_camera(spec)

@@ -2,7 +2,7 @@
 
 0 stops (the default) is one placement, the plan as it is; N > 0 splits the
 plan's targets into segments of N stops, each repeating the last M of the one
-before (:func:`lps_gui.core.plan_segments.stitched_segments`). The capture
+before (:func:`lps_gui.core.planning.segments.stitched_segments`). The capture
 then pauses before each segment and says where to move the board.
 """
 from __future__ import annotations
@@ -13,7 +13,7 @@ from typing import Any
 from PySide6.QtCore import Signal
 from PySide6.QtWidgets import QHBoxLayout, QSpinBox, QWidget
 
-from lps_gui.core.plan import Plan
+from lps_gui.core.planning.plan import Plan
 
 
 class StitchRow(QWidget):
@@ -46,7 +46,7 @@ class StitchRow(QWidget):
         n = self.segment_stops.value()
         if not n or plan.planar:
             return plan
-        from lps_gui.core.plan_segments import stitched_segments
+        from lps_gui.core.planning.segments import stitched_segments
 
         return replace(plan, segments=stitched_segments(plan.targets(), n, self.overlap_stops.value()))
 

@@ -14,12 +14,23 @@ from typing import Any, Callable
 
 from PySide6.QtCore import QSettings, Signal
 from PySide6.QtWidgets import (
-    QAbstractItemView, QComboBox, QFileDialog, QFormLayout, QGroupBox, QHBoxLayout, QLabel, QPushButton, QSpinBox,
-    QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget,
+    QAbstractItemView,
+    QComboBox,
+    QFileDialog,
+    QFormLayout,
+    QGroupBox,
+    QHBoxLayout,
+    QLabel,
+    QPushButton,
+    QSpinBox,
+    QTableWidget,
+    QTableWidgetItem,
+    QVBoxLayout,
+    QWidget,
 )
 
-from lps_gui.core.board import Board
-from lps_gui.core.targets import Target, check_targets
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.geometry.targets import Target, check_targets
 from lps_gui.errors import InputError
 from lps_gui.gui.widgets import double_spin
 from lps_gui.gui.workers import one_line

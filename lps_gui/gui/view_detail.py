@@ -14,12 +14,12 @@ import pyqtgraph as pg
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QLabel, QVBoxLayout, QWidget
 
-from lps_gui.core.camera_model import project_board
-from lps_gui.core.lps_model import LpsLine
+from lps_gui.core.geometry.camera_model import project_board
+from lps_gui.core.models.lps_model import LpsLine
 from lps_gui.errors import InputError
 from lps_gui.io.image_file import decode_image
-from lps_gui.io.results_model import Results
-from lps_gui.io.results_sections import Position
+from lps_gui.io.results.model import Results
+from lps_gui.io.results.sections import Position
 
 ARROW_GAIN = 50.0  # residual vectors drawn this many times longer than they are
 

@@ -4,7 +4,7 @@ Motion follows trapezoidal profiles (``hardware/motion.py``) evaluated at the
 clock's time, so with a :class:`~lps_gui.core.clock.SimClock` a 500 mm move
 "takes" 10 s but :meth:`SimulatedStage.wait_idle` returns at once by
 advancing the clock. Where the carriage *really* is comes from the one
-:class:`~lps_gui.core.stage_errors.StageErrorModel` every simulator shares
+:class:`~lps_gui.core.truth.stage_errors.StageErrorModel` every simulator shares
 (backlash of the last approach direction, one repeatability draw per
 completed move, straightness and angular errors); the simulated camera
 renders from :meth:`SimulatedStage.true_pose`.
@@ -26,7 +26,7 @@ from typing import Iterator
 import numpy as np
 
 from lps_gui.core.clock import Clock, SimClock
-from lps_gui.core.stage_errors import PlanarErrorModel, PlanarTruePose, StageErrorModel, TruePose, Vibration
+from lps_gui.core.truth.stage_errors import PlanarErrorModel, PlanarTruePose, StageErrorModel, TruePose, Vibration
 from lps_gui.errors import HardwareError
 from lps_gui.hardware.grbl.codes import SETTINGS, GrblError, check_setting, setting_info, stored_settings, travel_text
 from lps_gui.hardware.capabilities import Alarms, FeedHold, Jogging, Settings, WorkCoordinates
@@ -35,7 +35,7 @@ from lps_gui.hardware.planner import PLANNER_BLOCKS, HeldMove, MotionPlanner
 from lps_gui.hardware.stage import AXES, WORK_SYSTEMS, Stage, StageEvent, StageSetting, StageStatus
 
 RX_BUFFER_BYTES = 128
-__all__ = ["PLANNER_BLOCKS", "RX_BUFFER_BYTES", "SimulatedStage", "Vibration"]  # Vibration: core/stage_errors
+__all__ = ["PLANNER_BLOCKS", "RX_BUFFER_BYTES", "SimulatedStage", "Vibration"]  # Vibration: core/truth/stage_errors
 
 
 class SimulatedStage(Stage, Settings, WorkCoordinates, Jogging, FeedHold, Alarms):

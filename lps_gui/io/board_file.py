@@ -4,7 +4,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from lps_gui.core.board import Board
+from lps_gui.core.geometry.board import Board
 from lps_gui.errors import InputError
 from lps_gui.io.jsonfile import read_json, write_json
 from lps_gui.io.value_checks import check_board_values

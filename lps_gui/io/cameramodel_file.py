@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
+from lps_gui.core.geometry.camera_model import INTRINSIC_NAMES, CameraIntrinsics
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_text_atomic
 

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from lps_gui.core.compensation import CompensationTable, skew_factor, skew_square_lengths
+from lps_gui.core.metrology.compensation import CompensationTable, skew_factor, skew_square_lengths
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_bytes_atomic
 

@@ -18,8 +18,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from lps_gui.core.camera_model import CameraIntrinsics
-from lps_gui.core.export_poses import PIXEL_CENTRE_SHIFT, camera_to_world_opengl, rotation_to_quaternion
+from lps_gui.core.geometry.camera_model import CameraIntrinsics
+from lps_gui.core.models.export_poses import PIXEL_CENTRE_SHIFT, camera_to_world_opengl, rotation_to_quaternion
 from lps_gui.io.atomic import write_text_atomic
 from lps_gui.io.file_set import write_file_set
 

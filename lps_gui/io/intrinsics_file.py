@@ -17,8 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from lps_gui.core.board import Board
-from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.geometry.camera_model import INTRINSIC_NAMES, CameraIntrinsics
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_text_atomic
 from lps_gui.io.cameramodel_file import SUFFIX as CAMERAMODEL_SUFFIX

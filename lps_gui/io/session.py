@@ -13,10 +13,10 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from lps_gui.core.board import Board
-from lps_gui.core.targets import Target
-from lps_gui.core.camera_model import CameraIntrinsics
-from lps_gui.core.plan import Plan, PlannedStop
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.geometry.camera_model import CameraIntrinsics
+from lps_gui.core.geometry.targets import Target
+from lps_gui.core.planning.plan import Plan, PlannedStop
 from lps_gui.errors import InputError, StorageError
 from lps_gui.io.atomic import append_line_durable, sha256_bytes, write_bytes_atomic
 from lps_gui.io.board_file import board_from_dict, board_to_dict

@@ -4,9 +4,10 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from lps_gui.core.targets import Target, check_targets
+from lps_gui.core.geometry.targets import Target, check_targets
 from lps_gui.errors import InputError
 from lps_gui.io.board_file import board_from_dict, board_to_dict
+
 
 def _finite(value: Any) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)

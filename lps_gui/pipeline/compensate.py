@@ -6,10 +6,10 @@ from typing import Any
 
 import numpy as np
 
-from lps_gui.core.compensation import CompensationTable, build_table, own_sigma_um
+from lps_gui.core.metrology.compensation import CompensationTable, build_table, own_sigma_um
 from lps_gui.errors import InputError
 from lps_gui.io.compensation_file import backlash_lines, skew_lines, write_table
-from lps_gui.io.results_model import Results, as_results, read_results
+from lps_gui.io.results.model import Results, as_results, read_results
 from lps_gui.pipeline.session_checks import require_current_results
 
 RESULTS_FILE = "results.json"

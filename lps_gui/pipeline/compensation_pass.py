@@ -10,12 +10,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from pathlib import Path
+
 import numpy as np
 
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import InputError
 from lps_gui.io.session import Session
-from lps_gui.report.compare import session_E_um, true_E_um
+from lps_gui.report.pdf.compare import session_E_um, true_E_um
 
 TABLE_FILE = "compensation.csv"
 CARRIED_META = ("stage_spec", "environment", "identification")  # as left is judged like as found
@@ -64,11 +65,11 @@ def compensation_pass(
 ) -> PassResult:
     """Re-capture ``before_dir``'s plan on its simulated rig through its compensation table into ``after_dir``."""
     from lps_gui.capture.compensated import apply_compensation
-    from lps_gui.sim.session import create_simulated_session, simulated_engine, spec_of_session
     from lps_gui.io.compensation_file import write_table
     from lps_gui.pipeline.compensate import session_results, table_from_results
     from lps_gui.pipeline.detect import detect_session
     from lps_gui.pipeline.estimate import estimate_session
+    from lps_gui.sim.session import create_simulated_session, simulated_engine, spec_of_session
 
     before = Session.open(before_dir)
     truth = before.truth or {}

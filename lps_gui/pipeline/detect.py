@@ -27,15 +27,15 @@ from typing import TYPE_CHECKING, Any, Sequence
 import numpy as np
 
 from lps_gui.camera.processes import process_context
-from lps_gui.core.board import Board
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.geometry.targets import Target, target_offsets
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import Cancelled, InputError
 from lps_gui.io.atomic import sha256_file
-from lps_gui.io.corners_vnl import CornerTable, read_corners_vnl, write_corners_vnl
-from lps_gui.io.corners_hashes import corners_current, hash_meta, image_hashes, image_unchanged, stat_meta
+from lps_gui.io.corners.hashes import corners_current, hash_meta, image_hashes, image_unchanged, stat_meta
+from lps_gui.io.corners.target_vnl import TargetCornerTable, read_target_corners, write_target_corners
+from lps_gui.io.corners.vnl import CornerTable, read_corners_vnl, write_corners_vnl
 from lps_gui.io.session import Session
-from lps_gui.io.target_corners_vnl import TargetCornerTable, read_target_corners, write_target_corners
-from lps_gui.core.targets import Target, target_offsets
 
 if TYPE_CHECKING:
     from lps_gui.camera.detection import ChessboardTracker
@@ -335,7 +335,7 @@ def detect_session(
 
     If captures.jsonl is unchanged since the last run, every view is in
     corners.vnl and no image file changed since its corners were detected
-    (size and mtime, else sha256: :func:`~lps_gui.io.corners_hashes.image_unchanged`),
+    (size and mtime, else sha256: :func:`~lps_gui.io.corners.hashes.image_unchanged`),
     nothing is detected. Otherwise views with corners from their current image
     are kept and the others (new, replaced, or failed before) are detected;
     ``force`` redoes all. Rows use captures.jsonl's ``file`` names.

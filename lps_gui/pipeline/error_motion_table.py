@@ -7,7 +7,7 @@ compensation (a CNC with volumetric compensation, a robot's calibration) or
 records: per target, the mean over every capture of each motion of results.json
 ``error_motions`` and the sigma of that mean, without the reference stop's own
 noise (the centred sigma; with several runs the run-to-run scatter when larger).
-A motion the data do not resolve (core/resolution) has empty cells.
+A motion the data do not resolve (core/metrology/resolution) has empty cells.
 """
 from __future__ import annotations
 
@@ -17,10 +17,10 @@ from typing import Any
 
 import numpy as np
 
-from lps_gui.core.compensation import target_means
+from lps_gui.core.metrology.compensation import target_means
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_bytes_atomic
-from lps_gui.io.results_model import Results, as_results
+from lps_gui.io.results.model import Results, as_results
 
 UNIT_SUFFIX = {"um": "um", "urad": "urad"}
 

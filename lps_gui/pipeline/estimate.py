@@ -3,9 +3,9 @@
 The only way from a session to results, for a stage of one or two axes:
 reads session.json, captures.jsonl and corners.vnl (board at the session's
 temperature, with its warp; stale and collinear corners refused), runs
-:func:`lps_gui.core.estimate.estimate` (the solver chosen by the number of
+:func:`lps_gui.core.estimator.estimate.estimate` (the solver chosen by the number of
 axes D), adds the accuracy figures (a line's here, a plane's in
-:mod:`lps_gui.pipeline.planar_results`), the environment and uncertainty
+:mod:`lps_gui.pipeline.results.planar`), the environment and uncertainty
 budget and, for a simulated session, the error against truth, and writes
 results.json, positions.csv and summary.csv under the session lock.
 Everything is computed before anything is written, so a failure leaves the
@@ -21,30 +21,29 @@ from typing import Any
 
 import numpy as np
 
-from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
-from lps_gui.core.estimate import EstimateOptions, LpsEstimate, estimate
-from lps_gui.core.hybrid import HybridOptions
-from lps_gui.core.observations import Observations
+from lps_gui.core.estimator.estimate import EstimateOptions, LpsEstimate, estimate
+from lps_gui.core.estimator.observations import Observations
+from lps_gui.core.geometry.camera_model import INTRINSIC_NAMES, CameraIntrinsics
+from lps_gui.core.geometry.rotation import log_so3
+from lps_gui.core.models.hybrid import HybridOptions
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
-from lps_gui.core.rotation import log_so3
 from lps_gui.errors import InputError
 from lps_gui.gc_tuning import paused as paused_collections
 from lps_gui.io.board_file import board_to_dict
-from lps_gui.io.corners_vnl import read_corners_vnl
+from lps_gui.io.corners.vnl import read_corners_vnl
 from lps_gui.io.intrinsics_file import apply_board_warp, intrinsics_to_dict, read_intrinsics
-from lps_gui.io.results_file import assemble_results, write_results
-from lps_gui.io.results_file import json_floats, rows_from_columns
-from lps_gui.io.results_file import json_float as _f
-from lps_gui.io.results_history import commit_results
+from lps_gui.io.results.document import assemble_results, json_floats, rows_from_columns, write_results
+from lps_gui.io.results.document import json_float as _f
+from lps_gui.io.results.history import commit_results
 from lps_gui.io.session import Session
 from lps_gui.io.session_lock import SessionLock
-from lps_gui.pipeline.asme_results import add_asme_results, test_options
-from lps_gui.pipeline.board_plane_results import position_columns, straightness_figures
-from lps_gui.pipeline.error_motion_results import add_error_motions
-from lps_gui.pipeline.planar_results import build_planar_results
+from lps_gui.pipeline.results.asme import add_asme_results, test_options
+from lps_gui.pipeline.results.board_plane import position_columns, straightness_figures
+from lps_gui.pipeline.results.error_motions import add_error_motions
+from lps_gui.pipeline.results.planar import build_planar_results
+from lps_gui.pipeline.results.uncertainty import add_uncertainty, session_board
 from lps_gui.pipeline.session_checks import corners_of_records, session_inputs
 from lps_gui.pipeline.target_session import add_targets_section, target_observations
-from lps_gui.pipeline.uncertainty import add_uncertainty, session_board
 from lps_gui.sim.truth import session_truth, truth_comparison
 
 HYBRID_KEYS = {"grid_window_mm": "window_mm", "grid_resolution_mm": "resolution_mm", "grid_points": "grid_points",
@@ -133,7 +132,7 @@ def estimate_session(
 
     The one way from a session to its results: the board correction
     (thermal, warp) and the input checks in :func:`observations_from_session`,
-    :func:`~lps_gui.core.estimate.estimate` with the solver of D axes, the
+    :func:`~lps_gui.core.estimator.estimate.estimate` with the solver of D axes, the
     uncertainty budget, the session lock while writing. Returns the
     results.json content.
     """
@@ -181,7 +180,7 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate, intrins
 
 def line_results(session: Session, obs: Observations, est: LpsEstimate, intrinsics_source: str) -> dict[str, Any]:
     """The results.json document of one axis: its parts computed here, assembled by
-    :func:`lps_gui.io.results_file.assemble_results`."""
+    :func:`lps_gui.io.results.document.assemble_results`."""
     positions = position_rows(obs, est)
     truth = session_truth(session)
     results = assemble_results(
@@ -239,7 +238,7 @@ def position_rows(obs: Observations, est: LpsEstimate) -> list[dict[str, Any]]:
 
 def session_figures(obs: Observations, est: LpsEstimate) -> dict[str, Any]:
     """results.json ``figures``: SPEC 5 figures of the deviations, straightness and angle spans."""
-    from lps_gui.core.iso230 import figures_for_session
+    from lps_gui.core.metrology.iso230 import figures_for_session
 
     dev_um = est.deviation_um(obs.target_mm)
     six = est.six_dof
@@ -288,13 +287,13 @@ def estimate_parameters(obs: Observations, est: LpsEstimate) -> dict[str, Any]:
 def scale_with_uncertainty(obs: Observations, est: LpsEstimate, valid: np.ndarray, sigma_um: np.ndarray) -> dict[str, Any]:
     """The scale error's sigma from the full covariance, for the one (weighted) scale fit of ``core.iso230_run``.
 
-    The slope is the linear functional :func:`~lps_gui.core.iso230_run.scale_functional`
+    The slope is the linear functional :func:`~lps_gui.core.metrology.iso230_run.scale_functional`
     of the deviations (one offset per run and direction: backlash is not
     scale; weights 1/sigma^2 as in the figures). Its sigma counts the
     correlations between positions (from the board distance and direction)
     and, in total, the intrinsics: a focal-length error is a pure scale error.
     """
-    from lps_gui.core.iso230_run import scale_functional
+    from lps_gui.core.metrology.iso230_run import scale_functional
 
     groups = obs.run * 2 + (obs.direction > 0)
     row = scale_functional(obs.target_mm[valid], groups[valid], 1.0 / sigma_um[valid] ** 2)

@@ -14,12 +14,12 @@ from pathlib import Path
 
 import numpy as np
 
-from lps_gui.core.export_poses import camera_centres, world_to_camera
+from lps_gui.core.models.export_poses import camera_centres, world_to_camera
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_text_atomic
 from lps_gui.io.export_files import write_colmap, write_nerfstudio, write_poses_csv
 from lps_gui.io.intrinsics_file import intrinsics_from_dict
-from lps_gui.io.results_sections import Figures
+from lps_gui.io.results.sections import Figures
 from lps_gui.io.session import Session
 from lps_gui.pipeline.compensate import session_results
 

@@ -5,13 +5,13 @@ from pathlib import Path
 
 import numpy as np
 
-from lps_gui.core.board import Board
-from lps_gui.core.camera_model import CameraIntrinsics
-from lps_gui.core.intrinsics_calibration import IntrinsicsCalibration, calibrate_intrinsics
-from lps_gui.core.intrinsics_crossval import CrossValidation, cross_validate
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.geometry.camera_model import CameraIntrinsics
+from lps_gui.core.intrinsics.calibration import IntrinsicsCalibration, calibrate_intrinsics
+from lps_gui.core.intrinsics.crossval import CrossValidation, cross_validate
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import InputError
-from lps_gui.io.corners_vnl import CornerTable
+from lps_gui.io.corners.vnl import CornerTable
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".pgm")
 
@@ -112,7 +112,7 @@ def drop_repeated_views(table: CornerTable, min_views: int = 3) -> None:
     Copies of one image would shrink the reported std as if they were new
     poses; fewer than ``min_views`` distinct usable views are refused.
     """
-    from lps_gui.core.view_geometry import collinear_views, duplicate_views
+    from lps_gui.core.geometry.view_geometry import collinear_views, duplicate_views
 
     for k in collinear_views(table.corners_px):
         table.failed.setdefault(table.names[k], "corners lie on one line (board edge-on or corrupt corners)")

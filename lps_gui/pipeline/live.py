@@ -5,12 +5,12 @@ frame events and works on one thread beside it (cv2 releases the GIL):
 
 * each listed frame is detected as ``lps detect`` would (the tracker starts
   again at the frames where :func:`~lps_gui.pipeline.detect.chunk_size` starts
-  a chunk) and its block appended to corners.vnl (:mod:`lps_gui.io.live_corners`,
+  a chunk) and its block appended to corners.vnl (:mod:`lps_gui.io.corners.live`,
   fsynced; a resumed capture re-detects from the start of the killed chunk);
 * every ``estimate_every`` views the views so far go through the one
-  estimator (:func:`lps_gui.core.estimate.estimate`, warm-started from the
+  estimator (:func:`lps_gui.core.estimator.estimate.estimate`, warm-started from the
   previous solution) for the live deviation plot;
-* the checks of :mod:`lps_gui.core.live_checks` run on every frame and every
+* the checks of :mod:`lps_gui.core.estimator.live_checks` run on every frame and every
   estimate; each finding is a :class:`LiveEvent` ("flag") at once.
 
 When the plan completes, :meth:`LiveCapture.finish` writes corners.vnl in
@@ -32,17 +32,24 @@ from typing import Any, Callable
 import numpy as np
 
 from lps_gui.capture.events import CaptureEvent, CaptureSummary
-from lps_gui.core.estimate import estimate, views_against
-from lps_gui.core.live_checks import EstimateChecks, FrameChecks, LiveFlag
+from lps_gui.core.estimator.estimate import estimate, views_against
+from lps_gui.core.estimator.live_checks import EstimateChecks, FrameChecks, LiveFlag
 from lps_gui.errors import LpsError
 from lps_gui.hardware.stage import EventSource
 from lps_gui.io.atomic import sha256_file
-from lps_gui.io.corners_hashes import stat_meta
-from lps_gui.io.live_corners import LiveView, open_live_corners
+from lps_gui.io.corners.hashes import stat_meta
+from lps_gui.io.corners.live import LiveView, open_live_corners
 from lps_gui.io.session import CaptureRecord, Session
 from lps_gui.pipeline.detect import (
-    ViewJob, ViewResult, board_key, chunk_size, default_workers, detect_view, session_corner_meta,
-    session_corner_table, write_session_corners,
+    ViewJob,
+    ViewResult,
+    board_key,
+    chunk_size,
+    default_workers,
+    detect_view,
+    session_corner_meta,
+    session_corner_table,
+    write_session_corners,
 )
 
 log = logging.getLogger(__name__)
@@ -170,7 +177,7 @@ class LiveCapture:
         results = estimate_session(self.session.folder, self.method, self.options, progress=progress or no_progress)
         self._emit(LiveEvent("results", f"{self.session.folder / 'results.json'}", data=results))
         if report:
-            from lps_gui.report.pdf import write_report
+            from lps_gui.report.pdf.document import write_report
 
             out = None if report is True else Path(report)
             path = write_report(self.session.folder, results=results, out=out)
@@ -231,7 +238,7 @@ class LiveCapture:
         """The views so far through the one estimator, warm-started; its checks."""
         from lps_gui.io.intrinsics_file import apply_board_warp
         from lps_gui.pipeline.estimate import make_options, observations_of_views
-        from lps_gui.pipeline.uncertainty import session_board
+        from lps_gui.pipeline.results.uncertainty import session_board
 
         if self.session.planar or self.method != "joint" or not self.session.has_intrinsics():
             return

@@ -1,6 +1,6 @@
 """Are the corners usable and the results still those of the session's current files?
 
-corners.vnl names the image hash of every view (:mod:`lps_gui.io.corners_hashes`)
+corners.vnl names the image hash of every view (:mod:`lps_gui.io.corners.hashes`)
 and results.json the sha256 of session.json, captures.jsonl and corners.vnl
 it was computed from. Estimation refuses corners of replaced images; the
 report says when results.json no longer matches the session. A view whose
@@ -13,10 +13,10 @@ from typing import Any, Sequence
 
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import sha256_file
-from lps_gui.io.corners_hashes import image_hashes, stale_views
-from lps_gui.io.corners_vnl import CornerTable
-from lps_gui.io.results_model import Results, as_results
-from lps_gui.io.results_sections import Parameters
+from lps_gui.io.corners.hashes import image_hashes, stale_views
+from lps_gui.io.corners.vnl import CornerTable
+from lps_gui.io.results.model import Results, as_results
+from lps_gui.io.results.sections import Parameters
 from lps_gui.io.session import SESSION_FILE, Session
 
 
@@ -60,9 +60,9 @@ MAX_CORNER_PX = 1e6  # no camera is a million pixels across
 def check_view_geometry(corners_px: Any, names: Sequence[str], source: Path | str) -> None:
     """InputError naming the views whose corners lie on one line (they would give a silent wrong position)
     or that hold a corner no camera can see (1e308 overflows the solver's sums)."""
-    from lps_gui.core.view_geometry import collinear_views
-
     import numpy as np
+
+    from lps_gui.core.geometry.view_geometry import collinear_views
 
     check_corner_values(corners_px, names, source)
     bad = collinear_views(corners_px)

@@ -4,9 +4,9 @@ session.json names its one ``board`` and a plan with ``segments``; captures.json
 gives each capture's ``segment``; corners.vnl is the board's (detection as
 for any board). Here each segment's placement of the board becomes a target
 (``S0``, ``S1``, ...: the same geometry, its own unknown pose) with the view's
-corners in that target's place, so :func:`lps_gui.core.estimate.estimate`
+corners in that target's place, so :func:`lps_gui.core.estimator.estimate.estimate`
 solves it as a row whose ties are the stops repeated across a boundary
-(:mod:`lps_gui.core.stitching`). The stage's repeatability that those ties
+(:mod:`lps_gui.core.estimator.stitching`). The stage's repeatability that those ties
 rest on is 1/4 of the specified repeatability R (session.json
 ``stage_spec.repeatability_um``; ISO 230-2: R = 4 s); without it the ties'
 term is not stated and not in U.
@@ -18,10 +18,10 @@ from typing import Any
 
 import numpy as np
 
-from lps_gui.core.observations import Observations
-from lps_gui.core.stitching import segment_ties, stitch_budget_row
-from lps_gui.core.targets import Target
-from lps_gui.core.uncertainty_budget import BudgetRow
+from lps_gui.core.estimator.observations import Observations
+from lps_gui.core.estimator.stitching import segment_ties, stitch_budget_row
+from lps_gui.core.geometry.targets import Target
+from lps_gui.core.metrology.uncertainty_budget import BudgetRow
 from lps_gui.errors import InputError
 from lps_gui.io.session import Session
 

@@ -7,7 +7,7 @@ one set of corners per view with each corner's target
 (``Observations.mounted``). :func:`add_targets_section` adds results.json
 ``targets``: each target's pose in the world frame (target 0's) with its
 sigma, the views that saw it and that tie it, and its share of the travel
-(what its print's scale enters in the budget, :mod:`lps_gui.core.target_scale`).
+(what its print's scale enters in the budget, :mod:`lps_gui.core.metrology.target_scale`).
 """
 from __future__ import annotations
 
@@ -16,17 +16,17 @@ from typing import Any
 
 import numpy as np
 
-from lps_gui.core.camera_model import CameraIntrinsics
-from lps_gui.core.environment import corrected_board
-from lps_gui.core.observations import Observations
-from lps_gui.core.target_scale import covered_fractions
-from lps_gui.core.target_summary import MIN_CORNERS, target_rows
-from lps_gui.core.targets import Target, target_offsets
+from lps_gui.core.estimator.observations import Observations
+from lps_gui.core.geometry.camera_model import CameraIntrinsics
+from lps_gui.core.geometry.targets import Target, target_offsets
+from lps_gui.core.metrology.environment import corrected_board
+from lps_gui.core.metrology.target_scale import covered_fractions
 from lps_gui.errors import InputError
+from lps_gui.io.corners.target_vnl import read_target_corners
 from lps_gui.io.session import Session
-from lps_gui.io.target_corners_vnl import read_target_corners
+from lps_gui.pipeline.results.targets import MIN_CORNERS, target_rows
+from lps_gui.pipeline.results.uncertainty import session_environment
 from lps_gui.pipeline.session_checks import corners_of_records
-from lps_gui.pipeline.uncertainty import session_environment
 
 
 def measured_targets(session: Session) -> list[Target]:
@@ -62,7 +62,7 @@ def target_observations(session: Session, intrinsics: CameraIntrinsics, records:
 def without_collinear_targets(corners_px: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     """The corners with each target's dropped from the views where they lie on one line (a target cut by
     the image border to one row or column fixes no pose of its own); the rest of those views is kept."""
-    from lps_gui.core.view_geometry import collinear_views
+    from lps_gui.core.geometry.view_geometry import collinear_views
 
     out = corners_px
     for a, b in zip(offsets[:-1], offsets[1:]):

@@ -19,7 +19,7 @@ from typing import Sequence
 
 import numpy as np
 
-from lps_gui.core.rotation import exp_so3
+from lps_gui.core.geometry.rotation import exp_so3
 
 KINDS = ("board_leaves_view", "exposure", "bump", "jolt")
 

@@ -13,14 +13,14 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
-from lps_gui.core.simulate import SimulationSpec, frame_since_move_s, simulate_views
-from lps_gui.core.targets import target_offsets
+from lps_gui.core.geometry.camera_model import INTRINSIC_NAMES, CameraIntrinsics
+from lps_gui.core.geometry.targets import target_offsets
+from lps_gui.core.truth.simulate import SimulationSpec, frame_since_move_s, simulate_views
 from lps_gui.io.board_file import write_board
-from lps_gui.io.corners_vnl import CornerTable, write_corners_vnl
+from lps_gui.io.corners.target_vnl import TargetCornerTable, write_target_corners
+from lps_gui.io.corners.vnl import CornerTable, write_corners_vnl
 from lps_gui.io.intrinsics_file import write_intrinsics
 from lps_gui.io.session import CaptureRecord, Session
-from lps_gui.io.target_corners_vnl import TargetCornerTable, write_target_corners
 from lps_gui.sim.session import write_simulated_session
 
 # 1-sigma of a good 20-view calibration (relative for focal lengths)

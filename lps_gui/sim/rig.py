@@ -1,13 +1,13 @@
 """The simulated rig: a simulated stage (one axis or an XY gantry) and a simulated camera that renders
 where the stage really is.
 
-One :class:`~lps_gui.core.simulate.SimulationSpec` describes it; the stage
+One :class:`~lps_gui.core.truth.simulate.SimulationSpec` describes it; the stage
 carries the spec's error model (a :class:`StageErrorModel`, or a
 :class:`PlanarErrorModel` on two axes), the camera renders the board through
 the stage's true pose, both run on one clock (a :class:`SimClock` unless
 told otherwise). The CLI, the GUI and the demo use :func:`make_simulated_rig`;
 the stage error models and the rig geometry they bind are pure models in
-``core/stage_errors.py`` and ``core/rig.py``.
+``core/truth/stage_errors.py`` and ``core/truth/rig.py``.
 
 Both devices can be seeded (``seed_capture(key)``, through the capture
 engine's one simulator hook, :class:`lps_gui.sim.session.SimulatedRigHook`):
@@ -24,12 +24,12 @@ from typing import Any
 import numpy as np
 
 from lps_gui.camera.sim_camera import SimulatedCamera
-from lps_gui.core.camera_model import project_board
 from lps_gui.core.clock import Clock, SimClock
-from lps_gui.core.plan import Plan
-from lps_gui.core.rig import Rig
-from lps_gui.core.simulate import SimulationSpec, layout_truth, preset
-from lps_gui.core.stage_errors import PlanarErrorModel, PlanarTruePose, StageErrorModel
+from lps_gui.core.geometry.camera_model import project_board
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.truth.rig import Rig
+from lps_gui.core.truth.simulate import SimulationSpec, layout_truth, preset
+from lps_gui.core.truth.stage_errors import PlanarErrorModel, PlanarTruePose, StageErrorModel
 from lps_gui.errors import InputError
 from lps_gui.hardware.sim_stage import SimulatedStage
 from lps_gui.io.board_file import board_from_dict, board_to_dict

@@ -16,11 +16,11 @@ from pathlib import Path
 from typing import Any
 
 from lps_gui.capture.engine import CaptureEngine
-from lps_gui.core.camera_model import CameraIntrinsics
 from lps_gui.core.clock import Clock
-from lps_gui.core.plan import Plan, PlannedStop
-from lps_gui.core.simulate import SimulationSpec
-from lps_gui.core.stage_errors import Vibration
+from lps_gui.core.geometry.camera_model import CameraIntrinsics
+from lps_gui.core.planning.plan import Plan, PlannedStop
+from lps_gui.core.truth.simulate import SimulationSpec
+from lps_gui.core.truth.stage_errors import Vibration
 from lps_gui.errors import InputError
 from lps_gui.hardware.stage import Stage
 from lps_gui.io.atomic import check_writable
@@ -132,8 +132,8 @@ def layout_from_truth(targets: list, truth: dict[str, Any], source: str):
     """The targets at the poses session.json ``truth.targets`` records (a capture on the simulated rig)."""
     import numpy as np
 
-    from lps_gui.core.rotation import exp_so3
-    from lps_gui.core.target_rig import TargetLayout
+    from lps_gui.core.geometry.rotation import exp_so3
+    from lps_gui.core.geometry.target_rig import TargetLayout
 
     poses = {t.get("id"): t for t in truth.get("targets") or []}
     missing = [t.id for t in targets if t.id not in poses]

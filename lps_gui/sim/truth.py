@@ -39,21 +39,22 @@ from typing import Any, Callable
 
 import numpy as np
 
-from lps_gui.core.camera_model import project_board
-from lps_gui.core.estimate_types import LpsEstimate
-from lps_gui.core.observations import Observations
-from lps_gui.core.planar_figures import axis_geometry, planar_figures
-from lps_gui.core.planar_model import affine_motion, planar_positions_only, planar_truth_in_stage_frame
-from lps_gui.core.rig import Rig
-from lps_gui.core.simulate import board_plane_positions, board_plane_straightness, nominal_planar_state
-from lps_gui.core.stage_errors import PlanarTruePose, StageErrorModel, TruePose
+from lps_gui.core.estimator.estimate_types import LpsEstimate
+from lps_gui.core.estimator.observations import Observations
+from lps_gui.core.geometry.camera_model import project_board
+from lps_gui.core.metrology.planar_figures import axis_geometry, planar_figures
+from lps_gui.core.models.planar_model import affine_motion, planar_positions_only, planar_truth_in_stage_frame
+from lps_gui.core.truth.rig import Rig
+from lps_gui.core.truth.simulate import board_plane_positions, board_plane_straightness, nominal_planar_state
+from lps_gui.core.truth.stage_errors import PlanarTruePose, StageErrorModel, TruePose
+from lps_gui.errors import InputError
 from lps_gui.io.atomic import append_line_durable, write_text_atomic
 from lps_gui.io.board_file import board_from_dict
 from lps_gui.io.intrinsics_file import intrinsics_from_dict
-from lps_gui.io.results_file import json_float as _f, json_floats
+from lps_gui.io.results.document import json_float as _f
+from lps_gui.io.results.document import json_floats
 from lps_gui.io.session import Session
 from lps_gui.io.session_paths import read_session_file
-from lps_gui.errors import InputError
 
 TRUTH_FILE = "truth.jsonl"
 MAX_TRUTH_BYTES = 256 << 20  # ~300 bytes a capture
@@ -471,7 +472,7 @@ def _board_plane_normal_um(meta: dict[str, Any], plane_mm: np.ndarray, K: int) -
     rig, board = meta.get("rig") or {}, meta.get("board")
     if meta.get("normal_um") is None or meta.get("angles_urad") is None or not rig or not board:
         return None
-    from lps_gui.core.constant_orientation import board_plane_offsets
+    from lps_gui.core.models.constant_orientation import board_plane_offsets
     from lps_gui.io.board_file import board_from_dict
 
     E = np.asarray(rig["axes_board"], float)
@@ -489,7 +490,7 @@ def _plane_truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str
 
     Truth is put in the estimate's frame convention first (SPEC 10: origin at the reference capture, +x along
     the fitted +X motion), by the rule the estimator applies to its own positions
-    (:func:`lps_gui.core.planar_model.planar_truth_in_stage_frame`).
+    (:func:`lps_gui.core.models.planar_model.planar_truth_in_stage_frame`).
     """
     by_index = {int(i): k for k, i in enumerate(truth["index"])}
     rows = np.array([by_index.get(int(i), -1) for i in obs.index])
@@ -560,7 +561,7 @@ def target_truth_comparison(session: Session, section: list[dict[str, Any]]) -> 
     """results.json ``truth_comparison.targets``: each estimated target pose against the simulator's
     (session.json ``truth.targets``, world = target 0's frame), the rotation error as the left
     perturbation the sigmas are of; None for a real session."""
-    from lps_gui.core.rotation import exp_so3, log_so3
+    from lps_gui.core.geometry.rotation import exp_so3, log_so3
 
     truth = (session.meta.get("truth") or {}).get("targets")
     if not truth:

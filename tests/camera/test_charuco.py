@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from lps_gui.camera.charuco import board_image, detect_charuco
-from lps_gui.core.board import Board
+from lps_gui.core.geometry.board import Board
 from lps_gui.errors import InputError
 
 BOARD = Board(cols=7, rows=5, square_mm=30.0, type="charuco", marker_mm=22.0, dictionary="DICT_4X4_50")

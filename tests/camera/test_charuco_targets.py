@@ -7,8 +7,8 @@ import pytest
 
 from lps_gui.camera.charuco import board_image
 from lps_gui.camera.charuco_targets import dense_corners, detect_targets
-from lps_gui.core.board import Board
-from lps_gui.core.targets import Target, pack_targets
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.geometry.targets import Target, pack_targets
 
 PX, MARGIN = 40, 40
 

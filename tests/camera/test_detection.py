@@ -14,9 +14,9 @@ from lps_gui.camera.detection import (
     why_not_found,
 )
 from lps_gui.camera.render import BoardRenderer
-from lps_gui.core.board import Board
-from lps_gui.core.camera_model import project_board
-from lps_gui.core.simulate import small_spec, true_views
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.geometry.camera_model import project_board
+from lps_gui.core.truth.simulate import small_spec, true_views
 
 
 @pytest.fixture(scope="module")

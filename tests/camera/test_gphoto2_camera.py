@@ -13,7 +13,7 @@ import pytest
 from lps_gui.camera import controls, open_camera
 from lps_gui.camera.gphoto2_camera import GPhoto2Camera, list_gphoto2_devices
 from lps_gui.capture.engine import CaptureEngine
-from lps_gui.core.plan import Plan
+from lps_gui.core.planning.plan import Plan
 from lps_gui.errors import HardwareError, InputError
 from lps_gui.sim.rig import RigStage
 from lps_gui.sim.session import SimulatedRigHook

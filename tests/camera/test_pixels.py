@@ -6,15 +6,15 @@ import pytest
 
 from lps_gui.camera.detection import detect_chessboard
 from lps_gui.camera.pixels import BayerGrey, to_grey8
-from lps_gui.errors import HardwareError
 from lps_gui.camera.render import BoardRenderer
+from lps_gui.errors import HardwareError
 from tests.capture.helpers import tiny_spec
 
 
 def _board_image():
     rig = tiny_spec().rig
     renderer = BoardRenderer(rig.board, rig.intrinsics, 1.0, noise_grey=0.0)
-    R, t = rig.camera_poses(__import__("lps_gui.core.stage_errors", fromlist=["TruePose"]).TruePose(
+    R, t = rig.camera_poses(__import__("lps_gui.core.truth.stage_errors", fromlist=["TruePose"]).TruePose(
         axis_mm=np.array([19.0]), straightness_um=np.zeros((1, 2)), angles_urad=np.zeros((1, 3))))
     return rig.board, renderer.render(R[0], t[0], np.random.default_rng(0))
 

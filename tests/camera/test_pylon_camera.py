@@ -10,9 +10,9 @@ import pytest
 from lps_gui.camera import controls, open_camera
 from lps_gui.camera.pylon_camera import PylonCamera, list_pylon_devices
 from lps_gui.capture.camera_lock import check_frame
-from lps_gui.core.plan import Plan
+from lps_gui.core.planning.plan import Plan
 from lps_gui.errors import HardwareError, InputError
-from lps_gui.io.corners_vnl import read_corners_vnl
+from lps_gui.io.corners.vnl import read_corners_vnl
 from lps_gui.io.session import Session
 from lps_gui.pipeline.detect import detect_session
 from lps_gui.pipeline.estimate import estimate_session

@@ -7,10 +7,10 @@ import pytest
 
 from lps_gui.camera.render import BoardRenderer, Lighting
 from lps_gui.camera.sim_camera import SimulatedCamera
-from lps_gui.core.camera_model import project_board
 from lps_gui.core.clock import SimClock
-from lps_gui.core.simulate import small_spec, true_views
-from lps_gui.core.stage_errors import TruePose
+from lps_gui.core.geometry.camera_model import project_board
+from lps_gui.core.truth.simulate import small_spec, true_views
+from lps_gui.core.truth.stage_errors import TruePose
 from lps_gui.errors import HardwareError
 
 

@@ -7,11 +7,11 @@ from scipy.ndimage import binary_erosion
 from lps_gui.camera.charuco_targets import detect_targets
 from lps_gui.camera.render import BoardRenderer
 from lps_gui.camera.render_targets import TargetsRenderer, marker_mask
-from lps_gui.core.board import Board
-from lps_gui.core.camera_model import CameraIntrinsics
-from lps_gui.core.rotation import exp_so3
-from lps_gui.core.target_rig import TargetLayout, observe, row_layout
-from lps_gui.core.targets import pack_targets
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.geometry.camera_model import CameraIntrinsics
+from lps_gui.core.geometry.rotation import exp_so3
+from lps_gui.core.geometry.target_rig import TargetLayout, observe, row_layout
+from lps_gui.core.geometry.targets import pack_targets
 
 CAMERA = CameraIntrinsics.from_values((960, 540), 1160.0, 1160.0, 480.0, 270.0, dist=(-0.05, 0.02, 0.0, 0.0, 0.0))
 BOARD = Board(8, 5, 30.0, type="charuco", marker_mm=22.0)
@@ -80,8 +80,8 @@ def test_the_marker_mask_only_darkens_white_squares():
 
 
 def test_a_two_depth_constellation_renders_both_rows_where_the_model_projects_them():
-    """SPEC 14's layout (core/two_depth) at half the paper camera's resolution: near row on top, far row below."""
-    from lps_gui.core.two_depth import two_depth_rig
+    """SPEC 14's layout (core/truth/two_depth) at half the paper camera's resolution: near row on top, far row below."""
+    from lps_gui.core.truth.two_depth import two_depth_rig
 
     half = CameraIntrinsics.from_values((960, 540), 1159.5, 1159.5, 480.0, 270.0)
     tr = two_depth_rig(600.0, intrinsics=half, seed=2)

@@ -36,7 +36,7 @@ def test_a_missing_sdk_is_one_line_naming_the_extra(monkeypatch, spec, module, e
 def test_the_core_install_imports_no_sdk():
     import subprocess
 
-    code = ("import sys, lps_gui.camera, lps_gui.capture.engine, lps_gui.cli.capture; "
+    code = ("import sys, lps_gui.camera, lps_gui.capture.engine, lps_gui.cli.capture.command; "
             "print(sorted(m for m in ('pypylon', 'harvesters', 'genicam', 'gphoto2') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert out.stdout.strip() == "[]", out.stderr

@@ -10,13 +10,12 @@ from typing import Callable, Iterable
 import cv2
 import numpy as np
 
-from lps_gui.core.camera_model import CameraIntrinsics
-
-from lps_gui.sim.session import create_simulated_session, simulated_engine
-from lps_gui.sim.rig import spec_for_plan
-from lps_gui.core.plan import Plan
+from lps_gui.core.geometry.camera_model import CameraIntrinsics
+from lps_gui.core.planning.plan import Plan
 from lps_gui.io.atomic import sha256_file
 from lps_gui.io.session import Session
+from lps_gui.sim.rig import spec_for_plan
+from lps_gui.sim.session import create_simulated_session, simulated_engine
 
 PLAN20 = Plan(start_mm=0.0, stop_mm=38.0, step_mm=2.0, directions="both", runs=2, overshoot_mm=1.0, settle_s=0.1, feed_mm_min=1200.0)
 SEED = 7

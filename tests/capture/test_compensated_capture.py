@@ -7,14 +7,14 @@ import numpy as np
 import pytest
 
 from lps_gui.capture.compensated import apply_compensation
-from lps_gui.sim.session import create_simulated_session, simulated_engine
-from lps_gui.sim.rig import spec_for_plan
-from lps_gui.sim.truth import read_truth
-from lps_gui.core.compensation import CompensationTable
-from lps_gui.core.plan import Plan
-from lps_gui.core.simulate import preset
-from lps_gui.core.stage_errors import StageErrorModel
+from lps_gui.core.metrology.compensation import CompensationTable
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.truth.simulate import preset
+from lps_gui.core.truth.stage_errors import StageErrorModel
 from lps_gui.io.compensation_file import write_table
+from lps_gui.sim.rig import spec_for_plan
+from lps_gui.sim.session import create_simulated_session, simulated_engine
+from lps_gui.sim.truth import read_truth
 
 ERRORS = StageErrorModel(scale_ppm=80.0, periodic_um=6.0, pitch_mm=5.0, periodic_phase_rad=0.7, backlash_um=12.0,
                          repeatability_um=0.3)
@@ -74,7 +74,7 @@ def test_compensated_recapture_reduces_true_E_5x(tmp_path):
     estimate_session(before.folder)
     res = compensation_pass(before.folder, tmp_path / "after")
     print(*res.lines(), sep="\n")
-    from lps_gui.report.compare import write_comparison
+    from lps_gui.report.pdf.compare import write_comparison
 
     assert write_comparison(before.folder, res.after_dir).stat().st_size > 1000  # the as-found/as-left PDF
     assert res.true_E_before_um > 20.0

@@ -7,7 +7,7 @@ import pytest
 from lps_gui.camera.opencv_camera import OpenCVCamera
 from lps_gui.camera.sim_camera import SimulatedCamera
 from lps_gui.capture.engine import CaptureEngine
-from lps_gui.core.plan import Plan
+from lps_gui.core.planning.plan import Plan
 from lps_gui.errors import InputError
 from lps_gui.hardware.grbl.driver import GrblStage
 from lps_gui.hardware.stage import Stage

@@ -9,11 +9,11 @@ from collections import namedtuple
 import numpy as np
 import pytest
 
-from lps_gui.sim.truth import read_truth
-from lps_gui.core.plan import Plan
-from lps_gui.core.stage_errors import StageErrorModel
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.truth.stage_errors import StageErrorModel
 from lps_gui.errors import InputError
 from lps_gui.io.session import Session
+from lps_gui.sim.truth import read_truth
 from tests.capture.helpers import (
     PLAN20,
     assert_listed_frames_intact,
@@ -210,7 +210,7 @@ def test_a_repeated_target_is_approached_again_from_its_own_side(tmp_path):
 
 def test_frames_record_their_time_after_the_move(tmp_path):
     """captures.jsonl since_move_s: the engine's clock from the stage reporting the move done (settling tests)."""
-    from lps_gui.core.plan import Plan
+    from lps_gui.core.planning.plan import Plan
     from tests.capture.helpers import start_capture
 
     plan = Plan(start_mm=0.0, stop_mm=2.0, step_mm=2.0, directions="+", settle_s=0.05, frames_per_stop=3)

@@ -8,9 +8,16 @@ import pytest
 
 from lps_gui.camera.base import Camera, Frame
 from lps_gui.camera.render import BoardRenderer
-from lps_gui.capture.intrinsics_plan import LIST_FILE, IntrinsicsCapture, check_view, coverage, goal_pose, intrinsics_plan
-from lps_gui.core.camera_model import project
-from lps_gui.core.simulate import small_spec
+from lps_gui.capture.intrinsics_plan import (
+    LIST_FILE,
+    IntrinsicsCapture,
+    check_view,
+    coverage,
+    goal_pose,
+    intrinsics_plan,
+)
+from lps_gui.core.geometry.camera_model import project
+from lps_gui.core.truth.simulate import small_spec
 from lps_gui.io.atomic import sha256_file
 
 

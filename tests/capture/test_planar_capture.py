@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from lps_gui.core.clock import SimClock
-from lps_gui.core.plan import Plan
-from lps_gui.core.simulate import small_planar_spec
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.truth.simulate import small_planar_spec
 from lps_gui.io.session import Session
 from lps_gui.pipeline.detect import detect_session
 from lps_gui.pipeline.estimate import estimate_session

@@ -6,7 +6,7 @@ import json
 import pytest
 
 from lps_gui.capture.plans import describe_plan, parse_targets, plan_duration_s, plan_with, read_plan
-from lps_gui.core.plan import Plan
+from lps_gui.core.planning.plan import Plan
 from lps_gui.errors import InputError
 from tests.capture.helpers import PLAN20, start_capture
 

@@ -67,7 +67,7 @@ class StillCamera(Camera):
 
 
 def test_settling_ends_on_a_frozen_clock_and_a_board_that_is_never_found(tmp_path):
-    from lps_gui.core.board import Board
+    from lps_gui.core.geometry.board import Board
 
     camera = StillCamera(np.full((60, 80), 128, np.uint8))  # no board in view
     settler = Settler(Board(cols=9, rows=6, square_mm=20.0), SettleOptions(settle_px=0.01, timeout_s=1.0), SimClock())
@@ -78,7 +78,7 @@ def test_settling_ends_on_a_frozen_clock_and_a_board_that_is_never_found(tmp_pat
 def test_averaging_n_frames_shrinks_the_corner_noise_as_one_over_root_n(tmp_path):
     from lps_gui.camera.detection import detect_chessboard
     from lps_gui.camera.render import BoardRenderer
-    from lps_gui.core.stage_errors import TruePose
+    from lps_gui.core.truth.stage_errors import TruePose
     from tests.capture.helpers import tiny_spec
 
     rig = tiny_spec().rig

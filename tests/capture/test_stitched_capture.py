@@ -6,8 +6,8 @@ import threading
 
 import pytest
 
-from lps_gui.core.plan import Plan
-from lps_gui.core.plan_segments import check_segments, stitched_segments
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.planning.segments import check_segments, stitched_segments
 from lps_gui.errors import InputError
 from tests.capture.helpers import start_capture
 

@@ -9,9 +9,9 @@ import numpy as np
 from lps_gui.camera.detection import detect_chessboard
 from lps_gui.capture.engine import CaptureEngine
 from lps_gui.capture.settle import SettleOptions
-from lps_gui.core.camera_model import project_board
-from lps_gui.core.plan import Plan
-from lps_gui.core.stage_errors import TruePose
+from lps_gui.core.geometry.camera_model import project_board
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.truth.stage_errors import TruePose
 from lps_gui.hardware.sim_stage import Vibration
 from lps_gui.sim.session import create_simulated_session
 from tests.capture.helpers import tiny_spec

@@ -25,7 +25,7 @@ def test_simulate_min_step_with_a_dead_band_estimates_a_sticking_stage(tmp_path,
     section = json.loads((out / "results.json").read_text())["asme_b5_64"]
     assert section["incremental_step"]["sticks"] and section["incremental_step"]["truth"]["dead_band_um"] == 3.0
     assert "Minimum incremental motion" in [r["figure"] for r in section["test_uncertainty_ratio"]]
-    from lps_gui.report.pdf import render_report
+    from lps_gui.report.pdf.document import render_report
 
     info = render_report(out.resolve())
     page = next(p for p in info.pages if "ASME B5.64 incremental-step test (minimum incremental motion)" in p)
@@ -60,7 +60,7 @@ def test_capture_settling_on_the_ringing_simulated_rig(tmp_path):
     assert lps_main(["estimate", str(out)]) == 0
     settle = json.loads((out / "results.json").read_text())["asme_b5_64"]["settling"]
     assert abs(settle["settling_time_s"] / settle["truth"]["settling_time_s"] - 1.0) < 0.2
-    from lps_gui.report.pdf import render_report
+    from lps_gui.report.pdf.document import render_report
 
     info = render_report(out)
     assert any("ASME B5.64 settling test" in page for page in info.pages) and not info.clipped

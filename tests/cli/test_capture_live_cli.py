@@ -7,8 +7,6 @@ import shutil
 import numpy as np
 
 from lps_gui.cli import main as lps_main
-
-
 def test_capture_report_equals_separate_detect_and_estimate(tmp_path, capsys):
     folder = tmp_path / "s"
     assert lps_main(["capture", "--out", str(folder), "--preset", "small", "--stop", "14", "--report"]) == 0

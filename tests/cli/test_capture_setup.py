@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from lps_gui.cli import main
-from lps_gui.core.presets import SPEC_PRESETS, iso230_targets, parse_spec
+from lps_gui.core.planning.presets import SPEC_PRESETS, iso230_targets, parse_spec
 from lps_gui.errors import InputError
 
 

@@ -4,7 +4,6 @@ from __future__ import annotations
 import json
 
 from lps_gui.cli import main as lps_main
-
 CAMERA = ["--focal-mm", "8.18", "--pixel-um", "5.86", "--image", "1920x1080", "--inner-corners", "30x18",
           "--square-mm", "10"]
 

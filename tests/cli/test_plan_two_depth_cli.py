@@ -4,7 +4,6 @@ from __future__ import annotations
 import json
 
 from lps_gui.cli import main as lps_main
-
 PAPER_CAMERA = ["--focal-mm", "8", "--pixel-um", "3.45", "--image", "1920x1080"]
 
 

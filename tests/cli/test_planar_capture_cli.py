@@ -12,12 +12,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from lps_gui.cli import capture as capture_cli
 from lps_gui.cli import main as lps_main
-from lps_gui.cli.capture_plan import build_planar_plan
+from lps_gui.cli.capture import command as capture_cli
+from lps_gui.cli.capture.plan import build_planar_plan
 from lps_gui.io.session import Session
 from tests.capture.helpers import (
-    assert_listed_frames_intact, image_bytes, kill_when, records_without_time, replay_frames,
+    assert_listed_frames_intact,
+    image_bytes,
+    kill_when,
+    records_without_time,
+    replay_frames,
 )
 
 ROOT = Path(__file__).resolve().parents[2]

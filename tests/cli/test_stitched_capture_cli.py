@@ -5,7 +5,6 @@ import io
 import json
 
 from lps_gui.cli import main as lps_main
-
 PLAN = ["--start", "0", "--stop", "16", "--step", "2", "--settle", "0", "--segment-stops", "5", "--overlap-stops", "2"]
 
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from lps_gui.core.target_model import N_COMMON, _linearize, _retract, initial_solution
+from lps_gui.core.models.target_model import N_COMMON, _linearize, _retract, initial_solution
 
 
 def crb_centred(obs, layout, s_true, D: int, noise_px: float, intrinsics) -> np.ndarray:

@@ -1,14 +1,13 @@
-"""ASME B5.64 figures (core/asme_b5_64) against their definitions and synthetic truth; the stage's dead band
-and ringing (core/stage_errors); the test plan presets (core/presets)."""
+"""ASME B5.64 figures (core/metrology/asme_b5_64) against their definitions and synthetic truth; the stage's dead band
+and ringing (core/truth/stage_errors); the test plan presets (core/planning/presets)."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from lps_gui.core.asme_b5_64 import (incremental_step_figures, named_figures, settling_figures,
-                                     tur)
-from lps_gui.core.presets import asme_test_record, min_step_plan_fields, parse_spec, settling_plan_fields
-from lps_gui.core.stage_errors import StageErrorModel, Vibration
+from lps_gui.core.metrology.asme_b5_64 import incremental_step_figures, named_figures, settling_figures, tur
+from lps_gui.core.planning.presets import asme_test_record, min_step_plan_fields, parse_spec, settling_plan_fields
+from lps_gui.core.truth.stage_errors import StageErrorModel, Vibration
 from lps_gui.errors import InputError
 
 

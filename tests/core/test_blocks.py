@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from lps_gui.core import blocks
+from lps_gui.core.numerics import blocks
 
 
 def test_results_come_back_in_order_and_equal_a_loop(monkeypatch):
@@ -28,9 +28,9 @@ def test_one_thread_is_a_plain_loop(monkeypatch):
 
 def test_pose_blocks_do_not_depend_on_the_thread_count(monkeypatch):
     """Threads only change where blocks run: every number is the same bit for bit."""
-    from lps_gui.core.plan import Plan
-    from lps_gui.core.pose_normals import BLOCK_VIEWS, pose_normals
-    from lps_gui.core.simulate import paper_rig_spec, simulate_views
+    from lps_gui.core.numerics.pose_normals import BLOCK_VIEWS, pose_normals
+    from lps_gui.core.planning.plan import Plan
+    from lps_gui.core.truth.simulate import paper_rig_spec, simulate_views
 
     spec = paper_rig_spec(plan=Plan(start_mm=0.0, stop_mm=float(3 * BLOCK_VIEWS), step_mm=1.0))
     views = simulate_views(spec)

@@ -3,8 +3,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from lps_gui.core.simulate import board_plane_positions, paper_rig_spec
-from lps_gui.core.stage_errors import TruePose
+from lps_gui.core.truth.simulate import board_plane_positions, paper_rig_spec
+from lps_gui.core.truth.stage_errors import TruePose
 
 
 def pose(axis, angles=None):

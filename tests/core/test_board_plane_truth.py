@@ -2,9 +2,9 @@
 solve computed for it before)."""
 import numpy as np
 
-from lps_gui.core.board_plane_truth import BLOCK_VIEWS, positions_on_line
-from lps_gui.core.camera_model import project, project_board
-from lps_gui.core.simulate import board_plane_positions, paper_rig_spec, paper_stage_errors, small_spec
+from lps_gui.core.geometry.camera_model import project, project_board
+from lps_gui.core.truth.board_plane_truth import BLOCK_VIEWS, positions_on_line
+from lps_gui.core.truth.simulate import board_plane_positions, paper_rig_spec, paper_stage_errors, small_spec
 
 
 def _old_board_plane_positions(rig, pose, iterations=30):

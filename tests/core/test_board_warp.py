@@ -6,12 +6,12 @@ import pytest
 
 from lps_gui.camera.detection import detect_chessboard
 from lps_gui.camera.render import BoardRenderer, Lighting
-from lps_gui.core.board import Board
-from lps_gui.core.camera_model import project_board
-from lps_gui.core.intrinsics_calibration import calibrate_intrinsics
-from lps_gui.core.intrinsics_refine import WarpNotSeparableError, _residuals_and_jacobian
-from lps_gui.core.rotation import exp_so3
-from lps_gui.core.simulate import small_spec
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.geometry.camera_model import project_board
+from lps_gui.core.geometry.rotation import exp_so3
+from lps_gui.core.intrinsics.calibration import calibrate_intrinsics
+from lps_gui.core.intrinsics.refine import WarpNotSeparableError, _residuals_and_jacobian
+from lps_gui.core.truth.simulate import small_spec
 
 INTR = small_spec().rig.intrinsics
 BOW = (0.6, 0.4)  # the centre stands 1 mm off the board's corners
@@ -141,8 +141,8 @@ def test_lps_estimate_with_the_bowed_board_is_back_at_the_noise():
     """An LPS run of a bowed board: the flat model leaves structure in the residuals and errors in the positions."""
     from dataclasses import replace
 
-    from lps_gui.core.estimate import EstimateOptions, estimate
-    from lps_gui.core.simulate import observations_of, simulate_views
+    from lps_gui.core.estimator.estimate import EstimateOptions, estimate
+    from lps_gui.core.truth.simulate import observations_of, simulate_views
 
     spec = small_spec(seed=1, noise_px=0.05)
     bowed = replace(spec.rig.board, warp_mm=(2.0, 1.0))

@@ -3,8 +3,8 @@ import cv2
 import numpy as np
 import pytest
 
-from lps_gui.core.camera_model import CameraIntrinsics, pose_jacobian_rodrigues, project
-from lps_gui.core.simulate import PAPER_INTRINSICS
+from lps_gui.core.geometry.camera_model import CameraIntrinsics, pose_jacobian_rodrigues, project
+from lps_gui.core.truth.simulate import PAPER_INTRINSICS
 
 
 def random_case(seed):

@@ -11,13 +11,13 @@ import cv2
 import numpy as np
 import pytest
 
-from lps_gui.core import constant_orientation as co
-from lps_gui.core.estimate import EstimateOptions, estimate
-from lps_gui.core.lps_model import unit
-from lps_gui.core.plan import Plan
-from lps_gui.core.rotation import exp_so3
-from lps_gui.core.simulate import observations_of, paper_rig_spec, simulate_views
-from lps_gui.core.stage_errors import ErrorProfile, StageErrorModel
+from lps_gui.core.estimator.estimate import EstimateOptions, estimate
+from lps_gui.core.geometry.rotation import exp_so3
+from lps_gui.core.models import constant_orientation as co
+from lps_gui.core.models.lps_model import unit
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.truth.simulate import observations_of, paper_rig_spec, simulate_views
+from lps_gui.core.truth.stage_errors import ErrorProfile, StageErrorModel
 
 TRAVEL_MM = 798.0
 

@@ -4,9 +4,9 @@ import math
 import numpy as np
 import pytest
 
-from lps_gui.core.board import Board
-from lps_gui.core.environment import Environment, corrected_board, thermal_scale
-from lps_gui.core.uncertainty_budget import BudgetInputs, budget_rows, combine, figure_uncertainties
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.metrology.environment import Environment, corrected_board, thermal_scale
+from lps_gui.core.metrology.uncertainty_budget import BudgetInputs, budget_rows, combine, figure_uncertainties
 from lps_gui.errors import InputError
 
 
@@ -99,7 +99,7 @@ def test_periodic_amplitude_uncertainty_matches_a_monte_carlo_fit():
 
 def test_a_tilt_curve_within_the_noise_gives_no_abbe_term():
     """A quick demo: 48 views, per-view pitch/yaw sigma 500 urad, no tilt at all; the cubic fit's noise is not a tilt."""
-    from lps_gui.core.uncertainty_budget import smooth_tilt_spread_urad
+    from lps_gui.core.metrology.uncertainty_budget import smooth_tilt_spread_urad
 
     n = 48
     t = np.repeat(np.linspace(0, 22, 12), 4)

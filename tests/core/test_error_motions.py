@@ -4,10 +4,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.core.error_motions import error_motions, iso_names
-from lps_gui.core.pose_model import _linearize, _retract, solve_poses
-from lps_gui.core.rotation import exp_so3
-from lps_gui.core.two_depth import PAPER_CAMERA, observe_stops, two_depth_rig
+from lps_gui.core.geometry.rotation import exp_so3
+from lps_gui.core.metrology.error_motions import error_motions, iso_names
+from lps_gui.core.models.pose_model import _linearize, _retract, solve_poses
+from lps_gui.core.truth.two_depth import PAPER_CAMERA, observe_stops, two_depth_rig
 
 CAMERA = PAPER_CAMERA  # 8 mm lens, 3.45 um pixels, 1920 x 1080
 
@@ -17,7 +17,7 @@ def two_depth_scene(seed: int, two_depth: bool = True, stops: int = 121, noise_p
     """The paper camera 800 mm from a row of 30 mm targets and, 300 mm nearer, a row of 15 mm targets.
 
     The stage rolls, pitches and yaws along smooth curves of 50-160 urad (plus 3 urad per stop) and bows
-    10 um across and 15 um along the view (core/two_depth). ``two_depth=False`` puts the small targets in
+    10 um across and 15 um along the view (core/truth/two_depth). ``two_depth=False`` puts the small targets in
     the far plane.
     """
     tr = two_depth_rig(travel_mm, near_mm=300.0 if two_depth else 0.0, seed=seed)
@@ -115,7 +115,7 @@ def test_the_tool_point_carries_the_abbe_error():
 
 
 def test_weighted_variances_are_the_variances_of_the_weighted_functionals():
-    from lps_gui.core.target_arrowhead import PositionCovariance
+    from lps_gui.core.numerics.target_arrowhead import PositionCovariance
 
     rng = np.random.default_rng(4)
     K, G, P = 7, 5, 6

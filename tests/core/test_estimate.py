@@ -9,10 +9,10 @@ import cv2
 import numpy as np
 import pytest
 
-from lps_gui.core.estimate import EstimateOptions, estimate
-from lps_gui.core.joint_lm import LpsState
-from lps_gui.core.simulate import observations_of, paper_rig_spec, simulate_views, small_spec
-from lps_gui.core.stage_errors import StageErrorModel
+from lps_gui.core.estimator.estimate import EstimateOptions, estimate
+from lps_gui.core.models.joint_lm import LpsState
+from lps_gui.core.truth.simulate import observations_of, paper_rig_spec, simulate_views, small_spec
+from lps_gui.core.truth.stage_errors import StageErrorModel
 
 AXIAL_ERRORS = StageErrorModel(scale_ppm=25.0, periodic_um=4.0, pitch_mm=5.0, backlash_um=6.0, repeatability_um=1.0)
 
@@ -115,7 +115,7 @@ def test_hybrid_within_twice_the_bound_on_a_short_paper_run():
 
 @pytest.mark.parametrize("resolution_mm", [1e-2, 1e-4])
 def test_grid_search_finds_each_position_to_its_resolution(resolution_mm):
-    from lps_gui.core.hybrid import grid_search_positions
+    from lps_gui.core.models.hybrid import grid_search_positions
 
     spec = replace(small_spec(seed=2, views=15), noise_px=0.0)
     views = simulate_views(spec)
@@ -171,7 +171,7 @@ def test_replaced_and_bumped_views_are_flagged_and_others_unaffected():
 
 
 def test_six_dof_recovers_straightness_and_angles_with_honest_sigmas():
-    from lps_gui.core.stage_errors import ErrorProfile
+    from lps_gui.core.truth.stage_errors import ErrorProfile
 
     errors = replace(
         AXIAL_ERRORS,

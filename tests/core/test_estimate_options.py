@@ -3,8 +3,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from lps_gui.core.estimate import EstimateOptions, estimate
-from lps_gui.core.simulate import observations_of, simulate_views, small_spec
+from lps_gui.core.estimator.estimate import EstimateOptions, estimate
+from lps_gui.core.truth.simulate import observations_of, simulate_views, small_spec
 
 
 def rms_error_um(est, views):

@@ -1,6 +1,6 @@
 """The analytic normal equations of every stage model against central finite differences, as one table.
 
-Rows: the model of D axes (line: core/joint_lm; planar: core/planar_model; SPEC 13's target rows join
+Rows: the model of D axes (line: core/models/joint_lm; planar: core/models/planar_model; SPEC 13's target rows join
 here). Columns: which parameter groups are differentiated (mrcal's test-gradients varies its problem
 selections the same way): ``poses`` (the shared rotation and line or plane, and every view's position),
 ``intrinsics`` (the 9 intrinsics beside them) and ``warp`` (both, on a bowed board whose points leave the
@@ -15,16 +15,15 @@ from typing import Callable
 import numpy as np
 import pytest
 
-from lps_gui.core.joint_lm import N_POSE_PARAMS, LpsState, apply_step, linearize, residuals
-from lps_gui.core.planar_model import (
+from lps_gui.core.models.joint_lm import N_POSE_PARAMS, LpsState, apply_step, linearize, residuals
+from lps_gui.core.models.planar_model import (
     N_PLANAR_SHARED,
     PlanarState,
     apply_planar_step,
     linearize_planar,
     planar_residuals,
 )
-from lps_gui.core.simulate import nominal_planar_state, simulate_views, small_planar_spec
-from lps_gui.core.simulate import simulate_views, small_spec
+from lps_gui.core.truth.simulate import nominal_planar_state, simulate_views, small_planar_spec, small_spec
 from tests.core.finite_differences import central_jacobian, normalized_difference
 
 TOL = 1e-5  # a Jacobian column scaled by 1.01 moves the normal matrix by ~1e-2 in these units
@@ -58,7 +57,7 @@ def line_case(warp: bool) -> Case:
     s = np.asarray(views.truth["positions_mm"]) + rng.normal(0, 0.01, len(views.stops))
     state = LpsState(rig.R_cam_board, views.t_cam_board[0] + 0.05, -rig.R_cam_board @ rig.u_board, s, rig.intrinsics)
     board = replace(rig.board, warp_mm=WARP_MM) if warp else rig.board
-    return Case("line", state, board.object_points(), *_noisy(views.corners_px), "lps_gui.core.pose_normals")
+    return Case("line", state, board.object_points(), *_noisy(views.corners_px), "lps_gui.core.numerics.pose_normals")
 
 
 def planar_case(warp: bool) -> Case:
@@ -68,7 +67,7 @@ def planar_case(warp: bool) -> Case:
     state = nominal_planar_state(spec.rig, views.board_plane_mm + rng.normal(0, 0.01, views.board_plane_mm.shape))
     state.l0 = state.l0 + 0.05
     board = replace(spec.rig.board, warp_mm=WARP_MM) if warp else spec.rig.board
-    return Case("planar", state, board.object_points(), *_noisy(views.corners_px), "lps_gui.core.planar_model")
+    return Case("planar", state, board.object_points(), *_noisy(views.corners_px), "lps_gui.core.models.planar_model")
 
 
 def line_analytic(case: Case, with_intrinsics: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -4,12 +4,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.core.board import Board
-from lps_gui.core.camera_model import project_board
-from lps_gui.core.rotation import exp_so3
-from lps_gui.core.simulate import small_spec
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.geometry.camera_model import project_board
+from lps_gui.core.geometry.rotation import exp_so3
+from lps_gui.core.intrinsics.calibration import calibrate_intrinsics, coverage_grid
+from lps_gui.core.truth.simulate import small_spec
 from lps_gui.errors import DegenerateGeometryError, InputError
-from lps_gui.core.intrinsics_calibration import calibrate_intrinsics, coverage_grid
 
 INTR = small_spec().rig.intrinsics
 BOARD = Board(cols=9, rows=6, square_mm=20.0)

@@ -3,12 +3,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from lps_gui.core.board import Board
-from lps_gui.core.camera_model import project_board
-from lps_gui.core.intrinsics_calibration import calibrate_intrinsics
-from lps_gui.core.intrinsics_crossval import cross_validate, projection_diff, uncertainty_map
-from lps_gui.core.rotation import exp_so3
-from lps_gui.core.simulate import small_spec
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.geometry.camera_model import project_board
+from lps_gui.core.geometry.rotation import exp_so3
+from lps_gui.core.intrinsics.calibration import calibrate_intrinsics
+from lps_gui.core.intrinsics.crossval import cross_validate, projection_diff, uncertainty_map
+from lps_gui.core.truth.simulate import small_spec
 
 INTR = small_spec().rig.intrinsics
 BOARD = Board(9, 6, 20.0)

@@ -5,9 +5,14 @@ import math
 import numpy as np
 import pytest
 
-from lps_gui.core.iso230 import (bidirectional_figures, check_specification, direction_signs, figures_for_session,
-                                 single_run_figures)
-from lps_gui.core.iso230_spectrum import deviation_spectrum
+from lps_gui.core.metrology.iso230 import (
+    bidirectional_figures,
+    check_specification,
+    direction_signs,
+    figures_for_session,
+    single_run_figures,
+)
+from lps_gui.core.metrology.iso230_spectrum import deviation_spectrum
 from lps_gui.errors import InputError
 
 SQ2 = math.sqrt(2.0)
@@ -294,8 +299,8 @@ def test_repeated_positions_are_merged_into_their_mean():
 
 def test_session_figures_recover_the_stage_error_model():
     """Closed loop on the simulator's truth: scale, lead-screw pitch, backlash and repeatability."""
-    from lps_gui.core.plan import Plan
-    from lps_gui.core.stage_errors import StageErrorModel
+    from lps_gui.core.planning.plan import Plan
+    from lps_gui.core.truth.stage_errors import StageErrorModel
 
     model = StageErrorModel(scale_ppm=60.0, periodic_um=2.5, pitch_mm=4.0, periodic_phase_rad=0.3,
                             backlash_um=8.0, repeatability_um=0.4)

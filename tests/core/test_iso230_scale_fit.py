@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from lps_gui.core.iso230_run import _scale_fit, scale_functional
+from lps_gui.core.metrology.iso230_run import _scale_fit, scale_functional
 
 
 def _design(t, group):

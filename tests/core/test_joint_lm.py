@@ -1,4 +1,4 @@
-"""core/joint_lm: Huber weights in the normal equations; the Schur step against a dense solve.
+"""core/models/joint_lm: Huber weights in the normal equations; the Schur step against a dense solve.
 
 The normal equations against central finite differences: tests/core/test_gradients.py (every model).
 """
@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.core.joint_lm import apply_step, huber_weights, linearize, robust_cost, solve_arrowhead
+from lps_gui.core.models.joint_lm import apply_step, huber_weights, linearize, robust_cost, solve_arrowhead
 from tests.core.finite_differences import normalized_difference
 from tests.core.test_gradients import Case, line_case, line_numeric
 

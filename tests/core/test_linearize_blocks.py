@@ -4,9 +4,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.core.joint_lm import LpsState, linearize
-from lps_gui.core.plan import Plan
-from lps_gui.core.simulate import paper_rig_spec, simulate_views
+from lps_gui.core.models.joint_lm import LpsState, linearize
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.truth.simulate import paper_rig_spec, simulate_views
 
 
 @pytest.fixture(scope="module")
@@ -43,7 +43,7 @@ def test_pose_blocks_equal_the_full_jacobian_ones(case, huber_c):
 @pytest.mark.parametrize("with_intrinsics", [False, True])
 def test_a_view_selection_equals_masking_the_other_views(case, with_intrinsics):
     """One pass over every view with ``views`` selecting the solve's equals the pass over the used views' corners."""
-    from lps_gui.core.joint_lm import linearize_poses
+    from lps_gui.core.models.joint_lm import linearize_poses
 
     state, X, corners, mask = case
     used = np.ones(mask.shape[0], bool)

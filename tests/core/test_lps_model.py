@@ -1,10 +1,10 @@
-"""core/lps_model: the line of SPEC 3, its frame, and the sphere tangent step of the direction."""
+"""core/models/lps_model: the line of SPEC 3, its frame, and the sphere tangent step of the direction."""
 from __future__ import annotations
 
 import numpy as np
 
-from lps_gui.core.lps_model import LpsLine, motion_frame, sphere_retract, sphere_tangent_basis, unit
-from lps_gui.core.rotation import exp_so3
+from lps_gui.core.geometry.rotation import exp_so3
+from lps_gui.core.models.lps_model import LpsLine, motion_frame, sphere_retract, sphere_tangent_basis, unit
 from tests.core.finite_differences import central_jacobian
 
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.core.iso230_spectrum import deviation_spectrum, sine_amplitude_um
-from lps_gui.core.rotation import exp_so3, log_so3
+from lps_gui.core.geometry.rotation import exp_so3, log_so3
+from lps_gui.core.metrology.iso230_spectrum import deviation_spectrum, sine_amplitude_um
 
 
 def _rotvecs(rng):

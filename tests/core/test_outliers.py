@@ -1,10 +1,16 @@
-"""core/outliers: robust scales, and flagging a bumped view (reprojection) or a replaced one (position)."""
+"""core/numerics/outliers: robust scales, and flagging a bumped view (reprojection) or a replaced one (position)."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from lps_gui.core.outliers import MAD_TO_SIGMA, local_trend_residuals, position_outliers, reprojection_outliers, robust_sigma
+from lps_gui.core.numerics.outliers import (
+    MAD_TO_SIGMA,
+    local_trend_residuals,
+    position_outliers,
+    reprojection_outliers,
+    robust_sigma,
+)
 
 
 def test_robust_sigma_of_gaussian_noise_ignores_a_wild_value():

@@ -10,7 +10,7 @@ import json
 
 import pytest
 
-from lps_gui.core.plan import Plan, PlannedStop
+from lps_gui.core.planning.plan import Plan, PlannedStop
 from lps_gui.errors import InputError
 
 # Plan(0, 4, 2, directions="both", runs=2).stops() before the merge: (index, run, direction, target, frame)

@@ -5,19 +5,18 @@ import cv2
 import numpy as np
 import pytest
 
-from lps_gui.core.estimate import EstimateOptions, estimate
-from lps_gui.core.observations import Observations
-from lps_gui.core.planar_model import planar_truth_in_stage_frame
-from lps_gui.core.planar_figures import axis_geometry, planar_figures
-from lps_gui.core.stage_errors import PlanarErrorModel
-from lps_gui.core.simulate import (
+from lps_gui.core.estimator.estimate import EstimateOptions, estimate
+from lps_gui.core.estimator.observations import Observations
+from lps_gui.core.metrology.planar_figures import axis_geometry, planar_figures
+from lps_gui.core.models.planar_model import planar_truth_in_stage_frame
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.truth.simulate import (
     nominal_planar_state,
     paper_planar_spec,
     simulate_views,
     small_planar_spec,
 )
-from lps_gui.core.plan import Plan
-from lps_gui.core.stage_errors import StageErrorModel
+from lps_gui.core.truth.stage_errors import PlanarErrorModel, StageErrorModel
 from lps_gui.errors import DegenerateGeometryError, InputError
 
 
@@ -95,7 +94,7 @@ def test_paper_planar_positions_reach_the_cramer_rao_bound_and_recover_squarenes
 
 
 def planar_truth_geometry(est, obs, truth_xy):
-    from lps_gui.core.planar_model import affine_motion
+    from lps_gui.core.models.planar_model import affine_motion
 
     G = affine_motion(truth_xy, obs.target_mm, obs.approach, est.used)
     return axis_geometry(G, np.zeros((4, 4)))

@@ -3,12 +3,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from lps_gui.core.estimate import EstimateOptions, estimate
-from lps_gui.core.observations import Observations
-from lps_gui.core.planar_flatness import out_of_plane
-from lps_gui.core.stage_errors import PlanarErrorModel
-from lps_gui.core.simulate import paper_planar_spec, simulate_views
-from lps_gui.core.stage_errors import ErrorProfile, StageErrorModel
+from lps_gui.core.estimator.estimate import EstimateOptions, estimate
+from lps_gui.core.estimator.observations import Observations
+from lps_gui.core.metrology.planar_flatness import out_of_plane
+from lps_gui.core.truth.simulate import paper_planar_spec, simulate_views
+from lps_gui.core.truth.stage_errors import ErrorProfile, PlanarErrorModel, StageErrorModel
 
 
 def test_out_of_plane_bow_is_recovered_with_honest_sigma():

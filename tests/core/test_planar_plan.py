@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.core.plan import Plan, approach_directions, iso_lines_plan
+from lps_gui.core.planning.plan import Plan, approach_directions, iso_lines_plan
 from lps_gui.errors import InputError
 
 
@@ -70,7 +70,7 @@ def test_arrival_indices_follow_each_axis():
 
 def test_axis_moves_overshoot_only_where_an_axis_would_arrive_from_the_wrong_side():
     from lps_gui.capture.moves import axis_moves
-    from lps_gui.core.plan import PlannedStop
+    from lps_gui.core.planning.plan import PlannedStop
 
     stop = PlannedStop(0, 1, "+", (10.0, 5.0), 0, (1, -1))
     sides = [None, None]

@@ -1,11 +1,18 @@
-"""The one rule for 'resolved' and 'indicative' (core/resolution.py)."""
+"""The one rule for 'resolved' and 'indicative' (core/metrology/resolution.py)."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from lps_gui.core.resolution import (is_indicative, is_resolved, noise_max_abs, noise_peak_to_valley,
-                                     not_resolved_text, profile_span, straightness_verdict)
+from lps_gui.core.metrology.resolution import (
+    is_indicative,
+    is_resolved,
+    noise_max_abs,
+    noise_peak_to_valley,
+    not_resolved_text,
+    profile_span,
+    straightness_verdict,
+)
 
 
 def test_noise_bounds_sit_in_the_far_tail_of_pure_noise():
@@ -95,7 +102,7 @@ def test_fewer_than_five_runs_per_direction_are_indicative():
 def test_chi2_survival_matches_scipy_stats():
     from scipy.stats import chi2
 
-    from lps_gui.core.resolution import chi2_sf
+    from lps_gui.core.metrology.resolution import chi2_sf
 
     for x, dof in ((3.0, 2), (50.0, 20), (1.0, 7), (400.0, 300)):
         assert chi2_sf(x, dof) == pytest.approx(chi2.sf(x, dof), rel=1e-12)

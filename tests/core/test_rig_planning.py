@@ -4,12 +4,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.core.estimate import estimate
-from lps_gui.core.observations import Observations
-from lps_gui.core.plan import Plan
-from lps_gui.core.simulate import simulate_views, small_planar_spec
-from lps_gui.core.rig_planning import intrinsics_from_lens, predict_rig
-from lps_gui.core.simulate import observations_of, simulate_views, small_spec
+from lps_gui.core.estimator.estimate import estimate
+from lps_gui.core.estimator.observations import Observations
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.planning.rig import intrinsics_from_lens, predict_rig
+from lps_gui.core.truth.simulate import observations_of, simulate_views, small_planar_spec, small_spec
 from lps_gui.errors import InputError
 
 

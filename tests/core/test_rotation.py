@@ -1,9 +1,9 @@
-"""core/rotation: exp/log are inverse, the left perturbation's derivative, the chordal mean."""
+"""core/geometry/rotation: exp/log are inverse, the left perturbation's derivative, the chordal mean."""
 from __future__ import annotations
 
 import numpy as np
 
-from lps_gui.core.rotation import chordal_mean, exp_so3, log_so3, project_to_so3, skew
+from lps_gui.core.geometry.rotation import chordal_mean, exp_so3, log_so3, project_to_so3, skew
 from tests.core.finite_differences import central_jacobian
 
 

@@ -4,11 +4,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.core.rig_planning import intrinsics_from_lens
-from lps_gui.core.rotation import exp_so3
-from lps_gui.core.row_planning import DISTANCE_STEP_MM, RowPlan, plan_row, propose_row
-from lps_gui.core.target_model import TargetObservations, solve_targets
-from lps_gui.core.target_rig import TargetLayout, observe
+from lps_gui.core.geometry.rotation import exp_so3
+from lps_gui.core.geometry.target_rig import TargetLayout, observe
+from lps_gui.core.models.target_model import TargetObservations, solve_targets
+from lps_gui.core.planning.rig import intrinsics_from_lens
+from lps_gui.core.planning.rows import DISTANCE_STEP_MM, RowPlan, plan_row, propose_row
 from lps_gui.errors import InputError
 
 PAPER_CAMERA = intrinsics_from_lens(8.0, 3.45, (1920, 1080))

@@ -1,14 +1,14 @@
-"""core/six_dof: the per-view pose solver and the straightness / angle Jacobians against central differences."""
+"""core/models/six_dof: the per-view pose solver and the straightness / angle Jacobians against central differences."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from lps_gui.core.camera_model import project_board
-from lps_gui.core.rotation import exp_so3, log_so3
-from lps_gui.core.simulate import simulate_views, small_spec
-from lps_gui.core.six_dof import ViewPoses, refine_view_poses, six_dof_motion
-from lps_gui.core.stage_errors import ErrorProfile, StageErrorModel
+from lps_gui.core.geometry.camera_model import project_board
+from lps_gui.core.geometry.rotation import exp_so3, log_so3
+from lps_gui.core.models.six_dof import ViewPoses, refine_view_poses, six_dof_motion
+from lps_gui.core.truth.simulate import simulate_views, small_spec
+from lps_gui.core.truth.stage_errors import ErrorProfile, StageErrorModel
 from tests.core.finite_differences import central_jacobian, normalized_difference
 
 TOL = 1e-5

@@ -1,5 +1,5 @@
 """Straight-line accuracy against a data sheet must not blame the stage for measurement noise."""
-from lps_gui.core.iso230 import check_specification
+from lps_gui.core.metrology.iso230 import check_specification
 
 
 def straightness_row(span_um, sigma_um):

@@ -1,10 +1,10 @@
-"""core/stage_errors: the one truth of every simulator, term by term."""
+"""core/truth/stage_errors: the one truth of every simulator, term by term."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from lps_gui.core.stage_errors import ErrorProfile, StageErrorModel
+from lps_gui.core.truth.stage_errors import ErrorProfile, StageErrorModel
 
 
 def test_error_profile_polynomial_in_metres_plus_sine():

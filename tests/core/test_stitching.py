@@ -4,13 +4,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.core.board import Board
-from lps_gui.core.camera_model import CameraIntrinsics
-from lps_gui.core.rotation import exp_so3
-from lps_gui.core.stitching import merged_observations, segment_ties, solve_stitched, stitch_budget_row
-from lps_gui.core.target_model import TargetObservations
-from lps_gui.core.target_rig import TargetLayout, observe
-from lps_gui.core.targets import Target
+from lps_gui.core.estimator.stitching import merged_observations, segment_ties, solve_stitched, stitch_budget_row
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.geometry.camera_model import CameraIntrinsics
+from lps_gui.core.geometry.rotation import exp_so3
+from lps_gui.core.geometry.target_rig import TargetLayout, observe
+from lps_gui.core.geometry.targets import Target
+from lps_gui.core.models.target_model import TargetObservations
 from lps_gui.errors import InputError
 
 CAMERA = CameraIntrinsics.from_values((1920, 1080), 2319.0, 2319.0, 960.0, 540.0)  # the paper's 8 mm, 3.45 um
@@ -83,7 +83,7 @@ def test_segments_without_a_common_stop_are_a_one_line_error():
 
 
 def test_the_one_estimators_view_of_a_stitched_capture_agrees_with_its_covariance():
-    from lps_gui.core.stitching import stitched_target_solution
+    from lps_gui.core.estimator.stitching import stitched_target_solution
 
     obs, segment, _ = segmented_capture(1, segments=3, stops=12, overlap=3, repeatability_mm=0.005)
     sol, st = stitched_target_solution(obs, segment, CAMERA, repeatability_mm=0.005)
@@ -105,8 +105,8 @@ def test_the_functionals_covariance_has_the_variances_on_its_diagonal():
     """covariance(g) (Q, Q) of the factored and the stitched covariance against their own variances(g)."""
     import numpy as np
 
-    from lps_gui.core.stitching import StitchedCovariance
-    from lps_gui.core.target_arrowhead import PositionCovariance
+    from lps_gui.core.estimator.stitching import StitchedCovariance
+    from lps_gui.core.numerics.target_arrowhead import PositionCovariance
 
     rng = np.random.default_rng(3)
     K, G, P, Q = 7, 5, 1, 4

@@ -4,8 +4,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.core.rotation import exp_so3, log_so3
-from lps_gui.core.target_chain import chain_targets, tie_counts
+from lps_gui.core.geometry.rotation import exp_so3, log_so3
+from lps_gui.core.geometry.target_chain import chain_targets, tie_counts
 from lps_gui.errors import DegenerateGeometryError
 
 

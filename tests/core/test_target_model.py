@@ -4,13 +4,19 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.core.board import Board
-from lps_gui.core.camera_model import INTRINSIC_NAMES, CameraIntrinsics
-from lps_gui.core.rotation import exp_so3, log_so3
-from lps_gui.core.target_model import (
-    N_COMMON, TargetObservations, _linearize, _retract, initial_solution, solve_targets)
-from lps_gui.core.target_rig import TargetLayout, observe, row_layout
-from lps_gui.core.targets import pack_targets
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.geometry.camera_model import INTRINSIC_NAMES, CameraIntrinsics
+from lps_gui.core.geometry.rotation import exp_so3, log_so3
+from lps_gui.core.geometry.target_rig import TargetLayout, observe, row_layout
+from lps_gui.core.geometry.targets import pack_targets
+from lps_gui.core.models.target_model import (
+    N_COMMON,
+    TargetObservations,
+    _linearize,
+    _retract,
+    initial_solution,
+    solve_targets,
+)
 from lps_gui.errors import DegenerateGeometryError
 from tests.core.target_crb import crb_centred
 
@@ -169,7 +175,7 @@ def test_an_untied_target_is_a_one_line_error():
 
 
 def test_the_targets_section_names_poses_sigmas_views_ties_and_stretch():
-    from lps_gui.core.target_summary import target_rows
+    from lps_gui.pipeline.results.targets import target_rows
 
     obs, layout, _ = paper_x_axis(2)
     sol = solve_targets(obs, PAPER_CAMERA)

@@ -1,13 +1,13 @@
-"""core/arrowhead and core/uncertainty: the Schur step and the factored inverse against dense algebra for
+"""core/numerics/arrowhead and core/numerics/uncertainty: the Schur step and the factored inverse against dense algebra for
 blocks of b = 1 (line), 2 (plane) and 6 (poses); noise variance; propagation."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from lps_gui.core.arrowhead import arrowhead_inverse, intrinsics_sensitivity, schur_step
-from lps_gui.core.joint_lm import line_inverse
-from lps_gui.core.uncertainty import noise_variance, propagated_variance
+from lps_gui.core.models.joint_lm import line_inverse
+from lps_gui.core.numerics.arrowhead import arrowhead_inverse, intrinsics_sensitivity, schur_step
+from lps_gui.core.numerics.uncertainty import noise_variance, propagated_variance
 from lps_gui.errors import DegenerateGeometryError
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.core.view_geometry import LINE_RATIO, collinear_views
+from lps_gui.core.geometry.view_geometry import LINE_RATIO, collinear_views
 
 
 def _per_view_svd(corners_px):

@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from lps_gui.core.presets import asme_test_record, min_step_plan_fields, settling_plan_fields
+from lps_gui.core.planning.presets import asme_test_record, min_step_plan_fields, settling_plan_fields
 from tests.gui.test_capture_flow import SMALL_PLAN, capture_window, records
 
 pytestmark = pytest.mark.gui

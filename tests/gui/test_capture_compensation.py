@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from lps_gui.core.compensation import CompensationTable
+from lps_gui.core.metrology.compensation import CompensationTable
 from lps_gui.io.compensation_file import write_table
 from tests.gui.test_capture_flow import SMALL_PLAN, capture_window
 

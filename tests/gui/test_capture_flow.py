@@ -6,7 +6,7 @@ import json
 import pytest
 
 from lps_gui.core.clock import SimClock
-from lps_gui.core.plan import Plan
+from lps_gui.core.planning.plan import Plan
 from tests.gui.conftest import connect_sim
 
 pytestmark = pytest.mark.gui

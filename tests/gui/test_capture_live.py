@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from lps_gui.core.plan import Plan
+from lps_gui.core.planning.plan import Plan
 from lps_gui.sim.faults import Fault, InjectedFaults
 from tests.gui.test_capture_flow import capture_window
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from lps_gui.core.simulate import preset
+from lps_gui.core.truth.simulate import preset
 from lps_gui.sim.points import simulate_point_session
 
 pytestmark = pytest.mark.gui

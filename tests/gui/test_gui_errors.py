@@ -69,7 +69,7 @@ def test_the_log_follows_the_newest_line(qtbot, window):
 def test_a_failed_intrinsics_run_clears_the_old_parameters_and_save(qtbot, window, tmp_path):
     import cv2
 
-    from lps_gui.core.simulate import preset
+    from lps_gui.core.truth.simulate import preset
 
     panel = window.intrinsics_panel
     panel.set_intrinsics(preset("small").rig.intrinsics)  # an earlier calibration on screen

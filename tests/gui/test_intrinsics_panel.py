@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.core.simulate import preset
+from lps_gui.core.truth.simulate import preset
 from lps_gui.sim.images import simulate_intrinsics_set
 
 pytestmark = pytest.mark.gui

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import pytest
 
-from lps_gui.core.plan import Plan
+from lps_gui.core.planning.plan import Plan
 
 pytestmark = pytest.mark.gui
 

@@ -9,8 +9,8 @@ import numpy as np
 import pyqtgraph as pg
 import pytest
 
-from lps_gui.core.board import Board
 from lps_gui.core.clock import SimClock
+from lps_gui.core.geometry.board import Board
 from lps_gui.gui.planar_plan_editor import PlanarPlanEditor, planar_duration_s
 
 pytestmark = pytest.mark.gui

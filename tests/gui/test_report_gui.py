@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from lps_gui.core.plan import Plan
+from lps_gui.core.planning.plan import Plan
 
 pytestmark = pytest.mark.gui
 

@@ -7,9 +7,9 @@ import pytest
 from PySide6.QtCore import Qt
 
 from lps_gui.cli import main as lps_main
-from lps_gui.io.results_model import as_results
-from lps_gui.report.asme_pages import finding_lines, section, tur_cells
-from lps_gui.report.error_motions_report import error_motion_rows
+from lps_gui.io.results.model import as_results
+from lps_gui.report.pages.asme import finding_lines, section, tur_cells
+from lps_gui.report.pages.error_motions import error_motion_rows
 
 pytestmark = pytest.mark.gui
 
@@ -94,7 +94,7 @@ def test_legends_keep_labels_of_distinct_colours_and_fit_long_labels():
     import numpy as np
 
     from lps_gui.gui.plot_adapter import legend_columns, wants_compact_legend
-    from lps_gui.report.figure_spec import FigureSpec, Series
+    from lps_gui.report.figures.spec import FigureSpec, Series
 
     x = np.arange(3.0)
     moves = FigureSpec("settling", "t", "x", "y", [Series(x, x, f"{k} mm", "line", f"#00000{k}") for k in range(8)])

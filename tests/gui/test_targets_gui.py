@@ -6,7 +6,7 @@ import json
 import pytest
 
 from lps_gui.cli import main as lps_main
-from lps_gui.core.board import Board
+from lps_gui.core.geometry.board import Board
 from lps_gui.errors import InputError
 from lps_gui.gui.targets_editor import TargetsEditor, add_targets
 from lps_gui.pipeline.estimate import estimate_session
@@ -78,7 +78,7 @@ def test_the_results_panel_shows_the_targets_and_their_stretches(qtbot, tmp_path
 
 
 def test_a_stitched_plan_pauses_to_move_the_board_and_resume_continues(qtbot, make_window, tmp_path):
-    from lps_gui.core.plan import Plan
+    from lps_gui.core.planning.plan import Plan
 
     folder = tmp_path / "stitched"
     plan = Plan(start_mm=0.0, stop_mm=16.0, step_mm=2.0, directions="+", runs=1, settle_s=0.0, overshoot_mm=1.0)

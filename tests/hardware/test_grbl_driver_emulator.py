@@ -5,17 +5,15 @@ home, soft_reset drive it) or when a test calls ``emu.advance``.
 """
 from __future__ import annotations
 
-
 import pytest
 
-from lps_gui.core.stage_errors import StageErrorModel
+from lps_gui.core.truth.stage_errors import StageErrorModel
 from lps_gui.errors import HardwareError
 from lps_gui.hardware import list_serial_ports, open_stage
 from lps_gui.hardware.grbl.codes import GrblError
 from lps_gui.hardware.grbl.driver import GrblStage
 from lps_gui.hardware.grbl.emulator import Faults, GrblEmulator
 from lps_gui.hardware.sim_stage import SimulatedStage
-
 from tests.hardware.grbl_port import drive, stepped_stage
 
 SCALE = 50.0  # simulated seconds per real second

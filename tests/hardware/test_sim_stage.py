@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from lps_gui.core.clock import SimClock
-from lps_gui.core.stage_errors import ErrorProfile, StageErrorModel
+from lps_gui.core.truth.stage_errors import ErrorProfile, StageErrorModel
 from lps_gui.errors import HardwareError
 from lps_gui.hardware.grbl.codes import GrblError
 from lps_gui.hardware.motion import duration_s, trapezoid

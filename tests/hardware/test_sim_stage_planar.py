@@ -4,8 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.core.stage_errors import PlanarErrorModel
-from lps_gui.core.stage_errors import StageErrorModel
+from lps_gui.core.truth.stage_errors import PlanarErrorModel, StageErrorModel
 from lps_gui.hardware.grbl.codes import GrblError
 from lps_gui.hardware.sim_stage import SimulatedStage
 

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from lps_gui.errors import InputError
-from lps_gui.io.corners_vnl import HEADER, CornerTable
+from lps_gui.io.corners.vnl import HEADER, CornerTable
 
 
 def format_corners_vnl(table: CornerTable) -> str:

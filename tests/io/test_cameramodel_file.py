@@ -6,7 +6,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from lps_gui.core.camera_model import CameraIntrinsics
+from lps_gui.core.geometry.camera_model import CameraIntrinsics
 from lps_gui.errors import InputError
 from lps_gui.io.cameramodel_file import format_cameramodel, parse_cameramodel, read_cameramodel, write_cameramodel
 from lps_gui.io.intrinsics_file import read_intrinsics, write_intrinsics

@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from lps_gui.core.compensation import CompensationTable
+from lps_gui.core.metrology.compensation import CompensationTable
 from lps_gui.errors import InputError
 from lps_gui.io.compensation_file import backlash_lines, mach4_text, read_table, skew_lines
 

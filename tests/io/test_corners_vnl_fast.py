@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from lps_gui.errors import InputError
-from lps_gui.io.corners_vnl import CornerTable, corners_vnl_bytes, read_corners_vnl, write_corners_vnl
+from lps_gui.io.corners.vnl import CornerTable, corners_vnl_bytes, read_corners_vnl, write_corners_vnl
 from tests.io import corners_vnl_reference as ref
 
 
@@ -131,7 +131,7 @@ def test_unreadable_files_give_the_same_errors(tmp_path):
 
 def test_many_rows_across_parse_chunks(tmp_path, monkeypatch):
     """Chunk boundaries (made small here) must not split a view or lose a row."""
-    import lps_gui.io.corners_vnl as fast
+    import lps_gui.io.corners.vnl as fast
 
     monkeypatch.setattr(fast, "_CHUNK", 7)
     table = _table(np.random.default_rng(3), k=9, n=6)
@@ -145,7 +145,7 @@ def test_many_rows_across_parse_chunks(tmp_path, monkeypatch):
 
 
 # ----------------------------------------------------------------------------- the streaming fast path (issue 15)
-# Files in the writer's fixed-point form are read by io/corners_vnl_fast.read_simple; anything it does not
+# Files in the writer's fixed-point form are read by io/corners/vnl_fast.read_simple; anything it does not
 # take must fall through to the general reader with the same table or the same message.
 
 F = H + "## source = test\n"
@@ -217,7 +217,7 @@ def test_reader_matches_the_line_by_line_one(tmp_path, name, n_corners):
 
 def test_the_writers_files_take_the_fast_path(tmp_path):
     """Not a timing test: the common file must not fall back to the general reader unnoticed."""
-    from lps_gui.io.corners_vnl_fast import read_simple
+    from lps_gui.io.corners.vnl_fast import read_simple
 
     table = _table(np.random.default_rng(7), k=9, n=12)
     write_corners_vnl(tmp_path / "corners.vnl", table)
@@ -236,7 +236,7 @@ def test_the_writers_files_take_the_fast_path(tmp_path):
 @pytest.mark.parametrize("block", [64, 97, 256])
 def test_blocks_split_rows_and_comments_anywhere(tmp_path, monkeypatch, block):
     """Small read blocks: rows, comments and names cut at every place; a line longer than a block falls back."""
-    import lps_gui.io.corners_vnl_fast as fast
+    import lps_gui.io.corners.vnl_fast as fast
 
     monkeypatch.setattr(fast, "_BLOCK", block)
     table = _table(np.random.default_rng(block), k=9, n=6)

@@ -4,13 +4,13 @@ import json
 import numpy as np
 import pytest
 
-from lps_gui.core.board import Board
-from lps_gui.core.camera_model import CameraIntrinsics
-from lps_gui.core.plan import Plan
-from lps_gui.core.simulate import PAPER_INTRINSICS, spec_from_dict, spec_to_dict, paper_rig_spec, simulate_views
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.geometry.camera_model import CameraIntrinsics
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.truth.simulate import PAPER_INTRINSICS, paper_rig_spec, simulate_views, spec_from_dict, spec_to_dict
 from lps_gui.errors import InputError
 from lps_gui.io.board_file import read_board, write_board
-from lps_gui.io.corners_vnl import CornerTable, read_corners_vnl, write_corners_vnl
+from lps_gui.io.corners.vnl import CornerTable, read_corners_vnl, write_corners_vnl
 from lps_gui.io.intrinsics_file import read_intrinsics, write_intrinsics
 from lps_gui.io.session import CaptureRecord, Session
 

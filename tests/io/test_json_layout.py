@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from lps_gui.core.simulate import small_spec
+from lps_gui.core.truth.simulate import small_spec
 from lps_gui.io.jsonfile import _default, json_bytes
 from lps_gui.pipeline.estimate import estimate_session
 from lps_gui.sim.points import simulate_point_session

@@ -5,7 +5,7 @@ import io
 import numpy as np
 import pytest
 
-from lps_gui.io import results_file as rf
+from lps_gui.io.results import document as rf
 
 
 def _row_by_row(results):

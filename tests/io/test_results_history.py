@@ -3,8 +3,8 @@ import json
 import os
 
 from lps_gui.cli import main
-from lps_gui.core.simulate import small_spec
-from lps_gui.io.results_history import history, stale_report_message
+from lps_gui.core.truth.simulate import small_spec
+from lps_gui.io.results.history import history, stale_report_message
 from lps_gui.pipeline.estimate import estimate_session
 from lps_gui.sim.points import simulate_point_session
 

@@ -8,11 +8,11 @@ import json
 import pytest
 
 from lps_gui.cli import main as lps_main
-from lps_gui.core.simulate import small_spec
+from lps_gui.core.truth.simulate import small_spec
 from lps_gui.errors import InputError
 from lps_gui.io.jsonfile import json_bytes
-from lps_gui.io.results_model import Results, as_results, read_results
-from lps_gui.io.results_sections import Uncertainty
+from lps_gui.io.results.model import Results, as_results, read_results
+from lps_gui.io.results.sections import Uncertainty
 from lps_gui.pipeline.estimate import estimate_session
 from lps_gui.sim.points import simulate_point_session
 
@@ -65,7 +65,7 @@ def test_round_trip_gives_the_file_back_byte_for_byte(estimated, kind):
 @pytest.mark.slow
 @pytest.mark.parametrize("planar", [False, True])
 def test_round_trip_of_the_quick_demo(tmp_path, planar):
-    from lps_gui.pipeline.demo import run_demo
+    from lps_gui.pipeline.demos.run import run_demo
 
     res = run_demo(tmp_path / "out", quick=True, planar=planar)
     path = res.session_dir / "results.json"
@@ -141,8 +141,8 @@ def sections(tmp_path_factory):
     meta = json.loads(meta_path.read_text())
     meta["tool_point"] = {"offset_mm": [0.0, 40.0, -25.0], "frame": "stage"}
     meta_path.write_text(json.dumps(meta, indent=2))
-    from lps_gui.core.plan import Plan
-    from lps_gui.core.target_presets import paper_constellation_spec
+    from lps_gui.core.planning.plan import Plan
+    from lps_gui.core.planning.target_presets import paper_constellation_spec
 
     plan = Plan.xy(start_mm=(0.0, 0.0), stop_mm=(1524.0, 1016.0), step_mm=(254.0, 254.0))
     simulate_point_session(paper_constellation_spec(seed=0, plan=plan), root / "constellation")

@@ -4,11 +4,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.core.board import Board
-from lps_gui.core.targets import Target, pack_targets
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.geometry.targets import Target, pack_targets
 from lps_gui.errors import InputError
-from lps_gui.io.target_corners_vnl import (
-    HEADER, empty_table, is_target_layout, read_target_corners, target_offsets, write_target_corners)
+from lps_gui.io.corners.target_vnl import (
+    HEADER,
+    empty_table,
+    is_target_layout,
+    read_target_corners,
+    target_offsets,
+    write_target_corners,
+)
 from lps_gui.io.targets_file import session_targets, targets_from_list, targets_to_list
 
 CHARUCO = {"type": "charuco", "inner_corners": [10, 7], "square_mm": 30.0, "marker_mm": 22.0,
@@ -109,8 +115,8 @@ def test_a_single_board_file_is_not_the_target_layout(tmp_path):
 
 
 def test_a_session_names_its_targets_instead_of_a_board(tmp_path):
-    from lps_gui.core.camera_model import CameraIntrinsics
-    from lps_gui.core.plan import Plan
+    from lps_gui.core.geometry.camera_model import CameraIntrinsics
+    from lps_gui.core.planning.plan import Plan
     from lps_gui.io.session import Session
 
     targets = _targets()
@@ -125,7 +131,7 @@ def test_a_session_names_its_targets_instead_of_a_board(tmp_path):
 
 def test_the_fast_reader_gives_what_the_line_by_line_reader_gives(tmp_path, monkeypatch):
     """Hand-edited files (views interleaved, extra spaces, comments between rows) read alike both ways."""
-    import lps_gui.io.target_corners_vnl as module
+    import lps_gui.io.corners.target_vnl as module
 
     path = tmp_path / "corners.vnl"
     path.write_text(f"{HEADER}\n## failed c.png: no target found\nb.png  T1 3 10.5 20.25\na.png T0 0 1 2\n"

@@ -11,10 +11,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from lps_gui.core.plan import Plan
-from lps_gui.core.presets import asme_test_record, min_step_plan_fields, settling_plan_fields
-from lps_gui.core.simulate import preset
-from lps_gui.core.stage_errors import Vibration
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.planning.presets import asme_test_record, min_step_plan_fields, settling_plan_fields
+from lps_gui.core.truth.simulate import preset
+from lps_gui.core.truth.stage_errors import Vibration
 from lps_gui.pipeline.estimate import estimate_session
 from lps_gui.sim.points import simulate_point_session
 

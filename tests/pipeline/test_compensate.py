@@ -6,9 +6,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from lps_gui.core.plan import Plan
-from lps_gui.core.simulate import paper_rig_spec
-from lps_gui.core.stage_errors import StageErrorModel
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.truth.simulate import paper_rig_spec
+from lps_gui.core.truth.stage_errors import StageErrorModel
 from lps_gui.errors import InputError
 from lps_gui.io.compensation_file import read_table, write_table
 from lps_gui.pipeline.compensate import compensate_session, table_from_results
@@ -79,7 +79,7 @@ def test_unidirectional_repeats_its_column_and_irregular_targets_resample(tmp_pa
     rng = np.random.default_rng(0)
     t = np.sort(rng.uniform(0, 300, 400))
     dev = 5 * np.sin(t / 20)
-    table = __import__("lps_gui.core.compensation", fromlist=["build_table"]).build_table(
+    table = __import__("lps_gui.core.metrology.compensation", fromlist=["build_table"]).build_table(
         t, np.ones_like(t), np.ones_like(t), dev, np.full_like(t, 0.5), np.ones_like(t, bool))
     assert len(table.nominal_mm) == 256 and not table.bidirectional
     assert np.allclose(np.diff(table.nominal_mm), np.diff(table.nominal_mm)[0])

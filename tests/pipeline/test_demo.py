@@ -7,7 +7,8 @@ import re
 import pytest
 
 from lps_gui.errors import InputError
-from lps_gui.pipeline import demo, demo_summary
+from lps_gui.pipeline.demos import run as demo
+from lps_gui.pipeline.demos import summary as demo_summary
 from tests.report.conftest import make_results
 
 
@@ -84,7 +85,6 @@ def test_quick_demo_end_to_end_through_images(tmp_path):
 def test_lps_demo_prints_the_truth_comparison_of_results_json(tmp_path, capsys):
     """`lps demo --quick`: paths, the summary lines, and the truth error exactly as results.json has it."""
     from lps_gui.cli import main
-
     assert main(["demo", "--quick", "--out", str(tmp_path / "d")]) == 0
     out = capsys.readouterr().out
     assert f"report:  {tmp_path / 'd' / 'session' / 'report.pdf'}" in out and "csv:     " in out
@@ -102,7 +102,6 @@ def test_lps_demo_prints_the_truth_comparison_of_results_json(tmp_path, capsys):
 
 def test_lps_demo_refuses_a_foreign_folder(tmp_path, capsys):
     from lps_gui.cli import main
-
     (tmp_path / "notes.txt").write_text("mine")
     assert main(["demo", "--quick", "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip()

@@ -7,8 +7,8 @@ import json
 import pytest
 
 from lps_gui.cli import main as lps_main
-from lps_gui.pipeline.demo import demo_spec
-from lps_gui.pipeline.demo_summary import planar_summary_lines
+from lps_gui.pipeline.demos.run import demo_spec
+from lps_gui.pipeline.demos.summary import planar_summary_lines
 
 
 def test_demo_plans_have_lines_along_both_axes():

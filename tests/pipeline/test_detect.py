@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 
 from lps_gui.cli import main as lps_main
-from lps_gui.core.camera_model import project_board
+from lps_gui.core.geometry.camera_model import project_board
 from lps_gui.core.progress import CancelToken
-from lps_gui.core.simulate import small_spec, true_views
+from lps_gui.core.truth.simulate import small_spec, true_views
 from lps_gui.errors import Cancelled, InputError
 from lps_gui.io.board_file import write_board
-from lps_gui.io.corners_vnl import read_corners_vnl
+from lps_gui.io.corners.vnl import read_corners_vnl
 from lps_gui.io.session import Session
 from lps_gui.pipeline import detect as detect_mod
 from lps_gui.pipeline.detect import detect_images, detect_session

@@ -4,7 +4,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from lps_gui.io.corners_vnl import read_corners_vnl, write_corners_vnl
+from lps_gui.io.corners.vnl import read_corners_vnl, write_corners_vnl
 from lps_gui.pipeline.detect import detect_images
 from tests.camera.test_charuco import BOARD, _scene
 

@@ -6,9 +6,9 @@ import pytest
 
 from lps_gui.camera.detection import detect_chessboard
 from lps_gui.camera.render import BoardRenderer
-from lps_gui.core.camera_model import project_board
-from lps_gui.core.plan import Plan
-from lps_gui.core.simulate import paper_rig_spec, true_views
+from lps_gui.core.geometry.camera_model import project_board
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.truth.simulate import paper_rig_spec, true_views
 from lps_gui.pipeline.detect import detect_session
 from lps_gui.sim.images import simulate_image_session
 

@@ -4,7 +4,7 @@ from dataclasses import replace
 
 import pytest
 
-from lps_gui.core.simulate import small_spec
+from lps_gui.core.truth.simulate import small_spec
 from lps_gui.pipeline.estimate import estimate_session
 from lps_gui.sim.points import simulate_point_session
 

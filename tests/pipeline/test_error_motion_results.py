@@ -6,13 +6,13 @@ import json
 import numpy as np
 import pytest
 
-from lps_gui.core.plan import Plan
-from lps_gui.core.simulate import paper_rig_spec
-from lps_gui.core.stage_errors import ErrorProfile, StageErrorModel
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.truth.simulate import paper_rig_spec
+from lps_gui.core.truth.stage_errors import ErrorProfile, StageErrorModel
 from lps_gui.errors import InputError
-from lps_gui.io.results_file import POSITION_COLUMNS, positions_csv
-from lps_gui.pipeline.error_motion_results import tool_point
+from lps_gui.io.results.document import POSITION_COLUMNS, positions_csv
 from lps_gui.pipeline.estimate import estimate_session
+from lps_gui.pipeline.results.error_motions import tool_point
 from lps_gui.sim.points import simulate_point_session
 
 

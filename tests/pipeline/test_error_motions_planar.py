@@ -5,9 +5,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from lps_gui.core.plan import Plan
-from lps_gui.core.stage_errors import ErrorProfile, PlanarErrorModel
-from lps_gui.core.target_presets import constellation_errors, paper_constellation_spec
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.planning.target_presets import constellation_errors, paper_constellation_spec
+from lps_gui.core.truth.stage_errors import ErrorProfile, PlanarErrorModel
 from lps_gui.pipeline.estimate import estimate_session
 from lps_gui.sim.points import simulate_point_session
 
@@ -38,7 +38,7 @@ def test_a_constellation_gives_both_axes_yaw_and_not_their_tilts(tmp_path):
                                       "ecx_sigma_urad"]
     cells = [r.split(",")[-6:] for r in rows]
     assert all(c[0] == c[1] == "" and c[2] != "" for c in cells)
-    from lps_gui.report.error_motions_report import error_motion_figures, error_motion_rows
+    from lps_gui.report.pages.error_motions import error_motion_figures, error_motion_rows
 
     assert [f.key for f in error_motion_figures(results)] == ["error_motions_angular", "error_motions_linear",
                                                               "error_motions_angular_y", "error_motions_linear_y"]

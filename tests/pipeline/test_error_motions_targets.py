@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.core.plan import Plan
-from lps_gui.core.two_depth import one_plane_spec, two_depth_spec
-from lps_gui.core.two_depth_planning import plan_two_depth
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.planning.two_depth import plan_two_depth
+from lps_gui.core.truth.two_depth import one_plane_spec, two_depth_spec
 from lps_gui.pipeline.estimate import estimate_session
 from lps_gui.sim.points import simulate_point_session
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from lps_gui.cli import main as lps_main
-from lps_gui.io.results_file import PLANAR_POSITION_COLUMNS
+from lps_gui.io.results.document import PLANAR_POSITION_COLUMNS
 from lps_gui.io.session import Session
 
 
@@ -55,7 +55,7 @@ def test_results_carry_figures_planar_and_flag_the_replaced_view(planar_session)
 
 
 def test_planar_report_pages(planar_session):
-    from lps_gui.report.pdf import render_report
+    from lps_gui.report.pdf.document import render_report
 
     info = render_report(planar_session)
     text = [t for page in info.pages for t in page]
@@ -68,7 +68,7 @@ def test_planar_report_pages(planar_session):
 
 
 def test_report_text_holds_squareness(planar_session):
-    from lps_gui.report.planar_report import planar_summary_rows
+    from lps_gui.report.pages.planar import planar_summary_rows
 
     r = json.loads((planar_session / "results.json").read_text())
     rows = {row.name: row for row in planar_summary_rows(r)}
@@ -85,7 +85,7 @@ def test_hybrid_on_a_planar_session_is_a_one_line_error(planar_session, capsys):
 
 
 def test_error_map_exaggeration_is_stated_and_round():
-    from lps_gui.report.figures import nice_exaggeration
+    from lps_gui.report.figures.plots import nice_exaggeration
 
     assert nice_exaggeration(10.0, 10.0) == 500.0  # 0.8 * 10 mm / 10 um = 800 -> 500
     assert nice_exaggeration(0.0, 10.0) == 1.0

@@ -5,8 +5,8 @@ from dataclasses import replace
 import pytest
 
 from lps_gui.cli import main
-from lps_gui.core.simulate import small_spec
-from lps_gui.io.results_model import read_results
+from lps_gui.core.truth.simulate import small_spec
+from lps_gui.io.results.model import read_results
 from lps_gui.pipeline.estimate import estimate_session
 from lps_gui.sim.points import simulate_point_session
 

@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 
 from lps_gui.cli import main as lps_main
-from lps_gui.core.estimate import estimate
-from lps_gui.core.simulate import preset
-from lps_gui.core.target_model import TargetObservations
+from lps_gui.core.estimator.estimate import estimate
+from lps_gui.core.models.target_model import TargetObservations
+from lps_gui.core.truth.simulate import preset
 from lps_gui.errors import LpsError
+from lps_gui.io.corners.target_vnl import read_target_corners, write_target_corners
 from lps_gui.io.session import Session
-from lps_gui.io.target_corners_vnl import read_target_corners, write_target_corners
 from lps_gui.pipeline.estimate import estimate_session, observations_from_session
 from lps_gui.sim.points import simulate_point_session
 from tests.core.target_crb import crb_centred
@@ -194,7 +194,7 @@ def test_a_constellation_session_gives_the_planar_figures_against_truth(tmp_path
 @pytest.mark.slow
 def test_the_row_demo_writes_its_report_and_csvs(tmp_path):
     """lps demo --preset small-row: calibrate, render, detect, estimate, report; the figures beside the truth."""
-    from lps_gui.pipeline.demo import run_demo
+    from lps_gui.pipeline.demos.run import run_demo
 
     res = run_demo(tmp_path / "demo", preset="small-row")
     assert res.report_pdf is not None and res.report_pdf.exists()
@@ -211,7 +211,7 @@ def test_self_calibration_recovers_a_pixel_aspect_error_the_row_is_sensitive_to(
     calibration as prior (SPEC 4.6) the row's views fix the aspect and the positions come back to the noise."""
     from dataclasses import replace
 
-    from lps_gui.core.estimate_types import EstimateOptions
+    from lps_gui.core.estimator.estimate_types import EstimateOptions
 
     session, _ = point_session(tmp_path / "row", "paper-row")
     obs = observations_from_session(session)

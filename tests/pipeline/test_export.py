@@ -14,9 +14,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from lps_gui.core.plan import Plan
-from lps_gui.core.simulate import paper_rig_spec
-from lps_gui.io.corners_vnl import read_corners_vnl
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.truth.simulate import paper_rig_spec
+from lps_gui.io.corners.vnl import read_corners_vnl
 from lps_gui.pipeline.estimate import estimate_session
 from lps_gui.pipeline.export import export_session
 from lps_gui.sim.points import simulate_point_session
@@ -129,7 +129,7 @@ def test_csv_has_nominal_and_measured_centres(session, tmp_path):
 
 
 def test_straightness_components_move_the_cameras_only_when_resolved():
-    from lps_gui.io.results_sections import Figures
+    from lps_gui.io.results.sections import Figures
     from lps_gui.pipeline.export import straightness_resolved
 
     assert straightness_resolved(Figures.from_dict({})) == (False, False)

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from lps_gui.cli import main as lps_main
-from lps_gui.core.camera_model import INTRINSIC_NAMES
-from lps_gui.core.simulate import small_spec
+from lps_gui.core.geometry.camera_model import INTRINSIC_NAMES
+from lps_gui.core.truth.simulate import small_spec
 from lps_gui.io.intrinsics_file import read_intrinsics
 from lps_gui.pipeline.intrinsics import calibrate_images
 from lps_gui.sim.images import simulate_intrinsics_set

@@ -12,8 +12,8 @@ import json
 import numpy as np
 import pytest
 
-from lps_gui.core.plan import Plan
-from lps_gui.io.corners_vnl import read_corners_vnl
+from lps_gui.core.planning.plan import Plan
+from lps_gui.io.corners.vnl import read_corners_vnl
 from lps_gui.pipeline.detect import detect_session
 from lps_gui.pipeline.estimate import estimate_session
 from lps_gui.pipeline.live import LiveCapture

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from lps_gui.cli import main as lps_main
-from lps_gui.io.corners_vnl import read_corners_vnl
+from lps_gui.io.corners.vnl import read_corners_vnl
 from lps_gui.io.session import Session
 from lps_gui.pipeline.detect import detect_session
 from tests.capture.helpers import assert_listed_frames_intact, kill_when

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from lps_gui.cli import main as lps_main
-from lps_gui.core.camera_model import INTRINSIC_NAMES
+from lps_gui.core.geometry.camera_model import INTRINSIC_NAMES
 from lps_gui.errors import InputError
 from lps_gui.io.session_lock import SessionBusy, SessionLock
 from lps_gui.pipeline.estimate import estimate_session

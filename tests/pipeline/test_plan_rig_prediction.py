@@ -3,10 +3,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from lps_gui.core.plan import Plan
-from lps_gui.core.rig_planning import intrinsics_from_lens
-from lps_gui.core.row_planning import propose_row
-from lps_gui.core.target_presets import row_spec
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.planning.rig import intrinsics_from_lens
+from lps_gui.core.planning.rows import propose_row
+from lps_gui.core.planning.target_presets import row_spec
 from lps_gui.pipeline.estimate import estimate_session
 from lps_gui.sim.points import simulate_point_session
 

@@ -5,8 +5,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from lps_gui.core.estimate import estimate
-from lps_gui.core.simulate import small_spec
+from lps_gui.core.estimator.estimate import estimate
+from lps_gui.core.truth.simulate import small_spec
 from lps_gui.io.session import Session
 from lps_gui.pipeline.estimate import make_options, observations_from_session, position_rows
 from lps_gui.sim.points import simulate_point_session

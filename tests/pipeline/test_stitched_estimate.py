@@ -6,14 +6,14 @@ import time
 import numpy as np
 import pytest
 
-from lps_gui.core.board import Board
-from lps_gui.core.camera_model import CameraIntrinsics
-from lps_gui.core.plan import Plan
-from lps_gui.core.plan_segments import stitched_segments
-from lps_gui.core.rotation import exp_so3
-from lps_gui.core.target_rig import TargetLayout, observe
-from lps_gui.core.targets import Target
-from lps_gui.io.corners_vnl import CornerTable, write_corners_vnl
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.geometry.camera_model import CameraIntrinsics
+from lps_gui.core.geometry.rotation import exp_so3
+from lps_gui.core.geometry.target_rig import TargetLayout, observe
+from lps_gui.core.geometry.targets import Target
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.planning.segments import stitched_segments
+from lps_gui.io.corners.vnl import CornerTable, write_corners_vnl
 from lps_gui.io.session import CaptureRecord, Session
 from lps_gui.pipeline.estimate import estimate_session
 

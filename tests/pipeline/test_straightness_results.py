@@ -3,14 +3,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from lps_gui.core.iso230 import check_specification
-from lps_gui.core.plan import Plan
-from lps_gui.core.simulate import paper_rig_spec, paper_stage_errors
-from lps_gui.io.results_file import POSITION_COLUMNS
-from lps_gui.pipeline.demo import PAPER_SPEC
+from lps_gui.core.metrology.iso230 import check_specification
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.truth.simulate import paper_rig_spec, paper_stage_errors
+from lps_gui.io.results.document import POSITION_COLUMNS
+from lps_gui.pipeline.demos.run import PAPER_SPEC
 from lps_gui.pipeline.estimate import estimate_session
+from lps_gui.report.pages.summary import extremes_rows, spec_checks
 from lps_gui.sim.points import simulate_point_session
-from lps_gui.report.summary import extremes_rows, spec_checks
 
 
 def _session(tmp_path, runs: int, directions: str = "both"):

@@ -6,8 +6,8 @@ from dataclasses import replace
 
 import pytest
 
-from lps_gui.core.plan import Plan
-from lps_gui.core.simulate import small_spec
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.truth.simulate import small_spec
 from lps_gui.sim.points import simulate_point_session
 
 PLAN6 = Plan(start_mm=0.0, stop_mm=10.0, step_mm=2.0, directions="+", runs=1, overshoot_mm=1.0, settle_s=0.0, feed_mm_min=1200.0)

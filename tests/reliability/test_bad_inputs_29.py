@@ -23,7 +23,6 @@ import numpy as np
 import pytest
 
 from lps_gui.cli import main
-
 TIMEOUT_S = 60
 
 

@@ -14,7 +14,7 @@ import pytest
 
 from lps_gui.cli import main
 from lps_gui.errors import InputError
-from lps_gui.io.corners_vnl import read_corners_vnl, write_corners_vnl
+from lps_gui.io.corners.vnl import read_corners_vnl, write_corners_vnl
 from lps_gui.io.session import Session
 
 BOARD = {"type": "chessboard", "inner_corners": [9, 6], "square_mm": 20}
@@ -35,7 +35,6 @@ def huge_png(path: Path, w: int = 30000, h: int = 30000) -> Path:
 # ------------------------------------------------------------------ item 8: log file
 def test_item8_log_goes_to_the_users_state_folder_created_0700(tmp_path, monkeypatch):
     from lps_gui.cli import log_file
-
     monkeypatch.setenv("XDG_STATE_HOME", str(tmp_path / "state"))
     handler, where = log_file.open_log_handler()
     try:
@@ -50,7 +49,6 @@ def test_item8_log_goes_to_the_users_state_folder_created_0700(tmp_path, monkeyp
 
 def test_item8_a_symlinked_or_folder_log_is_not_followed_and_not_fatal(tmp_path, monkeypatch):
     from lps_gui.cli import log_file
-
     monkeypatch.setenv("XDG_STATE_HOME", str(tmp_path))
     (tmp_path / "lps-calib").mkdir(mode=0o700)
     victim = tmp_path / "victim"
@@ -152,7 +150,7 @@ def test_item11_the_exit_status_is_documented(capsys):
 
 
 def test_item11_non_convergence_is_reported():
-    from lps_gui.io.results_sections import Parameters
+    from lps_gui.io.results.sections import Parameters
     from lps_gui.pipeline.session_checks import result_doubts
 
     assert result_doubts(Parameters.from_dict({"converged": True, "sigma_px": 0.2})) == []
@@ -163,7 +161,6 @@ def test_item11_non_convergence_is_reported():
 # ------------------------------------------------------------------ item 12: duplicate views in intrinsics
 def test_item12_copies_of_one_image_are_refused_for_intrinsics(tmp_path, capsys):
     from lps_gui.cli import main as lps
-
     assert lps(["simulate", str(tmp_path / "set"), "--intrinsics-set", "--views", "4", "--seed", "1"]) == 0
     images = sorted((tmp_path / "set").rglob("*.png"))
     assert len(images) >= 1
@@ -183,7 +180,7 @@ def test_item12_copies_of_one_image_are_refused_for_intrinsics(tmp_path, capsys)
 
 
 def test_item12_duplicate_views_are_found():
-    from lps_gui.core.view_geometry import duplicate_views
+    from lps_gui.core.geometry.view_geometry import duplicate_views
 
     rng = np.random.default_rng(1)
     a = rng.uniform(0, 600, (54, 2))

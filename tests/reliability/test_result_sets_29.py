@@ -17,8 +17,8 @@ import pytest
 from lps_gui.cli import main
 from lps_gui.errors import StorageError
 from lps_gui.io import file_set
-from lps_gui.io.results_history import HISTORY_DIR, LATEST_FILE
 from lps_gui.io.atomic import storage_error
+from lps_gui.io.results.history import HISTORY_DIR, LATEST_FILE
 
 SET = ("results.json", "positions.csv", "summary.csv", f"{HISTORY_DIR}/{LATEST_FILE}")
 
@@ -95,7 +95,7 @@ def _kill_after_renames(monkeypatch, folder: Path, n_done: int) -> None:
 
 @pytest.mark.parametrize("n_done", [0, 1, 2, 3])
 def test_item6_a_kill_between_the_renames_is_finished_by_the_next_reader(estimated, monkeypatch, n_done):
-    from lps_gui.io.results_model import read_results
+    from lps_gui.io.results.model import read_results
 
     old = set_bytes(estimated)
     _kill_after_renames(monkeypatch, estimated, n_done)
@@ -180,7 +180,6 @@ def test_item7_a_session_moved_mid_capture_stops_and_nothing_reappears_at_the_ol
 
 def test_item7_a_session_removed_mid_estimate_is_not_recreated(estimated, monkeypatch, capsys):
     from lps_gui.pipeline import estimate as pipeline_estimate
-
     real = pipeline_estimate.build_results
 
     def build_results(session, *a, **k):
@@ -215,8 +214,7 @@ def test_item15_a_kill_between_the_two_session_json_writes_is_repaired_by_the_re
 
 
 def test_item12_a_full_disk_in_a_writer_without_its_own_check_is_one_line_not_a_bug(tmp_path, monkeypatch, capsys):
-    from lps_gui.pipeline import demo
-
+    from lps_gui.pipeline.demos import run as demo
     def full(*_a, **_k):
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(tmp_path / "d" / "intrinsics" / "view_003.png"))
 

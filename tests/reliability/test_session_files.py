@@ -116,7 +116,7 @@ def _replace_image(session_dir: Path, index: int) -> str:
 
 
 def test_item5_a_replaced_image_is_detected_again(imaged_session, capsys):
-    from lps_gui.io.corners_vnl import read_corners_vnl
+    from lps_gui.io.corners.vnl import read_corners_vnl
 
     assert main(["detect", str(imaged_session), "--workers", "1"]) == 0
     n = Session.open(imaged_session).board().n_corners
@@ -197,7 +197,7 @@ def test_item7_resume_never_opens_a_device_named_in_session_json(tmp_path, capsy
     board.write_text(json.dumps({"type": "chessboard", "inner_corners": [9, 6], "square_mm": 20}))
     out = tmp_path / "s"
     Session.create(out, __import__("lps_gui.io.board_file", fromlist=["read_board"]).read_board(board),
-                   __import__("lps_gui.core.plan", fromlist=["Plan"]).Plan(targets_mm=(0.0, 1.0), settle_s=0.0),
+                   __import__("lps_gui.core.planning.plan", fromlist=["Plan"]).Plan(targets_mm=(0.0, 1.0), settle_s=0.0),
                    camera={"spec": str(frames)}, stage={"spec": "grbl:socket://203.0.113.9:23"})
     assert main(["capture", "--resume", str(out)]) == 2
     err = err_line(capsys)

@@ -12,8 +12,9 @@ import pytest
 from lps_gui.cli import main
 from lps_gui.errors import LpsError
 from lps_gui.io import atomic
-from lps_gui.io.results_file import write_results
+from lps_gui.io.results.document import write_results
 from tests.report.conftest import make_results
+
 
 def last_line(stderr: str) -> str:
     """The error line (progress bars come before it)."""
@@ -35,7 +36,7 @@ def _report_folder(tmp_path: Path) -> Path:
 @pytest.mark.gui
 def test_item1_a_pdf_cut_short_by_a_full_disk_never_replaces_the_report(tmp_path, capsys, monkeypatch):
     """Qt's PDF writer reports no error when the disk fills: the file it leaves ends early (no %%EOF)."""
-    from lps_gui.report.layout import PdfFlow
+    from lps_gui.report.pdf.layout import PdfFlow
 
     finish = PdfFlow.finish
 
@@ -139,8 +140,8 @@ def test_item2_estimate_on_a_full_disk_is_one_line_and_keeps_the_old_results(poi
 def test_item1_every_pdf_writer_goes_through_the_checked_commit(tmp_path, monkeypatch):
     """The as-found/as-left PDF (and every other report) is committed only when complete: one mechanism."""
     from lps_gui.errors import StorageError
-    from lps_gui.report.compare import write_comparison
-    from lps_gui.report.layout import PdfFlow
+    from lps_gui.report.pdf.compare import write_comparison
+    from lps_gui.report.pdf.layout import PdfFlow
 
     finish = PdfFlow.finish
 

@@ -8,12 +8,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.core.board import Board
-from lps_gui.core.environment import Environment, thermal_record
-from lps_gui.core.iso230 import figures_for_session
-from lps_gui.pipeline.uncertainty import uncertainty_of
-from lps_gui.core.simulate import small_spec, true_views
-
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.metrology.environment import Environment, thermal_record
+from lps_gui.core.metrology.iso230 import figures_for_session
+from lps_gui.core.truth.simulate import small_spec, true_views
+from lps_gui.pipeline.results.uncertainty import uncertainty_of
 
 ENVIRONMENT = {"board_temperature_c": 21.0, "board_cte_ppm_per_k": 10.0, "square_mm_uncertainty_um": 0.2}
 

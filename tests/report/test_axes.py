@@ -1,6 +1,6 @@
 import numpy as np
 
-from lps_gui.report.axes import log_ticks, nice_ticks, padded, tick_label
+from lps_gui.report.figures.axes import log_ticks, nice_ticks, padded, tick_label
 
 
 def test_nice_ticks_on_1_2_5_steps_inside_the_range():

@@ -5,13 +5,19 @@ from dataclasses import replace
 
 import pytest
 
-from lps_gui.core.plan import Plan
-from lps_gui.core.simulate import paper_rig_spec
-from lps_gui.core.stage_errors import StageErrorModel
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.truth.simulate import paper_rig_spec
+from lps_gui.core.truth.stage_errors import StageErrorModel
 from lps_gui.errors import InputError
 from lps_gui.pipeline.estimate import estimate_session
+from lps_gui.report.pdf.compare import (
+    comparison_figure,
+    comparison_rows,
+    improvement_factor,
+    true_E_um,
+    write_comparison,
+)
 from lps_gui.sim.points import simulate_point_session
-from lps_gui.report.compare import comparison_figure, comparison_rows, improvement_factor, true_E_um, write_comparison
 
 
 @pytest.fixture(scope="module")
@@ -55,7 +61,7 @@ def test_compare_names_u_verdicts_and_labels_true_against_measured(tmp_path):
     after, truth_a = make_results(seed=4)
     bdir = _session(tmp_path / "b", before, truth_b, SPEC)
     adir = _session(tmp_path / "a", after, truth_a, SPEC)
-    from lps_gui.report.compare import compare_rows, verdict_rows
+    from lps_gui.report.pdf.compare import compare_rows, verdict_rows
 
     rows = {r.name: r for r in compare_rows(before, after)}
     e = rows["ISO 230-2 Systematic deviation E (bidirectional)"]

@@ -4,8 +4,8 @@ from __future__ import annotations
 import pytest
 
 from lps_gui.pipeline.estimate import estimate_session
-from lps_gui.report.error_motions_report import error_motion_figures, error_motion_rows
-from lps_gui.report.pdf import render_report
+from lps_gui.report.pages.error_motions import error_motion_figures, error_motion_rows
+from lps_gui.report.pdf.document import render_report
 from tests.pipeline.test_error_motion_results import _board_session
 
 pytestmark = pytest.mark.gui

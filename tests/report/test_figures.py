@@ -3,8 +3,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from lps_gui.core.simulate import small_spec
-from lps_gui.report.figures import FIGURE_KEYS, figure_by_key, figures_from_results, per_target_stats, truth_columns
+from lps_gui.core.truth.simulate import small_spec
+from lps_gui.report.figures.plots import (
+    FIGURE_KEYS,
+    figure_by_key,
+    figures_from_results,
+    per_target_stats,
+    truth_columns,
+)
 from tests.report.conftest import make_results
 
 

@@ -4,12 +4,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.core.board import Board
-from lps_gui.core.camera_model import project_board
-from lps_gui.core.intrinsics_calibration import calibrate_intrinsics
-from lps_gui.core.intrinsics_crossval import cross_validate
-from lps_gui.core.rotation import exp_so3
-from lps_gui.core.simulate import small_spec
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.geometry.camera_model import project_board
+from lps_gui.core.geometry.rotation import exp_so3
+from lps_gui.core.intrinsics.calibration import calibrate_intrinsics
+from lps_gui.core.intrinsics.crossval import cross_validate
+from lps_gui.core.truth.simulate import small_spec
 
 INTR = small_spec().rig.intrinsics
 BOARD = Board(9, 6, 20.0, warp_mm=(0.3, 0.2))
@@ -29,7 +29,7 @@ def corners():
 
 
 def test_pictures_show_the_data(corners):
-    from lps_gui.report.intrinsics_pictures import PICTURE_PX, intrinsics_pictures
+    from lps_gui.report.pdf.intrinsics_pictures import PICTURE_PX, intrinsics_pictures
 
     cal = calibrate_intrinsics(BOARD.flat_points(), corners, INTR.image_size)
     pics = intrinsics_pictures(cal, cross_validate(BOARD.flat_points(), corners, INTR.image_size))
@@ -46,7 +46,7 @@ def test_pictures_show_the_data(corners):
 
 
 def test_report_pdf(corners, tmp_path):
-    from lps_gui.report.intrinsics_report import parameter_rows, write_intrinsics_report
+    from lps_gui.report.pdf.intrinsics import parameter_rows, write_intrinsics_report
 
     cal = calibrate_intrinsics(BOARD.flat_points(), corners, INTR.image_size)
     assert [(c.view, c.corner) for c in cal.rejected_corners] == [(5, 20)]

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.report.text_fit import fit_widths
+from lps_gui.report.pdf.text_fit import fit_widths
 from tests.report.conftest import make_results, with_unresolved_extremes, write_session
 from tests.report.test_intrinsics_report import BOARD, INTR, corners  # noqa: F401  (the calibration fixture)
 
@@ -29,8 +29,8 @@ def test_the_demos_cut_cell_is_an_overflow_and_widening_removes_it(tmp_path):
     """`lps demo --quick` page 2 printed "not resolved (σ 2321 µrad)" in a 26 mm column, read as "ved (σ ...)"."""
     from PySide6.QtCore import QRectF, Qt
 
-    from lps_gui.report.layout import PdfFlow, ensure_gui_app
-    from lps_gui.report.text_fit import draw_text, font
+    from lps_gui.report.pdf.layout import PdfFlow, ensure_gui_app
+    from lps_gui.report.pdf.text_fit import draw_text, font
 
     ensure_gui_app()
     flow = PdfFlow(tmp_path / "t.pdf", "t", "t")
@@ -49,8 +49,8 @@ def test_the_demos_cut_cell_is_an_overflow_and_widening_removes_it(tmp_path):
 
 
 def test_a_long_axis_label_is_set_smaller_to_fit(tmp_path):
-    from lps_gui.report.figure_spec import FigureSpec, Series
-    from lps_gui.report.layout import PdfFlow, ensure_gui_app
+    from lps_gui.report.figures.spec import FigureSpec, Series
+    from lps_gui.report.pdf.layout import PdfFlow, ensure_gui_app
 
     ensure_gui_app()
     flow = PdfFlow(tmp_path / "t.pdf", "t", "t")
@@ -65,7 +65,6 @@ def test_a_long_axis_label_is_set_smaller_to_fit(tmp_path):
 @pytest.fixture(scope="module")
 def planar_session(tmp_path_factory):
     from lps_gui.cli import main as lps_main
-
     folder = tmp_path_factory.mktemp("planar") / "s"
     assert lps_main(["simulate", "--planar", "--points", str(folder), "--preset", "small-planar", "--directions",
                      "both", "--runs", "2", "--seed", "3"]) == 0
@@ -75,7 +74,7 @@ def planar_session(tmp_path_factory):
 
 @pytest.mark.parametrize("kind", ["line with spec", "line without spec", "line, demo's unresolved figures"])
 def test_no_string_of_a_line_report_is_clipped(tmp_path, kind):
-    from lps_gui.report.pdf import render_report
+    from lps_gui.report.pdf.document import render_report
 
     results, truth = make_results()
     if "demo" in kind:
@@ -87,7 +86,7 @@ def test_no_string_of_a_line_report_is_clipped(tmp_path, kind):
 
 
 def test_no_string_of_a_planar_report_is_clipped(planar_session):
-    from lps_gui.report.pdf import render_report
+    from lps_gui.report.pdf.document import render_report
 
     info = render_report(planar_session)
     assert info.clipped == ()
@@ -95,7 +94,7 @@ def test_no_string_of_a_planar_report_is_clipped(planar_session):
 
 
 def test_no_string_of_a_compare_report_is_clipped(tmp_path):
-    from lps_gui.report.compare import write_comparison
+    from lps_gui.report.pdf.compare import write_comparison
 
     before, truth = make_results(seed=3)
     after, truth2 = make_results(seed=4)
@@ -106,9 +105,9 @@ def test_no_string_of_a_compare_report_is_clipped(tmp_path):
 
 
 def test_no_string_of_an_intrinsics_report_is_clipped(corners, tmp_path):  # noqa: F811
-    from lps_gui.core.intrinsics_calibration import calibrate_intrinsics
-    from lps_gui.core.intrinsics_crossval import cross_validate
-    from lps_gui.report.intrinsics_report import write_intrinsics_report
+    from lps_gui.core.intrinsics.calibration import calibrate_intrinsics
+    from lps_gui.core.intrinsics.crossval import cross_validate
+    from lps_gui.report.pdf.intrinsics import write_intrinsics_report
 
     cal = calibrate_intrinsics(BOARD.flat_points(), corners, INTR.image_size)
     clipped: list[str] = []

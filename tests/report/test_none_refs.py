@@ -31,7 +31,7 @@ def test_void_painter_calls_keep_none_alive():
 
 @pytest.mark.gui
 def test_a_long_report_leaves_none_references_intact(tmp_path):
-    from lps_gui.report.pdf import write_report
+    from lps_gui.report.pdf.document import write_report
 
     results, truth = make_results(runs=2, views=60)
     before = sys.getrefcount(None)

@@ -5,9 +5,9 @@ import json
 
 import pytest
 
-from lps_gui.report.pdf import render_report
-from lps_gui.report.summary import fmt, summary_rows, u_key
-from lps_gui.report.verdict import verdicts
+from lps_gui.report.pages.summary import fmt, summary_rows, u_key
+from lps_gui.report.pages.verdict import verdicts
+from lps_gui.report.pdf.document import render_report
 from tests.report.conftest import make_results, with_unresolved_extremes
 
 pytestmark = pytest.mark.gui
@@ -63,7 +63,7 @@ def test_the_same_figure_carries_the_same_u_on_every_page_and_in_results(tmp_pat
 
 
 def test_without_a_stage_spec_page_one_shows_the_measured_figures_with_u(tmp_path):
-    from lps_gui.report.sections import FRONT_FIGURES
+    from lps_gui.report.pages.sections import FRONT_FIGURES
 
     results, truth = make_results()
     folder = tmp_path / "s"
@@ -89,8 +89,8 @@ def _planar_with_budget(folder, tmp_path, spec=None):
     """The planar session's results with an ``environment`` and an ``uncertainty`` section (as the one estimation path gives)."""
     import shutil
 
-    from lps_gui.core.board import Board
-    from lps_gui.core.environment import Environment, thermal_record
+    from lps_gui.core.geometry.board import Board
+    from lps_gui.core.metrology.environment import Environment, thermal_record
     from tests.report.conftest import ENVIRONMENT
 
     out = tmp_path / "planar"
@@ -109,7 +109,7 @@ def _planar_with_budget(folder, tmp_path, spec=None):
 
 
 def test_a_planar_figure_carries_the_u_of_results_on_every_page(planar_session, tmp_path):  # noqa: F811
-    from lps_gui.report.planar_report import planar_summary_rows
+    from lps_gui.report.pages.planar import planar_summary_rows
 
     folder, results = _planar_with_budget(planar_session, tmp_path, SPEC)
     info = render_report(folder)
@@ -129,7 +129,7 @@ def test_a_planar_figure_carries_the_u_of_results_on_every_page(planar_session, 
 
 
 def test_planar_u_without_a_budget_is_two_sigma_and_a_truth_beyond_u_is_not_trusted(planar_session):  # noqa: F811
-    from lps_gui.report.planar_report import planar_summary_rows
+    from lps_gui.report.pages.planar import planar_summary_rows
 
     results = json.loads((planar_session / "results.json").read_text())
     results.pop("uncertainty", None)
@@ -142,7 +142,7 @@ def test_planar_u_without_a_budget_is_two_sigma_and_a_truth_beyond_u_is_not_trus
 
 def test_the_planar_report_paints_each_axis_budget_the_one_path_writes(planar_session):  # noqa: F811
     """The estimate writes one budget per axis (uncertainty.per_axis); the report shows both, and the scales' U."""
-    from lps_gui.report.planar_report import planar_summary_rows
+    from lps_gui.report.pages.planar import planar_summary_rows
 
     results = json.loads((planar_session / "results.json").read_text())
     per_axis = results["uncertainty"]["per_axis"]

@@ -11,8 +11,8 @@ from pdfminer.layout import LTTextContainer
 from pypdf import PdfReader
 
 from lps_gui.errors import InputError
-from lps_gui.report.pdf import render_report, write_report
-from lps_gui.report.summary import summary_rows
+from lps_gui.report.pages.summary import summary_rows
+from lps_gui.report.pdf.document import render_report, write_report
 from tests.report.conftest import make_results, write_session
 
 pytestmark = pytest.mark.gui
@@ -121,8 +121,8 @@ def test_failed_render_keeps_the_previous_report(tmp_path):
 
 
 def test_page_one_states_the_verdict_with_expanded_uncertainty_and_nothing_is_clipped(tmp_path):
-    from lps_gui.report.layout import ensure_gui_app
-    from lps_gui.report.verdict import verdicts
+    from lps_gui.report.pages.verdict import verdicts
+    from lps_gui.report.pdf.layout import ensure_gui_app
 
     results, truth = make_results()  # 2 runs per direction: indicative
     spec = {"accuracy_um": 20, "repeatability_um": 5, "straightness_um": 38}
@@ -138,7 +138,7 @@ def test_page_one_states_the_verdict_with_expanded_uncertainty_and_nothing_is_cl
         assert line is not None, v.name
         assert v.verdict in line
         if v.u_k2 is not None:
-            from lps_gui.report.summary import fmt
+            from lps_gui.report.pages.summary import fmt
             assert f"\u00b1 {fmt(v.u_k2)}" in line
     assert "(indicative)" in text and "FAIL\n" not in text.replace(" ", "")  # fewer than 5 runs: never a bare FAIL
     assert "Truth:" not in text  # simulator truth has its own page

@@ -4,8 +4,18 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lps_gui.report.summary import (extremes_rows, fmt, intrinsics_rows, iso_rows, outlier_rows, position_table,
-                                    spec_checks, summary_rows, title_rows, truth_rows)
+from lps_gui.report.pages.summary import (
+    extremes_rows,
+    fmt,
+    intrinsics_rows,
+    iso_rows,
+    outlier_rows,
+    position_table,
+    spec_checks,
+    summary_rows,
+    title_rows,
+    truth_rows,
+)
 from tests.report.conftest import make_results
 
 SPEC = {"accuracy_um": 20, "repeatability_um": 5, "straightness_um": 38}
@@ -104,7 +114,7 @@ def test_outlier_rows_merge_positions_and_flags():
 
 
 def test_figure_notes_are_collected_once():
-    from lps_gui.report.summary import figure_notes
+    from lps_gui.report.pages.summary import figure_notes
 
     results, _ = make_results()
     results["figures"]["single_run"]["notes"] = ["a", "b"]
@@ -123,7 +133,7 @@ def test_class_names_are_printed_as_words_and_identification_is_shown():
 
 
 def test_verdict_decision_rule_and_indicative_runs():
-    from lps_gui.report.verdict import INDICATIVE_COLOR, verdicts
+    from lps_gui.report.pages.verdict import INDICATIVE_COLOR, verdicts
 
     results, _ = make_results()
     iso = results["figures"]["iso230_2"]
@@ -151,7 +161,7 @@ def test_verdict_decision_rule_and_indicative_runs():
                                       ({"board_temperature_c": 20.0, "board_cte_ppm_per_k": 23.0},
                                        "the board was at 20 \u00b0C")])
 def test_no_thermal_correction_says_which_case_applies(env, why):
-    from lps_gui.report.budget_table import environment_rows
+    from lps_gui.report.pages.budget import environment_rows
 
     rows = dict(environment_rows({**make_results()[0], "environment": env}))
     assert rows["Thermal correction applied"] == f"none: {why}"

@@ -7,11 +7,11 @@ from pypdf import PdfReader
 
 from lps_gui.camera.charuco import aruco_board
 from lps_gui.cli import main
-from lps_gui.core.board import Board
-from lps_gui.core.targets import Target
+from lps_gui.core.geometry.board import Board
+from lps_gui.core.geometry.targets import Target
 from lps_gui.io.jsonfile import read_json
 from lps_gui.io.targets_file import targets_from_list
-from lps_gui.report.targets_pdf import CAPTION_MM, MARGIN_MM, board_rectangles
+from lps_gui.report.pdf.targets import CAPTION_MM, MARGIN_MM, board_rectangles
 
 
 @pytest.mark.parametrize("first", [0, 44])

@@ -6,10 +6,10 @@ import pytest
 from pypdf import PdfReader
 
 from lps_gui.pipeline.estimate import estimate_session
-from lps_gui.report.figures import figure_by_key, figures_from_results
-from lps_gui.report.pdf import render_report
-from lps_gui.report.target_figures import TARGET_LABEL, lanes
-from lps_gui.report.targets_report import WORLD_FRAME, target_table
+from lps_gui.report.figures.plots import figure_by_key, figures_from_results
+from lps_gui.report.figures.targets import TARGET_LABEL, lanes
+from lps_gui.report.pages.targets import WORLD_FRAME, target_table
+from lps_gui.report.pdf.document import render_report
 from tests.pipeline.test_estimate_targets import point_session
 
 pytestmark = pytest.mark.gui
@@ -85,7 +85,7 @@ def test_a_constellation_lists_both_axes_scale_terms_and_its_stretch_in_the_plan
 
 def test_a_row_has_no_board_plane_curves_only_the_pointer_to_the_error_motions(row):
     """No per-view straightness or angles from the row model: the truth's 1e-10 curves are not drawn either."""
-    from lps_gui.report.figures import figure_by_key, figures_from_results
+    from lps_gui.report.figures.plots import figure_by_key, figures_from_results
 
     _, results, _ = row
     figures = figures_from_results(results)

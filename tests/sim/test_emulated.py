@@ -1,12 +1,17 @@
 """The simulated rig through the real GRBL driver and the pty emulator gives the same session as the direct one."""
 from __future__ import annotations
 
+from lps_gui.core.planning.plan import Plan
+from lps_gui.io.session import Session
 from lps_gui.sim.emulated import emulated_rig_stage
 from lps_gui.sim.session import create_simulated_session, simulated_engine
-from lps_gui.core.plan import Plan
-from lps_gui.io.session import Session
 from tests.capture.helpers import (
-    assert_listed_frames_intact, capture_through_emulator, image_bytes, records_without_time, start_capture, tiny_spec,
+    assert_listed_frames_intact,
+    capture_through_emulator,
+    image_bytes,
+    records_without_time,
+    start_capture,
+    tiny_spec,
 )
 
 PLAN = Plan(start_mm=0.0, stop_mm=4.0, step_mm=2.0, directions="both", overshoot_mm=1.0, settle_s=0.0, feed_mm_min=1200.0)

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from lps_gui.camera.detection import detect_chessboard
-from lps_gui.core.camera_model import project_board
-from lps_gui.core.simulate import simulate_views, small_spec, true_views
+from lps_gui.core.geometry.camera_model import project_board
 from lps_gui.core.progress import CancelToken
+from lps_gui.core.truth.simulate import simulate_views, small_spec, true_views
 from lps_gui.errors import Cancelled, InputError
 from lps_gui.io.atomic import sha256_file
 from lps_gui.io.board_file import read_board

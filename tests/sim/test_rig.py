@@ -4,9 +4,9 @@ from __future__ import annotations
 import numpy as np
 
 from lps_gui.camera import open_camera
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.truth.stage_errors import StageErrorModel
 from lps_gui.sim.rig import make_simulated_rig, rig_truth, spec_for_plan, spec_from_truth, stage_travel_mm
-from lps_gui.core.plan import Plan
-from lps_gui.core.stage_errors import StageErrorModel
 from tests.capture.helpers import tiny_spec
 
 PLAN = Plan(start_mm=10.0, stop_mm=30.0, step_mm=5.0, overshoot_mm=2.0)

@@ -1,0 +1,1 @@
+"""`lps capture` and what it needs: devices, plan, preflight checks, segments, live results, set-up, resume."""

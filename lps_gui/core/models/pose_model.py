@@ -1,0 +1,128 @@
+"""Every stop's full camera pose against targets at known-shape, unknown-pose mounts (SPEC 13, 14).
+
+x_cam = R_i (Q_j X + p_j) + t_i: no line and no common orientation are
+assumed, so each stop keeps all six degrees of freedom and the error motions
+of SPEC 14 (positioning, two straightness, roll, pitch, yaw) follow from the
+poses. With targets at one depth a tilt and a translation look alike and the
+tilts come out poorly determined (SPEC 11); targets at two depths separate
+them. Solved on the block arrowhead of :mod:`lps_gui.core.numerics.target_arrowhead`
+(6 columns per target but the first, 6 per view), known intrinsics.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from lps_gui.core.geometry.camera_model import CameraIntrinsics
+from lps_gui.core.geometry.rotation import chordal_mean, exp_so3
+from lps_gui.core.models.target_model import TargetObservations, TargetSolution, origin_in_camera, target_views
+from lps_gui.core.numerics.target_arrowhead import (
+    Linearization,
+    PositionCovariance,
+    levenberg_marquardt,
+    project_residuals,
+    retract_targets,
+    view_rms,
+)
+
+
+@dataclass
+class PoseSolution:
+    R: np.ndarray  # (K, 3, 3) camera from world (target 0's frame)
+    t: np.ndarray  # (K, 3) mm
+    Q: np.ndarray  # (T, 3, 3)
+    p: np.ndarray  # (T, 3)
+    used: np.ndarray  # (K,)
+    sigma_px: float
+    rms_px: np.ndarray
+    covariance: PositionCovariance  # of the views' 6-vectors (rotation, translation; camera frame, left)
+    single_view: np.ndarray  # (K, 6, 6): each view's covariance with the targets known (what one view resolves)
+    target_sigma: np.ndarray  # (T, 6)
+    iterations: int
+    converged: bool
+
+
+def _linearize(state: dict, X, tj, view, uv, intrinsics: CameraIntrinsics, want_jacobian: bool = True) -> Linearization:
+    R, t, Q, p = state["R"], state["t"], state["Q"], state["p"]
+    QX = np.einsum("mij,mj->mi", Q[tj], X)
+    Rv = R[view]
+    RXw = np.einsum("mij,mj->mi", Rv, QX + p[tj])
+    P = RXw + t[view]
+    cost, r, dP = project_residuals(P, uv, intrinsics, want_jacobian)
+    if dP is None:
+        return Linearization(cost, r, None, None, None)  # type: ignore[arg-type]
+    Jv = np.empty((len(P), 2, 6))
+    Jv[:, :, 0:3] = -np.cross(dP, RXw[:, None, :])  # a row times -[v]x is -(row x v)
+    Jv[:, :, 3:6] = dP
+    dPR = np.matmul(dP, Rv)
+    Jt = np.empty((len(P), 2, 6))
+    Jt[:, :, 0:3] = -np.cross(dPR, QX[:, None, :])
+    Jt[:, :, 3:6] = dPR
+    Jt[tj == 0] = 0.0
+    return Linearization(cost, r, np.zeros((len(P), 2, 0)), Jt, Jv)
+
+
+def _retract(state: dict, dg: np.ndarray, dv: np.ndarray) -> dict:
+    new = dict(state)
+    new["R"] = np.einsum("kij,kjl->kil", exp_so3(dv[:, 0:3]), state["R"])
+    new["t"] = state["t"] + dv[:, 3:6]
+    new["Q"], new["p"] = retract_targets(state["Q"], state["p"], dg)
+    return new
+
+
+def solve_poses(obs: TargetObservations, intrinsics: CameraIntrinsics, max_iterations: int = 50,
+                tolerance: float = 1e-10, progress=None, noise_px: float | None = None,
+                start: TargetSolution | None = None) -> PoseSolution:
+    """Every view's pose and the targets' poses, jointly; sigmas from (J^T J)^-1 at the solution.
+
+    ``start``: the row model's solution of the same views (one orientation, a line), whose target
+    poses and per-view translations are a close start: no PnP per view and target, a few iterations.
+    """
+    K, T = len(obs.names), len(obs.targets)
+    if start is None:
+        views = target_views(obs, intrinsics)
+        ok, used, Q, p = views["ok"], views["used"], views["Q"], views["p"]
+        R = np.tile(np.eye(3), (K, 1, 1))
+        for i in np.flatnonzero(used):
+            R[i] = chordal_mean(views["R_world"][i, ok[i]])
+        t = origin_in_camera(views["tv"], ok, p, R)
+    else:
+        used, Q, p = start.used.copy(), start.Q.copy(), start.p.copy()
+        R = np.tile(start.R, (K, 1, 1))
+        t = start.l0[None, :] + np.where(used[:, None], start.s, 0.0) @ start.N.T
+    state = {"R": R, "t": t, "Q": Q, "p": p}
+    seen = np.isfinite(obs.corners_px[..., 0]) & used[:, None]
+    view, corner = np.nonzero(seen)
+    X, tj, uv = obs.own_points[corner], obs.which[corner], obs.corners_px[view, corner]
+    fit = levenberg_marquardt(
+        state, lambda st, jac=True: _linearize(st, X, tj, view, uv, intrinsics, jac), _retract,
+        tj, view, K, T, used.copy(), max_iterations, tolerance, progress, "pose model")
+    n_params = 6 * (T - 1) + 6 * int(used.sum())
+    dof = max(2 * len(view) - n_params, 1)
+    sigma2 = fit.lin.cost / dof if noise_px is None else float(noise_px) ** 2
+    cov = PositionCovariance(fit.Avv_inv * used[:, None, None], fit.W * used[:, None, None], fit.S_inv, sigma2,
+                             np.eye(6))
+    target_sigma = np.zeros((T, 6))
+    if T > 1:
+        target_sigma[1:] = np.sqrt(np.maximum(np.diag(fit.S_inv), 0.0) * sigma2).reshape(T - 1, 6)
+    return PoseSolution(fit.state["R"], fit.state["t"], fit.state["Q"], fit.state["p"], used,
+                        float(np.sqrt(sigma2)), view_rms(fit.lin.r, view, K), cov, fit.Avv_inv * sigma2,
+                        target_sigma, fit.iterations, fit.converged)
+
+
+def pose_solution_from_views(R: np.ndarray, t: np.ndarray, cov_unit: np.ndarray, used: np.ndarray,
+                             sigma2_px: float) -> PoseSolution:
+    """Per-view poses against one board (the world, known) as a :class:`PoseSolution`: no target columns.
+
+    ``cov_unit`` (K, 6, 6): each view's (rotation, translation) covariance per unit noise variance, the
+    left perturbation of :func:`solve_poses`, so :mod:`core.error_motions` reads one board's poses
+    (the 6-DOF fit of a single-board session) as it reads a constellation's.
+    """
+    used = np.asarray(used, bool)
+    K = len(used)
+    cov = PositionCovariance(cov_unit * used[:, None, None], np.zeros((K, 0, 6)), np.zeros((0, 0)), float(sigma2_px),
+                             np.eye(6))
+    return PoseSolution(np.asarray(R, float), np.asarray(t, float), np.eye(3)[None], np.zeros((1, 3)), used,
+                        float(np.sqrt(sigma2_px)), np.full(K, np.nan), cov, cov_unit * sigma2_px, np.zeros((1, 6)), 0,
+                        True)

@@ -1,0 +1,1 @@
+"""The simulator's truth: stage error models, the rig, simulated views; no estimation model imports it."""

@@ -1,0 +1,34 @@
+"""What a simulated experiment is: the rig, the plan, the noise and the injected outliers (one or two axes).
+
+Its own module so that the presets of :mod:`lps_gui.core.truth.simulate` and of
+:mod:`lps_gui.core.planning.target_presets` (rows of targets) build it without
+importing each other; :mod:`lps_gui.core.truth.simulate` re-exports it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from lps_gui.core.geometry.target_rig import TargetLayout
+from lps_gui.core.planning.plan import Plan
+from lps_gui.core.truth.rig import Rig
+from lps_gui.core.truth.stage_errors import Vibration
+
+
+@dataclass(frozen=True)
+class SimulationSpec:
+    """A simulated experiment; every random draw comes from ``seed``."""
+
+    name: str
+    rig: Rig  # as many axes as the plan
+    plan: Plan
+    noise_px: float = 0.1
+    noise_clip_px: float | None = None  # paper's synthetic case: |noise| < 1 px
+    missing_fraction: float = 0.0
+    replaced_views: tuple[int, ...] = ()  # images swapped for another position's
+    replaced_offset: int = 37  # ... the one this many captures away
+    bumped_views: tuple[int, ...] = ()  # camera knocked: rotated by bump_mrad
+    bump_mrad: float = 3.0
+    seed: int = 0
+    vibration: Vibration | None = None  # the carriage rings after each move (ASME B5.64 settling test)
+    frame_interval_s: float = 0.01  # time between the frames of a stop (the camera's exposure), s
+    layout: TargetLayout | None = None  # a row or constellation of targets (SPEC 13); the rig's board is its first

@@ -1,0 +1,84 @@
+"""results.json fields of the board-plane straightness and image rotation (SPEC 11).
+
+``positions.csv`` ``straightness_um_1/_2`` carry the constant-orientation
+figures (resolved to micrometres in the board plane); the per-view 6-DOF
+pose's straightness stays in results.json as ``pose_straightness_um_1/_2``
+for comparison. Figures carry their noise p-v and a ``resolved`` flag from
+:mod:`lps_gui.core.metrology.resolution`, so report and GUI show only resolved ones.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from lps_gui.core.estimator.estimate_types import LpsEstimate
+from lps_gui.core.metrology.resolution import is_resolved, noise_max_abs, profile_span
+from lps_gui.io.results.document import json_floats
+
+
+def _f(x: Any) -> float | None:
+    x = float(x)
+    return x if np.isfinite(x) else None
+
+
+def position_columns(est: LpsEstimate) -> dict[str, list[Any]]:
+    """The per-position straightness / image rotation entries of every view, as columns (K each)."""
+    cols: dict[str, list[Any]] = {}
+    bp, six = est.board_plane, est.six_dof
+    if six is not None:
+        for j in (0, 1):
+            cols[f"pose_straightness_um_{j + 1}"] = json_floats(six.straightness_um[:, j])
+            cols[f"pose_straightness_sigma_um_{j + 1}"] = json_floats(six.straightness_sigma_um[:, j])
+    if bp is not None:
+        for j in (0, 1):
+            cols[f"straightness_um_{j + 1}"] = json_floats(bp.straightness_um[:, j])
+            cols[f"straightness_sigma_um_{j + 1}"] = json_floats(bp.straightness_sigma_um[:, j])
+        cols["image_rotation_urad"] = json_floats(bp.image_rotation_urad)
+        cols["image_rotation_sigma_urad"] = json_floats(bp.image_rotation_sigma_urad)
+    elif six is not None:  # per-view methods have no common orientation: the pose figures are all there is
+        for j in (0, 1):
+            cols[f"straightness_um_{j + 1}"] = cols[f"pose_straightness_um_{j + 1}"]
+            cols[f"straightness_sigma_um_{j + 1}"] = cols[f"pose_straightness_sigma_um_{j + 1}"]
+    return cols
+
+
+def straightness_figures(target_mm: np.ndarray, est: LpsEstimate, valid: np.ndarray) -> dict[str, Any]:
+    """``figures`` entries: p-v of v1, v2 and image rotation over the targets, each with its noise p-v.
+
+    The legacy keys (``straightness_um_max``, ``straightness_span_um``,
+    ``straightness_sigma_um``) keep their meaning, now from the board-plane
+    figures when the method has them.
+    """
+    bp, six = est.board_plane, est.six_dof
+    if bp is not None:
+        values, sigma, basis = bp.straightness_um, bp.straightness_sigma_um, "board plane, constant orientation (SPEC 11)"
+    elif six is not None:
+        values, sigma, basis = six.straightness_um, six.straightness_sigma_um, "per-view 6-DOF poses"
+    else:
+        return {}
+    ok = valid & np.all(np.isfinite(values), axis=1)
+    if not ok.any():
+        return {}
+    spans = [profile_span(values[:, j], sigma[:, j], target_mm, ok) for j in (0, 1)]
+    out: dict[str, Any] = {
+        "straightness_um_max": _f(np.nanmax(np.ptp(values[ok], axis=0))),
+        "straightness_span_um": [_f(v) for v in np.ptp(values[ok], axis=0)],
+        "straightness_sigma_um": _f(np.nanmax(np.nanmedian(sigma[ok], axis=0))),
+        "straightness": {"basis": basis, "v1": spans[0].to_dict("um"), "v2": spans[1].to_dict("um")},
+    }
+    if bp is not None:
+        rot_ok = valid & np.isfinite(bp.image_rotation_urad)
+        out["image_rotation"] = profile_span(bp.image_rotation_urad, bp.image_rotation_sigma_urad, target_mm,
+                                             rot_ok).to_dict("urad")
+    if six is not None:
+        resolved = {}
+        for j, name in enumerate(("roll", "pitch", "yaw")):
+            a, s = six.angles_urad[valid, j], six.angles_sigma_urad[valid, j]
+            keep = np.isfinite(a) & np.isfinite(s)
+            if keep.any():
+                noise = noise_max_abs(float(np.sqrt(np.mean(s[keep] ** 2))), int(keep.sum()))
+                resolved[name] = {"max_abs_urad": _f(np.max(np.abs(a[keep]))), "noise_max_abs_urad": _f(noise),
+                                  "resolved": is_resolved(float(np.max(np.abs(a[keep]))), noise)}
+        out["angles_resolution"] = resolved
+    return out

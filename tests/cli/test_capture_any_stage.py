@@ -52,7 +52,10 @@ def test_a_command_stage_gives_the_simulated_estimate_and_a_failing_script_stops
     assert lps_main(["capture", "--out", str(folder), "--stage", stage, *PLAN]) == 3
     err = capsys.readouterr().err
     assert "move.sh 6.000000` exited with status 2: axis fault" in err and "--resume" in err
+    assert f"--resume {folder} --stage '{stage}'" in err  # the hint names the stage again, quoted for a shell
     fault.unlink()  # the operator fixed the stage
+    assert lps_main(["capture", "--resume", str(folder)]) == 2  # never the simulated stage in its place
+    assert f"give --stage to resume with (it was captured with --stage '{stage}'" in capsys.readouterr().err
     assert lps_main(["capture", "--resume", str(folder), "--stage", stage]) == 0
     assert log.read_text().split()[-1] == "8.000000"
     np.testing.assert_allclose(measured(folder), simulated, rtol=0, atol=1e-9)

@@ -188,7 +188,12 @@ def settle_options(args: argparse.Namespace):
 def _resume_devices_hint(session) -> str:
     """The device switches a resume of a real-device session needs (never read back by itself)."""
     if (session.truth or {}).get("simulated"):
-        return ""
+        import shlex
+
+        from lps_gui.cli.capture.resume_devices import SIMULATED_STAGES
+
+        stage = (session.meta.get("stage") or {}).get("spec")
+        return "" if stage in (None, *SIMULATED_STAGES) else f" --stage {shlex.quote(stage)}"  # the rig rode that stage
     stage, camera = (session.meta.get("stage") or {}).get("spec"), (session.meta.get("camera") or {}).get("spec")
     cti = (session.meta.get("camera") or {}).get("cti")  # a GenICam camera's producer
     return (f" --stage {stage} --camera {camera}" + (f" --cti {cti}" if cti else "")) if stage and camera \
@@ -327,14 +332,16 @@ def _resume(args: argparse.Namespace):
         raise InputError(f"{session.folder}: a single-axis session; resume it without the planar switches")
     truth = session.truth or {}
     if truth.get("simulated") and (args.camera or "sim") == "sim":
+        from lps_gui.cli.capture.resume_devices import rig_stage_named_by_operator
         from lps_gui.sim.session import reopen_simulated_rig, simulated_engine
 
+        stage_spec = rig_stage_named_by_operator(session, args.stage)
         stage, camera = reopen_simulated_rig(session, clock=clock(args))
-        stage = bind_stage(args.stage or "sim", stage, args.time_scale, args)
+        stage = bind_stage(stage_spec, stage, args.time_scale, args)
         if "spec" not in (session.meta.get("stage") or {}) or "spec" not in (session.meta.get("camera") or {}):
             # a kill between the start's two session.json writes left the devices unrecorded: record them now
             axes = {"axes": ["X", "Y"]} if session.planar else {}
-            session.meta["stage"] = {**stage.describe(), **axes, "spec": args.stage or "sim"}
+            session.meta["stage"] = {**stage.describe(), **axes, "spec": stage_spec}
             session.meta["camera"] = {**camera.properties(), "spec": "sim"}
             session.save_meta()
         return session, stage, camera, simulated_engine(session, stage, camera, args.encode)

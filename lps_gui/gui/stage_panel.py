@@ -27,6 +27,7 @@ from lps_gui.gui.sources import BAUD_RATES, SIM, open_stage_source, source_from_
 from lps_gui.gui.stage_controller import StageController
 from lps_gui.gui.stage_declared import show_declared, stop_action
 from lps_gui.hardware.capabilities import Settings, WorkCoordinates
+from lps_gui.hardware.registry import DEFAULT_PORT_KIND, specs_help
 from lps_gui.hardware.stage import AXES, StageSetting, StageStatus
 
 JOG_STEPS_MM = (0.01, 0.1, 1.0, 10.0, 50.0)
@@ -58,7 +59,8 @@ class StagePanel(QWidget):
         self.source.setMinimumContentsLength(14)
         self.source.setEditable(True)  # an external emulator's /dev/pts/N, a port not listed
         self.source.setInsertPolicy(QComboBox.InsertPolicy.NoInsert)
-        self.source.setToolTip("Pick a source, or type a port: /dev/pts/5, /dev/serial/by-id/..., COM3, grbl:PORT")
+        self.source.setToolTip(f"Pick a source, or type one: {specs_help()}; a bare port (/dev/pts/5, COM3) opens as "
+                               f"{DEFAULT_PORT_KIND}PORT")
         self.refresh_btn = QPushButton("Refresh")
         self.refresh_btn.setToolTip("List serial ports again")
         self.baud = QComboBox()

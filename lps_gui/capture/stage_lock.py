@@ -1,16 +1,19 @@
 """A stage locked in Alarm before a capture: home it, unlock it, or say how (never silently).
 
-GRBL with homing enabled powers up in Alarm (``[MSG:'$H'|'$X' to unlock]``) and
-answers every move with ``error:9``; a capture must not start there and fail on
-its first move. The operator chooses: home (``$H``, the position is then
-referenced to the switch) or unlock (``$X``, the position is wherever GRBL
-believes it is). The CLI asks with ``--home`` / ``--unlock``, the GUI with a prompt.
+A stage that declares :class:`~lps_gui.hardware.capabilities.Alarms` may be
+locked (GRBL with homing enabled powers up so and refuses every move); a
+capture must not start there and fail on its first move. The operator
+chooses: home (the position is then referenced to the switch) or unlock (the
+position is wherever the controller believes it is); the driver's
+``lock_hint`` says how in its own terms. The CLI asks with ``--home`` /
+``--unlock``, the GUI with a prompt. A stage without alarms is never locked.
 """
 from __future__ import annotations
 
 from typing import Literal
 
 from lps_gui.errors import HardwareError
+from lps_gui.hardware.capabilities import Alarms
 from lps_gui.hardware.stage import Stage
 
 LockAction = Literal["home", "unlock"]
@@ -21,8 +24,8 @@ class StageLocked(HardwareError):
 
 
 def is_locked(stage: Stage) -> bool:
-    """The stage reports Alarm (a homing lock at power-up, or an alarm since)."""
-    return stage.status().state == "Alarm"
+    """The stage declares alarms and is locked in one (a homing lock at power-up, or an alarm since)."""
+    return isinstance(stage, Alarms) and stage.in_alarm(stage.status())
 
 
 def release_lock(stage: Stage, action: LockAction | None, what: str = "--home or --unlock") -> str | None:
@@ -32,6 +35,7 @@ def release_lock(stage: Stage, action: LockAction | None, what: str = "--home or
     """
     if not is_locked(stage):
         return None
+    assert isinstance(stage, Alarms)  # is_locked says so
     if action == "home":
         stage.home()
         done = "homed"
@@ -40,8 +44,7 @@ def release_lock(stage: Stage, action: LockAction | None, what: str = "--home or
         done = "unlocked"
     else:
         raise StageLocked(
-            "the stage is locked in Alarm (GRBL with homing enabled starts so); "
-            f"home it ($H) or unlock it ($X) first: {what}"
+            f"the stage is locked in Alarm; {stage.lock_hint} first: {what}"
         )
     if is_locked(stage):
         raise HardwareError(f"the stage is still in Alarm after it was {done}; reset the controller and try again")

@@ -13,7 +13,8 @@ import logging
 import sys
 from typing import NoReturn
 
-from lps_gui.cli import compare, compensate, demo, detect, emulate_grbl, estimate, export, intrinsics, make_targets, report, simulate
+from lps_gui.cli import (compare, compensate, demo, detect, emulate, emulate_grbl, estimate, export, intrinsics,
+                         make_targets, report, simulate)
 from lps_gui.cli.capture import command as capture
 from lps_gui.cli.plan_rig import command as plan_rig
 
@@ -25,7 +26,8 @@ COMMANDS = {
     "estimate": estimate,
     "report": report,
     "capture": capture,
-    "emulate-grbl": emulate_grbl,
+    "emulate": emulate,
+    "emulate-grbl": emulate_grbl,  # the same as `lps emulate grbl`
     "plan-rig": plan_rig,
     "compensate": compensate,
     "export": export,

@@ -36,13 +36,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    return serve(args, "grbl")
+
+
+def serve(args: argparse.Namespace, kind: str) -> int:
+    """Serve the emulator of stage ``kind`` (a registry name) over the simulated stage the switches describe."""
     import signal
     import sys
     import time
 
     from lps_gui.errors import InputError
     from lps_gui.hardware.announce import announce
-    from lps_gui.hardware.grbl.emulator import Faults, GrblEmulator
+    from lps_gui.hardware.grbl.emulator import Faults
+    from lps_gui.hardware.registry import emulated_kinds
     from lps_gui.hardware.sim_stage import SimulatedStage
 
     lo, hi = args.travel
@@ -69,13 +75,17 @@ def run(args: argparse.Namespace) -> int:
         signal.signal(signal.SIGTERM, lambda signum, _frame: stop.append(signum))
     except ValueError:  # not the main thread (tests calling run() directly)
         pass
-    emu = GrblEmulator(stage, faults=faults, time_scale=args.time_scale, homing_init_lock=not args.no_homing_lock)
+    emulator = emulated_kinds()[kind].emulator
+    assert emulator is not None  # emulated_kinds() lists only kinds with one
+    options = {"homing_init_lock": not args.no_homing_lock} if kind == "grbl" else {}  # GRBL's build option
+    emu = emulator()(stage, faults=faults, time_scale=args.time_scale, **options)
     withdraw = None
     try:
         path = emu.start()
-        withdraw = announce(path)  # the GUI's stage list shows it
+        withdraw = announce(path, kind=kind)  # the GUI's stage list shows it
         print(path, flush=True)
-        print(f"GRBL 1.1h emulator on {path} (115200 baud, any rate works on a pty); Ctrl-C to stop", file=sys.stderr, flush=True)
+        print(f"{kind} emulator on {path} (115200 baud, any rate works on a pty; --stage {kind}:{path}); Ctrl-C to stop",
+              file=sys.stderr, flush=True)
         while not stop:
             time.sleep(0.2)
             if emu.dropped:

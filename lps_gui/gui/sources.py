@@ -10,50 +10,32 @@ from __future__ import annotations
 
 from lps_gui.camera.base import Camera
 from lps_gui.core.clock import Clock, RealClock
-from lps_gui.errors import InputError
 from lps_gui.hardware.stage import Stage
 
 SIM = "sim"
-EMULATOR = "emulator"
 SIM_PRESET = "small"
 BAUD_RATES = (115200, 250000, 57600, 38400, 19200, 9600)
 CAMERA_FOLLOWS_STAGE = "sim"  # the simulated camera riding the simulated stage
 
 
 def stage_choices() -> list[tuple[str, str]]:
-    """(label, source) pairs: simulated, emulator, then every serial port found."""
-    out = [("Simulated stage", SIM), ("GRBL emulator (pty)", EMULATOR)]
-    from lps_gui.hardware import list_serial_ports
+    """(label, source) pairs from the stage registry: the bare kinds, then every serial kind on every port found."""
+    from lps_gui.hardware import list_serial_ports, serial_ports_by_id
+    from lps_gui.hardware.announce import announced
+    from lps_gui.hardware.registry import stage_choices as registry_choices
+
     try:
         ports = list_serial_ports()
-    except Exception:  # no port listing yet (or no serial support): offer the two simulations
+    except Exception:  # no port listing yet (or no serial support): offer the bare kinds
         ports = []
-    for p in ports:
-        name = getattr(p, "device", None) or (p[0] if isinstance(p, (tuple, list)) else str(p))
-        desc = getattr(p, "description", "") or ""
-        out.append((f"{name} {desc}".strip(), f"grbl:{name}"))
-    out += by_id_choices()
-    from lps_gui.hardware.announce import announced_ports
-
-    listed = {src for _, src in out}
-    out += [(f"{p} (GRBL emulator)", f"grbl:{p}") for p in announced_ports() if f"grbl:{p}" not in listed]
-    return out
-
-
-def by_id_choices() -> list[tuple[str, str]]:
-    """The stable /dev/serial/by-id names of the serial adapters (they survive replugging)."""
-    from lps_gui.hardware import serial_ports_by_id
-    return [(f"{link} ({device.rsplit('/', 1)[-1]})", f"grbl:{link}") for link, device in serial_ports_by_id()]
+    return registry_choices(ports, serial_ports_by_id(), announced())
 
 
 def source_from_text(text: str) -> str | None:
-    """A source typed into the editable box: sim, emulator, grbl:PORT, or a bare port (/dev/pts/5, COM3)."""
-    text = text.strip()
-    if text in (SIM, EMULATOR) or (text.startswith("grbl:") and len(text) > 5):
-        return text
-    if text.startswith(("/dev/", "COM", "socket://", "rfc2217://", "loop://")):
-        return f"grbl:{text}"
-    return None
+    """A source typed into the editable box: any registered spec, or a bare port (/dev/pts/5, COM3)."""
+    from lps_gui.hardware.registry import source_from_text as registry_source
+
+    return registry_source(text)
 
 
 def simulated_rig(clock: Clock | None = None) -> tuple[Stage, Camera]:
@@ -69,11 +51,11 @@ def open_stage_source(source: str, baud: int = 115200, clock: Clock | None = Non
     if source == SIM:
         return simulated_rig(clock)
     from lps_gui.hardware import open_stage
-    if source == EMULATOR:
-        return open_stage(EMULATOR), None
-    if source.startswith("grbl:"):
-        return (open_stage(source, baudrate=baud) if baud != 115200 else open_stage(source)), None
-    raise InputError(f"stage source {source!r} is unknown; choose one from the list")
+    from lps_gui.hardware.registry import kind_of
+
+    kind = kind_of(source)
+    options = {"baudrate": baud} if kind.serial and baud != 115200 else {}
+    return open_stage(source, **options), None
 
 
 _sdk_devices: list[tuple[str, str]] | None = None

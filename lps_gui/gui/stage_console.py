@@ -1,9 +1,10 @@
-"""A raw console for G-code and ``$`` commands, with history, like UGS / CNCjs / bCNC offer.
+"""A raw console to the controller (G-code and ``$`` commands), with history, like UGS / CNCjs / bCNC offer.
 
 Lines go through the :class:`StageController` (the one command thread) to
-``stage.command(line)`` and the reply (the lines GRBL printed, then ``ok`` or
-the one-line error) is appended. Stages without a G-code interpreter (the
-simulated stage) have no ``command``: the console says so and stays disabled.
+``stage.command(line)`` and the reply (the lines the controller printed, then
+``ok`` or the one-line error) is appended. Only a stage that declares a
+:class:`~lps_gui.hardware.capabilities.Console` has one; for any other the
+console says so and stays disabled.
 """
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from PySide6.QtWidgets import QHBoxLayout, QLineEdit, QPlainTextEdit, QPushButto
 
 from lps_gui.gui.stage_controller import StageController
 from lps_gui.gui.workers import one_line
+from lps_gui.hardware.capabilities import Console
 
 HISTORY_MAX = 200
 
@@ -74,13 +76,14 @@ class StageConsole(QWidget):
 
     def available(self) -> bool:
         stage = self.controller.stage
-        return stage is not None and callable(getattr(stage, "command", None))
+        return isinstance(stage, Console)
 
     def update_enabled(self) -> None:
         on = self.available()
         self.line.setEnabled(on)
         self.send_btn.setEnabled(on)
-        self.line.setPlaceholderText(console_placeholder(self.controller.stage is not None, on))
+        stage = self.controller.stage
+        self.line.setPlaceholderText(console_placeholder(stage is not None, stage.console_hint if isinstance(stage, Console) else ""))
 
     def send(self) -> Future | None:
         text = self.line.text().strip()
@@ -104,10 +107,10 @@ class StageConsole(QWidget):
         self._reply.emit("  ok")
 
 
-def console_placeholder(connected: bool, has_console: bool) -> str:
-    """What the command line says it takes, for the stage connected now."""
-    if has_console:
-        return "G-code or $ command, e.g. $$  $#  G0 X10  (Up/Down: history)"
+def console_placeholder(connected: bool, hint: str) -> str:
+    """What the command line says it takes: the connected stage's console ``hint`` ("" when it has none)."""
+    if hint:
+        return hint
     if connected:
-        return "this stage has no G-code console (the simulated stage); connect a GRBL"
-    return "connect a GRBL stage to send G-code or $ commands"
+        return "this stage has no G-code console"
+    return "connect a stage with a console (GRBL, Marlin) to send it commands"

@@ -118,6 +118,9 @@ class StageController(QObject):
             self.command_failed.emit(what, "stage: not connected; connect the stage first")
             return None
         stage = self.stage
+        if not callable(getattr(stage, method, None)):  # a menu entry for a capability this stage does not declare
+            self.command_failed.emit(what, f"{what}: the connected stage ({type(stage).__name__}) cannot do this")
+            return None
         log.info("stage: %s", what)
         fut = self._submit(what, lambda: getattr(stage, method)(*args))
         if method == "home":

@@ -25,6 +25,9 @@ from lps_gui.gui.dro import PositionReadout
 from lps_gui.gui.stage_console import StageConsole
 from lps_gui.gui.sources import BAUD_RATES, SIM, open_stage_source, source_from_text, stage_choices
 from lps_gui.gui.stage_controller import StageController
+from lps_gui.gui.stage_declared import show_declared, stop_action
+from lps_gui.hardware.capabilities import Settings, WorkCoordinates
+from lps_gui.hardware.registry import DEFAULT_PORT_KIND, specs_help
 from lps_gui.hardware.stage import AXES, StageSetting, StageStatus
 
 JOG_STEPS_MM = (0.01, 0.1, 1.0, 10.0, 50.0)
@@ -56,7 +59,8 @@ class StagePanel(QWidget):
         self.source.setMinimumContentsLength(14)
         self.source.setEditable(True)  # an external emulator's /dev/pts/N, a port not listed
         self.source.setInsertPolicy(QComboBox.InsertPolicy.NoInsert)
-        self.source.setToolTip("Pick a source, or type a port: /dev/pts/5, /dev/serial/by-id/..., COM3, grbl:PORT")
+        self.source.setToolTip(f"Pick a source, or type one: {specs_help()}; a bare port (/dev/pts/5, COM3) opens as "
+                               f"{DEFAULT_PORT_KIND}PORT")
         self.refresh_btn = QPushButton("Refresh")
         self.refresh_btn.setToolTip("List serial ports again")
         self.baud = QComboBox()
@@ -122,7 +126,7 @@ class StagePanel(QWidget):
         self.keyboard_state = QLabel()
         jg.addWidget(self.keyboard_jog, 2, 2)
         jg.addWidget(self.keyboard_state, 2, 3)
-        self.travel_label = QLabel("travel: read the settings ($$)")
+        self.travel_label = QLabel("travel: read the settings")
         self.travel_label.setWordWrap(True)
         self.travel_label.setStyleSheet("QLabel { color: #555555; }")
         jg.addWidget(self.travel_label, 3, 0, 1, 4)
@@ -168,7 +172,10 @@ class StagePanel(QWidget):
         self.stop_btn.setStyleSheet("QPushButton { color: #b00020; font-weight: bold; }")
         self.stop_btn.setToolTip("Esc: cancels a jog, or holds a programmed move (feed hold). "
                                  "Resume continues the move; Reset discards it")
-        for i, b in enumerate((self.home_btn, self.unlock_btn, self.resume_btn)):
+        self.moved_btn = QPushButton("Moved")
+        self.moved_btn.setToolTip("A stage you move by hand: press when the carriage is at the position asked for")
+        self.moved_btn.clicked.connect(lambda: self.controller.call_now("moved", "confirm_moved"))
+        for i, b in enumerate((self.home_btn, self.unlock_btn, self.resume_btn, self.moved_btn)):
             cmds.addWidget(b, 0, i)
         cmds.addWidget(self.stop_btn, 1, 0, 1, 2)
         cmds.addWidget(self.reset_btn, 1, 2)
@@ -181,7 +188,7 @@ class StagePanel(QWidget):
         sett = QGroupBox("Controller settings ($$)")
         sl = QVBoxLayout(sett)
         self.settings_table = QTableWidget(0, 4)
-        self.settings_table.setHorizontalHeaderLabels(["$", "Setting", "Value", "Unit"])
+        self.settings_table.setHorizontalHeaderLabels(["#", "Setting", "Value", "Unit"])
         self.settings_table.verticalHeader().setVisible(False)
         self.settings_table.setSelectionBehavior(QAbstractItemView.SelectionBehavior.SelectRows)
         hh = self.settings_table.horizontalHeader()
@@ -189,7 +196,7 @@ class StagePanel(QWidget):
         for col in (0, 2, 3):
             hh.setSectionResizeMode(col, QHeaderView.ResizeMode.ResizeToContents)
         row = QHBoxLayout()
-        self.read_settings_btn = QPushButton("Read $$")
+        self.read_settings_btn = QPushButton("Read")
         self.write_settings_btn = QPushButton("Write changes")
         row.addWidget(self.read_settings_btn)
         row.addWidget(self.write_settings_btn)
@@ -209,7 +216,8 @@ class StagePanel(QWidget):
         self.console = StageConsole(controller)
         self.lower_tabs = QTabWidget()  # settings and console share the space: the panel stays short
         sett.setTitle("")
-        self.lower_tabs.addTab(sett, "Settings ($$)")
+        self.settings_page = sett
+        self.lower_tabs.addTab(sett, "Settings")
         self.lower_tabs.addTab(self.console, "Console")
         lay.addWidget(self.lower_tabs, 1)
 
@@ -310,7 +318,7 @@ class StagePanel(QWidget):
             self.source.addItem(label, src)
         self.source.blockSignals(False)
         self._choices = choices
-        if current is not None and self.source.findData(current) < 0 and current.startswith("grbl:"):
+        if current is not None and self.source.findData(current) < 0 and ":" in current:
             self.select_source(current)  # a typed port stays
         else:
             self.source.setCurrentIndex(max(self.source.findData(current), 0))
@@ -343,7 +351,7 @@ class StagePanel(QWidget):
 
     def select_source(self, source: str) -> None:
         i = self.source.findData(source)
-        if i < 0 and source.startswith("grbl:"):
+        if i < 0 and ":" in source:  # a typed port or argument (grbl:/dev/pts/5, command:...)
             self.source.addItem(source.split(":", 1)[1], source)
             i = self.source.count() - 1
         self.source.setCurrentIndex(max(i, 0))
@@ -375,7 +383,8 @@ class StagePanel(QWidget):
         self._set_enabled(connected)
         self._lock_asked = False
         if connected:
-            self.controller.read_settings()
+            if isinstance(self.controller.stage, Settings):
+                self.controller.read_settings()
             self._read_work_system()
         else:
             self.dro.clear()
@@ -389,8 +398,7 @@ class StagePanel(QWidget):
                 self.home_btn, self.unlock_btn, self.resume_btn, self.stop_btn, self.read_settings_btn,
                 self.write_settings_btn, self.goto_btn, self.reset_btn]:
             b.setEnabled(on)
-        stage = self.controller.stage
-        self.dro.set_offsets_enabled(on and stage is not None and bool(stage.work_systems))
+        show_declared(self, self.controller.stage if on else None, on)
 
     # ------------------------------------------------------------------ readout
     def show_status(self, st: StageStatus) -> None:
@@ -403,10 +411,11 @@ class StagePanel(QWidget):
 
     def _ask_home_or_unlock(self) -> None:
         """A stage in Alarm (GRBL powers up so with homing enabled) moves only after $H or $X: ask which."""
+        hint = getattr(self.controller.stage, "lock_hint", "home it or unlock it")
         box = QMessageBox(QMessageBox.Icon.Question, "Stage locked",
-                          "The stage is locked in Alarm (a GRBL with homing enabled starts so, and after an alarm).\n"
-                          "Home it ($H: drives to the limit switch) or unlock it ($X: keeps the position it believes)?\n"
-                          "After a limit alarm ('Reset to continue') press Reset first.",
+                          "The stage is locked in Alarm (at power-up with homing enabled, and after an alarm).\n"
+                          f"Home or unlock it ({hint})? Homing drives to the limit switch; unlocking keeps the "
+                          "position it believes.\nAfter a limit alarm ('Reset to continue') press Reset first.",
                           parent=self)
         home = box.addButton("Home", QMessageBox.ButtonRole.AcceptRole)
         unlock = box.addButton("Unlock", QMessageBox.ButtonRole.ActionRole)
@@ -465,7 +474,7 @@ class StagePanel(QWidget):
     # ------------------------------------------------------------------ work coordinates
     def _read_work_system(self) -> None:
         stage = self.controller.stage
-        if stage is None or not stage.work_systems:
+        if not isinstance(stage, WorkCoordinates) or not stage.work_systems:
             self.work_system.setCurrentIndex(0)
             return
         fut = self.controller.call("read the work coordinate system", "work_system")
@@ -507,19 +516,20 @@ class StagePanel(QWidget):
     def stop(self) -> None:
         """Stop motion now: cancel a jog; a programmed move is held (Resume continues it)."""
         st = self.controller.last_status
-        if st is not None and st.state == "Run":
-            self.controller.call_now("feed hold", "feed_hold")
-        else:
-            self.controller.call_now("jog cancel", "jog_cancel")
+        action = stop_action(self.controller.stage, st is not None and st.state == "Run")
+        if action is not None:
+            self.controller.call_now(*action)
 
     # ------------------------------------------------------------------ settings
     def show_settings(self, settings: list[StageSetting]) -> None:
         self._settings = list(settings)
-        self.travel_label.setText(travel_text({st.number: st.value for st in settings}))
+        stage = self.controller.stage
+        self.travel_label.setText(stage.travel_text(settings) if isinstance(stage, Settings) else "travel: unknown")
         t = self.settings_table
         t.setRowCount(len(settings))
         for r, s in enumerate(settings):
-            for c, text in enumerate((f"${s.number}", s.name, f"{s.value:g}", s.unit)):
+            label = stage.setting_label(s) if isinstance(stage, Settings) else str(s.number)
+            for c, text in enumerate((label, s.name, f"{s.value:g}", s.unit)):
                 item = QTableWidgetItem(text)
                 if c != 2:
                     item.setFlags(item.flags() & ~Qt.ItemFlag.ItemIsEditable)
@@ -557,15 +567,6 @@ class StagePanel(QWidget):
             self.controller.write_setting(number, value)
         if changes:
             self.controller.read_settings()
-
-
-def travel_text(values: dict[int, float]) -> str:
-    """The soft-limit travel of each axis from $20 and $130-$132 (GRBL's machine space: -$13x .. 0 after homing)."""
-    spans = [f"{ax} {values[130 + i]:g} mm" for i, ax in enumerate(AXES) if 130 + i in values]
-    if not spans:
-        return "travel: unknown"
-    limits = "soft limits ON" if values.get(20) else "soft limits off ($20=0): nothing stops a move past the ends"
-    return f"travel {', '.join(spans)}; {limits}"
 
 
 def _is_integer_setting(s: StageSetting) -> bool:

@@ -1,4 +1,5 @@
-"""Stage drivers: the Stage interface, a simulated stage, GRBL 1.1 over serial and its pty emulator.
+"""Stage drivers: the Stage interface and its capabilities, a simulated stage, GRBL 1.1, Marlin, manual and
+command stages, their emulators, and the registry naming them all.
 
 :func:`open_stage` turns the ``--stage`` spec of the CLI and GUI into a
 connected :class:`~lps_gui.hardware.stage.Stage`; pyserial stays inside this
@@ -6,39 +7,22 @@ package.
 """
 from __future__ import annotations
 
-from lps_gui.errors import InputError
 from lps_gui.hardware.stage import Stage
-
-STAGE_SPECS = "sim | emulator | grbl:PORT (e.g. grbl:/dev/ttyUSB0 or grbl:COM3)"
 
 
 def open_stage(spec: str, **options) -> Stage:
-    """Make and connect the stage named by ``spec``.
+    """Make and connect the stage named by ``spec`` (its kind from :data:`lps_gui.hardware.registry.KINDS`).
 
     ``"sim"`` -> :class:`SimulatedStage` (simulated time), ``"grbl:PORT"`` ->
-    :class:`GrblStage` on that serial port, ``"emulator"`` -> a
-    :class:`GrblEmulator` on a fresh pseudo-terminal with a :class:`GrblStage`
-    connected to it (the emulator stops when the stage disconnects).
-    ``options`` go to the stage's constructor (e.g. ``errors``, ``seed``,
-    ``clock`` for "sim"; ``baudrate``, ``timeout_s`` for "grbl").
+    :class:`GrblStage` on that serial port, ``"emulator"`` -> a GRBL driver on a
+    fresh emulator (stopped when the stage disconnects), ``"marlin:PORT"``,
+    ``"manual"``, ``"command:'./move.sh {mm}'"``... ``options`` go to the
+    driver's constructor (e.g. ``errors``, ``seed``, ``clock`` for "sim";
+    ``baudrate``, ``timeout_s`` for serial ones).
     """
-    spec = (spec or "").strip()
-    if spec == "sim":
-        from lps_gui.hardware.sim_stage import SimulatedStage
+    from lps_gui.hardware.registry import kind_of
 
-        stage: Stage = SimulatedStage(**options)
-    elif spec == "emulator":
-        from lps_gui.hardware.grbl.emulator import emulated_grbl_stage
-
-        return emulated_grbl_stage(**options)
-    elif spec.startswith("grbl:") and len(spec) > 5:
-        from lps_gui.hardware.grbl.driver import GrblStage
-
-        stage = GrblStage(spec[5:], **options)
-    else:
-        raise InputError(f"stage {spec!r}: not understood; use {STAGE_SPECS}")
-    stage.connect()
-    return stage
+    return kind_of(spec).make((spec or "").strip(), **options)
 
 
 def list_serial_ports() -> list[str]:

@@ -1,4 +1,4 @@
-"""Ports announced by running emulators, so the GUI lists `lps emulate-grbl`'s pty without it being typed.
+"""Ports announced by running emulators, so the GUI lists `lps emulate KIND`'s pty (as that kind) untyped.
 
 A pseudo-terminal (/dev/pts/N) is not a serial port the system lists; the
 emulator writes its path to a file named by its process id in a per-user
@@ -19,13 +19,14 @@ def announce_dir() -> Path:
     return Path(base) / "lps-calib" / "ports"
 
 
-def announce(port: str, folder: Path | None = None) -> Callable[[], None]:
-    """Announce ``port`` for this process; returns the function that withdraws it."""
+def announce(port: str, folder: Path | None = None, kind: str = "grbl") -> Callable[[], None]:
+    """Announce ``port`` (served as stage ``kind``, a registry name) for this process; returns the function that
+    withdraws it."""
     folder = folder or announce_dir()
     try:
         folder.mkdir(parents=True, exist_ok=True, mode=0o700)
         path = folder / str(os.getpid())
-        path.write_text(port + "\n")
+        path.write_text(f"{port}\n{kind}\n")
     except OSError:  # nowhere to write: the port can still be typed
         return lambda: None
 
@@ -40,6 +41,11 @@ def announce(port: str, folder: Path | None = None) -> Callable[[], None]:
 
 def announced_ports(folder: Path | None = None) -> list[str]:
     """Ports announced by processes still running (sorted); stale announcements are removed."""
+    return sorted({port for port, _kind in announced(folder)})
+
+
+def announced(folder: Path | None = None) -> list[tuple[str, str]]:
+    """(port, stage kind) announced by processes still running (sorted); stale announcements are removed."""
     folder = folder or announce_dir()
     try:
         files = sorted(folder.iterdir())
@@ -49,11 +55,11 @@ def announced_ports(folder: Path | None = None) -> list[str]:
     for f in files:
         try:
             pid = int(f.name)
-            port = f.read_text().strip()
+            port, _, kind = f.read_text().strip().partition("\n")
         except (OSError, ValueError):
             continue
         if _alive(pid) and port and os.path.exists(port):
-            out.append(port)
+            out.append((port, kind.strip() or "grbl"))
         else:
             try:
                 f.unlink()

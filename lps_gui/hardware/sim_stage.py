@@ -28,7 +28,8 @@ import numpy as np
 from lps_gui.core.clock import Clock, SimClock
 from lps_gui.core.truth.stage_errors import PlanarErrorModel, PlanarTruePose, StageErrorModel, TruePose, Vibration
 from lps_gui.errors import HardwareError
-from lps_gui.hardware.grbl.codes import SETTINGS, GrblError, check_setting, setting_info, stored_settings
+from lps_gui.hardware.grbl.codes import SETTINGS, GrblError, check_setting, setting_info, stored_settings, travel_text
+from lps_gui.hardware.capabilities import Alarms, FeedHold, Jogging, Settings, WorkCoordinates
 from lps_gui.hardware.motion import Profile
 from lps_gui.hardware.planner import PLANNER_BLOCKS, HeldMove, MotionPlanner
 from lps_gui.hardware.stage import AXES, WORK_SYSTEMS, Stage, StageEvent, StageSetting, StageStatus
@@ -37,7 +38,7 @@ RX_BUFFER_BYTES = 128
 __all__ = ["PLANNER_BLOCKS", "RX_BUFFER_BYTES", "SimulatedStage", "Vibration"]  # Vibration: core/truth/stage_errors
 
 
-class SimulatedStage(Stage):
+class SimulatedStage(Stage, Settings, WorkCoordinates, Jogging, FeedHold, Alarms):
     """A plain-Python stage implementing :class:`Stage` in simulated (or real) time.
 
     Parameters
@@ -487,6 +488,10 @@ class SimulatedStage(Stage):
             if self._motion.resume(self.clock.now(), self._accel):
                 self._update()
 
+    def stop(self) -> None:
+        """A feed hold: the move decelerates and stops (resume continues it, a reset discards it)."""
+        self.feed_hold()
+
     def start_home(self) -> None:
         """Begin homing (seek the low switch, pull off, locate slowly, pull off) without waiting."""
         with self._command():
@@ -542,6 +547,15 @@ class SimulatedStage(Stage):
                 StageSetting(n, v, setting_info(n).name, setting_info(n).unit, setting_info(n).description)
                 for n, v in sorted(self.settings.items())
             ]
+
+    settings_title = "Controller settings ($$)"
+    lock_hint = "home it ($H) or unlock it ($X)"
+
+    def setting_label(self, setting: StageSetting) -> str:
+        return f"${setting.number}"
+
+    def travel_text(self, settings: list[StageSetting]) -> str:
+        return travel_text({st.number: st.value for st in settings})
 
     def write_setting(self, number: int, value: float) -> None:
         with self._command():

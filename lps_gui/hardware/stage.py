@@ -1,4 +1,5 @@
-"""The Stage interface every driver implements (GRBL, simulated, future ones).
+"""The Stage interface every driver implements (GRBL, Marlin, manual, simulated...); capabilities beyond it
+are declared through ``hardware/capabilities.py``.
 
 Axis positions are in mm, feeds in mm/min. Drivers push events (alarms,
 errors, messages, state changes) to subscribers; subscribers never block the
@@ -92,14 +93,21 @@ class EventSource:
 
 
 class Stage(abc.ABC):
-    """A motorized stage. Methods block until the controller acknowledged the command.
+    """A motorized stage: what every stage has. Methods block until the controller acknowledged the command.
 
-    What a driver may know beyond the commands is declared here with the
-    default of a driver that does not: the capture engine and the GUI read
-    these, never probe for them.
+    Connect, home (when :attr:`can_home`), move to absolute positions on its
+    axes, wait until still, read the position, stop. Anything more (settings,
+    a console, work coordinates, jogging, feed hold, alarms, an operator who
+    moves it) is a capability the driver declares by also inheriting its
+    interface from :mod:`lps_gui.hardware.capabilities`; the capture engine and
+    the GUI ask those declarations, never the protocol. What a driver may know
+    beyond the commands is declared here with the default of a driver that
+    does not.
     """
 
     axis: str = "X"  # the axis the LPS measurement moves along
+    axes: tuple[str, ...] = AXES  # the axes it can move
+    can_home: bool = True  # home() drives to a reference switch; False: home() raises
     travel_mm: tuple[float, float] | None = None  # soft-limit range of ``axis`` when known (the simulated stage);
     #   None: the controller guards its limits itself (GRBL's $20 alarms at the offending move)
     axis_travel_mm: list[tuple[float, float]] | None = None  # the range of each of X, Y, Z when known
@@ -126,54 +134,22 @@ class Stage(abc.ABC):
     # state
     @abc.abstractmethod
     def status(self) -> StageStatus: ...
-    @abc.abstractmethod
-    def home(self) -> None: ...
-    @abc.abstractmethod
-    def unlock(self) -> None: ...
-    @abc.abstractmethod
-    def soft_reset(self) -> None: ...
-    @abc.abstractmethod
-    def feed_hold(self) -> None: ...
-    @abc.abstractmethod
-    def resume(self) -> None: ...
+
+    def home(self) -> None:
+        """Drive to the reference switch (drivers with :attr:`can_home` override this)."""
+        raise HardwareError(f"{type(self).__name__}: this stage cannot home; move it to its start instead")
 
     # motion
     @abc.abstractmethod
     def move_to(self, position_mm: float, feed_mm_min: float, axis: str | None = None) -> None:
         """Start an absolute move (machine-independent work coordinates)."""
     @abc.abstractmethod
-    def jog(self, distance_mm: float, feed_mm_min: float, axis: str | None = None) -> None:
-        """Incremental jog; for continuous jogging send a long one and :meth:`jog_cancel`."""
-    @abc.abstractmethod
-    def jog_cancel(self) -> None: ...
-    @abc.abstractmethod
     def wait_idle(self, timeout_s: float = 60.0) -> StageStatus:
         """Block until the stage is Idle; raise HardwareError on alarm or timeout."""
 
-    # settings
-    @abc.abstractmethod
-    def read_settings(self) -> list[StageSetting]: ...
-    @abc.abstractmethod
-    def write_setting(self, number: int, value: float) -> None: ...
-
-    # work coordinates (GRBL's model: work = machine - offset of the selected system)
-    work_systems: tuple[str, ...] = ()  # the systems this driver can select and zero; () = work is machine
-
-    def work_system(self) -> str:
-        """The selected work coordinate system (G54 when the driver has none)."""
-        return WORK_SYSTEMS[0]
-
-    def select_work_system(self, name: str) -> None:
-        """Make ``name`` (one of :attr:`work_systems`) the system positions and moves refer to."""
-        raise HardwareError(f"{type(self).__name__}: no work coordinate systems; positions are machine positions")
-
-    def work_offsets(self) -> dict[str, tuple[float, float, float]]:
-        """Offset of every system in mm, GRBL's sign (``$#``): work = machine - offset."""
-        return {}
-
-    def set_work_zero(self, axis: str | None = None, value_mm: float = 0.0) -> None:
-        """Make the current position read ``value_mm`` on ``axis`` in the selected system."""
-        raise HardwareError(f"{type(self).__name__}: no work coordinate systems; positions are machine positions")
+    def stop(self) -> None:
+        """Stop motion now, as well as this stage can (a controller's quick stop, a feed hold)."""
+        raise HardwareError(f"{type(self).__name__}: cannot be stopped from here; use the controller's own stop")
 
     # conveniences shared by all drivers
     def position_mm(self, axis: str | None = None) -> float:

@@ -18,10 +18,12 @@ def _last_error(capsys) -> str:
     return capsys.readouterr().err.strip().splitlines()[-1]
 
 
-def test_real_stage_with_the_simulated_camera_is_refused_before_the_session_exists(tmp_path, capsys):
+def test_a_stage_that_does_not_open_with_the_simulated_camera_is_refused_before_the_session_exists(tmp_path, capsys):
     out = tmp_path / "s"
-    assert lps_main(["capture", "--out", str(out), "--stage", "grbl:/dev/nonexistent-port", *SIM_PLAN]) == 2
-    assert "simulated camera rides only" in _last_error(capsys)
+    assert lps_main(["capture", "--out", str(out), "--stage", "nonsense:1", *SIM_PLAN]) == 2
+    assert "not understood" in _last_error(capsys)
+    assert lps_main(["capture", "--out", str(out), "--stage", "grbl:/dev/nonexistent-port", *SIM_PLAN]) != 0
+    assert "/dev/nonexistent-port" in _last_error(capsys)
     assert not out.exists()
     assert lps_main(["capture", "--out", str(out), *SIM_PLAN]) == 0  # the retry is not "already holds a session"
 

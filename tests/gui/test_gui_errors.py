@@ -102,11 +102,11 @@ def test_a_camera_that_fails_to_open_leaves_no_old_frame_or_figures(qtbot, windo
 
 def test_console_placeholder_follows_the_connected_stage(qtbot, window):
     line = window.stage_panel.console.line
-    assert "connect a GRBL" in line.placeholderText()
+    assert "connect a stage with a console" in line.placeholderText()
     connect_sim(qtbot, window)
     assert "no G-code console" in line.placeholderText()
     window.stage_ctl.detach("test")
-    assert "connect a GRBL" in line.placeholderText()
+    assert "connect a stage with a console" in line.placeholderText()
 
 
 def test_a_stopped_capture_says_frames_are_kept_only_when_there_are_some(window):

@@ -29,6 +29,7 @@ from lps_gui.cli.capture.devices import (
     close,
     device_session,
     open_devices,
+    open_operator_stage,
     preflight,
     read_intrinsics,
     release_lock,
@@ -55,7 +56,10 @@ HELP = "capture a session: move the stage through a plan and store an image per 
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--stage", default=None, help="sim | emulator | grbl:PORT (default sim)")
+    from lps_gui.hardware.registry import specs_help
+
+    p.add_argument("--stage", default=None, help=f"{specs_help()} (default sim; with --camera sim any stage moves "
+                   "the simulated rig too)")
     p.add_argument("--camera", default=None, help="sim | N (device index) | genicam:SERIAL | pylon:SERIAL | gphoto2:[PORT] | "
                    "v4l2:/dev/videoN | DIR (replay a folder) | FILE | URL (default sim)")
     p.add_argument("--cti", metavar="PATH", help="genicam: the GenTL producer (.cti) of the camera vendor (default: GENICAM_GENTL64_PATH)")
@@ -184,7 +188,12 @@ def settle_options(args: argparse.Namespace):
 def _resume_devices_hint(session) -> str:
     """The device switches a resume of a real-device session needs (never read back by itself)."""
     if (session.truth or {}).get("simulated"):
-        return ""
+        import shlex
+
+        from lps_gui.cli.capture.resume_devices import SIMULATED_STAGES
+
+        stage = (session.meta.get("stage") or {}).get("spec")
+        return "" if stage in (None, *SIMULATED_STAGES) else f" --stage {shlex.quote(stage)}"  # the rig rode that stage
     stage, camera = (session.meta.get("stage") or {}).get("spec"), (session.meta.get("camera") or {}).get("spec")
     cti = (session.meta.get("camera") or {}).get("cti")  # a GenICam camera's producer
     return (f" --stage {stage} --camera {camera}" + (f" --cti {cti}" if cti else "")) if stage and camera \
@@ -272,8 +281,8 @@ def _start(args: argparse.Namespace):
             raise InputError(f"--board: the simulated {'gantry' if planar else 'rig'}'s board comes from --preset; "
                              "drop --board")
         if planar:
-            if stage_spec not in ("sim", "emulator"):
-                raise InputError(f"--stage {stage_spec}: the simulated camera rides only --stage sim or emulator")
+            if stage_spec not in ("sim", "emulator"):  # a followed stage moves one axis at a time
+                raise InputError(f"--stage {stage_spec}: the simulated gantry rides only --stage sim or emulator")
             make_spec = PLANAR_PRESETS[planar_preset_name(args.preset)]
             spec = make_spec(seed=args.seed, plan=build_planar_plan(args, make_spec(seed=args.seed).plan))  # centred
             check_board_in_view(spec)
@@ -283,9 +292,15 @@ def _start(args: argparse.Namespace):
         from lps_gui.cli.capture.asme_test import simulated_rig_options, simulated_stage
 
         spec, ringing = simulated_stage(args, spec)  # --dead-band-um, --ringing (a settling test rings by default)
-        session, stage, camera = create_simulated_session(args.out, spec, clock=clock(args), noise_grey=args.noise_grey,
-                                                          intrinsics=intr, **simulated_rig_options(ringing))
-        stage = bind_simulated_stage(args, session, stage, camera, stage_spec, **axes)
+        driver = None if stage_spec in ("sim", "emulator") else open_operator_stage(stage_spec)  # fails before the session
+        try:
+            session, stage, camera = create_simulated_session(args.out, spec, clock=clock(args), noise_grey=args.noise_grey,
+                                                              intrinsics=intr, **simulated_rig_options(ringing))
+            stage = bind_simulated_stage(args, session, stage, camera, stage_spec, driver=driver, **axes)
+        except BaseException:
+            if driver is not None:
+                driver.disconnect()
+            raise
         return session, stage, camera, simulated_engine(session, stage, camera, args.encode)
     if not args.board:
         raise InputError("--board FILE is required with a real camera (board.json is described in docs/capture.md)")
@@ -317,14 +332,16 @@ def _resume(args: argparse.Namespace):
         raise InputError(f"{session.folder}: a single-axis session; resume it without the planar switches")
     truth = session.truth or {}
     if truth.get("simulated") and (args.camera or "sim") == "sim":
+        from lps_gui.cli.capture.resume_devices import rig_stage_named_by_operator
         from lps_gui.sim.session import reopen_simulated_rig, simulated_engine
 
+        stage_spec = rig_stage_named_by_operator(session, args.stage)
         stage, camera = reopen_simulated_rig(session, clock=clock(args))
-        stage = bind_stage(args.stage or "sim", stage, args.time_scale)
+        stage = bind_stage(stage_spec, stage, args.time_scale, args)
         if "spec" not in (session.meta.get("stage") or {}) or "spec" not in (session.meta.get("camera") or {}):
             # a kill between the start's two session.json writes left the devices unrecorded: record them now
             axes = {"axes": ["X", "Y"]} if session.planar else {}
-            session.meta["stage"] = {**stage.describe(), **axes, "spec": args.stage or "sim"}
+            session.meta["stage"] = {**stage.describe(), **axes, "spec": stage_spec}
             session.meta["camera"] = {**camera.properties(), "spec": "sim"}
             session.save_meta()
         return session, stage, camera, simulated_engine(session, stage, camera, args.encode)

@@ -65,10 +65,9 @@ def open_devices(stage_spec: str, camera_spec: str, cti: str | None = None):
     """The operator's stage and camera (the stage closed again when the camera fails to open)."""
     from lps_gui.camera import open_camera
     from lps_gui.errors import InputError
-    from lps_gui.hardware import open_stage
     if camera_spec == "sim":
         raise InputError("--camera sim follows only the simulated rig; use --stage sim or emulator")
-    stage = open_stage(stage_spec)
+    stage = open_operator_stage(stage_spec)
     try:
         camera = open_camera(camera_spec, **({"cti": cti} if cti else {}))
     except BaseException:
@@ -77,11 +76,23 @@ def open_devices(stage_spec: str, camera_spec: str, cti: str | None = None):
     return stage, camera
 
 
-def bind_simulated_stage(args: argparse.Namespace, session, rig_stage, camera, stage_spec: str, **stage_meta):
+def open_operator_stage(stage_spec: str):
+    """The stage ``stage_spec`` names, connected; one the operator moves by hand asks on this terminal."""
+    from lps_gui.hardware import open_stage
+    from lps_gui.hardware.capabilities import OperatorMoved
+
+    stage = open_stage(stage_spec)
+    if isinstance(stage, OperatorMoved):
+        from lps_gui.hardware.manual import terminal_prompt
+
+        stage.attach_prompt(terminal_prompt)
+    return stage
+
+
+def bind_simulated_stage(args: argparse.Namespace, session, rig_stage, camera, stage_spec: str, driver=None, **stage_meta):
     """The simulated rig's stage as the command line asked for it (direct or through the emulator), unlocked
     as asked, and recorded in session.json with the camera and the intrinsics' source."""
-    stage = bind_stage(stage_spec, rig_stage, args.time_scale)
-    release_lock(args, stage)
+    stage = bind_stage(stage_spec, rig_stage, args.time_scale, args, driver)
     session.meta["stage"] = {**stage.describe(), **stage_meta, "spec": stage_spec}
     session.meta["camera"] = {**camera.properties(), "spec": "sim"}
     if args.intrinsics:
@@ -90,18 +101,32 @@ def bind_simulated_stage(args: argparse.Namespace, session, rig_stage, camera, s
     return stage
 
 
-def bind_stage(stage_spec: str, rig_stage, time_scale: float = 1.0):
-    """Connect the simulated rig's stage directly ("sim") or through the GRBL emulator ("emulator")."""
-    from lps_gui.errors import InputError
-
+def bind_stage(stage_spec: str, rig_stage, time_scale: float = 1.0, args: argparse.Namespace | None = None, driver=None):
+    """Connect the simulated rig's stage directly ("sim"), through the GRBL emulator ("emulator"), or behind
+    any other stage, which it follows move by move (:class:`~lps_gui.sim.follow.FollowedStage`); unlocked
+    as ``args`` ask (--home, --unlock). ``driver``: that other stage, already opened."""
     if stage_spec == "sim":
         rig_stage.connect()
-        return rig_stage
-    if stage_spec == "emulator":
+        stage = rig_stage
+    elif stage_spec == "emulator":
         from lps_gui.sim.emulated import emulated_rig_stage
 
-        return emulated_rig_stage(rig_stage, time_scale=time_scale)
-    raise InputError(f"--stage {stage_spec}: the simulated camera rides only --stage sim or emulator")
+        stage = emulated_rig_stage(rig_stage, time_scale=time_scale)
+    else:
+        from lps_gui.sim.follow import FollowedStage
+
+        driver = driver or open_operator_stage(stage_spec)
+        try:
+            if args is not None:
+                release_lock(args, driver)
+            rig_stage.connect()
+        except BaseException:
+            driver.disconnect()
+            raise
+        return FollowedStage(driver, rig_stage)
+    if args is not None:
+        release_lock(args, stage)
+    return stage
 
 
 def close(stage, camera) -> None:

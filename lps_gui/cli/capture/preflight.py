@@ -17,8 +17,9 @@ SIM_STAGES = ("sim", "emulator")
 def check_capture_args(args: argparse.Namespace, stage_spec: str, camera_spec: str) -> None:
     """Raise the one-line :class:`InputError` a later step would raise, before anything is written."""
     if camera_spec == "sim" and stage_spec not in SIM_STAGES:
-        raise InputError(f"--stage {stage_spec}: the simulated camera rides only --stage sim or emulator; "
-                         f"with a real stage give --camera N (and --board)")
+        from lps_gui.hardware.registry import kind_of
+
+        kind_of(stage_spec)  # a spec no stage kind takes is refused before anything is created
     check_encode(args.encode)
 
 

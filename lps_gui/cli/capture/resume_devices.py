@@ -14,6 +14,21 @@ from typing import Any
 from lps_gui.errors import InputError
 
 
+SIMULATED_STAGES = ("sim", "emulator")
+
+
+def rig_stage_named_by_operator(session: Any, stage: str | None) -> str:
+    """The stage a resumed capture on the simulated rig rides: --stage, else sim; a session captured behind
+    another stage (marlin:, command:...) needs it named again (InputError naming the recorded one)."""
+    recorded = (session.meta.get("stage") or {}).get("spec")
+    if stage or recorded in (None, *SIMULATED_STAGES):
+        return stage or "sim"
+    import shlex
+
+    raise InputError(f"{session.folder}: give --stage to resume with (it was captured with --stage {shlex.quote(recorded)}; "
+                     "devices named in a session file are never opened by themselves)")
+
+
 def devices_named_by_operator(session: Any, stage: str | None, camera: str | None) -> tuple[str, str]:
     """(stage spec, camera spec) from the command line; InputError naming the recorded ones when missing."""
     if stage and camera:

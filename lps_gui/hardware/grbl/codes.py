@@ -204,3 +204,12 @@ _HINTS = {
     ("error", 9): " Unlock ($X) or home ($H) first.",
     ("error", 15): " Choose a target inside the travel.",
 }
+
+
+def travel_text(values: dict[int, float]) -> str:
+    """The soft-limit travel of each axis from $20 and $130-$132 (GRBL's machine space: -$13x .. 0 after homing)."""
+    spans = [f"{ax} {values[130 + i]:g} mm" for i, ax in enumerate("XYZ") if 130 + i in values]
+    if not spans:
+        return "travel: unknown"
+    limits = "soft limits ON" if values.get(20) else "soft limits off ($20=0): nothing stops a move past the ends"
+    return f"travel {', '.join(spans)}; {limits}"

@@ -28,7 +28,7 @@ import time
 from typing import Any
 
 from lps_gui.errors import HardwareError
-from lps_gui.hardware.grbl.codes import GrblError, format_setting, setting_info, stored_settings
+from lps_gui.hardware.grbl.codes import GrblError, format_setting, setting_info, stored_settings, travel_text
 from lps_gui.hardware.grbl.link import ControllerReset, GrblLink, Pending
 from lps_gui.hardware.grbl.protocol import (
     MM_PER_INCH,
@@ -42,6 +42,7 @@ from lps_gui.hardware.grbl.protocol import (
     parse_settings,
     parse_work_system,
 )
+from lps_gui.hardware.capabilities import Alarms, Console, FeedHold, Jogging, Settings, WorkCoordinates
 from lps_gui.hardware.stage import WORK_SYSTEMS, Stage, StageEvent, StageSetting, StageStatus
 
 RT_STATUS, RT_HOLD, RT_RESUME, RT_RESET, RT_JOG_CANCEL = b"?", b"!", b"~", b"\x18", b"\x85"
@@ -55,7 +56,7 @@ UNLOCK_MESSAGE = "'$H'|'$X' to unlock"
 __all__ = ["ControllerReset", "GrblStage"]
 
 
-class GrblStage(Stage):
+class GrblStage(Stage, Settings, Console, WorkCoordinates, Jogging, FeedHold, Alarms):
     """A GRBL 1.1 controller on a serial port.
 
     Parameters
@@ -69,6 +70,10 @@ class GrblStage(Stage):
     reset_on_connect : send a soft reset on connect and wait for the banner (a real
         Arduino also resets when the port opens); otherwise just ask for ``$I``.
     """
+
+    settings_title = "Controller settings ($$)"
+    console_hint = "G-code or $ command, e.g. $$  $#  G0 X10  (Up/Down: history)"
+    lock_hint = "home it ($H) or unlock it ($X)"
 
     def __init__(
         self,
@@ -444,6 +449,10 @@ class GrblStage(Stage):
                                     f"(state {st.state}); reset the controller")
             time.sleep(self.poll_interval_s)
 
+    def stop(self) -> None:
+        """A feed hold: the move decelerates and stops (resume continues it, a reset discards it)."""
+        self.feed_hold()
+
     # ------------------------------------------------------------------ Stage: motion
     def move_to(self, position_mm: float, feed_mm_min: float, axis: str | None = None) -> None:
         self._alarm_code = None
@@ -521,6 +530,12 @@ class GrblStage(Stage):
             info = setting_info(n)
             out.append(StageSetting(n, v, info.name, info.unit, info.description))
         return out
+
+    def setting_label(self, setting: StageSetting) -> str:
+        return f"${setting.number}"
+
+    def travel_text(self, settings: list[StageSetting]) -> str:
+        return travel_text({st.number: st.value for st in settings})
 
     def write_setting(self, number: int, value: float) -> None:
         """``$N=value``, sent only with nothing in flight (EEPROM writes stall GRBL's serial)."""

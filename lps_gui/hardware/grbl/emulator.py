@@ -52,6 +52,8 @@ class GrblEmulator:
     in-process rigs of tests and demos unlocked; ``lps emulate-grbl`` is stock.
     """
 
+    firmware_class: type = GrblFirmware  # what answers on the pty (another controller's emulator names its own)
+
     def __init__(self, stage: SimulatedStage | None = None, faults: Faults | None = None, time_scale: float = 1.0,
                  homing_init_lock: bool = False, stepped: bool = False, line_latency_s: float = 0.0,
                  boot_race: bool = False) -> None:
@@ -67,7 +69,7 @@ class GrblEmulator:
         self.bytes_in = 0  # bytes read from the port (a stepped test waits until its writes are in)
         self.path = ""
         self.dropped = False
-        self.firmware = GrblFirmware(self.stage, self.faults, send=self._send, on_drop=self._drop_now,
+        self.firmware = self.firmware_class(self.stage, self.faults, send=self._send, on_drop=self._drop_now,
                                      homing_init_lock=homing_init_lock)
         self._master = self._slave = -1
         self._thread: threading.Thread | None = None

@@ -1,0 +1,53 @@
+"""One registry of stage kinds; every kind opens from its spec and declares its capabilities (no probing)."""
+from __future__ import annotations
+
+import pytest
+
+from lps_gui.errors import InputError
+from lps_gui.hardware import open_stage
+from lps_gui.hardware.capabilities import (
+    Alarms, Console, FeedHold, Jogging, OperatorMoved, Settings, WorkCoordinates, declared,
+)
+from lps_gui.hardware.grbl.driver import GrblStage
+from lps_gui.hardware.registry import KINDS, emulated_kinds, kind_of, source_from_text, specs_help, stage_choices
+from lps_gui.hardware.sim_stage import SimulatedStage
+from lps_gui.hardware.stage import Stage
+
+
+def test_every_spec_finds_its_kind_and_a_wrong_one_lists_them_all():
+    assert kind_of("grbl:/dev/ttyUSB0").name == "grbl" and kind_of("sim").name == "sim"
+    assert kind_of("command:./move.sh {mm}").name == "command" and kind_of("manual").name == "manual"
+    with pytest.raises(InputError, match="not understood; use sim \\| emulator \\| grbl:PORT"):
+        kind_of("grbl:")  # a scheme without its port
+    with pytest.raises(InputError, match="manual"):
+        kind_of("zaber")
+    assert all(k.help.split(": ", 1)[0] in specs_help() for k in KINDS)
+    assert "grbl" in emulated_kinds()
+
+
+def test_a_typed_port_is_a_source_and_every_serial_kind_is_offered_on_every_port():
+    assert source_from_text("/dev/pts/5") == "grbl:/dev/pts/5" and source_from_text("manual") == "manual"
+    assert source_from_text("hello") is None
+    choices = stage_choices(["/dev/ttyUSB0"], [("/dev/serial/by-id/usb-x", "/dev/ttyUSB0")], [("/dev/pts/9", "grbl")])
+    sources = [src for _, src in choices]
+    assert sources[:3] == ["sim", "emulator", "manual"]
+    serial = [k for k in KINDS if k.serial]
+    for k in serial:
+        assert f"{k.scheme}/dev/ttyUSB0" in sources and f"{k.scheme}/dev/serial/by-id/usb-x" in sources
+    assert sources.count("grbl:/dev/pts/9") == 1 and "emulator" in dict((s, l) for l, s in choices)["grbl:/dev/pts/9"]
+
+
+def test_grbl_keeps_every_capability_and_the_simple_stages_declare_only_theirs():
+    assert set(declared(GrblStage.__new__(GrblStage))) == {
+        "settings", "console", "work coordinates", "jogging", "feed hold", "alarms"}
+    sim = SimulatedStage()
+    assert isinstance(sim, (Settings, WorkCoordinates, Jogging, FeedHold, Alarms)) and not isinstance(sim, Console)
+    manual = open_stage("manual")
+    command = open_stage("command:true {mm}")
+    assert declared(manual) == ["operator moved"] and isinstance(manual, OperatorMoved)
+    assert declared(command) == [] and isinstance(command, Stage) and command.connected
+    assert not manual.can_home and not command.can_home
+    from lps_gui.errors import HardwareError
+
+    with pytest.raises(HardwareError, match="cannot home"):
+        command.home()

@@ -11,7 +11,6 @@ from __future__ import annotations
 import argparse
 
 from lps_gui.cli import emulate_grbl
-
 HELP = "serve a stage controller's emulator (grbl, marlin...) on a pseudo-terminal (prints its path) until Ctrl-C"
 
 

@@ -11,7 +11,6 @@ import numpy as np
 import pytest
 
 from lps_gui.cli import main as lps_main
-
 PLAN = ["--preset", "small", "--start", "0", "--stop", "8", "--step", "2", "--settle", "0", "--seed", "3"]
 
 

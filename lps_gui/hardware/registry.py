@@ -81,6 +81,35 @@ def _marlin_emulator():
     return MarlinEmulator
 
 
+def _zaber():
+    from lps_gui.hardware.zaber import ZaberStage
+
+    def open_zaber(argument: str, **options: Any) -> Any:
+        """zaber:PORT[:DEVICE[:AXIS]] (SPEC 16): device and axis numbers after the port, 1 and 1 by default."""
+        parts = argument.split(":")
+        numbers = []
+        while len(parts) > 1 and parts[-1].isdigit() and len(numbers) < 2:
+            numbers.insert(0, int(parts.pop()))
+        device, axis = (numbers + [1, 1])[:2] if len(numbers) < 2 else numbers
+        return ZaberStage(":".join(parts), device=device, axis_number=axis, **options)
+    return open_zaber
+
+
+def _zaber_emulator():
+    from lps_gui.hardware.zaber_emulator import ZaberEmulator
+    return ZaberEmulator
+
+
+def _thorlabs():
+    from lps_gui.hardware.thorlabs import ThorlabsStage
+    return ThorlabsStage
+
+
+def _thorlabs_emulator():
+    from lps_gui.hardware.thorlabs_emulator import ThorlabsEmulator
+    return ThorlabsEmulator
+
+
 def _manual():
     from lps_gui.hardware.manual import ManualStage
     return ManualStage
@@ -96,6 +125,10 @@ KINDS: tuple[StageKind, ...] = (
     StageKind("emulator", "emulator", _emulator, "emulator: GRBL emulator (pty)", connects=True),
     StageKind("grbl:", "grbl", _grbl, "grbl:PORT: GRBL 1.1 (e.g. grbl:/dev/ttyUSB0, grbl:COM3)", serial=True, emulator=_grbl_emulator),
     StageKind("marlin:", "marlin", _marlin, "marlin:PORT: Marlin 2.x G-code (e.g. marlin:/dev/ttyACM0)", serial=True, emulator=_marlin_emulator),
+    StageKind("zaber:", "zaber", _zaber, "zaber:PORT[:DEVICE[:AXIS]]: Zaber ASCII through zaber-motion (device 1, axis 1 by default)",
+              serial=True, emulator=_zaber_emulator),
+    StageKind("thorlabs:", "thorlabs", _thorlabs, "thorlabs:PORT: Thorlabs KDC101 + MTS/Z8 stage (APT)", serial=True,
+              emulator=_thorlabs_emulator),
     StageKind("manual", "manual", _manual, "manual: manual stage (you move it and confirm each stop)"),
     StageKind("command:", "command", _command, "command:'./move.sh {mm}': a program moves the stage, one run per move"),
 )

@@ -18,6 +18,7 @@ import threading
 import time
 
 from lps_gui.errors import HardwareError
+from lps_gui.hardware.capabilities import FeedHold, Jogging, Settings
 from lps_gui.hardware.stage import AXES, Stage, StageEvent, StageSetting, StageStatus
 
 HOST, USB = 0x01, 0x50
@@ -81,7 +82,7 @@ def _kdc101_class():
     return WatchedKDC101
 
 
-class ThorlabsStage(Stage):
+class ThorlabsStage(Stage, Settings, Jogging, FeedHold):
     """One KDC101 channel driving a linear stage (``thorlabs:PORT``)."""
 
     def __init__(self, port: str, counts_per_mm: float = Z8_COUNTS_PER_MM, timeout_s: float = 5.0,

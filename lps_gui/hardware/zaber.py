@@ -24,6 +24,7 @@ import time
 from typing import Iterator
 
 from lps_gui.errors import HardwareError
+from lps_gui.hardware.capabilities import FeedHold, Jogging, Settings
 from lps_gui.hardware.stage import AXES, Stage, StageEvent, StageSetting, StageStatus
 
 VELOCITY_SCALE = 1.6384  # Zaber native speed = microsteps/s * 1.6384 (ASCII protocol manual, unit conversions)
@@ -40,7 +41,7 @@ SETTINGS = {
 }
 
 
-class ZaberStage(Stage):
+class ZaberStage(Stage, Settings, Jogging, FeedHold):
     """One axis of one Zaber device on a serial port (``zaber:PORT``)."""
 
     def __init__(self, port: str, device: int = 1, axis_number: int = 1, full_step_um: float = X_LSM_FULL_STEP_UM,

@@ -51,3 +51,46 @@ def test_grbl_keeps_every_capability_and_the_simple_stages_declare_only_theirs()
 
     with pytest.raises(HardwareError, match="cannot home"):
         command.home()
+
+
+@pytest.mark.parametrize("kind,spec_tail", [("zaber", ":1:1"), ("thorlabs", "")])
+def test_the_vendor_stages_open_from_their_spec_and_declare_their_capabilities(kind, spec_tail):
+    """zaber:PORT[:DEVICE[:AXIS]] and thorlabs:PORT through the registry, against their emulators (SPEC 16)."""
+    emulator_class = emulated_kinds()[kind].emulator()
+    with emulator_class(SimulatedStage()) as emu:
+        stage = open_stage(f"{kind}:{emu.path}{spec_tail}")
+        try:
+            assert isinstance(stage, Settings) and isinstance(stage, Jogging) and isinstance(stage, FeedHold)
+            assert {"settings", "feed hold"} <= set(declared(stage))
+            assert not isinstance(stage, (Alarms, Console, WorkCoordinates, OperatorMoved))
+            stage.home()
+            stage.wait_idle(30.0)
+            stage.move_to(2.0, 600.0)
+            stage.wait_idle(30.0)
+            assert abs(stage.position_mm() - 2.0) < 1e-3
+        finally:
+            stage.disconnect()
+
+
+def test_a_zaber_spec_names_device_and_axis_after_the_port():
+    from lps_gui.hardware.registry import kind_of as kind
+
+    opened = {}
+
+    class Recorder:
+        def __init__(self, port, device=1, axis_number=1, **options):
+            opened.update(port=port, device=device, axis=axis_number)
+
+    import lps_gui.hardware.zaber as zaber_module
+    real = zaber_module.ZaberStage
+    zaber_module.ZaberStage = Recorder
+    try:
+        factory = kind("zaber:/dev/ttyUSB0").driver()
+        factory("/dev/ttyUSB0:2:3")
+        assert opened == {"port": "/dev/ttyUSB0", "device": 2, "axis": 3}
+        factory("/dev/ttyUSB0:4")
+        assert opened == {"port": "/dev/ttyUSB0", "device": 4, "axis": 1}
+        factory("COM3")
+        assert opened == {"port": "COM3", "device": 1, "axis": 1}
+    finally:
+        zaber_module.ZaberStage = real

@@ -153,3 +153,43 @@ def test_locked_controls_are_recorded_and_put_back_when_a_capture_resumes(tmp_pa
         assert len(session.records()) == 4
     finally:
         cam.close()
+
+
+@pytest.mark.parametrize("pixel_format", ["BGRA8Packed", "RGB16Packed"])
+def test_colour_formats_getarray_refuses_are_read_from_the_buffer(pixel_format):
+    cam = open_camera("pylon:0815-0001")
+    try:
+        assert controls.surface_of(cam).set("pixel format", pixel_format)
+        frame = cam.grab()  # pypylon's GetArray: "ValueError: Pixel format currently not supported"
+        assert frame.meta["pixel_format"] == pixel_format and frame.image.dtype == np.uint8
+        assert frame.image.shape == (cam.properties()["height"], cam.properties()["width"])
+        assert frame.image.any()
+    finally:
+        cam.close()
+
+
+class _LostAfterGrab:
+    """An InstantCamera that is unplugged right after a successful GrabOne (every node read then fails)."""
+
+    def __init__(self, cam):
+        self._cam = cam
+
+    def __getattr__(self, name):
+        return getattr(self._cam, name)
+
+    def GrabOne(self, timeout_ms):
+        result = self._cam.GrabOne(timeout_ms)
+        self._cam.Close()
+        return result
+
+
+def test_a_camera_lost_right_after_its_grab_is_one_line_with_the_resume_hint():
+    cam = open_camera("pylon:0815-0001")
+    try:
+        cam._handle = _LostAfterGrab(cam._handle)
+        with pytest.raises(HardwareError, match=r"^camera pylon:0815-0001: lost after the grab \(.*\); check the cable, "
+                                                r"then resume$") as exc:
+            cam.grab()
+        assert "\n" not in str(exc.value) and not cam.is_open  # the next run reopens it
+    finally:
+        cam.close()

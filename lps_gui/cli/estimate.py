@@ -57,7 +57,14 @@ def run(args: argparse.Namespace) -> int:
         "grid_resolution_mm": args.grid_resolution_mm,
         "threshold_px": args.threshold_px,
     }
-    out = resolve_out(args.out, "results.json", args.session, (".json",), "lps estimate") if args.out else None
+    out = resolve_out(args.out, "results.json", args.session, (".json",), "lps estimate", own_session=args.session,
+                      inputs=[p for p in (args.intrinsics,) if p]) if args.out else None
+    if out is not None:  # its CSVs go beside it: each checked like the results file
+        from lps_gui.cli.out_path import check_out_file
+        from lps_gui.io.results_file import result_set_paths
+
+        for path in result_set_paths(out):
+            check_out_file(path, allow=(path.name,), own_session=args.session)
     lock = SessionLock(args.session) if out is None and Path(args.session).is_dir() else None
     if lock is not None:
         lock.__enter__()  # refused at once when a capture or detection holds the session

@@ -43,11 +43,16 @@ def run(args: argparse.Namespace) -> int:
 
     from lps_gui.cli.out_path import check_out_file, resolve_out
 
+    from lps_gui.pipeline.intrinsics import expand_image_paths
+
     board = read_board(args.board)
-    args.out = resolve_out(args.out, "intrinsics.json", None, (".json", ".yaml", ".yml"), "lps intrinsics")
-    for extra in (args.yaml, args.cameramodel, args.report):
+    inputs = [args.board, *args.images, *expand_image_paths([Path(p) for p in args.images if Path(p).exists()])]
+    args.out = resolve_out(args.out, "intrinsics.json", None, (".json", ".yaml", ".yml"), "lps intrinsics", inputs=inputs)
+    written = [args.out]
+    for option, extra in (("--yaml", args.yaml), ("--cameramodel", args.cameramodel), ("--report", args.report)):
         if extra:
-            check_out_file(extra)
+            check_out_file(extra, option=option, inputs=inputs + written)
+            written.append(extra)
     flags = cv2.CALIB_FIX_K3 if args.fix_k3 else 0
     cal = calibrate_images([Path(p) for p in args.images], board, ProgressBar("intrinsics"), workers=args.workers, flags=flags, warp=args.warp)
     write_intrinsics(args.out, cal.intrinsics)

@@ -6,6 +6,12 @@ so the test fails on such a reader without the machine paying for it.
 """
 from __future__ import annotations
 
+import json
+import os
+import stat
+
+import cv2
+import numpy as np
 import pytest
 
 from lps_gui.core.image_header import bytes_reader, check_image_header
@@ -51,3 +57,106 @@ def test_a_tethered_camera_delivering_a_raw_file_pauses_with_one_line():
 
     with pytest.raises(HardwareError, match=r"^camera gphoto2:: DSC_0001.NEF: a camera raw file .*, then resume$"):
         decode(bad_images.nef_like(), "camera gphoto2:: DSC_0001.NEF")
+
+
+# ------------------------------------------------------------------ lost data: one guard for every path written
+def _lps(args, capsys) -> tuple[int, str]:
+    from lps_gui.cli import main
+
+    code = main([str(a) for a in args])
+    err = capsys.readouterr().err.strip().splitlines()
+    return code, err[-1] if err else ""
+
+
+def _snapshot(folder) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def _estimated(folder, capsys):
+    assert _lps(["estimate", folder], capsys)[0] == 0
+    return next(p for p in (folder / "results").iterdir() if p.is_dir())
+
+
+@pytest.mark.parametrize("name", ["session.json", "captures.jsonl", "corners.vnl"])
+def test_simulate_write_rig_never_replaces_a_session_file(point_session, capsys, name):
+    before = _snapshot(point_session)
+    code, err = _lps(["simulate", point_session / name, "--write-rig"], capsys)
+    assert code == 2 and err.endswith(f"{point_session / name}: is a file of the session {point_session}; writing it "
+                                      "would destroy the session's data: choose a name outside the session's own files")
+    assert _snapshot(point_session) == before
+
+
+def test_simulate_write_rig_never_replaces_a_special_file(tmp_path, capsys):
+    fifo = tmp_path / "fifo"  # stands for a device node (as root a rename over /dev/null replaces it): never tried here
+    os.mkfifo(fifo)
+    code, err = _lps(["simulate", fifo, "--write-rig"], capsys)
+    assert code == 2 and f"{fifo}: exists and is not a regular file" in err
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode)
+
+
+def test_simulate_intrinsics_set_into_an_existing_folder_is_refused(point_session, capsys):
+    before = _snapshot(point_session)  # a session: board.json among its files
+    code, err = _lps(["simulate", point_session, "--intrinsics-set"], capsys)
+    assert code == 2 and err.endswith(f"simulate --intrinsics-set {point_session}: exists and is not an empty folder; "
+                                      "give a new folder (nothing of another set or session is replaced)")
+    assert _snapshot(point_session) == before
+
+
+@pytest.mark.parametrize("option", ["--out", "--yaml", "--cameramodel", "--report"])
+def test_intrinsics_outputs_naming_an_input_are_refused_before_calibrating(tmp_path, capsys, option):
+    board = tmp_path / "board.json"
+    board.write_text('{"type": "chessboard", "inner_corners": [9, 6], "square_mm": 20}')
+    view = tmp_path / "view.png"
+    cv2.imwrite(str(view), np.full((24, 32), 128, np.uint8))
+    for target in (board, view):
+        args = ["intrinsics", view, "--board", board, "--workers", "1"]
+        args += [option, target] if option == "--out" else ["--out", tmp_path / "i.json", option, target]
+        code, err = _lps(args, capsys)
+        assert code == 2 and f"{option} {target}: is one of this command's inputs" in err
+    assert board.read_text().startswith('{"type": "chessboard"') and cv2.imread(str(view)).shape[:2] == (24, 32)
+
+
+def test_detect_images_out_never_replaces_another_sessions_corners(point_session, tmp_path, capsys):
+    board = tmp_path / "board.json"
+    board.write_text('{"type": "chessboard", "inner_corners": [9, 6], "square_mm": 20}')
+    view = tmp_path / "view.png"
+    cv2.imwrite(str(view), np.full((24, 32), 128, np.uint8))
+    before = _snapshot(point_session)
+    for out in (point_session, point_session / "corners.vnl"):
+        code, err = _lps(["detect", view, "--board", board, "--out", out, "--workers", "1"], capsys)
+        assert code == 2 and f"is a file of the session {point_session}" in err
+    assert _snapshot(point_session) == before
+
+
+def test_compensate_and_estimate_never_replace_a_history_copy(point_session, tmp_path, capsys):
+    run = _estimated(point_session, capsys)
+    before = _snapshot(point_session)
+    for args in (["compensate", point_session, "--format", "csv", "--out", run / "positions.csv"],
+                 ["estimate", point_session, "--out", run / "results.json"]):
+        code, err = _lps(args, capsys)
+        assert code == 2 and f"is a file of the session {point_session}" in err, err
+    assert _snapshot(point_session) == before
+
+
+def test_estimate_of_one_session_never_replaces_anothers_result_set(point_session, tmp_path, capsys):
+    from lps_gui.core.simulate import small_spec
+    from lps_gui.sim.points import simulate_point_session
+
+    other = tmp_path / "other"
+    simulate_point_session(small_spec(seed=4, views=10, directions="+", runs=1), other)
+    _estimated(point_session, capsys)
+    before = _snapshot(point_session)
+    for out in (point_session, point_session / "results.json"):
+        code, err = _lps(["estimate", other, "--out", out], capsys)
+        assert code == 2 and f"is a file of the session {point_session}" in err, err
+    assert _snapshot(point_session) == before
+    assert _lps(["estimate", point_session, "--out", point_session], capsys)[0] == 0  # its own: allowed as before
+
+
+def test_a_journal_renaming_onto_session_json_is_not_replayed(point_session, tmp_path, capsys):
+    _estimated(point_session, capsys)
+    (point_session / ".file-set-commit.json").write_text(json.dumps({"renames": [["captures.jsonl", "session.json"]]}))
+    session_json = (point_session / "session.json").read_bytes()
+    code, _ = _lps(["compensate", point_session, "--format", "csv", "--out", tmp_path / "c.csv"], capsys)
+    assert (point_session / "session.json").read_bytes() == session_json
+    assert (point_session / "captures.jsonl").is_file() and code == 0

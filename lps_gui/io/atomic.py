@@ -14,9 +14,11 @@ import hashlib
 import os
 import re
 import tempfile
+import stat
 from pathlib import Path
 
 from lps_gui.errors import InputError, StorageError
+from lps_gui.file_limits import MAX_FILE_BYTES
 
 
 def _umask() -> int:
@@ -235,11 +237,23 @@ def sha256_bytes(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
 
 
-def sha256_file(path: Path | str, chunk: int = 1 << 20) -> str:
+def sha256_file(path: Path | str, chunk: int = 1 << 20, max_bytes: int = MAX_FILE_BYTES) -> str:
+    """The sha256 of a regular file, opened without following a final link and without blocking.
+
+    A session's image replaced by a FIFO, or by a link to /dev/urandom or to a FIFO elsewhere, is
+    refused (OSError ELOOP for the link, InputError otherwise) instead of being read for ever.
+    """
     h = hashlib.sha256()
-    with open(path, "rb") as f:
-        while block := f.read(chunk):
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0))
+    with os.fdopen(fd, "rb") as f:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode) or st.st_size > max_bytes:
+            raise InputError(f"{path}: not a regular file of at most {max_bytes / 1e6:.0f} MB; replace it with the "
+                             "file itself")
+        left = max_bytes + 1
+        while left > 0 and (block := f.read(min(chunk, left))):
             h.update(block)
+            left -= len(block)
     return h.hexdigest()
 
 

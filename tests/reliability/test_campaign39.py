@@ -8,7 +8,12 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import stat
+import subprocess
+import sys
+import time
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -18,6 +23,8 @@ from lps_gui.core.image_header import bytes_reader, check_image_header
 from lps_gui.errors import HardwareError, InputError
 from lps_gui.io.image_file import decode_image
 from tests.reliability import bad_images
+
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _check(data: bytes, name: str = "x"):
@@ -160,3 +167,73 @@ def test_a_journal_renaming_onto_session_json_is_not_replayed(point_session, tmp
     code, _ = _lps(["compensate", point_session, "--format", "csv", "--out", tmp_path / "c.csv"], capsys)
     assert (point_session / "session.json").read_bytes() == session_json
     assert (point_session / "captures.jsonl").is_file() and code == 0
+
+
+# ------------------------------------------------------------------ hangs
+POOL_CHILD = """
+import multiprocessing.resource_tracker as rt, os, sys, time
+from lps_gui.camera.processes import worker_pool
+if __name__ == "__main__":
+    with worker_pool(2) as pool:
+        busy = [pool.submit(time.sleep, 600) for _ in range(2)]
+        while len(pool._processes) < 2:
+            time.sleep(0.05)
+        print(*pool._processes, rt._resource_tracker._pid, flush=True)
+        busy[0].result()
+"""
+
+
+def _gone(pid: int) -> bool:
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except FileNotFoundError:
+        return True
+    return "\nState:\tZ" in status  # a zombie has ended; only its reaper is missing
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGHUP, signal.SIGKILL])
+def test_detect_workers_and_the_resource_tracker_end_with_their_parent(tmp_path, signum):
+    script = tmp_path / "pool_child.py"
+    script.write_text(POOL_CHILD)
+    child = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE, text=True, cwd=ROOT)
+    try:
+        pids = [int(p) for p in child.stdout.readline().split()]
+        assert len(pids) == 3 and not any(_gone(p) for p in pids)
+        child.send_signal(signum)
+        child.wait(timeout=60)
+        for _ in range(600):  # a bounded wait for the kernel to deliver the death signal (never a hang)
+            if all(_gone(p) for p in pids):
+                break
+            time.sleep(0.05)
+        assert all(_gone(p) for p in pids), [p for p in pids if not _gone(p)]
+    finally:
+        child.kill()
+        child.wait()
+
+
+def _fifo_or_link(path: Path, kind: str, tmp_path: Path) -> None:
+    path.unlink()
+    if kind == "fifo":
+        os.mkfifo(path)
+    elif kind == "urandom":
+        path.symlink_to("/dev/urandom")
+    else:
+        os.mkfifo(tmp_path / "outside-fifo")
+        path.symlink_to(tmp_path / "outside-fifo")
+
+
+@pytest.mark.parametrize("kind", ["fifo", "urandom", "outside-fifo"])
+def test_detect_returns_when_an_image_became_a_fifo_or_a_link_to_one(imaged_session, tmp_path, capsys, kind):
+    from lps_gui.io.session import Session
+
+    assert _lps(["detect", imaged_session, "--workers", "1"], capsys)[0] == 0
+    first = Session.open(imaged_session).records()[0]
+    _fifo_or_link(imaged_session / first.file, kind, tmp_path)
+    code, err = _lps(["detect", imaged_session, "--workers", "1"], capsys)  # returns: the view fails with its reason
+    assert code == 3 and err.startswith("failed: images/000000.png: ") and "\n" not in err
+
+
+def test_a_journal_that_is_a_fifo_blocks_no_command(point_session, capsys):
+    os.mkfifo(point_session / ".file-set-commit.json")
+    assert _lps(["estimate", point_session], capsys)[0] == 0
+    assert _lps(["report", point_session, "--out", point_session / "r.pdf"], capsys)[0] in (0, 1)

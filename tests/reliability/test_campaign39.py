@@ -237,3 +237,28 @@ def test_a_journal_that_is_a_fifo_blocks_no_command(point_session, capsys):
     os.mkfifo(point_session / ".file-set-commit.json")
     assert _lps(["estimate", point_session], capsys)[0] == 0
     assert _lps(["report", point_session, "--out", point_session / "r.pdf"], capsys)[0] in (0, 1)
+
+
+# ------------------------------------------------------------------ internal errors: parse errors caught at the boundary
+@pytest.mark.parametrize("name", ["session.json", "board.json", "results.json"])
+def test_an_integer_over_4300_digits_is_one_line(point_session, capsys, name):
+    _estimated(point_session, capsys)
+    path = point_session / name
+    path.write_text(path.read_text().replace("{", '{"huge": ' + "9" * 5000 + ", ", 1))
+    view = point_session.parent / "view.png"
+    cv2.imwrite(str(view), np.full((24, 32), 128, np.uint8))
+    command = {"session.json": ["estimate", point_session],
+               "board.json": ["detect", view, "--board", path, "--out", point_session.parent / "c.vnl"],
+               "results.json": ["compensate", point_session, "--format", "csv", "--out", point_session.parent / "c.csv"]}
+    code, err = _lps(command[name], capsys)
+    assert code == 2 and "a number in it is out of range (Exceeds the limit (4300 digits)" in err, err
+
+
+def test_a_duplicate_key_is_refused_not_silently_the_second(tmp_path, capsys):
+    board = tmp_path / "board.json"
+    board.write_text('{"type": "chessboard", "inner_corners": [9, 6], "square_mm": 20, "square_mm": 25}')
+    view = tmp_path / "view.png"
+    cv2.imwrite(str(view), np.full((24, 32), 128, np.uint8))
+    code, err = _lps(["detect", view, "--board", board, "--out", tmp_path / "c.vnl"], capsys)
+    assert code == 2 and err.endswith(f"{board}: key 'square_mm' appears twice in one object (which one counts is a "
+                                      "guess); keep one and fix or regenerate the board file")

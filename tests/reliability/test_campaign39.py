@@ -262,3 +262,38 @@ def test_a_duplicate_key_is_refused_not_silently_the_second(tmp_path, capsys):
     code, err = _lps(["detect", view, "--board", board, "--out", tmp_path / "c.vnl"], capsys)
     assert code == 2 and err.endswith(f"{board}: key 'square_mm' appears twice in one object (which one counts is a "
                                       "guess); keep one and fix or regenerate the board file")
+
+
+# ------------------------------------------------------------------ outside the session
+def test_images_linked_outside_are_not_tidied_or_replayed_there(point_session, tmp_path, capsys):
+    outside = tmp_path / "outside"
+    outside.mkdir()
+    (outside / ".x.999999-y.tmp").write_text("someone's file")
+    (outside / "notes.txt").write_text("notes")
+    (outside / ".file-set-commit.json").write_text(json.dumps({"renames": [["notes.txt", "gone.txt"]]}))
+    for p in (point_session / "images").iterdir():
+        p.unlink()
+    (point_session / "images").rmdir()
+    (point_session / "images").symlink_to(outside)
+    before = _snapshot(outside)
+    _lps(["estimate", point_session], capsys)
+    assert _snapshot(outside) == before
+
+
+def test_results_linked_outside_receive_no_history_run(point_session, tmp_path, capsys):
+    outside = tmp_path / "outside"
+    outside.mkdir()
+    (point_session / "results").symlink_to(outside)
+    code, err = _lps(["estimate", point_session], capsys)
+    assert code == 2 and err.endswith(f"{point_session / 'results'}: is a symbolic link; a session's result history "
+                                      "stays inside the session: remove the link (lps creates the folder)")
+    assert not list(outside.iterdir())
+
+
+def test_a_linked_latest_record_is_not_opened(point_session, tmp_path, capsys):
+    _estimated(point_session, capsys)
+    os.mkfifo(tmp_path / "outside-fifo")
+    latest = point_session / "results" / "latest.json"
+    latest.unlink()
+    latest.symlink_to(tmp_path / "outside-fifo")  # opening it would block: never opened
+    assert _lps(["estimate", point_session], capsys)[0] == 0

@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
-from lps_gui.cli.option_types import positive_finite
+from lps_gui.cli.option_types import float_range, positive_finite
 
 if TYPE_CHECKING:  # the command's help stays instant: no numpy before run()
     from lps_gui.io.results_model import Results
@@ -27,7 +27,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "(and the CSVs) inside; a name ending in .json is the results file (CSVs beside it as "
                    "NAME-positions.csv, NAME-summary.csv); a name without suffix is a new folder")
     p.add_argument("--robust", action="store_true", help="Huber loss on corner residuals (joint)")
-    p.add_argument("--outlier-k", type=positive_finite, default=5.0, help="robust sigmas that flag an outlier view (default 5)")
+    p.add_argument("--outlier-k", type=float_range(1.0, 1e6), default=5.0,
+                   help="robust sigmas that flag an outlier view (default 5; at least 1: below, most good views are flagged)")
     p.add_argument("--no-outliers", action="store_true", help="do not look for outlier views")
     p.add_argument("--self-calibrate", action="store_true", help="intrinsics free with their covariance as prior (joint)")
     p.add_argument("--no-six-dof", action="store_true", help="skip straightness and angular errors")

@@ -165,10 +165,11 @@ def read_corners_vnl(path: Path | str, n_corners: int) -> CornerTable:
         why = "is a symbolic link; session files must be regular files inside the session folder" if path.is_symlink() \
             else f"cannot read corners ({exc.strerror})"
         raise InputError(f"{path}: {why}") from None
+    st = os.fstat(fd)
+    if not stat.S_ISREG(st.st_mode):  # before fdopen, which refuses a folder with its own IsADirectoryError
+        os.close(fd)
+        raise InputError(f"{path}: not a regular file; delete it and run `lps detect` again")
     with os.fdopen(fd, "rb") as stream:
-        st = os.fstat(fd)
-        if not stat.S_ISREG(st.st_mode):
-            raise InputError(f"{path}: not a regular file; delete it and run `lps detect` again")
         if st.st_size > MAX_CORNERS_BYTES:
             raise InputError(f"{path}: {st.st_size / 1e6:.0f} MB, over the {MAX_CORNERS_BYTES / 1e6:.0f} MB limit of a "
                              "corners file; delete it and run `lps detect` again")

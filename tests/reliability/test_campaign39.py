@@ -297,3 +297,63 @@ def test_a_linked_latest_record_is_not_opened(point_session, tmp_path, capsys):
     latest.unlink()
     latest.symlink_to(tmp_path / "outside-fifo")  # opening it would block: never opened
     assert _lps(["estimate", point_session], capsys)[0] == 0
+
+
+@pytest.mark.parametrize("key", ["truth", "asme_test"])
+def test_a_session_json_entry_of_the_wrong_type_is_one_line(point_session, capsys, key):
+    meta = json.loads((point_session / "session.json").read_text())
+    meta[key] = "x"
+    (point_session / "session.json").write_text(json.dumps(meta))
+    code, err = _lps(["estimate", point_session], capsys)
+    assert code == 2 and err.endswith(f"{point_session / 'session.json'}: {key} is str, not an object; fix or "
+                                      "regenerate session.json")
+
+
+def test_a_nul_byte_in_a_path_is_one_line(point_session, capsys):
+    code, err = _lps(["estimate", point_session, "--intrinsics", "intr\x00.json"], capsys)
+    assert code == 2 and err.endswith("argument intrinsics: holds a NUL byte, which no file name or setting can; "
+                                      "check the command line")
+
+
+def test_corners_vnl_a_folder_is_one_line(point_session, capsys):
+    (point_session / "corners.vnl").unlink()
+    (point_session / "corners.vnl").mkdir()
+    code, err = _lps(["estimate", point_session], capsys)
+    assert code == 2 and err.endswith(f"{point_session / 'corners.vnl'}: not a regular file; delete it and run "
+                                      "`lps detect` again")
+
+
+def test_an_outlier_k_that_flags_every_view_is_refused_as_an_option(point_session, capsys):
+    from lps_gui.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(["estimate", str(point_session), "--outlier-k", "1e-300"])
+    assert exc.value.code == 2 and "--outlier-k: must be at least 1" in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------ confident wrong answers
+def _edit_corners(folder, edit):
+    from dataclasses import replace
+
+    from lps_gui.io.corners_vnl import read_corners_vnl, write_corners_vnl
+    from lps_gui.io.session import Session
+
+    table = read_corners_vnl(folder / "corners.vnl", Session.open(folder).board().n_corners)
+    write_corners_vnl(folder / "corners.vnl", replace(table, corners_px=edit(table.corners_px.copy())))
+
+
+def _reverse_view_3(c):
+    c[3] = c[3][::-1]
+    return c
+
+
+@pytest.mark.parametrize("edit,says", [
+    (_reverse_view_3, "view images/000003.png: corners in the reverse order of the other views"),
+    (lambda c: c * 2.0, "view images/000000.png: corners reach (858, 598) px, outside the 640x480 image of the intrinsics"),
+    (lambda c: c[..., ::-1].copy(), "view images/000000.png: corners mirrored (x and y swapped?)"),
+], ids=["reversed", "scaled", "swapped"])
+def test_corners_that_do_not_fit_the_board_or_the_intrinsics_are_refused_not_estimated(point_session, capsys, edit, says):
+    _edit_corners(point_session, edit)
+    code, err = _lps(["estimate", point_session], capsys)
+    assert code == 2 and f"{point_session / 'corners.vnl'}: {says}" in err and "nothing estimated" in err
+    assert not (point_session / "results.json").exists()

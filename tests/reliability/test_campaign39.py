@@ -357,3 +357,37 @@ def test_corners_that_do_not_fit_the_board_or_the_intrinsics_are_refused_not_est
     code, err = _lps(["estimate", point_session], capsys)
     assert code == 2 and f"{point_session / 'corners.vnl'}: {says}" in err and "nothing estimated" in err
     assert not (point_session / "results.json").exists()
+
+
+def test_an_empty_target_entry_is_refused_not_dropped():
+    from lps_gui.capture.plans import parse_targets
+
+    assert parse_targets("0, 1.5,3,") == (0.0, 1.5, 3.0)
+    with pytest.raises(InputError, match=r"^--targets '1,2,,3': give comma-separated positions in mm, e.g. 0,1.5,3 "
+                                         r"\(no empty entry\)$"):
+        parse_targets("1,2,,3")
+
+
+def test_a_covariance_with_a_negative_variance_is_refused(tmp_path):
+    from lps_gui.core.camera_model import CameraIntrinsics
+    from lps_gui.io.intrinsics_file import read_intrinsics, write_intrinsics
+
+    cov = np.diag([1.0, 1.0, 0.5, 0.5, 1e-4, 1e-4, 1e-6, 1e-6, 1e-5])
+    cov[0, 0] = -1.0
+    intr = CameraIntrinsics.from_values((640, 480), 800.0, 800.0, 320.0, 240.0, dist=(0.0,) * 5)
+    path = tmp_path / "i.json"
+    write_intrinsics(path, intr)
+    d = json.loads(path.read_text())
+    d["covariance"] = cov.tolist()
+    path.write_text(json.dumps(d))
+    with pytest.raises(InputError, match="covariance must be finite and symmetric with no negative variance"):
+        read_intrinsics(path)
+
+
+def test_make_targets_refuses_squares_too_small_to_print(tmp_path, capsys):
+    from lps_gui.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(["make-targets", str(tmp_path / "t"), "--square-mm", "1e-9"])
+    assert exc.value.code == 2 and "--square-mm: must be at least 1" in capsys.readouterr().err
+    assert not (tmp_path / "t").exists()

@@ -23,7 +23,8 @@ from __future__ import annotations
 import argparse
 
 from lps_gui.cli.capture_devices import (
-    bind_simulated_stage, bind_stage, clock, close, device_session, open_devices, preflight, read_intrinsics, release_lock,
+    bind_simulated_stage, bind_stage, clock, close, device_session, follow, open_devices, open_followed_stage, preflight,
+    read_intrinsics, release_lock,
 )
 from lps_gui.cli.capture_plan import (
     ISO_LEVELS, ISO_RUNS, build_planar_plan, describe, line_plan, planar_preset_name, wants_planar,
@@ -263,9 +264,17 @@ def _start(args: argparse.Namespace):
         from lps_gui.cli.asme_test import simulated_rig_options, simulated_stage
 
         spec, ringing = simulated_stage(args, spec)  # --dead-band-um, --ringing (a settling test rings by default)
-        session, stage, camera = create_simulated_session(args.out, spec, clock=clock(args), noise_grey=args.noise_grey,
-                                                          intrinsics=intr, **simulated_rig_options(ringing))
-        stage = bind_simulated_stage(args, session, stage, camera, stage_spec, **axes)
+        real = open_followed_stage(stage_spec)  # grbl:PORT, before anything is created
+        try:
+            session, stage, camera = create_simulated_session(args.out, spec, clock=clock(args), noise_grey=args.noise_grey,
+                                                              intrinsics=intr, **simulated_rig_options(ringing))
+            if real is not None:
+                follow(camera, real)
+            stage = bind_simulated_stage(args, session, stage, camera, stage_spec, real=real, **axes)
+        except BaseException:
+            if real is not None:
+                real.disconnect()
+            raise
         return session, stage, camera, simulated_engine(session, stage, camera, args.encode)
     if not args.board:
         raise InputError("--board FILE is required with a real camera (board.json is described in docs/capture.md)")
@@ -300,7 +309,10 @@ def _resume(args: argparse.Namespace):
         from lps_gui.sim.session import reopen_simulated_rig, simulated_engine
 
         stage, camera = reopen_simulated_rig(session, clock=clock(args))
-        stage = bind_stage(args.stage or "sim", stage, args.time_scale)
+        recorded = str((session.meta.get("stage") or {}).get("spec") or "")
+        spec = args.stage or (recorded if recorded.startswith("grbl:") else "sim")
+        real = open_followed_stage(spec, camera)  # the camera rendered where a GRBL stage reported: it goes on so
+        stage = bind_stage(spec, stage, args.time_scale) if real is None else real
         if "spec" not in (session.meta.get("stage") or {}) or "spec" not in (session.meta.get("camera") or {}):
             # a kill between the start's two session.json writes left the devices unrecorded: record them now
             axes = {"axes": ["X", "Y"]} if session.planar else {}

@@ -79,10 +79,13 @@ def open_devices(stage_spec: str, camera_spec: str, cti: str | None = None):
     return stage, camera
 
 
-def bind_simulated_stage(args: argparse.Namespace, session, rig_stage, camera, stage_spec: str, **stage_meta):
+def bind_simulated_stage(args: argparse.Namespace, session, rig_stage, camera, stage_spec: str, real=None,
+                         **stage_meta):
     """The simulated rig's stage as the command line asked for it (direct or through the emulator), unlocked
-    as asked, and recorded in session.json with the camera and the intrinsics' source."""
-    stage = bind_stage(stage_spec, rig_stage, args.time_scale)
+    as asked, and recorded in session.json with the camera and the intrinsics' source.
+
+    ``real``: a stage already opened for ``grbl:PORT`` (:func:`open_followed_stage`); the camera follows it."""
+    stage = bind_stage(stage_spec, rig_stage, args.time_scale) if real is None else real
     release_lock(args, stage)
     session.meta["stage"] = {**stage.describe(), **stage_meta, "spec": stage_spec}
     session.meta["camera"] = {**camera.properties(), "spec": "sim"}
@@ -90,6 +93,27 @@ def bind_simulated_stage(args: argparse.Namespace, session, rig_stage, camera, s
         session.meta["intrinsics_source"] = str(args.intrinsics)
     session.save_meta()
     return stage
+
+
+def open_followed_stage(stage_spec: str, camera=None):
+    """The ``grbl:PORT`` stage the simulated camera follows (its reported position), or None for sim/emulator.
+
+    Opened before the session is created: a port that cannot open leaves nothing behind.
+    """
+    if not stage_spec.startswith("grbl:"):
+        return None
+    from lps_gui.hardware import open_stage
+
+    stage = open_stage(stage_spec)
+    if camera is not None:
+        follow(camera, stage)
+    return stage
+
+
+def follow(camera, stage) -> None:
+    from lps_gui.sim.follow_stage import follow_reported_position
+
+    follow_reported_position(camera, stage)
 
 
 def bind_stage(stage_spec: str, rig_stage, time_scale: float = 1.0):
@@ -103,7 +127,7 @@ def bind_stage(stage_spec: str, rig_stage, time_scale: float = 1.0):
         from lps_gui.sim.emulated import emulated_rig_stage
 
         return emulated_rig_stage(rig_stage, time_scale=time_scale)
-    raise InputError(f"--stage {stage_spec}: the simulated camera rides only --stage sim or emulator")
+    raise InputError(f"--stage {stage_spec}: the simulated camera rides --stage sim, emulator or grbl:PORT")
 
 
 def close(stage, camera) -> None:

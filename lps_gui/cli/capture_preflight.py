@@ -16,9 +16,9 @@ SIM_STAGES = ("sim", "emulator")
 
 def check_capture_args(args: argparse.Namespace, stage_spec: str, camera_spec: str) -> None:
     """Raise the one-line :class:`InputError` a later step would raise, before anything is written."""
-    if camera_spec == "sim" and stage_spec not in SIM_STAGES:
-        raise InputError(f"--stage {stage_spec}: the simulated camera rides only --stage sim or emulator; "
-                         f"with a real stage give --camera N (and --board)")
+    if camera_spec == "sim" and stage_spec not in SIM_STAGES and not stage_spec.startswith("grbl:"):
+        raise InputError(f"--stage {stage_spec}: the simulated camera rides --stage sim, emulator or grbl:PORT (it "
+                         f"renders where that stage reports); with a real camera give --camera N (and --board)")
     check_encode(args.encode)
 
 

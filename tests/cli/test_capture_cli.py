@@ -71,7 +71,8 @@ def test_plan_file_and_switch_override(tmp_path):
         (["capture", "--out", "X", "--resume", "Y"], "either --out SESSION"),
         (["capture", "--out", "{tmp}/s", "--board", "b.json", "--start", "0", "--stop", "2", "--step", "1"], "drop --board"),
         (["capture", "--out", "{tmp}/s", "--camera", "{tmp}", "--board", "{tmp}/b.json"], "no plan"),
-        (["capture", "--out", "{tmp}/s", "--stage", "grbl:/dev/nonexistent-port", "--start", "0", "--stop", "2", "--step", "1"], "simulated camera rides only"),
+        (["capture", "--out", "{tmp}/s", "--stage", "grbl:/dev/nonexistent-port", "--start", "0", "--stop", "2", "--step", "1"], "cannot open port"),
+        (["capture", "--out", "{tmp}/s", "--stage", "nope", "--start", "0", "--stop", "2", "--step", "1"], "simulated camera rides --stage sim, emulator or grbl:PORT"),
         (["capture", "--resume", "{tmp}/missing"], "not found"),
     ],
 )

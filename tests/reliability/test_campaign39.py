@@ -391,3 +391,22 @@ def test_make_targets_refuses_squares_too_small_to_print(tmp_path, capsys):
         main(["make-targets", str(tmp_path / "t"), "--square-mm", "1e-9"])
     assert exc.value.code == 2 and "--square-mm: must be at least 1" in capsys.readouterr().err
     assert not (tmp_path / "t").exists()
+
+
+# ------------------------------------------------------------------ promises kept quietly
+def test_opencv_decoder_warnings_do_not_reach_stderr(capfd):
+    entries = [(257, 3, 1, 16), (256, 3, 1, 16), (258, 3, 1, 8), (259, 3, 1, 1), (262, 3, 1, 1), (273, 4, 1, -1),
+               (277, 3, 1, 1), (278, 3, 1, 16), (279, 4, 1, 256)]  # tags out of order: libtiff warns
+    data = bad_images.tiff(entries, bytes(256))
+    capfd.readouterr()
+    assert decode_image(data, "unsorted.tif").shape == (16, 16)
+    assert capfd.readouterr().err == ""
+
+
+def test_a_corners_file_for_the_general_parser_over_32_mb_is_refused_unparsed(point_session, capsys):
+    path = point_session / "corners.vnl"
+    with open(path, "wb") as f:
+        f.write(b"# filename x y level\r\n")
+        f.truncate((32 << 20) + 1)  # sparse: no disk, no memory until something parses it
+    code, err = _lps(["estimate", point_session], capsys)
+    assert code == 2 and "not in the form `lps detect` writes (over the 34 MB this reader takes)" in err, err

@@ -38,14 +38,7 @@ def _jpeg(head: bytes, read_at: "ReadAt | None" = None) -> tuple[int, int] | Non
     """
     if head[:2] != b"\xff\xd8":
         return None
-
-    def get(offset: int, size: int) -> bytes:
-        if offset + size <= len(head):
-            return head[offset : offset + size]
-        if read_at is None:
-            raise _Unreachable("JPEG")
-        return read_at(offset, size)
-
+    get = _reader(head, read_at, "JPEG")
     i = 2
     for _ in range(1 << 16):  # segments are at least 4 bytes long: a bounded walk
         seg = get(i, 9)
@@ -68,6 +61,19 @@ def _jpeg(head: bytes, read_at: "ReadAt | None" = None) -> tuple[int, int] | Non
             return w, h
         i += 2 + length
     return None
+
+
+def _reader(head: bytes, read_at: "ReadAt | None", fmt: str) -> "ReadAt":
+    """Bytes at an offset: from ``head`` when there, else through ``read_at`` (none: the field is unreachable)."""
+
+    def get(offset: int, size: int) -> bytes:
+        if offset + size <= len(head):
+            return head[offset : offset + size]
+        if read_at is None:
+            raise _Unreachable(fmt)
+        return read_at(offset, size)
+
+    return get
 
 
 def _webp(head: bytes) -> tuple[int, int] | None:
@@ -104,13 +110,7 @@ def _tiff(head: bytes, read_at: ReadAt | None = None) -> tuple[int, int] | None:
     if head[:4] not in (b"II*\x00", b"MM\x00*"):
         return None
     e = "<" if head[:2] == b"II" else ">"
-
-    def get(offset: int, size: int) -> bytes:
-        if offset + size <= len(head):
-            return head[offset : offset + size]
-        if read_at is None:
-            raise _Unreachable("TIFF")
-        return read_at(offset, size)
+    get = _reader(head, read_at, "TIFF")
 
     if head[8:10] == b"CR":
         raise _Refused(RAW_REFUSAL)

@@ -18,7 +18,7 @@ import stat
 from pathlib import Path
 
 from lps_gui.errors import InputError, StorageError
-from lps_gui.file_limits import MAX_FILE_BYTES
+from lps_gui.file_limits import MAX_FILE_BYTES, open_regular
 
 
 def _umask() -> int:
@@ -241,15 +241,13 @@ def sha256_file(path: Path | str, chunk: int = 1 << 20, max_bytes: int = MAX_FIL
     """The sha256 of a regular file, opened without following a final link and without blocking.
 
     A session's image replaced by a FIFO, or by a link to /dev/urandom or to a FIFO elsewhere, is
-    refused (OSError ELOOP for the link, InputError otherwise) instead of being read for ever.
+    refused (InputError) instead of being read for ever.
     """
     h = hashlib.sha256()
-    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_NONBLOCK", 0))
-    with os.fdopen(fd, "rb") as f:
-        st = os.fstat(fd)
-        if not stat.S_ISREG(st.st_mode) or st.st_size > max_bytes:
-            raise InputError(f"{path}: not a regular file of at most {max_bytes / 1e6:.0f} MB; replace it with the "
-                             "file itself")
+    f, st = open_regular(path, "file", follow_symlinks=False)
+    with f:
+        if st.st_size > max_bytes:
+            raise InputError(f"{path}: {st.st_size / 1e6:.0f} MB, over the {max_bytes / 1e6:.0f} MB limit of a file lps hashes")
         left = max_bytes + 1
         while left > 0 and (block := f.read(min(chunk, left))):
             h.update(block)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import os
 import stat
 from pathlib import Path, PurePosixPath
+from typing import BinaryIO
 
 from lps_gui.errors import InputError
 
@@ -22,11 +23,29 @@ def read_file_limited(path: Path | str, max_bytes: int = MAX_FILE_BYTES, what: s
                       follow_symlinks: bool = True) -> bytes:
     """The bytes of a regular file of at most ``max_bytes`` (not a device, FIFO or folder)."""
     path = Path(path)
+    f, st = open_regular(path, what, follow_symlinks)
+    with f:
+        if st.st_size > max_bytes:
+            raise InputError(f"{path}: {st.st_size / 1e6:.0f} MB, over the {max_bytes / 1e6:.0f} MB limit for an {what}")
+        data = f.read(max_bytes + 1)
+        if len(data) > max_bytes:  # grew while being read
+            raise InputError(f"{path}: over the {max_bytes / 1e6:.0f} MB limit for an {what}")
+        return data
+
+
+def open_regular(path: Path | str, what: str = "file", follow_symlinks: bool = True, missing: str | None = None,
+                 irregular: str | None = None) -> tuple[BinaryIO, os.stat_result]:
+    """The open binary stream of a regular file and its stat; InputError (``missing`` / ``irregular``: the
+    message after the path) for a missing file, a final link when not followed, a FIFO, device or folder.
+
+    The open never blocks (O_NONBLOCK: a FIFO without a writer opens at once, then is refused by its stat).
+    """
+    path = Path(path)
     flags = os.O_RDONLY | (0 if follow_symlinks else getattr(os, "O_NOFOLLOW", 0)) | getattr(os, "O_NONBLOCK", 0)
     try:
         fd = os.open(path, flags)
     except FileNotFoundError:
-        raise InputError(f"{path}: {what} not found; check the path") from None
+        raise InputError(f"{path}: {missing or f'{what} not found; check the path'}") from None
     except OSError as exc:
         if not follow_symlinks and path.is_symlink():
             raise InputError(f"{path}: is a symbolic link; session files must be regular files inside the session folder") from None
@@ -34,14 +53,8 @@ def read_file_limited(path: Path | str, max_bytes: int = MAX_FILE_BYTES, what: s
     st = os.fstat(fd)
     if not stat.S_ISREG(st.st_mode):  # before fdopen, which refuses a folder with its own error
         os.close(fd)
-        raise InputError(f"{path}: not a regular file (a {_kind(st.st_mode)}); give the {what} as a regular file")
-    with os.fdopen(fd, "rb") as f:
-        if st.st_size > max_bytes:
-            raise InputError(f"{path}: {st.st_size / 1e6:.0f} MB, over the {max_bytes / 1e6:.0f} MB limit for an {what}")
-        data = f.read(max_bytes + 1)
-        if len(data) > max_bytes:  # grew while being read
-            raise InputError(f"{path}: over the {max_bytes / 1e6:.0f} MB limit for an {what}")
-        return data
+        raise InputError(f"{path}: {irregular or f'not a regular file (a {_kind(st.st_mode)}); give the {what} as a regular file'}")
+    return os.fdopen(fd, "rb"), st
 
 
 def _kind(mode: int) -> str:

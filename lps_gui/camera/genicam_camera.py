@@ -163,7 +163,12 @@ class GenICamCamera(SdkCamera):
                 data = np.array(c.data, copy=True).reshape(shape)
             if not self.streaming:
                 ia.stop()
-        except HardwareError:
+        except HardwareError:  # a format not handled: no acquisition left running to buffer frames during a move
+            if not self.streaming:
+                try:
+                    ia.stop()
+                except Exception:  # a device gone as well: the next grab reopens it
+                    self.close()
             raise
         except Exception as exc:  # fetch timeout, a removed device
             self.close()

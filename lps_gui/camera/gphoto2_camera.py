@@ -24,6 +24,7 @@ from lps_gui.camera.extras import first_line, gphoto2_sdk
 from lps_gui.camera.pixels import colour_to_grey, to_8bit
 from lps_gui.camera.sdk_device import SdkCamera
 from lps_gui.core.clock import Clock
+from lps_gui.core.image_header import HEADER_BYTES, bytes_reader, check_image_header
 from lps_gui.errors import HardwareError, InputError
 
 WIDGETS = {"exposure": "shutterspeed", "gain": "iso", "pixel format": "imageformat", "white balance": "whitebalance"}
@@ -142,7 +143,15 @@ class GPhoto2Camera(SdkCamera):
 
 
 def decode(data: bytes, what: str) -> np.ndarray:
-    """8-bit grey from a JPEG / TIFF / PNG file's bytes; HardwareError for raw or broken files."""
+    """8-bit grey from a JPEG / TIFF / PNG file's bytes; HardwareError for raw or broken files.
+
+    The header is checked first: a TIFF-based raw file (NEF, DNG, CR2, ARW) would otherwise be decoded as its
+    160x120 preview, and a size over the pixel limit would be decoded before anyone looked.
+    """
+    try:
+        check_image_header(data[:HEADER_BYTES], what, read_at=bytes_reader(data))
+    except InputError as exc:
+        raise HardwareError(f"{exc}, then resume") from None
     image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
     if image is None:
         raise HardwareError(f"{what}: not a JPEG or TIFF picture (raw files are not decoded); "

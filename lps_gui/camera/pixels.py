@@ -21,13 +21,15 @@ from lps_gui.errors import HardwareError
 MONO = re.compile(r"^Mono(8|10|12|14|16)$")
 BAYER = re.compile(r"^Bayer(RG|GB|GR|BG)(8|10|12|14|16)$")
 COLOUR = {"RGB8": "rgb", "RGB8Packed": "rgb", "BGR8": "bgr", "BGR8Packed": "bgr", "RGBa8": "rgba", "BGRa8": "bgra",
-          "BGRA8Packed": "bgra"}
+          "BGRA8Packed": "bgra", "RGB16Packed": "rgb", "RGB16": "rgb"}
+COLOUR_BITS = {"RGB16Packed": 16, "RGB16": 16}  # colour formats of more than 8 bits a sample
+CHANNELS = {"rgb": 3, "bgr": 3, "rgba": 4, "bgra": 4}
 
 
 def bits_of(pixel_format: str) -> int:
-    """Bits per sample of a mono or Bayer format (8 for colour formats)."""
+    """Bits per sample of a mono, Bayer or colour format (8 unless the name says more)."""
     m = MONO.match(pixel_format) or BAYER.match(pixel_format)
-    return int(m.groups()[-1]) if m else 8
+    return int(m.groups()[-1]) if m else COLOUR_BITS.get(pixel_format, 8)
 
 
 def is_supported(pixel_format: str) -> bool:
@@ -50,7 +52,12 @@ def colour_to_grey(data: np.ndarray, order: str) -> np.ndarray:
 
 
 class BayerGrey:
-    """A raw mosaic as grey: each 2x2 sub-lattice scaled to the common level; gains fixed at the first frame."""
+    """A raw mosaic as grey: each 2x2 sub-lattice scaled to the common level; gains fixed at the first frame.
+
+    The gains multiply the samples at their full depth (10 to 16 bits) before the result is brought to
+    8 bits: truncating first would throw away the low bits the gain brings up. The gains are ratios of
+    levels, so the same gains serve every bit depth; a session records them and a resumed capture reuses them.
+    """
 
     def __init__(self, gains: np.ndarray | None = None) -> None:
         self.gains = None if gains is None else np.asarray(gains, dtype=np.float32).reshape(2, 2)
@@ -62,7 +69,7 @@ class BayerGrey:
         levels = np.maximum(levels, 1.0)
         return (levels.mean() / levels).astype(np.float32)
 
-    def __call__(self, mosaic: np.ndarray) -> np.ndarray:
+    def __call__(self, mosaic: np.ndarray, bits: int = 8) -> np.ndarray:
         if self.gains is None:
             self.gains = self.estimate_gains(mosaic)
         h, w = mosaic.shape
@@ -70,6 +77,8 @@ class BayerGrey:
         for i in (0, 1):
             for j in (0, 1):
                 out[i::2, j::2] *= self.gains[i, j]
+        if bits > 8:
+            out *= np.float32(2.0 ** (8 - bits))
         return np.clip(np.rint(out), 0, 255).astype(np.uint8).reshape(h, w)
 
 
@@ -78,9 +87,9 @@ def to_grey8(data: np.ndarray, pixel_format: str, bayer: BayerGrey | None = None
     if MONO.match(pixel_format):
         return to_8bit(data.reshape(data.shape[:2]), bits_of(pixel_format))
     if BAYER.match(pixel_format):
-        return (bayer or BayerGrey())(to_8bit(data.reshape(data.shape[:2]), bits_of(pixel_format)))
+        return (bayer or BayerGrey())(data.reshape(data.shape[:2]), bits_of(pixel_format))
     if pixel_format in COLOUR:
-        return colour_to_grey(data, COLOUR[pixel_format])
+        return to_8bit(colour_to_grey(data, COLOUR[pixel_format]), bits_of(pixel_format))
     raise HardwareError(
-        f"camera: pixel format {pixel_format} is not handled; set PixelFormat to Mono8..Mono16, Bayer..8..16 or RGB8"
+        f"camera: pixel format {pixel_format} is not handled; set PixelFormat to Mono8..Mono16, Bayer..8..16, RGB8 or BGR8"
     )

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from lps_gui.camera.base import Frame
 from lps_gui.camera.control_surface import GenApiNodes, NodeMapControls
 from lps_gui.camera.extras import first_line, pylon_sdk
@@ -45,6 +47,21 @@ class PylonNodes(GenApiNodes):
 
     def _enum(self, node: Any) -> tuple[str, ...]:
         return tuple(node.GetSymbolics())
+
+
+BUFFER_LAYOUTS = {"BGRA8Packed": (4, np.uint8), "RGB16Packed": (3, np.uint16)}  # GetArray refuses these
+
+
+def grab_array(result: Any, pixel_format: str) -> np.ndarray:
+    """The grab result's pixels as an array; the formats ``GetArray`` does not support are read from the raw buffer."""
+    if pixel_format not in BUFFER_LAYOUTS:
+        return result.GetArray()
+    channels, dtype = BUFFER_LAYOUTS[pixel_format]
+    h, w = int(result.Height), int(result.Width)
+    rows = np.frombuffer(result.GetBuffer(), dtype=dtype)
+    if rows.size < h * w * channels:
+        raise HardwareError(f"camera: a {pixel_format} buffer of {rows.nbytes} bytes is short for {w}x{h}; resume to retry")
+    return rows[: h * (rows.size // h)].reshape(h, -1)[:, : w * channels].reshape(h, w, channels)
 
 
 def list_pylon_devices() -> list[tuple[str, str]]:
@@ -110,13 +127,21 @@ class PylonCamera(SdkCamera):
         except Exception as exc:  # timeout or a removed device
             self.close()
             raise HardwareError(f"camera {self.source}: no frame ({first_line(exc)}); check the cable, then resume") from None
-        try:
-            if not result.GrabSucceeded():
-                raise HardwareError(f"camera {self.source}: grab failed ({result.GetErrorDescription()}); resume to retry")
-            data = result.GetArray()
-        finally:
-            result.Release()
-        return self._frame(data, str(cam.PixelFormat.GetValue()))
+        try:  # the camera can vanish between GrabOne and these node reads: same one line as a lost grab
+            try:
+                if not result.GrabSucceeded():
+                    raise HardwareError(f"camera {self.source}: grab failed ({result.GetErrorDescription()}); resume to retry")
+                fmt = str(cam.PixelFormat.GetValue())
+                data = grab_array(result, fmt)
+            finally:
+                result.Release()
+            return self._frame(data, fmt)
+        except HardwareError:
+            raise
+        except Exception as exc:  # genicam.LogicalErrorException, RuntimeException: the device is gone
+            self.close()
+            raise HardwareError(f"camera {self.source}: lost after the grab ({first_line(exc)}); "
+                                "check the cable, then resume") from None
 
     def properties(self) -> dict[str, Any]:
         out = super().properties()

@@ -80,10 +80,19 @@ class SdkCamera(Camera):
             meta["controls"] = self._controls.frame_values()
         return Frame(image=image, time=self.clock.now(), meta={"frame": self._frame_no, **meta})
 
+    @property
+    def bayer_gains(self) -> list[list[float]] | None:
+        """The raw mosaic's sub-lattice gains (2x2) once fixed by a first Bayer frame; None before."""
+        return None if self._bayer.gains is None else self._bayer.gains.astype(float).tolist()  # exact: a resume reuses them
+
+    def set_bayer_gains(self, gains: Any) -> None:
+        """Fix the gains (a resumed capture: those of its first frames, not ones estimated from another frame)."""
+        self._bayer = BayerGrey(np.asarray(gains, dtype=np.float64))
+
     def properties(self) -> dict[str, Any]:
         out: dict[str, Any] = {"driver": self.driver, "source": self.source, "channels": 1}
         if self._controls is not None:
             out["controls"] = self._controls.values()
         if self._bayer.gains is not None:
-            out["bayer_gains"] = self._bayer.gains.round(4).tolist()
+            out["bayer_gains"] = self.bayer_gains
         return out

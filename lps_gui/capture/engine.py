@@ -24,13 +24,19 @@ from __future__ import annotations
 
 import threading
 import time
-from typing import Callable, Protocol
+from typing import Any, Callable, Protocol
 
 import numpy as np
 
 from lps_gui.camera.base import Camera
 from lps_gui.capture import events as ev
-from lps_gui.capture.camera_lock import check_frame, lock_camera
+from lps_gui.capture.camera_lock import (
+    check_frame,
+    check_frame_size,
+    expected_frame_size,
+    lock_camera,
+    record_bayer_gains,
+)
 from lps_gui.capture.events import CaptureEvent, CaptureListener, CaptureProgress, CaptureSummary
 from lps_gui.capture.moves import approach_point_mm, check_plan_in_travel, format_target, go_to_planar
 from lps_gui.capture.settle import SettleOptions, Settler
@@ -175,6 +181,7 @@ class CaptureEngine:
         self._active = False
         self.configure_settle(settle)
         self._locked: dict[str, Any] = {}
+        self._frame_size: tuple[int, int] | None = None  # the intrinsics' image size every frame must have
 
     def configure_settle(self, settle: SettleOptions | None) -> None:
         """Settle detection and averaging for the next :meth:`run` (None or inactive options: neither)."""
@@ -258,6 +265,7 @@ class CaptureEngine:
                     self.camera.open()
                 check_writable(self.session.folder / IMAGES_DIR, len(remaining) * bytes_per_frame(self.camera))
                 self._locked = lock_camera(self.camera, self.session)
+                self._frame_size = expected_frame_size(self.session)
                 if self.settle is not None and self.session.meta.get("acquisition") != self.settle.to_dict():
                     self.session.meta["acquisition"] = self.settle.to_dict()
                     self.session.save_meta()
@@ -370,6 +378,8 @@ class CaptureEngine:
             if not got.settled:
                 self._emit(CaptureEvent("warning", f"frame {stop.index}: the picture did not settle within "
                                         f"{self.settle.timeout_s:g} s (last shift {got.shift_px} px); taken anyway", stop.index))
+        check_frame_size(self._frame_size, frame, stop.index)
+        record_bayer_gains(self.camera, self.session)
         data = encode_image(frame.image, self.encode)
         rel, sha = self.session.write_image(image_name(stop.index, self.encode), data)
         if self.simulator is not None:

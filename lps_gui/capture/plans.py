@@ -51,10 +51,13 @@ def plan_with(base: Plan | None, **fields: Any) -> Plan:
 
 def parse_targets(text: str) -> tuple[float, ...]:
     """``"0,1.5,3"`` -> (0.0, 1.5, 3.0) for ``--targets``."""
+    parts = text.replace(";", ",").strip().strip(",").split(",")
     try:
-        return tuple(float(t) for t in text.replace(";", ",").split(",") if t.strip())
+        if not all(p.strip() for p in parts):  # "1,2,,3": a position lost in typing, not one to drop quietly
+            raise ValueError
+        return tuple(float(t) for t in parts)
     except ValueError:
-        raise InputError(f"--targets {text!r}: give comma-separated positions in mm, e.g. 0,1.5,3") from None
+        raise InputError(f"--targets {text!r}: give comma-separated positions in mm, e.g. 0,1.5,3 (no empty entry)") from None
 
 
 def describe_plan(plan: Plan) -> str:

@@ -10,10 +10,24 @@ from __future__ import annotations
 import argparse
 import errno
 import logging
+import os
 import sys
 from typing import NoReturn
 
-from lps_gui.cli import compare, compensate, demo, detect, emulate, emulate_grbl, estimate, export, intrinsics, make_targets, report, simulate
+from lps_gui.cli import (
+    compare,
+    compensate,
+    demo,
+    detect,
+    emulate,
+    emulate_grbl,
+    estimate,
+    export,
+    intrinsics,
+    make_targets,
+    report,
+    simulate,
+)
 from lps_gui.cli.capture import command as capture
 from lps_gui.cli.plan_rig import command as plan_rig
 
@@ -105,6 +119,7 @@ def _main(argv: list[str] | None) -> int:
         handlers=[handler] + ([logging.StreamHandler()] if args.verbose else []),
     )
     try:
+        check_no_nul(args)
         return int(args._module.run(args) or 0)
     except LpsError as exc:
         logging.getLogger("lps").info("user error", exc_info=True)
@@ -123,6 +138,17 @@ def _main(argv: list[str] | None) -> int:
         return 2
     except Exception as exc:  # a bug: one line here, the traceback in the log
         return _bug(args.command, exc, log_where)
+
+
+def check_no_nul(args: argparse.Namespace) -> None:
+    """InputError naming the option whose value holds a NUL byte: no file name can (os calls raise ValueError)."""
+    from lps_gui.errors import InputError
+
+    for name, value in vars(args).items():
+        values = value if isinstance(value, (list, tuple)) else [value]
+        if any(isinstance(v, (str, os.PathLike)) and "\x00" in os.fspath(v) for v in values):
+            raise InputError(f"argument {name.replace('_', '-')}: holds a NUL byte, which no file name or setting can; "
+                             "check the command line")
 
 
 def _bug(command: str, exc: BaseException, log_where: str) -> int:

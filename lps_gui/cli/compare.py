@@ -29,7 +29,8 @@ def run(args: argparse.Namespace) -> int:
     if args.out is not None:
         from lps_gui.cli.out_path import resolve_out
 
-        args.out = resolve_out(args.out, "as-found-as-left.pdf", args.after, (".pdf",), "lps compare")
+        args.out = resolve_out(args.out, "as-found-as-left.pdf", args.after, (".pdf",), "lps compare", own_session=args.after,
+                               inputs=(args.before, args.after))
     path = write_comparison(args.before, args.after, args.out)
     for name, b, a, factor in comparison_rows(before, after):
         print(f"{name}: {b} -> {a} \u00b5m, improvement {factor}")

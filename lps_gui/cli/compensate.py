@@ -32,7 +32,7 @@ def run(args: argparse.Namespace) -> int:
 
     check_out_file(args.out)
     if args.error_motions:
-        check_out_file(args.error_motions)
+        check_out_file(args.error_motions, option="--error-motions", inputs=(args.out,))
     table, lines = compensate_session(args.session, args.format, args.out, args.axis, args.error_motions)
     worst = max(float(abs(table.offset_um(1)).max()), float(abs(table.offset_um(-1)).max()))
     kind = "bidirectional" if table.bidirectional else "one direction measured, its column repeated"

@@ -61,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
         if not args.board:
             raise InputError(f"detect: {len(paths)} image(s) need --board board.json (a session folder has its own)")
         board = read_board(args.board)
-        out = resolve_out(args.out, "corners.vnl", None, (".vnl",), "lps detect")
+        out = resolve_out(args.out, "corners.vnl", None, (".vnl",), "lps detect", inputs=[args.board, *paths])
         table = detect_images(paths, board, bar, workers=args.workers, track=not args.no_track)
         if len(table.failed) == len(table.names):
             for name, reason in table.failed.items():

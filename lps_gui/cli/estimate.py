@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
-from lps_gui.cli.option_types import positive_finite
+from lps_gui.cli.option_types import float_range, positive_finite
 
 if TYPE_CHECKING:  # the command's help stays instant: no numpy before run()
     from lps_gui.io.results.model import Results
@@ -29,7 +29,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "(and the CSVs) inside; a name ending in .json is the results file (CSVs beside it as "
                    "NAME-positions.csv, NAME-summary.csv); a name without suffix is a new folder")
     p.add_argument("--robust", action="store_true", help="Huber loss on corner residuals (joint)")
-    p.add_argument("--outlier-k", type=positive_finite, default=5.0, help="robust sigmas that flag an outlier view (default 5)")
+    p.add_argument("--outlier-k", type=float_range(1.0, 1e6), default=5.0,
+                   help="robust sigmas that flag an outlier view (default 5; at least 1: below, most good views are flagged)")
     p.add_argument("--no-outliers", action="store_true", help="do not look for outlier views")
     p.add_argument("--self-calibrate", action="store_true", help="intrinsics free with their covariance as prior (joint)")
     p.add_argument("--no-six-dof", action="store_true", help="skip straightness and angular errors")
@@ -59,7 +60,14 @@ def run(args: argparse.Namespace) -> int:
         "grid_resolution_mm": args.grid_resolution_mm,
         "threshold_px": args.threshold_px,
     }
-    out = resolve_out(args.out, "results.json", args.session, (".json",), "lps estimate") if args.out else None
+    out = resolve_out(args.out, "results.json", args.session, (".json",), "lps estimate", own_session=args.session,
+                      inputs=[p for p in (args.intrinsics,) if p]) if args.out else None
+    if out is not None:  # its CSVs go beside it: each checked like the results file
+        from lps_gui.cli.out_path import check_out_file
+        from lps_gui.io.results.document import result_set_paths
+
+        for path in result_set_paths(out):
+            check_out_file(path, allow=(path.name,), own_session=args.session)
     lock = SessionLock(args.session) if out is None and Path(args.session).is_dir() else None
     if lock is not None:
         lock.__enter__()  # refused at once when a capture or detection holds the session

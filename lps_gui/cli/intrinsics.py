@@ -40,13 +40,16 @@ def run(args: argparse.Namespace) -> int:
     from lps_gui.cli.progress_bar import ProgressBar
     from lps_gui.io.board_file import read_board
     from lps_gui.io.intrinsics_file import write_intrinsics
-    from lps_gui.pipeline.intrinsics import calibrate_images, cross_validate_calibration
+    from lps_gui.pipeline.intrinsics import calibrate_images, cross_validate_calibration, expand_image_paths
 
     board = read_board(args.board)
-    args.out = resolve_out(args.out, "intrinsics.json", None, (".json", ".yaml", ".yml"), "lps intrinsics")
-    for extra in (args.yaml, args.cameramodel, args.report):
+    inputs = [args.board, *args.images, *expand_image_paths([Path(p) for p in args.images if Path(p).exists()])]
+    args.out = resolve_out(args.out, "intrinsics.json", None, (".json", ".yaml", ".yml"), "lps intrinsics", inputs=inputs)
+    written = [args.out]
+    for option, extra in (("--yaml", args.yaml), ("--cameramodel", args.cameramodel), ("--report", args.report)):
         if extra:
-            check_out_file(extra)
+            check_out_file(extra, option=option, inputs=inputs + written)
+            written.append(extra)
     flags = cv2.CALIB_FIX_K3 if args.fix_k3 else 0
     cal = calibrate_images([Path(p) for p in args.images], board, ProgressBar("intrinsics"), workers=args.workers, flags=flags, warp=args.warp)
     write_intrinsics(args.out, cal.intrinsics)

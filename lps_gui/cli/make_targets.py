@@ -26,12 +26,16 @@ def _size(text: str) -> tuple[int, int]:
     return w, h
 
 
+MIN_PRINTED_MM = 1.0  # 1e-9 mm squares made a PDF of nothing
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("out", help="folder for targets.pdf and targets.json (created if missing)")
     p.add_argument("--count", type=int_range(1, 100), default=6, help="number of targets (default 6)")
     p.add_argument("--inner-corners", type=_size, default=(10, 7), help="inner corners COLSxROWS (default 10x7)")
-    p.add_argument("--square-mm", type=float_range(0.0, 1e4, low_open=True), default=30.0, help="square size, mm (default 30)")
-    p.add_argument("--marker-mm", type=float_range(0.0, 1e4, low_open=True), help="marker size, mm (default 70 %% of the square)")
+    p.add_argument("--square-mm", type=float_range(MIN_PRINTED_MM, 1e4), default=30.0,
+                   help="square size, mm (default 30; at least 1: a printer's dots and the detector need the size)")
+    p.add_argument("--marker-mm", type=float_range(0.7 * MIN_PRINTED_MM, 1e4), help="marker size, mm (default 70 %% of the square)")
     p.add_argument("--dictionary", default="DICT_5X5_1000", help="ArUco dictionary (default DICT_5X5_1000)")
     p.add_argument("--first-marker", type=nonnegative_int, default=0,
                    help="first marker id of the first target (another set in the same session starts after the last)")

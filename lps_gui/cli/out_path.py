@@ -8,24 +8,29 @@ Commands that write a set of files (demo) take folders only.
 """
 from __future__ import annotations
 
+import os
 from pathlib import Path
+from typing import Iterable
 
 from lps_gui.errors import InputError
 
 
 def resolve_out(out: str | Path | None, usual_name: str, default_folder: Path | str | None = None,
-                suffixes: tuple[str, ...] = (), command: str = "lps") -> Path:
+                suffixes: tuple[str, ...] = (), command: str = "lps", *, own_session: Path | str | None = None,
+                inputs: Iterable[Path | str] = ()) -> Path:
     """The file path a command writes for ``--out`` (``default_folder / usual_name`` without one).
 
-    Folders named without a suffix are created; a named file's folder must exist.
+    Folders named without a suffix are created; a named file's folder must exist. The path passes
+    :func:`check_out_file` (``own_session``: the session the command works on; ``inputs``: what it reads).
     """
+    guard = {"own_session": own_session, "inputs": inputs}
     if out is None or str(out) == "":
         folder = Path(default_folder) if default_folder is not None else Path.cwd()
         return folder / usual_name
     path = Path(out)
     if path.is_dir():
-        return check_out_file(path / usual_name, allow=(usual_name,))
-    check_out_file(path, allow=(usual_name,))
+        return check_out_file(path / usual_name, allow=(usual_name,), **guard)
+    check_out_file(path, allow=(usual_name,), **guard)
     suffix = path.suffix.lower()
     if suffix and suffix in suffixes:
         if not path.parent.is_dir():
@@ -56,28 +61,46 @@ SESSION_RESULTS = ("results.json", "positions.csv", "summary.csv")
 SESSION_FOLDERS = ("images", "results")
 
 
-def check_out_file(path: Path | str, allow: tuple[str, ...] = ()) -> Path:
-    """``path`` when it may be written as a file: a new name or an existing regular file that is no session's own.
+def check_out_file(path: Path | str, allow: tuple[str, ...] = (), *, option: str = "--out",
+                   own_session: Path | str | None = None, inputs: Iterable[Path | str] = ()) -> Path:
+    """``path`` when it may be written as a file: a new name or an existing regular file that is nobody's data.
 
-    Refused: a symbolic link, anything that is not a regular file (a device node: a rename over /dev/full as root
-    replaces the device; a FIFO blocks), and a session's inputs or results (``allow`` names the file the command
-    itself writes there, e.g. `lps estimate`'s results.json).
+    The one guard of every file a command writes (``option`` names the option in the message). Refused:
+    a symbolic link, anything that is not a regular file (a device node: a rename over /dev/null as root
+    replaces the device; a FIFO blocks); any of the command's ``inputs`` (``--yaml board.json``); and in
+    any session folder above it, however deep: its inputs, its images and its result history
+    (``results/<run>/``), and its result set unless the session is ``own_session`` and the name is in
+    ``allow`` (`lps estimate S` may replace S's results.json, `lps estimate B --out S` may not).
     """
     path = Path(path)
     if path.is_symlink() or (path.exists() and not path.is_file()):
-        raise InputError(f"--out {path}: exists and is not a regular file; give a new file name or a regular file")
+        raise InputError(f"{option} {path}: exists and is not a regular file; give a new file name or a regular file")
     try:
         where = path.parent.resolve() / path.name
+        own = Path(own_session).resolve() if own_session is not None else None
     except (OSError, RuntimeError):
         return path  # the writer names the problem with the folder
-    for folder in (where.parent, where.parent.parent):
+    for given in inputs:
+        try:
+            same = Path(given).resolve() == where or (path.exists() and Path(given).exists()
+                                                        and os.path.samefile(given, path))
+        except (OSError, RuntimeError, ValueError):
+            same = False
+        if same:
+            raise InputError(f"{option} {path}: is one of this command's inputs; writing it would destroy it: "
+                             "choose another name")
+    for folder in where.parents:
         if not (folder / "session.json").is_file():
             continue
         rel = where.relative_to(folder).parts
-        own = rel[0] in SESSION_FOLDERS if len(rel) > 1 else rel[0] in SESSION_INPUTS + SESSION_RESULTS
-        if own and rel[-1] not in allow:
-            raise InputError(f"--out {path}: is a file of the session {folder}; writing it would destroy the session's "
-                             "data: choose a name outside the session's own files")
+        if len(rel) > 1:
+            protected = rel[0] in SESSION_FOLDERS
+        else:
+            protected = rel[0] in SESSION_INPUTS or (rel[0] in SESSION_RESULTS + allow
+                                                     and not (folder == own and rel[0] in allow))
+        if protected:
+            raise InputError(f"{option} {path}: is a file of the session {folder}; writing it would destroy the "
+                             "session's data: choose a name outside the session's own files")
     return path
 
 

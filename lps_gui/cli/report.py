@@ -38,7 +38,7 @@ def run(args: argparse.Namespace) -> int:
 
         # session.json as every command reads it: a regular file inside, no link, no FIFO (the report reads it later)
         check_regular_file(folder / "session.json", "session file", follow_symlinks=False)
-    out = resolve_out(args.out, "report.pdf", folder, (".pdf",), "lps report")
+    out = resolve_out(args.out, "report.pdf", folder, (".pdf",), "lps report", own_session=folder)
     from lps_gui.io.atomic import remove_orphan_temps
 
     remove_orphan_temps(out.parent)  # a report killed mid-write left its temp file (only dead writers' are removed)

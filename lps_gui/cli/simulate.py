@@ -123,6 +123,16 @@ def _check_noise(spec, source: str) -> None:
             raise InputError(f"{source}: {name} is {value}; give 0 or more")
 
 
+def check_new_folder(out, option: str) -> None:
+    """A set of views goes into a new or empty folder: its names (view_000.png, poses_truth.json, board.json)
+    would replace another set's or a session's files."""
+    from lps_gui.errors import InputError
+
+    if out.is_symlink() or (out.exists() and (not out.is_dir() or any(out.iterdir()))):
+        raise InputError(f"{option} {out}: exists and is not an empty folder; give a new folder (nothing of "
+                         "another set or session is replaced)")
+
+
 def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
@@ -139,14 +149,16 @@ def run(args: argparse.Namespace) -> int:
         if spec.layout is not None:
             raise InputError(f"simulate --write-rig: preset {spec.name} is a row of targets, which a rig description "
                              "does not hold yet; use --preset with --stops, --noise-px and --seed")
+        from lps_gui.cli.out_path import check_out_file
         from lps_gui.io.jsonfile import write_json
 
-        write_json(out, spec_to_dict(spec))
+        write_json(check_out_file(out, option="simulate --write-rig"), spec_to_dict(spec))
         print(f"wrote the rig description of preset {spec.name} to {out}; edit it and pass --rig {out}")
         return 0
     if args.intrinsics_set:
         from lps_gui.sim.images import simulate_intrinsics_set
 
+        check_new_folder(out, "simulate --intrinsics-set")
         paths = simulate_intrinsics_set(out, spec.rig.board, spec.rig.intrinsics, n_views=args.views, seed=args.seed,
                                         progress=ProgressBar("render"))
         print(f"wrote {len(paths)} calibration views to {out}")

@@ -17,6 +17,7 @@ import tempfile
 from pathlib import Path
 
 from lps_gui.errors import InputError, StorageError
+from lps_gui.file_limits import MAX_FILE_BYTES, open_regular
 
 
 def _umask() -> int:
@@ -235,11 +236,21 @@ def sha256_bytes(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
 
 
-def sha256_file(path: Path | str, chunk: int = 1 << 20) -> str:
+def sha256_file(path: Path | str, chunk: int = 1 << 20, max_bytes: int = MAX_FILE_BYTES) -> str:
+    """The sha256 of a regular file, opened without following a final link and without blocking.
+
+    A session's image replaced by a FIFO, or by a link to /dev/urandom or to a FIFO elsewhere, is
+    refused (InputError) instead of being read for ever.
+    """
     h = hashlib.sha256()
-    with open(path, "rb") as f:
-        while block := f.read(chunk):
+    f, st = open_regular(path, "file", follow_symlinks=False)
+    with f:
+        if st.st_size > max_bytes:
+            raise InputError(f"{path}: {st.st_size / 1e6:.0f} MB, over the {max_bytes / 1e6:.0f} MB limit of a file lps hashes")
+        left = max_bytes + 1
+        while left > 0 and (block := f.read(min(chunk, left))):
             h.update(block)
+            left -= len(block)
     return h.hexdigest()
 
 

@@ -12,13 +12,14 @@ lps command has looked at the folder. Names may lie one folder down
 """
 from __future__ import annotations
 
-import errno
 import json
 import os
 from pathlib import Path, PurePosixPath
 from typing import Mapping
 
-from lps_gui.io.atomic import _unlink, fsync_dir, storage_error, write_bytes_atomic, write_temp
+from lps_gui.errors import InputError
+from lps_gui.file_limits import read_file_limited
+from lps_gui.io.atomic import TEMP_SUFFIX, _unlink, fsync_dir, storage_error, write_bytes_atomic, write_temp
 
 JOURNAL = ".file-set-commit.json"
 
@@ -27,6 +28,22 @@ def _check_name(name: str) -> None:
     p = PurePosixPath(name)
     if not name or p.is_absolute() or any(part in ("", ".", "..") for part in p.parts) or len(p.parts) > 2:
         raise ValueError(f"write_file_set takes file names (at most one folder down), not {name!r}")
+
+
+PROTECTED = ("session.json", "captures.jsonl", "corners.vnl", "truth.jsonl", ".lock", "board.json", "intrinsics.json")
+
+
+def _check_temp_of(tmp: str, name: str) -> None:
+    """ValueError unless ``tmp`` is a temp file :func:`write_temp` made for ``name`` and ``name`` is no session input.
+
+    A journal only ever renames ``.NAME.PID-xxxx.tmp`` onto NAME in the same folder; one naming
+    ``captures.jsonl -> session.json`` would destroy the session on a read-only command's recovery.
+    """
+    t, n = PurePosixPath(tmp), PurePosixPath(name)
+    if t.parent != n.parent or ".." in t.parts or n.name in PROTECTED or n.parts[0] == "images":
+        raise ValueError(tmp)
+    if not (t.name.startswith(f".{n.name}.") and t.name.endswith(TEMP_SUFFIX)):
+        raise ValueError(tmp)
 
 
 def write_file_set(folder: Path | str, files: Mapping[str, bytes], last: str | None = None) -> dict[str, Path]:
@@ -83,19 +100,20 @@ def recover_file_set(folder: Path | str) -> bool:
     """
     folder = Path(folder)
     path = folder / JOURNAL
+    if not os.path.lexists(path):
+        return False
+    try:  # a FIFO or a link (to /dev/zero, /etc/passwd) is never opened: not a journal lps wrote
+        data = read_file_limited(path, 1 << 20, "journal", follow_symlinks=False)
+    except InputError:
+        return False
     try:
-        with open(path, "rb") as f:
-            record = json.loads(f.read(1 << 20))
+        record = json.loads(data)
         renames = [[str(t), str(n)] for t, n in record["renames"]]
         for tmp, name in renames:
             _check_name(name)
-            if "/" in tmp and PurePosixPath(tmp).parent != PurePosixPath(name).parent or ".." in tmp:
-                raise ValueError(tmp)
-    except FileNotFoundError:
-        return False
-    except (OSError, ValueError, KeyError, TypeError) as exc:  # a journal of another program, or torn: drop it
-        if not isinstance(exc, OSError) or exc.errno != errno.EACCES:
-            _unlink(path)
+            _check_temp_of(tmp, name)
+    except (ValueError, KeyError, TypeError, RecursionError):  # a journal of another program, or torn: drop it
+        _unlink(path)
         return False
     _finish(folder, renames)
     return True

@@ -45,7 +45,13 @@ def intrinsics_from_dict(d: dict[str, Any], source: str = "intrinsics") -> Camer
         order = tuple(d.get("covariance_order", INTRINSIC_NAMES))
         if order != INTRINSIC_NAMES:
             raise InputError(f"{source}: covariance_order must be {list(INTRINSIC_NAMES)}")
-        cov = np.asarray(d["covariance"], dtype=float).reshape(9, 9)
+        try:
+            cov = np.asarray(d["covariance"], dtype=float).reshape(9, 9)
+        except (TypeError, ValueError):
+            raise InputError(f"{source}: covariance must be a 9x9 matrix of numbers; recalibrate") from None
+        if not np.isfinite(cov).all() or (np.diag(cov) < 0).any() or not np.allclose(cov, cov.T, rtol=1e-6, atol=0.0):
+            raise InputError(f"{source}: covariance must be finite and symmetric with no negative variance (a "
+                             "variance is a squared sigma); recalibrate")
     elif d.get("std"):
         std = d["std"]
         cov = np.diag([float(std.get(name, 0.0)) ** 2 for name in INTRINSIC_NAMES])

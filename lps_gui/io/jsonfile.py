@@ -9,7 +9,6 @@ from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_bytes_atomic
 from lps_gui.io.image_file import read_file_limited
 
-
 MAX_JSON_BYTES = 256 << 20  # a results.json of 100000 views is ~100 MB
 
 
@@ -23,12 +22,40 @@ def read_json(path: Path | str, what: str = "file", follow_symlinks: bool = True
         text = read_file_limited(path, MAX_JSON_BYTES, what, follow_symlinks=follow_symlinks).decode("utf-8")
     except UnicodeDecodeError:
         raise InputError(f"{path}: not a text file (binary content); fix or regenerate the {what}") from None
+    return parse_json(text, str(path), what)
+
+
+class _DuplicateKey(ValueError):
+    """An object names a key twice (args: the key)."""
+
+
+def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    out = dict(pairs)
+    if len(out) != len(pairs):
+        seen: set[str] = set()
+        raise _DuplicateKey(next(k for k, _ in pairs if k in seen or seen.add(k)))  # type: ignore[func-returns-value]
+    return out
+
+
+def parse_json(text: str, where: str, what: str = "file") -> Any:
+    """JSON text parsed, every failure one InputError naming ``where``: the parser's own errors caught here, at the boundary.
+
+    Besides syntax: an object naming a key twice (``"square_mm"`` twice: json keeps the last silently, a
+    different board), an integer over Python's 4300-digit limit (a ValueError, not a JSONDecodeError) and
+    nesting too deep for the parser.
+    """
     try:
-        return json.loads(text)
+        return json.loads(text, object_pairs_hook=_unique_keys)
     except json.JSONDecodeError as exc:
-        raise InputError(f"{path}: not valid JSON (line {exc.lineno}: {exc.msg}); fix or regenerate the {what}") from exc
+        raise InputError(f"{where}: not valid JSON (line {exc.lineno}: {exc.msg}); fix or regenerate the {what}") from None
+    except _DuplicateKey as exc:
+        raise InputError(f"{where}: key {exc.args[0]!r} appears twice in one object (which one counts is a guess); "
+                         f"keep one and fix or regenerate the {what}") from None
+    except ValueError as exc:  # "Exceeds the limit (4300 digits) for integer string conversion"
+        raise InputError(f"{where}: a number in it is out of range ({str(exc).split(';')[0]}); fix or regenerate "
+                         f"the {what}") from None
     except RecursionError:
-        raise InputError(f"{path}: JSON nested too deeply; fix or regenerate the {what}") from None
+        raise InputError(f"{where}: JSON nested too deeply; fix or regenerate the {what}") from None
 
 
 def json_bytes(data: Any) -> bytes:

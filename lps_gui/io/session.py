@@ -77,6 +77,9 @@ def _identity(folder: Path) -> tuple[int, int] | None:
     return (st.st_dev, st.st_ino)
 
 
+OBJECT_KEYS = ("plan", "camera", "stage", "truth", "asme_test", "acquisition")
+
+
 class Session:
     """A session folder on disk; cheap to open, reads files on demand."""
 
@@ -145,6 +148,10 @@ class Session:
         meta = read_json(folder / SESSION_FILE, "session file", follow_symlinks=False)
         if not isinstance(meta, dict) or meta.get("format") != FORMAT:
             raise InputError(f"{folder / SESSION_FILE}: not an {FORMAT} session file")
+        for key in OBJECT_KEYS:  # every reader takes these as objects: "truth": "x" must not reach them
+            if meta.get(key) is not None and not isinstance(meta[key], dict):
+                raise InputError(f"{folder / SESSION_FILE}: {key} is {type(meta[key]).__name__}, not an object; fix or "
+                                 "regenerate session.json")
         return cls(folder, meta)
 
     def save_meta(self) -> None:

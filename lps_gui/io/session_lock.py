@@ -39,6 +39,14 @@ def _holder_text(raw: bytes) -> str:
         return "another process"
 
 
+def _inside(folder: Path, place: Path) -> bool:
+    """``place`` is a real folder inside ``folder`` (no link on the way out)."""
+    try:
+        return not place.is_symlink() and place.resolve().is_relative_to(folder.resolve())
+    except (OSError, RuntimeError):
+        return False
+
+
 def tidy_after_kill(folder: Path) -> None:
     """What a killed writer left: finish its journaled result commit, delete its temp files.
 
@@ -51,6 +59,8 @@ def tidy_after_kill(folder: Path) -> None:
     except OSError:
         pass
     for place in places:
+        if place != folder and not _inside(folder, place):  # images/ or results/ linked elsewhere: not ours to tidy
+            continue
         try:
             recover_file_set(place)
         except LpsError:  # a read-only folder: the next writable run finishes it

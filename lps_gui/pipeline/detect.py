@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import logging
 import os
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, Future, wait
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
-from lps_gui.camera.processes import process_context
+from lps_gui.camera.processes import worker_pool
 from lps_gui.core.geometry.board import Board
 from lps_gui.core.geometry.targets import Target, target_offsets
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
@@ -208,7 +208,7 @@ def run_detection(
         return results
     finished: set[int] = set()
     try:
-        with ProcessPoolExecutor(max_workers=min(workers, len(chunks)), mp_context=process_context(), initializer=_init_worker) as pool:
+        with worker_pool(min(workers, len(chunks)), _init_worker) as pool:  # workers end with this process
             # At most one queued chunk per worker (plus one spare); this process takes the next unqueued chunk whenever
             # it is free (the first while the workers start up), so no core waits while work is left.
             queue = list(range(1, len(chunks)))

@@ -85,12 +85,26 @@ def observations_from_session(session: Session, intrinsics: CameraIntrinsics | N
     board = apply_board_warp(session_board(session), intr)
     table = read_corners_vnl(session.corners_path, board.n_corners)
     corners = corners_of_records(session, table, records)
+    check_corner_layout(session, board, intr, records, corners)
     obs = observations_of_views(session, board, intr, records, corners, table.sha256)
     if not session.planar and session.plan().segments:  # one board moved between segments (SPEC 13 stitching)
         from lps_gui.pipeline.stitched_session import stitched_observations
 
         return stitched_observations(session, obs, records)
     return obs
+
+
+def check_corner_layout(session: Session, board: Any, intr: CameraIntrinsics, records: list[Any],
+                        corners: np.ndarray) -> None:
+    """One line naming the first view whose corners are reversed, mirrored or outside the intrinsics' image."""
+    from lps_gui.core.corner_layout import layout_problems
+
+    problems = layout_problems(corners, board.cols, board.rows, tuple(intr.image_size))
+    if problems:
+        k, why = problems[0]
+        more = f" (and {len(problems) - 1} other view(s))" if len(problems) > 1 else ""
+        raise InputError(f"{session.corners_path}: view {records[k].file}: {why}{more}; nothing estimated: run "
+                         f"`lps detect {session.folder} --force`, or check the intrinsics")
 
 
 def observations_of_views(session: Session, board: Any, intr: CameraIntrinsics, records: list[Any], corners: np.ndarray,

@@ -12,14 +12,14 @@ from __future__ import annotations
 import logging
 import os
 import time
-from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures import Future
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any, Iterator, Sequence
 
 import numpy as np
 
-from lps_gui.camera.processes import process_context
+from lps_gui.camera.processes import worker_pool
 from lps_gui.camera.render import BoardRenderer, Lighting
 from lps_gui.core.geometry.board import Board
 from lps_gui.core.geometry.camera_model import CameraIntrinsics, project_board
@@ -103,7 +103,7 @@ def _render_stream(
 
     next_out = 0  # first chunk not yet yielded
     try:
-        with ProcessPoolExecutor(max_workers=workers, mp_context=process_context()) as pool:
+        with worker_pool(workers) as pool:  # workers end with this process
             queue: list[Future] = []
             next_chunk = 0
             try:

@@ -192,6 +192,7 @@ def simulated_engine(session: Session, stage: Stage, camera: RigCamera, encode: 
 
     ``stage`` is the rig's stage or a driver in front of it (the GRBL emulator).
     """
-    rig_stage = stage if isinstance(stage, RigStage) else stage.simulated  # direct, or behind the GRBL emulator
+    rig_stage = stage if isinstance(stage, RigStage) else getattr(stage, "simulated", None)  # direct, behind the GRBL
+    # emulator, or None: another stage the rig follows (sim/follow.py)
     hook = SimulatedRigHook(session.plan(), rig_stage if isinstance(rig_stage, RigStage) else None, camera)
     return CaptureEngine(stage, camera, session, encode=encode, simulator=hook)

@@ -1,8 +1,9 @@
 """The emulated Basler camera (PYLON_CAMEMU) fed the simulated camera's render of every frame.
 
 pylon's emulator returns the image file named by ``ImageFilename`` byte for
-byte (``TestImageSelector=Off``, ``ImageFileMode=On``); it reads a file once
-per name, so each render gets its own file in ``feed_dir``. The frame then
+byte (``TestImageSelector=Off``, ``ImageFileMode=On``); it reads the named
+file again at every GrabOne, and each render gets its own file in ``feed_dir``
+(none is rewritten while pylon may read it). The frame then
 comes through the real SDK path: GrabOne, the node map, the pixel format.
 """
 from __future__ import annotations

@@ -57,7 +57,7 @@ def test_errors_name_the_folder_or_file(tmp_path):
     (tmp_path / "broken.png").write_bytes(b"not a png")
     cam = FolderReplayCamera(tmp_path)
     cam.open()
-    with pytest.raises(HardwareError, match="broken.png: cannot read"):
+    with pytest.raises(InputError, match="broken.png: not a PNG, TIFF, BMP, PGM/PPM, JPEG or WebP image"):
         cam.grab()
 
 

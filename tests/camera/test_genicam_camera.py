@@ -75,3 +75,15 @@ def test_a_missing_harvesters_names_the_extra(cti, monkeypatch):
     monkeypatch.setitem(sys.modules, "harvesters.core", None)
     with pytest.raises(InputError, match=r"pip install lps-calib\[genicam\]$"):
         GenICamCamera("0", cti=cti).open()
+
+
+def test_a_pixel_format_not_handled_leaves_no_acquisition_running(cti, monkeypatch):
+    from lps_gui.camera import genicam_camera
+    cam = open_camera("genicam:0", cti=cti)
+    try:
+        monkeypatch.setattr(genicam_camera, "is_supported", lambda fmt: False)
+        with pytest.raises(HardwareError, match=r"^camera genicam:0: pixel format RGBa8 is not handled"):
+            cam.grab()
+        assert cam.is_open and not cam._handle.is_acquiring()  # no frame buffered during the next move
+    finally:
+        cam.close()

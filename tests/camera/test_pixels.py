@@ -53,3 +53,17 @@ def test_bayer_gains_are_fixed_at_the_first_frame():
     gains = conv.gains.copy()
     conv((first // 2).astype(np.uint8))
     assert np.array_equal(conv.gains, gains)
+
+
+def test_bayer_gains_multiply_the_full_depth_samples_before_the_8_bit_truncation():
+    mosaic = np.full((4, 4), 31, np.uint16)  # 12-bit samples: 31 >> 4 is 1, 31 * 2 / 16 is 3.9
+    conv = BayerGrey(np.array([[2.0, 1.0], [1.0, 1.0]]))
+    out = to_grey8(mosaic, "BayerRG12", conv)
+    assert out[0, 0] == 4 and out[0, 1] == 2  # truncating first gave 2 and 2: the gain lost its low bits
+
+
+def test_sixteen_bit_colour_is_brought_to_8_bits():
+    data = np.zeros((2, 2, 3), np.uint16)
+    data[0, 0] = (65535, 65535, 65535)
+    out = to_grey8(data, "RGB16Packed")
+    assert out.dtype == np.uint8 and out[0, 0] == 255 and out[1, 1] == 0

@@ -140,6 +140,8 @@ def test_locked_controls_are_recorded_and_put_back_when_a_capture_resumes(tmp_pa
     cam = PylonCamera("0815-0001")
     cam.open()
     try:
+        cam.device.Width.SetValue(320)  # the session's intrinsics' size
+        cam.device.Height.SetValue(240)
         cam.device.ExposureAuto.SetValue("Continuous")
         cam.device.ExposureTime.SetValue(1500.0)
         engine = CaptureEngine(stage, cam, session)
@@ -151,5 +153,101 @@ def test_locked_controls_are_recorded_and_put_back_when_a_capture_resumes(tmp_pa
         assert CaptureEngine(stage, cam, session).run().state == "done"
         assert cam.device.ExposureTime.GetValue() == 1500.0  # the recorded value, put back before the first frame
         assert len(session.records()) == 4
+    finally:
+        cam.close()
+
+
+@pytest.mark.parametrize("pixel_format", ["BGRA8Packed", "RGB16Packed"])
+def test_colour_formats_getarray_refuses_are_read_from_the_buffer(pixel_format):
+    cam = open_camera("pylon:0815-0001")
+    try:
+        assert controls.surface_of(cam).set("pixel format", pixel_format)
+        frame = cam.grab()  # pypylon's GetArray: "ValueError: Pixel format currently not supported"
+        assert frame.meta["pixel_format"] == pixel_format and frame.image.dtype == np.uint8
+        assert frame.image.shape == (cam.properties()["height"], cam.properties()["width"])
+        assert frame.image.any()
+    finally:
+        cam.close()
+
+
+class _LostAfterGrab:
+    """An InstantCamera that is unplugged right after a successful GrabOne (every node read then fails)."""
+
+    def __init__(self, cam):
+        self._cam = cam
+
+    def __getattr__(self, name):
+        return getattr(self._cam, name)
+
+    def GrabOne(self, timeout_ms):
+        result = self._cam.GrabOne(timeout_ms)
+        self._cam.Close()
+        return result
+
+
+def test_a_camera_lost_right_after_its_grab_is_one_line_with_the_resume_hint():
+    cam = open_camera("pylon:0815-0001")
+    try:
+        cam._handle = _LostAfterGrab(cam._handle)
+        with pytest.raises(HardwareError, match=r"^camera pylon:0815-0001: lost after the grab \(.*\); check the cable, "
+                                                r"then resume$") as exc:
+            cam.grab()
+        assert "\n" not in str(exc.value) and not cam.is_open  # the next run reopens it
+    finally:
+        cam.close()
+
+
+def _small_plan():
+    return Plan(start_mm=0.0, stop_mm=6.0, step_mm=2.0, directions="+", runs=1, overshoot_mm=1.0, settle_s=0.1,
+                feed_mm_min=1200.0)
+
+
+def test_frames_of_another_size_than_the_intrinsics_are_refused_at_the_first(tmp_path):
+    from lps_gui.capture.engine import CaptureEngine
+    from tests.capture.helpers import start_capture
+
+    session, stage, _, _ = start_capture(tmp_path / "s", plan=_small_plan())  # intrinsics 320x240
+    cam = PylonCamera("0815-0001")  # the emulator's 1024x1040
+    try:
+        summary = CaptureEngine(stage, cam, session).run()
+        assert summary.state == "paused" and summary.listed == 0
+        assert summary.error == ("camera: frame 0 refused, it is 1024x1040 but the intrinsics are for 320x240; set the "
+                                 "camera's width, height and binning as when it was calibrated (or calibrate at this "
+                                 "size), then resume")
+        assert not list((session.folder / "images").glob("*.png"))
+    finally:
+        cam.close()
+
+
+def test_bayer_gains_are_recorded_and_a_resumed_capture_reuses_them(tmp_path):
+    from lps_gui.capture.engine import CaptureEngine
+    from tests.capture.helpers import start_capture
+
+    session, stage, _, _ = start_capture(tmp_path / "s", plan=_small_plan())
+    cam = PylonCamera("0815-0001")
+    cam.open()
+    try:
+        cam.device.Width.SetValue(320)
+        cam.device.Height.SetValue(240)
+        cam.device.PixelFormat.SetValue("BayerRG12")
+        engine = CaptureEngine(stage, cam, session)
+        engine.subscribe(lambda e: engine.abort() if e.kind == "frame" and e.index == 1 else None)
+        assert engine.run().state == "aborted"
+        recorded = Session.open(session.folder).meta["camera"]["bayer_gains"]
+        assert recorded == cam.bayer_gains and np.shape(recorded) == (2, 2)
+    finally:
+        cam.close()
+    meta = json.loads((session.folder / "session.json").read_text())
+    meta["camera"]["bayer_gains"] = [[1.25, 1.0], [1.0, 0.75]]  # those the first frames had (the scene changed since)
+    (session.folder / "session.json").write_text(json.dumps(meta))
+    cam = PylonCamera("0815-0001")  # a new process: no gains in memory
+    cam.open()
+    try:
+        cam.device.Width.SetValue(320)
+        cam.device.Height.SetValue(240)
+        cam.device.PixelFormat.SetValue("BayerRG12")
+        session = Session.open(session.folder)
+        assert CaptureEngine(stage, cam, session).run().state == "done"
+        assert cam.bayer_gains == [[1.25, 1.0], [1.0, 0.75]]  # not estimated again from another frame
     finally:
         cam.close()

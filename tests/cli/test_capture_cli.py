@@ -72,6 +72,7 @@ def test_plan_file_and_switch_override(tmp_path):
         (["capture", "--out", "{tmp}/s", "--board", "b.json", "--start", "0", "--stop", "2", "--step", "1"], "drop --board"),
         (["capture", "--out", "{tmp}/s", "--camera", "{tmp}", "--board", "{tmp}/b.json"], "no plan"),
         (["capture", "--out", "{tmp}/s", "--stage", "grbl", "--start", "0", "--stop", "2", "--step", "1"], "not understood"),
+        (["capture", "--out", "{tmp}/s", "--stage", "grbl:/dev/nonexistent-port", "--start", "0", "--stop", "2", "--step", "1"], "cannot open port"),
         (["capture", "--resume", "{tmp}/missing"], "not found"),
     ],
 )

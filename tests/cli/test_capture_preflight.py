@@ -64,3 +64,18 @@ def test_capture_with_home_homes_a_locked_grbl_first(tmp_path, capsys, locked_gr
     emu, argv = locked_grbl
     assert lps_main([*argv, "--out", str(tmp_path / "s"), "--home"]) == 0
     assert "homed it" in capsys.readouterr().err and emu.stage.homed
+
+
+def test_the_simulated_camera_follows_a_grbl_stage_end_to_end(tmp_path, capsys):
+    """`lps emulate-grbl` (here in-process) and `lps capture --stage grbl:PTY --camera sim`: no camera needed."""
+    out = tmp_path / "s"
+    with GrblEmulator(SimulatedStage(travel_mm=(-5.0, 50.0)), time_scale=50.0) as emu:
+        assert lps_main(["capture", "--out", str(out), "--stage", f"grbl:{emu.path}", "--camera", "sim",
+                         "--start", "0", "--stop", "4", "--step", "2", "--settle", "0", "--feed", "3000"]) == 0
+    meta = json.loads((out / "session.json").read_text())
+    assert meta["stage"]["spec"] == f"grbl:{emu.path}" and meta["camera"]["spec"] == "sim"
+    records = [json.loads(line) for line in (out / "captures.jsonl").read_text().splitlines()]
+    assert [r["target_mm"] for r in records] == [0, 2, 4]
+    # the board rendered where GRBL reported the carriage: that is the truth recorded beside each frame
+    assert meta["truth"]["axis_mm"] == [r["reported_mm"] for r in records]
+    assert lps_main(["detect", str(out), "--workers", "1"]) == 0

@@ -47,7 +47,7 @@ def test_make_targets_writes_true_scale_pages_and_the_session_list(tmp_path, cap
 @pytest.mark.parametrize("args,words", [
     (["--count", "0"], "at least 1 and at most 100"),
     (["--count", "6", "--dictionary", "DICT_4X4_50"], "DICT_4X4_50 has 50"),
-    (["--square-mm", "-3"], "must be over 0 and at most 10000"),
+    (["--square-mm", "-3"], "must be at least 1 and at most 10000"),
     (["--marker-mm", "40"], "marker_mm 40.0 must be smaller than its square_mm 30.0"),
 ])
 def test_bad_target_options_are_one_line_errors(tmp_path, capsys, args, words):

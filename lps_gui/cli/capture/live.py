@@ -32,7 +32,7 @@ def report_path(args: argparse.Namespace, folder: Path | str) -> Path | None:
         return None
     from lps_gui.cli.out_path import resolve_out
 
-    return resolve_out(args.report or None, "report.pdf", folder, (".pdf",), "lps capture --report")
+    return resolve_out(args.report or None, "report.pdf", folder, (".pdf",), "lps capture --report", own_session=folder)
 
 
 def wants_live(args: argparse.Namespace) -> bool:

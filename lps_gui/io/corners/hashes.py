@@ -18,6 +18,7 @@ import os
 from pathlib import Path
 from typing import Iterable, Protocol
 
+from lps_gui.errors import InputError
 from lps_gui.io.atomic import sha256_file
 from lps_gui.io.corners.vnl import CornerTable
 
@@ -94,5 +95,5 @@ def image_unchanged(table: CornerTable, name: str, folder: Path) -> bool:
         return recorded is None  # neither stat nor hash kept: nothing to compare with
     try:
         return sha256_file(path) == want
-    except OSError:
+    except (OSError, InputError):  # a link or a FIFO now: detected again, where the reader refuses it in one line
         return False

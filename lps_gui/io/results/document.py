@@ -377,6 +377,12 @@ def result_set_bytes(results: dict[str, Any], names: dict[str, str] | None = Non
     }
 
 
+def result_set_paths(path: Path | str) -> list[Path]:
+    """The three files :func:`write_results` writes for ``path`` (so a caller can check each before the write)."""
+    folder, names = _result_names(Path(path))
+    return [folder / name for name in names.values()]
+
+
 def _result_names(path: Path) -> tuple[Path, dict[str, str]]:
     if path.suffix.lower() != ".json" or path.is_dir():
         return path, {"positions": POSITIONS_FILE, "summary": SUMMARY_FILE, "results": RESULTS_FILE}

@@ -14,6 +14,8 @@ import re
 from pathlib import Path
 from typing import Any
 
+from lps_gui.errors import InputError
+from lps_gui.file_limits import resolve_in_session
 from lps_gui.io.atomic import write_bytes_atomic
 from lps_gui.io.file_set import write_file_set
 from lps_gui.io.jsonfile import json_bytes, read_json
@@ -37,6 +39,17 @@ def _copy_set(src: Path, dest: Path) -> None:
     write_file_set(dest, {name: (src / name).read_bytes() for name in SET if (src / name).is_file()}, last=RESULTS_FILE)
 
 
+def history_dir(session_dir: Path | str) -> Path:
+    """The session's results/ folder; InputError when it is a link or leads out of the session (never written
+    or read there: a history run would land in someone else's folder)."""
+    folder = Path(session_dir)
+    base = folder / HISTORY_DIR
+    if base.is_symlink():
+        raise InputError(f"{base}: is a symbolic link; a session's result history stays inside the session: "
+                         "remove the link (lps creates the folder)")
+    return resolve_in_session(folder, HISTORY_DIR)
+
+
 def keep_previous(session_dir: Path | str) -> Path | None:
     """Copy the top-level result set into the history unless it is there already; returns its folder."""
     folder = Path(session_dir)
@@ -47,7 +60,7 @@ def keep_previous(session_dir: Path | str) -> Path | None:
     if kept is not None:
         return kept
     try:
-        previous = read_json(top, "results file")
+        previous = read_json(top, "results file", follow_symlinks=False)
     except Exception:  # an unreadable old file is kept where it is, never a reason to stop an estimate
         return None
     dest = folder / HISTORY_DIR / entry_name(previous if isinstance(previous, dict) else {})
@@ -64,7 +77,7 @@ def _kept_as_latest(folder: Path) -> Path | None:
     its creation time and method.
     """
     try:
-        name = (read_json(folder / HISTORY_DIR / LATEST_FILE, "results history") or {}).get("latest")
+        name = (read_json(history_dir(folder) / LATEST_FILE, "results history", follow_symlinks=False) or {}).get("latest")
         if not isinstance(name, str) or not name or "/" in name or name in (".", ".."):
             return None
         entry = folder / HISTORY_DIR / name
@@ -79,7 +92,7 @@ def _kept_as_latest(folder: Path) -> Path | None:
 def _new_entry(folder: Path, results: dict[str, Any]) -> Path:
     dest = folder / HISTORY_DIR / entry_name(results)
     n = 1
-    while (dest / RESULTS_FILE).exists() and read_json(dest / RESULTS_FILE, "results file") != results:
+    while (dest / RESULTS_FILE).exists() and read_json(dest / RESULTS_FILE, "results file", follow_symlinks=False) != results:
         n += 1  # two estimates within one second: keep both
         dest = folder / HISTORY_DIR / f"{entry_name(results)}-{n}"
     return dest
@@ -107,6 +120,7 @@ def commit_results(session_dir: Path | str, results: dict[str, Any]) -> Path:
     naming it) in place, a kill leaves the old set or a journal the next command finishes.
     """
     folder = Path(session_dir)
+    history_dir(folder)  # refused before anything is written when results/ leads out of the session
     keep_previous(folder)
     files = result_set_bytes(results)
     dest = _new_entry(folder, results)
@@ -117,14 +131,14 @@ def commit_results(session_dir: Path | str, results: dict[str, Any]) -> Path:
 
 def history(session_dir: Path | str) -> list[dict[str, Any]]:
     """Every kept result set, oldest first: ``{"name", "path", "created", "method", "latest"}``."""
-    base = Path(session_dir) / HISTORY_DIR
+    base = history_dir(session_dir)
     latest = None
     if (base / LATEST_FILE).is_file():
-        latest = (read_json(base / LATEST_FILE, "results history") or {}).get("latest")
+        latest = (read_json(base / LATEST_FILE, "results history", follow_symlinks=False) or {}).get("latest")
     out = []
     sets = [p for p in base.glob("*") if (p / RESULTS_FILE).is_file()]
     for d in sorted(sets, key=lambda p: ((p / RESULTS_FILE).stat().st_mtime, p.name)):  # copies keep the mtime
-        meta = read_json(d / RESULTS_FILE, "results file")
+        meta = read_json(d / RESULTS_FILE, "results file", follow_symlinks=False)
         out.append({"name": d.name, "path": d, "created": meta.get("created"), "method": meta.get("method"),
                     "latest": d.name == latest})
     return out

@@ -317,6 +317,7 @@ class CameraPanel(QWidget):
         self.show_controls(None)
         self.watch.reset()
         self.jump_label.setText("")
+        self.clear_display()
 
     def pause(self, on: bool) -> None:
         """Lend the camera to the capture engine (on) or take it back (off); the controls lock meanwhile."""
@@ -326,16 +327,21 @@ class CameraPanel(QWidget):
             _stream(self.camera, not on)  # a capture takes fresh frames, one acquisition each
         self.lock_controls(on)
 
-    def _on_grab_failed(self, message: str) -> None:
-        opened = self.camera is not None
-        self.stop()
-        self.image.clear()  # no frozen last frame that looks live
+    def clear_display(self) -> None:
+        """No frozen last frame that looks live, nor the figures of that frame (after a stop, a lost camera,
+        a disconnected stage)."""
+        self.image.clear()
         self.overlay.setData([], [])
         self.first_corner.setData([], [])
         self.placeholder.setVisible(True)
-        self.sharpness_bar.setValue(0)  # nor the figures of that frame
+        self.sharpness_bar.setValue(0)
         self.sharpness_label.setText("sharpness —")
         self.fps_label.setText("— fps")
+        self._set_detect("no frame", "#777777")
+
+    def _on_grab_failed(self, message: str) -> None:
+        opened = self.camera is not None
+        self.stop()
         self._set_detect("camera lost" if opened else "not opened", "#d00000")
         self.failed.emit("Camera preview stopped" if opened else "Camera not opened", message)
 

@@ -12,7 +12,7 @@ import logging
 from pathlib import Path
 from typing import Any, Callable
 
-from PySide6.QtCore import QSettings, Qt
+from PySide6.QtCore import QSettings, Qt, QTimer
 from PySide6.QtGui import QAction, QCloseEvent, QKeySequence
 from PySide6.QtWidgets import (
     QDockWidget, QFileDialog, QLabel, QMainWindow, QMessageBox, QWidget,
@@ -41,6 +41,7 @@ log = logging.getLogger("lps_gui.gui")
 ORGANIZATION = "lps-calib"
 APPLICATION = "lps-gui"
 LAYOUT_VERSION = 1
+DOCK_SHARES = (0.38, 0.38, 0.24)  # of the window's width: panels on the left, results, camera and log
 SCROLLED = ("stage", "camera", "intrinsics", "capture", "estimation")  # they grow; the window must not
 
 
@@ -79,6 +80,7 @@ class MainWindow(QMainWindow):
             dock.setObjectName(f"dock_{name}")
             dock.setWidget(scrolled(widget) if name in SCROLLED else widget)
             self.docks[name] = dock
+            dock.visibilityChanged.connect(lambda _on: QTimer.singleShot(0, lambda: clamp_to_screen(self)))
         self.default_layout()
 
         # --- status bar
@@ -100,8 +102,8 @@ class MainWindow(QMainWindow):
     # ------------------------------------------------------------------ layout
     def default_layout(self) -> None:
         """View > Reset layout: the docks as at first start, the window within the screen."""
-        self.arrange_docks()
         clamp_to_screen(self)
+        self.arrange_docks()
 
     def arrange_docks(self) -> None:
         """Left: stage / capture / estimation / intrinsics tabs; right: results beside camera and log."""
@@ -116,8 +118,10 @@ class MainWindow(QMainWindow):
         self.splitDockWidget(d["results"], d["camera"], Qt.Orientation.Horizontal)
         self.splitDockWidget(d["camera"], d["log"], Qt.Orientation.Vertical)
         d["stage"].raise_()
-        self.resizeDocks([d["stage"], d["results"], d["camera"]], [430, 860, 310], Qt.Orientation.Horizontal)
-        self.resizeDocks([d["camera"], d["log"]], [600, 250], Qt.Orientation.Vertical)
+        w, h = max(self.width(), 800), max(self.height(), 500)  # shares of the window: a laptop screen too
+        self.resizeDocks([d["stage"], d["results"], d["camera"]], [int(w * f) for f in DOCK_SHARES],
+                         Qt.Orientation.Horizontal)
+        self.resizeDocks([d["camera"], d["log"]], [int(h * 0.7), int(h * 0.3)], Qt.Orientation.Vertical)
 
     def show_panel(self, name: str) -> None:
         dock = self.docks[name]
@@ -185,6 +189,7 @@ class MainWindow(QMainWindow):
         self.capture_panel.failed.connect(self.show_error)
         self.capture_panel.board_changed.connect(self.intrinsics_panel.set_board)
         self.results_panel.export_requested.connect(self.export)
+        self.results_panel.failed.connect(self.show_error)
 
     # ------------------------------------------------------------------ stage status
     def _on_status(self, st: StageStatus) -> None:
@@ -259,8 +264,11 @@ class MainWindow(QMainWindow):
             self.remember_folder(session_dir)
 
     def _on_capture_done(self, session_dir: Path) -> None:
+        """A complete capture: the next estimate is of it; a live capture's results (and report) come on screen."""
         self.estimation_panel.set_session(session_dir)
         self.remember_folder(session_dir)
+        if (Path(session_dir) / "results.json").is_file():
+            self.open_session(Path(session_dir))
 
     def open_session_dialog(self) -> None:
         folder = QFileDialog.getExistingDirectory(self, "Open a session folder", self.last_folder())
@@ -270,6 +278,10 @@ class MainWindow(QMainWindow):
     def open_session(self, folder: Path) -> bool:
         """Select ``folder`` for estimation and show its results.json if it has one."""
         folder = Path(folder)
+        if not (folder / "session.json").is_file():
+            self.show_error("Not a session", f"{folder}: no session.json here; choose a folder made by a capture "
+                                             "(or by `lps simulate`)")
+            return False
         self.estimation_panel.set_session(folder)
         self.remember_folder(folder)
         results_path = folder / "results.json"
@@ -369,7 +381,21 @@ class MainWindow(QMainWindow):
         self.stage_ctl.shutdown()
         self.log_panel.detach()
 
+    def confirm_quit(self) -> bool:
+        """Quitting during a capture stops it: ask first (the frames taken stay; it can be resumed)."""
+        job = self.capture_panel.job
+        if job is None or not job.running:
+            return True
+        answer = QMessageBox.question(
+            self, "Capture running", "A capture is running. Quit and stop it? The frames taken so far are kept and "
+            "the session can be resumed.", QMessageBox.StandardButton.Yes | QMessageBox.StandardButton.No,
+            QMessageBox.StandardButton.No)
+        return answer == QMessageBox.StandardButton.Yes
+
     def closeEvent(self, event: QCloseEvent) -> None:
+        if not self.confirm_quit():
+            event.ignore()
+            return
         self.save_settings()
         self.shutdown()
         super().closeEvent(event)

@@ -11,7 +11,7 @@ from typing import Callable
 
 import numpy as np
 import pyqtgraph as pg
-from PySide6.QtCore import Qt
+from PySide6.QtCore import QEvent, QObject, Qt
 
 from lps_gui.report.figure_spec import OUTLIER_COLOR, FigureSpec, Series
 
@@ -132,6 +132,32 @@ def legend_columns(fig: FigureSpec, compact: bool) -> int:
     return columns if compact else max(1, min(columns, LEGEND_ROW_CHARS // max(longest, 1)))
 
 
+class _LegendFit(QObject):
+    """Event filter on a plot widget: a resize re-flows its legend (:func:`fit_legend`)."""
+
+    def eventFilter(self, obj: QObject, event: QEvent) -> bool:
+        if event.type() == QEvent.Type.Resize and isinstance(obj, pg.PlotWidget):
+            fit_legend(obj.getPlotItem())
+        return False
+
+
+_LEGEND_FIT = _LegendFit()
+
+
+def fit_legend(plot: pg.PlotItem) -> None:
+    """As many legend columns as the plot's width holds (at most the figure's): a legend wider than the plot
+    made its scene wider than the view, and the right side was cut off ("trut", "yav")."""
+    legend, view = plot.legend, plot.getViewWidget()
+    if legend is None or view is None or not legend.items:
+        return
+    wanted = getattr(legend, "wanted_columns", legend.columnCount)
+    entry = max(sample.boundingRect().width() + label.boundingRect().width() for sample, label in legend.items)
+    room = view.width() - plot.getAxis("left").width() - 20
+    columns = int(max(1, min(wanted, room // (entry + 12))))
+    if columns != legend.columnCount:
+        legend.setColumnCount(columns)
+
+
 def figure_steps(plot: pg.PlotItem, fig: FigureSpec) -> tuple[DrawnFigure, list[Callable[[], None]]]:
     """Drawing ``fig`` into ``plot`` as small steps (set-up, one per series, finish).
 
@@ -151,7 +177,12 @@ def figure_steps(plot: pg.PlotItem, fig: FigureSpec) -> tuple[DrawnFigure, list[
             plot.legend = pg.LegendItem(labelTextSize="8pt", labelTextColor="#202020",
                                         brush=pg.mkBrush(255, 255, 255, 0), pen=pg.mkPen(None))
             plot.layout.addItem(plot.legend, LEGEND_ROW, 1)
-        plot.legend.setColumnCount(legend_columns(fig, compact))
+        plot.legend.wanted_columns = legend_columns(fig, compact)
+        plot.legend.setColumnCount(plot.legend.wanted_columns)
+        view = plot.getViewWidget()
+        if view is not None and not view.property("_legend_fit"):
+            view.installEventFilter(_LEGEND_FIT)
+            view.setProperty("_legend_fit", True)
         plot.setTitle(fig.title, color="#202020", size="11pt")
         plot.setLabel("bottom", fig.x_label)
         plot.setLabel("left", fig.y_label)
@@ -165,6 +196,7 @@ def figure_steps(plot: pg.PlotItem, fig: FigureSpec) -> tuple[DrawnFigure, list[
     if compact:
         steps.append(lambda: compact_legend(plot.legend, fig))
     steps.append(lambda: fit_range(plot, drawn))
+    steps.append(lambda: fit_legend(plot))
     return drawn, steps
 
 

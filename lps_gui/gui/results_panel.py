@@ -23,7 +23,7 @@ from lps_gui.gui.plot_adapter import DrawnFigure, ReadableAxis, figure_steps
 from lps_gui.gui.section_tabs import SectionContent, SectionPage, section_contents, tab_tip
 from lps_gui.gui.view_detail import ViewDetail
 from lps_gui.gui.widgets import TextTable, ValueTable
-from lps_gui.gui.workers import Job
+from lps_gui.gui.workers import Job, owned_by
 from lps_gui.io.results_model import Results, as_results
 from lps_gui.io.results_sections import Position
 from lps_gui.report.figures import figures_from_results, position_columns
@@ -43,6 +43,7 @@ class ResultsPanel(QWidget):
     """Plots, ISO 230-2 and position tables of one estimation; export to PDF and CSV."""
 
     export_requested = Signal(str)  # "pdf" or "csv"; the main window asks for a path and runs it
+    failed = Signal(str, str)  # title, one line: something the operator asked for could not be done
     drawing_done = Signal()  # every figure and table of the latest results is drawn
 
     def __init__(self, parent: QWidget | None = None) -> None:
@@ -69,11 +70,13 @@ class ResultsPanel(QWidget):
         self.report_path: Path | None = None
         for b in (self.pdf_btn, self.csv_btn, self.open_report_btn):
             b.setEnabled(False)
-        top = QHBoxLayout()
-        top.addWidget(self.header, 1)
-        top.addWidget(self.pdf_btn)
-        top.addWidget(self.open_report_btn)
-        top.addWidget(self.csv_btn)
+        top = QVBoxLayout()  # the header wraps above the buttons: a narrow results dock keeps them all in view
+        top.addWidget(self.header)
+        buttons = QHBoxLayout()
+        for b in (self.pdf_btn, self.open_report_btn, self.csv_btn):
+            buttons.addWidget(b)
+        buttons.addStretch(1)
+        top.addLayout(buttons)
         self.verdict = QLabel("")
         self.verdict.setWordWrap(True)
         self.verdict.setTextFormat(Qt.TextFormat.RichText)
@@ -108,7 +111,10 @@ class ResultsPanel(QWidget):
         split.addWidget(self.detail)
         split.setStretchFactor(0, 3)
         split.setStretchFactor(1, 1)
-        split.setSizes([700, 240])  # Results get the room; the clicked view beside them
+        split.setCollapsible(0, False)
+        split.setSizes([1, 0])  # the figures get the whole width: the clicked view opens beside them on a click
+        self.split = split
+        self._header_text = ""  # the header without the stale-report note (set_report adds or drops that)
         lay = QVBoxLayout(self)
         lay.setContentsMargins(6, 6, 6, 6)
         lay.addLayout(top)
@@ -137,6 +143,8 @@ class ResultsPanel(QWidget):
         self.session_dir = Path(session_dir) if session_dir else None
         self.results_dir = Path(results_dir) if results_dir else self.session_dir
         self._corners = None
+        self._pending_view = None
+        self.detail.clear()  # the previous session's view does not stay beside these results
         meta = self._session_meta()
         spec = meta.get("stage_spec") or results.stage_spec
         figures = with_limits(figures_from_results(results, meta.get("truth")), spec)
@@ -145,6 +153,7 @@ class ResultsPanel(QWidget):
             tips = [f.notes or f.title for f in figures if self._pages.get(f.key) is page]
             self.tabs.setTabToolTip(self.tabs.indexOf(page), "\n".join(tips))
         self.tabs.setCurrentWidget(self.accuracy_page)  # the answer first: accuracy figures and verdict
+        scroll_home(self)  # tables and plots start at their left edge, not where the last results were scrolled
         self.drawn.clear()
         self._header(results)
         self.verdict.setText(verdict_html(results, spec))
@@ -271,12 +280,13 @@ class ResultsPanel(QWidget):
         n_out = sum(r.outlier for r in results.positions)
         single = results.figures.single_run
         maxdev = single.max_abs_deviation_um if single else None
-        self.header.setText(
+        self._header_text = (
             f"<b>{results.method or '?'}</b> on {self.session_dir.name if self.session_dir else 'results'}: "
             f"{len(results.positions)} positions, {'?' if p.n_used is None else p.n_used} used, {n_out} outlier view(s); "
             f"RMS {_f(p.rms_px)} px"
             + (f"; peak deviation {_f(maxdev)} µm" if maxdev is not None else "")
             + ("<br><i>outliers beyond an axis are drawn at its edge</i>" if n_out else ""))
+        self.header.setText(self._header_text)
 
     def _session_meta(self) -> dict[str, Any]:
         if self.session_dir is None:
@@ -294,13 +304,14 @@ class ResultsPanel(QWidget):
         self.report_path = Path(path) if path else None
         self.open_report_btn.setEnabled(self.report_path is not None)
         tip = "Open the exported PDF report in the system's viewer"
+        header = self._header_text
         if self.report_path is not None and self.session_dir is not None:
             from lps_gui.io.results_history import stale_report_message
 
             if self.report_path == self.session_dir / "report.pdf" and (stale := stale_report_message(self.session_dir)):
                 tip = stale
-                self.header.setText(self.header.text() + "<br><i>report.pdf is older than these results: "
-                                    "export the PDF again</i>")
+                header += "<br><i>report.pdf is older than these results: export the PDF again</i>"
+        self.header.setText(header)  # an export after the note takes it away again
         self.open_report_btn.setToolTip(tip)
 
     def open_report(self) -> bool:
@@ -309,8 +320,13 @@ class ResultsPanel(QWidget):
         from PySide6.QtGui import QDesktopServices
 
         if self.report_path is None or not self.report_path.is_file():
+            self.failed.emit("Report not opened", "open report: no report.pdf yet; export the PDF first")
             return False
-        return bool(QDesktopServices.openUrl(QUrl.fromLocalFile(str(self.report_path))))
+        if not QDesktopServices.openUrl(QUrl.fromLocalFile(str(self.report_path))):
+            self.failed.emit("Report not opened", f"{self.report_path}: no PDF viewer opened it; install one "
+                                                  "(e.g. evince or okular) or open the file from a file manager")
+            return False
+        return True
 
     def _fill_tables(self, results: Results) -> None:
         from lps_gui.gui.planar_results import planar_table_rows
@@ -356,7 +372,7 @@ class ResultsPanel(QWidget):
         from lps_gui.gui.planar_results import position_table_for
 
         self._pending_table = True
-        job = Job("format positions", lambda: position_table_for(results), pass_progress=False)
+        job = owned_by(Job("format positions", lambda: position_table_for(results), pass_progress=False), self)
         job.succeeded.connect(lambda table, r=results: self._show_positions(table, r))
         job.finished.connect(lambda: setattr(self, "_pending_table", False))
         job.start()
@@ -400,9 +416,11 @@ class ResultsPanel(QWidget):
         row = rows[0]
         if self._corners is None and self.session_dir is not None:
             self.detail.show_view(self.session_dir, self.results, row, None, None)
+            self._open_detail()
             self._pending_view = index
             if self._corners_job is None:
-                self._corners_job = Job("read corners", load_corners, self.session_dir, pass_progress=False)
+                self._corners_job = owned_by(Job("read corners", load_corners, self.session_dir, pass_progress=False),
+                                             self)
                 folder = self.session_dir
                 self._corners_job.succeeded.connect(lambda res, d=folder: self._corners_loaded(res, d))
                 self._corners_job.failed.connect(lambda msg, _tb, d=folder: self._corners_loaded(msg, d))
@@ -411,7 +429,15 @@ class ResultsPanel(QWidget):
             return index
         detected, X = self._detected(row)
         self.detail.show_view(self.session_dir, self.results, row, detected, X)
+        self._open_detail()
         return index
+
+    def _open_detail(self) -> None:
+        """The clicked view beside the figures, a third of the width (collapsed until a point is clicked)."""
+        sizes = self.split.sizes()
+        if sizes[1] == 0:
+            total = sum(sizes)
+            self.split.setSizes([total - total // 3, total // 3])
 
     def _corners_loaded(self, loaded: Any, folder: Path) -> None:
         if folder != self.session_dir:
@@ -454,6 +480,14 @@ class ResultsPanel(QWidget):
                 files[name] = src.read_bytes()
         write_file_set(folder, files)  # checked, all or nothing (a full disk leaves no half export)
         return [folder / name for name in CSV_FILES]
+
+
+def scroll_home(root: QWidget) -> None:
+    """Every scroll area under ``root`` back at its left edge (each new result starts unscrolled)."""
+    from PySide6.QtWidgets import QAbstractScrollArea
+
+    for area in root.findChildren(QAbstractScrollArea):
+        area.horizontalScrollBar().setValue(0)
 
 
 def with_limits(figures: list[Any], spec: dict[str, Any] | None) -> list[Any]:

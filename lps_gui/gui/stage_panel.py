@@ -11,6 +11,7 @@ from one status report, with GRBL's offset sign (work = machine - offset).
 from __future__ import annotations
 
 import math
+import time
 
 from PySide6.QtCore import QEvent, QObject, QSettings, Qt, QTimer, Signal
 from PySide6.QtGui import QKeyEvent, QKeySequence, QShortcut
@@ -214,7 +215,7 @@ class StagePanel(QWidget):
         lay.addWidget(self.lower_tabs, 1)
 
         self.source.currentTextChanged.connect(lambda _t: self.source_changed.emit(self.current_source()))
-        self.refresh_btn.clicked.connect(self.refresh_sources)
+        self.refresh_btn.clicked.connect(lambda _checked=False: self.refresh_sources())  # clicked(bool) is no list
         self.connect_btn.clicked.connect(self.toggle_connection)
         controller.status_changed.connect(self.show_status)
         controller.connection_changed.connect(self._on_connection)
@@ -351,8 +352,11 @@ class StagePanel(QWidget):
 
     def toggle_connection(self) -> None:
         if self.controller.connected:
+            if time.monotonic() - getattr(self, "_connect_at", -1e9) < QApplication.doubleClickInterval() / 1000:
+                return  # the second click of a double-click on Connect: the stage connected meanwhile, keep it
             self.controller.detach("disconnected by the operator")
         else:
+            self._connect_at = time.monotonic()
             self.connect_source()
 
     def connect_source(self) -> None:

@@ -54,6 +54,9 @@ class PathPicker(QWidget):
         self.changed.emit(self.text())
 
 
+STRETCH_CAP_PX = 200  # the widest a ValueTable's long-text column starts (the rest of its text elided, in the tooltip)
+
+
 class ValueTable(QTableWidget):
     """A read-only table of rows of text, sized to its contents."""
 
@@ -62,6 +65,7 @@ class ValueTable(QTableWidget):
         super().__init__(0, len(headers), parent)
         self.numeric = set(numeric)  # right-aligned columns
         self.stretch = stretch  # the column that gives up width (elided, full text in its tooltip): the others stay seen
+        self.setTextElideMode(Qt.TextElideMode.ElideRight)
         self.setHorizontalHeaderLabels(list(headers))
         self.verticalHeader().setVisible(False)
         self.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
@@ -86,11 +90,10 @@ class ValueTable(QTableWidget):
                         item.setTextAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
                     self.setItem(r, c, item)
             self.resizeColumnsToContents()
-            if self.stretch is not None:
-                hh.setStretchLastSection(False)
-                hh.setSectionResizeMode(self.stretch, QHeaderView.ResizeMode.Stretch)
-            else:
-                hh.setStretchLastSection(True)
+            if self.stretch is not None:  # capped, never below its header: the other columns stay in view
+                header_px = hh.sectionSizeFromContents(self.stretch).width()
+                hh.resizeSection(self.stretch, max(header_px, min(hh.sectionSize(self.stretch), STRETCH_CAP_PX)))
+            hh.setStretchLastSection(True)
         finally:
             self.setUpdatesEnabled(True)
 

@@ -154,7 +154,7 @@ class EstimationPanel(QWidget):
         row.addWidget(self.cancel_btn)
         row.addWidget(self.progress, 1)
 
-        self.table = ValueTable(["Parameter", "Value", "σ", "Unit"])
+        self.table = ValueTable(["Parameter", "Value", "σ", "Unit"], stretch=0)
         stack(self, [inputs, opts, row, self.message, (self.table, 1)])
 
         self.job: Job | None = None

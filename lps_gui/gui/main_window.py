@@ -359,6 +359,8 @@ class MainWindow(QMainWindow):
         state = s.value("window/state")
         if state is not None:
             self.restoreState(state, LAYOUT_VERSION)
+        else:
+            self.arrange_docks()  # the first start: the docks' shares of the window as it now is
         self.stage_panel.restore(s)
         self.camera_panel.expect_sim_camera(self.stage_panel.current_source() == SIM)
         self.capture_panel.restore(s)

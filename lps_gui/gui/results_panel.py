@@ -59,6 +59,7 @@ class ResultsPanel(QWidget):
         self._pending_table = False
         self._tab_keys: list[str] = []
         self.section_pages: dict[str, SectionPage] = {}  # tab title -> page, built on first use
+        self._holders: dict[QWidget, QWidget] = {}  # a stack of plots -> the scroll area that is its tab
         self._generation = 0
 
         self.header = QLabel("No results yet: run an estimation or open a session with results.json.")
@@ -151,7 +152,7 @@ class ResultsPanel(QWidget):
         self._build_tabs(figures)
         for page in set(self._pages.values()):
             tips = [f.notes or f.title for f in figures if self._pages.get(f.key) is page]
-            self.tabs.setTabToolTip(self.tabs.indexOf(page), "\n".join(tips))
+            self.tabs.setTabToolTip(self.tabs.indexOf(self._holders.get(page, page)), "\n".join(tips))
         self.tabs.setCurrentWidget(self.accuracy_page)  # the answer first: accuracy figures and verdict
         scroll_home(self)  # tables and plots start at their left edge, not where the last results were scrolled
         self.drawn.clear()
@@ -163,7 +164,8 @@ class ResultsPanel(QWidget):
         self.set_report(report if report is not None and report.is_file() else None)
         # the visible figure first, then the others, then the tables
         current = self.tabs.currentIndex()
-        order = sorted(range(len(figures)), key=lambda i: self.tabs.indexOf(self._pages[figures[i].key]) != current)
+        order = sorted(range(len(figures)), key=lambda i: self.tabs.indexOf(
+            self._holders.get(self._pages[figures[i].key], self._pages[figures[i].key])) != current)
         self._queue = []
         for i in order:
             self._queue += self._draw_steps(figures[i])
@@ -222,7 +224,7 @@ class ResultsPanel(QWidget):
                 page.setStretchFactor(1, 2)
             for k in members:
                 self._pages[k] = page
-            self.tabs.addTab(page, title)
+            self.tabs.addTab(self.tab_holder(page) if len(members) > 1 else page, title)
         self.tabs.addTab(self.position_table, "Table")
         self._tab_keys = keys
 
@@ -233,7 +235,7 @@ class ResultsPanel(QWidget):
         Reading the sections, each tab and each plot are steps of their own (the window stays responsive).
         """
         for page in self.section_pages.values():
-            if (i := self.tabs.indexOf(page)) >= 0:
+            if (i := self.tabs.indexOf(self.tab_holder(page))) >= 0:
                 self.tabs.removeTab(i)
 
         def expand() -> None:
@@ -252,7 +254,7 @@ class ResultsPanel(QWidget):
     def _add_section(self, content: SectionContent) -> None:
         page = self.section_pages.setdefault(content.title, SectionPage())
         page.set_content(content)
-        index = self.tabs.insertTab(self.tabs.indexOf(self.position_table), page, content.title)
+        index = self.tabs.insertTab(self.tabs.indexOf(self.position_table), self.tab_holder(page), content.title)
         self.tabs.setTabToolTip(index, tab_tip(content))
 
     def _section_figure_steps(self, content: SectionContent, index: int, fig: Any) -> list[Any]:
@@ -263,7 +265,22 @@ class ResultsPanel(QWidget):
     def show_figure(self, key: str) -> None:
         """Bring the tab holding figure ``key`` to the front."""
         page = self._pages.get(key) or next(p for p in self.section_pages.values() if key in p.plots)
-        self.tabs.setCurrentWidget(page)
+        self.tabs.setCurrentWidget(self._holders.get(page, page))
+
+    def tab_holder(self, page: QWidget) -> QWidget:
+        """The tab of a stack of plots: a scroll area, so plots that need more height than the tab has scroll
+        down instead of losing their data area (each plot keeps its minimum height, plot_adapter.fit_legend)."""
+        holder = self._holders.get(page)
+        if holder is None:
+            from PySide6.QtWidgets import QFrame, QScrollArea
+
+            area = QScrollArea()
+            area.setWidgetResizable(True)
+            area.setFrameShape(QFrame.Shape.NoFrame)
+            area.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+            area.setWidget(page)
+            holder = self._holders[page] = area
+        return holder
 
     def _draw_steps(self, fig: Any) -> list[Any]:
         drawn, steps = figure_steps(self.plots[fig.key].getPlotItem(), fig)

@@ -85,6 +85,20 @@ class Driver:
         if frame.width() > area.width() or frame.height() > area.height():
             self.problems.append(f"{step}: window {frame.width()}x{frame.height()} exceeds the screen "
                                  f"{area.width()}x{area.height()}")
+        import pyqtgraph as pg
+
+        for plot in w.findChildren(pg.PlotWidget):
+            if not plot.isVisible():
+                continue
+            item = plot.getPlotItem()
+            need = item.geometry()  # laid out no smaller than its minimum: larger than the view is cut off
+            vb = item.getViewBox().geometry()
+            if (need.width() > plot.viewport().width() + 1 or need.height() > plot.viewport().height() + 1
+                    or vb.height() < 40 or vb.width() < 60):
+                self.problems.append(f"{step}: plot {item.titleLabel.text[:40]!r} is cut off: it needs "
+                                     f"{need.width():.0f}x{need.height():.0f} px, its view is "
+                                     f"{plot.viewport().width()}x{plot.viewport().height()} px, "
+                                     f"data area {vb.width():.0f}x{vb.height():.0f} px")
         for view in w.findChildren(QAbstractItemView):
             header = getattr(view, "horizontalHeader", lambda: None)()
             if not isinstance(header, QHeaderView) or not view.isVisible() or view.model() is None:

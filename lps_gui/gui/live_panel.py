@@ -35,7 +35,7 @@ class LivePanel(QGroupBox):
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__("Live results", parent)
-        self.enabled = QCheckBox("Detect, estimate and check while capturing; end in the report")
+        self.enabled = QCheckBox("Detect, estimate, check; then report")  # short: a laptop's dock
         self.enabled.setChecked(True)
         self.pause_on_flag = QCheckBox("Pause the capture at a flag")
         self.pause_on_flag.setToolTip("Stop after the frame being taken when a check flags something: fix it, then Resume")
@@ -141,4 +141,4 @@ class LivePanel(QGroupBox):
             self.n_views = int(data["n_views"])
         if self._steps:
             self._steps.pop(0)()
-            QTimer.singleShot(0, self._draw_next)
+            QTimer.singleShot(0, self, self._draw_next)  # dropped with the panel

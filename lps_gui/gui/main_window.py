@@ -80,7 +80,7 @@ class MainWindow(QMainWindow):
             dock.setObjectName(f"dock_{name}")
             dock.setWidget(scrolled(widget) if name in SCROLLED else widget)
             self.docks[name] = dock
-            dock.visibilityChanged.connect(lambda _on: QTimer.singleShot(0, lambda: clamp_to_screen(self)))
+            dock.visibilityChanged.connect(lambda _on: QTimer.singleShot(0, self, lambda: clamp_to_screen(self)))
         self.default_layout()
 
         # --- status bar

@@ -91,6 +91,7 @@ class ResultsPanel(QWidget):
         self._groups: dict[str, QSplitter] = {}
         self.iso_table = ValueTable(["Figure", "Value", "U (k = 2)", "Unit"], numeric=(1, 2), stretch=0)
         self.target_label = QLabel("ISO 230-2 per target")
+        self.target_label.setWordWrap(True)
         self.target_table = TextTable(numeric=range(0, 20))
         self.accuracy_page = QSplitter(Qt.Orientation.Vertical)  # the figures, then the per-target table
         targets = QWidget()
@@ -173,7 +174,7 @@ class ResultsPanel(QWidget):
         self._queue += [lambda: self._fill_tables(results), lambda: self._fill_positions(results)]
         self._generation += 1
         generation = self._generation
-        QTimer.singleShot(0, lambda: self._drain(generation))
+        QTimer.singleShot(0, self, lambda: self._drain(generation))  # dropped with the panel
 
     def _drain(self, generation: int) -> None:
         if generation != self._generation:
@@ -185,7 +186,7 @@ class ResultsPanel(QWidget):
             except Exception:  # one broken figure or table must not stop the others
                 log.exception("results: drawing step failed")
         if self._queue:
-            QTimer.singleShot(0, lambda: self._drain(generation))
+            QTimer.singleShot(0, self, lambda: self._drain(generation))
         else:
             self.drawing_done.emit()
 

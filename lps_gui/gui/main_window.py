@@ -29,7 +29,7 @@ from lps_gui.gui.job_runner import JobRunner
 from lps_gui.gui.log_panel import LogPanel
 from lps_gui.gui.results_panel import ResultsPanel
 from lps_gui.gui.services import preload_backends
-from lps_gui.gui.sources import SIM
+from lps_gui.gui.sources import RIG_SOURCES
 from lps_gui.gui.stage_controller import StageController
 from lps_gui.gui.stage_panel import StagePanel
 from lps_gui.gui.workers import Job, one_line, stop_all_jobs
@@ -184,7 +184,7 @@ class MainWindow(QMainWindow):
             panel.run_requested.connect(self._panel_job)
         self.estimation_panel.results_ready.connect(self._on_results)
         self.intrinsics_panel.saved.connect(self.estimation_panel.set_intrinsics_file)
-        self.stage_panel.source_changed.connect(lambda src: self.camera_panel.expect_sim_camera(src == SIM))
+        self.stage_panel.source_changed.connect(lambda src: self.camera_panel.expect_sim_camera(src in RIG_SOURCES))
         self.capture_panel.session_done.connect(self._on_capture_done)
         self.capture_panel.failed.connect(self.show_error)
         self.capture_panel.board_changed.connect(self.intrinsics_panel.set_board)
@@ -362,7 +362,7 @@ class MainWindow(QMainWindow):
         else:
             self.arrange_docks()  # the first start: the docks' shares of the window as it now is
         self.stage_panel.restore(s)
-        self.camera_panel.expect_sim_camera(self.stage_panel.current_source() == SIM)
+        self.camera_panel.expect_sim_camera(self.stage_panel.current_source() in RIG_SOURCES)
         self.capture_panel.restore(s)
         self.estimation_panel.restore(s)
 

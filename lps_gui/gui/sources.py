@@ -18,6 +18,7 @@ EMULATOR = "emulator"
 SIM_PRESET = "small"
 BAUD_RATES = (115200, 250000, 57600, 38400, 19200, 9600)
 CAMERA_FOLLOWS_STAGE = "sim"  # the simulated camera riding the simulated stage
+RIG_SOURCES = (SIM, EMULATOR)  # stage sources that come with the simulated camera (the emulator serves the rig)
 
 
 def stage_choices() -> list[tuple[str, str]]:
@@ -72,8 +73,11 @@ def open_stage_source(source: str, baud: int = 115200, clock: Clock | None = Non
         return simulated_rig(clock)
     from lps_gui.hardware import open_stage
 
-    if source == EMULATOR:
-        return open_stage(EMULATOR), None
+    if source == EMULATOR:  # the GRBL emulator serves the simulated rig's stage: the simulated camera rides it
+        from lps_gui.sim.emulated import emulated_rig_stage
+
+        rig_stage, camera = simulated_rig(clock)
+        return emulated_rig_stage(rig_stage), camera
     if source.startswith("grbl:"):
         return (open_stage(source, baudrate=baud) if baud != 115200 else open_stage(source)), None
     raise InputError(f"stage source {source!r} is unknown; choose one from the list")

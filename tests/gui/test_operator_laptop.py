@@ -370,3 +370,14 @@ def test_the_camera_display_is_cleared_when_the_stage_disconnects(qtbot, window)
     qtbot.waitUntil(lambda: cam.grabber is None, timeout=5000)
     assert cam.last_image() is None and cam.fps_label.text() == "— fps" and cam.placeholder.isVisible()
     assert cam.detect_label.text() == "no frame"
+
+
+def test_the_grbl_emulator_comes_with_the_simulated_camera(qtbot, window):
+    panel, cam = window.stage_panel, window.camera_panel
+    panel.select_source("emulator")
+    assert cam.source.findData("sim") >= 0  # offered before connecting, as with the simulated stage
+    panel.connect_btn.click()
+    qtbot.waitUntil(lambda: window.stage_ctl.connected and window.stage_ctl.last_status is not None, timeout=15000)
+    qtbot.waitUntil(lambda: cam.sim_camera is not None, timeout=5000)
+    assert cam.source.currentData() == "sim" and cam.start()
+    qtbot.waitUntil(lambda: cam.frames_shown >= 2 and cam.detect_label.text().startswith("found"), timeout=30000)

@@ -178,6 +178,7 @@ class CapturePanel(QWidget):
         from lps_gui.gui.live_panel import LivePanel
 
         self.live_panel = LivePanel()  # the deviation plot growing stop by stop, the live flags, the report
+        self.planar_editor.enabled.toggled.connect(self.live_panel.set_planar)
         self.live_panel.flagged.connect(lambda _flag: self.pause() if self.live_panel.pause_on_flag.isChecked() else None)
         stack(self, [plan_box, (self.planar_editor, 1), self.targets_editor, self.report_setup, sess, row, self.progress, self.eta,
                      self.live_panel]).addStretch(1)

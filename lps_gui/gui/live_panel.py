@@ -92,6 +92,12 @@ class LivePanel(QGroupBox):
             self._bridge.event.emit(LiveEvent("error", f"live results: {exc}"))
 
     # ------------------------------------------------------------------ GUI thread
+    def set_planar(self, planar: bool) -> None:
+        """A planar plan: no deviation-against-target plot (its axes are one-dimensional); the flags and the
+        status stay. The plot of an earlier line capture goes too."""
+        self.clear()
+        self.plot.setVisible(not planar)
+
     def clear(self) -> None:
         self.flags.clear()
         self.plot.getPlotItem().clear()

@@ -381,3 +381,13 @@ def test_the_grbl_emulator_comes_with_the_simulated_camera(qtbot, window):
     qtbot.waitUntil(lambda: cam.sim_camera is not None, timeout=5000)
     assert cam.source.currentData() == "sim" and cam.start()
     qtbot.waitUntil(lambda: cam.frames_shown >= 2 and cam.detect_label.text().startswith("found"), timeout=30000)
+
+
+def test_a_planar_plan_shows_no_one_dimensional_live_plot(qtbot, window):
+    live = window.capture_panel.live_panel
+    window.show_panel("capture")
+    live.plot.getPlotItem().plot([0.0, 1.0], [0.0, 2.0])  # the last line capture's live deviation
+    window.capture_panel.planar_editor.enabled.setChecked(True)
+    assert not live.plot.isVisible() and not live.plot.getPlotItem().listDataItems()
+    window.capture_panel.planar_editor.enabled.setChecked(False)
+    assert live.plot.isVisible()

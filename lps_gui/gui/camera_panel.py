@@ -16,9 +16,9 @@ from typing import Callable
 
 import numpy as np
 import pyqtgraph as pg
-from PySide6.QtCore import QTimer, Signal
+from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtWidgets import (
-    QCheckBox, QComboBox, QDoubleSpinBox, QFileDialog, QGridLayout, QGroupBox, QHBoxLayout, QLabel, QProgressBar,
+    QCheckBox, QComboBox, QDoubleSpinBox, QFileDialog, QGridLayout, QGroupBox, QLabel, QProgressBar,
     QPushButton, QVBoxLayout, QWidget,
 )
 
@@ -70,10 +70,11 @@ class CameraPanel(QWidget):
         self.source.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
         self.source.setMinimumContentsLength(12)  # a long label elides; the dock keeps its width
         self.open_btn = QPushButton("Start preview")
-        top = QHBoxLayout()
-        top.addWidget(QLabel("Source"))
-        top.addWidget(self.source, 1)
-        top.addWidget(self.open_btn)
+        top = QGridLayout()  # the button under the source: side by side they pushed Start preview off a laptop's screen
+        top.addWidget(QLabel("Source"), 0, 0)
+        top.addWidget(self.source, 0, 1)
+        top.addWidget(self.open_btn, 1, 1, Qt.AlignmentFlag.AlignLeft)
+        top.setColumnStretch(1, 1)
 
         self.view = pg.GraphicsLayoutWidget()
         self.view.setBackground("#202020")

@@ -42,6 +42,7 @@ ORGANIZATION = "lps-calib"
 APPLICATION = "lps-gui"
 LAYOUT_VERSION = 1
 DOCK_SHARES = (0.38, 0.38, 0.24)  # of the window's width: panels on the left, results, camera and log
+DOCK_CAPS = (470, 320)  # px: on a wide screen the left panels and the camera stop there, the results get the rest
 SCROLLED = ("stage", "camera", "intrinsics", "capture", "estimation")  # they grow; the window must not
 
 
@@ -80,7 +81,7 @@ class MainWindow(QMainWindow):
             dock.setObjectName(f"dock_{name}")
             dock.setWidget(scrolled(widget) if name in SCROLLED else widget)
             self.docks[name] = dock
-            dock.visibilityChanged.connect(lambda _on: QTimer.singleShot(0, self, lambda: clamp_to_screen(self)))
+            dock.toggleViewAction().toggled.connect(self._dock_toggled)
         self.default_layout()
 
         # --- status bar
@@ -119,9 +120,15 @@ class MainWindow(QMainWindow):
         self.splitDockWidget(d["camera"], d["log"], Qt.Orientation.Vertical)
         d["stage"].raise_()
         w, h = max(self.width(), 800), max(self.height(), 500)  # shares of the window: a laptop screen too
-        self.resizeDocks([d["stage"], d["results"], d["camera"]], [int(w * f) for f in DOCK_SHARES],
+        left, camera = (int(min(w * share, cap)) for share, cap in zip(DOCK_SHARES[::2], DOCK_CAPS))
+        self.resizeDocks([d["stage"], d["results"], d["camera"]], [left, w - left - camera, camera],
                          Qt.Orientation.Horizontal)
         self.resizeDocks([d["camera"], d["log"]], [int(h * 0.7), int(h * 0.3)], Qt.Orientation.Vertical)
+
+    def _dock_toggled(self, shown: bool) -> None:
+        """A dock closed (not merely tabbed away) gives its width back: the window shrinks into the screen."""
+        if not shown:
+            QTimer.singleShot(0, self, lambda: clamp_to_screen(self))
 
     def show_panel(self, name: str) -> None:
         dock = self.docks[name]

@@ -391,3 +391,19 @@ def test_a_planar_plan_shows_no_one_dimensional_live_plot(qtbot, window):
     assert not live.plot.isVisible() and not live.plot.getPlotItem().listDataItems()
     window.capture_panel.planar_editor.enabled.setChecked(False)
     assert live.plot.isVisible()
+
+
+def test_a_status_that_arrives_after_disconnect_is_not_shown(qtbot, window):
+    from concurrent.futures import Future
+
+    connect_sim(qtbot, window)
+    ctl = window.stage_ctl
+    stage, late = ctl.stage, Future()
+    late.set_result(ctl.last_status)
+    poll = threading.Thread(target=ctl._on_polled, args=(stage, late))  # the status thread's last poll ...
+    poll.start()
+    poll.join()
+    ctl.detach("disconnected by the operator")  # ... is delivered after the operator disconnected
+    qtbot.wait(50)
+    assert window.status_state.text() == "\u2014" and window.status_pos.text() == "X \u2014 mm"
+    assert ctl.last_status is None

@@ -35,17 +35,18 @@ def xvfb_display(request):
     display = Display(backend="xvfb", size=(width, height), color_depth=24, manage_global_env=False)
     display.start()
     try:
-        yield display
+        yield display, (width, height)
     finally:
         display.stop()
 
 
 @pytest.mark.parametrize("xvfb_display", SIZES, indirect=True, ids=[f"{w}x{h}" for w, h in SIZES])
 def test_the_real_window_fits_the_screen_through_a_whole_run(xvfb_display, tmp_path):
-    env = dict(os.environ, DISPLAY=xvfb_display.env()["DISPLAY"], QT_QPA_PLATFORM="xcb")
+    display, size = xvfb_display
+    env = dict(os.environ, DISPLAY=display.env()["DISPLAY"], QT_QPA_PLATFORM="xcb")
     env.pop("WAYLAND_DISPLAY", None)
     out = Path(os.environ.get("LPS_SCREENSHOTS") or tmp_path / "shots")
-    if "LPS_SCREENSHOTS" in os.environ and xvfb_display._size != (1000, 700):
+    if "LPS_SCREENSHOTS" in os.environ and size != (1000, 700):
         out = tmp_path / "shots"  # the docs keep the laptop size only
     proc = subprocess.run([sys.executable, "-m", "tests.gui.real_window", "--out", str(out)], cwd=ROOT, env=env,
                           capture_output=True, text=True, timeout=200)

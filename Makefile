@@ -18,10 +18,19 @@ demo: $(STAMP)
 demo-quick: $(STAMP)
 	$(VENV)/bin/lps demo --quick --out demo-output-quick
 
+# the real-window tests (tests/gui/test_real_window.py) need an X server (Xvfb) and Qt's xcb libraries, installed
+# here when missing and apt-get can run (as root; stdin closed, a timeout: a stuck apt never hangs the build)
+XVFB := { command -v Xvfb && ldconfig -p | grep -q libxcb-cursor.so.0 && ldconfig -p | grep -q libxcb-icccm.so.4; } >/dev/null \
+	|| { [ "$$(id -u)" = 0 ] && timeout 300 apt-get install -y -q xvfb libxcb-cursor0 libxcb-icccm4 libxcb-keysyms1 \
+	libxcb-image0 libxcb-render-util0 libxcb-shape0 libxcb-randr0 libxcb-xinerama0 libxcb-xkb1 libxkbcommon-x11-0 \
+	>/dev/null </dev/null; } || echo "make: Xvfb or Qt's xcb libraries missing and not installable (see README, Install)"
+
 test: $(STAMP)
+	@$(XVFB)
 	$(PY) -m pytest -m "not slow"
 
 test-all: $(STAMP)
+	@$(XVFB)
 	$(PY) -m pytest
 
 bench: $(STAMP)
@@ -29,6 +38,8 @@ bench: $(STAMP)
 
 screenshots: $(STAMP)
 	$(PY) -m lps_gui.gui.screenshots docs/screenshots
+	@$(XVFB)
+	LPS_SCREENSHOTS=docs/screenshots/1000x700 $(PY) -m pytest -q tests/gui/test_real_window.py -k 1000x700
 
 package: $(STAMP)
 	$(PY) -m pip install -q -e '.[package]'

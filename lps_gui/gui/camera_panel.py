@@ -16,7 +16,7 @@ from typing import Callable
 
 import numpy as np
 import pyqtgraph as pg
-from PySide6.QtCore import QTimer, Signal
+from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtWidgets import (
     QCheckBox,
     QComboBox,
@@ -24,7 +24,6 @@ from PySide6.QtWidgets import (
     QFileDialog,
     QGridLayout,
     QGroupBox,
-    QHBoxLayout,
     QLabel,
     QProgressBar,
     QPushButton,
@@ -80,10 +79,11 @@ class CameraPanel(QWidget):
         self.source.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
         self.source.setMinimumContentsLength(12)  # a long label elides; the dock keeps its width
         self.open_btn = QPushButton("Start preview")
-        top = QHBoxLayout()
-        top.addWidget(QLabel("Source"))
-        top.addWidget(self.source, 1)
-        top.addWidget(self.open_btn)
+        top = QGridLayout()  # the button under the source: side by side they pushed Start preview off a laptop's screen
+        top.addWidget(QLabel("Source"), 0, 0)
+        top.addWidget(self.source, 0, 1)
+        top.addWidget(self.open_btn, 1, 1, Qt.AlignmentFlag.AlignLeft)
+        top.setColumnStretch(1, 1)
 
         self.view = pg.GraphicsLayoutWidget()
         self.view.setBackground("#202020")
@@ -327,6 +327,7 @@ class CameraPanel(QWidget):
         self.show_controls(None)
         self.watch.reset()
         self.jump_label.setText("")
+        self.clear_display()
 
     def pause(self, on: bool) -> None:
         """Lend the camera to the capture engine (on) or take it back (off); the controls lock meanwhile."""
@@ -336,16 +337,21 @@ class CameraPanel(QWidget):
             _stream(self.camera, not on)  # a capture takes fresh frames, one acquisition each
         self.lock_controls(on)
 
-    def _on_grab_failed(self, message: str) -> None:
-        opened = self.camera is not None
-        self.stop()
-        self.image.clear()  # no frozen last frame that looks live
+    def clear_display(self) -> None:
+        """No frozen last frame that looks live, nor the figures of that frame (after a stop, a lost camera,
+        a disconnected stage)."""
+        self.image.clear()
         self.overlay.setData([], [])
         self.first_corner.setData([], [])
         self.placeholder.setVisible(True)
-        self.sharpness_bar.setValue(0)  # nor the figures of that frame
+        self.sharpness_bar.setValue(0)
         self.sharpness_label.setText("sharpness —")
         self.fps_label.setText("— fps")
+        self._set_detect("no frame", "#777777")
+
+    def _on_grab_failed(self, message: str) -> None:
+        opened = self.camera is not None
+        self.stop()
         self._set_detect("camera lost" if opened else "not opened", "#d00000")
         self.failed.emit("Camera preview stopped" if opened else "Camera not opened", message)
 

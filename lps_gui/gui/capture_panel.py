@@ -197,6 +197,7 @@ class CapturePanel(QWidget):
         from lps_gui.gui.live_panel import LivePanel
 
         self.live_panel = LivePanel()  # the deviation plot growing stop by stop, the live flags, the report
+        self.planar_editor.enabled.toggled.connect(self.live_panel.set_planar)
         self.live_panel.flagged.connect(lambda _flag: self.pause() if self.live_panel.pause_on_flag.isChecked() else None)
         stack(self, [plan_box, (self.planar_editor, 1), self.targets_editor, self.report_setup, sess, row, self.progress, self.eta,
                      self.live_panel]).addStretch(1)
@@ -453,6 +454,7 @@ class CapturePanel(QWidget):
             return summary
 
         self._abort_early = False
+        self._eta_base: tuple[int, float] | None = None  # (frames done, time) at this run's first report
         job = Job(f"capture {self.session_dir.name}", work)
         job.progress.connect(self._on_progress)
         job.succeeded.connect(self._on_summary)
@@ -470,6 +472,7 @@ class CapturePanel(QWidget):
         state = getattr(summary, "state", "done")
         self._learn_frame_time(summary)
         if state == "done":
+            self.progress.setValue(self.progress.maximum())
             self.eta.setText(f"complete: {summary.listed} frames in {self.session_dir}")
             self.session_done.emit(self.session_dir)
         elif state == "aborted":
@@ -539,10 +542,21 @@ class CapturePanel(QWidget):
     def _on_progress(self, done: int, total: int, message: str) -> None:
         self.progress.setMaximum(max(total, 1))
         self.progress.setValue(done)
-        elapsed = time.monotonic() - self._t0
-        eta = elapsed / done * (total - done) if done else float("nan")
-        self.eta.setText(f"{done}/{total} frames" + (f", {fmt_duration(eta)} left" if done else "")
+        eta = self.remaining_s(done, total)
+        self.eta.setText(f"{done}/{total} frames" + (f", {fmt_duration(eta)} left" if eta is not None else "")
                          + (f" — {message}" if message else ""))
+
+    def remaining_s(self, done: int, total: int) -> float | None:
+        """Time left from this run's own pace: a resumed session's earlier frames took no time of this run
+        (counting them halved the estimate). None until two reports of this run came."""
+        now = time.monotonic()
+        if getattr(self, "_eta_base", None) is None:
+            self._eta_base = (done, now)
+            return None
+        done0, t0 = self._eta_base
+        if done <= done0:
+            return None
+        return (now - t0) / (done - done0) * (total - done)
 
     def _on_finished(self) -> None:
         if self.job is not None and self.job.error is not None:

@@ -72,18 +72,29 @@ PARALLEL_DETECTION_MIN_VIEWS = 60  # below this, starting detection processes co
 
 
 def corners_needed(session_dir: Path) -> bool:
-    """Whether captured images still lack corners (corners.vnl absent or older than captures.jsonl)."""
+    """Whether the session has images to take corners from; detection itself keeps what is current.
+
+    A file time does not say whether corners.vnl is complete: a cancelled
+    detection writes the views it finished, newer than captures.jsonl, and the
+    session then looked detected for good. :func:`detect_session` judges by
+    content (the hash of captures.jsonl, each image's stats or hash) and
+    detects only what is missing, returning at once when nothing is.
+    """
     from lps_gui.io.session import Session
 
     session = Session.open(session_dir)
-    corners = session.corners_path
     records = session.records()
-    if not records:
-        return False  # estimation says what is missing
-    if not corners.exists():
-        return any((session.folder / r.file).exists() for r in records)
-    return corners.stat().st_mtime < session.captures_path.stat().st_mtime and any(
-        (session.folder / r.file).exists() for r in records)
+    return bool(records) and any((session.folder / r.file).exists() for r in records)
+
+
+def detect_missing(session_dir: Path, progress: Any, cancel: Any) -> Any:
+    """Detect the views corners.vnl lacks (all of them the first time); what the Detect button runs."""
+    from lps_gui.io.session import Session
+    from lps_gui.pipeline.detect import detect_session
+
+    n = len(Session.open(session_dir).records())
+    return detect_session(session_dir, progress=progress, cancel=cancel,
+                          workers=None if n >= PARALLEL_DETECTION_MIN_VIEWS else 1)
 
 
 def detect_and_estimate(session_dir: Path, method: str, options: dict[str, Any], intrinsics_path: Path | None,
@@ -95,12 +106,7 @@ def detect_and_estimate(session_dir: Path, method: str, options: dict[str, Any],
     resumed capture only detects its new frames.
     """
     if corners_needed(session_dir):
-        from lps_gui.io.session import Session
-        from lps_gui.pipeline.detect import detect_session
-
-        n = len(Session.open(session_dir).records())
-        detect_session(session_dir, progress=progress, cancel=cancel,
-                       workers=None if n >= PARALLEL_DETECTION_MIN_VIEWS else 1)
+        detect_missing(session_dir, progress, cancel)
     from lps_gui.pipeline.estimate import estimate_session
 
     return as_results(estimate_session(session_dir, method=method, options=options, intrinsics_path=intrinsics_path,
@@ -140,6 +146,9 @@ class EstimationPanel(QWidget):
             ("Grid resolution (hybrid)", self.grid_resolution), ("Stop at RMS (hybrid)", self.threshold_px)])
 
         self.run_btn = QPushButton("Estimate")
+        self.detect_btn = QPushButton("Detect")
+        self.detect_btn.setToolTip("Detect the corners the session's images still lack (corners.vnl), without "
+                                   "estimating; Estimate does this first by itself")
         self.cancel_btn = QPushButton("Cancel")
         self.cancel_btn.setEnabled(False)
         self.progress = QProgressBar()
@@ -148,16 +157,18 @@ class EstimationPanel(QWidget):
         self.message.setWordWrap(True)  # a long error wraps; it does not widen the dock
         row = QHBoxLayout()
         row.addWidget(self.run_btn)
+        row.addWidget(self.detect_btn)
         row.addWidget(self.cancel_btn)
         row.addWidget(self.progress, 1)
 
-        self.table = ValueTable(["Parameter", "Value", "σ", "Unit"])
+        self.table = ValueTable(["Parameter", "Value", "σ", "Unit"], stretch=0)
         stack(self, [inputs, opts, row, self.message, (self.table, 1)])
 
         self.job: Job | None = None
         self.last_results: Results | None = None
         self.method.currentIndexChanged.connect(self._method_changed)
         self.run_btn.clicked.connect(self.start)
+        self.detect_btn.clicked.connect(self.start_detection)
         self.cancel_btn.clicked.connect(self.cancel)
         self._method_changed()
 
@@ -204,8 +215,24 @@ class EstimationPanel(QWidget):
 
     def start(self) -> None:
         """Ask the main window to run the estimation (it owns job bookkeeping and error boxes)."""
+        session = self.session.path()
+        self._launch(self.make_job, lambda res: self._on_done(res, session))
+
+    def start_detection(self) -> None:
+        """Detect only: after a cancelled estimate, or to look at the corners before estimating."""
+        def make() -> Job:
+            session = self.session.path()
+            if session is None:
+                from lps_gui.errors import InputError
+
+                raise InputError("detection: choose a session folder first")
+            return Job(f"detect {session.name}", detect_missing, session)
+
+        self._launch(make, self._on_detected)
+
+    def _launch(self, make: Any, on_success: Any) -> None:
         try:
-            job = self.make_job()
+            job = make()
         except Exception as exc:
             from lps_gui.gui.workers import one_line
 
@@ -213,17 +240,22 @@ class EstimationPanel(QWidget):
             self.run_requested.emit(exc)
             return
         self.job = job
-        session = self.session.path()
         job.progress.connect(self._on_progress)
-        job.succeeded.connect(lambda res: self._on_done(res, session))
+        job.succeeded.connect(on_success)
         job.failed.connect(lambda msg, _tb: self.message.setText(f"failed: {msg}"))
         job.cancelled.connect(lambda msg: self.message.setText(msg))
         job.finished.connect(self._on_finished)
         self.run_btn.setEnabled(False)
+        self.detect_btn.setEnabled(False)
         self.cancel_btn.setEnabled(True)
         self.progress.setValue(0)
         self.message.setText("running…")
         self.run_requested.emit(job)
+
+    def _on_detected(self, table: Any) -> None:
+        self.progress.setValue(self.progress.maximum())
+        found = sum(1 for n in table.names if n not in table.failed)
+        self.message.setText(f"corners: {found} of {len(table.names)} views detected; estimate next")
 
     def cancel(self) -> None:
         if self.job is not None:
@@ -236,6 +268,8 @@ class EstimationPanel(QWidget):
             self.message.setText(message)
 
     def _on_done(self, results: Results, session: Path | None) -> None:
+        self.progress.setMaximum(max(self.progress.maximum(), 1))
+        self.progress.setValue(self.progress.maximum())  # done is 100 %, whatever the last report said
         self.show_results(results)
         self.message.setText("done")
         self.results_ready.emit(results, session)
@@ -249,6 +283,7 @@ class EstimationPanel(QWidget):
         if self.job is not None and self.job.error is not None:
             self.progress.reset()
         self.run_btn.setEnabled(True)
+        self.detect_btn.setEnabled(True)
         self.cancel_btn.setEnabled(False)
         self.job = None
 

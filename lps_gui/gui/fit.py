@@ -3,7 +3,9 @@
 A dock's minimum height is its panel's; a panel that grows (a section
 unfolded, the planar editor shown) used to push the whole window past the
 screen, Start and the status bar with it. Inside a scroll area a panel can
-grow without the window. A wheel turned over a field the operator did not
+grow without the window. Its width is capped too (:data:`DOCK_MIN_WIDTH`):
+a panel wider than that scrolls sideways inside its dock, so the docks side by
+side fit a 1000 px screen (they used to add up to 1179 px). A wheel turned over a field the operator did not
 click used to change it (the plan Pattern while scrolling the panel): fields
 take the wheel only once focused, otherwise it scrolls the panel.
 """
@@ -13,15 +15,19 @@ from PySide6.QtCore import QEvent, QObject, QRect, Qt
 from PySide6.QtGui import QGuiApplication
 from PySide6.QtWidgets import QAbstractSpinBox, QComboBox, QFrame, QScrollArea, QWidget
 
+DOCK_MIN_WIDTH = 260  # px: the narrowest a scrolled panel's dock goes; three docks side by side fit 1000 px
 
-def scrolled(panel: QWidget) -> QScrollArea:
-    """``panel`` in a frameless scroll area that follows the dock's width and scrolls down."""
+
+def scrolled(panel: QWidget, min_width: int = DOCK_MIN_WIDTH) -> QScrollArea:
+    """``panel`` in a frameless scroll area that follows the dock's width; it scrolls down, and sideways only
+    when the dock is narrower than the panel can go (never below ``min_width``)."""
     area = QScrollArea()
     area.setWidgetResizable(True)
     area.setFrameShape(QFrame.Shape.NoFrame)
     area.setWidget(panel)
-    area.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)  # down, never sideways:
-    area.setMinimumWidth(panel.minimumSizeHint().width() + area.verticalScrollBar().sizeHint().width())
+    area.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAsNeeded)
+    bar = area.verticalScrollBar().sizeHint().width()
+    area.setMinimumWidth(min(panel.minimumSizeHint().width() + bar, min_width))
     area.setObjectName(f"scroll_{panel.objectName() or type(panel).__name__}")
     return area
 

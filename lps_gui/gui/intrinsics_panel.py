@@ -152,7 +152,7 @@ class IntrinsicsPanel(QWidget):
         self.message = QLabel("Add 6–30 images of the board in varied poses, then calibrate.")
         self.message.setWordWrap(True)
 
-        self.table = ValueTable(["Parameter", "Value", "σ", "Unit"])
+        self.table = ValueTable(["Parameter", "Value", "σ", "Unit"], stretch=0)
         self.pictures = {name: PictureView(f"{name}: calibrate first") for name in
                          ("Residuals per view", "Residual field", "Uncertainty", "Coverage", "Cross-validation")}
         self.pictures["Cross-validation"].setText("Cross-validation: calibrate, then press Cross-validate")

@@ -35,7 +35,7 @@ class LivePanel(QGroupBox):
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__("Live results", parent)
-        self.enabled = QCheckBox("Detect, estimate and check while capturing; end in the report")
+        self.enabled = QCheckBox("Detect, estimate, check; then report")  # short: a laptop's dock
         self.enabled.setChecked(True)
         self.pause_on_flag = QCheckBox("Pause the capture at a flag")
         self.pause_on_flag.setToolTip("Stop after the frame being taken when a check flags something: fix it, then Resume")
@@ -92,6 +92,12 @@ class LivePanel(QGroupBox):
             self._bridge.event.emit(LiveEvent("error", f"live results: {exc}"))
 
     # ------------------------------------------------------------------ GUI thread
+    def set_planar(self, planar: bool) -> None:
+        """A planar plan: no deviation-against-target plot (its axes are one-dimensional); the flags and the
+        status stay. The plot of an earlier line capture goes too."""
+        self.clear()
+        self.plot.setVisible(not planar)
+
     def clear(self) -> None:
         self.flags.clear()
         self.plot.getPlotItem().clear()
@@ -141,4 +147,4 @@ class LivePanel(QGroupBox):
             self.n_views = int(data["n_views"])
         if self._steps:
             self._steps.pop(0)()
-            QTimer.singleShot(0, self._draw_next)
+            QTimer.singleShot(0, self, self._draw_next)  # dropped with the panel

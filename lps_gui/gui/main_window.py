@@ -12,7 +12,7 @@ import logging
 from pathlib import Path
 from typing import Any, Callable
 
-from PySide6.QtCore import QSettings, Qt
+from PySide6.QtCore import QSettings, Qt, QTimer
 from PySide6.QtGui import QAction, QCloseEvent, QKeySequence
 from PySide6.QtWidgets import (
     QDockWidget,
@@ -34,7 +34,7 @@ from lps_gui.gui.job_runner import JobRunner
 from lps_gui.gui.log_panel import LogPanel
 from lps_gui.gui.results_panel import ResultsPanel
 from lps_gui.gui.services import preload_backends
-from lps_gui.gui.sources import SIM
+from lps_gui.gui.sources import RIG_SOURCES
 from lps_gui.gui.stage_controller import StageController
 from lps_gui.gui.stage_panel import StagePanel
 from lps_gui.gui.workers import Job, one_line, stop_all_jobs
@@ -46,6 +46,8 @@ log = logging.getLogger("lps_gui.gui")
 ORGANIZATION = "lps-calib"
 APPLICATION = "lps-gui"
 LAYOUT_VERSION = 1
+DOCK_SHARES = (0.38, 0.38, 0.24)  # of the window's width: panels on the left, results, camera and log
+DOCK_CAPS = (470, 320)  # px: on a wide screen the left panels and the camera stop there, the results get the rest
 SCROLLED = ("stage", "camera", "intrinsics", "capture", "estimation")  # they grow; the window must not
 
 
@@ -84,6 +86,7 @@ class MainWindow(QMainWindow):
             dock.setObjectName(f"dock_{name}")
             dock.setWidget(scrolled(widget) if name in SCROLLED else widget)
             self.docks[name] = dock
+            dock.toggleViewAction().toggled.connect(self._dock_toggled)
         self.default_layout()
 
         # --- status bar
@@ -105,8 +108,8 @@ class MainWindow(QMainWindow):
     # ------------------------------------------------------------------ layout
     def default_layout(self) -> None:
         """View > Reset layout: the docks as at first start, the window within the screen."""
-        self.arrange_docks()
         clamp_to_screen(self)
+        self.arrange_docks()
 
     def arrange_docks(self) -> None:
         """Left: stage / capture / estimation / intrinsics tabs; right: results beside camera and log."""
@@ -121,8 +124,16 @@ class MainWindow(QMainWindow):
         self.splitDockWidget(d["results"], d["camera"], Qt.Orientation.Horizontal)
         self.splitDockWidget(d["camera"], d["log"], Qt.Orientation.Vertical)
         d["stage"].raise_()
-        self.resizeDocks([d["stage"], d["results"], d["camera"]], [430, 860, 310], Qt.Orientation.Horizontal)
-        self.resizeDocks([d["camera"], d["log"]], [600, 250], Qt.Orientation.Vertical)
+        w, h = max(self.width(), 800), max(self.height(), 500)  # shares of the window: a laptop screen too
+        left, camera = (int(min(w * share, cap)) for share, cap in zip(DOCK_SHARES[::2], DOCK_CAPS))
+        self.resizeDocks([d["stage"], d["results"], d["camera"]], [left, w - left - camera, camera],
+                         Qt.Orientation.Horizontal)
+        self.resizeDocks([d["camera"], d["log"]], [int(h * 0.7), int(h * 0.3)], Qt.Orientation.Vertical)
+
+    def _dock_toggled(self, shown: bool) -> None:
+        """A dock closed (not merely tabbed away) gives its width back: the window shrinks into the screen."""
+        if not shown:
+            QTimer.singleShot(0, self, lambda: clamp_to_screen(self))
 
     def show_panel(self, name: str) -> None:
         dock = self.docks[name]
@@ -185,11 +196,12 @@ class MainWindow(QMainWindow):
             panel.run_requested.connect(self._panel_job)
         self.estimation_panel.results_ready.connect(self._on_results)
         self.intrinsics_panel.saved.connect(self.estimation_panel.set_intrinsics_file)
-        self.stage_panel.source_changed.connect(lambda src: self.camera_panel.expect_sim_camera(src == SIM))
+        self.stage_panel.source_changed.connect(lambda src: self.camera_panel.expect_sim_camera(src in RIG_SOURCES))
         self.capture_panel.session_done.connect(self._on_capture_done)
         self.capture_panel.failed.connect(self.show_error)
         self.capture_panel.board_changed.connect(self.intrinsics_panel.set_board)
         self.results_panel.export_requested.connect(self.export)
+        self.results_panel.failed.connect(self.show_error)
 
     # ------------------------------------------------------------------ stage status
     def _on_status(self, st: StageStatus) -> None:
@@ -264,8 +276,11 @@ class MainWindow(QMainWindow):
             self.remember_folder(session_dir)
 
     def _on_capture_done(self, session_dir: Path) -> None:
+        """A complete capture: the next estimate is of it; a live capture's results (and report) come on screen."""
         self.estimation_panel.set_session(session_dir)
         self.remember_folder(session_dir)
+        if (Path(session_dir) / "results.json").is_file():
+            self.open_session(Path(session_dir))
 
     def open_session_dialog(self) -> None:
         folder = QFileDialog.getExistingDirectory(self, "Open a session folder", self.last_folder())
@@ -275,6 +290,10 @@ class MainWindow(QMainWindow):
     def open_session(self, folder: Path) -> bool:
         """Select ``folder`` for estimation and show its results.json if it has one."""
         folder = Path(folder)
+        if not (folder / "session.json").is_file():
+            self.show_error("Not a session", f"{folder}: no session.json here; choose a folder made by a capture "
+                                             "(or by `lps simulate`)")
+            return False
         self.estimation_panel.set_session(folder)
         self.remember_folder(folder)
         results_path = folder / "results.json"
@@ -352,8 +371,10 @@ class MainWindow(QMainWindow):
         state = s.value("window/state")
         if state is not None:
             self.restoreState(state, LAYOUT_VERSION)
+        else:
+            self.arrange_docks()  # the first start: the docks' shares of the window as it now is
         self.stage_panel.restore(s)
-        self.camera_panel.expect_sim_camera(self.stage_panel.current_source() == SIM)
+        self.camera_panel.expect_sim_camera(self.stage_panel.current_source() in RIG_SOURCES)
         self.capture_panel.restore(s)
         self.estimation_panel.restore(s)
 
@@ -374,7 +395,21 @@ class MainWindow(QMainWindow):
         self.stage_ctl.shutdown()
         self.log_panel.detach()
 
+    def confirm_quit(self) -> bool:
+        """Quitting during a capture stops it: ask first (the frames taken stay; it can be resumed)."""
+        job = self.capture_panel.job
+        if job is None or not job.running:
+            return True
+        answer = QMessageBox.question(
+            self, "Capture running", "A capture is running. Quit and stop it? The frames taken so far are kept and "
+            "the session can be resumed.", QMessageBox.StandardButton.Yes | QMessageBox.StandardButton.No,
+            QMessageBox.StandardButton.No)
+        return answer == QMessageBox.StandardButton.Yes
+
     def closeEvent(self, event: QCloseEvent) -> None:
+        if not self.confirm_quit():
+            event.ignore()
+            return
         self.save_settings()
         self.shutdown()
         super().closeEvent(event)

@@ -21,6 +21,7 @@ class MountedTargetsView(QWidget):
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.label = QLabel("Targets")
+        self.label.setWordWrap(True)  # its sentence wraps: it used to widen the results dock to 740 px
         self.table = TextTable(numeric=range(1, 9))
         lay = QVBoxLayout(self)
         lay.setContentsMargins(0, 4, 0, 0)

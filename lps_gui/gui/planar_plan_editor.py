@@ -23,12 +23,10 @@ from PySide6.QtWidgets import (
     QCheckBox,
     QComboBox,
     QFormLayout,
-    QFrame,
+    QGridLayout,
     QGroupBox,
-    QHBoxLayout,
     QLabel,
     QPushButton,
-    QScrollArea,
     QSizePolicy,
     QVBoxLayout,
     QWidget,
@@ -90,7 +88,8 @@ class PlanarPlanEditor(QGroupBox):
         self.pattern = QComboBox()
         for p in PATTERNS:
             self.pattern.addItem(p, p)
-        self.iso_lines = QCheckBox("ISO 230-2 lines preset (along X at 3 Y, along Y at 3 X; both ways, 5 runs)")
+        self.iso_lines = QCheckBox("ISO 230-2 lines preset")
+        self.iso_lines.setToolTip("Lines along X at 3 Y and along Y at 3 X; both ways, 5 runs")
         self.gantry = QComboBox()
         for label, key in GANTRY_PRESETS:
             self.gantry.addItem(label, key)
@@ -113,20 +112,22 @@ class PlanarPlanEditor(QGroupBox):
         self.order_note = QLabel()
 
         def pair(a: QWidget, b: QWidget) -> QWidget:
+            """X above Y: side by side they made the editor wider than a laptop's Capture dock (cut off)."""
             w = QWidget()
-            row = QHBoxLayout(w)
-            row.setContentsMargins(0, 0, 0, 0)
-            row.addWidget(QLabel("X"))
-            row.addWidget(a)
-            row.addWidget(QLabel("Y"))
-            row.addWidget(b)
+            grid = QGridLayout(w)
+            grid.setContentsMargins(0, 0, 0, 0)
+            grid.setVerticalSpacing(2)
+            for r, (name, field) in enumerate((("X", a), ("Y", b))):
+                grid.addWidget(QLabel(name), r, 0)
+                grid.addWidget(field, r, 1)
+            grid.setColumnStretch(1, 1)
             return w
 
         outer = QVBoxLayout(self)
         outer.setContentsMargins(6, 2, 6, 2)
-        top = QHBoxLayout()  # one row while planar mode is off: the line plan's panel stays about as compact
-        top.addWidget(self.enabled, 1)
-        top.addWidget(self.demo_btn)
+        top = QGridLayout()  # one row while planar mode is off and the dock is wide; the button wraps under otherwise
+        top.addWidget(self.enabled, 0, 0)
+        top.addWidget(self.demo_btn, 1, 0, Qt.AlignmentFlag.AlignLeft)
         outer.addLayout(top)
         self.body = QWidget()
         outer.addWidget(self.body, 1)  # hidden until planar mode is on; the Capture dock scrolls, not a box of its own

@@ -11,7 +11,7 @@ from typing import Callable
 
 import numpy as np
 import pyqtgraph as pg
-from PySide6.QtCore import Qt
+from PySide6.QtCore import QEvent, QObject, Qt
 
 from lps_gui.report.figures.spec import OUTLIER_COLOR, FigureSpec, Series
 
@@ -21,6 +21,7 @@ LEGEND_ROW = 4  # PlotItem layout rows: 0 title, 1 top axis, 2 view, 3 bottom ax
 COMPACT_LEGEND_AT = 7  # series: from here the legend names each colour once and each line style once
 LEGEND_ROW_CHARS = 100  # a legend row longer than this widens the plot beyond a half-screen panel
 STYLE_GREY = "#555555"
+PLOT_DATA_MIN_PX = 90  # the least height a plot's data area gets under its title and above its legend
 
 
 class ReadableAxis(pg.AxisItem):
@@ -132,6 +133,48 @@ def legend_columns(fig: FigureSpec, compact: bool) -> int:
     return columns if compact else max(1, min(columns, LEGEND_ROW_CHARS // max(longest, 1)))
 
 
+class _LegendFit(QObject):
+    """Event filter on a plot widget: a resize re-flows its legend (:func:`fit_legend`)."""
+
+    def eventFilter(self, obj: QObject, event: QEvent) -> bool:
+        if event.type() == QEvent.Type.Resize and isinstance(obj, pg.PlotWidget):
+            fit_legend(obj.getPlotItem())
+        return False
+
+
+_LEGEND_FIT = _LegendFit()
+
+
+def fit_legend(plot: pg.PlotItem) -> None:
+    """As many legend columns as the plot's width holds (at most the figure's), the title wrapped to it: a legend
+    or title wider than the plot made its scene wider than the view, and the right side was cut off ("trut", "yav")."""
+    legend, view = plot.legend, plot.getViewWidget()
+    if view is None:
+        return
+    room = view.width() - plot.getAxis("left").width() - plot.getAxis("right").width() - 24  # the title's column
+    title = plot.titleLabel.item
+    title.setTextWidth(-1)
+    if title.boundingRect().width() > room:
+        title.setTextWidth(max(60, room))  # wraps onto a second line
+    plot.titleLabel.updateMin()
+    if legend is None or not legend.items:
+        return
+    wanted = getattr(legend, "wanted_columns", legend.columnCount)
+    for sample, label in legend.items:  # a label longer than the room wraps ("EYX not resolved (noise p-v ...)")
+        label.item.setTextWidth(-1)
+        if sample.boundingRect().width() + label.item.boundingRect().width() + 16 > room:
+            label.item.setTextWidth(max(60, room - sample.boundingRect().width() - 16))  # the legend's own margins
+        label.updateMin()
+    entry = max(sample.boundingRect().width() + label.item.boundingRect().width() for sample, label in legend.items)
+    columns = int(max(1, min(wanted, room // (entry + 12))))
+    if columns != legend.columnCount:
+        legend.setColumnCount(columns)
+    # the title, axis and legend take what they need; the data get at least PLOT_DATA_MIN_PX more: a stack of
+    # plots taller than its tab then scrolls (results_panel.tab_holder) instead of squeezing the data away
+    other = plot.titleLabel.minimumHeight() + legend.minimumHeight() + plot.getAxis("bottom").height()
+    view.setMinimumHeight(int(other + PLOT_DATA_MIN_PX))
+
+
 def figure_steps(plot: pg.PlotItem, fig: FigureSpec) -> tuple[DrawnFigure, list[Callable[[], None]]]:
     """Drawing ``fig`` into ``plot`` as small steps (set-up, one per series, finish).
 
@@ -151,7 +194,12 @@ def figure_steps(plot: pg.PlotItem, fig: FigureSpec) -> tuple[DrawnFigure, list[
             plot.legend = pg.LegendItem(labelTextSize="8pt", labelTextColor="#202020",
                                         brush=pg.mkBrush(255, 255, 255, 0), pen=pg.mkPen(None))
             plot.layout.addItem(plot.legend, LEGEND_ROW, 1)
-        plot.legend.setColumnCount(legend_columns(fig, compact))
+        plot.legend.wanted_columns = legend_columns(fig, compact)
+        plot.legend.setColumnCount(plot.legend.wanted_columns)
+        view = plot.getViewWidget()
+        if view is not None and not view.property("_legend_fit"):
+            view.installEventFilter(_LEGEND_FIT)
+            view.setProperty("_legend_fit", True)
         plot.setTitle(fig.title, color="#202020", size="11pt")
         plot.setLabel("bottom", fig.x_label)
         plot.setLabel("left", fig.y_label)
@@ -165,6 +213,7 @@ def figure_steps(plot: pg.PlotItem, fig: FigureSpec) -> tuple[DrawnFigure, list[
     if compact:
         steps.append(lambda: compact_legend(plot.legend, fig))
     steps.append(lambda: fit_range(plot, drawn))
+    steps.append(lambda: fit_legend(plot))
     return drawn, steps
 
 

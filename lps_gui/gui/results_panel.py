@@ -29,7 +29,7 @@ from lps_gui.gui.plot_adapter import DrawnFigure, ReadableAxis, figure_steps
 from lps_gui.gui.section_tabs import SectionContent, SectionPage, section_contents, tab_tip
 from lps_gui.gui.view_detail import ViewDetail
 from lps_gui.gui.widgets import TextTable, ValueTable
-from lps_gui.gui.workers import Job
+from lps_gui.gui.workers import Job, owned_by
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import Position
 from lps_gui.report.figures.plots import figures_from_results, position_columns
@@ -49,6 +49,7 @@ class ResultsPanel(QWidget):
     """Plots, ISO 230-2 and position tables of one estimation; export to PDF and CSV."""
 
     export_requested = Signal(str)  # "pdf" or "csv"; the main window asks for a path and runs it
+    failed = Signal(str, str)  # title, one line: something the operator asked for could not be done
     drawing_done = Signal()  # every figure and table of the latest results is drawn
 
     def __init__(self, parent: QWidget | None = None) -> None:
@@ -64,6 +65,7 @@ class ResultsPanel(QWidget):
         self._pending_table = False
         self._tab_keys: list[str] = []
         self.section_pages: dict[str, SectionPage] = {}  # tab title -> page, built on first use
+        self._holders: dict[QWidget, QWidget] = {}  # a stack of plots -> the scroll area that is its tab
         self._generation = 0
 
         self.header = QLabel("No results yet: run an estimation or open a session with results.json.")
@@ -75,11 +77,13 @@ class ResultsPanel(QWidget):
         self.report_path: Path | None = None
         for b in (self.pdf_btn, self.csv_btn, self.open_report_btn):
             b.setEnabled(False)
-        top = QHBoxLayout()
-        top.addWidget(self.header, 1)
-        top.addWidget(self.pdf_btn)
-        top.addWidget(self.open_report_btn)
-        top.addWidget(self.csv_btn)
+        top = QVBoxLayout()  # the header wraps above the buttons: a narrow results dock keeps them all in view
+        top.addWidget(self.header)
+        buttons = QHBoxLayout()
+        for b in (self.pdf_btn, self.open_report_btn, self.csv_btn):
+            buttons.addWidget(b)
+        buttons.addStretch(1)
+        top.addLayout(buttons)
         self.verdict = QLabel("")
         self.verdict.setWordWrap(True)
         self.verdict.setTextFormat(Qt.TextFormat.RichText)
@@ -93,6 +97,7 @@ class ResultsPanel(QWidget):
         self._groups: dict[str, QSplitter] = {}
         self.iso_table = ValueTable(["Figure", "Value", "U (k = 2)", "Unit"], numeric=(1, 2), stretch=0)
         self.target_label = QLabel("ISO 230-2 per target")
+        self.target_label.setWordWrap(True)
         self.target_table = TextTable(numeric=range(0, 20))
         self.accuracy_page = QSplitter(Qt.Orientation.Vertical)  # the figures, then the per-target table
         targets = QWidget()
@@ -114,7 +119,10 @@ class ResultsPanel(QWidget):
         split.addWidget(self.detail)
         split.setStretchFactor(0, 3)
         split.setStretchFactor(1, 1)
-        split.setSizes([700, 240])  # Results get the room; the clicked view beside them
+        split.setCollapsible(0, False)
+        split.setSizes([1, 0])  # the figures get the whole width: the clicked view opens beside them on a click
+        self.split = split
+        self._header_text = ""  # the header without the stale-report note (set_report adds or drops that)
         lay = QVBoxLayout(self)
         lay.setContentsMargins(6, 6, 6, 6)
         lay.addLayout(top)
@@ -143,14 +151,17 @@ class ResultsPanel(QWidget):
         self.session_dir = Path(session_dir) if session_dir else None
         self.results_dir = Path(results_dir) if results_dir else self.session_dir
         self._corners = None
+        self._pending_view = None
+        self.detail.clear()  # the previous session's view does not stay beside these results
         meta = self._session_meta()
         spec = meta.get("stage_spec") or results.stage_spec
         figures = with_limits(figures_from_results(results, meta.get("truth")), spec)
         self._build_tabs(figures)
         for page in set(self._pages.values()):
             tips = [f.notes or f.title for f in figures if self._pages.get(f.key) is page]
-            self.tabs.setTabToolTip(self.tabs.indexOf(page), "\n".join(tips))
+            self.tabs.setTabToolTip(self.tabs.indexOf(self._holders.get(page, page)), "\n".join(tips))
         self.tabs.setCurrentWidget(self.accuracy_page)  # the answer first: accuracy figures and verdict
+        scroll_home(self)  # tables and plots start at their left edge, not where the last results were scrolled
         self.drawn.clear()
         self._header(results)
         self.verdict.setText(verdict_html(results, spec))
@@ -160,7 +171,8 @@ class ResultsPanel(QWidget):
         self.set_report(report if report is not None and report.is_file() else None)
         # the visible figure first, then the others, then the tables
         current = self.tabs.currentIndex()
-        order = sorted(range(len(figures)), key=lambda i: self.tabs.indexOf(self._pages[figures[i].key]) != current)
+        order = sorted(range(len(figures)), key=lambda i: self.tabs.indexOf(
+            self._holders.get(self._pages[figures[i].key], self._pages[figures[i].key])) != current)
         self._queue = []
         for i in order:
             self._queue += self._draw_steps(figures[i])
@@ -168,7 +180,7 @@ class ResultsPanel(QWidget):
         self._queue += [lambda: self._fill_tables(results), lambda: self._fill_positions(results)]
         self._generation += 1
         generation = self._generation
-        QTimer.singleShot(0, lambda: self._drain(generation))
+        QTimer.singleShot(0, self, lambda: self._drain(generation))  # dropped with the panel
 
     def _drain(self, generation: int) -> None:
         if generation != self._generation:
@@ -180,7 +192,7 @@ class ResultsPanel(QWidget):
             except Exception:  # one broken figure or table must not stop the others
                 log.exception("results: drawing step failed")
         if self._queue:
-            QTimer.singleShot(0, lambda: self._drain(generation))
+            QTimer.singleShot(0, self, lambda: self._drain(generation))
         else:
             self.drawing_done.emit()
 
@@ -219,7 +231,7 @@ class ResultsPanel(QWidget):
                 page.setStretchFactor(1, 2)
             for k in members:
                 self._pages[k] = page
-            self.tabs.addTab(page, title)
+            self.tabs.addTab(self.tab_holder(page) if len(members) > 1 else page, title)
         self.tabs.addTab(self.position_table, "Table")
         self._tab_keys = keys
 
@@ -230,7 +242,7 @@ class ResultsPanel(QWidget):
         Reading the sections, each tab and each plot are steps of their own (the window stays responsive).
         """
         for page in self.section_pages.values():
-            if (i := self.tabs.indexOf(page)) >= 0:
+            if (i := self.tabs.indexOf(self.tab_holder(page))) >= 0:
                 self.tabs.removeTab(i)
 
         def expand() -> None:
@@ -249,7 +261,7 @@ class ResultsPanel(QWidget):
     def _add_section(self, content: SectionContent) -> None:
         page = self.section_pages.setdefault(content.title, SectionPage())
         page.set_content(content)
-        index = self.tabs.insertTab(self.tabs.indexOf(self.position_table), page, content.title)
+        index = self.tabs.insertTab(self.tabs.indexOf(self.position_table), self.tab_holder(page), content.title)
         self.tabs.setTabToolTip(index, tab_tip(content))
 
     def _section_figure_steps(self, content: SectionContent, index: int, fig: Any) -> list[Any]:
@@ -260,7 +272,22 @@ class ResultsPanel(QWidget):
     def show_figure(self, key: str) -> None:
         """Bring the tab holding figure ``key`` to the front."""
         page = self._pages.get(key) or next(p for p in self.section_pages.values() if key in p.plots)
-        self.tabs.setCurrentWidget(page)
+        self.tabs.setCurrentWidget(self._holders.get(page, page))
+
+    def tab_holder(self, page: QWidget) -> QWidget:
+        """The tab of a stack of plots: a scroll area, so plots that need more height than the tab has scroll
+        down instead of losing their data area (each plot keeps its minimum height, plot_adapter.fit_legend)."""
+        holder = self._holders.get(page)
+        if holder is None:
+            from PySide6.QtWidgets import QFrame, QScrollArea
+
+            area = QScrollArea()
+            area.setWidgetResizable(True)
+            area.setFrameShape(QFrame.Shape.NoFrame)
+            area.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+            area.setWidget(page)
+            holder = self._holders[page] = area
+        return holder
 
     def _draw_steps(self, fig: Any) -> list[Any]:
         drawn, steps = figure_steps(self.plots[fig.key].getPlotItem(), fig)
@@ -277,12 +304,13 @@ class ResultsPanel(QWidget):
         n_out = sum(r.outlier for r in results.positions)
         single = results.figures.single_run
         maxdev = single.max_abs_deviation_um if single else None
-        self.header.setText(
+        self._header_text = (
             f"<b>{results.method or '?'}</b> on {self.session_dir.name if self.session_dir else 'results'}: "
             f"{len(results.positions)} positions, {'?' if p.n_used is None else p.n_used} used, {n_out} outlier view(s); "
             f"RMS {_f(p.rms_px)} px"
             + (f"; peak deviation {_f(maxdev)} µm" if maxdev is not None else "")
             + ("<br><i>outliers beyond an axis are drawn at its edge</i>" if n_out else ""))
+        self.header.setText(self._header_text)
 
     def _session_meta(self) -> dict[str, Any]:
         if self.session_dir is None:
@@ -300,13 +328,14 @@ class ResultsPanel(QWidget):
         self.report_path = Path(path) if path else None
         self.open_report_btn.setEnabled(self.report_path is not None)
         tip = "Open the exported PDF report in the system's viewer"
+        header = self._header_text
         if self.report_path is not None and self.session_dir is not None:
             from lps_gui.io.results.history import stale_report_message
 
             if self.report_path == self.session_dir / "report.pdf" and (stale := stale_report_message(self.session_dir)):
                 tip = stale
-                self.header.setText(self.header.text() + "<br><i>report.pdf is older than these results: "
-                                    "export the PDF again</i>")
+                header += "<br><i>report.pdf is older than these results: export the PDF again</i>"
+        self.header.setText(header)  # an export after the note takes it away again
         self.open_report_btn.setToolTip(tip)
 
     def open_report(self) -> bool:
@@ -315,8 +344,13 @@ class ResultsPanel(QWidget):
         from PySide6.QtGui import QDesktopServices
 
         if self.report_path is None or not self.report_path.is_file():
+            self.failed.emit("Report not opened", "open report: no report.pdf yet; export the PDF first")
             return False
-        return bool(QDesktopServices.openUrl(QUrl.fromLocalFile(str(self.report_path))))
+        if not QDesktopServices.openUrl(QUrl.fromLocalFile(str(self.report_path))):
+            self.failed.emit("Report not opened", f"{self.report_path}: no PDF viewer opened it; install one "
+                                                  "(e.g. evince or okular) or open the file from a file manager")
+            return False
+        return True
 
     def _fill_tables(self, results: Results) -> None:
         from lps_gui.gui.planar_results import planar_table_rows
@@ -362,7 +396,7 @@ class ResultsPanel(QWidget):
         from lps_gui.gui.planar_results import position_table_for
 
         self._pending_table = True
-        job = Job("format positions", lambda: position_table_for(results), pass_progress=False)
+        job = owned_by(Job("format positions", lambda: position_table_for(results), pass_progress=False), self)
         job.succeeded.connect(lambda table, r=results: self._show_positions(table, r))
         job.finished.connect(lambda: setattr(self, "_pending_table", False))
         job.start()
@@ -406,9 +440,11 @@ class ResultsPanel(QWidget):
         row = rows[0]
         if self._corners is None and self.session_dir is not None:
             self.detail.show_view(self.session_dir, self.results, row, None, None)
+            self._open_detail()
             self._pending_view = index
             if self._corners_job is None:
-                self._corners_job = Job("read corners", load_corners, self.session_dir, pass_progress=False)
+                self._corners_job = owned_by(Job("read corners", load_corners, self.session_dir, pass_progress=False),
+                                             self)
                 folder = self.session_dir
                 self._corners_job.succeeded.connect(lambda res, d=folder: self._corners_loaded(res, d))
                 self._corners_job.failed.connect(lambda msg, _tb, d=folder: self._corners_loaded(msg, d))
@@ -417,7 +453,15 @@ class ResultsPanel(QWidget):
             return index
         detected, X = self._detected(row)
         self.detail.show_view(self.session_dir, self.results, row, detected, X)
+        self._open_detail()
         return index
+
+    def _open_detail(self) -> None:
+        """The clicked view beside the figures, a third of the width (collapsed until a point is clicked)."""
+        sizes = self.split.sizes()
+        if sizes[1] == 0:
+            total = sum(sizes)
+            self.split.setSizes([total - total // 3, total // 3])
 
     def _corners_loaded(self, loaded: Any, folder: Path) -> None:
         if folder != self.session_dir:
@@ -460,6 +504,14 @@ class ResultsPanel(QWidget):
                 files[name] = src.read_bytes()
         write_file_set(folder, files)  # checked, all or nothing (a full disk leaves no half export)
         return [folder / name for name in CSV_FILES]
+
+
+def scroll_home(root: QWidget) -> None:
+    """Every scroll area under ``root`` back at its left edge (each new result starts unscrolled)."""
+    from PySide6.QtWidgets import QAbstractScrollArea
+
+    for area in root.findChildren(QAbstractScrollArea):
+        area.horizontalScrollBar().setValue(0)
 
 
 def with_limits(figures: list[Any], spec: dict[str, Any] | None) -> list[Any]:

@@ -13,9 +13,11 @@ from lps_gui.core.clock import Clock, RealClock
 from lps_gui.hardware.stage import Stage
 
 SIM = "sim"
+EMULATOR = "emulator"  # the registry's GRBL emulator kind, which serves the simulated rig here
 SIM_PRESET = "small"
 BAUD_RATES = (115200, 250000, 57600, 38400, 19200, 9600)
 CAMERA_FOLLOWS_STAGE = "sim"  # the simulated camera riding the simulated stage
+RIG_SOURCES = (SIM, EMULATOR)  # stage sources that come with the simulated camera (the emulator serves the rig)
 
 
 def stage_choices() -> list[tuple[str, str]]:
@@ -53,6 +55,11 @@ def open_stage_source(source: str, baud: int = 115200, clock: Clock | None = Non
     from lps_gui.hardware import open_stage
     from lps_gui.hardware.registry import kind_of
 
+    if source == EMULATOR:  # the GRBL emulator serves the simulated rig's stage: the simulated camera rides it
+        from lps_gui.sim.emulated import emulated_rig_stage
+
+        rig_stage, camera = simulated_rig(clock)
+        return emulated_rig_stage(rig_stage), camera
     kind = kind_of(source)
     options = {"baudrate": baud} if kind.serial and baud != 115200 else {}
     return open_stage(source, **options), None

@@ -36,6 +36,7 @@ class StageController(QObject):
     link_lost = Signal(str)  # the stage stopped answering; the GUI drops the connection
     opened = Signal(object, object, str)  # stage, extra (e.g. its simulated camera), description
     _opened_in_thread = Signal(object, object, str)
+    _polled = Signal(object, object)  # stage, StageStatus: from the status thread to the GUI thread
 
     def __init__(self, parent: QObject | None = None) -> None:
         super().__init__(parent)
@@ -50,6 +51,7 @@ class StageController(QObject):
         self._timer.setInterval(POLL_INTERVAL_MS)
         self._timer.timeout.connect(self.poll)
         self._opened_in_thread.connect(self._on_opened)
+        self._polled.connect(self._show_polled)
 
     # ------------------------------------------------------------------ connection
     @property
@@ -178,7 +180,11 @@ class StageController(QObject):
         if fut.exception() is not None:
             self._check("status", fut)
         else:
-            st = fut.result()
+            self._polled.emit(stage, fut.result())
+
+    def _show_polled(self, stage: Stage, st: StageStatus) -> None:  # GUI thread
+        """A status that arrives after a disconnect is dropped: no stale position or state under "not connected"."""
+        if self.stage is stage:
             self.last_status = st
             self.status_changed.emit(st)
 

@@ -11,19 +11,37 @@ from one status report, with GRBL's offset sign (work = machine - offset).
 from __future__ import annotations
 
 import math
+import time
 
 from PySide6.QtCore import QEvent, QObject, QSettings, Qt, QTimer, Signal
 from PySide6.QtGui import QKeyEvent, QKeySequence, QShortcut
 from PySide6.QtWidgets import (
-    QAbstractButton, QAbstractItemView, QAbstractSpinBox, QApplication, QCheckBox, QComboBox, QDoubleSpinBox, QGridLayout, QGroupBox,
-    QHBoxLayout, QHeaderView, QLabel, QLineEdit, QMessageBox, QPushButton, QTableWidget, QTableWidgetItem, QTabWidget,
-    QVBoxLayout, QWidget,
+    QAbstractButton,
+    QAbstractItemView,
+    QAbstractSpinBox,
+    QApplication,
+    QCheckBox,
+    QComboBox,
+    QDoubleSpinBox,
+    QGridLayout,
+    QGroupBox,
+    QHBoxLayout,
+    QHeaderView,
+    QLabel,
+    QLineEdit,
+    QMessageBox,
+    QPushButton,
+    QTableWidget,
+    QTableWidgetItem,
+    QTabWidget,
+    QVBoxLayout,
+    QWidget,
 )
 
 from lps_gui.core.clock import Clock
 from lps_gui.gui.dro import PositionReadout
+from lps_gui.gui.sources import BAUD_RATES, open_stage_source, source_from_text, stage_choices
 from lps_gui.gui.stage_console import StageConsole
-from lps_gui.gui.sources import BAUD_RATES, SIM, open_stage_source, source_from_text, stage_choices
 from lps_gui.gui.stage_controller import StageController
 from lps_gui.gui.stage_declared import show_declared, stop_action
 from lps_gui.hardware.capabilities import Settings, WorkCoordinates
@@ -222,7 +240,7 @@ class StagePanel(QWidget):
         lay.addWidget(self.lower_tabs, 1)
 
         self.source.currentTextChanged.connect(lambda _t: self.source_changed.emit(self.current_source()))
-        self.refresh_btn.clicked.connect(self.refresh_sources)
+        self.refresh_btn.clicked.connect(lambda _checked=False: self.refresh_sources())  # clicked(bool) is no list
         self.connect_btn.clicked.connect(self.toggle_connection)
         controller.status_changed.connect(self.show_status)
         controller.connection_changed.connect(self._on_connection)
@@ -359,8 +377,11 @@ class StagePanel(QWidget):
 
     def toggle_connection(self) -> None:
         if self.controller.connected:
+            if time.monotonic() - getattr(self, "_connect_at", -1e9) < QApplication.doubleClickInterval() / 1000:
+                return  # the second click of a double-click on Connect: the stage connected meanwhile, keep it
             self.controller.detach("disconnected by the operator")
         else:
+            self._connect_at = time.monotonic()
             self.connect_source()
 
     def connect_source(self) -> None:

@@ -80,7 +80,7 @@ class TargetsEditor(QGroupBox):
     changed = Signal()
 
     def __init__(self, start_dir: Callable[[], str] | None = None, parent: QWidget | None = None) -> None:
-        super().__init__("Targets (a row along the travel instead of one board)", parent)
+        super().__init__("Targets (a row, not one board)", parent)
         self.setCheckable(True)
         self.setChecked(False)
         self.setToolTip("Several ChArUco targets fixed along the travel, with their own marker ids "

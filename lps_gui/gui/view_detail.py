@@ -30,7 +30,7 @@ class ViewResiduals:
 
     detected_px: np.ndarray  # shape (N, 2), NaN where missing
     predicted_px: np.ndarray  # shape (N, 2)
-    rms_px: float
+    rms_px: float  # per corner, the residual as a vector (the estimate reports per coordinate: this / sqrt 2)
 
     @property
     def residual_px(self) -> np.ndarray:
@@ -92,6 +92,14 @@ class ViewDetail(QWidget):
         lay.addWidget(self.view, 1)
         self.shown_index: int | None = None
 
+    def clear(self) -> None:
+        """Nothing shown: new results came (the previous session's view must not stay beside them)."""
+        self.shown_index = None
+        self.image.clear()
+        for item in (self.corners, self.arrows, self.sensor):
+            item.setData([], [])
+        self.title.setText("Click a point in a plot to see its image and residuals.")
+
     def show_view(self, session_dir: Path | None, results: Results, row: Position,
                   detected_px: np.ndarray | None, object_points: np.ndarray | None) -> None:
         self.shown_index = row.index
@@ -102,7 +110,7 @@ class ViewDetail(QWidget):
 
         text = (f"view {row.index}  run {row.run} {row.direction}  "
                 f"target {value('target_mm'):.3f} mm  deviation {value('deviation_um'):.2f} µm  "
-                f"RMS {value('rms_px'):.3f} px")
+                f"RMS per coordinate {value('rms_px'):.3f} px")
         if row.outlier:
             text += f"  — OUTLIER: {row.outlier_reason or 'flagged'}"
         image = None
@@ -135,7 +143,8 @@ class ViewDetail(QWidget):
                 tips = res.detected_px + ARROW_GAIN * res.residual_px
                 pairs = np.stack([res.detected_px[ok], tips[ok]], axis=1).reshape(-1, 2)  # shape (2M, 2)
                 self.arrows.setData(pairs[:, 0], pairs[:, 1], connect="pairs")
-                text += f"\nresiduals ×{ARROW_GAIN:g} (red), recomputed RMS {res.rms_px:.3f} px"
+                text += (f"\nresiduals ×{ARROW_GAIN:g} (red), recomputed RMS per coordinate "
+                         f"{res.rms_px / np.sqrt(2.0):.3f} px (per corner, as a vector: {res.rms_px:.3f} px)")
             else:
                 self.arrows.setData([], [])
         else:

@@ -7,7 +7,19 @@ from typing import Callable, Sequence
 from PySide6.QtCore import QAbstractTableModel, QModelIndex, Qt, Signal
 from PySide6.QtGui import QColor
 from PySide6.QtWidgets import (
-    QDoubleSpinBox, QFileDialog, QFormLayout, QLayout, QTableView, QVBoxLayout, QHBoxLayout, QHeaderView, QLineEdit, QPushButton, QTableWidget, QTableWidgetItem, QWidget,
+    QDoubleSpinBox,
+    QFileDialog,
+    QFormLayout,
+    QHBoxLayout,
+    QHeaderView,
+    QLayout,
+    QLineEdit,
+    QPushButton,
+    QTableView,
+    QTableWidget,
+    QTableWidgetItem,
+    QVBoxLayout,
+    QWidget,
 )
 
 
@@ -61,7 +73,8 @@ class ValueTable(QTableWidget):
                  stretch: int | None = None) -> None:
         super().__init__(0, len(headers), parent)
         self.numeric = set(numeric)  # right-aligned columns
-        self.stretch = stretch  # the column that gives up width (elided, full text in its tooltip): the others stay seen
+        self.stretch = stretch  # kept for callers; every column now gives up width alike (fit_columns)
+        self.setTextElideMode(Qt.TextElideMode.ElideRight)
         self.setHorizontalHeaderLabels(list(headers))
         self.verticalHeader().setVisible(False)
         self.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
@@ -80,19 +93,35 @@ class ValueTable(QTableWidget):
             for r, row in enumerate(rows):
                 for c, text in enumerate(row):
                     item = QTableWidgetItem(str(text))
-                    if c == self.stretch:
-                        item.setToolTip(str(text))
+                    item.setToolTip(str(text))  # an elided cell shows its whole text on hover
                     if c in self.numeric:
                         item.setTextAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
                     self.setItem(r, c, item)
             self.resizeColumnsToContents()
-            if self.stretch is not None:
-                hh.setStretchLastSection(False)
-                hh.setSectionResizeMode(self.stretch, QHeaderView.ResizeMode.Stretch)
-            else:
-                hh.setStretchLastSection(True)
+            self._widths = [hh.sectionSize(c) for c in range(self.columnCount())]
+            self.fit_columns()
+            hh.setStretchLastSection(True)
         finally:
             self.setUpdatesEnabled(True)
+
+    def fit_columns(self) -> None:
+        """Columns as wide as their text when the table has the room; in a narrow table each gives up the same
+        share of what it has beyond its header (text elided, whole in the tooltip), never less than its header.
+        A stretched column used to be squeezed to ~25 px beside wide numbers, its header unreadable."""
+        widths = getattr(self, "_widths", None)
+        if not widths or len(widths) != self.columnCount():
+            return
+        hh = self.horizontalHeader()
+        mins = [min(w, hh.sectionSizeFromContents(c).width()) for c, w in enumerate(widths)]
+        room = self.viewport().width()
+        spare = sum(widths) - sum(mins)
+        f = 1.0 if sum(widths) <= room or spare <= 0 else max(0.0, (room - sum(mins)) / spare)
+        for c, (w, m) in enumerate(zip(widths, mins)):
+            hh.resizeSection(c, int(m + (w - m) * f))
+
+    def resizeEvent(self, event) -> None:  # noqa: N802 (Qt's name)
+        super().resizeEvent(event)
+        self.fit_columns()
 
     def cell(self, row: int, col: int) -> str:
         item = self.item(row, col)

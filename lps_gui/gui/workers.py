@@ -15,6 +15,7 @@ import sys
 import threading
 import time
 import traceback
+import weakref
 from typing import Any, Callable
 
 from PySide6.QtCore import QObject, QThread, Signal
@@ -188,6 +189,11 @@ class Job(QObject):
             log.info("%s: cancel requested", self.name)
         self.token.cancel()
 
+    @property
+    def running(self) -> bool:
+        """Its thread is still working (False once it ended, even before ``finished`` is delivered)."""
+        return self._thread.isRunning()
+
     def wait(self, timeout_ms: int = 30000) -> bool:
         return self._thread.wait(timeout_ms)
 
@@ -232,3 +238,23 @@ class Job(QObject):
         if self.error is None:  # a failure or a cancel is reported by whoever shows it, without a duration
             log.info("%s: finished in %.2f s", self.name, time.monotonic() - self.started_at)
         self.finished.emit()
+
+
+def owned_by(job: Job, owner: QObject) -> Job:
+    """Tie ``job`` to ``owner`` (a panel): when the owner goes, the job is cancelled and its signals stop.
+
+    A panel's own worker (formatting a table, reading corners) can finish after
+    the panel was deleted; its slots would then touch deleted widgets
+    ("TextTable already deleted"). Blocked, its results go nowhere; the job's
+    bookkeeping (``_RUNNING``, the thread's end) still happens.
+    """
+    ref = weakref.ref(job)
+
+    def gone(_obj: object = None) -> None:
+        j = ref()
+        if j is not None:
+            j.cancel()
+            j.blockSignals(True)
+
+    owner.destroyed.connect(gone)
+    return job

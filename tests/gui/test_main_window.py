@@ -82,8 +82,10 @@ def test_the_window_uses_what_panels_expose_not_their_child_widgets(window):
 def test_the_camera_defaults_to_the_simulated_one_while_the_simulated_stage_is_chosen(window):
     cam, stage = window.camera_panel, window.stage_panel
     assert stage.current_source() == "sim" and cam.source.currentData() == "sim"
-    stage.select_source("emulator")
+    stage.select_source("grbl:/dev/ttyUSB9")  # a GRBL controller on a port: nothing simulated rides it
     assert cam.source.findData("sim") < 0 and cam.source.currentData() == "0"
+    stage.select_source("emulator")  # the emulator serves the simulated rig: its camera comes along (issue 37)
+    assert cam.source.findData("sim") >= 0
     stage.select_source("sim")
     assert cam.source.currentData() == "sim"
     cam.start()  # before the stage is connected: one line saying what to do, nothing opened

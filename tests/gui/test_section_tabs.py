@@ -72,7 +72,7 @@ def test_error_motions_and_asme_tabs_show_the_reports_figures_and_rows(qtbot, mi
     assert asme.table.model_.rows == tur_cells(section(results).test_uncertainty_ratio)
     assert asme.table.model_.rows and asme.table.model_.rows[-1][0] == "Minimum incremental motion"
     panel.show_figure("min_step")
-    assert panel.tabs.currentWidget() is asme
+    assert panel.tabs.currentWidget() is panel.tab_holder(asme)  # the stack of plots in its scroll area
 
 
 def test_results_without_the_sections_keep_the_tab_layout(qtbot, min_step_session):

@@ -92,7 +92,7 @@ def test_grbl_emulator_over_a_pty_and_the_cable_pulled(qtbot, window):
     assert panel.source.currentData() == "emulator"
     panel.connect_btn.click()
     qtbot.waitUntil(lambda: window.stage_ctl.connected and window.stage_ctl.last_status is not None, timeout=15000)
-    assert window.camera_panel.sim_camera is None  # no simulated camera rides a GRBL controller
+    assert window.camera_panel.sim_camera is not None  # the emulator serves the simulated rig: its camera rides it (issue 37)
     qtbot.waitUntil(lambda: panel.readout["X"].text().strip() != "---", timeout=5000)
     x0 = readout_mm(window)
     panel.step.setCurrentIndex(panel.step.findData(1.0))

@@ -288,8 +288,10 @@ def summary_figures(results: dict[str, Any]) -> list[SummaryFigure]:
     ] + periodic_figures(single)
     out += iso_figures(figs.get("iso230_2"))
     out += extreme_figures(results)
-    for name, value in (figs.get("angles_span_urad") or {}).items():
-        out.append(SummaryFigure(f"{name}_span", None, value, MU + "rad"))
+    angles = figs.get("angles_resolution") or {}
+    for name, value in (figs.get("angles_span_urad") or {}).items():  # no finding where the angle is not resolved
+        unresolved = "not resolved" if name in angles and not (angles[name] or {}).get("resolved") else ""
+        out.append(SummaryFigure(f"{name}_span", None, value, MU + "rad", unresolved=unresolved))
     for key, value in (results.get("truth_comparison") or {}).items():
         if finite_number(value) is None:
             continue

@@ -2,7 +2,8 @@
 
 Full detection runs cv2.findChessboardCornersSB (on a half-size image when
 the frame is large: 4x cheaper, same topology) and refines every corner with
-cv2.cornerSubPix at full resolution. Between neighbouring frames of an LPS
+cv2.cornerSubPix at full resolution, then without its pixel locking
+(:mod:`lps_gui.camera.subpixel`). Between neighbouring frames of an LPS
 session the board only shifts by a few pixels, so :class:`ChessboardTracker`
 predicts the corners from the previous frame (shift measured by phase
 correlation on a quarter-size image), refines them with cornerSubPix and
@@ -19,6 +20,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from lps_gui.camera.subpixel import polish_corners
 from lps_gui.core.geometry.board import Board
 
 SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 40, 1e-3)
@@ -76,10 +78,11 @@ def subpix_half_window(corners_px: np.ndarray, board: Board) -> int:
 
 
 def refine(image: np.ndarray, corners_px: np.ndarray, half_window: int) -> np.ndarray:
-    """cornerSubPix on every corner, shape (N, 2) -> (N, 2) float64."""
+    """cornerSubPix on every corner (it converges from a rough guess), then the interpolation-free polish
+    that removes its pixel locking (:func:`lps_gui.camera.subpixel.polish_corners`); (N, 2) -> (N, 2) float64."""
     pts = np.ascontiguousarray(corners_px, dtype=np.float32).reshape(-1, 1, 2)
     out = cv2.cornerSubPix(image, pts, (half_window, half_window), (-1, -1), SUBPIX_CRITERIA)
-    return out.reshape(-1, 2).astype(np.float64)
+    return polish_corners(image, out.reshape(-1, 2).astype(np.float64), half_window)
 
 
 def orient(corners_px: np.ndarray, board: Board, reference_px: np.ndarray | None = None) -> np.ndarray:

@@ -77,6 +77,59 @@ def _box_square_wave(x: np.ndarray, width: np.ndarray) -> np.ndarray:
     return (_triangle(x + half) - _triangle(x - half)) / width
 
 
+WIDE_BLUR_SQUARES = 0.1  # below this blur (squares) a kink 0.5 square away adds < 1e-20: only the nearest counts
+
+
+KINK_TABLE_STEP = 1.0 / 256.0  # the kink's profile tabulated over a = |t|/s in [0, 8] (f(8) ~ 1e-16), linear between
+_KINK_TABLE: np.ndarray | None = None
+
+
+def _kink_table() -> np.ndarray:
+    """f(a) = phi(a) - a Phi(-a) on the table's grid, float32 (computed once: erfc is the render's dearest step)."""
+    global _KINK_TABLE
+    if _KINK_TABLE is None:
+        from scipy.special import erfc
+
+        a = np.arange(0.0, 8.0 + 2 * KINK_TABLE_STEP, KINK_TABLE_STEP)
+        f = np.exp(-0.5 * a * a) / np.sqrt(2.0 * np.pi) - 0.5 * a * erfc(a / np.sqrt(2.0))
+        _KINK_TABLE = f.astype(np.float32)
+    return _KINK_TABLE
+
+
+def _smoothed_kink(t: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """What a Gaussian (sigma s) adds to |t| at a kink, halved: s f(|t|/s), f(a) = phi(a) - a Phi(-a)
+    (from the table, linear interpolation: error ~1e-8 of s)."""
+    table = _kink_table()
+    pos = np.minimum(np.abs(t) / s, np.float32(8.0)) * np.float32(1.0 / KINK_TABLE_STEP)
+    i = pos.astype(np.int32)
+    frac = pos - i
+    return s * (table[i] + frac * (table[i + 1] - table[i]))
+
+
+def _blurred_box_square_wave(x: np.ndarray, width: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Mean of the square wave under a box of ``width`` convolved with a Gaussian of sigma ``s`` (exact).
+
+    The box's mean is a difference of the triangle wave (:func:`_triangle`);
+    the Gaussian rounds each of its kinks (at the integers, slope +-1 -> -+1)
+    by 2 (-1)^m :func:`_smoothed_kink`: the nearest kink, and its neighbours
+    where the blur exceeds WIDE_BLUR_SQUARES (farther ones are 1.5 squares
+    away, where a kernel under 0.3 square is nil).
+    """
+    s = np.maximum(s, np.float32(1e-6))
+    half = 0.5 * width
+    wide = s > WIDE_BLUR_SQUARES  # the next kinks matter only under a blur this wide (of a square)
+    total = np.zeros_like(x)
+    for sign, y in ((1.0, x + half), (-1.0, x - half)):
+        m0 = np.round(y)
+        ty = _triangle(y) + 2.0 * (1.0 - 2.0 * np.mod(m0, 2.0)) * _smoothed_kink(y - m0, s)
+        if wide.any():
+            for dm in (-1.0, 1.0):
+                m = m0[wide] + dm
+                ty[wide] += 2.0 * (1.0 - 2.0 * np.mod(m, 2.0)) * _smoothed_kink(y[wide] - m, s[wide])
+        total = total + sign * ty
+    return total / width
+
+
 def _box_inside(x: np.ndarray, width: np.ndarray, lo: float, hi: float) -> np.ndarray:
     """Fraction of [x - width/2, x + width/2] inside [lo, hi] (exact)."""
     half = 0.5 * width
@@ -93,6 +146,8 @@ class Surface:
     wy: np.ndarray
     facing: np.ndarray
     depth: np.ndarray  # along the optical axis per unit of normalized ray, i.e. z_cam (mm)
+    sx: np.ndarray | None = None  # |d bx / d(u, v)|: a 1-px Gaussian's sigma along board x (squares)
+    sy: np.ndarray | None = None
 
 
 class BoardRenderer:
@@ -143,13 +198,56 @@ class BoardRenderer:
         return self.intrinsics.image_size
 
     def render_float(self, R_cam_board: np.ndarray, t_cam_board: np.ndarray) -> np.ndarray:
-        """Noise-free irradiance in grey levels, float32 shape (H, W)."""
+        """Noise-free irradiance in grey levels, float32 shape (H, W).
+
+        A lens blurs the scene *before* the pixels integrate it. Blurring the
+        pixel-integrated image instead (a discrete Gaussian on the box-filtered
+        render) is not the same: the corners it makes are pulled by ~0.01 px
+        towards a sub-pixel phase, a pattern that does not average over a board
+        (it leaned a planar gantry's squareness, issue 35). So the checker's
+        modulation, which alone makes the corners, is blurred analytically
+        (:func:`_blurred_box_square_wave`: pixel box and lens Gaussian together),
+        and only the slowly varying rest (paper, board outline, background) takes
+        the discrete blur.
+        """
         surface = self.surface(R_cam_board, t_cam_board)
-        board_val, paper = self.shade(surface)
         lt = self.lighting
-        img = lt.background + paper * (board_val - lt.background)
-        img = np.where(surface.facing, img, lt.background).astype(np.float32)
-        return self.optics(img)
+        if not self.analytic_blur:
+            board_val, paper = self.shade(surface)
+            img = lt.background + paper * (board_val - lt.background)
+            img = np.where(surface.facing, img, lt.background).astype(np.float32)
+            return self.optics(img)
+        board_val, paper, depth, checker = self.layers(surface)
+        base = np.where(surface.facing, lt.background + paper * (board_val - lt.background), lt.background)
+        depth = np.where(surface.facing, depth, 0.0).astype(np.float32)
+        return self.compose(base.astype(np.float32), depth, checker)
+
+    @property
+    def analytic_blur(self) -> bool:
+        """Whether the checker is blurred analytically (:meth:`render_float`): antialiased, blurred, no texture."""
+        lt = self.lighting
+        return bool(lt.antialias and lt.blur_px > 0 and self._texture is None)
+
+    def layers(self, surface: "Surface") -> tuple[np.ndarray, ...]:
+        """The board without its checker (grey levels), the paper fraction, the checker's half contrast where
+        it is printed, and the checker blurred by pixel and lens (+1 black, -1 white): the scene is
+        ``background + paper (board - background) - depth checker``."""
+        lt = self.lighting
+        inside, paper = self._masks(surface)
+        mid, half = 0.5 * (lt.white + lt.black), 0.5 * (lt.white - lt.black)
+        board_val = lt.white + inside * (mid - lt.white)
+        b = np.float32(lt.blur_px)
+        checker = (_blurred_box_square_wave(surface.bx, surface.wx, b * surface.sx)
+                   * _blurred_box_square_wave(surface.by, surface.wy, b * surface.sy))
+        return board_val, paper, paper * inside * half, checker
+
+    def compose(self, base: np.ndarray, depth: np.ndarray, checker: np.ndarray) -> np.ndarray:
+        """The lens on a scene in layers (:meth:`layers`): the slowly varying base and the checker's contrast
+        take the discrete blur, the checker itself is already blurred; vignetting dims the whole."""
+        img = self.optics(base, vignette=False) - self.optics(depth, vignette=False) * checker.astype(np.float32)
+        if self._gain is not None:
+            img *= self._gain
+        return img.astype(np.float32)
 
     def surface(self, R_cam_board: np.ndarray, t_cam_board: np.ndarray,
                 window: tuple[slice, slice] = (slice(None), slice(None))) -> "Surface":
@@ -177,22 +275,29 @@ class BoardRenderer:
         a01 = (G[0, 1] - bx * G[2, 1]) * inv_w
         a10 = (G[1, 0] - by * G[2, 0]) * inv_w
         a11 = (G[1, 1] - by * G[2, 1]) * inv_w
-        wx = np.abs(a00 * j00 + a01 * j10) + np.abs(a00 * j01 + a01 * j11)
-        wy = np.abs(a10 * j00 + a11 * j10) + np.abs(a10 * j01 + a11 * j11)
+        bxu, bxv, byu, byv = a00 * j00 + a01 * j10, a00 * j01 + a01 * j11, a10 * j00 + a11 * j10, a10 * j01 + a11 * j11
+        wx, wy = np.abs(bxu) + np.abs(bxv), np.abs(byu) + np.abs(byv)
         if not self.lighting.antialias:
             wx[:], wy[:] = 1e-4, 1e-4
         np.maximum(wx, 1e-4, out=wx)
         np.maximum(wy, 1e-4, out=wy)
-        return Surface(bx, by, wx, wy, facing, inv_w)
+        return Surface(bx, by, wx, wy, facing, inv_w, np.hypot(bxu, bxv), np.hypot(byu, byv))
+
+    def _masks(self, surface: "Surface") -> tuple[np.ndarray, np.ndarray]:
+        """Fractions of each pixel inside the checker area and on the paper."""
+        bx, by, wx, wy = surface.bx, surface.by, surface.wx, surface.wy
+        inside = _box_inside(bx, wx, -1.0, self.board.cols) * _box_inside(by, wy, -1.0, self.board.rows)
+        m = self.margin_squares
+        paper = _box_inside(bx, wx, -1.0 - m, self.board.cols + m) * _box_inside(by, wy, -1.0 - m, self.board.rows + m)
+        return inside, paper
 
     def shade(self, surface: "Surface") -> tuple[np.ndarray, np.ndarray]:
         """The board's grey level at each pixel and the fraction of the pixel the paper covers."""
         bx, by, wx, wy = surface.bx, surface.by, surface.wx, surface.wy
         # squares span [-1, cols] x [-1, rows]; square [0,1)x[0,1) is black
         checker = _box_square_wave(bx, wx) * _box_square_wave(by, wy)  # +1 black, -1 white
-        inside = _box_inside(bx, wx, -1.0, self.board.cols) * _box_inside(by, wy, -1.0, self.board.rows)
+        inside, paper = self._masks(surface)
         m = self.margin_squares
-        paper = _box_inside(bx, wx, -1.0 - m, self.board.cols + m) * _box_inside(by, wy, -1.0 - m, self.board.rows + m)
         lt = self.lighting
         mid, half = 0.5 * (lt.white + lt.black), 0.5 * (lt.white - lt.black)
         board_val = (lt.white + inside * (mid - half * checker - lt.white)).astype(np.float32)
@@ -201,11 +306,11 @@ class BoardRenderer:
             board_val *= 1.0 + lt.texture * tex
         return board_val, paper
 
-    def optics(self, img: np.ndarray) -> np.ndarray:
+    def optics(self, img: np.ndarray, vignette: bool = True) -> np.ndarray:
         """Blur and vignetting of the lens, applied to the whole scene's irradiance."""
         if self.lighting.blur_px > 0:
             img = cv2.GaussianBlur(img, (0, 0), self.lighting.blur_px)
-        if self._gain is not None:
+        if vignette and self._gain is not None:
             img *= self._gain
         return img
 

@@ -56,6 +56,9 @@ class TargetsRenderer:
         w, h = self.intrinsics.image_size
         img = np.full((h, w), lt.background, np.float32)
         nearest = np.full((h, w), np.inf, np.float32)
+        analytic = self._renderers[0].analytic_blur  # the checkers blurred as by the lens (BoardRenderer.render_float)
+        depth_img = np.zeros((h, w), np.float32)
+        checker_img = np.zeros((h, w), np.float32)
         for j, (renderer, mask) in enumerate(zip(self._renderers, self._masks)):
             R_j = R @ self.layout.Q[j]
             t_j = R @ self.layout.p[j] + t
@@ -63,7 +66,10 @@ class TargetsRenderer:
             if window is None:
                 continue
             surface = renderer.surface(R_j, t_j, window)
-            value, paper = renderer.shade(surface)
+            if analytic:
+                value, paper, depth, checker = renderer.layers(surface)
+            else:
+                value, paper = renderer.shade(surface)
             hit = surface.facing & (paper > 0) & (surface.depth < nearest[window])
             if not hit.any():
                 continue
@@ -74,6 +80,11 @@ class TargetsRenderer:
             scene = lt.background + paper * (value - lt.background)
             img[window] = np.where(hit, scene, img[window])
             nearest[window] = np.where(hit, surface.depth, nearest[window])
+            if analytic:
+                depth_img[window] = np.where(hit, depth, depth_img[window])
+                checker_img[window] = np.where(hit, checker, checker_img[window])
+        if analytic:
+            return self._renderers[0].compose(img, depth_img, checker_img)
         return self._renderers[0].optics(img)
 
     def _window(self, j: int, R_j: np.ndarray, t_j: np.ndarray) -> tuple[slice, slice] | None:

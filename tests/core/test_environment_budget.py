@@ -93,8 +93,11 @@ def test_periodic_amplitude_uncertainty_matches_a_monte_carlo_fit():
         c = np.linalg.lstsq(A, y, rcond=None)[0]
         amps.append(np.hypot(*c))
     unc = {"coverage_factor": 2.0, "expanded_k2_um": 1.0, "noise_standard_um": sigma * math.sqrt(2)}
-    U = figure_uncertainties(unc, {}, 100.0, n_views=n)["periodic_amplitude_um"]
+    figures = {"single_run": {"periodic_amplitude_um": float(np.mean(amps))}}
+    U = figure_uncertainties(unc, figures, 100.0, n_views=n)["periodic_amplitude_um"]
     assert U / 2 == pytest.approx(np.std(amps), rel=0.15)
+    # a periodic error the plan does not define (no amplitude) has no U either
+    assert figure_uncertainties(unc, {"single_run": {}}, 100.0, n_views=n)["periodic_amplitude_um"] is None
 
 
 def test_a_tilt_curve_within_the_noise_gives_no_abbe_term():

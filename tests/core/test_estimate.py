@@ -170,6 +170,23 @@ def test_replaced_and_bumped_views_are_flagged_and_others_unaffected():
     assert abs(est.deviation_um(obs.target_mm)[7]) > 1000
 
 
+@pytest.mark.parametrize("scale_ppm", [1e5, -5e4])
+def test_a_wrong_steps_per_mm_is_measured_with_every_good_view_kept(scale_ppm):
+    """A 5-10 % scale error (a misconfigured steps/mm) is a smooth trend, not replaced images: every good view
+    is kept and the scale comes out as simulated; a truly replaced image is still flagged (issue 35)."""
+    errors = StageErrorModel(scale_ppm=scale_ppm, periodic_um=5.0, pitch_mm=8.0, repeatability_um=1.0)
+    spec = replace(small_spec(seed=4, views=30, noise_px=0.2, directions="both", errors=errors), replaced_views=(40,))
+    views = simulate_views(spec)
+    obs = observations_of(spec, views)
+    est = estimate(obs, EstimateOptions(six_dof=False))
+    assert np.flatnonzero(est.outlier).tolist() == [40]
+    keep = ~est.outlier
+    slope = np.polyfit(obs.target_mm[keep], est.state.s[keep], 1)[0]
+    true_slope = np.polyfit(obs.target_mm[keep], true_s(views)[keep], 1)[0]
+    assert abs(true_slope - 1.0 - 1e-6 * scale_ppm) < 1e-3
+    assert abs(slope - true_slope) < 1e-3  # 1000 ppm of a 100000 ppm error; the estimate's sigma is ~300 ppm
+
+
 def test_six_dof_recovers_straightness_and_angles_with_honest_sigmas():
     from lps_gui.core.truth.stage_errors import ErrorProfile
 

@@ -196,7 +196,8 @@ def test_fft_recovers_a_5mm_lead_screw_pitch():
     assert f.periodic_amplitude_um == pytest.approx(3.0, rel=0.05)
     assert f.scale_ppm == pytest.approx(40.0, abs=2.0)
     spec = f.to_dict()["spectrum"]
-    assert len(spec["period_mm"]) == len(spec["amplitude_um"]) == 200
+    assert len(spec["period_mm"]) == len(spec["amplitude_um"]) == 100  # periods of 4 steps and more: no alias
+    assert min(spec["period_mm"]) == pytest.approx(4.0)
     assert spec["period_mm"][int(np.argmax(spec["amplitude_um"]))] == pytest.approx(5.0)
 
 
@@ -221,6 +222,44 @@ def test_spectrum_needs_four_targets_and_ignores_the_longest_periods():
     s = deviation_spectrum(t, y)
     assert s.peak_period_mm == pytest.approx(10.0, rel=0.01)
     assert s.peak_amplitude_um == pytest.approx(1.0, rel=0.05)
+
+
+def test_a_period_the_plan_does_not_resolve_is_not_defined():
+    """Issue 35: a 0-10 mm plan at 2 mm steps gave 3.45e+15 um at the Nyquist period, a min-step plan 240 um
+    at 0.68 mm. A period needs 2 cycles in the travel, 4 samples in a cycle and no gap over half a cycle."""
+    rng = np.random.default_rng(0)
+    t = np.arange(0.0, 10.0 + 1e-9, 2.0)
+    f = single_run_figures(t, rng.normal(0, 1.0, t.size) + 5.0 * (-1.0) ** np.arange(t.size))
+    assert f.periodic_amplitude_um is None and f.periodic_period_mm is None
+    assert f.spectrum is not None and any("Periodic error not defined" in n for n in f.notes)
+    # min-step: 10 steps of 2 um at three places, both ways; the jumps between places are no steps
+    from lps_gui.core.planning.presets import min_step_plan_fields
+
+    plan = np.asarray(min_step_plan_fields(0.0, 200.0)["targets_mm"])
+    target = np.r_[plan, plan[::-1]]
+    group = np.repeat([0, 1], plan.size)
+    x = 2.0 * np.sin(2 * np.pi * target / 0.68) + rng.normal(0, 0.3, target.size)
+    f = single_run_figures(target, x, group=group)
+    assert f.periodic_amplitude_um is None and f.periodic_period_mm is None
+    assert f.mean_step_mm == pytest.approx(0.002, abs=0.5e-3)
+    assert f.step_std_um < 3.0  # the steps' own scatter (sine and noise), not the 100 mm jumps
+    assert any("4 jump(s)" in n for n in f.notes)
+    # the same sine on a plan that resolves it: 4 samples per period is enough
+    t = np.arange(0.0, 60.0, 2.0)
+    f = single_run_figures(t, 3.0 * np.sin(2 * np.pi * t / 8.0))
+    assert f.periodic_period_mm == pytest.approx(8.0, rel=0.01) and f.periodic_amplitude_um == pytest.approx(3.0, rel=0.05)
+    assert f.step_std_um > 0 and not any("jump" in n for n in f.notes)
+
+
+def test_an_undefined_period_reads_not_defined_in_the_summary_and_csv():
+    from lps_gui.io.results.document import summary_csv_rows, summary_figures
+
+    single = {"n_captures": 6, "periodic_amplitude_um": None, "periodic_period_mm": None, "scale_ppm": 1.0}
+    figs = {f.key: f for f in summary_figures({"figures": {"single_run": single}})}
+    assert figs["periodic_amplitude"].unresolved.startswith("not defined")
+    assert figs["periodic_period"].unresolved.startswith("not defined")
+    rows = {r[0]: r[1] for r in summary_csv_rows({"figures": {"single_run": single}})}
+    assert rows["periodic_amplitude"] is None and rows["periodic_period"] is None  # kept, empty: no number
 
 
 # ---------------------------------------------------------------- session and specification

@@ -49,9 +49,16 @@ def test_replaced_view_leaves_its_local_trend():
     assert not flags.any()
 
 
-def test_local_trend_equals_the_median_of_each_views_own_neighbours():
-    """The vectorized windows against the definition, view by view, on ragged groups with gaps."""
+def _theil_sen_residual(d: np.ndarray, t: np.ndarray, i: int, nb: np.ndarray) -> float:
+    """The definition, one view at a time: d minus the Theil-Sen line of its neighbours at its target."""
+    slopes = [(d[b] - d[a]) / (t[b] - t[a]) for k, a in enumerate(nb) for b in nb[k + 1:] if t[b] != t[a]]
+    slope = float(np.median(slopes)) if slopes else 0.0
+    return float(d[i] - np.median(d[nb] - slope * (t[nb] - t[i])))
 
+
+def test_local_trend_is_the_theil_sen_line_of_each_views_own_neighbours():
+    """The vectorized windows against the definition, view by view, on ragged groups with gaps: the 6 views
+    nearest in target order (the window slides inward at a run's ends), self excluded."""
     rng = np.random.default_rng(0)
     for K in (3, 4, 7, 50, 301):
         dev, target = rng.normal(size=K), rng.permutation(K).astype(float)
@@ -64,5 +71,32 @@ def test_local_trend_equals_the_median_of_each_views_own_neighbours():
                 assert np.isnan(got[i])
                 continue
             j = int(np.flatnonzero(same == i)[0])
-            nb = np.r_[dev[same[max(0, j - 3):j]], dev[same[j + 1:j + 4]]]
-            assert got[i] == pytest.approx(dev[i] - np.median(nb), abs=1e-15)
+            width = min(7, same.size)
+            lo = min(max(j - 3, 0), same.size - width)
+            nb = np.array([v for v in same[lo:lo + width] if v != i])
+            assert got[i] == pytest.approx(_theil_sen_residual(dev, target, i, nb), abs=1e-12)
+
+
+@pytest.mark.parametrize("scale", [0.05, -0.07, 0.10])
+def test_a_wrong_steps_per_mm_is_a_trend_not_outliers(scale):
+    """A stage with a 5-10 % scale error (wrong steps/mm) deviates along a line: no view leaves the local trend,
+    not even at a run's ends (the old median of one-sided neighbours flagged them, round after round)."""
+    rng = np.random.default_rng(3)
+    target = np.tile(np.arange(60.0) * 2.0, 2)
+    groups = np.repeat([0, 1], 60)
+    dev = 1e3 * scale * target + 2.0 * np.sin(target / 4.0) + rng.normal(0, 0.5, target.size)
+    valid = np.ones(target.size, bool)
+    flags, resid = position_outliers(dev, target, groups, valid, np.full(target.size, 0.5), k=5.0)
+    assert not flags.any(), np.abs(resid).max()
+    dev[70] += 1e3 * scale * 6.0  # but another position's image (3 targets away) is still caught
+    flags, _ = position_outliers(dev, target, groups, valid, np.full(target.size, 0.5), k=5.0)
+    assert np.flatnonzero(flags).tolist() == [70]
+
+
+def test_repeated_frames_at_one_target_take_a_constant_trend():
+    """Neighbours all at one target (frames_per_stop > 1) have no slope: their median is the trend."""
+    target = np.repeat([0.0, 1.0], 8)
+    dev = np.r_[np.zeros(8), np.full(8, 5.0)]
+    dev[3] = 40.0
+    resid = local_trend_residuals(dev, target, np.zeros(16, int), np.ones(16, bool))
+    assert resid[3] == pytest.approx(40.0) and np.isfinite(resid).all()

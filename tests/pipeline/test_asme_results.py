@@ -89,3 +89,20 @@ def test_settling_time_within_20_percent_of_the_truth(tmp_path):
     assert results["parameters"]["n_outliers"] == 0  # ringing frames are not outliers in a settling test
     row = results["asme_b5_64"]["test_uncertainty_ratio"][0]
     assert row["figure"] == "Settling time" and row["tur"] == pytest.approx(1.0 / settle["settling_time_U_s"])
+
+
+def test_a_min_step_session_has_no_periodic_figure_and_steps_without_the_jumps(tmp_path):
+    """Issue 35: the min-step test printed "Periodic error amplitude 240 +- 0.18 um, period 0.680 mm" and
+    "Step std 24391 um" (the jumps between its three places). Its clusters define no period; its steps are 2 um."""
+    from lps_gui.io.results.document import summary_csv_rows
+
+    session = _min_step_session(tmp_path / "s", 0.0, None)
+    results = estimate_session(session.folder)
+    single = results["figures"]["single_run"]
+    assert single["periodic_amplitude_um"] is None and single["periodic_period_mm"] is None
+    assert results["uncertainty"]["figures_k2"].get("periodic_amplitude_um") is None
+    true_um = np.abs(_true_steps_um(results, session))  # single-run steps go up the targets in both directions
+    assert single["mean_step_mm"] == pytest.approx(1e-3 * true_um.mean(), abs=0.3e-3)
+    assert single["step_std_um"] < 3.0 * max(float(np.std(true_um, ddof=1)), 0.5)
+    rows = {r[0]: r[1] for r in summary_csv_rows(results)}
+    assert rows["periodic_amplitude"] is None and rows["step_std"] == pytest.approx(single["step_std_um"])

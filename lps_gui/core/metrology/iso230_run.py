@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from lps_gui.core.metrology.iso230_spectrum import Spectrum, deviation_spectrum
+from lps_gui.core.metrology.iso230_spectrum import UNDEFINED_NOTE, Spectrum, deviation_spectrum
 from lps_gui.errors import InputError
 
 TARGET_TOL_MM = 1e-6  # targets closer than this are one target P_j
@@ -94,19 +94,25 @@ class RunFigures(JsonDataclass):
     deviation_span_um: float | None  # max x - min x
     scale_ppm: float | None  # slope of the least-squares line x(P), in um/m
     scale_sigma_ppm: float | None  # its standard uncertainty
-    periodic_amplitude_um: float | None  # sine amplitude of the spectrum's peak (detrended x)
+    periodic_amplitude_um: float | None  # sine amplitude of the spectrum's peak (detrended x); None: not defined
     periodic_period_mm: float | None  # period of that peak (a lead-screw pitch)
     spectrum: Spectrum | None
     notes: list[str] = field(default_factory=list)
 
 
-def _steps_mm(t: np.ndarray, measured: np.ndarray, ok: np.ndarray, group: np.ndarray) -> np.ndarray:
-    """Steps between measured positions of adjacent targets within each group (mm).
+JUMP_RATIO = 10.0  # a commanded move over this many times the median commanded step is a jump between places, not a step
+
+
+def _steps_mm(t: np.ndarray, measured: np.ndarray, ok: np.ndarray, group: np.ndarray) -> tuple[np.ndarray, int]:
+    """Steps between measured positions of adjacent targets within each group (mm), and the jumps left out.
 
     The target grid of a group includes invalid captures, so an outlier leaves
-    a hole instead of a double step; frames at one target are averaged.
+    a hole instead of a double step; frames at one target are averaged. A move
+    of more than JUMP_RATIO times the median commanded step is the plan's jump
+    to its next place (a min-step test's 2 um steps at three places), not a step:
+    its millimetres would swamp the step std.
     """
-    steps = []
+    steps, commanded = [], []
     for g in np.unique(group):
         sel = (group == g) & np.isfinite(t)
         targets, j = target_index(t[sel])
@@ -114,8 +120,13 @@ def _steps_mm(t: np.ndarray, measured: np.ndarray, ok: np.ndarray, group: np.nda
         with np.errstate(invalid="ignore", divide="ignore"):
             pos = np.bincount(j[ok[sel]], measured[sel][ok[sel]], minlength=targets.size) / n
         steps.append(np.diff(pos))
-    s = np.concatenate(steps) if steps else np.empty(0)
-    return s[np.isfinite(s)]
+        commanded.append(np.diff(targets))
+    if not steps:
+        return np.empty(0), 0
+    s, c = np.concatenate(steps), np.abs(np.concatenate(commanded))
+    jump = c > JUMP_RATIO * np.median(c) if c.size else np.zeros(0, bool)
+    keep = np.isfinite(s) & ~jump
+    return s[keep], int((np.isfinite(s) & jump).sum())
 
 
 def _within_groups(t: np.ndarray, group: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, bool]:
@@ -218,7 +229,9 @@ def single_run_figures(target_mm: np.ndarray, deviation_um: np.ndarray, valid: n
     if t.size == 0:
         return RunFigures(0, None, None, None, None, None, None, None, None, None, notes + ["No valid capture."])
 
-    steps = _steps_mm(t_all, t_all + x_all * 1e-3, ok, grp_all)
+    steps, jumps = _steps_mm(t_all, t_all + x_all * 1e-3, ok, grp_all)
+    if jumps:
+        notes.append(f"{jumps} jump(s) between the plan's places left out of the step figures.")
     mean_step = float(steps.mean()) if steps.size else None
     step_std = float(steps.std(ddof=1) * 1e3) if steps.size > 1 else None
     if steps.size == 0:
@@ -236,6 +249,8 @@ def single_run_figures(target_mm: np.ndarray, deviation_um: np.ndarray, valid: n
     spec = deviation_spectrum(t, resid, w)
     if spec is None:
         notes.append("Fewer than 4 valid targets: no periodic error.")
+    elif spec.peak_amplitude_um is None:
+        notes.append(UNDEFINED_NOTE)
     return RunFigures(
         n_captures=int(t.size), mean_step_mm=mean_step, step_std_um=step_std,
         max_abs_deviation_um=float(np.abs(x).max()), deviation_span_um=float(np.ptp(x)),

@@ -184,6 +184,39 @@ def profile_span(values: np.ndarray, sigma: np.ndarray, target: np.ndarray, vali
     return ProfileSpan(span, sig, noise, int(m), significant and is_resolved(span, noise, limit))
 
 
+def max_abs_resolution(values: np.ndarray, sigma: np.ndarray, target: np.ndarray, valid: np.ndarray,
+                       profile: ProfileSpan | None = None) -> dict[str, Any] | None:
+    """Max |x| of a profile over the views (an angle: "Max |roll|") and whether it is a finding.
+
+    The one rule for a max |x|: it is a finding only when it exceeds what noise
+    alone reaches (:func:`noise_max_abs` of the views' RMS sigma) *and* the
+    profile it comes from is resolved (:func:`profile_span`: not flat at
+    p < 0.001, p-v above the noise p-v). ``profile`` is that profile when the
+    caller has a better one (the error motions' own, with the stops' full
+    covariance: then the summary's "Max |roll|" and the error-motion table
+    cannot disagree); otherwise it is computed from ``values`` and ``sigma``
+    as independent. None when no view has a value.
+    """
+    v, s = np.asarray(values, float), np.asarray(sigma, float)
+    keep = np.asarray(valid, bool) & np.isfinite(v) & np.isfinite(s)
+    if not keep.any():
+        return None
+    peak = float(np.max(np.abs(v[keep])))
+    noise = noise_max_abs(float(np.sqrt(np.mean(s[keep] ** 2))), int(keep.sum()))
+    if profile is None:
+        profile = profile_span(v, s, target, keep)
+    return {"max_abs_urad": peak, "noise_max_abs_urad": noise,
+            "resolved": bool(is_resolved(peak, noise) and profile.resolved)}
+
+
+def with_profile_resolution(angles: dict[str, Any], profile_resolved: dict[str, bool]) -> dict[str, Any]:
+    """``figures["angles_resolution"]`` once the error motions have their profiles' verdicts
+    (``{"roll": bool, ...}``): a max |angle| whose profile is not resolved is no finding
+    (:func:`max_abs_resolution`'s rule, with the error motions' profile)."""
+    return {name: {**entry, "resolved": bool(entry.get("resolved")) and profile_resolved.get(name, True)}
+            for name, entry in angles.items()}
+
+
 def runs_per_direction(figures: dict[str, Any]) -> int:
     """The smaller number of runs of the directions measured (from ``figures["per_run"]``)."""
     counts: dict[str, int] = {}

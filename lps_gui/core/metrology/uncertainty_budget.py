@@ -203,7 +203,8 @@ def figure_uncertainties(unc: dict[str, Any], figures: dict[str, Any], travel_mm
 
     The periodic amplitude is a sinusoid fitted to ``n_views`` noisy positions:
     its 1-sigma is the per-view noise times sqrt(2 / n) (the reference view's
-    noise is a common offset, the scale terms a trend: neither enters).
+    noise is a common offset, the scale terms a trend: neither enters). A
+    periodic error the plan does not define has no U.
     """
     k = float(unc.get("coverage_factor") or COVERAGE_FACTOR)
     U = unc.get("expanded_k2_um")
@@ -222,7 +223,7 @@ def figure_uncertainties(unc: dict[str, Any], figures: dict[str, Any], travel_mm
                        if r["contribution_um"] is not None and r["source"] not in NOISE_SOURCES + ("intrinsics", "Abbe offset")]
         rel = [1e3 * c / travel_mm for c in scale_terms]  # um over L -> ppm
         out["scale_ppm"] = k * math.sqrt(float(scale_u) ** 2 + sum(r * r for r in rel))
-    out["periodic_amplitude_um"] = (None if u_noise is None or n_views < 3
+    out["periodic_amplitude_um"] = (None if u_noise is None or n_views < 3 or single.get("periodic_amplitude_um") is None
                                     else k * (u_noise / math.sqrt(2.0)) * math.sqrt(2.0 / n_views))  # per-view part
     s = figures.get("straightness_sigma_um")
     out["straightness_um_max"] = None if s is None else k * float(s)

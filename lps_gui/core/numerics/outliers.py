@@ -2,8 +2,8 @@
 
 Two kinds: a *bumped* camera does not fit the common rotation, so its RMS
 reprojection error stands out; a *replaced* image (another position's image,
-a wrong file) reprojects fine but its position leaves the local trend of its
-run. Both are judged against robust scales (median and MAD), k sigmas.
+a wrong file) reprojects fine but its position leaves the local (linear) trend
+of its run; a smooth deviation, a scale error above all, is no outlier. Both are judged against robust scales (median and MAD), k sigmas.
 """
 from __future__ import annotations
 
@@ -33,27 +33,45 @@ def reprojection_outliers(rms_px: np.ndarray, valid: np.ndarray, k: float) -> np
 def local_trend_residuals(
     deviation: np.ndarray, target_mm: np.ndarray, groups: np.ndarray, valid: np.ndarray, half_window: int = 3
 ) -> np.ndarray:
-    """Deviation minus the median of its neighbours in the same run and direction (self excluded).
+    """Deviation minus the robust line through its neighbours in the same run and direction (self excluded).
 
+    The neighbours are the ``2 half_window`` views nearest in target order (the
+    window slides inward at a run's ends, so an end view has as many). The
+    trend is *linear*, not constant: a stage with a wrong steps/mm deviates
+    along a line, and a median of one-sided neighbours would call its end
+    views (then, round after round, the next ones) replaced images. The line
+    is Theil-Sen (median of the pairwise slopes, median intercept), which
+    one replaced image among the neighbours does not move.
     Returns shape (K,), NaN where a view has fewer than 2 valid neighbours.
     """
     out = np.full(deviation.shape, np.nan)
-    offsets = np.r_[np.arange(-half_window, 0), np.arange(1, half_window + 1)]
     for g in np.unique(groups):
         idx = np.flatnonzero((groups == g) & valid)
         if idx.size < 3:
             continue
         idx = idx[np.argsort(target_mm[idx], kind="stable")]
-        d = deviation[idx]
-        at = np.arange(idx.size)[:, None] + offsets[None, :]  # each view's neighbours, shape (m, 2 half_window)
-        inside = (at >= 0) & (at < idx.size)
-        window = np.sort(np.where(inside, d[np.clip(at, 0, idx.size - 1)], np.nan), axis=1)  # NaN sort last
-        n = inside.sum(axis=1)
-        rows = np.arange(idx.size)
-        median = 0.5 * (window[rows, (n - 1) // 2] + window[rows, n // 2])
-        ok = n >= 2
-        out[idx[ok]] = d[ok] - median[ok]
+        out[idx] = _robust_line_residuals(deviation[idx], target_mm[idx], half_window)
     return out
+
+
+def _robust_line_residuals(d: np.ndarray, t: np.ndarray, half_window: int) -> np.ndarray:
+    """For views sorted by target, each one's deviation minus its neighbours' Theil-Sen line at its target."""
+    m = d.size
+    width = min(2 * half_window + 1, m)
+    rows = np.arange(m)
+    start = np.clip(rows - half_window, 0, m - width)
+    window = start[:, None] + np.arange(width)[None, :]  # shape (m, width), self included
+    nb = np.sort(np.where(window == rows[:, None], m, window), axis=1)[:, :-1]  # self moved last and dropped
+    dn, tn = d[nb], t[nb] - t[:, None]  # neighbours relative to the view's own target
+    a, b = np.triu_indices(width - 1, 1)
+    dt = tn[:, b] - tn[:, a]
+    tied = np.abs(dt) <= 1e-9 * np.maximum(np.abs(tn[:, a]) + np.abs(tn[:, b]), 1e-12)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        slopes = np.where(tied, np.nan, (dn[:, b] - dn[:, a]) / dt)
+    slope = np.zeros(m)
+    some = ~np.all(tied, axis=1)  # neighbours all at one target (repeated frames): a constant trend
+    slope[some] = np.nanmedian(slopes[some], axis=1)
+    return d - np.median(dn - slope[:, None] * tn, axis=1)
 
 
 def position_outliers(

@@ -253,6 +253,18 @@ def extreme_figures(results: dict[str, Any]) -> list[SummaryFigure]:
     return out
 
 
+def periodic_figures(single: dict[str, Any]) -> list[SummaryFigure]:
+    """Periodic error amplitude and period; "not defined" (no value, no U) where the plan resolves no period
+    (:func:`lps_gui.core.metrology.iso230_spectrum.resolvable_band`) though captures exist."""
+    from lps_gui.core.metrology.iso230_spectrum import UNDEFINED_TEXT
+
+    amplitude = finite_number(single.get("periodic_amplitude_um"))
+    undefined = UNDEFINED_TEXT if amplitude is None and single.get("n_captures") else ""
+    return [SummaryFigure("periodic_amplitude", "Periodic error amplitude", amplitude, MU + "m", unresolved=undefined),
+            SummaryFigure("periodic_period", "Periodic error period", None if undefined else
+                          finite_number(single.get("periodic_period_mm")), "mm", unresolved=undefined)]
+
+
 def summary_figures(results: dict[str, Any]) -> list[SummaryFigure]:
     """Every summary figure of a results document, in report order: the one builder of summary.csv,
     the report's summary table and the GUI's (via ``report.summary.summary_rows``)."""
@@ -273,13 +285,13 @@ def summary_figures(results: dict[str, Any]) -> list[SummaryFigure]:
         SummaryFigure("scale_sigma", "Scale error \u03c3 (noise, correlations included)", finite_number(single.get("scale_sigma_ppm")), "ppm"),
         SummaryFigure("scale_sigma_total", "Scale error \u03c3 (total, with intrinsics)", finite_number(single.get("scale_sigma_total_ppm")),
                       "ppm"),
-        SummaryFigure("periodic_amplitude", "Periodic error amplitude", finite_number(single.get("periodic_amplitude_um")), MU + "m"),
-        SummaryFigure("periodic_period", "Periodic error period", finite_number(single.get("periodic_period_mm")), "mm"),
-    ]
+    ] + periodic_figures(single)
     out += iso_figures(figs.get("iso230_2"))
     out += extreme_figures(results)
-    for name, value in (figs.get("angles_span_urad") or {}).items():
-        out.append(SummaryFigure(f"{name}_span", None, value, MU + "rad"))
+    angles = figs.get("angles_resolution") or {}
+    for name, value in (figs.get("angles_span_urad") or {}).items():  # no finding where the angle is not resolved
+        unresolved = "not resolved" if name in angles and not (angles[name] or {}).get("resolved") else ""
+        out.append(SummaryFigure(f"{name}_span", None, value, MU + "rad", unresolved=unresolved))
     for key, value in (results.get("truth_comparison") or {}).items():
         if finite_number(value) is None:
             continue
@@ -294,10 +306,11 @@ def summary_figures(results: dict[str, Any]) -> list[SummaryFigure]:
 def summary_csv_rows(results: dict[str, Any]) -> list[tuple[str, Any, str]]:
     """(name, value, unit) rows of summary.csv: every figure of :func:`summary_figures` with a value.
 
-    An unresolved figure keeps its row with an empty value (noise alone could give it: no finding).
+    An unresolved figure keeps its row with an empty value (noise alone could give it: no finding), and
+    so does a figure the plan does not define (its ``unresolved`` says "not defined ...").
     """
     return [(f.key, None if f.unresolved else f.value, f.unit.replace(MU, "u"))
-            for f in summary_figures(results) if f.value is not None]
+            for f in summary_figures(results) if f.value is not None or f.unresolved]
 
 
 def _fmt(value: Any) -> str:

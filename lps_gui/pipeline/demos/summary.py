@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from lps_gui.core.metrology.iso230_spectrum import UNDEFINED_TEXT
 from lps_gui.core.truth.simulate import SimulationSpec
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import PlanarAxis, PlanarFigures, SingleRun, TruthComparison
@@ -53,8 +54,10 @@ def summary_lines(results: Results | dict[str, Any], spec: SimulationSpec) -> li
     return [
         f"views: {'?' if p.n_views is None else p.n_views} ({len(plan.targets())} targets x {len(plan.run_directions())} "
         f"directions x {plan.runs} runs), {n_out} flagged outlier(s); RMS residual {fmt(p.rms_px)} px",
-        f"positioning: scale {fmt(single.scale_ppm)} ppm, periodic {fmt(single.periodic_amplitude_um)} \u00b5m "
-        f"at {fmt(single.periodic_period_mm)} mm, mean step {fmt(single.mean_step_mm, 6)} mm",
+        f"positioning: scale {fmt(single.scale_ppm)} ppm, periodic " + (
+            UNDEFINED_TEXT if single.periodic_amplitude_um is None else
+            f"{fmt(single.periodic_amplitude_um)} \u00b5m at {fmt(single.periodic_period_mm)} mm")
+        + f", mean step {fmt(single.mean_step_mm, 6)} mm",
         f"straightness p-v (board plane) v1 {ext.get('Max straightness v1 (peak-to-valley)', '-')}, "
         f"v2 {ext.get('Max straightness v2 (peak-to-valley)', '-')}; image rotation p-v "
         f"{ext.get('Image rotation (peak-to-valley)', '-')}; max |roll| {ext.get('Max |roll|', '-')}, "

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from lps_gui.core.estimator.estimate_types import LpsEstimate
-from lps_gui.core.metrology.resolution import is_resolved, noise_max_abs, profile_span
+from lps_gui.core.metrology.resolution import max_abs_resolution, profile_span
 from lps_gui.io.results.document import json_floats
 
 
@@ -74,11 +74,8 @@ def straightness_figures(target_mm: np.ndarray, est: LpsEstimate, valid: np.ndar
     if six is not None:
         resolved = {}
         for j, name in enumerate(("roll", "pitch", "yaw")):
-            a, s = six.angles_urad[valid, j], six.angles_sigma_urad[valid, j]
-            keep = np.isfinite(a) & np.isfinite(s)
-            if keep.any():
-                noise = noise_max_abs(float(np.sqrt(np.mean(s[keep] ** 2))), int(keep.sum()))
-                resolved[name] = {"max_abs_urad": _f(np.max(np.abs(a[keep]))), "noise_max_abs_urad": _f(noise),
-                                  "resolved": is_resolved(float(np.max(np.abs(a[keep]))), noise)}
+            r = max_abs_resolution(six.angles_urad[:, j], six.angles_sigma_urad[:, j], target_mm, valid)
+            if r is not None:
+                resolved[name] = {k: _f(v) if k != "resolved" else v for k, v in r.items()}
         out["angles_resolution"] = resolved
     return out

@@ -28,8 +28,10 @@ from lps_gui.core.metrology.error_motions import (
     PLANAR_MOTIONS,
     ErrorMotions,
     error_motions,
+    iso_names,
     planar_error_motions,
 )
+from lps_gui.core.metrology.resolution import with_profile_resolution
 from lps_gui.core.models.lps_model import motion_frame
 from lps_gui.core.models.pose_model import PoseSolution, pose_solution_from_views
 from lps_gui.errors import InputError
@@ -257,3 +259,9 @@ def add_error_motions(results: dict[str, Any], session: Any, obs: Any, est: Any)
         return
     add_columns(results["positions"], motions.columns)
     results["error_motions"] = motions.section
+    figures = results.get("figures") or {}
+    if obs.D == 1 and figures.get("angles_resolution"):  # "Max |roll|" is a finding only if EAX's profile is
+        names = iso_names(motions.section.get("axis", "X"))
+        verdicts = motions.section.get("resolved") or {}
+        figures["angles_resolution"] = with_profile_resolution(
+            figures["angles_resolution"], {a: bool(verdicts.get(names[a], True)) for a in ANGULAR})

@@ -18,6 +18,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from lps_gui.core.metrology.iso230_spectrum import UNDEFINED_TEXT
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.report.figures.spec import (
     BACKWARD_COLOR,
@@ -348,6 +349,8 @@ def spectrum_figure(results: Results | dict[str, Any] | None) -> FigureSpec:
     if single and single.periodic_period_mm:
         notes = (f"strongest period {single.periodic_period_mm:.3g} mm, "
                  f"amplitude {single.periodic_amplitude_um or 0:.3g} \u00b5m")
+    elif single and single.max_abs_deviation_um is not None:  # captures, but no period the plan resolves
+        notes = f"periodic error {UNDEFINED_TEXT}"
     return FigureSpec("spectrum", "Error spectrum of the deviation", "period [mm]", "amplitude [\u00b5m]", series,
                       notes, x_log=True)
 

@@ -53,7 +53,7 @@ def unproject(uv: np.ndarray, intr: CameraIntrinsics) -> np.ndarray:
     """
     crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-14)
     q = np.asarray(uv, dtype=float).reshape(-1, 2)
-    xy = cv2.undistortPoints(q.reshape(-1, 1, 2), intr.camera_matrix, intr.dist, criteria=crit).reshape(-1, 2)
+    xy = cv2.undistortPoints(q.reshape(-1, 1, 2), intr.camera_matrix, intr.cv_dist, criteria=crit).reshape(-1, 2)
     x = np.column_stack([xy, np.ones(len(xy))])
     for _ in range(5):
         proj = project(x, intr, want_jacobian=True)

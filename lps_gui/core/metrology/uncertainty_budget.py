@@ -62,6 +62,7 @@ class BudgetInputs:
     tilt_urad: np.ndarray | None = None  # (n, 2) pitch and yaw per used view
     tilt_sigma_urad: np.ndarray | None = None  # (n, 2) their 1-sigma
     target_mm: np.ndarray | None = None  # (n,) targets of the used views (for the smooth tilt curve)
+    tilt_resolved: tuple[bool, bool] | None = None  # pitch (EBX), yaw (ECX) resolved by the error motions; None: not judged
 
 
 def _rms(v: np.ndarray) -> float:
@@ -129,13 +130,19 @@ def _abbe_row(x: BudgetInputs) -> BudgetRow:
         return BudgetRow("Abbe offset", "B", None, "\u00b5rad", None, None, "no per-view angles; not in U")
     spread = smooth_tilt_spread_urad(np.asarray(x.tilt_urad, float), np.asarray(x.tilt_sigma_urad, float),
                                      None if x.target_mm is None else np.asarray(x.target_mm, float))
+    judged = ""
+    if x.tilt_resolved is not None:  # an angle the error motions do not resolve (a lens misfit could fake it) is no term
+        spread = np.where(np.asarray(x.tilt_resolved, bool), spread, 0.0)
+        judged = "; " + ", ".join(f"{n} {'resolved' if r else 'not resolved: no term'}"
+                                  for n, r in zip(("pitch (EBX)", "yaw (ECX)"), x.tilt_resolved))
     lever = np.abs(np.asarray(x.abbe_lever_mm, float))
     contribution = float(np.sqrt(np.sum((1e-3 * lever * spread) ** 2)))  # um
     angle = float(np.sqrt(np.sum(spread**2)))
     c = contribution / angle if angle > 0 else float(lever[0]) * 1e-3
     return BudgetRow("Abbe offset", "B", angle, "\u00b5rad", c, contribution,
                      f"smooth pitch {spread[0]:.1f} \u00b5rad x {lever[0]:.0f} mm, yaw {spread[1]:.1f} \u00b5rad x "
-                     f"{lever[1]:.0f} mm (beyond per-view noise; positions are at the board plane)")
+                     f"{lever[1]:.0f} mm, the camera-board geometry's lever arms (beyond per-view noise; positions are at "
+                     f"the board plane){judged}")
 
 
 def smooth_tilt_spread_urad(tilt: np.ndarray, sigma: np.ndarray, target_mm: np.ndarray | None,

@@ -81,16 +81,18 @@ class ErrorMotionResults:
     section: dict[str, Any]  # results.json ``error_motions``
     columns: dict[str, list[Any]]  # SPEC 14 positions columns (None where not resolved), K each
     motions: ErrorMotions
+    lens: Any = None  # the lens-model check (:class:`lps_gui.pipeline.results.lens_model.LensModelCheck`)
 
 
 def error_motion_results(sol: PoseSolution, targets_mm: np.ndarray, basis: str, tool: ToolPoint | None = None,
-                         truth_rotations: np.ndarray | None = None, axis: str = "X") -> ErrorMotionResults:
+                         truth_rotations: np.ndarray | None = None, axis: str = "X",
+                         lens: Any = None) -> ErrorMotionResults:
     """The ``error_motions`` section and the positions columns of one axis.
 
     ``truth_rotations`` (K, 3) rad: the simulator's carriage rotation vectors in the world frame,
     for the truth comparison of the angles (centred: the reference stop's own noise left out).
     """
-    em = error_motions(sol, targets_mm, axis, **(tool.kwargs() if tool else {}))
+    em = error_motions(sol, targets_mm, axis, **(tool.kwargs() if tool else {}), lens=lens)
     motions: dict[str, Any] = {}
     for name, iso in em.names.items():
         unit = UNITS[name]
@@ -182,8 +184,13 @@ def session_error_motions(meta: dict[str, Any], where: str, obs: Any, est: Any,
         sol, basis = board_pose_solution(est), BASIS_BOARD
     if sol is None or int(np.asarray(sol.used).sum()) < 3:
         return None
+    from lps_gui.pipeline.results.lens_model import lens_model_check
+
     w = board_truth_rotations(meta.get("truth"), truth, np.asarray(obs.index))
-    return error_motion_results(sol, obs.target_mm, basis, tool, w)
+    check = lens_model_check(sol, obs)
+    out = error_motion_results(sol, obs.target_mm, basis, tool, w, lens=check.misfit)
+    out.lens = check
+    return out
 
 
 def planar_error_motion_results(sol: PoseSolution, targets_mm: np.ndarray,
@@ -257,3 +264,6 @@ def add_error_motions(results: dict[str, Any], session: Any, obs: Any, est: Any)
         return
     add_columns(results["positions"], motions.columns)
     results["error_motions"] = motions.section
+    if motions.lens is not None:
+        motions.section["lens_model"] = motions.lens.section
+        results.setdefault("flags", []).extend(motions.lens.flags)

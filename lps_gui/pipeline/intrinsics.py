@@ -78,9 +78,6 @@ def calibrate_images(
     cal = calibrate_intrinsics(board.flat_points(), list(table.corners_px), size, flags=flags, warp=warp)
     cal.view_names = list(table.names)
     cal.warnings += [f"{name}: {reason}" for name, reason in table.failed.items()]
-    structure = cal.residual_structure()
-    if structure is not None and structure.exceeds_noise:
-        cal.warnings.append(structure.message("these views"))
     cal.intrinsics = _with_report(cal)
     return cal
 
@@ -103,9 +100,6 @@ def _with_report(cal: IntrinsicsCalibration) -> CameraIntrinsics:
         "rejected_corners": [{"view": names[c.view], "corner": c.corner, "residual_px": round(c.residual_px, 4)}
                              for c in cal.rejected_corners],
     }
-    structure = cal.residual_structure()
-    if structure is not None:  # what the session's lens-model check and tilt uncertainty read (issue 35)
-        extra["lens_fit"] = structure.to_dict()
     if cal.warp_mm is not None:
         extra["board_warp_mm"] = [float(v) for v in cal.warp_mm]
         extra["board_warp_sigma_mm"] = [float(v) for v in cal.warp_sigma_mm]

@@ -10,7 +10,7 @@ reason to calibrate intrinsics apart from the LPS run).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
 import cv2
@@ -215,10 +215,16 @@ def calibrate_intrinsics(
         n_views=len(used),
     )
     warp_sigma = None if ref.warp_cov is None else np.sqrt(np.diag(ref.warp_cov))
-    return IntrinsicsCalibration(intr, std, rms, per_view_rms, coverage, flagged, warnings, used, r_all, t_all,
+    cal = IntrinsicsCalibration(intr, std, rms, per_view_rms, coverage, flagged, warnings, used, r_all, t_all,
                                  warp_mm=ref.warp_mm, warp_sigma_mm=warp_sigma, rejected_corners=ref.rejected,
                                  residuals_px=residuals, row_of=np.unique(X64[:, 1], return_inverse=True)[1],
                                  image_points=[np.asarray(u, float).reshape(-1, 2) for u in image_points])
+    structure = cal.residual_structure()
+    if structure is not None:  # what a session's lens-model check and tilt uncertainty read (intrinsics.json lens_fit)
+        cal.intrinsics = replace(cal.intrinsics, extra={**cal.intrinsics.extra, "lens_fit": structure.to_dict()})
+        if structure.exceeds_noise:
+            cal.warnings.append(structure.message("these views"))
+    return cal
 
 
 def _flag_views(objs, imgs, used, per_view_rms, image_size, flags, rms, flag_k) -> list[int]:

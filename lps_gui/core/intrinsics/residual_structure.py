@@ -3,9 +3,10 @@
 Corner noise averages out within a bin; a lens the model cannot follow does
 not: it leaves a smooth field of residuals over the image. The binned mean
 residual is tested against what noise alone gives (chi-square over the bins,
-the noise taken from the scatter within fine cells, where a smooth misfit is
-nearly constant), and its size beyond the noise is the *misfit*: the RMS of the
-residual field that no pose or intrinsics of this model takes out. A misfit
+the noise taken from second differences of neighbouring corners, where a smooth
+misfit cancels), and the residual's RMS beyond that noise is the *misfit*: the
+field that no pose or intrinsics of this model takes out (each view's pose
+absorbs a different part of it, so its mean over the views understates it). A misfit
 above the corner noise is flagged, naming the richer model to calibrate.
 """
 from __future__ import annotations
@@ -48,8 +49,8 @@ class ResidualStructure:
 
     mean_px: np.ndarray  # (rows, cols, 2) mean residual of each bin
     count: np.ndarray  # (rows, cols) corners of each bin
-    noise_px: float  # corner noise per axis (scatter within the fine cells)
-    misfit_px: float  # RMS length of the binned mean residual beyond noise, weighted by corners
+    noise_px: float  # corner noise per axis (second differences, or the scatter within fine cells)
+    misfit_px: float  # RMS length of the residual beyond the corner noise (smooth within a view, so a model's)
     chi2: float
     dof: int
 
@@ -75,9 +76,9 @@ class ResidualStructure:
                 "flagged": self.exceeds_noise}
 
     def message(self, what: str) -> str:
-        return (f"lens model does not fit {what}: the residuals binned over the image ({BINS[0]}x{BINS[1]}) average "
-                f"{self.misfit_px:.3f} px beyond the corner noise of {self.noise_px:.3f} px "
-                f"(chi-square {self.chi2:.0f} on {self.dof} dof); tilts from one target plane are then not resolved; "
+        return (f"lens model does not fit {what}: the residuals leave {self.misfit_px:.3f} px RMS beyond the corner "
+                f"noise of {self.noise_px:.3f} px, structured over the image (chi-square {self.chi2:.0f} on {self.dof} dof "
+                f"of {BINS[0]}x{BINS[1]} bins); tilts from one target plane are then not resolved; "
                 f"{RECALIBRATE}")
 
 
@@ -122,9 +123,8 @@ def residual_structure(uv: np.ndarray, residuals: np.ndarray, image_size: tuple[
     judged = count >= MIN_PER_BIN
     if judged.sum() < 2 or noise <= 0:
         return None
-    m2 = np.sum(mean[judged] ** 2, axis=1)
-    chi2 = float(np.sum(count[judged] * m2) / noise**2)
-    excess = np.sum(count[judged] * (m2 - 2.0 * noise**2 / count[judged])) / np.sum(count[judged])
+    chi2 = float(np.sum(count[judged] * np.sum(mean[judged] ** 2, axis=1)) / noise**2)
+    excess = float(np.mean(np.sum(res**2, axis=1))) - 2.0 * noise**2  # what noise does not explain (2-D)
     shape = (BINS[1], BINS[0])
     return ResidualStructure(mean.reshape(shape + (2,)), count.reshape(shape).astype(int), noise,
                              math.sqrt(max(float(excess), 0.0)), chi2, int(2 * judged.sum()))

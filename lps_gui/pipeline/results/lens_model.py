@@ -62,8 +62,8 @@ def lens_model_check(sol: PoseSolution, obs: Any) -> LensModelCheck:
     flags = []
     if calibration and calibration.get("flagged"):
         flags.append({"index": None, "kind": "lens_model", "message": (
-            f"lens model does not fit the intrinsics calibration: its residuals binned over the image average "
-            f"{cal_misfit:.3f} px beyond the corner noise of {float(calibration.get('noise_px') or 0):.3f} px; tilts "
+            f"lens model does not fit the intrinsics calibration: its residuals leave {cal_misfit:.3f} px RMS beyond "
+            f"the corner noise of {float(calibration.get('noise_px') or 0):.3f} px, structured over the image; tilts "
             f"from one target plane are then not resolved; {RECALIBRATE}")})
     if session is not None and session.exceeds_noise:
         flags.append({"index": None, "kind": "lens_model", "message": session.message("this session's views")})

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 import cv2
 import numpy as np
 
-from lps_gui.core.geometry.camera_model import INTRINSIC_NAMES, CameraIntrinsics
+from lps_gui.core.geometry.camera_model import HIGHER_NAMES, INTRINSIC_NAMES, CameraIntrinsics
 from lps_gui.core.intrinsics.refine import RejectedCorner, WarpNotSeparableError, refine_intrinsics
 from lps_gui.errors import DegenerateGeometryError, InputError
 
@@ -76,6 +76,9 @@ class IntrinsicsCalibration:
     def summary(self) -> str:
         """Human-readable lines: each parameter with its std, error figures, flags, warnings."""
         lines = [f"{name:>3} = {v:12.6g} +- {s:.3g}" for name, v, s in zip(INTRINSIC_NAMES, self.intrinsics.vector(), self.std)]
+        if self.intrinsics.has_higher:
+            lines += [f"{name:>3} = {v:12.6g} (held at OpenCV's value)"
+                      for name, v in zip(HIGHER_NAMES, self.intrinsics.higher)]
         lines.append(f"rms = {self.rms_px:.4f} px over {len(self.used_views)} views; coverage {100 * self.coverage_fraction():.0f} % of the image grid")
         if self.warp_mm is not None:
             lines.append(

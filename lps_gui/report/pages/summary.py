@@ -401,6 +401,11 @@ def straightness_notes(results: Results, cols: dict[str, np.ndarray]) -> list[st
     ]
 
 
+def session_flags(results: Results | dict[str, Any]) -> list[str]:
+    """Flags of the whole session (no view index), e.g. a lens model that does not fit: page 1 shows them."""
+    return [f.message or f.kind or "" for f in as_results(results).flags if f.index is None]
+
+
 def outlier_rows(results: Results | dict[str, Any]) -> list[dict[str, Any]]:
     """Flagged views: index, file, reason, RMS residual; flags without a position row are kept too."""
     results = as_results(results)

@@ -184,11 +184,14 @@ def session_error_motions(meta: dict[str, Any], where: str, obs: Any, est: Any,
         sol, basis = board_pose_solution(est), BASIS_BOARD
     if sol is None or int(np.asarray(sol.used).sum()) < 3:
         return None
-    from lps_gui.pipeline.results.lens_model import lens_model_check
+    from lps_gui.pipeline.results.lens_model import lens_model_check, position_lens_sigma_um
 
     w = board_truth_rotations(meta.get("truth"), truth, np.asarray(obs.index))
     check = lens_model_check(sol, obs)
     out = error_motion_results(sol, obs.target_mm, basis, tool, w, lens=check.misfit)
+    if check.misfit is not None:
+        check.position_sigma_um = position_lens_sigma_um(sol, obs, check.misfit, out.motions.frame,
+                                                         out.motions.reference)
     out.lens = check
     return out
 
@@ -267,3 +270,9 @@ def add_error_motions(results: dict[str, Any], session: Any, obs: Any, est: Any)
     if motions.lens is not None:
         motions.section["lens_model"] = motions.lens.section
         results.setdefault("flags", []).extend(motions.lens.flags)
+        lens_um = motions.lens.position_sigma_um
+        if lens_um is not None and len(results["positions"]) == len(lens_um):  # the positions carry the lens misfit
+            for row, s in zip(results["positions"], lens_um):
+                row["sigma_lens_um"] = json_float(s)
+                if row.get("sigma_total_um") is not None:
+                    row["sigma_total_um"] = json_float(np.hypot(row["sigma_total_um"], s))

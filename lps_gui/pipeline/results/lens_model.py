@@ -27,6 +27,7 @@ class LensModelCheck:
     misfit: LensMisfit | None  # the poses' sensitivity, None when no misfit is seen
     section: dict[str, Any]  # results.json ``lens_model``
     flags: list[dict[str, Any]] = field(default_factory=list)
+    position_sigma_um: np.ndarray | None = None  # (K,) the misfit's share of each board-plane position
 
 
 def corner_points(obs: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -77,3 +78,22 @@ def lens_model_check(sol: PoseSolution, obs: Any) -> LensModelCheck:
                "carried_by_poses": misfit is not None,
                "term_sigma": None if misfit is None else misfit.term_sigma.tolist()}
     return LensModelCheck(misfit, section, flags)
+
+
+def position_lens_sigma_um(sol: PoseSolution, obs: Any, misfit: LensMisfit, frame_world: np.ndarray,
+                           reference: int) -> np.ndarray:
+    """Per stop: the lens misfit's 1-sigma on the board-plane position along the motion, relative to the reference (um).
+
+    The board centre seen from the camera, P = R c + t, moves by w x (R c) + dt under a view's perturbation, so the
+    position along the motion u (camera frame) has the gradient [(R c) x u, u]: the lens misfit's share of the
+    positions, which does not average out over the stops (it is smooth over the image).
+    """
+    own, which = corner_points(obs)
+    centre = np.mean(np.einsum("nij,nj->ni", sol.Q[which], own) + sol.p[which], axis=0)
+    u = np.einsum("kij,j->ki", sol.R, frame_world[:, 0])
+    grad = np.concatenate([np.cross(np.einsum("kij,j->ki", sol.R, centre), u), u], axis=1)
+    K = len(sol.R)
+    rel = np.eye(K)
+    rel[:, reference] -= 1.0
+    rel[reference, reference] = 0.0
+    return np.sqrt(np.sum(misfit.functional(grad, rel, 1e3) ** 2, axis=1))

@@ -53,6 +53,7 @@ def budget_inputs(results: dict[str, Any], square_mm: float, axis: str = "") -> 
     return BudgetInputs(
         travel_mm=travel, square_mm=square_mm, sigma_px=float(p.get("sigma_px") or 0.0),
         sigma_um=_column(used, f"sigma{sfx}_um"), sigma_total_um=_column(used, f"sigma_total{sfx}_um"),
+        sigma_lens_um=_column(used, "sigma_lens_um") if not axis and any("sigma_lens_um" in r for r in used) else None,
         abbe_lever_mm=abbe_lever_mm(results),
         tilt_urad=tilt, tilt_sigma_urad=tilt_sig, target_mm=targets, tilt_resolved=tilt_resolved(results))
 

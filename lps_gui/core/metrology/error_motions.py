@@ -254,8 +254,10 @@ def _additive(xy: np.ndarray, rows: np.ndarray, ref: int) -> tuple[list[np.ndarr
     return keys, W
 
 
-def planar_error_motions(sol: PoseSolution, targets_mm: np.ndarray) -> PlanarErrorMotions:
-    """The 12 error motions of an XY stage and the per-stop angles, with sigmas, from :func:`solve_poses`."""
+def planar_error_motions(sol: PoseSolution, targets_mm: np.ndarray, lens: LensMisfit | None = None
+                          ) -> PlanarErrorMotions:
+    """The 12 error motions of an XY stage and the per-stop angles, with sigmas, from :func:`solve_poses`;
+    ``lens`` as in :func:`error_motions`."""
     used = sol.used
     K = len(used)
     rows = np.flatnonzero(used)
@@ -273,8 +275,10 @@ def planar_error_motions(sol: PoseSolution, targets_mm: np.ndarray) -> PlanarErr
     rel[rows, ref] -= 1.0
     grads = {"angle": [np.einsum("i,kip->kp", S[:, c], dth) for c in range(3)],
              "position": [np.einsum("i,kip->kp", S[:, c], dC) for c in range(3)]}
-    stop_sig = np.stack([np.sqrt(np.maximum(sol.covariance.weighted_variances(rel, g), 0.0)) for g in grads["angle"]],
-                        axis=1) * 1e6
+    stop_var = [np.maximum(sol.covariance.weighted_variances(rel, g), 0.0) for g in grads["angle"]]
+    if lens is not None:
+        stop_var = [v + np.sum(lens.functional(g, rel, 1.0) ** 2, axis=1) for v, g in zip(stop_var, grads["angle"])]
+    stop_sig = np.sqrt(np.stack(stop_var, axis=1)) * 1e6
     keys, W = _additive(xy, rows, ref)
     nx = len(keys[0])
     parts = {0: slice(0, nx), 1: slice(nx, None)}
@@ -294,7 +298,8 @@ def planar_error_motions(sol: PoseSolution, targets_mm: np.ndarray) -> PlanarErr
             w = w - w[at_ref[along]]
         weights[name] = w
         values[name] = w @ np.where(used, per_stop, 0.0)
-        sigmas[name], centred[name], cov = _functional_sigmas(sol, grad, w, wc, unit)
+        sigmas[name], centred[name], cov = _with_lens(sol, lens, grad, w, wc, unit,
+                                                      _functional_sigmas(sol, grad, w, wc, unit))
         profiles[name] = profile_span(values[name], centred[name], keys[along], np.ones(len(keys[along]), bool),
                                       covariance=cov)
     stop_sig[~used] = np.nan

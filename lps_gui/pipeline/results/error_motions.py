@@ -197,10 +197,10 @@ def session_error_motions(meta: dict[str, Any], where: str, obs: Any, est: Any,
 
 
 def planar_error_motion_results(sol: PoseSolution, targets_mm: np.ndarray,
-                                truth_rotations: np.ndarray | None = None) -> ErrorMotionResults:
+                                truth_rotations: np.ndarray | None = None, lens: Any = None) -> ErrorMotionResults:
     """A planar stage's section: both axes' six error motions over their own positions, the per-stop angles
     about the stage X, Y, Z (positions.csv, empty where neither axis' motion about it is resolved)."""
-    pm = planar_error_motions(sol, targets_mm)
+    pm = planar_error_motions(sol, targets_mm, lens)
     motions: dict[str, Any] = {}
     for name, along, kind, _ in PLANAR_MOTIONS:
         unit = "urad" if kind == "angle" else "um"
@@ -260,7 +260,13 @@ def add_error_motions(results: dict[str, Any], session: Any, obs: Any, est: Any)
         tool_point(meta, where)  # checked alike, used by one axis only
         sol = target_pose_solution(obs, est)
         w = planar_truth_rotations(meta.get("truth"), np.asarray(obs.index))
-        motions = planar_error_motion_results(sol, obs.target_mm, w) if int(sol.used.sum()) >= 3 else None
+        motions = None
+        if int(sol.used.sum()) >= 3:
+            from lps_gui.pipeline.results.lens_model import lens_model_check
+
+            check = lens_model_check(sol, obs)
+            motions = planar_error_motion_results(sol, obs.target_mm, w, lens=check.misfit)
+            motions.lens = check
     else:
         motions = None
     if motions is None:

@@ -171,12 +171,16 @@ def project_parts(
         cross = 2.0 * xy * dr + 2.0 * p1 * xp + 2.0 * p2 * yp  # d xd / d yp == d yd / d xp
         dxd_dxp = radial + 2.0 * xx * dr + 2.0 * p1 * yp + 6.0 * p2 * xp
         dyd_dyp = radial + 2.0 * yy * dr + 6.0 * p1 * yp + 2.0 * p2 * xp
-        fx_z, fy_z = fx * inv_z, fy * inv_z
-        du_dx, du_dy = fx_z * dxd_dxp, fx_z * cross
-        dv_dx, dv_dy = fy_z * cross, fy_z * dyd_dyp
-        du = (du_dx, du_dy, -(du_dx * xp + du_dy * yp))
-        dv = (dv_dx, dv_dy, -(dv_dx * xp + dv_dy * yp))
+        du, dv = _to_camera_frame(fx * inv_z, fy * inv_z, xp, yp, (dxd_dxp, cross, cross, dyd_dyp))
     return ProjectionParts(u, v, du, dv, xp, yp, xd, yd)
+
+
+def _to_camera_frame(fx_z: np.ndarray, fy_z: np.ndarray, xp: np.ndarray, yp: np.ndarray,
+                     d: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]) -> tuple[tuple, tuple]:
+    """d u, d v / d (x, y, z) from the distortion's d (xd, yd) / d (xp, yp) = ``d`` (xx, xy, yx, yy)."""
+    du_dx, du_dy = fx_z * d[0], fx_z * d[1]
+    dv_dx, dv_dy = fy_z * d[2], fy_z * d[3]
+    return (du_dx, du_dy, -(du_dx * xp + du_dy * yp)), (dv_dx, dv_dy, -(dv_dx * xp + dv_dy * yp))
 
 
 def _rational(intrinsics: CameraIntrinsics, r2: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -212,11 +216,7 @@ def _project_parts_higher(x: np.ndarray, y: np.ndarray, z: np.ndarray, intrinsic
         dxd_dyp = common + px_ * yp
         dyd_dxp = common + py_ * xp
         dyd_dyp = radial + 2.0 * yy * dr + 6.0 * p1 * yp + 2.0 * p2 * xp + py_ * yp
-        fx_z, fy_z = fx * inv_z, fy * inv_z
-        du_dx, du_dy = fx_z * dxd_dxp, fx_z * dxd_dyp
-        dv_dx, dv_dy = fy_z * dyd_dxp, fy_z * dyd_dyp
-        du = (du_dx, du_dy, -(du_dx * xp + du_dy * yp))
-        dv = (dv_dx, dv_dy, -(dv_dx * xp + dv_dy * yp))
+        du, dv = _to_camera_frame(fx * inv_z, fy * inv_z, xp, yp, (dxd_dxp, dxd_dyp, dyd_dxp, dyd_dyp))
     return ProjectionParts(u, v, du, dv, xp, yp, xd, yd)
 
 

@@ -12,7 +12,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from lps_gui.core.geometry.camera_model import INTRINSIC_NAMES
+from lps_gui.core.geometry.camera_model import HIGHER_NAMES, INTRINSIC_NAMES
 from lps_gui.io.results.document import SummaryFigure, extreme_figures, iso_figures, summary_figures
 from lps_gui.io.results.document import finite_number as _num
 from lps_gui.io.results.model import Results, as_results
@@ -193,6 +193,8 @@ def intrinsics_rows(results: Results | dict[str, Any]) -> list[tuple[str, str, s
     for name in INTRINSIC_NAMES:
         unit = " px" if name in ("fx", "fy", "cx", "cy") else ""
         out.append((name, (f"{values[name]:.3f}" if unit else fmt(values[name], 4)) + unit, fmt(_num(std.get(name)), 2) + (unit if _num(std.get(name)) is not None else "")))
+    higher = dist[5:12] if len(dist) >= 12 + 5 else []  # a rational / thin-prism lens: 12 coefficients (+ the padding)
+    out += [(name, fmt(v, 4), "held") for name, v in zip(HIGHER_NAMES, higher) if v]
     return out
 
 

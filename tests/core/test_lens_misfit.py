@@ -4,6 +4,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+import pytest
 
 from lps_gui.core.geometry.camera_model import CameraIntrinsics, project
 from lps_gui.core.geometry.board import Board
@@ -84,3 +85,20 @@ def test_pose_sensitivity_matches_refitting_the_pose_to_a_perturbed_lens():
     assert np.abs(v[:3]).max() > 1e-7  # the lens moved the pose ...
     assert np.allclose(predicted, v, rtol=0.02, atol=0.02 * np.abs(v).max())  # ... as predicted
     assert lens_misfit(R[None], t[None], X, np.ones((1, len(X)), bool), np.ones(1, bool), INTR, 0.0) is None
+
+
+@pytest.mark.parametrize("misfit_px, model", [(0.0, "opencv5"), (0.3, "rational")])
+def test_cross_validation_chooses_the_lens_model_the_data_need(misfit_px, model):
+    """lps intrinsics --model auto: the rational/thin-prism model only when it predicts held-out views better."""
+    from lps_gui.core.geometry.camera_model import project_board
+    from lps_gui.core.intrinsics.crossval import choose_lens_model
+    from lps_gui.sim.images import sample_intrinsics_poses
+
+    board = Board(cols=9, rows=6, square_mm=20.0)
+    true = misfit_lens(INTR, misfit_px)
+    rng = np.random.default_rng(0)
+    X = board.object_points()
+    views = [project_board(R, t, X, true) + rng.normal(0.0, 0.03, (len(X), 2))
+             for R, t in sample_intrinsics_poses(board, true, 20, rng)]
+    choice = choose_lens_model(X, views, true.image_size)
+    assert choice.model == model, choice.summary()

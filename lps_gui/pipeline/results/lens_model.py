@@ -52,6 +52,17 @@ def session_structure(sol: PoseSolution, own: np.ndarray, which: np.ndarray, cor
     return residual_structure(np.where(np.isfinite(res), corners_px, np.nan), res, intr.image_size, row_of)
 
 
+def _significant(record: dict[str, Any] | None) -> bool:
+    """A recorded residual structure (intrinsics.json ``lens_fit``) is beyond noise (at the check's P_VALUE)."""
+    from lps_gui.core.intrinsics.residual_structure import P_VALUE
+    from lps_gui.core.metrology.resolution import chi2_sf
+
+    try:
+        return bool(record) and int(record["dof"]) > 0 and chi2_sf(float(record["chi2"]), int(record["dof"])) < P_VALUE
+    except (KeyError, TypeError, ValueError):
+        return False
+
+
 def lens_model_check(sol: PoseSolution, obs: Any) -> LensModelCheck:
     """The lens-model section, its flags, and the misfit the poses carry."""
     intr = obs.intrinsics
@@ -59,7 +70,10 @@ def lens_model_check(sol: PoseSolution, obs: Any) -> LensModelCheck:
     session = session_structure(sol, own, which, obs.corners_px, intr)
     calibration = intr.extra.get("lens_fit") if isinstance(intr.extra.get("lens_fit"), dict) else None
     cal_misfit = float(calibration.get("misfit_px") or 0.0) if calibration else 0.0
-    misfit_px = max(cal_misfit, session.misfit_px if session is not None else 0.0)
+    # a misfit counts only where the residuals are structured beyond noise: a calibration of a lens the model fits
+    # still shows a few thousandths of a pixel by chance, which would inflate every tilt's sigma for nothing
+    misfit_px = max(cal_misfit if _significant(calibration) else 0.0,
+                    session.misfit_px if session is not None and session.significant else 0.0)
     flags = []
     if calibration and calibration.get("flagged"):
         flags.append({"index": None, "kind": "lens_model", "message": (
@@ -72,7 +86,8 @@ def lens_model_check(sol: PoseSolution, obs: Any) -> LensModelCheck:
     seen = np.all(np.isfinite(obs.corners_px), axis=-1)
     misfit = lens_misfit(sol.R, sol.t, W, seen, np.asarray(sol.used, bool), intr, misfit_px)
     section = {"misfit_px": misfit_px, "model": "opencv12" if intr.has_higher else "opencv5",
-               "calibration": calibration and {k: calibration.get(k) for k in ("misfit_px", "noise_px", "flagged")},
+               "calibration": calibration and {**{k: calibration.get(k) for k in ("misfit_px", "noise_px", "flagged")},
+                                               "significant": _significant(calibration)},
                "session": None if session is None else {k: v for k, v in session.to_dict().items()
                                                          if k not in ("mean_px", "count")},
                "carried_by_poses": misfit is not None,

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import ast
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -11,7 +12,37 @@ import pytest
 PACKAGE = Path(__file__).resolve().parent.parent / "lps_gui"
 QT_MODULES = ("PySide6", "pyqtgraph", "shiboken6")
 QT_ALLOWED = ("gui", "report")
-LAYER = {"core": 0, "io": 1, "hardware": 1, "camera": 1, "capture": 2, "sim": 2, "pipeline": 2, "report": 2, "gui": 3, "cli": 3}
+ARCHITECTURE = PACKAGE.parent / "docs" / "ARCHITECTURE.md"
+MAX_CORE_ENTRIES = 12
+
+
+def house(doc: Path = ARCHITECTURE) -> dict[str, str]:
+    """The folders of docs/ARCHITECTURE.md's house block, "core/geometry" -> its line (layer tag and words)."""
+    text = doc.read_text()
+    block = text.split("## The house", 1)[1].split("```", 2)[1]
+    folders: dict[str, str] = {}
+    stack: list[str] = []
+    for line in block.splitlines():
+        m = re.match(r"^( *)(\S+)/\s+(.*)$", line)
+        if not m:
+            continue
+        depth = len(m.group(1)) // 2
+        stack[depth:] = [m.group(2)]
+        folders["/".join(stack[1:])] = m.group(3)
+    return folders
+
+
+def layers_of(folders: dict[str, str]) -> dict[str, int]:
+    """The layer of each top-level folder, from its ``[n]`` tag."""
+    out = {}
+    for path, words in folders.items():
+        tag = re.match(r"\[(\d)\]", words)
+        if tag and "/" not in path and path:
+            out[path] = int(tag.group(1))
+    return out
+
+
+LAYER = layers_of(house())
 # sideways imports allowed within layer 2: the simulated rig drives the capture engine; pipeline runs
 # capture, simulation and report (the demo); the report draws truth through the one truth reduction
 SIBLINGS = {("pipeline", "capture"), ("pipeline", "report"), ("pipeline", "sim"), ("sim", "capture"), ("report", "sim")}
@@ -154,3 +185,38 @@ def test_no_import_circles():
     inside a function (the planar twins once were: report/figures/plots <-> report/planar_figures)."""
     assert import_circles(module_graph()) == []
     assert import_circles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+
+
+def package_folders(package: Path = PACKAGE) -> set[str]:
+    return {str(d.relative_to(package)) for d in package.rglob("*") if d.is_dir() and any(d.glob("*.py"))
+            and "__pycache__" not in d.parts}
+
+
+def test_the_house_block_lists_every_folder_and_only_those():
+    documented = set(house()) - {""}
+    assert documented == package_folders(), (
+        f"docs/ARCHITECTURE.md's house block is out of date: missing {sorted(package_folders() - documented)}, "
+        f"gone {sorted(documented - package_folders())}")
+    assert LAYER == {"core": 0, "io": 1, "hardware": 1, "camera": 1, "capture": 2, "sim": 2, "pipeline": 2,
+                     "report": 2, "gui": 3, "cli": 3}
+
+
+def test_core_is_grouped_by_concept():
+    entries = [p for p in (PACKAGE / "core").iterdir() if p.name != "__pycache__" and p.name != "__init__.py"
+               and (p.suffix == ".py" or p.is_dir())]
+    assert len(entries) <= MAX_CORE_ENTRIES, sorted(p.name for p in entries)
+
+
+@pytest.mark.parametrize("folder", sorted(package_folders()))
+def test_every_package_says_what_lives_there(folder):
+    init = PACKAGE / folder / "__init__.py"
+    assert init.exists(), f"{init}: a package folder without __init__.py"
+    doc = ast.get_docstring(ast.parse(init.read_text()))
+    assert doc, f"{init}: no docstring saying what lives in {folder}/"
+
+
+def test_the_house_reader_sees_a_missing_folder(tmp_path):
+    doc = tmp_path / "A.md"
+    doc.write_text("## The house\n\n```\nlps_gui/   [-] x\n  core/   [0] math\n    geometry/   g\n```\n")
+    assert house(doc) == {"": "[-] x", "core": "[0] math", "core/geometry": "g"}
+    assert layers_of(house(doc)) == {"core": 0}

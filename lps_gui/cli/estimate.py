@@ -19,8 +19,10 @@ EXIT_DOUBTFUL = 4
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.epilog = ("exit status: 0 estimated, 4 results written but not trustworthy (the solver did not converge or the "
                 "corner noise is implausible; the reason is printed), 2 bad input or the results could not be written")
+    from lps_gui.core.estimator.methods import DEFAULT, METHODS  # no numpy: --help stays instant
+
     p.add_argument("session", help="session folder (session.json, captures.jsonl, corners.vnl)")
-    p.add_argument("--method", default="joint", choices=("joint", "hybrid", "pnp", "calibrate"),
+    p.add_argument("--method", default=DEFAULT, choices=METHODS,
                    help="joint LM (default), the paper's hybrid, per-view PnP, or full calibration (reference)")
     p.add_argument("--intrinsics", help="intrinsics JSON/YAML instead of the session's")
     p.add_argument("--out", help="where to write (default the session folder): an existing folder gets results.json "

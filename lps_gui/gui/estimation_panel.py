@@ -22,12 +22,12 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from lps_gui.core.estimator import methods
 from lps_gui.gui.widgets import PathPicker, ValueTable, add_rows, double_spin, fmt, stack
 from lps_gui.gui.workers import Job
 from lps_gui.io.results.model import Results, as_results
 
-METHODS = (("Joint LM (all positions at once)", "joint"), ("Hybrid (paper: PnP + LM + grid search)", "hybrid"),
-           ("Per-view PnP", "pnp"))
+METHODS = tuple((m.label, m.name) for m in methods.REGISTRY if m.in_gui)
 
 
 def parameter_rows(results: Results | dict[str, Any]) -> list[tuple[str, str, str, str]]:

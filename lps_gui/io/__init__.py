@@ -1,0 +1,1 @@
+"""Files of SPEC 7 and the session folder: atomic writes, locks, sessions, boards, intrinsics, corners, results."""

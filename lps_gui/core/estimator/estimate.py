@@ -32,6 +32,7 @@ from lps_gui.core.estimator.estimate_types import (
     sigmas_of,
     step_pairs,
 )
+from lps_gui.core.estimator.methods import BY_NAME
 from lps_gui.core.estimator.observations import Observations
 from lps_gui.core.estimator.outlier_round import Solution, judge_views, solve_with_outliers
 from lps_gui.core.estimator.per_view import estimate_per_view, plane_per_view
@@ -119,7 +120,7 @@ def _estimate_line(obs: Observations, opt: EstimateOptions, progress: ProgressFn
     ref = int(np.flatnonzero(usable)[0])
     progress(0, 4, "initializing")
 
-    if opt.method in ("pnp", "calibrate"):
+    if BY_NAME[opt.method].per_view:
         return estimate_per_view(obs, opt, usable, ref, X, progress, cancel, timings, t_start)
 
     state = (_initial_state(obs, usable, ref, X, full_pnp=opt.method == "hybrid") if warm_start is None

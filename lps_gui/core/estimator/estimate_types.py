@@ -6,6 +6,7 @@ from typing import Any
 
 import numpy as np
 
+from lps_gui.core.estimator.methods import METHODS, METHODS_BY_AXES
 from lps_gui.core.geometry.camera_model import INTRINSIC_NAMES, CameraIntrinsics
 from lps_gui.core.models.constant_orientation import BoardPlaneMotion
 from lps_gui.core.models.hybrid import HybridOptions
@@ -15,8 +16,6 @@ from lps_gui.core.models.six_dof import SixDof
 from lps_gui.core.numerics.arrowhead import ArrowheadInverse
 from lps_gui.errors import InputError
 
-METHODS = ("joint", "hybrid", "pnp", "calibrate")
-METHODS_BY_AXES = {1: METHODS, 2: ("joint", "pnp")}  # the hybrid grid search and Eq. 2 are 1-D by construction
 PRIOR_JITTER = 1e-18  # keeps an intrinsics covariance with exact zeros invertible
 
 

@@ -12,6 +12,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from lps_gui.core.estimator.methods import report_text
 from lps_gui.core.geometry.camera_model import HIGHER_NAMES, INTRINSIC_NAMES
 from lps_gui.io.results.document import SummaryFigure, extreme_figures, iso_figures, summary_figures
 from lps_gui.io.results.document import finite_number as _num
@@ -19,9 +20,6 @@ from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import Iso230
 from lps_gui.report.figures.plots import position_columns
 
-METHOD_NAMES = {"joint": "joint LM (all positions, orientation and line at once)",
-                "hybrid": "paper's hybrid algorithm (LM + per-view grid search)",
-                "pnp": "per-view PnP (baseline)", "calibrate": "full calibration (reference only)"}
 DASH = "\u2014"
 ZERO_BELOW = 1e-9  # |values| below this print as 0 (no unit of the report resolves them)
 
@@ -203,7 +201,7 @@ def method_rows(results: Results | dict[str, Any]) -> list[tuple[str, str]]:
     results = as_results(results)
     p = results.parameters.raw
     method = str(results.method or DASH)
-    rows = [("Method", METHOD_NAMES.get(method, method))]
+    rows = [("Method", report_text(method))]
     for k, v in results.settings.items():
         if k == "method" or (isinstance(v, dict) and k != method):
             continue  # the method is above; another method's options do not apply

@@ -11,10 +11,10 @@ No Qt here.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
+from lps_gui.core.metrology.decision_rule import decide
 from lps_gui.core.metrology.iso230 import ISO_RUNS
 from lps_gui.core.metrology.resolution import runs_per_direction
 from lps_gui.io.results.model import Results, as_results
@@ -57,15 +57,7 @@ def _straightness_quantity(results: Results) -> str:
 
 
 def _decide(c: SpecCheck, u: float | None) -> str:
-    if c.passed is None or c.measured is None:
-        return "not resolved" if c.note.lower().startswith("not resolved") or c.measured is not None else "not measured"
-    if u is None or not math.isfinite(u):
-        return "PASS" if c.passed else "FAIL"
-    if c.passed and c.measured + u > c.limit:
-        return "not resolved"
-    if not c.passed and c.measured - u <= c.limit:
-        return "not resolved"
-    return "PASS" if c.passed else "FAIL"
+    return decide(c.measured, c.limit, c.passed, u, unresolved_figure=c.note.lower().startswith("not resolved"))
 
 
 def verdicts(results: Results | dict[str, Any], spec: dict[str, Any] | None) -> list[Verdict]:

@@ -51,7 +51,7 @@ def _undistorted_rays(intrinsics: CameraIntrinsics) -> tuple[np.ndarray, ...]:
     uv = np.stack([u.ravel(), v.ravel()], axis=-1)  # shape (H*W, 2)
     crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 30, 1e-12)
     xy = cv2.undistortPoints(
-        uv.reshape(-1, 1, 2), intrinsics.camera_matrix, intrinsics.dist, criteria=crit
+        uv.reshape(-1, 1, 2), intrinsics.camera_matrix, intrinsics.cv_dist, criteria=crit
     ).reshape(-1, 2)
     xcam = np.empty((xy.shape[0], 3))
     for _ in range(3):

@@ -94,7 +94,7 @@ def goal_pose(goal: PoseGoal, board: Board, intrinsics: CameraIntrinsics, fill: 
     w, h = intrinsics.image_size
     cx, cy = goal.centre
     ray = cv2.undistortPoints(
-        np.array([[[cx * (w - 1), cy * (h - 1)]]]), intrinsics.camera_matrix, intrinsics.dist
+        np.array([[[cx * (w - 1), cy * (h - 1)]]]), intrinsics.camera_matrix, intrinsics.cv_dist
     ).reshape(2)
     x0, _, x1, _ = goal.region
     width_mm = board.square_mm * (board.cols - 1)

@@ -134,7 +134,8 @@ def format_planar_summary(results: Results) -> str:
             straight = span_text(a.straightness) if a.straightness else f"{_g(a.straightness_um_max, '.2f')} µm"
             oop = f"; out of plane {span_text(a.out_of_plane)}" if a.out_of_plane else ""
             lines.append(f"{axis}: {a.lines} line(s), straightness along {other} {straight}{oop}{extra}")
-    lines += [f"outlier view {f.index}: {f.message}" for f in results.flags]
+    lines += [f"outlier view {f.index}: {f.message}" if f.index is not None else f"warning: {f.message}"
+              for f in results.flags]
     tc = results.truth_comparison
     if tc and tc.per_coordinate_rms_error_um:
         ex, ey = tc.per_coordinate_rms_error_um
@@ -166,7 +167,8 @@ def format_summary(results: Results) -> str:
         from lps_gui.report.pages.asme import test_lines
 
         lines += [f"ASME B5.64: {line}" for line in test_lines(results)]
-    lines += [f"outlier view {f.index}: {f.message}" for f in results.flags]
+    lines += [f"outlier view {f.index}: {f.message}" if f.index is not None else f"warning: {f.message}"
+              for f in results.flags]
     tc = results.truth_comparison
     if tc and tc.position_rms_error_um is not None:
         lines.append(

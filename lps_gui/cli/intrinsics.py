@@ -22,6 +22,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--cameramodel", help="also write an mrcal .cameramodel here")
     parser.add_argument("--lensmodel", choices=("opencv5", "opencv8"), default="opencv5",
                         help="mrcal lens model of --cameramodel (opencv8 with k4..k6 = 0; default opencv5)")
+    parser.add_argument("--model", choices=("opencv5", "rational", "auto"), default="opencv5",
+                        help="lens model: opencv5 (k1 k2 p1 p2 k3, default), rational (+ OpenCV's rational k4-k6 and "
+                             "thin-prism s1-s4 terms: a lens the 5-coefficient model misses), or auto (the one that "
+                             "predicts held-out views better, by two-fold cross-validation)")
     parser.add_argument("--fix-k3", action="store_true", help="hold k3 at 0 (narrow fields of view)")
     parser.add_argument("--warp", choices=("auto", "on", "off"), default="auto",
                         help="estimate the board's bow with the intrinsics (auto: unless the views cannot separate it; on: fail then)")
@@ -51,7 +55,8 @@ def run(args: argparse.Namespace) -> int:
             check_out_file(extra, option=option, inputs=inputs + written)
             written.append(extra)
     flags = cv2.CALIB_FIX_K3 if args.fix_k3 else 0
-    cal = calibrate_images([Path(p) for p in args.images], board, ProgressBar("intrinsics"), workers=args.workers, flags=flags, warp=args.warp)
+    cal = calibrate_images([Path(p) for p in args.images], board, ProgressBar("intrinsics"), workers=args.workers, flags=flags,
+                           warp=args.warp, model=args.model)
     write_intrinsics(args.out, cal.intrinsics)
     if args.yaml:
         write_intrinsics(args.yaml, cal.intrinsics)
@@ -60,6 +65,10 @@ def run(args: argparse.Namespace) -> int:
 
         write_cameramodel(args.cameramodel, cal.intrinsics, "LENSMODEL_" + args.lensmodel.upper())
     print(cal.summary())
+    if cal.intrinsics.has_higher:  # the cross-validation compares the halves with the same model
+        from lps_gui.core.intrinsics.crossval import LENS_MODELS
+
+        flags |= LENS_MODELS["rational"]
     crossval = cross_validate_calibration(cal, board, flags=flags, warp=args.warp) if args.cross_validate else None
     if crossval is not None:
         print(crossval.summary())

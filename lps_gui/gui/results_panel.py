@@ -527,11 +527,14 @@ def with_limits(figures: list[Any], spec: dict[str, Any] | None) -> list[Any]:
 
 def verdict_html(results: Results, spec: dict[str, Any] | None) -> str:
     """One line per specification row, coloured like the report's verdict."""
-    from lps_gui.report.pages.summary import fmt
+    from html import escape
+
+    from lps_gui.report.pages.summary import fmt, session_flags
     from lps_gui.report.pages.verdict import overall, verdicts
 
     rows = verdicts(results, spec)
     parts = [f"<b>{overall(rows)}</b>"]
+    parts += [f"<span style='color:#c00000'>{escape(m)}</span>" for m in session_flags(results)]  # e.g. the lens model
     for v in rows:
         u = f" \u00b1 {fmt(v.u_k2)}" if v.u_k2 is not None else ""
         parts.append(f"<span style='color:{v.color}'>{v.name}: {fmt(v.measured)}{u} {v.unit} "

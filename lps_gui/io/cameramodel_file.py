@@ -8,9 +8,9 @@ distortion coefficients in OpenCV's order k1, k2, p1, p2, k3, k4, k5, k6),
 and ``imagersize`` [width, height]; optionally ``valid_intrinsics_region``,
 ``icam_intrinsics`` and the binary ``optimization_inputs`` (read past).
 
-Our camera model is OpenCV's five-coefficient one, so we read
-LENSMODEL_PINHOLE, OPENCV4, OPENCV5, and OPENCV8 when its rational terms
-k4..k6 are zero, and write OPENCV5 or OPENCV8 (k4..k6 = 0). Our standard
+Our camera model is OpenCV's with the rational and thin-prism terms, so we
+read LENSMODEL_PINHOLE, OPENCV4, OPENCV5, OPENCV8 and OPENCV12, and write
+OPENCV5, OPENCV8 or OPENCV12 (a lens with higher terms is written as OPENCV12). Our standard
 deviations and the board's bow go into comments (mrcal keeps no such keys;
 the uncertainty mrcal computes lives in ``optimization_inputs``).
 """
@@ -27,8 +27,9 @@ from lps_gui.io.atomic import write_text_atomic
 
 SUFFIX = ".cameramodel"
 # lens model -> number of distortion coefficients (OpenCV order)
-LENSMODELS = {"LENSMODEL_PINHOLE": 0, "LENSMODEL_OPENCV4": 4, "LENSMODEL_OPENCV5": 5, "LENSMODEL_OPENCV8": 8}
-WRITABLE = ("LENSMODEL_OPENCV5", "LENSMODEL_OPENCV8")
+LENSMODELS = {"LENSMODEL_PINHOLE": 0, "LENSMODEL_OPENCV4": 4, "LENSMODEL_OPENCV5": 5, "LENSMODEL_OPENCV8": 8,
+              "LENSMODEL_OPENCV12": 12}
+WRITABLE = ("LENSMODEL_OPENCV5", "LENSMODEL_OPENCV8", "LENSMODEL_OPENCV12")
 
 
 def parse_cameramodel(text: str, source: str = "cameramodel") -> CameraIntrinsics:
@@ -54,21 +55,20 @@ def parse_cameramodel(text: str, source: str = "cameramodel") -> CameraIntrinsic
     n = LENSMODELS[model]
     if v.size != 4 + n:
         raise InputError(f"{source}: {model} needs {4 + n} intrinsics, the file has {v.size}")
-    dist = np.zeros(8)
+    dist = np.zeros(12)
     dist[:n] = v[4:]
-    if np.any(dist[5:] != 0):
-        raise InputError(f"{source}: {model} with nonzero rational terms k4..k6 cannot be used here (5-coefficient model); "
-                         "refit with mrcal-convert-lensmodel LENSMODEL_OPENCV5")
     if not np.all(np.isfinite(v)) or v[0] <= 0 or v[1] <= 0:
         raise InputError(f"{source}: intrinsics must be finite with positive focal lengths")
-    return CameraIntrinsics.from_values((w, h), *v[:4], dist=tuple(dist[:5]))
+    return CameraIntrinsics.from_values((w, h), *v[:4], dist=tuple(dist))
 
 
 def format_cameramodel(intr: CameraIntrinsics, lensmodel: str = "LENSMODEL_OPENCV5") -> str:
     """The text of a .cameramodel file for ``intr`` (camera at the reference: extrinsics zero)."""
     if lensmodel not in WRITABLE:
         raise InputError(f"cameramodel: can write {', '.join(WRITABLE)}, not {lensmodel!r}")
-    coeffs = list(intr.dist) + ([0.0, 0.0, 0.0] if lensmodel == "LENSMODEL_OPENCV8" else [])
+    if intr.has_higher and lensmodel != "LENSMODEL_OPENCV12":
+        lensmodel = "LENSMODEL_OPENCV8" if not np.any(intr.higher[3:]) else "LENSMODEL_OPENCV12"
+    coeffs = list(np.concatenate([intr.dist, intr.higher])[: LENSMODELS[lensmodel]])
     values = [intr.fx, intr.fy, intr.cx, intr.cy, *coeffs]
     from lps_gui import __version__  # importlib.metadata: only when a file is written
 

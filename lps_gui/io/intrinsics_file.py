@@ -1,6 +1,7 @@
 """intrinsics.json and OpenCV FileStorage YAML (SPEC 7).
 
-JSON: ``{"image_size": [w, h], "camera_matrix": 3x3, "dist": [k1,k2,p1,p2,k3],
+JSON: ``{"image_size": [w, h], "camera_matrix": 3x3, "dist": [k1,k2,p1,p2,k3]`` (12 coefficients,
+OpenCV's order, when the lens has rational and thin-prism terms)``,
 "std": {"fx": .., ...}, "rms_px": x, "n_views": n}``, optionally a full
 ``"covariance"`` (9x9 in ``covariance_order``), and when the calibration
 estimated the board's bow ``"board_warp_mm": [bow_x, bow_y]`` with
@@ -71,7 +72,7 @@ def intrinsics_to_dict(intr: CameraIntrinsics) -> dict[str, Any]:
     d: dict[str, Any] = {
         "image_size": list(intr.image_size),
         "camera_matrix": intr.camera_matrix.tolist(),
-        "dist": intr.dist.tolist(),
+        "dist": intr.cv_dist.tolist(),
     }
     std = intr.std()
     if std is not None:
@@ -149,7 +150,7 @@ def _read_opencv_yaml(path: Path, data: bytes) -> CameraIntrinsics:
         raise InputError(f"{path}: not an OpenCV FileStorage file ({why[:120]})") from None
     if K is None or dist is None:
         raise InputError(f"{path}: needs camera_matrix and distortion_coefficients nodes (OpenCV calibration YAML)")
-    d: dict[str, Any] = {"image_size": [int(w), int(h)], "camera_matrix": K, "dist": dist.ravel()[:5]}
+    d: dict[str, Any] = {"image_size": [int(w), int(h)], "camera_matrix": K, "dist": dist.ravel()}
     if std is not None:
         d["std"] = dict(zip(INTRINSIC_NAMES, std.ravel().tolist()))
     if rms:
@@ -168,7 +169,7 @@ def _write_opencv_yaml(path: Path, intr: CameraIntrinsics) -> None:
         fs.write("image_width", int(intr.image_size[0]))
         fs.write("image_height", int(intr.image_size[1]))
         fs.write("camera_matrix", intr.camera_matrix)
-        fs.write("distortion_coefficients", intr.dist.reshape(1, 5))
+        fs.write("distortion_coefficients", intr.cv_dist.reshape(1, -1))
         std = intr.std()
         if std is not None:
             fs.write("std_intrinsics", std.reshape(1, 9))

@@ -1,6 +1,7 @@
 """Intrinsics from a set of board images: detect every image, then calibrate (SPEC 6)."""
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -8,7 +9,7 @@ import numpy as np
 from lps_gui.core.geometry.board import Board
 from lps_gui.core.geometry.camera_model import CameraIntrinsics
 from lps_gui.core.intrinsics.calibration import IntrinsicsCalibration, calibrate_intrinsics
-from lps_gui.core.intrinsics.crossval import CrossValidation, cross_validate
+from lps_gui.core.intrinsics.crossval import LENS_MODELS, CrossValidation, choose_lens_model, cross_validate
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import InputError
 from lps_gui.io.corners.vnl import CornerTable
@@ -63,8 +64,13 @@ def calibrate_images(
     workers: int | None = None,
     flags: int = 0,
     warp: str = "auto",
+    model: str = "opencv5",
 ) -> IntrinsicsCalibration:
     """Detect the board in every image and calibrate; failed images are listed in the warnings.
+
+    ``model``: "opencv5" (k1 k2 p1 p2 k3), "rational" (with OpenCV's rational and thin-prism terms, 12
+    coefficients) or "auto" (the one two-fold cross-validation prefers,
+    :func:`lps_gui.core.intrinsics.crossval.choose_lens_model`; recorded in ``extra["lens_model_choice"]``).
 
     The returned intrinsics carry per-view RMS, coverage, flagged views and
     warnings in ``extra`` so intrinsics.json keeps them.
@@ -75,7 +81,18 @@ def calibrate_images(
     table = detect_images(paths, board, progress, cancel, workers, track=False)
     size = image_size_of(paths, table)
     drop_repeated_views(table)
-    cal = calibrate_intrinsics(board.flat_points(), list(table.corners_px), size, flags=flags, warp=warp)
+    choice = None
+    if model == "auto":
+        choice = choose_lens_model(board.flat_points(), list(table.corners_px), size, flags=flags, warp=warp)
+        model = choice.model
+    if model not in LENS_MODELS:
+        raise InputError(f"intrinsics: lens model must be opencv5, rational or auto, not {model!r}")
+    cal = calibrate_intrinsics(board.flat_points(), list(table.corners_px), size, flags=flags | LENS_MODELS[model],
+                               warp=warp)
+    if choice is not None:
+        cal.intrinsics = replace(cal.intrinsics, extra={**cal.intrinsics.extra, "lens_model_choice": {
+            "model": choice.model, "heldout_rms_px": choice.heldout_rms_px}})
+        cal.warnings.append(choice.summary())
     cal.view_names = list(table.names)
     cal.warnings += [f"{name}: {reason}" for name, reason in table.failed.items()]
     cal.intrinsics = _with_report(cal)

@@ -47,7 +47,8 @@ def _scene_key(scene: Scene) -> Any:
 
 def _renderer(board: Scene, intrinsics: CameraIntrinsics, lighting: Lighting, noise_grey: float) -> Any:
     """One renderer per process and camera: the per-pixel rays take seconds to build."""
-    key = (_scene_key(board), intrinsics.image_size, intrinsics.vector().tobytes(), lighting, noise_grey)
+    key = (_scene_key(board), intrinsics.image_size, intrinsics.vector().tobytes(), intrinsics.higher.tobytes(), lighting,
+           noise_grey)
     if key not in _RENDERERS:
         _RENDERERS.clear()
         if isinstance(board, Board):

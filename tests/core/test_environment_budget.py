@@ -114,3 +114,21 @@ def test_a_tilt_curve_within_the_noise_gives_no_abbe_term():
     tilt = np.stack([300.0 * (t / 22.0) ** 2 + np.random.default_rng(1).normal(0, 50.0, n), np.zeros(n)], axis=1)
     assert smooth_tilt_spread_urad(tilt, np.full((n, 2), 50.0), t)[0] == pytest.approx(np.std(300.0 * (t / 22.0) ** 2),
                                                                                        rel=0.15)
+
+
+def test_abbe_term_only_for_angles_the_error_motions_resolve_and_the_lens_row():
+    """Issue 35: a smooth pitch that the error motions do not resolve (a lens misfit could fake it) is no Abbe term;
+    the positions' lens-model share is its own row, not the intrinsics'."""
+    n = 40
+    t = np.linspace(0, 100, n)
+    tilt = np.stack([10.0 * np.sin(2 * np.pi * t / 200.0), np.zeros(n)], axis=1)
+    kw = dict(tilt_urad=tilt, tilt_sigma_urad=np.full((n, 2), 0.5), target_mm=t)
+    resolved = {r.source: r for r in budget_rows(_inputs(**kw, tilt_resolved=(True, False)), Environment())}
+    unresolved = {r.source: r for r in budget_rows(_inputs(**kw, tilt_resolved=(False, False)), Environment())}
+    assert resolved["Abbe offset"].contribution_um > 1.0  # about 0.6 um/urad x the smooth pitch
+    assert unresolved["Abbe offset"].contribution_um == 0.0 and "pitch (EBX) not resolved: no term" in \
+        unresolved["Abbe offset"].note
+    lens = {r.source: r for r in budget_rows(_inputs(sigma_total_um=np.full(n, np.hypot(1.0, 2.0)),
+                                                     sigma_lens_um=np.full(n, 2.0)), Environment())}
+    assert lens["lens model"].contribution_um == pytest.approx(2.0)
+    assert lens["intrinsics"].contribution_um == pytest.approx(np.sqrt(1.0 - 0.36))

@@ -164,3 +164,18 @@ def test_report_pdf_is_written_with_the_users_umask(tmp_path, umask):
     finally:
         os.umask(old)
     assert stat.S_IMODE(os.stat(path).st_mode) == 0o666 & ~umask  # not mkstemp's 0600
+
+
+def test_page_one_shows_a_session_flag_such_as_the_lens_model(tmp_path):
+    """A flag of the whole session (index None: the lens model does not fit) is on page 1 and in the GUI's verdict."""
+    from lps_gui.gui.results_panel import verdict_html
+    from lps_gui.io.results.model import as_results
+
+    results, truth = make_results()
+    message = ("lens model does not fit the intrinsics calibration: ... recalibrate with `lps intrinsics --model "
+               "rational`")
+    results["flags"] = list(results.get("flags") or []) + [{"index": None, "kind": "lens_model", "message": message}]
+    info = render_report(_session(tmp_path, results, truth))
+    text = " ".join(_page_text(info.path, 1).split())
+    assert "lens model does not fit the intrinsics calibration" in text and "--model rational" in text
+    assert "lens model does not fit" in verdict_html(as_results(results), None)

@@ -165,3 +165,11 @@ def test_no_thermal_correction_says_which_case_applies(env, why):
 
     rows = dict(environment_rows({**make_results()[0], "environment": env}))
     assert rows["Thermal correction applied"] == f"none: {why}"
+
+
+def test_intrinsics_rows_list_a_rational_thin_prism_lens_terms():
+    results, _ = make_results()
+    assert [r[0] for r in intrinsics_rows(results)] == ["fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3"]
+    results["intrinsics"]["dist"] = [-0.1, 0.05, 0.0, 0.0, 0.01, 0.02, -0.01, 0.005, 1e-3, 0.0, 0.0, 0.0]
+    rows = intrinsics_rows(results)
+    assert [r[0] for r in rows[9:]] == ["k4", "k5", "k6", "s1"] and rows[9][2] == "held"

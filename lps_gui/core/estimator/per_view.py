@@ -111,8 +111,12 @@ def calibrate_all(obs: Observations, idx: np.ndarray, X: np.ndarray) -> CameraIn
         objs.append(X[seen].astype(np.float32))
         imgs.append(obs.corners_px[i, seen].astype(np.float32))
     intr = obs.intrinsics
+    flags = cv2.CALIB_USE_INTRINSIC_GUESS
+    if intr.has_higher:  # the calibrated lens's rational and thin-prism terms stay as calibrated
+        flags |= (cv2.CALIB_RATIONAL_MODEL | cv2.CALIB_THIN_PRISM_MODEL | cv2.CALIB_FIX_K4 | cv2.CALIB_FIX_K5
+                  | cv2.CALIB_FIX_K6 | cv2.CALIB_FIX_S1_S2_S3_S4)
     _, K, dist, _, _ = cv2.calibrateCamera(
-        objs, imgs, intr.image_size, intr.camera_matrix.copy(), intr.dist.copy(), flags=cv2.CALIB_USE_INTRINSIC_GUESS
+        objs, imgs, intr.image_size, intr.camera_matrix.copy(), intr.cv_dist.copy(), flags=flags
     )
     return replace(intr, camera_matrix=K, dist=dist.ravel()[:5])
 

@@ -1,10 +1,15 @@
 """The camera model of SPEC section 2 (OpenCV's), with analytic Jacobians.
 
 Projection of camera-frame points ``x_cam`` through the pinhole with
-Brown-Conrady distortion ``(k1, k2, p1, p2, k3)``. Jacobians come back with
-respect to the camera-frame point (chain into any pose parametrization) and
-to the 9 intrinsics in :data:`INTRINSIC_NAMES` order, which is also the order
-of cv2.calibrateCameraExtended's standard deviations.
+Brown-Conrady distortion ``(k1, k2, p1, p2, k3)`` and, when a lens needs them,
+OpenCV's rational ``(k4, k5, k6)`` and thin-prism ``(s1, s2, s3, s4)`` terms
+(:data:`HIGHER_NAMES`, held fixed by the session estimators: a real lens always
+leaves some misfit to the 5-coefficient model, and an estimate through the
+wrong model fakes tilts). Jacobians come back with respect to the camera-frame
+point (chain into any pose parametrization), to the 9 intrinsics in
+:data:`INTRINSIC_NAMES` order, which is also the order of
+cv2.calibrateCameraExtended's standard deviations, and (:func:`higher_rows`)
+to the 7 higher terms.
 """
 from __future__ import annotations
 
@@ -16,6 +21,7 @@ import numpy as np
 from lps_gui.errors import InputError
 
 INTRINSIC_NAMES = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3")
+HIGHER_NAMES = ("k4", "k5", "k6", "s1", "s2", "s3", "s4")  # OpenCV's dist[5:12]: rational, then thin-prism
 
 
 @dataclass(frozen=True)
@@ -34,22 +40,39 @@ class CameraIntrinsics:
     rms_px: float | None = None
     n_views: int | None = None
     extra: dict = field(default_factory=dict)
+    higher: np.ndarray | None = None  # shape (7,): k4, k5, k6, s1, s2, s3, s4
 
     def __post_init__(self) -> None:
         K = np.asarray(self.camera_matrix, dtype=float).reshape(3, 3)
         d = np.zeros(5)
         given = np.asarray(self.dist, dtype=float).ravel()
-        if given.size > 5 and np.any(given[5:] != 0):
+        if given.size > 14 or (given.size > 12 and np.any(given[12:] != 0)):
             raise InputError(
-                "intrinsics: only the 5-coefficient model (k1,k2,p1,p2,k3) is supported; "
-                "recalibrate without the rational/thin-prism terms"
+                "intrinsics: the tilted-sensor terms (tauX, tauY) are not supported; "
+                "recalibrate with the 5, 8 or 12-coefficient model (lps intrinsics --model rational)"
             )
         d[: min(5, given.size)] = given[:5]
+        high = np.zeros(7)
+        if self.higher is not None:
+            high[:] = np.asarray(self.higher, dtype=float).ravel()
+        elif given.size > 5:
+            high[: min(7, given.size - 5)] = given[5:12]
         object.__setattr__(self, "camera_matrix", K)
         object.__setattr__(self, "dist", d)
+        object.__setattr__(self, "higher", high)
         object.__setattr__(self, "image_size", (int(self.image_size[0]), int(self.image_size[1])))
         if self.covariance is not None:
             object.__setattr__(self, "covariance", np.asarray(self.covariance, dtype=float).reshape(9, 9))
+
+    @property
+    def has_higher(self) -> bool:
+        """True when the lens has rational or thin-prism terms (the slower projection path)."""
+        return bool(np.any(self.higher != 0))
+
+    @property
+    def cv_dist(self) -> np.ndarray:
+        """The distortion as OpenCV takes it: 5 coefficients, or 12 with the rational and thin-prism terms."""
+        return np.concatenate([self.dist, self.higher]) if self.has_higher else self.dist
 
     @property
     def fx(self) -> float:
@@ -128,6 +151,8 @@ def project_parts(
     Same model as :func:`project`; avoids packing so that each output is a
     contiguous array (strided writes dominate the cost at K*N ~ 2e5 points).
     """
+    if intrinsics.has_higher:
+        return _project_parts_higher(x, y, z, intrinsics, want_jacobian)
     fx, fy, cx, cy = intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy
     k1, k2, p1, p2, k3 = intrinsics.dist
     inv_z = 1.0 / z
@@ -146,12 +171,73 @@ def project_parts(
         cross = 2.0 * xy * dr + 2.0 * p1 * xp + 2.0 * p2 * yp  # d xd / d yp == d yd / d xp
         dxd_dxp = radial + 2.0 * xx * dr + 2.0 * p1 * yp + 6.0 * p2 * xp
         dyd_dyp = radial + 2.0 * yy * dr + 6.0 * p1 * yp + 2.0 * p2 * xp
-        fx_z, fy_z = fx * inv_z, fy * inv_z
-        du_dx, du_dy = fx_z * dxd_dxp, fx_z * cross
-        dv_dx, dv_dy = fy_z * cross, fy_z * dyd_dyp
-        du = (du_dx, du_dy, -(du_dx * xp + du_dy * yp))
-        dv = (dv_dx, dv_dy, -(dv_dx * xp + dv_dy * yp))
+        du, dv = _to_camera_frame(fx * inv_z, fy * inv_z, xp, yp, (dxd_dxp, cross, cross, dyd_dyp))
     return ProjectionParts(u, v, du, dv, xp, yp, xd, yd)
+
+
+def _to_camera_frame(fx_z: np.ndarray, fy_z: np.ndarray, xp: np.ndarray, yp: np.ndarray,
+                     d: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]) -> tuple[tuple, tuple]:
+    """d u, d v / d (x, y, z) from the distortion's d (xd, yd) / d (xp, yp) = ``d`` (xx, xy, yx, yy)."""
+    du_dx, du_dy = fx_z * d[0], fx_z * d[1]
+    dv_dx, dv_dy = fy_z * d[2], fy_z * d[3]
+    return (du_dx, du_dy, -(du_dx * xp + du_dy * yp)), (dv_dx, dv_dy, -(dv_dx * xp + dv_dy * yp))
+
+
+def _rational(intrinsics: CameraIntrinsics, r2: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Numerator, denominator of the rational radial factor and their derivatives in r2."""
+    k1, k2, _, _, k3 = intrinsics.dist
+    k4, k5, k6 = intrinsics.higher[:3]
+    num = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
+    den = 1.0 + r2 * (k4 + r2 * (k5 + r2 * k6))
+    return num, den, k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2), k4 + r2 * (2.0 * k5 + 3.0 * k6 * r2)
+
+
+def _project_parts_higher(x: np.ndarray, y: np.ndarray, z: np.ndarray, intrinsics: CameraIntrinsics,
+                          want_jacobian: bool) -> ProjectionParts:
+    """:func:`project_parts` with OpenCV's rational and thin-prism terms (cv2.projectPoints' 12-coefficient model)."""
+    fx, fy, cx, cy = intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy
+    _, _, p1, p2, _ = intrinsics.dist
+    s1, s2, s3, s4 = intrinsics.higher[3:]
+    inv_z = 1.0 / z
+    xp, yp = x * inv_z, y * inv_z
+    xx, yy, xy = xp * xp, yp * yp, xp * yp
+    r2 = xx + yy
+    num, den, dnum, dden = _rational(intrinsics, r2)
+    radial = num / den
+    xd = xp * radial + 2.0 * p1 * xy + p2 * (r2 + 2.0 * xx) + r2 * (s1 + s2 * r2)
+    yd = yp * radial + p1 * (r2 + 2.0 * yy) + 2.0 * p2 * xy + r2 * (s3 + s4 * r2)
+    u, v = fx * xd + cx, fy * yd + cy
+    du = dv = None
+    if want_jacobian:
+        dr = (dnum - radial * dden) / den  # d radial / d r2
+        px_, py_ = 2.0 * (s1 + 2.0 * s2 * r2), 2.0 * (s3 + 2.0 * s4 * r2)  # d prism / d r2, times 2 (d r2 = 2 x dx)
+        common = 2.0 * xy * dr + 2.0 * p1 * xp + 2.0 * p2 * yp
+        dxd_dxp = radial + 2.0 * xx * dr + 2.0 * p1 * yp + 6.0 * p2 * xp + px_ * xp
+        dxd_dyp = common + px_ * yp
+        dyd_dxp = common + py_ * xp
+        dyd_dyp = radial + 2.0 * yy * dr + 6.0 * p1 * yp + 2.0 * p2 * xp + py_ * yp
+        du, dv = _to_camera_frame(fx * inv_z, fy * inv_z, xp, yp, (dxd_dxp, dxd_dyp, dyd_dxp, dyd_dyp))
+    return ProjectionParts(u, v, du, dv, xp, yp, xd, yd)
+
+
+def higher_rows(parts: ProjectionParts, intrinsics: CameraIntrinsics) -> tuple[np.ndarray, np.ndarray]:
+    """d u / d (k4, k5, k6, s1, s2, s3, s4) and d v / d them, each shape (7,) + parts' shape.
+
+    What a lens misfit the session's model holds fixed does to the pixels: the
+    basis of the lens-model uncertainty of single-plane tilts.
+    """
+    fx, fy = intrinsics.fx, intrinsics.fy
+    xp, yp = parts.xp, parts.yp
+    r2 = xp * xp + yp * yp
+    num, den, _, _ = _rational(intrinsics, r2)
+    g = -num / den**2  # d radial / d k4 per r2
+    Ju = np.zeros((7,) + xp.shape)
+    Jv = np.zeros((7,) + xp.shape)
+    for j, power in enumerate((r2, r2 * r2, r2 * r2 * r2)):
+        Ju[j], Jv[j] = fx * xp * g * power, fy * yp * g * power
+    Ju[3], Ju[4] = fx * r2, fx * r2 * r2
+    Jv[5], Jv[6] = fy * r2, fy * r2 * r2
+    return Ju, Jv
 
 
 def intrinsics_rows(parts: ProjectionParts, intrinsics: CameraIntrinsics) -> tuple[np.ndarray, np.ndarray]:
@@ -166,6 +252,9 @@ def intrinsics_rows(parts: ProjectionParts, intrinsics: CameraIntrinsics) -> tup
     Ju[0], Jv[1] = xd, yd
     Ju[2], Jv[3] = 1.0, 1.0
     fxp, fyp = fx * xp, fy * yp
+    if intrinsics.has_higher:  # the radial polynomial is divided by the rational denominator
+        den = _rational(intrinsics, r2)[1]
+        fxp, fyp = fxp / den, fyp / den
     Ju[4], Jv[4] = fxp * r2, fyp * r2
     Ju[5], Jv[5] = fxp * r4, fyp * r4
     Ju[6], Jv[6] = 2.0 * fx * xy, fy * (r2 + 2.0 * yy)

@@ -27,7 +27,7 @@ def solve_pnp(
     R = np.tile(np.eye(3), (K, 1, 1))
     t = np.zeros((K, 3))
     ok = np.zeros(K, dtype=bool)
-    Kmat, dist = intrinsics.camera_matrix, intrinsics.dist
+    Kmat, dist = intrinsics.camera_matrix, intrinsics.cv_dist
     for i in range(K):
         seen = np.all(np.isfinite(corners_px[i]), axis=-1)
         if seen.sum() < 6:

@@ -10,14 +10,18 @@ reason to calibrate intrinsics apart from the LPS run).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
 
-from lps_gui.core.geometry.camera_model import INTRINSIC_NAMES, CameraIntrinsics
+from lps_gui.core.geometry.camera_model import HIGHER_NAMES, INTRINSIC_NAMES, CameraIntrinsics
 from lps_gui.core.intrinsics.refine import RejectedCorner, WarpNotSeparableError, refine_intrinsics
 from lps_gui.errors import DegenerateGeometryError, InputError
+
+if TYPE_CHECKING:
+    from lps_gui.core.intrinsics.residual_structure import ResidualStructure
 
 WARP_MODES = ("auto", "on", "off")
 
@@ -46,11 +50,25 @@ class IntrinsicsCalibration:
     rejected_corners: list[RejectedCorner] = field(default_factory=list)
     residuals_px: list[np.ndarray] = field(default_factory=list)  # per view (N, 2) observed - projected, NaN where not seen
     image_points: list[np.ndarray] = field(default_factory=list)  # per view (N, 2) px as given
+    row_of: np.ndarray | None = None  # (N,) the board row of each corner (neighbours for the noise estimate)
 
     def coverage_on(self, grid: tuple[int, int]) -> np.ndarray:
         """Corner counts of the used views on another (cols, rows) grid."""
         pts = [self.image_points[k] for k in self.used_views]
         return coverage_grid(np.concatenate(pts), self.intrinsics.image_size, grid)
+
+    def residual_structure(self) -> "ResidualStructure | None":
+        """The used views' residuals binned over the image: does the lens model fit (issue 35)?"""
+        from lps_gui.core.intrinsics.residual_structure import residual_structure
+
+        if not self.residuals_px or not self.image_points:
+            return None
+        res = {k: self.residuals_px[k].copy() for k in self.used_views}
+        for c in self.rejected_corners:  # outliers are not the lens's
+            res[c.view][c.corner] = np.nan
+        uv = np.stack([self.image_points[k] for k in self.used_views])
+        return residual_structure(uv, np.stack([res[k] for k in self.used_views]), self.intrinsics.image_size,
+                                  self.row_of)
 
     def coverage_fraction(self) -> float:
         return float(np.mean(self.coverage > 0))
@@ -58,6 +76,9 @@ class IntrinsicsCalibration:
     def summary(self) -> str:
         """Human-readable lines: each parameter with its std, error figures, flags, warnings."""
         lines = [f"{name:>3} = {v:12.6g} +- {s:.3g}" for name, v, s in zip(INTRINSIC_NAMES, self.intrinsics.vector(), self.std)]
+        if self.intrinsics.has_higher:
+            lines += [f"{name:>3} = {v:12.6g} (held at OpenCV's value)"
+                      for name, v in zip(HIGHER_NAMES, self.intrinsics.higher)]
         lines.append(f"rms = {self.rms_px:.4f} px over {len(self.used_views)} views; coverage {100 * self.coverage_fraction():.0f} % of the image grid")
         if self.warp_mm is not None:
             lines.append(
@@ -164,8 +185,7 @@ def calibrate_intrinsics(
     flagged = _flag_views(objs, imgs, used, per_view_rms, image_size, flags, float(rms), flag_k)
     coverage = coverage_grid(np.concatenate([i.reshape(-1, 2) for i in imgs]), image_size, grid)
     warnings += _warnings(coverage, r_all[used], std, K, len(used))
-    dist5 = np.asarray(dist, dtype=float).ravel()[:5]
-    seed = CameraIntrinsics(image_size, K, dist5)
+    seed = CameraIntrinsics(image_size, K, np.asarray(dist, dtype=float).ravel()[:12])  # 5, or 12 with higher terms
     X64 = X.astype(float)
     size_mm = (float(np.ptp(X64[:, 0])), float(np.ptp(X64[:, 1])))
     args = (size_mm, [X64[i] for i in ids], [np.asarray(image_points[k], float).reshape(-1, 2)[i] for k, i in zip(used, ids)],
@@ -192,15 +212,22 @@ def calibrate_intrinsics(
         image_size=image_size,
         camera_matrix=intr.camera_matrix,
         dist=intr.dist,
+        higher=intr.higher,
         covariance=ref.covariance,
         rms_px=rms,
         n_views=len(used),
     )
     warp_sigma = None if ref.warp_cov is None else np.sqrt(np.diag(ref.warp_cov))
-    return IntrinsicsCalibration(intr, std, rms, per_view_rms, coverage, flagged, warnings, used, r_all, t_all,
+    cal = IntrinsicsCalibration(intr, std, rms, per_view_rms, coverage, flagged, warnings, used, r_all, t_all,
                                  warp_mm=ref.warp_mm, warp_sigma_mm=warp_sigma, rejected_corners=ref.rejected,
-                                 residuals_px=residuals,
+                                 residuals_px=residuals, row_of=np.unique(X64[:, 1], return_inverse=True)[1],
                                  image_points=[np.asarray(u, float).reshape(-1, 2) for u in image_points])
+    structure = cal.residual_structure()
+    if structure is not None:  # what a session's lens-model check and tilt uncertainty read (intrinsics.json lens_fit)
+        cal.intrinsics = replace(cal.intrinsics, extra={**cal.intrinsics.extra, "lens_fit": structure.to_dict()})
+        if structure.exceeds_noise:
+            cal.warnings.append(structure.message("these views"))
+    return cal
 
 
 def _flag_views(objs, imgs, used, per_view_rms, image_size, flags, rms, flag_k) -> list[int]:

@@ -53,7 +53,7 @@ def unproject(uv: np.ndarray, intr: CameraIntrinsics) -> np.ndarray:
     """
     crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-14)
     q = np.asarray(uv, dtype=float).reshape(-1, 2)
-    xy = cv2.undistortPoints(q.reshape(-1, 1, 2), intr.camera_matrix, intr.dist, criteria=crit).reshape(-1, 2)
+    xy = cv2.undistortPoints(q.reshape(-1, 1, 2), intr.camera_matrix, intr.cv_dist, criteria=crit).reshape(-1, 2)
     x = np.column_stack([xy, np.ones(len(xy))])
     for _ in range(5):
         proj = project(x, intr, want_jacobian=True)
@@ -265,3 +265,67 @@ def cross_validate(
     seen = (cal_even.coverage_on(grid) > 0) & (cal_odd.coverage_on(grid) > 0)
     diff = projection_diff(cal_even.intrinsics, cal_odd.intrinsics, grid, judged=seen if seen.any() else None)
     return CrossValidation(cal_even, cal_odd, diff, even, odd)
+
+
+# ----------------------------------------------------------------------------- choosing the lens model
+# mrcal's argument: a lens model is right when it predicts data it was not fitted to. Each candidate is
+# calibrated on the even views and on the odd views; every view of the other half is then fitted with its own
+# pose only (the intrinsics held), and the held-out residual RMS says how well the model predicts a new view.
+# The richer model (OpenCV's rational and thin-prism terms) is chosen only when it predicts clearly better.
+
+LENS_MODELS = {"opencv5": 0, "rational": cv2.CALIB_RATIONAL_MODEL | cv2.CALIB_THIN_PRISM_MODEL}
+MIN_IMPROVEMENT = 0.05  # the richer model must lower the held-out RMS by this fraction
+
+
+def heldout_rms_px(intr: CameraIntrinsics, object_points: np.ndarray, image_points: list[np.ndarray]) -> float:
+    """RMS reprojection error (2-D) of views fitted by their pose alone under fixed intrinsics."""
+    X = np.asarray(object_points, float).reshape(-1, 3)
+    r2 = []
+    for uv in image_points:
+        uv = np.asarray(uv, float).reshape(-1, 2)
+        ok = np.all(np.isfinite(uv), axis=1)
+        if ok.sum() < 6:
+            continue
+        obj, img = X[ok] * np.array([1.0, 1.0, 0.0]), uv[ok]
+        good, rvec, tvec = cv2.solvePnP(obj, img, intr.camera_matrix, intr.cv_dist, flags=cv2.SOLVEPNP_IPPE)
+        if not good:
+            continue
+        rvec, tvec = cv2.solvePnPRefineLM(obj, img, intr.camera_matrix, intr.cv_dist, rvec, tvec)
+        proj = cv2.projectPoints(obj, rvec, tvec, intr.camera_matrix, intr.cv_dist)[0].reshape(-1, 2)
+        r2.append(np.sum((proj - img) ** 2, axis=1))
+    return float(np.sqrt(np.mean(np.concatenate(r2)))) if r2 else float("nan")
+
+
+@dataclass
+class LensModelChoice:
+    """The lens model cross-validation chose, with each candidate's held-out RMS."""
+
+    model: str
+    heldout_rms_px: dict[str, float]
+
+    @property
+    def flags(self) -> int:
+        return LENS_MODELS[self.model]
+
+    def summary(self) -> str:
+        rms = ", ".join(f"{m} {v:.4f} px" for m, v in self.heldout_rms_px.items())
+        return (f"lens model: {self.model} (held-out RMS of views fitted by their pose alone: {rms}; the richer model "
+                f"is chosen when it lowers it by {100 * MIN_IMPROVEMENT:.0f} %)")
+
+
+def choose_lens_model(object_points: np.ndarray, image_points: list[np.ndarray], image_size: tuple[int, int],
+                      flags: int = 0, **calibrate_kwargs) -> LensModelChoice:
+    """The 5-coefficient or the rational/thin-prism model, by two-fold cross-validation of the views."""
+    from lps_gui.core.intrinsics.calibration import calibrate_intrinsics
+
+    halves = [list(range(0, len(image_points), 2)), list(range(1, len(image_points), 2))]
+    rms = {}
+    for model, extra in LENS_MODELS.items():
+        r2 = []
+        for fit, test in (halves, halves[::-1]):
+            cal = calibrate_intrinsics(object_points, [image_points[k] for k in fit], image_size, flags=flags | extra,
+                                       **calibrate_kwargs)
+            r2.append(heldout_rms_px(cal.intrinsics, object_points, [image_points[k] for k in test]) ** 2)
+        rms[model] = float(np.sqrt(np.mean(r2)))
+    richer = rms["rational"] < (1.0 - MIN_IMPROVEMENT) * rms["opencv5"]
+    return LensModelChoice("rational" if richer else "opencv5", rms)

@@ -82,7 +82,7 @@ def _residuals_and_jacobian(p, X_flat, imgs, free, base, size_mm: tuple[float, f
         res.append((uv - uv_obs).ravel())
         if want_jac:
             Jk = np.zeros((uv.shape[0], 2, n_params))
-            Jk[..., :m] = J[..., 6:][..., free]
+            Jk[..., :m] = J[..., 6:][..., free[:9]]
             if want_warp:
                 Jk[..., m : m + 2] = dX[..., 2:3] * basis[:, None, :]
             Jk[..., m + nw + 6 * k : m + nw + 6 * k + 6] = J[..., :6]
@@ -116,10 +116,11 @@ def refine_intrinsics(
     the observed pixels (n_k, 2), ``corner_ids`` their SPEC corner indices and
     ``view_ids`` the views' indices as given by the caller (for the listing).
     ``size_mm`` is the extent of the corner grid (the warp's [-1, 1] span).
-    ``free`` masks the 9 intrinsics (False = held, e.g. k3 with CALIB_FIX_K3).
+    ``free`` masks the 9 intrinsics (False = held, e.g. k3 with CALIB_FIX_K3); the lens's rational and
+    thin-prism terms (``intrinsics.higher``, from OpenCV's calibration) are held as given.
     """
-    free = np.asarray(free, dtype=bool)
-    base = intrinsics.vector()
+    free = np.concatenate([np.asarray(free, dtype=bool), np.zeros(7, dtype=bool)])
+    base = np.concatenate([intrinsics.vector(), intrinsics.higher])  # 16: the 9, then the held higher terms
     keep = [np.ones(len(u), dtype=bool) for u in uv_views]
     rejected: list[RejectedCorner] = []
     head = np.concatenate([base[free], np.zeros(2) if estimate_warp else np.zeros(0)])

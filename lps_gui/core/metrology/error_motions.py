@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lps_gui.core.geometry.rotation import log_so3, skew
+from lps_gui.core.metrology.lens_tilts import LensMisfit
 from lps_gui.core.metrology.resolution import ProfileSpan, profile_span
 from lps_gui.core.models.pose_model import PoseSolution
 
@@ -83,13 +84,29 @@ def _tool_grad(A: np.ndarray, dC: np.ndarray, tool_cam_mm: np.ndarray) -> np.nda
     return dC + np.concatenate([np.einsum("kij,kjl->kil", skew(Ao), A), np.zeros_like(A)], axis=2)
 
 
+def _with_lens(sol: PoseSolution, lens: LensMisfit | None, grad: np.ndarray, w: np.ndarray, wc: np.ndarray,
+               unit: float, sigmas: tuple[np.ndarray, np.ndarray, np.ndarray | None]
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """:func:`_functional_sigmas`' sigmas and covariance with the lens-model term added (correlated over the stops)."""
+    s, c, cov = sigmas
+    if lens is None:
+        return s, c, cov
+    Fw, Fc = lens.functional(grad, w, unit), lens.functional(grad, wc, unit)
+    if cov is None:
+        cov = unit**2 * sol.covariance.weighted_covariance(w, grad)
+    return (np.sqrt(s**2 + np.sum(Fw**2, axis=1)), np.sqrt(c**2 + np.sum(Fc**2, axis=1)), cov + Fw @ Fw.T)
+
+
 def error_motions(sol: PoseSolution, targets_mm: np.ndarray, axis: str = "X",
-                  tool_cam_mm: np.ndarray | None = None, tool_stage_mm: np.ndarray | None = None) -> ErrorMotions:
+                  tool_cam_mm: np.ndarray | None = None, tool_stage_mm: np.ndarray | None = None,
+                  lens: LensMisfit | None = None) -> ErrorMotions:
     """EXX ... ECX of a line axis at every stop, with sigmas, from the poses of :func:`solve_poses`.
 
     The tool point is an offset from the camera centre fixed to the carriage: in
     the camera frame (``tool_cam_mm``), or in the stage frame at the reference stop
-    (``tool_stage_mm``: along X, Y, Z of the axis, as a user measures it).
+    (``tool_stage_mm``: along X, Y, Z of the axis, as a user measures it). ``lens``: the poses'
+    sensitivity to the lens misfit the data allow (:mod:`lps_gui.core.metrology.lens_tilts`), whose
+    smooth, correlated effect every figure's sigma and covariance then carry.
     """
     used = sol.used
     K = len(used)
@@ -133,8 +150,8 @@ def error_motions(sol: PoseSolution, targets_mm: np.ndarray, axis: str = "X",
     for name, (val, grad, weights, unit) in comps.items():
         val = np.where(used, val, np.nan)
         values[name] = val
-        s, c, cov = _functional_sigmas(sol, grad, weights, centred if name in ANGULAR or name == "positioning" else line,
-                                       unit)
+        wc = centred if name in ANGULAR or name == "positioning" else line
+        s, c, cov = _with_lens(sol, lens, grad, weights, wc, unit, _functional_sigmas(sol, grad, weights, wc, unit))
         sig[name], csig[name] = np.where(used, s, np.nan), np.where(used, c, np.nan)
         profiles[name] = profile_span(val, csig[name], x, used, covariance=cov)
     single = np.full((K, 3), np.nan)
@@ -151,7 +168,10 @@ def error_motions(sol: PoseSolution, targets_mm: np.ndarray, axis: str = "X",
         dtool = _tool_grad(A, dC, tool_cam_mm)
         T_world = C + np.einsum("kij,j->ki", A, tool_cam_mm)
         tool = np.where(used, 1e3 * ((T_world - T_world[ref]) @ X - (x - x[ref])), np.nan)
-        var = sol.covariance.weighted_variances(rel, np.einsum("i,kip->kp", X, dtool))
+        g_tool = np.einsum("i,kip->kp", X, dtool)
+        var = sol.covariance.weighted_variances(rel, g_tool)
+        if lens is not None:
+            var = var + np.sum(lens.functional(g_tool, rel, 1.0) ** 2, axis=1)
         tool_sig = np.where(used, 1e3 * np.sqrt(np.maximum(var, 0.0)), np.nan)
     return ErrorMotions(axis, S, ref, values, sig, csig, single, resolved, m, tool, tool_sig, iso_names(axis),
                         profiles, tool_cam_mm)
@@ -234,8 +254,10 @@ def _additive(xy: np.ndarray, rows: np.ndarray, ref: int) -> tuple[list[np.ndarr
     return keys, W
 
 
-def planar_error_motions(sol: PoseSolution, targets_mm: np.ndarray) -> PlanarErrorMotions:
-    """The 12 error motions of an XY stage and the per-stop angles, with sigmas, from :func:`solve_poses`."""
+def planar_error_motions(sol: PoseSolution, targets_mm: np.ndarray, lens: LensMisfit | None = None
+                          ) -> PlanarErrorMotions:
+    """The 12 error motions of an XY stage and the per-stop angles, with sigmas, from :func:`solve_poses`;
+    ``lens`` as in :func:`error_motions`."""
     used = sol.used
     K = len(used)
     rows = np.flatnonzero(used)
@@ -253,8 +275,10 @@ def planar_error_motions(sol: PoseSolution, targets_mm: np.ndarray) -> PlanarErr
     rel[rows, ref] -= 1.0
     grads = {"angle": [np.einsum("i,kip->kp", S[:, c], dth) for c in range(3)],
              "position": [np.einsum("i,kip->kp", S[:, c], dC) for c in range(3)]}
-    stop_sig = np.stack([np.sqrt(np.maximum(sol.covariance.weighted_variances(rel, g), 0.0)) for g in grads["angle"]],
-                        axis=1) * 1e6
+    stop_var = [np.maximum(sol.covariance.weighted_variances(rel, g), 0.0) for g in grads["angle"]]
+    if lens is not None:
+        stop_var = [v + np.sum(lens.functional(g, rel, 1.0) ** 2, axis=1) for v, g in zip(stop_var, grads["angle"])]
+    stop_sig = np.sqrt(np.stack(stop_var, axis=1)) * 1e6
     keys, W = _additive(xy, rows, ref)
     nx = len(keys[0])
     parts = {0: slice(0, nx), 1: slice(nx, None)}
@@ -274,7 +298,8 @@ def planar_error_motions(sol: PoseSolution, targets_mm: np.ndarray) -> PlanarErr
             w = w - w[at_ref[along]]
         weights[name] = w
         values[name] = w @ np.where(used, per_stop, 0.0)
-        sigmas[name], centred[name], cov = _functional_sigmas(sol, grad, w, wc, unit)
+        sigmas[name], centred[name], cov = _with_lens(sol, lens, grad, w, wc, unit,
+                                                      _functional_sigmas(sol, grad, w, wc, unit))
         profiles[name] = profile_span(values[name], centred[name], keys[along], np.ones(len(keys[along]), bool),
                                       covariance=cov)
     stop_sig[~used] = np.nan

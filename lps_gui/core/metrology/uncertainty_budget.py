@@ -57,11 +57,13 @@ class BudgetInputs:
     square_mm: float
     sigma_px: float
     sigma_um: np.ndarray  # noise-only 1-sigma per used view (relative to the reference)
-    sigma_total_um: np.ndarray  # with the intrinsics' covariance
+    sigma_total_um: np.ndarray  # with the intrinsics' covariance (and the lens misfit, when the session has one)
+    sigma_lens_um: np.ndarray | None = None  # the lens-model misfit's share of each position (issue 35)
     abbe_lever_mm: tuple[float, float] | None = None  # camera -> board centre along v2 (pitch's lever), along v1 (yaw's)
     tilt_urad: np.ndarray | None = None  # (n, 2) pitch and yaw per used view
     tilt_sigma_urad: np.ndarray | None = None  # (n, 2) their 1-sigma
     target_mm: np.ndarray | None = None  # (n,) targets of the used views (for the smooth tilt curve)
+    tilt_resolved: tuple[bool, bool] | None = None  # pitch (EBX), yaw (ECX) resolved by the error motions; None: not judged
 
 
 def _rms(v: np.ndarray) -> float:
@@ -80,10 +82,17 @@ def budget_rows(x: BudgetInputs, env: Environment) -> list[BudgetRow]:
     for source, note in (("corner noise", "RMS 1-sigma over the views / sqrt 2 (noise of the measured view)"),
                          ("reference view noise", "the first capture's noise, part of every position")):
         rows.append(BudgetRow(source, "A", x.sigma_px, "px", c_px, _finite(per_view), note))
-    extra = np.sqrt(np.clip(np.asarray(x.sigma_total_um, float) ** 2 - np.asarray(x.sigma_um, float) ** 2, 0, None))
+    lens = np.zeros_like(np.asarray(x.sigma_um, float)) if x.sigma_lens_um is None else np.nan_to_num(x.sigma_lens_um)
+    extra = np.sqrt(np.clip(np.asarray(x.sigma_total_um, float) ** 2 - np.asarray(x.sigma_um, float) ** 2 - lens**2,
+                            0, None))
     intr = _rms(extra)
     rows.append(BudgetRow("intrinsics", "A", _finite(intr), "\u00b5m", 1.0 if math.isfinite(intr) else None,
                           _finite(intr), "calibration covariance propagated through d s / d intrinsics (RMS)"))
+    if x.sigma_lens_um is not None and np.any(lens > 0):
+        u_lens = _rms(lens)
+        rows.append(BudgetRow("lens model", "B", _finite(u_lens), "\u00b5m", 1.0, _finite(u_lens),
+                              "the misfit of the 5-coefficient lens model the residuals show, through each view's pose "
+                              "(RMS; smooth over the image, so it does not average out over the stops)"))
     n_squares = L / x.square_mm
     if env.square_mm_uncertainty_um is None:
         rows.append(BudgetRow("board square size", "B", None, "\u00b5m", n_squares, None,
@@ -129,13 +138,19 @@ def _abbe_row(x: BudgetInputs) -> BudgetRow:
         return BudgetRow("Abbe offset", "B", None, "\u00b5rad", None, None, "no per-view angles; not in U")
     spread = smooth_tilt_spread_urad(np.asarray(x.tilt_urad, float), np.asarray(x.tilt_sigma_urad, float),
                                      None if x.target_mm is None else np.asarray(x.target_mm, float))
+    judged = ""
+    if x.tilt_resolved is not None:  # an angle the error motions do not resolve (a lens misfit could fake it) is no term
+        spread = np.where(np.asarray(x.tilt_resolved, bool), spread, 0.0)
+        judged = "; " + ", ".join(f"{n} {'resolved' if r else 'not resolved: no term'}"
+                                  for n, r in zip(("pitch (EBX)", "yaw (ECX)"), x.tilt_resolved))
     lever = np.abs(np.asarray(x.abbe_lever_mm, float))
     contribution = float(np.sqrt(np.sum((1e-3 * lever * spread) ** 2)))  # um
     angle = float(np.sqrt(np.sum(spread**2)))
     c = contribution / angle if angle > 0 else float(lever[0]) * 1e-3
     return BudgetRow("Abbe offset", "B", angle, "\u00b5rad", c, contribution,
                      f"smooth pitch {spread[0]:.1f} \u00b5rad x {lever[0]:.0f} mm, yaw {spread[1]:.1f} \u00b5rad x "
-                     f"{lever[1]:.0f} mm (beyond per-view noise; positions are at the board plane)")
+                     f"{lever[1]:.0f} mm, the camera-board geometry's lever arms (beyond per-view noise; positions are at "
+                     f"the board plane){judged}")
 
 
 def smooth_tilt_spread_urad(tilt: np.ndarray, sigma: np.ndarray, target_mm: np.ndarray | None,

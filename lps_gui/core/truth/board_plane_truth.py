@@ -34,6 +34,10 @@ def _distorted_along(x: np.ndarray, y: np.ndarray, z: np.ndarray, n: np.ndarray,
     The distortion of :func:`lps_gui.core.geometry.camera_model.project_parts`, differentiated along one
     direction only (forward mode): 2 derivatives per corner where its Jacobian has 6.
     """
+    if intr.has_higher:  # rational / thin-prism lens: the full Jacobian (the simulator's true lens, rarely)
+        pp = project_parts(x, y, z, intr, want_jacobian=True)
+        return (pp.xd, pp.yd, sum(d * c for d, c in zip(pp.du, n)) / intr.fx,
+                sum(d * c for d, c in zip(pp.dv, n)) / intr.fy)
     k1, k2, p1, p2, k3 = intr.dist
     inv_z = 1.0 / z
     xp, yp = x * inv_z, y * inv_z

@@ -129,7 +129,7 @@ def true_views(spec: SimulationSpec, rng: np.random.Generator) -> tuple[list[Pla
         "board": {"type": spec.rig.board.type, "inner_corners": [spec.rig.board.cols, spec.rig.board.rows],
                   "square_mm": spec.rig.board.square_mm},
         "intrinsics": {"image_size": list(spec.rig.intrinsics.image_size),
-                       "camera_matrix": spec.rig.intrinsics.camera_matrix.tolist(), "dist": spec.rig.intrinsics.dist.tolist()},
+                       "camera_matrix": spec.rig.intrinsics.camera_matrix.tolist(), "dist": spec.rig.intrinsics.cv_dist.tolist()},
         "noise_px": spec.noise_px,
         "seed": spec.seed,
     }
@@ -386,7 +386,7 @@ def spec_to_dict(spec: SimulationSpec, distance_mm: float | None = None) -> dict
         "name": spec.name,
         "board": {"type": rig.board.type, "inner_corners": [rig.board.cols, rig.board.rows], "square_mm": rig.board.square_mm},
         "intrinsics": {"image_size": list(intr.image_size), "fx": intr.fx, "fy": intr.fy, "cx": intr.cx, "cy": intr.cy,
-                       "dist": intr.dist.tolist()},
+                       "dist": intr.cv_dist.tolist()},
         "camera_pose": {"rvec_cam_board": log_so3(rig.R_cam_board).tolist(), "C0_board_mm": rig.C0_board.tolist(),
                         "u_board": rig.u_board.tolist()},
         "stage_errors": rig.errors.to_dict(),

@@ -121,6 +121,7 @@ def run_demo(
     planar: bool = False,
     travel_mm: float | None = None,
     preset: str | None = None,
+    lens_misfit_px: float = 0.0,
 ) -> DemoResult:
     """Run the demo into ``out``; every step reports through ``bar(label)`` and ``say``.
 
@@ -132,6 +133,8 @@ def run_demo(
     say : prints one line (what a step did or skipped).
     planar : the planar pipeline (SPEC 10) on the simulated XY gantry.
     travel_mm, preset : the whole travel against a row of targets (SPEC 13, :mod:`lps_gui.pipeline.demos.targets`).
+    lens_misfit_px : a true lens with rational and thin-prism terms that the 5-coefficient calibration misses by
+        this RMS over the image (:mod:`lps_gui.core.truth.lens_misfit`); 0: the 5-coefficient lens.
     """
     out = Path(out)
     row = travel_mm is not None or preset is not None
@@ -141,6 +144,10 @@ def run_demo(
         spec = row_demo_spec(travel_mm, preset, seed)
     else:
         spec = demo_spec(quick, seed, planar)
+    if lens_misfit_px > 0:
+        from lps_gui.core.truth.lens_misfit import with_lens_misfit
+
+        spec = with_lens_misfit(spec, lens_misfit_px)
     prepare_out(out)
     res = DemoResult(out)
 

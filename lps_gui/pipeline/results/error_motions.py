@@ -83,16 +83,18 @@ class ErrorMotionResults:
     section: dict[str, Any]  # results.json ``error_motions``
     columns: dict[str, list[Any]]  # SPEC 14 positions columns (None where not resolved), K each
     motions: ErrorMotions
+    lens: Any = None  # the lens-model check (:class:`lps_gui.pipeline.results.lens_model.LensModelCheck`)
 
 
 def error_motion_results(sol: PoseSolution, targets_mm: np.ndarray, basis: str, tool: ToolPoint | None = None,
-                         truth_rotations: np.ndarray | None = None, axis: str = "X") -> ErrorMotionResults:
+                         truth_rotations: np.ndarray | None = None, axis: str = "X",
+                         lens: Any = None) -> ErrorMotionResults:
     """The ``error_motions`` section and the positions columns of one axis.
 
     ``truth_rotations`` (K, 3) rad: the simulator's carriage rotation vectors in the world frame,
     for the truth comparison of the angles (centred: the reference stop's own noise left out).
     """
-    em = error_motions(sol, targets_mm, axis, **(tool.kwargs() if tool else {}))
+    em = error_motions(sol, targets_mm, axis, **(tool.kwargs() if tool else {}), lens=lens)
     motions: dict[str, Any] = {}
     for name, iso in em.names.items():
         unit = UNITS[name]
@@ -184,15 +186,23 @@ def session_error_motions(meta: dict[str, Any], where: str, obs: Any, est: Any,
         sol, basis = board_pose_solution(est), BASIS_BOARD
     if sol is None or int(np.asarray(sol.used).sum()) < 3:
         return None
+    from lps_gui.pipeline.results.lens_model import lens_model_check, position_lens_sigma_um
+
     w = board_truth_rotations(meta.get("truth"), truth, np.asarray(obs.index))
-    return error_motion_results(sol, obs.target_mm, basis, tool, w)
+    check = lens_model_check(sol, obs)
+    out = error_motion_results(sol, obs.target_mm, basis, tool, w, lens=check.misfit)
+    if check.misfit is not None:
+        check.position_sigma_um = position_lens_sigma_um(sol, obs, check.misfit, out.motions.frame,
+                                                         out.motions.reference)
+    out.lens = check
+    return out
 
 
 def planar_error_motion_results(sol: PoseSolution, targets_mm: np.ndarray,
-                                truth_rotations: np.ndarray | None = None) -> ErrorMotionResults:
+                                truth_rotations: np.ndarray | None = None, lens: Any = None) -> ErrorMotionResults:
     """A planar stage's section: both axes' six error motions over their own positions, the per-stop angles
     about the stage X, Y, Z (positions.csv, empty where neither axis' motion about it is resolved)."""
-    pm = planar_error_motions(sol, targets_mm)
+    pm = planar_error_motions(sol, targets_mm, lens)
     motions: dict[str, Any] = {}
     for name, along, kind, _ in PLANAR_MOTIONS:
         unit = "urad" if kind == "angle" else "um"
@@ -252,13 +262,28 @@ def add_error_motions(results: dict[str, Any], session: Any, obs: Any, est: Any)
         tool_point(meta, where)  # checked alike, used by one axis only
         sol = target_pose_solution(obs, est)
         w = planar_truth_rotations(meta.get("truth"), np.asarray(obs.index))
-        motions = planar_error_motion_results(sol, obs.target_mm, w) if int(sol.used.sum()) >= 3 else None
+        motions = None
+        if int(sol.used.sum()) >= 3:
+            from lps_gui.pipeline.results.lens_model import lens_model_check
+
+            check = lens_model_check(sol, obs)
+            motions = planar_error_motion_results(sol, obs.target_mm, w, lens=check.misfit)
+            motions.lens = check
     else:
         motions = None
     if motions is None:
         return
     add_columns(results["positions"], motions.columns)
     results["error_motions"] = motions.section
+    if motions.lens is not None:
+        motions.section["lens_model"] = motions.lens.section
+        results.setdefault("flags", []).extend(motions.lens.flags)
+        lens_um = motions.lens.position_sigma_um
+        if lens_um is not None and len(results["positions"]) == len(lens_um):  # the positions carry the lens misfit
+            for row, s in zip(results["positions"], lens_um):
+                row["sigma_lens_um"] = json_float(s)
+                if row.get("sigma_total_um") is not None:
+                    row["sigma_total_um"] = json_float(np.hypot(row["sigma_total_um"], s))
     figures = results.get("figures") or {}
     if obs.D == 1 and figures.get("angles_resolution"):  # "Max |roll|" is a finding only if EAX's profile is
         names = iso_names(motions.section.get("axis", "X"))

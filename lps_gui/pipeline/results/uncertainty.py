@@ -53,8 +53,18 @@ def budget_inputs(results: dict[str, Any], square_mm: float, axis: str = "") -> 
     return BudgetInputs(
         travel_mm=travel, square_mm=square_mm, sigma_px=float(p.get("sigma_px") or 0.0),
         sigma_um=_column(used, f"sigma{sfx}_um"), sigma_total_um=_column(used, f"sigma_total{sfx}_um"),
+        sigma_lens_um=_column(used, "sigma_lens_um") if not axis and any("sigma_lens_um" in r for r in used) else None,
         abbe_lever_mm=abbe_lever_mm(results),
-        tilt_urad=tilt, tilt_sigma_urad=tilt_sig, target_mm=targets)
+        tilt_urad=tilt, tilt_sigma_urad=tilt_sig, target_mm=targets, tilt_resolved=tilt_resolved(results))
+
+
+def tilt_resolved(results: dict[str, Any]) -> tuple[bool, bool] | None:
+    """Pitch (EBX) and yaw (ECX) resolved by the error motions (None when the session has none): the Abbe term
+    takes only a resolved angle (issue 35: a lens misfit fakes a smooth tilt from one target plane)."""
+    resolved = (results.get("error_motions") or {}).get("resolved")
+    if not isinstance(resolved, dict) or not resolved:
+        return None
+    return (bool(resolved.get("EBX")), bool(resolved.get("ECX")))
 
 
 def abbe_lever_mm(results: dict[str, Any]) -> tuple[float, float] | None:

@@ -74,6 +74,8 @@ def verdict_section(flow: Any, results: Results, spec: dict[str, Any] | None,
     rows = verdicts(results, spec)
     flow.heading("Verdict", 11)
     flow.paragraph(overall(rows), size_pt=10.0, color=overall_color(rows))
+    for message in S.session_flags(results):  # what holds for the whole session (a lens model that does not fit)
+        flow.paragraph(message, size_pt=8.5, color="#c00000")
     if rows:
         verdict_table(flow, rows)
         flow.paragraph(DECISION_RULE, size_pt=NOTE_SIZE, color=GREY)

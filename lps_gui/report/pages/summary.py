@@ -13,7 +13,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from lps_gui.core.estimator.methods import report_text
-from lps_gui.core.geometry.camera_model import INTRINSIC_NAMES
+from lps_gui.core.geometry.camera_model import HIGHER_NAMES, INTRINSIC_NAMES
 from lps_gui.io.results.document import SummaryFigure, extreme_figures, iso_figures, summary_figures
 from lps_gui.io.results.document import finite_number as _num
 from lps_gui.io.results.model import Results, as_results
@@ -191,6 +191,8 @@ def intrinsics_rows(results: Results | dict[str, Any]) -> list[tuple[str, str, s
     for name in INTRINSIC_NAMES:
         unit = " px" if name in ("fx", "fy", "cx", "cy") else ""
         out.append((name, (f"{values[name]:.3f}" if unit else fmt(values[name], 4)) + unit, fmt(_num(std.get(name)), 2) + (unit if _num(std.get(name)) is not None else "")))
+    higher = dist[5:12] if len(dist) >= 12 + 5 else []  # a rational / thin-prism lens: 12 coefficients (+ the padding)
+    out += [(name, fmt(v, 4), "held") for name, v in zip(HIGHER_NAMES, higher) if v]
     return out
 
 
@@ -397,6 +399,11 @@ def straightness_notes(results: Results, cols: dict[str, np.ndarray]) -> list[st
         "effect at the board plane is inside the straightness and positions (Abbe offset). A second board at "
         "another distance in the same view would separate them; this version does not support a two-depth target.",
     ]
+
+
+def session_flags(results: Results | dict[str, Any]) -> list[str]:
+    """Flags of the whole session (no view index), e.g. a lens model that does not fit: page 1 shows them."""
+    return [f.message or f.kind or "" for f in as_results(results).flags if f.index is None]
 
 
 def outlier_rows(results: Results | dict[str, Any]) -> list[dict[str, Any]]:

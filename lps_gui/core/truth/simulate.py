@@ -133,6 +133,7 @@ def true_views(spec: SimulationSpec, rng: np.random.Generator) -> tuple[list[Pla
         "noise_px": spec.noise_px,
         "seed": spec.seed,
     }
+    truth.update(spec.realism_truth())
     if spec.vibration is not None:
         truth["vibration"] = {**spec.vibration.to_dict(), "frame_interval_s": spec.frame_interval_s}
     if spec.layout is not None:

@@ -143,6 +143,23 @@ def realism_named(name: str) -> Realism | None:
     return REALISM[name]
 
 
+def brown_residual_px(intrinsics: CameraIntrinsics, lens: LensMisfit) -> tuple[float, float]:
+    """RMS and max (px) of what the best 5-coefficient (Brown) lens leaves of ``lens`` over a 64 x 48 grid of
+    the image: how much of the true lens the estimate's model cannot express."""
+    import cv2
+    from scipy.optimize import least_squares
+
+    w, h = intrinsics.image_size
+    u, v = np.meshgrid(np.linspace(0, w - 1, 64), np.linspace(0, h - 1, 48))
+    uv = np.stack([u.ravel(), v.ravel()], -1)
+    xy = cv2.undistortPoints(uv.reshape(-1, 1, 2), intrinsics.camera_matrix, lens.opencv_dist(intrinsics)).reshape(-1, 2)
+    brown, target = LensMisfit(), lens.distort(xy, intrinsics)
+    fit = least_squares(lambda p: (brown.distort(xy, intrinsics.with_vector(p)) - target).ravel(), intrinsics.vector(),
+                        x_scale="jac")
+    n = np.linalg.norm(fit.fun.reshape(-1, 2), axis=1)
+    return float(np.sqrt(np.mean(n**2))), float(n.max())
+
+
 def printed_rng(seed: int) -> np.random.Generator:
     """The draws of the prints: their own stream of the session's seed (the stage's and camera's are untouched)."""
     return np.random.default_rng([int(seed), 35])

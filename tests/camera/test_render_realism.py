@@ -74,3 +74,16 @@ def test_blur_grows_to_the_corners_and_keeps_the_centre():
 def test_the_prints_draws_are_their_own_stream():
     a, b = printed_rng(4).standard_normal(3), printed_rng(4).standard_normal(3)
     assert np.array_equal(a, b) and not np.array_equal(a, np.random.default_rng(4).standard_normal(3))
+
+
+def test_lps_simulate_realism_records_the_true_lens_and_prints_and_refuses_points(tmp_path, capsys):
+    import json
+
+    from lps_gui.cli import main
+
+    assert main(["simulate", str(tmp_path / "s"), "--realism", "strong", "--stops", "3", "--directions", "+",
+                 "--runs", "1"]) == 0
+    real = json.loads((tmp_path / "s" / "session.json").read_text())["truth"]["realism"]
+    assert real["lens_px"] == REALISM["strong"].lens_px and len(real["printed"]) == 1 and real["lens"]["k4"] != 0
+    assert main(["simulate", str(tmp_path / "p"), "--points", "--realism", "on"]) != 0
+    assert "drop --points" in capsys.readouterr().err

@@ -47,52 +47,40 @@ def _undistorted_rays(intrinsics: CameraIntrinsics, lens: Any = None) -> tuple[n
     cv2.undistortPoints gives a start; three Newton steps with the analytic
     Jacobian of :func:`project` make the rays exact to ~1e-9 px even where
     the distortion is strong. ``lens`` (a :class:`lps_gui.core.truth.realism.LensMisfit`):
-    the true lens has terms beyond the 5-coefficient model (:func:`_misfit_rays`).
+    the true lens has terms beyond the 5-coefficient model; cv2's 12-coefficient
+    undistortion starts, four Newton steps on ``lens.distort`` (Jacobian by
+    central differences, 1e-7 in x') make the rays exact to ~1e-6 px.
     """
-    if lens is not None:
-        return _misfit_rays(intrinsics, lens)
     w, h = intrinsics.image_size
     u, v = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
     uv = np.stack([u.ravel(), v.ravel()], axis=-1)  # shape (H*W, 2)
     crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 30, 1e-12)
-    xy = cv2.undistortPoints(
-        uv.reshape(-1, 1, 2), intrinsics.camera_matrix, intrinsics.dist, criteria=crit
-    ).reshape(-1, 2)
-    xcam = np.empty((xy.shape[0], 3))
-    for _ in range(3):
-        xcam[:, :2], xcam[:, 2] = xy, 1.0
-        proj = project(xcam, intrinsics, want_jacobian=True)
-        J = proj.d_uv_d_xcam[:, :, :2]  # shape (P, 2, 2): d uv / d (x', y')
-        xy = xy - np.linalg.solve(J, (proj.uv - uv)[..., None])[..., 0]
-    xcam[:, :2], xcam[:, 2] = xy, 1.0
-    J = project(xcam, intrinsics, want_jacobian=True).d_uv_d_xcam[:, :, :2]
-    Jinv = np.linalg.inv(J)  # shape (P, 2, 2): d (x', y') / d uv
+    dist = intrinsics.dist if lens is None else lens.opencv_dist(intrinsics)
+    xy = cv2.undistortPoints(uv.reshape(-1, 1, 2), intrinsics.camera_matrix, dist, criteria=crit).reshape(-1, 2)
+    step = _brown_step if lens is None else _lens_step(lens)
+    for _ in range(3 if lens is None else 4):
+        at, J = step(xy, intrinsics)
+        xy = xy - np.linalg.solve(J, (at - uv)[..., None])[..., 0]
+    Jinv = np.linalg.inv(step(xy, intrinsics)[1])  # shape (P, 2, 2): d (x', y') / d uv
     f32 = lambda a: np.ascontiguousarray(a.reshape(h, w), dtype=np.float32)  # noqa: E731
     return f32(xy[:, 0]), f32(xy[:, 1]), f32(Jinv[:, 0, 0]), f32(Jinv[:, 0, 1]), f32(Jinv[:, 1, 0]), f32(Jinv[:, 1, 1])
 
 
-def _misfit_rays(intrinsics: CameraIntrinsics, lens: Any) -> tuple[np.ndarray, ...]:
-    """:func:`_undistorted_rays` through a lens with rational and thin-prism terms: cv2's 12-coefficient
-    undistortion starts, Newton steps on ``lens.distort`` (Jacobian by central differences, 1e-7 in x')
-    make the rays exact to ~1e-6 px."""
-    w, h = intrinsics.image_size
-    u, v = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
-    uv = np.stack([u.ravel(), v.ravel()], axis=-1)
-    crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 30, 1e-12)
-    xy = cv2.undistortPoints(uv.reshape(-1, 1, 2), intrinsics.camera_matrix, lens.opencv_dist(intrinsics),
-                             criteria=crit).reshape(-1, 2)
+def _brown_step(xy: np.ndarray, intrinsics: CameraIntrinsics) -> tuple[np.ndarray, np.ndarray]:
+    """Pixels of normalized points (P, 2) and d uv / d (x', y') (P, 2, 2) through the 5-coefficient model."""
+    proj = project(np.c_[xy, np.ones(len(xy))], intrinsics, want_jacobian=True)
+    return proj.uv, proj.d_uv_d_xcam[:, :, :2]
+
+
+def _lens_step(lens: Any) -> Any:
+    """:func:`_brown_step` through a lens with terms beyond the model (Jacobian by central differences)."""
     eps = 1e-7
 
-    def jacobian(p: np.ndarray) -> np.ndarray:  # shape (P, 2, 2): d uv / d (x', y')
-        cols = [(lens.distort(p + d, intrinsics) - lens.distort(p - d, intrinsics)) / (2 * eps)
+    def step(xy: np.ndarray, intrinsics: CameraIntrinsics) -> tuple[np.ndarray, np.ndarray]:
+        cols = [(lens.distort(xy + d, intrinsics) - lens.distort(xy - d, intrinsics)) / (2 * eps)
                 for d in (np.array([eps, 0.0]), np.array([0.0, eps]))]
-        return np.stack(cols, axis=-1)
-
-    for _ in range(4):
-        xy = xy - np.linalg.solve(jacobian(xy), (lens.distort(xy, intrinsics) - uv)[..., None])[..., 0]
-    Jinv = np.linalg.inv(jacobian(xy))
-    f32 = lambda a: np.ascontiguousarray(a.reshape(h, w), dtype=np.float32)  # noqa: E731
-    return f32(xy[:, 0]), f32(xy[:, 1]), f32(Jinv[:, 0, 0]), f32(Jinv[:, 0, 1]), f32(Jinv[:, 1, 0]), f32(Jinv[:, 1, 1])
+        return lens.distort(xy, intrinsics), np.stack(cols, axis=-1)
+    return step
 
 
 def _triangle(x: np.ndarray) -> np.ndarray:

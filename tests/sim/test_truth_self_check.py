@@ -58,6 +58,13 @@ def test_a_board_printed_off_scale_makes_the_truth_contradict_the_report_and_it_
 
     assert "SIMULATED SESSION FAILS ITS TRUTH CHECK" in format_summary(as_results(results))
 
+    from pypdf import PdfReader
+
+    from lps_gui.report.pdf.document import write_report
+
+    page1 = " ".join(PdfReader(str(write_report(folder, results))).pages[0].extract_text().split())
+    assert "SIMULATED SESSION FAILS ITS TRUTH CHECK" in page1 and "per-stop positions: mean (error/sigma)^2" in page1
+
 
 def _motion_results(resolved: bool, truth_urad: float) -> dict:
     """A hand-made results.json of one line with an EBX (pitch) profile called ``resolved``."""

@@ -248,6 +248,17 @@ def markdown(pooled: dict[str, list[dict[str, Any]]], header: str) -> str:
         found = f"{f['resolved_with']}/{f['n_with']}" if f["n_with"] else "-"
         mark = "**" if bad else ""
         lines.append(f"| {f['kind']} | {f['realism']} | {_cell(f['finding'])} | {mark}{fr}{mark} | {found} |")
+    lines += ["", "Below the issue's bar (coverage of U under 90 %, mean (error/sigma)^2 outside 0.5-2, or false "
+              "'resolved' in more than 1 of 10):", ""]
+    for f in pooled["figures"]:
+        if (f["coverage"] is not None and f["coverage"] < 0.9) or not 0.5 <= f["mean_z2"] <= 2.0:
+            cov = "" if f["coverage"] is None else f"coverage {_pct(f['coverage'])}, "
+            lines.append(f"- {f['kind']}, realism {f['realism']}: {f['figure']}: {cov}mean (error/sigma)^2 "
+                         f"{f['mean_z2']:.2f} over {f['n']} sessions")
+    for f in pooled["findings"]:
+        if f["n_without"] and f["false_resolved"] > max(1, 0.1 * f["n_without"]):
+            lines.append(f"- {f['kind']}, realism {f['realism']}: {f['finding']} called resolved in "
+                         f"{f['false_resolved']} of {f['n_without']} sessions whose truth lacks it")
     return "\n".join(lines) + "\n"
 
 
@@ -288,7 +299,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--keep", action="store_true", help="keep each session's folder")
     ap.add_argument("--short", action="store_true", help="1 seed, line-both, flat stage, realism on, 8 targets x 1 run")
     ap.add_argument("--lens-misfit", action="store_true", help="print what the realism lens leaves beyond a Brown fit")
+    ap.add_argument("--tables", action="store_true", help="only pool the sessions in --json into the tables (no runs)")
     a = ap.parse_args(argv)
+    if a.tables:
+        doc = json.loads(a.json.read_text())
+        text = markdown(pool([x for x in doc["sessions"] if "error" not in x]), doc["machine"])
+        print(text)
+        if a.md:
+            a.md.write_text(text)
+        return 0
     if a.lens_misfit:
         print_lens_misfit()
         return 0

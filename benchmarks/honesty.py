@@ -185,16 +185,16 @@ def run_session(kind: str, stage: str, realism: str, seed: int, root: Path, shor
 
 
 def pool(sessions: list[dict[str, Any]]) -> dict[str, list[dict[str, Any]]]:
-    """Per (kind, realism): each figure's coverage of U and mean z^2, each finding's false-resolution rate,
+    """Per (kind, stage, realism): each figure's coverage of U and mean z^2, each finding's false-resolution rate,
     the per-stop positions' mean (error/sigma)^2."""
-    groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    groups: dict[tuple[str, str, str], list[dict[str, Any]]] = {}
     for s in sessions:
-        groups.setdefault((s["kind"], s["realism"]), []).append(s)
+        groups.setdefault((s["kind"], s["stage"], s["realism"]), []).append(s)
     figures, findings = [], []
-    for (kind, realism), rows in sorted(groups.items()):
+    for (kind, stage, realism), rows in sorted(groups.items()):
         z = [r["position_z_ms"] for r in rows if r["position_z_ms"] is not None]
         if z:
-            figures.append({"kind": kind, "realism": realism, "figure": "per-stop position", "n": len(z),
+            figures.append({"kind": kind, "stage": stage, "realism": realism, "figure": "per-stop position", "n": len(z),
                             "coverage": None, "mean_z2": float(np.mean(z)), "worst": float(np.max(z))})
         by_fig: dict[str, list[dict[str, Any]]] = {}
         for r in rows:
@@ -202,7 +202,7 @@ def pool(sessions: list[dict[str, Any]]) -> dict[str, list[dict[str, Any]]]:
                 by_fig.setdefault(c["figure"], []).append(c)
         for name, cs in by_fig.items():
             z2 = np.array([c["z"] ** 2 for c in cs])
-            figures.append({"kind": kind, "realism": realism, "figure": name, "n": len(cs),
+            figures.append({"kind": kind, "stage": stage, "realism": realism, "figure": name, "n": len(cs),
                             "coverage": float(np.mean([abs(c["error"]) <= c["U_k2"] for c in cs])),
                             "mean_z2": float(np.mean(z2)), "worst": float(np.sqrt(z2.max())),
                             "mean_error": float(np.mean([c["error"] for c in cs])),
@@ -214,7 +214,7 @@ def pool(sessions: list[dict[str, Any]]) -> dict[str, list[dict[str, Any]]]:
         for name, fs in by_find.items():
             absent = [f for f in fs if not f["truth_has_it"]]
             present = [f for f in fs if f["truth_has_it"]]
-            findings.append({"kind": kind, "realism": realism, "finding": name,
+            findings.append({"kind": kind, "stage": stage, "realism": realism, "finding": name,
                              "n_without": len(absent), "false_resolved": sum(f["resolved"] for f in absent),
                              "n_with": len(present), "resolved_with": sum(f["resolved"] for f in present)})
     return {"figures": figures, "findings": findings}
@@ -230,34 +230,34 @@ def _pct(x: float | None) -> str:
 
 def markdown(pooled: dict[str, list[dict[str, Any]]], header: str) -> str:
     """The campaign's two tables: figures (coverage, mean z^2) and findings (false resolutions)."""
-    lines = [header, "", "| kind | realism | figure | n | coverage of U (k=2) | mean (error/sigma)^2 | worst abs(z) | "
-             "mean error | mean U |", "|---|---|---|---:|---:|---:|---:|---:|---:|"]
+    lines = [header, "", "| kind | stage | realism | figure | n | coverage of U (k=2) | mean (error/sigma)^2 | "
+             "worst abs(z) | mean error | mean U |", "|---|---|---|---|---:|---:|---:|---:|---:|---:|"]
     for f in pooled["figures"]:
         bad = (f["coverage"] is not None and f["coverage"] < 0.9) or not 0.5 <= f["mean_z2"] <= 2.0
         unit = f.get("unit", "")
         err = "-" if "mean_error" not in f else f"{f['mean_error']:+.3g} {unit}"
         U = "-" if "mean_U" not in f else f"{f['mean_U']:.3g} {unit}"
         worst = f"{f['worst']:.1f}" + (" (max z^2)" if f["coverage"] is None else "")
-        lines.append(f"| {f['kind']} | {f['realism']} | {_cell(f['figure'])} | {f['n']} | {_pct(f['coverage'])} | "
+        lines.append(f"| {f['kind']} | {f['stage']} | {f['realism']} | {_cell(f['figure'])} | {f['n']} | {_pct(f['coverage'])} | "
                      f"{'**' if bad else ''}{f['mean_z2']:.2f}{'**' if bad else ''} | {worst} | {err} | {U} |")
-    lines += ["", "| kind | realism | finding | false 'resolved' (truth lacks it) | resolved where the truth has it |",
-              "|---|---|---|---:|---:|"]
+    lines += ["", "| kind | stage | realism | finding | false 'resolved' (truth lacks it) | resolved where the truth "
+              "has it |", "|---|---|---|---|---:|---:|"]
     for f in pooled["findings"]:
         bad = f["n_without"] and f["false_resolved"] > max(1, 0.1 * f["n_without"])
         fr = f"{f['false_resolved']}/{f['n_without']}" if f["n_without"] else "-"
         found = f"{f['resolved_with']}/{f['n_with']}" if f["n_with"] else "-"
         mark = "**" if bad else ""
-        lines.append(f"| {f['kind']} | {f['realism']} | {_cell(f['finding'])} | {mark}{fr}{mark} | {found} |")
+        lines.append(f"| {f['kind']} | {f['stage']} | {f['realism']} | {_cell(f['finding'])} | {mark}{fr}{mark} | {found} |")
     lines += ["", "Below the issue's bar (coverage of U under 90 %, mean (error/sigma)^2 outside 0.5-2, or false "
               "'resolved' in more than 1 of 10):", ""]
     for f in pooled["figures"]:
         if (f["coverage"] is not None and f["coverage"] < 0.9) or not 0.5 <= f["mean_z2"] <= 2.0:
             cov = "" if f["coverage"] is None else f"coverage {_pct(f['coverage'])}, "
-            lines.append(f"- {f['kind']}, realism {f['realism']}: {f['figure']}: {cov}mean (error/sigma)^2 "
+            lines.append(f"- {f['kind']}, {f['stage']} stage, realism {f['realism']}: {f['figure']}: {cov}mean (error/sigma)^2 "
                          f"{f['mean_z2']:.2f} over {f['n']} sessions")
     for f in pooled["findings"]:
         if f["n_without"] and f["false_resolved"] > max(1, 0.1 * f["n_without"]):
-            lines.append(f"- {f['kind']}, realism {f['realism']}: {f['finding']} called resolved in "
+            lines.append(f"- {f['kind']}, {f['stage']} stage, realism {f['realism']}: {f['finding']} called resolved in "
                          f"{f['false_resolved']} of {f['n_without']} sessions whose truth lacks it")
     return "\n".join(lines) + "\n"
 

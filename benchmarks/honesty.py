@@ -13,6 +13,7 @@ mean (error / sigma)^2 with sigma = U / 2 (what the report draws), and per
 (its size under half the noise threshold). Kinds:
 
   line-one     one direction, 2 runs, 12 targets        line-both    both directions, 2 runs, 12 targets
+  paper-line   the paper's camera (1920 x 1080, 600 mm) over 98 mm, 15 targets both ways (its noise is 10x lower)
   compensated  line-both, then the compensated (as-left) capture, scored
   planar       a 5 x 3 grid on the simulated XY gantry, both directions
   row          three targets at 170 mm pitch (small-row), 18 stops
@@ -48,7 +49,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-KINDS = ("line-one", "line-both", "compensated", "planar", "row", "two-depth", "min-step", "settling")
+KINDS = ("line-one", "line-both", "paper-line", "compensated", "planar", "row", "two-depth", "min-step", "settling")
 STAGES = ("flat", "motions")
 REALISM = ("off", "on")
 
@@ -91,7 +92,17 @@ def build_spec(kind: str, stage: str, realism: str, seed: int, short: bool = Fal
     from lps_gui.core.truth.stage_errors import Vibration
 
     errors = planar_errors(stage) if kind == "planar" else line_errors(stage)
-    if kind in ("line-one", "line-both", "compensated"):
+    if kind == "paper-line":
+        from lps_gui.core.truth.simulate import paper_rig_spec, paper_stage_errors
+        from lps_gui.core.truth.stage_errors import ErrorProfile
+
+        paper = paper_stage_errors()
+        if stage == "flat":
+            none = ErrorProfile()
+            paper = replace(paper, straightness_um=(none, none), roll_urad=none, pitch_urad=none, yaw_urad=none)
+        plan = Plan(start_mm=0.0, stop_mm=98.0, step_mm=7.0, directions="both", runs=1)
+        spec = paper_rig_spec(seed=seed, errors=paper, plan=plan)
+    elif kind in ("line-one", "line-both", "compensated"):
         views = 8 if short else 12
         spec = small_spec(seed=seed, views=views, directions="+" if kind == "line-one" else "both",
                           runs=1 if short else 2, errors=errors)
@@ -129,7 +140,7 @@ def capture(kind: str, spec: Any, folder: Path, intrinsics: Any) -> Path:
     from lps_gui.pipeline.demos.targets import ROW_ENVIRONMENT
     from lps_gui.sim.images import simulate_image_session
 
-    if kind in ("line-one", "line-both", "compensated", "planar"):
+    if kind in ("line-one", "line-both", "paper-line", "compensated", "planar"):
         session = capture_step(folder, spec, intrinsics, lambda *a: None, None)[0]
     else:
         session = simulate_image_session(spec, folder, intrinsics=intrinsics, workers=1)
@@ -192,10 +203,15 @@ def pool(sessions: list[dict[str, Any]]) -> dict[str, list[dict[str, Any]]]:
         groups.setdefault((s["kind"], s["stage"], s["realism"]), []).append(s)
     figures, findings = [], []
     for (kind, stage, realism), rows in sorted(groups.items()):
-        z = [r["position_z_ms"] for r in rows if r["position_z_ms"] is not None]
-        if z:
-            figures.append({"kind": kind, "stage": stage, "realism": realism, "figure": "per-stop position", "n": len(z),
-                            "coverage": None, "mean_z2": float(np.mean(z)), "worst": float(np.max(z))})
+        per_point = {"per-stop position": [r.get("position_z_ms") for r in rows],
+                     "target poses": [r.get("targets_z_ms") for r in rows],
+                     **{f"per-stop straightness v{j + 1}": [(r.get("straightness_z_ms") or [None, None])[j] for r in rows]
+                        for j in (0, 1)}}
+        for name, values in per_point.items():  # each session's mean (error/sigma)^2, averaged over the sessions
+            z = [v for v in values if v is not None]
+            if z:
+                figures.append({"kind": kind, "stage": stage, "realism": realism, "figure": name, "n": len(z),
+                                "coverage": None, "mean_z2": float(np.mean(z)), "worst": float(np.max(z))})
         by_fig: dict[str, list[dict[str, Any]]] = {}
         for r in rows:
             for c in r["figures"]:

@@ -57,18 +57,21 @@ REALISM = ("off", "on")
 # ----------------------------------------------------------------------------- the simulated experiments
 
 
-def line_errors(stage: str) -> Any:
-    """One axis: the small rig's positioning errors; ``motions`` adds straightness and the three angles."""
+def line_errors(stage: str, travel_mm: float = 22.0) -> Any:
+    """One axis: the small rig's positioning errors; ``motions`` adds straightness and the three angles, each
+    profile the same size over any travel (a 9.7 um sag, 5 um waves; roll 2000, pitch 1320, yaw 400 urad: what
+    the small camera resolves over 22 mm)."""
     from lps_gui.core.truth.stage_errors import ErrorProfile, StageErrorModel
 
     flat = StageErrorModel(scale_ppm=100.0, periodic_um=5.0, pitch_mm=8.0, backlash_um=4.0, repeatability_um=1.0)
     if stage == "flat":
         return flat
-    return replace(flat, straightness_um=(ErrorProfile(poly=(0.0, 0.0, -20000.0)),
-                                          ErrorProfile(amplitude=5.0, period_mm=30.0)),
-                   roll_urad=ErrorProfile(amplitude=2000.0, period_mm=40.0),
-                   pitch_urad=ErrorProfile(poly=(0.0, 60000.0)),
-                   yaw_urad=ErrorProfile(amplitude=400.0, period_mm=30.0, phase_rad=0.5))
+    m = travel_mm / 1000.0
+    return replace(flat, straightness_um=(ErrorProfile(poly=(0.0, 0.0, -9.68 / m**2)),
+                                          ErrorProfile(amplitude=5.0, period_mm=30.0 / 22.0 * travel_mm)),
+                   roll_urad=ErrorProfile(amplitude=2000.0, period_mm=40.0 / 22.0 * travel_mm),
+                   pitch_urad=ErrorProfile(poly=(0.0, 1320.0 / m)),
+                   yaw_urad=ErrorProfile(amplitude=400.0, period_mm=30.0 / 22.0 * travel_mm, phase_rad=0.5))
 
 
 def planar_errors(stage: str) -> Any:
@@ -91,7 +94,8 @@ def build_spec(kind: str, stage: str, realism: str, seed: int, short: bool = Fal
     from lps_gui.core.truth.simulate import small_spec
     from lps_gui.core.truth.stage_errors import Vibration
 
-    errors = planar_errors(stage) if kind == "planar" else line_errors(stage)
+    travel = {"row": 340.0, "two-depth": 300.0}.get(kind, 22.0)
+    errors = planar_errors(stage) if kind == "planar" else line_errors(stage, travel)
     if kind == "paper-line":
         from lps_gui.core.truth.simulate import paper_rig_spec, paper_stage_errors
         from lps_gui.core.truth.stage_errors import ErrorProfile

@@ -28,5 +28,5 @@ def test_the_short_campaign_scores_a_rendered_session_with_realism_on(tmp_path):
     pooled = {(f["figure"]) for f in doc["figures"]}
     assert "per-stop position" in pooled and "E" in pooled
     text = md.read_text()
-    assert "coverage of U (k=2)" in text and "| line-both | on | E | 1 |" in text
+    assert "coverage of U (k=2)" in text and "| line-both | flat | on | E | 1 |" in text
     assert not list((tmp_path / "work").iterdir())  # sessions cleared after scoring

@@ -17,6 +17,7 @@ few vectorized passes over float32 arrays.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import cv2
 import numpy as np
@@ -34,36 +35,52 @@ class Lighting:
     background: float = 90.0  # whatever is behind the board
     vignetting: float = 0.0  # relative fall-off at the image corners (0 = none)
     blur_px: float = 1.2  # Gaussian optics + defocus sigma (0 = none); real lenses are never sharper than ~1 px
+    blur_edge_px: float = 0.0  # > blur_px: the blur grows (as r^2) to this sigma at the image corners (realism)
     texture: float = 0.0  # relative amplitude of the paper texture (0 = none)
     shot_gain: float = 0.0  # shot-noise variance per grey level (0 = none)
     antialias: bool = True  # False: point-sample each pixel centre (for comparison only: biased)
 
 
-def _undistorted_rays(intrinsics: CameraIntrinsics) -> tuple[np.ndarray, ...]:
+def _undistorted_rays(intrinsics: CameraIntrinsics, lens: Any = None) -> tuple[np.ndarray, ...]:
     """Normalized coordinates (x', y') of every pixel centre and d(x', y') / d(u, v).
 
     cv2.undistortPoints gives a start; three Newton steps with the analytic
     Jacobian of :func:`project` make the rays exact to ~1e-9 px even where
-    the distortion is strong.
+    the distortion is strong. ``lens`` (a :class:`lps_gui.core.truth.realism.LensMisfit`):
+    the true lens has terms beyond the 5-coefficient model; cv2's 12-coefficient
+    undistortion starts, four Newton steps on ``lens.distort`` (Jacobian by
+    central differences, 1e-7 in x') make the rays exact to ~1e-6 px.
     """
     w, h = intrinsics.image_size
     u, v = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
     uv = np.stack([u.ravel(), v.ravel()], axis=-1)  # shape (H*W, 2)
     crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 30, 1e-12)
-    xy = cv2.undistortPoints(
-        uv.reshape(-1, 1, 2), intrinsics.camera_matrix, intrinsics.cv_dist, criteria=crit
-    ).reshape(-1, 2)
-    xcam = np.empty((xy.shape[0], 3))
-    for _ in range(3):
-        xcam[:, :2], xcam[:, 2] = xy, 1.0
-        proj = project(xcam, intrinsics, want_jacobian=True)
-        J = proj.d_uv_d_xcam[:, :, :2]  # shape (P, 2, 2): d uv / d (x', y')
-        xy = xy - np.linalg.solve(J, (proj.uv - uv)[..., None])[..., 0]
-    xcam[:, :2], xcam[:, 2] = xy, 1.0
-    J = project(xcam, intrinsics, want_jacobian=True).d_uv_d_xcam[:, :, :2]
-    Jinv = np.linalg.inv(J)  # shape (P, 2, 2): d (x', y') / d uv
+    dist = intrinsics.cv_dist if lens is None else lens.opencv_dist(intrinsics)
+    xy = cv2.undistortPoints(uv.reshape(-1, 1, 2), intrinsics.camera_matrix, dist, criteria=crit).reshape(-1, 2)
+    step = _brown_step if lens is None else _lens_step(lens)
+    for _ in range(3 if lens is None else 4):
+        at, J = step(xy, intrinsics)
+        xy = xy - np.linalg.solve(J, (at - uv)[..., None])[..., 0]
+    Jinv = np.linalg.inv(step(xy, intrinsics)[1])  # shape (P, 2, 2): d (x', y') / d uv
     f32 = lambda a: np.ascontiguousarray(a.reshape(h, w), dtype=np.float32)  # noqa: E731
     return f32(xy[:, 0]), f32(xy[:, 1]), f32(Jinv[:, 0, 0]), f32(Jinv[:, 0, 1]), f32(Jinv[:, 1, 0]), f32(Jinv[:, 1, 1])
+
+
+def _brown_step(xy: np.ndarray, intrinsics: CameraIntrinsics) -> tuple[np.ndarray, np.ndarray]:
+    """Pixels of normalized points (P, 2) and d uv / d (x', y') (P, 2, 2) through the intrinsics' own model (all its coefficients)."""
+    proj = project(np.c_[xy, np.ones(len(xy))], intrinsics, want_jacobian=True)
+    return proj.uv, proj.d_uv_d_xcam[:, :, :2]
+
+
+def _lens_step(lens: Any) -> Any:
+    """:func:`_brown_step` through a lens with terms beyond the model (Jacobian by central differences)."""
+    eps = 1e-7
+
+    def step(xy: np.ndarray, intrinsics: CameraIntrinsics) -> tuple[np.ndarray, np.ndarray]:
+        cols = [(lens.distort(xy + d, intrinsics) - lens.distort(xy - d, intrinsics)) / (2 * eps)
+                for d in (np.array([eps, 0.0]), np.array([0.0, eps]))]
+        return lens.distort(xy, intrinsics), np.stack(cols, axis=-1)
+    return step
 
 
 def _triangle(x: np.ndarray) -> np.ndarray:
@@ -161,6 +178,7 @@ class BoardRenderer:
     margin_squares : white paper around the checker area, in squares.
     lighting : grey levels, blur, vignetting, texture, shot noise.
     noise_grey : Gaussian read noise sigma in grey levels (0 = none).
+    lens : a :class:`lps_gui.core.truth.realism.LensMisfit`: the true lens's terms beyond ``intrinsics`` (None: none).
     """
 
     def __init__(
@@ -172,13 +190,14 @@ class BoardRenderer:
         noise_grey: float = 0.0,
         texture_seed: int = 1,
         rays: tuple[np.ndarray, ...] | None = None,
+        lens: Any = None,
     ) -> None:
         self.board = board
         self.intrinsics = intrinsics
         self.margin_squares = float(margin_squares)
         self.lighting = lighting or Lighting()
         self.noise_grey = float(noise_grey)
-        self.rays = rays if rays is not None else _undistorted_rays(intrinsics)  # shared by renderers of one camera
+        self.rays = rays if rays is not None else _undistorted_rays(intrinsics, lens)  # shared by renderers of one camera
         self._x, self._y, self._j00, self._j01, self._j10, self._j11 = self.rays
         w, h = intrinsics.image_size
         self._gain = None
@@ -187,6 +206,10 @@ class BoardRenderer:
                 (np.arange(h) - intrinsics.cy) / (0.5 * h)
             )[:, None] ** 2
             self._gain = (1.0 - self.lighting.vignetting * r2 / 2.0).astype(np.float32)
+        self._edge_weight = None
+        if self.lighting.blur_edge_px > self.lighting.blur_px:  # 0 at the principal point, 1 at the farthest corner
+            r2 = ((np.arange(w) - intrinsics.cx) ** 2)[None, :] + ((np.arange(h) - intrinsics.cy) ** 2)[:, None]
+            self._edge_weight = (r2 / r2.max()).astype(np.float32)
         self._texture = None
         if self.lighting.texture:
             rng = np.random.default_rng(texture_seed)
@@ -308,7 +331,11 @@ class BoardRenderer:
 
     def optics(self, img: np.ndarray, vignette: bool = True) -> np.ndarray:
         """Blur and vignetting of the lens, applied to the whole scene's irradiance."""
-        if self.lighting.blur_px > 0:
+        if self._edge_weight is not None:  # two blurs blended by r^2: symmetric about every corner point
+            sharp = cv2.GaussianBlur(img, (0, 0), self.lighting.blur_px) if self.lighting.blur_px > 0 else img
+            soft = cv2.GaussianBlur(img, (0, 0), self.lighting.blur_edge_px)
+            img = sharp + self._edge_weight * (soft - sharp)
+        elif self.lighting.blur_px > 0:
             img = cv2.GaussianBlur(img, (0, 0), self.lighting.blur_px)
         if vignette and self._gain is not None:
             img *= self._gain

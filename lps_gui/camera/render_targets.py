@@ -10,6 +10,8 @@ the whole scene.
 """
 from __future__ import annotations
 
+from typing import Any
+
 import cv2
 import numpy as np
 
@@ -36,11 +38,11 @@ class TargetsRenderer:
     """8-bit grey images of a :class:`TargetLayout` seen through ``intrinsics`` from camera poses (R, t) of the world."""
 
     def __init__(self, layout: TargetLayout, intrinsics: CameraIntrinsics, lighting: Lighting | None = None,
-                 noise_grey: float = 0.0, margin_squares: float = 0.5) -> None:
+                 noise_grey: float = 0.0, margin_squares: float = 0.5, lens: Any = None) -> None:
         self.layout = layout
         self.intrinsics = intrinsics
         self.lighting = lighting or Lighting()
-        first = BoardRenderer(layout.targets[0].board, intrinsics, margin_squares, self.lighting, noise_grey)
+        first = BoardRenderer(layout.targets[0].board, intrinsics, margin_squares, self.lighting, noise_grey, lens=lens)
         self._renderers = [first] + [BoardRenderer(t.board, intrinsics, margin_squares, self.lighting, noise_grey,
                                                    rays=first.rays) for t in layout.targets[1:]]
         self.margin_squares = margin_squares

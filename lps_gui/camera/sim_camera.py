@@ -36,6 +36,8 @@ class SimulatedCamera(Camera):
         (the rig's board frame is then the first target's, the world frame).
     render_options : ``margin_squares``, ``exposure_s`` and any
         :class:`Lighting` field (``blur_px``, ``vignetting``, ``texture``...).
+    lens, printed : the simulator's realism (:mod:`lps_gui.core.truth.realism`): the true lens's terms beyond
+        the rig's intrinsics, and the board (or layout) as printed; None: the rig's own.
     """
 
     def __init__(
@@ -46,10 +48,14 @@ class SimulatedCamera(Camera):
         seed: int = 0,
         clock: Clock | None = None,
         layout: Any = None,
+        lens: Any = None,
+        printed: Any = None,
         **render_options: Any,
     ) -> None:
         self.rig = rig
         self.layout = layout
+        self.lens = lens
+        self.printed = printed
         self.pose_source = pose_source
         self.noise_grey = float(noise_grey)
         self.seed = int(seed)
@@ -72,11 +78,12 @@ class SimulatedCamera(Camera):
         if self._renderer is None and self.layout is not None:  # every target of the row in one scene
             from lps_gui.camera.render_targets import TargetsRenderer
 
-            self._renderer = TargetsRenderer(self.layout, self.rig.intrinsics, self.lighting, self.noise_grey,
-                                             self.margin_squares)
+            self._renderer = TargetsRenderer(self.printed or self.layout, self.rig.intrinsics, self.lighting,
+                                             self.noise_grey, self.margin_squares, lens=self.lens)
         if self._renderer is None:  # the per-pixel rays take a moment: build once
             self._renderer = BoardRenderer(
-                self.rig.board, self.rig.intrinsics, self.margin_squares, self.lighting, self.noise_grey
+                self.printed or self.rig.board, self.rig.intrinsics, self.margin_squares, self.lighting,
+                self.noise_grey, lens=self.lens,
             )
         self._open = True
 

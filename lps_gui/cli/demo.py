@@ -21,6 +21,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--lens-misfit", type=nonnegative_finite, default=0.0, metavar="PX",
                         help="a true lens with rational and thin-prism terms that the 5-coefficient model misses by PX "
                              "RMS over the image (real lenses: 0.03-0.3 px); default 0")
+    parser.add_argument("--realism", choices=("off", "on", "strong"), default="off",
+                        help="the simulator's realism (docs/validation.md): a true lens with rational and thin-prism "
+                             "terms (on ~0.04 px, strong ~0.2 px beyond the 5-coefficient fit), prints off scale and "
+                             "bowed, blur and noise varying over the image; default off")
     row = parser.add_mutually_exclusive_group()
     row.add_argument("--travel", type=positive_finite, metavar="MM",
                      help="the whole travel against a row of targets (docs/targets.md): the paper's X axis is 1524")
@@ -39,18 +43,22 @@ def run(args: argparse.Namespace) -> int:
     t0 = time.monotonic()
     if args.planar and (args.travel or args.preset):
         raise InputError("--planar with --travel/--preset: a row of targets is one axis; drop --planar")
+    if args.lens_misfit and args.realism != "off":
+        raise InputError("--lens-misfit with --realism: each brings its own true lens; give one of them")
     if args.test:
         if args.planar or args.travel or args.preset:
             raise InputError("--test: the ASME B5.64 tests are single-axis tests of one board; drop --planar/--travel/--preset")
         if args.lens_misfit:
             raise InputError("--test with --lens-misfit: the ASME B5.64 demo keeps its own lens; drop --lens-misfit")
+        if args.realism != "off":
+            raise InputError("--test with --realism: the ASME demos simulate corners, not images; drop --realism")
         from lps_gui.pipeline.demos.asme import run_asme_demo
 
         res = run_asme_demo(args.out, args.test, seed=args.seed, say=lambda line: print(line, flush=True))
     else:
         res = run_demo(args.out, quick=args.quick, bar=ProgressBar, say=lambda line: print(line, flush=True), seed=args.seed,
                        planar=args.planar, travel_mm=args.travel, preset=args.preset,
-                       lens_misfit_px=args.lens_misfit)
+                       lens_misfit_px=args.lens_misfit, realism=args.realism)
     print()
     if res.report_pdf is None:
         print(f"demo stopped before the report; files so far in {res.out_dir}")

@@ -107,6 +107,7 @@ def _median(values: list[float]) -> float:
 def format_planar_summary(results: Results) -> str:
     """The first lines of a planar session: squareness, per-axis scale, straightness, truth."""
     from lps_gui.core.metrology.resolution import not_resolved_text
+    from lps_gui.report.pages.summary import truth_check_lines, view_flags
 
     pl = results.figures.planar
     lines = [_fit_line(results, " (planar X,Y)")]
@@ -135,18 +136,20 @@ def format_planar_summary(results: Results) -> str:
             oop = f"; out of plane {span_text(a.out_of_plane)}" if a.out_of_plane else ""
             lines.append(f"{axis}: {a.lines} line(s), straightness along {other} {straight}{oop}{extra}")
     lines += [f"outlier view {f.index}: {f.message}" if f.index is not None else f"warning: {f.message}"
-              for f in results.flags]
+              for f in view_flags(results)]
     tc = results.truth_comparison
     if tc and tc.per_coordinate_rms_error_um:
         ex, ey = tc.per_coordinate_rms_error_um
         lines.append(f"against truth ({tc.reference}): RMS error x {_g(ex, '.2f')} µm, y {_g(ey, '.2f')} µm, mean "
                      f"reported sigma {_g(tc.mean_sigma_um, '.2f')} µm; squareness error "
                      f"{_g(tc.squareness_error_urad, '+.1f')} µrad ({_g(tc.squareness_z, '+.1f')} sigma)")
-    return "\n".join(lines)
+    return "\n".join(lines + truth_check_lines(results))
 
 
 def format_summary(results: Results) -> str:
     """A few lines a person reads first: what was measured and how well."""
+    from lps_gui.report.pages.summary import truth_check_lines, view_flags
+
     if results.planar:
         return format_planar_summary(results)
     single, iso = results.figures.single_run, results.figures.iso230_2
@@ -168,7 +171,7 @@ def format_summary(results: Results) -> str:
 
         lines += [f"ASME B5.64: {line}" for line in test_lines(results)]
     lines += [f"outlier view {f.index}: {f.message}" if f.index is not None else f"warning: {f.message}"
-              for f in results.flags]
+              for f in view_flags(results)]
     tc = results.truth_comparison
     if tc and tc.position_rms_error_um is not None:
         lines.append(
@@ -180,4 +183,4 @@ def format_summary(results: Results) -> str:
             f"against truth at the board plane (what a constant-orientation model sees; Abbe term RMS {_g(tc.abbe_rms_um, '.2f')} µm): "
             f"RMS error {_g(tc.board_plane_rms_error_um, '.2f')} µm, mean (error/sigma)^2 {_g(tc.board_plane_z_mean_square, '.2f')}"
         )
-    return "\n".join(lines)
+    return "\n".join(lines + truth_check_lines(results))

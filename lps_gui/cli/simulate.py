@@ -31,6 +31,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--rig", help="rig description JSON (board, intrinsics, camera pose, stage errors, plan, noise, outliers)")
     p.add_argument("--write-rig", action="store_true", help="write the preset's rig description to OUT (a .json file) and stop")
     p.add_argument("--seed", type=nonnegative_int, default=0)
+    p.add_argument("--realism", choices=("off", "on", "strong"), default="off",
+                   help="rendered sessions and intrinsics sets: a true lens with rational and thin-prism terms (on "
+                        "~0.04 px, strong ~0.2 px beyond the 5-coefficient fit), prints off scale and bowed, blur and "
+                        "noise varying over the image (docs/validation.md); default off")
     p.add_argument("--noise-px", type=nonnegative_finite, help="corner noise sigma, px (points mode)")
     p.add_argument("--views", type=int_range(3, 10000), default=20, help="views of an intrinsics set (default 20)")
     p.add_argument("--directions", choices=("+", "-", "both"), help="override the plan's directions")
@@ -87,6 +91,13 @@ def build_spec(args: argparse.Namespace):
         overrides["seed"] = args.seed
     if args.noise_px is not None:
         overrides["noise_px"] = args.noise_px
+    if getattr(args, "realism", "off") != "off":
+        from lps_gui.core.truth.realism import realism_named
+        from lps_gui.errors import InputError
+
+        if args.points:
+            raise InputError("simulate --realism: the realism is of rendered images (lens, prints, blur); drop --points")
+        overrides["realism"] = realism_named(args.realism)
     spec = replace(spec, **overrides)
     _check_noise(spec, "--noise-px" if args.noise_px is not None else (args.rig or "preset"))
     from lps_gui.cli.capture.asme_test import simulated_stage
@@ -159,8 +170,10 @@ def run(args: argparse.Namespace) -> int:
         from lps_gui.sim.images import simulate_intrinsics_set
 
         check_new_folder(out, "simulate --intrinsics-set")
+        real = spec.camera_realism()  # the same true lens and print as a rendered session of this seed
         paths = simulate_intrinsics_set(out, spec.rig.board, spec.rig.intrinsics, n_views=args.views, seed=args.seed,
-                                        progress=ProgressBar("render"))
+                                        progress=ProgressBar("render"), lens=real.get("lens"),
+                                        printed=real.get("printed") if spec.layout is None else None)
         print(f"wrote {len(paths)} calibration views to {out}")
         return 0
     if args.points:

@@ -45,6 +45,7 @@ from lps_gui.pipeline.results.uncertainty import add_uncertainty, session_board
 from lps_gui.pipeline.session_checks import corners_of_records, session_inputs
 from lps_gui.pipeline.target_session import add_targets_section, target_observations
 from lps_gui.sim.truth import session_truth, truth_comparison
+from lps_gui.sim.truth_figures import add_self_check
 
 HYBRID_KEYS = {"grid_window_mm": "window_mm", "grid_resolution_mm": "resolution_mm", "grid_points": "grid_points",
                "threshold_px": "threshold_rms_px", "max_rounds": "max_rounds"}
@@ -189,7 +190,9 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate, intrins
         add_stitch_ties(results, obs)  # a stitched session's placements are tied by their repeated stops
     add_error_motions(results, session, obs, est)  # SPEC 14: the six error motions per axis, where poses allow
     results = add_uncertainty(results, session)  # environment, GUM budget, U (k = 2) per figure
-    return add_asme_results(results, session, obs, est) if obs.D == 1 else results  # ASME B5.64 names, TUR, tests
+    if obs.D == 1:
+        results = add_asme_results(results, session, obs, est)  # ASME B5.64 names, TUR, tests
+    return add_self_check(results)  # a simulated session: does its truth contradict a figure or a finding?
 
 
 def line_results(session: Session, obs: Observations, est: LpsEstimate, intrinsics_source: str) -> dict[str, Any]:

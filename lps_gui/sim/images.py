@@ -13,7 +13,7 @@ import logging
 import os
 import time
 from concurrent.futures import Future
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any, Iterator, Sequence
 
@@ -45,18 +45,19 @@ def _scene_key(scene: Scene) -> Any:
     return (scene.targets, scene.Q.tobytes(), scene.p.tobytes())
 
 
-def _renderer(board: Scene, intrinsics: CameraIntrinsics, lighting: Lighting, noise_grey: float) -> Any:
+def _renderer(board: Scene, intrinsics: CameraIntrinsics, lighting: Lighting, noise_grey: float, lens: Any = None
+              ) -> Any:
     """One renderer per process and camera: the per-pixel rays take seconds to build."""
     key = (_scene_key(board), intrinsics.image_size, intrinsics.vector().tobytes(), intrinsics.higher.tobytes(), lighting,
-           noise_grey)
+           noise_grey, lens)
     if key not in _RENDERERS:
         _RENDERERS.clear()
         if isinstance(board, Board):
-            _RENDERERS[key] = BoardRenderer(board, intrinsics, lighting=lighting, noise_grey=noise_grey)
+            _RENDERERS[key] = BoardRenderer(board, intrinsics, lighting=lighting, noise_grey=noise_grey, lens=lens)
         else:
             from lps_gui.camera.render_targets import TargetsRenderer
 
-            _RENDERERS[key] = TargetsRenderer(board, intrinsics, lighting=lighting, noise_grey=noise_grey)
+            _RENDERERS[key] = TargetsRenderer(board, intrinsics, lighting=lighting, noise_grey=noise_grey, lens=lens)
     return _RENDERERS[key]
 
 
@@ -67,12 +68,14 @@ def render_encoded(
     noise_grey: float,
     poses: Sequence[tuple[np.ndarray, np.ndarray, int]],
     image_ext: str,
+    lens: Any = None,
 ) -> list[bytes]:
-    """Render and encode frames; each pose carries its own noise seed so any split gives the same images."""
+    """Render and encode frames; each pose carries its own noise seed so any split gives the same images.
+    ``lens``: the true lens's terms beyond ``intrinsics`` (the simulator's realism)."""
     import cv2
 
     cv2.setNumThreads(1)
-    r = _renderer(board, intrinsics, lighting, noise_grey)
+    r = _renderer(board, intrinsics, lighting, noise_grey, lens)
     params = [cv2.IMWRITE_PNG_COMPRESSION, 1] if image_ext.lower() == ".png" else []
     out = []
     for R, t, seed in poses:
@@ -93,12 +96,13 @@ def _render_stream(
     image_ext: str,
     workers: int,
     chunk: int = 8,
+    lens: Any = None,
 ) -> Iterator[bytes]:
     """Encoded frames in order; at most ``2 * workers`` chunks in flight."""
     chunks = [poses[i : i + chunk] for i in range(0, len(poses), chunk)]
     if workers <= 1 or len(chunks) <= 1:
         for c in chunks:
-            yield from render_encoded(board, intrinsics, lighting, noise_grey, c, image_ext)
+            yield from render_encoded(board, intrinsics, lighting, noise_grey, c, image_ext, lens)
         return
     from concurrent.futures.process import BrokenProcessPool
 
@@ -110,7 +114,8 @@ def _render_stream(
             try:
                 while queue or next_chunk < len(chunks):
                     while next_chunk < len(chunks) and len(queue) < 2 * workers:
-                        queue.append(pool.submit(render_encoded, board, intrinsics, lighting, noise_grey, chunks[next_chunk], image_ext))
+                        queue.append(pool.submit(render_encoded, board, intrinsics, lighting, noise_grey, chunks[next_chunk], image_ext,
+                                                 lens))
                         next_chunk += 1
                     frames = queue.pop(0).result()
                     next_out += 1
@@ -121,7 +126,7 @@ def _render_stream(
     except BrokenProcessPool:  # e.g. a calling script without the __main__ guard: render here
         logging.getLogger(__name__).warning("worker processes failed to start; rendering in this process")
         for c in chunks[next_out:]:
-            yield from render_encoded(board, intrinsics, lighting, noise_grey, c, image_ext)
+            yield from render_encoded(board, intrinsics, lighting, noise_grey, c, image_ext, lens)
 
 
 def simulate_image_session(
@@ -148,6 +153,9 @@ def simulate_image_session(
     """
     out = Path(out)
     lighting = lighting or Lighting()
+    realism = spec.camera_realism()  # the simulator's realism switches (issue 35): {} when off
+    lens, scene = realism.pop("lens", None), realism.pop("printed", None)
+    lighting = replace(lighting, **realism)
     rng = np.random.default_rng(spec.seed)
     stops, R, t, truth = true_views(spec, rng)
     K = len(stops)
@@ -167,8 +175,9 @@ def simulate_image_session(
     workers = max(1, int(workers or os.cpu_count() or 1))
     progress(0, K, "rendering")
     t0 = time.time()
-    scene = rig.board if spec.layout is None else spec.layout
-    frames = _render_stream(scene, rig.intrinsics, lighting, noise_grey, poses, image_ext, workers if K > 16 else 1)
+    scene = scene or (rig.board if spec.layout is None else spec.layout)
+    frames = _render_stream(scene, rig.intrinsics, lighting, noise_grey, poses, image_ext, workers if K > 16 else 1,
+                            lens=lens)
     for stop, data in zip(stops, frames):
         if cancel is not None:
             cancel.check("image simulation")
@@ -236,13 +245,16 @@ def simulate_intrinsics_set(
     noise_grey: float = 2.0,
     lighting: Lighting | None = None,
     image_ext: str = ".png",
+    lens: Any = None,
+    printed: Board | None = None,
 ) -> list[Path]:
     """Render ``n_views`` varied-pose images for intrinsics calibration into ``out``.
 
     Tilts up to 45 degrees in every direction, the board filling 45-95 % of
     the frame and placed so corners reach the image edges. Writes the images
     (view_000.png ...), board.json, intrinsics_truth.json and poses_truth.json;
-    returns the image paths.
+    returns the image paths. ``lens`` and ``printed`` (the simulator's realism): the true lens's terms beyond
+    ``intrinsics`` and the board as printed (board.json keeps the nominal ``board``).
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -258,7 +270,8 @@ def simulate_intrinsics_set(
     for k, (R, t) in enumerate(poses):
         if cancel is not None:
             cancel.check("intrinsics set simulation")
-        data = render_encoded(board, intrinsics, lighting, noise_grey, [(R, t, seed * 100003 + k)], image_ext)[0]
+        data = render_encoded(printed or board, intrinsics, lighting, noise_grey, [(R, t, seed * 100003 + k)],
+                              image_ext, lens)[0]
         path = out / f"view_{k:03d}{image_ext}"
         write_bytes_atomic(path, data)
         paths.append(path)

@@ -27,6 +27,7 @@ from lps_gui.camera.sim_camera import SimulatedCamera
 from lps_gui.core.clock import Clock, SimClock
 from lps_gui.core.geometry.camera_model import project_board
 from lps_gui.core.planning.plan import Plan
+from lps_gui.core.truth.realism import Realism
 from lps_gui.core.truth.rig import Rig
 from lps_gui.core.truth.simulate import SimulationSpec, layout_truth, preset
 from lps_gui.core.truth.stage_errors import PlanarErrorModel, PlanarTruePose, StageErrorModel
@@ -136,7 +137,7 @@ def make_simulated_rig(
                          **stage_opts)
         pose_source = stage.true_pose
     camera = RigCamera(spec.rig, pose_source=pose_source, noise_grey=noise_grey, seed=spec.seed, clock=clock,
-                       layout=spec.layout, **camera_opts)
+                       layout=spec.layout, **{**spec.camera_realism(), **camera_opts})
     return stage, camera
 
 
@@ -171,6 +172,7 @@ def rig_truth(spec: SimulationSpec, camera: SimulatedCamera) -> dict[str, Any]:
             "board": board_to_dict(spec.rig.board), "intrinsics": intrinsics_to_dict(spec.rig.intrinsics),
             "camera": {"noise_grey": camera.noise_grey, "blur_px": camera.lighting.blur_px}, "per_capture": TRUTH_FILE,
             "noise_px": None, **({} if spec.layout is None else {"targets": layout_truth(spec.layout)}),
+            **spec.realism_truth(),
         }
     return {
         "simulated": True,
@@ -185,6 +187,7 @@ def rig_truth(spec: SimulationSpec, camera: SimulatedCamera) -> dict[str, Any]:
         "camera": {"noise_grey": camera.noise_grey, "blur_px": camera.lighting.blur_px},
         "per_capture": TRUTH_FILE,
         **({} if spec.layout is None else {"targets": layout_truth(spec.layout)}),
+        **spec.realism_truth(),
     }
 
 
@@ -206,9 +209,17 @@ def spec_from_truth(truth: dict[str, Any], plan: Plan, source: str = "session.js
                 axes_board=np.asarray(truth["u_board"], dtype=float),
                 errors=StageErrorModel.from_dict(truth["stage_errors"]),
             )
-        return SimulationSpec(str(truth.get("preset", "sim")), rig, plan, seed=int(truth.get("seed", 0)))
+        return SimulationSpec(str(truth.get("preset", "sim")), rig, plan, seed=int(truth.get("seed", 0)),
+                              realism=Realism.from_dict(_switches(truth.get("realism"))))
     except (KeyError, TypeError, ValueError) as exc:
         raise InputError(f"{source}: the simulated {what}'s truth is incomplete ({exc}); start a new session") from exc
+
+
+def _switches(realism: dict[str, Any] | None) -> dict[str, Any] | None:
+    """truth.realism without what it derives (the lens for this camera, the prints): the switches to rebuild it."""
+    if not realism:
+        return None
+    return {k: v for k, v in realism.items() if k not in ("lens", "printed")}
 
 
 def check_board_in_view(spec: SimulationSpec) -> None:

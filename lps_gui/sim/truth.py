@@ -528,7 +528,11 @@ def _plane_truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str
     true_figs = planar_figures(obs.target_mm, obs.approach, obs.run, obs.direction, true_dev, np.ones_like(true_dev),
                                ok, np.eye(2), np.zeros((4, 4)))  # the same per-line reduction as the estimate's
     for axis in ("X", "Y"):
-        out[f"straightness_{axis.lower()}_um"] = (true_figs.per_axis.get(axis) or {}).get("straightness_um_max")
+        true_axis = true_figs.per_axis.get(axis) or {}
+        out[f"straightness_{axis.lower()}_um"] = true_axis.get("straightness_um_max")
+        iso = ((true_axis.get("iso230_2") or {}).get("iso230_2")) or {}
+        if iso:  # the ISO 230-2 figures of the true deviations, by the estimate's per-line rule
+            out[f"iso230_2_{axis.lower()}"] = {k: _f(iso.get(k)) for k in ("A_um", "E_um", "R_um", "B_um", "M_um")}
     for k, row in enumerate(positions):
         row["truth_deviation_x_um"] = _f(true_dev[k, 0])
         row["truth_deviation_y_um"] = _f(true_dev[k, 1])

@@ -29,7 +29,6 @@ from lps_gui.core.truth.stage_errors import (
     PlanarTruePose,
     StageErrorModel,
     TruePose,
-    Vibration,
 )
 from lps_gui.errors import InputError
 
@@ -133,6 +132,7 @@ def true_views(spec: SimulationSpec, rng: np.random.Generator) -> tuple[list[Pla
         "noise_px": spec.noise_px,
         "seed": spec.seed,
     }
+    truth.update(spec.realism_truth())
     if spec.vibration is not None:
         truth["vibration"] = {**spec.vibration.to_dict(), "frame_interval_s": spec.frame_interval_s}
     if spec.layout is not None:

@@ -7,9 +7,12 @@ importing each other; :mod:`lps_gui.core.truth.simulate` re-exports it.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
+from lps_gui.core.geometry.board import Board
 from lps_gui.core.geometry.target_rig import TargetLayout
 from lps_gui.core.planning.plan import Plan
+from lps_gui.core.truth.realism import Realism, printed_rng
 from lps_gui.core.truth.rig import Rig
 from lps_gui.core.truth.stage_errors import Vibration
 
@@ -32,3 +35,28 @@ class SimulationSpec:
     vibration: Vibration | None = None  # the carriage rings after each move (ASME B5.64 settling test)
     frame_interval_s: float = 0.01  # time between the frames of a stop (the camera's exposure), s
     layout: TargetLayout | None = None  # a row or constellation of targets (SPEC 13); the rig's board is its first
+    realism: Realism | None = None  # lens misfit, prints off scale and bowed, blur and noise over the image (issue 35)
+
+    def printed(self) -> Board | TargetLayout:
+        """The board (or layout) as the camera sees it: as printed with realism on, else the nominal one."""
+        scene = self.rig.board if self.layout is None else self.layout
+        if self.realism is None:
+            return scene
+        rng = printed_rng(self.seed)
+        return self.realism.printed_board(scene, rng) if self.layout is None else self.realism.printed_layout(scene, rng)
+
+    def camera_realism(self) -> dict[str, Any]:
+        """What the simulated camera and renderers take for the realism: ``lens``, ``printed`` and Lighting fields."""
+        if self.realism is None:
+            return {}
+        return {"lens": self.realism.lens(self.rig.intrinsics), "printed": self.printed(), **self.realism.lighting()}
+
+    def realism_truth(self) -> dict[str, Any]:
+        """session.json ``truth.realism``: the switches, the true lens's extra terms and each print's scale and bow."""
+        if self.realism is None:
+            return {}
+        scene = self.printed()
+        boards = [scene] if self.layout is None else [t.board for t in scene.targets]
+        return {"realism": {**self.realism.to_dict(), "lens": self.realism.lens(self.rig.intrinsics).to_dict(),
+                            "printed": [{"square_mm": b.square_mm, "warp_mm": list(b.warp_mm or (0.0, 0.0))}
+                                        for b in boards]}}

@@ -15,7 +15,7 @@ from __future__ import annotations
 import logging
 import shutil
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable
 
@@ -24,6 +24,7 @@ import numpy as np
 from lps_gui.core.geometry.camera_model import CameraIntrinsics
 from lps_gui.core.planning.plan import Plan
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
+from lps_gui.core.truth.realism import printed_rng, realism_named
 from lps_gui.core.truth.simulate import SimulationSpec, paper_planar_spec, paper_rig_spec, small_planar_spec, small_spec
 from lps_gui.errors import InputError
 from lps_gui.io.intrinsics_file import write_intrinsics
@@ -98,6 +99,17 @@ def demo_spec(quick: bool, seed: int = 0, planar: bool = False) -> SimulationSpe
     return paper_rig_spec(seed=seed, errors=paper_stage_errors(), plan=plan)
 
 
+def declared_environment(spec: SimulationSpec, base: dict) -> dict:
+    """session.json ``environment``: ``base``, its board uncertainty at least the realism's print scale (a user
+    declares what the certificate says; the simulated prints are drawn from it)."""
+    env = dict(base)
+    if spec.realism is not None:
+        square = spec.rig.board.square_mm
+        env["square_mm_uncertainty_um"] = max(float(env.get("square_mm_uncertainty_um") or 0.0),
+                                              1e-3 * spec.realism.print_scale_ppm * square)
+    return env
+
+
 def prepare_out(out: Path) -> None:
     """Make ``out``; clear it only if an earlier demo made it; refuse to touch anything else."""
     out = Path(out)
@@ -122,6 +134,7 @@ def run_demo(
     travel_mm: float | None = None,
     preset: str | None = None,
     lens_misfit_px: float = 0.0,
+    realism: str = "off",
 ) -> DemoResult:
     """Run the demo into ``out``; every step reports through ``bar(label)`` and ``say``.
 
@@ -135,6 +148,7 @@ def run_demo(
     travel_mm, preset : the whole travel against a row of targets (SPEC 13, :mod:`lps_gui.pipeline.demos.targets`).
     lens_misfit_px : a true lens with rational and thin-prism terms that the 5-coefficient calibration misses by
         this RMS over the image (:mod:`lps_gui.core.truth.lens_misfit`); 0: the 5-coefficient lens.
+    realism : "off", "on" or "strong": the simulator's realism switches (:mod:`lps_gui.core.truth.realism`).
     """
     out = Path(out)
     row = travel_mm is not None or preset is not None
@@ -148,6 +162,7 @@ def run_demo(
         from lps_gui.core.truth.lens_misfit import with_lens_misfit
 
         spec = with_lens_misfit(spec, lens_misfit_px)
+    spec = replace(spec, realism=realism_named(realism))
     prepare_out(out)
     res = DemoResult(out)
 
@@ -171,7 +186,7 @@ def run_demo(
     res.session_dir = session.folder
     if not planar:
         session.meta["stage_spec"] = dict(PAPER_SPEC)
-        session.meta.setdefault("environment", dict(DEMO_ENVIRONMENT))
+        session.meta.setdefault("environment", declared_environment(spec, DEMO_ENVIRONMENT))
         session.meta.setdefault("identification", dict(DEMO_IDENTIFICATION))
         session.save_meta()
 
@@ -207,8 +222,13 @@ def calibrate_step(out: Path, spec: SimulationSpec, quick: bool, progress: Progr
     truth = spec.rig.intrinsics
     n_views = 10 if quick else 15
     folder = out / "intrinsics-set"
+    lens = printed = None
+    if spec.realism is not None:  # the same true lens; the session's board as printed, or a chessboard of its own
+        lens = spec.realism.lens(truth)
+        printed = (spec.printed() if spec.layout is None
+                   else spec.realism.printed_board(spec.rig.board, printed_rng(seed + 1)))
     paths = simulate_intrinsics_set(folder, spec.rig.board, truth, n_views=n_views, seed=seed + 1,
-                                    progress=_first_half(progress), cancel=cancel)
+                                    progress=_first_half(progress), cancel=cancel, lens=lens, printed=printed)
     cal = calibrate_images(paths, spec.rig.board, progress=_second_half(progress), cancel=cancel)
     write_intrinsics(out / "intrinsics.json", cal.intrinsics)
     fx_err = cal.intrinsics.fx - truth.fx

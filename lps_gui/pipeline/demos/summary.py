@@ -33,7 +33,7 @@ def _or_nan(x: float | None) -> float:
 
 def summary_lines(results: Results | dict[str, Any], spec: SimulationSpec) -> list[str]:
     """Five lines a newcomer reads first: what was measured, the stage figures, the verdict, the truth check."""
-    from lps_gui.report.pages.summary import extremes_rows, fmt
+    from lps_gui.report.pages.summary import extremes_rows, fmt, truth_check_lines
     from lps_gui.report.pages.verdict import verdicts
 
     results = as_results(results)
@@ -65,7 +65,7 @@ def summary_lines(results: Results | dict[str, Any], spec: SimulationSpec) -> li
         f"paper's spec (\u00b120 \u00b5m, \u00b15 \u00b5m, 38 \u00b5m): {verdict}"
         + (f"; U (k = 2) {fmt(U, 2)} \u00b5m over the travel" if U is not None else ""),
         truth_line,
-    ]
+    ] + truth_check_lines(results)
 
 
 def _v(x: Any, digits: int = 1) -> str:
@@ -112,4 +112,6 @@ def planar_summary_lines(results: Results | dict[str, Any]) -> list[str]:
                      f"mean (error/sigma)^2 {_s(tc.z_mean_square, 2)}")
     else:
         lines.append("error against truth: no truth")
-    return lines
+    from lps_gui.report.pages.summary import truth_check_lines
+
+    return lines + truth_check_lines(results)

@@ -104,7 +104,7 @@ def run_row_demo(out: Path, spec: SimulationSpec, res: Any, step: Callable[[str,
 
 def row_summary_lines(results: Results) -> list[str]:
     """What the row demo prints: the fit, the positioning figures, the targets, the truth beside them."""
-    from lps_gui.report.pages.summary import fmt
+    from lps_gui.report.pages.summary import fmt, truth_check_lines
 
     p, single, unc, tc = results.parameters, results.figures.single_run, results.uncertainty, results.truth_comparison
     sig = [v for r in results.positions if (v := r.number("sigma_um"))]
@@ -123,4 +123,4 @@ def row_summary_lines(results: Results) -> list[str]:
         lines.append(f"error against truth: position RMS {fmt(tc.position_rms_error_um)} \u00b5m, max "
                      f"{fmt(tc.position_max_abs_error_um)} \u00b5m, mean (error/sigma)^2 {fmt(tc.z_mean_square)}"
                      f"; target poses within {fmt(tc.targets.max_abs_z if tc.targets else None)} sigma of truth")
-    return lines
+    return lines + truth_check_lines(results)

@@ -190,6 +190,10 @@ def paint_planar_report(flow: Any, meta: dict[str, Any], results: Results, title
     results hold them.
     """
     flow.heading("XY positioning stage \u2014 planar measurement report", 15)
+    from lps_gui.report.pages.summary import truth_check_lines
+
+    for line in truth_check_lines(results):  # a simulated session whose truth contradicts the report says so first
+        flow.paragraph(line, size_pt=9.0, color="#c00000")
     spec = R.stage_spec(meta, results)
     axes = {axis: ar for axis in "XY" if (ar := axis_results(results, axis)) is not None}
     verdict_rows = [replace(v, name=f"{axis}: {v.name}") for axis, ar in axes.items() for v in verdicts(ar, spec)]

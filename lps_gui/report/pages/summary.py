@@ -289,6 +289,25 @@ def _with_u(results: Results, row: Row) -> Row:
     return replace(row, u_k2=unc.u_k2(u_key(row.key)))
 
 
+TRUTH_CHECK_KIND = "truth_check"  # results.json flag of a simulated session its truth contradicts (sim/truth_figures)
+
+
+def truth_check_lines(results: Results | dict[str, Any]) -> list[str]:
+    """Page 1's and the console's warning when a simulated session's truth contradicts its report (none else)."""
+    flags = [f for f in as_results(results).flags if f.kind == TRUTH_CHECK_KIND]
+    if not flags:
+        return []
+    tc = as_results(results).truth_comparison
+    problems = ((tc.get("self_check") or {}).get("problems") or []) if tc else []
+    return ["SIMULATED SESSION FAILS ITS TRUTH CHECK: the simulator's truth contradicts this report"] + [
+        f"  - {p}" for p in problems or [flags[0].message or ""]]
+
+
+def view_flags(results: Results) -> list[Any]:
+    """The flags of single views (outliers), without the session-level truth check."""
+    return [f for f in results.flags if f.kind != TRUTH_CHECK_KIND]
+
+
 def figure_notes(results: Results | dict[str, Any]) -> list[str]:
     """The caveats the figures carry (e.g. ISO 230-2 asks for 5 runs), each once."""
     figs = as_results(results).figures
@@ -415,7 +434,7 @@ def outlier_rows(results: Results | dict[str, Any]) -> list[dict[str, Any]]:
         if r.outlier:
             rows[r.index] = {"index": r.index, "file": r.file or "", "reason": r.outlier_reason or "flagged",
                              "rms_px": r.number("rms_px")}
-    for f in results.flags:
+    for f in view_flags(results):
         i = -1 if f.index is None else f.index
         pos = by_index.get(i)
         entry = rows.setdefault(i, {"index": i, "file": (pos and pos.file) or "", "reason": "",

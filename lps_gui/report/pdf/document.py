@@ -141,6 +141,8 @@ def _front_page(flow: Any, meta: dict[str, Any], results: Results, version: str)
     """Page 1: the verdict with U (k = 2), the deviation plot with the limit drawn, the identification."""
     spec = R.stage_spec(meta, results)
     flow.heading("Linear positioning stage \u2014 measurement report", 15)
+    for line in S.truth_check_lines(results):  # a simulated session whose truth contradicts the report says so first
+        flow.paragraph(line, size_pt=9.0, color="#c00000")
     R.verdict_section(flow, results, spec, [r for r in S.summary_rows(results) if r.key in R.FRONT_FIGURES])
     deviation = figure_by_key(figures_from_results(results, None), "deviation")
     deviation = replace(deviation, series=[s for s in deviation.series if not s.label.startswith("truth")])  # p. 1: measured only

@@ -1,0 +1,32 @@
+"""benchmarks/honesty.py's short form (issue 35): one rendered session with realism on, end to end, scored against
+the truth; the full campaign (10 seeds of every kind) is a benchmark, its table in docs/validation.md."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_the_short_campaign_scores_a_rendered_session_with_realism_on(tmp_path):
+    out = tmp_path / "honesty.json"
+    md = tmp_path / "honesty.md"
+    done = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "honesty.py"), "--short", "--out",
+                           str(tmp_path / "work"), "--json", str(out), "--md", str(md)],
+                          capture_output=True, text=True, timeout=200)
+    assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
+    doc = json.loads(out.read_text())
+    [s] = doc["sessions"]
+    assert (s["kind"], s["stage"], s["realism"], s["seed"]) == ("line-both", "flat", "on", 0)
+    assert s["rms_px"] > 0.03  # the lens misfit and the noise over the frame show in the residuals
+    figures = {c["figure"] for c in s["figures"]}
+    assert {"E", "M", "B", "scale", "max |deviation|"} <= figures, figures
+    assert {f["finding"] for f in s["findings"]} >= {"EAX", "EBX", "ECX", "straightness v1"}
+    assert s["position_z_ms"] is not None and s["self_check"] is not None
+    pooled = {(f["figure"]) for f in doc["figures"]}
+    assert "per-stop position" in pooled and "E" in pooled
+    text = md.read_text()
+    assert "coverage of U (k=2)" in text and "| line-both | flat | on | E | 1 |" in text
+    assert not list((tmp_path / "work").iterdir())  # sessions cleared after scoring

@@ -76,6 +76,8 @@ def test_the_simulated_camera_follows_a_grbl_stage_end_to_end(tmp_path, capsys):
     assert meta["stage"]["spec"] == f"grbl:{emu.path}" and meta["camera"]["spec"] == "sim"
     records = [json.loads(line) for line in (out / "captures.jsonl").read_text().splitlines()]
     assert [r["target_mm"] for r in records] == [0, 2, 4]
-    # the board rendered where GRBL reported the carriage: that is the truth recorded beside each frame
-    assert meta["truth"]["axis_mm"] == [r["reported_mm"] for r in records]
+    # the simulated rig goes where GRBL reported the carriage (sim/follow.py); its truth is that move through
+    # the rig's own stage errors (micrometres), recorded beside each frame
+    truth = meta["truth"]["axis_mm"]
+    assert len(truth) == 3 and max(abs(t - r["reported_mm"]) for t, r in zip(truth, records)) < 0.01
     assert lps_main(["detect", str(out), "--workers", "1"]) == 0

@@ -70,12 +70,16 @@ class MarlinFirmware:
     def busy(self) -> bool:
         return self._pending is not None or self.stage.next_event_s() is not None
 
-    def power_up(self) -> None:
+    def power_up(self, boot_race: bool = False) -> None:
+        """The start-up lines Marlin prints (``boot_race`` is GRBL's double banner: Marlin has none)."""
         for line in BANNER:
             self._send(line)
 
     def receive(self, b: int) -> None:
         self._rx.append(b)
+
+    def drain(self) -> None:
+        """Nothing per byte: Marlin's queue takes whole lines in its idle loop (:meth:`poll`)."""
 
     def poll(self) -> None:
         if self.halted:

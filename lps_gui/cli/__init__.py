@@ -14,20 +14,7 @@ import os
 import sys
 from typing import NoReturn
 
-from lps_gui.cli import (
-    compare,
-    compensate,
-    demo,
-    detect,
-    emulate,
-    emulate_grbl,
-    estimate,
-    export,
-    intrinsics,
-    make_targets,
-    report,
-    simulate,
-)
+from lps_gui.cli import compare, compensate, demo, detect, emulate, emulate_grbl, estimate, export, intrinsics, make_targets, report, simulate
 from lps_gui.cli.capture import command as capture
 from lps_gui.cli.plan_rig import command as plan_rig
 

@@ -25,18 +25,18 @@ from PySide6.QtWidgets import (
 
 from lps_gui import __version__
 from lps_gui.core.clock import Clock
-from lps_gui.gui.camera_panel import CameraPanel
-from lps_gui.gui.capture_panel import CapturePanel
-from lps_gui.gui.estimation_panel import EstimationPanel
+from lps_gui.gui.camera.intrinsics import IntrinsicsPanel
+from lps_gui.gui.camera.panel import CameraPanel
+from lps_gui.gui.capture.panel import CapturePanel
 from lps_gui.gui.fit import clamp_to_screen, guard_wheel, scrolled
-from lps_gui.gui.intrinsics_panel import IntrinsicsPanel
 from lps_gui.gui.job_runner import JobRunner
 from lps_gui.gui.log_panel import LogPanel
-from lps_gui.gui.results_panel import ResultsPanel
+from lps_gui.gui.results.estimation import EstimationPanel
+from lps_gui.gui.results.panel import ResultsPanel
 from lps_gui.gui.services import preload_backends
-from lps_gui.gui.sources import RIG_SOURCES
-from lps_gui.gui.stage_controller import StageController
-from lps_gui.gui.stage_panel import StagePanel
+from lps_gui.gui.stage.controller import StageController
+from lps_gui.gui.stage.panel import StagePanel
+from lps_gui.gui.stage.sources import RIG_SOURCES
 from lps_gui.gui.workers import Job, one_line, stop_all_jobs
 from lps_gui.hardware.stage import StageStatus
 from lps_gui.io.results.model import Results

@@ -52,7 +52,7 @@ def show_results(qtbot, panel, results, folder):
 
 
 def narrow_panel(qtbot, width=320, height=600):
-    from lps_gui.gui.results_panel import ResultsPanel
+    from lps_gui.gui.results.panel import ResultsPanel
 
     panel = ResultsPanel()
     qtbot.addWidget(panel)
@@ -220,8 +220,8 @@ def test_opening_a_folder_that_is_no_session_says_so(qtbot, window, tmp_path):
 
 def test_a_worker_that_outlives_its_panel_is_cancelled_and_silent(qtbot, row_results, monkeypatch):
     """The flaky teardown of test_targets_gui: "format positions" finished after the panel was deleted."""
-    import lps_gui.gui.planar_results as planar_results
-    from lps_gui.gui.results_panel import ResultsPanel
+    import lps_gui.gui.results.planar as planar_results
+    from lps_gui.gui.results.panel import ResultsPanel
     from lps_gui.gui.workers import running_jobs
 
     folder, results = row_results
@@ -272,7 +272,7 @@ def cancelled_detection(folder: Path) -> None:
 
 
 def test_a_cancelled_detection_is_finished_by_the_next_estimate(qtbot, image_session):
-    from lps_gui.gui.estimation_panel import corners_needed, detect_and_estimate
+    from lps_gui.gui.results.estimation import corners_needed, detect_and_estimate
 
     cancelled_detection(image_session)  # corners.vnl now newer than captures.jsonl, yet partial
     assert (image_session / "corners.vnl").stat().st_mtime >= (image_session / "captures.jsonl").stat().st_mtime
@@ -297,7 +297,7 @@ def test_the_detect_action_completes_the_corners(qtbot, window, image_session):
 
 
 def test_a_finished_estimate_shows_a_full_progress_bar(qtbot, window, image_session, monkeypatch):
-    import lps_gui.gui.estimation_panel as estimation_panel
+    import lps_gui.gui.results.estimation as estimation_panel
 
     real = estimation_panel.detect_and_estimate
 
@@ -345,7 +345,7 @@ def test_quitting_during_a_capture_asks_first(qtbot, make_window, tmp_path, monk
 
 
 def test_the_eta_after_a_resume_counts_only_this_runs_frames(qtbot, window, monkeypatch):
-    import lps_gui.gui.capture_panel as capture_panel
+    import lps_gui.gui.capture.panel as capture_panel
 
     now = [1000.0]
     monkeypatch.setattr(capture_panel.time, "monotonic", lambda: now[0])

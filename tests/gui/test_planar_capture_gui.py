@@ -11,7 +11,7 @@ import pytest
 
 from lps_gui.core.clock import SimClock
 from lps_gui.core.geometry.board import Board
-from lps_gui.gui.planar_plan_editor import PlanarPlanEditor, planar_duration_s
+from lps_gui.gui.capture.planar_plan_editor import PlanarPlanEditor, planar_duration_s
 
 pytestmark = pytest.mark.gui
 

@@ -1,10 +1,9 @@
 """Smaller GUI items of issue 26 (item 12): compact angular legend, readable log ticks, the ISO 230-2 default plan."""
 from __future__ import annotations
 
-import pyqtgraph as pg
 import pytest
 
-from lps_gui.gui.plot_adapter import ReadableAxis, component_name
+from lps_gui.gui.results.plot_adapter import ReadableAxis, component_name
 
 pytestmark = pytest.mark.gui
 

@@ -26,7 +26,7 @@ def min_step_session(tmp_path_factory):
 
 
 def _panel(qtbot):
-    from lps_gui.gui.results_panel import ResultsPanel
+    from lps_gui.gui.results.panel import ResultsPanel
 
     panel = ResultsPanel()
     qtbot.addWidget(panel)
@@ -93,7 +93,7 @@ def test_results_without_the_sections_keep_the_tab_layout(qtbot, min_step_sessio
 def test_legends_keep_labels_of_distinct_colours_and_fit_long_labels():
     import numpy as np
 
-    from lps_gui.gui.plot_adapter import legend_columns, wants_compact_legend
+    from lps_gui.gui.results.plot_adapter import legend_columns, wants_compact_legend
     from lps_gui.report.figures.spec import FigureSpec, Series
 
     x = np.arange(3.0)

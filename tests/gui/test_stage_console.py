@@ -114,7 +114,7 @@ def external_grbl():
 
 
 def test_typed_pty_of_an_external_grbl_connects_asks_home_or_unlock_and_shows_homing(qtbot, window, external_grbl, caplog):
-    caplog.set_level(logging.INFO, logger="lps_gui.gui.stage_controller")
+    caplog.set_level(logging.INFO, logger="lps_gui.gui.stage.controller")
     panel = window.stage_panel
     panel.source.setEditText(external_grbl.path)  # /dev/pts/N typed into the Source box
     panel.connect_btn.click()

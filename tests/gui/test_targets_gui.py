@@ -8,7 +8,7 @@ import pytest
 from lps_gui.cli import main as lps_main
 from lps_gui.core.geometry.board import Board
 from lps_gui.errors import InputError
-from lps_gui.gui.targets_editor import TargetsEditor, add_targets
+from lps_gui.gui.capture.targets_editor import TargetsEditor, add_targets
 from lps_gui.pipeline.estimate import estimate_session
 from tests.gui.test_capture_flow import SMALL_PLAN, capture_window, records
 from tests.pipeline.test_estimate_targets import point_session
@@ -52,7 +52,7 @@ def test_targets_defined_in_the_capture_panel_go_into_session_json(qtbot, make_w
     cap.run_requested.connect(lambda job: errors.append(job) if isinstance(job, Exception) else None)
     cap.start_btn.click()  # the simulated rig renders one board: a one-line refusal, nothing written
     assert errors and "simulated rig renders one board" in str(errors[0]) and not (folder / "session.json").exists()
-    monkeypatch.setattr("lps_gui.gui.capture_panel.is_simulated_rig", lambda stage, camera: False)
+    monkeypatch.setattr("lps_gui.gui.capture.panel.is_simulated_rig", lambda stage, camera: False)
     with qtbot.waitSignal(cap.session_done, timeout=60000):
         cap.start_btn.click()  # as a real rig: the session names the targets, not a board
     meta = json.loads((folder / "session.json").read_text())
@@ -61,7 +61,7 @@ def test_targets_defined_in_the_capture_panel_go_into_session_json(qtbot, make_w
 
 
 def test_the_results_panel_shows_the_targets_and_their_stretches(qtbot, tmp_path):
-    from lps_gui.gui.results_panel import ResultsPanel
+    from lps_gui.gui.results.panel import ResultsPanel
 
     session, _ = point_session(tmp_path / "row")  # the small-row preset: 3 targets
     results = estimate_session(session.folder)

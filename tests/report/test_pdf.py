@@ -168,7 +168,7 @@ def test_report_pdf_is_written_with_the_users_umask(tmp_path, umask):
 
 def test_page_one_shows_a_session_flag_such_as_the_lens_model(tmp_path):
     """A flag of the whole session (index None: the lens model does not fit) is on page 1 and in the GUI's verdict."""
-    from lps_gui.gui.results_panel import verdict_html
+    from lps_gui.gui.results.panel import verdict_html
     from lps_gui.io.results.model import as_results
 
     results, truth = make_results()

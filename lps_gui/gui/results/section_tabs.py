@@ -14,7 +14,7 @@ import pyqtgraph as pg
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QLabel, QSplitter, QVBoxLayout, QWidget
 
-from lps_gui.gui.plot_adapter import ReadableAxis
+from lps_gui.gui.results.plot_adapter import ReadableAxis
 from lps_gui.gui.widgets import TextTable
 from lps_gui.io.results.model import Results
 from lps_gui.report.figures.spec import FigureSpec

@@ -24,10 +24,10 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from lps_gui.gui.mounted_targets import MountedTargetsView
-from lps_gui.gui.plot_adapter import DrawnFigure, ReadableAxis, figure_steps
-from lps_gui.gui.section_tabs import SectionContent, SectionPage, section_contents, tab_tip
-from lps_gui.gui.view_detail import ViewDetail
+from lps_gui.gui.capture.mounted_targets import MountedTargetsView
+from lps_gui.gui.results.plot_adapter import DrawnFigure, ReadableAxis, figure_steps
+from lps_gui.gui.results.section_tabs import SectionContent, SectionPage, section_contents, tab_tip
+from lps_gui.gui.results.view_detail import ViewDetail
 from lps_gui.gui.widgets import TextTable, ValueTable
 from lps_gui.gui.workers import Job, owned_by
 from lps_gui.io.results.model import Results, as_results
@@ -353,7 +353,7 @@ class ResultsPanel(QWidget):
         return True
 
     def _fill_tables(self, results: Results) -> None:
-        from lps_gui.gui.planar_results import planar_table_rows
+        from lps_gui.gui.results.planar import planar_table_rows
         from lps_gui.report.pages.summary import summary_rows
 
         self._fill_targets(results)
@@ -393,7 +393,7 @@ class ResultsPanel(QWidget):
 
     def _fill_positions(self, results: Results) -> None:
         """Format the per-position table on a worker thread (hundreds of rows), then show it."""
-        from lps_gui.gui.planar_results import position_table_for
+        from lps_gui.gui.results.planar import position_table_for
 
         self._pending_table = True
         job = owned_by(Job("format positions", lambda: position_table_for(results), pass_progress=False), self)

@@ -39,11 +39,11 @@ from PySide6.QtWidgets import (
 )
 
 from lps_gui.core.clock import Clock
-from lps_gui.gui.dro import PositionReadout
-from lps_gui.gui.sources import BAUD_RATES, open_stage_source, source_from_text, stage_choices
-from lps_gui.gui.stage_console import StageConsole
-from lps_gui.gui.stage_controller import StageController
-from lps_gui.gui.stage_declared import show_declared, stop_action
+from lps_gui.gui.stage.console import StageConsole
+from lps_gui.gui.stage.controller import StageController
+from lps_gui.gui.stage.declared import show_declared, stop_action
+from lps_gui.gui.stage.dro import PositionReadout
+from lps_gui.gui.stage.sources import BAUD_RATES, open_stage_source, source_from_text, stage_choices
 from lps_gui.hardware.capabilities import Settings, WorkCoordinates
 from lps_gui.hardware.registry import DEFAULT_PORT_KIND, specs_help
 from lps_gui.hardware.stage import AXES, StageSetting, StageStatus

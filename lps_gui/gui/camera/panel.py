@@ -35,9 +35,9 @@ from lps_gui.camera import controls
 from lps_gui.camera.base import Camera
 from lps_gui.camera.frame_watch import FrameWatch
 from lps_gui.core.geometry.board import Board
+from lps_gui.gui.camera.preview import PreviewGrabber
 from lps_gui.gui.fit import guard_wheel
-from lps_gui.gui.preview import PreviewGrabber
-from lps_gui.gui.sources import CAMERA_FOLLOWS_STAGE, camera_choices, open_camera_source
+from lps_gui.gui.stage.sources import CAMERA_FOLLOWS_STAGE, camera_choices, open_camera_source
 
 log = logging.getLogger(__name__)
 

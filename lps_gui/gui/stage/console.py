@@ -14,7 +14,7 @@ from PySide6.QtCore import Qt, Signal
 from PySide6.QtGui import QFont, QKeyEvent
 from PySide6.QtWidgets import QHBoxLayout, QLineEdit, QPlainTextEdit, QPushButton, QVBoxLayout, QWidget
 
-from lps_gui.gui.stage_controller import StageController
+from lps_gui.gui.stage.controller import StageController
 from lps_gui.gui.workers import one_line
 from lps_gui.hardware.capabilities import Console
 

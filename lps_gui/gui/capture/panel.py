@@ -32,15 +32,15 @@ from lps_gui.capture.plans import plan_duration_s
 from lps_gui.core.geometry.board import Board
 from lps_gui.core.planning.plan import Plan
 from lps_gui.errors import InputError
-from lps_gui.gui.planar_plan_editor import (
+from lps_gui.gui.capture.planar_plan_editor import (
     PlanarPlanEditor,
     apply_shared_to_panel,
     planar_duration_s,
     planar_engine,
     shared_from_panel,
 )
-from lps_gui.gui.stitch_plan import StitchRow
-from lps_gui.gui.targets_editor import TargetsEditor
+from lps_gui.gui.capture.stitch_plan import StitchRow
+from lps_gui.gui.capture.targets_editor import TargetsEditor
 from lps_gui.gui.widgets import PathPicker, add_rows, double_spin, stack
 from lps_gui.gui.workers import Job, one_line
 
@@ -59,7 +59,7 @@ def is_simulated_rig(stage: Any, camera: Any) -> bool:
 
 def sim_spec() -> Any:
     from lps_gui.core.truth.simulate import preset
-    from lps_gui.gui.sources import SIM_PRESET
+    from lps_gui.gui.stage.sources import SIM_PRESET
 
     return preset(SIM_PRESET)
 
@@ -158,7 +158,7 @@ class CapturePanel(QWidget):
             ("Settle", self.settle_s), ("Frames per stop", self.frames_per_stop), ("Feed", self.feed_mm_min),
             ("Move board every", self.stitch)])
         form.addRow("", self.summary)
-        from lps_gui.gui.report_setup import ReportSetupBox
+        from lps_gui.gui.capture.report_setup import ReportSetupBox
 
         self.report_setup = ReportSetupBox()
         self.planar_editor = PlanarPlanEditor(lambda: shared_from_panel(self), self.board, self.intrinsics,
@@ -194,7 +194,7 @@ class CapturePanel(QWidget):
         self.eta.setWordWrap(True)  # a long error wraps; it does not widen the dock
         self.eta.setMinimumHeight(2 * self.eta.fontMetrics().lineSpacing() + 2)  # "complete: ... folder" takes two lines
 
-        from lps_gui.gui.live_panel import LivePanel
+        from lps_gui.gui.capture.live import LivePanel
 
         self.live_panel = LivePanel()  # the deviation plot growing stop by stop, the live flags, the report
         self.planar_editor.enabled.toggled.connect(self.live_panel.set_planar)

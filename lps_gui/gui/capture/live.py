@@ -4,7 +4,7 @@
 the capture's engine on the worker thread; its events cross to the GUI
 thread through a queued signal. The plot is the report's deviation figure
 (:func:`lps_gui.report.figures.plots.deviation_figure`, mean with its +-2 sigma
-band) drawn by :mod:`lps_gui.gui.plot_adapter` in small steps, one
+band) drawn by :mod:`lps_gui.gui.results.plot_adapter` in small steps, one
 event-loop turn each, so the window stays responsive while the estimate
 grows. Each flag is listed with its frame the moment it is found; the
 operator pauses, fixes and resumes with the capture buttons.
@@ -20,7 +20,7 @@ import pyqtgraph as pg
 from PySide6.QtCore import QObject, Qt, QTimer, Signal
 from PySide6.QtWidgets import QCheckBox, QGroupBox, QLabel, QListWidget, QVBoxLayout, QWidget
 
-from lps_gui.gui.plot_adapter import DrawnFigure, figure_steps
+from lps_gui.gui.results.plot_adapter import DrawnFigure, figure_steps
 
 
 class _Bridge(QObject):

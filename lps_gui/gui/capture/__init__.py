@@ -1,0 +1,1 @@
+"""The capture dock: plans (line, planar, stitched, targets), report set-up, live results while capturing."""

@@ -1,0 +1,1 @@
+"""The results dock: estimation, every results tab and plot, the clicked view, planar results."""

@@ -1,0 +1,1 @@
+"""The stage dock: sources, connection, the declared capabilities' controls, DRO, console, controller thread."""

@@ -23,6 +23,7 @@ from lps_gui.cli import (
     emulate_grbl,
     estimate,
     export,
+    import_images,
     intrinsics,
     make_targets,
     report,
@@ -39,6 +40,7 @@ COMMANDS = {
     "estimate": estimate,
     "report": report,
     "capture": capture,
+    "import": import_images,
     "emulate": emulate,
     "emulate-grbl": emulate_grbl,  # the same as `lps emulate grbl`
     "plan-rig": plan_rig,

@@ -128,18 +128,16 @@ def check_free(folder: Path, in_place: bool) -> None:
         raise InputError(f"{folder}: exists and is not a folder; give a new folder for the session")
 
 
-def folder_images(images_dir: Path, skip: Path | None = None) -> list[str]:
+def folder_images(images_dir: Path) -> list[str]:
     """The image files of ``images_dir`` (not its sub-folders or hidden files) in natural name order.
 
     A file that is not an image by its extension is an error naming it: a
     stray file would otherwise shift every position after it.
     """
-    names = []
-    for entry in os.scandir(images_dir):
-        if entry.name.startswith(".") or entry.is_dir() or (skip is not None and Path(entry.path).resolve() == skip):
-            continue
-        check_image_name(images_dir / entry.name)
-        names.append(entry.name)
+    with os.scandir(images_dir) as entries:
+        names = [e.name for e in entries if not e.name.startswith(".") and not e.is_dir()]
+    for name in names:
+        check_image_name(images_dir / name)
     if not names:
         raise InputError(f"{images_dir}: no images ({', '.join(IMAGE_EXTENSIONS)}); check the folder")
     return sorted(names, key=natural_key)

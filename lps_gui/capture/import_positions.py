@@ -88,7 +88,7 @@ def _mm(text: str) -> float:
 def stops_from_names(files: list[str], pattern: str, where: str = "") -> list[ImageStop]:
     """Positions (and index, run, direction when the pattern has them) read from the file names.
 
-    Order: by ``{index}`` when the pattern has it, else natural name order,
+    Order: by ``{index}`` when the pattern has it, else natural name order with ``{mm}`` compared as a number,
     then grouped by ``{run}`` and by ``{dir}`` (forward first) when given, a
     pass ordered by position (upward forward, downward backward).
     """
@@ -100,20 +100,23 @@ def stops_from_names(files: list[str], pattern: str, where: str = "") -> list[Im
             raise InputError(f"{where}{f}: the name does not match --from-names {pattern!r} (no number where {{mm}} "
                              "is); rename it, move it out of the folder or fix the pattern")
         g = m.groupdict()
-        rows.append((f, _mm(g["mm"]), int(g["index"]) if g.get("index") else None,
-                     int(g["run"]) if g.get("run") else None, DIRECTION_WORDS[g["dir"].lower()] if g.get("dir") else None))
+        name, mm = Path(f).name, _mm(g["mm"])
+        order = (natural_key(name[:m.start("mm")]), mm, natural_key(name[m.end("mm"):]))  # the number as a number
+        rows.append((f, mm, int(g["index"]) if g.get("index") else None,
+                     int(g["run"]) if g.get("run") else None, DIRECTION_WORDS[g["dir"].lower()] if g.get("dir") else None,
+                     order))
     if "index" in rx.groupindex:
         seen: dict[int, str] = {}
-        for f, _, index, _, _ in rows:
+        for f, _, index, *_ in rows:
             if index in seen:
                 raise InputError(f"{where}{f}: index {index} again (also {seen[index]}); each image needs its own {{index}}")
             seen[index] = f
         rows.sort(key=lambda r: r[2])
     else:
-        rows.sort(key=lambda r: natural_key(r[0]))
+        rows.sort(key=lambda r: r[5])
         if "run" in rx.groupindex or "dir" in rx.groupindex:
             rows.sort(key=lambda r: (r[3] or 0, r[4] == "-", r[1] if r[4] != "-" else -r[1]))
-    return complete([(f, mm, d, run) for f, mm, _, run, d in rows])
+    return complete([(f, mm, d, run) for f, mm, _, run, d, _ in rows])
 
 
 def stops_from_csv(text: str, where: str) -> tuple[list[ImageStop], list[int]]:

@@ -216,6 +216,9 @@ def test_an_existing_session_is_not_overwritten(tmp_path, capsys):
     assert _lps("import", photos, "--in-place", "--board", _board(tmp_path), "--step", "1") == 0
     assert _lps("import", photos, "--in-place", "--board", _board(tmp_path), "--step", "1") == 2
     assert "photos: already holds a session" in capsys.readouterr().err
+    assert _lps("capture", "--resume", out) == 2  # no stage went with these images: a capture cannot go on
+    assert "imported images (lps import), not a capture; nothing to resume" in capsys.readouterr().err
+    assert (out / "captures.jsonl").read_bytes() == kept
 
 
 @pytest.mark.parametrize("switches, match", [

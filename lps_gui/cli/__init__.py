@@ -14,7 +14,21 @@ import os
 import sys
 from typing import NoReturn
 
-from lps_gui.cli import compare, compensate, demo, detect, emulate, emulate_grbl, estimate, export, intrinsics, make_targets, report, simulate
+from lps_gui.cli import (
+    compare,
+    compensate,
+    demo,
+    detect,
+    emulate,
+    emulate_grbl,
+    estimate,
+    export,
+    import_images,
+    intrinsics,
+    make_targets,
+    report,
+    simulate,
+)
 from lps_gui.cli.capture import command as capture
 from lps_gui.cli.plan_rig import command as plan_rig
 
@@ -26,6 +40,7 @@ COMMANDS = {
     "estimate": estimate,
     "report": report,
     "capture": capture,
+    "import": import_images,
     "emulate": emulate,
     "emulate-grbl": emulate_grbl,  # the same as `lps emulate grbl`
     "plan-rig": plan_rig,

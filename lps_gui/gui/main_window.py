@@ -144,6 +144,7 @@ class MainWindow(QMainWindow):
         mb = self.menuBar()
         m = mb.addMenu("&File")
         self.open_session_action = self._action(m, "Open session…", self.open_session_dialog, QKeySequence.StandardKey.Open)
+        self._action(m, "Import images…", self.import_dialog)
         m.addSeparator()
         self._action(m, "Export PDF report…", lambda: self.export("pdf"))
         self._action(m, "Export CSV…", lambda: self.export("csv"))
@@ -286,6 +287,20 @@ class MainWindow(QMainWindow):
         folder = QFileDialog.getExistingDirectory(self, "Open a session folder", self.last_folder())
         if folder:
             self.open_session(Path(folder))
+
+    def import_dialog(self) -> Any:
+        """File > Import images: the dialog, then the import as a job; the new session is opened for estimation."""
+        from lps_gui.gui.import_dialog import ImportDialog
+
+        dialog = ImportDialog(self.last_folder, self)
+        dialog.accepted.connect(lambda: self._run_import(dialog.request))
+        dialog.open()
+        return dialog
+
+    def _run_import(self, request: dict[str, Any]) -> Job:
+        from lps_gui.capture.import_images import import_images
+
+        return self.run_job(Job("import images", import_images, **request), lambda folder: self.open_session(Path(folder)))
 
     def open_session(self, folder: Path) -> bool:
         """Select ``folder`` for estimation and show its results.json if it has one."""

@@ -81,6 +81,9 @@ def capture_fields(d: Any) -> dict[str, Any]:
         raise ValueError(f"field 'direction' must be \"+\" or \"-\", not {direction!r}")
     if not isinstance(d["file"], str):
         raise ValueError(f"field 'file' must be a string, not {d['file']!r}")
+    source = d.get("source")
+    if source is not None and not isinstance(source, str):
+        raise ValueError(f"field 'source' must be a string, not {source!r}")
     sha = d.get("sha256")
     if sha is not None and not isinstance(sha, str):
         raise ValueError(f"field 'sha256' must be a hex string, not {sha!r}")
@@ -98,6 +101,7 @@ def capture_fields(d: Any) -> dict[str, Any]:
         "settle_s": _float(d, "settle_s", optional=True),
         "since_move_s": _float(d, "since_move_s", optional=True),
         "segment": None if d.get("segment") is None else _int(d, "segment"),  # a stitched capture's (SPEC 13)
+        "source": source,  # "import" (SPEC 16)
     }
 
 

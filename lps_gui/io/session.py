@@ -49,13 +49,14 @@ class CaptureRecord:
     settle_s: float | None = None  # settle detection: time until two frames agreed; absent without it
     since_move_s: float | None = None  # the frame's time after the stage reported its move done (capture clock)
     segment: int | None = None  # a stitched capture: which placement of the moved board; absent otherwise
+    source: str | None = None  # "import": images the user already had (SPEC 16); absent for a capture
 
     def to_json(self) -> str:
         d = asdict(self)
         for key in ("target_mm", "reported_mm"):
             if isinstance(d[key], tuple):
                 d[key] = list(d[key])
-        for key in ("commanded_mm", "settle_s", "since_move_s", "segment"):
+        for key in ("commanded_mm", "settle_s", "since_move_s", "segment", "source"):
             if d[key] is None:
                 del d[key]
         return json.dumps(d, separators=(",", ":"))

@@ -323,6 +323,9 @@ def _resume(args: argparse.Namespace):
     from lps_gui.io.session import Session
 
     session = Session.open(args.resume)
+    if (session.meta.get("stage") or {}).get("driver") == "import":  # SPEC 16: no stage and no plan to go on with
+        raise InputError(f"{session.folder}: imported images (lps import), not a capture; nothing to resume: import "
+                         "the whole folder again into a new session")
     if session.planar:
         given = [s for s, v in (("--grid", args.grid), ("--targets-xy", args.targets_xy), ("--iso-lines", args.iso_lines),
                                 ("--pattern", args.pattern), ("--plan", args.plan)) if v]

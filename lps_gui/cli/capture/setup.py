@@ -22,17 +22,15 @@ ID_SWITCHES = (("--operator", "operator"), ("--customer", "customer"), ("--stage
                ("--serial", "stage_serial"), ("--controller-serial", "controller_serial"), ("--location", "location"))
 
 
-def add_setup_arguments(p: argparse.ArgumentParser) -> None:
-    """The report's switches, in their own help groups."""
+def add_setup_arguments(p: argparse.ArgumentParser, iso_plan: bool = True) -> None:
+    """The report's switches, in their own help groups (``iso_plan``: with the ISO 230-2 plan's, for a capture)."""
     from lps_gui.core.planning.presets import SPEC_PRESETS
 
-    r = p.add_argument_group("specification and ISO 230-2 plan")
+    r = p.add_argument_group("specification and ISO 230-2 plan" if iso_plan else "specification")
     r.add_argument("--spec", metavar="SPEC", help=f"stage data sheet: a preset ({', '.join(SPEC_PRESETS)}; paper = "
                    "its Table 1) or accuracy=UM,repeatability=UM,straightness=UM")
-    r.add_argument("--iso-plan", action="store_true", help="ISO 230-2 plan: 5 runs both directions over non-uniform "
-                   "targets between --start and --stop")
-    r.add_argument("--iso-targets", type=int_range(5, 10000), metavar="N", help="number of targets of --iso-plan (default 5 per metre, min 5)")
-    r.add_argument("--pitch", type=positive_finite, metavar="MM", help="lead-screw pitch for --iso-plan: targets spread over its phase")
+    if iso_plan:
+        _add_iso_plan_arguments(r)
     e = p.add_argument_group("environment (session.json 'environment')")
     for flag, key, text in ENV_SWITCHES:
         e.add_argument(flag, type=finite, dest=f"env_{key}", metavar="X", help=text)
@@ -40,6 +38,13 @@ def add_setup_arguments(p: argparse.ArgumentParser) -> None:
     i = p.add_argument_group("identification (printed on the report)")
     for flag, key in ID_SWITCHES:
         i.add_argument(flag, dest=f"id_{key}", metavar="TEXT", help=key.replace("_", " "))
+
+
+def _add_iso_plan_arguments(r: argparse._ArgumentGroup) -> None:
+    r.add_argument("--iso-plan", action="store_true", help="ISO 230-2 plan: 5 runs both directions over non-uniform "
+                   "targets between --start and --stop")
+    r.add_argument("--iso-targets", type=int_range(5, 10000), metavar="N", help="number of targets of --iso-plan (default 5 per metre, min 5)")
+    r.add_argument("--pitch", type=positive_finite, metavar="MM", help="lead-screw pitch for --iso-plan: targets spread over its phase")
 
 
 def iso_plan_fields(args: argparse.Namespace, base: Any) -> dict[str, Any]:

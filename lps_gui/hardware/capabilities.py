@@ -129,3 +129,15 @@ CAPABILITIES: dict[str, type] = {
 def declared(stage: object) -> list[str]:
     """The names of the capabilities ``stage`` declares (for session.json and the docs' table)."""
     return [name for name, cls in CAPABILITIES.items() if isinstance(stage, cls)]
+
+
+SPEC_NAMES = {"settings": "settings", "console": "console", "work coordinates": "work_coordinates", "jogging": "jog",
+              "feed hold": "feed_hold", "alarms": "alarms", "operator moved": "operator_moved"}
+
+
+def session_stage(stage: object) -> dict:
+    """What session.json records of a stage (SPEC 16): its own description, and the capabilities its driver declared
+    (``home`` first where it can home); a simulated rig following another stage records that stage's."""
+    driver = getattr(stage, "driver", stage)
+    names = (["home"] if getattr(driver, "can_home", False) else []) + [SPEC_NAMES[n] for n in declared(driver)]
+    return {**stage.describe(), "capabilities": names}

@@ -344,7 +344,9 @@ def _resume(args: argparse.Namespace):
         if "spec" not in (session.meta.get("stage") or {}) or "spec" not in (session.meta.get("camera") or {}):
             # a kill between the start's two session.json writes left the devices unrecorded: record them now
             axes = {"axes": ["X", "Y"]} if session.planar else {}
-            session.meta["stage"] = {**stage.describe(), **axes, "spec": stage_spec}
+            from lps_gui.hardware.capabilities import session_stage
+
+            session.meta["stage"] = {**session_stage(stage), **axes, "spec": stage_spec}
             session.meta["camera"] = {**camera.properties(), "spec": "sim"}
             session.save_meta()
         return session, stage, camera, simulated_engine(session, stage, camera, args.encode)

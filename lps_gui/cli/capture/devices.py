@@ -33,6 +33,7 @@ def preflight(args: argparse.Namespace, stage_spec: str, camera_spec: str) -> No
 def device_session(args: argparse.Namespace, board, plan, intr, stage_spec: str, camera_spec: str, **stage_meta):
     """Open the operator's devices, unlock as asked and create the session on them (devices closed on failure)."""
     from lps_gui.capture.engine import CaptureEngine
+    from lps_gui.hardware.capabilities import session_stage
     from lps_gui.io.session import Session
 
     stage, camera = open_devices(stage_spec, camera_spec, getattr(args, "cti", None))
@@ -41,7 +42,7 @@ def device_session(args: argparse.Namespace, board, plan, intr, stage_spec: str,
         session = Session.create(
             args.out, board, plan, intr,
             camera={**camera.properties(), "spec": camera_spec},
-            stage={**stage.describe(), **stage_meta, "spec": stage_spec},
+            stage={**session_stage(stage), **stage_meta, "spec": stage_spec},
             extra={"intrinsics_source": str(args.intrinsics)} if args.intrinsics else None,
         )
     except BaseException:
@@ -92,8 +93,10 @@ def open_operator_stage(stage_spec: str):
 def bind_simulated_stage(args: argparse.Namespace, session, rig_stage, camera, stage_spec: str, driver=None, **stage_meta):
     """The simulated rig's stage as the command line asked for it (direct or through the emulator), unlocked
     as asked, and recorded in session.json with the camera and the intrinsics' source."""
+    from lps_gui.hardware.capabilities import session_stage
+
     stage = bind_stage(stage_spec, rig_stage, args.time_scale, args, driver)
-    session.meta["stage"] = {**stage.describe(), **stage_meta, "spec": stage_spec}
+    session.meta["stage"] = {**session_stage(stage), **stage_meta, "spec": stage_spec}
     session.meta["camera"] = {**camera.properties(), "spec": "sim"}
     if args.intrinsics:
         session.meta["intrinsics_source"] = str(args.intrinsics)

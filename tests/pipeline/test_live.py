@@ -78,7 +78,7 @@ def test_injected_fault_is_flagged_within_two_frames(tmp_path, fault, kinds):
     hits = {kind: (index, at) for (kind, index), at in flagged_at.items() if kind in kinds}
     assert set(hits) == kinds, flagged_at
     for kind, (index, detected_by_then) in hits.items():
-        assert index == FAULT_AT, (kind, index)  # named at the frame it happened
+        assert index == FAULT_AT, (kind, index, flagged_at)  # named at the frame it happened
         assert detected_by_then <= FAULT_AT + 2, (kind, detected_by_then)  # and reported within two stops
     assert all(index >= FAULT_AT for (kind, index) in flagged_at), flagged_at  # nothing before the fault
 

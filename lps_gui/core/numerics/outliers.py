@@ -20,14 +20,32 @@ def robust_sigma(x: np.ndarray) -> float:
     return MAD_TO_SIGMA * float(np.median(np.abs(x - np.median(x))))
 
 
-def reprojection_outliers(rms_px: np.ndarray, valid: np.ndarray, k: float) -> np.ndarray:
-    """Views whose RMS reprojection error exceeds median + k robust sigmas, shape (K,) bool."""
+def reprojection_outliers(rms_px: np.ndarray, valid: np.ndarray, k: float, half_window: int = 3) -> np.ndarray:
+    """Views whose RMS reprojection error exceeds median + k robust sigmas, shape (K,) bool.
+
+    A bumped camera is a spike: it also stands k scales above the median RMS of
+    the ``2 half_window`` views nearest in capture order (self excluded, the
+    window sliding inward at the ends). A stage whose motion the model does not
+    quite express raises the RMS smoothly towards the ends of what was seen so
+    far, and the newest view of a live estimate sits at the end of that slope:
+    above the median of all views, but not above its neighbours.
+    """
     ok = valid & np.isfinite(rms_px)
     if ok.sum() < 3:
         return np.zeros_like(valid)
     med = float(np.median(rms_px[ok]))
     scale = max(robust_sigma(rms_px[ok]), 0.02 * med, 1e-12)
-    return valid & (rms_px > med + k * scale)
+    idx = np.flatnonzero(ok)
+    r = rms_px[idx]
+    m = r.size
+    width = min(2 * half_window + 1, m)
+    rows = np.arange(m)
+    start = np.clip(rows - half_window, 0, m - width)
+    window = start[:, None] + np.arange(width)[None, :]
+    nb = np.sort(np.where(window == rows[:, None], m, window), axis=1)[:, :-1]  # self moved last and dropped
+    local = np.full(rms_px.shape, np.inf)
+    local[idx] = np.median(r[nb], axis=1)
+    return valid & (rms_px > med + k * scale) & (rms_px > local + k * scale)
 
 
 def local_trend_residuals(

@@ -13,7 +13,8 @@ import logging
 import sys
 from typing import NoReturn
 
-from lps_gui.cli import compare, compensate, demo, detect, emulate_grbl, estimate, export, intrinsics, make_targets, report, simulate
+from lps_gui.cli import (compare, compensate, demo, detect, emulate_grbl, estimate, export, intrinsics, lightfield,
+                         make_targets, report, simulate)
 from lps_gui.cli.capture import command as capture
 from lps_gui.cli.plan_rig import command as plan_rig
 
@@ -29,6 +30,7 @@ COMMANDS = {
     "plan-rig": plan_rig,
     "compensate": compensate,
     "export": export,
+    "lightfield": lightfield,
     "compare": compare,
     "make-targets": make_targets,
 }

@@ -6,7 +6,7 @@ row per view is kept for the epipolar-plane images. Written into ``out``: ``view
 ``lightfield.json``, the HCI layout in ``hci/`` when the positions are a uniform grid within 2 sigma
 (otherwise one line naming the largest deviation), COLMAP (``colmap/``) and nerfstudio (``nerfstudio/``)
 models of the rectified set, and the epipolar check (``epi_before.png``, ``epi_after.png``, numbers in
-lightfield.json ``check``).
+lightfield.json ``check``, a report page ``report.pdf``).
 """
 from __future__ import annotations
 
@@ -185,6 +185,10 @@ def make_lightfield(scene_dir: Path | str, out: Path | str, measurement: Path | 
         **({"check": res.check} if res.check else {}),
     }
     res.files.insert(0, write_lightfield_json(out, doc))
+    from lps_gui.report.pdf.lightfield import REPORT_FILE, write_lightfield_report
+
+    write_lightfield_report(doc, before, after, out / REPORT_FILE)
+    res.files.append(out / REPORT_FILE)
     return res
 
 

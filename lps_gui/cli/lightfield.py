@@ -26,7 +26,7 @@ def run(args: argparse.Namespace) -> int:
 
     from lps_gui.cli.out_path import check_out_folder
     from lps_gui.cli.progress_bar import ProgressBar
-    from lps_gui.pipeline.lightfield import make_lightfield
+    from lps_gui.pipeline.lightfield import check_lines, make_lightfield
 
     check_out_folder(args.out)
     res = make_lightfield(args.scene, args.out, args.measurement, args.epi_row, progress=ProgressBar("lightfield"))
@@ -38,17 +38,3 @@ def run(args: argparse.Namespace) -> int:
     for line in check_lines(res.check):
         print(f"  {line}")
     return 0
-
-
-def check_lines(check: dict | None) -> list[str]:
-    """The epipolar check's numbers as printed lines."""
-    if not check:
-        return []
-    v = check["vertical_disparity_rms_px"]
-    lines = [f"vertical disparity RMS {v['before']:.3f} px before rectification, {v['after']:.4f} px after "
-             f"({check['n_points']} known scene points)"]
-    for p in check.get("disparity_vs_position", []):
-        lines.append(f"{p['plane']} ({p['depth_mm']:.0f} mm): disparity residual {p['residual_rms_px_measured']:.4f} px RMS "
-                     f"on measured positions, {p['residual_rms_px_nominal']:.4f} px on nominal; depth from slope "
-                     f"{p['depth_from_slope_mm_measured']:.1f} mm")
-    return lines

@@ -220,3 +220,17 @@ def _write_hci(folder: Path, views: SceneViews, grid: GridCheck, vc: VirtualCame
                                 baseline_mm=float(abs(grid.spacing_mm[0])), centre_m=1e-3 * C.mean(axis=0),
                                 rotation_rad=log_so3(vc.R.T), scene=scene_name, date=time.strftime("%Y-%m-%d"),
                                 version=__version__, disparity=None)
+
+
+def check_lines(check: dict[str, Any] | None) -> list[str]:
+    """The epipolar check's numbers as printed lines (lps lightfield, lps demo --lightfield)."""
+    if not check:
+        return []
+    v = check["vertical_disparity_rms_px"]
+    lines = [f"vertical disparity RMS {v['before']:.3f} px before rectification, {v['after']:.4f} px after "
+             f"({check['n_points']} known scene points)"]
+    for p in check.get("disparity_vs_position", []):
+        lines.append(f"{p['plane']} ({p['depth_mm']:.0f} mm): disparity residual {p['residual_rms_px_measured']:.4f} px "
+                     f"RMS on measured positions, {p['residual_rms_px_nominal']:.4f} px on nominal; depth from slope "
+                     f"{p['depth_from_slope_mm_measured']:.1f} mm")
+    return lines

@@ -4,10 +4,12 @@ A scene view is matched to the measured stops of the same approach direction; it
 measurement's position curve at the view's *commanded* position (the target, or what a compensation
 table sent instead), interpolated between measured stops on a line, the stop itself on a plane. Runs of
 one stop are averaged; their scatter (the stage's repeatability: the scene visits the stop once more)
-adds to the measurement's sigma. The rotation of a view is what the measurement resolved: the error
-motions of SPEC 14 where results.json has them, otherwise the image rotation and the board-plane shift
-across the motion taken as a tilt (:func:`lps_gui.core.models.lightfield_views.tilt_from_board_shift`);
-a planar measurement has no per-view rotation (the common orientation only).
+adds to the measurement's sigma. The rotation of a view is what the measurement resolves per view: the
+error motions of SPEC 14 when targets at two depths gave them (every stop's full pose); with one board,
+the image rotation and the board-plane shift across the motion taken as a tilt
+(:func:`lps_gui.core.models.lightfield_views.tilt_from_board_shift`), both resolved per view to a few
+urad, where one board's per-view 6-DOF tilts scatter by ~100 urad (SPEC 11) even when their profile is
+resolved. A planar measurement has no per-view rotation (the common orientation only).
 """
 from __future__ import annotations
 
@@ -23,6 +25,7 @@ from lps_gui.errors import InputError
 from lps_gui.io.intrinsics_file import intrinsics_from_dict
 from lps_gui.io.results.model import Results
 from lps_gui.io.session import Session
+from lps_gui.pipeline.results.error_motions import BASIS_TARGETS
 
 
 @dataclass(frozen=True)
@@ -60,7 +63,16 @@ class SceneViews:
         return g.origin + (self.position_mm - g.ref_mm) @ g.axes.T
 
 
+def targets_basis(results: Results) -> bool:
+    """Whether results.json's error motions come from every stop's full pose against targets at two depths."""
+    em = results.error_motions
+    return em is not None and em.basis == BASIS_TARGETS and len(em.frame_world) == 3
+
+
 def measured_geometry(results: Results, session: Session) -> MeasuredGeometry:
+    """The common orientation and motion of the measurement; with SPEC 14's full poses, the motion axis of the
+    camera centres (error_motions.frame_world), which a linear roll does not bend as it bends the line of a
+    constant-orientation fit (a roll gradient b looks like a line turned by b Z at the board)."""
     p = results.parameters.raw
     where = f"{session.folder}/results.json"
     if results.intrinsics is None:
@@ -72,6 +84,8 @@ def measured_geometry(results: Results, session: Session) -> MeasuredGeometry:
             axes = np.stack([unit(np.asarray(p["u_x_board"], float)), unit(np.asarray(p["u_y_board"], float))], axis=1)
         else:
             axes = unit(-R.T @ np.asarray(p["n_cam"], dtype=float))[:, None]
+            if targets_basis(results):
+                axes = unit(np.asarray(results.error_motions.frame_world, dtype=float)[:, 0])[:, None]
     except KeyError as exc:
         raise InputError(f"{where}: no {exc} in parameters; estimate the measurement again") from None
     ref = [r.raw for r in results.positions if r.raw.get("index") == results.parameters.reference_index]
@@ -101,9 +115,9 @@ def _measured_table(results: Results, g: MeasuredGeometry) -> dict[str, np.ndarr
     if not results.planar:
         R, u = g.R, g.axes[:, 0]
         motions = np.array([[_num(r.get(k)) for k in ("eax_urad", "ebx_urad", "ecx_urad")] for r in rows])
-        if np.isfinite(motions).any(axis=0).any():  # SPEC 14: the angles the data resolve, relative to their mean
-            Z = unit(R[2] - (R[2] @ u) * u)
-            F = np.stack([u, np.cross(Z, u), Z], axis=1)
+        if targets_basis(results) and np.isfinite(motions).any():
+            # SPEC 14: targets at two depths resolve the angles per stop (relative to their mean) in the stage frame
+            F = np.asarray(results.error_motions.frame_world, dtype=float)
             seen = np.isfinite(motions)
             mean = np.nansum(motions, axis=0) / np.maximum(seen.sum(axis=0), 1)
             m = np.where(seen, motions - mean, 0.0)

@@ -76,11 +76,12 @@ def hci_refusal(grid: GridCheck, views: SceneViews) -> str | None:
     if grid.uniform:
         return None
     k = grid.worst
+    todo = ("capture the scene through the measurement's compensation table (lps compensate, then lps capture "
+            "--scene ... --compensation FILE)") if views.D == 1 else \
+        "a planar stage has no compensation here: use lightfield.json's measured positions instead"
     return (f"HCI layout not written: view {int(views.index[k])} ({views.files[k]}) is "
             f"{grid.residual_um[k, grid.worst_axis]:+.1f} um off a uniform grid along {axis}, "
-            f"{grid.z[k, grid.worst_axis]:.1f} sigma (sigma {views.sigma_um[k, grid.worst_axis]:.1f} um, limit 2); "
-            "capture the scene through the measurement's compensation table (lps compensate, then lps capture "
-            "--scene ... --compensation FILE)")
+            f"{grid.z[k, grid.worst_axis]:.1f} sigma (sigma {views.sigma_um[k, grid.worst_axis]:.1f} um, limit 2); {todo}")
 
 
 def hci_order(views: SceneViews, g: MeasuredGeometry, vc: VirtualCamera) -> np.ndarray:
@@ -228,7 +229,10 @@ def check_lines(check: dict[str, Any] | None) -> list[str]:
         return []
     v = check["vertical_disparity_rms_px"]
     lines = [f"vertical disparity RMS {v['before']:.3f} px before rectification, {v['after']:.4f} px after "
-             f"({check['n_points']} known scene points)"]
+             f"({check['n_points']} known scene points{', within rows of views' if 'within' in check else ''})"]
+    h = check.get("horizontal_disparity_rms_px")
+    if h:
+        lines.append(f"horizontal disparity RMS within columns of views {h['before']:.3f} px before, {h['after']:.4f} px after")
     for p in check.get("disparity_vs_position", []):
         lines.append(f"{p['plane']} ({p['depth_mm']:.0f} mm): disparity residual {p['residual_rms_px_measured']:.4f} px "
                      f"RMS on measured positions, {p['residual_rms_px_nominal']:.4f} px on nominal; depth from slope "

@@ -6,7 +6,8 @@ true poses and the true lens into every raw view (the exact positions a perfect 
 then through the same rectification as the images (the measured intrinsics and each view's measured
 rotation: the exact inverse of the remap's map). Numbers:
 
-- vertical disparity RMS before (raw image rows) and after rectification, over the points of every plane;
+- vertical disparity RMS before (raw image rows) and after rectification, over the points of every plane
+  (a planar light field: within each row of views, and the horizontal one within each column);
 - per plane parallel to the motion, the disparity against the measured and against the nominal positions
   (one slope, an intercept per point): residual RMS and the depth the slope implies, beside the true depth.
 
@@ -21,7 +22,7 @@ import numpy as np
 from lps_gui.core.geometry.camera_model import project
 from lps_gui.core.intrinsics.crossval import unproject
 from lps_gui.core.metrology.epipolar import disparity_fit, vertical_disparity_rms
-from lps_gui.core.models.lightfield_views import VirtualCamera
+from lps_gui.core.models.lightfield_views import VirtualCamera, grid_indices
 from lps_gui.core.truth.scene import Scene, scene_points, visible_points
 from lps_gui.core.truth.stage_errors import PlanarTruePose, TruePose
 from lps_gui.io.session import Session
@@ -84,15 +85,16 @@ def epipolar_check(scene: Session, views: SceneViews, g: MeasuredGeometry, vc: V
         return None
     rig, R, t = poses
     raw, rect, owner = point_tracks(scene_def, rig, R, t, g, vc, R_rect)
-    out: dict[str, Any] = {
-        "basis": "known scene points through the true poses (simulated scene)",
-        "n_points": int(raw.shape[1]),
-        "vertical_disparity_rms_px": {"before": vertical_disparity_rms(raw[..., 1]),
-                                      "after": vertical_disparity_rms(rect[..., 1])},
-    }
-    if views.D == 2:
-        out["horizontal_disparity_rms_px"] = {"before": vertical_disparity_rms(raw[..., 0])}
+    out: dict[str, Any] = {"basis": "known scene points through the true poses (simulated scene)",
+                           "n_points": int(raw.shape[1])}
+    if views.D == 2:  # a row of views (one Y) keeps a point's image row, a column (one X) its image column
+        idx, _ = grid_indices(views.nominal_mm)
+        for key, axis, group in (("vertical_disparity_rms_px", 1, idx[:, 1]), ("horizontal_disparity_rms_px", 0, idx[:, 0])):
+            out[key] = {name: _pooled(track[..., axis], group) for name, track in (("before", raw), ("after", rect))}
+        out["within"] = "views of one grid row (vertical) or one grid column (horizontal)"
         return out
+    out["vertical_disparity_rms_px"] = {"before": vertical_disparity_rms(raw[..., 1]),
+                                        "after": vertical_disparity_rms(rect[..., 1])}
     planes = []
     for j, plane in enumerate(scene_def.planes):
         if plane.depth_mm is None or not (owner == j).any():
@@ -107,3 +109,16 @@ def epipolar_check(scene: Session, views: SceneViews, g: MeasuredGeometry, vc: V
                        **{f"depth_from_slope_mm_{n}": f.depth_mm(vc.focal_px) for n, f in fits.items()}})
     out["disparity_vs_position"] = planes
     return out
+
+
+def _pooled(track: np.ndarray, group: np.ndarray) -> float:
+    """RMS of a coordinate about its mean within each group of views, pooled over the groups."""
+    sq, n = 0.0, 0
+    for g in np.unique(group):
+        t = track[group == g]
+        keep = np.isfinite(t).sum(axis=0) >= 2
+        if keep.any():
+            d = t[:, keep] - np.nanmean(t[:, keep], axis=0)
+            sq += float(np.nansum(d**2))
+            n += int(np.isfinite(d).sum())
+    return float(np.sqrt(sq / n)) if n else float("nan")

@@ -194,7 +194,8 @@ def scene_views(scene: Session, results: Results, g: MeasuredGeometry) -> SceneV
                 hit = np.flatnonzero(np.all(np.abs(stops["target"] - nominal[k]) < 1e-6, axis=1))
                 if hit.size == 0:
                     raise InputError(f"{scene.folder}: view {records[k].index} at {tuple(nominal[k])} mm is not a "
-                                     "measured stop; capture the scene at the measurement's stops")
+                                     "usable measured stop (missing or an outlier there); re-measure that stop or "
+                                     "leave the view out")
                 pos[k], sig[k] = stops["position"][hit[0]], stops["sigma"][hit[0]]
     return SceneViews(np.array([r.index for r in records]), [r.file for r in records], nominal, commanded, pos, sig,
                       tilt, phi, str(table["source"][0]))

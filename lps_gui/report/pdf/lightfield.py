@@ -42,6 +42,10 @@ def check_rows(doc: dict[str, Any]) -> list[list[str]]:
         v = check["vertical_disparity_rms_px"]
         rows.append(["vertical disparity RMS, before", f"{v['before']:.3f} px"])
         rows.append(["vertical disparity RMS, after", f"{v['after']:.4f} px"])
+        h = check.get("horizontal_disparity_rms_px")
+        if h:
+            rows.append(["horizontal disparity RMS within columns of views, before", f"{h['before']:.3f} px"])
+            rows.append(["horizontal disparity RMS within columns of views, after", f"{h['after']:.4f} px"])
         for p in check.get("disparity_vs_position", []):
             rows.append([f"{p['plane']} at {p['depth_mm']:.0f} mm: disparity residual, measured positions",
                          f"{p['residual_rms_px_measured']:.4f} px"])

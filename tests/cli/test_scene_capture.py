@@ -42,3 +42,16 @@ def test_a_scene_capture_refuses_a_measurement_without_results_and_a_plan_of_its
     assert lps_main(["estimate", str(m)]) == 0
     assert lps_main(["capture", "--scene", str(m), "--step", "2", "--out", str(tmp_path / "s2")]) != 0
     assert "--step: a scene capture repeats the measured session's plan" in capsys.readouterr().err
+
+
+def test_lps_lightfield_refuses_a_session_that_is_not_a_scene_and_a_lost_measurement(tmp_path, capsys):
+    m = _measured(tmp_path, "+")
+    assert lps_main(["lightfield", str(m), "--out", str(tmp_path / "lf")]) != 0
+    assert "not a scene session" in capsys.readouterr().err
+    s = tmp_path / "scene"
+    assert lps_main(["capture", "--scene", str(m), "--out", str(s)]) == 0
+    m.rename(tmp_path / "moved")
+    assert lps_main(["lightfield", str(s), "--out", str(tmp_path / "lf")]) != 0
+    assert "its measurement session" in capsys.readouterr().err
+    assert lps_main(["lightfield", str(s), "--measurement", str(tmp_path / "moved"), "--out", str(tmp_path / "lf")]) == 0
+    assert (tmp_path / "lf" / "lightfield.json").is_file()

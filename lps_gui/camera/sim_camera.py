@@ -34,6 +34,7 @@ class SimulatedCamera(Camera):
     clock : timestamps frames and spends ``exposure_s`` per grab.
     layout : a row or constellation of targets (SPEC 13) rendered instead of the rig's board
         (the rig's board frame is then the first target's, the world frame).
+    scene : a light-field scene (``core/truth/scene.Scene``) rendered instead of any board (issue 38).
     render_options : ``margin_squares``, ``exposure_s`` and any
         :class:`Lighting` field (``blur_px``, ``vignetting``, ``texture``...).
     lens, printed : the simulator's realism (:mod:`lps_gui.core.truth.realism`): the true lens's terms beyond
@@ -50,12 +51,14 @@ class SimulatedCamera(Camera):
         layout: Any = None,
         lens: Any = None,
         printed: Any = None,
+        scene: Any = None,
         **render_options: Any,
     ) -> None:
         self.rig = rig
         self.layout = layout
         self.lens = lens
         self.printed = printed
+        self.scene = scene
         self.pose_source = pose_source
         self.noise_grey = float(noise_grey)
         self.seed = int(seed)
@@ -75,6 +78,10 @@ class SimulatedCamera(Camera):
         self.faults: Any = None  # a simulator's injected faults (lps_gui.sim.faults): camera_pose(R, t), image(image)
 
     def open(self) -> None:
+        if self._renderer is None and self.scene is not None:  # the light-field scene, no board in view
+            from lps_gui.camera.render_scene import SceneRenderer
+
+            self._renderer = SceneRenderer(self.scene, self.rig.intrinsics, self.lighting, self.noise_grey)
         if self._renderer is None and self.layout is not None:  # every target of the row in one scene
             from lps_gui.camera.render_targets import TargetsRenderer
 

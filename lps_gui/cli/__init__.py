@@ -25,6 +25,7 @@ from lps_gui.cli import (
     export,
     import_images,
     intrinsics,
+    lightfield,
     make_targets,
     report,
     simulate,
@@ -46,6 +47,7 @@ COMMANDS = {
     "plan-rig": plan_rig,
     "compensate": compensate,
     "export": export,
+    "lightfield": lightfield,
     "compare": compare,
     "make-targets": make_targets,
 }

@@ -16,6 +16,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="output folder (default demo-output): an existing or new folder; a name with a suffix is refused")
     parser.add_argument("--seed", type=nonnegative_int, default=0, help="random seed of the simulation")
     parser.add_argument("--planar", action="store_true", help="the planar pipeline on a simulated XY gantry (docs/planar.md)")
+    parser.add_argument("--lightfield", action="store_true", help="the light field (docs/lightfield.md): measure, "
+                        "compensate, capture a scene, rectify, HCI layout, epipolar check")
     parser.add_argument("--test", choices=("min-step", "settling"), help="an ASME B5.64 test on the simulated stage "
                         "(docs/asme-b5.64.md): min-step on a 3 um dead band, settling of a ringing stage; seconds")
     parser.add_argument("--lens-misfit", type=nonnegative_finite, default=0.0, metavar="PX",
@@ -45,6 +47,10 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--planar with --travel/--preset: a row of targets is one axis; drop --planar")
     if args.lens_misfit and args.realism != "off":
         raise InputError("--lens-misfit with --realism: each brings its own true lens; give one of them")
+    if args.lightfield:
+        if args.planar or args.travel or args.preset or args.test:
+            raise InputError("--lightfield: runs on its own simulated rig; drop --planar/--travel/--preset/--test")
+        return _lightfield(args, t0)
     if args.test:
         if args.planar or args.travel or args.preset:
             raise InputError("--test: the ASME B5.64 tests are single-axis tests of one board; drop --planar/--travel/--preset")
@@ -77,3 +83,20 @@ def run(args: argparse.Namespace) -> int:
         print("\nnot the full chain: " + "; ".join(f"{s.name}: {s.message}" for s in skipped))
     print(f"\ndemo finished in {time.monotonic() - t0:.1f} s")
     return 0
+
+
+def _lightfield(args: argparse.Namespace, t0: float) -> int:
+    from lps_gui.cli.progress_bar import ProgressBar
+    from lps_gui.pipeline.demos.lightfield import report_paths, run_lightfield_demo
+
+    res = run_lightfield_demo(args.out, quick=args.quick, bar=ProgressBar, say=lambda line: print(line, flush=True),
+                              seed=args.seed)
+    print()
+    for path in report_paths(res):
+        print(f"report:  {path}")
+    print(f"measurement: {res.measurement}")
+    print()
+    for line in res.summary:
+        print(f"  {line}")
+    print(f"\ndemo finished in {time.monotonic() - t0:.1f} s")
+    return 0 if res.compensated is not None and res.compensated.hci is not None and res.hci_views_equal else 1

@@ -104,13 +104,19 @@ def reopen_simulated_rig(session: Session, clock: Clock | None = None) -> tuple[
         raise InputError(f"{session.folder}: not captured on the simulated gantry; resume it with --stage and --camera")
     if not truth.get("simulated"):
         raise InputError(f"{session.folder}: not captured on the simulated rig; resume it with --stage and --camera")
-    spec = spec_of_session(session)
+    scene = truth.get("scene")  # a scene session (issue 38): the scene instead of any board or targets
+    spec = spec_from_truth(truth, session.plan(), str(session.folder / "session.json")) if scene else \
+        spec_of_session(session)
     cam = truth.get("camera") or {}
     ring = (session.meta.get("stage") or {}).get("vibration")  # the stage rang after each move (settling tests)
     options: dict[str, Any] = {"vibration": Vibration.from_dict(ring)} if isinstance(ring, dict) else {}
     exposure = (session.meta.get("camera") or {}).get("exposure_s")  # its frames took time (frame times)
     if exposure:
         options["exposure_s"] = float(exposure)
+    if scene:
+        from lps_gui.core.truth.scene import Scene
+
+        options["scene"] = Scene.from_dict(scene)
     return make_simulated_rig(spec, clock=clock, noise_grey=float(cam.get("noise_grey", 2.0)),
                               blur_px=float(cam.get("blur_px", 1.2)), **options)
 

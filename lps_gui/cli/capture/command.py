@@ -13,6 +13,7 @@ Examples::
     lps capture --planar --targets-xy "0,0;20,0;20,10;0,10" --stage emulator --out xy3
     lps capture --planar --iso-lines --grid 0,0:40,20:10,10 --out xy4                # ISO 230-2 lines per axis
     lps capture --planar --stage grbl:/dev/ttyUSB0 --camera 0 --board board.json --grid ... --out xy5
+    lps capture --scene run2 --compensation comp.csv --out scene2              # light-field scene (no board)
 
 One command for one axis and two: the plan comes from :mod:`lps_gui.cli.capture.plan`, the devices
 from :mod:`lps_gui.cli.capture.devices`; a plan with two axes runs on the simulated gantry (or the
@@ -104,6 +105,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     from lps_gui.cli.capture.live import add_live_arguments
 
     add_live_arguments(p)
+    from lps_gui.cli.capture.scene import add_scene_arguments
+
+    add_scene_arguments(p)
     a = p.add_argument_group("settle detection and averaging")
     a.add_argument("--settle-px", type=positive_finite, metavar="PX", help="before each stop's frame, grab until consecutive frames show the "
                    "board within PX pixels (mean corner shift), e.g. 0.02")
@@ -261,6 +265,10 @@ def _start(args: argparse.Namespace):
     """(session, stage, camera, engine) of a new capture on one axis or, with a planar switch, on two."""
     from lps_gui.errors import InputError
 
+    if args.scene:  # a light-field scene at a measured session's stops (issue 38)
+        from lps_gui.cli.capture.scene import start_scene
+
+        return start_scene(args)
     planar = wants_planar(args)
     if planar and args.compensation:
         raise InputError("--compensation: a table corrects one axis; planar plans are captured without one")

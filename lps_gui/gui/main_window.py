@@ -25,6 +25,7 @@ from PySide6.QtWidgets import (
 
 from lps_gui import __version__
 from lps_gui.core.clock import Clock
+from lps_gui.errors import LpsError
 from lps_gui.gui.camera.intrinsics import IntrinsicsPanel
 from lps_gui.gui.camera.panel import CameraPanel
 from lps_gui.gui.capture.panel import CapturePanel
@@ -145,6 +146,7 @@ class MainWindow(QMainWindow):
         m = mb.addMenu("&File")
         self.open_session_action = self._action(m, "Open session…", self.open_session_dialog, QKeySequence.StandardKey.Open)
         self._action(m, "Import images…", self.import_dialog)
+        self._action(m, "Open light field…", self.open_lightfield_dialog)
         m.addSeparator()
         self._action(m, "Export PDF report…", lambda: self.export("pdf"))
         self._action(m, "Export CSV…", lambda: self.export("csv"))
@@ -287,6 +289,21 @@ class MainWindow(QMainWindow):
         folder = QFileDialog.getExistingDirectory(self, "Open a session folder", self.last_folder())
         if folder:
             self.open_session(Path(folder))
+
+    def open_lightfield_dialog(self) -> None:
+        folder = QFileDialog.getExistingDirectory(self, "Open a light field folder", self.last_folder())
+        if folder:
+            self.open_lightfield(Path(folder))
+
+    def open_lightfield(self, folder: Path) -> bool:
+        """File > Open light field: the results dock's "Light field" tab shows the folder's EPIs and numbers."""
+        try:
+            self.results_panel.show_lightfield(folder)
+        except LpsError as exc:
+            self.show_error("Not a light field", str(exc))
+            return False
+        self.show_panel("results")
+        return True
 
     def import_dialog(self) -> Any:
         """File > Import images: the dialog, then the import as a job; the new session is opened for estimation."""

@@ -138,6 +138,18 @@ class ResultsPanel(QWidget):
         self.open_report_btn.clicked.connect(self.open_report)
 
     # ------------------------------------------------------------------ showing
+    def show_lightfield(self, folder: Path | str) -> None:
+        """A "Light field" tab with the folder's EPIs and epipolar numbers (replacing an earlier one), selected."""
+        from lps_gui.gui.results.lightfield import LightFieldPage
+
+        page = getattr(self, "lightfield_page", None)
+        if page is None:
+            page = self.lightfield_page = LightFieldPage()
+        page.load(folder)  # an InputError leaves the tabs as they were
+        if self.tabs.indexOf(page) < 0:
+            self.tabs.addTab(page, "Light field")
+        self.tabs.setCurrentWidget(page)
+
     def set_results(self, results: Results | dict[str, Any], session_dir: Path | None = None,
                     results_dir: Path | None = None) -> None:
         """Show ``results``: header at once, then one figure per event-loop turn.

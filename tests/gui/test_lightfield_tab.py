@@ -1,0 +1,33 @@
+"""File > Open light field: the results dock's "Light field" tab shows the EPIs and the epipolar numbers (issue 38)."""
+from __future__ import annotations
+
+import pytest
+
+from lps_gui.pipeline.demos.lightfield import run_lightfield_demo
+
+pytestmark = pytest.mark.gui
+
+
+@pytest.fixture(scope="module")
+def lightfield_folder(tmp_path_factory):
+    return run_lightfield_demo(tmp_path_factory.mktemp("lf") / "out", quick=True).plain.out
+
+
+def test_the_light_field_tab_shows_both_epis_and_the_numbers(window, lightfield_folder):
+    assert window.open_lightfield(lightfield_folder)
+    panel = window.results_panel
+    page = panel.lightfield_page
+    assert panel.tabs.currentWidget() is page and panel.tabs.tabText(panel.tabs.indexOf(page)) == "Light field"
+    text = page.summary.text()
+    assert "vertical disparity RMS" in text and "px after" in text and "HCI layout not written: view" in text
+    for caption, picture in page.pictures:
+        assert not picture.pixmap().isNull() and picture.pixmap().width() > 0
+    assert window.open_lightfield(lightfield_folder)  # opened again: one tab, not two
+    assert sum(panel.tabs.tabText(i) == "Light field" for i in range(panel.tabs.count())) == 1
+
+
+def test_a_folder_without_a_light_field_is_one_line_and_changes_nothing(window, tmp_path):
+    count = window.results_panel.tabs.count()
+    assert not window.open_lightfield(tmp_path)
+    assert window.last_error[0] == "Not a light field" and "lightfield.json" in window.last_error[1]
+    assert window.results_panel.tabs.count() == count

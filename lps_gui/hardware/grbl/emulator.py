@@ -29,11 +29,10 @@ import os
 import select
 import threading
 import time
-import tty
 
 from lps_gui.core.clock import SimClock
-from lps_gui.errors import HardwareError
 from lps_gui.hardware.grbl.firmware import BANNER, Faults, GrblFirmware
+from lps_gui.hardware.pty_device import PtyEndpoint
 from lps_gui.hardware.sim_stage import SimulatedStage
 
 log = logging.getLogger(__name__)
@@ -42,7 +41,7 @@ GARBAGE = b"\x00\xff\xfe#%\x07garbage\x1b[0m"
 __all__ = ["BANNER", "Faults", "GrblEmulator", "emulated_grbl_stage"]
 
 
-class GrblEmulator:
+class GrblEmulator(PtyEndpoint):
     """GRBL 1.1 on a pty. ``start()`` returns the device path a serial client opens.
 
     Use as a context manager in tests: ``with GrblEmulator(...) as emu: GrblStage(emu.path)``.
@@ -57,9 +56,8 @@ class GrblEmulator:
     def __init__(self, stage: SimulatedStage | None = None, faults: Faults | None = None, time_scale: float = 1.0,
                  homing_init_lock: bool = False, stepped: bool = False, line_latency_s: float = 0.0,
                  boot_race: bool = False) -> None:
-        self.stage = stage if stage is not None else SimulatedStage()
+        super().__init__(stage if stage is not None else SimulatedStage(), time_scale, "grbl-emulator")
         self.faults = faults or Faults()
-        self.time_scale = float(time_scale)
         self.stepped = stepped
         self.line_latency_s = float(line_latency_s)
         self.boot_race = boot_race
@@ -67,13 +65,8 @@ class GrblEmulator:
             raise ValueError("a stepped GRBL emulator needs a stage on a SimClock")
         self._lock = threading.RLock()  # the firmware is driven by the serving thread and by advance()
         self.bytes_in = 0  # bytes read from the port (a stepped test waits until its writes are in)
-        self.path = ""
-        self.dropped = False
         self.firmware = self.firmware_class(self.stage, self.faults, send=self._send, on_drop=self._drop_now,
                                      homing_init_lock=homing_init_lock)
-        self._master = self._slave = -1
-        self._thread: threading.Thread | None = None
-        self._running = False
         self._out: list[tuple[float, float, bytes]] = []  # (wall due, due on _now(), bytes), in the order GRBL printed them
         self._n_out = 0
 
@@ -83,63 +76,14 @@ class GrblEmulator:
         return self.firmware.rx_overflow_bytes
 
     @property
-    def running(self) -> bool:
-        """The serving thread is up (False after stop, a drop, or a crash logged as an error)."""
-        return self._running
-
-    @property
     def lines_received(self) -> int:
         return self.firmware.lines_received
 
-    # ------------------------------------------------------------------ lifecycle
-    def start(self) -> str:
-        """Open the pty, print the banner, serve in a thread; return the slave's path."""
-        self._master, self._slave = os.openpty()
-        tty.setraw(self._slave)
-        os.set_blocking(self._master, False)
-        self.path = os.ttyname(self._slave)
-        if not self.stage.connected:
-            self.stage.connect()
-        self._running = True
-        self._last_real = time.monotonic()
-        self.firmware.power_up(boot_race=self.boot_race)  # the homing lock (if built with it), then the welcome
+    # ------------------------------------------------------------------ lifecycle (hardware/pty_device.PtyEndpoint)
+    def _opened(self) -> None:
+        """Power-up: the homing lock (if built with it), then the welcome (twice with the boot race)."""
+        self.firmware.power_up(boot_race=self.boot_race)
         self._flush_out()
-        self._thread = threading.Thread(target=self._serve, name="grbl-emulator", daemon=True)
-        self._thread.start()
-        return self.path
-
-    def stop(self) -> None:
-        self._running = False
-        if self._thread is not None and threading.current_thread() is not self._thread:
-            self._thread.join(timeout=2.0)
-        self._close()
-
-    def drop(self) -> None:
-        """Vanish like an unplugged USB cable: close both ends of the pty."""
-        self.dropped = True
-        self.stop()
-
-    def _drop_now(self) -> None:
-        """Drop from inside the serving thread (fault injection)."""
-        self.dropped = True
-        self._running = False
-        self._close()
-
-    def _close(self) -> None:
-        for fd in (self._master, self._slave):
-            if fd >= 0:
-                try:
-                    os.close(fd)
-                except OSError:
-                    pass
-        self._master = self._slave = -1
-
-    def __enter__(self) -> "GrblEmulator":
-        self.start()
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.stop()
 
     @property
     def undelivered(self) -> list[str]:
@@ -180,18 +124,7 @@ class GrblEmulator:
             except OSError:
                 return
 
-    # ------------------------------------------------------------------ serving loop
-    def _serve(self) -> None:
-        try:
-            while self._running:
-                self._step()
-        except HardwareError as exc:  # the stage under us vanished (SimulatedStage.disconnect_fault)
-            log.info("GRBL emulator: stage gone (%s); dropping the port", exc)
-            self._drop_now()
-        except Exception:  # an emulator bug must show in the log, not hang the client
-            log.exception("GRBL emulator stopped")
-            self._running = False
-
+    # ------------------------------------------------------------------ serving loop (PtyEndpoint._serve)
     def _step(self) -> None:
         busy = self.firmware.busy or bool(self._out)
         r, _, _ = select.select([self._master], [], [], 0.002 if busy else 0.02)

@@ -17,3 +17,42 @@ def test_every_view_flagged_as_an_outlier_is_one_line_not_a_crash(point_session,
                                      "outliers (") and "raise the outlier threshold k" in str(exc.value)
     assert "\n" not in str(exc.value) and isinstance(exc.value, LpsError)
     assert not (point_session / "results.json").exists()
+
+
+def _lps(args, capsys) -> tuple[int, str]:
+    from lps_gui.cli import main
+    code = main([str(a) for a in args])
+    err = capsys.readouterr().err.strip().splitlines()
+    return code, err[-1] if err else ""
+
+
+def _board_and_views(tmp_path):
+    import cv2
+    import numpy as np
+
+    board = tmp_path / "board.json"
+    board.write_text('{"type": "chessboard", "inner_corners": [9, 6], "square_mm": 20}')
+    views = tmp_path / "views"
+    views.mkdir()
+    cv2.imwrite(str(views / "a.png"), np.full((24, 32), 128, np.uint8))
+    return board, views
+
+
+@pytest.mark.parametrize("kind", ["fifo", "urandom", "named-fifo"])
+def test_intrinsics_refuses_a_fifo_or_a_device_link_among_its_images_before_opening_it(tmp_path, capsys, monkeypatch, kind):
+    import os
+
+    board, views = _board_and_views(tmp_path)
+    odd = views / "b.png"
+    if kind == "urandom":
+        odd.symlink_to("/dev/urandom")
+    else:
+        os.mkfifo(odd)  # an open without O_NONBLOCK would block for ever
+    opened: list[str] = []
+    real_open = os.open
+    monkeypatch.setattr(os, "open", lambda path, *a, **k: opened.append(str(path)) or real_open(path, *a, **k))
+    images = [odd, views / "a.png"] if kind == "named-fifo" else [views]
+    code, err = _lps(["intrinsics", *images, "--board", board, "--workers", "1", "--out", tmp_path / "i.json"], capsys)
+    kind_word = "device" if kind == "urandom" else "FIFO"
+    assert code == 2 and err.endswith(f"{odd}: not a regular file (a {kind_word}); give the image as a regular file")
+    assert str(odd) not in opened and not (tmp_path / "i.json").exists()

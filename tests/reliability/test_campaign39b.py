@@ -56,3 +56,69 @@ def test_intrinsics_refuses_a_fifo_or_a_device_link_among_its_images_before_open
     kind_word = "device" if kind == "urandom" else "FIFO"
     assert code == 2 and err.endswith(f"{odd}: not a regular file (a {kind_word}); give the image as a regular file")
     assert str(odd) not in opened and not (tmp_path / "i.json").exists()
+
+
+def _spy_reads(monkeypatch) -> list[str]:
+    """The real paths every open in this process would read through a link (os.open without O_NOFOLLOW, open())."""
+    import builtins
+    import os
+
+    followed: list[str] = []
+    real_os_open, real_open = os.open, builtins.open
+
+    def os_open(path, flags, *a, **k):
+        if not flags & getattr(os, "O_NOFOLLOW", 0):
+            followed.append(os.path.realpath(path))
+        return real_os_open(path, flags, *a, **k)
+
+    def open_(file, *a, **k):
+        if isinstance(file, (str, bytes, os.PathLike)):
+            followed.append(os.path.realpath(file))
+        return real_open(file, *a, **k)
+
+    monkeypatch.setattr(os, "open", os_open)
+    monkeypatch.setattr(builtins, "open", open_)
+    return followed
+
+
+@pytest.mark.parametrize("where", [".", "results"])
+def test_a_journal_linked_to_etc_passwd_is_never_read(point_session, tmp_path, capsys, monkeypatch, where):
+    import os
+    from pathlib import Path
+
+    from lps_gui.io.file_set import JOURNAL
+
+    assert _lps(["estimate", point_session], capsys)[0] == 0
+    journal = point_session / where / JOURNAL
+    journal.symlink_to("/etc/passwd")
+    followed = _spy_reads(monkeypatch)
+    assert _lps(["estimate", point_session], capsys)[0] == 0
+    assert _lps(["compensate", point_session, "--format", "csv", "--out", tmp_path / "c.csv"], capsys)[0] == 0
+    monkeypatch.undo()
+    assert "/etc/passwd" not in followed and not os.path.lexists(journal)  # not a journal lps wrote: the link dropped
+    assert Path("/etc/passwd").is_file()
+
+
+def test_a_journal_linked_outside_is_not_replayed(point_session, tmp_path, capsys):
+    import json
+
+    from lps_gui.io.file_set import JOURNAL
+
+    (point_session / ".corners.vnl.1-x.tmp").write_text("not corners")  # what a replay would rename onto corners.vnl
+    outside = tmp_path / "journal.json"
+    outside.write_text(json.dumps({"renames": [[".corners.vnl.1-x.tmp", "corners.vnl"]]}))
+    (point_session / JOURNAL).symlink_to(outside)
+    corners = (point_session / "corners.vnl").read_bytes()
+    assert _lps(["estimate", point_session], capsys)[0] == 0
+    assert (point_session / "corners.vnl").read_bytes() == corners
+
+
+def test_detect_force_returns_with_a_fifo_journal(imaged_session, capsys):
+    import os
+
+    from lps_gui.io.file_set import JOURNAL
+
+    os.mkfifo(imaged_session / JOURNAL)  # an open() of it would block for ever (the watchdog ends the test)
+    assert _lps(["detect", imaged_session, "--force", "--workers", "1"], capsys)[0] == 0
+    assert _lps(["detect", imaged_session, "--force", "--workers", "1"], capsys)[0] == 0  # again, over its own corners
+    assert not os.path.lexists(imaged_session / JOURNAL) and (imaged_session / "corners.vnl").is_file()

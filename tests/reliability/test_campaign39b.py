@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import pytest
 
-from lps_gui.errors import DegenerateGeometryError, LpsError
+from lps_gui.errors import DegenerateGeometryError, InputError, LpsError
 
 
 @pytest.mark.parametrize("k", [1e-300, 0.01])
@@ -122,3 +122,78 @@ def test_detect_force_returns_with_a_fifo_journal(imaged_session, capsys):
     assert _lps(["detect", imaged_session, "--force", "--workers", "1"], capsys)[0] == 0
     assert _lps(["detect", imaged_session, "--force", "--workers", "1"], capsys)[0] == 0  # again, over its own corners
     assert not os.path.lexists(imaged_session / JOURNAL) and (imaged_session / "corners.vnl").is_file()
+
+
+def _big_corners(path, rows_mb: int, last: bytes = b"") -> int:
+    """A corners.vnl in the form `lps detect` writes, about ``rows_mb`` MB of 54-corner views, then ``last``."""
+    head = path.read_bytes().split(b"\nimages/", 1)[0] + b"\n"
+    view = b"".join(b"images/%06d.png " % 0 + b"%.4f %.4f 0\n" % (100 + i % 9 * 24.1, 100 + i // 9 * 24.3)
+                    for i in range(54))
+    n = (rows_mb << 20) // len(view)
+    with open(path, "wb") as f:
+        f.write(head)
+        for v in range(n):
+            f.write(view.replace(b"000000", b"%06d" % v))
+        f.write(last)
+    return n
+
+
+def test_a_corners_file_over_the_cap_is_refused_before_a_byte_of_it_is_parsed(point_session, monkeypatch):
+    from lps_gui.io.corners import vnl
+
+    path = point_session / "corners.vnl"
+    _big_corners(path, 2)
+    monkeypatch.setattr(vnl, "MAX_CORNERS_BYTES", 1 << 20)  # the 2 GB cap, scaled to the test
+    parsed: list[int] = []
+    monkeypatch.setattr(vnl, "read_simple", lambda *a: parsed.append(1))
+    with pytest.raises(InputError, match=r"corners.vnl: 2 MB, over the 1 MB limit of a corners file; delete it and run "):
+        vnl.read_corners_vnl(path, 54)
+    assert not parsed
+
+
+@pytest.mark.parametrize("last", [b"", b"images/999999.png 1.0 2.0 0\r\n"], ids=["detect-form", "hand-edited-tail"])
+def test_a_large_corners_file_is_read_in_bounded_memory_or_refused_before_the_general_parser(point_session, monkeypatch,
+                                                                                              last):
+    """The 250 MB case scaled down: the general parser holds ~14 bytes a byte (3.5 GB for 250 MB); the form
+    `lps detect` writes is read in blocks, and a file that leaves that form late is refused by its size."""
+    import tracemalloc
+
+    from lps_gui.io.corners import vnl
+
+    path = point_session / "corners.vnl"
+    views = _big_corners(path, 8, last)
+    size = path.stat().st_size
+    monkeypatch.setattr(vnl, "MAX_GENERAL_BYTES", 1 << 20)
+    general: list[int] = []
+    monkeypatch.setattr(vnl, "_parse", lambda *a: general.append(1))
+    tracemalloc.start()
+    try:
+        if last:
+            with pytest.raises(InputError, match=r"MB and not in the form `lps detect` writes \(over the 1 MB this reader "):
+                vnl.read_corners_vnl(path, 54)
+        else:
+            assert vnl.read_corners_vnl(path, 54).corners_px.shape == (views, 54, 2)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert not general and peak < 2 * size, (peak, size)  # the general parser: ~14 bytes a byte
+
+
+def test_the_general_parser_at_its_cap_stays_under_1_gb(point_session):
+    """The 250 MB hand-edited corners.vnl took 3.5 GB: the general parser's bytes per file byte, measured here on
+    4 MB, times the largest file it takes, must stay under 1 GB (at 256 MB, the cap before, it did not)."""
+    import tracemalloc
+
+    from lps_gui.io.corners import vnl
+
+    path = point_session / "corners.vnl"
+    views = _big_corners(path, 4)
+    path.write_bytes(path.read_bytes().replace(b"\n", b"\r\n"))  # CR LF line ends: only the general parser reads them
+    tracemalloc.start()
+    try:
+        assert vnl.read_corners_vnl(path, 54).corners_px.shape == (views, 54, 2)
+        per_byte = tracemalloc.get_traced_memory()[1] / path.stat().st_size
+    finally:
+        tracemalloc.stop()
+    assert per_byte > 2  # it is the general parser that was measured
+    assert per_byte * vnl.MAX_GENERAL_BYTES < 1e9, (per_byte, vnl.MAX_GENERAL_BYTES)

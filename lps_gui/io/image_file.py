@@ -18,6 +18,7 @@ from lps_gui.file_limits import (  # re-exported: every reader's way in
     check_regular_file,
     read_file_limited,
 )
+from lps_gui.png_clean import clean_png
 
 MAX_IMAGE_BYTES = MAX_FILE_BYTES  # 1 GB on disk
 __all__ = ["MAX_IMAGE_BYTES", "check_regular_file", "decode_image", "read_file_limited", "read_image"]
@@ -31,6 +32,7 @@ def decode_image(data: bytes, name: str, flags: int | None = None) -> np.ndarray
     if not data:
         return None
     quiet_opencv()
+    data = clean_png(data, name)  # libpng prints to stderr itself: it gets only checked, critical chunks
     return cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_GRAYSCALE if flags is None else flags)
 
 

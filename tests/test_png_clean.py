@@ -173,3 +173,44 @@ def test_the_camera_paths_decode_through_the_same_check(tmp_path, capfd):
     with pytest.raises(HardwareError, match=r"^camera gphoto2:: d.png: a damaged PNG \(its IDAT chunk at byte 33 "):
         decode(_damage(_encoded(grey), "idat-crc"), "camera gphoto2:: d.png")
     assert capfd.readouterr().err == ""
+
+
+@pytest.mark.parametrize("ext", [".bmp", ".pgm"])
+def test_opencvs_own_error_lines_for_a_truncated_image_never_reach_stderr(capfd, ext):
+    """OpenCV logs "[ERROR:0@0.9] global loadsave.cpp ... Unexpected end of input stream" at its default level."""
+    import cv2.utils.logging as cv_log
+
+    data = bytes(cv2.imencode(ext, RNG.integers(0, 256, (64, 80), dtype=np.uint8))[1])
+    level = cv_log.getLogLevel()
+    capfd.readouterr()
+    assert decode_image(data[:len(data) * 2 // 3], "t" + ext) is None  # read_image turns it into its one line
+    assert capfd.readouterr().err == ""
+    assert cv_log.getLogLevel() == level  # put back: other OpenCV errors are still logged
+
+
+def test_overlapping_decodes_on_threads_put_the_log_level_back_once():
+    import threading
+
+    import cv2.utils.logging as cv_log
+
+    from lps_gui.quiet_decode import opencv_log_silenced
+
+    level = cv_log.getLogLevel()
+    inside, go = threading.Event(), threading.Event()
+
+    def other():
+        with opencv_log_silenced():
+            inside.set()
+            go.wait(30)
+
+    t = threading.Thread(target=other)
+    t.start()
+    try:
+        assert inside.wait(30)
+        with opencv_log_silenced():
+            assert cv_log.getLogLevel() == cv_log.LOG_LEVEL_SILENT
+        assert cv_log.getLogLevel() == cv_log.LOG_LEVEL_SILENT  # the other decode is still under way
+    finally:
+        go.set()
+        t.join(30)
+    assert cv_log.getLogLevel() == level

@@ -115,10 +115,11 @@ class FolderReplayCamera(Camera):
 def _read_checked(path: Path) -> np.ndarray | None:
     """Decode ``path`` after checking its header's pixel count (a tiny file can decode to gigabytes)."""
     from lps_gui.core.image_header import bytes_reader, check_image_header
+    from lps_gui.quiet_decode import imdecode_quiet
 
     try:
         data = read_file_limited(path, what="image", follow_symlinks=False)
     except InputError as exc:
         raise HardwareError(str(exc)) from None
     check_image_header(data[:1 << 16], str(path), read_at=bytes_reader(data))
-    return cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED) if data else None
+    return imdecode_quiet(data, str(path), cv2.IMREAD_UNCHANGED) if data else None

@@ -26,6 +26,7 @@ from lps_gui.camera.sdk_device import SdkCamera
 from lps_gui.core.clock import Clock
 from lps_gui.core.image_header import HEADER_BYTES, bytes_reader, check_image_header
 from lps_gui.errors import HardwareError, InputError
+from lps_gui.quiet_decode import imdecode_quiet
 
 WIDGETS = {"exposure": "shutterspeed", "gain": "iso", "pixel format": "imageformat", "white balance": "whitebalance"}
 AUTO_WORDS = ("auto", "automatic")
@@ -150,9 +151,9 @@ def decode(data: bytes, what: str) -> np.ndarray:
     """
     try:
         check_image_header(data[:HEADER_BYTES], what, read_at=bytes_reader(data))
+        image = imdecode_quiet(data, what, cv2.IMREAD_UNCHANGED)
     except InputError as exc:
         raise HardwareError(f"{exc}, then resume") from None
-    image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
     if image is None:
         raise HardwareError(f"{what}: not a JPEG or TIFF picture (raw files are not decoded); "
                             "set the camera's image format to JPEG Fine, then resume")

@@ -7,6 +7,7 @@ Fault switches inject what goes wrong with real hardware.
 from __future__ import annotations
 
 import argparse
+from typing import Any
 
 from lps_gui.cli.option_types import float_range
 
@@ -33,20 +34,23 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     faults.add_argument("--fail-homing", type=int, nargs="?", const=8, choices=(8, 9), metavar="CODE",
                         help="every $H fails half-way with ALARM:CODE (8 pull-off, the default; 9 switch not found), then ok and a reset")
     faults.add_argument("--garbage-every", type=int, default=0, metavar="N", help="send a line of garbage bytes before every Nth message")
+    link = parser.add_argument_group("link timing (GRBL: the races a real board's USB link and boot produce)")
+    link.add_argument("--line-latency", type=float_range(0.0, 1000.0), default=0.0, metavar="MS",
+                      help="deliver every reply line MS milliseconds after the one before it, like a USB serial "
+                           "adapter's latency timer (16 on FTDI chips): a report asked for before a real-time byte "
+                           "can then arrive after it")
+    link.add_argument("--boot-race", action="store_true",
+                      help="boot as the port opens (an Arduino's DTR reset): the boot banner waits for the host's "
+                           "first byte, and a reset byte sent during boot gives a second banner after it")
 
 
 def run(args: argparse.Namespace) -> int:
     return serve(args, "grbl")
 
 
-def serve(args: argparse.Namespace, kind: str) -> int:
-    """Serve the emulator of stage ``kind`` (a registry name) over the simulated stage the switches describe."""
-    import signal
-    import sys
-    import time
-
+def build_emulator(args: argparse.Namespace, kind: str) -> Any:
+    """The (not yet started) emulator of stage ``kind`` (a registry name) over the simulated stage the switches describe."""
     from lps_gui.errors import InputError
-    from lps_gui.hardware.announce import announce
     from lps_gui.hardware.grbl.emulator import Faults
     from lps_gui.hardware.registry import emulated_kinds
     from lps_gui.hardware.sim_stage import SimulatedStage
@@ -70,15 +74,27 @@ def serve(args: argparse.Namespace, kind: str) -> int:
         error_code=args.error_code, reply_delay_s=args.reply_delay, garbage_every=args.garbage_every,
         fail_homing=args.fail_homing,
     )
+    emulator = emulated_kinds()[kind].emulator
+    assert emulator is not None  # emulated_kinds() lists only kinds with one
+    options = {"homing_init_lock": not args.no_homing_lock,  # GRBL's build option
+               "line_latency_s": args.line_latency / 1000.0, "boot_race": args.boot_race} if kind == "grbl" else {}
+    return emulator()(stage, faults=faults, time_scale=args.time_scale, **options)
+
+
+def serve(args: argparse.Namespace, kind: str) -> int:
+    """Serve the emulator of stage ``kind`` (a registry name) over the simulated stage the switches describe."""
+    import signal
+    import sys
+    import time
+
+    from lps_gui.hardware.announce import announce
+
+    emu = build_emulator(args, kind)
     stop: list[int] = []  # a plain flag: a handler calling Event.set() can deadlock on the lock wait() holds
     try:  # SIGTERM (a service manager, `kill`) stops as cleanly as Ctrl-C; set before the path is announced
         signal.signal(signal.SIGTERM, lambda signum, _frame: stop.append(signum))
     except ValueError:  # not the main thread (tests calling run() directly)
         pass
-    emulator = emulated_kinds()[kind].emulator
-    assert emulator is not None  # emulated_kinds() lists only kinds with one
-    options = {"homing_init_lock": not args.no_homing_lock} if kind == "grbl" else {}  # GRBL's build option
-    emu = emulator()(stage, faults=faults, time_scale=args.time_scale, **options)
     withdraw = None
     try:
         path = emu.start()

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import os
+import stat
 from pathlib import Path, PurePosixPath
 from typing import Mapping
 
@@ -100,11 +101,16 @@ def recover_file_set(folder: Path | str) -> bool:
     """
     folder = Path(folder)
     path = folder / JOURNAL
-    if not os.path.lexists(path):
+    try:
+        st = os.lstat(path)
+    except OSError:
         return False
-    try:  # a FIFO or a link (to /dev/zero, /etc/passwd) is never opened: not a journal lps wrote
+    if not stat.S_ISREG(st.st_mode):  # a FIFO or a link (to /dev/zero, /etc/passwd): never opened, never a journal
+        _unlink(path)  # lps wrote; dropped like a torn one (a link's target is untouched), so the next commit can write its own
+        return False
+    try:
         data = read_file_limited(path, 1 << 20, "journal", follow_symlinks=False)
-    except InputError:
+    except InputError:  # replaced meanwhile, or over 1 MB
         return False
     try:
         record = json.loads(data)

@@ -18,29 +18,20 @@ from lps_gui.file_limits import (  # re-exported: every reader's way in
     check_regular_file,
     read_file_limited,
 )
+from lps_gui.quiet_decode import imdecode_quiet
 
 MAX_IMAGE_BYTES = MAX_FILE_BYTES  # 1 GB on disk
 __all__ = ["MAX_IMAGE_BYTES", "check_regular_file", "decode_image", "read_file_limited", "read_image"]
 
 
 def decode_image(data: bytes, name: str, flags: int | None = None) -> np.ndarray | None:
-    """Decode bytes after the header check; None when OpenCV cannot decode them."""
+    """Decode bytes after the header check; None when OpenCV cannot decode them (its own lines kept off stderr)."""
     import cv2
 
     check_image_header(data[:HEADER_BYTES], name, read_at=bytes_reader(data))
     if not data:
         return None
-    quiet_opencv()
-    return cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_GRAYSCALE if flags is None else flags)
-
-
-def quiet_opencv() -> None:
-    """OpenCV's decoder warnings ("[ WARN:0@0.4] global grfmt_tiff.cpp ...") off stderr: lps says what is wrong
-    with a file in its own one line, and a decode that fails is reported as such."""
-    import cv2.utils.logging as cv_log
-
-    if cv_log.getLogLevel() > cv_log.LOG_LEVEL_ERROR:
-        cv_log.setLogLevel(cv_log.LOG_LEVEL_ERROR)
+    return imdecode_quiet(data, name, cv2.IMREAD_GRAYSCALE if flags is None else flags)
 
 
 def image_size(path: Path | str) -> tuple[int, int]:

@@ -18,12 +18,20 @@ IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".pgm")
 
 
 def expand_image_paths(items: list[Path]) -> list[Path]:
-    """Files as given, folders expanded to their images (sorted)."""
+    """Files as given, folders expanded to their images (sorted); InputError for an image (named, or a folder
+    entry named like one) that is no regular file (a FIFO, a device, a link to one), by its stat before any open."""
+    from lps_gui.file_limits import check_regular_file
+
     out: list[Path] = []
     for item in map(Path, items):
         if item.is_dir():
-            out += sorted(p for p in item.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+            found = sorted(p for p in item.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+            for p in found:  # a link to a regular file elsewhere is the user's choice; /dev/urandom is not an image
+                check_regular_file(p, "image")
+            out += found
         else:
+            if item.exists():  # a missing one fails as its view, like an unreadable image
+                check_regular_file(item, "image")
             out.append(item)
     return out
 

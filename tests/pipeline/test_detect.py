@@ -152,7 +152,8 @@ def test_unreadable_image_without_hash(tmp_path, rendered):
     bad = tmp_path / "bad.png"
     bad.write_bytes((folder / "images/000001.png").read_bytes()[:5000])
     table = detect_images([good, bad, tmp_path / "nope.png"], SPEC.rig.board, workers=1)
-    assert table.failed[str(bad)] == "image unreadable or truncated"
+    assert table.failed[str(bad)].startswith("a damaged PNG (its IDAT chunk at byte ")  # found before libpng decodes
+    assert table.failed[str(bad)].endswith(" runs past the end of the file: truncated); copy or capture the image again")
     assert table.failed[str(tmp_path / "nope.png")] == "image file missing"
     assert rms(table.corners_px[0], truth[0]) < 0.05
 

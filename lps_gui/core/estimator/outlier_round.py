@@ -71,11 +71,12 @@ def judge_views(sol: Solution, rms: np.ndarray, position_test: PositionTest, ind
     if not new.any():
         return False
     sol.outlier |= new
+    if sol.used.sum() < MIN_VIEWS_LEFT:  # before a new gauge view is chosen: every view may be flagged
+        raise DegenerateGeometryError(f"{source}: fewer than {MIN_VIEWS_LEFT} views are left after removing outliers "
+                                      f"({int(sol.used.sum())} of {int(sol.usable.sum())}); check the capture, or raise "
+                                      "the outlier threshold k")
     if sol.outlier[sol.ref]:
         sol.ref = int(np.flatnonzero(sol.used)[0])
-    if sol.used.sum() < MIN_VIEWS_LEFT:
-        raise DegenerateGeometryError(f"{source}: fewer than {MIN_VIEWS_LEFT} views are left after removing outliers; "
-                                      "check the capture")
     return True
 
 

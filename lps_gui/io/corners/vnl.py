@@ -173,7 +173,7 @@ def read_corners_vnl(path: Path | str, n_corners: int) -> CornerTable:
             raise InputError(f"{path}: {st.st_size / 1e6:.0f} MB and not in the form `lps detect` writes (over the "
                              f"{MAX_GENERAL_BYTES / 1e6:.0f} MB this reader takes); delete it and run `lps detect` again")
         stream.seek(0)
-        data = stream.read(MAX_GENERAL_BYTES + 1)
+        data = stream.read(st.st_size + 1)  # not MAX_GENERAL_BYTES + 1: read(n) allocates n bytes first
     try:
         text = data.decode("utf-8")
     except FileNotFoundError:

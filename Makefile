@@ -20,10 +20,13 @@ demo-quick: $(STAMP)
 
 # the real-window tests (tests/gui/test_real_window.py) need an X server (Xvfb) and Qt's xcb libraries, installed
 # here when missing and apt-get can run (as root; stdin closed, a timeout: a stuck apt never hangs the build)
+XCB_PKGS := xvfb libxcb-cursor0 libxcb-icccm4 libxcb-keysyms1 libxcb-image0 libxcb-render-util0 libxcb-shape0 \
+	libxcb-randr0 libxcb-xinerama0 libxcb-xkb1 libxkbcommon-x11-0
+# a fresh machine's package lists may be empty: on a failed install, update them once and try again
 XVFB := { command -v Xvfb && ldconfig -p | grep -q libxcb-cursor.so.0 && ldconfig -p | grep -q libxcb-icccm.so.4; } >/dev/null \
-	|| { [ "$$(id -u)" = 0 ] && timeout 300 apt-get install -y -q xvfb libxcb-cursor0 libxcb-icccm4 libxcb-keysyms1 \
-	libxcb-image0 libxcb-render-util0 libxcb-shape0 libxcb-randr0 libxcb-xinerama0 libxcb-xkb1 libxkbcommon-x11-0 \
-	>/dev/null </dev/null; } || echo "make: Xvfb or Qt's xcb libraries missing and not installable (see README, Install)"
+	|| { [ "$$(id -u)" = 0 ] && { timeout 300 apt-get install -y -q $(XCB_PKGS) >/dev/null 2>&1 </dev/null \
+	|| { timeout 300 apt-get update -q >/dev/null 2>&1 </dev/null && timeout 300 apt-get install -y -q $(XCB_PKGS) \
+	>/dev/null </dev/null; }; }; } || echo "make: Xvfb or Qt's xcb libraries missing and not installable (see README, Install)"
 
 test: $(STAMP)
 	@$(XVFB)

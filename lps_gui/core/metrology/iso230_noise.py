@@ -9,12 +9,16 @@ campaign: A +7.5 um on U 7.6 um, R +11 um, coverage 50 %; 0 % with realism).
 ISO 230-2's figures are the stage's, so the noise is the measurement's.
 
 How: the figures are non-linear (max over targets of x̄ + 2s), so the noise is
-propagated by Monte Carlo (GUM Supplement 1): the measured deviations plus
-fresh draws of each view's independent noise give the distribution of each
-figure around the measured one. Its mean minus the measured figure estimates
-the bias the noise adds (bootstrap bias correction; the figure reported is the
-measured one minus that bias) and its standard deviation is the noise's
-standard uncertainty of the figure, which replaces the budget's per-displacement
+propagated by Monte Carlo (GUM Supplement 1) and taken out by SIMEX (Cook and
+Stefanski 1994, the simulation-extrapolation of measurement-error models):
+the measured deviations plus fresh draws of lambda times each view's noise
+variance give each figure's mean as a function of lambda (0.5 ... 2); a
+quadratic through those means and the measured figure (lambda = 0),
+extrapolated to lambda = -1, is the figure without noise. A one-step bootstrap
+correction (lambda = 1 only) left half the bias: the inflation of sqrt(s^2 +
+sigma^2) shrinks as s grows. The spread of the figure at lambda = 1, times
+``SIMEX_U_FACTOR`` (the extrapolation scatters more), is the noise's standard
+uncertainty of the corrected figure; it replaces the budget's per-displacement
 noise rows in U (terms common to a target across runs - intrinsics, lens
 misfit, print scale - stay in the budget). The reference view's noise is a
 common offset of every deviation: no ISO figure (all differences) sees it.

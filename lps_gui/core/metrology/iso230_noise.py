@@ -90,15 +90,17 @@ def noise_corrected_iso(target_mm: np.ndarray, direction: np.ndarray, run: np.nd
     ok = np.asarray(valid, bool) & np.isfinite(x)
     noise = np.where(ok, np.nan_to_num(np.asarray(noise_um, float)), 0.0)
     measured = _figure_vector(t, sign, r, x, ok)
+    if not np.isfinite(measured).any():
+        return {}
     rng = np.random.default_rng(SEED)
     per = max(draws // len(SIMEX_LAMBDA), 2)
     means, sd = [], None
     for lam in SIMEX_LAMBDA:
         sims = np.array([_figure_vector(t, sign, r, x + np.sqrt(lam) * noise * rng.standard_normal(x.size), ok)
                          for _ in range(per)])
-        means.append(np.nanmean(sims, axis=0))
+        means.append(sims.mean(axis=0))  # a figure the plan leaves undefined is NaN in every draw
         if lam == 1.0:
-            sd = np.nanstd(sims, axis=0, ddof=1)
+            sd = sims.std(axis=0, ddof=1)
     # SIMEX: the figure's mean as a quadratic in the added noise variance (lambda sigma^2), extrapolated to
     # lambda = -1 (no noise at all); lambda = 0 is the measured figure itself
     lam = np.array((0.0,) + SIMEX_LAMBDA)

@@ -33,7 +33,7 @@ import numpy as np
 
 from lps_gui.core.metrology.iso230 import bidirectional_figures, direction_signs
 
-__all__ = ["NOISE_KEYS", "apply_noise_correction", "independent_sigma_um", "noise_corrected_iso"]
+__all__ = ["NOISE_KEYS", "apply_noise_correction", "independent_sigma_um", "noise_bound", "noise_corrected_iso"]
 
 NOISE_KEYS = ("A_um", "A_up_um", "A_down_um", "E_um", "E_up_um", "E_down_um", "M_um",
               "R_um", "R_up_um", "R_down_um", "B_um", "B_mean_um")
@@ -68,6 +68,28 @@ def _figure_vector(target_mm: np.ndarray, sign: np.ndarray, run: np.ndarray, dev
     return np.array([np.nan if getattr(fig, k) is None else float(getattr(fig, k)) for k in NOISE_KEYS])
 
 
+def noise_bound(fig: Any, noise_um: np.ndarray) -> float:
+    """Factor (<= 1) on the claimed per-view noise so that it is no larger than the run-to-run scatter it makes.
+
+    Repeated approaches of a target differ by the stage's repeatability plus the noise, so their pooled
+    variance bounds the noise's. A sigma that also carries model misfit (a carriage's angular motion
+    against the constant-orientation model: 0.34 px where the corners have 0.016) would otherwise take
+    out far more than noise (R of a stage with angles went to 0, truth 8 um). 1 when no target was
+    approached twice in one direction.
+    """
+    if fig is None:
+        return 1.0
+    tab = fig.per_target
+    dof = np.concatenate([tab.n_up, tab.n_down]).astype(float) - 1.0
+    var = np.concatenate([tab.std_up_um, tab.std_down_um]) ** 2
+    keep = (dof > 0) & np.isfinite(var)
+    claimed = float(np.mean(np.square(noise_um))) if np.size(noise_um) else 0.0
+    if not keep.any() or claimed <= 0:
+        return 1.0
+    pooled = float(np.sum(dof[keep] * var[keep]) / np.sum(dof[keep]))
+    return float(min(1.0, np.sqrt(pooled / claimed)))
+
+
 def noise_corrected_iso(target_mm: np.ndarray, direction: np.ndarray, run: np.ndarray, deviation_um: np.ndarray,
                         valid: np.ndarray, noise_um: np.ndarray, draws: int = DRAWS) -> dict[str, dict[str, float]]:
     """Per ISO figure: the measured value, the noise's bias and standard uncertainty, the corrected value (um).
@@ -79,8 +101,8 @@ def noise_corrected_iso(target_mm: np.ndarray, direction: np.ndarray, run: np.nd
 
     Returns
     -------
-    ``{key: {"measured", "bias", "u_noise", "corrected"}}`` for the figures the data define (``u_noise``: the
-    noise's standard uncertainty of the corrected figure);
+    ``{key: {"measured", "bias", "noise_scale", "u_noise", "corrected"}}`` for the figures the data define
+    (``u_noise``: the noise's standard uncertainty of the corrected figure; ``noise_scale``: :func:`noise_bound`);
     ``corrected`` is the measured value minus the bias, never below 0 for a span or range.
     """
     t = np.asarray(target_mm, float)
@@ -92,6 +114,8 @@ def noise_corrected_iso(target_mm: np.ndarray, direction: np.ndarray, run: np.nd
     measured = _figure_vector(t, sign, r, x, ok)
     if not np.isfinite(measured).any():
         return {}
+    scale = noise_bound(bidirectional_figures(t, sign, r, x, ok), noise[ok])
+    noise = scale * noise
     rng = np.random.default_rng(SEED)
     per = max(draws // len(SIMEX_LAMBDA), 2)
     means, sd = [], None
@@ -114,7 +138,7 @@ def noise_corrected_iso(target_mm: np.ndarray, direction: np.ndarray, run: np.nd
         corrected = measured[i] - bias[i]
         if key != "B_mean_um":  # spans, ranges, max |B_j|: not negative
             corrected = max(corrected, 0.0)
-        out[key] = {"measured": float(measured[i]), "bias": float(bias[i]),
+        out[key] = {"measured": float(measured[i]), "bias": float(bias[i]), "noise_scale": scale,
                     "u_noise": float(SIMEX_U_FACTOR * sd[i]), "corrected": float(corrected)}
     return out
 

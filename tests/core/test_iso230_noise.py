@@ -75,3 +75,18 @@ def test_the_reference_views_share_is_left_out() -> None:
     sigma = np.array([0.0, 2.0, 2.0, 2.0])  # the reference view: sigma 0 by the gauge
     own = independent_sigma_um(sigma)
     assert own[0] == 0.0 and np.allclose(own[1:], np.sqrt(2.0))
+
+
+def test_a_sigma_larger_than_the_scatter_it_would_make_is_bounded_by_it() -> None:
+    # a sigma that carries model misfit (a carriage's angles against the constant-orientation model) claims
+    # 20 um where the runs scatter by 1 um: taking out 20 um of noise would leave R = 0 (truth ~4 um)
+    rng = np.random.default_rng(3)
+    t, d, r = _plan()
+    true = 0.1 * t + 2.0 * (d > 0) + 1.0 * rng.standard_normal(t.size)
+    meas = true + 0.3 * rng.standard_normal(t.size)
+    corr = noise_corrected_iso(t, d, r, meas, np.ones(t.size, bool), np.full(t.size, 20.0), draws=100)
+    truth = bidirectional_figures(t, d, r, true)
+    assert corr["R_um"]["noise_scale"] < 0.1
+    for key in ("R_um", "A_um"):
+        assert abs(corr[key]["corrected"] - getattr(truth, key)) <= 2 * corr[key]["u_noise"] + 0.5, key
+        assert corr[key]["corrected"] > 0.3 * getattr(truth, key), key  # not taken to 0 by a noise that is not there

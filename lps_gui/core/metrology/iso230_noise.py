@@ -30,6 +30,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from scipy.stats import chi2
 
 from lps_gui.core.metrology.iso230 import bidirectional_figures, direction_signs
 
@@ -42,7 +43,8 @@ SIMEX_LAMBDA = (0.5, 1.0, 1.5, 2.0)  # added noise variance in units of the view
 SEED = 20260535
 # the extrapolated figure scatters more than the measured one: over 60 synthetic sessions (12 targets, 2 runs each
 # way, noise 1-3 um on repeatability 1-3 um) its error's sd was 1.37-1.62 times the sd at lambda = 1
-SIMEX_U_FACTOR = 1.5  # fixed: results do not change between runs of the same session
+SIMEX_U_FACTOR = 1.5
+REJECT_P = 0.001  # a claimed noise the run-to-run scatter rejects at this level is not the noise  # fixed: results do not change between runs of the same session
 
 
 def independent_sigma_um(sigma_um: np.ndarray) -> np.ndarray:
@@ -69,13 +71,14 @@ def _figure_vector(target_mm: np.ndarray, sign: np.ndarray, run: np.ndarray, dev
 
 
 def noise_bound(fig: Any, noise_um: np.ndarray) -> float:
-    """Factor (<= 1) on the claimed per-view noise so that it is no larger than the run-to-run scatter it makes.
+    """Factor (<= 1) on the claimed per-view noise when the run-to-run scatter it would make is not there.
 
     Repeated approaches of a target differ by the stage's repeatability plus the noise, so their pooled
     variance bounds the noise's. A sigma that also carries model misfit (a carriage's angular motion
     against the constant-orientation model: 0.34 px where the corners have 0.016) would otherwise take
-    out far more than noise (R of a stage with angles went to 0, truth 8 um). 1 when no target was
-    approached twice in one direction.
+    out far more than noise (R of a stage with angles went to 0, truth 8 um). Only a claim the scatter
+    rejects (chi-square, ``REJECT_P``) is replaced, by half the pooled variance (the scatter's split into
+    repeatability and noise is unknown). 1 when no target was approached twice in one direction.
     """
     if fig is None:
         return 1.0
@@ -86,8 +89,12 @@ def noise_bound(fig: Any, noise_um: np.ndarray) -> float:
     claimed = float(np.mean(np.square(noise_um))) if np.size(noise_um) else 0.0
     if not keep.any() or claimed <= 0:
         return 1.0
-    pooled = float(np.sum(dof[keep] * var[keep]) / np.sum(dof[keep]))
-    return float(min(1.0, np.sqrt(pooled / claimed)))
+    n = float(np.sum(dof[keep]))
+    pooled = float(np.sum(dof[keep] * var[keep]) / n)
+    if pooled >= claimed * chi2.ppf(REJECT_P, n) / n:
+        return 1.0  # the scatter could hold the claimed noise: keep it
+    # the claim is rejected; the scatter is repeatability plus noise in unknown shares: take half of it
+    return float(np.sqrt(0.5 * pooled / claimed))
 
 
 def noise_corrected_iso(target_mm: np.ndarray, direction: np.ndarray, run: np.ndarray, deviation_um: np.ndarray,
@@ -138,8 +145,11 @@ def noise_corrected_iso(target_mm: np.ndarray, direction: np.ndarray, run: np.nd
         corrected = measured[i] - bias[i]
         if key != "B_mean_um":  # spans, ranges, max |B_j|: not negative
             corrected = max(corrected, 0.0)
+        u = SIMEX_U_FACTOR * sd[i]
+        if scale < 1.0:  # the noise's share of the scatter is unknown (0 to all of it): the bias 0 to twice this one
+            u = float(np.hypot(u, bias[i] / np.sqrt(3.0)))
         out[key] = {"measured": float(measured[i]), "bias": float(bias[i]), "noise_scale": scale,
-                    "u_noise": float(SIMEX_U_FACTOR * sd[i]), "corrected": float(corrected)}
+                    "u_noise": float(u), "corrected": float(corrected)}
     return out
 
 

@@ -90,3 +90,10 @@ def test_a_sigma_larger_than_the_scatter_it_would_make_is_bounded_by_it() -> Non
     for key in ("R_um", "A_um"):
         assert abs(corr[key]["corrected"] - getattr(truth, key)) <= 2 * corr[key]["u_noise"] + 0.5, key
         assert corr[key]["corrected"] > 0.3 * getattr(truth, key), key  # not taken to 0 by a noise that is not there
+
+
+def test_both_directions_are_at_least_each_direction_after_the_correction() -> None:
+    for corr, _ in _sessions(5, noise_um=20.0, repeat_um=1.0):  # noise-dominated: each figure corrected alone
+        for letter in ("A", "R", "E"):
+            both = corr[f"{letter}_um"]["corrected"]
+            assert both >= corr[f"{letter}_up_um"]["corrected"] and both >= corr[f"{letter}_down_um"]["corrected"]

@@ -146,16 +146,14 @@ def noise_corrected_iso(target_mm: np.ndarray, direction: np.ndarray, run: np.nd
 
 def _bidirectional_at_least_each_way(out: dict[str, dict[str, float]]) -> None:
     """A, R, E over both directions are at least each direction's (ISO 230-2's definitions); corrected one by
-    one, a noise-dominated session could break that (A 12 um beside A down 95 um): the larger one is kept."""
+    one, a noise-dominated session could break that (A 12 um beside A down 95 um, truth 17 and 15). The
+    figure over both directions rests on all the data: a direction's figure is capped at it. (Raising the
+    both-ways figure instead made R's mean (error/sigma)^2 2.27 on line-both with realism, 1.81 without.)"""
     for letter in ("A", "R", "E"):
         bi = out.get(f"{letter}_um")
-        each = [out[k] for k in (f"{letter}_up_um", f"{letter}_down_um") if k in out]
-        if bi is None or not each:
-            continue
-        top = max(each, key=lambda c: c["corrected"])
-        if top["corrected"] > bi["corrected"]:
-            bi["corrected"] = top["corrected"]
-            bi["u_noise"] = max(bi["u_noise"], top["u_noise"])
+        for key in (f"{letter}_up_um", f"{letter}_down_um"):
+            if bi is not None and key in out and out[key]["corrected"] > bi["corrected"]:
+                out[key]["corrected"] = bi["corrected"]
 
 
 def _corrected(out: dict[str, dict[str, float]], measured: np.ndarray, bias: np.ndarray, sd: np.ndarray,

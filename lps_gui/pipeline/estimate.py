@@ -265,6 +265,11 @@ def session_figures(obs: Observations, est: LpsEstimate) -> dict[str, Any]:
     positive = valid & (sigma_um > 0)
     sigma_um = np.where(valid & ~(sigma_um > 0), np.median(sigma_um[positive]) if positive.any() else 1.0, sigma_um)
     figures = figures_for_session(obs.target_mm, obs.direction, obs.run, dev_um, valid=valid, sigma_um=sigma_um)
+    if figures.get("iso230_2"):  # the camera's noise inflates s_j and the extremes: take it out (issue 35)
+        from lps_gui.core.metrology.iso230_noise import apply_noise_correction, independent_sigma_um, noise_corrected_iso
+
+        corr = noise_corrected_iso(obs.target_mm, obs.direction, obs.run, dev_um, valid, independent_sigma_um(sigma_um))
+        figures["iso230_2"] = apply_noise_correction(figures["iso230_2"], corr)
     single = figures.get("single_run")
     if single is not None and valid.sum() >= 3:
         single.update(scale_with_uncertainty(obs, est, valid, sigma_um))

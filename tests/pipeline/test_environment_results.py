@@ -40,7 +40,11 @@ def test_board_at_23c_with_23ppm_changes_scale_by_plus_69ppm(session, tmp_path):
     assert sources["board temperature"]["contribution_um"] > 0
     assert sources["board square size"]["type"] == "B"
     assert unc["expanded_k2_um"] > 0 and unc["coverage_factor"] == 2
-    assert unc["figures_k2"]["A_um"] == unc["expanded_k2_um"]
+    # A's U: the noise-corrected A's own noise u (Monte Carlo) with the budget's rows that are not per-view noise
+    noise_u = at23["figures"]["iso230_2"]["noise_correction"]["A_um"]["u_noise"]
+    other = [r["contribution_um"] for r in unc["budget"]
+             if r["contribution_um"] is not None and r["source"] not in ("corner noise", "reference view noise")]
+    assert unc["figures_k2"]["A_um"] == pytest.approx(2 * (noise_u**2 + sum(c * c for c in other)) ** 0.5)
 
 
 def test_without_environment_nothing_is_corrected(session, tmp_path):

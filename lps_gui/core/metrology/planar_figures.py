@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from lps_gui.core.metrology.iso230 import figures_for_session
+from lps_gui.core.metrology.iso230_noise import apply_noise_correction, independent_sigma_um, noise_corrected_iso
 from lps_gui.core.metrology.iso230_run import JsonDataclass, target_index
 from lps_gui.core.metrology.resolution import profile_span
 
@@ -150,6 +151,10 @@ def planar_figures(
             try:
                 iso = figures_for_session(target_mm[sel, moving], np.where(signs > 0, "+", "-"), runs_key,
                                           deviation_um[sel, moving], None)
+                if iso.get("iso230_2"):  # the per-view noise taken out, as a line's (issue 35)
+                    corr = noise_corrected_iso(target_mm[sel, moving], signs, runs_key, deviation_um[sel, moving],
+                                               np.ones(sel.size, bool), independent_sigma_um(sigma_um[sel, moving]))
+                    iso["iso230_2"] = apply_noise_correction(iso["iso230_2"], corr)
             except Exception as exc:  # a line too short for the figures: say so, keep the rest
                 notes.append(f"{names[moving]} line at {names[other]}={at:g} mm: no ISO 230-2 figures ({exc})")
             lines.append(LineFigures(names[moving], at, int(np.unique(target_mm[sel, moving]).size), p_v, s, iso,

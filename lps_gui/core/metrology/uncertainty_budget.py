@@ -231,6 +231,7 @@ def figure_uncertainties(unc: dict[str, Any], figures: dict[str, Any], travel_mm
         out[key] = U
     for key in ("R_um", "R_up_um", "R_down_um", "B_um", "B_mean_um", "step_std_um"):
         out[key] = at_target
+    out.update(iso_noise_uncertainties(unc, figures, k))
     single = figures.get("single_run") or {}
     scale_u = single.get("scale_sigma_total_ppm")
     if scale_u is not None and travel_mm > 0:
@@ -245,6 +246,27 @@ def figure_uncertainties(unc: dict[str, Any], figures: dict[str, Any], travel_mm
     out.update(extreme_uncertainties(figures, k, angle_sigma_urad or {}))
     if n_targets >= 2 and U is not None:
         out["mean_step_um"] = float(U) / (n_targets - 1)  # (last - first) / (n - 1): U over the travel shared out
+    return out
+
+
+def iso_noise_uncertainties(unc: dict[str, Any], figures: dict[str, Any], k: float) -> dict[str, float]:
+    """U (k) of the noise-corrected ISO 230-2 figures (``iso230_2.noise_correction``), keyed like the figures.
+
+    The Monte Carlo's u replaces the budget's noise rows: spans over the travel (A, E, M) add it to the
+    budget's other rows (scale, intrinsics, lens, Abbe: common to a target across runs); differences at
+    one target (R, B) take it alone (those terms cancel there).
+    """
+    corr = (figures.get("iso230_2") or {}).get("noise_correction") or {}
+    rows = [r["contribution_um"] for r in unc.get("budget") or []
+            if r.get("contribution_um") is not None and r.get("source") not in NOISE_SOURCES]
+    u_other2 = float(np.sum(np.square(rows))) if rows else 0.0
+    out: dict[str, float] = {}
+    for key, c in corr.items():
+        u = c.get("u_noise")
+        if u is None or not math.isfinite(u):
+            continue
+        at_target = key.startswith(("R_", "B_"))
+        out[key] = k * math.sqrt(u * u + (0.0 if at_target else u_other2))
     return out
 
 

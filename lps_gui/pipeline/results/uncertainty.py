@@ -112,7 +112,9 @@ def uncertainty_of(results: dict[str, Any], env: Environment, square_mm: float) 
     planar = (results.get("figures") or {}).get("planar") or {}
     return {"per_axis": {
         name: _axis_uncertainty(results, env, square_mm, name.lower(),
-                                {"single_run": {"scale_sigma_total_ppm": planar.get(f"scale_{name.lower()}_sigma_ppm")}})
+                                {"single_run": {"scale_sigma_total_ppm": planar.get(f"scale_{name.lower()}_sigma_ppm")},
+                                 "iso230_2": (((planar.get("per_axis") or {}).get(name) or {}).get("iso230_2") or {})
+                                 .get("iso230_2")})
         for name in ("X", "Y")}}
 
 

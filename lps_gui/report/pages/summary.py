@@ -14,7 +14,8 @@ import numpy as np
 
 from lps_gui.core.estimator.methods import report_text
 from lps_gui.core.geometry.camera_model import HIGHER_NAMES, INTRINSIC_NAMES
-from lps_gui.io.results.document import SummaryFigure, extreme_figures, iso_figures, summary_figures
+from lps_gui.io.results.document import SummaryFigure, extreme_figures, figure_u_k2, iso_figures, summary_figures
+from lps_gui.io.results.document import u_key  # noqa: F401  (re-exported: compare and tests read U by it)
 from lps_gui.io.results.document import finite_number as _num
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import Iso230
@@ -250,9 +251,8 @@ def summary_rows(results: Results | dict[str, Any]) -> list[Row]:
     ISO 230-2 figures (absent with one run), maxima of straightness and
     angles over the positions not flagged; the truth comparison is :func:`truth_rows`, on its own page.
     """
-    results = as_results(results)
-    return [_with_u(results, _row(f)) for f in summary_figures(results.to_dict())
-            if f.label is not None and not f.key.startswith("truth_")]
+    doc = as_results(results).to_dict()
+    return [_with_u(doc, _row(f)) for f in summary_figures(doc) if f.label is not None and not f.key.startswith("truth_")]
 
 
 def truth_rows(results: Results | dict[str, Any]) -> list[Row]:
@@ -261,32 +261,12 @@ def truth_rows(results: Results | dict[str, Any]) -> list[Row]:
             if f.label is not None and f.key.startswith("truth_")]
 
 
-U_KEYS = {"step_std": "step_std_um", "max_abs_deviation": "max_abs_deviation_um", "scale": "scale_ppm",
-          "periodic_amplitude": "periodic_amplitude_um"}  # summary figure -> results uncertainty.figures_k2
+def _with_u(doc: dict[str, Any], row: Row) -> Row:
+    """The row with its U (k = 2): :func:`lps_gui.io.results.document.figure_u_k2`, the one reading summary.csv uses.
 
-
-def u_key(key: str) -> str:
-    """The ``uncertainty.figures_k2`` key of a summary figure (core.uncertainty_budget.figure_uncertainties)."""
-    if key.startswith("iso230_2_"):
-        return key.removeprefix("iso230_2_") + "_um"
-    if key.startswith(("straightness_span_", "max_abs_", "image_rotation_span")) and key != "max_abs_deviation":
-        return key
-    return U_KEYS.get(key, key)
-
-
-def _with_u(results: Results, row: Row) -> Row:
-    """The row with its U (k = 2), read from results ``uncertainty.figures_k2`` and nowhere else.
-
-    The mean step's is stored in um and printed in the row's mm; a figure
-    printed as "not resolved" carries no U (it states no value to carry one).
+    A figure printed as "not resolved" carries no U (it states no value to carry one).
     """
-    unc = results.uncertainty
-    if row.unresolved or unc is None:
-        return row
-    if row.key == "mean_step":
-        value = unc.u_k2("mean_step_um")
-        return replace(row, u_k2=None if value is None else 1e-3 * value)
-    return replace(row, u_k2=unc.u_k2(u_key(row.key)))
+    return row if row.unresolved else replace(row, u_k2=figure_u_k2(doc, row.key))
 
 
 TRUTH_CHECK_KIND = "truth_check"  # results.json flag of a simulated session its truth contradicts (sim/truth_figures)

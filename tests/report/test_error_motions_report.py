@@ -27,7 +27,7 @@ def test_the_report_has_an_error_motions_page_with_the_tool_point(tmp_path):
     assert [r[-1] for r in rows] == ["not resolved"] * 5 + ["resolved"]
     info = render_report(folder)
     page = next(p for p in info.pages if p and p[0].startswith("Error motions"))
-    assert page[0] == "Error motions of the X axis (ISO 230-1, SPEC 14)"
+    assert page[0] == "Error motions of the X axis (ISO 230-1)"
     assert [w for w in page if w.startswith("figure:")][:2] == ["figure:error_motions_angular",
                                                                  "figure:error_motions_linear"]
     assert any("figure:error_motions_tool" in p for p in info.pages)

@@ -172,7 +172,7 @@ def for_row(figure: FigureSpec) -> FigureSpec:
     """A board-plane figure of a session with targets: empty (the row model fits no per-view orientation),
     with a note pointing to the error motions (SPEC 14), which give straightness and angles at the camera."""
     return replace(figure, series=[], notes="a row of targets: the model fits one camera orientation and no per-view "
-                   "offsets, so straightness and angles come from the error motions (their page, SPEC 14)")
+                   "offsets, so straightness and angles come from the error motions (the error motions page)")
 
 
 def _by_direction(cols: dict[str, np.ndarray]) -> list[tuple[str, np.ndarray]]:

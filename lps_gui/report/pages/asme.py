@@ -21,7 +21,7 @@ FIGURE_HEIGHT_MM = 78.0
 RECORD_MARGIN = 1.5  # a settling record should run this many times the settling time
 TUR_NOTE = ("Test uncertainty ratio (ASME B5.64): the specification's tolerance over the expanded uncertainty U "
             "(k = 2) of the figure as it is compared with it (a \u00b1 limit against half a band, as in the verdict). "
-            "A figure without a tolerance in session.json stage_spec has no ratio; 4 or more is the usual aim.")
+            "A figure without a tolerance in the stage specification has no ratio; 4 or more is the usual aim.")
 
 
 def section(results: Results | Mapping[str, Any]) -> AsmeB564:
@@ -174,7 +174,7 @@ def tur_cells(rows: tuple[UncertaintyRatio, ...]) -> list[list[str]]:
 def tur_section(flow: Any, rows: tuple[UncertaintyRatio, ...]) -> None:
     flow.heading("Test uncertainty ratio", 11)
     if not rows:
-        flow.paragraph("No tolerance in session.json stage_spec (lps capture --spec ...,min_step=UM,settling=S): "
+        flow.paragraph("No tolerance in the stage specification (lps capture --spec ...,min_step=UM,settling=S): "
                        "no ratio is stated.", color=GREY)
         return
     flow.table(TUR_HEADER, tur_cells(rows), [56, 30, 30, 30, 20], size_pt=8.0)

@@ -142,7 +142,7 @@ def paint_error_motions_page(flow: Any, results: Results | Mapping[str, Any], fi
     section = results.error_motions
     flow.new_page()
     axes = " and ".join(section.axis_names)
-    flow.heading(f"Error motions of the {axes} ax{'es' if ' and ' in axes else 'is'} (ISO 230-1, SPEC 14)", 12)
+    flow.heading(f"Error motions of the {axes} ax{'es' if ' and ' in axes else 'is'} (ISO 230-1)", 12)
     flow.paragraph(f"From {section.basis or ''}. Each motion is resolved when its profile over the targets "
                    "differs from zero beyond what noise alone gives (chi-square, p < 0.001) and its p-v exceeds "
                    "the noise p-v; positions.csv carries eax/ebx/ecx only where resolved.", size_pt=7.5,

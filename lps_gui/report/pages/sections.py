@@ -64,8 +64,8 @@ DECISION_RULE = ("Decision rule ISO 14253-1: PASS when the figure plus U is with
                  "(or R) listed with the measured figures; a p-v's U is that of the larger per-target span. "
                  "U covers the measurement (see the uncertainty budget), not the stage's own scatter. TUR (test "
                  "uncertainty ratio, ASME B5.64): the limit over that U.")
-NO_SPEC = ("No stage specification in session.json (key \"stage_spec\"; enter it with lps capture --spec or in "
-           "the capture panel): no verdict is given.")
+NO_SPEC = ("No stage specification was given (enter it with lps capture --spec or in the capture panel): "
+           "no verdict is given.")
 
 
 def verdict_section(flow: Any, results: Results, spec: dict[str, Any] | None,

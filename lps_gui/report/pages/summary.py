@@ -342,8 +342,8 @@ def limits_notes(results: Results | dict[str, Any]) -> list[str]:
         f"({fmt(square_mm, 4)} mm as given). An error in the printed square size is a pure "
         "scale error: a square 0.1 % too large makes every position and the scale error 1000 ppm too large, "
         "and leaves the shape of the deviation curve, the straightness and the angles unchanged. Measure the "
-        "board with a calibrated instrument to remove it; its certified uncertainty (environment "
-        "square_mm_uncertainty_um) and its temperature enter the uncertainty budget, and a board away from "
+        "board with a calibrated instrument to remove it; its certified uncertainty (the board's "
+        "calibration certificate) and its temperature enter the uncertainty budget, and a board away from "
         "20 \u00b0C is corrected with its expansion coefficient.",
     ]
     if sig.size:
@@ -377,6 +377,10 @@ def straightness_notes(results: Results, cols: dict[str, np.ndarray]) -> list[st
     rot_med = fmt(float(np.median(rot[np.isfinite(rot)])), 2) if np.isfinite(rot).any() else DASH
     st = results.figures.straightness
     if st is None or "constant orientation" not in str(st.basis or ""):
+        if DASH in (med["straightness_sigma_um_1"], med["straightness_sigma_um_2"]):  # no per-view straightness
+            return ["Straightness and angles: no per-view figures at the board plane in this session; where the "
+                    "session resolves them they are on the error motions page. Figures that noise alone could "
+                    "produce are shown as \"not resolved\"."]
         return ["Straightness and angles come from each view's own pose, which is far less certain than its "
                 f"position along the line: median 1\u03c3 is {med['straightness_sigma_um_1']} \u00b5m (v1) and "
                 f"{med['straightness_sigma_um_2']} \u00b5m (v2). Figures that noise alone could produce are shown "

@@ -106,3 +106,19 @@ def test_truth_beside_each_position_wins_over_the_session_record():
     t = truth_columns(results, truth)
     assert t["deviation_um"].tolist() == list(range(len(results["positions"])))
     assert np.all(t["roll_urad"] == 3.0) and np.all(np.isnan(t["yaw_urad"]))
+
+
+def test_repeated_stops_of_one_run_are_not_called_runs():
+    """Issue 37: a min-step session's legend said "over 8 runs" while its ISO table said "runs 1/1"."""
+    import numpy as np
+
+    from lps_gui.report.figures.plots import deviation_figure
+
+    n = 16
+    cols = {"target_mm": np.repeat([0.0, 1.0], 8), "deviation_um": np.linspace(0, 1, n), "outlier": np.zeros(n, bool),
+            "direction": np.array(["+"] * n), "sigma_um": np.full(n, 0.1), "run": np.ones(n)}
+    fig = deviation_figure(cols, None)
+    assert "8 runs" not in fig.notes and "(1 run)" in fig.notes
+    assert not any(s.label.startswith("runs") for s in fig.series)
+    cols["run"] = np.tile(np.arange(1.0, 9.0), 2)  # eight real runs: still "runs"
+    assert "over 8 runs" in deviation_figure(cols, None).notes

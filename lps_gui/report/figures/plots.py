@@ -210,11 +210,15 @@ def deviation_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] |
         x, y = cols["target_mm"][sel], cols["deviation_um"][sel]
         t, mean, std, count = per_target_stats(x, y, keep[sel])
         if count.size and count.max() > 1:
-            series.append(Series(x, y, f"runs {_dir_label(d)}", "markers", _color(d), marked=cols["outlier"][sel]))
+            runs = np.unique(cols["run"][sel][np.isfinite(cols["run"][sel])]).size if "run" in cols else 0
+            what = "runs" if runs >= count.max() else "captures"  # repeated stops of one run are not runs (issue 37)
+            series.append(Series(x, y, f"{what} {_dir_label(d)}", "markers", _color(d), marked=cols["outlier"][sel]))
             band = 2.0 * np.nan_to_num(std)
             series.append(Series(t, mean, f"mean \u00b12s {_dir_label(d)}", "line", _color(d),
                                  band_low=mean - band, band_high=mean + band))
-            notes.append(f"{_dir_label(d)}: band = mean \u00b1 2 s over {int(count.max())} runs")
+            notes.append(f"{_dir_label(d)}: band = mean \u00b1 2 s over {int(count.max())} runs" if what == "runs" else
+                         f"{_dir_label(d)}: band = mean \u00b1 2 s over up to {int(count.max())} captures per target "
+                         f"({runs} run{'s' if runs != 1 else ''})")
         else:
             sig = 2.0 * np.nan_to_num(cols["sigma_um"][sel])
             series.append(Series(x, y, f"deviation {_dir_label(d)}", "line+markers", _color(d),

@@ -82,7 +82,7 @@ def incremental_step_section(flow: Any, step: IncrementalStep) -> None:
     flow.heading("ASME B5.64 incremental-step test (minimum incremental motion)", 11)
     flow.paragraph(step_verdict(step), size_pt=9.0)
     flow.figure(step_figure(step), FIGURE_HEIGHT_MM)
-    header = ["commanded", "steps", "resolved", "achieved", "stuck", "by noise", "mean step", "median \u03c3"]
+    header = ["commanded", "steps", "resolved", "achieved", "below \u00bd", "by noise", "mean step", "median \u03c3"]
     cells = [[f"{fmt(z.commanded_um)} \u00b5m", str(z.n_steps), str(z.n_resolved), str(z.n_achieved),
               str(z.n_stuck), f"{z.n_stuck_by_noise:.1f}", f"{fmt(z.mean_achieved_um)} \u00b5m",
               f"{fmt(step.median_step_sigma_um)} \u00b5m"] for z in step.sizes]

@@ -47,7 +47,8 @@ def verdict_section(results: dict[str, Any]) -> dict[str, Any]:
         "checks": [{"key": check_key(r.name), "name": r.name, "quantity": r.quantity,
                     "measured": None if r.measured is None else json_float(r.measured),
                     "u_k2": None if r.u_k2 is None else json_float(r.u_k2), "limit": json_float(r.limit),
-                    "unit": r.unit, "verdict": r.verdict, "note": r.note} for r in rows],
+                    "unit": r.unit, "verdict": r.verdict, "note": r.note, **({"shown": r.shown} if r.shown else {})}
+                   for r in rows],
     }
 
 

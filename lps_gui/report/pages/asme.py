@@ -149,8 +149,15 @@ def finding_lines(results: Results | Mapping[str, Any]) -> list[str]:
 
 def test_lines(results: Results | Mapping[str, Any]) -> list[str]:
     """The ASME test's findings and the test uncertainty ratios, one line each (demo, CLI)."""
+    from lps_gui.report.pages.asme_verdict import TEST_ROWS
+    from lps_gui.report.pages.verdict import verdicts
+
     s = section(results)
     lines = finding_lines(results)
+    r_all = as_results(results)
+    for v in verdicts(r_all, dict(r_all.stage_spec or {})):  # the test's verdict, as page 1 and summary.csv state it
+        if v.name in TEST_ROWS:
+            lines.append(f"Verdict {v.name}: {v.verdict} against {fmt(v.limit)} {v.unit} ({v.note})")
     for r in s.test_uncertainty_ratio:
         ratio = "\u2014" if r.tur is None else f"{r.tur:.1f}"
         lines.append(f"TUR {r.figure}: {ratio} (tolerance {fmt(r.tolerance)} {r.unit})")

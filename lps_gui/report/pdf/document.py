@@ -150,10 +150,9 @@ def _front_page(flow: Any, meta: dict[str, Any], results: Results, version: str)
     if limit is not None:
         deviation = with_spec_band(deviation, float(limit), str(spec.get("limits", "plus_minus")) == "plus_minus")
     flow.figure(deviation, 100.0)
-    flow.heading("Identification", 11)
     title = S.title_rows(meta, results, version)
     title.append(("Results", f"{results.created or DASH_TEXT}, method {results.method or DASH_TEXT}"))
-    flow.table(None, [[k, v] for k, v in title], [30, 150], size_pt=8.0, row_mm=4.2, align_right_from=9)
+    R.identification_blocks(flow, meta, results, title)
 
 
 DASH_TEXT = S.DASH

@@ -122,3 +122,24 @@ def test_repeated_stops_of_one_run_are_not_called_runs():
     assert not any(s.label.startswith("runs") for s in fig.series)
     cols["run"] = np.tile(np.arange(1.0, 9.0), 2)  # eight real runs: still "runs"
     assert "over 8 runs" in deviation_figure(cols, None).notes
+
+
+def test_the_truth_beside_the_positions_is_at_the_board_plane_where_they_are_measured():
+    """Issue 37: page 6 plotted the camera-centre truth against positions measured at the board plane."""
+    import numpy as np
+
+    from lps_gui.report.figures.plots import figure_by_key, figures_from_results
+    from lps_gui.report.pages.summary import position_table
+    from tests.report.conftest import make_results
+
+    results, _ = make_results(runs=1, directions="+")
+    for k, p in enumerate(results["positions"]):
+        p["truth_deviation_um"] = 100.0 + k  # camera centre: an Abbe term away
+        p["truth_plane_deviation_um"] = float(k)  # at the board plane, where the positions are measured
+    fig = figure_by_key(figures_from_results(results), "deviation")
+    truth = [s for s in fig.series if s.label.startswith("truth")]
+    assert truth and np.nanmax(np.abs(truth[0].y)) < 50.0
+    header, body, _ = position_table(results)
+    assert "truth dev.\nboard pl." in header
+    col = header.index("truth dev.\nboard pl.")
+    assert body[3][col] == "3.00"

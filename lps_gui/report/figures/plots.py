@@ -36,6 +36,7 @@ from lps_gui.report.figures.spec import (
 from lps_gui.report.figures.targets import with_target_stretches
 from lps_gui.sim.truth import centred, residual_from_line, true_deviation_um
 
+TRUTH_AT_MEASUREMENT = "truth_plane_deviation_um"  # the true deviation where the positions are measured (sim/truth)
 TRUTH_KEYS = ("deviation_um", "straightness_um_1", "straightness_um_2", "roll_urad", "pitch_urad", "yaw_urad",
               "image_rotation_urad")
 FIGURE_KEYS = ("positions", "deviation", "step", "straightness", "angles", "residuals", "spectrum")
@@ -112,7 +113,11 @@ def truth_columns(results: Results | dict[str, Any] | None, truth: dict[str, Any
     results = as_results(results)
     rows = results.sorted_positions()
     if rows and any(r.get("truth_deviation_um") is not None for r in rows):
-        return {key: results.column(f"truth_{key}", rows) for key in TRUTH_KEYS}
+        out = {key: results.column(f"truth_{key}", rows) for key in TRUTH_KEYS}
+        plane = results.column(TRUTH_AT_MEASUREMENT, rows)
+        if np.isfinite(plane).any():  # like with like: the positions are measured at the board plane (issue 37)
+            out["deviation_um"] = plane
+        return out
     if not truth or "positions_mm" not in truth:
         return None
     cols = position_columns(results)

@@ -19,7 +19,7 @@ from lps_gui.io.results.document import u_key  # noqa: F401  (re-exported: compa
 from lps_gui.io.results.document import finite_number as _num
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import Iso230
-from lps_gui.report.figures.plots import position_columns
+from lps_gui.report.figures.plots import TRUTH_AT_MEASUREMENT, position_columns
 
 DASH = "\u2014"
 ZERO_BELOW = 1e-9  # |values| below this print as 0 (no unit of the report resolves them)
@@ -467,6 +467,9 @@ def position_table(results: Results | dict[str, Any]) -> tuple[list[str], list[l
     positions = as_results(results).sorted_positions()
     has_truth = any(r.get("truth_deviation_um") is not None for r in positions)
     columns = [c for c in POSITION_TABLE_COLUMNS if has_truth or c[0] != "truth_deviation_um"]
+    if any(r.get(TRUTH_AT_MEASUREMENT) is not None for r in positions):  # like with like: truth at the board plane
+        columns = [(TRUTH_AT_MEASUREMENT, "truth dev.\nboard pl.", *c[2:]) if c[0] == "truth_deviation_um" else c
+                   for c in columns]
     header = [c[1] for c in columns]
     body = table_cells(positions, columns)
     return header, body, [float(c[3]) for c in columns]

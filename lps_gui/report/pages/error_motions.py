@@ -150,8 +150,12 @@ def paint_error_motions_page(flow: Any, results: Results | Mapping[str, Any], fi
     flow.table(["motion", "what", "p-v", "noise p-v", "median \u03c3", "unit", ""], error_motion_rows(results),
                [14, 40, 20, 22, 22, 14, 28], size_pt=7.5, row_mm=4.0, align_right_from=2, align_left=(5, 6),
                colors=[None if r[-1] == "resolved" else "#888888" for r in error_motion_rows(results)])
+    from lps_gui.report.pages.reconcile import reconciliation_lines
+
     for spec in figures:
         flow.figure(spec, figure_height_mm)
+    for line in reconciliation_lines(results):  # one reported figure per quantity; the other a cross-check
+        flow.paragraph(line, size_pt=7.5, color="#555555")
     tool = section.tool_point
     if tool:
         flow.paragraph(f"Tool point {list(tool.offset_mm)} mm from the camera centre ({tool.frame} frame): "

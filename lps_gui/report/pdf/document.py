@@ -162,8 +162,11 @@ def _figures_page(flow: Any, results: Results) -> None:
     """Measured figures with U (k = 2), then the ISO 230-2 per-target table."""
     flow.heading("Measured figures", 11)
     R.figure_table(flow, S.summary_rows(results))
-    for note in S.figure_notes(results):
-        flow.paragraph(note, size_pt=7.5, color="#555555")
+    from lps_gui.report.pages.reconcile import page2_note
+
+    for note in [*S.figure_notes(results), page2_note(results)]:
+        if note:
+            flow.paragraph(note, size_pt=7.5, color="#555555")
     flow.paragraph(U_NOTE, size_pt=7.5, color="#555555")
     R.iso_section(flow, results)
     asme_pages.names_note(flow, results)

@@ -105,6 +105,9 @@ def test_the_row_report_speaks_iso_and_gum_without_internal_names_or_template_da
     assert not re.search(r"SPEC \d", text)
     assert "square_mm_uncertainty_um" not in text and "stage_spec" not in text
     assert not re.search("\u2014 \u00b5m \\(v[12]\\)", text), "a template with no numbers"
+    # a row's straightness and angles come from the stops' poses, the one estimator it has: named, never a dash
+    assert "Straightness EYX (peak-to-valley, error motions)" in text and "Yaw ECX (peak-to-valley, error motions)" in text
+    assert "Max straightness v1 (peak-to-valley) \u2014" not in text
 
 
 def test_the_targets_print_scales_say_how_they_combine():

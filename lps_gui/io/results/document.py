@@ -242,15 +242,39 @@ def extreme_figures(results: dict[str, Any]) -> list[SummaryFigure]:
     def column(key: str) -> list[float]:
         return [v for v in (finite_number(r.get(key)) for r in rows) if v is not None]
 
+    from lps_gui.core.metrology.resolution import not_resolved_text
+
     out = []
-    for k in (1, 2):
+    motions = (results.get("error_motions") or {}).get("motions") or {}
+    for k, iso in ((1, "EYX"), (2, "EZX")):
         v = column(f"straightness_um_{k}")
+        if not v and isinstance(motions.get(iso), dict):  # a row: straightness only from the stops' poses (issue 37)
+            out.append(error_motion_straightness(k, iso, motions[iso], bool(results["error_motions"].get(
+                "resolved", {}).get(iso))))
+            continue
         out.append(SummaryFigure(f"straightness_span_{k}", f"Max straightness v{k} (peak-to-valley)",
                                  max(v) - min(v) if v else None, MU + "m"))
-    for name in ("roll", "pitch", "yaw"):
+    for name, iso in (("roll", "EAX"), ("pitch", "EBX"), ("yaw", "ECX")):
         v = column(f"{name}_urad")
+        if not v and isinstance(motions.get(iso), dict):  # a row: the angles only from the stops' poses (issue 37)
+            m = motions[iso]
+            text = "" if results["error_motions"].get("resolved", {}).get(iso) else not_resolved_text(
+                finite_number(m.get("noise_span_urad")), MU + "rad")
+            out.append(SummaryFigure(f"{name}_span_error_motions", f"{name.capitalize()} {iso} (peak-to-valley, error "
+                                     "motions)", finite_number(m.get("span_urad")), MU + "rad", unresolved=text))
+            continue
         out.append(SummaryFigure(f"max_abs_{name}", f"Max |{name}|", max(abs(x) for x in v) if v else None, MU + "rad"))
     return out
+
+
+def error_motion_straightness(k: int, iso: str, motion: dict[str, Any], resolved: bool) -> SummaryFigure:
+    """Straightness v``k`` of a session whose only straightness is the error motion ``iso`` (a row of targets):
+    its p-v over the targets, "not resolved (noise p-v X)" below its noise."""
+    from lps_gui.core.metrology.resolution import not_resolved_text
+
+    text = "" if resolved else not_resolved_text(finite_number(motion.get("noise_span_um")), MU + "m")
+    return SummaryFigure(f"straightness_span_{k}", f"Straightness {iso} (peak-to-valley, error motions)",
+                         finite_number(motion.get("span_um")), MU + "m", unresolved=text)
 
 
 def periodic_figures(single: dict[str, Any]) -> list[SummaryFigure]:

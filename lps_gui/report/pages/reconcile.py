@@ -15,6 +15,7 @@ from lps_gui.io.results.model import Results, as_results
 from lps_gui.report.pages.summary import fmt
 
 MU = "\u00b5"
+ONE_ESTIMATOR = "error motions)"  # the label of a page-2 figure taken from the error motions (io.results.document)
 # ISO 230-1 motion -> (page 2 summary key, which page's figure is reported)
 PAIRS = {"EYX": ("straightness_span_1", "page 2"), "EZX": ("straightness_span_2", "page 2"),
          "EAX": ("max_abs_roll", "error motions"), "EBX": ("max_abs_pitch", "error motions"),
@@ -43,8 +44,8 @@ def reconciliation_lines(results: Results | dict[str, Any]) -> list[str]:
     lines = []
     for iso, (key, reported) in PAIRS.items():
         m, f = section.motions.get(iso), page2.get(key)
-        if m is None or f is None or (f.value is None and not f.unresolved):
-            continue
+        if m is None or f is None or (f.value is None and not f.unresolved) or f.label.endswith(ONE_ESTIMATOR):
+            continue  # a row of targets: page 2 already takes the error motion (one estimator, nothing to reconcile)
         unit = f"{MU}m" if m.unit == "um" else f"{MU}rad"
         here = (f"p-v {fmt(m.span())} {unit} resolved" if section.is_resolved(iso)
                 else f"not resolved (noise p-v {fmt(m.noise_span())} {unit})")
@@ -59,5 +60,9 @@ def reconciliation_lines(results: Results | dict[str, Any]) -> list[str]:
 
 def page2_note(results: Results | dict[str, Any]) -> str:
     """Page 2's pointer to where each angle is reported (empty without error motions)."""
-    section = as_results(results).error_motions
-    return PAGE2_NOTE if section is not None and section.motions else ""
+    results = as_results(results)
+    section = results.error_motions
+    if section is None or not section.motions:
+        return ""
+    labels = [f.label or "" for f in extreme_figures(results.to_dict())]
+    return "" if all(label.endswith(ONE_ESTIMATOR) for label in labels) else PAGE2_NOTE

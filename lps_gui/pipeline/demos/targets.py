@@ -126,4 +126,8 @@ def row_summary_lines(results: Results) -> list[str]:
         lines.append(f"error against truth: position RMS {fmt(tc.position_rms_error_um)} \u00b5m, max "
                      f"{fmt(tc.position_max_abs_error_um)} \u00b5m, mean (error/sigma)^2 {fmt(tc.z_mean_square)}"
                      f"; target poses within {fmt(tc.targets.max_abs_z if tc.targets else None)} sigma of truth")
+    verdict = (results.raw.get("verdict") or {}) if hasattr(results, "raw") else {}
+    if verdict.get("checks"):  # the page-1 verdict against the paper's Table 1, as results.json states it
+        lines.append(f"verdict ({verdict.get('decision_rule', '').split(':')[0]}): {verdict.get('overall')}; " + ", ".join(
+            f"{c['name']} {c['verdict']}" for c in verdict["checks"]))
     return lines + truth_check_lines(results)

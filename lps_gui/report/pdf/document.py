@@ -149,13 +149,15 @@ def _front_page(flow: Any, meta: dict[str, Any], results: Results, version: str)
     limit = (spec or {}).get("accuracy_um")
     if limit is not None:
         deviation = with_spec_band(deviation, float(limit), str(spec.get("limits", "plus_minus")) == "plus_minus")
-    flow.figure(deviation, 100.0)
+    # the identification and signing blocks stay on page 1: the plot gives way (down to 60 mm) when the verdict is long
+    flow.figure(deviation, max(FRONT_FIGURE_MIN_MM, min(100.0, flow.remaining_mm() - FRONT_BLOCKS_MM)))
     title = S.title_rows(meta, results, version)
     title.append(("Results", f"{results.created or DASH_TEXT}, method {results.method or DASH_TEXT}"))
     R.identification_blocks(flow, meta, results, title)
 
 
 DASH_TEXT = S.DASH
+FRONT_FIGURE_MIN_MM, FRONT_BLOCKS_MM = 60.0, 96.0  # page 1's plot at least; identification + signing blocks need
 
 
 def _figures_page(flow: Any, results: Results) -> None:

@@ -13,20 +13,6 @@ from lps_gui.io.results.document import summary_csv_rows, json_float
 
 DECISION_RULE = ("ISO 14253-1: PASS when the figure plus its expanded uncertainty U (k = 2) is within the limit, "
                  "FAIL when the figure minus U is beyond it, not resolved when the limit lies within +-U")
-NO_SPEC = "no specification"
-
-
-def overall_word(words: list[str]) -> str:
-    """One word for the whole verdict: FAIL beats indicative FAIL beats not resolved; PASS only when every row passes."""
-    if not words:
-        return NO_SPEC
-    if "FAIL" in words:
-        return "FAIL"
-    if all(w == "PASS" for w in words):
-        return "PASS"
-    if any(w.startswith("FAIL") for w in words):
-        return "FAIL (indicative)"
-    return "not resolved"
 
 
 def check_key(name: str) -> str:
@@ -36,7 +22,7 @@ def check_key(name: str) -> str:
 
 def verdict_section(results: dict[str, Any]) -> dict[str, Any]:
     """results.json ``verdict``: the decision rule, the overall word and line, one row per specified figure."""
-    from lps_gui.report.pages.verdict import overall, verdicts
+    from lps_gui.report.pages.verdict import overall, overall_word, verdicts
 
     spec = (results.get("session_meta") or {}).get("stage_spec") or results.get("stage_spec")
     rows = verdicts(results, spec)

@@ -96,15 +96,29 @@ def verdicts(results: Results | dict[str, Any], spec: dict[str, Any] | None) -> 
     return out
 
 
-def overall(rows: list[Verdict]) -> str:
-    """One line for the top of page 1."""
-    if not rows:
-        return "No stage specification given: figures only, no verdict."
-    words = [r.verdict for r in rows]
-    if any(w == "FAIL" for w in words):
-        return "FAIL: the stage is outside its specification beyond the measurement uncertainty."
+NO_SPEC_WORD = "no specification"
+OVERALL_TEXT = {NO_SPEC_WORD: "No stage specification given: figures only, no verdict.",
+                "FAIL": "FAIL: the stage is outside its specification beyond the measurement uncertainty.",
+                "PASS": "PASS: every specified figure is within its limit, uncertainty included.",
+                "FAIL (indicative)": "Indicative FAIL: too few runs for an ISO 230-2 verdict; repeat with 5 runs per "
+                                     "direction.",
+                "not resolved": "Not fully resolved: see the rows below (indicative, not resolved or not measured)."}
+
+
+def overall_word(words: list[str]) -> str:
+    """One word for the whole verdict (results.json, summary.csv): FAIL beats an indicative FAIL beats not resolved;
+    PASS only when every row passes."""
+    if not words:
+        return NO_SPEC_WORD
+    if "FAIL" in words:
+        return "FAIL"
     if all(w == "PASS" for w in words):
-        return "PASS: every specified figure is within its limit, uncertainty included."
+        return "PASS"
     if any(w.startswith("FAIL") for w in words):
-        return "Indicative FAIL: too few runs for an ISO 230-2 verdict; repeat with 5 runs per direction."
-    return "Not fully resolved: see the rows below (indicative, not resolved or not measured)."
+        return "FAIL (indicative)"
+    return "not resolved"
+
+
+def overall(rows: list[Verdict]) -> str:
+    """One line for the top of page 1: :func:`overall_word` in words."""
+    return OVERALL_TEXT[overall_word([r.verdict for r in rows])]

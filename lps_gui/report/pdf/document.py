@@ -140,7 +140,7 @@ def _paint_line_report(flow: Any, session_dir: Path, meta: dict[str, Any], resul
 def _front_page(flow: Any, meta: dict[str, Any], results: Results, version: str) -> None:
     """Page 1: the verdict with U (k = 2), the deviation plot with the limit drawn, the identification."""
     spec = R.stage_spec(meta, results)
-    flow.heading("Linear positioning stage \u2014 measurement report", 15)
+    flow.heading(front_title(results), 15)
     for line in S.truth_check_lines(results):  # a simulated session whose truth contradicts the report says so first
         flow.paragraph(line, size_pt=9.0, color="#c00000")
     R.verdict_section(flow, results, spec, [r for r in S.summary_rows(results) if r.key in R.FRONT_FIGURES])
@@ -157,6 +157,16 @@ def _front_page(flow: Any, meta: dict[str, Any], results: Results, version: str)
 
 
 DASH_TEXT = S.DASH
+
+
+def front_title(results: Results) -> str:
+    """Page 1's title: the ASME B5.64 test a test session ran (its verdict row leads), else the measurement report."""
+    asme = results.asme_b5_64
+    if asme is not None and asme.incremental_step is not None and asme.incremental_step.raw:
+        return "Linear positioning stage \u2014 minimum incremental motion test (ASME B5.64)"
+    if asme is not None and asme.settling is not None and asme.settling.raw:
+        return "Linear positioning stage \u2014 settling time test (ASME B5.64)"
+    return "Linear positioning stage \u2014 measurement report"
 FRONT_FIGURE_MIN_MM, FRONT_BLOCKS_MM = 60.0, 96.0  # page 1's plot at least; identification + signing blocks need
 
 

@@ -15,6 +15,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from lps_gui.errors import InputError
+    from lps_gui.pipeline.comparable import require_comparable
     from lps_gui.pipeline.compensate import session_results
     from lps_gui.report.pdf.compare import comparison_rows, write_comparison
 
@@ -26,6 +27,7 @@ def run(args: argparse.Namespace) -> int:
     if axes[0] != "X":
         raise InputError(f"lps compare: {args.before} and {args.after} are planar (X,Y) sessions; the as-found / as-left "
                          "report compares line sessions only")
+    require_comparable(before, after, args.before, args.after)
     if args.out is not None:
         from lps_gui.cli.out_path import resolve_out
 

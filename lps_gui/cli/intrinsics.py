@@ -75,7 +75,7 @@ def run(args: argparse.Namespace) -> int:
     if args.report:
         from lps_gui.report.pdf.intrinsics import write_intrinsics_report
 
-        write_intrinsics_report(cal, args.report, crossval, title=Path(args.out).name)
+        write_intrinsics_report(cal, args.report, crossval, title=Path(args.out).name, board=board)
     print("wrote " + ", ".join(str(p) for p in (args.out, args.yaml, args.cameramodel, args.report) if p))
     failed = [w for w in cal.warnings if any(w.startswith(n + ":") for n in cal.view_names)]
     if failed:

@@ -42,6 +42,7 @@ from lps_gui.pipeline.results.board_plane import position_columns, straightness_
 from lps_gui.pipeline.results.error_motions import add_error_motions
 from lps_gui.pipeline.results.planar import build_planar_results
 from lps_gui.pipeline.results.uncertainty import add_uncertainty, session_board
+from lps_gui.pipeline.results.verdict import add_verdict
 from lps_gui.pipeline.session_checks import corners_of_records, session_inputs
 from lps_gui.pipeline.target_session import add_targets_section, target_observations
 from lps_gui.sim.truth import session_truth, truth_comparison
@@ -192,6 +193,7 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate, intrins
     results = add_uncertainty(results, session)  # environment, GUM budget, U (k = 2) per figure
     if obs.D == 1:
         results = add_asme_results(results, session, obs, est)  # ASME B5.64 names, TUR, tests
+        results = add_verdict(results)  # the verdict, U (k = 2) and the decision rule, machine-readable
     return add_self_check(results)  # a simulated session: does its truth contradict a figure or a finding?
 
 
@@ -266,7 +268,11 @@ def session_figures(obs: Observations, est: LpsEstimate) -> dict[str, Any]:
     sigma_um = np.where(valid & ~(sigma_um > 0), np.median(sigma_um[positive]) if positive.any() else 1.0, sigma_um)
     figures = figures_for_session(obs.target_mm, obs.direction, obs.run, dev_um, valid=valid, sigma_um=sigma_um)
     if figures.get("iso230_2"):  # the camera's noise inflates s_j and the extremes: take it out (issue 35)
-        from lps_gui.core.metrology.iso230_noise import apply_noise_correction, independent_sigma_um, noise_corrected_iso
+        from lps_gui.core.metrology.iso230_noise import (
+            apply_noise_correction,
+            independent_sigma_um,
+            noise_corrected_iso,
+        )
 
         corr = noise_corrected_iso(obs.target_mm, obs.direction, obs.run, dev_um, valid, independent_sigma_um(sigma_um))
         figures["iso230_2"] = apply_noise_correction(figures["iso230_2"], corr)

@@ -84,3 +84,13 @@ def test_test_plan_presets():
     assert parse_spec("paper,min_step=2,settling=0.5") == {"accuracy_um": 20.0, "repeatability_um": 5.0,
                                                            "straightness_um": 38.0, "min_incremental_motion_um": 2.0,
                                                            "settling_time_s": 0.5}
+
+
+def test_a_step_is_never_both_achieved_and_stuck():
+    """Issue 37: a 2 um step that moved -0.44 um (sigma 0.75) counted as achieved and as stuck."""
+    fig = incremental_step_figures(np.array([2.0, 2.0, 2.0]), np.array([-0.44, 2.1, -1.5]), np.array([0.75, 0.75, 0.3]))
+    steps = fig["steps"]
+    assert not any(s["achieved"] and s["stuck"] for s in steps)
+    assert steps[0]["achieved"] and not steps[0]["stuck"] and steps[0]["below_half"]  # a miss needs evidence
+    assert steps[2]["stuck"] and not steps[2]["achieved"]
+    assert fig["n_stuck"] == 2  # the sticking test counts every step below half its command

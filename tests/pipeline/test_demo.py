@@ -125,3 +125,21 @@ def test_full_demo_on_the_paper_rig(tmp_path):
     te = demo_summary.truth_errors(res.results)
     assert te["rms_um"] < 3.0
     assert elapsed < 300, f"demo took {elapsed:.0f} s (budget 5 minutes on 2 cores)"
+
+
+def test_the_travel_demo_is_bidirectional_against_the_papers_table_1():
+    """Issue 37: `lps demo --travel 1524` had no ISO 230-2 figures and no verdict (no spec, one direction)."""
+    from lps_gui.pipeline.demos.targets import row_demo_spec
+
+    assert row_demo_spec(1524.0, None).plan.directions == "both"  # ISO 230-2's bidirectional figures
+
+
+def test_the_row_demo_states_its_verdict_against_the_papers_table_1(tmp_path):
+    from lps_gui.pipeline.demos.run import run_demo
+    from lps_gui.pipeline.demos.summary import PAPER_SPEC
+
+    res = run_demo(tmp_path / "row", quick=True, preset="small-row")
+    assert res.results.session_meta["stage_spec"] == PAPER_SPEC
+    checks = res.results.raw["verdict"]["checks"]
+    assert [c["name"] for c in checks] == ["Positional accuracy", "Repeatability", "Straight-line accuracy"]
+    assert any(line.startswith("verdict (ISO 14253-1)") for line in res.summary)

@@ -27,8 +27,29 @@ def test_the_report_has_an_error_motions_page_with_the_tool_point(tmp_path):
     assert [r[-1] for r in rows] == ["not resolved"] * 5 + ["resolved"]
     info = render_report(folder)
     page = next(p for p in info.pages if p and p[0].startswith("Error motions"))
-    assert page[0] == "Error motions of the X axis (ISO 230-1, SPEC 14)"
+    assert page[0] == "Error motions of the X axis (ISO 230-1)"
     assert [w for w in page if w.startswith("figure:")][:2] == ["figure:error_motions_angular",
                                                                  "figure:error_motions_linear"]
     assert any("figure:error_motions_tool" in p for p in info.pages)
+    assert info.clipped == ()
+
+
+def test_two_estimators_tell_one_story(tmp_path):
+    """Issue 37: page 2 said "Max |yaw| not resolved" and the error-motions page "ECX resolved" with no word
+    between them; now each quantity names where it is reported and gives the cross-check beside it."""
+    from pypdf import PdfReader
+
+    from lps_gui.report.pages.reconcile import PAGE2_NOTE, reconciliation_lines
+
+    folder = _board_session(tmp_path / "s", {"offset_mm": [0.0, 80.0, 120.0], "frame": "stage"})
+    results = estimate_session(folder)
+    lines = reconciliation_lines(results)
+    assert [line[:4] for line in lines] == ["EYX:", "EZX:", "EAX:", "EBX:", "ECX:"]
+    ecx = lines[-1]
+    assert "reported on this page, p-v" in ecx and "resolved" in ecx and "page 2's Max |yaw|" in ecx
+    assert lines[0].startswith("EYX: reported on page 2, Max straightness v1")
+    info = render_report(folder)
+    text = " ".join(" ".join(p.extract_text().split()) for p in PdfReader(info.path).pages)
+    text = text.replace("\ufb01", "fi").replace("\ufb02", "fl")
+    assert PAGE2_NOTE in text and "ECX: reported on this page" in text
     assert info.clipped == ()

@@ -106,3 +106,40 @@ def test_truth_beside_each_position_wins_over_the_session_record():
     t = truth_columns(results, truth)
     assert t["deviation_um"].tolist() == list(range(len(results["positions"])))
     assert np.all(t["roll_urad"] == 3.0) and np.all(np.isnan(t["yaw_urad"]))
+
+
+def test_repeated_stops_of_one_run_are_not_called_runs():
+    """Issue 37: a min-step session's legend said "over 8 runs" while its ISO table said "runs 1/1"."""
+    import numpy as np
+
+    from lps_gui.report.figures.plots import deviation_figure
+
+    n = 16
+    cols = {"target_mm": np.repeat([0.0, 1.0], 8), "deviation_um": np.linspace(0, 1, n), "outlier": np.zeros(n, bool),
+            "direction": np.array(["+"] * n), "sigma_um": np.full(n, 0.1), "run": np.ones(n)}
+    fig = deviation_figure(cols, None)
+    assert "8 runs" not in fig.notes and "(1 run)" in fig.notes
+    assert not any(s.label.startswith("runs") for s in fig.series)
+    cols["run"] = np.tile(np.arange(1.0, 9.0), 2)  # eight real runs: still "runs"
+    assert "over 8 runs" in deviation_figure(cols, None).notes
+
+
+def test_the_truth_beside_the_positions_is_at_the_board_plane_where_they_are_measured():
+    """Issue 37: page 6 plotted the camera-centre truth against positions measured at the board plane."""
+    import numpy as np
+
+    from lps_gui.report.figures.plots import figure_by_key, figures_from_results
+    from lps_gui.report.pages.summary import position_table
+    from tests.report.conftest import make_results
+
+    results, _ = make_results(runs=1, directions="+")
+    for k, p in enumerate(results["positions"]):
+        p["truth_deviation_um"] = 100.0 + k  # camera centre: an Abbe term away
+        p["truth_plane_deviation_um"] = float(k)  # at the board plane, where the positions are measured
+    fig = figure_by_key(figures_from_results(results), "deviation")
+    truth = [s for s in fig.series if s.label.startswith("truth")]
+    assert truth and np.nanmax(np.abs(truth[0].y)) < 50.0
+    header, body, _ = position_table(results)
+    assert "truth dev.\nboard pl." in header
+    col = header.index("truth dev.\nboard pl.")
+    assert body[3][col] == "3.00"

@@ -60,3 +60,18 @@ def test_report_pdf(corners, tmp_path):
 
     with pytest.raises(InputError, match="folder not found"):
         write_intrinsics_report(cal, tmp_path / "missing" / "x.pdf")
+
+
+def test_the_intrinsics_pdf_names_its_date_board_and_lens_model(corners, tmp_path):
+    """Issue 37: the intrinsics PDF had no date and no board."""
+    from pypdf import PdfReader
+
+    from lps_gui.report.pdf.intrinsics import write_intrinsics_report
+
+    cal = calibrate_intrinsics(BOARD.flat_points(), corners, INTR.image_size)
+    out = tmp_path / "intrinsics.pdf"
+    write_intrinsics_report(cal, out, board=BOARD, date="2026-12-03 10:00:00+0000")
+    text = " ".join(PdfReader(out).pages[0].extract_text().split()).replace("\ufb03", "ffi")  # Qt's ligature
+    assert "Date 2026-12-03 10:00:00+0000" in text
+    assert f"{BOARD.cols}\u00d7{BOARD.rows} inner corners, square {BOARD.square_mm:g} mm" in text
+    assert "OpenCV 5 coefficients" in text

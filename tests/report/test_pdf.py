@@ -43,7 +43,7 @@ def test_pdf_has_the_planned_pages_and_opens(tmp_path):
     # verdict page, figures, uncertainty, method, three pages of plots (the last with outliers), table, truth
     assert _pdf_pages(info.path) == info.n_pages == len(info.pages) == 9
     assert info.pages[0] == ["Linear positioning stage \u2014 measurement report", "Verdict", "figure:deviation",
-                             "Identification"]
+                             "Identification", "Certificate and approval"]
     assert info.pages[1] == ["Measured figures", "ISO 230-2 per target"]
     assert info.pages[2] == ["Environment", "Uncertainty budget (GUM, ISO/TR 230-9)"]
     assert info.pages[3] == ["Method and camera", "What limits this result"]

@@ -63,7 +63,7 @@ def test_the_report_has_the_targets_page_and_nothing_of_it_is_clipped(row):
     folder, results, _ = row
     info = render_report(folder, results)
     assert not [c for c in info.clipped if c.startswith(("page 1:", "page 2:", "page 5:"))]  # the pages with targets
-    assert "Targets (3, SPEC 13)" in info.pages[1]
+    assert "Targets (3)" in info.pages[1]
     pages = [p.extract_text().replace("\t", " ") for p in PdfReader(info.path).pages[:2]]  # Qt's word gaps
     front, text = pages
     assert "T2" in text and "world frame" in text
@@ -93,3 +93,32 @@ def test_a_row_has_no_board_plane_curves_only_the_pointer_to_the_error_motions(r
         f = figure_by_key(figures, key)
         assert f.series == [] and "error motions" in f.notes
     assert figure_by_key(figures, "deviation").series  # the positions are drawn
+
+
+def test_the_row_report_speaks_iso_and_gum_without_internal_names_or_template_dashes(row):
+    """Issue 37: customer pages named "SPEC 11/13/14" and raw keys, and printed "median 1 sigma is - um (v1)"."""
+    import re
+
+    folder, results, _ = row
+    info = render_report(folder, results)
+    text = " ".join(" ".join(p.extract_text().split()) for p in PdfReader(info.path).pages)
+    assert not re.search(r"SPEC \d", text)
+    assert "square_mm_uncertainty_um" not in text and "stage_spec" not in text
+    assert not re.search("\u2014 \u00b5m \\(v[12]\\)", text), "a template with no numbers"
+    # a row's straightness and angles come from the stops' poses, the one estimator it has: named, never a dash
+    assert "Straightness EYX (peak-to-valley, error motions)" in text and "Yaw ECX (peak-to-valley, error motions)" in text
+    assert "Max straightness v1 (peak-to-valley) \u2014" not in text
+
+
+def test_the_targets_print_scales_say_how_they_combine():
+    """Issue 37: several targets' print-scale terms were combined in quadrature without saying so."""
+    from lps_gui.core.metrology.target_scale import target_scale_rows
+
+    targets = [{"id": f"T{i}", "covered_fraction": 1 / 3, "square_mm": 10.0, "square_mm_uncertainty_um": 1.0}
+               for i in range(3)]
+    rows = target_scale_rows(targets, 300.0)
+    each = rows[0].contribution_um
+    assert each == pytest.approx(10.0)
+    note = rows[0].note
+    assert "uncorrelated" in note and "one printer" in note
+    assert f"{np.sqrt(3) * each:.3g} \u00b5m" in note and f"{3 * each:.3g} \u00b5m" in note

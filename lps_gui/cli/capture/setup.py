@@ -22,6 +22,13 @@ ID_SWITCHES = (("--operator", "operator"), ("--customer", "customer"), ("--stage
                ("--serial", "stage_serial"), ("--controller-serial", "controller_serial"), ("--location", "location"))
 
 
+def _id_switches() -> tuple[tuple[str, str], ...]:
+    """The identification switches: who and where, then the signing block's (lps_gui.report.pages.signing)."""
+    from lps_gui.report.pages.signing import SIGNING_FIELDS
+
+    return ID_SWITCHES + tuple((flag, key) for key, flag, _ in SIGNING_FIELDS)
+
+
 def add_setup_arguments(p: argparse.ArgumentParser, iso_plan: bool = True) -> None:
     """The report's switches, in their own help groups (``iso_plan``: with the ISO 230-2 plan's, for a capture)."""
     from lps_gui.core.planning.presets import SPEC_PRESETS
@@ -36,8 +43,11 @@ def add_setup_arguments(p: argparse.ArgumentParser, iso_plan: bool = True) -> No
         e.add_argument(flag, type=finite, dest=f"env_{key}", metavar="X", help=text)
     e.add_argument("--env-notes", dest="env_notes", metavar="TEXT", help="free text: thermometer, where it was, ...")
     i = p.add_argument_group("identification (printed on the report)")
-    for flag, key in ID_SWITCHES:
-        i.add_argument(flag, dest=f"id_{key}", metavar="TEXT", help=key.replace("_", " "))
+    from lps_gui.report.pages.signing import SIGNING_FIELDS
+
+    helps = {key: text for key, _, text in SIGNING_FIELDS}
+    for flag, key in _id_switches():
+        i.add_argument(flag, dest=f"id_{key}", metavar="TEXT", help=helps.get(key, key.replace("_", " ")))
 
 
 def _add_iso_plan_arguments(r: argparse._ArgumentGroup) -> None:
@@ -80,7 +90,7 @@ def setup_meta(args: argparse.Namespace) -> dict[str, Any]:
 
     if test_record(args):
         out["asme_test"] = test_record(args)
-    ident = {key: getattr(args, f"id_{key}") for _, key in ID_SWITCHES if getattr(args, f"id_{key}", None)}
+    ident = {key: getattr(args, f"id_{key}") for _, key in _id_switches() if getattr(args, f"id_{key}", None)}
     if ident:
         out["identification"] = ident
     return out

@@ -99,7 +99,9 @@ def incremental_step_figures(commanded_um: np.ndarray, achieved_um: np.ndarray, 
     *sticks* when more steps stuck than the noise alone would make (their
     expected number plus 3 sigma, binomial). The minimum incremental motion
     is the smallest commanded size whose steps are resolved, do not stick
-    and are achieved (95 % or more; None when no size is).
+    and are achieved (95 % or more; None when no size is). Per step, *stuck* means
+    below half and not achieved (a miss needs evidence, as above): never both (issue 37: a step that
+    moved -0.44 um of 2 um with a 0.75 um sigma was both); the sticking test counts every step below half.
     """
     from scipy.special import ndtr
 
@@ -109,14 +111,15 @@ def incremental_step_figures(commanded_um: np.ndarray, achieved_um: np.ndarray, 
     band = tolerance * size
     resolved = np.isfinite(s) & (2.0 * s < size)
     achieved = np.abs(along - size) <= band + 2.0 * s
-    stuck = along < 0.5 * size
+    below_half = along < 0.5 * size  # counted against noise's expectation: does the stage stick?
+    stuck = below_half & ~achieved  # a step is stuck with evidence, never both stuck and achieved
     chance = ndtr(-0.5 * size / np.where(s > 0, s, np.inf))  # a made step measured below half its command
     per_size = []
     mim, sticks = None, False
     for d in np.unique(np.round(size, 6)):
         sel = np.isclose(size, d, atol=1e-6)
         expected = float(chance[sel].sum())
-        n_stuck = int(stuck[sel].sum())
+        n_stuck = int(below_half[sel].sum())
         size_sticks = bool(resolved[sel].all() and n_stuck > expected + 3.0 * math.sqrt(expected + 1.0))
         ok = bool(resolved[sel].all() and not size_sticks and achieved[sel].mean() >= 0.95)
         z2 = float(np.mean(((along[sel] - d) / s[sel]) ** 2))
@@ -129,14 +132,14 @@ def incremental_step_figures(commanded_um: np.ndarray, achieved_um: np.ndarray, 
             mim = float(d)
     return {
         "n_steps": int(c.size), "n_resolved": int(resolved.sum()), "n_achieved": int(achieved.sum()),
-        "n_stuck": int(stuck.sum()), "sticks": bool(sticks), "tolerance": float(tolerance),
+        "n_stuck": int(below_half.sum()), "sticks": bool(sticks), "tolerance": float(tolerance),
         "max_step_sigma_um": float(np.max(s)) if s.size else None,
         "median_step_sigma_um": float(np.median(s)) if s.size else None,
         "minimum_incremental_motion_um": mim,
         "sizes": per_size,
         "steps": [{"commanded_um": float(ci), "achieved_um": float(ai), "sigma_um": float(si), "resolved": bool(r),
-                   "achieved": bool(ok), "stuck": bool(st)}
-                  for ci, ai, si, r, ok, st in zip(c, a, s, resolved, achieved, stuck)],
+                   "achieved": bool(ok), "stuck": bool(st), "below_half": bool(bh)}
+                  for ci, ai, si, r, ok, st, bh in zip(c, a, s, resolved, achieved, stuck, below_half)],
     }
 
 

@@ -12,6 +12,7 @@ quadrature like every other row of the budget.
 """
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -42,8 +43,22 @@ def target_scale_rows(targets: list[dict[str, Any]], travel_mm: float, fallback_
         where = f"{length:.0f} mm of the travel measured against it ({squares:.1f} squares)"
         if u is None:
             rows.append(BudgetRow(name, "B", None, "\u00b5m", squares, None,
-                                  f"print scale not stated (targets[].square_mm_uncertainty_um); {where}; not in U"))
+                                  f"print scale not stated (the target's certificate); {where}; not in U"))
         else:
             rows.append(BudgetRow(name, "B", float(u), "\u00b5m", squares, squares * float(u),
                                   f"print scale of {t['id']}; {where}"))
-    return rows
+    return correlation_stated(rows)
+
+
+def correlation_stated(rows: list[BudgetRow]) -> list[BudgetRow]:
+    """The first stated row's note says how the targets' print scales combine: as independent prints (root sum of
+    squares, as the budget does); one printer for all would correlate them fully and add them linearly (GUM 5.2)."""
+    stated = [r.contribution_um for r in rows if r.contribution_um is not None]
+    if len(stated) < 2:
+        return rows
+    rss, linear = float(np.sqrt(np.sum(np.square(stated)))), float(np.sum(np.abs(stated)))
+    first = next(i for i, r in enumerate(rows) if r.contribution_um is not None)
+    note = (f"{rows[first].note}; the {len(stated)} print scales are combined as independent prints (uncorrelated: "
+            f"{rss:.3g} \u00b5m together); if one printer made them all they are correlated and add linearly "
+            f"({linear:.3g} \u00b5m)")
+    return [*rows[:first], replace(rows[first], note=note), *rows[first + 1:]]

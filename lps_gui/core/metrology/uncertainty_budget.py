@@ -96,7 +96,7 @@ def budget_rows(x: BudgetInputs, env: Environment) -> list[BudgetRow]:
     n_squares = L / x.square_mm
     if env.square_mm_uncertainty_um is None:
         rows.append(BudgetRow("board square size", "B", None, "\u00b5m", n_squares, None,
-                              "not stated (environment.square_mm_uncertainty_um); not in U"))
+                              "not stated (the board's certificate: lps capture --square-u, or the report set-up); not in U"))
     else:
         u = env.square_mm_uncertainty_um
         rows.append(BudgetRow("board square size", "B", u, "\u00b5m", n_squares, n_squares * u,

@@ -37,7 +37,11 @@ ENV_FIELDS = (("board_temperature_c", "Board temperature", -50.0, 100.0, 2, " \u
               ("stage_temperature_c", "Stage temperature", -50.0, 100.0, 2, " \u00b0C"),
               ("stage_cte_ppm_per_k", "Stage expansion", 0.0, 100.0, 2, " ppm/K"))
 ID_FIELDS = (("operator", "Operator"), ("customer", "Customer"), ("stage_model", "Stage model"),
-             ("stage_serial", "Stage serial"))
+             ("stage_serial", "Stage serial"),  # then the signing block's (lps_gui.report.pages.signing.SIGNING_FIELDS)
+             ("lab", "Laboratory"), ("certificate_number", "Certificate no."), ("board_id", "Board id"),
+             ("board_certificate", "Board certificate"), ("thermometer", "Thermometer"),
+             ("thermometer_certificate", "Thermometer cert."), ("camera_serial", "Camera serial"),
+             ("camera_certificate", "Camera certificate"), ("approved_by", "Approved by"))
 SPEC_FIELDS = (("accuracy_um", "Accuracy \u00b1"), ("repeatability_um", "Repeatability \u00b1"),
                ("straightness_um", "Straight-line accuracy"))
 

@@ -242,15 +242,39 @@ def extreme_figures(results: dict[str, Any]) -> list[SummaryFigure]:
     def column(key: str) -> list[float]:
         return [v for v in (finite_number(r.get(key)) for r in rows) if v is not None]
 
+    from lps_gui.core.metrology.resolution import not_resolved_text
+
     out = []
-    for k in (1, 2):
+    motions = (results.get("error_motions") or {}).get("motions") or {}
+    for k, iso in ((1, "EYX"), (2, "EZX")):
         v = column(f"straightness_um_{k}")
+        if not v and isinstance(motions.get(iso), dict):  # a row: straightness only from the stops' poses (issue 37)
+            out.append(error_motion_straightness(k, iso, motions[iso], bool(results["error_motions"].get(
+                "resolved", {}).get(iso))))
+            continue
         out.append(SummaryFigure(f"straightness_span_{k}", f"Max straightness v{k} (peak-to-valley)",
                                  max(v) - min(v) if v else None, MU + "m"))
-    for name in ("roll", "pitch", "yaw"):
+    for name, iso in (("roll", "EAX"), ("pitch", "EBX"), ("yaw", "ECX")):
         v = column(f"{name}_urad")
+        if not v and isinstance(motions.get(iso), dict):  # a row: the angles only from the stops' poses (issue 37)
+            m = motions[iso]
+            text = "" if results["error_motions"].get("resolved", {}).get(iso) else not_resolved_text(
+                finite_number(m.get("noise_span_urad")), MU + "rad")
+            out.append(SummaryFigure(f"{name}_span_error_motions", f"{name.capitalize()} {iso} (peak-to-valley, error "
+                                     "motions)", finite_number(m.get("span_urad")), MU + "rad", unresolved=text))
+            continue
         out.append(SummaryFigure(f"max_abs_{name}", f"Max |{name}|", max(abs(x) for x in v) if v else None, MU + "rad"))
     return out
+
+
+def error_motion_straightness(k: int, iso: str, motion: dict[str, Any], resolved: bool) -> SummaryFigure:
+    """Straightness v``k`` of a session whose only straightness is the error motion ``iso`` (a row of targets):
+    its p-v over the targets, "not resolved (noise p-v X)" below its noise."""
+    from lps_gui.core.metrology.resolution import not_resolved_text
+
+    text = "" if resolved else not_resolved_text(finite_number(motion.get("noise_span_um")), MU + "m")
+    return SummaryFigure(f"straightness_span_{k}", f"Straightness {iso} (peak-to-valley, error motions)",
+                         finite_number(motion.get("span_um")), MU + "m", unresolved=text)
 
 
 def periodic_figures(single: dict[str, Any]) -> list[SummaryFigure]:
@@ -303,14 +327,57 @@ def summary_figures(results: dict[str, Any]) -> list[SummaryFigure]:
     return out
 
 
-def summary_csv_rows(results: dict[str, Any]) -> list[tuple[str, Any, str]]:
-    """(name, value, unit) rows of summary.csv: every figure of :func:`summary_figures` with a value.
+U_KEYS = {"step_std": "step_std_um", "max_abs_deviation": "max_abs_deviation_um", "scale": "scale_ppm",
+          "periodic_amplitude": "periodic_amplitude_um"}  # summary figure -> results uncertainty.figures_k2
+SUMMARY_COLUMNS = ("name", "value", "unit", "u_k2", "note")  # U (k = 2) in the row's unit; note: "not resolved ..."
 
-    An unresolved figure keeps its row with an empty value (noise alone could give it: no finding), and
-    so does a figure the plan does not define (its ``unresolved`` says "not defined ...").
+
+def u_key(key: str) -> str:
+    """The ``uncertainty.figures_k2`` key of a summary figure (core.uncertainty_budget.figure_uncertainties)."""
+    if key.startswith("iso230_2_"):
+        return key.removeprefix("iso230_2_") + "_um"
+    if key.startswith(("straightness_span_", "max_abs_", "image_rotation_span")) and key != "max_abs_deviation":
+        return key
+    return U_KEYS.get(key, key)
+
+
+def figure_u_k2(results: dict[str, Any], key: str) -> float | None:
+    """U (k = 2) of a summary figure in its printed unit, from results ``uncertainty.figures_k2`` and nowhere else
+    (the mean step's is stored in um and printed in mm); None when not assessed."""
+    k2 = (results.get("uncertainty") or {}).get("figures_k2") or {}
+    if key == "mean_step":
+        u = finite_number(k2.get("mean_step_um"))
+        return None if u is None else 1e-3 * u
+    return finite_number(k2.get(u_key(key)))
+
+
+def summary_csv_rows(results: dict[str, Any]) -> list[tuple[Any, ...]]:
+    """(name, value, unit, U (k = 2), note) rows of summary.csv: every figure of :func:`summary_figures` with a
+    value, then the verdict rows (``results["verdict"]``, when the session has a stage specification).
+
+    An unresolved figure keeps its row with an empty value and no U, its note saying why ("not resolved (noise
+    p-v X)": noise alone could give it, no finding), and so does a figure the plan does not define.
     """
-    return [(f.key, None if f.unresolved else f.value, f.unit.replace(MU, "u"))
-            for f in summary_figures(results) if f.value is not None or f.unresolved]
+    rows: list[tuple[Any, ...]] = [
+        (f.key, None if f.unresolved else f.value, f.unit.replace(MU, "u"),
+         None if f.unresolved else figure_u_k2(results, f.key), f.unresolved.replace(MU, "u"))
+        for f in summary_figures(results) if f.value is not None or f.unresolved]
+    return rows + verdict_csv_rows(results.get("verdict"))
+
+
+def verdict_csv_rows(verdict: dict[str, Any] | None) -> list[tuple[Any, ...]]:
+    """summary.csv's verdict: the overall word, the decision rule, then one ``check_*`` row per specified figure."""
+    if not isinstance(verdict, dict):
+        return []
+    rows: list[tuple[Any, ...]] = [("verdict", verdict.get("overall"), "", None, verdict.get("overall_text", "")),
+                                   ("decision_rule", verdict.get("decision_rule"), "", None, "")]
+    for c in verdict.get("checks") or []:
+        unit = str(c.get("unit") or "").replace(MU, "u")
+        limit = finite_number(c.get("limit"))
+        note = f"{c.get('verdict')}; {c.get('quantity') or 'figure'} against the limit {_fmt(limit)} {unit}".strip()
+        rows.append((f"check_{c.get('key')}", finite_number(c.get("measured")), unit, finite_number(c.get("u_k2")),
+                     note + (f"; {c['note']}" if c.get("note") else "")))
+    return rows
 
 
 def _fmt(value: Any) -> str:
@@ -363,9 +430,10 @@ def positions_csv(results: dict[str, Any]) -> str:
 def summary_csv(results: dict[str, Any]) -> str:
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(("name", "value", "unit"))
-    for name, value, unit in results.get("summary", []):
-        w.writerow((name, _fmt(value), unit))
+    w.writerow(SUMMARY_COLUMNS)
+    for row in results.get("summary", []):
+        cells = [_fmt(v) for v in row] + [""] * (len(SUMMARY_COLUMNS) - len(row))
+        w.writerow(cells[:len(SUMMARY_COLUMNS)])
     return buf.getvalue()
 
 

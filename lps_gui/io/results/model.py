@@ -83,6 +83,7 @@ class Results(Section):
     asme_b5_64: AsmeB564 | None = None
     targets: tuple[TargetRecord, ...] = ()  # SPEC 13: each target's pose and sigma (docs/targets.md)
     error_motions: ErrorMotions | None = None  # SPEC 14: per axis, six motions per stop (docs/error-motions.md)
+    verdict: Mapping[str, Any] = field(default_factory=dict)  # decision rule, overall word, one row per check (issue 37)
     extra: Mapping[str, Any] = field(default_factory=dict, metadata={"not_read": True})  # sections not known here
     source: str = field(default="results", compare=False, metadata={"not_read": True})  # the file, for messages
 

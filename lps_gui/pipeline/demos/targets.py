@@ -25,6 +25,7 @@ from lps_gui.core.truth.simulate import SimulationSpec
 from lps_gui.errors import InputError
 from lps_gui.io.results.model import Results
 from lps_gui.pipeline.demos.steps import estimate_and_report
+from lps_gui.pipeline.demos.summary import PAPER_SPEC  # the paper's Table 1
 
 ROW_STEP_MM = 12.7  # the paper's X axis: 1524 mm in 120 steps
 # a printed target checked with a steel rule over its 330 mm: 20 um, i.e. 2 um per 30 mm square
@@ -47,7 +48,8 @@ def row_demo_spec(travel_mm: float | None, preset: str | None, seed: int = 0) ->
     if not 0 < travel_mm <= 20000:
         raise InputError(f"demo --travel {travel_mm:g}: give a travel between 0 and 20000 mm")
     stops = max(3, round(travel_mm / ROW_STEP_MM) + 1)
-    plan = Plan(start_mm=0.0, stop_mm=float(travel_mm), step_mm=float(travel_mm) / (stops - 1))
+    plan = Plan(start_mm=0.0, stop_mm=float(travel_mm), step_mm=float(travel_mm) / (stops - 1),
+                directions="both")  # forward and back: ISO 230-2's bidirectional figures (E, B, M; A indicative)
     return paper_row_spec(seed=seed, plan=plan, n_targets=targets_for_travel(travel_mm))
 
 
@@ -82,6 +84,7 @@ def run_row_demo(out: Path, spec: SimulationSpec, res: Any, step: Callable[[str,
     t0 = time.monotonic()
     session = simulate_image_session(spec, out / "session", progress=bar("render"), cancel=cancel, intrinsics=intrinsics)
     session.meta.setdefault("environment", dict(ROW_ENVIRONMENT))
+    session.meta.setdefault("stage_spec", dict(PAPER_SPEC))  # the paper's Table 1: the row is the paper's X axis
     session.save_meta()
     res.session_dir = session.folder
     T = len(spec.layout.targets)
@@ -123,4 +126,8 @@ def row_summary_lines(results: Results) -> list[str]:
         lines.append(f"error against truth: position RMS {fmt(tc.position_rms_error_um)} \u00b5m, max "
                      f"{fmt(tc.position_max_abs_error_um)} \u00b5m, mean (error/sigma)^2 {fmt(tc.z_mean_square)}"
                      f"; target poses within {fmt(tc.targets.max_abs_z if tc.targets else None)} sigma of truth")
+    verdict = (results.raw.get("verdict") or {}) if hasattr(results, "raw") else {}
+    if verdict.get("checks"):  # the page-1 verdict against the paper's Table 1, as results.json states it
+        lines.append(f"verdict ({verdict.get('decision_rule', '').split(':')[0]}): {verdict.get('overall')}; " + ", ".join(
+            f"{c['name']} {c['verdict']}" for c in verdict["checks"]))
     return lines + truth_check_lines(results)

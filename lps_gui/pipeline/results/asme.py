@@ -60,25 +60,12 @@ def add_asme_results(results: dict[str, Any], session: Session, obs: Observation
 
 
 def tur_rows(results: dict[str, Any], spec: dict[str, Any]) -> list[dict[str, Any]]:
-    """Per specified figure: tolerance, U (k = 2) of the figure compared, and their ratio (None without U)."""
+    """Per specified figure: tolerance, U (k = 2) of the figure compared, and their ratio (None without U); the verdict's
+    rows, the ASME test's own (min-step, settling) among them."""
     from lps_gui.report.pages.verdict import verdicts
 
-    rows = [{"figure": v.name, "quantity": v.quantity, "tolerance": v.limit, "U": v.u_k2, "unit": v.unit,
+    return [{"figure": v.name, "quantity": v.quantity, "tolerance": v.limit, "U": v.u_k2, "unit": v.unit,
              "tur": tur(v.limit, v.u_k2)} for v in verdicts(results, spec)]
-    section = results.get("asme_b5_64") or {}
-    step = section.get("incremental_step") or {}
-    limit = spec.get(SPEC_TOLERANCES["incremental_step"][0])
-    if limit is not None and step:
-        U = None if step.get("max_step_sigma_um") is None else 2.0 * float(step["max_step_sigma_um"])
-        rows.append({"figure": "Minimum incremental motion", "quantity": "step", "tolerance": float(limit), "U": U,
-                     "unit": "\u00b5m", "tur": tur(limit, U)})
-    settle = section.get("settling") or {}
-    limit = spec.get(SPEC_TOLERANCES["settling"][0])
-    if limit is not None and settle:
-        U = settle.get("settling_time_U_s")
-        rows.append({"figure": "Settling time", "quantity": f"\u00b1{settle.get('band_um'):g} \u00b5m band",
-                     "tolerance": float(limit), "U": U, "unit": "s", "tur": tur(limit, U)})
-    return rows
 
 
 def stop_keys(obs: Observations, records: dict[int, Any]) -> np.ndarray:

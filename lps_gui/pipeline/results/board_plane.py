@@ -52,7 +52,7 @@ def straightness_figures(target_mm: np.ndarray, est: LpsEstimate, valid: np.ndar
     """
     bp, six = est.board_plane, est.six_dof
     if bp is not None:
-        values, sigma, basis = bp.straightness_um, bp.straightness_sigma_um, "board plane, constant orientation (SPEC 11)"
+        values, sigma, basis = bp.straightness_um, bp.straightness_sigma_um, "board plane, constant orientation"
     elif six is not None:
         values, sigma, basis = six.straightness_um, six.straightness_sigma_um, "per-view 6-DOF poses"
     else:

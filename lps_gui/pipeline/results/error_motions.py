@@ -40,8 +40,8 @@ from lps_gui.io.results.document import json_float, json_floats
 ANGLE_COLUMNS = {"roll": "eax", "pitch": "ebx", "yaw": "ecx"}  # SPEC 14's column stems (for every axis)
 UNITS = {"positioning": "um", "straightness_y": "um", "straightness_z": "um", "roll": "urad", "pitch": "urad",
          "yaw": "urad"}
-BASIS_BOARD = "per-view 6-DOF poses against one board (SPEC 11: the tilts need targets at two depths)"
-BASIS_TARGETS = "every stop's full pose, jointly with the targets (SPEC 14)"
+BASIS_BOARD = "per-view 6-DOF poses against one board (the tilts need targets at two depths)"
+BASIS_TARGETS = "every stop's full pose, jointly with the targets"
 WARM_START_MAX_PX = 2.0  # the row model's residual up to which its solution starts the pose solve
 
 

@@ -36,7 +36,7 @@ def step_figure(step: IncrementalStep) -> FigureSpec:
     series.append(Series(n, commanded, "commanded", "line", TRUTH_COLOR, dashed=True))
     return FigureSpec("min_step", "Incremental steps: achieved against commanded (stops averaged)", "step number",
                       "step along the command [\u00b5m]", series,
-                      notes="red crosses: steps that moved less than half the command")
+                      notes="red crosses: stuck steps (less than half the command, and short of the tolerance by more than 2\u03c3)")
 
 
 def settling_figure(settling: Settling) -> FigureSpec:

@@ -36,6 +36,7 @@ from lps_gui.report.figures.spec import (
 from lps_gui.report.figures.targets import with_target_stretches
 from lps_gui.sim.truth import centred, residual_from_line, true_deviation_um
 
+TRUTH_AT_MEASUREMENT = "truth_plane_deviation_um"  # the true deviation where the positions are measured (sim/truth)
 TRUTH_KEYS = ("deviation_um", "straightness_um_1", "straightness_um_2", "roll_urad", "pitch_urad", "yaw_urad",
               "image_rotation_urad")
 FIGURE_KEYS = ("positions", "deviation", "step", "straightness", "angles", "residuals", "spectrum")
@@ -112,7 +113,11 @@ def truth_columns(results: Results | dict[str, Any] | None, truth: dict[str, Any
     results = as_results(results)
     rows = results.sorted_positions()
     if rows and any(r.get("truth_deviation_um") is not None for r in rows):
-        return {key: results.column(f"truth_{key}", rows) for key in TRUTH_KEYS}
+        out = {key: results.column(f"truth_{key}", rows) for key in TRUTH_KEYS}
+        plane = results.column(TRUTH_AT_MEASUREMENT, rows)
+        if np.isfinite(plane).any():  # like with like: the positions are measured at the board plane (issue 37)
+            out["deviation_um"] = plane
+        return out
     if not truth or "positions_mm" not in truth:
         return None
     cols = position_columns(results)
@@ -172,7 +177,7 @@ def for_row(figure: FigureSpec) -> FigureSpec:
     """A board-plane figure of a session with targets: empty (the row model fits no per-view orientation),
     with a note pointing to the error motions (SPEC 14), which give straightness and angles at the camera."""
     return replace(figure, series=[], notes="a row of targets: the model fits one camera orientation and no per-view "
-                   "offsets, so straightness and angles come from the error motions (their page, SPEC 14)")
+                   "offsets, so straightness and angles come from the error motions (the error motions page)")
 
 
 def _by_direction(cols: dict[str, np.ndarray]) -> list[tuple[str, np.ndarray]]:
@@ -210,11 +215,15 @@ def deviation_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] |
         x, y = cols["target_mm"][sel], cols["deviation_um"][sel]
         t, mean, std, count = per_target_stats(x, y, keep[sel])
         if count.size and count.max() > 1:
-            series.append(Series(x, y, f"runs {_dir_label(d)}", "markers", _color(d), marked=cols["outlier"][sel]))
+            runs = np.unique(cols["run"][sel][np.isfinite(cols["run"][sel])]).size if "run" in cols else 0
+            what = "runs" if runs >= count.max() else "captures"  # repeated stops of one run are not runs (issue 37)
+            series.append(Series(x, y, f"{what} {_dir_label(d)}", "markers", _color(d), marked=cols["outlier"][sel]))
             band = 2.0 * np.nan_to_num(std)
             series.append(Series(t, mean, f"mean \u00b12s {_dir_label(d)}", "line", _color(d),
                                  band_low=mean - band, band_high=mean + band))
-            notes.append(f"{_dir_label(d)}: band = mean \u00b1 2 s over {int(count.max())} runs")
+            notes.append(f"{_dir_label(d)}: band = mean \u00b1 2 s over {int(count.max())} runs" if what == "runs" else
+                         f"{_dir_label(d)}: band = mean \u00b1 2 s over up to {int(count.max())} captures per target "
+                         f"({runs} run{'s' if runs != 1 else ''})")
         else:
             sig = 2.0 * np.nan_to_num(cols["sigma_um"][sel])
             series.append(Series(x, y, f"deviation {_dir_label(d)}", "line+markers", _color(d),

@@ -21,7 +21,7 @@ FIGURE_HEIGHT_MM = 78.0
 RECORD_MARGIN = 1.5  # a settling record should run this many times the settling time
 TUR_NOTE = ("Test uncertainty ratio (ASME B5.64): the specification's tolerance over the expanded uncertainty U "
             "(k = 2) of the figure as it is compared with it (a \u00b1 limit against half a band, as in the verdict). "
-            "A figure without a tolerance in session.json stage_spec has no ratio; 4 or more is the usual aim.")
+            "A figure without a tolerance in the stage specification has no ratio; 4 or more is the usual aim.")
 
 
 def section(results: Results | Mapping[str, Any]) -> AsmeB564:
@@ -82,7 +82,7 @@ def incremental_step_section(flow: Any, step: IncrementalStep) -> None:
     flow.heading("ASME B5.64 incremental-step test (minimum incremental motion)", 11)
     flow.paragraph(step_verdict(step), size_pt=9.0)
     flow.figure(step_figure(step), FIGURE_HEIGHT_MM)
-    header = ["commanded", "steps", "resolved", "achieved", "stuck", "by noise", "mean step", "median \u03c3"]
+    header = ["commanded", "steps", "resolved", "achieved", "below \u00bd", "by noise", "mean step", "median \u03c3"]
     cells = [[f"{fmt(z.commanded_um)} \u00b5m", str(z.n_steps), str(z.n_resolved), str(z.n_achieved),
               str(z.n_stuck), f"{z.n_stuck_by_noise:.1f}", f"{fmt(z.mean_achieved_um)} \u00b5m",
               f"{fmt(step.median_step_sigma_um)} \u00b5m"] for z in step.sizes]
@@ -149,8 +149,15 @@ def finding_lines(results: Results | Mapping[str, Any]) -> list[str]:
 
 def test_lines(results: Results | Mapping[str, Any]) -> list[str]:
     """The ASME test's findings and the test uncertainty ratios, one line each (demo, CLI)."""
+    from lps_gui.report.pages.asme_verdict import TEST_ROWS
+    from lps_gui.report.pages.verdict import verdicts
+
     s = section(results)
     lines = finding_lines(results)
+    r_all = as_results(results)
+    for v in verdicts(r_all, dict(r_all.stage_spec or {})):  # the test's verdict, as page 1 and summary.csv state it
+        if v.name in TEST_ROWS:
+            lines.append(f"Verdict {v.name}: {v.verdict} against {fmt(v.limit)} {v.unit} ({v.note})")
     for r in s.test_uncertainty_ratio:
         ratio = "\u2014" if r.tur is None else f"{r.tur:.1f}"
         lines.append(f"TUR {r.figure}: {ratio} (tolerance {fmt(r.tolerance)} {r.unit})")
@@ -174,7 +181,7 @@ def tur_cells(rows: tuple[UncertaintyRatio, ...]) -> list[list[str]]:
 def tur_section(flow: Any, rows: tuple[UncertaintyRatio, ...]) -> None:
     flow.heading("Test uncertainty ratio", 11)
     if not rows:
-        flow.paragraph("No tolerance in session.json stage_spec (lps capture --spec ...,min_step=UM,settling=S): "
+        flow.paragraph("No tolerance in the stage specification (lps capture --spec ...,min_step=UM,settling=S): "
                        "no ratio is stated.", color=GREY)
         return
     flow.table(TUR_HEADER, tur_cells(rows), [56, 30, 30, 30, 20], size_pt=8.0)

@@ -142,7 +142,7 @@ def paint_error_motions_page(flow: Any, results: Results | Mapping[str, Any], fi
     section = results.error_motions
     flow.new_page()
     axes = " and ".join(section.axis_names)
-    flow.heading(f"Error motions of the {axes} ax{'es' if ' and ' in axes else 'is'} (ISO 230-1, SPEC 14)", 12)
+    flow.heading(f"Error motions of the {axes} ax{'es' if ' and ' in axes else 'is'} (ISO 230-1)", 12)
     flow.paragraph(f"From {section.basis or ''}. Each motion is resolved when its profile over the targets "
                    "differs from zero beyond what noise alone gives (chi-square, p < 0.001) and its p-v exceeds "
                    "the noise p-v; positions.csv carries eax/ebx/ecx only where resolved.", size_pt=7.5,
@@ -150,8 +150,12 @@ def paint_error_motions_page(flow: Any, results: Results | Mapping[str, Any], fi
     flow.table(["motion", "what", "p-v", "noise p-v", "median \u03c3", "unit", ""], error_motion_rows(results),
                [14, 40, 20, 22, 22, 14, 28], size_pt=7.5, row_mm=4.0, align_right_from=2, align_left=(5, 6),
                colors=[None if r[-1] == "resolved" else "#888888" for r in error_motion_rows(results)])
+    from lps_gui.report.pages.reconcile import reconciliation_lines
+
     for spec in figures:
         flow.figure(spec, figure_height_mm)
+    for line in reconciliation_lines(results):  # one reported figure per quantity; the other a cross-check
+        flow.paragraph(line, size_pt=7.5, color="#555555")
     tool = section.tool_point
     if tool:
         flow.paragraph(f"Tool point {list(tool.offset_mm)} mm from the camera centre ({tool.frame} frame): "

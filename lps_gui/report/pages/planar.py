@@ -221,8 +221,7 @@ def paint_planar_report(flow: Any, meta: dict[str, Any], results: Results, title
         flow.heading("Simulation only: against the simulator's truth", 11)
         flow.table(["figure", "value", "unit", "note"], [[r.name, r.text(), r.unit, r.note] for r in truth],
                    [78, 20, 14, 68], align_right_from=1, align_left=(3,), colors=[R.GREY] * len(truth))
-    flow.heading("Identification", 11)
-    flow.table(None, [[k, v] for k, v in title_rows], [32, 148], size_pt=8.0, row_mm=4.2, align_right_from=9)
+    R.identification_blocks(flow, meta, results, title_rows)
     for axis, ar in axes.items():
         R.iso_section(flow, ar, f"ISO 230-2 per target, {axis} axis (worst line)")
     targets_section(flow, results)  # a constellation of targets (SPEC 13)

@@ -64,8 +64,8 @@ DECISION_RULE = ("Decision rule ISO 14253-1: PASS when the figure plus U is with
                  "(or R) listed with the measured figures; a p-v's U is that of the larger per-target span. "
                  "U covers the measurement (see the uncertainty budget), not the stage's own scatter. TUR (test "
                  "uncertainty ratio, ASME B5.64): the limit over that U.")
-NO_SPEC = ("No stage specification in session.json (key \"stage_spec\"; enter it with lps capture --spec or in "
-           "the capture panel): no verdict is given.")
+NO_SPEC = ("No stage specification was given (enter it with lps capture --spec or in the capture panel): "
+           "no verdict is given.")
 
 
 def verdict_section(flow: Any, results: Results, spec: dict[str, Any] | None,
@@ -115,3 +115,24 @@ def uncertainty_sections(flow: Any, results: Results, axis: str | None = None, e
                align_left=(3, 5))
     for note in B.budget_notes(results):
         flow.paragraph(note, size_pt=7.5, color="#333333")
+
+
+# ----------------------------------------------------------------------------- identification and signing
+
+
+def two_pairs(rows: list[tuple[str, str]]) -> list[list[str]]:
+    """(label, text) rows as a table of two pairs a line, the first half down the left: page 1 keeps its blocks."""
+    half = (len(rows) + 1) // 2
+    return [[*rows[i], *(rows[i + half] if i + half < len(rows) else ("", ""))] for i in range(half)]
+
+
+def identification_blocks(flow: Any, meta: dict[str, Any], results: Results, title: list[tuple[str, str]]) -> None:
+    """Page 1's identification, then the certificate's signing block (laboratory, instruments and their
+    certificates, dates, approval: :mod:`lps_gui.report.pages.signing`), two pairs a line."""
+    from lps_gui.report.pages.signing import signing_rows
+
+    flow.heading("Identification", 11)
+    flow.table(None, two_pairs(title), [22, 68, 22, 68], size_pt=7.5, row_mm=3.8, align_right_from=9)
+    flow.heading("Certificate and approval", 11)
+    flow.table(None, two_pairs(signing_rows(meta, results)), [22, 68, 22, 68], size_pt=7.5, row_mm=3.8,
+               align_right_from=9)

@@ -14,11 +14,18 @@ import numpy as np
 
 from lps_gui.core.estimator.methods import report_text
 from lps_gui.core.geometry.camera_model import HIGHER_NAMES, INTRINSIC_NAMES
-from lps_gui.io.results.document import SummaryFigure, extreme_figures, iso_figures, summary_figures
+from lps_gui.io.results.document import (
+    SummaryFigure,
+    extreme_figures,
+    figure_u_k2,
+    iso_figures,
+    summary_figures,
+    u_key,  # noqa: F401  (re-exported: compare and tests read U by it)
+)
 from lps_gui.io.results.document import finite_number as _num
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import Iso230
-from lps_gui.report.figures.plots import position_columns
+from lps_gui.report.figures.plots import TRUTH_AT_MEASUREMENT, position_columns
 
 DASH = "\u2014"
 ZERO_BELOW = 1e-9  # |values| below this print as 0 (no unit of the report resolves them)
@@ -250,9 +257,8 @@ def summary_rows(results: Results | dict[str, Any]) -> list[Row]:
     ISO 230-2 figures (absent with one run), maxima of straightness and
     angles over the positions not flagged; the truth comparison is :func:`truth_rows`, on its own page.
     """
-    results = as_results(results)
-    return [_with_u(results, _row(f)) for f in summary_figures(results.to_dict())
-            if f.label is not None and not f.key.startswith("truth_")]
+    doc = as_results(results).to_dict()
+    return [_with_u(doc, _row(f)) for f in summary_figures(doc) if f.label is not None and not f.key.startswith("truth_")]
 
 
 def truth_rows(results: Results | dict[str, Any]) -> list[Row]:
@@ -261,32 +267,12 @@ def truth_rows(results: Results | dict[str, Any]) -> list[Row]:
             if f.label is not None and f.key.startswith("truth_")]
 
 
-U_KEYS = {"step_std": "step_std_um", "max_abs_deviation": "max_abs_deviation_um", "scale": "scale_ppm",
-          "periodic_amplitude": "periodic_amplitude_um"}  # summary figure -> results uncertainty.figures_k2
+def _with_u(doc: dict[str, Any], row: Row) -> Row:
+    """The row with its U (k = 2): :func:`lps_gui.io.results.document.figure_u_k2`, the one reading summary.csv uses.
 
-
-def u_key(key: str) -> str:
-    """The ``uncertainty.figures_k2`` key of a summary figure (core.uncertainty_budget.figure_uncertainties)."""
-    if key.startswith("iso230_2_"):
-        return key.removeprefix("iso230_2_") + "_um"
-    if key.startswith(("straightness_span_", "max_abs_", "image_rotation_span")) and key != "max_abs_deviation":
-        return key
-    return U_KEYS.get(key, key)
-
-
-def _with_u(results: Results, row: Row) -> Row:
-    """The row with its U (k = 2), read from results ``uncertainty.figures_k2`` and nowhere else.
-
-    The mean step's is stored in um and printed in the row's mm; a figure
-    printed as "not resolved" carries no U (it states no value to carry one).
+    A figure printed as "not resolved" carries no U (it states no value to carry one).
     """
-    unc = results.uncertainty
-    if row.unresolved or unc is None:
-        return row
-    if row.key == "mean_step":
-        value = unc.u_k2("mean_step_um")
-        return replace(row, u_k2=None if value is None else 1e-3 * value)
-    return replace(row, u_k2=unc.u_k2(u_key(row.key)))
+    return row if row.unresolved else replace(row, u_k2=figure_u_k2(doc, row.key))
 
 
 TRUTH_CHECK_KIND = "truth_check"  # results.json flag of a simulated session its truth contradicts (sim/truth_figures)
@@ -362,8 +348,8 @@ def limits_notes(results: Results | dict[str, Any]) -> list[str]:
         f"({fmt(square_mm, 4)} mm as given). An error in the printed square size is a pure "
         "scale error: a square 0.1 % too large makes every position and the scale error 1000 ppm too large, "
         "and leaves the shape of the deviation curve, the straightness and the angles unchanged. Measure the "
-        "board with a calibrated instrument to remove it; its certified uncertainty (environment "
-        "square_mm_uncertainty_um) and its temperature enter the uncertainty budget, and a board away from "
+        "board with a calibrated instrument to remove it; its certified uncertainty (the board's "
+        "calibration certificate) and its temperature enter the uncertainty budget, and a board away from "
         "20 \u00b0C is corrected with its expansion coefficient.",
     ]
     if sig.size:
@@ -397,6 +383,10 @@ def straightness_notes(results: Results, cols: dict[str, np.ndarray]) -> list[st
     rot_med = fmt(float(np.median(rot[np.isfinite(rot)])), 2) if np.isfinite(rot).any() else DASH
     st = results.figures.straightness
     if st is None or "constant orientation" not in str(st.basis or ""):
+        if DASH in (med["straightness_sigma_um_1"], med["straightness_sigma_um_2"]):  # no per-view straightness
+            return ["Straightness and angles: no per-view figures at the board plane in this session; where the "
+                    "session resolves them they are on the error motions page. Figures that noise alone could "
+                    "produce are shown as \"not resolved\"."]
         return ["Straightness and angles come from each view's own pose, which is far less certain than its "
                 f"position along the line: median 1\u03c3 is {med['straightness_sigma_um_1']} \u00b5m (v1) and "
                 f"{med['straightness_sigma_um_2']} \u00b5m (v2). Figures that noise alone could produce are shown "
@@ -483,6 +473,9 @@ def position_table(results: Results | dict[str, Any]) -> tuple[list[str], list[l
     positions = as_results(results).sorted_positions()
     has_truth = any(r.get("truth_deviation_um") is not None for r in positions)
     columns = [c for c in POSITION_TABLE_COLUMNS if has_truth or c[0] != "truth_deviation_um"]
+    if any(r.get(TRUTH_AT_MEASUREMENT) is not None for r in positions):  # like with like: truth at the board plane
+        columns = [(TRUTH_AT_MEASUREMENT, "truth dev.\nboard pl.", *c[2:]) if c[0] == "truth_deviation_um" else c
+                   for c in columns]
     header = [c[1] for c in columns]
     body = table_cells(positions, columns)
     return header, body, [float(c[3]) for c in columns]

@@ -69,7 +69,7 @@ def targets_section(flow: Any, results: Results | Mapping[str, Any]) -> bool:
     if table is None:
         return False
     header, rows, widths = table
-    flow.heading(f"Targets ({len(rows)}, SPEC 13)", 11)
+    flow.heading(f"Targets ({len(rows)})", 11)
     flow.table(header, rows, widths, size_pt=7.5, row_mm=4.0, align_right_from=1, align_left=(4,))
     flow.paragraph(NOTE, size_pt=7.0, color="#555555")
     return True

@@ -18,6 +18,7 @@ from lps_gui.core.metrology.decision_rule import decide
 from lps_gui.core.metrology.iso230 import ISO_RUNS
 from lps_gui.core.metrology.resolution import runs_per_direction
 from lps_gui.io.results.model import Results, as_results
+from lps_gui.report.pages.asme_verdict import asme_rows
 from lps_gui.report.pages.summary import SpecCheck, fmt, spec_checks
 
 PASS_COLOR, FAIL_COLOR, INDICATIVE_COLOR, GREY = "#007a1f", "#c00000", "#a05a00", "#555555"
@@ -41,10 +42,11 @@ class Verdict:
     color: str
     note: str
     quantity: str = ""  # what ``measured`` and ``u_k2`` are: "A/2", "R/2", "p-v v2", ...
+    shown: str = ""  # printed instead of a missing value when the test bounds it ("> 2.00 µm")
 
     def measured_text(self) -> str:
         """The compared quantity and its value, e.g. "A/2 = 13.1 µm" (the figure page 2 lists as A is twice it)."""
-        value = "\u2014" if self.measured is None else f"{fmt(self.measured)} {self.unit}"
+        value = (self.shown or "\u2014") if self.measured is None else f"{fmt(self.measured)} {self.unit}"
         return f"{self.quantity} = {value}" if self.quantity else value
 
 
@@ -88,18 +90,35 @@ def verdicts(results: Results | dict[str, Any], spec: dict[str, Any] | None) -> 
             note = f"{runs} run(s) per direction, ISO 230-2 asks for {ISO_RUNS}; {note}"
             word += " (indicative)"
         out.append(Verdict(c.name, c.measured, u, c.limit, c.unit, word, color, note, quantity))
+    for name, quantity, measured, u, limit, unit, word, note, shown in asme_rows(results, spec):  # the test's own result
+        out.append(Verdict(name, measured, u, limit, unit, word, {"PASS": PASS_COLOR, "FAIL": FAIL_COLOR}.get(word, GREY),
+                           note, quantity, shown))
     return out
 
 
-def overall(rows: list[Verdict]) -> str:
-    """One line for the top of page 1."""
-    if not rows:
-        return "No stage specification given: figures only, no verdict."
-    words = [r.verdict for r in rows]
-    if any(w == "FAIL" for w in words):
-        return "FAIL: the stage is outside its specification beyond the measurement uncertainty."
+NO_SPEC_WORD = "no specification"
+OVERALL_TEXT = {NO_SPEC_WORD: "No stage specification given: figures only, no verdict.",
+                "FAIL": "FAIL: the stage is outside its specification beyond the measurement uncertainty.",
+                "PASS": "PASS: every specified figure is within its limit, uncertainty included.",
+                "FAIL (indicative)": "Indicative FAIL: too few runs for an ISO 230-2 verdict; repeat with 5 runs per "
+                                     "direction.",
+                "not resolved": "Not fully resolved: see the rows below (indicative, not resolved or not measured)."}
+
+
+def overall_word(words: list[str]) -> str:
+    """One word for the whole verdict (results.json, summary.csv): FAIL beats an indicative FAIL beats not resolved;
+    PASS only when every row passes."""
+    if not words:
+        return NO_SPEC_WORD
+    if "FAIL" in words:
+        return "FAIL"
     if all(w == "PASS" for w in words):
-        return "PASS: every specified figure is within its limit, uncertainty included."
+        return "PASS"
     if any(w.startswith("FAIL") for w in words):
-        return "Indicative FAIL: too few runs for an ISO 230-2 verdict; repeat with 5 runs per direction."
-    return "Not fully resolved: see the rows below (indicative, not resolved or not measured)."
+        return "FAIL (indicative)"
+    return "not resolved"
+
+
+def overall(rows: list[Verdict]) -> str:
+    """One line for the top of page 1: :func:`overall_word` in words."""
+    return OVERALL_TEXT[overall_word([r.verdict for r in rows])]

@@ -140,7 +140,7 @@ def _paint_line_report(flow: Any, session_dir: Path, meta: dict[str, Any], resul
 def _front_page(flow: Any, meta: dict[str, Any], results: Results, version: str) -> None:
     """Page 1: the verdict with U (k = 2), the deviation plot with the limit drawn, the identification."""
     spec = R.stage_spec(meta, results)
-    flow.heading("Linear positioning stage \u2014 measurement report", 15)
+    flow.heading(front_title(results), 15)
     for line in S.truth_check_lines(results):  # a simulated session whose truth contradicts the report says so first
         flow.paragraph(line, size_pt=9.0, color="#c00000")
     R.verdict_section(flow, results, spec, [r for r in S.summary_rows(results) if r.key in R.FRONT_FIGURES])
@@ -149,22 +149,36 @@ def _front_page(flow: Any, meta: dict[str, Any], results: Results, version: str)
     limit = (spec or {}).get("accuracy_um")
     if limit is not None:
         deviation = with_spec_band(deviation, float(limit), str(spec.get("limits", "plus_minus")) == "plus_minus")
-    flow.figure(deviation, 100.0)
-    flow.heading("Identification", 11)
+    # the identification and signing blocks stay on page 1: the plot gives way (down to 60 mm) when the verdict is long
+    flow.figure(deviation, max(FRONT_FIGURE_MIN_MM, min(100.0, flow.remaining_mm() - FRONT_BLOCKS_MM)))
     title = S.title_rows(meta, results, version)
     title.append(("Results", f"{results.created or DASH_TEXT}, method {results.method or DASH_TEXT}"))
-    flow.table(None, [[k, v] for k, v in title], [30, 150], size_pt=8.0, row_mm=4.2, align_right_from=9)
+    R.identification_blocks(flow, meta, results, title)
 
 
 DASH_TEXT = S.DASH
+
+
+def front_title(results: Results) -> str:
+    """Page 1's title: the ASME B5.64 test a test session ran (its verdict row leads), else the measurement report."""
+    asme = results.asme_b5_64
+    if asme is not None and asme.incremental_step is not None and asme.incremental_step.raw:
+        return "Linear positioning stage \u2014 minimum incremental motion test (ASME B5.64)"
+    if asme is not None and asme.settling is not None and asme.settling.raw:
+        return "Linear positioning stage \u2014 settling time test (ASME B5.64)"
+    return "Linear positioning stage \u2014 measurement report"
+FRONT_FIGURE_MIN_MM, FRONT_BLOCKS_MM = 60.0, 96.0  # page 1's plot at least; identification + signing blocks need
 
 
 def _figures_page(flow: Any, results: Results) -> None:
     """Measured figures with U (k = 2), then the ISO 230-2 per-target table."""
     flow.heading("Measured figures", 11)
     R.figure_table(flow, S.summary_rows(results))
-    for note in S.figure_notes(results):
-        flow.paragraph(note, size_pt=7.5, color="#555555")
+    from lps_gui.report.pages.reconcile import page2_note
+
+    for note in [*S.figure_notes(results), page2_note(results)]:
+        if note:
+            flow.paragraph(note, size_pt=7.5, color="#555555")
     flow.paragraph(U_NOTE, size_pt=7.5, color="#555555")
     R.iso_section(flow, results)
     asme_pages.names_note(flow, results)

@@ -9,10 +9,13 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from lps_gui.core.geometry.camera_model import INTRINSIC_NAMES
 from lps_gui.errors import InputError
 
 if TYPE_CHECKING:
+    from lps_gui.core.geometry.board import Board
     from lps_gui.core.intrinsics.calibration import IntrinsicsCalibration
     from lps_gui.core.intrinsics.crossval import CrossValidation
 
@@ -37,12 +40,33 @@ def parameter_rows(cal: "IntrinsicsCalibration") -> list[list[str]]:
     return rows
 
 
+def identification_rows(cal: "IntrinsicsCalibration", board: "Board | None", date: str, version: str
+                        ) -> list[list[str]]:
+    """Date, board, lens model, views and software: what a reader of the calibration needs to trace it (issue 37)."""
+    if board is None:
+        board_text = "not given"
+    else:
+        kind = "ChArUco" if board.type != "chessboard" else "chessboard"
+        board_text = (f"{kind} {board.cols}\u00d7{board.rows} inner corners, square {board.square_mm:g} mm "
+                      "(the calibration's length unit; its print scale does not change the intrinsics)")
+    higher = np.asarray(cal.intrinsics.higher, dtype=float)
+    n_dist = 12 if np.any(higher[3:]) else 8 if np.any(higher) else 5  # SPEC 15: 5, 8 or 12 in OpenCV's order
+    lens = {5: "OpenCV 5 coefficients (k1 k2 p1 p2 k3)", 8: "OpenCV 8 coefficients (rational: + k4 k5 k6)",
+            12: "OpenCV 12 coefficients (rational and thin prism: + k4 k5 k6 s1 s2 s3 s4)"}[n_dist]
+    return [["Date", date], ["Board", board_text], ["Lens model", lens],
+            ["Views", f"{len(cal.used_views)} used of {len(cal.per_view_rms_px)}"], ["Software", f"lps-calib {version}"]]
+
+
 def write_intrinsics_report(cal: "IntrinsicsCalibration", out: Path | str, crossval: "CrossValidation | None" = None,
-                            title: str = "", clipped: list[str] | None = None) -> int:
+                            title: str = "", clipped: list[str] | None = None, board: "Board | None" = None,
+                            date: str | None = None) -> int:
     """Write the PDF; returns its number of pages. A failure leaves no partial file.
 
-    ``clipped``, when given, receives every string that does not fit its box (the layout check).
+    ``board`` the calibration board (printed with the date, default now); ``clipped``, when given, receives
+    every string that does not fit its box (the layout check).
     """
+    import time
+
     from lps_gui import __version__
     from lps_gui.report.pdf.intrinsics_pictures import intrinsics_pictures
     from lps_gui.report.pdf.layout import ensure_gui_app, pdf_file
@@ -53,6 +77,8 @@ def write_intrinsics_report(cal: "IntrinsicsCalibration", out: Path | str, cross
     ensure_gui_app()
     with pdf_file(out, f"Camera intrinsics report {title}".strip(), f"lps-calib {__version__} \u00b7 intrinsics {title}".strip()) as flow:
         flow.heading("Camera intrinsics \u2014 calibration report", 15)
+        flow.table(None, identification_rows(cal, board, date or time.strftime("%Y-%m-%d %H:%M:%S%z"), __version__),
+                   [30, 150], size_pt=8.0, row_mm=4.2, align_right_from=9)
         flow.paragraph("Board warp as mrcal models it: corner z = bow_x (1 - x\u00b2) + bow_y (1 - y\u00b2) with the "
                        "corner grid spanning [-1, 1]; the bow is the centre's offset from the edges along each board axis. "
                        "Sigmas are from the Jacobian at the solution, scaled by the residual noise.")

@@ -94,6 +94,10 @@ class PdfFlow:
         if self.y + height_mm * self.mm > self.bottom + 1e-6:
             self.new_page()
 
+    def remaining_mm(self) -> float:
+        """Height left on this page below the cursor, mm."""
+        return (self.bottom - self.y) / self.mm
+
     def finish(self) -> int:
         """End painting; a PDF Qt could not write completely (disk full) raises StorageError."""
         from lps_gui.errors import StorageError

@@ -1,0 +1,45 @@
+"""results.json ``verdict`` and summary.csv's U and verdict rows: the page-1 verdict, machine-readable.
+
+The rows are the report's own (:func:`lps_gui.report.pages.verdict.verdicts`, one decision rule in
+``core.metrology.decision_rule``), so the PDF, summary.csv and results.json cannot disagree; a session
+without a stage specification gets "no specification", never a PASS.
+"""
+from __future__ import annotations
+
+import re
+from typing import Any
+
+from lps_gui.io.results.document import json_float, summary_csv_rows
+
+DECISION_RULE = ("ISO 14253-1: PASS when the figure plus its expanded uncertainty U (k = 2) is within the limit, "
+                 "FAIL when the figure minus U is beyond it, not resolved when the limit lies within +-U")
+
+
+def check_key(name: str) -> str:
+    """"Straight-line accuracy" -> "straight_line_accuracy" (a summary.csv row name)."""
+    return re.sub(r"[^a-z0-9]+", "_", name.lower()).strip("_")
+
+
+def verdict_section(results: dict[str, Any]) -> dict[str, Any]:
+    """results.json ``verdict``: the decision rule, the overall word and line, one row per specified figure."""
+    from lps_gui.report.pages.verdict import overall, overall_word, verdicts
+
+    spec = (results.get("session_meta") or {}).get("stage_spec") or results.get("stage_spec")
+    rows = verdicts(results, spec)
+    return {
+        "decision_rule": DECISION_RULE,
+        "overall": overall_word([r.verdict for r in rows]),
+        "overall_text": overall(rows),
+        "checks": [{"key": check_key(r.name), "name": r.name, "quantity": r.quantity,
+                    "measured": None if r.measured is None else json_float(r.measured),
+                    "u_k2": None if r.u_k2 is None else json_float(r.u_k2), "limit": json_float(r.limit),
+                    "unit": r.unit, "verdict": r.verdict, "note": r.note, **({"shown": r.shown} if r.shown else {})}
+                   for r in rows],
+    }
+
+
+def add_verdict(results: dict[str, Any]) -> dict[str, Any]:
+    """Add ``verdict`` and rebuild ``summary`` (now with U and the verdict rows); in place, also returned."""
+    results["verdict"] = verdict_section(results)
+    results["summary"] = summary_csv_rows(results)
+    return results

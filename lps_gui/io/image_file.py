@@ -18,7 +18,6 @@ from lps_gui.file_limits import (  # re-exported: every reader's way in
     check_regular_file,
     read_file_limited,
 )
-from lps_gui.quiet_decode import imdecode_quiet
 
 MAX_IMAGE_BYTES = MAX_FILE_BYTES  # 1 GB on disk
 __all__ = ["MAX_IMAGE_BYTES", "check_regular_file", "decode_image", "read_file_limited", "read_image"]
@@ -27,6 +26,8 @@ __all__ = ["MAX_IMAGE_BYTES", "check_regular_file", "decode_image", "read_file_l
 def decode_image(data: bytes, name: str, flags: int | None = None) -> np.ndarray | None:
     """Decode bytes after the header check; None when OpenCV cannot decode them (its own lines kept off stderr)."""
     import cv2
+
+    from lps_gui.quiet_decode import imdecode_quiet  # cv2 only where an image is decoded (lps estimate never does)
 
     check_image_header(data[:HEADER_BYTES], name, read_at=bytes_reader(data))
     if not data:

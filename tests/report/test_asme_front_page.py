@@ -26,7 +26,7 @@ def test_the_test_result_is_one_row_everywhere(demo):
     assert rows[key]["note"].startswith(word)
     front = " ".join(PdfReader(res.report_pdf).pages[0].extract_text().split())
     assert name in front and f"{name} " in front
-    title = {"min-step": "minimum incremental motion test (ASME B5.64)", "settling": "settling time test (ASME B5.64)"}
+    title = {"min-step": "Minimum incremental motion test (ASME B5.64)", "settling": "Settling time test (ASME B5.64)"}
     assert title[test] in front  # a test-specific front page
     line = [s for s in res.summary if s.startswith(f"Verdict {name}")]
     assert line and f": {word} " in line[0]

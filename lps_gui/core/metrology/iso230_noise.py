@@ -30,7 +30,6 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from scipy.stats import chi2
 
 from lps_gui.core.metrology.iso230 import bidirectional_figures, direction_signs
 
@@ -89,6 +88,8 @@ def noise_bound(fig: Any, noise_um: np.ndarray) -> float:
     claimed = float(np.mean(np.square(noise_um))) if np.size(noise_um) else 0.0
     if not keep.any() or claimed <= 0:
         return 1.0
+    from scipy.stats import chi2  # scipy.stats costs lps estimate's start-up: only where the bound is tested
+
     n = float(np.sum(dof[keep]))
     pooled = float(np.sum(dof[keep] * var[keep]) / n)
     if pooled >= claimed * chi2.ppf(REJECT_P, n) / n:

@@ -163,10 +163,12 @@ def front_title(results: Results) -> str:
     """Page 1's title: the ASME B5.64 test a test session ran (its verdict row leads), else the measurement report."""
     asme = results.asme_b5_64
     if asme is not None and asme.incremental_step is not None and asme.incremental_step.raw:
-        return "Linear positioning stage \u2014 minimum incremental motion test (ASME B5.64)"
+        return "Minimum incremental motion test (ASME B5.64)"
     if asme is not None and asme.settling is not None and asme.settling.raw:
-        return "Linear positioning stage \u2014 settling time test (ASME B5.64)"
+        return "Settling time test (ASME B5.64)"
     return "Linear positioning stage \u2014 measurement report"
+
+
 FRONT_FIGURE_MIN_MM, FRONT_BLOCKS_MM = 60.0, 96.0  # page 1's plot at least; identification + signing blocks need
 
 

@@ -45,3 +45,11 @@ def _collector_as_usual(request):
 
         QCoreApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete)
         gc.collect()
+
+
+@pytest.fixture(scope="session")
+def lightfield_demo(tmp_path_factory):
+    """`lps demo --lightfield --quick` once per test run (about 9 s): its pipeline tests and the GUI's tab share it."""
+    from lps_gui.pipeline.demos.lightfield import run_lightfield_demo
+
+    return run_lightfield_demo(tmp_path_factory.mktemp("lf") / "out", quick=True)

@@ -3,14 +3,12 @@ from __future__ import annotations
 
 import pytest
 
-from lps_gui.pipeline.demos.lightfield import run_lightfield_demo
-
 pytestmark = pytest.mark.gui
 
 
-@pytest.fixture(scope="module")
-def lightfield_folder(tmp_path_factory):
-    return run_lightfield_demo(tmp_path_factory.mktemp("lf") / "out", quick=True).plain.out
+@pytest.fixture
+def lightfield_folder(lightfield_demo):
+    return lightfield_demo.plain.out
 
 
 def test_the_light_field_tab_shows_both_epis_and_the_numbers(window, lightfield_folder):

@@ -5,12 +5,11 @@ import numpy as np
 import pytest
 
 from lps_gui.io.lightfield_files import read_hci
-from lps_gui.pipeline.demos.lightfield import run_lightfield_demo
 
 
-@pytest.fixture(scope="module")
-def demo(tmp_path_factory):
-    return run_lightfield_demo(tmp_path_factory.mktemp("lf") / "out", quick=True)
+@pytest.fixture
+def demo(lightfield_demo):
+    return lightfield_demo
 
 
 def test_without_compensation_the_hci_layout_is_refused_naming_the_largest_deviation(demo):

@@ -32,7 +32,7 @@ import time
 
 from lps_gui.core.clock import SimClock
 from lps_gui.hardware.grbl.firmware import BANNER, Faults, GrblFirmware
-from lps_gui.hardware.pty_device import PtyEndpoint
+from lps_gui.hardware.pty_device import PtyEndpoint, emulated_stage
 from lps_gui.hardware.sim_stage import SimulatedStage
 
 log = logging.getLogger(__name__)
@@ -203,28 +203,4 @@ def emulated_grbl_stage(time_scale: float = 1.0, faults: Faults | None = None, s
     """
     from lps_gui.hardware.grbl.driver import GrblStage
 
-    stage_options.pop("clock", None)
-    served = simulated if simulated is not None else SimulatedStage(**stage_options)
-    emu = GrblEmulator(served, faults=faults, time_scale=time_scale)
-    path = emu.start()
-
-    class EmulatedGrblStage(GrblStage):
-        emulator = emu
-        simulated = served
-
-        def disconnect(self) -> None:
-            try:
-                super().disconnect()
-            finally:
-                emu.stop()
-
-        def describe(self) -> dict:
-            return {**super().describe(), "emulated": served.describe()}
-
-    stage = EmulatedGrblStage(path)
-    try:
-        stage.connect()
-    except BaseException:
-        emu.stop()
-        raise
-    return stage
+    return emulated_stage(GrblStage, GrblEmulator, simulated, stage_options, faults=faults, time_scale=time_scale)

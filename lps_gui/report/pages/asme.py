@@ -149,7 +149,7 @@ def finding_lines(results: Results | Mapping[str, Any]) -> list[str]:
 
 def test_lines(results: Results | Mapping[str, Any]) -> list[str]:
     """The ASME test's findings and the test uncertainty ratios, one line each (demo, CLI)."""
-    from lps_gui.report.pages.asme_verdict import TEST_ROWS
+    from lps_gui.core.metrology.verdict import TEST_ROWS
     from lps_gui.report.pages.verdict import verdicts
 
     s = section(results)

@@ -138,7 +138,8 @@ def run(args: argparse.Namespace) -> int:
         return _intrinsics_mode(args)
     if bool(args.out) == bool(args.resume):
         raise InputError("give either --out SESSION (new capture) or --resume SESSION")
-    from lps_gui.cli.capture.setup import apply_setup, setup_meta
+    from lps_gui.capture.setup import apply_setup
+    from lps_gui.cli.capture.setup import setup_meta
 
     extra = setup_meta(args)  # --spec, environment, identification: checked before any device opens
     from lps_gui.cli.capture.live import report_path

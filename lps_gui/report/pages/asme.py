@@ -12,7 +12,8 @@ from typing import Any
 
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import AsmeB564, AsmeFigure, IncrementalStep, Settling, UncertaintyRatio
-from lps_gui.report.figures.asme import settling_figure, step_figure
+from lps_gui.report.figures.asme import settling_figure, step_figure, test_figures
+from lps_gui.report.pages.content import SectionContent
 from lps_gui.report.pages.summary import fmt
 
 GREY = "#555555"
@@ -42,8 +43,18 @@ def has_test(results: Results | Mapping[str, Any]) -> bool:
     return section(results).has_test
 
 
-def test_pages(flow: Any, results: Results | Mapping[str, Any]) -> None:
-    """The test's page (new page first); nothing for a session that ran neither test."""
+def asme_content(results: Results) -> SectionContent:
+    """The "ASME B5.64" tab, for a session that ran the incremental-step or the settling test."""
+    s = section(results)
+    rows = tur_cells(s.test_uncertainty_ratio)
+    lines = finding_lines(results) + ([] if rows else ["No tolerance in session.json stage_spec: no test "
+                                                       "uncertainty ratio is stated."])
+    return SectionContent("ASME B5.64", test_figures(s), lines, TUR_HEADER, rows)
+
+
+def test_pages(flow: Any, results: Results | Mapping[str, Any], figure_height_mm: float = FIGURE_HEIGHT_MM) -> None:
+    """The test's page (new page first); nothing for a session that ran neither test. (The test's figures
+    keep their own height, :data:`FIGURE_HEIGHT_MM`: ``figure_height_mm`` is the registry's common signature.)"""
     s = section(results)
     if not s.has_test:
         return

@@ -78,6 +78,17 @@ class SessionSetup:
         return out
 
 
+def device_records(stage: Any, camera: Any, stage_source: str | None = None, camera_source: str | None = None,
+                   **stage_meta: Any) -> tuple[dict[str, Any], dict[str, Any]]:
+    """session.json ``stage`` and ``camera`` of the devices a session runs on: the stage's description with the
+    capabilities its driver declared (SPEC 16), the camera's properties, and the source each was opened from
+    (``spec``: what `lps capture --resume` reopens) when the face knows it."""
+    from lps_gui.hardware.capabilities import session_stage
+
+    stage_record = {**session_stage(stage), **stage_meta, **({"spec": stage_source} if stage_source else {})}
+    return stage_record, {**camera.properties(), **({"spec": camera_source} if camera_source else {})}
+
+
 def apply_setup(session: Any, extra: dict[str, Any]) -> None:
     """Merge :meth:`SessionSetup.meta` into session.json (environment and identification key by key) and save it:
     a new session gets the entries, a resumed one keeps what it had where nothing new was given."""

@@ -51,3 +51,22 @@ def test_the_asme_plans_are_the_presets():
     assert asme_plan_fields("min-step", 0, 8, step_um=1.0) == min_step_plan_fields(0.0, 8.0, step_um=1.0)
     with pytest.raises(InputError, match="--test drift"):
         asme_plan_fields("drift", 0, 8)
+
+
+def test_both_faces_record_the_devices_alike():
+    """session.json ``stage`` carries the driver's declared capabilities (SPEC 16) and, when the face knows it,
+    the source the device was opened from; the GUI once recorded the description only."""
+    from lps_gui.camera.sim_camera import SimulatedCamera
+    from lps_gui.capture.setup import device_records
+    from lps_gui.core.clock import SimClock
+    from lps_gui.core.truth.simulate import small_spec
+    from lps_gui.hardware.sim_stage import SimulatedStage
+
+    spec, clock = small_spec(), SimClock()
+    stage = SimulatedStage(errors=spec.rig.errors, clock=clock)
+    camera = SimulatedCamera(spec.rig, stage.true_pose, clock=clock)
+    stage_record, camera_record = device_records(stage, camera, "sim", "sim", axes=["X"])
+    assert stage_record["capabilities"] and stage_record["spec"] == "sim" and stage_record["axes"] == ["X"]
+    assert camera_record == {**camera.properties(), "spec": "sim"}
+    bare = device_records(stage, camera)
+    assert "spec" not in bare[0] and "spec" not in bare[1] and bare[0]["capabilities"] == stage_record["capabilities"]

@@ -379,8 +379,11 @@ class CapturePanel(QWidget):
                 session = start_rig_session(folder, replace(sim_spec(), plan=plan), stage, camera)
                 apply_setup(session, extra)  # specification, environment, test, identification for the report
                 return session
-            return Session.create(folder, board, plan, intrinsics=intrinsics, camera=camera.properties(),
-                                  stage=stage.describe(), extra=extra)
+            from lps_gui.capture.setup import device_records
+
+            stage_record, camera_record = device_records(stage, camera)  # as lps capture records them (SPEC 16)
+            return Session.create(folder, board, plan, intrinsics=intrinsics, camera=camera_record,
+                                  stage=stage_record, extra=extra)
 
         self._run(folder, create, stage, camera)
 

@@ -12,7 +12,6 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 from lps_gui.io.results.model import Results
-from lps_gui.report.figures.asme import test_figures
 from lps_gui.report.figures.spec import FigureSpec
 from lps_gui.report.pages import asme, error_motions, targets
 from lps_gui.report.pages.content import SectionContent
@@ -28,18 +27,18 @@ class ResultSection:
 
     name: str  # its results.json key
     has: Callable[[Results], bool]  # whether these results have it
-    figures: Callable[[Results], list[FigureSpec]]  # its figures (the PDF's and the tab's)
+    figures: Callable[[Results], list[FigureSpec]]  # its figures: the tab draws these, the PDF painter the same
     place: str  # where the line report paints it: AFTER_FIGURES or AFTER_PLOTS
     paint: Callable[[Any, Results, float], Any]  # its PDF pages: (page flow, results, figure height in mm)
-    tab: Callable[[Results], SectionContent] | None = None  # its GUI tab's content; None: no tab
+    tab: Callable[[Results, list[FigureSpec]], SectionContent] | None = None  # its GUI tab, given its figures
 
 
 SECTIONS: tuple[ResultSection, ...] = (
     ResultSection("targets", targets.has_targets, lambda r: [], AFTER_FIGURES, targets.targets_section),
     ResultSection("error_motions", error_motions.has_error_motions, error_motions.error_motion_figures, AFTER_PLOTS,
                   error_motions.paint_error_motions_page, error_motions.error_motions_content),
-    ResultSection("asme_b5_64", asme.has_test, lambda r: test_figures(asme.section(r)), AFTER_FIGURES,
-                  asme.test_pages, asme.asme_content),
+    ResultSection("asme_b5_64", asme.has_test, asme.section_figures, AFTER_FIGURES, asme.test_pages,
+                  asme.asme_content),
 )
 
 
@@ -56,4 +55,4 @@ def paint_sections(flow: Any, results: Results, place: str, figure_height_mm: fl
 
 def tab_contents(results: Results) -> list[SectionContent]:
     """The GUI's section tabs these results have, in tab order."""
-    return [s.tab(results) for s in present(results) if s.tab is not None]
+    return [s.tab(results, s.figures(results)) for s in present(results) if s.tab is not None]

@@ -13,7 +13,7 @@ from lps_gui.report.registry import AFTER_FIGURES, AFTER_PLOTS, SECTIONS, Result
 from tests.report.conftest import make_results, write_session
 
 EXTRA = ResultSection("extra", lambda r: True, lambda r: [], AFTER_PLOTS,
-                      lambda flow, r, h: flow.heading("An extra section"), lambda r: SectionContent("Extra", []))
+                      lambda flow, r, h: flow.heading("An extra section"), lambda r, figures: SectionContent("Extra", figures))
 
 
 def test_every_section_is_a_results_json_section_with_a_place():

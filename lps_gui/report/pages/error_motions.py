@@ -124,8 +124,8 @@ def has_error_motions(results: Results) -> bool:
     return bool(error_motion_figures(results))
 
 
-def error_motions_content(results: Results) -> SectionContent:
-    """The "Error motions" tab: angular and linear figures (and the tool point), the table of motions."""
+def error_motions_content(results: Results, figures: list[FigureSpec]) -> SectionContent:
+    """The "Error motions" tab: its ``figures`` (:func:`error_motion_figures`), the table of motions."""
     rows = error_motion_rows(results)
     unresolved = [r[0] for r in rows if r[-1] != "resolved"]
     lines = [f"Not resolved (grey): {', '.join(unresolved)}." if unresolved else "Every error motion is resolved."]
@@ -133,7 +133,7 @@ def error_motions_content(results: Results) -> SectionContent:
     if tool:
         lines.append(f"Tool point {list(tool.offset_mm)} mm ({tool.frame} frame): the angular error motions add up "
                      f"to {tool.max_abs_abbe_um:.3g} \u00b5m (max |Abbe term|) to the positioning error there.")
-    return SectionContent("Error motions", error_motion_figures(results), lines, MOTION_HEADER, rows,
+    return SectionContent("Error motions", figures, lines, MOTION_HEADER, rows,
                           [None if r[-1] == "resolved" else UNRESOLVED_ROW for r in rows])
 
 

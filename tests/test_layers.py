@@ -223,6 +223,8 @@ def test_the_house_reader_sees_a_missing_folder(tmp_path):
 
 
 REPORT_WRITERS = ("lps_gui.pipeline.demos", "lps_gui.pipeline.live", "lps_gui.pipeline.lightfield")
+# known, to move below the report: the compensation pass takes E of a deviation column from report/pdf/compare
+REPORT_READS = {"lps_gui.pipeline.compensation_pass": {"lps_gui.report.pdf.compare"}}
 
 
 def reachable(graph: dict[str, set[str]], root: str) -> set[str]:
@@ -248,7 +250,6 @@ def test_results_are_computed_without_the_report():
         assert not found, f"{m} reaches the report: {found}"
     for m in graph:
         if m.startswith("lps_gui.pipeline") and not m.startswith(REPORT_WRITERS):
-            found = sorted(r for r in graph[m] if r.startswith("lps_gui.report")
-                           and not r.startswith("lps_gui.report.pdf"))
-            assert not found, f"{m} imports report pages to compute something: {found}"
+            found = sorted(r for r in graph[m] - REPORT_READS.get(m, set()) if r.startswith("lps_gui.report"))
+            assert not found, f"{m} imports the report to compute something: {found}"
     assert reachable({"a": {"b"}, "b": {"c"}, "c": set()}, "a") == {"b", "c"}

@@ -220,3 +220,36 @@ def test_the_house_reader_sees_a_missing_folder(tmp_path):
     doc.write_text("## The house\n\n```\nlps_gui/   [-] x\n  core/   [0] math\n    geometry/   g\n```\n")
     assert house(doc) == {"": "[-] x", "core": "[0] math", "core/geometry": "g"}
     assert layers_of(house(doc)) == {"core": 0}
+
+
+REPORT_WRITERS = ("lps_gui.pipeline.demos", "lps_gui.pipeline.live", "lps_gui.pipeline.lightfield")
+# known, to move below the report: the compensation pass takes E of a deviation column from report/pdf/compare
+REPORT_READS = {"lps_gui.pipeline.compensation_pass": {"lps_gui.report.pdf.compare"}}
+
+
+def reachable(graph: dict[str, set[str]], root: str) -> set[str]:
+    """Every module ``root`` imports, directly or through others (inside functions too)."""
+    seen, todo = set(), [root]
+    while todo:
+        for m in graph.get(todo.pop(), ()):
+            if m not in seen:
+                seen.add(m)
+                todo.append(m)
+    return seen
+
+
+def test_results_are_computed_without_the_report():
+    """pipeline may import report only to write a PDF (the demo, a live run, the light-field check): the path
+    from a session to results.json (pipeline/estimate, pipeline/results) reaches no report module, so the
+    numbers the report prints never come from the report (the verdict rows are core.metrology.verdict)."""
+    graph = module_graph()
+    builders = [m for m in graph if m == "lps_gui.pipeline.estimate" or m.startswith("lps_gui.pipeline.results")]
+    assert len(builders) > 5
+    for m in builders:
+        found = sorted(r for r in reachable(graph, m) if r.startswith("lps_gui.report"))
+        assert not found, f"{m} reaches the report: {found}"
+    for m in graph:
+        if m.startswith("lps_gui.pipeline") and not m.startswith(REPORT_WRITERS):
+            found = sorted(r for r in graph[m] - REPORT_READS.get(m, set()) if r.startswith("lps_gui.report"))
+            assert not found, f"{m} imports the report to compute something: {found}"
+    assert reachable({"a": {"b"}, "b": {"c"}, "c": set()}, "a") == {"b", "c"}

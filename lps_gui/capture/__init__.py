@@ -1,1 +1,2 @@
-"""The capture engine: plans run on a stage and a camera into a session, with settle, locks, compensation and resume."""
+"""The capture engine: plans run on a stage and a camera into a session (settle, locks, compensation, resume),
+and the operator's session set-up both faces build."""

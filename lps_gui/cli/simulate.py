@@ -111,17 +111,11 @@ def build_spec(args: argparse.Namespace):
 
 
 def _record_setup(args: argparse.Namespace, session) -> None:
-    """--spec and --test into session.json (what lps capture records for the same switches)."""
-    from lps_gui.cli.capture.asme_test import test_record
-    from lps_gui.core.planning.presets import parse_spec
+    """--spec and --test into session.json (what lps capture records for the same switches: one SessionSetup)."""
+    from lps_gui.capture.setup import apply_setup
+    from lps_gui.cli.capture.setup import setup_meta
 
-    extra = {"stage_spec": parse_spec(args.spec)} if getattr(args, "spec", None) else {}
-    record = test_record(args)
-    if record:
-        extra["asme_test"] = record
-    if extra:
-        session.meta.update(extra)
-        session.save_meta()
+    apply_setup(session, setup_meta(args))
 
 
 def _check_noise(spec, source: str) -> None:

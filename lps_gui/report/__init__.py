@@ -1,1 +1,2 @@
-"""The report: figures as plain data, pages as plain rows, and the PDF painters (Qt imported lazily)."""
+"""The report: figures as plain data, pages as plain rows, the PDF painters (Qt imported lazily), and the
+registry of result sections the PDF and the GUI read."""

@@ -36,10 +36,13 @@ def test_nothing_recorded_says_so_and_leaves_lines_to_sign():
     assert rows["Approved by"] == SIGN_LINE
 
 
-def test_the_gui_asks_for_every_signing_field():
-    from lps_gui.gui.capture.report_setup import ID_FIELDS
+@pytest.mark.gui
+def test_the_gui_asks_for_every_signing_field(qtbot):
+    from lps_gui.gui.capture.report_setup import ReportSetupBox
 
-    assert {key for key, _, _ in SIGNING_FIELDS} <= {key for key, _ in ID_FIELDS}
+    box = ReportSetupBox()
+    qtbot.addWidget(box)
+    assert len(SIGNING_FIELDS) == 9 and {key for key, _, _ in SIGNING_FIELDS} <= set(box.ident)
 
 
 @pytest.mark.gui

@@ -60,7 +60,7 @@ def test_plan_fields(args: argparse.Namespace, start_mm: float | None, stop_mm: 
     test = getattr(args, "test", None)
     if not test:
         return {}
-    from lps_gui.core.planning.presets import min_step_plan_fields, settling_plan_fields
+    from lps_gui.capture.setup import asme_plan_fields
     from lps_gui.errors import InputError
 
     if getattr(args, "iso_plan", False):
@@ -69,11 +69,7 @@ def test_plan_fields(args: argparse.Namespace, start_mm: float | None, stop_mm: 
         raise InputError(f"--test {test} chooses the targets; drop --targets")
     if start_mm is None or stop_mm is None:
         raise InputError(f"--test {test}: give --start and --stop (mm) of the travel to test")
-    if test == "min-step":
-        kw = {k: v for k, v in (("step_um", args.test_step_um), ("steps", args.test_steps)) if v is not None}
-        fields = min_step_plan_fields(float(start_mm), float(stop_mm), **kw)
-    else:
-        fields = settling_plan_fields(float(start_mm), float(stop_mm))
+    fields = asme_plan_fields(test, start_mm, stop_mm, args.test_step_um, args.test_steps)
     for key in ("frames_per_stop", "settle_s"):  # the operator's switches win
         if getattr(args, key, None) is not None:
             fields.pop(key, None)
@@ -82,13 +78,9 @@ def test_plan_fields(args: argparse.Namespace, start_mm: float | None, stop_mm: 
 
 def test_record(args: argparse.Namespace) -> dict[str, Any] | None:
     """session.json ``asme_test`` of the switches (None without --test)."""
-    if not getattr(args, "test", None):
-        return None
-    from lps_gui.core.planning.presets import asme_test_record
+    from lps_gui.cli.capture.setup import session_setup
 
-    if args.test == "min-step":
-        return asme_test_record("min-step", step_um=args.test_step_um)
-    return asme_test_record("settling", band_um=args.test_band_um)
+    return session_setup(args).test_record()
 
 
 def simulated_stage(args: argparse.Namespace, spec: Any) -> tuple[Any, Any]:

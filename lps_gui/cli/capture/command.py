@@ -138,7 +138,8 @@ def run(args: argparse.Namespace) -> int:
         return _intrinsics_mode(args)
     if bool(args.out) == bool(args.resume):
         raise InputError("give either --out SESSION (new capture) or --resume SESSION")
-    from lps_gui.cli.capture.setup import apply_setup, setup_meta
+    from lps_gui.capture.setup import apply_setup
+    from lps_gui.cli.capture.setup import setup_meta
 
     extra = setup_meta(args)  # --spec, environment, identification: checked before any device opens
     from lps_gui.cli.capture.live import report_path
@@ -352,10 +353,9 @@ def _resume(args: argparse.Namespace):
         if "spec" not in (session.meta.get("stage") or {}) or "spec" not in (session.meta.get("camera") or {}):
             # a kill between the start's two session.json writes left the devices unrecorded: record them now
             axes = {"axes": ["X", "Y"]} if session.planar else {}
-            from lps_gui.hardware.capabilities import session_stage
+            from lps_gui.capture.setup import device_records
 
-            session.meta["stage"] = {**session_stage(stage), **axes, "spec": stage_spec}
-            session.meta["camera"] = {**camera.properties(), "spec": "sim"}
+            session.meta["stage"], session.meta["camera"] = device_records(stage, camera, stage_spec, "sim", **axes)
             session.save_meta()
         return session, stage, camera, simulated_engine(session, stage, camera, args.encode)
     from lps_gui.cli.capture.resume_devices import devices_named_by_operator

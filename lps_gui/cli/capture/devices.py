@@ -33,18 +33,15 @@ def preflight(args: argparse.Namespace, stage_spec: str, camera_spec: str) -> No
 def device_session(args: argparse.Namespace, board, plan, intr, stage_spec: str, camera_spec: str, **stage_meta):
     """Open the operator's devices, unlock as asked and create the session on them (devices closed on failure)."""
     from lps_gui.capture.engine import CaptureEngine
-    from lps_gui.hardware.capabilities import session_stage
+    from lps_gui.capture.setup import device_records
     from lps_gui.io.session import Session
 
     stage, camera = open_devices(stage_spec, camera_spec, getattr(args, "cti", None))
     try:
         release_lock(args, stage)
-        session = Session.create(
-            args.out, board, plan, intr,
-            camera={**camera.properties(), "spec": camera_spec},
-            stage={**session_stage(stage), **stage_meta, "spec": stage_spec},
-            extra={"intrinsics_source": str(args.intrinsics)} if args.intrinsics else None,
-        )
+        stage_record, camera_record = device_records(stage, camera, stage_spec, camera_spec, **stage_meta)
+        session = Session.create(args.out, board, plan, intr, camera=camera_record, stage=stage_record,
+                                 extra={"intrinsics_source": str(args.intrinsics)} if args.intrinsics else None)
     except BaseException:
         close(stage, camera)
         raise
@@ -93,11 +90,10 @@ def open_operator_stage(stage_spec: str):
 def bind_simulated_stage(args: argparse.Namespace, session, rig_stage, camera, stage_spec: str, driver=None, **stage_meta):
     """The simulated rig's stage as the command line asked for it (direct or through the emulator), unlocked
     as asked, and recorded in session.json with the camera and the intrinsics' source."""
-    from lps_gui.hardware.capabilities import session_stage
+    from lps_gui.capture.setup import device_records
 
     stage = bind_stage(stage_spec, rig_stage, args.time_scale, args, driver)
-    session.meta["stage"] = {**session_stage(stage), **stage_meta, "spec": stage_spec}
-    session.meta["camera"] = {**camera.properties(), "spec": "sim"}
+    session.meta["stage"], session.meta["camera"] = device_records(stage, camera, stage_spec, "sim", **stage_meta)
     if args.intrinsics:
         session.meta["intrinsics_source"] = str(args.intrinsics)
     session.save_meta()

@@ -1,7 +1,9 @@
 """`lps capture` switches for what a report needs besides images: specification, environment, identification.
 
-They go into session.json (``stage_spec``, ``environment``, ``identification``)
-when a session is created or resumed, so nobody edits session.json by hand.
+The switches are the fields of :mod:`lps_gui.io.setup_fields`; what they mean and how they are checked
+is :class:`lps_gui.capture.setup.SessionSetup` (the GUI's capture panel fills the same), written into
+session.json (``stage_spec``, ``environment``, ``asme_test``, ``identification``) when a session is
+created or resumed, so nobody edits session.json by hand.
 ``--iso-plan`` replaces the targets by the ISO 230-2 preset (5 runs both ways,
 non-uniform spacing; :mod:`lps_gui.core.planning.presets`).
 """
@@ -10,23 +12,13 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from typing import TYPE_CHECKING
+
 from lps_gui.cli.option_types import finite, int_range, positive_finite
+from lps_gui.io.setup_fields import ENV_FIELDS, ID_FIELDS
 
-ENV_SWITCHES = (("--board-temp", "board_temperature_c", "board temperature, deg C (corrects the length scale to 20 C)"),
-                ("--board-cte", "board_cte_ppm_per_k", "board expansion coefficient, ppm/K (e.g. 23 aluminium, 8 glass)"),
-                ("--square-u", "square_mm_uncertainty_um", "standard uncertainty of the board's square size, µm (certificate)"),
-                ("--stage-temp", "stage_temperature_c", "stage temperature, deg C"),
-                ("--stage-cte", "stage_cte_ppm_per_k", "stage scale expansion coefficient, ppm/K (e.g. 11.5 steel screw)"),
-                ("--temp-u", "temperature_uncertainty_k", "standard uncertainty of the thermometers, K (default 0.5)"))
-ID_SWITCHES = (("--operator", "operator"), ("--customer", "customer"), ("--stage-model", "stage_model"),
-               ("--serial", "stage_serial"), ("--controller-serial", "controller_serial"), ("--location", "location"))
-
-
-def _id_switches() -> tuple[tuple[str, str], ...]:
-    """The identification switches: who and where, then the signing block's (lps_gui.report.pages.signing)."""
-    from lps_gui.report.pages.signing import SIGNING_FIELDS
-
-    return ID_SWITCHES + tuple((flag, key) for key, flag, _ in SIGNING_FIELDS)
+if TYPE_CHECKING:  # `lps capture --help` imports no numpy
+    from lps_gui.capture.setup import SessionSetup
 
 
 def add_setup_arguments(p: argparse.ArgumentParser, iso_plan: bool = True) -> None:
@@ -39,15 +31,12 @@ def add_setup_arguments(p: argparse.ArgumentParser, iso_plan: bool = True) -> No
     if iso_plan:
         _add_iso_plan_arguments(r)
     e = p.add_argument_group("environment (session.json 'environment')")
-    for flag, key, text in ENV_SWITCHES:
-        e.add_argument(flag, type=finite, dest=f"env_{key}", metavar="X", help=text)
+    for f in ENV_FIELDS:
+        e.add_argument(f.flag, type=finite, dest=f"env_{f.key}", metavar="X", help=f.help)
     e.add_argument("--env-notes", dest="env_notes", metavar="TEXT", help="free text: thermometer, where it was, ...")
     i = p.add_argument_group("identification (printed on the report)")
-    from lps_gui.report.pages.signing import SIGNING_FIELDS
-
-    helps = {key: text for key, _, text in SIGNING_FIELDS}
-    for flag, key in _id_switches():
-        i.add_argument(flag, dest=f"id_{key}", metavar="TEXT", help=helps.get(key, key.replace("_", " ")))
+    for f in ID_FIELDS:
+        i.add_argument(f.flag, dest=f"id_{f.key}", metavar="TEXT", help=f.help)
 
 
 def _add_iso_plan_arguments(r: argparse._ArgumentGroup) -> None:
@@ -73,36 +62,19 @@ def iso_plan_fields(args: argparse.Namespace, base: Any) -> dict[str, Any]:
     return iso230_plan_fields(float(start), float(stop), args.iso_targets, args.pitch)
 
 
+def session_setup(args: argparse.Namespace) -> "SessionSetup":
+    """The operator's set-up of the switches given (``lps_gui.capture.setup``: the GUI's form builds the same)."""
+    from lps_gui.capture.setup import SessionSetup
+
+    return SessionSetup(
+        spec=getattr(args, "spec", None),
+        environment={f.key: getattr(args, f"env_{f.key}", None) for f in ENV_FIELDS},
+        env_notes=getattr(args, "env_notes", None) or "",
+        identification={f.key: getattr(args, f"id_{f.key}", None) for f in ID_FIELDS},
+        test=getattr(args, "test", None), test_step_um=getattr(args, "test_step_um", None),
+        test_band_um=getattr(args, "test_band_um", None), where="environment switches")
+
+
 def setup_meta(args: argparse.Namespace) -> dict[str, Any]:
-    """session.json entries from the switches given (only those given)."""
-    from lps_gui.core.metrology.environment import Environment
-    from lps_gui.core.planning.presets import parse_spec
-
-    out: dict[str, Any] = {}
-    if getattr(args, "spec", None):
-        out["stage_spec"] = parse_spec(args.spec)
-    env = {key: getattr(args, f"env_{key}") for _, key, _ in ENV_SWITCHES if getattr(args, f"env_{key}", None) is not None}
-    if getattr(args, "env_notes", None):
-        env["notes"] = args.env_notes
-    if env:
-        out["environment"] = Environment.from_dict(env, "environment switches").to_dict()
-    from lps_gui.cli.capture.asme_test import test_record
-
-    if test_record(args):
-        out["asme_test"] = test_record(args)
-    ident = {key: getattr(args, f"id_{key}") for _, key in _id_switches() if getattr(args, f"id_{key}", None)}
-    if ident:
-        out["identification"] = ident
-    return out
-
-
-def apply_setup(session: Any, extra: dict[str, Any]) -> None:
-    """Merge :func:`setup_meta` into session.json (environment and identification key by key) and save it."""
-    if not extra:
-        return
-    for key, value in extra.items():
-        if isinstance(value, dict) and key != "stage_spec":
-            session.meta[key] = {**(session.meta.get(key) or {}), **value}
-        else:
-            session.meta[key] = value
-    session.save_meta()
+    """session.json entries from the switches given (only those given), checked before any device opens."""
+    return session_setup(args).meta()

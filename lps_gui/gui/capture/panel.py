@@ -302,15 +302,14 @@ class CapturePanel(QWidget):
 
     def apply_asme_test(self) -> None:
         """The chosen ASME B5.64 test's plan over [start, stop] (the presets of lps capture --test)."""
-        from lps_gui.core.planning.presets import min_step_plan_fields, settling_plan_fields
+        from lps_gui.capture.setup import asme_plan_fields
 
         test = self.test_name()
         if test is None:
             self.apply_iso_plan()  # back to the standard plan
             return
-        start, stop = self.start_mm.value(), self.stop_mm.value()
         try:
-            fields = min_step_plan_fields(start, stop) if test == "min-step" else settling_plan_fields(start, stop)
+            fields = asme_plan_fields(test, self.start_mm.value(), self.stop_mm.value())
         except InputError as exc:
             self._set_test(None)
             self.summary.setText(f"<span style='color:#b00020'>{one_line(exc)}</span>")
@@ -319,10 +318,12 @@ class CapturePanel(QWidget):
 
     def asme_test_meta(self) -> dict[str, Any]:
         """session.json ``asme_test`` of the chosen test (what lps estimate computes for it); {} for none."""
-        from lps_gui.core.planning.presets import asme_test_record
+        record = self.session_setup().test_record()
+        return {"asme_test": record} if record else {}
 
-        test = self.test_name()
-        return {"asme_test": asme_test_record(test)} if test else {}
+    def session_setup(self) -> Any:
+        """The operator's set-up (``lps_gui.capture.setup.SessionSetup``): the report box and the chosen test."""
+        return self.report_setup.setup(test=self.test_name())
 
     def _targets_edited(self) -> None:
         if self._iso_targets is not None and not self.signalsBlocked():
@@ -347,7 +348,7 @@ class CapturePanel(QWidget):
             stage, camera = gantry[1:] if gantry else self._rig()
             if self.planar_editor.active() and not gantry:
                 self.planar_editor.check_connected_rig(is_simulated_rig(stage, camera))
-            extra = self.report_setup.meta() | self.asme_test_meta()  # spec, environment, identification, test
+            extra = self.session_setup().meta()  # spec, environment, test, identification: checked once
             targets = self.targets_editor.targets()
             if targets and (gantry or is_simulated_rig(stage, camera)):
                 raise InputError("targets: the simulated rig renders one board; uncheck Targets, or simulate a row "
@@ -373,13 +374,16 @@ class CapturePanel(QWidget):
             if simulated:
                 from lps_gui.sim.session import start_rig_session
 
+                from lps_gui.capture.setup import apply_setup
+
                 session = start_rig_session(folder, replace(sim_spec(), plan=plan), stage, camera)
-                if extra:  # specification, environment, identification for the report
-                    session.meta.update(extra)
-                    session.save_meta()
+                apply_setup(session, extra)  # specification, environment, test, identification for the report
                 return session
-            return Session.create(folder, board, plan, intrinsics=intrinsics, camera=camera.properties(),
-                                  stage=stage.describe(), extra=extra)
+            from lps_gui.capture.setup import device_records
+
+            stage_record, camera_record = device_records(stage, camera)  # as lps capture records them (SPEC 16)
+            return Session.create(folder, board, plan, intrinsics=intrinsics, camera=camera_record,
+                                  stage=stage_record, extra=extra)
 
         self._run(folder, create, stage, camera)
 

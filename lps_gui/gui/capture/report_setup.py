@@ -1,9 +1,11 @@
 """What the capture panel asks for the report: specification (with presets), environment, identification.
 
-The same fields as ``lps capture --spec/--board-temp/--operator ...``; they go
-into session.json (``stage_spec``, ``environment``, ``identification``) when
-the session is created. A spin box at its minimum reads "not recorded" and
-is left out, so nothing is invented.
+The same fields as ``lps capture --spec/--board-temp/--operator ...`` (both
+from :mod:`lps_gui.io.setup_fields`, both read into one
+:class:`lps_gui.capture.setup.SessionSetup`); they go into session.json
+(``stage_spec``, ``environment``, ``identification``) when the session is
+created. A spin box at its minimum reads "not recorded" and is left out, so
+nothing is invented.
 """
 from __future__ import annotations
 
@@ -22,28 +24,15 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from lps_gui.core.metrology.environment import Environment
+from lps_gui.capture.setup import SessionSetup
 from lps_gui.core.planning.presets import SPEC_PRESETS
 from lps_gui.gui.widgets import add_rows, double_spin
+from lps_gui.io.setup_fields import ENV_FIELDS, ID_FIELDS, SPEC_FIELDS
 
 NOT_RECORDED = "not recorded"
 NOT_SPECIFIED = "not specified"
 PRESET_LABELS = {"paper": "paper's Table 1 (\u00b120, \u00b15, 38 \u00b5m)", "lead-screw-standard": "lead screw, standard",
                  "ball-screw-precision": "ball screw, precision"}
-# (environment key, label, lowest real value, highest, decimals, unit)
-ENV_FIELDS = (("board_temperature_c", "Board temperature", -50.0, 100.0, 2, " \u00b0C"),
-              ("board_cte_ppm_per_k", "Board expansion", 0.0, 100.0, 2, " ppm/K"),
-              ("square_mm_uncertainty_um", "Square size u", 0.0, 100.0, 3, " \u00b5m"),
-              ("stage_temperature_c", "Stage temperature", -50.0, 100.0, 2, " \u00b0C"),
-              ("stage_cte_ppm_per_k", "Stage expansion", 0.0, 100.0, 2, " ppm/K"))
-ID_FIELDS = (("operator", "Operator"), ("customer", "Customer"), ("stage_model", "Stage model"),
-             ("stage_serial", "Stage serial"),  # then the signing block's (lps_gui.report.pages.signing.SIGNING_FIELDS)
-             ("lab", "Laboratory"), ("certificate_number", "Certificate no."), ("board_id", "Board id"),
-             ("board_certificate", "Board certificate"), ("thermometer", "Thermometer"),
-             ("thermometer_certificate", "Thermometer cert."), ("camera_serial", "Camera serial"),
-             ("camera_certificate", "Camera certificate"), ("approved_by", "Approved by"))
-SPEC_FIELDS = (("accuracy_um", "Accuracy \u00b1"), ("repeatability_um", "Repeatability \u00b1"),
-               ("straightness_um", "Straight-line accuracy"))
 
 
 def optional_spin(lo: float, hi: float, decimals: int, suffix: str, empty: str) -> QDoubleSpinBox:
@@ -84,15 +73,15 @@ class ReportSetupBox(QGroupBox):
         for key in SPEC_PRESETS:
             self.preset.addItem(PRESET_LABELS.get(key, key), key)
         self.spec = {key: optional_spin(0.001, 10000.0, 3, " \u00b5m", NOT_SPECIFIED) for key, _ in SPEC_FIELDS}
-        self.env = {key: optional_spin(lo, hi, dec, unit, NOT_RECORDED) for key, _, lo, hi, dec, unit in ENV_FIELDS}
+        self.env = {f.key: optional_spin(f.lo, f.hi, f.decimals, f.unit, NOT_RECORDED) for f in ENV_FIELDS}
         self.notes = QLineEdit()
         self.notes.setPlaceholderText("thermometer, where it was, anything a reader should know")
-        self.ident = {key: QLineEdit() for key, _ in ID_FIELDS}
+        self.ident = {f.key: QLineEdit() for f in ID_FIELDS}
         rows: list[tuple[str, QWidget]] = [("Specification", self.preset)]
         rows += [(label, self.spec[key]) for key, label in SPEC_FIELDS]
-        rows += [(label, self.env[key]) for key, label, *_ in ENV_FIELDS]
+        rows += [(f.label, self.env[f.key]) for f in ENV_FIELDS]
         rows += [("Environment notes", self.notes)]
-        rows += [(label, self.ident[key]) for key, label in ID_FIELDS]
+        rows += [(f.label, self.ident[f.key]) for f in ID_FIELDS]
         form = QFormLayout(self.fields)
         form.setContentsMargins(0, 0, 0, 0)
         add_rows(form, rows)
@@ -149,21 +138,17 @@ class ReportSetupBox(QGroupBox):
         self.preset.setCurrentIndex(max(0, self.preset.findData(key)))
         self._update_brief()
 
+    def setup(self, test: str | None = None) -> SessionSetup:
+        """The operator's set-up of the form (``lps_gui.capture.setup``: `lps capture`'s switches build the same);
+        a spin box at its minimum and an empty line are not given."""
+        return SessionSetup(spec={k: spin_value(w) for k, w in self.spec.items()},
+                            environment={k: spin_value(w) for k, w in self.env.items()}, env_notes=self.notes.text(),
+                            identification={k: w.text() for k, w in self.ident.items()}, test=test,
+                            where="capture panel: environment")
+
     def meta(self) -> dict[str, Any]:
-        """session.json entries: only what was given; the environment is checked like session.json's."""
-        out: dict[str, Any] = {}
-        spec = {k: v for k, w in self.spec.items() if (v := spin_value(w)) is not None}
-        if spec:
-            out["stage_spec"] = spec
-        env: dict[str, Any] = {k: v for k, w in self.env.items() if (v := spin_value(w)) is not None}
-        if self.notes.text().strip():
-            env["notes"] = self.notes.text().strip()
-        if env:
-            out["environment"] = Environment.from_dict(env, "capture panel: environment").to_dict()
-        ident = {k: w.text().strip() for k, w in self.ident.items() if w.text().strip()}
-        if ident:
-            out["identification"] = ident
-        return out
+        """session.json entries: only what was given, checked as session.json's are."""
+        return self.setup().meta()
 
     # ------------------------------------------------------------------ settings
     def save(self, s: QSettings) -> None:

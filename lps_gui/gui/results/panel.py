@@ -26,13 +26,15 @@ from PySide6.QtWidgets import (
 
 from lps_gui.gui.capture.mounted_targets import MountedTargetsView
 from lps_gui.gui.results.plot_adapter import DrawnFigure, ReadableAxis, figure_steps
-from lps_gui.gui.results.section_tabs import SectionContent, SectionPage, section_contents, tab_tip
+from lps_gui.gui.results.section_tabs import SectionPage, tab_tip
 from lps_gui.gui.results.view_detail import ViewDetail
 from lps_gui.gui.widgets import TextTable, ValueTable
 from lps_gui.gui.workers import Job, owned_by
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import Position
 from lps_gui.report.figures.plots import figures_from_results, position_columns
+from lps_gui.report.pages.content import SectionContent
+from lps_gui.report.registry import tab_contents
 
 log = logging.getLogger(__name__)
 
@@ -259,7 +261,7 @@ class ResultsPanel(QWidget):
 
         def expand() -> None:
             steps: list[Any] = []
-            for content in section_contents(results):
+            for content in tab_contents(results):  # the registry's sections with a tab
                 steps.append(lambda c=content: self._add_section(c))
                 steps += [lambda c=content, i=i, fig=fig: self._run_next(self._section_figure_steps(c, i, fig))
                           for i, fig in enumerate(content.figures)]

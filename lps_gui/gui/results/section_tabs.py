@@ -1,14 +1,10 @@
-"""The results tabs of the sections only some sessions have: error motions (SPEC 14) and an ASME B5.64 test.
+"""The results tabs of the sections only some sessions have (error motions, an ASME B5.64 test, ...).
 
-The figures are the report's own :class:`FigureSpec` definitions
-(:func:`lps_gui.report.pages.error_motions.error_motion_figures`,
-:func:`lps_gui.report.figures.asme.test_figures`) and the tables its rows, so
-screen and paper agree; a session without the section gets no tab.
+Which sections there are and what their tabs show is the report's registry
+(:mod:`lps_gui.report.registry`: the report's own figures and rows, so screen and
+paper agree); here only how a tab draws it. A session without the section gets no tab.
 """
 from __future__ import annotations
-
-from dataclasses import dataclass, field
-from typing import Callable
 
 import pyqtgraph as pg
 from PySide6.QtCore import Qt
@@ -16,63 +12,7 @@ from PySide6.QtWidgets import QLabel, QSplitter, QVBoxLayout, QWidget
 
 from lps_gui.gui.results.plot_adapter import ReadableAxis
 from lps_gui.gui.widgets import TextTable
-from lps_gui.io.results.model import Results
-from lps_gui.report.figures.spec import FigureSpec
-
-MOTION_HEADER = ["motion", "what", "p-v", "noise p-v", "median \u03c3", "unit", ""]
-UNRESOLVED_ROW = "#888888"  # as the report's table: not resolved reads grey, never as a finding
-
-
-@dataclass
-class SectionContent:
-    """What one section tab shows: its figures, a few lines of findings, one table."""
-
-    title: str
-    figures: list[FigureSpec]
-    lines: list[str] = field(default_factory=list)
-    header: list[str] = field(default_factory=list)
-    rows: list[list[str]] = field(default_factory=list)
-    colors: list[str | None] = field(default_factory=list)
-
-
-def error_motions_content(results: Results) -> SectionContent | None:
-    """The "Error motions" tab: angular and linear figures (and the tool point), the table of motions."""
-    from lps_gui.report.pages.error_motions import error_motion_figures, error_motion_rows
-
-    figures = error_motion_figures(results)
-    if not figures:
-        return None
-    rows = error_motion_rows(results)
-    unresolved = [r[0] for r in rows if r[-1] != "resolved"]
-    lines = [f"Not resolved (grey): {', '.join(unresolved)}." if unresolved else "Every error motion is resolved."]
-    tool = results.error_motions.tool_point
-    if tool:
-        lines.append(f"Tool point {list(tool.offset_mm)} mm ({tool.frame} frame): the angular error motions add up "
-                     f"to {tool.max_abs_abbe_um:.3g} \u00b5m (max |Abbe term|) to the positioning error there.")
-    return SectionContent("Error motions", figures, lines, MOTION_HEADER, rows,
-                          [None if r[-1] == "resolved" else UNRESOLVED_ROW for r in rows])
-
-
-def asme_content(results: Results) -> SectionContent | None:
-    """The "ASME B5.64" tab, for a session that ran the incremental-step or the settling test."""
-    from lps_gui.report.figures.asme import test_figures
-    from lps_gui.report.pages.asme import TUR_HEADER, finding_lines, section, tur_cells
-
-    s = section(results)
-    if not s.has_test:
-        return None
-    rows = tur_cells(s.test_uncertainty_ratio)
-    lines = finding_lines(results) + ([] if rows else ["No tolerance in session.json stage_spec: no test "
-                                                       "uncertainty ratio is stated."])
-    return SectionContent("ASME B5.64", test_figures(s), lines, TUR_HEADER, rows)
-
-
-SECTIONS: tuple[Callable[[Results], SectionContent | None], ...] = (error_motions_content, asme_content)
-
-
-def section_contents(results: Results) -> list[SectionContent]:
-    """The section tabs these results have, in tab order."""
-    return [c for c in (make(results) for make in SECTIONS) if c is not None]
+from lps_gui.report.pages.content import SectionContent
 
 
 class SectionPage(QSplitter):

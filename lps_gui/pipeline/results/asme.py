@@ -3,7 +3,7 @@
 Every session gets the ISO 230-2 figures under both names with their test
 uncertainty ratio (the data sheet's tolerance, session.json ``stage_spec``,
 over U of the figure as the verdict compares it: one rule,
-:func:`lps_gui.report.pages.verdict.verdicts`; no tolerance, no ratio). A session
+:func:`lps_gui.core.metrology.verdict.verdicts`; no tolerance, no ratio). A session
 whose ``asme_test`` names the incremental-step or the settling test (the
 plan presets of :mod:`lps_gui.core.planning.presets`) also gets that test's figures:
 stops averaged over their frames, each step's sigma from the estimate's full
@@ -62,10 +62,11 @@ def add_asme_results(results: dict[str, Any], session: Session, obs: Observation
 def tur_rows(results: dict[str, Any], spec: dict[str, Any]) -> list[dict[str, Any]]:
     """Per specified figure: tolerance, U (k = 2) of the figure compared, and their ratio (None without U); the verdict's
     rows, the ASME test's own (min-step, settling) among them."""
-    from lps_gui.report.pages.verdict import verdicts
+    from lps_gui.core.metrology.verdict import verdicts
+    from lps_gui.io.results.model import as_results
 
     return [{"figure": v.name, "quantity": v.quantity, "tolerance": v.limit, "U": v.u_k2, "unit": v.unit,
-             "tur": tur(v.limit, v.u_k2)} for v in verdicts(results, spec)]
+             "tur": tur(v.limit, v.u_k2)} for v in (verdicts(as_results(results), spec) if spec else [])]
 
 
 def stop_keys(obs: Observations, records: dict[int, Any]) -> np.ndarray:

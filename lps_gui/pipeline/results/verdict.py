@@ -1,6 +1,6 @@
 """results.json ``verdict`` and summary.csv's U and verdict rows: the page-1 verdict, machine-readable.
 
-The rows are the report's own (:func:`lps_gui.report.pages.verdict.verdicts`, one decision rule in
+The rows are the report's own (:func:`lps_gui.core.metrology.verdict.verdicts`, one decision rule in
 ``core.metrology.decision_rule``), so the PDF, summary.csv and results.json cannot disagree; a session
 without a stage specification gets "no specification", never a PASS.
 """
@@ -22,10 +22,11 @@ def check_key(name: str) -> str:
 
 def verdict_section(results: dict[str, Any]) -> dict[str, Any]:
     """results.json ``verdict``: the decision rule, the overall word and line, one row per specified figure."""
-    from lps_gui.report.pages.verdict import overall, overall_word, verdicts
+    from lps_gui.core.metrology.verdict import overall, overall_word, verdicts
+    from lps_gui.io.results.model import as_results
 
     spec = (results.get("session_meta") or {}).get("stage_spec") or results.get("stage_spec")
-    rows = verdicts(results, spec)
+    rows = verdicts(as_results(results), spec) if spec else []
     return {
         "decision_rule": DECISION_RULE,
         "overall": overall_word([r.verdict for r in rows]),

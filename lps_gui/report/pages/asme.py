@@ -12,7 +12,9 @@ from typing import Any
 
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import AsmeB564, AsmeFigure, IncrementalStep, Settling, UncertaintyRatio
-from lps_gui.report.figures.asme import settling_figure, step_figure
+from lps_gui.report.figures.asme import settling_figure, step_figure, test_figures
+from lps_gui.report.figures.spec import FigureSpec
+from lps_gui.report.pages.content import SectionContent
 from lps_gui.report.pages.summary import fmt
 
 GREY = "#555555"
@@ -42,8 +44,23 @@ def has_test(results: Results | Mapping[str, Any]) -> bool:
     return section(results).has_test
 
 
-def test_pages(flow: Any, results: Results | Mapping[str, Any]) -> None:
-    """The test's page (new page first); nothing for a session that ran neither test."""
+def section_figures(results: Results) -> list[FigureSpec]:
+    """The figures of the test a session ran (steps, settling); [] for none."""
+    return test_figures(section(results))
+
+
+def asme_content(results: Results, figures: list[FigureSpec]) -> SectionContent:
+    """The "ASME B5.64" tab, for a session that ran the incremental-step or the settling test: its ``figures``
+    (:func:`section_figures`), the findings and the test uncertainty ratios."""
+    rows = tur_cells(section(results).test_uncertainty_ratio)
+    lines = finding_lines(results) + ([] if rows else ["No tolerance in session.json stage_spec: no test "
+                                                       "uncertainty ratio is stated."])
+    return SectionContent("ASME B5.64", figures, lines, TUR_HEADER, rows)
+
+
+def test_pages(flow: Any, results: Results | Mapping[str, Any], figure_height_mm: float = FIGURE_HEIGHT_MM) -> None:
+    """The test's page (new page first); nothing for a session that ran neither test. (The test's figures
+    keep their own height, :data:`FIGURE_HEIGHT_MM`: ``figure_height_mm`` is the registry's common signature.)"""
     s = section(results)
     if not s.has_test:
         return
@@ -149,7 +166,7 @@ def finding_lines(results: Results | Mapping[str, Any]) -> list[str]:
 
 def test_lines(results: Results | Mapping[str, Any]) -> list[str]:
     """The ASME test's findings and the test uncertainty ratios, one line each (demo, CLI)."""
-    from lps_gui.report.pages.asme_verdict import TEST_ROWS
+    from lps_gui.core.metrology.verdict import TEST_ROWS
     from lps_gui.report.pages.verdict import verdicts
 
     s = section(results)

@@ -20,6 +20,7 @@ from lps_gui.core.metrology.resolution import not_resolved_text
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import ErrorMotions, Motion
 from lps_gui.report.figures.spec import COMPONENT_COLORS, FigureSpec, Series, num_or_nan
+from lps_gui.report.pages.content import SectionContent
 
 MU = "\u00b5"
 LINEAR = ("EXX", "EYX", "EZX")
@@ -39,6 +40,8 @@ def what(iso: str) -> str:
         return f"roll (about {about})"
     return f"{'yaw' if about == 'Z' else 'pitch'} (about {about})"
 UNRESOLVED_COLOR = "#9a9a9a"
+MOTION_HEADER = ["motion", "what", "p-v", "noise p-v", "median \u03c3", "unit", ""]  # the table, on paper and screen
+UNRESOLVED_ROW = "#888888"  # a table row not resolved reads grey, never as a finding
 
 
 def _axes(section: ErrorMotions) -> list[tuple[str, tuple[str, ...], tuple[str, ...]]]:
@@ -116,6 +119,24 @@ def error_motion_figures(results: Results | Mapping[str, Any]) -> list[FigureSpe
     return figures
 
 
+def has_error_motions(results: Results) -> bool:
+    """Whether the results have error motions to show (SPEC 14: where the poses allow)."""
+    return bool(error_motion_figures(results))
+
+
+def error_motions_content(results: Results, figures: list[FigureSpec]) -> SectionContent:
+    """The "Error motions" tab: its ``figures`` (:func:`error_motion_figures`), the table of motions."""
+    rows = error_motion_rows(results)
+    unresolved = [r[0] for r in rows if r[-1] != "resolved"]
+    lines = [f"Not resolved (grey): {', '.join(unresolved)}." if unresolved else "Every error motion is resolved."]
+    tool = results.error_motions.tool_point
+    if tool:
+        lines.append(f"Tool point {list(tool.offset_mm)} mm ({tool.frame} frame): the angular error motions add up "
+                     f"to {tool.max_abs_abbe_um:.3g} \u00b5m (max |Abbe term|) to the positioning error there.")
+    return SectionContent("Error motions", figures, lines, MOTION_HEADER, rows,
+                          [None if r[-1] == "resolved" else UNRESOLVED_ROW for r in rows])
+
+
 def error_motion_rows(results: Results | Mapping[str, Any]) -> list[list[str]]:
     """One row per motion: name, what, p-v over the targets, its noise p-v, median sigma, resolved."""
     section = as_results(results).error_motions
@@ -147,9 +168,9 @@ def paint_error_motions_page(flow: Any, results: Results | Mapping[str, Any], fi
                    "differs from zero beyond what noise alone gives (chi-square, p < 0.001) and its p-v exceeds "
                    "the noise p-v; positions.csv carries eax/ebx/ecx only where resolved.", size_pt=7.5,
                    color="#555555")
-    flow.table(["motion", "what", "p-v", "noise p-v", "median \u03c3", "unit", ""], error_motion_rows(results),
+    flow.table(MOTION_HEADER, error_motion_rows(results),
                [14, 40, 20, 22, 22, 14, 28], size_pt=7.5, row_mm=4.0, align_right_from=2, align_left=(5, 6),
-               colors=[None if r[-1] == "resolved" else "#888888" for r in error_motion_rows(results)])
+               colors=[None if r[-1] == "resolved" else UNRESOLVED_ROW for r in error_motion_rows(results)])
     from lps_gui.report.pages.reconcile import reconciliation_lines
 
     for spec in figures:

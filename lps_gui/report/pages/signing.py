@@ -10,21 +10,15 @@ from __future__ import annotations
 import time
 from typing import TYPE_CHECKING, Any
 
-if TYPE_CHECKING:  # `lps capture --help` reads SIGNING_FIELDS: no numpy behind it
+from lps_gui.io.setup_fields import ID_FIELDS
+
+if TYPE_CHECKING:
     from lps_gui.io.results.model import Results
 
 NOT_RECORDED = "not recorded"
 SIGN_LINE = "_" * 34
-# identification key -> (lps capture switch, what it is): the switches and the GUI's fields are built from this
-SIGNING_FIELDS = (("lab", "--lab", "laboratory performing the measurement"),
-                  ("certificate_number", "--certificate", "this report's certificate number"),
-                  ("board_id", "--board-id", "the board's (target's) identifier"),
-                  ("board_certificate", "--board-cert", "the board's calibration certificate number"),
-                  ("thermometer", "--thermometer", "the thermometer's identifier"),
-                  ("thermometer_certificate", "--thermometer-cert", "the thermometer's calibration certificate number"),
-                  ("camera_serial", "--camera-serial", "the camera's serial number"),
-                  ("camera_certificate", "--camera-cert", "the camera's (or its intrinsics') certificate number"),
-                  ("approved_by", "--approved-by", "who approves the report (name, function)"))
+# identification key -> (lps capture switch, what it is) of the signing block (lps_gui.io.setup_fields.ID_FIELDS)
+SIGNING_FIELDS = tuple((f.key, f.flag, f.help) for f in ID_FIELDS if f.signing)
 
 
 def _instrument(ident: dict[str, Any], id_key: str, cert_key: str, fallback_id: str = "") -> str:

@@ -5,7 +5,6 @@ every number printed has exactly one source. No Qt here.
 """
 from __future__ import annotations
 
-import math
 import re
 from dataclasses import dataclass, replace
 from typing import Any, Sequence
@@ -14,6 +13,9 @@ import numpy as np
 
 from lps_gui.core.estimator.methods import report_text
 from lps_gui.core.geometry.camera_model import HIGHER_NAMES, INTRINSIC_NAMES
+from lps_gui.core.metrology.digits import DASH, fmt  # noqa: F401  (fmt re-exported: the report prints through it)
+from lps_gui.core.metrology.verdict import SpecCheck  # noqa: F401  (re-exported: the report types its rows by it)
+from lps_gui.core.metrology.verdict import spec_checks as _spec_checks
 from lps_gui.io.results.document import (
     SummaryFigure,
     extreme_figures,
@@ -26,9 +28,6 @@ from lps_gui.io.results.document import finite_number as _num
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import Iso230
 from lps_gui.report.figures.plots import TRUTH_AT_MEASUREMENT, position_columns
-
-DASH = "\u2014"
-ZERO_BELOW = 1e-9  # |values| below this print as 0 (no unit of the report resolves them)
 
 
 @dataclass(frozen=True)
@@ -58,48 +57,6 @@ class Row:
         if "e" in text and "." in value:  # e.g. a mean step 2.000054 mm +- 0.000086 mm, not 8.6e-05
             text = f"{self.u_k2:.{len(value.split('.')[1])}f}"
         return f"\u00b1 {text}"
-
-
-@dataclass(frozen=True)
-class SpecCheck:
-    """One criterion of the stage specification against its measured figure."""
-
-    name: str
-    measured: float | None
-    limit: float
-    unit: str
-    passed: bool | None  # None: not measured by this session
-    note: str = ""
-    indicative: bool = False  # fewer runs than ISO 230-2 asks: a verdict to read, not a FAIL
-
-    def verdict(self) -> str:
-        """PASS / FAIL / not resolved, "(indicative)" when fewer than 5 runs per direction back it."""
-        if self.passed is None:
-            return "not resolved" if self.measured is not None else "not measured"
-        word = "PASS" if self.passed else ("above limit" if self.indicative else "FAIL")
-        return f"{word} (indicative)" if self.indicative else word
-
-    def color(self) -> str:
-        """Green pass, red fail; grey when not resolved; muted (never red) when indicative."""
-        if self.passed is None:
-            return "#555555"
-        if self.indicative:
-            return "#4f7a5a" if self.passed else "#8a6d00"
-        return "#007a1f" if self.passed else "#c00000"
-
-
-def fmt(value: float | None, digits: int = 3) -> str:
-    """A number with ``digits`` significant digits (no exponent for usual sizes); a dash for None/NaN."""
-    if value is None or not isinstance(value, (int, float, np.floating, np.integer)) or not math.isfinite(value):
-        return DASH
-    v = float(value)
-    if abs(v) < ZERO_BELOW:
-        return "0"  # rounding noise of a difference (e.g. an Abbe term of 6e-12 um) reads as what it is
-    mag = int(math.floor(math.log10(abs(v))))
-    if mag >= 6 or mag < -4:
-        return f"{v:.{digits - 1}e}"
-    decimals = max(0, digits - 1 - mag)
-    return f"{v:.{decimals}f}"
 
 
 # ----------------------------------------------------------------------------- title block
@@ -314,23 +271,8 @@ def extremes_rows(results: Results | dict[str, Any]) -> list[Row]:
 
 
 def spec_checks(results: Results | dict[str, Any], spec: dict[str, Any] | None) -> list[SpecCheck]:
-    """Pass/fail of the stage specification (session.json ``stage_spec``), by ``core.iso230.check_specification``.
-
-    One source of truth for how a data sheet is read (+-limits against half
-    bands, straightness as a full width); here only its rows are typed.
-    """
-    if not spec:
-        return []
-    from lps_gui.core.metrology.iso230 import check_specification
-
-    return [_as_check(c) for c in check_specification(dict(as_results(results).figures.raw), spec)]
-
-
-def _as_check(c: dict[str, Any]) -> SpecCheck:
-    passed = c.get("passed")
-    return SpecCheck(str(c.get("name", "")), _num(c.get("measured")), float(c.get("limit", math.nan)),
-                     str(c.get("unit") or "\u00b5m"), None if passed is None else bool(passed), str(c.get("note") or ""),
-                     bool(c.get("indicative", False)))
+    """Pass/fail of the stage specification (session.json ``stage_spec``): ``core.metrology.verdict.spec_checks``."""
+    return _spec_checks(as_results(results).figures.raw, spec)
 
 
 # ----------------------------------------------------------------------------- limits

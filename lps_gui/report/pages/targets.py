@@ -63,8 +63,14 @@ def target_table(results: Results | Mapping[str, Any]) -> tuple[list[str], list[
     return TARGET_HEADER, rows, TARGET_WIDTHS
 
 
-def targets_section(flow: Any, results: Results | Mapping[str, Any]) -> bool:
-    """Heading, the table of targets and its note; False (nothing painted) for a single-board session."""
+def has_targets(results: Results) -> bool:
+    """Whether the session measured a row or constellation of targets (SPEC 13), not one board."""
+    return bool(results.targets)
+
+
+def targets_section(flow: Any, results: Results | Mapping[str, Any], figure_height_mm: float = 0.0) -> bool:
+    """Heading, the table of targets and its note; False (nothing painted) for a single-board session.
+    (A table, no figure: ``figure_height_mm`` is the registry's common signature.)"""
     table = target_table(results)
     if table is None:
         return False

@@ -21,9 +21,8 @@ from lps_gui.report.figures.plots import figure_by_key, figures_from_results, wi
 from lps_gui.report.pages import asme as asme_pages
 from lps_gui.report.pages import sections as R
 from lps_gui.report.pages import summary as S
-from lps_gui.report.pages.error_motions import paint_error_motions_page
 from lps_gui.report.pages.planar import paint_planar_report
-from lps_gui.report.pages.targets import targets_section
+from lps_gui.report.registry import AFTER_FIGURES, AFTER_PLOTS, paint_sections
 
 log = logging.getLogger(__name__)
 
@@ -111,8 +110,7 @@ def _paint_line_report(flow: Any, session_dir: Path, meta: dict[str, Any], resul
     _front_page(flow, meta, results, version)
     flow.new_page()
     _figures_page(flow, results)
-    targets_section(flow, results)  # a row of targets (SPEC 13)
-    asme_pages.test_pages(flow, results)  # a session of the ASME B5.64 incremental-step or settling test
+    paint_sections(flow, results, AFTER_FIGURES, FIGURE_HEIGHT_MM)  # a row of targets (SPEC 13), an ASME B5.64 test
     flow.new_page()
     R.uncertainty_sections(flow, results)
     flow.new_page()
@@ -125,7 +123,7 @@ def _paint_line_report(flow: Any, session_dir: Path, meta: dict[str, Any], resul
     flow.heading("Plots")
     for spec in figures_from_results(results, meta.get("truth")):
         flow.figure(spec, FIGURE_HEIGHT_MM)
-    paint_error_motions_page(flow, results, FIGURE_HEIGHT_MM)  # SPEC 14, when the results have them
+    paint_sections(flow, results, AFTER_PLOTS, FIGURE_HEIGHT_MM)  # error motions (SPEC 14), when the results have them
     progress(2, len(steps), "outliers")
     _outliers(flow, session_dir, results)
     progress(3, len(steps), "table")

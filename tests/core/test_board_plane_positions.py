@@ -3,6 +3,7 @@ corners' noise. One point-level session of the small rig with the honesty campai
 from dataclasses import replace
 
 import numpy as np
+import pytest
 
 from lps_gui.core.estimator.board_plane_positions import POSITION_MODEL_BOARD_PLANE, line_model_rejected
 from lps_gui.core.estimator.estimate import estimate
@@ -56,3 +57,31 @@ def test_the_variance_ratio_test():
     assert not line_model_rejected(1.02, 5000, 1.0, 5000)  # noise: ln F ~ 0.02 < 3.09 x 0.028
     assert line_model_rejected(1.2, 5000, 1.0, 5000)
     assert not line_model_rejected(400.0, 0, 1.0, 5000)  # no redundancy: no judgement
+
+
+def test_a_row_of_targets_on_a_stage_with_angles_takes_each_stops_full_pose():
+    """SPEC 13's row model holds one orientation and one unknown per stop with the targets' poses: a roll's
+    sideways path and a yaw are its misfit (0.33 px on 0.1 px corners). The positions come from every stop's
+    full pose (the pose model, with the targets'), at the first target's centre, with the corners' noise."""
+    from lps_gui.core.planning.target_presets import small_row_spec
+
+    travel = 340.0
+    m = travel / 1000.0
+    errors = replace(FLAT, straightness_um=(ErrorProfile(poly=(0.0, 0.0, -9.68 / m**2)),
+                                            ErrorProfile(amplitude=5.0, period_mm=30.0 / 22.0 * travel)),
+                     roll_urad=ErrorProfile(amplitude=2000.0, period_mm=40.0 / 22.0 * travel),
+                     pitch_urad=ErrorProfile(poly=(0.0, 1320.0 / m)),
+                     yaw_urad=ErrorProfile(amplitude=400.0, period_mm=30.0 / 22.0 * travel, phase_rad=0.5))
+    spec = small_row_spec(seed=0, noise_px=0.1, errors=errors)
+    views = simulate_views(spec)
+    est = estimate(observations_of(spec, views))
+    t = views.truth
+    truth = board_plane_positions(spec.rig, TruePose(np.asarray(t["axis_mm"]), np.asarray(t["straightness_um"]),
+                                                     np.asarray(t["angles_urad"])))
+    assert est.position_model == POSITION_MODEL_BOARD_PLANE and est.line_model_sigma_px > 0.2
+    assert 0.08 < est.sigma_px < 0.12  # the corners' 0.1 px (was the row model's 0.33 px)
+    assert 0.4 < _z2(est, truth) < 2.0
+    assert np.all(np.isfinite(est.step_sigma_mm[1:]))  # one run, one direction: every step after the first
+    L = np.zeros((1, obs_k := est.used.size))
+    L[0, -1], L[0, 0] = 1.0, -1.0  # the whole travel: its sigma is that of the last stop relative to the first
+    assert np.sqrt(est.functional_covariance(L)[0, 0]) == pytest.approx(est.sigma_s_mm[-1], rel=1e-6)

@@ -19,14 +19,17 @@ nothing changes.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from lps_gui.core.estimator.estimate_types import LpsEstimate
 from lps_gui.core.models.constant_orientation import board_plane_displacements, path_direction
-from lps_gui.core.models.six_dof import ViewPoses
+from lps_gui.core.geometry.camera_model import CameraIntrinsics
+from lps_gui.core.models.pose_model import solve_poses
+from lps_gui.core.models.target_model import TargetObservations, TargetSolution
 from lps_gui.core.numerics.arrowhead import ArrowheadInverse
+from lps_gui.core.numerics.target_arrowhead import PositionCovariance
 from lps_gui.core.numerics.uncertainty import propagated_variance
 
 MISFIT_Z = 3.09  # one-sided 0.1 % of the normal: ln F beyond this many of its sd rejects the line model
@@ -54,19 +57,18 @@ def gauge_inverse(var_unit: np.ndarray, ref: int, free: np.ndarray) -> Arrowhead
     return ArrowheadInverse(np.array([[float(var_unit[ref])]]), W, D_inv)
 
 
-def positions_from_poses(poses: ViewPoses, R: np.ndarray, X0: np.ndarray, used: np.ndarray, towards: np.ndarray
-                         ) -> tuple[np.ndarray, np.ndarray]:
-    """(D_i . a, its variance per unit noise variance), shape (K,) each: a the least-squares line's direction.
+def positions_from_poses(R_views: np.ndarray, t_views: np.ndarray, R: np.ndarray, X0: np.ndarray, used: np.ndarray,
+                         towards: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(D_i . a (K,), its gradient (K, 6) in each pose's (rotation, translation)): a the least-squares line's direction.
 
     With the left perturbation of the poses (R_i <- exp(dw) R_i, t_i <- t_i + dt), d b_i = dw x c_i + dt
     (c_i = R_i X0), so d (D_i . a) = -(c_i x m) . dw - m . dt with m = R a.
     """
-    D = board_plane_displacements(poses.R, poses.t, X0, R)
+    D = board_plane_displacements(R_views, t_views, X0, R)
     a = path_direction(D, used, towards)
     m = R @ a
-    c = np.einsum("kij,j->ki", poses.R, X0)
-    J = np.concatenate([-np.cross(c, m[None, :]), -np.broadcast_to(m, c.shape)], axis=1)  # shape (K, 6)
-    return D @ a, np.einsum("ka,kab,kb->k", J, poses.cov_unit, J)
+    c = np.einsum("kij,j->ki", R_views, X0)
+    return D @ a, np.concatenate([-np.cross(c, m[None, :]), -np.broadcast_to(m, c.shape)], axis=1)
 
 
 def with_board_plane_positions(est: LpsEstimate, X0: np.ndarray, prev: np.ndarray, cur: np.ndarray) -> LpsEstimate:
@@ -85,7 +87,8 @@ def with_board_plane_positions(est: LpsEstimate, X0: np.ndarray, prev: np.ndarra
     dof_views = int(2 * est.n_corners[used].sum()) - 6 * n_used
     if not line_model_rejected(est.sigma_px**2, est.dof, six.sigma2_px, dof_views):
         return est
-    position, var_unit = positions_from_poses(six.poses, est.state.R, X0, used, est.state.line().u_board)
+    position, J = positions_from_poses(six.poses.R, six.poses.t, est.state.R, X0, used, est.state.line().u_board)
+    var_unit = np.einsum("ka,kab,kb->k", J, six.poses.cov_unit, J)
     seen = usable & np.isfinite(position) & np.isfinite(var_unit)
     if not seen[ref]:
         return est
@@ -106,3 +109,69 @@ def with_board_plane_positions(est: LpsEstimate, X0: np.ndarray, prev: np.ndarra
     return replace(est, state=state, sigma_px=float(np.sqrt(sigma2)), sigma_s_mm=np.sqrt(var_s),
                    sigma_total_mm=np.sqrt(var_s + np.where(seen, intr, np.nan)), step_sigma_mm=step, inverse=inv,
                    dof=dof_views, position_model=POSITION_MODEL_BOARD_PLANE, line_model_sigma_px=est.sigma_px)
+
+
+@dataclass(frozen=True)
+class PosePositionCovariance:
+    """The covariance of positions s_k = g_k . v_k - g_ref . v_ref, linear in the pose model's view 6-vectors v_k
+    (their covariance correlated through the targets' poses): the interface of the row model's position
+    covariance (:class:`~lps_gui.core.numerics.target_arrowhead.PositionCovariance`, D = 1) for the estimate's
+    functionals (scale, steps)."""
+
+    poses: PositionCovariance  # of the views' 6-vectors
+    g: np.ndarray  # (K, 6): d s_k / d v_k
+    ref: int
+    sigma2: float
+    row: PositionCovariance  # the row model's: its shared parameters' block (``S_inv``) gives their sigmas
+
+    @property
+    def S_inv(self) -> np.ndarray:
+        return self.row.S_inv
+
+    def _weights(self, L: np.ndarray) -> np.ndarray:
+        L = np.array(L[..., 0], dtype=float)  # (Q, K) on the positions
+        L[:, self.ref] = 0.0  # s_ref is 0
+        g6 = L[:, :, None] * self.g[None, :, :]
+        g6[:, self.ref, :] = -L.sum(axis=1)[:, None] * self.g[self.ref][None, :]
+        return g6
+
+    def covariance(self, L: np.ndarray) -> np.ndarray:
+        """(Q, Q) covariance of Q functionals with weights L (Q, K, 1) on the positions."""
+        return self.poses.covariance(self._weights(L))
+
+    def variances(self, L: np.ndarray) -> np.ndarray:
+        """Variances of Q functionals with weights L (Q, K, 1) on the positions."""
+        return self.poses.variances(self._weights(L))
+
+
+def row_with_board_plane_positions(tobs: TargetObservations, sol: TargetSolution, intrinsics: CameraIntrinsics,
+                                   dof_row: int) -> TargetSolution:
+    """A row's solution (SPEC 13, D = 1) with every stop's position from its full pose when the row model is rejected.
+
+    The row model holds one orientation and one unknown per view, jointly with the targets' poses; a carriage
+    that rolls or yaws leaves a misfit that the targets' poses absorb (520 um of max |deviation| on the
+    campaign's row with angles). The pose model (:func:`~lps_gui.core.models.pose_model.solve_poses`, every
+    stop's six unknowns with the targets', started from the row's solution) has none. The positions are the
+    first target's centre's line of sight (D_i, as one board's) along its least-squares line; the targets'
+    poses and their sigmas are the pose model's.
+    """
+    poses = solve_poses(tobs, intrinsics, start=sol)
+    used = sol.used & poses.used
+    n_corners = int((np.isfinite(tobs.corners_px[..., 0]) & used[:, None]).sum())
+    dof_poses = 2 * n_corners - 6 * (len(tobs.targets) - 1) - 6 * int(used.sum())
+    if not line_model_rejected(sol.sigma_px**2, dof_row, poses.sigma_px**2, dof_poses):
+        return sol
+    ref = sol.reference
+    X0 = tobs.targets[0].board.object_points().mean(axis=0)
+    position, g = positions_from_poses(poses.R, poses.t, sol.R, X0, used, -sol.R.T @ sol.N[:, 0])
+    cov = PosePositionCovariance(poses.covariance, np.where(used[:, None], g, 0.0), ref, poses.sigma_px**2,
+                                 sol.covariance)
+    K = len(used)
+    unit = np.zeros((K, K, 1))
+    unit[np.arange(K), np.arange(K), 0] = 1.0
+    sigma = np.sqrt(np.maximum(cov.variances(unit), 0.0))
+    s = np.where(used, position - position[ref], np.nan)[:, None]
+    sigma = np.where(used, sigma, np.nan)[:, None]
+    centred = np.where(used, np.sqrt(np.maximum(np.einsum("ka,kab,kb->k", g, poses.single_view, g), 0.0)), np.nan)
+    return replace(sol, s=s, sigma_s=sigma, sigma_centred=centred[:, None], Q=poses.Q, p=poses.p,
+                   target_sigma=poses.target_sigma, sigma_px=poses.sigma_px, covariance=cov, used=used)

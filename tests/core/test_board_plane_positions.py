@@ -55,7 +55,9 @@ def test_on_a_stage_the_line_model_fits_nothing_changes():
 
 def test_the_variance_ratio_test():
     assert not line_model_rejected(1.02, 5000, 1.0, 5000)  # noise: ln F ~ 0.02 < 3.09 x 0.028
-    assert line_model_rejected(1.2, 5000, 1.0, 5000)
+    assert line_model_rejected(2.5, 5000, 1.0, 5000)
+    assert not line_model_rejected(1.2, 5000, 1.0, 5000)  # significant, but the misfit is under the noise
+    assert not line_model_rejected(2.5, 20, 1.0, 20)  # a misfit as large as the noise, not significant on 20 dof
     assert not line_model_rejected(400.0, 0, 1.0, 5000)  # no redundancy: no judgement
 
 

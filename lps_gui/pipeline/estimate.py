@@ -307,6 +307,9 @@ def estimate_parameters(obs: Observations, est: LpsEstimate) -> dict[str, Any]:
         "converged": est.converged,
         "reference_index": int(obs.index[est.reference_view]),
     }
+    if est.line_model_sigma_px is not None:  # the line model left more than noise: positions of the per-view fit
+        parameters["position_model"] = est.position_model
+        parameters["line_model_sigma_px"] = est.line_model_sigma_px
     if est.options.self_calibrate:
         parameters["intrinsics_estimated"] = dict(zip(INTRINSIC_NAMES, est.state.intrinsics.vector().tolist()))
     return parameters

@@ -132,3 +132,21 @@ def test_abbe_term_only_for_angles_the_error_motions_resolve_and_the_lens_row():
                                                      sigma_lens_um=np.full(n, 2.0)), Environment())}
     assert lens["lens model"].contribution_um == pytest.approx(2.0)
     assert lens["intrinsics"].contribution_um == pytest.approx(np.sqrt(1.0 - 0.36))
+
+
+def test_the_abbe_row_is_shown_but_not_in_u():
+    """Issue 35: the positions are the displacement at the board plane, so a resolved pitch's Abbe row (what the
+    camera centre's displacement would differ by) is in the table and not in U of A, E, M or max |deviation|."""
+    n = 40
+    t = np.linspace(0, 100, n)
+    tilt = np.stack([1000.0 * np.sin(2 * np.pi * t / 200.0), np.zeros(n)], axis=1)
+    rows = budget_rows(_inputs(tilt_urad=tilt, tilt_sigma_urad=np.full((n, 2), 0.5), target_mm=t,
+                               tilt_resolved=(True, False)), Environment())
+    abbe = next(r for r in rows if r.source == "Abbe offset")
+    assert abbe.contribution_um > 100.0 and "not in U" in abbe.note  # the smooth pitch x 600 mm
+    unc = combine(rows)
+    others = [r.contribution_um for r in rows if r.contribution_um is not None and r.source != "Abbe offset"]
+    assert unc["expanded_k2_um"] == pytest.approx(2 * math.sqrt(sum(c * c for c in others)))
+    assert unc["expanded_k2_um"] < 10.0
+    corr = {"iso230_2": {"noise_correction": {"A_um": {"u_noise": 1.0}}}}
+    assert figure_uncertainties(unc, corr, 100.0)["A_um"] < 10.0

@@ -24,6 +24,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from lps_gui.core.estimator.board_plane_positions import with_board_plane_positions
 from lps_gui.core.estimator.estimate_types import (
     METHODS,
     EstimateOptions,
@@ -356,7 +357,7 @@ def _finish(obs: Observations, opt: EstimateOptions, sol: Solution, X: np.ndarra
                                              obs.corners_px, mask_all, state.intrinsics, state.s, sol.usable, sol.used,
                                              start=unc.poses)
         timings["board_plane"] = time.perf_counter() - t1
-    return LpsEstimate(
+    est = LpsEstimate(
         method=opt.method,
         options=opt,
         state=sol.state,
@@ -383,6 +384,9 @@ def _finish(obs: Observations, opt: EstimateOptions, sol: Solution, X: np.ndarra
         intrinsics_gradient=unc.intrinsics_gradient,
         board_plane=board_plane,
     )
+    if opt.method == "joint":  # the line model's misfit (angles, straightness) is not the corners' noise
+        est = with_board_plane_positions(est, X.mean(axis=0), *step_pairs(obs.run, obs.direction))
+    return est
 
 
 def _six_dof(

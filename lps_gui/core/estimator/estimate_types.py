@@ -121,6 +121,8 @@ class LpsEstimate:
     parameter_sigmas: dict[str, Any] = field(default_factory=dict)
     six_dof: SixDof | None = None
     board_plane: BoardPlaneMotion | None = None  # straightness at the board plane, image rotation (SPEC 11)
+    position_model: str = "line"  # "board plane": the positions of the per-view fit (core.estimator.board_plane_positions)
+    line_model_sigma_px: float | None = None  # the line model's a-posteriori sigma when the per-view fit replaced it
     # D = 2
     cov_mm2: np.ndarray | None = None  # shape (K, 2, 2): each view's position covariance, from noise
     cov_total_mm2: np.ndarray | None = None  # shape (K, 2, 2): with the intrinsics' covariance

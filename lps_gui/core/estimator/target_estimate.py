@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from lps_gui.core.estimator.board_plane_positions import POSITION_MODEL_BOARD_PLANE, row_with_board_plane_positions
 from lps_gui.core.estimator.estimate_types import (
     EstimateOptions,
     LpsEstimate,
@@ -99,6 +100,16 @@ def estimate_with_targets(obs: Observations, opt: EstimateOptions, progress: Pro
                         timings, cancel)
     sol = rounds.state
     common = _common_fields(obs, opt, sol, timings)
+    if obs.D == 1 and obs.segment is None and prior is None:  # a row's misfit (angles) is not the corners' noise
+        corners = np.where(sol.used[:, None, None], obs.corners_px, np.nan)
+        poses = row_with_board_plane_positions(TargetObservations(list(obs.mounted), corners, obs.targets,
+                                                                  list(obs.names)), sol, obs.intrinsics, common["dof"])
+        if poses is not sol:
+            n_obs = common["n_observations"]
+            common.update(sigma_px=poses.sigma_px, used=poses.used.copy(), position_model=POSITION_MODEL_BOARD_PLANE,
+                          line_model_sigma_px=sol.sigma_px,
+                          dof=n_obs - 6 * (len(obs.mounted) - 1) - 6 * int(poses.used.sum()))
+            sol = poses
     common.update(usable=rounds.usable.copy(), outlier=rounds.outlier.copy(), outlier_reason=list(rounds.reasons),
                   flags=rounds.flags)
     est = _line_estimate(obs, sol, common) if obs.D == 1 else _plane_estimate(obs, sol, common)

@@ -12,8 +12,11 @@ calibration), the board's square size (type B, from the board's
 certificate), the board thermometer and expansion coefficient (type B), the
 stage's uncorrected expansion relative to 20 C (rectangular, type B) and an
 Abbe offset estimate from the noise-corrected spread of pitch and yaw
-times the camera-board distance. A source that was not recorded stays in
-the table with contribution None and a note; it is not in U.
+times the camera-board distance, which is shown but not in U: the positions
+are the displacement at the board plane (README "Abbe offset"), and the row
+is what the camera centre's would differ by (a tool point's error is on the
+error-motions page). A source that was not recorded stays in the table with
+contribution None and a note; it is not in U.
 
 Per-figure uncertainties (:func:`figure_uncertainties`): figures that are
 positions or spans of positions (A, E, M, max |deviation|) carry U; figures
@@ -32,6 +35,7 @@ from lps_gui.core.metrology.environment import Environment
 
 COVERAGE_FACTOR = 2.0
 NOISE_SOURCES = ("corner noise", "reference view noise")
+ABBE_SOURCE = "Abbe offset"  # in the table, not in U: the positions are at the board plane (see :func:`_abbe_row`)
 TILT_DEGREE = 3  # a carriage's pitch and yaw along the travel: smooth, a cubic follows it
 TILT_K = 3.0  # a tilt spread counts when it exceeds the noise share by this many of its sd
 
@@ -135,7 +139,7 @@ def _abbe_row(x: BudgetInputs) -> BudgetRow:
     acts over the board distance d, yaw over the board's sideways offset h.
     """
     if x.abbe_lever_mm is None or x.tilt_urad is None or x.tilt_sigma_urad is None or not len(x.tilt_urad):
-        return BudgetRow("Abbe offset", "B", None, "\u00b5rad", None, None, "no per-view angles; not in U")
+        return BudgetRow(ABBE_SOURCE, "B", None, "\u00b5rad", None, None, "no per-view angles; not in U")
     spread = smooth_tilt_spread_urad(np.asarray(x.tilt_urad, float), np.asarray(x.tilt_sigma_urad, float),
                                      None if x.target_mm is None else np.asarray(x.target_mm, float))
     judged = ""
@@ -147,10 +151,10 @@ def _abbe_row(x: BudgetInputs) -> BudgetRow:
     contribution = float(np.sqrt(np.sum((1e-3 * lever * spread) ** 2)))  # um
     angle = float(np.sqrt(np.sum(spread**2)))
     c = contribution / angle if angle > 0 else float(lever[0]) * 1e-3
-    return BudgetRow("Abbe offset", "B", angle, "\u00b5rad", c, contribution,
+    return BudgetRow(ABBE_SOURCE, "B", angle, "\u00b5rad", c, contribution,
                      f"smooth pitch {spread[0]:.1f} \u00b5rad x {lever[0]:.0f} mm, yaw {spread[1]:.1f} \u00b5rad x "
-                     f"{lever[1]:.0f} mm, the camera-board geometry's lever arms (beyond per-view noise; positions are at "
-                     f"the board plane){judged}")
+                     f"{lever[1]:.0f} mm, the camera-board geometry's lever arms (beyond per-view noise){judged}; not in "
+                     "U: the positions are at the board plane, this is what the camera centre's would differ by")
 
 
 def smooth_tilt_spread_urad(tilt: np.ndarray, sigma: np.ndarray, target_mm: np.ndarray | None,
@@ -192,7 +196,7 @@ def _finite(v: float) -> float | None:
 
 def combine(rows: list[BudgetRow], k: float = COVERAGE_FACTOR) -> dict[str, Any]:
     """results.json ``uncertainty``: the budget, u_c, U (k) and what is not in U."""
-    known = [r.contribution_um for r in rows if r.contribution_um is not None]
+    known = [r.contribution_um for r in rows if r.contribution_um is not None and r.source != ABBE_SOURCE]
     u_c = float(np.sqrt(np.sum(np.square(known)))) if known else None
     noise = [r.contribution_um for r in rows if r.source in NOISE_SOURCES and r.contribution_um is not None]
     u_noise = float(np.sqrt(np.sum(np.square(noise)))) if noise else None
@@ -203,7 +207,7 @@ def combine(rows: list[BudgetRow], k: float = COVERAGE_FACTOR) -> dict[str, Any]
         "expanded_k2_um": None if u_c is None else k * u_c,
         "noise_standard_um": u_noise,
         "not_in_u": [r.source for r in rows if r.contribution_um is None],
-        "applies_to": "a displacement over the measured travel",
+        "applies_to": "a displacement over the measured travel, at the board plane",
     }
 
 
@@ -236,7 +240,7 @@ def figure_uncertainties(unc: dict[str, Any], figures: dict[str, Any], travel_mm
     scale_u = single.get("scale_sigma_total_ppm")
     if scale_u is not None and travel_mm > 0:
         scale_terms = [r["contribution_um"] for r in unc.get("budget") or []
-                       if r["contribution_um"] is not None and r["source"] not in NOISE_SOURCES + ("intrinsics", "Abbe offset")]
+                       if r["contribution_um"] is not None and r["source"] not in NOISE_SOURCES + ("intrinsics", ABBE_SOURCE)]
         rel = [1e3 * c / travel_mm for c in scale_terms]  # um over L -> ppm
         out["scale_ppm"] = k * math.sqrt(float(scale_u) ** 2 + sum(r * r for r in rel))
     out["periodic_amplitude_um"] = (None if u_noise is None or n_views < 3 or single.get("periodic_amplitude_um") is None
@@ -258,7 +262,7 @@ def iso_noise_uncertainties(unc: dict[str, Any], figures: dict[str, Any], k: flo
     """
     corr = (figures.get("iso230_2") or {}).get("noise_correction") or {}
     rows = [r["contribution_um"] for r in unc.get("budget") or []
-            if r.get("contribution_um") is not None and r.get("source") not in NOISE_SOURCES]
+            if r.get("contribution_um") is not None and r.get("source") not in NOISE_SOURCES + (ABBE_SOURCE,)]
     u_other2 = float(np.sum(np.square(rows))) if rows else 0.0
     out: dict[str, float] = {}
     for key, c in corr.items():

@@ -278,6 +278,25 @@ def board_plane_offsets(C_board: np.ndarray, w_board: np.ndarray, X0: np.ndarray
     return C + np.cross(np.asarray(w_board, float), X0[None, :] - C)
 
 
+def board_plane_displacements(R: np.ndarray, t: np.ndarray, X0: np.ndarray, R0: np.ndarray) -> np.ndarray:
+    """Where a camera of orientation R0 sees the board centre X0 as the poses (R, t) do: D = X0 - R0^T (R X0 + t).
+
+    Exact for any rotation (:func:`board_plane_offsets` is its first order): the board centre's line of sight,
+    the displacement at the board plane that the positions and straightness measure. Shape (K, 3).
+    """
+    b = np.einsum("kij,j->ki", np.asarray(R, float), X0) + np.asarray(t, float)
+    return X0[None, :] - b @ np.asarray(R0, float)
+
+
+def path_direction(D: np.ndarray, used: np.ndarray, towards: np.ndarray) -> np.ndarray:
+    """Unit direction of the least-squares line through the used rows of D (K, 3), oriented along ``towards``."""
+    Dv = D[np.asarray(used, bool) & np.all(np.isfinite(D), axis=1)]
+    if Dv.shape[0] < 2:
+        return np.asarray(towards, float) / np.linalg.norm(towards)
+    a = np.linalg.svd(Dv - Dv.mean(axis=0), full_matrices=False)[2][0]
+    return a if a @ towards >= 0 else -a
+
+
 def start_from_line(R: np.ndarray, translations: np.ndarray, X0: np.ndarray) -> np.ndarray:
     """b_i = R X0 + t_i for the LPS model's translations t_i, shape (K, 3)."""
     return (R @ X0)[None, :] + np.asarray(translations, float)

@@ -438,21 +438,32 @@ def spec_from_dict(d: dict[str, Any], source: str = "rig description") -> Simula
 
 
 def board_plane_positions(rig: Rig, pose: TruePose) -> np.ndarray:
-    """Where a constant-orientation model puts each true pose (mm along the axis).
+    """The true positions at the board plane: the board centre's line of sight along its least-squares line (mm).
 
     The LPS model holds the camera's orientation constant, so a carriage
-    rotation about an axis perpendicular to the motion shifts the image like
-    a translation of (board distance x angle): the model measures the
-    displacement at the board plane, an Abbe offset equal to the distance.
-    This is that displacement, from noise-free projections of the true poses
-    and the rig's nominal line; it equals ``pose.axis_mm`` without angular errors.
-    The per-view least squares is :func:`lps_gui.core.truth.board_plane_truth.positions_on_line`.
+    rotation about an axis across the view shifts the image like a translation
+    of (board distance x angle): what a camera measures is the displacement at
+    the board plane, an Abbe offset equal to the distance. Per view, the board
+    centre X0 sits at b_i = R_i X0 + t_i in the true camera frame; a camera of
+    the rig's nominal orientation R0 sees it there from D_i = X0 - R0^T b_i
+    (exact, any angle; to first order C_i + w_i x (X0 - C_i), the straightness
+    truth's :func:`board_plane_straightness`). The positions are the D_i along
+    the least-squares line through all of them (ISO 230-1's reference line,
+    oriented as the axis), offset so a path without angles and straightness
+    gives ``pose.axis_mm``. A roll moves D across the motion (distance x roll),
+    so the line is not the axis direction: along the axis direction a curved
+    path would read its lateral excursion into the positions. Independent of
+    any solver. (It was the line model's own fit of the true poses, one unknown
+    per view: that fit follows neither a roll's sideways path nor a tilt's
+    perspective, and read them into the positions, 13 um RMS on the honesty
+    campaign's ``motions`` stage.)
     """
-    from lps_gui.core.truth.board_plane_truth import positions_on_line
+    from lps_gui.core.models.constant_orientation import board_plane_displacements, path_direction
 
     R, t = rig.camera_poses(pose)
-    return positions_on_line(R, t, rig.board.object_points(), rig.intrinsics, rig.R_cam_board,
-                             -rig.R_cam_board @ rig.C0_board, -rig.R_cam_board @ rig.u_board, pose.axis_mm)
+    D = board_plane_displacements(R, t, rig.board.object_points().mean(axis=0), rig.R_cam_board)
+    a = path_direction(D, np.ones(len(D), bool), rig.u_board)
+    return (D - rig.C0_board[None, :]) @ a
 
 
 def board_plane_straightness(rig: Rig, pose: TruePose) -> tuple[np.ndarray, np.ndarray]:

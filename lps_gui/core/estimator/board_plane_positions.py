@@ -1,0 +1,182 @@
+"""Positions at the board plane when the line model cannot follow the carriage (issue 35).
+
+The LPS model (SPEC 3) gives each view one unknown, its position s_i on a line, under one orientation. A
+carriage that rolls or runs off the line moves the board's image across the motion (roll x board distance:
+~1 mm on the honesty campaign's ``motions`` stage), and a yaw about the viewing direction turns it; one
+unknown per view follows neither. The joint fit's a-posteriori sigma is then that misfit (0.34 px where the
+corners have 0.016 px), every position's sigma ~20 x too large, and each position couples to the misfit.
+
+Each view's own pose (SPEC 4.5, :mod:`lps_gui.core.models.six_dof`, fixed intrinsics) has no misfit: its
+residuals are the corners' noise. A tilt and a sideways shift are hard to tell apart in one view, but the
+board centre's place in the camera frame, b_i = R_i X0 + t_i, is not: D_i = X0 - R^T b_i, where a camera of
+the common orientation R sees the board centre (the Abbe convention of the positions, exact for any angle),
+is as well determined as the line model's s_i. The positions are D_i along the least-squares line of the used
+D_i (ISO 230-1's reference line), each with its own sigma. (The 4-unknown fit of SPEC 11 leaves a camera tilt's
+perspective in its b_i: 290 ppm of scale on that stage.) They replace the line model's positions when a
+variance-ratio test says the line model leaves more than noise; on a stage the line model fits (ratio ~1.00)
+nothing changes.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from lps_gui.core.estimator.estimate_types import LpsEstimate
+from lps_gui.core.geometry.camera_model import CameraIntrinsics
+from lps_gui.core.models.constant_orientation import board_plane_displacements, path_direction
+from lps_gui.core.models.pose_model import solve_poses
+from lps_gui.core.models.target_model import TargetObservations, TargetSolution
+from lps_gui.core.numerics.arrowhead import ArrowheadInverse
+from lps_gui.core.numerics.target_arrowhead import PositionCovariance
+from lps_gui.core.numerics.uncertainty import propagated_variance
+
+MISFIT_Z = 3.09  # one-sided 0.1 % of the normal: ln F beyond this many of its sd rejects the line model
+MISFIT_MATERIAL = 2.0  # ... when its residual variance is also at least twice the noise's (the misfit at least the noise)
+POSITION_MODEL_BOARD_PLANE = "board plane"  # each view's board-centre line of sight from its own pose (else "line")
+
+
+def line_model_rejected(sigma2_line: float, dof_line: int, sigma2_views: float, dof_views: int) -> bool:
+    """True when the line model's residual variance exceeds the per-view fit's by more than noise allows and
+    by at least as much as the noise itself.
+
+    Both variances estimate the corners' noise when the line model holds; ln of their ratio is then
+    normal with variance 2/dof_line + 2/dof_views (large dof, thousands here). One-sided at 0.1 %. With
+    10^5 residuals a misfit of 1 % of the noise's variance is significant (the paper close-up's small
+    angles: 0.1005 px against 0.1001 px); the line model's positions are then the more precise and its
+    sigma covers the misfit, so only a misfit at least the noise (``MISFIT_MATERIAL``) switches.
+    """
+    if not (dof_line > 0 and dof_views > 0 and sigma2_views > 0 and math.isfinite(sigma2_line)):
+        return False
+    ratio = sigma2_line / sigma2_views
+    return ratio >= MISFIT_MATERIAL and math.log(ratio) > MISFIT_Z * math.sqrt(2.0 / dof_line + 2.0 / dof_views)
+
+
+def gauge_inverse(var_unit: np.ndarray, ref: int, free: np.ndarray) -> ArrowheadInverse:
+    """The covariance of s_i = p_i - p_ref for independent p_i (unit variances ``var_unit``) as an arrowhead:
+    the reference's own p is the one shared unknown, so every functional and step keeps its correlation."""
+    K = var_unit.size
+    D_inv = np.where(free, var_unit, 0.0).reshape(K, 1, 1)
+    W = np.where(free, -1.0, 0.0).reshape(K, 1, 1)
+    return ArrowheadInverse(np.array([[float(var_unit[ref])]]), W, D_inv)
+
+
+def positions_from_poses(R_views: np.ndarray, t_views: np.ndarray, R: np.ndarray, X0: np.ndarray, used: np.ndarray,
+                         towards: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(D_i . a (K,), its gradient (K, 6) in each pose's (rotation, translation)): a the least-squares line's direction.
+
+    With the left perturbation of the poses (R_i <- exp(dw) R_i, t_i <- t_i + dt), d b_i = dw x c_i + dt
+    (c_i = R_i X0), so d (D_i . a) = -(c_i x m) . dw - m . dt with m = R a.
+    """
+    D = board_plane_displacements(R_views, t_views, X0, R)
+    a = path_direction(D, used, towards)
+    m = R @ a
+    c = np.einsum("kij,j->ki", R_views, X0)
+    return D @ a, np.concatenate([-np.cross(c, m[None, :]), -np.broadcast_to(m, c.shape)], axis=1)
+
+
+def with_board_plane_positions(est: LpsEstimate, X0: np.ndarray, prev: np.ndarray, cur: np.ndarray) -> LpsEstimate:
+    """``est`` with the board-plane positions of the per-view poses when the line model is rejected, else ``est``.
+
+    ``X0``: the board centre (board frame); ``prev``, ``cur``: the step pairs of
+    :func:`~lps_gui.core.estimator.estimate_types.step_pairs`. The intrinsics' share of each position is the
+    line model's (both measure the same displacement to first order); views outside the solve get their own
+    position and sigma from their pose.
+    """
+    six = est.six_dof
+    if six is None or six.poses is None or est.state.s.ndim != 1:
+        return est
+    used, usable, ref = est.used, est.usable, est.reference_view
+    n_used = int(used.sum())
+    dof_views = int(2 * est.n_corners[used].sum()) - 6 * n_used
+    if not line_model_rejected(est.sigma_px**2, est.dof, six.sigma2_px, dof_views):
+        return est
+    position, J = positions_from_poses(six.poses.R, six.poses.t, est.state.R, X0, used, est.state.line().u_board)
+    var_unit = np.einsum("ka,kab,kb->k", J, six.poses.cov_unit, J)
+    seen = usable & np.isfinite(position) & np.isfinite(var_unit)
+    if not seen[ref]:
+        return est
+    sigma2 = six.sigma2_px
+    free = seen.copy()
+    free[ref] = False
+    inv = gauge_inverse(np.where(seen, var_unit, 0.0), ref, free)
+    var_s = np.where(seen, sigma2 * inv.variances()[:, 0], np.nan)
+    intr = np.nan_to_num(est.sigma_total_mm**2 - est.sigma_s_mm**2)
+    if est.intrinsics_gradient is not None and est.state.intrinsics.covariance is not None:
+        intr = propagated_variance(est.intrinsics_gradient, est.state.intrinsics.covariance)
+    state = est.state.copy()
+    state.s = np.where(seen, position - position[ref], est.state.s)
+    step = np.full(state.s.size, np.nan)
+    both = seen[prev] & seen[cur]
+    if both.any():
+        step[cur[both]] = np.sqrt(sigma2 * inv.cov_difference(prev[both], cur[both])[:, 0, 0])
+    return replace(est, state=state, sigma_px=float(np.sqrt(sigma2)), sigma_s_mm=np.sqrt(var_s),
+                   sigma_total_mm=np.sqrt(var_s + np.where(seen, intr, np.nan)), step_sigma_mm=step, inverse=inv,
+                   dof=dof_views, position_model=POSITION_MODEL_BOARD_PLANE, line_model_sigma_px=est.sigma_px)
+
+
+@dataclass(frozen=True)
+class PosePositionCovariance:
+    """The covariance of positions s_k = g_k . v_k - g_ref . v_ref, linear in the pose model's view 6-vectors v_k
+    (their covariance correlated through the targets' poses): the interface of the row model's position
+    covariance (:class:`~lps_gui.core.numerics.target_arrowhead.PositionCovariance`, D = 1) for the estimate's
+    functionals (scale, steps)."""
+
+    poses: PositionCovariance  # of the views' 6-vectors
+    g: np.ndarray  # (K, 6): d s_k / d v_k
+    ref: int
+    sigma2: float
+    row: PositionCovariance  # the row model's: its shared parameters' block (``S_inv``) gives their sigmas
+
+    @property
+    def S_inv(self) -> np.ndarray:
+        return self.row.S_inv
+
+    def _weights(self, L: np.ndarray) -> np.ndarray:
+        L = np.array(L[..., 0], dtype=float)  # (Q, K) on the positions
+        L[:, self.ref] = 0.0  # s_ref is 0
+        g6 = L[:, :, None] * self.g[None, :, :]
+        g6[:, self.ref, :] = -L.sum(axis=1)[:, None] * self.g[self.ref][None, :]
+        return g6
+
+    def covariance(self, L: np.ndarray) -> np.ndarray:
+        """(Q, Q) covariance of Q functionals with weights L (Q, K, 1) on the positions."""
+        return self.poses.covariance(self._weights(L))
+
+    def variances(self, L: np.ndarray) -> np.ndarray:
+        """Variances of Q functionals with weights L (Q, K, 1) on the positions."""
+        return self.poses.variances(self._weights(L))
+
+
+def row_with_board_plane_positions(tobs: TargetObservations, sol: TargetSolution, intrinsics: CameraIntrinsics,
+                                   dof_row: int) -> TargetSolution:
+    """A row's solution (SPEC 13, D = 1) with every stop's position from its full pose when the row model is rejected.
+
+    The row model holds one orientation and one unknown per view, jointly with the targets' poses; a carriage
+    that rolls or yaws leaves a misfit that the targets' poses absorb (520 um of max |deviation| on the
+    campaign's row with angles). The pose model (:func:`~lps_gui.core.models.pose_model.solve_poses`, every
+    stop's six unknowns with the targets', started from the row's solution) has none. The positions are the
+    first target's centre's line of sight (D_i, as one board's) along its least-squares line; the targets'
+    poses and their sigmas are the pose model's.
+    """
+    poses = solve_poses(tobs, intrinsics, start=sol)
+    used = sol.used & poses.used
+    n_corners = int((np.isfinite(tobs.corners_px[..., 0]) & used[:, None]).sum())
+    dof_poses = 2 * n_corners - 6 * (len(tobs.targets) - 1) - 6 * int(used.sum())
+    if not line_model_rejected(sol.sigma_px**2, dof_row, poses.sigma_px**2, dof_poses):
+        return sol
+    ref = sol.reference
+    X0 = tobs.targets[0].board.object_points().mean(axis=0)
+    position, g = positions_from_poses(poses.R, poses.t, sol.R, X0, used, -sol.R.T @ sol.N[:, 0])
+    cov = PosePositionCovariance(poses.covariance, np.where(used[:, None], g, 0.0), ref, poses.sigma_px**2,
+                                 sol.covariance)
+    K = len(used)
+    unit = np.zeros((K, K, 1))
+    unit[np.arange(K), np.arange(K), 0] = 1.0
+    sigma = np.sqrt(np.maximum(cov.variances(unit), 0.0))
+    s = np.where(used, position - position[ref], np.nan)[:, None]
+    sigma = np.where(used, sigma, np.nan)[:, None]
+    centred = np.where(used, np.sqrt(np.maximum(np.einsum("ka,kab,kb->k", g, poses.single_view, g), 0.0)), np.nan)
+    return replace(sol, s=s, sigma_s=sigma, sigma_centred=centred[:, None], Q=poses.Q, p=poses.p,
+                   target_sigma=poses.target_sigma, sigma_px=poses.sigma_px, covariance=cov, used=used)

@@ -1,0 +1,89 @@
+"""Positions at the board plane on a stage with angular motions (issue 35): the line model's misfit is not the
+corners' noise. One point-level session of the small rig with the honesty campaign's ``motions`` profiles."""
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from lps_gui.core.estimator.board_plane_positions import POSITION_MODEL_BOARD_PLANE, line_model_rejected
+from lps_gui.core.estimator.estimate import estimate
+from lps_gui.core.truth.simulate import board_plane_positions, observations_of, simulate_views, small_spec
+from lps_gui.core.truth.stage_errors import ErrorProfile, StageErrorModel, TruePose
+
+FLAT = StageErrorModel(scale_ppm=100.0, periodic_um=5.0, pitch_mm=8.0, backlash_um=4.0, repeatability_um=1.0)
+# benchmarks/honesty.py's motions stage over 22 mm: a sag, waves, roll 2000, pitch 1320, yaw 400 urad
+MOTIONS = replace(FLAT, straightness_um=(ErrorProfile(poly=(0.0, 0.0, -9.68 / 0.022**2)), ErrorProfile(amplitude=5.0, period_mm=30.0)),
+                  roll_urad=ErrorProfile(amplitude=2000.0, period_mm=40.0), pitch_urad=ErrorProfile(poly=(0.0, 1320.0 / 0.022)),
+                  yaw_urad=ErrorProfile(amplitude=400.0, period_mm=30.0, phase_rad=0.5))
+NOISE_PX = 0.05
+
+
+def _session(errors: StageErrorModel, seed: int = 0):
+    spec = small_spec(seed=seed, views=12, noise_px=NOISE_PX, directions="both", runs=2, errors=errors)
+    views = simulate_views(spec)
+    obs = observations_of(spec, views)
+    t = views.truth
+    pose = TruePose(np.asarray(t["axis_mm"]), np.asarray(t["straightness_um"]), np.asarray(t["angles_urad"]))
+    return obs, estimate(obs), board_plane_positions(spec.rig, pose)
+
+
+def _z2(est, truth_mm) -> float:
+    ok = est.used.copy()
+    ref = est.reference_view
+    ok[ref] = False
+    err = (est.state.s - (truth_mm - truth_mm[ref]))[ok]
+    return float(np.mean((err / est.sigma_s_mm[ok]) ** 2))
+
+
+def test_on_a_stage_with_angles_the_sigma_is_the_corners_noise_and_the_positions_honest():
+    obs, est, truth = _session(MOTIONS)
+    assert est.position_model == POSITION_MODEL_BOARD_PLANE
+    assert est.line_model_sigma_px > 3 * NOISE_PX  # the line model's misfit (roll x distance, yaw)
+    assert 0.8 * NOISE_PX < est.sigma_px < 1.2 * NOISE_PX  # the per-view poses' residuals: the corners' noise
+    assert 0.4 < _z2(est, truth) < 2.0  # was ~0.01: sigma ~10x too large
+    steps = est.step_sigma_mm[np.isfinite(est.step_sigma_mm)]
+    assert steps.size == obs.K - 4  # every step but the first of each run and direction (2 x 2)
+    assert np.all(steps < 2 * np.nanmax(est.sigma_s_mm))
+
+
+def test_on_a_stage_the_line_model_fits_nothing_changes():
+    obs, est, truth = _session(FLAT)
+    assert est.position_model == "line" and est.line_model_sigma_px is None
+    assert 0.8 * NOISE_PX < est.sigma_px < 1.2 * NOISE_PX
+    assert 0.4 < _z2(est, truth) < 2.0
+
+
+def test_the_variance_ratio_test():
+    assert not line_model_rejected(1.02, 5000, 1.0, 5000)  # noise: ln F ~ 0.02 < 3.09 x 0.028
+    assert line_model_rejected(2.5, 5000, 1.0, 5000)
+    assert not line_model_rejected(1.2, 5000, 1.0, 5000)  # significant, but the misfit is under the noise
+    assert not line_model_rejected(2.5, 20, 1.0, 20)  # a misfit as large as the noise, not significant on 20 dof
+    assert not line_model_rejected(400.0, 0, 1.0, 5000)  # no redundancy: no judgement
+
+
+def test_a_row_of_targets_on_a_stage_with_angles_takes_each_stops_full_pose():
+    """SPEC 13's row model holds one orientation and one unknown per stop with the targets' poses: a roll's
+    sideways path and a yaw are its misfit (0.33 px on 0.1 px corners). The positions come from every stop's
+    full pose (the pose model, with the targets'), at the first target's centre, with the corners' noise."""
+    from lps_gui.core.planning.target_presets import small_row_spec
+
+    travel = 340.0
+    m = travel / 1000.0
+    errors = replace(FLAT, straightness_um=(ErrorProfile(poly=(0.0, 0.0, -9.68 / m**2)),
+                                            ErrorProfile(amplitude=5.0, period_mm=30.0 / 22.0 * travel)),
+                     roll_urad=ErrorProfile(amplitude=2000.0, period_mm=40.0 / 22.0 * travel),
+                     pitch_urad=ErrorProfile(poly=(0.0, 1320.0 / m)),
+                     yaw_urad=ErrorProfile(amplitude=400.0, period_mm=30.0 / 22.0 * travel, phase_rad=0.5))
+    spec = small_row_spec(seed=0, noise_px=0.1, errors=errors)
+    views = simulate_views(spec)
+    est = estimate(observations_of(spec, views))
+    t = views.truth
+    truth = board_plane_positions(spec.rig, TruePose(np.asarray(t["axis_mm"]), np.asarray(t["straightness_um"]),
+                                                     np.asarray(t["angles_urad"])))
+    assert est.position_model == POSITION_MODEL_BOARD_PLANE and est.line_model_sigma_px > 0.2
+    assert 0.08 < est.sigma_px < 0.12  # the corners' 0.1 px (was the row model's 0.33 px)
+    assert 0.4 < _z2(est, truth) < 2.0
+    assert np.all(np.isfinite(est.step_sigma_mm[1:]))  # one run, one direction: every step after the first
+    L = np.zeros((1, obs_k := est.used.size))
+    L[0, -1], L[0, 0] = 1.0, -1.0  # the whole travel: its sigma is that of the last stop relative to the first
+    assert np.sqrt(est.functional_covariance(L)[0, 0]) == pytest.approx(est.sigma_s_mm[-1], rel=1e-6)

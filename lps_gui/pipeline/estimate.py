@@ -31,7 +31,7 @@ from lps_gui.errors import InputError
 from lps_gui.gc_tuning import paused as paused_collections
 from lps_gui.io.board_file import board_to_dict
 from lps_gui.io.corners.vnl import read_corners_vnl
-from lps_gui.io.intrinsics_file import apply_board_warp, intrinsics_to_dict, read_intrinsics
+from lps_gui.io.intrinsics_file import apply_board_warp, intrinsics_to_dict
 from lps_gui.io.results.document import assemble_results, json_floats, rows_from_columns, write_results
 from lps_gui.io.results.document import json_float as _f
 from lps_gui.io.results.history import commit_results
@@ -41,11 +41,12 @@ from lps_gui.pipeline.results.asme import add_asme_results, test_options
 from lps_gui.pipeline.results.board_plane import position_columns, straightness_figures
 from lps_gui.pipeline.results.error_motions import add_error_motions
 from lps_gui.pipeline.results.planar import build_planar_results
-from lps_gui.pipeline.results.uncertainty import add_uncertainty, session_board
+from lps_gui.pipeline.results.uncertainty import add_uncertainty
 from lps_gui.pipeline.results.verdict import add_verdict
 from lps_gui.pipeline.session_checks import corners_of_records, session_inputs
+from lps_gui.pipeline.session_input import SessionInput, read_session_input
 from lps_gui.pipeline.target_session import add_targets_section, target_observations
-from lps_gui.sim.truth import session_truth, truth_comparison
+from lps_gui.sim.truth import truth_comparison
 from lps_gui.sim.truth_figures import add_self_check
 
 HYBRID_KEYS = {"grid_window_mm": "window_mm", "grid_resolution_mm": "resolution_mm", "grid_points": "grid_points",
@@ -65,38 +66,42 @@ def make_options(method: str = "joint", options: dict[str, Any] | EstimateOption
     return EstimateOptions(method=method, hybrid=HybridOptions(**hybrid), **opts)
 
 
-def observations_from_session(session: Session, intrinsics: CameraIntrinsics | None = None) -> Observations:
+def observations_from_session(source: SessionInput | Session, intrinsics: CameraIntrinsics | None = None
+                              ) -> Observations:
     """Match every line of captures.jsonl to its corners in corners.vnl, for a stage of one or two axes.
 
     The board is the one at the session's temperature (environment), bowed as
     the intrinsics calibration found it; corners of replaced images and views
     whose corners lie on one line are refused. A planar session takes every
-    capture's per-axis approach side from its plan.
+    capture's per-axis approach side from its plan. ``source``: the session as
+    read once (:func:`~lps_gui.pipeline.session_input.read_session_input`), or an open session read here.
     """
-    intr = intrinsics or session.intrinsics()
-    records = session.records()
+    inp = source if isinstance(source, SessionInput) else read_session_input(source, intrinsics=intrinsics)
+    intr = intrinsics or inp.intrinsics
+    records = list(inp.records)
     if not records:
-        raise InputError(f"{session.captures_path}: no captures listed; capture or simulate a session first")
-    if session.planar:
+        raise InputError(f"{inp.captures_path}: no captures listed; capture or simulate a session first")
+    if inp.planar:
         for r in records:
             if not isinstance(r.target_mm, tuple):
-                raise InputError(f"{session.captures_path}: capture {r.index} has target_mm {r.target_mm!r}, "
+                raise InputError(f"{inp.captures_path}: capture {r.index} has target_mm {r.target_mm!r}, "
                                  "not [x, y]; a planar session (plan.axes [X, Y]) lists both coordinates")
-    if session.meta.get("targets") is not None:  # a row or constellation (SPEC 13)
-        return target_observations(session, intr, records, approach_of(session, records))
-    board = apply_board_warp(session_board(session), intr)
-    table = read_corners_vnl(session.corners_path, board.n_corners)
-    corners = corners_of_records(session, table, records)
-    check_corner_layout(session, board, intr, records, corners)
-    obs = observations_of_views(session, board, intr, records, corners, table.sha256)
-    if not session.planar and session.plan().segments:  # one board moved between segments (SPEC 13 stitching)
+    if inp.meta.get("targets") is not None:  # a row or constellation (SPEC 13)
+        return target_observations(inp, intr, records, approach_of(inp, records))
+    board = apply_board_warp(inp.measured_board, intr)
+    table = read_corners_vnl(inp.corners_path, board.n_corners)
+    corners = corners_of_records(inp, table, records)
+    check_corner_layout(inp, board, intr, records, corners)
+    obs = observations_of_views(inp.corners_path, board, intr, records, corners, table.sha256,
+                                approach_of(inp, records))
+    if not inp.planar and inp.plan.segments:  # one board moved between segments (SPEC 13 stitching)
         from lps_gui.pipeline.stitched_session import stitched_observations
 
-        return stitched_observations(session, obs, records)
+        return stitched_observations(inp, obs, records)
     return obs
 
 
-def check_corner_layout(session: Session, board: Any, intr: CameraIntrinsics, records: list[Any],
+def check_corner_layout(session: SessionInput, board: Any, intr: CameraIntrinsics, records: list[Any],
                         corners: np.ndarray) -> None:
     """One line naming the first view whose corners are reversed, mirrored or outside the intrinsics' image."""
     from lps_gui.core.corner_layout import layout_problems
@@ -109,8 +114,9 @@ def check_corner_layout(session: Session, board: Any, intr: CameraIntrinsics, re
                          f"`lps detect {session.folder} --force`, or check the intrinsics")
 
 
-def observations_of_views(session: Session, board: Any, intr: CameraIntrinsics, records: list[Any], corners: np.ndarray,
-                          sha256: str | None = None) -> Observations:
+def observations_of_views(corners_path: Path, board: Any, intr: CameraIntrinsics, records: list[Any],
+                          corners: np.ndarray, sha256: str | None = None, approach: list | None = None
+                          ) -> Observations:
     """The observations of ``records`` with their ``corners`` (K, N, 2): the file's, or a live capture's so far."""
     return Observations(
         board=board,
@@ -121,17 +127,17 @@ def observations_of_views(session: Session, board: Any, intr: CameraIntrinsics, 
         run=[r.run for r in records],
         index=[r.index for r in records],
         names=[r.file for r in records],
-        source=str(session.corners_path),
+        source=str(corners_path),
         source_sha256=sha256,
-        approach=approach_of(session, records),
+        approach=approach,
     )
 
 
-def approach_of(session: Session, records: list) -> list | None:
+def approach_of(session: SessionInput, records: list) -> list | None:
     """Every capture's per-axis approach side from a planar session's plan (None on one axis)."""
     if not session.planar:
         return None
-    approach_by_index = {s.index: s.approach for s in session.plan().stops()}
+    approach_by_index = {s.index: s.approach for s in session.plan.stops()}
     return [approach_by_index.get(r.index, (1, 1)) for r in records]
 
 
@@ -153,18 +159,17 @@ def estimate_session(
     results.json content.
     """
     t0 = time.perf_counter()
-    session = Session.open(session_dir)
-    intr = read_intrinsics(intrinsics_path) if intrinsics_path else None
-    opt = test_options(session, make_options(method, options))  # a settling test's frames move by design
-    obs = observations_from_session(session, intr)
+    inp = read_session_input(session_dir, intrinsics_path)  # the session read once; every builder is given it
+    opt = test_options(inp, make_options(method, options))  # a settling test's frames move by design
+    obs = observations_from_session(inp)
     est = estimate(obs, opt, progress, cancel)
     with paused_collections():  # results are trees of dicts and lists: nothing for the cyclic collector
-        results = build_results(session, obs, est, intrinsics_source=str(intrinsics_path or "session.json"))
+        results = build_results(inp, obs, est, intrinsics_source=str(intrinsics_path or "session.json"))
         results["timings_s"]["pipeline_total"] = time.perf_counter() - t0
         if cancel is not None:
             cancel.check("estimation")
-        with SessionLock(session.folder) if not out_dir else nullcontext():  # one writer per session
-            _write_keeping_history(session, out_dir, results)
+        with SessionLock(inp.folder) if not out_dir else nullcontext():  # one writer per session
+            _write_keeping_history(inp.session, out_dir, results)
     return results
 
 
@@ -179,7 +184,7 @@ def _write_keeping_history(session: Session, out_dir: Path | str | None, results
 
 # ----------------------------------------------------------------------------- results
 
-def build_results(session: Session, obs: Observations, est: LpsEstimate, intrinsics_source: str
+def build_results(session: SessionInput, obs: Observations, est: LpsEstimate, intrinsics_source: str
                   ) -> dict[str, Any]:
     """The results.json document of an estimate of D axes, with its environment and uncertainty budget."""
     results = RESULTS_BY_AXES[obs.D](session, obs, est, intrinsics_source)
@@ -197,11 +202,11 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate, intrins
     return add_self_check(results)  # a simulated session: does its truth contradict a figure or a finding?
 
 
-def line_results(session: Session, obs: Observations, est: LpsEstimate, intrinsics_source: str) -> dict[str, Any]:
+def line_results(session: SessionInput, obs: Observations, est: LpsEstimate, intrinsics_source: str) -> dict[str, Any]:
     """The results.json document of one axis: its parts computed here, assembled by
     :func:`lps_gui.io.results.document.assemble_results`."""
     positions = position_rows(obs, est)
-    truth = session_truth(session)
+    truth = session.truth
     results = assemble_results(
         method=est.method,
         settings=est.options.to_dict(),

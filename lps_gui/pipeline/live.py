@@ -238,7 +238,7 @@ class LiveCapture:
         """The views so far through the one estimator, warm-started; its checks."""
         from lps_gui.io.intrinsics_file import apply_board_warp
         from lps_gui.pipeline.estimate import make_options, observations_of_views
-        from lps_gui.pipeline.results.uncertainty import session_board
+        from lps_gui.pipeline.session_input import session_board
 
         if self.session.planar or self.method != "joint" or not self.session.has_intrinsics():
             return
@@ -251,7 +251,7 @@ class LiveCapture:
                             for r in views.results])
         intr = self.session.intrinsics()
         board = apply_board_warp(session_board(self.session), intr)
-        obs = observations_of_views(self.session, board, intr, list(views.records), corners)
+        obs = observations_of_views(self.session.corners_path, board, intr, list(views.records), corners)
         opt = make_options("joint", {**(self.options or {}), "six_dof": False})
         t0 = time.perf_counter()
         if self._warm is not None and self._base_rms is not None:  # the new views against the solution so far

@@ -28,13 +28,13 @@ from lps_gui.core.metrology.asme_b5_64 import (
     tur,
 )
 from lps_gui.core.truth.stage_errors import StageErrorModel, Vibration
-from lps_gui.io.session import Session
+from lps_gui.pipeline.session_input import SessionInput
 
 SPEC_TOLERANCES = {"incremental_step": ("min_incremental_motion_um", "\u00b5m"),
                    "settling": ("settling_time_s", "s")}  # stage_spec keys of the ASME tests' tolerances
 
 
-def test_options(session: Session, options: EstimateOptions) -> EstimateOptions:
+def test_options(session: SessionInput, options: EstimateOptions) -> EstimateOptions:
     """The estimate's options for a session's ASME test: a settling test's frames ring by design, so the
     outlier test (a view off its neighbours' positions) is off there; every other session as given."""
     if (session.meta.get("asme_test") or {}).get("test") == "settling" and options.detect_outliers:
@@ -42,13 +42,13 @@ def test_options(session: Session, options: EstimateOptions) -> EstimateOptions:
     return options
 
 
-def add_asme_results(results: dict[str, Any], session: Session, obs: Observations, est: LpsEstimate) -> dict[str, Any]:
+def add_asme_results(results: dict[str, Any], session: SessionInput, obs: Observations, est: LpsEstimate) -> dict[str, Any]:
     """``results["asme_b5_64"]`` of a line session (after its uncertainty budget: the ratios need U)."""
     figures = results.get("figures") or {}
     u = (results.get("uncertainty") or {}).get("figures_k2") or {}
     section: dict[str, Any] = {"figures": named_figures(figures.get("iso230_2"), u)}
     test = session.meta.get("asme_test") or {}
-    records = {r.index: r for r in session.records()}
+    records = {r.index: r for r in session.records}
     if test.get("test") == "min-step":
         section["incremental_step"] = incremental_step_section(obs, est, records, session, test)
     elif test.get("test") == "settling":
@@ -91,7 +91,7 @@ def stop_means(obs: Observations, est: LpsEstimate, keys: np.ndarray) -> tuple[S
     ), order
 
 
-def incremental_step_section(obs: Observations, est: LpsEstimate, records: dict[int, Any], session: Session,
+def incremental_step_section(obs: Observations, est: LpsEstimate, records: dict[int, Any], session: SessionInput,
                              test: dict[str, Any]) -> dict[str, Any]:
     """The incremental-step test: each step between consecutive averaged stops of one pass."""
     stops, frames = stop_means(obs, est, stop_keys(obs, records))
@@ -116,7 +116,7 @@ def incremental_step_section(obs: Observations, est: LpsEstimate, records: dict[
     return out
 
 
-def settling_section(obs: Observations, est: LpsEstimate, records: dict[int, Any], session: Session,
+def settling_section(obs: Observations, est: LpsEstimate, records: dict[int, Any], session: SessionInput,
                      test: dict[str, Any]) -> dict[str, Any]:
     """The settling test: each stop's positions against its frames' time after the move, and the time to settle."""
     band = float(test.get("band_um", 5.0))
@@ -150,14 +150,14 @@ def settling_section(obs: Observations, est: LpsEstimate, records: dict[int, Any
     return out
 
 
-def _truth_errors(session: Session) -> StageErrorModel | None:
-    truth = session.truth or {}
+def _truth_errors(session: SessionInput) -> StageErrorModel | None:
+    truth = session.meta.get("truth") or {}
     return StageErrorModel.from_dict(truth["stage_errors"]) if isinstance(truth.get("stage_errors"), dict) else None
 
 
-def _truth_vibration(session: Session) -> Vibration | None:
+def _truth_vibration(session: SessionInput) -> Vibration | None:
     """The simulated stage's ringing: the point simulator's truth, or the simulated stage's description."""
-    truth = session.truth or {}
+    truth = session.meta.get("truth") or {}
     if not truth:
         return None
     ring = truth.get("vibration") or (session.meta.get("stage") or {}).get("vibration")

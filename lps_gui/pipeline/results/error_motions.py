@@ -251,13 +251,11 @@ def add_error_motions(results: dict[str, Any], session: Any, obs: Any, est: Any)
     A line: from the targets' joint pose solve or a single board's 6-DOF poses; a plane: from the
     targets' joint pose solve (a single board's planar fit keeps one orientation and has no per-view poses).
     """
-    from lps_gui.sim.truth import session_truth
-
     meta, where = session.meta, str(session.folder / "session.json")
     if obs.segment is not None:
         return  # one board moved between segments: its placements are tied by repeated stops, never seen together
     if obs.D == 1:
-        motions = session_error_motions(meta, where, obs, est, session_truth(session))
+        motions = session_error_motions(meta, where, obs, est, session.truth)
     elif obs.mounted is not None:
         tool_point(meta, where)  # checked alike, used by one axis only
         sol = target_pose_solution(obs, est)

@@ -22,9 +22,9 @@ from lps_gui.core.metrology.planar_flatness import out_of_plane
 from lps_gui.io.board_file import board_to_dict
 from lps_gui.io.intrinsics_file import intrinsics_to_dict
 from lps_gui.io.results.document import FORMAT
-from lps_gui.io.session import Session
 from lps_gui.pipeline.session_checks import session_inputs
-from lps_gui.sim.truth import session_truth, truth_comparison
+from lps_gui.pipeline.session_input import SessionInput
+from lps_gui.sim.truth import truth_comparison
 
 
 def _f(x: Any) -> float | None:
@@ -32,7 +32,7 @@ def _f(x: Any) -> float | None:
     return x if np.isfinite(x) else None
 
 
-def build_planar_results(session: Session, obs: Observations, est: LpsEstimate, intrinsics_source: str
+def build_planar_results(session: SessionInput, obs: Observations, est: LpsEstimate, intrinsics_source: str
                          ) -> dict[str, Any]:
     """The results.json document of a planar session (SPEC 10; schema in docs/ARCHITECTURE.md)."""
     dev = est.deviation_um(obs.target_mm)
@@ -92,7 +92,7 @@ def build_planar_results(session: Session, obs: Observations, est: LpsEstimate, 
         "parameters": parameters, "positions": positions, "figures": {"planar": planar},
         "flags": est.flags, "timings_s": dict(est.timings_s),
     }
-    truth = session_truth(session)
+    truth = session.truth
     if truth is not None:
         results["truth_comparison"] = truth_comparison(obs, est, truth, positions)
         _add_truth_to_nodes(planar["nodes"], obs, positions, valid)

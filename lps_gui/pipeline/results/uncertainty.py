@@ -14,20 +14,9 @@ from typing import Any
 
 import numpy as np
 
-from lps_gui.core.geometry.board import Board
-from lps_gui.core.metrology.environment import Environment, corrected_board, thermal_record
+from lps_gui.core.metrology.environment import Environment, thermal_record
 from lps_gui.core.metrology.uncertainty_budget import BudgetInputs, budget_rows, combine, figure_uncertainties
-from lps_gui.io.session import SESSION_FILE, Session
-
-
-def session_environment(session: Session) -> Environment:
-    """session.json ``environment`` parsed (empty when absent)."""
-    return Environment.from_dict(session.meta.get("environment"), f"{session.folder / SESSION_FILE}: environment")
-
-
-def session_board(session: Session) -> Board:
-    """The session's board with its square size corrected to the board's temperature."""
-    return corrected_board(session.board(), session_environment(session))
+from lps_gui.pipeline.session_input import SessionInput
 
 
 def _column(positions: list[dict[str, Any]], key: str) -> np.ndarray:
@@ -88,15 +77,14 @@ def abbe_lever_mm(results: dict[str, Any]) -> tuple[float, float] | None:
     return float(abs(r @ frame[:, 2])), float(abs(r @ frame[:, 1]))
 
 
-def add_uncertainty(results: dict[str, Any], session: Session) -> dict[str, Any]:
+def add_uncertainty(results: dict[str, Any], session: SessionInput) -> dict[str, Any]:
     """Add ``environment`` and ``uncertainty`` to results (in place; also returned).
 
     ``board.square_mm`` stays the nominal (20 C) size; the size used is in
     ``environment.square_mm_used``.
     """
-    env = session_environment(session)
-    targets = session.targets()
-    nominal = session.board() if targets is None else targets[0].board  # a row's world frame is its first target
+    env = session.environment
+    nominal = session.nominal_board  # a row's world frame is its first target
     results["environment"] = thermal_record(nominal, env)
     if isinstance(results.get("board"), dict):
         results["board"]["square_mm"] = nominal.square_mm

@@ -99,7 +99,8 @@ def _pdf(path: Path) -> list[tuple[str, str]]:
 
 def _files(root: Path) -> list[Path]:
     keep = ("results.json", "positions.csv", "summary.csv", ".pdf")
-    return sorted(p.relative_to(root) for p in root.rglob("*") if p.is_file() and p.name.endswith(keep))
+    return sorted(p.relative_to(root) for p in root.rglob("*")
+                  if p.is_file() and p.name.endswith(keep) and "results" not in p.relative_to(root).parts[:-1])
 
 
 def compare(before: Path, after: Path) -> int:

@@ -48,6 +48,7 @@ from lps_gui.pipeline.session_input import SessionInput, read_session_input
 from lps_gui.pipeline.target_session import add_targets_section, target_observations
 from lps_gui.sim.truth import truth_comparison
 from lps_gui.sim.truth_figures import add_self_check
+from lps_gui.io.results.keys import DEVIATION_UM
 
 HYBRID_KEYS = {"grid_window_mm": "window_mm", "grid_resolution_mm": "resolution_mm", "grid_points": "grid_points",
                "threshold_px": "threshold_rms_px", "max_rounds": "max_rounds"}
@@ -240,7 +241,7 @@ def position_rows(obs: Observations, est: LpsEstimate) -> list[dict[str, Any]]:
         "direction": ["+" if d > 0 else "-" for d in np.asarray(obs.direction).tolist()],
         "target_mm": np.asarray(obs.target_mm, dtype=float).tolist(),
         "measured_mm": json_floats(np.where(usable, est.state.s + obs.target_mm[est.reference_view], missing)),
-        "deviation_um": json_floats(np.where(usable, dev_um, missing)),
+        DEVIATION_UM: json_floats(np.where(usable, dev_um, missing)),
         "sigma_um": json_floats(1e3 * est.sigma_s_mm),
         "sigma_total_um": json_floats(1e3 * est.sigma_total_mm),
         "step_sigma_um": json_floats(1e3 * est.step_sigma_mm),

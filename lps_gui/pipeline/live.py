@@ -51,6 +51,7 @@ from lps_gui.pipeline.detect import (
     session_corner_table,
     write_session_corners,
 )
+from lps_gui.io.results.keys import DEVIATION_UM
 
 log = logging.getLogger(__name__)
 
@@ -271,7 +272,7 @@ class LiveCapture:
         dev = est.deviation_um(obs.target_mm)
         data = {"index": index.tolist(), "target_mm": np.asarray(obs.target_mm, float).tolist(),
                 "direction": [r.direction for r in views.records],
-                "deviation_um": np.where(est.usable, dev, np.nan).tolist(), "sigma_um": (1e3 * est.sigma_s_mm).tolist(),
+                DEVIATION_UM: np.where(est.usable, dev, np.nan).tolist(), "sigma_um": (1e3 * est.sigma_s_mm).tolist(),
                 "outlier": est.outlier.tolist(), "rms_px": est.rms_px.tolist(), "n_views": int(obs.K),
                 "sigma_px": float(est.sigma_px), "seconds": time.perf_counter() - t0}
         self.last_estimate = data

@@ -5,8 +5,9 @@
 
 The reference set: the quick demo (a bidirectional line, its compensated as-left session and the as-found/as-left
 comparison), planar, a row of targets, min-step, settling, two depths (points) and a stitched session. Compared:
-every results.json (times and paths aside), positions.csv, summary.csv, and every PDF page (page count, text, and the
-decompressed drawing operators, which fix the pixels). The outputs are not committed: keep BEFORE outside the tree.
+every results.json, positions.csv and summary.csv (times, input hashes and the run's folder masked), and every PDF
+page: its text lines and their places (masked alike) and everything else drawn (the content stream without its
+text objects, and the images): what fixes the pixels. The outputs are not committed: keep BEFORE outside the tree.
 """
 from __future__ import annotations
 
@@ -14,14 +15,18 @@ import argparse
 import hashlib
 import json
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 HERE = Path(__file__).resolve().parents[1]
 DEMOS = {"line": [], "planar": ["--planar"], "row": ["--preset", "small-row"],
          "minstep": ["--test", "min-step"], "settling": ["--test", "settling"]}
-VOLATILE = ("time", "date", "created", "path", "folder", "file", "version", "elapsed", "seconds", "duration", "written")
+VOLATILE = ("created", "timings_s", "sha256", "version")  # results.json keys that differ between any two runs
+TIMESTAMP = re.compile(r"\d{4}-\d{2}-\d{2}T\d{2}:\d{2}:\d{2}[+-]\d{4}")
+HASH = re.compile(r"sha256\s+\S+")
 STITCHED = """
 import sys
 sys.path.append({tests!r})  # after the checkout under test: its lps_gui first
@@ -58,42 +63,47 @@ def run(out: Path, code: Path) -> None:
     _lps(code, ["report", str(stitched)], log)
 
 
-def _scrub(value, key: str = ""):
-    """The JSON value with times and paths replaced by a placeholder (they differ between any two runs)."""
+def _mask(text: str, root: Path) -> str:
+    """Text with the run's folder and the times of day masked (they differ between any two runs)."""
+    return HASH.sub("sha256 <hash>", TIMESTAMP.sub("<time>", text.replace(str(root), "<out>")))
+
+
+def _scrub(value: Any, root: Path) -> Any:
+    """The JSON value with times, input hashes and the run's folder masked."""
     if isinstance(value, dict):
-        return {k: _scrub(v, k) for k, v in value.items()}
+        return {_mask(k, root): "<scrubbed>" if k in VOLATILE else _scrub(v, root) for k, v in value.items()}
     if isinstance(value, list):
-        return [_scrub(v, key) for v in value]
-    if isinstance(value, str) and any(w in key.lower() for w in VOLATILE):
-        return "<scrubbed>"
-    if isinstance(value, str) and ("/tmp/" in value or "/work/" in value):
-        return "<path>"
-    if isinstance(value, float) and any(w in key.lower() for w in ("time", "elapsed", "seconds", "duration")):
-        return "<scrubbed>"
+        return [_scrub(v, root) for v in value]
+    if isinstance(value, str):
+        return _mask(value, root)
     return value
 
 
-def _csv(path: Path) -> list[str]:
-    """A CSV's lines with any absolute path masked."""
-    return [("<path>" if ("/tmp/" in line or "/work/" in line) else line) for line in path.read_text().splitlines()]
+def _csv(path: Path, root: Path) -> list[str]:
+    """A CSV's lines with the run's folder and times masked."""
+    return [_mask(line, root) for line in path.read_text().splitlines()]
 
 
-def _pdf(path: Path) -> list[tuple[str, str]]:
-    """Per page: the text and a digest of the decompressed drawing operators (and the images they draw)."""
-    from pdfminer.high_level import extract_text
+def _pdf(path: Path, root: Path) -> list[tuple[Any, ...]]:
+    """Per page: every text line with its place (times and folder masked) and a digest of everything else drawn
+    (the content stream without its text objects, and the images): equal pages look the same."""
+    from pdfminer.high_level import extract_pages
+    from pdfminer.layout import LTTextContainer, LTTextLine
     from pypdf import PdfReader
 
-    pages = []
     reader = PdfReader(path)
-    for i, page in enumerate(reader.pages):
+    pages = []
+    for page, layout in zip(reader.pages, extract_pages(path)):
         h = hashlib.sha256()
         contents = page.get_contents()
-        h.update(contents.get_data() if contents is not None else b"")
+        h.update(re.sub(rb"\bBT\b.*?\bET\b", b"", contents.get_data() if contents is not None else b"", flags=re.S))
         resources = page.get("/Resources") or {}
         xobjects = resources.get("/XObject") or {}
         for name in sorted(xobjects):
             h.update(name.encode() + xobjects[name].get_object().get_data())
-        pages.append((extract_text(path, page_numbers=[i]), h.hexdigest()))
+        lines = [(round(line.x0, 2), round(line.y0, 2), _mask(line.get_text(), root))
+                 for box in layout if isinstance(box, LTTextContainer) for line in box if isinstance(line, LTTextLine)]
+        pages.append((h.hexdigest(), lines))
     return pages
 
 
@@ -113,11 +123,11 @@ def compare(before: Path, after: Path) -> int:
     for rel in sorted(set(a) & set(b)):
         x, y = before / rel, after / rel
         if rel.suffix == ".json":
-            same = _scrub(json.loads(x.read_text())) == _scrub(json.loads(y.read_text()))
+            same = _scrub(json.loads(x.read_text()), before) == _scrub(json.loads(y.read_text()), after)
         elif rel.suffix == ".csv":
-            same = _csv(x) == _csv(y)
+            same = _csv(x, before) == _csv(y, after)
         else:
-            px, py = _pdf(x), _pdf(y)
+            px, py = _pdf(x, before), _pdf(y, after)
             same = px == py
             if not same:
                 diff = [i + 1 for i, (p, q) in enumerate(zip(px, py)) if p != q]

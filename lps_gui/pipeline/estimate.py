@@ -41,7 +41,7 @@ from lps_gui.pipeline.results.asme import add_asme_results, test_options
 from lps_gui.pipeline.results.board_plane import position_columns, straightness_figures
 from lps_gui.pipeline.results.error_motions import add_error_motions
 from lps_gui.pipeline.results.planar import build_planar_results
-from lps_gui.pipeline.results.uncertainty import add_uncertainty
+from lps_gui.pipeline.results.uncertainty import BudgetSource, environment_and_uncertainty
 from lps_gui.pipeline.results.verdict import add_verdict
 from lps_gui.pipeline.session_checks import corners_of_records, session_inputs
 from lps_gui.pipeline.session_input import SessionInput, read_session_input
@@ -196,9 +196,17 @@ def build_results(session: SessionInput, obs: Observations, est: LpsEstimate, in
 
         add_stitch_ties(results, obs)  # a stitched session's placements are tied by their repeated stops
     add_error_motions(results, session, obs, est)  # SPEC 14: the six error motions per axis, where poses allow
-    results = add_uncertainty(results, session)  # environment, GUM budget, U (k = 2) per figure
+    if isinstance(results.get("board"), dict):  # nominal (20 C); environment.square_mm_used is the size used
+        results["board"]["square_mm"] = session.nominal_board.square_mm
+    budget = BudgetSource(  # the values the builders made, passed on (the budget reads no document)
+        positions=results["positions"], parameters=results.get("parameters") or {}, board=results.get("board") or {},
+        figures=results.get("figures") or {}, axes=("X",) if obs.D == 1 else ("X", "Y"),
+        resolved=(results.get("error_motions") or {}).get("resolved"), targets=results.get("targets"),
+        stage_spec=session.meta.get("stage_spec"), stitched=bool((session.meta.get("plan") or {}).get("segments")))
+    results["environment"], results["uncertainty"] = environment_and_uncertainty(budget, session)  # GUM, U (k = 2)
     if obs.D == 1:
-        results = add_asme_results(results, session, obs, est)  # ASME B5.64 names, TUR, tests
+        results = add_asme_results(results, session, obs, est, budget.figures.get("iso230_2"),
+                                   results["uncertainty"].get("figures_k2") or {})  # ASME B5.64 names, TUR, tests
         results = add_verdict(results)  # the verdict, U (k = 2) and the decision rule, machine-readable
     return add_self_check(results)  # a simulated session: does its truth contradict a figure or a finding?
 

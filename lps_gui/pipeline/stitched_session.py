@@ -66,9 +66,8 @@ def add_stitch_ties(results: dict[str, Any], obs: Observations) -> None:
         row["stitch_ties"] = int(len(ties[k - 1])) if k else 0
 
 
-def stitch_row(results: dict[str, Any]) -> BudgetRow:
+def stitch_row(targets: list[dict[str, Any]] | None, stage_spec: dict[str, Any] | None) -> BudgetRow:
     """The budget row of the ties (over the whole travel) from results.json's targets and the stage spec."""
-    counts = [t.get("stitch_ties", 0) for t in (results.get("targets") or [])[1:]]
-    spec = (results.get("session_meta") or {}).get("stage_spec") or results.get("stage_spec")
-    sigma = stage_repeatability_mm(spec)
+    counts = [t.get("stitch_ties", 0) for t in (targets or [])[1:]]
+    sigma = stage_repeatability_mm(stage_spec)
     return stitch_budget_row([np.zeros((c, 2), int) for c in counts], None if sigma is None else 1e3 * sigma)

@@ -42,11 +42,11 @@ def test_options(session: SessionInput, options: EstimateOptions) -> EstimateOpt
     return options
 
 
-def add_asme_results(results: dict[str, Any], session: SessionInput, obs: Observations, est: LpsEstimate) -> dict[str, Any]:
-    """``results["asme_b5_64"]`` of a line session (after its uncertainty budget: the ratios need U)."""
-    figures = results.get("figures") or {}
-    u = (results.get("uncertainty") or {}).get("figures_k2") or {}
-    section: dict[str, Any] = {"figures": named_figures(figures.get("iso230_2"), u)}
+def add_asme_results(results: dict[str, Any], session: SessionInput, obs: Observations, est: LpsEstimate,
+                     iso230_2: dict[str, Any] | None, figures_k2: dict[str, Any]) -> dict[str, Any]:
+    """``results["asme_b5_64"]`` of a line session from its ISO 230-2 figures and their U (k = 2), passed in (after
+    the uncertainty budget: the ratios need U); the ratios are the verdict's rows of the document so far."""
+    section: dict[str, Any] = {"figures": named_figures(iso230_2, figures_k2)}
     test = session.meta.get("asme_test") or {}
     records = {r.index: r for r in session.records}
     if test.get("test") == "min-step":

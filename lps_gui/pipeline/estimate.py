@@ -49,6 +49,7 @@ from lps_gui.pipeline.target_session import add_targets_section, target_observat
 from lps_gui.sim.truth import truth_comparison
 from lps_gui.sim.truth_figures import add_self_check
 from lps_gui.io.results.keys import DEVIATION_UM
+from lps_gui.io.results.sections import Flag, Iso230, SingleRun
 
 HYBRID_KEYS = {"grid_window_mm": "window_mm", "grid_resolution_mm": "resolution_mm", "grid_points": "grid_points",
                "threshold_px": "threshold_rms_px", "max_rounds": "max_rounds"}
@@ -203,10 +204,11 @@ def build_results(session: SessionInput, obs: Observations, est: LpsEstimate, in
         figures=results.get("figures") or {}, axes=("X",) if obs.D == 1 else ("X", "Y"),
         resolved=(results.get("error_motions") or {}).get("resolved"), targets=results.get("targets"),
         stage_spec=session.meta.get("stage_spec"), stitched=bool((session.meta.get("plan") or {}).get("segments")))
-    results["environment"], results["uncertainty"] = environment_and_uncertainty(budget, session)  # GUM, U (k = 2)
+    environment, uncertainty = environment_and_uncertainty(budget, session)  # GUM budget, U (k = 2) per figure
+    results["environment"], results["uncertainty"] = environment.to_dict(), uncertainty.to_dict()
     if obs.D == 1:
         results = add_asme_results(results, session, obs, est, budget.figures.get("iso230_2"),
-                                   results["uncertainty"].get("figures_k2") or {})  # ASME B5.64 names, TUR, tests
+                                   uncertainty.get("figures_k2") or {})  # ASME B5.64 names, TUR, tests
         results = add_verdict(results)  # the verdict, U (k = 2) and the decision rule, machine-readable
     return add_self_check(results)  # a simulated session: does its truth contradict a figure or a finding?
 
@@ -226,7 +228,7 @@ def line_results(session: SessionInput, obs: Observations, est: LpsEstimate, int
         parameters=estimate_parameters(obs, est),
         positions=positions,
         figures=session_figures(obs, est),
-        flags=est.flags,
+        flags=[Flag.of(**f).to_dict() for f in est.flags],
         timings_s=dict(est.timings_s),
         truth_comparison=truth_comparison(obs, est, truth, positions) if truth is not None else None,
     )
@@ -295,6 +297,9 @@ def session_figures(obs: Observations, est: LpsEstimate) -> dict[str, Any]:
         single.update(scale_with_uncertainty(obs, est, valid, sigma_um))
     if valid.any():
         figures.update(straightness_figures(obs.target_mm, est, valid))
+    for key, section in (("single_run", SingleRun), ("iso230_2", Iso230)):  # written as the readers read them
+        if isinstance(figures.get(key), dict):
+            figures[key] = section.of(**figures[key]).to_dict()
     if six is not None and valid.any():
         figures["angles_span_urad"] = dict(zip(("roll", "pitch", "yaw"), (_f(v) for v in np.ptp(six.angles_urad[valid], axis=0))))
     return figures

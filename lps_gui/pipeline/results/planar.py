@@ -22,6 +22,7 @@ from lps_gui.core.metrology.planar_flatness import out_of_plane
 from lps_gui.io.board_file import board_to_dict
 from lps_gui.io.intrinsics_file import intrinsics_to_dict
 from lps_gui.io.results.document import FORMAT
+from lps_gui.io.results.sections import Flag
 from lps_gui.pipeline.session_checks import session_inputs
 from lps_gui.pipeline.session_input import SessionInput
 from lps_gui.sim.truth import truth_comparison
@@ -90,7 +91,7 @@ def build_planar_results(session: SessionInput, obs: Observations, est: LpsEstim
         "session_meta": {k: session.meta.get(k) for k in ("camera", "stage", "plan", "stage_spec", "created")
                          if k in session.meta},
         "parameters": parameters, "positions": positions, "figures": {"planar": planar},
-        "flags": est.flags, "timings_s": dict(est.timings_s),
+        "flags": [Flag.of(**f).to_dict() for f in est.flags], "timings_s": dict(est.timings_s),
     }
     truth = session.truth
     if truth is not None:

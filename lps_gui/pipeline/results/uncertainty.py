@@ -17,6 +17,7 @@ import numpy as np
 
 from lps_gui.core.metrology.environment import Environment, thermal_record
 from lps_gui.core.metrology.uncertainty_budget import BudgetInputs, budget_rows, combine, figure_uncertainties
+from lps_gui.io.results.sections import EnvironmentRecord, Uncertainty
 from lps_gui.pipeline.session_input import SessionInput
 
 
@@ -106,12 +107,13 @@ def abbe_lever_mm(p: Mapping[str, Any], board: Mapping[str, Any]) -> tuple[float
     return float(abs(r @ frame[:, 2])), float(abs(r @ frame[:, 1]))
 
 
-def environment_and_uncertainty(src: BudgetSource, session: SessionInput) -> tuple[dict[str, Any], dict[str, Any]]:
+def environment_and_uncertainty(src: BudgetSource, session: SessionInput) -> tuple[EnvironmentRecord, Uncertainty]:
     """results.json ``environment`` and ``uncertainty`` of the estimate's values (``src.board`` with the
     nominal square size, :attr:`SessionInput.nominal_board`; the size used is ``environment.square_mm_used``)."""
     env = session.environment
     nominal = session.nominal_board  # a row's world frame is its first target
-    return thermal_record(nominal, env), uncertainty_section(src, env, nominal.square_mm)
+    return (EnvironmentRecord.of(**thermal_record(nominal, env)),
+            Uncertainty.of(**uncertainty_section(src, env, nominal.square_mm)))
 
 
 def uncertainty_of(results: Mapping[str, Any], env: Environment, square_mm: float) -> dict[str, Any]:

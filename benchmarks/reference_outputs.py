@@ -101,7 +101,8 @@ def _pdf(path: Path, root: Path) -> list[tuple[Any, ...]]:
         xobjects = resources.get("/XObject") or {}
         for name in sorted(xobjects):
             h.update(name.encode() + xobjects[name].get_object().get_data())
-        lines = [(round(line.x0, 2), round(line.y0, 2), _mask(line.get_text(), root))
+        # x to the point: a table's columns follow the width of a masked time (its digits), a few tenths of a point
+        lines = [(round(line.x0), round(line.y0, 2), _mask(line.get_text(), root))
                  for box in layout if isinstance(box, LTTextContainer) for line in box if isinstance(line, LTTextLine)]
         pages.append((h.hexdigest(), lines))
     return pages

@@ -317,6 +317,7 @@ def estimate_parameters(obs: Observations, est: LpsEstimate) -> dict[str, Any]:
         **est.parameter_sigmas,
         "sigma_px": est.sigma_px,
         "rms_px": _f(np.sqrt(np.nanmean(est.rms_px[est.used] ** 2))),
+        "rms_um_at_board": rms_um_at_board(obs, est),
         "n_views": obs.K,
         "n_used": int(est.used.sum()),
         "n_outliers": int(est.outlier.sum()),
@@ -329,6 +330,18 @@ def estimate_parameters(obs: Observations, est: LpsEstimate) -> dict[str, Any]:
     if est.options.self_calibrate:
         parameters["intrinsics_estimated"] = dict(zip(INTRINSIC_NAMES, est.state.intrinsics.vector().tolist()))
     return parameters
+
+
+def rms_um_at_board(obs: Observations, est: LpsEstimate) -> float | None:
+    """The RMS reprojection error as a length at the board (um): each used view's RMS (px) times its board
+    centre's depth over the focal length, what a pixel of corner error is on the board, where the stage is."""
+    line, intr = est.state.line(), est.state.intrinsics
+    centre = obs.board.object_points().mean(axis=0)
+    depth = (line.R_cam_board @ centre)[2] + line.l0_cam[2] + est.state.s * line.n_cam[2]  # mm, per view
+    used = np.asarray(est.used, bool) & np.isfinite(est.rms_px)
+    if not used.any():
+        return None
+    return _f(1e3 * np.sqrt(np.mean((est.rms_px[used] * depth[used] / (0.5 * (intr.fx + intr.fy))) ** 2)))
 
 
 def scale_with_uncertainty(obs: Observations, est: LpsEstimate, valid: np.ndarray, sigma_um: np.ndarray) -> dict[str, Any]:

@@ -272,6 +272,8 @@ def summary_figures(results: dict[str, Any]) -> list[SummaryFigure]:
         SummaryFigure("outlier_views", None, p.get("n_outliers")),
         SummaryFigure("corner_noise_sigma", None, p.get("sigma_px"), "px"),
         SummaryFigure("rms_reprojection", None, p.get("rms_px"), "px"),
+        *([SummaryFigure("rms_reprojection_at_board", "RMS reprojection error at the board",
+                         finite_number(p.get("rms_um_at_board")), MU + "m")] if "rms_um_at_board" in p else []),
         SummaryFigure("mean_step", "Mean step", finite_number(single.get("mean_step_mm")), "mm", digits=7),
         SummaryFigure("step_std", "Step std", finite_number(single.get("step_std_um")), MU + "m"),
         SummaryFigure("max_abs_deviation", "Max |deviation|", finite_number(single.get("max_abs_deviation_um")), MU + "m"),

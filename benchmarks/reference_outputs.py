@@ -104,7 +104,7 @@ def _pdf(path: Path, root: Path) -> list[tuple[Any, ...]]:
         # x to the point: a table's columns follow the width of a masked time (its digits), a few tenths of a point
         lines = [(round(line.x0), round(line.y0, 2), _mask(line.get_text(), root))
                  for box in layout if isinstance(box, LTTextContainer) for line in box if isinstance(line, LTTextLine)]
-        pages.append((h.hexdigest(), lines))
+        pages.append((h.hexdigest(), sorted(lines)))  # pdfminer's grouping order follows the masked widths too
     return pages
 
 

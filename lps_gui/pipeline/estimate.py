@@ -48,7 +48,7 @@ from lps_gui.pipeline.session_input import SessionInput, read_session_input
 from lps_gui.pipeline.target_session import add_targets_section, target_observations
 from lps_gui.sim.truth import truth_comparison
 from lps_gui.sim.truth_figures import add_self_check
-from lps_gui.io.results.keys import DEVIATION_UM
+from lps_gui.io.results.keys import DEVIATION_UM, MEASURED_MM, SIGMA_TOTAL_UM
 from lps_gui.io.results.sections import Flag, Iso230, SingleRun
 
 HYBRID_KEYS = {"grid_window_mm": "window_mm", "grid_resolution_mm": "resolution_mm", "grid_points": "grid_points",
@@ -250,10 +250,10 @@ def position_rows(obs: Observations, est: LpsEstimate) -> list[dict[str, Any]]:
         "run": np.asarray(obs.run).astype(int).tolist(),
         "direction": ["+" if d > 0 else "-" for d in np.asarray(obs.direction).tolist()],
         "target_mm": np.asarray(obs.target_mm, dtype=float).tolist(),
-        "measured_mm": json_floats(np.where(usable, est.state.s + obs.target_mm[est.reference_view], missing)),
+        MEASURED_MM: json_floats(np.where(usable, est.state.s + obs.target_mm[est.reference_view], missing)),
         DEVIATION_UM: json_floats(np.where(usable, dev_um, missing)),
         "sigma_um": json_floats(1e3 * est.sigma_s_mm),
-        "sigma_total_um": json_floats(1e3 * est.sigma_total_mm),
+        SIGMA_TOTAL_UM: json_floats(1e3 * est.sigma_total_mm),
         "step_sigma_um": json_floats(1e3 * est.step_sigma_mm),
         "rms_px": json_floats(est.rms_px),
         "n_corners": np.asarray(est.n_corners).astype(int).tolist(),

@@ -36,6 +36,7 @@ from lps_gui.core.models.lps_model import motion_frame
 from lps_gui.core.models.pose_model import PoseSolution, pose_solution_from_views
 from lps_gui.errors import InputError
 from lps_gui.io.results.document import json_float, json_floats
+from lps_gui.io.results.keys import SIGMA_TOTAL_UM
 
 ANGLE_COLUMNS = {"roll": "eax", "pitch": "ebx", "yaw": "ecx"}  # SPEC 14's column stems (for every axis)
 UNITS = {"positioning": "um", "straightness_y": "um", "straightness_z": "um", "roll": "urad", "pitch": "urad",
@@ -280,8 +281,8 @@ def add_error_motions(results: dict[str, Any], session: Any, obs: Any, est: Any)
         if lens_um is not None and len(results["positions"]) == len(lens_um):  # the positions carry the lens misfit
             for row, s in zip(results["positions"], lens_um):
                 row["sigma_lens_um"] = json_float(s)
-                if row.get("sigma_total_um") is not None:
-                    row["sigma_total_um"] = json_float(np.hypot(row["sigma_total_um"], s))
+                if row.get(SIGMA_TOTAL_UM) is not None:
+                    row[SIGMA_TOTAL_UM] = json_float(np.hypot(row[SIGMA_TOTAL_UM], s))
     figures = results.get("figures") or {}
     if obs.D == 1 and figures.get("angles_resolution"):  # "Max |roll|" is a finding only if EAX's profile is
         names = iso_names(motions.section.get("axis", "X"))

@@ -35,7 +35,7 @@ from lps_gui.report.figures.spec import (
 )
 from lps_gui.report.figures.targets import with_target_stretches
 from lps_gui.sim.truth import centred, residual_from_line, true_deviation_um
-from lps_gui.io.results.keys import DEVIATION_UM
+from lps_gui.io.results.keys import DEVIATION_UM, MEASURED_MM, SIGMA_TOTAL_UM
 
 TRUTH_AT_MEASUREMENT = "truth_plane_deviation_um"  # the true deviation where the positions are measured (sim/truth)
 TRUTH_KEYS = (DEVIATION_UM, "straightness_um_1", "straightness_um_2", "roll_urad", "pitch_urad", "yaw_urad",
@@ -54,7 +54,7 @@ def position_columns(results: Results | dict[str, Any] | None) -> dict[str, np.n
     """
     results = None if results is None else as_results(results)
     rows = results.sorted_positions() if results is not None else []
-    numeric = ("index", "run", "target_mm", "measured_mm", DEVIATION_UM, "sigma_um", "sigma_total_um",
+    numeric = ("index", "run", "target_mm", MEASURED_MM, DEVIATION_UM, "sigma_um", SIGMA_TOTAL_UM,
                "rms_px", "n_corners", "straightness_um_1", "straightness_um_2", "straightness_sigma_um_1",
                "straightness_sigma_um_2", "roll_urad", "pitch_urad", "yaw_urad", "roll_sigma_urad",
                "pitch_sigma_urad", "yaw_sigma_urad", "image_rotation_urad", "image_rotation_sigma_urad")
@@ -197,7 +197,7 @@ def positions_figure(cols: dict[str, np.ndarray]) -> FigureSpec:
     """Measured position d_i against its target: the line every other plot magnifies."""
     series = []
     for d, sel in _by_direction(cols):
-        series.append(Series(cols["target_mm"][sel], cols["measured_mm"][sel], f"measured {_dir_label(d)}",
+        series.append(Series(cols["target_mm"][sel], cols[MEASURED_MM][sel], f"measured {_dir_label(d)}",
                              "markers", _color(d), marked=cols["outlier"][sel]))
     return FigureSpec("positions", "Measured position vs target", "target position [mm]", "measured position d\u1d62 [mm]",
                       series)

@@ -115,6 +115,7 @@ class LiveCapture:
         self._estimate_checks = EstimateChecks()
         self._warm = None
         self._base_rms: float | None = None
+        self._measured: tuple[Any, Any] | None = None  # (intrinsics, the board at its temperature, warped)
         self.flags: list[LiveFlag] = []
         self.last_estimate: dict[str, Any] | None = None
         self.error: str | None = None
@@ -250,8 +251,10 @@ class LiveCapture:
         n = self.board.n_corners
         corners = np.stack([np.full((n, 2), np.nan) if r.corners_px is None else np.asarray(r.corners_px, float)
                             for r in views.results])
-        intr = self.session.intrinsics()
-        board = apply_board_warp(session_board(self.session), intr)
+        if self._measured is None:  # the session's intrinsics and board read once, not at every running estimate
+            intr = self.session.intrinsics()
+            self._measured = (intr, apply_board_warp(session_board(self.session), intr))
+        intr, board = self._measured
         obs = observations_of_views(self.session.corners_path, board, intr, list(views.records), corners)
         opt = make_options("joint", {**(self.options or {}), "six_dof": False})
         t0 = time.perf_counter()

@@ -49,7 +49,7 @@ from lps_gui.pipeline.target_session import add_targets_section, target_observat
 from lps_gui.sim.truth import truth_comparison
 from lps_gui.sim.truth_figures import add_self_check
 from lps_gui.io.results.keys import DEVIATION_UM, MEASURED_MM, SIGMA_TOTAL_UM
-from lps_gui.io.results.sections import Flag, Iso230, SingleRun
+from lps_gui.io.results.sections import Flag, Iso230, SingleRun, TruthComparison
 
 HYBRID_KEYS = {"grid_window_mm": "window_mm", "grid_resolution_mm": "resolution_mm", "grid_points": "grid_points",
                "threshold_px": "threshold_rms_px", "max_rounds": "max_rounds"}
@@ -230,7 +230,8 @@ def line_results(session: SessionInput, obs: Observations, est: LpsEstimate, int
         figures=session_figures(obs, est),
         flags=[Flag.of(**f).to_dict() for f in est.flags],
         timings_s=dict(est.timings_s),
-        truth_comparison=truth_comparison(obs, est, truth, positions) if truth is not None else None,
+        truth_comparison=None if truth is None else TruthComparison.of(
+            **truth_comparison(obs, est, truth, positions)).to_dict(),
     )
     return results
 

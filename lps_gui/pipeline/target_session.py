@@ -23,6 +23,7 @@ from lps_gui.core.metrology.environment import corrected_board
 from lps_gui.core.metrology.target_scale import covered_fractions
 from lps_gui.errors import InputError
 from lps_gui.io.corners.target_vnl import read_target_corners
+from lps_gui.io.results.sections import TargetRecord
 from lps_gui.pipeline.results.targets import MIN_CORNERS, target_rows
 from lps_gui.pipeline.session_checks import corners_of_records
 from lps_gui.pipeline.session_input import SessionInput
@@ -106,7 +107,7 @@ def add_targets_section(results: dict[str, Any], obs: Observations, est: Any, se
     ``truth_comparison.targets`` compares each pose with the simulator's."""
     from lps_gui.sim.truth import target_truth_comparison
 
-    section = targets_section(obs, est, session)
+    section = [TargetRecord.of(**row).to_dict() for row in targets_section(obs, est, session)]  # as readers read it
     ordered: dict[str, Any] = {}
     for key, value in results.items():
         ordered[key] = value

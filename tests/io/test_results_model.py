@@ -221,7 +221,9 @@ def _sections_of(d: dict) -> list[tuple[type, dict]]:
     out += [(S.BudgetRow, b) for b in (d["uncertainty"].get("budget") or [])]
     if figures.get("single_run"):
         out += [(S.SingleRun, figures["single_run"]), (S.Iso230, figures["iso230_2"])]
-    return out
+    out += [(section, d[key]) for section, key in ((S.AsmeB564, "asme_b5_64"), (S.ErrorMotions, "error_motions"))
+            if d.get(key)]
+    return out + [(S.TargetRecord, row) for row in d.get("targets") or []]
 
 
 @pytest.mark.parametrize("kind", ["line", "planar"])

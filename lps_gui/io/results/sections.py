@@ -482,6 +482,7 @@ class ErrorMotions(Section):
     resolved: Mapping[str, bool | None] = field(default_factory=dict)
     tool_point: ToolPoint | None = None
     truth: Mapping[str, MotionTruth] = field(default_factory=dict)
+    lens_model: Mapping[str, Any] | None = None  # the two witnesses of a lens the model cannot follow
 
     @property
     def axis_names(self) -> tuple[str, ...]:

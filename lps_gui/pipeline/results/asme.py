@@ -28,6 +28,7 @@ from lps_gui.core.metrology.asme_b5_64 import (
     tur,
 )
 from lps_gui.core.truth.stage_errors import StageErrorModel, Vibration
+from lps_gui.io.results.sections import AsmeB564
 from lps_gui.pipeline.session_input import SessionInput
 
 SPEC_TOLERANCES = {"incremental_step": ("min_incremental_motion_um", "\u00b5m"),
@@ -55,7 +56,7 @@ def add_asme_results(results: dict[str, Any], session: SessionInput, obs: Observ
         section["settling"] = settling_section(obs, est, records, session, test)
     spec = session.meta.get("stage_spec") or {}
     section["test_uncertainty_ratio"] = tur_rows({**results, "asme_b5_64": section}, spec)
-    results["asme_b5_64"] = section
+    results["asme_b5_64"] = AsmeB564.of(**section).to_dict()  # as the readers read it
     return results
 
 

@@ -37,6 +37,7 @@ from lps_gui.core.models.pose_model import PoseSolution, pose_solution_from_view
 from lps_gui.errors import InputError
 from lps_gui.io.results.document import json_float, json_floats
 from lps_gui.io.results.keys import SIGMA_TOTAL_UM
+from lps_gui.io.results.sections import ErrorMotions
 
 ANGLE_COLUMNS = {"roll": "eax", "pitch": "ebx", "yaw": "ecx"}  # SPEC 14's column stems (for every axis)
 UNITS = {"positioning": "um", "straightness_y": "um", "straightness_z": "um", "roll": "urad", "pitch": "urad",
@@ -283,6 +284,7 @@ def add_error_motions(results: dict[str, Any], session: Any, obs: Any, est: Any)
                 row["sigma_lens_um"] = json_float(s)
                 if row.get(SIGMA_TOTAL_UM) is not None:
                     row[SIGMA_TOTAL_UM] = json_float(np.hypot(row[SIGMA_TOTAL_UM], s))
+    results["error_motions"] = ErrorMotions.of(**motions.section).to_dict()  # as the readers read it
     figures = results.get("figures") or {}
     if obs.D == 1 and figures.get("angles_resolution"):  # "Max |roll|" is a finding only if EAX's profile is
         names = iso_names(motions.section.get("axis", "X"))

@@ -49,7 +49,7 @@ from lps_gui.pipeline.target_session import add_targets_section, target_observat
 from lps_gui.sim.truth import truth_comparison
 from lps_gui.sim.truth_figures import add_self_check
 from lps_gui.io.results.keys import DEVIATION_UM, MEASURED_MM, SIGMA_TOTAL_UM
-from lps_gui.io.results.sections import Flag, Iso230, SingleRun, TruthComparison
+from lps_gui.io.results.sections import Figures, Flag, Parameters, TruthComparison
 
 HYBRID_KEYS = {"grid_window_mm": "window_mm", "grid_resolution_mm": "resolution_mm", "grid_points": "grid_points",
                "threshold_px": "threshold_rms_px", "max_rounds": "max_rounds"}
@@ -298,12 +298,9 @@ def session_figures(obs: Observations, est: LpsEstimate) -> dict[str, Any]:
         single.update(scale_with_uncertainty(obs, est, valid, sigma_um))
     if valid.any():
         figures.update(straightness_figures(obs.target_mm, est, valid))
-    for key, section in (("single_run", SingleRun), ("iso230_2", Iso230)):  # written as the readers read them
-        if isinstance(figures.get(key), dict):
-            figures[key] = section.of(**figures[key]).to_dict()
     if six is not None and valid.any():
         figures["angles_span_urad"] = dict(zip(("roll", "pitch", "yaw"), (_f(v) for v in np.ptp(six.angles_urad[valid], axis=0))))
-    return figures
+    return Figures.of(**figures).to_dict()  # written through the readers' definition
 
 
 def estimate_parameters(obs: Observations, est: LpsEstimate) -> dict[str, Any]:
@@ -330,7 +327,7 @@ def estimate_parameters(obs: Observations, est: LpsEstimate) -> dict[str, Any]:
     }
     if est.options.self_calibrate:
         parameters["intrinsics_estimated"] = dict(zip(INTRINSIC_NAMES, est.state.intrinsics.vector().tolist()))
-    return parameters
+    return Parameters.of(**parameters).to_dict()
 
 
 def rms_um_at_board(obs: Observations, est: LpsEstimate) -> float | None:

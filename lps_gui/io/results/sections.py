@@ -231,6 +231,7 @@ class PlanarFigures(Section):
     lines: tuple[Any, ...] = ()
     nodes: tuple[PlanarNode, ...] = ()
     notes: tuple[str, ...] = ()
+    motion_matrix: tuple[tuple[float, ...], ...] = ()  # G: the stage's axes in the board frame (SPEC 10)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -22,7 +22,7 @@ from lps_gui.core.metrology.planar_flatness import out_of_plane
 from lps_gui.io.board_file import board_to_dict
 from lps_gui.io.intrinsics_file import intrinsics_to_dict
 from lps_gui.io.results.document import FORMAT
-from lps_gui.io.results.sections import Flag, TruthComparison
+from lps_gui.io.results.sections import Figures, Flag, Parameters, TruthComparison
 from lps_gui.pipeline.session_checks import session_inputs
 from lps_gui.pipeline.session_input import SessionInput
 from lps_gui.sim.truth import truth_comparison
@@ -82,6 +82,7 @@ def build_planar_results(session: SessionInput, obs: Observations, est: LpsEstim
     }
     if est.options.self_calibrate:
         parameters["intrinsics_estimated"] = dict(zip(INTRINSIC_NAMES, st.intrinsics.vector().tolist()))
+    parameters = Parameters.of(**parameters).to_dict()
     inputs = session_inputs(session, intrinsics_source, {session.corners_path.name: obs.source_sha256})
     results: dict[str, Any] = {
         "format": FORMAT, "software": {"name": "lps-calib", "version": __version__},
@@ -97,6 +98,7 @@ def build_planar_results(session: SessionInput, obs: Observations, est: LpsEstim
     if truth is not None:
         results["truth_comparison"] = TruthComparison.of(**truth_comparison(obs, est, truth, positions)).to_dict()
         _add_truth_to_nodes(planar["nodes"], obs, positions, valid)
+    results["figures"] = Figures.of(planar=planar).to_dict()  # written through the readers' definition
     results["summary"] = summary_csv_rows(results)
     return results
 

@@ -5,6 +5,7 @@ import argparse
 from typing import TYPE_CHECKING
 
 from lps_gui.cli.option_types import float_range, positive_finite
+from lps_gui.io.results.keys import SIGMA_TOTAL_UM
 
 if TYPE_CHECKING:  # the command's help stays instant: no numpy before run()
     from lps_gui.io.results.model import Results
@@ -159,7 +160,7 @@ def format_summary(results: Results) -> str:
             f"mean step {_g(single.mean_step_mm, '.5f')} mm (std {_g(single.step_std_um, '.2f')} µm), "
             f"max |deviation| {_g(single.max_abs_deviation_um, '.2f')} µm, scale {_g(single.scale_ppm, '+.1f')} ppm"
         )
-    sig = [v for r in results.positions if (v := r.number("sigma_total_um")) is not None and r.used]
+    sig = [v for r in results.positions if (v := r.number(SIGMA_TOTAL_UM)) is not None and r.used]
     if sig:
         lines.append(f"position sigma (total) median {_g(_median(sig), '.2f')} µm")
     if iso and (iso.number("A_um") is not None or iso.number("E_um") is not None):

@@ -22,8 +22,9 @@ from lps_gui.core.geometry.camera_model import CameraIntrinsics
 from lps_gui.core.models.export_poses import PIXEL_CENTRE_SHIFT, camera_to_world_opengl, rotation_to_quaternion
 from lps_gui.io.atomic import write_text_atomic
 from lps_gui.io.file_set import write_file_set
+from lps_gui.io.results.keys import MEASURED_MM
 
-POSES_CSV_COLUMNS = ("index", "run", "direction", "file", "target_mm", "measured_mm",
+POSES_CSV_COLUMNS = ("index", "run", "direction", "file", "target_mm", MEASURED_MM,
                      "nominal_x_mm", "nominal_y_mm", "nominal_z_mm", "measured_x_mm", "measured_y_mm", "measured_z_mm")
 
 

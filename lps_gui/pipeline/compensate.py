@@ -11,6 +11,7 @@ from lps_gui.errors import InputError
 from lps_gui.io.compensation_file import backlash_lines, skew_lines, write_table
 from lps_gui.io.results.model import Results, as_results, read_results
 from lps_gui.pipeline.session_checks import require_current_results
+from lps_gui.io.results.keys import DEVIATION_UM, SIGMA_TOTAL_UM
 
 RESULTS_FILE = "results.json"
 
@@ -41,12 +42,12 @@ def table_from_results(results: Results | dict[str, Any], max_points: int = 256,
         return _planar_axis_table(results, axis, max_points)
     rows, col = results.positions, results.column
     is_ref = np.array([r.index == results.parameters.reference_index for r in rows])
-    valid = np.array([r.usable and r.get("deviation_um") is not None for r in rows])
+    valid = np.array([r.usable and r.get(DEVIATION_UM) is not None for r in rows])
     direction = np.array([1.0 if r.direction == "+" else -1.0 for r in rows])
-    noise, total = col("sigma_um"), col("sigma_total_um")
+    noise, total = col("sigma_um"), col(SIGMA_TOTAL_UM)
     intrinsics_var = np.maximum(np.nan_to_num(total**2 - noise**2), 0.0)  # correlated, grows with the distance
     sigma = np.sqrt(own_sigma_um(noise, is_ref) ** 2 + intrinsics_var)
-    return build_table(col("target_mm"), direction, col("run"), col("deviation_um"), sigma, valid, max_points)
+    return build_table(col("target_mm"), direction, col("run"), col(DEVIATION_UM), sigma, valid, max_points)
 
 
 def _planar_axis_table(results: Results, axis: str, max_points: int) -> CompensationTable:

@@ -31,7 +31,7 @@ from lps_gui.errors import InputError
 from lps_gui.gc_tuning import paused as paused_collections
 from lps_gui.io.board_file import board_to_dict
 from lps_gui.io.corners.vnl import read_corners_vnl
-from lps_gui.io.intrinsics_file import apply_board_warp, intrinsics_to_dict, read_intrinsics
+from lps_gui.io.intrinsics_file import apply_board_warp, intrinsics_to_dict
 from lps_gui.io.results.document import assemble_results, json_floats, rows_from_columns, write_results
 from lps_gui.io.results.document import json_float as _f
 from lps_gui.io.results.history import commit_results
@@ -41,12 +41,15 @@ from lps_gui.pipeline.results.asme import add_asme_results, test_options
 from lps_gui.pipeline.results.board_plane import position_columns, straightness_figures
 from lps_gui.pipeline.results.error_motions import add_error_motions
 from lps_gui.pipeline.results.planar import build_planar_results
-from lps_gui.pipeline.results.uncertainty import add_uncertainty, session_board
+from lps_gui.pipeline.results.uncertainty import BudgetSource, environment_and_uncertainty
 from lps_gui.pipeline.results.verdict import add_verdict
 from lps_gui.pipeline.session_checks import corners_of_records, session_inputs
+from lps_gui.pipeline.session_input import SessionInput, read_session_input
 from lps_gui.pipeline.target_session import add_targets_section, target_observations
-from lps_gui.sim.truth import session_truth, truth_comparison
+from lps_gui.sim.truth import truth_comparison
 from lps_gui.sim.truth_figures import add_self_check
+from lps_gui.io.results.keys import DEVIATION_UM, MEASURED_MM, SIGMA_TOTAL_UM
+from lps_gui.io.results.sections import Figures, Flag, Parameters, TruthComparison
 
 HYBRID_KEYS = {"grid_window_mm": "window_mm", "grid_resolution_mm": "resolution_mm", "grid_points": "grid_points",
                "threshold_px": "threshold_rms_px", "max_rounds": "max_rounds"}
@@ -65,38 +68,42 @@ def make_options(method: str = "joint", options: dict[str, Any] | EstimateOption
     return EstimateOptions(method=method, hybrid=HybridOptions(**hybrid), **opts)
 
 
-def observations_from_session(session: Session, intrinsics: CameraIntrinsics | None = None) -> Observations:
+def observations_from_session(source: SessionInput | Session, intrinsics: CameraIntrinsics | None = None
+                              ) -> Observations:
     """Match every line of captures.jsonl to its corners in corners.vnl, for a stage of one or two axes.
 
     The board is the one at the session's temperature (environment), bowed as
     the intrinsics calibration found it; corners of replaced images and views
     whose corners lie on one line are refused. A planar session takes every
-    capture's per-axis approach side from its plan.
+    capture's per-axis approach side from its plan. ``source``: the session as
+    read once (:func:`~lps_gui.pipeline.session_input.read_session_input`), or an open session read here.
     """
-    intr = intrinsics or session.intrinsics()
-    records = session.records()
+    inp = source if isinstance(source, SessionInput) else read_session_input(source, intrinsics=intrinsics)
+    intr = intrinsics or inp.intrinsics
+    records = list(inp.records)
     if not records:
-        raise InputError(f"{session.captures_path}: no captures listed; capture or simulate a session first")
-    if session.planar:
+        raise InputError(f"{inp.captures_path}: no captures listed; capture or simulate a session first")
+    if inp.planar:
         for r in records:
             if not isinstance(r.target_mm, tuple):
-                raise InputError(f"{session.captures_path}: capture {r.index} has target_mm {r.target_mm!r}, "
+                raise InputError(f"{inp.captures_path}: capture {r.index} has target_mm {r.target_mm!r}, "
                                  "not [x, y]; a planar session (plan.axes [X, Y]) lists both coordinates")
-    if session.meta.get("targets") is not None:  # a row or constellation (SPEC 13)
-        return target_observations(session, intr, records, approach_of(session, records))
-    board = apply_board_warp(session_board(session), intr)
-    table = read_corners_vnl(session.corners_path, board.n_corners)
-    corners = corners_of_records(session, table, records)
-    check_corner_layout(session, board, intr, records, corners)
-    obs = observations_of_views(session, board, intr, records, corners, table.sha256)
-    if not session.planar and session.plan().segments:  # one board moved between segments (SPEC 13 stitching)
+    if inp.meta.get("targets") is not None:  # a row or constellation (SPEC 13)
+        return target_observations(inp, intr, records, approach_of(inp, records))
+    board = apply_board_warp(inp.measured_board, intr)
+    table = read_corners_vnl(inp.corners_path, board.n_corners)
+    corners = corners_of_records(inp, table, records)
+    check_corner_layout(inp, board, intr, records, corners)
+    obs = observations_of_views(inp.corners_path, board, intr, records, corners, table.sha256,
+                                approach_of(inp, records))
+    if not inp.planar and inp.plan.segments:  # one board moved between segments (SPEC 13 stitching)
         from lps_gui.pipeline.stitched_session import stitched_observations
 
-        return stitched_observations(session, obs, records)
+        return stitched_observations(inp, obs, records)
     return obs
 
 
-def check_corner_layout(session: Session, board: Any, intr: CameraIntrinsics, records: list[Any],
+def check_corner_layout(session: SessionInput, board: Any, intr: CameraIntrinsics, records: list[Any],
                         corners: np.ndarray) -> None:
     """One line naming the first view whose corners are reversed, mirrored or outside the intrinsics' image."""
     from lps_gui.core.corner_layout import layout_problems
@@ -109,8 +116,9 @@ def check_corner_layout(session: Session, board: Any, intr: CameraIntrinsics, re
                          f"`lps detect {session.folder} --force`, or check the intrinsics")
 
 
-def observations_of_views(session: Session, board: Any, intr: CameraIntrinsics, records: list[Any], corners: np.ndarray,
-                          sha256: str | None = None) -> Observations:
+def observations_of_views(corners_path: Path, board: Any, intr: CameraIntrinsics, records: list[Any],
+                          corners: np.ndarray, sha256: str | None = None, approach: list | None = None
+                          ) -> Observations:
     """The observations of ``records`` with their ``corners`` (K, N, 2): the file's, or a live capture's so far."""
     return Observations(
         board=board,
@@ -121,17 +129,17 @@ def observations_of_views(session: Session, board: Any, intr: CameraIntrinsics, 
         run=[r.run for r in records],
         index=[r.index for r in records],
         names=[r.file for r in records],
-        source=str(session.corners_path),
+        source=str(corners_path),
         source_sha256=sha256,
-        approach=approach_of(session, records),
+        approach=approach,
     )
 
 
-def approach_of(session: Session, records: list) -> list | None:
+def approach_of(session: SessionInput, records: list) -> list | None:
     """Every capture's per-axis approach side from a planar session's plan (None on one axis)."""
     if not session.planar:
         return None
-    approach_by_index = {s.index: s.approach for s in session.plan().stops()}
+    approach_by_index = {s.index: s.approach for s in session.plan.stops()}
     return [approach_by_index.get(r.index, (1, 1)) for r in records]
 
 
@@ -153,18 +161,17 @@ def estimate_session(
     results.json content.
     """
     t0 = time.perf_counter()
-    session = Session.open(session_dir)
-    intr = read_intrinsics(intrinsics_path) if intrinsics_path else None
-    opt = test_options(session, make_options(method, options))  # a settling test's frames move by design
-    obs = observations_from_session(session, intr)
+    inp = read_session_input(session_dir, intrinsics_path)  # the session read once; every builder is given it
+    opt = test_options(inp, make_options(method, options))  # a settling test's frames move by design
+    obs = observations_from_session(inp)
     est = estimate(obs, opt, progress, cancel)
     with paused_collections():  # results are trees of dicts and lists: nothing for the cyclic collector
-        results = build_results(session, obs, est, intrinsics_source=str(intrinsics_path or "session.json"))
+        results = build_results(inp, obs, est, intrinsics_source=str(intrinsics_path or "session.json"))
         results["timings_s"]["pipeline_total"] = time.perf_counter() - t0
         if cancel is not None:
             cancel.check("estimation")
-        with SessionLock(session.folder) if not out_dir else nullcontext():  # one writer per session
-            _write_keeping_history(session, out_dir, results)
+        with SessionLock(inp.folder) if not out_dir else nullcontext():  # one writer per session
+            _write_keeping_history(inp.session, out_dir, results)
     return results
 
 
@@ -179,7 +186,7 @@ def _write_keeping_history(session: Session, out_dir: Path | str | None, results
 
 # ----------------------------------------------------------------------------- results
 
-def build_results(session: Session, obs: Observations, est: LpsEstimate, intrinsics_source: str
+def build_results(session: SessionInput, obs: Observations, est: LpsEstimate, intrinsics_source: str
                   ) -> dict[str, Any]:
     """The results.json document of an estimate of D axes, with its environment and uncertainty budget."""
     results = RESULTS_BY_AXES[obs.D](session, obs, est, intrinsics_source)
@@ -190,18 +197,27 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate, intrins
 
         add_stitch_ties(results, obs)  # a stitched session's placements are tied by their repeated stops
     add_error_motions(results, session, obs, est)  # SPEC 14: the six error motions per axis, where poses allow
-    results = add_uncertainty(results, session)  # environment, GUM budget, U (k = 2) per figure
+    if isinstance(results.get("board"), dict):  # nominal (20 C); environment.square_mm_used is the size used
+        results["board"]["square_mm"] = session.nominal_board.square_mm
+    budget = BudgetSource(  # the values the builders made, passed on (the budget reads no document)
+        positions=results["positions"], parameters=results.get("parameters") or {}, board=results.get("board") or {},
+        figures=results.get("figures") or {}, axes=("X",) if obs.D == 1 else ("X", "Y"),
+        resolved=(results.get("error_motions") or {}).get("resolved"), targets=results.get("targets"),
+        stage_spec=session.meta.get("stage_spec"), stitched=bool((session.meta.get("plan") or {}).get("segments")))
+    environment, uncertainty = environment_and_uncertainty(budget, session)  # GUM budget, U (k = 2) per figure
+    results["environment"], results["uncertainty"] = environment.to_dict(), uncertainty.to_dict()
     if obs.D == 1:
-        results = add_asme_results(results, session, obs, est)  # ASME B5.64 names, TUR, tests
+        results = add_asme_results(results, session, obs, est, budget.figures.get("iso230_2"),
+                                   uncertainty.get("figures_k2") or {})  # ASME B5.64 names, TUR, tests
         results = add_verdict(results)  # the verdict, U (k = 2) and the decision rule, machine-readable
     return add_self_check(results)  # a simulated session: does its truth contradict a figure or a finding?
 
 
-def line_results(session: Session, obs: Observations, est: LpsEstimate, intrinsics_source: str) -> dict[str, Any]:
+def line_results(session: SessionInput, obs: Observations, est: LpsEstimate, intrinsics_source: str) -> dict[str, Any]:
     """The results.json document of one axis: its parts computed here, assembled by
     :func:`lps_gui.io.results.document.assemble_results`."""
     positions = position_rows(obs, est)
-    truth = session_truth(session)
+    truth = session.truth
     results = assemble_results(
         method=est.method,
         settings=est.options.to_dict(),
@@ -212,9 +228,10 @@ def line_results(session: Session, obs: Observations, est: LpsEstimate, intrinsi
         parameters=estimate_parameters(obs, est),
         positions=positions,
         figures=session_figures(obs, est),
-        flags=est.flags,
+        flags=[Flag.of(**f).to_dict() for f in est.flags],
         timings_s=dict(est.timings_s),
-        truth_comparison=truth_comparison(obs, est, truth, positions) if truth is not None else None,
+        truth_comparison=None if truth is None else TruthComparison.of(
+            **truth_comparison(obs, est, truth, positions)).to_dict(),
     )
     return results
 
@@ -234,10 +251,10 @@ def position_rows(obs: Observations, est: LpsEstimate) -> list[dict[str, Any]]:
         "run": np.asarray(obs.run).astype(int).tolist(),
         "direction": ["+" if d > 0 else "-" for d in np.asarray(obs.direction).tolist()],
         "target_mm": np.asarray(obs.target_mm, dtype=float).tolist(),
-        "measured_mm": json_floats(np.where(usable, est.state.s + obs.target_mm[est.reference_view], missing)),
-        "deviation_um": json_floats(np.where(usable, dev_um, missing)),
+        MEASURED_MM: json_floats(np.where(usable, est.state.s + obs.target_mm[est.reference_view], missing)),
+        DEVIATION_UM: json_floats(np.where(usable, dev_um, missing)),
         "sigma_um": json_floats(1e3 * est.sigma_s_mm),
-        "sigma_total_um": json_floats(1e3 * est.sigma_total_mm),
+        SIGMA_TOTAL_UM: json_floats(1e3 * est.sigma_total_mm),
         "step_sigma_um": json_floats(1e3 * est.step_sigma_mm),
         "rms_px": json_floats(est.rms_px),
         "n_corners": np.asarray(est.n_corners).astype(int).tolist(),
@@ -283,7 +300,7 @@ def session_figures(obs: Observations, est: LpsEstimate) -> dict[str, Any]:
         figures.update(straightness_figures(obs.target_mm, est, valid))
     if six is not None and valid.any():
         figures["angles_span_urad"] = dict(zip(("roll", "pitch", "yaw"), (_f(v) for v in np.ptp(six.angles_urad[valid], axis=0))))
-    return figures
+    return Figures.of(**figures).to_dict()  # written through the readers' definition
 
 
 def estimate_parameters(obs: Observations, est: LpsEstimate) -> dict[str, Any]:
@@ -298,6 +315,7 @@ def estimate_parameters(obs: Observations, est: LpsEstimate) -> dict[str, Any]:
         **est.parameter_sigmas,
         "sigma_px": est.sigma_px,
         "rms_px": _f(np.sqrt(np.nanmean(est.rms_px[est.used] ** 2))),
+        "rms_um_at_board": rms_um_at_board(obs, est),
         "n_views": obs.K,
         "n_used": int(est.used.sum()),
         "n_outliers": int(est.outlier.sum()),
@@ -312,7 +330,19 @@ def estimate_parameters(obs: Observations, est: LpsEstimate) -> dict[str, Any]:
         parameters["line_model_sigma_px"] = est.line_model_sigma_px
     if est.options.self_calibrate:
         parameters["intrinsics_estimated"] = dict(zip(INTRINSIC_NAMES, est.state.intrinsics.vector().tolist()))
-    return parameters
+    return Parameters.of(**parameters).to_dict()
+
+
+def rms_um_at_board(obs: Observations, est: LpsEstimate) -> float | None:
+    """The RMS reprojection error as a length at the board (um): each used view's RMS (px) times its board
+    centre's depth over the focal length, what a pixel of corner error is on the board, where the stage is."""
+    line, intr = est.state.line(), est.state.intrinsics
+    centre = obs.board.object_points().mean(axis=0)
+    depth = (line.R_cam_board @ centre)[2] + line.l0_cam[2] + est.state.s * line.n_cam[2]  # mm, per view
+    used = np.asarray(est.used, bool) & np.isfinite(est.rms_px)
+    if not used.any():
+        return None
+    return _f(1e3 * np.sqrt(np.mean((est.rms_px[used] * depth[used] / (0.5 * (intr.fx + intr.fy))) ** 2)))
 
 
 def scale_with_uncertainty(obs: Observations, est: LpsEstimate, valid: np.ndarray, sigma_um: np.ndarray) -> dict[str, Any]:

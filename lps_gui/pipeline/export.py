@@ -19,6 +19,7 @@ from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_text_atomic
 from lps_gui.io.export_files import write_colmap, write_nerfstudio, write_poses_csv
 from lps_gui.io.intrinsics_file import intrinsics_from_dict
+from lps_gui.io.results.keys import MEASURED_MM
 from lps_gui.io.results.sections import Figures
 from lps_gui.io.session import Session
 from lps_gui.pipeline.compensate import session_results
@@ -72,11 +73,11 @@ def export_session(session_dir: Path | str, fmt: str, out: Path | str, straightn
     if not ref:
         raise InputError(f"{session.folder}/results.json: the reference capture is missing; estimate the session again")
     t_ref = float(ref[0]["target_mm"])
-    keep = [r for r in rows if r.get("used", True) and not r.get("outlier") and r.get("measured_mm") is not None]
+    keep = [r for r in rows if r.get("used", True) and not r.get("outlier") and r.get(MEASURED_MM) is not None]
     res = ExportResult(excluded=[f"{r.get('file')}  {r.get('outlier_reason') or 'not used'}" for r in rows if r not in keep])
     if not keep:
         raise InputError(f"{session.folder}: no usable capture to export")
-    s = np.array([float(r["measured_mm"]) - t_ref for r in keep])
+    s = np.array([float(r[MEASURED_MM]) - t_ref for r in keep])
     use = (True, True) if straightness == "on" else straightness_resolved(results.figures) if straightness == "auto" else (False, False)
     st = None
     if any(use):
@@ -94,7 +95,7 @@ def export_session(session_dir: Path | str, fmt: str, out: Path | str, straightn
         res.files = [write_nerfstudio(out, intr, R, C, names, Path(root).as_posix())]
     else:
         nominal = camera_centres(R, l0, n, np.array([float(r["target_mm"]) - t_ref for r in keep]))
-        table = [{**{k: r.get(k) for k in ("index", "run", "direction", "file", "target_mm", "measured_mm")},
+        table = [{**{k: r.get(k) for k in ("index", "run", "direction", "file", "target_mm", MEASURED_MM)},
                   **dict(zip(("nominal_x_mm", "nominal_y_mm", "nominal_z_mm"), map(float, cn))),
                   **dict(zip(("measured_x_mm", "measured_y_mm", "measured_z_mm"), map(float, cm)))}
                  for r, cn, cm in zip(keep, nominal, C)]

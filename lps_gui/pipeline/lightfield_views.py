@@ -23,6 +23,7 @@ from lps_gui.core.models.lightfield_views import tilt_from_board_shift
 from lps_gui.core.models.lps_model import unit
 from lps_gui.errors import InputError
 from lps_gui.io.intrinsics_file import intrinsics_from_dict
+from lps_gui.io.results.keys import MEASURED_MM
 from lps_gui.io.results.model import Results
 from lps_gui.io.session import Session
 from lps_gui.pipeline.results.error_motions import BASIS_TARGETS
@@ -105,11 +106,11 @@ def _measured_table(results: Results, g: MeasuredGeometry) -> dict[str, np.ndarr
     """Per usable measured capture: direction, target (K, D), position (K, D), sigma (K, D), tilt (K, 3), phi (K,)."""
     rows = [r.raw for r in results.positions
             if r.raw.get("used", True) and not r.raw.get("outlier")
-            and (r.raw.get("measured_x_mm") if results.planar else r.raw.get("measured_mm")) is not None]
+            and (r.raw.get("measured_x_mm") if results.planar else r.raw.get(MEASURED_MM)) is not None]
     if not rows:
         raise InputError("the measurement has no usable capture; estimate it again")
     keys = (("target_x_mm", "target_y_mm"), ("measured_x_mm", "measured_y_mm"), ("sigma_x_um", "sigma_y_um")) \
-        if results.planar else (("target_mm",), ("measured_mm",), ("sigma_um",))
+        if results.planar else (("target_mm",), (MEASURED_MM,), ("sigma_um",))
     target, pos, sig = (np.array([[_num(r.get(k)) for k in ks] for r in rows]) for ks in keys)
     tilt, phi, source = np.zeros((len(rows), 3)), np.zeros(len(rows)), "none (a planar measurement: common orientation)"
     if not results.planar:

@@ -51,6 +51,7 @@ from lps_gui.pipeline.detect import (
     session_corner_table,
     write_session_corners,
 )
+from lps_gui.io.results.keys import DEVIATION_UM
 
 log = logging.getLogger(__name__)
 
@@ -114,6 +115,7 @@ class LiveCapture:
         self._estimate_checks = EstimateChecks()
         self._warm = None
         self._base_rms: float | None = None
+        self._measured: tuple[Any, Any] | None = None  # (intrinsics, the board at its temperature, warped)
         self.flags: list[LiveFlag] = []
         self.last_estimate: dict[str, Any] | None = None
         self.error: str | None = None
@@ -238,7 +240,7 @@ class LiveCapture:
         """The views so far through the one estimator, warm-started; its checks."""
         from lps_gui.io.intrinsics_file import apply_board_warp
         from lps_gui.pipeline.estimate import make_options, observations_of_views
-        from lps_gui.pipeline.results.uncertainty import session_board
+        from lps_gui.pipeline.session_input import session_board
 
         if self.session.planar or self.method != "joint" or not self.session.has_intrinsics():
             return
@@ -249,9 +251,11 @@ class LiveCapture:
         n = self.board.n_corners
         corners = np.stack([np.full((n, 2), np.nan) if r.corners_px is None else np.asarray(r.corners_px, float)
                             for r in views.results])
-        intr = self.session.intrinsics()
-        board = apply_board_warp(session_board(self.session), intr)
-        obs = observations_of_views(self.session, board, intr, list(views.records), corners)
+        if self._measured is None:  # the session's intrinsics and board read once, not at every running estimate
+            intr = self.session.intrinsics()
+            self._measured = (intr, apply_board_warp(session_board(self.session), intr))
+        intr, board = self._measured
+        obs = observations_of_views(self.session.corners_path, board, intr, list(views.records), corners)
         opt = make_options("joint", {**(self.options or {}), "six_dof": False})
         t0 = time.perf_counter()
         if self._warm is not None and self._base_rms is not None:  # the new views against the solution so far
@@ -271,7 +275,7 @@ class LiveCapture:
         dev = est.deviation_um(obs.target_mm)
         data = {"index": index.tolist(), "target_mm": np.asarray(obs.target_mm, float).tolist(),
                 "direction": [r.direction for r in views.records],
-                "deviation_um": np.where(est.usable, dev, np.nan).tolist(), "sigma_um": (1e3 * est.sigma_s_mm).tolist(),
+                DEVIATION_UM: np.where(est.usable, dev, np.nan).tolist(), "sigma_um": (1e3 * est.sigma_s_mm).tolist(),
                 "outlier": est.outlier.tolist(), "rms_px": est.rms_px.tolist(), "n_views": int(obs.K),
                 "sigma_px": float(est.sigma_px), "seconds": time.perf_counter() - t0}
         self.last_estimate = data

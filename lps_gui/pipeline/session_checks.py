@@ -17,10 +17,11 @@ from lps_gui.io.corners.hashes import image_hashes, stale_views
 from lps_gui.io.corners.vnl import CornerTable
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import Parameters
-from lps_gui.io.session import SESSION_FILE, Session
+from lps_gui.io.session import SESSION_FILE
+from lps_gui.pipeline.session_input import SessionInput
 
 
-def corners_of_records(session: Session, table: Any, records: Sequence[Any], views_whole: bool = True) -> Any:
+def corners_of_records(session: SessionInput, table: Any, records: Sequence[Any], views_whole: bool = True) -> Any:
     """The corners (K, N, 2) of every capture in captures.jsonl order, checked (stale images, views missing,
     collinear views); ``table`` a corners.vnl of one board or of targets (names, meta, corners_px).
 
@@ -46,7 +47,7 @@ def corners_of_records(session: Session, table: Any, records: Sequence[Any], vie
     return corners
 
 
-def check_corners_current(session: Session, table: CornerTable, records: Sequence[Any]) -> None:
+def check_corners_current(session: SessionInput, table: CornerTable, records: Sequence[Any]) -> None:
     """InputError when corners.vnl holds corners of images that were replaced since detection."""
     stale = stale_views(table, image_hashes(records))
     if stale:
@@ -89,7 +90,7 @@ def check_corner_values(corners_px: Any, names: Sequence[str], source: Path | st
                          "the corners are corrupt: delete corners.vnl and run `lps detect` again")
 
 
-def session_inputs(session: Session, intrinsics_source: str, known: dict[str, str | None] | None = None
+def session_inputs(session: SessionInput, intrinsics_source: str, known: dict[str, str | None] | None = None
                    ) -> dict[str, Any]:
     """results.json ``inputs``: where the data came from, with the sha256 of each input file.
 

@@ -23,7 +23,7 @@ from lps_gui.core.estimator.stitching import segment_ties, stitch_budget_row
 from lps_gui.core.geometry.targets import Target
 from lps_gui.core.metrology.uncertainty_budget import BudgetRow
 from lps_gui.errors import InputError
-from lps_gui.io.session import Session
+from lps_gui.pipeline.session_input import SessionInput
 
 SEGMENT_PREFIX = "S"  # the targets of a stitched session: S0, S1, ... one per placement of the board
 R_PER_SIGMA = 4.0  # ISO 230-2: the repeatability R of a direction is 4 s
@@ -35,7 +35,7 @@ def stage_repeatability_mm(spec: dict[str, Any] | None) -> float | None:
     return None if r is None else float(r) / R_PER_SIGMA * 1e-3
 
 
-def stitched_observations(session: Session, obs: Observations, records: list) -> Observations:
+def stitched_observations(session: SessionInput, obs: Observations, records: list) -> Observations:
     """The board session's observations as a row of one target per segment."""
     missing = next((r for r in records if r.segment is None), None)
     if missing is not None:
@@ -66,9 +66,8 @@ def add_stitch_ties(results: dict[str, Any], obs: Observations) -> None:
         row["stitch_ties"] = int(len(ties[k - 1])) if k else 0
 
 
-def stitch_row(results: dict[str, Any]) -> BudgetRow:
+def stitch_row(targets: list[dict[str, Any]] | None, stage_spec: dict[str, Any] | None) -> BudgetRow:
     """The budget row of the ties (over the whole travel) from results.json's targets and the stage spec."""
-    counts = [t.get("stitch_ties", 0) for t in (results.get("targets") or [])[1:]]
-    spec = (results.get("session_meta") or {}).get("stage_spec") or results.get("stage_spec")
-    sigma = stage_repeatability_mm(spec)
+    counts = [t.get("stitch_ties", 0) for t in (targets or [])[1:]]
+    sigma = stage_repeatability_mm(stage_spec)
     return stitch_budget_row([np.zeros((c, 2), int) for c in counts], None if sigma is None else 1e3 * sigma)

@@ -23,18 +23,18 @@ from lps_gui.core.metrology.environment import corrected_board
 from lps_gui.core.metrology.target_scale import covered_fractions
 from lps_gui.errors import InputError
 from lps_gui.io.corners.target_vnl import read_target_corners
-from lps_gui.io.session import Session
+from lps_gui.io.results.sections import TargetRecord
 from lps_gui.pipeline.results.targets import MIN_CORNERS, target_rows
-from lps_gui.pipeline.results.uncertainty import session_environment
 from lps_gui.pipeline.session_checks import corners_of_records
+from lps_gui.pipeline.session_input import SessionInput
 
 
-def measured_targets(session: Session) -> list[Target]:
+def measured_targets(session: SessionInput) -> list[Target]:
     """The session's targets as the estimator uses them: each square at its certified scale
     (``scale_ppm``) and at the session's temperature (environment)."""
-    env = session_environment(session)
+    env = session.environment
     out = []
-    for t in session.targets() or []:
+    for t in session.targets or []:
         board = t.board
         if t.scale_ppm:
             board = replace(board, square_mm=board.square_mm * (1.0 + 1e-6 * t.scale_ppm))
@@ -42,7 +42,7 @@ def measured_targets(session: Session) -> list[Target]:
     return out
 
 
-def target_observations(session: Session, intrinsics: CameraIntrinsics, records: list, approach: list | None
+def target_observations(session: SessionInput, intrinsics: CameraIntrinsics, records: list, approach: list | None
                         ) -> Observations:
     """Observations of every capture against the session's targets (corners laid end to end)."""
     targets = measured_targets(session)
@@ -81,14 +81,14 @@ def seen_by_target(obs: Observations, used: np.ndarray) -> np.ndarray:
     return (counts >= MIN_CORNERS) & np.asarray(used, bool)[:, None]
 
 
-def targets_section(obs: Observations, est: Any, session: Session) -> list[dict[str, Any]]:
+def targets_section(obs: Observations, est: Any, session: SessionInput) -> list[dict[str, Any]]:
     """results.json ``targets`` (SPEC 13)."""
     fit = est.fit_targets
     rows = target_rows(list(obs.mounted), fit.Q, fit.p, fit.target_sigma, obs.corners_px, obs.targets, est.used)
     seen = seen_by_target(obs, est.used)
     several = seen.sum(axis=1) >= 2
     share = covered_fractions(seen)
-    nominal = {t.id: t for t in session.targets() or []}
+    nominal = {t.id: t for t in session.targets or []}
     for j, (row, t) in enumerate(zip(rows, obs.mounted)):
         printed = nominal.get(t.id, t)
         row["square_mm"] = printed.board.square_mm
@@ -102,12 +102,12 @@ def targets_section(obs: Observations, est: Any, session: Session) -> list[dict[
     return rows
 
 
-def add_targets_section(results: dict[str, Any], obs: Observations, est: Any, session: Session) -> None:
+def add_targets_section(results: dict[str, Any], obs: Observations, est: Any, session: SessionInput) -> None:
     """Put ``targets`` into results (after ``board``, in schema order); a simulated session's
     ``truth_comparison.targets`` compares each pose with the simulator's."""
     from lps_gui.sim.truth import target_truth_comparison
 
-    section = targets_section(obs, est, session)
+    section = [TargetRecord.of(**row).to_dict() for row in targets_section(obs, est, session)]  # as readers read it
     ordered: dict[str, Any] = {}
     for key, value in results.items():
         ordered[key] = value

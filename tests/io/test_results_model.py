@@ -208,3 +208,46 @@ def test_a_wrong_value_in_a_newer_section_names_its_field(sections):
     d["error_motions"]["motions"]["EAX"]["values"] = 3.0
     with pytest.raises(InputError, match=r"'error_motions\.motions\.EAX\.values'"):
         Results.from_dict(d, source="r.json")
+
+
+def _sections_of(d: dict) -> list[tuple[type, dict]]:
+    """(section class, its JSON object) of every section a builder writes through :meth:`Section.of`, and more."""
+    from lps_gui.io.results import sections as S
+
+    figures = d.get("figures") or {}
+    out = [(S.Parameters, d["parameters"]), (S.EnvironmentRecord, d["environment"]), (S.Uncertainty, d["uncertainty"]),
+           (S.Figures, figures), (S.TruthComparison, d["truth_comparison"])]
+    out += [(S.Position, row) for row in d["positions"]] + [(S.Flag, f) for f in d.get("flags") or []]
+    out += [(S.BudgetRow, b) for b in (d["uncertainty"].get("budget") or [])]
+    if figures.get("single_run"):
+        out += [(S.SingleRun, figures["single_run"]), (S.Iso230, figures["iso230_2"])]
+    out += [(section, d[key]) for section, key in ((S.AsmeB564, "asme_b5_64"), (S.ErrorMotions, "error_motions"))
+            if d.get(key)]
+    return out + [(S.TargetRecord, row) for row in d.get("targets") or []]
+
+
+@pytest.mark.parametrize("kind", ["line", "planar"])
+def test_each_section_is_written_and_read_through_one_definition(estimated, kind):
+    d = _document(estimated[kind])
+    for section, obj in _sections_of(d):
+        read = section.from_dict(obj)
+        assert read.to_dict() == obj, section.__name__  # to_dict of a read section is the JSON
+        built = section.of(**obj)
+        assert section.from_dict(built.to_dict()) == built == read, section.__name__
+        assert json.dumps(built.to_dict()) == json.dumps(obj), section.__name__  # the keys in the file's order
+
+
+def test_a_builder_cannot_write_a_field_the_readers_do_not_know():
+    from lps_gui.io.results.sections import EnvironmentRecord, Flag, Iso230, SingleRun, Uncertainty
+
+    assert Flag.of(index=None, kind="lens_model", message="m").to_dict() == {"index": None, "kind": "lens_model",
+                                                                              "message": "m"}
+    for section, field in ((Flag, "kindd"), (SingleRun, "scale_pm"), (Uncertainty, "figures_k3"),
+                           (EnvironmentRecord, "board_temperature")):
+        with pytest.raises(TypeError, match=field):
+            section.of(**{field: 1.0})
+    with pytest.raises(InputError, match="scale_ppm"):  # a field of the wrong type: the reader's own message
+        SingleRun.of(scale_ppm="large")
+    assert Iso230.of(A_um=3.0).get("A_um") == 3.0  # E/M/B/R/A by name: an open set
+    nested = Uncertainty.of(per_axis={"X": Uncertainty.of(expanded_k2_um=2.0)})
+    assert nested.per_axis["X"].expanded_k2_um == 2.0 and nested.to_dict() == {"per_axis": {"X": {"expanded_k2_um": 2.0}}}

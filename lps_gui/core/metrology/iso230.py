@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from lps_gui.core.metrology.iso230_run import (
+    DEVIATION,
     TARGET_TOL_MM,
     JsonDataclass,
     RunFigures,
@@ -166,7 +167,7 @@ def bidirectional_figures(target_mm: np.ndarray, direction: np.ndarray, run: np.
     ok = a["valid"]
     if not ok.any():
         return None
-    t, x, r, sign = a["target_mm"][ok], a["deviation_um"][ok], a["run"][ok], a["sign"][ok]
+    t, x, r, sign = a["target_mm"][ok], a[DEVIATION][ok], a["run"][ok], a["sign"][ok]
     targets, j = target_index(t)
     m = targets.size
     # one approach = (target, direction, run): average its frames first
@@ -239,12 +240,12 @@ def figures_for_session(target_mm: np.ndarray, direction: np.ndarray, run: np.nd
     r, sign = a["run"], a["sign"]
     pairs, group = np.unique(np.stack([r.astype(str), sign.astype(str)], axis=1), axis=0, return_inverse=True)
     sig = None if sigma_um is None else np.asarray(sigma_um, dtype=float).ravel()
-    single = single_run_figures(a["target_mm"], a["deviation_um"], a["valid"], sig, group=group.ravel())
+    single = single_run_figures(a["target_mm"], a[DEVIATION], a["valid"], sig, group=group.ravel())
     order = sorted(range(len(pairs)), key=lambda i: (_run_sort_key(r[group.ravel() == i][0]), -int(pairs[i][1])))
     per_run = []
     for i in order:
         sel = group.ravel() == i
-        figs = single_run_figures(a["target_mm"][sel], a["deviation_um"][sel], a["valid"][sel],
+        figs = single_run_figures(a["target_mm"][sel], a[DEVIATION][sel], a["valid"][sel],
                                   None if sig is None else sig[sel])
         run_value = r[sel][0]
         per_run.append({"run": json_value(run_value.item() if hasattr(run_value, "item") else run_value),
@@ -253,7 +254,7 @@ def figures_for_session(target_mm: np.ndarray, direction: np.ndarray, run: np.nd
     runs_per_dir = [np.unique(r[ok & (sign == s)]).size for s in (1, -1)]
     iso = None
     if max(runs_per_dir) >= 2 or min(runs_per_dir) >= 1:
-        fig = bidirectional_figures(a["target_mm"], sign, r, a["deviation_um"], ok)
+        fig = bidirectional_figures(a["target_mm"], sign, r, a[DEVIATION], ok)
         iso = None if fig is None else fig.to_dict()
     return {"single_run": single.to_dict(), "per_run": per_run, "iso230_2": iso}
 

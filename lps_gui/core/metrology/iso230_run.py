@@ -16,6 +16,8 @@ import numpy as np
 from lps_gui.core.metrology.iso230_spectrum import UNDEFINED_NOTE, Spectrum, deviation_spectrum
 from lps_gui.errors import InputError
 
+DEVIATION = "deviation_um"  # the deviations' name among the capture arrays (the argument's, in messages)
+
 TARGET_TOL_MM = 1e-6  # targets closer than this are one target P_j
 
 
@@ -59,7 +61,7 @@ def capture_arrays(target_mm: Any, deviation_um: Any, valid: Any, **others: Any)
     """Check that every per-capture array has shape (K,); valid defaults to all True, NaN is invalid."""
     t = np.asarray(target_mm, dtype=float).ravel()
     x = np.asarray(deviation_um, dtype=float).ravel()
-    out = {"target_mm": t, "deviation_um": x}
+    out = {"target_mm": t, DEVIATION: x}
     for name, v in others.items():
         if v is not None:
             out[name] = np.asarray(v).ravel()
@@ -213,7 +215,7 @@ def single_run_figures(target_mm: np.ndarray, deviation_um: np.ndarray, valid: n
     um), with the spectrum for plotting. Figures the data cannot give are None (see ``notes``).
     """
     a = capture_arrays(target_mm, deviation_um, valid, sigma_um=sigma_um, group=group)
-    ok, t_all, x_all = a["valid"], a["target_mm"], a["deviation_um"]
+    ok, t_all, x_all = a["valid"], a["target_mm"], a[DEVIATION]
     grp_all = a.get("group", np.zeros(t_all.shape, int))
     notes: list[str] = []
     n_bad = int((~ok).sum())

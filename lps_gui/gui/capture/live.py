@@ -21,6 +21,7 @@ from PySide6.QtCore import QObject, Qt, QTimer, Signal
 from PySide6.QtWidgets import QCheckBox, QGroupBox, QLabel, QListWidget, QVBoxLayout, QWidget
 
 from lps_gui.gui.results.plot_adapter import DrawnFigure, figure_steps
+from lps_gui.io.results.keys import DEVIATION_UM
 
 
 class _Bridge(QObject):
@@ -120,7 +121,7 @@ class LivePanel(QGroupBox):
 
             cols = position_columns(event.data)
             self.status.setText(f"results: {event.message}")
-            self._pending = {key: cols[key] for key in ("target_mm", "deviation_um", "sigma_um", "outlier", "direction")}
+            self._pending = {key: cols[key] for key in ("target_mm", DEVIATION_UM, "sigma_um", "outlier", "direction")}
             self._pending["n_views"] = len(cols["target_mm"])
             self._pending["title"] = f"Deviation ({len(cols['target_mm'])} views, final estimate)"
             if not self._steps:
@@ -138,7 +139,7 @@ class LivePanel(QGroupBox):
             from lps_gui.report.figures.plots import deviation_figure
 
             data, self._pending = self._pending, None
-            cols = {"target_mm": np.asarray(data["target_mm"], float), "deviation_um": np.asarray(data["deviation_um"], float),
+            cols = {"target_mm": np.asarray(data["target_mm"], float), DEVIATION_UM: np.asarray(data[DEVIATION_UM], float),
                     "sigma_um": np.asarray(data["sigma_um"], float), "outlier": np.asarray(data["outlier"], bool),
                     "direction": np.asarray(data["direction"], dtype=object)}
             fig = deviation_figure(cols, None)

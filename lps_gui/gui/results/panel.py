@@ -30,6 +30,7 @@ from lps_gui.gui.results.section_tabs import SectionPage, tab_tip
 from lps_gui.gui.results.view_detail import ViewDetail
 from lps_gui.gui.widgets import TextTable, ValueTable
 from lps_gui.gui.workers import Job, owned_by
+from lps_gui.io.results.keys import DEVIATION_UM, MEASURED_MM
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import Position
 from lps_gui.report.figures.plots import figures_from_results, position_columns
@@ -43,7 +44,7 @@ TAB_NAMES = {"positions": "Positions", "deviation": "Deviation", "step": "Steps"
              "angles": "Roll/pitch/yaw", "residuals": "Residuals", "spectrum": "Spectrum"}
 GROUPS = (("Deviation", ("deviation", "positions")), ("Steps", ("step", "spectrum")),
           ("Straightness, angles", ("straightness", "angles")))  # one tab each: all tabs fit without arrows
-CLICKABLE = {"positions": ("target_mm", "measured_mm"), "deviation": ("target_mm", "deviation_um"),
+CLICKABLE = {"positions": ("target_mm", MEASURED_MM), "deviation": ("target_mm", DEVIATION_UM),
              "residuals": ("index", "rms_px")}
 
 

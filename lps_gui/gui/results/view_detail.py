@@ -18,6 +18,7 @@ from lps_gui.core.geometry.camera_model import project_board
 from lps_gui.core.models.lps_model import LpsLine
 from lps_gui.errors import InputError
 from lps_gui.io.image_file import decode_image
+from lps_gui.io.results.keys import MEASURED_MM
 from lps_gui.io.results.model import Results
 from lps_gui.io.results.sections import Position
 
@@ -51,11 +52,11 @@ def view_residuals(results: Results, row: Position, detected_px: np.ndarray,
         line = LpsLine(np.asarray(p["R_cam_board"], float).reshape(3, 3), np.asarray(p["l0_cam_mm"], float),
                        np.asarray(p["n_cam"], float))
         intr = intrinsics_from_dict(results.intrinsics.raw if results.intrinsics else {}, "results.json")
-        s_mm = float(row.raw["measured_mm"])
+        s_mm = float(row.raw[MEASURED_MM])
     except (KeyError, TypeError, ValueError, InputError):
         return None
     first = min(results.positions, key=lambda r: r.index)
-    candidates = {s_mm, s_mm - (first.number("measured_mm") or 0.0)}
+    candidates = {s_mm, s_mm - (first.number(MEASURED_MM) or 0.0)}
     best: ViewResiduals | None = None
     for s in candidates:
         t = line.translations(np.array([s]))[0]

@@ -24,43 +24,13 @@ from lps_gui import __version__
 from lps_gui.errors import InputError, LpsError
 from lps_gui.io.file_set import JOURNAL, recover_file_set, write_file_set
 from lps_gui.io.jsonfile import json_bytes, read_json
+from lps_gui.io.results.keys import PLANAR_POSITION_COLUMNS, POSITION_COLUMNS
 from lps_gui.io.results.typed_json import finite_number
 
 FORMAT = "lps-results/1"
 RESULTS_FILE = "results.json"
 POSITIONS_FILE = "positions.csv"
 SUMMARY_FILE = "summary.csv"
-POSITION_COLUMNS = (
-    "index",
-    "run",
-    "direction",
-    "target_mm",
-    "measured_mm",
-    "deviation_um",
-    "sigma_um",
-    "rms_px",
-    "outlier",
-    "straightness_um_1",
-    "straightness_um_2",
-    "roll_urad",
-    "pitch_urad",
-    "yaw_urad",
-)
-PLANAR_POSITION_COLUMNS = (  # SPEC 10
-    "index",
-    "run",
-    "direction",
-    "target_x_mm",
-    "target_y_mm",
-    "measured_x_mm",
-    "measured_y_mm",
-    "deviation_x_um",
-    "deviation_y_um",
-    "sigma_x_um",
-    "sigma_y_um",
-    "rms_px",
-    "outlier",
-)
 ERROR_MOTION_COLUMNS = (  # SPEC 14: after the columns above, in results that have error_motions
     "eax_urad",
     "ebx_urad",
@@ -302,6 +272,8 @@ def summary_figures(results: dict[str, Any]) -> list[SummaryFigure]:
         SummaryFigure("outlier_views", None, p.get("n_outliers")),
         SummaryFigure("corner_noise_sigma", None, p.get("sigma_px"), "px"),
         SummaryFigure("rms_reprojection", None, p.get("rms_px"), "px"),
+        *([SummaryFigure("rms_reprojection_at_board", "RMS reprojection error at the board",
+                         finite_number(p.get("rms_um_at_board")), MU + "m")] if "rms_um_at_board" in p else []),
         SummaryFigure("mean_step", "Mean step", finite_number(single.get("mean_step_mm")), "mm", digits=7),
         SummaryFigure("step_std", "Step std", finite_number(single.get("step_std_um")), MU + "m"),
         SummaryFigure("max_abs_deviation", "Max |deviation|", finite_number(single.get("max_abs_deviation_um")), MU + "m"),

@@ -47,10 +47,11 @@ from lps_gui.io.results.sections import (
     Uncertainty,
 )
 from lps_gui.io.results.typed_json import Section, finite_number, section_fields
+from lps_gui.io.results.keys import DEVIATION_UM, MEASURED_MM, TARGET_MM
 
 FIX = Section.fix
 MAX_ABS_VALUE = 1e9  # mm or um: no stage measured by a camera is a kilometre long or off by one
-LINE_KEYS = ("target_mm", "measured_mm", "deviation_um")
+LINE_KEYS = (TARGET_MM, MEASURED_MM, DEVIATION_UM)
 PLANAR_KEYS = ("target_x_mm", "target_y_mm", "measured_x_mm", "measured_y_mm", "deviation_x_um", "deviation_y_um")
 
 

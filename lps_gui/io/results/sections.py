@@ -60,6 +60,8 @@ class IntrinsicsRecord(Section):
 class Parameters(Section):
     """The fit: its statistics (the stage line's vectors stay in ``raw``: R_cam_board, l0_cam_mm, n_cam, ...)."""
 
+    open_keys = True
+
     sigma_px: float | None = None
     rms_px: float | None = None
     n_views: int | None = None
@@ -75,6 +77,8 @@ class Parameters(Section):
 @dataclass(frozen=True, kw_only=True)
 class Position(Section):
     """One capture's row: identity and flags typed; measured columns by name (:meth:`Section.number`)."""
+
+    open_keys = True
 
     index: int
     run: int | None = None
@@ -92,9 +96,12 @@ class Position(Section):
 
 @dataclass(frozen=True, kw_only=True)
 class Flag(Section):
+    """A finding about one view (``index``) or the session (None): an outlier of round ``round``, a lens misfit."""
+
     index: int | None = None
     kind: str | None = None
     message: str | None = None
+    round: int | None = None
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -108,6 +115,7 @@ class Spectrum(Section):
 class SingleRun(Section):
     """``figures.single_run``: the figures of all captures as one run (SPEC 5)."""
 
+    n_captures: int | None = None
     mean_step_mm: float | None = None
     step_std_um: float | None = None
     max_abs_deviation_um: float | None = None
@@ -124,6 +132,8 @@ class SingleRun(Section):
 @dataclass(frozen=True, kw_only=True)
 class Iso230(Section):
     """``figures.iso230_2``: E/M/B/R/A by name (``get("A_um")``; an open set), per-target table, notes."""
+
+    open_keys = True
 
     n_targets: int | None = None
     n_runs_up: int | None = None
@@ -221,6 +231,7 @@ class PlanarFigures(Section):
     lines: tuple[Any, ...] = ()
     nodes: tuple[PlanarNode, ...] = ()
     notes: tuple[str, ...] = ()
+    motion_matrix: tuple[tuple[float, ...], ...] = ()  # G: the stage's axes in the board frame (SPEC 10)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -229,6 +240,8 @@ class TruthComparison(Section):
 
     An open set of figures (:meth:`numbers`); those that readers name are typed.
     """
+
+    open_keys = True
 
     position_rms_error_um: float | None = None
     position_max_abs_error_um: float | None = None
@@ -470,6 +483,7 @@ class ErrorMotions(Section):
     resolved: Mapping[str, bool | None] = field(default_factory=dict)
     tool_point: ToolPoint | None = None
     truth: Mapping[str, MotionTruth] = field(default_factory=dict)
+    lens_model: Mapping[str, Any] | None = None  # the two witnesses of a lens the model cannot follow
 
     @property
     def axis_names(self) -> tuple[str, ...]:

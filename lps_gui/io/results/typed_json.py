@@ -46,6 +46,22 @@ class Section:
 
     raw: Mapping[str, Any] = field(default_factory=dict, repr=False, compare=False)
     fix: ClassVar[str] = "re-run `lps estimate` on the session"  # what the user does about a wrong field
+    open_keys: ClassVar[bool] = False  # keys beyond the fields are an open set (figures by name, columns)
+
+    @classmethod
+    def of(cls, **values: Any) -> Any:
+        """The section as a builder writes it: its fields by name, in the order results.json holds them, checked
+        and converted by the same definition the readers use (a name no field has is a TypeError, unless the
+        section's keys are an open set); a nested section is given as itself."""
+        if not cls.open_keys:
+            unknown = set(values) - {name for name, _, _ in section_fields(cls)}
+            if unknown:
+                raise TypeError(f"{cls.__name__} has no field {', '.join(sorted(unknown))}")
+        return cls.from_dict({k: _as_json(v) for k, v in values.items()}, cls.__name__, "results builder")
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON object, as built (:meth:`of`) or read: ``Section.from_dict(s.to_dict()) == s``."""
+        return {k: _as_json(v) for k, v in self.raw.items()}
 
     def get(self, key: str, default: Any = None) -> Any:
         """A key of the object as written (for keys of an open set: figures by name, columns)."""
@@ -69,6 +85,17 @@ class Section:
                 continue
             values[name] = convert(value, f"{where}.{name}" if where else name, source, cls.fix)
         return cls(**values)
+
+
+def _as_json(value: Any) -> Any:
+    """A value as JSON data: a section as its object, lists and objects copied (the section keeps its own)."""
+    if isinstance(value, Section):
+        return value.to_dict()
+    if isinstance(value, (list, tuple)):
+        return [_as_json(v) for v in value]
+    if isinstance(value, Mapping):
+        return {k: _as_json(v) for k, v in value.items()}
+    return value
 
 
 @lru_cache(maxsize=None)

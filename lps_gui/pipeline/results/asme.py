@@ -28,13 +28,14 @@ from lps_gui.core.metrology.asme_b5_64 import (
     tur,
 )
 from lps_gui.core.truth.stage_errors import StageErrorModel, Vibration
-from lps_gui.io.session import Session
+from lps_gui.io.results.sections import AsmeB564
+from lps_gui.pipeline.session_input import SessionInput
 
 SPEC_TOLERANCES = {"incremental_step": ("min_incremental_motion_um", "\u00b5m"),
                    "settling": ("settling_time_s", "s")}  # stage_spec keys of the ASME tests' tolerances
 
 
-def test_options(session: Session, options: EstimateOptions) -> EstimateOptions:
+def test_options(session: SessionInput, options: EstimateOptions) -> EstimateOptions:
     """The estimate's options for a session's ASME test: a settling test's frames ring by design, so the
     outlier test (a view off its neighbours' positions) is off there; every other session as given."""
     if (session.meta.get("asme_test") or {}).get("test") == "settling" and options.detect_outliers:
@@ -42,20 +43,20 @@ def test_options(session: Session, options: EstimateOptions) -> EstimateOptions:
     return options
 
 
-def add_asme_results(results: dict[str, Any], session: Session, obs: Observations, est: LpsEstimate) -> dict[str, Any]:
-    """``results["asme_b5_64"]`` of a line session (after its uncertainty budget: the ratios need U)."""
-    figures = results.get("figures") or {}
-    u = (results.get("uncertainty") or {}).get("figures_k2") or {}
-    section: dict[str, Any] = {"figures": named_figures(figures.get("iso230_2"), u)}
+def add_asme_results(results: dict[str, Any], session: SessionInput, obs: Observations, est: LpsEstimate,
+                     iso230_2: dict[str, Any] | None, figures_k2: dict[str, Any]) -> dict[str, Any]:
+    """``results["asme_b5_64"]`` of a line session from its ISO 230-2 figures and their U (k = 2), passed in (after
+    the uncertainty budget: the ratios need U); the ratios are the verdict's rows of the document so far."""
+    section: dict[str, Any] = {"figures": named_figures(iso230_2, figures_k2)}
     test = session.meta.get("asme_test") or {}
-    records = {r.index: r for r in session.records()}
+    records = {r.index: r for r in session.records}
     if test.get("test") == "min-step":
         section["incremental_step"] = incremental_step_section(obs, est, records, session, test)
     elif test.get("test") == "settling":
         section["settling"] = settling_section(obs, est, records, session, test)
     spec = session.meta.get("stage_spec") or {}
     section["test_uncertainty_ratio"] = tur_rows({**results, "asme_b5_64": section}, spec)
-    results["asme_b5_64"] = section
+    results["asme_b5_64"] = AsmeB564.of(**section).to_dict()  # as the readers read it
     return results
 
 
@@ -92,7 +93,7 @@ def stop_means(obs: Observations, est: LpsEstimate, keys: np.ndarray) -> tuple[S
     ), order
 
 
-def incremental_step_section(obs: Observations, est: LpsEstimate, records: dict[int, Any], session: Session,
+def incremental_step_section(obs: Observations, est: LpsEstimate, records: dict[int, Any], session: SessionInput,
                              test: dict[str, Any]) -> dict[str, Any]:
     """The incremental-step test: each step between consecutive averaged stops of one pass."""
     stops, frames = stop_means(obs, est, stop_keys(obs, records))
@@ -117,7 +118,7 @@ def incremental_step_section(obs: Observations, est: LpsEstimate, records: dict[
     return out
 
 
-def settling_section(obs: Observations, est: LpsEstimate, records: dict[int, Any], session: Session,
+def settling_section(obs: Observations, est: LpsEstimate, records: dict[int, Any], session: SessionInput,
                      test: dict[str, Any]) -> dict[str, Any]:
     """The settling test: each stop's positions against its frames' time after the move, and the time to settle."""
     band = float(test.get("band_um", 5.0))
@@ -151,14 +152,14 @@ def settling_section(obs: Observations, est: LpsEstimate, records: dict[int, Any
     return out
 
 
-def _truth_errors(session: Session) -> StageErrorModel | None:
-    truth = session.truth or {}
+def _truth_errors(session: SessionInput) -> StageErrorModel | None:
+    truth = session.meta.get("truth") or {}
     return StageErrorModel.from_dict(truth["stage_errors"]) if isinstance(truth.get("stage_errors"), dict) else None
 
 
-def _truth_vibration(session: Session) -> Vibration | None:
+def _truth_vibration(session: SessionInput) -> Vibration | None:
     """The simulated stage's ringing: the point simulator's truth, or the simulated stage's description."""
-    truth = session.truth or {}
+    truth = session.meta.get("truth") or {}
     if not truth:
         return None
     ring = truth.get("vibration") or (session.meta.get("stage") or {}).get("vibration")

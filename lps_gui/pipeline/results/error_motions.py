@@ -36,6 +36,8 @@ from lps_gui.core.models.lps_model import motion_frame
 from lps_gui.core.models.pose_model import PoseSolution, pose_solution_from_views
 from lps_gui.errors import InputError
 from lps_gui.io.results.document import json_float, json_floats
+from lps_gui.io.results.keys import SIGMA_TOTAL_UM
+from lps_gui.io.results.sections import ErrorMotions
 
 ANGLE_COLUMNS = {"roll": "eax", "pitch": "ebx", "yaw": "ecx"}  # SPEC 14's column stems (for every axis)
 UNITS = {"positioning": "um", "straightness_y": "um", "straightness_z": "um", "roll": "urad", "pitch": "urad",
@@ -251,13 +253,11 @@ def add_error_motions(results: dict[str, Any], session: Any, obs: Any, est: Any)
     A line: from the targets' joint pose solve or a single board's 6-DOF poses; a plane: from the
     targets' joint pose solve (a single board's planar fit keeps one orientation and has no per-view poses).
     """
-    from lps_gui.sim.truth import session_truth
-
     meta, where = session.meta, str(session.folder / "session.json")
     if obs.segment is not None:
         return  # one board moved between segments: its placements are tied by repeated stops, never seen together
     if obs.D == 1:
-        motions = session_error_motions(meta, where, obs, est, session_truth(session))
+        motions = session_error_motions(meta, where, obs, est, session.truth)
     elif obs.mounted is not None:
         tool_point(meta, where)  # checked alike, used by one axis only
         sol = target_pose_solution(obs, est)
@@ -282,8 +282,9 @@ def add_error_motions(results: dict[str, Any], session: Any, obs: Any, est: Any)
         if lens_um is not None and len(results["positions"]) == len(lens_um):  # the positions carry the lens misfit
             for row, s in zip(results["positions"], lens_um):
                 row["sigma_lens_um"] = json_float(s)
-                if row.get("sigma_total_um") is not None:
-                    row["sigma_total_um"] = json_float(np.hypot(row["sigma_total_um"], s))
+                if row.get(SIGMA_TOTAL_UM) is not None:
+                    row[SIGMA_TOTAL_UM] = json_float(np.hypot(row[SIGMA_TOTAL_UM], s))
+    results["error_motions"] = ErrorMotions.of(**motions.section).to_dict()  # as the readers read it
     figures = results.get("figures") or {}
     if obs.D == 1 and figures.get("angles_resolution"):  # "Max |roll|" is a finding only if EAX's profile is
         names = iso_names(motions.section.get("axis", "X"))

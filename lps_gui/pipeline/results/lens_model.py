@@ -20,6 +20,7 @@ from lps_gui.core.geometry.camera_model import CameraIntrinsics, project
 from lps_gui.core.intrinsics.residual_structure import RECALIBRATE, ResidualStructure, residual_structure
 from lps_gui.core.metrology.lens_tilts import LensMisfit, lens_misfit
 from lps_gui.core.models.pose_model import PoseSolution
+from lps_gui.io.results.sections import Flag
 
 
 @dataclass
@@ -76,12 +77,12 @@ def lens_model_check(sol: PoseSolution, obs: Any) -> LensModelCheck:
                     session.misfit_px if session is not None and session.significant else 0.0)
     flags = []
     if calibration and calibration.get("flagged"):
-        flags.append({"index": None, "kind": "lens_model", "message": (
+        flags.append(Flag.of(index=None, kind="lens_model", message=(
             f"lens model does not fit the intrinsics calibration: its residuals leave {cal_misfit:.3f} px RMS beyond "
             f"the corner noise of {float(calibration.get('noise_px') or 0):.3f} px, structured over the image; tilts "
-            f"from one target plane are then not resolved; {RECALIBRATE}")})
+            f"from one target plane are then not resolved; {RECALIBRATE}")).to_dict())
     if session is not None and session.exceeds_noise:
-        flags.append({"index": None, "kind": "lens_model", "message": session.message("this session's views")})
+        flags.append(Flag.of(index=None, kind="lens_model", message=session.message("this session's views")).to_dict())
     W = np.einsum("nij,nj->ni", sol.Q[which], own) + sol.p[which]
     seen = np.all(np.isfinite(obs.corners_px), axis=-1)
     misfit = lens_misfit(sol.R, sol.t, W, seen, np.asarray(sol.used, bool), intr, misfit_px)

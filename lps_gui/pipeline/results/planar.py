@@ -22,9 +22,10 @@ from lps_gui.core.metrology.planar_flatness import out_of_plane
 from lps_gui.io.board_file import board_to_dict
 from lps_gui.io.intrinsics_file import intrinsics_to_dict
 from lps_gui.io.results.document import FORMAT
-from lps_gui.io.session import Session
+from lps_gui.io.results.sections import Figures, Flag, Parameters, TruthComparison
 from lps_gui.pipeline.session_checks import session_inputs
-from lps_gui.sim.truth import session_truth, truth_comparison
+from lps_gui.pipeline.session_input import SessionInput
+from lps_gui.sim.truth import truth_comparison
 
 
 def _f(x: Any) -> float | None:
@@ -32,7 +33,7 @@ def _f(x: Any) -> float | None:
     return x if np.isfinite(x) else None
 
 
-def build_planar_results(session: Session, obs: Observations, est: LpsEstimate, intrinsics_source: str
+def build_planar_results(session: SessionInput, obs: Observations, est: LpsEstimate, intrinsics_source: str
                          ) -> dict[str, Any]:
     """The results.json document of a planar session (SPEC 10; schema in docs/ARCHITECTURE.md)."""
     dev = est.deviation_um(obs.target_mm)
@@ -81,6 +82,7 @@ def build_planar_results(session: Session, obs: Observations, est: LpsEstimate, 
     }
     if est.options.self_calibrate:
         parameters["intrinsics_estimated"] = dict(zip(INTRINSIC_NAMES, st.intrinsics.vector().tolist()))
+    parameters = Parameters.of(**parameters).to_dict()
     inputs = session_inputs(session, intrinsics_source, {session.corners_path.name: obs.source_sha256})
     results: dict[str, Any] = {
         "format": FORMAT, "software": {"name": "lps-calib", "version": __version__},
@@ -90,12 +92,13 @@ def build_planar_results(session: Session, obs: Observations, est: LpsEstimate, 
         "session_meta": {k: session.meta.get(k) for k in ("camera", "stage", "plan", "stage_spec", "created")
                          if k in session.meta},
         "parameters": parameters, "positions": positions, "figures": {"planar": planar},
-        "flags": est.flags, "timings_s": dict(est.timings_s),
+        "flags": [Flag.of(**f).to_dict() for f in est.flags], "timings_s": dict(est.timings_s),
     }
-    truth = session_truth(session)
+    truth = session.truth
     if truth is not None:
-        results["truth_comparison"] = truth_comparison(obs, est, truth, positions)
+        results["truth_comparison"] = TruthComparison.of(**truth_comparison(obs, est, truth, positions)).to_dict()
         _add_truth_to_nodes(planar["nodes"], obs, positions, valid)
+    results["figures"] = Figures.of(planar=planar).to_dict()  # written through the readers' definition
     results["summary"] = summary_csv_rows(results)
     return results
 

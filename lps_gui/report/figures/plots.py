@@ -35,9 +35,10 @@ from lps_gui.report.figures.spec import (
 )
 from lps_gui.report.figures.targets import with_target_stretches
 from lps_gui.sim.truth import centred, residual_from_line, true_deviation_um
+from lps_gui.io.results.keys import DEVIATION_UM, MEASURED_MM, SIGMA_TOTAL_UM
 
 TRUTH_AT_MEASUREMENT = "truth_plane_deviation_um"  # the true deviation where the positions are measured (sim/truth)
-TRUTH_KEYS = ("deviation_um", "straightness_um_1", "straightness_um_2", "roll_urad", "pitch_urad", "yaw_urad",
+TRUTH_KEYS = (DEVIATION_UM, "straightness_um_1", "straightness_um_2", "roll_urad", "pitch_urad", "yaw_urad",
               "image_rotation_urad")
 FIGURE_KEYS = ("positions", "deviation", "step", "straightness", "angles", "residuals", "spectrum")
 
@@ -53,7 +54,7 @@ def position_columns(results: Results | dict[str, Any] | None) -> dict[str, np.n
     """
     results = None if results is None else as_results(results)
     rows = results.sorted_positions() if results is not None else []
-    numeric = ("index", "run", "target_mm", "measured_mm", "deviation_um", "sigma_um", "sigma_total_um",
+    numeric = ("index", "run", "target_mm", MEASURED_MM, DEVIATION_UM, "sigma_um", SIGMA_TOTAL_UM,
                "rms_px", "n_corners", "straightness_um_1", "straightness_um_2", "straightness_sigma_um_1",
                "straightness_sigma_um_2", "roll_urad", "pitch_urad", "yaw_urad", "roll_sigma_urad",
                "pitch_sigma_urad", "yaw_sigma_urad", "image_rotation_urad", "image_rotation_sigma_urad")
@@ -116,7 +117,7 @@ def truth_columns(results: Results | dict[str, Any] | None, truth: dict[str, Any
         out = {key: results.column(f"truth_{key}", rows) for key in TRUTH_KEYS}
         plane = results.column(TRUTH_AT_MEASUREMENT, rows)
         if np.isfinite(plane).any():  # like with like: the positions are measured at the board plane (issue 37)
-            out["deviation_um"] = plane
+            out[DEVIATION_UM] = plane
         return out
     if not truth or "positions_mm" not in truth:
         return None
@@ -130,7 +131,7 @@ def truth_columns(results: Results | dict[str, Any] | None, truth: dict[str, Any
         return None
     ref_index = results.parameters.reference_index
     ref = int(np.flatnonzero(idx == ref_index)[0]) if ref_index in set(idx.tolist()) else int(np.flatnonzero(compared)[0])
-    out: dict[str, np.ndarray] = {"deviation_um": true_deviation_um(s_true_mm[idx], cols["target_mm"], ref)}
+    out: dict[str, np.ndarray] = {DEVIATION_UM: true_deviation_um(s_true_mm[idx], cols["target_mm"], ref)}
     straight = np.asarray(truth.get("straightness_um") or np.zeros((s_true_mm.size, 2)), dtype=float)[idx]
     resid = residual_from_line(straight, cols["target_mm"], compared)  # shape (K, 2): distance from the best line
     out["straightness_um_1"], out["straightness_um_2"] = resid[:, 0], resid[:, 1]
@@ -196,7 +197,7 @@ def positions_figure(cols: dict[str, np.ndarray]) -> FigureSpec:
     """Measured position d_i against its target: the line every other plot magnifies."""
     series = []
     for d, sel in _by_direction(cols):
-        series.append(Series(cols["target_mm"][sel], cols["measured_mm"][sel], f"measured {_dir_label(d)}",
+        series.append(Series(cols["target_mm"][sel], cols[MEASURED_MM][sel], f"measured {_dir_label(d)}",
                              "markers", _color(d), marked=cols["outlier"][sel]))
     return FigureSpec("positions", "Measured position vs target", "target position [mm]", "measured position d\u1d62 [mm]",
                       series)
@@ -212,7 +213,7 @@ def deviation_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] |
     notes = []
     keep = ~cols["outlier"]
     for d, sel in _by_direction(cols):
-        x, y = cols["target_mm"][sel], cols["deviation_um"][sel]
+        x, y = cols["target_mm"][sel], cols[DEVIATION_UM][sel]
         t, mean, std, count = per_target_stats(x, y, keep[sel])
         if count.size and count.max() > 1:
             runs = np.unique(cols["run"][sel][np.isfinite(cols["run"][sel])]).size if "run" in cols else 0
@@ -230,7 +231,7 @@ def deviation_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] |
                                  band_low=y - sig, band_high=y + sig, marked=cols["outlier"][sel]))
             notes.append(f"{_dir_label(d)}: band = \u00b12 sigma (measurement noise)")
         if tcols is not None:
-            tt, tmean, _, _ = per_target_stats(x, tcols["deviation_um"][sel], np.ones(x.shape, bool))
+            tt, tmean, _, _ = per_target_stats(x, tcols[DEVIATION_UM][sel], np.ones(x.shape, bool))
             series.append(_truth_series(tt, tmean, f"truth {_dir_label(d)}", TRUTH_COLORS[d]))
     return FigureSpec("deviation", "Positioning deviation vs target", "target position [mm]", "deviation [\u00b5m]",
                       series, "; ".join(notes))
@@ -274,8 +275,8 @@ def step_deviation(cols: dict[str, np.ndarray], deviation_um: np.ndarray) -> lis
 def step_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] | None) -> FigureSpec:
     """How much each step differs from the commanded step: the lead-screw signature."""
     series = []
-    truth_steps = dict((d, (x, y)) for d, x, y in step_deviation(cols, tcols["deviation_um"])) if tcols else {}
-    for d, x, y in step_deviation(cols, cols["deviation_um"]):
+    truth_steps = dict((d, (x, y)) for d, x, y in step_deviation(cols, tcols[DEVIATION_UM])) if tcols else {}
+    for d, x, y in step_deviation(cols, cols[DEVIATION_UM]):
         t, mean, _, count = per_target_stats(x, y, np.ones(x.shape, bool))
         label = f"step {_dir_label(d)}" + (" (mean over runs)" if count.size and count.max() > 1 else "")
         series.append(Series(t, mean, label, "markers" if t.size > 150 else "line+markers", _color(d)))

@@ -28,6 +28,7 @@ from lps_gui.io.results.document import finite_number as _num
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import Iso230
 from lps_gui.report.figures.plots import TRUTH_AT_MEASUREMENT, position_columns
+from lps_gui.io.results.keys import DEVIATION_UM, MEASURED_MM, SIGMA_TOTAL_UM
 
 
 @dataclass(frozen=True)
@@ -284,7 +285,7 @@ def limits_notes(results: Results | dict[str, Any]) -> list[str]:
     square_mm = results.board.square_mm if results.board else None
     cols = position_columns(results)
     sig = cols["sigma_um"][np.isfinite(cols["sigma_um"])]
-    tot = cols["sigma_total_um"][np.isfinite(cols["sigma_total_um"])]
+    tot = cols[SIGMA_TOTAL_UM][np.isfinite(cols[SIGMA_TOTAL_UM])]
     notes = [
         "Board scale: every length is measured in units of the board's square size "
         f"({fmt(square_mm, 4)} mm as given). An error in the printed square size is a pure "
@@ -378,7 +379,7 @@ def outlier_rows(results: Results | dict[str, Any]) -> list[dict[str, Any]]:
 
 POSITION_TABLE_COLUMNS = (  # (key, header, decimals or None for text, width in mm)
     ("index", "#", 0, 9), ("run", "run", 0, 7), ("direction", "dir", None, 6), ("target_mm", "target\n[mm]", 3, 13),
-    ("measured_mm", "measured\n[mm]", 4, 15), ("deviation_um", "deviation\n[\u00b5m]", 2, 14),
+    (MEASURED_MM, "measured\n[mm]", 4, 15), (DEVIATION_UM, "deviation\n[\u00b5m]", 2, 14),
     ("truth_deviation_um", "truth dev.\n[\u00b5m]", 2, 16),
     ("sigma_um", "1\u03c3 noise\n[\u00b5m]", 2, 13), ("rms_px", "rms\n[px]", 3, 10),
     ("straightness_um_1", "str. v1\n[\u00b5m]", 2, 13), ("straightness_um_2", "str. v2\n[\u00b5m]", 2, 13),

@@ -25,6 +25,7 @@ from lps_gui.report.pages.sections import NO_SPEC, stage_spec
 from lps_gui.report.pages.summary import fmt, iso_rows, u_key
 from lps_gui.report.pages.verdict import verdicts
 from lps_gui.report.pdf.document import load_results, load_session_meta
+from lps_gui.io.results.keys import DEVIATION_UM
 
 COMPARE_FILE = "as-found-as-left.pdf"
 AFTER_COLORS = {"+": "#2a9d3c", "-": "#a8326e"}
@@ -68,14 +69,14 @@ def comparison_figure(before: Results, after: Results) -> FigureSpec:
     for results, tag, dashed in ((before, "as found", True), (after, "as left", False)):
         cols = position_columns(results)
         for d, sel in _by_direction(cols):
-            t, mean, _, _ = per_target_stats(cols["target_mm"][sel], cols["deviation_um"][sel], ~cols["outlier"][sel])
+            t, mean, _, _ = per_target_stats(cols["target_mm"][sel], cols[DEVIATION_UM][sel], ~cols["outlier"][sel])
             color = (FORWARD_COLOR if d == "+" else BACKWARD_COLOR) if dashed else AFTER_COLORS[d]
             series.append(Series(t, mean, f"{tag} {_dir_label(d)}", "line+markers", color, dashed=dashed))
     return FigureSpec("compare", "Deviation as found and as left", "target position [mm]", "deviation [\u00b5m]", series,
                       "mean over runs per target and direction")
 
 
-def session_E_um(results: Results | dict[str, Any], key: str = "deviation_um") -> float:
+def session_E_um(results: Results | dict[str, Any], key: str = DEVIATION_UM) -> float:
     """E (ISO 230-2, um) of one deviation column of results.json: measured, or the simulator's truth."""
     from lps_gui.core.metrology.iso230 import figures_for_session
 

@@ -193,7 +193,7 @@ def build_results(session: Session, obs: Observations, est: LpsEstimate, intrins
     results = add_uncertainty(results, session)  # environment, GUM budget, U (k = 2) per figure
     if obs.D == 1:
         results = add_asme_results(results, session, obs, est)  # ASME B5.64 names, TUR, tests
-        results = add_verdict(results)  # the verdict, U (k = 2) and the decision rule, machine-readable
+    results = add_verdict(results)  # the verdict, U (k = 2) and the decision rule, machine-readable (line or plane)
     return add_self_check(results)  # a simulated session: does its truth contradict a figure or a finding?
 
 

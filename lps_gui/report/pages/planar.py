@@ -15,6 +15,7 @@ from dataclasses import replace
 from typing import Any
 
 from lps_gui.errors import InputError
+from lps_gui.io.results.document import finite_number as finite_or_none
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import Figures, SpanResolution, TruthComparison
 from lps_gui.report.figures.plots import planar_figures_from_results
@@ -22,7 +23,7 @@ from lps_gui.report.pages import sections as R
 from lps_gui.report.pages.error_motions import paint_error_motions_page
 from lps_gui.report.pages.summary import DASH, Row, fmt, table_cells
 from lps_gui.report.pages.targets import targets_section
-from lps_gui.report.pages.verdict import overall, verdicts
+from lps_gui.report.pages.verdict import Verdict, line_verdicts, overall, verdicts
 
 PLANAR_TABLE_COLUMNS = (  # key, header, decimals, width mm
     ("index", "#", None, 8), ("run", "run", None, 7), ("direction", "dir", None, 7),
@@ -106,24 +107,50 @@ def planar_summary_rows(results: Results | dict[str, Any]) -> list[Row]:
         a = pl.per_axis.get(axis)
         if not a:
             continue
+        ax, ot = axis.lower(), other.lower()
+        axis_k2 = _axis_figures_k2(results, axis)
+        unresolved = _unresolved(a.straightness)  # no value, hence no U (never one smaller than its noise)
         rows.append(Row(f"Straightness of {axis} (in the plane, along {other}), worst line", a.straightness_um_max,
                         "\u00b5m", f"{a.lines} line(s); per-point 1\u03c3 {fmt(a.straightness_sigma_um)} \u00b5m",
-                        unresolved=_unresolved(a.straightness)))
+                        unresolved=unresolved, key=f"straightness_{ax}_along_{ot}_max",
+                        u_k2=None if unresolved else finite_or_none(axis_k2.get("straightness_span_max"))))
         oop = a.out_of_plane
         if oop:
             rows.append(Row(f"Straightness of {axis} out of the plane (along the normal), worst line", oop.span_um,
-                            "\u00b5m", f"per-target 1\u03c3 {fmt(oop.sigma_um)} \u00b5m", unresolved=_unresolved(oop)))
+                            "\u00b5m", f"per-target 1\u03c3 {fmt(oop.sigma_um)} \u00b5m", unresolved=_unresolved(oop),
+                            key=f"out_of_plane_straightness_{ax}_max"))
         iso = a.iso230_2.iso230_2 if a.iso230_2 else None
         for key, name in (("A_um", "accuracy A"), ("R_um", "repeatability R"), ("E_um", "systematic E"),
                           ("B_um", "reversal B")):
-            if iso and iso.number(key) is not None:
-                rows.append(Row(f"{axis} ISO 230-2 {name} (worst line)", iso.number(key), "\u00b5m"))
+            if iso and iso.number(key) is not None:  # U from that axis's budget, the U its verdict row compares
+                rows.append(Row(f"{axis} ISO 230-2 {name} (worst line)", iso.number(key), "\u00b5m",
+                                key=f"iso230_2_{ax}_{key[:-3]}", u_k2=finite_or_none(axis_k2.get(key))))
     p = results.parameters
     n_used = p.n_used if p.n_used is not None else DASH
     rows.append(Row("Corner noise (a posteriori)", p.sigma_px, "px"))
     rows.append(Row("Views used / total", None if p.n_used is None else float(p.n_used), "",
                     f"{p.n_outliers} outlier view(s)", shown=f"{n_used} / {p.n_views if p.n_views is not None else n_used}"))
     return rows
+
+
+def _axis_figures_k2(results: Results, axis: str) -> Mapping[str, Any]:
+    """U (k = 2) of one axis's figures: that axis's budget (``uncertainty.per_axis``), else the top-level one."""
+    unc = results.uncertainty
+    if unc is None:
+        return {}
+    axis_unc = unc.per_axis.get(axis)
+    return axis_unc.figures_k2 if axis_unc is not None else unc.figures_k2
+
+
+CSV_NAMES = {"squareness_urad": "squareness", "scale_x_ppm": "scale_x", "scale_y_ppm": "scale_y"}  # report key ->
+# summary.csv name where the two differ (the others are the same)
+
+
+def planar_csv_columns(results: Results | dict[str, Any]) -> dict[str, tuple[float | None, str]]:
+    """summary.csv's U (k = 2) and note of every planar figure page 1 prints, by summary.csv name: the report's
+    own rows, so the file and the PDF cannot disagree; an unresolved figure has no U and says why."""
+    return {CSV_NAMES.get(r.key, r.key): (None if r.unresolved else r.u_k2, r.unresolved.replace("\u00b5", "u"))
+            for r in planar_summary_rows(results) if r.key}
 
 
 def axis_results(results: Results | dict[str, Any], axis: str) -> Results | None:
@@ -143,6 +170,36 @@ def axis_results(results: Results | dict[str, Any], axis: str) -> Results | None
                                 f"figures.planar.per_axis.{axis}.iso230_2", results.source)
     unc = results.uncertainty.per_axis.get(axis) if results.uncertainty else None
     return replace(results, figures=figures, uncertainty=unc)
+
+
+SQUARENESS_CHECK = "Squareness"  # stage_spec ``squareness_urad``: the limit on |squareness| (no halving: an angle)
+
+
+def planar_verdicts(results: Results, spec: dict[str, Any]) -> list[Verdict]:
+    """The verdict rows of a planar session: each axis's line rows ("X: Positional accuracy", from that axis's
+    ISO 230-2 figures and its U) and, when the specification gives ``squareness_urad``, the squareness row
+    (|squareness| with the U page 1's geometry table prints, one decision rule)."""
+    from lps_gui.core.metrology.decision_rule import decide
+    from lps_gui.report.pages.verdict import FAIL_COLOR, GREY, PASS_COLOR
+
+    rows = [replace(v, name=f"{axis}: {v.name}") for axis in "XY" if (ar := axis_results(results, axis)) is not None
+            for v in line_verdicts(ar, spec)]
+    limit = spec.get("squareness_urad")
+    if limit is None:
+        return rows
+    try:
+        limit = float(limit)
+    except (TypeError, ValueError):
+        raise InputError(f"stage spec: squareness_urad must be a number in \u00b5rad, got {limit!r}") from None
+    sq = next((r for r in planar_summary_rows(results) if r.key == "squareness_urad"), None)
+    measured = None if sq is None or sq.value is None else abs(float(sq.value))
+    u = None if sq is None else sq.u_k2
+    word = decide(measured, limit, None if measured is None else measured <= limit, u)
+    note = "|angle +X to +Y minus 90\u00b0| against the limit"
+    if word == "not resolved":
+        note = f"the limit lies within \u00b1U of the figure (ISO 14253-1); {note}"
+    return rows + [Verdict(SQUARENESS_CHECK, measured, u, limit, "\u00b5rad", word,
+                           {"PASS": PASS_COLOR, "FAIL": FAIL_COLOR}.get(word, GREY), note, "|squareness|")]
 
 
 def _unresolved(span: SpanResolution | None) -> str:
@@ -196,7 +253,7 @@ def paint_planar_report(flow: Any, meta: dict[str, Any], results: Results, title
         flow.paragraph(line, size_pt=9.0, color="#c00000")
     spec = R.stage_spec(meta, results)
     axes = {axis: ar for axis in "XY" if (ar := axis_results(results, axis)) is not None}
-    verdict_rows = [replace(v, name=f"{axis}: {v.name}") for axis, ar in axes.items() for v in verdicts(ar, spec)]
+    verdict_rows = verdicts(results, spec)  # the rows results.json and summary.csv state
     flow.heading("Verdict", 11)
     flow.paragraph(overall(verdict_rows) if spec else R.NO_SPEC, size_pt=10.0 if spec else 8.5,
                    color=R.overall_color(verdict_rows) if spec else R.GREY)

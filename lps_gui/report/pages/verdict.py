@@ -63,10 +63,21 @@ def _decide(c: SpecCheck, u: float | None) -> str:
 
 
 def verdicts(results: Results | dict[str, Any], spec: dict[str, Any] | None) -> list[Verdict]:
-    """The verdict rows of results against a stage specification (empty without one)."""
+    """The verdict rows of results against a stage specification (empty without one): a line's, or a planar
+    session's per-axis rows and its squareness (:func:`lps_gui.report.pages.planar.planar_verdicts`), so page 1,
+    the GUI, results.json and summary.csv read one list."""
     if not spec:
         return []
     results = as_results(results)
+    if results.planar:
+        from lps_gui.report.pages.planar import planar_verdicts
+
+        return planar_verdicts(results, spec)
+    return line_verdicts(results, spec)
+
+
+def line_verdicts(results: Results, spec: dict[str, Any]) -> list[Verdict]:
+    """The verdict rows of one axis's results (a line session's, or one axis of a plane shaped like one)."""
     figures_k2 = results.uncertainty.figures_k2 if results.uncertainty else {}
     half = 0.5 if str(spec.get("limits", "plus_minus")) == "plus_minus" else 1.0
     runs = runs_per_direction(dict(results.figures.raw))

@@ -166,6 +166,12 @@ class Driver:
         self.check("planar plan editor")
         self.shot(w.docks["capture"], "capture-planar")
         cap.planar_editor.enabled.setChecked(False)
+        setup = cap.report_setup  # the signing fields (issue 37): specification, environment, identification
+        setup.toggle.setChecked(True)
+        self.show_widget(setup.fields)
+        self.check("report set-up unfolded")
+        self.shot(w.docks["capture"], "capture-report-setup")
+        setup.toggle.setChecked(False)
         self.click(cap.start_btn)
         self.wait(lambda: (folder / "results.json").exists() and cap.start_btn.isEnabled(), "the capture", 120.0)
         self.wait(lambda: w.results_panel.session_dir == folder and not w.results_panel.drawing,

@@ -43,6 +43,7 @@ from lps_gui.gui.stage.console import StageConsole
 from lps_gui.gui.stage.controller import StageController
 from lps_gui.gui.stage.declared import show_declared, stop_action
 from lps_gui.gui.stage.dro import PositionReadout
+from lps_gui.gui.fit import compact_buttons
 from lps_gui.gui.stage.sources import BAUD_RATES, open_stage_source, source_from_text, stage_choices
 from lps_gui.hardware.capabilities import Settings, WorkCoordinates
 from lps_gui.hardware.registry import DEFAULT_PORT_KIND, specs_help
@@ -116,7 +117,7 @@ class StagePanel(QWidget):
         for r, ax in enumerate(AXES):
             for c, sign in enumerate((-1, +1)):
                 b = QPushButton(f"{ax}{'−' if sign < 0 else '+'}")
-                b.setMinimumWidth(b.fontMetrics().horizontalAdvance("XX−") + 24)  # not the style's 80 px: the pad fits
+                compact_buttons(b, padding=32)  # not the style's 80 px: the pad fits a 1000 px screen's dock
                 b.clicked.connect(lambda _=False, a=ax, s=sign: self.jog(a, s))
                 b.pressed.connect(lambda a=ax, s=sign: self._hold_jog_start(a, s))
                 b.released.connect(self._hold_jog_stop)

@@ -1,4 +1,5 @@
-"""The stage panel at 1000x700 (issue 37): no sideways scroll bar in its dock for any kind of stage connected."""
+"""The panels at 1000x700 (issue 37): no sideways scroll bar in the stage dock for any kind of stage connected, nor in
+any other dock that scrolls."""
 from __future__ import annotations
 
 import stat
@@ -59,3 +60,19 @@ def test_the_stage_panel_needs_no_sideways_scrolling_at_1000_px(qtbot, window, m
         assert not shown, f"{kind}: the panel needs {need} px, its dock shows {have} px"
         window.stage_ctl.detach("test")
         qtbot.waitUntil(lambda: not window.stage_ctl.connected, timeout=5000)
+
+
+def test_no_scrolled_panel_needs_sideways_scrolling_at_1000_px(qtbot, window, monkeypatch):
+    import lps_gui.gui.main_window as main_window
+
+    monkeypatch.setattr(main_window, "clamp_to_screen", lambda w: None)
+    window.resize(*LAPTOP)
+    window.default_layout()
+    for name in main_window.SCROLLED:
+        window.show_panel(name)
+        qtbot.wait(20)
+        QApplication.processEvents()
+        area = window.docks[name].widget()
+        assert not area.horizontalScrollBar().isVisible(), (
+            f"{name}: the panel needs {area.widget().minimumSizeHint().width()} px, its dock shows "
+            f"{area.viewport().width()} px")

@@ -85,6 +85,13 @@ class Driver:
         if frame.width() > area.width() or frame.height() > area.height():
             self.problems.append(f"{step}: window {frame.width()}x{frame.height()} exceeds the screen "
                                  f"{area.width()}x{area.height()}")
+        from PySide6.QtWidgets import QScrollArea
+
+        for name, dock in w.docks.items():  # a panel wider than its dock scrolls sideways: cut off on a laptop
+            area = dock.widget()
+            if isinstance(area, QScrollArea) and dock.isVisible() and area.horizontalScrollBar().isVisible():
+                self.problems.append(f"{step}: the {name} dock scrolls sideways (its panel needs "
+                                     f"{area.widget().minimumSizeHint().width()} px, it shows {area.viewport().width()})")
         import pyqtgraph as pg
 
         for plot in w.findChildren(pg.PlotWidget):

@@ -20,8 +20,13 @@ SPEC = {"accuracy_um": 20, "repeatability_um": 5, "straightness_um": 38}
 def estimated(tmp_path_factory):
     folder = tmp_path_factory.mktemp("verdict") / "s"
     simulate_point_session(replace(small_spec(seed=3, views=12, directions="both", runs=2)), folder)
+    return estimate_with_spec(folder, SPEC)
+
+
+def estimate_with_spec(folder, spec):
+    """(folder, results, summary.csv rows by name) of the session estimated with ``spec`` as its stage_spec."""
     meta = json.loads((folder / "session.json").read_text())
-    meta["stage_spec"] = SPEC
+    meta["stage_spec"] = spec
     (folder / "session.json").write_text(json.dumps(meta))
     results = estimate_session(folder)
     with open(folder / "summary.csv", newline="") as f:
@@ -82,13 +87,7 @@ def planar_estimated(tmp_path_factory):
     folder = tmp_path_factory.mktemp("planar-verdict") / "s"
     assert lps_main(["simulate", "--planar", "--points", str(folder), "--preset", "small-planar", "--directions",
                      "both", "--runs", "2", "--seed", "3"]) == 0
-    meta = json.loads((folder / "session.json").read_text())
-    meta["stage_spec"] = PLANAR_SPEC
-    (folder / "session.json").write_text(json.dumps(meta))
-    results = estimate_session(folder)
-    with open(folder / "summary.csv", newline="") as f:
-        rows = {r["name"]: r for r in csv.DictReader(f)}
-    return folder, results, rows
+    return estimate_with_spec(folder, PLANAR_SPEC)
 
 
 def test_a_planar_session_states_its_verdict_u_and_rule_per_axis_and_for_squareness(planar_estimated):

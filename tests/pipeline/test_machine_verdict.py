@@ -10,7 +10,7 @@ from pypdf import PdfReader
 from lps_gui.core.truth.simulate import small_spec
 from lps_gui.pipeline.estimate import estimate_session
 from lps_gui.report.pages.summary import summary_rows
-from lps_gui.report.pages.verdict import verdicts
+from lps_gui.report.pages.session_verdict import session_verdicts as verdicts
 from lps_gui.sim.points import simulate_point_session
 
 SPEC = {"accuracy_um": 20, "repeatability_um": 5, "straightness_um": 38}

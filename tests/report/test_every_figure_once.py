@@ -18,7 +18,7 @@ import pytest
 from lps_gui.io.results.model import as_results
 from lps_gui.report.pages.planar import CSV_NAMES, planar_summary_rows
 from lps_gui.report.pages.summary import summary_rows
-from lps_gui.report.pages.verdict import verdicts
+from lps_gui.report.pages.session_verdict import session_verdicts as verdicts
 
 pytestmark = pytest.mark.gui
 

@@ -22,10 +22,11 @@ def check_key(name: str) -> str:
 
 def verdict_section(results: dict[str, Any]) -> dict[str, Any]:
     """results.json ``verdict``: the decision rule, the overall word and line, one row per specified figure."""
-    from lps_gui.report.pages.verdict import overall, overall_word, verdicts
+    from lps_gui.report.pages.session_verdict import session_verdicts
+    from lps_gui.report.pages.verdict import overall, overall_word
 
     spec = (results.get("session_meta") or {}).get("stage_spec") or results.get("stage_spec")
-    rows = verdicts(results, spec)
+    rows = session_verdicts(results, spec)
     return {
         "decision_rule": DECISION_RULE,
         "overall": overall_word([r.verdict for r in rows]),

@@ -23,7 +23,7 @@ from lps_gui.report.pages import sections as R
 from lps_gui.report.pages.error_motions import paint_error_motions_page
 from lps_gui.report.pages.summary import DASH, Row, fmt, table_cells
 from lps_gui.report.pages.targets import targets_section
-from lps_gui.report.pages.verdict import Verdict, line_verdicts, overall, verdicts
+from lps_gui.report.pages.verdict import Verdict, line_verdicts, overall
 
 PLANAR_TABLE_COLUMNS = (  # key, header, decimals, width mm
     ("index", "#", None, 8), ("run", "run", None, 7), ("direction", "dir", None, 7),
@@ -253,7 +253,7 @@ def paint_planar_report(flow: Any, meta: dict[str, Any], results: Results, title
         flow.paragraph(line, size_pt=9.0, color="#c00000")
     spec = R.stage_spec(meta, results)
     axes = {axis: ar for axis in "XY" if (ar := axis_results(results, axis)) is not None}
-    verdict_rows = verdicts(results, spec)  # the rows results.json and summary.csv state
+    verdict_rows = planar_verdicts(results, spec) if spec else []  # the rows results.json and summary.csv state
     flow.heading("Verdict", 11)
     flow.paragraph(overall(verdict_rows) if spec else R.NO_SPEC, size_pt=10.0 if spec else 8.5,
                    color=R.overall_color(verdict_rows) if spec else R.GREY)

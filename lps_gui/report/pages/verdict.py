@@ -63,17 +63,11 @@ def _decide(c: SpecCheck, u: float | None) -> str:
 
 
 def verdicts(results: Results | dict[str, Any], spec: dict[str, Any] | None) -> list[Verdict]:
-    """The verdict rows of results against a stage specification (empty without one): a line's, or a planar
-    session's per-axis rows and its squareness (:func:`lps_gui.report.pages.planar.planar_verdicts`), so page 1,
-    the GUI, results.json and summary.csv read one list."""
+    """The verdict rows of a line session's results against a stage specification (empty without one); any
+    session's, a plane's too: :func:`lps_gui.report.pages.session_verdict.session_verdicts`."""
     if not spec:
         return []
-    results = as_results(results)
-    if results.planar:
-        from lps_gui.report.pages.planar import planar_verdicts
-
-        return planar_verdicts(results, spec)
-    return line_verdicts(results, spec)
+    return line_verdicts(as_results(results), spec)
 
 
 def line_verdicts(results: Results, spec: dict[str, Any]) -> list[Verdict]:

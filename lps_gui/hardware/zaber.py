@@ -8,14 +8,15 @@ daisy chain numbers them).
 Units: zaber-motion converts mm to microsteps only for a device it has
 *identified* from Zaber's device database, which it fetches from Zaber's web
 service (``api.zaber.io/device-db/v2/public/device/ID?fw=...``) or reads from
-Zaber's downloadable SQLite file; neither is available offline, and the
-library does not accept a hand-made database (an empty web-service answer
-crashes its core). So the driver opens devices unidentified
-(``detect_devices(identify_devices=False)``), talks native units through the
-library, and converts itself with the manual's rules: position = mm / microstep
-size, where microstep size = the stage's full step (``full_step_um``, from its
-datasheet: 3.048 um for the X-LSM series) / ``get resolution`` (microsteps per
-step, read from the device); speed = microsteps/s x 1.6384.
+Zaber's downloadable SQLite file. So the driver asks the library to identify
+the device and, when it can, takes the scales from it
+(``convert_to_native_units`` for position, speed and acceleration); where the
+database is out of reach (a lab PC offline: the library raises
+DeviceDbFailedException) it converts with the manual's rules: position = mm /
+microstep size, where microstep size = the stage's full step
+(``full_step_um``, from its datasheet: 3.048 um for the X-LSM series) / ``get
+resolution`` (microsteps per step, read from the device); speed = microsteps/s
+x 1.6384. ``describe()["units_from"]`` says which.
 """
 from __future__ import annotations
 
@@ -55,6 +56,9 @@ class ZaberStage(Stage, Settings, Jogging, FeedHold):
         self.timeout_s = timeout_s
         self.poll_interval_s = poll_interval_s
         self.microstep_mm = self.full_step_um / 64 / 1000.0
+        self.units_from = "manual"  # or "zaber-motion": who gave the scales (describe())
+        self._speed_per_mm_s = VELOCITY_SCALE / self.microstep_mm  # native speed per mm/s
+        self._accel_per_mm_s2 = ACCEL_SCALE / self.microstep_mm  # native acceleration per mm/s^2
         self.serial_number: int | None = None
         self._conn = None
         self._axis = None
@@ -114,12 +118,37 @@ class ZaberStage(Stage, Settings, Jogging, FeedHold):
         try:
             with self._talk("reading the device"):
                 resolution = int(self._axis.settings.get("resolution"))
-                self.microstep_mm = self.full_step_um / resolution / 1000.0
+                self._set_scales(self.full_step_um / resolution / 1000.0)
+                self._library_scales(device)
             self._read_travel()
         except BaseException:
             self.disconnect()  # a half-read device is not connected
             raise
         self.events.emit(StageEvent("connected", text=f"Zaber device {self.device_address} on {self.port}"))
+
+    def _set_scales(self, microstep_mm: float, speed_per_mm_s: float | None = None,
+                    accel_per_mm_s2: float | None = None) -> None:
+        self.microstep_mm = microstep_mm
+        self._speed_per_mm_s = speed_per_mm_s if speed_per_mm_s is not None else VELOCITY_SCALE / microstep_mm
+        self._accel_per_mm_s2 = accel_per_mm_s2 if accel_per_mm_s2 is not None else ACCEL_SCALE / microstep_mm
+
+    def _library_scales(self, device) -> None:
+        """The library's own unit scales when it can identify the device; else the manual's stay (say why once)."""
+        from zaber_motion import Units
+        from zaber_motion import exceptions as zx
+
+        try:
+            device.identify()
+            native = self._axis.settings.convert_to_native_units
+            per_mm = native("pos", 1.0, Units.LENGTH_MILLIMETRES)
+            self._set_scales(1.0 / per_mm, native("maxspeed", 1.0, Units.VELOCITY_MILLIMETRES_PER_SECOND),
+                             native("accel", 1.0, Units.ACCELERATION_MILLIMETRES_PER_SECOND_SQUARED))
+            self.units_from = "zaber-motion"
+        except zx.DeviceDbFailedException:
+            self.units_from = "manual"
+            self.events.emit(StageEvent("message", text=(
+                "Zaber: the device database is out of reach (offline?); units from the manual's rules with a "
+                f"{self.full_step_um:g} um full step")))
 
     def _read_travel(self) -> None:
         with self._talk("reading the travel limits"):
@@ -148,7 +177,7 @@ class ZaberStage(Stage, Settings, Jogging, FeedHold):
         return round(mm / self.microstep_mm)
 
     def _speed(self, feed_mm_min: float) -> float:
-        return feed_mm_min / 60.0 / self.microstep_mm * VELOCITY_SCALE
+        return feed_mm_min / 60.0 * self._speed_per_mm_s
 
     def _check_axis(self, axis: str | None) -> None:
         if (axis or self.axis) != self.axis:
@@ -270,16 +299,17 @@ class ZaberStage(Stage, Settings, Jogging, FeedHold):
         return f"travel: {by_name['limit.min']:g} .. {by_name['limit.max']:g} mm (limit.min, limit.max; the device refuses moves beyond)"
 
     def _from_native(self, v: float, kind: str) -> float:
-        return {"speed": v / VELOCITY_SCALE * self.microstep_mm * 60.0, "accel": v / ACCEL_SCALE * self.microstep_mm,
+        return {"speed": v / self._speed_per_mm_s * 60.0, "accel": v / self._accel_per_mm_s2,
                 "position": v * self.microstep_mm, "raw": v}[kind]
 
     def _to_native(self, v: float, kind: str) -> float:
-        return {"speed": self._speed(v), "accel": v / self.microstep_mm * ACCEL_SCALE,
+        return {"speed": self._speed(v), "accel": v * self._accel_per_mm_s2,
                 "position": v / self.microstep_mm, "raw": v}[kind]
 
     def describe(self) -> dict:
         return {**super().describe(), "port": self.port, "device": self.device_address, "axis_number": self.axis_number,
-                "serial_number": self.serial_number, "microstep_um": self.microstep_mm * 1000.0}
+                "serial_number": self.serial_number, "microstep_um": self.microstep_mm * 1000.0,
+                "units_from": self.units_from}
 
 
 def _first_line(exc: BaseException) -> str:

@@ -25,18 +25,54 @@ def rig():
 
 
 def test_connect_exchange_is_what_the_library_sends(rig):
-    """PyMeasure-style record: the driver reads the serial number (which also proves the device is there), the
-    resolution and the travel limits; message ids and checksums are the library's, WR until homed."""
+    """PyMeasure-style record: the driver reads the serial number (which also proves the device is there) and the
+    resolution, asks the library to identify the device (its queries; the device database is out of reach here, so
+    the manual's units stay), then the travel limits; message ids and checksums are the library's, WR until homed."""
     emu, stage = rig
     assert emu.device.log == [
         ("/1 0 00 get system.serial:2C", "@01 0 00 OK IDLE WR 36036"),
         ("/1 1 01 get resolution:29", "@01 1 01 OK IDLE WR 64"),
-        ("/1 1 02 get limit.min:EB", "@01 1 02 OK IDLE WR 0"),
-        ("/1 1 03 get limit.max:E8", "@01 1 03 OK IDLE WR 2099738"),
+        ("/1 0 02 get deviceid:40", "@01 0 02 OK IDLE WR 50081"),
+        ("/1 0 03 get system.serial:29", "@01 0 03 OK IDLE WR 36036"),
+        ("/1 0 04 get version:75", "@01 0 04 OK IDLE WR 7.38"),
+        ("/1 0 05 get version.build:36", "@01 0 05 OK IDLE WR 17916"),
+        ("/1 0 06 get device.hw.modified:8D", "@01 0 06 RJ IDLE WR BADCOMMAND"),
+        ("/1 0 07 get comm.command.packets.max:32", "@01 0 07 RJ IDLE WR BADCOMMAND"),
+        ("/1 0 08 get comm.word.size.max:84", "@01 0 08 RJ IDLE WR BADCOMMAND"),
+        ("/1 0 09 get get.settings.max:23", "@01 0 09 RJ IDLE WR BADCOMMAND"),
+        ("/1 0 10 get system.axiscount:CD", "@01 0 10 OK IDLE WR 1"),
+        ("/1 1 11 get resolution:28", "@01 1 11 OK IDLE WR 64"),
+        ("/1 1 12 get peripheralid:82", "@01 1 12 RJ IDLE WR BADCOMMAND"),
+        ("/1 1 13 get limit.min:E9", "@01 1 13 OK IDLE WR 0"),
+        ("/1 1 14 get limit.max:E6", "@01 1 14 OK IDLE WR 2099738"),
     ]
     assert stage.serial_number == 36036 and stage.microstep_mm == pytest.approx(STEP_MM, rel=1e-12)
     assert stage.travel_mm == pytest.approx((0.0, 2099738 * STEP_MM))
+    assert stage.describe()["units_from"] == "manual"
 
+
+def test_a_device_the_library_identifies_moves_by_the_librarys_scales(monkeypatch):
+    """Where the device database is reachable, the library's unit conversion is the one used (here a stand-in
+    scale, 2 % off the manual's, so the test sees which one went out)."""
+    from zaber_motion.ascii import AxisSettings, Device
+
+    per_mm = 1.0 / STEP_MM * 1.02
+    scales = {"pos": per_mm, "maxspeed": per_mm * 1.6384, "accel": per_mm * 1.6384 / 10000.0}
+    monkeypatch.setattr(Device, "identify", lambda self, assume_version=None: None)
+    monkeypatch.setattr(AxisSettings, "convert_to_native_units",
+                        lambda self, setting, value, unit, round=False: scales[setting] * value)
+    with ZaberEmulator(SimulatedStage(travel_mm=TRAVEL, start_mm=10.0), time_scale=200.0) as emu:
+        stage = ZaberStage(emu.path, timeout_s=5.0, poll_interval_s=0.002)
+        stage.connect()
+        try:
+            assert stage.describe()["units_from"] == "zaber-motion"
+            n = len(emu.device.log)
+            stage.move_to(42.5, 3000.0)
+            words = emu.device.log[n][0].split(":")[0].split()
+            assert int(words[5]) == round(42.5 * per_mm)
+            assert float(words[6]) == pytest.approx(50.0 * per_mm * 1.6384, rel=1e-6)
+        finally:
+            stage.disconnect()
 
 
 def test_home_clears_wr_and_move_is_sent_in_microsteps_and_native_speed(rig):

@@ -11,6 +11,7 @@ from PySide6.QtWidgets import QApplication, QScrollArea
 from lps_gui.hardware.marlin.emulator import MarlinEmulator
 from lps_gui.hardware.sim_stage import SimulatedStage
 from lps_gui.hardware.zaber_emulator import ZaberEmulator
+from tests.hardware.conftest import _zaber_device_db_offline  # noqa: F401  (zaber-motion offline: the manual's units)
 
 pytestmark = pytest.mark.gui
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from PySide6.QtCore import QEvent, QObject, QRect, Qt
 from PySide6.QtGui import QGuiApplication
-from PySide6.QtWidgets import QAbstractSpinBox, QComboBox, QFrame, QScrollArea, QWidget
+from PySide6.QtWidgets import QAbstractButton, QAbstractSpinBox, QComboBox, QFrame, QScrollArea, QWidget
 
 DOCK_MIN_WIDTH = 260  # px: the narrowest a scrolled panel's dock goes; three docks side by side fit 1000 px
 
@@ -30,6 +30,13 @@ def scrolled(panel: QWidget, min_width: int = DOCK_MIN_WIDTH) -> QScrollArea:
     area.setMinimumWidth(min(panel.minimumSizeHint().width() + bar, min_width))
     area.setObjectName(f"scroll_{panel.objectName() or type(panel).__name__}")
     return area
+
+
+def compact_buttons(*buttons: QAbstractButton, padding: int = 16) -> None:
+    """Buttons as narrow as their text (plus ``padding`` px), not the style's 80 px minimum: a row of three or
+    four then fits a 1000 px screen's dock without scrolling sideways."""
+    for b in buttons:
+        b.setMinimumWidth(b.fontMetrics().horizontalAdvance(b.text().replace("&&", "&")) + padding)
 
 
 class _WheelGuard(QObject):

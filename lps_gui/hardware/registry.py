@@ -42,10 +42,16 @@ class StageKind:
     def matches(self, spec: str) -> bool:
         return spec.startswith(self.scheme) and len(spec) > len(self.scheme) if self.takes_argument else spec == self.scheme
 
+    def build(self, spec: str, **options: Any):
+        """The stage of ``spec``, not yet connected unless its driver connects itself (``connects``): for a caller
+        that connects it on its own thread (the GUI's stage thread), since a port opened twice is refused by
+        some vendors' libraries (zaber-motion: "port is likely already opened")."""
+        factory = self.driver()
+        return factory(spec[len(self.scheme):], **options) if self.takes_argument else factory(**options)
+
     def make(self, spec: str, **options: Any):
         """The (connected) stage of ``spec``."""
-        factory = self.driver()
-        stage = factory(spec[len(self.scheme):], **options) if self.takes_argument else factory(**options)
+        stage = self.build(spec, **options)
         if not self.connects:
             stage.connect()
         return stage

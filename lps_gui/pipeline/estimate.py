@@ -209,7 +209,7 @@ def build_results(session: SessionInput, obs: Observations, est: LpsEstimate, in
     if obs.D == 1:
         results = add_asme_results(results, session, obs, est, budget.figures.get("iso230_2"),
                                    uncertainty.get("figures_k2") or {})  # ASME B5.64 names, TUR, tests
-        results = add_verdict(results)  # the verdict, U (k = 2) and the decision rule, machine-readable
+    results = add_verdict(results)  # the verdict, U (k = 2) and the decision rule, machine-readable (line or plane)
     return add_self_check(results)  # a simulated session: does its truth contradict a figure or a finding?
 
 

@@ -224,17 +224,8 @@ def _write_hci(folder: Path, views: SceneViews, grid: GridCheck, vc: VirtualCame
 
 
 def check_lines(check: dict[str, Any] | None) -> list[str]:
-    """The epipolar check's numbers as printed lines (lps lightfield, lps demo --lightfield)."""
-    if not check:
-        return []
-    v = check["vertical_disparity_rms_px"]
-    lines = [f"vertical disparity RMS {v['before']:.3f} px before rectification, {v['after']:.4f} px after "
-             f"({check['n_points']} known scene points{', within rows of views' if 'within' in check else ''})"]
-    h = check.get("horizontal_disparity_rms_px")
-    if h:
-        lines.append(f"horizontal disparity RMS within columns of views {h['before']:.3f} px before, {h['after']:.4f} px after")
-    for p in check.get("disparity_vs_position", []):
-        lines.append(f"{p['plane']} ({p['depth_mm']:.0f} mm): disparity residual {p['residual_rms_px_measured']:.4f} px "
-                     f"RMS on measured positions, {p['residual_rms_px_nominal']:.4f} px on nominal; depth from slope "
-                     f"{p['depth_from_slope_mm_measured']:.1f} mm")
-    return lines
+    """The epipolar check's numbers as printed lines (lps lightfield, lps demo --lightfield, the GUI's tab): the
+    report page's rows (:func:`lps_gui.report.pdf.lightfield.epipolar_rows`), one line each."""
+    from lps_gui.report.pdf.lightfield import epipolar_rows
+
+    return [f"{what}: {value}" for what, value in epipolar_rows(check)]

@@ -85,6 +85,13 @@ class Driver:
         if frame.width() > area.width() or frame.height() > area.height():
             self.problems.append(f"{step}: window {frame.width()}x{frame.height()} exceeds the screen "
                                  f"{area.width()}x{area.height()}")
+        from PySide6.QtWidgets import QScrollArea
+
+        for name, dock in w.docks.items():  # a panel wider than its dock scrolls sideways: cut off on a laptop
+            area = dock.widget()
+            if isinstance(area, QScrollArea) and dock.isVisible() and area.horizontalScrollBar().isVisible():
+                self.problems.append(f"{step}: the {name} dock scrolls sideways (its panel needs "
+                                     f"{area.widget().minimumSizeHint().width()} px, it shows {area.viewport().width()})")
         import pyqtgraph as pg
 
         for plot in w.findChildren(pg.PlotWidget):
@@ -166,6 +173,12 @@ class Driver:
         self.check("planar plan editor")
         self.shot(w.docks["capture"], "capture-planar")
         cap.planar_editor.enabled.setChecked(False)
+        setup = cap.report_setup  # the signing fields (issue 37): specification, environment, identification
+        setup.toggle.setChecked(True)
+        self.show_widget(setup.fields)
+        self.check("report set-up unfolded")
+        self.shot(w.docks["capture"], "capture-report-setup")
+        setup.toggle.setChecked(False)
         self.click(cap.start_btn)
         self.wait(lambda: (folder / "results.json").exists() and cap.start_btn.isEnabled(), "the capture", 120.0)
         self.wait(lambda: w.results_panel.session_dir == folder and not w.results_panel.drawing,

@@ -99,7 +99,7 @@ def test_planar_straightness_in_and_out_of_the_plane_carry_their_resolution(plan
             assert d["noise_span_um"] > 0 and isinstance(d["resolved"], bool)
     row = next(p for p in r["positions"] if p["used"])
     assert "out_of_plane_um" in row and row["out_of_plane_sigma_um"] > 0
-    summary = {name: value for name, value, _ in r["summary"]}
+    summary = {name: value for name, value, *_ in r["summary"]}
     # an unresolved span has its row but no value: never a finding
     for axis in ("x", "y"):
         if not r["figures"]["planar"]["per_axis"][axis.upper()]["out_of_plane"]["resolved"]:

@@ -19,6 +19,7 @@ import numpy as np
 from PySide6.QtCore import QSize, Qt, Signal
 from PySide6.QtGui import QBrush, QColor, QIcon, QImage, QImageReader, QPixmap
 from PySide6.QtWidgets import (
+    QGridLayout,
     QDoubleSpinBox,
     QFileDialog,
     QGroupBox,
@@ -36,6 +37,7 @@ from PySide6.QtWidgets import (
 
 from lps_gui.core.geometry.board import Board
 from lps_gui.core.geometry.camera_model import INTRINSIC_NAMES, CameraIntrinsics
+from lps_gui.gui.fit import compact_buttons
 from lps_gui.gui.widgets import ValueTable, fmt
 from lps_gui.gui.workers import Job, one_line
 
@@ -120,11 +122,11 @@ class IntrinsicsPanel(QWidget):
         self.square.setValue(20.0)
         self.square.setSuffix(" mm")
         board_box = QGroupBox("Board (inner corners)")
-        bl = QHBoxLayout(board_box)
-        for label, w in (("columns", self.cols), ("rows", self.rows), ("square", self.square)):
-            bl.addWidget(QLabel(label))
-            bl.addWidget(w)
-        bl.addStretch(1)
+        bl = QGridLayout(board_box)  # square under columns: one row of six was wider than a 1000 px screen's dock
+        for i, (label, w) in enumerate((("columns", self.cols), ("rows", self.rows), ("square", self.square))):
+            bl.addWidget(QLabel(label), i // 2, 2 * (i % 2))
+            bl.addWidget(w, i // 2, 2 * (i % 2) + 1)
+        bl.setColumnStretch(4, 1)
 
         self.list = QListWidget()
         self.list.setIconSize(QSize(THUMB_PX, THUMB_PX))
@@ -141,14 +143,18 @@ class IntrinsicsPanel(QWidget):
         self.crossval_btn = QPushButton("Cross-validate")
         self.crossval_btn.setToolTip("calibrate the even and the odd images apart and compare the two projections")
         self.crossval_btn.setEnabled(False)
+        compact_buttons(self.add_btn, self.folder_btn, self.clear_btn, self.load_btn, self.save_btn, self.calib_btn,
+                        self.crossval_btn, self.cancel_btn)
         row1 = QHBoxLayout()
         for b in (self.add_btn, self.folder_btn, self.clear_btn):
             row1.addWidget(b)
-        row2 = QHBoxLayout()  # two rows of buttons: the panel fits a 440 px dock
+        files = QHBoxLayout()  # images, the intrinsics file, the actions: three rows fit a 1000 px screen's dock
+        for b in (self.load_btn, self.save_btn):
+            files.addWidget(b)
+        files.addStretch(1)
+        row2 = QHBoxLayout()
         for b in (self.calib_btn, self.crossval_btn, self.cancel_btn):
             row2.addWidget(b)
-        for b in (self.load_btn, self.save_btn):
-            row1.addWidget(b)
         self.message = QLabel("Add 6–30 images of the board in varied poses, then calibrate.")
         self.message.setWordWrap(True)
 
@@ -170,6 +176,7 @@ class IntrinsicsPanel(QWidget):
         lay.setContentsMargins(6, 6, 6, 6)
         lay.addWidget(board_box)
         lay.addLayout(row1)
+        lay.addLayout(files)
         lay.addLayout(row2)
         lay.addWidget(self.message)
         lay.addWidget(split, 1)

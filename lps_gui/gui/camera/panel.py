@@ -36,7 +36,7 @@ from lps_gui.camera.base import Camera
 from lps_gui.camera.frame_watch import FrameWatch
 from lps_gui.core.geometry.board import Board
 from lps_gui.gui.camera.preview import PreviewGrabber
-from lps_gui.gui.fit import guard_wheel
+from lps_gui.gui.fit import compact_buttons, guard_wheel
 from lps_gui.gui.stage.sources import CAMERA_FOLLOWS_STAGE, camera_choices, open_camera_source
 
 log = logging.getLogger(__name__)
@@ -125,6 +125,10 @@ class CameraPanel(QWidget):
         self.grab_btn.clicked.connect(self.grab_view)
         ig.addWidget(self.grab_btn, 2, 2)
         ig.setColumnStretch(1, 1)
+        # what a frame says must not widen the dock (it scrolled sideways at 1000 px once a board was found)
+        self.detect_label.setWordWrap(True)
+        self.sharpness_bar.setMinimumWidth(40)
+        compact_buttons(self.grab_btn)
 
         self.controls_box = QGroupBox("Camera controls")
         self.controls_grid = QGridLayout(self.controls_box)

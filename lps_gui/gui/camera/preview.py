@@ -62,6 +62,8 @@ class PreviewGrabber:
         self._lock = threading.Lock()
         self._latest: PreviewResult | None = None
         self._stop = threading.Event()
+        self._told = threading.Lock()  # held while a callback runs: once stop() returns, none runs (its receiver,
+        # a panel, may be deleted then; a camera still opening after stop's join timed out used to emit into it)
         self._paused = threading.Event()
         self._thread = threading.Thread(target=self._loop, name="camera-preview", daemon=True)
         self._detect = detect_chessboard
@@ -72,8 +74,20 @@ class PreviewGrabber:
         return self
 
     def stop(self, timeout_s: float = 2.0) -> None:
-        self._stop.set()
+        """Stop the loop; no callback runs after this returns, even while the thread is still opening the camera
+        (it then closes the camera it opened itself)."""
+        with self._told:
+            self._stop.set()
         self._thread.join(timeout_s)
+
+    def _tell(self, callback: Callable[..., None] | None, *args: object) -> bool:
+        """Call ``callback`` unless stopped; False when stopped (nothing called)."""
+        with self._told:
+            if self._stop.is_set():
+                return False
+            if callback is not None:
+                callback(*args)
+            return True
 
     def pause(self, on: bool) -> None:
         """Stop grabbing while someone else (the capture engine) owns the camera."""
@@ -90,13 +104,19 @@ class PreviewGrabber:
                 cam.open()
         except Exception as exc:  # no such device, busy, unplugged: one line to the operator
             _log_failure("camera not opened", exc)
-            if self.on_error:
-                self.on_error(one_line(exc))
+            self._tell(self.on_error, one_line(exc))
             return False
-        self.camera = cam
-        if self.on_open:
-            self.on_open(cam)
-        return True
+
+        def opened(camera: Camera) -> None:
+            self.camera = camera  # under the lock: stop() sees it set (the panel closes it) or the thread closes it
+            if self.on_open:
+                self.on_open(camera)
+
+        if self._tell(opened, cam):
+            return True
+        if not isinstance(self._source, Camera):  # stopped while opening: nobody else holds what we opened
+            cam.close()
+        return False
 
     def _loop(self) -> None:
         if not self._open():
@@ -115,8 +135,7 @@ class PreviewGrabber:
                 frame = self.camera.grab()
             except Exception as exc:  # a vanished camera ends the preview, reported once
                 _log_failure("camera preview stopped", exc)
-                if self.on_error:
-                    self.on_error(one_line(exc))
+                self._tell(self.on_error, one_line(exc))
                 return
             image = frame.image
             if self._detect is not None and t0 - t_detect >= self.detect_period_s:

@@ -138,6 +138,7 @@ class CapturePanel(QWidget):
                                 "spread over the lead-screw pitch so the targets do not alias it")
         self.pitch_mm = double_spin(0.0, 100.0, 0.0, 3, " mm")
         self.pitch_mm.setSpecialValueText("pitch unknown")
+        self.pitch_mm.setMinimumWidth(self.pitch_mm.sizeHint().width())  # squeezed, the text was cut on the left
         self.pitch_mm.setToolTip("lead-screw pitch for the ISO 230-2 plan (0: unknown)")
         iso_row = QHBoxLayout()
         iso_row.addWidget(self.iso_btn)

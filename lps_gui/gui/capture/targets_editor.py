@@ -137,13 +137,21 @@ class TargetsEditor(QGroupBox):
         lay = QVBoxLayout(self)
         lay.addWidget(self.body)
         self.body.setVisible(False)
+        self._fold(False)
         self.add_btn.clicked.connect(self.add)
         self.remove_btn.clicked.connect(self.remove_selected)
         self.clear_btn.clicked.connect(lambda: self.set_targets([]))
         self.load_btn.clicked.connect(self.load_dialog)
         self.toggled.connect(self.body.setVisible)
+        self.toggled.connect(self._fold)
         self.toggled.connect(lambda _on: self.changed.emit())
         self._show()
+
+    def _fold(self, on: bool) -> None:
+        """Unchecked: the title alone (flat, no margins), not an empty frame under it."""
+        self.setFlat(not on)
+        margin = 9 if on else 0
+        self.layout().setContentsMargins(margin, margin if on else 0, margin, margin)
 
     # ------------------------------------------------------------------ the list
     def targets(self) -> list[Target] | None:

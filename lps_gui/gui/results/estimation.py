@@ -23,6 +23,7 @@ from PySide6.QtWidgets import (
 )
 
 from lps_gui.core.estimator import methods
+from lps_gui.gui.fit import compact_buttons
 from lps_gui.gui.widgets import PathPicker, ValueTable, add_rows, double_spin, fmt, stack
 from lps_gui.gui.workers import Job
 from lps_gui.io.results.model import Results, as_results
@@ -155,6 +156,7 @@ class EstimationPanel(QWidget):
         self.progress.setFormat("%p%")
         self.message = QLabel("idle")
         self.message.setWordWrap(True)  # a long error wraps; it does not widen the dock
+        compact_buttons(self.run_btn, self.detect_btn, self.cancel_btn)  # with the bar: within a 1000 px screen's dock
         row = QHBoxLayout()
         row.addWidget(self.run_btn)
         row.addWidget(self.detect_btn)

@@ -545,9 +545,10 @@ def verdict_html(results: Results, spec: dict[str, Any] | None) -> str:
     from html import escape
 
     from lps_gui.report.pages.summary import fmt, session_flags
-    from lps_gui.report.pages.verdict import overall, verdicts
+    from lps_gui.io.results.verdict_rows import session_verdicts
+    from lps_gui.report.pages.verdict import overall
 
-    rows = verdicts(results, spec)
+    rows = session_verdicts(results, spec)  # a plane's per-axis rows too, as page 1 and results.json
     parts = [f"<b>{overall(rows)}</b>"]
     parts += [f"<span style='color:#c00000'>{escape(m)}</span>" for m in session_flags(results)]  # e.g. the lens model
     for v in rows:

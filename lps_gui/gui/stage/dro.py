@@ -10,7 +10,17 @@ from __future__ import annotations
 
 from PySide6.QtCore import Qt, Signal
 from PySide6.QtGui import QFont
-from PySide6.QtWidgets import QComboBox, QGridLayout, QGroupBox, QHBoxLayout, QLabel, QMessageBox, QPushButton, QWidget
+from PySide6.QtWidgets import (
+    QComboBox,
+    QGridLayout,
+    QGroupBox,
+    QHBoxLayout,
+    QLabel,
+    QMessageBox,
+    QPushButton,
+    QVBoxLayout,
+    QWidget,
+)
 
 from lps_gui.hardware.stage import AXES, WORK_SYSTEMS, StageStatus
 
@@ -47,12 +57,11 @@ class PositionReadout(QGroupBox):
         self.work_system.setToolTip("Work coordinate system (G54-G59) the readout, Go to and Zero refer to")
         self.work_system.activated.connect(lambda _i: self.system_chosen.emit(self.work_system.currentData()))
         grid.addWidget(self.work_system, 0, 1, alignment=Qt.AlignmentFlag.AlignRight)
-        for c, (text, tip) in enumerate((("Machine", "Machine coordinates (GRBL's homed space), mm"),
-                                         ("Offset", "Work offset of the selected system in mm, GRBL's sign ($#): "
-                                                    "work = machine − offset"))):
-            head = QLabel(text)
-            head.setToolTip(tip)
-            grid.addWidget(head, 0, 2 + c, alignment=Qt.AlignmentFlag.AlignRight)
+        head = QLabel("Machine\nOffset")  # one column, the two numbers stacked: the readout fits a 1000 px screen's dock
+        head.setAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
+        head.setToolTip("Machine: machine coordinates (the homed space), mm.\nOffset: work offset of the selected "
+                        "system in mm, GRBL's sign ($#): work = machine − offset")
+        grid.addWidget(head, 0, 2, alignment=Qt.AlignmentFlag.AlignRight)
         for row, ax in enumerate(AXES, start=1):
             self._axis_row(grid, row, ax, big)
         self.state_label = fixed_label(self.font(), "Disconnected", Qt.AlignmentFlag.AlignCenter)
@@ -63,7 +72,7 @@ class PositionReadout(QGroupBox):
         state_row.addWidget(self.state_label)
         state_row.addWidget(self.feed_label)
         state_row.addStretch(1)
-        grid.addLayout(state_row, len(AXES) + 1, 0, 1, 6)
+        grid.addLayout(state_row, len(AXES) + 1, 0, 1, 5)
         self.show_state("Disconnected")
 
     def _axis_row(self, grid: QGridLayout, row: int, ax: str, big: QFont) -> None:
@@ -83,8 +92,15 @@ class PositionReadout(QGroupBox):
         home.clicked.connect(lambda _=False, a=ax: self.to_zero_requested.emit(a))
         for b in (zero, home):
             b.setFixedWidth(b.fontMetrics().horizontalAdvance("Zero") + 14)
-        for c, w in enumerate((name, val, mach, off, zero, home)):
-            grid.addWidget(w, row, c)
+        both = QVBoxLayout()  # machine above offset, beside the large work value
+        both.setSpacing(0)
+        both.addWidget(mach)
+        both.addWidget(off)
+        grid.addWidget(name, row, 0)
+        grid.addWidget(val, row, 1)
+        grid.addLayout(both, row, 2)
+        grid.addWidget(zero, row, 3)
+        grid.addWidget(home, row, 4)
         self.readout[ax], self.machine[ax], self.offset[ax] = val, mach, off
         self.zero_buttons[ax], self.to_zero_buttons[ax] = zero, home
         self.axis_widgets[ax] = [name, val, mach, off, zero, home]

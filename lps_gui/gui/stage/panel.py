@@ -43,6 +43,7 @@ from lps_gui.gui.stage.console import StageConsole
 from lps_gui.gui.stage.controller import StageController
 from lps_gui.gui.stage.declared import show_declared, stop_action
 from lps_gui.gui.stage.dro import PositionReadout
+from lps_gui.gui.fit import compact_buttons
 from lps_gui.gui.stage.sources import BAUD_RATES, open_stage_source, source_from_text, stage_choices
 from lps_gui.hardware.capabilities import Settings, WorkCoordinates
 from lps_gui.hardware.registry import DEFAULT_PORT_KIND, specs_help
@@ -116,6 +117,7 @@ class StagePanel(QWidget):
         for r, ax in enumerate(AXES):
             for c, sign in enumerate((-1, +1)):
                 b = QPushButton(f"{ax}{'−' if sign < 0 else '+'}")
+                compact_buttons(b, padding=32)  # not the style's 80 px: the pad fits a 1000 px screen's dock
                 b.clicked.connect(lambda _=False, a=ax, s=sign: self.jog(a, s))
                 b.pressed.connect(lambda a=ax, s=sign: self._hold_jog_start(a, s))
                 b.released.connect(self._hold_jog_stop)
@@ -128,6 +130,8 @@ class StagePanel(QWidget):
         self.step.addItem("hold (continuous)", CONTINUOUS)
         self.step.setToolTip("Distance per click; 'hold': the stage moves while a jog button is held down")
         self.step.setCurrentIndex(2)
+        self.step.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+        self.step.setMinimumContentsLength(8)  # "hold (continuous)" elides in the box, whole in the list
         self.feed = QDoubleSpinBox()
         self.feed.setRange(1.0, 20000.0)
         self.feed.setDecimals(0)
@@ -142,8 +146,11 @@ class StagePanel(QWidget):
         self.keyboard_jog.setToolTip("When ticked: arrow keys jog X/Y and Page Up/Down jog Z while the stage panel "
                                      "has focus (number and list fields keep their keys)")
         self.keyboard_state = QLabel()
-        jg.addWidget(self.keyboard_jog, 2, 2)
-        jg.addWidget(self.keyboard_state, 2, 3)
+        keys = QHBoxLayout()  # under the pad, not in the Step/Feed column (it widened the panel past its dock)
+        keys.addWidget(self.keyboard_jog)
+        keys.addWidget(self.keyboard_state)
+        keys.addStretch(1)
+        jg.addLayout(keys, 4, 0, 1, 4)
         self.travel_label = QLabel("travel: read the settings")
         self.travel_label.setWordWrap(True)
         self.travel_label.setStyleSheet("QLabel { color: #555555; }")
@@ -175,8 +182,10 @@ class StagePanel(QWidget):
         goto.addWidget(self.goto_axis)
         goto.addWidget(self.goto_target, 1)
         goto.addWidget(self.goto_btn)
-        goto.addWidget(QLabel("Axes"))
-        goto.addWidget(self.axes)
+        axes_row = QHBoxLayout()  # a row of its own: beside Go to it pushed the panel past a 1000 px screen's dock
+        axes_row.addWidget(QLabel("Axes shown"))
+        axes_row.addWidget(self.axes)
+        axes_row.addStretch(1)
 
         # --- machine commands
         cmds = QGridLayout()
@@ -230,6 +239,7 @@ class StagePanel(QWidget):
         lay.addWidget(dro)
         lay.addWidget(jog)
         lay.addLayout(goto)
+        lay.addLayout(axes_row)
         lay.addLayout(cmds)
         self.console = StageConsole(controller)
         self.lower_tabs = QTabWidget()  # settings and console share the space: the panel stays short

@@ -49,10 +49,10 @@ def simulated_rig(clock: Clock | None = None) -> tuple[Stage, Camera]:
 
 
 def open_stage_source(source: str, baud: int = 115200, clock: Clock | None = None) -> tuple[Stage, Camera | None]:
-    """Build the stage for ``source``; the simulated rig also yields its camera."""
+    """Build the stage for ``source``, not yet connected (the stage controller connects it once); the simulated rig
+    also yields its camera."""
     if source == SIM:
         return simulated_rig(clock)
-    from lps_gui.hardware import open_stage
     from lps_gui.hardware.registry import kind_of
 
     if source == EMULATOR:  # the GRBL emulator serves the simulated rig's stage: the simulated camera rides it
@@ -62,7 +62,7 @@ def open_stage_source(source: str, baud: int = 115200, clock: Clock | None = Non
         return emulated_rig_stage(rig_stage), camera
     kind = kind_of(source)
     options = {"baudrate": baud} if kind.serial and baud != 115200 else {}
-    return open_stage(source, **options), None
+    return kind.build(source, **options), None
 
 
 _sdk_devices: list[tuple[str, str]] | None = None

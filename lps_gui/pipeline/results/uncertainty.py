@@ -127,12 +127,13 @@ def uncertainty_section(src: BudgetSource, env: Environment, square_mm: float) -
     if len(src.axes) == 1:
         return _axis_uncertainty(src, env, square_mm, "", src.figures)
     planar = src.figures.get("planar") or {}
-    return {"per_axis": {
+    axes = {name: (planar.get("per_axis") or {}).get(name) or {} for name in ("X", "Y")}
+    return {"per_axis": {  # an axis's in-plane straightness is its v1: U of its p-v as a line's (verdict, page 1)
         name: _axis_uncertainty(src, env, square_mm, name.lower(),
                                 {"single_run": {"scale_sigma_total_ppm": planar.get(f"scale_{name.lower()}_sigma_ppm")},
-                                 "iso230_2": (((planar.get("per_axis") or {}).get(name) or {}).get("iso230_2") or {})
-                                 .get("iso230_2")})
-        for name in ("X", "Y")}}
+                                 "iso230_2": (a.get("iso230_2") or {}).get("iso230_2"),
+                                 "straightness": {"v1": a.get("straightness") or {}}})
+        for name, a in axes.items()}}
 
 
 def _axis_uncertainty(src: BudgetSource, env: Environment, square_mm: float, axis: str,

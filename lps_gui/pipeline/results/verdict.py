@@ -9,7 +9,7 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from lps_gui.io.results.document import json_float, summary_csv_rows
+from lps_gui.io.results.document import json_float, summary_csv_rows, verdict_csv_rows
 
 DECISION_RULE = ("ISO 14253-1: PASS when the figure plus its expanded uncertainty U (k = 2) is within the limit, "
                  "FAIL when the figure minus U is beyond it, not resolved when the limit lies within +-U")
@@ -22,11 +22,11 @@ def check_key(name: str) -> str:
 
 def verdict_section(results: dict[str, Any]) -> dict[str, Any]:
     """results.json ``verdict``: the decision rule, the overall word and line, one row per specified figure."""
-    from lps_gui.core.metrology.verdict import overall, overall_word, verdicts
-    from lps_gui.io.results.model import as_results
+    from lps_gui.core.metrology.verdict import overall, overall_word
+    from lps_gui.io.results.verdict_rows import session_verdicts
 
     spec = (results.get("session_meta") or {}).get("stage_spec") or results.get("stage_spec")
-    rows = verdicts(as_results(results), spec) if spec else []
+    rows = session_verdicts(results, spec)  # a plane's per-axis and squareness rows too
     return {
         "decision_rule": DECISION_RULE,
         "overall": overall_word([r.verdict for r in rows]),
@@ -42,5 +42,17 @@ def verdict_section(results: dict[str, Any]) -> dict[str, Any]:
 def add_verdict(results: dict[str, Any]) -> dict[str, Any]:
     """Add ``verdict`` and rebuild ``summary`` (now with U and the verdict rows); in place, also returned."""
     results["verdict"] = verdict_section(results)
-    results["summary"] = summary_csv_rows(results)
+    results["summary"] = planar_summary_rows(results) if len(results.get("axes") or ["X"]) == 2 else (
+        summary_csv_rows(results))
     return results
+
+
+def planar_summary_rows(results: dict[str, Any]) -> list[tuple[Any, ...]]:
+    """summary.csv of a planar session as a line's: (name, value, unit, U (k = 2), note), then the verdict rows;
+    U and note are the report's (:func:`lps_gui.report.pages.planar.planar_csv_columns`)."""
+    from lps_gui.pipeline.results.planar import summary_csv_rows as planar_rows
+    from lps_gui.report.pages.planar import planar_csv_columns
+
+    columns = planar_csv_columns(results)
+    return [(name, value, unit, *columns.get(name, (None, ""))) for name, value, unit in planar_rows(results)
+            ] + verdict_csv_rows(results.get("verdict"))

@@ -15,14 +15,22 @@ from dataclasses import replace
 from typing import Any
 
 from lps_gui.errors import InputError
+from lps_gui.io.results.document import finite_number as finite_or_none
 from lps_gui.io.results.model import Results, as_results
-from lps_gui.io.results.sections import Figures, SpanResolution, TruthComparison
+from lps_gui.io.results.sections import SpanResolution, TruthComparison
+from lps_gui.io.results.verdict_rows import (  # noqa: F401  (names the pages and tests use)
+    SQUARENESS_CHECK,
+    axis_results,
+    figure_u,
+    planar_figures_k2,
+    planar_verdicts,
+)
 from lps_gui.report.figures.plots import planar_figures_from_results
 from lps_gui.report.pages import sections as R
 from lps_gui.report.pages.error_motions import paint_error_motions_page
 from lps_gui.report.pages.summary import DASH, Row, fmt, table_cells
 from lps_gui.report.pages.targets import targets_section
-from lps_gui.report.pages.verdict import overall, verdicts
+from lps_gui.report.pages.verdict import overall
 
 PLANAR_TABLE_COLUMNS = (  # key, header, decimals, width mm
     ("index", "#", None, 8), ("run", "run", None, 7), ("direction", "dir", None, 7),
@@ -34,14 +42,6 @@ PLANAR_TABLE_COLUMNS = (  # key, header, decimals, width mm
 )
 
 
-def _u(k2: Mapping[str, Any], key: str, sigma: float | None) -> float | None:
-    """U (k = 2) of a planar figure: results.json ``uncertainty.figures_k2`` when it has it, else 2 sigma (noise)."""
-    from lps_gui.io.results.document import finite_number
-
-    u = finite_number(k2.get(key))
-    return u if u is not None else (None if sigma is None else 2.0 * float(sigma))
-
-
 def _trust_note(tc: TruthComparison | None, error_key: str, z_key: str | None, u: float | None, unit: str) -> str:
     """A figure the simulator's truth shows off by more than its U: "not trusted" with the numbers, else empty."""
     err = tc.number(error_key) if tc else None
@@ -50,22 +50,6 @@ def _trust_note(tc: TruthComparison | None, error_key: str, z_key: str | None, u
     z = tc.number(z_key) if z_key else None
     return (f"not trusted: the truth is {fmt(abs(err))} {unit} off" + (f" ({fmt(abs(z), 2)} \u03c3)" if z is not None else "")
             + ", beyond U; a source is missing from the budget")
-
-
-def planar_figures_k2(results: Results | dict[str, Any]) -> dict[str, Any]:
-    """U (k = 2) of the planar figures: a top-level ``uncertainty.figures_k2``, or each axis's budget's scale U.
-
-    The estimate writes one budget per axis (``uncertainty.per_axis.X`` / ``.Y``); squareness has no budget
-    row of its own and keeps its noise U.
-    """
-    unc = as_results(results).uncertainty
-    if unc is None:
-        return {}
-    k2 = dict(unc.figures_k2)
-    for axis, axis_unc in unc.per_axis.items():
-        if axis in ("X", "Y") and axis_unc.figures_k2.get("scale_ppm") is not None:
-            k2.setdefault(f"scale_{axis.lower()}_ppm", axis_unc.figures_k2["scale_ppm"])
-    return k2
 
 
 def planar_summary_rows(results: Results | dict[str, Any]) -> list[Row]:
@@ -81,9 +65,9 @@ def planar_summary_rows(results: Results | dict[str, Any]) -> list[Row]:
         raise InputError(f"{results.source}: a planar session without 'figures.planar'; re-run `lps estimate`")
     k2 = planar_figures_k2(results)
     tc = results.truth_comparison
-    u_sq = _u(k2, "squareness_urad", pl.squareness_sigma_urad)
-    u_x = _u(k2, "scale_x_ppm", pl.scale_x_sigma_ppm)
-    u_y = _u(k2, "scale_y_ppm", pl.scale_y_sigma_ppm)
+    u_sq = figure_u(k2, "squareness_urad", pl.squareness_sigma_urad)
+    u_x = figure_u(k2, "scale_x_ppm", pl.scale_x_sigma_ppm)
+    u_y = figure_u(k2, "scale_y_ppm", pl.scale_y_sigma_ppm)
 
     def note(sigma: float | None, unit: str, trust: str) -> str:
         return "; ".join(t for t in (f"1\u03c3 {fmt(sigma)} {unit}", trust) if t)
@@ -106,18 +90,24 @@ def planar_summary_rows(results: Results | dict[str, Any]) -> list[Row]:
         a = pl.per_axis.get(axis)
         if not a:
             continue
+        ax, ot = axis.lower(), other.lower()
+        axis_k2 = _axis_figures_k2(results, axis)
+        unresolved = _unresolved(a.straightness)  # no value, hence no U (never one smaller than its noise)
         rows.append(Row(f"Straightness of {axis} (in the plane, along {other}), worst line", a.straightness_um_max,
                         "\u00b5m", f"{a.lines} line(s); per-point 1\u03c3 {fmt(a.straightness_sigma_um)} \u00b5m",
-                        unresolved=_unresolved(a.straightness)))
+                        unresolved=unresolved, key=f"straightness_{ax}_along_{ot}_max",
+                        u_k2=None if unresolved else finite_or_none(axis_k2.get("straightness_span_max"))))
         oop = a.out_of_plane
         if oop:
             rows.append(Row(f"Straightness of {axis} out of the plane (along the normal), worst line", oop.span_um,
-                            "\u00b5m", f"per-target 1\u03c3 {fmt(oop.sigma_um)} \u00b5m", unresolved=_unresolved(oop)))
+                            "\u00b5m", f"per-target 1\u03c3 {fmt(oop.sigma_um)} \u00b5m", unresolved=_unresolved(oop),
+                            key=f"out_of_plane_straightness_{ax}_max"))
         iso = a.iso230_2.iso230_2 if a.iso230_2 else None
         for key, name in (("A_um", "accuracy A"), ("R_um", "repeatability R"), ("E_um", "systematic E"),
                           ("B_um", "reversal B")):
-            if iso and iso.number(key) is not None:
-                rows.append(Row(f"{axis} ISO 230-2 {name} (worst line)", iso.number(key), "\u00b5m"))
+            if iso and iso.number(key) is not None:  # U from that axis's budget, the U its verdict row compares
+                rows.append(Row(f"{axis} ISO 230-2 {name} (worst line)", iso.number(key), "\u00b5m",
+                                key=f"iso230_2_{ax}_{key[:-3]}", u_k2=finite_or_none(axis_k2.get(key))))
     p = results.parameters
     n_used = p.n_used if p.n_used is not None else DASH
     rows.append(Row("Corner noise (a posteriori)", p.sigma_px, "px"))
@@ -126,23 +116,24 @@ def planar_summary_rows(results: Results | dict[str, Any]) -> list[Row]:
     return rows
 
 
-def axis_results(results: Results | dict[str, Any], axis: str) -> Results | None:
-    """One axis of a planar session shaped like a line session's results (its ISO 230-2 figures, its U), or None.
+def _axis_figures_k2(results: Results, axis: str) -> Mapping[str, Any]:
+    """U (k = 2) of one axis's figures: that axis's budget (``uncertainty.per_axis``), else the top-level one."""
+    unc = results.uncertainty
+    if unc is None:
+        return {}
+    axis_unc = unc.per_axis.get(axis)
+    return axis_unc.figures_k2 if axis_unc is not None else unc.figures_k2
 
-    What the line report's verdict and per-target sections read: ``figures``
-    (that axis's ``iso230_2`` block plus its straightness) and ``uncertainty``
-    (``uncertainty.per_axis[axis]`` when the results carry one).
-    """
-    results = as_results(results)
-    pl = results.figures.planar
-    a = pl.per_axis.get(axis) if pl else None
-    if a is None or a.iso230_2 is None or a.iso230_2.iso230_2 is None:
-        return None
-    figures = Figures.from_dict({**a.iso230_2.raw, "straightness_um_max": a.straightness_um_max,
-                                 "straightness_sigma_um": a.straightness_sigma_um},
-                                f"figures.planar.per_axis.{axis}.iso230_2", results.source)
-    unc = results.uncertainty.per_axis.get(axis) if results.uncertainty else None
-    return replace(results, figures=figures, uncertainty=unc)
+
+CSV_NAMES = {"squareness_urad": "squareness", "scale_x_ppm": "scale_x", "scale_y_ppm": "scale_y"}  # report key ->
+# summary.csv name where the two differ (the others are the same)
+
+
+def planar_csv_columns(results: Results | dict[str, Any]) -> dict[str, tuple[float | None, str]]:
+    """summary.csv's U (k = 2) and note of every planar figure page 1 prints, by summary.csv name: the report's
+    own rows, so the file and the PDF cannot disagree; an unresolved figure has no U and says why."""
+    return {CSV_NAMES.get(r.key, r.key): (None if r.unresolved else r.u_k2, r.unresolved.replace("\u00b5", "u"))
+            for r in planar_summary_rows(results) if r.key}
 
 
 def _unresolved(span: SpanResolution | None) -> str:
@@ -196,7 +187,7 @@ def paint_planar_report(flow: Any, meta: dict[str, Any], results: Results, title
         flow.paragraph(line, size_pt=9.0, color="#c00000")
     spec = R.stage_spec(meta, results)
     axes = {axis: ar for axis in "XY" if (ar := axis_results(results, axis)) is not None}
-    verdict_rows = [replace(v, name=f"{axis}: {v.name}") for axis, ar in axes.items() for v in verdicts(ar, spec)]
+    verdict_rows = planar_verdicts(results, spec) if spec else []  # the rows results.json and summary.csv state
     flow.heading("Verdict", 11)
     flow.paragraph(overall(verdict_rows) if spec else R.NO_SPEC, size_pt=10.0 if spec else 8.5,
                    color=R.overall_color(verdict_rows) if spec else R.GREY)

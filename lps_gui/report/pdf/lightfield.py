@@ -28,6 +28,27 @@ def _qimage(gray: np.ndarray) -> Any:
     return QImage(a.data, a.shape[1], a.shape[0], a.shape[1], QImage.Format.Format_Grayscale8).copy()
 
 
+def epipolar_rows(check: dict[str, Any] | None) -> list[tuple[str, str]]:
+    """The epipolar check's numbers as (what, value) rows: the one formatting the report's light-field page, the
+    GUI's light field tab and the console print (issue 37: a figure on two pages is produced once)."""
+    if not check:
+        return []
+    v = check["vertical_disparity_rms_px"]
+    where = ", within rows of views" if "within" in check else ""
+    rows = [(f"vertical disparity RMS, before ({check['n_points']} known scene points{where})", f"{v['before']:.3f} px"),
+            ("vertical disparity RMS, after", f"{v['after']:.4f} px")]
+    h = check.get("horizontal_disparity_rms_px")
+    if h:
+        rows += [("horizontal disparity RMS within columns of views, before", f"{h['before']:.3f} px"),
+                 ("horizontal disparity RMS within columns of views, after", f"{h['after']:.4f} px")]
+    for p in check.get("disparity_vs_position", []):
+        rows += [(f"{p['plane']} at {p['depth_mm']:.0f} mm: disparity residual, measured positions",
+                  f"{p['residual_rms_px_measured']:.4f} px"),
+                 (f"{p['plane']}: disparity residual, nominal positions", f"{p['residual_rms_px_nominal']:.4f} px"),
+                 (f"{p['plane']}: depth from the disparity slope", f"{p['depth_from_slope_mm_measured']:.1f} mm")]
+    return rows
+
+
 def check_rows(doc: dict[str, Any]) -> list[list[str]]:
     """The numbers of lightfield.json as table rows (what, value)."""
     rows = []
@@ -37,19 +58,7 @@ def check_rows(doc: dict[str, Any]) -> list[list[str]]:
     rows.append(["largest deviation from a uniform grid", f"{u.get('max_sigmas', float('nan')):.1f} sigma"])
     rows.append(["HCI layout", "written" if u.get("hci") else "not written (see below)"])
     rows.append(["view rotations from", str(doc.get("rotation_source", ""))])
-    check = doc.get("check") or {}
-    if check:
-        v = check["vertical_disparity_rms_px"]
-        rows.append(["vertical disparity RMS, before", f"{v['before']:.3f} px"])
-        rows.append(["vertical disparity RMS, after", f"{v['after']:.4f} px"])
-        h = check.get("horizontal_disparity_rms_px")
-        if h:
-            rows.append(["horizontal disparity RMS within columns of views, before", f"{h['before']:.3f} px"])
-            rows.append(["horizontal disparity RMS within columns of views, after", f"{h['after']:.4f} px"])
-        for p in check.get("disparity_vs_position", []):
-            rows.append([f"{p['plane']} at {p['depth_mm']:.0f} mm: disparity residual, measured positions",
-                         f"{p['residual_rms_px_measured']:.4f} px"])
-            rows.append([f"{p['plane']}: disparity residual, nominal positions", f"{p['residual_rms_px_nominal']:.4f} px"])
+    rows += [[what, value] for what, value in epipolar_rows(doc.get("check"))]  # the console's and the GUI's too
     return rows
 
 

@@ -16,9 +16,10 @@ from pathlib import Path
 import pytest
 
 from lps_gui.io.results.model import as_results
-from lps_gui.report.pages.planar import CSV_NAMES, planar_summary_rows
-from lps_gui.report.pages.summary import summary_rows
 from lps_gui.io.results.verdict_rows import session_verdicts as verdicts
+from lps_gui.pipeline.results.verdict import CSV_NAMES
+from lps_gui.report.pages.planar import planar_summary_rows
+from lps_gui.report.pages.summary import summary_rows
 
 pytestmark = pytest.mark.gui
 
@@ -28,7 +29,6 @@ pytestmark = pytest.mark.gui
 
 def _planar(tmp: Path) -> Path:
     from lps_gui.pipeline.demos.run import run_demo
-
     from lps_gui.pipeline.estimate import estimate_session
 
     folder = run_demo(tmp / "planar", quick=True, planar=True).session_dir

@@ -3,7 +3,8 @@
 One list for page 1, the GUI, results.json ``verdict`` and summary.csv. Here, below both the pipeline (which
 writes the verdict into results.json) and the report (which prints it): the rows and the decision rule are
 ``core.metrology.verdict``'s; what this module adds is reading a planar document per axis, each axis shaped
-like a line session's results (its ISO 230-2 figures, its U), and the U of the squareness figure.
+like a line session's results (its ISO 230-2 figures, its U), and the U (k = 2) of every planar figure page 1
+prints (:func:`planar_figure_us`: the report's rows and summary.csv read the same numbers).
 """
 from __future__ import annotations
 
@@ -12,10 +13,17 @@ from dataclasses import replace
 from typing import Any
 
 from lps_gui.core.metrology.decision_rule import decide
-from lps_gui.core.metrology.verdict import FAIL_COLOR, GREY, PASS_COLOR, Verdict, verdicts
+from lps_gui.core.metrology.resolution import not_resolved_text
+from lps_gui.core.metrology.verdict import (
+    FAIL_COLOR,
+    GREY,
+    PASS_COLOR,
+    Verdict,
+    verdicts,
+)
 from lps_gui.errors import InputError
 from lps_gui.io.results.model import Results, as_results
-from lps_gui.io.results.sections import Figures
+from lps_gui.io.results.sections import Figures, SpanResolution
 from lps_gui.io.results.typed_json import finite_number
 
 SQUARENESS_CHECK = "Squareness"  # stage_spec ``squareness_urad``: the limit on |squareness| (no halving: an angle)
@@ -42,6 +50,54 @@ def planar_figures_k2(results: Results | dict[str, Any]) -> dict[str, Any]:
         if axis in ("X", "Y") and axis_unc.figures_k2.get("scale_ppm") is not None:
             k2.setdefault(f"scale_{axis.lower()}_ppm", axis_unc.figures_k2["scale_ppm"])
     return k2
+
+
+def axis_figures_k2(results: Results, axis: str) -> Mapping[str, Any]:
+    """U (k = 2) of one axis's figures: that axis's budget (``uncertainty.per_axis``), else the top-level one."""
+    unc = results.uncertainty
+    if unc is None:
+        return {}
+    axis_unc = unc.per_axis.get(axis)
+    return axis_unc.figures_k2 if axis_unc is not None else unc.figures_k2
+
+
+def unresolved_text(span: SpanResolution | None) -> str:
+    """"not resolved (noise p-v X)" for a p-v that noise alone could give (core.resolution), else empty."""
+    if span is None or span.resolved is None or span.resolved:
+        return ""
+    return not_resolved_text(span.noise_span_um, "\u00b5m")
+
+
+def planar_figure_us(results: Results | dict[str, Any]) -> dict[str, tuple[float | None, str]]:
+    """(U (k = 2), "not resolved ..." or "") of each planar figure by the key page 1's rows carry: the
+    squareness (also in um/m), the scales, each axis's straightness in and out of the plane and its worst
+    line's ISO 230-2 A, R, E, B. An unresolved figure has no U (never one smaller than its noise)."""
+    results = as_results(results)
+    pl = results.figures.planar
+    if pl is None:
+        return {}
+    k2 = planar_figures_k2(results)
+    u_sq = figure_u(k2, "squareness_urad", pl.squareness_sigma_urad)
+    out: dict[str, tuple[float | None, str]] = {
+        "squareness_urad": (u_sq, ""), "squareness_um_per_m": (u_sq, ""),
+        "scale_x_ppm": (figure_u(k2, "scale_x_ppm", pl.scale_x_sigma_ppm), ""),
+        "scale_y_ppm": (figure_u(k2, "scale_y_ppm", pl.scale_y_sigma_ppm), "")}
+    for axis, other in (("X", "Y"), ("Y", "X")):
+        a = pl.per_axis.get(axis)
+        if not a:
+            continue
+        ax, ot = axis.lower(), other.lower()
+        axis_k2 = axis_figures_k2(results, axis)
+        unresolved = unresolved_text(a.straightness)
+        out[f"straightness_{ax}_along_{ot}_max"] = (
+            None if unresolved else finite_number(axis_k2.get("straightness_span_max")), unresolved)
+        if a.out_of_plane:
+            out[f"out_of_plane_straightness_{ax}_max"] = (None, unresolved_text(a.out_of_plane))
+        iso = a.iso230_2.iso230_2 if a.iso230_2 else None
+        for key in ("A_um", "R_um", "E_um", "B_um"):
+            if iso and iso.number(key) is not None:  # U from that axis's budget, the U its verdict row compares
+                out[f"iso230_2_{ax}_{key[:-3]}"] = (finite_number(axis_k2.get(key)), "")
+    return out
 
 
 def axis_results(results: Results | dict[str, Any], axis: str) -> Results | None:

@@ -47,12 +47,17 @@ def add_verdict(results: dict[str, Any]) -> dict[str, Any]:
     return results
 
 
+CSV_NAMES = {"squareness_urad": "squareness", "scale_x_ppm": "scale_x", "scale_y_ppm": "scale_y"}  # page 1's key
+# -> summary.csv's name where the two differ (the others are the same)
+
+
 def planar_summary_rows(results: dict[str, Any]) -> list[tuple[Any, ...]]:
     """summary.csv of a planar session as a line's: (name, value, unit, U (k = 2), note), then the verdict rows;
-    U and note are the report's (:func:`lps_gui.report.pages.planar.planar_csv_columns`)."""
+    U and note are page 1's (:func:`lps_gui.io.results.verdict_rows.planar_figure_us`, which its rows read)."""
+    from lps_gui.io.results.verdict_rows import planar_figure_us
     from lps_gui.pipeline.results.planar import summary_csv_rows as planar_rows
-    from lps_gui.report.pages.planar import planar_csv_columns
 
-    columns = planar_csv_columns(results)
+    columns = {CSV_NAMES.get(key, key): (None if unresolved else u, unresolved.replace("\u00b5", "u"))
+               for key, (u, unresolved) in planar_figure_us(results).items()}
     return [(name, value, unit, *columns.get(name, (None, ""))) for name, value, unit in planar_rows(results)
             ] + verdict_csv_rows(results.get("verdict"))

@@ -10,18 +10,16 @@ so tests read exactly what is printed; Qt only where painting.
 """
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import replace
 from typing import Any
 
 from lps_gui.errors import InputError
-from lps_gui.io.results.document import finite_number as finite_or_none
 from lps_gui.io.results.model import Results, as_results
-from lps_gui.io.results.sections import SpanResolution, TruthComparison
+from lps_gui.io.results.sections import TruthComparison
 from lps_gui.io.results.verdict_rows import (  # noqa: F401  (names the pages and tests use)
     SQUARENESS_CHECK,
     axis_results,
-    figure_u,
+    planar_figure_us,
     planar_figures_k2,
     planar_verdicts,
 )
@@ -63,11 +61,9 @@ def planar_summary_rows(results: Results | dict[str, Any]) -> list[Row]:
     pl = results.figures.planar
     if pl is None:
         raise InputError(f"{results.source}: a planar session without 'figures.planar'; re-run `lps estimate`")
-    k2 = planar_figures_k2(results)
+    us = planar_figure_us(results)  # U and "not resolved" of each figure: the ones summary.csv states
     tc = results.truth_comparison
-    u_sq = figure_u(k2, "squareness_urad", pl.squareness_sigma_urad)
-    u_x = figure_u(k2, "scale_x_ppm", pl.scale_x_sigma_ppm)
-    u_y = figure_u(k2, "scale_y_ppm", pl.scale_y_sigma_ppm)
+    u_sq, u_x, u_y = (us[k][0] for k in ("squareness_urad", "scale_x_ppm", "scale_y_ppm"))
 
     def note(sigma: float | None, unit: str, trust: str) -> str:
         return "; ".join(t for t in (f"1\u03c3 {fmt(sigma)} {unit}", trust) if t)
@@ -91,58 +87,29 @@ def planar_summary_rows(results: Results | dict[str, Any]) -> list[Row]:
         if not a:
             continue
         ax, ot = axis.lower(), other.lower()
-        axis_k2 = _axis_figures_k2(results, axis)
-        unresolved = _unresolved(a.straightness)  # no value, hence no U (never one smaller than its noise)
+        u, unresolved = us[f"straightness_{ax}_along_{ot}_max"]  # unresolved: no value, hence no U
         rows.append(Row(f"Straightness of {axis} (in the plane, along {other}), worst line", a.straightness_um_max,
                         "\u00b5m", f"{a.lines} line(s); per-point 1\u03c3 {fmt(a.straightness_sigma_um)} \u00b5m",
                         unresolved=unresolved, key=f"straightness_{ax}_along_{ot}_max",
-                        u_k2=None if unresolved else finite_or_none(axis_k2.get("straightness_span_max"))))
+                        u_k2=u))
         oop = a.out_of_plane
         if oop:
             rows.append(Row(f"Straightness of {axis} out of the plane (along the normal), worst line", oop.span_um,
-                            "\u00b5m", f"per-target 1\u03c3 {fmt(oop.sigma_um)} \u00b5m", unresolved=_unresolved(oop),
+                            "\u00b5m", f"per-target 1\u03c3 {fmt(oop.sigma_um)} \u00b5m",
+                            unresolved=us[f"out_of_plane_straightness_{ax}_max"][1],
                             key=f"out_of_plane_straightness_{ax}_max"))
         iso = a.iso230_2.iso230_2 if a.iso230_2 else None
         for key, name in (("A_um", "accuracy A"), ("R_um", "repeatability R"), ("E_um", "systematic E"),
                           ("B_um", "reversal B")):
             if iso and iso.number(key) is not None:  # U from that axis's budget, the U its verdict row compares
                 rows.append(Row(f"{axis} ISO 230-2 {name} (worst line)", iso.number(key), "\u00b5m",
-                                key=f"iso230_2_{ax}_{key[:-3]}", u_k2=finite_or_none(axis_k2.get(key))))
+                                key=f"iso230_2_{ax}_{key[:-3]}", u_k2=us[f"iso230_2_{ax}_{key[:-3]}"][0]))
     p = results.parameters
     n_used = p.n_used if p.n_used is not None else DASH
     rows.append(Row("Corner noise (a posteriori)", p.sigma_px, "px"))
     rows.append(Row("Views used / total", None if p.n_used is None else float(p.n_used), "",
                     f"{p.n_outliers} outlier view(s)", shown=f"{n_used} / {p.n_views if p.n_views is not None else n_used}"))
     return rows
-
-
-def _axis_figures_k2(results: Results, axis: str) -> Mapping[str, Any]:
-    """U (k = 2) of one axis's figures: that axis's budget (``uncertainty.per_axis``), else the top-level one."""
-    unc = results.uncertainty
-    if unc is None:
-        return {}
-    axis_unc = unc.per_axis.get(axis)
-    return axis_unc.figures_k2 if axis_unc is not None else unc.figures_k2
-
-
-CSV_NAMES = {"squareness_urad": "squareness", "scale_x_ppm": "scale_x", "scale_y_ppm": "scale_y"}  # report key ->
-# summary.csv name where the two differ (the others are the same)
-
-
-def planar_csv_columns(results: Results | dict[str, Any]) -> dict[str, tuple[float | None, str]]:
-    """summary.csv's U (k = 2) and note of every planar figure page 1 prints, by summary.csv name: the report's
-    own rows, so the file and the PDF cannot disagree; an unresolved figure has no U and says why."""
-    return {CSV_NAMES.get(r.key, r.key): (None if r.unresolved else r.u_k2, r.unresolved.replace("\u00b5", "u"))
-            for r in planar_summary_rows(results) if r.key}
-
-
-def _unresolved(span: SpanResolution | None) -> str:
-    """"not resolved (noise p-v X)" for a p-v that noise alone could give (core.resolution), else empty."""
-    from lps_gui.core.metrology.resolution import not_resolved_text
-
-    if span is None or span.resolved is None or span.resolved:
-        return ""
-    return not_resolved_text(span.noise_span_um, "\u00b5m")
 
 
 def planar_truth_rows(results: Results | dict[str, Any]) -> list[Row]:

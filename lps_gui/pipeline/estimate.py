@@ -143,11 +143,13 @@ def resolve_self_calibration(opt: EstimateOptions, obs: Observations) -> Estimat
     itself fixes the intrinsics to a fraction of their prior (docs/targets.md). The paper's X axis rendered
     (`lps demo --travel 1524 --seed 2`): position error 5.1 um RMS against a per-stop sigma of 0.94 um with
     the calibrated intrinsics held, 1.5 um self-calibrated; target poses 9.3 sigma from truth, 2.0. Without
-    the calibration's covariance there is no prior: held, as before.
+    the calibration's covariance there is no prior, and a stitched capture (one board moved between segments)
+    holds them: held, as before.
     """
     if opt.self_calibrate is not None:
         return opt
-    auto = obs.mounted is not None and obs.intrinsics.covariance is not None and opt.method == "joint"
+    auto = (obs.mounted is not None and obs.segment is None  # a stitched capture holds them (one board moved)
+            and obs.intrinsics.covariance is not None and opt.method == "joint")
     return replace(opt, self_calibrate=auto)
 
 

@@ -179,21 +179,24 @@ def noise_corrected_worst(lines: Sequence[tuple[np.ndarray, np.ndarray, np.ndarr
         scale = noise_bound(bidirectional_figures(t, sign, r, x, ok), noise[ok])
         parts.append((np.asarray(t, float), sign, np.asarray(r), ok, scale * noise, scale))
     edges = np.cumsum([0] + [p[0].size for p in parts])
-    a = NOISE_KEYS.index("A_um")
 
     def per_line(v: np.ndarray) -> np.ndarray:
         return np.array([_figure_vector(t, sign, r, v[edges[i]:edges[i + 1]], ok)
                          for i, (t, sign, r, ok, _, _) in enumerate(parts)])
 
-    def worst(v: np.ndarray) -> np.ndarray:
-        figs = per_line(v)
-        acc = figs[:, a]
-        return figs[int(np.nanargmax(acc))] if np.isfinite(acc).any() else np.full(len(NOISE_KEYS), np.nan)
-
     x = np.concatenate([np.asarray(ln[3], float) for ln in lines])
-    acc = per_line(x)[:, a]
-    if not np.isfinite(acc).any():
+    figs = per_line(x)
+    # A over both directions; a plan of one direction has that direction's A only
+    a = next((NOISE_KEYS.index(k) for k in ("A_um", "A_up_um", "A_down_um")
+              if np.isfinite(figs[:, NOISE_KEYS.index(k)]).any()), None)
+    if a is None:
         return None
+    acc = figs[:, a]
+
+    def worst(v: np.ndarray) -> np.ndarray:
+        f = per_line(v)
+        return f[int(np.nanargmax(f[:, a]))] if np.isfinite(f[:, a]).any() else np.full(len(NOISE_KEYS), np.nan)
+
     measured, bias, sd = simex(worst, x, np.concatenate([p[4] for p in parts]), draws)
     out: dict[str, dict[str, float]] = {}
     scale = min(p[5] for p in parts)

@@ -33,7 +33,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--outlier-k", type=float_range(1.0, 1e6), default=5.0,
                    help="robust sigmas that flag an outlier view (default 5; at least 1: below, most good views are flagged)")
     p.add_argument("--no-outliers", action="store_true", help="do not look for outlier views")
-    p.add_argument("--self-calibrate", action="store_true", help="intrinsics free with their covariance as prior (joint)")
+    p.add_argument("--self-calibrate", action=argparse.BooleanOptionalAction, default=None,
+                   help="intrinsics free with their covariance as prior (joint); default: on for a session with "
+                        "targets (a row), off otherwise")
     p.add_argument("--no-six-dof", action="store_true", help="skip straightness and angular errors")
     p.add_argument("--grid-window-mm", type=positive_finite, help="hybrid: grid half-width (default 0.5 mm)")
     p.add_argument("--grid-resolution-mm", type=positive_finite, help="hybrid: final grid spacing (default 0.0001 mm)")

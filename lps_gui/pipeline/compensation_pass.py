@@ -42,7 +42,7 @@ class PassResult:
 
     @property
     def measured_improvement(self) -> float:
-        """Of the measured E (what `lps compare` reports; it carries both measurements' noise)."""
+        """Of the measured E (results.json's, the noise taken out: what `lps compare` reports)."""
         return self.measured_E_before_um / max(self.measured_E_after_um, 1e-9)
 
     def lines(self) -> list[str]:

@@ -525,8 +525,10 @@ def _plane_truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str
     if "squareness_urad" in truth:
         out["model_squareness_urad"] = truth["squareness_urad"]
     true_dev = true_deviation_um(true_xy, obs.target_mm, ref)
-    true_figs = planar_figures(obs.target_mm, obs.approach, obs.run, obs.direction, true_dev, np.ones_like(true_dev),
-                               ok, np.eye(2), np.zeros((4, 4)))  # the same per-line reduction as the estimate's
+    # the same per-line reduction as the estimate's; the truth has no noise to take out (a sigma of 1 pm, not 0:
+    # the straightness test divides by it)
+    true_figs = planar_figures(obs.target_mm, obs.approach, obs.run, obs.direction, true_dev, np.full_like(true_dev, 1e-6),
+                               ok, np.eye(2), np.zeros((4, 4)))
     for axis in ("X", "Y"):
         true_axis = true_figs.per_axis.get(axis) or {}
         out[f"straightness_{axis.lower()}_um"] = true_axis.get("straightness_um_max")

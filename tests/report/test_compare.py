@@ -74,3 +74,20 @@ def test_compare_names_u_verdicts_and_labels_true_against_measured(tmp_path):
     path = write_comparison(bdir, adir, tmp_path / "c.pdf", clipped)
     assert clipped == [] and path.exists()
     assert json.loads((bdir / "results.json").read_text())["figures"]  # inputs untouched
+
+
+def test_compare_reads_the_noise_corrected_E_results_json_holds(pair):
+    """One definition: the measured E of the comparison (and the demo's compensation pass) is results.json's, with
+    the camera's noise taken out, never a recomputation from the deviations (which would keep the noise)."""
+    import copy
+
+    from lps_gui.report.pdf.compare import session_E_um
+
+    (_, before), _ = pair
+    iso = before["figures"]["iso230_2"]
+    assert iso["noise_correction"]["E_um"]["measured"] != iso["E_um"]  # the correction moved it
+    assert session_E_um(before) == pytest.approx(iso["E_um"])
+    moved = copy.deepcopy(before)
+    moved["figures"]["iso230_2"]["E_um"] = iso["E_um"] + 3.0
+    assert session_E_um(moved) == pytest.approx(iso["E_um"] + 3.0)
+    assert true_E_um(moved) == pytest.approx(true_E_um(before))  # the truth's E is the truth column's own

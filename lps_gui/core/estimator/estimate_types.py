@@ -43,7 +43,9 @@ class EstimateOptions:
     outlier_k: float = 5.0  # robust sigmas for an outlier view
     detect_outliers: bool = True
     max_outlier_rounds: int = 4
-    self_calibrate: bool = False  # intrinsics free with their covariance as prior (SPEC 4.6)
+    # intrinsics free with their covariance as prior (SPEC 4.6); None: the session decides (a row of targets does,
+    # pipeline.estimate.resolve_self_calibration)
+    self_calibrate: bool | None = None
     six_dof: bool = True
     hybrid: HybridOptions = field(default_factory=HybridOptions)
 

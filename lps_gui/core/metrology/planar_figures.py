@@ -16,7 +16,12 @@ from typing import Any
 import numpy as np
 
 from lps_gui.core.metrology.iso230 import figures_for_session
-from lps_gui.core.metrology.iso230_noise import apply_noise_correction, independent_sigma_um, noise_corrected_iso
+from lps_gui.core.metrology.iso230_noise import (
+    apply_noise_correction,
+    independent_sigma_um,
+    noise_corrected_iso,
+    noise_corrected_worst,
+)
 from lps_gui.core.metrology.iso230_run import JsonDataclass, target_index
 from lps_gui.core.metrology.resolution import profile_span
 
@@ -137,6 +142,7 @@ def planar_figures(
     geometry = axis_geometry(G, cov_G)
     notes: list[str] = []
     lines: list[LineFigures] = []
+    raw: list[tuple[dict[str, Any], tuple] | None] = []  # per line: its uncorrected figures and noise-correction inputs
     names = ("X", "Y")
     for moving in range(2):
         other = 1 - moving
@@ -148,12 +154,15 @@ def planar_figures(
             iso = None
             signs = approach[sel, moving]
             runs_key = run[sel] * 2 + (direction[sel] > 0)
+            noise_in = (target_mm[sel, moving], signs, runs_key, deviation_um[sel, moving],
+                        independent_sigma_um(sigma_um[sel, moving]))
+            raw.append(None)
             try:
                 iso = figures_for_session(target_mm[sel, moving], np.where(signs > 0, "+", "-"), runs_key,
                                           deviation_um[sel, moving], None)
                 if iso.get("iso230_2"):  # the per-view noise taken out, as a line's (issue 35)
-                    corr = noise_corrected_iso(target_mm[sel, moving], signs, runs_key, deviation_um[sel, moving],
-                                               np.ones(sel.size, bool), independent_sigma_um(sigma_um[sel, moving]))
+                    raw[-1] = (dict(iso["iso230_2"]), noise_in)
+                    corr = noise_corrected_iso(*noise_in[:4], np.ones(sel.size, bool), noise_in[4])
                     iso["iso230_2"] = apply_noise_correction(iso["iso230_2"], corr)
             except Exception as exc:  # a line too short for the figures: say so, keep the rest
                 notes.append(f"{names[moving]} line at {names[other]}={at:g} mm: no ISO 230-2 figures ({exc})")
@@ -172,7 +181,7 @@ def planar_figures(
             "straightness_at_mm": worst.at_mm,
             "straightness_sigma_um": worst.straightness_sigma_um,
             "straightness": worst.straightness,
-            "iso230_2": _worst_iso(own),
+            "iso230_2": _worst_iso([(ln, raw[i]) for i, ln in enumerate(lines) if ln.axis == name]),
         }
         with_oop = [ln for ln in own if ln.out_of_plane and ln.out_of_plane.get("span_um") is not None]
         if with_oop:
@@ -182,17 +191,19 @@ def planar_figures(
                          notes)
 
 
-def _worst_iso(lines: list[LineFigures]) -> dict[str, Any] | None:
-    """The ISO figures of the line with the largest accuracy A (the figure a spec is judged on)."""
-    best = None
-    for ln in lines:
-        iso = ln.iso230_2
-        if not iso:
-            continue
-        a = _accuracy(iso)
-        if a is not None and (best is None or a > best[0]):
-            best = (a, {"at_mm": ln.at_mm, **iso})
-    return None if best is None else best[1]
+def _worst_iso(lines: list[tuple[LineFigures, tuple[dict[str, Any], tuple] | None]]) -> dict[str, Any] | None:
+    """The ISO figures of the line with the largest accuracy A (the figure a spec is judged on), the noise taken
+    out with that choice (:func:`noise_corrected_worst`: the worst of several noisy lines is biased upwards by
+    the choice itself, which no line's own correction sees)."""
+    with_iso = [(ln, r) for ln, r in lines if r is not None and ln.iso230_2 and _accuracy(ln.iso230_2) is not None]
+    if not with_iso:
+        return None
+    picked = noise_corrected_worst([r[1] for _, r in with_iso])
+    if picked is None:
+        return None
+    i, corr = picked
+    ln, (measured, _) = with_iso[i]
+    return {"at_mm": ln.at_mm, **ln.iso230_2, "iso230_2": apply_noise_correction(measured, corr)}
 
 
 def _accuracy(figs: dict[str, Any]) -> float | None:

@@ -131,7 +131,7 @@ class EstimationPanel(QWidget):
         self.robust = QCheckBox("robust loss (Huber) on corner residuals")
         self.detect_outliers = QCheckBox("flag outlier views and re-solve without them")
         self.detect_outliers.setChecked(True)
-        self.self_calibrate = QCheckBox("refine intrinsics (prior: their covariance)")
+        self.self_calibrate = QCheckBox("refine intrinsics (prior: their covariance; a row of targets always does)")
         self.outlier_k = double_spin(2.0, 20.0, 5.0, 1, " σ")
         self.grid_window = double_spin(0.001, 50.0, 0.5, 3, " mm")
         self.grid_resolution = double_spin(0.00001, 1.0, 0.0001, 5, " mm")
@@ -199,7 +199,7 @@ class EstimationPanel(QWidget):
         """The options dict of :func:`estimate_session` (hybrid keys only for the hybrid method)."""
         opts: dict[str, Any] = {"robust": self.robust.isChecked(), "outlier_k": self.outlier_k.value(),
                                 "detect_outliers": self.detect_outliers.isChecked(),
-                                "self_calibrate": self.self_calibrate.isChecked()}
+                                "self_calibrate": True if self.self_calibrate.isChecked() else None}  # None: a row does
         if self.method.currentData() == "hybrid":
             opts.update(grid_window_mm=self.grid_window.value(), grid_resolution_mm=self.grid_resolution.value(),
                         threshold_px=self.threshold_px.value() or None)

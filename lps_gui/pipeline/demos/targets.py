@@ -112,13 +112,15 @@ def row_summary_lines(results: Results) -> list[str]:
     p, single, unc, tc = results.parameters, results.figures.single_run, results.uncertainty, results.truth_comparison
     sig = [v for r in results.positions if (v := r.number("sigma_um"))]
     worst = max((max(t.p_sigma_mm) for t in results.targets if t.p_sigma_mm), default=None)
+    settings = (results.raw.get("settings") or {}) if hasattr(results, "raw") else {}
+    what = "noise and the self-calibrated intrinsics" if settings.get("self_calibrate") else "noise only"
     lines = [
         f"views: {p.n_views} ({p.n_used} used) against {len(results.targets)} targets; RMS residual {fmt(p.rms_px)} px",
         f"positioning: scale {fmt(single.scale_ppm if single else None)} ppm (sigma "
         f"{fmt(single.scale_sigma_ppm if single else None)}), max |deviation| "
         f"{fmt(single.max_abs_deviation_um if single else None)} \u00b5m, mean step "
         f"{fmt(single.mean_step_mm if single else None, 6)} mm; "
-        f"sigma per stop median {fmt(float(np.median(sig)) if sig else None)} \u00b5m (noise only)",
+        f"sigma per stop median {fmt(float(np.median(sig)) if sig else None)} \u00b5m ({what})",
         f"targets: poses to {fmt(1e3 * worst if worst is not None else None)} \u00b5m (worst 1-sigma); "
         f"U (k = 2) {fmt(unc.expanded_k2_um if unc else None, 2)} \u00b5m over the travel, with each target's print scale",
     ]

@@ -174,7 +174,13 @@ def target_pose_solution(obs: Any, est: Any) -> PoseSolution:
     start = getattr(est, "fit_targets", None) if obs.D == 2 else getattr(est, "fit", None)  # the row model's solution
     if start is not None and not (start.converged and start.sigma_px < WARM_START_MAX_PX):
         start = None  # a row model that did not fit these views is no start: per-view PnP instead
-    return solve_poses(tobs, obs.intrinsics, start=start)
+    return solve_poses(tobs, pose_intrinsics(obs, est), start=start)
+
+
+def pose_intrinsics(obs: Any, est: Any) -> Any:
+    """The intrinsics the poses are solved and checked with: self-calibrated (a row, by default), the ones the
+    row model found, not the prior it refined (held, the two coincide)."""
+    return getattr(getattr(est, "state", None), "intrinsics", None) or obs.intrinsics
 
 
 def session_error_motions(meta: dict[str, Any], where: str, obs: Any, est: Any,
@@ -191,7 +197,7 @@ def session_error_motions(meta: dict[str, Any], where: str, obs: Any, est: Any,
     from lps_gui.pipeline.results.lens_model import lens_model_check, position_lens_sigma_um
 
     w = board_truth_rotations(meta.get("truth"), truth, np.asarray(obs.index))
-    check = lens_model_check(sol, obs)
+    check = lens_model_check(sol, obs, pose_intrinsics(obs, est))
     out = error_motion_results(sol, obs.target_mm, basis, tool, w, lens=check.misfit)
     if check.misfit is not None:
         check.position_sigma_um = position_lens_sigma_um(sol, obs, check.misfit, out.motions.frame,
@@ -266,7 +272,7 @@ def add_error_motions(results: dict[str, Any], session: Any, obs: Any, est: Any)
         if int(sol.used.sum()) >= 3:
             from lps_gui.pipeline.results.lens_model import lens_model_check
 
-            check = lens_model_check(sol, obs)
+            check = lens_model_check(sol, obs, pose_intrinsics(obs, est))
             motions = planar_error_motion_results(sol, obs.target_mm, w, lens=check.misfit)
             motions.lens = check
     else:

@@ -64,12 +64,14 @@ def _significant(record: dict[str, Any] | None) -> bool:
         return False
 
 
-def lens_model_check(sol: PoseSolution, obs: Any) -> LensModelCheck:
-    """The lens-model section, its flags, and the misfit the poses carry."""
-    intr = obs.intrinsics
+def lens_model_check(sol: PoseSolution, obs: Any, intrinsics: Any = None) -> LensModelCheck:
+    """The lens-model section, its flags, and the misfit the poses carry; ``intrinsics``: those the poses were
+    solved with (self-calibrated), else the session's."""
+    intr = intrinsics or obs.intrinsics
     own, which = corner_points(obs)
     session = session_structure(sol, own, which, obs.corners_px, intr)
-    calibration = intr.extra.get("lens_fit") if isinstance(intr.extra.get("lens_fit"), dict) else None
+    extra = obs.intrinsics.extra  # the calibration's own record travels with the session's intrinsics
+    calibration = extra.get("lens_fit") if isinstance(extra.get("lens_fit"), dict) else None
     cal_misfit = float(calibration.get("misfit_px") or 0.0) if calibration else 0.0
     # a misfit counts only where the residuals are structured beyond noise: a calibration of a lens the model fits
     # still shows a few thousandths of a pixel by chance, which would inflate every tilt's sigma for nothing

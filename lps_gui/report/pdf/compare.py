@@ -77,10 +77,20 @@ def comparison_figure(before: Results, after: Results) -> FigureSpec:
 
 
 def session_E_um(results: Results | dict[str, Any], key: str = DEVIATION_UM) -> float:
-    """E (ISO 230-2, um) of one deviation column of results.json: measured, or the simulator's truth."""
+    """E (ISO 230-2, um) of one deviation column of results.json.
+
+    The measured deviations' E is the one results.json holds (the camera's noise taken out,
+    ``iso230_2.noise_correction``): one definition, the report's, summary.csv's and this comparison's.
+    A column of the simulator's truth has no noise: its E is computed from the column."""
+    results = as_results(results)
+    if key == DEVIATION_UM:
+        iso = _iso(results)
+        value = iso.number("E_um") if iso is not None else None
+        if value is None:
+            raise InputError("results.json has no ISO 230-2 E; estimate a bidirectional session (or two runs)")
+        return float(value)
     from lps_gui.core.metrology.iso230 import figures_for_session
 
-    results = as_results(results)
     rows = [r for r in results.positions if r.get(key) is not None and not r.outlier]
     if not rows:
         raise InputError(f"results.json has no {key}; estimate a simulated session")

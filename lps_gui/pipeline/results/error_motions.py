@@ -37,7 +37,7 @@ from lps_gui.core.models.pose_model import PoseSolution, pose_solution_from_view
 from lps_gui.errors import InputError
 from lps_gui.io.results.document import json_float, json_floats
 from lps_gui.io.results.keys import SIGMA_TOTAL_UM
-from lps_gui.io.results.sections import ErrorMotions
+from lps_gui.io.results.sections import ErrorMotions as ErrorMotionsSection
 
 ANGLE_COLUMNS = {"roll": "eax", "pitch": "ebx", "yaw": "ecx"}  # SPEC 14's column stems (for every axis)
 UNITS = {"positioning": "um", "straightness_y": "um", "straightness_z": "um", "roll": "urad", "pitch": "urad",
@@ -165,8 +165,19 @@ def add_columns(positions: list[dict[str, Any]], columns: dict[str, list[Any]]) 
             row[key] = values[i]
 
 
-def target_pose_solution(obs: Any, est: Any) -> PoseSolution:
-    """Every stop's full pose against the session's targets, started from the row model's solution."""
+def target_pose_solution(obs: Any, est: Any) -> tuple[PoseSolution, Any]:
+    """Every stop's full pose against the session's targets, started from the row model's solution, and the
+    intrinsics it was solved with (the lens check uses the same).
+
+    Where the row self-calibrated, the poses are solved with both the calibrated and the self-calibrated
+    intrinsics and the ones the poses fit better (lower a-posteriori sigma) are kept; neither adds a parameter
+    to the pose model, so this is a plain choice of the likelier. Why both: the self-calibration frees the
+    intrinsics inside the row model (one orientation for every stop). On a stage without angles it corrects
+    the calibration, and the calibrated intrinsics fake tilts (the paper axis rendered, `lps demo --travel
+    1524`, seeds 2-4: EBX and ECX called resolved, the poses fit 0.5-3.7 % worse in variance). On a stage
+    with angles the freed intrinsics absorb the angular trend (a two-depth constellation's yaw of 120 urad
+    over 600 mm came out 66 urad, mean (error/sigma)^2 9.4), and the calibrated ones fit the poses better.
+    """
     from lps_gui.core.models.pose_model import solve_poses
     from lps_gui.core.models.target_model import TargetObservations
 
@@ -174,13 +185,12 @@ def target_pose_solution(obs: Any, est: Any) -> PoseSolution:
     start = getattr(est, "fit_targets", None) if obs.D == 2 else getattr(est, "fit", None)  # the row model's solution
     if start is not None and not (start.converged and start.sigma_px < WARM_START_MAX_PX):
         start = None  # a row model that did not fit these views is no start: per-view PnP instead
-    return solve_poses(tobs, pose_intrinsics(obs, est), start=start)
-
-
-def pose_intrinsics(obs: Any, est: Any) -> Any:
-    """The intrinsics the poses are solved and checked with: self-calibrated (a row, by default), the ones the
-    row model found, not the prior it refined (held, the two coincide)."""
-    return getattr(getattr(est, "state", None), "intrinsics", None) or obs.intrinsics
+    held = solve_poses(tobs, obs.intrinsics, start=start)
+    refined = getattr(getattr(est, "state", None), "intrinsics", None)
+    if refined is None or refined is obs.intrinsics or np.array_equal(refined.vector(), obs.intrinsics.vector()):
+        return held, obs.intrinsics
+    other = solve_poses(tobs, refined, start=start)
+    return (other, refined) if other.sigma_px < held.sigma_px else (held, obs.intrinsics)
 
 
 def session_error_motions(meta: dict[str, Any], where: str, obs: Any, est: Any,
@@ -189,15 +199,15 @@ def session_error_motions(meta: dict[str, Any], where: str, obs: Any, est: Any,
     6-DOF poses (None when the method has none)."""
     tool = tool_point(meta, where)
     if obs.mounted is not None:
-        sol, basis = target_pose_solution(obs, est), BASIS_TARGETS
+        (sol, intrinsics), basis = target_pose_solution(obs, est), BASIS_TARGETS
     else:
-        sol, basis = board_pose_solution(est), BASIS_BOARD
+        sol, intrinsics, basis = board_pose_solution(est), obs.intrinsics, BASIS_BOARD
     if sol is None or int(np.asarray(sol.used).sum()) < 3:
         return None
     from lps_gui.pipeline.results.lens_model import lens_model_check, position_lens_sigma_um
 
     w = board_truth_rotations(meta.get("truth"), truth, np.asarray(obs.index))
-    check = lens_model_check(sol, obs, pose_intrinsics(obs, est))
+    check = lens_model_check(sol, obs, intrinsics)
     out = error_motion_results(sol, obs.target_mm, basis, tool, w, lens=check.misfit)
     if check.misfit is not None:
         check.position_sigma_um = position_lens_sigma_um(sol, obs, check.misfit, out.motions.frame,
@@ -266,13 +276,13 @@ def add_error_motions(results: dict[str, Any], session: Any, obs: Any, est: Any)
         motions = session_error_motions(meta, where, obs, est, session.truth)
     elif obs.mounted is not None:
         tool_point(meta, where)  # checked alike, used by one axis only
-        sol = target_pose_solution(obs, est)
+        sol, intrinsics = target_pose_solution(obs, est)
         w = planar_truth_rotations(meta.get("truth"), np.asarray(obs.index))
         motions = None
         if int(sol.used.sum()) >= 3:
             from lps_gui.pipeline.results.lens_model import lens_model_check
 
-            check = lens_model_check(sol, obs, pose_intrinsics(obs, est))
+            check = lens_model_check(sol, obs, intrinsics)
             motions = planar_error_motion_results(sol, obs.target_mm, w, lens=check.misfit)
             motions.lens = check
     else:
@@ -290,7 +300,7 @@ def add_error_motions(results: dict[str, Any], session: Any, obs: Any, est: Any)
                 row["sigma_lens_um"] = json_float(s)
                 if row.get(SIGMA_TOTAL_UM) is not None:
                     row[SIGMA_TOTAL_UM] = json_float(np.hypot(row[SIGMA_TOTAL_UM], s))
-    results["error_motions"] = ErrorMotions.of(**motions.section).to_dict()  # as the readers read it
+    results["error_motions"] = ErrorMotionsSection.of(**motions.section).to_dict()  # as the readers read it
     figures = results.get("figures") or {}
     if obs.D == 1 and figures.get("angles_resolution"):  # "Max |roll|" is a finding only if EAX's profile is
         names = iso_names(motions.section.get("axis", "X"))

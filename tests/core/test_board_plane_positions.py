@@ -87,3 +87,23 @@ def test_a_row_of_targets_on_a_stage_with_angles_takes_each_stops_full_pose():
     L = np.zeros((1, obs_k := est.used.size))
     L[0, -1], L[0, 0] = 1.0, -1.0  # the whole travel: its sigma is that of the last stop relative to the first
     assert np.sqrt(est.functional_covariance(L)[0, 0]) == pytest.approx(est.sigma_s_mm[-1], rel=1e-6)
+
+
+def test_a_row_that_would_self_calibrate_keeps_the_full_poses_on_a_stage_with_angles():
+    """A row self-calibrates by default (pipeline.estimate.resolve_self_calibration), but freed intrinsics in a
+    model of one orientation absorb the angles: where the row model (intrinsics held) leaves the stage's angles,
+    the estimate is the held one with every stop's full pose."""
+    from lps_gui.core.geometry.camera_model import INTRINSIC_NAMES
+    from lps_gui.core.planning.target_presets import small_row_spec
+    from lps_gui.pipeline.estimate import estimate_with_self_calibration, make_options
+
+    travel = 340.0
+    errors = replace(FLAT, roll_urad=ErrorProfile(amplitude=2000.0, period_mm=40.0 / 22.0 * travel),
+                     yaw_urad=ErrorProfile(amplitude=400.0, period_mm=30.0 / 22.0 * travel, phase_rad=0.5))
+    spec = small_row_spec(seed=0, noise_px=0.1, errors=errors)
+    obs = observations_of(spec, simulate_views(spec))
+    cov = np.diag((1e-3 * np.abs(obs.intrinsics.vector()) + 1e-4) ** 2)  # a calibration's covariance: a prior
+    obs = replace(obs, intrinsics=replace(obs.intrinsics, covariance=cov))
+    assert cov.shape == (len(INTRINSIC_NAMES),) * 2
+    est = estimate_with_self_calibration(obs, make_options("joint", None))
+    assert est.position_model == POSITION_MODEL_BOARD_PLANE

@@ -131,7 +131,10 @@ class EstimationPanel(QWidget):
         self.robust = QCheckBox("robust loss (Huber) on corner residuals")
         self.detect_outliers = QCheckBox("flag outlier views and re-solve without them")
         self.detect_outliers.setChecked(True)
-        self.self_calibrate = QCheckBox("refine intrinsics (prior: their covariance; a row of targets always does)")
+        self.self_calibrate = QCheckBox("refine intrinsics (prior: their covariance)")
+        self.self_calibrate.setToolTip("Unchecked, the session decides: a row of targets refines its intrinsics "
+                                       "unless its stage's angles leave the row model (then each stop's own pose "
+                                       "is used with the calibrated intrinsics).")
         self.outlier_k = double_spin(2.0, 20.0, 5.0, 1, " σ")
         self.grid_window = double_spin(0.001, 50.0, 0.5, 3, " mm")
         self.grid_resolution = double_spin(0.00001, 1.0, 0.0001, 5, " mm")

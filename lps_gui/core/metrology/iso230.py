@@ -34,8 +34,9 @@ from lps_gui.core.metrology.iso230_run import (
 from lps_gui.core.metrology.resolution import ISO_RUNS_PER_DIRECTION, is_indicative, straightness_verdict
 from lps_gui.errors import InputError
 
-__all__ = ["TARGET_TOL_MM", "Iso230Figures", "RunFigures", "TargetTable", "bidirectional_figures",
-           "check_specification", "direction_signs", "figures_for_session", "single_run_figures"]
+__all__ = ["TARGET_TOL_MM", "ApproachPlan", "Iso230Figures", "RunFigures", "TargetTable", "approach_plan",
+           "bidirectional_figures", "check_specification", "direction_signs", "figures_for_session", "plan_figures",
+           "single_run_figures"]
 
 ISO_RUNS = 5  # ISO 230-2 asks for 5 runs per direction
 RUN_STATISTIC_ROWS = ("Positional accuracy", "Repeatability")  # specification rows that are ISO 230-2 run statistics
@@ -144,6 +145,76 @@ def _direction_stats(approach_target: np.ndarray, approach_dev: np.ndarray, m: i
     return n.astype(int), mean, std
 
 
+@dataclass(frozen=True)
+class ApproachPlan:
+    """How :func:`bidirectional_figures` groups a plan's captures into approaches (target, direction, run).
+
+    Why separate: the grouping depends on the plan only (targets, directions, runs, validity), not on the
+    deviations; the noise Monte Carlo (iso230_noise) evaluates hundreds of deviation draws of one plan.
+    """
+
+    valid: np.ndarray  # (K,) the captures used
+    targets: np.ndarray  # (m,) targets ascending
+    capture_approach: np.ndarray  # (K used,) approach of each used capture
+    frames: np.ndarray  # (n,) frames averaged into each approach
+    approach_target: np.ndarray  # (n,) target index of each approach
+    approach_up: np.ndarray  # (n,) bool: an upward approach
+    runs_up: int
+    runs_down: int
+
+
+def _approach_plan(t: np.ndarray, r: np.ndarray, sign: np.ndarray, ok: np.ndarray) -> ApproachPlan:
+    """The plan of the used captures (``t``, ``r``, ``sign`` already masked by ``ok``)."""
+    targets, j = target_index(t)
+    # one approach = (target, direction, run): its frames are averaged first
+    _, run_id = np.unique(r, return_inverse=True)
+    n_runs = run_id.max() + 1
+    appr_key = (j * 2 + (sign > 0)) * n_runs + run_id.ravel()
+    keys, inv, cnt = np.unique(appr_key, return_inverse=True, return_counts=True)
+    return ApproachPlan(valid=ok, targets=targets, capture_approach=inv.ravel(), frames=cnt,
+                        approach_target=keys // n_runs // 2, approach_up=((keys // n_runs) % 2).astype(bool),
+                        runs_up=int(np.unique(r[sign > 0]).size), runs_down=int(np.unique(r[sign < 0]).size))
+
+
+def approach_plan(target_mm: np.ndarray, direction: np.ndarray, run: np.ndarray,
+                  valid: np.ndarray | None = None) -> ApproachPlan | None:
+    """The grouping of :func:`bidirectional_figures` for captures whose deviations are all finite; None: none valid."""
+    a = _session_arrays(target_mm, direction, run, np.zeros(np.size(target_mm)), valid)
+    ok = a["valid"]
+    if not ok.any():
+        return None
+    return _approach_plan(a["target_mm"][ok], a["run"][ok], a["sign"][ok], ok)
+
+
+def plan_figures(plan: ApproachPlan, deviation_um: np.ndarray) -> tuple[TargetTable, dict[str, float | None]] | None:
+    """Per-target table and the ISO figures (the float fields of :class:`Iso230Figures`) of one deviation set.
+
+    ``deviation_um`` has shape (K,) as the plan's captures; None when a used capture's deviation is not
+    finite (its plan would differ: :func:`bidirectional_figures` leaves it out).
+    """
+    x = np.asarray(deviation_um, dtype=float).ravel()[plan.valid]
+    if not np.isfinite(x).all():
+        return None
+    m, up = plan.targets.size, plan.approach_up
+    appr_dev = np.bincount(plan.capture_approach, x) / plan.frames
+    n_up, mean_up, std_up = _direction_stats(plan.approach_target[up], appr_dev[up], m)
+    n_dn, mean_dn, std_dn = _direction_stats(plan.approach_target[~up], appr_dev[~up], m)
+    reversal = mean_up - mean_dn  # NaN unless both directions
+    R_up_j, R_dn_j = 4 * std_up, 4 * std_dn
+    R_j = np.fmax(np.fmax(2 * std_up + 2 * std_dn + np.abs(reversal), R_up_j), R_dn_j)
+    R_j[~(np.isfinite(std_up) & np.isfinite(std_dn) & np.isfinite(reversal))] = np.nan
+    table = TargetTable(plan.targets, n_up, n_dn, mean_up, mean_dn, std_up, std_dn, reversal, R_up_j, R_dn_j, R_j)
+    both = np.isfinite(reversal)
+    return table, dict(
+        E_up_um=_span(mean_up), E_down_um=_span(mean_dn), E_um=_span(mean_up, mean_dn),
+        M_um=_span(((mean_up + mean_dn) / 2)[both]),
+        B_um=_nanmax(np.abs(reversal)), B_mean_um=float(reversal[both].mean()) if both.any() else None,
+        R_up_um=_nanmax(R_up_j), R_down_um=_nanmax(R_dn_j), R_um=_nanmax(R_j),
+        A_up_um=_band([mean_up], [std_up]), A_down_um=_band([mean_dn], [std_dn]),
+        A_um=_band([mean_up, mean_dn], [std_up, std_dn]) if (np.isfinite(std_up).any()
+                                                              and np.isfinite(std_dn).any()) else None)
+
+
 def bidirectional_figures(target_mm: np.ndarray, direction: np.ndarray, run: np.ndarray,
                           deviation_um: np.ndarray, valid: np.ndarray | None = None) -> Iso230Figures | None:
     """ISO 230-2 positioning figures (SPEC section 5) from captures of several runs.
@@ -166,39 +237,11 @@ def bidirectional_figures(target_mm: np.ndarray, direction: np.ndarray, run: np.
     ok = a["valid"]
     if not ok.any():
         return None
-    t, x, r, sign = a["target_mm"][ok], a["deviation_um"][ok], a["run"][ok], a["sign"][ok]
-    targets, j = target_index(t)
-    m = targets.size
-    # one approach = (target, direction, run): average its frames first
-    _, run_id = np.unique(r, return_inverse=True)
-    appr_key = (j * 2 + (sign > 0)) * (run_id.max() + 1) + run_id.ravel()
-    keys, inv, cnt = np.unique(appr_key, return_inverse=True, return_counts=True)
-    appr_dev = np.bincount(inv.ravel(), x) / cnt
-    appr_dir_up = ((keys // (run_id.max() + 1)) % 2).astype(bool)
-    appr_target = keys // (run_id.max() + 1) // 2
-
-    n_up, mean_up, std_up = _direction_stats(appr_target[appr_dir_up], appr_dev[appr_dir_up], m)
-    n_dn, mean_dn, std_dn = _direction_stats(appr_target[~appr_dir_up], appr_dev[~appr_dir_up], m)
-    reversal = mean_up - mean_dn  # NaN unless both directions
-    R_up_j, R_dn_j = 4 * std_up, 4 * std_dn
-    R_j = np.fmax(np.fmax(2 * std_up + 2 * std_dn + np.abs(reversal), R_up_j), R_dn_j)
-    R_j[~(np.isfinite(std_up) & np.isfinite(std_dn) & np.isfinite(reversal))] = np.nan
-    table = TargetTable(targets, n_up, n_dn, mean_up, mean_dn, std_up, std_dn, reversal, R_up_j, R_dn_j, R_j)
-
-    runs_up = int(np.unique(r[sign > 0]).size)
-    runs_dn = int(np.unique(r[sign < 0]).size)
-    both = np.isfinite(reversal)
-    fig = Iso230Figures(
-        n_targets=int(m), n_runs_up=runs_up, n_runs_down=runs_dn,
-        E_up_um=_span(mean_up), E_down_um=_span(mean_dn), E_um=_span(mean_up, mean_dn),
-        M_um=_span(((mean_up + mean_dn) / 2)[both]),
-        B_um=_nanmax(np.abs(reversal)), B_mean_um=float(reversal[both].mean()) if both.any() else None,
-        R_up_um=_nanmax(R_up_j), R_down_um=_nanmax(R_dn_j), R_um=_nanmax(R_j),
-        A_up_um=_band([mean_up], [std_up]), A_down_um=_band([mean_dn], [std_dn]),
-        A_um=_band([mean_up, mean_dn], [std_up, std_dn]) if (np.isfinite(std_up).any()
-                                                              and np.isfinite(std_dn).any()) else None,
-        per_target=table, notes=_iso_notes(table, runs_up, runs_dn, int((~ok).sum())))
-    return fig
+    plan = _approach_plan(a["target_mm"][ok], a["run"][ok], a["sign"][ok], ok)
+    table, figures = plan_figures(plan, a["deviation_um"])
+    return Iso230Figures(n_targets=int(plan.targets.size), n_runs_up=plan.runs_up, n_runs_down=plan.runs_down,
+                         **figures, per_target=table,
+                         notes=_iso_notes(table, plan.runs_up, plan.runs_down, int((~ok).sum())))
 
 
 def _iso_notes(tab: TargetTable, runs_up: int, runs_dn: int, n_invalid: int) -> list[str]:

@@ -11,11 +11,12 @@ is exact for an axis-aligned footprint and unbiased (point-symmetric) for a
 skewed one: corners stay where they belong.
 
 What does not change between frames (each pixel's undistorted ray and the
-Jacobian of the undistortion) is computed once per renderer, so a frame is a
-few vectorized passes over float32 arrays.
+Jacobian of the undistortion) is computed once per camera and process
+(:func:`camera_rays`), so a frame is a few vectorized passes over float32 arrays.
 """
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 from typing import Any
 
@@ -64,6 +65,29 @@ def _undistorted_rays(intrinsics: CameraIntrinsics, lens: Any = None) -> tuple[n
     Jinv = np.linalg.inv(step(xy, intrinsics)[1])  # shape (P, 2, 2): d (x', y') / d uv
     f32 = lambda a: np.ascontiguousarray(a.reshape(h, w), dtype=np.float32)  # noqa: E731
     return f32(xy[:, 0]), f32(xy[:, 1]), f32(Jinv[:, 0, 0]), f32(Jinv[:, 0, 1]), f32(Jinv[:, 1, 0]), f32(Jinv[:, 1, 1])
+
+
+RAYS_CAMERAS = 2  # cameras whose rays a process keeps (a 5 Mpx camera's are 120 MB)
+_RAYS: dict[tuple[Any, ...], tuple[np.ndarray, ...]] = {}
+_RAYS_LOCK = threading.Lock()
+
+
+def camera_rays(intrinsics: CameraIntrinsics, lens: Any = None) -> tuple[np.ndarray, ...]:
+    """:func:`_undistorted_rays`, kept per camera (read-only): each simulated camera opened, each image set
+    and each scene of one camera would otherwise rebuild them (about a second for 640 x 480)."""
+    key = (intrinsics.image_size, intrinsics.camera_matrix.tobytes(), intrinsics.dist.tobytes(),
+           intrinsics.higher.tobytes(), lens)
+    with _RAYS_LOCK:
+        rays = _RAYS.get(key)
+    if rays is None:
+        rays = _undistorted_rays(intrinsics, lens)
+        for a in rays:
+            a.setflags(write=False)
+        with _RAYS_LOCK:
+            while len(_RAYS) >= RAYS_CAMERAS:
+                _RAYS.pop(next(iter(_RAYS)))
+            _RAYS[key] = rays
+    return rays
 
 
 def _brown_step(xy: np.ndarray, intrinsics: CameraIntrinsics) -> tuple[np.ndarray, np.ndarray]:
@@ -197,7 +221,7 @@ class BoardRenderer:
         self.margin_squares = float(margin_squares)
         self.lighting = lighting or Lighting()
         self.noise_grey = float(noise_grey)
-        self.rays = rays if rays is not None else _undistorted_rays(intrinsics, lens)  # shared by renderers of one camera
+        self.rays = rays if rays is not None else camera_rays(intrinsics, lens)  # shared by renderers of one camera
         self._x, self._y, self._j00, self._j01, self._j10, self._j11 = self.rays
         w, h = intrinsics.image_size
         self._gain = None

@@ -76,3 +76,18 @@ def lightfield_demo(tmp_path_factory):
     from lps_gui.pipeline.demos.lightfield import run_lightfield_demo
 
     return run_lightfield_demo(tmp_path_factory.mktemp("lf") / "out", quick=True)
+
+
+@pytest.fixture(scope="session")
+def small_planar_estimated(tmp_path_factory):
+    """A simulated small-planar point session (both directions, 2 runs, seed 3) estimated by `lps estimate`.
+
+    Read only (several modules share it, one estimate): a test that writes into it (a report) copies it first.
+    """
+    from lps_gui.cli import main as lps_main
+
+    folder = tmp_path_factory.mktemp("small-planar") / "s"
+    assert lps_main(["simulate", "--planar", "--points", str(folder), "--preset", "small-planar", "--directions",
+                     "both", "--runs", "2", "--seed", "3"]) == 0
+    assert lps_main(["estimate", str(folder)]) == 0
+    return folder

@@ -91,3 +91,11 @@ def small_planar_estimated(tmp_path_factory):
                      "both", "--runs", "2", "--seed", "3"]) == 0
     assert lps_main(["estimate", str(folder)]) == 0
     return folder
+
+
+@pytest.fixture(scope="session")
+def min_step_demo(tmp_path_factory):
+    """`lps demo --test min-step` (run_asme_demo, seed 0) once per test run: the report's and the GUI's tests read it."""
+    from lps_gui.pipeline.demos.asme import run_asme_demo
+
+    return run_asme_demo(tmp_path_factory.mktemp("asme") / "min-step", "min-step")

@@ -82,7 +82,7 @@ def _figure_vector(target_mm: np.ndarray, sign: np.ndarray, run: np.ndarray, dev
 
 
 _PLANS: dict[tuple[Any, ...], ApproachPlan | None] = {}
-MAX_PLANS = 32  # a planar session's lines, each drawn hundreds of times in turn
+MAX_PLANS = 128  # a planar session's lines (a 15 x 9 grid: 24), each drawn hundreds of times in turn
 
 
 def _plan_of(target_mm: np.ndarray, sign: np.ndarray, run: np.ndarray, valid: np.ndarray) -> ApproachPlan | None:

@@ -6,11 +6,34 @@ tests share one process in any order.
 """
 import gc
 import os
+import shutil
+import tempfile
 
 import pytest
 
 pytest_plugins = ["tests.watchdog"]  # a hung test fails with every thread's stack; a deadlock ends the run
 
+RAM_DISK = "/dev/shm"
+RAM_DISK_FREE_BYTES = 2 << 30  # a whole run writes ~0.2 GB (pytest keeps its last 3 runs)
+
+
+def _temp_in_ram() -> None:
+    """Test folders on the RAM disk when the machine has one and TMPDIR is not chosen.
+
+    Why: every write of the product is fsynced (io/atomic.py), a few thousand per
+    run; on a disk each waits for the device (~4-10 ms here), on tmpfs it returns
+    at once. The product code runs unchanged and every test sees the same files;
+    only the waits go. Subprocesses the tests start inherit TMPDIR.
+    """
+    if "TMPDIR" in os.environ or not os.access(RAM_DISK, os.W_OK):
+        return
+    if shutil.disk_usage(RAM_DISK).free < RAM_DISK_FREE_BYTES:
+        return
+    os.environ["TMPDIR"] = RAM_DISK
+    tempfile.tempdir = None  # tempfile caches its choice: the next call reads TMPDIR
+
+
+_temp_in_ram()
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 os.environ.setdefault("PYLON_CAMEMU", "2")  # pylon offers two emulated cameras (read when pylon first loads)
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # what the entry points do (lps_gui/blas_threads.py), before numpy loads
@@ -53,3 +76,26 @@ def lightfield_demo(tmp_path_factory):
     from lps_gui.pipeline.demos.lightfield import run_lightfield_demo
 
     return run_lightfield_demo(tmp_path_factory.mktemp("lf") / "out", quick=True)
+
+
+@pytest.fixture(scope="session")
+def small_planar_estimated(tmp_path_factory):
+    """A simulated small-planar point session (both directions, 2 runs, seed 3) estimated by `lps estimate`.
+
+    Read only (several modules share it, one estimate): a test that writes into it (a report) copies it first.
+    """
+    from lps_gui.cli import main as lps_main
+
+    folder = tmp_path_factory.mktemp("small-planar") / "s"
+    assert lps_main(["simulate", "--planar", "--points", str(folder), "--preset", "small-planar", "--directions",
+                     "both", "--runs", "2", "--seed", "3"]) == 0
+    assert lps_main(["estimate", str(folder)]) == 0
+    return folder
+
+
+@pytest.fixture(scope="session")
+def min_step_demo(tmp_path_factory):
+    """`lps demo --test min-step` (run_asme_demo, seed 0) once per test run: the report's and the GUI's tests read it."""
+    from lps_gui.pipeline.demos.asme import run_asme_demo
+
+    return run_asme_demo(tmp_path_factory.mktemp("asme") / "min-step", "min-step")

@@ -365,6 +365,8 @@ def test_the_camera_display_is_cleared_when_the_stage_disconnects(qtbot, window)
     qtbot.waitUntil(lambda: cam.sim_camera is not None, timeout=5000)
     assert cam.start()
     qtbot.waitUntil(lambda: cam.frames_shown >= 2 and cam.fps_label.text() != "— fps", timeout=20000)
+    # a deliberate click, not a double-click's second (the preview can be up within the double-click interval)
+    window.stage_panel._connect_at = time.monotonic() - 3600
     window.stage_panel.connect_btn.click()  # disconnect: the simulated camera goes with its stage
     qtbot.waitUntil(lambda: not window.stage_ctl.connected, timeout=10000)
     qtbot.waitUntil(lambda: cam.grabber is None, timeout=5000)

@@ -2,11 +2,11 @@
 from __future__ import annotations
 
 import json
+import shutil
 
 import pytest
 from PySide6.QtCore import Qt
 
-from lps_gui.cli import main as lps_main
 from lps_gui.io.results.model import as_results
 from lps_gui.report.pages.asme import finding_lines, section, tur_cells
 from lps_gui.report.pages.error_motions import error_motion_rows
@@ -17,11 +17,11 @@ PLAIN_TABS = ["Accuracy", "Deviation", "Steps", "Straightness, angles", "Residua
 
 
 @pytest.fixture(scope="module")
-def min_step_session(tmp_path_factory):
-    """``lps demo --test min-step``: 2 um steps on a stage with a 3 um dead band (a few seconds)."""
-    out = tmp_path_factory.mktemp("demo")
-    assert lps_main(["demo", "--test", "min-step", "--out", str(out)]) == 0
-    folder = out / "session"
+def min_step_session(min_step_demo, tmp_path_factory):
+    """``lps demo --test min-step``: 2 um steps on a stage with a 3 um dead band (the run's one demo,
+    tests/conftest.py), copied: the panel is given its folder."""
+    folder = tmp_path_factory.mktemp("demo") / "session"
+    shutil.copytree(min_step_demo.session_dir, folder)
     return folder, json.loads((folder / "results.json").read_text())
 
 

@@ -18,15 +18,13 @@ from lps_gui.sim.points import simulate_point_session
 
 
 @pytest.fixture(scope="module")
-def estimated(tmp_path_factory):
-    """{"line": folder, "planar": folder}: simulated point sessions estimated by the one path (a few seconds)."""
+def estimated(tmp_path_factory, small_planar_estimated):
+    """{"line": folder, "planar": folder}: simulated point sessions estimated by the one path (a few seconds);
+    the planar one is the shared session of tests/conftest.py (read only)."""
     root = tmp_path_factory.mktemp("results-model")
     simulate_point_session(small_spec(seed=3, views=12, directions="both", runs=2), root / "line")
     estimate_session(root / "line")
-    assert lps_main(["simulate", "--planar", "--points", str(root / "planar"), "--preset", "small-planar",
-                     "--directions", "both", "--runs", "2", "--seed", "4"]) == 0
-    estimate_session(root / "planar")
-    return {"line": root / "line", "planar": root / "planar"}
+    return {"line": root / "line", "planar": small_planar_estimated}
 
 
 def _document(folder) -> dict:

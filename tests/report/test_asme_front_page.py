@@ -12,6 +12,8 @@ pytestmark = pytest.mark.gui
 
 @pytest.fixture(scope="module", params=["min-step", "settling"])
 def demo(request, tmp_path_factory):
+    if request.param == "min-step":  # the GUI's section tabs read the same demo (tests/conftest.py)
+        return request.param, request.getfixturevalue("min_step_demo")
     return request.param, run_asme_demo(tmp_path_factory.mktemp("asme") / request.param, request.param)
 
 

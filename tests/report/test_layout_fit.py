@@ -63,12 +63,12 @@ def test_a_long_axis_label_is_set_smaller_to_fit(tmp_path):
 
 
 @pytest.fixture(scope="module")
-def planar_session(tmp_path_factory):
-    from lps_gui.cli import main as lps_main
+def planar_session(small_planar_estimated, tmp_path_factory):
+    """The shared estimated planar session (tests/conftest.py), copied: a report is written into it."""
+    import shutil
+
     folder = tmp_path_factory.mktemp("planar") / "s"
-    assert lps_main(["simulate", "--planar", "--points", str(folder), "--preset", "small-planar", "--directions",
-                     "both", "--runs", "2", "--seed", "3"]) == 0
-    assert lps_main(["estimate", str(folder)]) == 0
+    shutil.copytree(small_planar_estimated, folder)
     return folder
 
 

@@ -35,8 +35,9 @@ from lps_gui.core.metrology.iso230_run import (
 from lps_gui.core.metrology.resolution import ISO_RUNS_PER_DIRECTION, is_indicative, straightness_verdict
 from lps_gui.errors import InputError
 
-__all__ = ["TARGET_TOL_MM", "Iso230Figures", "RunFigures", "TargetTable", "bidirectional_figures",
-           "check_specification", "direction_signs", "figures_for_session", "single_run_figures"]
+__all__ = ["TARGET_TOL_MM", "ApproachPlan", "Iso230Figures", "RunFigures", "TargetTable", "approach_plan",
+           "bidirectional_figures", "check_specification", "direction_signs", "figures_for_session", "plan_figures",
+           "single_run_figures"]
 
 ISO_RUNS = 5  # ISO 230-2 asks for 5 runs per direction
 RUN_STATISTIC_ROWS = ("Positional accuracy", "Repeatability")  # specification rows that are ISO 230-2 run statistics
@@ -113,36 +114,118 @@ class Iso230Figures(JsonDataclass):
     notes: list[str] = field(default_factory=list)
 
 
-def _span(*arrays: np.ndarray) -> float | None:
-    """max - min over the finite values of all arrays, None if none is finite."""
-    v = np.concatenate([np.ravel(a) for a in arrays])
-    v = v[np.isfinite(v)]
+def _span(v: np.ndarray) -> float | None:
+    """max - min, None if ``v`` is empty."""
     return float(v.max() - v.min()) if v.size else None
 
 
-def _band(mean: list[np.ndarray], std: list[np.ndarray]) -> float | None:
+def _band(mean: np.ndarray, std: np.ndarray) -> float | None:
     """max(x̄ + 2s) - min(x̄ - 2s) over targets where s is defined (the accuracy A)."""
-    hi = np.concatenate([m + 2 * s for m, s in zip(mean, std)])
-    lo = np.concatenate([m - 2 * s for m, s in zip(mean, std)])
-    ok = np.isfinite(hi) & np.isfinite(lo)
-    return float(hi[ok].max() - lo[ok].min()) if ok.any() else None
+    return float((mean + 2 * std).max() - (mean - 2 * std).min()) if mean.size else None
 
 
-def _nanmax(a: np.ndarray) -> float | None:
-    a = a[np.isfinite(a)]
-    return float(a.max()) if a.size else None
+def _max(v: np.ndarray) -> float | None:
+    return float(v.max()) if v.size else None
 
 
-def _direction_stats(approach_target: np.ndarray, approach_dev: np.ndarray, m: int
-                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(n, mean, std ddof=1) per target over the approaches (runs) of one direction; shapes (m,)."""
-    n = np.bincount(approach_target, minlength=m).astype(float)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mean = np.bincount(approach_target, approach_dev, minlength=m) / n
-        ss = np.bincount(approach_target, (approach_dev - mean[approach_target]) ** 2, minlength=m)
-        std = np.sqrt(ss / (n - 1.0))
-    std[n < 2] = np.nan
-    return n.astype(int), mean, std
+@dataclass(frozen=True)
+class _Direction:
+    """The approaches of one direction: their targets, and per target how many (mean from 1, std from 2)."""
+
+    target: np.ndarray  # (n,) target index of each approach
+    n: np.ndarray  # (m,) approaches per target, float
+    has: np.ndarray  # (m,) n >= 1: x̄_j defined
+    two: np.ndarray  # (m,) n >= 2: s_j defined
+
+    @classmethod
+    def of(cls, target: np.ndarray, m: int) -> _Direction:
+        n = np.bincount(target, minlength=m).astype(float)
+        return cls(target, n, n >= 1, n >= 2)
+
+    def stats(self, dev: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(mean, std ddof=1) per target of the approaches' deviations ``dev``; NaN where undefined."""
+        m = self.n.size
+        mean, std = np.full(m, np.nan), np.full(m, np.nan)
+        mean[self.has] = np.bincount(self.target, dev, minlength=m)[self.has] / self.n[self.has]
+        ss = np.bincount(self.target, (dev - mean[self.target]) ** 2, minlength=m)
+        std[self.two] = np.sqrt(ss[self.two] / (self.n[self.two] - 1.0))
+        return mean, std
+
+
+@dataclass(frozen=True)
+class ApproachPlan:
+    """How :func:`bidirectional_figures` groups a plan's captures into approaches (target, direction, run).
+
+    Why separate: the grouping depends on the plan only (targets, directions, runs, validity), not on the
+    deviations; the noise Monte Carlo (iso230_noise) evaluates hundreds of deviation draws of one plan.
+    """
+
+    valid: np.ndarray  # (K,) the captures used
+    targets: np.ndarray  # (m,) targets ascending
+    capture_approach: np.ndarray  # (K used,) approach of each used capture
+    frames: np.ndarray  # (n,) frames averaged into each approach
+    approach_up: np.ndarray  # (n,) bool: an upward approach
+    up: _Direction
+    down: _Direction
+    runs_up: int
+    runs_down: int
+
+
+def _approach_plan(t: np.ndarray, r: np.ndarray, sign: np.ndarray, ok: np.ndarray) -> ApproachPlan:
+    """The plan of the used captures (``t``, ``r``, ``sign`` already masked by ``ok``)."""
+    targets, j = target_index(t)
+    # one approach = (target, direction, run): its frames are averaged first
+    _, run_id = np.unique(r, return_inverse=True)
+    n_runs = run_id.max() + 1
+    appr_key = (j * 2 + (sign > 0)) * n_runs + run_id.ravel()
+    keys, inv, cnt = np.unique(appr_key, return_inverse=True, return_counts=True)
+    approach_target, up = keys // n_runs // 2, ((keys // n_runs) % 2).astype(bool)
+    return ApproachPlan(valid=ok, targets=targets, capture_approach=inv.ravel(), frames=cnt, approach_up=up,
+                        up=_Direction.of(approach_target[up], targets.size),
+                        down=_Direction.of(approach_target[~up], targets.size),
+                        runs_up=int(np.unique(r[sign > 0]).size), runs_down=int(np.unique(r[sign < 0]).size))
+
+
+def approach_plan(target_mm: np.ndarray, direction: np.ndarray, run: np.ndarray,
+                  valid: np.ndarray | None = None) -> ApproachPlan | None:
+    """The grouping of :func:`bidirectional_figures` for captures whose deviations are all finite; None: none valid."""
+    a = _session_arrays(target_mm, direction, run, np.zeros(np.size(target_mm)), valid)
+    ok = a["valid"]
+    if not ok.any():
+        return None
+    return _approach_plan(a["target_mm"][ok], a["run"][ok], a["sign"][ok], ok)
+
+
+def plan_figures(plan: ApproachPlan, deviation_um: np.ndarray) -> tuple[TargetTable, dict[str, float | None]] | None:
+    """Per-target table and the ISO figures (the float fields of :class:`Iso230Figures`) of one deviation set.
+
+    ``deviation_um`` has shape (K,) as the plan's captures; None when a used capture's deviation is not
+    finite (its plan would differ: :func:`bidirectional_figures` leaves it out).
+    """
+    x = np.asarray(deviation_um, dtype=float).ravel()[plan.valid]
+    if not np.isfinite(x).all():
+        return None
+    u, d, is_up = plan.up, plan.down, plan.approach_up
+    appr_dev = np.bincount(plan.capture_approach, x) / plan.frames
+    mean_up, std_up = u.stats(appr_dev[is_up])
+    mean_dn, std_dn = d.stats(appr_dev[~is_up])
+    reversal = mean_up - mean_dn  # NaN unless both directions
+    both = u.has & d.has
+    R_up_j, R_dn_j = 4 * std_up, 4 * std_dn
+    R_j = np.fmax(np.fmax(2 * std_up + 2 * std_dn + np.abs(reversal), R_up_j), R_dn_j)
+    r_ok = u.two & d.two & both
+    R_j[~r_ok] = np.nan
+    table = TargetTable(plan.targets, u.n.astype(int), d.n.astype(int), mean_up, mean_dn, std_up, std_dn, reversal,
+                        R_up_j, R_dn_j, R_j)
+    return table, dict(
+        E_up_um=_span(mean_up[u.has]), E_down_um=_span(mean_dn[d.has]),
+        E_um=_span(np.concatenate([mean_up[u.has], mean_dn[d.has]])),
+        M_um=_span(((mean_up + mean_dn) / 2)[both]),
+        B_um=_max(np.abs(reversal[both])), B_mean_um=float(reversal[both].mean()) if both.any() else None,
+        R_up_um=_max(R_up_j[u.two]), R_down_um=_max(R_dn_j[d.two]), R_um=_max(R_j[r_ok]),
+        A_up_um=_band(mean_up[u.two], std_up[u.two]), A_down_um=_band(mean_dn[d.two], std_dn[d.two]),
+        A_um=_band(np.concatenate([mean_up[u.two], mean_dn[d.two]]), np.concatenate([std_up[u.two], std_dn[d.two]]))
+        if (u.two.any() and d.two.any()) else None)
 
 
 def bidirectional_figures(target_mm: np.ndarray, direction: np.ndarray, run: np.ndarray,
@@ -167,39 +250,11 @@ def bidirectional_figures(target_mm: np.ndarray, direction: np.ndarray, run: np.
     ok = a["valid"]
     if not ok.any():
         return None
-    t, x, r, sign = a["target_mm"][ok], a[DEVIATION][ok], a["run"][ok], a["sign"][ok]
-    targets, j = target_index(t)
-    m = targets.size
-    # one approach = (target, direction, run): average its frames first
-    _, run_id = np.unique(r, return_inverse=True)
-    appr_key = (j * 2 + (sign > 0)) * (run_id.max() + 1) + run_id.ravel()
-    keys, inv, cnt = np.unique(appr_key, return_inverse=True, return_counts=True)
-    appr_dev = np.bincount(inv.ravel(), x) / cnt
-    appr_dir_up = ((keys // (run_id.max() + 1)) % 2).astype(bool)
-    appr_target = keys // (run_id.max() + 1) // 2
-
-    n_up, mean_up, std_up = _direction_stats(appr_target[appr_dir_up], appr_dev[appr_dir_up], m)
-    n_dn, mean_dn, std_dn = _direction_stats(appr_target[~appr_dir_up], appr_dev[~appr_dir_up], m)
-    reversal = mean_up - mean_dn  # NaN unless both directions
-    R_up_j, R_dn_j = 4 * std_up, 4 * std_dn
-    R_j = np.fmax(np.fmax(2 * std_up + 2 * std_dn + np.abs(reversal), R_up_j), R_dn_j)
-    R_j[~(np.isfinite(std_up) & np.isfinite(std_dn) & np.isfinite(reversal))] = np.nan
-    table = TargetTable(targets, n_up, n_dn, mean_up, mean_dn, std_up, std_dn, reversal, R_up_j, R_dn_j, R_j)
-
-    runs_up = int(np.unique(r[sign > 0]).size)
-    runs_dn = int(np.unique(r[sign < 0]).size)
-    both = np.isfinite(reversal)
-    fig = Iso230Figures(
-        n_targets=int(m), n_runs_up=runs_up, n_runs_down=runs_dn,
-        E_up_um=_span(mean_up), E_down_um=_span(mean_dn), E_um=_span(mean_up, mean_dn),
-        M_um=_span(((mean_up + mean_dn) / 2)[both]),
-        B_um=_nanmax(np.abs(reversal)), B_mean_um=float(reversal[both].mean()) if both.any() else None,
-        R_up_um=_nanmax(R_up_j), R_down_um=_nanmax(R_dn_j), R_um=_nanmax(R_j),
-        A_up_um=_band([mean_up], [std_up]), A_down_um=_band([mean_dn], [std_dn]),
-        A_um=_band([mean_up, mean_dn], [std_up, std_dn]) if (np.isfinite(std_up).any()
-                                                              and np.isfinite(std_dn).any()) else None,
-        per_target=table, notes=_iso_notes(table, runs_up, runs_dn, int((~ok).sum())))
-    return fig
+    plan = _approach_plan(a["target_mm"][ok], a["run"][ok], a["sign"][ok], ok)
+    table, figures = plan_figures(plan, a[DEVIATION])
+    return Iso230Figures(n_targets=int(plan.targets.size), n_runs_up=plan.runs_up, n_runs_down=plan.runs_down,
+                         **figures, per_target=table,
+                         notes=_iso_notes(table, plan.runs_up, plan.runs_down, int((~ok).sum())))
 
 
 def _iso_notes(tab: TargetTable, runs_up: int, runs_dn: int, n_invalid: int) -> list[str]:

@@ -31,7 +31,8 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from lps_gui.core.metrology.iso230 import bidirectional_figures, direction_signs
+from lps_gui.core.metrology.iso230 import (ApproachPlan, approach_plan, bidirectional_figures, direction_signs,
+                                           plan_figures)
 
 __all__ = ["NOISE_KEYS", "apply_noise_correction", "independent_sigma_um", "noise_bound", "noise_corrected_iso",
            "noise_corrected_worst", "simex"]
@@ -64,10 +65,39 @@ def independent_sigma_um(sigma_um: np.ndarray) -> np.ndarray:
 
 def _figure_vector(target_mm: np.ndarray, sign: np.ndarray, run: np.ndarray, dev: np.ndarray,
                    valid: np.ndarray) -> np.ndarray:
-    fig = bidirectional_figures(target_mm, sign, run, dev, valid)
-    if fig is None:
-        return np.full(len(NOISE_KEYS), np.nan)
-    return np.array([np.nan if getattr(fig, k) is None else float(getattr(fig, k)) for k in NOISE_KEYS])
+    """The NOISE_KEYS figures of one deviation set, NaN where undefined (the Monte Carlo's inner loop).
+
+    The grouping into approaches is the plan's (cached across the draws of one plan); the arithmetic is
+    :func:`bidirectional_figures`'s own, so the figures are the same numbers.
+    """
+    plan = _plan_of(target_mm, sign, run, valid)
+    figures = None if plan is None else plan_figures(plan, dev)
+    if figures is None:
+        fig = bidirectional_figures(target_mm, sign, run, dev, valid)
+        if fig is None:
+            return np.full(len(NOISE_KEYS), np.nan)
+        figures = {k: getattr(fig, k) for k in NOISE_KEYS}
+    else:
+        figures = figures[1]
+    return np.array([np.nan if figures[k] is None else float(figures[k]) for k in NOISE_KEYS])
+
+
+_PLANS: dict[tuple[Any, ...], ApproachPlan | None] = {}
+MAX_PLANS = 128  # a planar session's lines (a 15 x 9 grid: 24), each drawn hundreds of times in turn
+
+
+def _plan_of(target_mm: np.ndarray, sign: np.ndarray, run: np.ndarray, valid: np.ndarray) -> ApproachPlan | None:
+    """:func:`approach_plan`, remembered by the plan's values: regrouping every draw was most of the Monte
+    Carlo's time (a fifth of a planar estimate)."""
+    r = np.asarray(run)
+    key = (np.asarray(target_mm, float).tobytes(), np.asarray(sign).tobytes(), r.dtype.str,
+           repr(r.tolist()) if r.dtype.kind == "O" else r.tobytes(),
+           None if valid is None else np.asarray(valid, bool).tobytes())
+    if key not in _PLANS:
+        if len(_PLANS) >= MAX_PLANS:
+            _PLANS.clear()
+        _PLANS[key] = approach_plan(target_mm, sign, run, valid)
+    return _PLANS[key]
 
 
 def noise_bound(fig: Any, noise_um: np.ndarray) -> float:

@@ -15,8 +15,8 @@ import numpy as np
 
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import InputError
+from lps_gui.io.results.iso_e import session_E_um, true_E_um
 from lps_gui.io.session import Session
-from lps_gui.report.pdf.compare import session_E_um, true_E_um
 
 TABLE_FILE = "compensation.csv"
 CARRIED_META = ("stage_spec", "environment", "identification")  # as left is judged like as found
@@ -69,7 +69,11 @@ def compensation_pass(
     from lps_gui.pipeline.compensate import session_results, table_from_results
     from lps_gui.pipeline.detect import detect_session
     from lps_gui.pipeline.estimate import estimate_session
-    from lps_gui.sim.session import create_simulated_session, simulated_engine, spec_of_session
+    from lps_gui.sim.session import (
+        create_simulated_session,
+        simulated_engine,
+        spec_of_session,
+    )
 
     before = Session.open(before_dir)
     truth = before.truth or {}

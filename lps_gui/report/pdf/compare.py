@@ -14,18 +14,27 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from lps_gui.errors import InputError
+from lps_gui.io.results.iso_e import session_E_um, true_E_um  # noqa: F401  (the comparison's E)
+from lps_gui.io.results.keys import DEVIATION_UM
 from lps_gui.io.results.model import Results, as_results
 from lps_gui.io.results.sections import Iso230
-from lps_gui.report.figures.plots import _by_direction, _dir_label, per_target_stats, position_columns
-from lps_gui.report.figures.spec import BACKWARD_COLOR, FORWARD_COLOR, FigureSpec, Series
+from lps_gui.report.figures.plots import (
+    _by_direction,
+    _dir_label,
+    per_target_stats,
+    position_columns,
+)
+from lps_gui.report.figures.spec import (
+    BACKWARD_COLOR,
+    FORWARD_COLOR,
+    FigureSpec,
+    Series,
+)
 from lps_gui.report.pages.sections import NO_SPEC, stage_spec
 from lps_gui.report.pages.summary import fmt, iso_rows, u_key
 from lps_gui.report.pages.verdict import verdicts
 from lps_gui.report.pdf.document import load_results, load_session_meta
-from lps_gui.io.results.keys import DEVIATION_UM
 
 COMPARE_FILE = "as-found-as-left.pdf"
 AFTER_COLORS = {"+": "#2a9d3c", "-": "#a8326e"}
@@ -74,37 +83,6 @@ def comparison_figure(before: Results, after: Results) -> FigureSpec:
             series.append(Series(t, mean, f"{tag} {_dir_label(d)}", "line+markers", color, dashed=dashed))
     return FigureSpec("compare", "Deviation as found and as left", "target position [mm]", "deviation [\u00b5m]", series,
                       "mean over runs per target and direction")
-
-
-def session_E_um(results: Results | dict[str, Any], key: str = DEVIATION_UM) -> float:
-    """E (ISO 230-2, um) of one deviation column of results.json.
-
-    The measured deviations' E is the one results.json holds (the camera's noise taken out,
-    ``iso230_2.noise_correction``): one definition, the report's, summary.csv's and this comparison's.
-    A column of the simulator's truth has no noise: its E is computed from the column."""
-    results = as_results(results)
-    if key == DEVIATION_UM:
-        iso = _iso(results)
-        value = iso.number("E_um") if iso is not None else None
-        if value is None:
-            raise InputError("results.json has no ISO 230-2 E; estimate a bidirectional session (or two runs)")
-        return float(value)
-    from lps_gui.core.metrology.iso230 import figures_for_session
-
-    rows = [r for r in results.positions if r.get(key) is not None and not r.outlier]
-    if not rows:
-        raise InputError(f"results.json has no {key}; estimate a simulated session")
-    t = results.column("target_mm", rows)
-    d = np.array([1.0 if r.direction == "+" else -1.0 for r in rows])
-    run = np.array([r.run for r in rows])
-    iso = figures_for_session(t, d, run, results.column(key, rows))["iso230_2"]
-    if not iso or iso.get("E_um") is None:
-        raise InputError("E needs both directions or two runs; capture a bidirectional session")
-    return float(iso["E_um"])
-
-
-def true_E_um(results: Results | dict[str, Any]) -> float:
-    return session_E_um(results, "truth_deviation_um")
 
 
 def _iso(results: Results) -> Iso230 | None:

@@ -55,10 +55,8 @@ class ZaberStage(Stage, Settings, Jogging, FeedHold):
         self.baudrate = baudrate
         self.timeout_s = timeout_s
         self.poll_interval_s = poll_interval_s
-        self.microstep_mm = self.full_step_um / 64 / 1000.0
         self.units_from = "manual"  # or "zaber-motion": who gave the scales (describe())
-        self._speed_per_mm_s = VELOCITY_SCALE / self.microstep_mm  # native speed per mm/s
-        self._accel_per_mm_s2 = ACCEL_SCALE / self.microstep_mm  # native acceleration per mm/s^2
+        self._set_scales(self.full_step_um / 64 / 1000.0)  # the default resolution until the device says its own
         self.serial_number: int | None = None
         self._conn = None
         self._axis = None
@@ -128,6 +126,7 @@ class ZaberStage(Stage, Settings, Jogging, FeedHold):
 
     def _set_scales(self, microstep_mm: float, speed_per_mm_s: float | None = None,
                     accel_per_mm_s2: float | None = None) -> None:
+        """mm per microstep and the native speed / acceleration per mm/s, mm/s^2 (the manual's rules by default)."""
         self.microstep_mm = microstep_mm
         self._speed_per_mm_s = speed_per_mm_s if speed_per_mm_s is not None else VELOCITY_SCALE / microstep_mm
         self._accel_per_mm_s2 = accel_per_mm_s2 if accel_per_mm_s2 is not None else ACCEL_SCALE / microstep_mm

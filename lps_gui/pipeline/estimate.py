@@ -167,9 +167,10 @@ def estimate_with_self_calibration(obs: Observations, opt: EstimateOptions, prog
     """The estimate, self-calibrated where :func:`resolve_self_calibration` defaults a row to it and the row model
     fits: with the intrinsics held first, a row whose model leaves the stage's angles (the positions then come
     from every stop's own pose, ``position_model`` "board plane") keeps that estimate. Why: freed intrinsics
-    inside a model of one orientation absorb an angular trend (a yaw of 120 urad over 600 mm came out 66 urad,
-    mean (error/sigma)^2 9.4, and the board-plane positions of a stage with angles would be lost); on a stage
-    the row model fits they fix the chain's scale (the paper axis: position z^2 27 -> 2.4)."""
+    inside a model of one orientation absorb the stage's angles, and the self-calibrated solve never switches
+    to the board-plane positions (core/estimator/target_estimate.py: the switch is for held intrinsics); on a
+    stage the row model fits they fix the chain's scale (the paper axis: position z^2 27 -> 2.4). The price: a
+    defaulted row is solved twice (held, then self-calibrated)."""
     chosen = resolve_self_calibration(opt, obs)
     if not chosen.self_calibrate or opt.self_calibrate is not None:  # held, or what the user asked for
         return estimate(obs, chosen, progress, cancel)

@@ -27,7 +27,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=0, help="seed of the repeatability draws")
     faults = parser.add_argument_group("fault injection")
     faults.add_argument("--drop-after-lines", type=int, metavar="N", help="close the port after N received lines (vanished USB cable)")
-    faults.add_argument("--alarm-mid-move", type=int, metavar="CODE", help="raise ALARM:CODE half-way through the first move (1 = hard limit)")
+    faults.add_argument("--alarm-mid-move", type=int, choices=range(1, 11), metavar="CODE",
+                        help="raise ALARM:CODE (1-10, GRBL 1.1's alarms) half-way through the first move (1 = hard limit)")
     faults.add_argument("--error-every", type=int, default=0, metavar="N", help="answer every Nth command with an error instead of executing it")
     faults.add_argument("--error-code", type=int, default=20, metavar="CODE", help="the error code of --error-every (default 20)")
     faults.add_argument("--reply-delay", type=float, default=0.0, metavar="S", help="delay every reply by S seconds (slow replies)")

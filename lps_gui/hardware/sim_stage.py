@@ -9,13 +9,16 @@ advancing the clock. Where the carriage *really* is comes from the one
 completed move, straightness and angular errors); the simulated camera
 renders from :meth:`SimulatedStage.true_pose`.
 
-Rules mirror GRBL 1.1 (the GRBL emulator runs on top of this class): codes
-come from ``grbl/codes.py``; settings are GRBL's ``$N`` numbers; a soft-limit
-violation of a move is ALARM:2, of a jog error:15; G-code in Alarm or Jog is
-error:9; a reset during motion is ALARM:3. Work coordinates follow GRBL's
-model: six systems G54-G59 (all offsets zero at start, so work = machine
-until the operator zeroes an axis), work = machine - offset of the selected
-system; moves, jogs and soft-limit messages are in work coordinates.
+The machine model speaks no protocol: a refused command raises
+:class:`~lps_gui.hardware.refusals.StageRefused` with a neutral reason, an alarm
+:class:`~lps_gui.hardware.refusals.StageAlarm` (a move outside the travel is a
+soft-limit alarm, a jog there a refusal; commands are locked out in Alarm and
+while jogging; a reset during motion is an alarm), and settings are named
+(``hardware/machine_settings.py``). A protocol's emulator wraps this class and
+says the same in its own words (``hardware/grbl/``: ``error:N``, ``ALARM:N``,
+``$N``). Work coordinates: six systems G54-G59 (all offsets zero at start, so
+work = machine until the operator zeroes an axis), work = machine - offset of
+the selected system; moves, jogs and soft-limit messages are in work coordinates.
 """
 from __future__ import annotations
 
@@ -28,10 +31,11 @@ import numpy as np
 from lps_gui.core.clock import Clock, SimClock
 from lps_gui.core.truth.stage_errors import PlanarErrorModel, PlanarTruePose, StageErrorModel, TruePose, Vibration
 from lps_gui.errors import HardwareError
-from lps_gui.hardware.grbl.codes import SETTINGS, GrblError, check_setting, setting_info, stored_settings, travel_text
 from lps_gui.hardware.capabilities import Alarms, FeedHold, Jogging, Settings, WorkCoordinates
+from lps_gui.hardware.machine_settings import BY_KEY, KEY, MACHINE_SETTINGS, NUMBER, machine_defaults, travel_text
 from lps_gui.hardware.motion import Profile
 from lps_gui.hardware.planner import PLANNER_BLOCKS, HeldMove, MotionPlanner
+from lps_gui.hardware.refusals import Alarm, Refusal, StageAlarm, StageRefused
 from lps_gui.hardware.stage import AXES, WORK_SYSTEMS, Stage, StageEvent, StageSetting, StageStatus
 
 RX_BUFFER_BYTES = 128
@@ -47,11 +51,11 @@ class SimulatedStage(Stage, Settings, WorkCoordinates, Jogging, FeedHold, Alarms
     seed : seeds the repeatability draws (one per completed move of ``axis``).
     travel_mm : (min, max) soft-limit range of every axis in machine coordinates (mm; equal to the work
         coordinates while every offset is zero, as at start).
-    max_rate_mm_min, accel_mm_s2 : velocity and acceleration limits (GRBL $11x, $12x).
+    max_rate_mm_min, accel_mm_s2 : velocity and acceleration limits of every axis.
     clock : time source; a fresh SimClock when None (tests never sleep).
     axis : the axis the LPS measurement moves along.
-    homing_required : start in Alarm like GRBL with $22=1 and the homing lock.
-    soft_limits : GRBL $20.
+    homing_required : start locked in Alarm until homed or unlocked (a controller's homing lock).
+    soft_limits : a move outside the travel raises a soft-limit alarm.
     axis_travel_mm : per-axis soft-limit ranges overriding ``travel_mm`` (e.g. {"Y": (0, 1016)}).
     planar_errors : an XY gantry's error model (SPEC 10); then X and Y both carry the camera
         and :meth:`true_planar_pose` gives the truth.
@@ -85,12 +89,7 @@ class SimulatedStage(Stage, Settings, WorkCoordinates, Jogging, FeedHold, Alarms
         for name, (lo, hi) in (axis_travel_mm or {}).items():
             self.axis_travel_mm[AXES.index(name.upper())] = (float(lo), float(hi))
         self.clock: Clock = clock if clock is not None else SimClock()
-        self.settings: dict[int, float] = {n: float(s.default) for n, s in SETTINGS.items()}
-        for i in range(3):
-            self.settings[110 + i] = float(max_rate_mm_min)
-            self.settings[120 + i] = float(accel_mm_s2)
-            self.settings[130 + i] = self.axis_travel_mm[i][1] - self.axis_travel_mm[i][0]
-        self.settings.update({20: float(soft_limits), 22: 1.0, 23: 7.0, 24: 100.0, 25: float(max_rate_mm_min), 27: 1.0})
+        self.machine: dict[str, float] = machine_defaults(max_rate_mm_min, accel_mm_s2, self.axis_travel_mm, soft_limits)
         self._rng = np.random.default_rng(seed)
         self._lock = threading.RLock()
         pos_mm = np.zeros(3)
@@ -98,7 +97,7 @@ class SimulatedStage(Stage, Settings, WorkCoordinates, Jogging, FeedHold, Alarms
         self._motion = MotionPlanner(pos_mm)
         self._homing = False
         self.homed = False
-        self._alarm: int | None = 0 if homing_required else None  # 0: GRBL's homing lock, no code
+        self._alarm: Alarm | None = Alarm.LOCK if homing_required else None
         self._last_dir = 1
         self._noise_um = 0.0
         self._angle_noise_urad = np.zeros(3)  # the angles' draw of the last move (StageErrorModel.angle_noise_urad)
@@ -120,26 +119,26 @@ class SimulatedStage(Stage, Settings, WorkCoordinates, Jogging, FeedHold, Alarms
     def _ax(self, axis: str | None) -> int:
         name = (axis or self.axis).upper()
         if name not in AXES:
-            raise GrblError("error", 20, f"axis {name!r}")
+            raise StageRefused(Refusal.UNKNOWN_AXIS, f"axis {name!r}")
         return AXES.index(name)
 
     def max_rate_mm_min(self, axis: int) -> float:
-        return self.settings[110 + axis]
+        return self.machine[f"max_rate_mm_min.{AXES[axis]}"]
 
     def accel_mm_s2(self, axis: int) -> float:
-        return self.settings[120 + axis]
+        return self.machine[f"accel_mm_s2.{AXES[axis]}"]
 
     @property
     def soft_limits(self) -> bool:
-        return bool(self.settings[20])
+        return bool(self.machine["soft_limits"])
 
     @property
     def homing_enabled(self) -> bool:
-        return bool(self.settings[22])
+        return bool(self.machine["homing"])
 
     def home_position_mm(self) -> float:
-        """Where homing leaves the carriage: the low switch plus the pull-off ($27)."""
-        return self.travel_mm[0] + self.settings[27]
+        """Where homing leaves the carriage: the low switch plus the pull-off."""
+        return self.travel_mm[0] + self.machine["homing_pulloff_mm"]
 
     # ------------------------------------------------------------------ connection
     def connect(self) -> None:
@@ -279,8 +278,8 @@ class SimulatedStage(Stage, Settings, WorkCoordinates, Jogging, FeedHold, Alarms
     def select_work_system(self, name: str) -> None:
         with self._command():
             if name not in WORK_SYSTEMS:
-                raise GrblError("error", 20, f"work coordinate system {name!r}")
-            self._require_gcode_ok()
+                raise StageRefused(Refusal.UNKNOWN_WORK_SYSTEM, f"work coordinate system {name!r}")
+            self._require_unlocked()
             self._system = name
 
     def work_offsets(self) -> dict[str, tuple[float, float, float]]:
@@ -291,7 +290,7 @@ class SimulatedStage(Stage, Settings, WorkCoordinates, Jogging, FeedHold, Alarms
         """``G10 L20``: the selected system's offset becomes what makes the position read ``value_mm`` now."""
         with self._command() as t:
             i = self._ax(axis)
-            self._require_gcode_ok()
+            self._require_unlocked()
             pos, _ = self._motion.positions(t)
             self._offsets[self._system][i] = float(pos[i]) - float(value_mm)
 
@@ -370,27 +369,30 @@ class SimulatedStage(Stage, Settings, WorkCoordinates, Jogging, FeedHold, Alarms
         }
 
     # ------------------------------------------------------------------ alarms and locks
-    def _raise_alarm(self, code: int, context: str) -> GrblError:
+    def _raise_alarm(self, alarm: Alarm, context: str) -> StageAlarm:
         self._freeze(self.clock.now())
-        self._alarm = code
-        if code:  # 0 is the silent homing lock
-            self.events.emit(StageEvent("alarm", code=code, text=GrblError("alarm", code).args[0]))
-        return GrblError("alarm", code, context)
+        self._alarm = alarm
+        if alarm is not Alarm.LOCK:  # the lock at start-up is silent
+            self.events.emit(StageEvent("alarm", text=f"simulated stage: alarm: {alarm.text}", reason=alarm))
+        return StageAlarm(alarm, context, self._alarm_hint(alarm))
 
-    def trigger_alarm(self, code: int) -> None:
-        """Raise ``ALARM:code`` now (fault injection: hard limit mid-move...)."""
+    def _alarm_hint(self, alarm: Alarm) -> str:
+        return "reset the stage, then unlock it" if alarm in (Alarm.HARD_LIMIT, Alarm.SOFT_LIMIT) else self.lock_hint
+
+    def trigger_alarm(self, alarm: Alarm) -> None:
+        """Lock in Alarm now for ``alarm`` (fault injection: a hard limit mid-move...; a wrapping firmware's alarms)."""
         with self._lock:
-            self._raise_alarm(code, "simulated stage")
+            self._raise_alarm(alarm, "simulated stage")
 
     @property
-    def alarm_code(self) -> int | None:
-        """The active alarm (0 = homing lock at start-up), None when not in Alarm."""
+    def alarm(self) -> Alarm | None:
+        """Why the stage is locked (``Alarm.LOCK``: at start-up), None when not in Alarm."""
         return self._alarm
 
-    def _require_gcode_ok(self) -> None:
+    def _require_unlocked(self) -> None:
         state, _ = self._state()
         if state in ("Alarm", "Jog"):
-            raise GrblError("error", 9, f"stage in {state}")
+            raise StageRefused(Refusal.LOCKED, f"stage in {state}", f"{self.lock_hint} first" if state == "Alarm" else "")
 
     def unlock(self) -> None:
         with self._command():
@@ -400,15 +402,15 @@ class SimulatedStage(Stage, Settings, WorkCoordinates, Jogging, FeedHold, Alarms
                 self._update()
 
     def soft_reset(self) -> None:
-        """Stop at once; a reset during motion or homing raises ALARM:3 / ALARM:6 like GRBL."""
+        """Stop at once; a reset during motion or homing locks the stage in Alarm (the position may be lost)."""
         with self._command() as t:
             moving = self._motion.active() is not None
             homing = self._homing
             self._freeze(t)
             if homing:
-                self._raise_alarm(6, "reset during homing")
+                self._raise_alarm(Alarm.HOMING_RESET, "reset during homing")
             elif moving:
-                self._raise_alarm(3, "reset during motion")
+                self._raise_alarm(Alarm.ABORT_DURING_CYCLE, "reset during motion")
             self._update(t)
 
     # ------------------------------------------------------------------ motion
@@ -424,25 +426,25 @@ class SimulatedStage(Stage, Settings, WorkCoordinates, Jogging, FeedHold, Alarms
         return lo <= target_mm <= hi
 
     def _wait_planner(self) -> None:
-        """Block (in clock time) until a planner block frees, like a GRBL line waiting for space."""
+        """Block (in clock time) until a planner block frees, like a controller's command waiting for space."""
         while self.planner_free() <= 0:
             nxt = self.next_event_s()
             if nxt is None:  # nothing moves that could free a block (a hold with a full planner)
-                raise HardwareError("simulated stage: planner full while held; resume (~) or reset first")
+                raise HardwareError("simulated stage: planner full while held; resume or reset it first")
             self.clock.sleep(max(nxt - self.clock.now(), 1e-6))
 
     def move_to(self, position_mm: float, feed_mm_min: float, axis: str | None = None) -> None:
         with self._command():
             i = self._ax(axis)
-            self._require_gcode_ok()
+            self._require_unlocked()
             if not feed_mm_min or feed_mm_min <= 0:
-                raise GrblError("error", 22, f"move to {position_mm} mm")
+                raise StageRefused(Refusal.NO_FEED, f"move to {position_mm} mm")
             off = self._offset(i)
             target = float(position_mm) + off
             if self.soft_limits and not self._in_travel(target, i):
                 lo, hi = self.axis_travel_mm[i]
                 raise self._raise_alarm(
-                    2, f"move of {AXES[i]} to {position_mm:.3f} mm is outside its travel {lo - off:g}..{hi - off:g} mm"
+                    Alarm.SOFT_LIMIT, f"move of {AXES[i]} to {position_mm:.3f} mm is outside its travel {lo - off:g}..{hi - off:g} mm"
                 )
             self._wait_planner()
             if self._motion.hold:
@@ -456,13 +458,14 @@ class SimulatedStage(Stage, Settings, WorkCoordinates, Jogging, FeedHold, Alarms
             i = self._ax(axis)
             state, _ = self._state()
             if state not in ("Idle", "Jog"):
-                raise GrblError("error", 8, f"jog in {state}")
+                raise StageRefused(Refusal.NOT_IDLE, f"jog in {state}")
             if not feed_mm_min or feed_mm_min <= 0:
-                raise GrblError("error", 22, "jog")
+                raise StageRefused(Refusal.NO_FEED, "jog")
             start = self.planned_mm(i)
             target = float(start + distance_mm)
             if self.soft_limits and not self._in_travel(target, i):
-                raise GrblError("error", 15, f"jog to {target - self._offset(i):.3f} mm")
+                raise StageRefused(Refusal.BEYOND_TRAVEL, f"jog to {target - self._offset(i):.3f} mm",
+                                   "choose a target inside the travel")
             self._wait_planner()
             self._plan(i, "Jog", target, float(feed_mm_min))
             self._update()
@@ -496,14 +499,14 @@ class SimulatedStage(Stage, Settings, WorkCoordinates, Jogging, FeedHold, Alarms
         """Begin homing (seek the low switch, pull off, locate slowly, pull off) without waiting."""
         with self._command():
             if not self.homing_enabled:
-                raise GrblError("error", 5, "home")
+                raise StageRefused(Refusal.HOMING_DISABLED, "home")
             state, _ = self._state()
             if state not in ("Idle", "Alarm"):
-                raise GrblError("error", 8, f"home in {state}")
+                raise StageRefused(Refusal.NOT_IDLE, f"home in {state}")
             self._alarm = None
             i = AXES.index(self.axis)
-            switch, pulloff = self.travel_mm[0], self.settings[27]
-            seek, locate = self.settings[25], self.settings[24]
+            switch, pulloff = self.travel_mm[0], self.machine["homing_pulloff_mm"]
+            seek, locate = self.machine["homing_seek_mm_min"], self.machine["homing_locate_mm_min"]
             self._plan(i, "Home", switch, seek)
             self._plan(i, "Home", switch + pulloff, seek)
             self._plan(i, "Home", switch, locate)
@@ -525,9 +528,9 @@ class SimulatedStage(Stage, Settings, WorkCoordinates, Jogging, FeedHold, Alarms
             if st.state == "Idle":
                 return st
             if st.state == "Alarm":
-                if self._alarm:
-                    raise GrblError("alarm", self._alarm, "while waiting for the stage")
-                raise HardwareError("simulated stage: locked in Alarm; home ($H) or unlock ($X) it first")
+                if self._alarm is not None and self._alarm is not Alarm.LOCK:
+                    raise StageAlarm(self._alarm, "while waiting for the stage", self._alarm_hint(self._alarm))
+                raise HardwareError(f"simulated stage: locked in Alarm; {self.lock_hint} first")
             now = self.clock.now()
             if now >= deadline:
                 raise HardwareError(
@@ -543,26 +546,43 @@ class SimulatedStage(Stage, Settings, WorkCoordinates, Jogging, FeedHold, Alarms
     def read_settings(self) -> list[StageSetting]:
         with self._lock:
             self.require_connected()
-            return [
-                StageSetting(n, v, setting_info(n).name, setting_info(n).unit, setting_info(n).description)
-                for n, v in sorted(self.settings.items())
-            ]
+            return [StageSetting(NUMBER[s.key], self.machine[s.key], s.name, s.unit, s.description)
+                    for s in MACHINE_SETTINGS]
 
-    settings_title = "Controller settings ($$)"
-    lock_hint = "home it ($H) or unlock it ($X)"
+    settings_title = "Simulated machine settings"
+    lock_hint = "home it or unlock it"
 
     def setting_label(self, setting: StageSetting) -> str:
-        return f"${setting.number}"
+        return KEY.get(setting.number, str(setting.number))
 
     def travel_text(self, settings: list[StageSetting]) -> str:
-        return travel_text({st.number: st.value for st in settings})
+        return travel_text({KEY[st.number]: st.value for st in settings if st.number in KEY})
 
     def write_setting(self, number: int, value: float) -> None:
+        """Change setting ``number`` (see :meth:`read_settings`); refused while moving, for an unknown number,
+        a negative value, or soft limits without homing (homing off turns soft limits off too)."""
         with self._command():
+            key = KEY.get(number)
+            context = f"setting {key or number} = {value:g}"
             state, _ = self._state()
             if state not in ("Idle", "Alarm"):
-                raise GrblError("error", 8, f"${number}={value:g}")
-            check_setting(self.settings, number, value)
-            self.settings.update(stored_settings(number, value))
-            if number == 130 + AXES.index(self.axis):
-                self.travel_mm = (self.travel_mm[0], self.travel_mm[0] + self.settings[number])
+                raise StageRefused(Refusal.NOT_IDLE, context)
+            if value < 0:
+                raise StageRefused(Refusal.NEGATIVE_VALUE, context)
+            if key is None:
+                raise StageRefused(Refusal.UNKNOWN_SETTING, context)
+            if key == "soft_limits" and value and not self.machine["homing"]:
+                raise StageRefused(Refusal.SOFT_LIMITS_NEED_HOMING, context)
+            self.set_machine(key, value)
+
+    def set_machine(self, key: str, value: float) -> None:
+        """Store named setting ``key`` unchecked (a wrapping firmware checked it by its own rules): flags are
+        0 or 1, homing off turns soft limits off, the measured axis' travel moves its high end."""
+        with self._lock:
+            if key not in BY_KEY:
+                raise StageRefused(Refusal.UNKNOWN_SETTING, f"setting {key}")
+            self.machine[key] = float(bool(value)) if BY_KEY[key].flag else float(value)
+            if key == "homing" and not value:
+                self.machine["soft_limits"] = 0.0
+            if key == f"travel_mm.{self.axis}":
+                self.travel_mm = (self.travel_mm[0], self.travel_mm[0] + self.machine[key])

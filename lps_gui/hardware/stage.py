@@ -10,6 +10,7 @@ from __future__ import annotations
 import abc
 import threading
 from dataclasses import dataclass, field
+from enum import Enum
 from typing import Any, Callable
 
 from lps_gui.core.clock import Clock
@@ -44,8 +45,9 @@ class StageEvent:
     """Something the controller said on its own: alarm, error, message, state change."""
 
     kind: str  # "alarm", "error", "message", "state", "disconnected", "connected"
-    code: int | None = None
+    code: int | None = None  # the controller's own number for it (GRBL's ALARM:N), when it has one
     text: str = ""
+    reason: Enum | None = None  # why, in no protocol's terms (hardware/refusals.py's Alarm), when known
 
 
 @dataclass(frozen=True)

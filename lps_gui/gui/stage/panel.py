@@ -559,7 +559,7 @@ class StagePanel(QWidget):
         t = self.settings_table
         t.setRowCount(len(settings))
         for r, s in enumerate(settings):
-            label = stage.setting_label(s) if isinstance(stage, Settings) else str(s.number)
+            label = self._setting_label(s)
             for c, text in enumerate((label, s.name, f"{s.value:g}", s.unit)):
                 item = QTableWidgetItem(text)
                 if c != 2:
@@ -568,21 +568,27 @@ class StagePanel(QWidget):
                     item.setToolTip(s.description)
                 t.setItem(r, c, item)
 
+    def _setting_label(self, s: StageSetting) -> str:
+        """The setting as its controller names it (GRBL ``$110``, Marlin ``M203 X``): the stage's declaration says."""
+        stage = self.controller.stage
+        return stage.setting_label(s) if isinstance(stage, Settings) else str(s.number)
+
     def pending_settings(self) -> tuple[list[tuple[int, float]], list[str]]:
         """Edited values as (number, value), and one line per value that fails validation."""
         changes, errors = [], []
         for r, s in enumerate(self._settings):
+            label = self._setting_label(s)
             item = self.settings_table.item(r, 2)
             text = item.text().strip() if item else ""
             try:
                 value = float(text)
             except ValueError:
-                errors.append(f"${s.number} ({s.name}): {text!r} is not a number")
+                errors.append(f"{label} ({s.name}): {text!r} is not a number")
                 continue
             if not math.isfinite(value) or value < 0:
-                errors.append(f"${s.number} ({s.name}): must be a finite value ≥ 0")
+                errors.append(f"{label} ({s.name}): must be a finite value ≥ 0")
             elif _is_integer_setting(s) and value != int(value):
-                errors.append(f"${s.number} ({s.name}): must be a whole number")
+                errors.append(f"{label} ({s.name}): must be a whole number")
             elif value != s.value:
                 changes.append((s.number, value))
         return changes, errors

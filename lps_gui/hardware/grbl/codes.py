@@ -3,13 +3,16 @@
 Texts are GRBL's own (gnea/grbl ``doc/csv/{error,alarm,setting}_codes_en_US.csv``),
 so a message a user sees names the same thing GRBL's documentation does. The
 driver, the emulator and the simulated stage all look codes up here and
-nowhere else (one table, like PyMeasure's ESP300 error mapping).
+nowhere else (one table, like PyMeasure's ESP300 error mapping). The simulated
+stage speaks neutral reasons (``hardware/refusals.py``); :func:`as_grbl` says
+them as GRBL does, and a :class:`GrblError` names its neutral reason back.
 """
 from __future__ import annotations
 
 from typing import NamedTuple
 
 from lps_gui.errors import HardwareError
+from lps_gui.hardware.refusals import Alarm, Refusal, StageAlarm, StageRefused
 
 
 class Code(NamedTuple):
@@ -186,12 +189,41 @@ def stored_settings(number: int, value: float) -> dict[int, float]:
     return out
 
 
+ALARM_NUMBERS: dict[Alarm, int] = {
+    Alarm.LOCK: 0, Alarm.HARD_LIMIT: 1, Alarm.SOFT_LIMIT: 2, Alarm.ABORT_DURING_CYCLE: 3, Alarm.PROBE_FAIL_INITIAL: 4,
+    Alarm.PROBE_FAIL_CONTACT: 5, Alarm.HOMING_RESET: 6, Alarm.HOMING_DOOR: 7, Alarm.HOMING_PULLOFF: 8,
+    Alarm.HOMING_NOT_FOUND: 9, Alarm.HOMING_DUAL: 10,
+}  # 0: GRBL's silent homing lock (no ALARM:N line)
+ALARM_REASONS: dict[int, Alarm] = {n: a for a, n in ALARM_NUMBERS.items()}
+ERROR_CODES: dict[Refusal, int] = {
+    Refusal.UNKNOWN_AXIS: 20, Refusal.UNKNOWN_WORK_SYSTEM: 20, Refusal.LOCKED: 9, Refusal.NOT_IDLE: 8,
+    Refusal.NO_FEED: 22, Refusal.BEYOND_TRAVEL: 15, Refusal.HOMING_DISABLED: 5, Refusal.NEGATIVE_VALUE: 4,
+    Refusal.UNKNOWN_SETTING: 3, Refusal.SOFT_LIMITS_NEED_HOMING: 10,
+}
+REFUSALS: dict[int, Refusal] = {n: r for r, n in ERROR_CODES.items() if n != 20}  # error:20 is any unsupported word
+
+
+def alarm_number(alarm: Alarm | None) -> int | None:
+    """GRBL's ``ALARM:N`` number of a neutral alarm (0: the homing lock), None for none."""
+    return None if alarm is None else ALARM_NUMBERS[alarm]
+
+
+def as_grbl(e: StageRefused | StageAlarm) -> "GrblError":
+    """The simulated stage's refusal or alarm as GRBL reports it (``error:N``, ``ALARM:N``)."""
+    if isinstance(e, StageAlarm):
+        return GrblError("alarm", ALARM_NUMBERS[e.alarm])
+    return GrblError("error", ERROR_CODES[e.reason])
+
+
 class GrblError(HardwareError):
-    """GRBL answered ``error:N`` or raised ``ALARM:N``; ``kind`` and ``code`` say which."""
+    """GRBL answered ``error:N`` or raised ``ALARM:N``; ``kind`` and ``code`` say which, ``reason`` the
+    neutral :class:`~lps_gui.hardware.refusals.Refusal` or :class:`~lps_gui.hardware.refusals.Alarm` (None:
+    GRBL-only, e.g. a G-code word it does not know)."""
 
     def __init__(self, kind: str, code: int, context: str = "") -> None:
         self.kind = kind  # "error" or "alarm"
         self.code = code
+        self.reason: Refusal | Alarm | None = (ALARM_REASONS if kind == "alarm" else REFUSALS).get(code)
         text = error_text(code) if kind == "error" else alarm_text(code)
         hint = _HINTS.get((kind, code), "")
         super().__init__(f"{context}{': ' if context else ''}{text}{hint}")

@@ -16,7 +16,9 @@ dropped while a line executes), a 15-block planner that makes a line wait,
 hard-limit switches at the travel ends (``$21``), and alarms as protocol.c raises them: ``ALARM:N``, then
 report.c's 500 ms delay; critical ones (1, 2) then print ``[MSG:Reset to
 continue]``, drop any reset that came in the delay and ignore everything but
-a new reset. Motion happens in a :class:`SimulatedStage`. Machine
+a new reset. Motion happens in a :class:`SimulatedStage`, which speaks no
+protocol: its refusals and alarms come back as GRBL's codes (``codes.as_grbl``),
+and ``$N`` reads and writes its named settings (``grbl/settings.py``). Machine
 coordinates are GRBL's homed space (0 at the top of the travel, negative
 below); G54 is stored as the base, so G54 work coordinates equal the stage's
 own coordinates. Multi-axis moves run one axis after the other; arcs are
@@ -38,6 +40,8 @@ from lps_gui.hardware.grbl.codes import GrblError, format_setting
 from lps_gui.hardware.grbl import gcode as gc
 from lps_gui.hardware.grbl.gcode import CodeError, ParserState, check_block, read_float
 from lps_gui.hardware.grbl.protocol import MM_PER_INCH, StatusReport, format_axes, format_status
+from lps_gui.hardware.grbl.settings import GrblSettings
+from lps_gui.hardware.refusals import StageAlarm, StageRefused
 from lps_gui.hardware.sim_stage import PLANNER_BLOCKS, RX_BUFFER_BYTES, SimulatedStage
 from lps_gui.hardware.stage import AXES
 
@@ -120,7 +124,7 @@ class GrblFirmware:
         self._build_user = ""
         self._limit_hit: set[int] = set()  # axes whose hard-limit switch is pressed (physical: survives resets)
         self._startup = ["", ""]  # EEPROM startup lines $N0, $N1 (N_STARTUP_LINE 2)
-        self._initial_settings = dict(stage.settings)
+        self.settings = GrblSettings(stage)  # $N: the stage's named settings and the firmware's own
         self._coords = self._default_coords()  # EEPROM: G54-G59, G28, G30 (machine mm); survives resets
         self._reset_state()
 
@@ -207,12 +211,26 @@ class GrblFirmware:
         except CodeError as e:
             self._pending = None
             self._send(f"error:{e.code}")
-        except GrblError as e:
+        except (GrblError, StageRefused, StageAlarm) as e:
             self._pending = None
-            if e.kind == "alarm":
-                self._alarm(e.code, line_open=True)
-            else:
-                self._send(f"error:{e.code}")
+            self._failed(e)
+
+    def _failed(self, e: GrblError | StageRefused | StageAlarm) -> None:
+        """A line failed: ``error:N``, or the alarm it raised; the stage's neutral reasons said as GRBL's codes."""
+        g = e if isinstance(e, GrblError) else codes.as_grbl(e)
+        if g.kind == "alarm":
+            self._alarm(g.code, line_open=True)
+        else:
+            self._send(f"error:{g.code}")
+
+    @property
+    def alarm_code(self) -> int | None:
+        """GRBL's number of the stage's alarm (0: the silent homing lock), None when not in Alarm."""
+        return codes.alarm_number(self.stage.alarm)
+
+    def _trigger(self, code: int) -> None:
+        """Lock the stage in Alarm for GRBL's ``ALARM:code`` (0: the homing lock)."""
+        self.stage.trigger_alarm(codes.ALARM_REASONS[code])
 
     def _held(self) -> bool:
         return self.stage.status().state == "Hold" or self._door
@@ -224,8 +242,8 @@ class GrblFirmware:
         waits for the host's first byte; a reset byte that came during init is
         acted on right after it (a second banner).
         """
-        if self.homing_init_lock and self.stage.homing_enabled and self.stage.alarm_code is None:
-            self.stage.trigger_alarm(0)  # the silent homing lock (no ALARM:N line)
+        if self.homing_init_lock and self.stage.homing_enabled and self.alarm_code is None:
+            self._trigger(0)  # the silent homing lock (no ALARM:N line)
         self._booting = boot_race
         if not boot_race:
             self.welcome()
@@ -271,11 +289,11 @@ class GrblFirmware:
         power-up with the homing lock, and after a reset out of an alarm.
         """
         self._send(BANNER)
-        if self.stage.settings[21] and self._limits_pressed():  # protocol.c CHECK_LIMITS_AT_INIT
-            if self.stage.alarm_code is None:
-                self.stage.trigger_alarm(0)  # sys.state = STATE_ALARM, no ALARM:N line
+        if self.settings[21] and self._limits_pressed():  # protocol.c CHECK_LIMITS_AT_INIT
+            if self.alarm_code is None:
+                self._trigger(0)  # sys.state = STATE_ALARM, no ALARM:N line
             self._send("[MSG:Check Limits]")
-        if self.stage.alarm_code is not None:
+        if self.alarm_code is not None:
             self._send("[MSG:'$H'|'$X' to unlock]")
         elif any(self._startup):
             self._pending = self._after_welcome()
@@ -315,7 +333,7 @@ class GrblFirmware:
         if state == "Door":  # report.c: 2 while the hold stops the motion, 0 once stopped with the door closed
             sub = 2 if st.state == "Hold" and st.substate == 1 else 0
         wco = self._gc.wco()
-        mask = int(self.stage.settings[10])
+        mask = int(self.settings[10])
         mpos = tuple(p + b for p, b in zip(st.machine_mm, self._base()))
         busy = state in BUSY
         show_wco = self._wco_counter == 0
@@ -345,7 +363,7 @@ class GrblFirmware:
             overrides=tuple(self._ovr) if show_ovr else None,
             accessories=accessories,
         )
-        return format_status(report, inches=bool(self.stage.settings[13]))
+        return format_status(report, inches=bool(self.settings[13]))
 
     def _pins(self) -> str:
         """report.c ``Pn:``: the probe pin, then the limit pins, as read through ``$6`` and ``$5`` (no switch wired).
@@ -355,11 +373,11 @@ class GrblFirmware:
         (ALARM:1) leaves its switch pressed.
         """
         pressed = set(self._limits_pressed())
-        if not pressed and self._critical and self.stage.alarm_code == 1:
+        if not pressed and self._critical and self.alarm_code == 1:
             pressed = {"X"}  # a hard limit injected by the alarm_mid_move fault
-        if self.stage.settings[5]:
+        if self.settings[5]:
             pressed = {"X", "Y", "Z"} - pressed
-        return ("P" if self.stage.settings[6] else "") + "".join(a for a in "XYZ" if a in pressed)
+        return ("P" if self.settings[6] else "") + "".join(a for a in "XYZ" if a in pressed)
 
     # ------------------------------------------------------------------ serial ISR and real-time bytes
     def receive(self, b: int) -> None:
@@ -447,24 +465,24 @@ class GrblFirmware:
         the one that raised a critical alarm) returns to the main loop on the
         abort and prints its ``ok`` before main() re-initializes (the banner).
         """
-        before = self.stage.alarm_code
+        before = self.alarm_code
         line_open = self._pending is not None or self._ok_on_reset
         self.stage.soft_reset()
         if self._stuck_homing:  # motion_control.c mc_reset(): STATE_HOMING -> EXEC_ALARM_HOMING_FAIL_RESET
-            self.stage.trigger_alarm(6)
-        elif self.stage.alarm_code == 6 and self._homing_pulloff:
+            self._trigger(6)
+        elif self.alarm_code == 6 and self._homing_pulloff:
             # limits.c limits_go_home(): after the reset's ALARM:6, a pull-off whose switch is still engaged
             # sets EXEC_ALARM_HOMING_FAIL_PULLOFF, which replaces it
-            self.stage.trigger_alarm(8)
-        if self.stage.alarm_code != before and self.stage.alarm_code:
+            self._trigger(8)
+        if self.alarm_code != before and self.alarm_code:
             # mc_reset() sets the alarm with the reset: protocol_exec_rt_system() prints ALARM:N and waits
             # report.c's 500 ms before it acts on the reset (a '?' or a line sent meanwhile is lost)
-            self._alarm(self.stage.alarm_code, line_open)
+            self._alarm(self.alarm_code, line_open)
             return
         if line_open:
             self._send("ok")
-        if self._sleep and self.stage.alarm_code is None:
-            self.stage.trigger_alarm(0)  # GRBL wakes from sleep into the alarm lock
+        if self._sleep and self.alarm_code is None:
+            self._trigger(0)  # GRBL wakes from sleep into the alarm lock
         self._reset_state()
         self.welcome()
 
@@ -489,8 +507,8 @@ class GrblFirmware:
         6-10) reset by themselves after the delay (a ``?`` in it is lost): the
         executing line's ``ok``, the banner and the unlock message.
         """
-        if self.stage.alarm_code != code:
-            self.stage.trigger_alarm(code)
+        if self.alarm_code != code:
+            self._trigger(code)
         self._pending = None
         self._send(f"ALARM:{code}")
         due = self.stage.clock.now() + ALARM_REPORT_DELAY_S
@@ -531,11 +549,8 @@ class GrblFirmware:
         except CodeError as e:
             self._send(f"error:{e.code}")
             return
-        except GrblError as e:
-            if e.kind == "alarm":
-                self._alarm(e.code, line_open=True)
-            else:
-                self._send(f"error:{e.code}")
+        except (GrblError, StageRefused, StageAlarm) as e:
+            self._failed(e)
             return
         if steps is None:
             return  # answered already (a line followed by a reset)
@@ -589,8 +604,8 @@ class GrblFirmware:
             if c == "$":
                 if state in ("Run", "Hold"):
                     raise CodeError(8)
-                for n in sorted(self.stage.settings):
-                    self._send(format_setting(n, self.stage.settings[n]))
+                for n in sorted(self.settings):
+                    self._send(format_setting(n, self.settings[n]))
             elif c == "G":
                 self._send(self._gcode_modes())
             elif c == "C":
@@ -616,7 +631,7 @@ class GrblFirmware:
         """report.c report_gcode_modes()."""
         g, m = self._gc, self._gc.modal
         motion = f"38.{m.motion - 138}" if m.motion in gc.PROBE_MODES else str(m.motion)
-        inches = bool(self.stage.settings[13])
+        inches = bool(self.settings[13])
         feed = f"{g.feed_rate / MM_PER_INCH:.1f}" if inches else f"{g.feed_rate:.0f}"
         return (f"[GC:G{motion} G{54 + m.coord_select} G{17 + m.plane} G{m.units} G{m.distance} G{m.feed_mode} "
                 f"M{m.spindle} M{m.coolant} T{g.tool} F{feed} S{g.spindle_speed:.0f}]")
@@ -658,7 +673,7 @@ class GrblFirmware:
             if cmd not in ("RST=$", "RST=#", "RST=*"):
                 raise CodeError(3)
             if cmd != "RST=#":  # settings.c settings_restore(): settings = defaults (defaults.h DEFAULTS_GENERIC)
-                self.stage.settings.update(codes.DEFAULT_SETTINGS)
+                self.settings.update(codes.DEFAULT_SETTINGS)
             if cmd != "RST=$":
                 self._coords = self._default_coords()  # G54 back to the base, by design (docs/hardware.md)
             if cmd == "RST=*":  # SETTINGS_RESTORE_ALL also wipes the startup lines and the build info
@@ -696,13 +711,13 @@ class GrblFirmware:
         value, end = got
         if end != len(cmd) or number > 255:
             raise CodeError(3)
-        self.stage.write_setting(int(number), value)
+        self.settings.write(int(number), value)
         if int(number) == 13:
             self._wco_counter = 0  # settings.c: system_flag_wco_change()
 
     def _ngc_parameters(self) -> None:
         """report.c report_ngc_parameters(): G54-G59, G28, G30 from EEPROM, G92, TLO, PRB."""
-        inches = bool(self.stage.settings[13])
+        inches = bool(self.settings[13])
         names = ["G54", "G55", "G56", "G57", "G58", "G59", "G28", "G30"]
         for name, data in zip(names, self._coords):
             self._send(f"[{name}:{format_axes(tuple(data), inches)}]")
@@ -713,7 +728,7 @@ class GrblFirmware:
 
     def _probe_line(self) -> str:
         """report.c report_probe_parameters(): the last probe position (machine) and whether it succeeded."""
-        return f"[PRB:{format_axes(tuple(self._probe_mpos), bool(self.stage.settings[13]))}:{int(self._probe_ok)}]"
+        return f"[PRB:{format_axes(tuple(self._probe_mpos), bool(self.settings[13]))}:{int(self._probe_ok)}]"
 
     def _homing(self) -> Steps:
         """``$H`` runs: a held-back ``?`` is answered when it ends (state still Home), then ``ok``.
@@ -728,7 +743,7 @@ class GrblFirmware:
         while True:
             pos = self.stage.status().machine_mm[axis]
             if pos != last:  # moving up off the low switch, not yet the pull-off away: it may still be engaged
-                self._homing_pulloff = pos > last and pos < switch + self.stage.settings[27] - TRAVEL_EPS_MM
+                self._homing_pulloff = pos > last and pos < switch + self.settings[27] - TRAVEL_EPS_MM
                 last = pos
             code = self.faults.fail_homing
             progress = self.stage.motion_progress()
@@ -814,7 +829,7 @@ class GrblFirmware:
             dist = math.dist(b.xyz, g.position)
             feed = dist * g.feed_rate if dist > 0 else math.inf
         if motion in (gc.CW_ARC, gc.CCW_ARC):
-            for point in gc.arc_points(b, g.position, self.stage.settings[12])[:-1]:
+            for point in gc.arc_points(b, g.position, self.settings[12])[:-1]:
                 self._soft_limit_check(point)
         if motion in gc.PROBE_MODES and not self._check:
             yield from self._probe_cycle(b.xyz, feed, motion)
@@ -833,7 +848,7 @@ class GrblFirmware:
         yield from self._synchronize()
         self._probe_ok = False
         away = motion in (142, 143)
-        if away != bool(self.stage.settings[6]):  # PROBE_FAIL_INITIAL: mc_probe_cycle() bails out at once
+        if away != bool(self.settings[6]):  # PROBE_FAIL_INITIAL: mc_probe_cycle() bails out at once
             yield from self._probe_alarm(4)
             return
         yield from self._line(target, feed)
@@ -847,7 +862,7 @@ class GrblFirmware:
 
     def _probe_alarm(self, code: int) -> Steps:
         """A probe alarm: ALARM:N, state Alarm, report.c's 500 ms inside the line (no reset)."""
-        self.stage.trigger_alarm(code)
+        self._trigger(code)
         self._send(f"ALARM:{code}")
         end = self.stage.clock.now() + ALARM_REPORT_DELAY_S
         while self.stage.clock.now() < end:
@@ -880,7 +895,7 @@ class GrblFirmware:
     def _rpm(self, s: float) -> float:
         """spindle_control.c spindle_compute_pwm_value(): S times the override, clamped to $31..$30 (0 is off)."""
         s *= 0.01 * self._ovr[2]
-        hi, lo = self.stage.settings[30], self.stage.settings[31]
+        hi, lo = self.settings[30], self.settings[31]
         if lo >= hi or s >= hi:
             return hi
         if s <= lo:
@@ -924,7 +939,7 @@ class GrblFirmware:
         """With ``$21=1`` a switch sits at each end of the travel: a move beyond it stops there and limits.c's
         ISR raises ALARM:1 when the carriage gets there (:meth:`_check_hard_limit`); otherwise the target."""
         lo, hi = self.stage.axis_travel_mm[axis]
-        if not self.stage.settings[21] or lo - TRAVEL_EPS_MM <= target_mm <= hi + TRAVEL_EPS_MM:
+        if not self.settings[21] or lo - TRAVEL_EPS_MM <= target_mm <= hi + TRAVEL_EPS_MM:
             return target_mm
         end = min(max(target_mm, lo), hi)
         self._hard_limit_at = (axis, end)

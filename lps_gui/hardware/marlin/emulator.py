@@ -223,20 +223,20 @@ class MarlinFirmware:
             if code == "M92":
                 self.steps_per_mm[i] = v
             elif code == "M203":  # mm/s
-                self.stage.settings[110 + i] = v * 60.0
+                self.stage.set_machine(f"max_rate_mm_min.{ax}", v * 60.0)
             else:
-                self.stage.settings[120 + i] = v
+                self.stage.set_machine(f"accel_mm_s2.{ax}", v)
 
     def _settings_lines(self) -> list[str]:
         """M503's report (MarlinSettings::report) for the values this emulator keeps."""
-        st = self.stage.settings
+        st = self.stage.machine
         return [
             "echo:; Steps per unit:",
             "echo: M92 " + " ".join(f"{ax}{s:.2f}" for ax, s in zip(AXES, self.steps_per_mm)) + " E500.00",
             "echo:; Maximum feedrates (units/s):",
-            "echo: M203 " + " ".join(f"{ax}{st[110 + i] / 60.0:.2f}" for i, ax in enumerate(AXES)) + " E25.00",
+            "echo: M203 " + " ".join(f"{ax}{st[f'max_rate_mm_min.{ax}'] / 60.0:.2f}" for ax in AXES) + " E25.00",
             "echo:; Maximum Acceleration (units/s2):",
-            "echo: M201 " + " ".join(f"{ax}{st[120 + i]:.2f}" for i, ax in enumerate(AXES)) + " E10000.00",
+            "echo: M201 " + " ".join(f"{ax}{st[f'accel_mm_s2.{ax}']:.2f}" for ax in AXES) + " E10000.00",
         ]
 
 

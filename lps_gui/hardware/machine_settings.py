@@ -28,9 +28,9 @@ def _per_axis(key: str, name: str, unit: str, description: str) -> list[NamedSet
 
 
 MACHINE_SETTINGS: tuple[NamedSetting, ...] = (
-    NamedSetting("soft_limits", "soft limits", "on/off", "a move whose target is outside the travel raises an alarm",
+    NamedSetting("soft_limits", "soft limits", "boolean", "a move whose target is outside the travel raises an alarm",
                  flag=True),
-    NamedSetting("homing", "homing cycle", "on/off", "homing to the low limit switch is enabled", flag=True),
+    NamedSetting("homing", "homing cycle", "boolean", "homing to the low limit switch is enabled", flag=True),
     NamedSetting("homing_locate_mm_min", "homing locate feed", "mm/min", "slow feed that locates the switch"),
     NamedSetting("homing_seek_mm_min", "homing seek rate", "mm/min", "fast feed that finds the switch"),
     NamedSetting("homing_pulloff_mm", "homing pull-off", "mm", "distance homing retreats from the switch"),

@@ -55,7 +55,7 @@ def test_capture_on_a_grbl_in_power_up_alarm_asks_for_home_or_unlock(tmp_path, c
     assert lps_main([*argv, "--out", str(out)]) == 2
     line = _last_error(capsys)
     assert "locked in Alarm" in line and "--home or --unlock" in line
-    assert not out.exists() and emu.stage.alarm_code == 0  # nothing created, nothing moved
+    assert not out.exists() and emu.firmware.alarm_code == 0  # nothing created, nothing moved
     assert lps_main([*argv, "--out", str(out), "--unlock"]) == 0
     assert "unlocked it" in capsys.readouterr().err and not emu.stage.homed
 

@@ -39,7 +39,7 @@ def test_connect_reads_build_info_and_settings(rig):
     assert (stage.build_info.planner_blocks, stage.build_info.rx_buffer_bytes) == (15, 128)
     settings = {s.number: s for s in stage.read_settings()}
     assert settings[130].value == 100.0 and settings[130].name == "X-axis maximum travel"
-    assert settings[110].value == emu.stage.settings[110]
+    assert settings[110].value == emu.firmware.settings[110]
     assert any(e.kind == "message" and e.text == "'$H'|'$X' to unlock" for e in events)
     assert stage.status().state == "Alarm"  # homing lock at start-up
 
@@ -139,7 +139,7 @@ def test_settings_cache_follows_the_firmware_rule_for_homing_off(rig):
     stage.home()
     assert stage.settings[20] == 1.0 and stage.settings[22] == 1.0
     stage.write_setting(22, 0)  # settings.c: homing off also clears soft limits
-    assert stage.settings[20] == 0.0 and emu.stage.settings[20] == 0.0
+    assert stage.settings[20] == 0.0 and emu.firmware.settings[20] == 0.0
     before = dict(stage.settings)
     stage.read_settings()
     assert stage.settings == before  # the cache is what $$ says

@@ -66,7 +66,7 @@ def test_failed_homing_ok_is_not_credited_to_the_next_command(stock):
         drive(emu, stage.home)
     emu.faults.fail_homing = None
     drive(emu, stage.unlock)  # must get its own ok, after the self-reset, not the stray ok of $H
-    assert emu.stage.alarm_code is None
+    assert emu.firmware.alarm_code is None
     assert stage.status().state == "Idle"
     stage.move_to(20.0, 3000.0)
     assert drive(emu, lambda: stage.wait_idle(timeout_s=60.0)).work_mm[0] == pytest.approx(20.0)
@@ -77,7 +77,7 @@ def test_status_right_after_a_failed_homing_is_answered(stock):
     emu.faults.fail_homing = 9
     homing = Background(stage.home)
     deadline = time.monotonic() + 30.0
-    while emu.stage.alarm_code != 9:  # time stops the moment the homing fails: report.c's 500 ms are still ahead
+    while emu.firmware.alarm_code != 9:  # time stops the moment the homing fails: report.c's 500 ms are still ahead
         assert time.monotonic() < deadline
         emu.advance(0.01)
     homing.thread.join(30.0)
@@ -121,7 +121,7 @@ def test_soft_limit_then_reset_then_the_lines_get_their_own_answers(stock):
     drive(emu, stage.soft_reset)  # ok of the G0 X150, banner, unlock message
     assert stage.status().state == "Alarm" and stage.link.in_flight == 0
     stage.unlock()
-    assert emu.stage.alarm_code is None
+    assert emu.firmware.alarm_code is None
     stage.move_to(20.0, 3000.0)
     assert drive(emu, lambda: stage.wait_idle(timeout_s=60.0)).work_mm[0] == pytest.approx(20.0)
 

@@ -205,7 +205,7 @@ def stock():
 
 def test_power_up_with_homing_enabled_is_alarm_with_unlock_message(stock):
     e, port = stock
-    assert e.stage.settings[22] == 1.0
+    assert e.firmware.settings[22] == 1.0
     assert port.ask(b"?", until="<")[-1].startswith("<Alarm|")
     assert port.ask(b"$I\n") == ["[VER:1.1h.20190830:]", "[OPT:V,15,128]", "ok"]
     assert port.ask(b"G0 X1\n") == ["error:9"]
@@ -328,3 +328,29 @@ def test_work_coordinate_systems_g92_and_rst_hash(stock):
     lines = port.ask(b"$#\n")
     assert lines[0] == "[G54:-100.000,-100.000,-100.000]"  # by design: G54 stays at the base
     assert lines[2] == "[G56:0.000,0.000,0.000]"
+
+
+def test_the_stage_s_neutral_reasons_all_have_a_grbl_code_and_back():
+    """GRBL's numbers live in grbl/codes.py only: every neutral refusal and alarm is said as one, and read back."""
+    from lps_gui.hardware.grbl.codes import ALARMS, ERRORS, GrblError, as_grbl
+    from lps_gui.hardware.refusals import Alarm, Refusal, StageAlarm, StageRefused
+
+    for alarm in Alarm:
+        g = as_grbl(StageAlarm(alarm))
+        assert g.kind == "alarm" and (g.code == 0 or g.code in ALARMS) and g.reason is alarm
+    for reason in Refusal:
+        g = as_grbl(StageRefused(reason))
+        assert g.kind == "error" and g.code in ERRORS
+        assert g.reason is (None if g.code == 20 else reason)  # error:20 is any unsupported word, not one reason
+    assert GrblError("error", 15).reason is Refusal.BEYOND_TRAVEL and GrblError("alarm", 2).reason is Alarm.SOFT_LIMIT
+
+
+def test_dollar_settings_are_the_stage_s_named_ones_and_grbl_s_rules(emu):
+    """$110/$22/$20 write the simulated machine's named settings; settings.c's refusals are GRBL's codes."""
+    e, port = emu
+    assert port.ask(b"$110=1200\n") == ["ok"] and e.stage.machine["max_rate_mm_min.X"] == 1200.0
+    assert port.ask(b"$130=90\n") == ["ok"] and e.stage.travel_mm == (0.0, 90.0)
+    assert port.ask(b"$23=1\n") == ["ok"] and e.firmware.settings[23] == 1.0  # GRBL's own: not the machine's
+    assert port.ask(b"$22=0\n") == ["ok"] and e.stage.machine["homing"] == 0.0 and e.stage.machine["soft_limits"] == 0.0
+    assert port.ask(b"$20=1\n") == ["error:10"]  # soft limits need homing
+    assert port.ask(b"$H\n") == ["error:5"]  # homing not enabled

@@ -7,8 +7,9 @@ import pytest
 from lps_gui.core.clock import SimClock
 from lps_gui.core.truth.stage_errors import ErrorProfile, StageErrorModel
 from lps_gui.errors import HardwareError
-from lps_gui.hardware.grbl.codes import GrblError
+from lps_gui.hardware.machine_settings import NUMBER
 from lps_gui.hardware.motion import duration_s, trapezoid
+from lps_gui.hardware.refusals import Alarm, Refusal, StageAlarm, StageRefused
 from lps_gui.hardware.sim_stage import SimulatedStage
 
 
@@ -97,17 +98,20 @@ def test_repeatability_draw_once_per_move_and_seeded():
 
 
 def test_soft_limit_move_alarms_jog_errors():
+    """The machine model's reasons are neutral (GRBL's error:15, ALARM:2, error:9 are the emulator's: test_grbl_*)."""
     st = make(travel_mm=(0.0, 100.0))
-    with pytest.raises(GrblError, match="error:15 Travel exceeded") as e:
+    with pytest.raises(StageRefused, match="jog to 150.000 mm: the jog's target is outside the travel") as e:
         st.jog(150.0, 1000.0)
-    assert e.value.code == 15 and st.status().state == "Idle"
+    assert e.value.reason is Refusal.BEYOND_TRAVEL and st.status().state == "Idle"
     alarms = []
-    st.events.subscribe(lambda ev: ev.kind == "alarm" and alarms.append(ev.code))
-    with pytest.raises(GrblError, match="ALARM:2 Soft limit"):
+    st.events.subscribe(lambda ev: ev.kind == "alarm" and alarms.append(ev.reason))
+    with pytest.raises(StageAlarm, match="outside its travel 0..100 mm: alarm: a move's target is outside") as a:
         st.move_to(120.0, 1000.0)
-    assert st.status().state == "Alarm" and alarms == [2]
-    with pytest.raises(GrblError, match="error:9"):
+    assert a.value.alarm is Alarm.SOFT_LIMIT
+    assert st.status().state == "Alarm" and alarms == [Alarm.SOFT_LIMIT] and st.alarm is Alarm.SOFT_LIMIT
+    with pytest.raises(StageRefused, match="stage in Alarm: commands are locked out") as e:
         st.move_to(10.0, 1000.0)
+    assert e.value.reason is Refusal.LOCKED
     st.unlock()
     st.move_to(10.0, 1000.0)
     assert st.wait_idle().work_mm[0] == pytest.approx(10.0)
@@ -120,8 +124,9 @@ def test_homing_lock_and_homing():
         st.wait_idle()
     st.start_home()
     assert st.status().state == "Home"
-    with pytest.raises(GrblError, match="error:8"):
-        st.start_home()  # $H while homing is not idle
+    with pytest.raises(StageRefused, match="home in Home: the stage must be idle") as e:
+        st.start_home()  # homing while homing is not idle
+    assert e.value.reason is Refusal.NOT_IDLE
     st.wait_idle()
     st.move_to(30.0, 3000.0)
     st.wait_idle()
@@ -152,15 +157,16 @@ def test_feed_hold_resume_and_jog_cancel():
     assert 100.0 < s.work_mm[0] < 160.0
 
 
-def test_reset_during_motion_is_alarm_3():
+def test_reset_during_motion_is_an_abort_alarm():
     clock = SimClock()
     st = make(clock=clock)
     st.move_to(100.0, 3000.0)
     clock.advance(0.5)
     st.soft_reset()
     assert st.status().state == "Alarm"
-    with pytest.raises(GrblError, match="ALARM:3"):
+    with pytest.raises(StageAlarm, match="stopped at once during motion") as e:
         st.wait_idle()
+    assert e.value.alarm is Alarm.ABORT_DURING_CYCLE
 
 
 def test_wait_idle_times_out_in_hold():
@@ -195,22 +201,29 @@ def test_not_connected_is_clear():
 
 
 def test_settings_read_write_rules():
+    """Named settings (GRBL's $110, $22, $20 rules are the emulator's: test_grbl_emulator)."""
     st = make()
+    rate, homing, soft = NUMBER["max_rate_mm_min.X"], NUMBER["homing"], NUMBER["soft_limits"]
     names = {s.number: s for s in st.read_settings()}
-    assert names[110].value == 3000.0 and names[110].unit == "mm/min"
-    st.write_setting(110, 1200.0)
-    st.move_to(100.0, 3000.0)  # capped at $110
+    assert names[rate].value == 3000.0 and names[rate].unit == "mm/min" and names[rate].name == "X maximum rate"
+    assert st.setting_label(names[rate]) == "max_rate_mm_min.X"
+    st.write_setting(rate, 1200.0)
+    st.move_to(100.0, 3000.0)  # capped at the maximum rate
     assert st.status().feed_mm_min <= 1200.0
     st.wait_idle()
-    with pytest.raises(GrblError, match="error:3"):
-        st.write_setting(99, 1.0)
-    with pytest.raises(GrblError, match="error:4"):
-        st.write_setting(110, -1.0)
-    st.write_setting(22, 0)
-    with pytest.raises(GrblError, match="error:10"):
-        st.write_setting(20, 1)
-    with pytest.raises(GrblError, match="error:5"):
+    refused = [(99, 1.0, Refusal.UNKNOWN_SETTING), (rate, -1.0, Refusal.NEGATIVE_VALUE)]
+    for number, value, reason in refused:
+        with pytest.raises(StageRefused) as e:
+            st.write_setting(number, value)
+        assert e.value.reason is reason
+    st.write_setting(homing, 0)
+    assert {s.number: s.value for s in st.read_settings()}[soft] == 0.0  # homing off turns soft limits off
+    with pytest.raises(StageRefused, match="soft limits need homing") as e:
+        st.write_setting(soft, 1)
+    assert e.value.reason is Refusal.SOFT_LIMITS_NEED_HOMING
+    with pytest.raises(StageRefused, match="homing is not enabled") as e:
         st.home()
+    assert e.value.reason is Refusal.HOMING_DISABLED
 
 
 def test_full_planner_waits_in_clock_time_and_never_spins_in_a_hold():
@@ -237,10 +250,12 @@ def test_six_work_systems_keep_their_own_offsets_and_limits_stay_in_machine_spac
     st.set_work_zero("X")
     st.move_to(-20.0, 3000.0)
     assert st.wait_idle().machine_mm[0] == pytest.approx(20.0)
-    with pytest.raises(GrblError, match="error:15"):
+    with pytest.raises(StageRefused) as e:
         st.jog(-30.0, 1000.0)  # machine -10: beyond the low end
-    with pytest.raises(GrblError, match=r"travel -40\.\.60 mm: ALARM:2"):
+    assert e.value.reason is Refusal.BEYOND_TRAVEL
+    with pytest.raises(StageAlarm, match=r"travel -40\.\.60 mm: alarm") as a:
         st.move_to(70.0, 1000.0)  # the travel named in work coordinates
+    assert a.value.alarm is Alarm.SOFT_LIMIT
     st.unlock()
     st.select_work_system("G54")
     assert st.status().work_mm[0] == pytest.approx(-10.0)

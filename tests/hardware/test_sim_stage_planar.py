@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from lps_gui.core.truth.stage_errors import PlanarErrorModel, StageErrorModel
-from lps_gui.hardware.grbl.codes import GrblError
+from lps_gui.hardware.refusals import StageAlarm
 from lps_gui.hardware.sim_stage import SimulatedStage
 
 
@@ -39,7 +39,7 @@ def test_true_planar_pose_follows_the_error_model_and_each_axis_backlash_side():
 
 def test_soft_limits_per_axis():
     st = gantry()
-    with pytest.raises(GrblError, match="Y to 150.000 mm is outside its travel -5..100"):
+    with pytest.raises(StageAlarm, match="Y to 150.000 mm is outside its travel -5..100"):
         st.move_to(150.0, 1000.0, "Y")
 
 

@@ -10,6 +10,8 @@ import pytest
 from lps_gui.errors import HardwareError
 from lps_gui.hardware.grbl.codes import GrblError
 from lps_gui.hardware.grbl.emulator import GrblEmulator
+from lps_gui.hardware.machine_settings import NUMBER
+from lps_gui.hardware.refusals import Alarm, Refusal
 from lps_gui.hardware.sim_stage import SimulatedStage
 from lps_gui.hardware.stage import Stage, StageEvent
 
@@ -63,31 +65,46 @@ def test_hold_then_resume_reaches_the_target(stage: Stage):
 
 
 def test_soft_limit_alarm_then_reset_and_unlock(stage: Stage):
+    """The same neutral reason on both; GRBL says it as ALARM:2 (the simulated stage speaks no protocol)."""
     events: list[StageEvent] = []
     stage.events.subscribe(events.append)
-    with pytest.raises(GrblError, match="ALARM:2 Soft limit") as e:
+    with pytest.raises(HardwareError) as e:
         stage.move_to(150.0, 600.0)
-    assert e.value.kind == "alarm" and e.value.code == 2
+    assert e.value.reason is Alarm.SOFT_LIMIT
+    assert [ev.reason for ev in events if ev.kind == "alarm"] == [Alarm.SOFT_LIMIT]
+    if isinstance(stage, SimulatedStage):
+        assert "outside its travel 0..100 mm: alarm: a move's target is outside the travel" in str(e.value)
+    else:
+        assert isinstance(e.value, GrblError) and "ALARM:2 Soft limit" in str(e.value)
+        assert e.value.kind == "alarm" and e.value.code == 2
+        assert [ev.code for ev in events if ev.kind == "alarm"] == [2]
     assert stage.status().state == "Alarm"
-    assert [ev.code for ev in events if ev.kind == "alarm"] == [2]
     stage.soft_reset()
     stage.unlock()
     assert stage.status().state == "Idle"
 
 
-def test_jog_beyond_travel_is_error_15_without_alarm(stage: Stage):
-    with pytest.raises(GrblError, match="error:15 Travel exceeded") as e:
+def test_jog_beyond_travel_is_refused_without_alarm(stage: Stage):
+    """Refused, not an alarm, on both; GRBL says error:15."""
+    with pytest.raises(HardwareError) as e:
         stage.jog(500.0, 600.0)
-    assert e.value.kind == "error" and stage.status().state == "Idle"
+    assert e.value.reason is Refusal.BEYOND_TRAVEL and stage.status().state == "Idle"
+    if not isinstance(stage, SimulatedStage):
+        assert isinstance(e.value, GrblError) and "error:15 Travel exceeded" in str(e.value) and e.value.kind == "error"
 
 
 def test_settings_have_names_units_and_write_back(stage: Stage):
+    """Each stage numbers its settings its own way (GRBL $130; the simulated machine by name)."""
+    sim = isinstance(stage, SimulatedStage)
+    travel, rate = (NUMBER["travel_mm.X"], NUMBER["max_rate_mm_min.X"]) if sim else (130, 110)
     settings = {s.number: s for s in stage.read_settings()}
-    assert settings[130].value == pytest.approx(100.0) and settings[130].unit == "millimeters"
-    stage.write_setting(110, 1500.0)
-    assert {s.number: s.value for s in stage.read_settings()}[110] == 1500.0
-    with pytest.raises(GrblError, match="error:3"):
+    assert settings[travel].value == pytest.approx(100.0) and settings[travel].unit == ("mm" if sim else "millimeters")
+    assert stage.setting_label(settings[rate]) == ("max_rate_mm_min.X" if sim else "$110")
+    stage.write_setting(rate, 1500.0)
+    assert {s.number: s.value for s in stage.read_settings()}[rate] == 1500.0
+    with pytest.raises(HardwareError, match="no such setting" if sim else "error:3") as e:
         stage.write_setting(99, 1.0)
+    assert e.value.reason is Refusal.UNKNOWN_SETTING
 
 
 def test_home_goes_to_low_switch_plus_pull_off(stage: Stage):

@@ -193,7 +193,7 @@ class GrblStage(Stage, Settings, Console, WorkCoordinates, Jogging, FeedHold, Al
                 self._reset_due = self._reset_due or code in SELF_RESET_ALARMS
             err = GrblError("alarm", code, f"GRBL on {self.port_name}")
             self.link.orphan_pending(err)
-            self.events.emit(StageEvent("alarm", code=msg.code, text=str(err)))
+            self.events.emit(StageEvent("alarm", code=msg.code, text=str(err), reason=err.reason))
         elif kind == "banner":
             self.version = msg.text
             self._critical = self._reset_due = self._held = self._reset_ready = False

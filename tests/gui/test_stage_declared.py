@@ -44,7 +44,7 @@ def test_marlin_shows_its_settings_and_console_and_the_sim_keeps_every_widget(qt
     connect_sim(qtbot, window)
     tabs = panel.lower_tabs
     assert panel.jog_area.isVisibleTo(panel) and panel.unlock_btn.isVisibleTo(panel) and not panel.moved_btn.isVisibleTo(panel)
-    assert tabs.isTabVisible(tabs.indexOf(panel.settings_page)) and tabs.tabText(tabs.indexOf(panel.settings_page)) == "Controller settings ($$)"
+    assert tabs.isTabVisible(tabs.indexOf(panel.settings_page)) and tabs.tabText(tabs.indexOf(panel.settings_page)) == "Simulated machine settings"
     window.stage_ctl.detach("test")
     qtbot.waitUntil(lambda: not window.stage_ctl.connected, timeout=5000)
     with MarlinEmulator(SimulatedStage(travel_mm=(0.0, 100.0)), time_scale=20.0) as emu:

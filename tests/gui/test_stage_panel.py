@@ -4,6 +4,7 @@ from __future__ import annotations
 import pytest
 from PySide6.QtCore import Qt
 
+from lps_gui.hardware.machine_settings import NUMBER
 from lps_gui.hardware.stage import StageSetting
 from tests.gui.conftest import connect_sim
 
@@ -61,8 +62,8 @@ def test_settings_table_validates_before_writing(qtbot, window):
     panel.settings_table.item(1, 2).setText("1.5")
     changes, errors = panel.pending_settings()
     assert changes == [] and len(errors) == 2
-    assert "$110" in errors[0] and "not a number" in errors[0]
-    assert "$3" in errors[1] and "whole number" in errors[1]
+    assert errors[0].startswith("110 (X max rate):") and "not a number" in errors[0]  # no stage: its plain number
+    assert errors[1].startswith("3 (direction invert):") and "whole number" in errors[1]
     panel.settings_table.item(0, 2).setText("2500")
     panel.settings_table.item(1, 2).setText("1")
     changes, errors = panel.pending_settings()
@@ -74,15 +75,18 @@ def test_settings_are_read_from_the_connected_stage_and_written(qtbot, window):
     panel = window.stage_panel
     qtbot.waitUntil(lambda: panel.settings_table.rowCount() > 5, timeout=5000)
     rows = {panel.settings_table.item(r, 0).text(): r for r in range(panel.settings_table.rowCount())}
-    r = rows["$110"]
-    assert panel.settings_table.item(r, 3).text()  # a unit is shown
+    r = rows["max_rate_mm_min.X"]  # the simulated machine names its settings (GRBL's $110 is the emulator's)
+    assert panel.settings_table.item(r, 3).text() == "mm/min"  # a unit is shown
     panel.settings_table.item(r, 2).setText("2400")
     panel.write_settings_btn.click()
     stage = window.stage_ctl.stage
-    qtbot.waitUntil(lambda: {s.number: s.value for s in stage.read_settings()}[110] == 2400.0, timeout=5000)
+    rate = NUMBER["max_rate_mm_min.X"]
+    qtbot.waitUntil(lambda: {s.number: s.value for s in stage.read_settings()}[rate] == 2400.0, timeout=5000)
     # the table is read back after writing and shows the controller's value
-    qtbot.waitUntil(lambda: panel._settings and {s.number: s.value for s in panel._settings}[110] == 2400.0,
+    qtbot.waitUntil(lambda: panel._settings and {s.number: s.value for s in panel._settings}[rate] == 2400.0,
                     timeout=5000)
+    lo, hi = stage.axis_travel_mm[0]  # the rig's travel, said from its named settings
+    assert f"travel X {hi - lo:g} mm" in panel.travel_label.text() and "soft limits ON" in panel.travel_label.text()
 
 
 def test_grbl_emulator_over_a_pty_and_the_cable_pulled(qtbot, window):

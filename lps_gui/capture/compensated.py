@@ -1,6 +1,6 @@
 """Compensated capture: the engine commands each target through a compensation table's inverse.
 
-GRBL has no compensation of its own, so our sender corrects: the target the
+A controller without compensation of its own is corrected here: the target the
 engine sends is ``table.command_mm(nominal, direction)``, the position at
 which the table says the carriage really arrives at the nominal. The table
 is stored in session.json so ``--resume`` goes on with the same correction.

@@ -81,7 +81,7 @@ def image_name(index: int, ext: str) -> str:
 
 
 LOSSLESS = (".png", ".tif", ".tiff", ".bmp", ".pgm", ".ppm")
-POSITION_TOLERANCE_MM = 0.01  # GRBL reports its step count: any real miss is a lost move, not noise
+POSITION_TOLERANCE_MM = 0.01  # a controller reports its step count: any real miss is a lost move, not noise
 
 
 def check_reached(target_mm: float, reported_mm: float, tolerance_mm: float = POSITION_TOLERANCE_MM) -> None:

@@ -83,7 +83,7 @@ def check_plan_in_travel(plan: Plan, stage: Stage) -> None:
     """InputError before any move when a target or overshoot lies outside the stage's known travel.
 
     Only stages that know their travel (``Stage.travel_mm``, ``axis_travel_mm``: the simulated one) can be
-    checked here; on GRBL, soft limits ($20) raise an alarm at the offending move.
+    checked here; a controller that guards its own soft limits raises an alarm at the offending move.
     """
     t = plan.targets()
     if not plan.planar:

@@ -1,7 +1,7 @@
 """A stage locked in Alarm before a capture: home it, unlock it, or say how (never silently).
 
 A stage that declares :class:`~lps_gui.hardware.capabilities.Alarms` may be
-locked (GRBL with homing enabled powers up so and refuses every move); a
+locked (a controller with homing enabled may power up so and refuse every move); a
 capture must not start there and fail on its first move. The operator
 chooses: home (the position is then referenced to the switch) or unlock (the
 position is wherever the controller believes it is); the driver's

@@ -1,6 +1,6 @@
 """One-axis motion profiles: trapezoidal moves and controlled stops, evaluated at any time.
 
-The simulated stage (and through it the GRBL emulator) plans every move as a
+The simulated stage (and through it every emulator serving it) plans every move as a
 list of constant-acceleration segments, so its position, velocity and state
 at any clock time follow from a closed form and nothing has to tick in real
 time. Units: mm, s, mm/s, mm/s^2.
@@ -35,7 +35,7 @@ class Segment:
 class Profile:
     """A planned motion of one axis from rest to rest (or to a stop), as segments in time order.
 
-    ``kind`` says what GRBL state it shows while running ("Run", "Jog", "Home"),
+    ``kind`` says what state (``StageStatus.state``) it shows while running ("Run", "Jog", "Home"),
     ``direction`` the sign of travel (+1/-1, 0 for a null move) used for backlash.
     """
 

@@ -1,7 +1,7 @@
-"""A GRBL-like motion planner for the simulated stage: queued profiles, controlled stops, held moves.
+"""A controller's motion planner for the simulated stage: queued profiles, controlled stops, held moves.
 
 Moves are planned back to back (each starts when the previous one ends, from
-where it ends) in a buffer of :data:`PLANNER_BLOCKS` blocks like GRBL's.
+where it ends) in a buffer of :data:`PLANNER_BLOCKS` blocks, as a controller's ring buffer.
 A feed hold or jog cancel replaces the running profile by its deceleration;
 a hold keeps what was cut short for :meth:`MotionPlanner.resume`. Everything
 is evaluated at a clock time, so nothing ticks. Not thread-safe: the owning
@@ -15,7 +15,7 @@ import numpy as np
 
 from lps_gui.hardware.motion import Profile, stop_from, trapezoid
 
-PLANNER_BLOCKS = 15  # GRBL: 16-block ring buffer, one always empty (reports Bf:15 when idle)
+PLANNER_BLOCKS = 15  # a 16-block ring buffer, one always empty (the GRBL emulator reports it as Bf:15 when idle)
 
 
 class HeldMove(NamedTuple):
@@ -56,7 +56,7 @@ class MotionPlanner:
         return self.stopping if self.stopping is not None else (self.queue[0] if self.queue else None)
 
     def state(self) -> tuple[str, int | None]:
-        """GRBL state of the motion: Hold:1/Hold:0, the active profile's kind, or Idle."""
+        """The motion's state: Hold with substate 1 (stopping) / 0 (stopped), the active profile's kind, or Idle."""
         if self.hold:
             return "Hold", (1 if self.stopping is not None else 0)
         p = self.active()
@@ -74,7 +74,7 @@ class MotionPlanner:
 
     @property
     def free(self) -> int:
-        """Free planner blocks (GRBL's ``Bf`` first value)."""
+        """Free planner blocks."""
         return self.blocks - len(self.queue) - len(self.held)
 
     def planned_mm(self, axis: int) -> float:
@@ -128,7 +128,7 @@ class MotionPlanner:
         self.hold = True
 
     def resume(self, t: float, accel_of: Callable[[int], float]) -> bool:
-        """Plan the held moves again once the hold is complete (GRBL ignores ``~`` during Hold:1)."""
+        """Plan the held moves again once the hold is complete (a resume while still stopping is ignored)."""
         if not self.hold or self.stopping is not None:
             return False
         self.hold = False

@@ -38,8 +38,7 @@ from lps_gui.hardware.planner import PLANNER_BLOCKS, HeldMove, MotionPlanner
 from lps_gui.hardware.refusals import Alarm, Refusal, StageAlarm, StageRefused
 from lps_gui.hardware.stage import AXES, WORK_SYSTEMS, Stage, StageEvent, StageSetting, StageStatus
 
-RX_BUFFER_BYTES = 128
-__all__ = ["PLANNER_BLOCKS", "RX_BUFFER_BYTES", "SimulatedStage", "Vibration"]  # Vibration: core/truth/stage_errors
+__all__ = ["PLANNER_BLOCKS", "SimulatedStage", "Vibration"]  # Vibration: core/truth/stage_errors
 
 
 class SimulatedStage(Stage, Settings, WorkCoordinates, Jogging, FeedHold, Alarms):
@@ -112,7 +111,7 @@ class SimulatedStage(Stage, Settings, WorkCoordinates, Jogging, FeedHold, Alarms
         self._stopped_at: float | None = None  # end of the last completed move of the measured axis
         self._rest_mm: float | None = float(start_mm)  # where the carriage rests (after its last move that moved it)
         self._stuck_mm = 0.0  # the carriage's offset from the commanded position after a move inside the dead band
-        self._offsets = {name: [0.0, 0.0, 0.0] for name in WORK_SYSTEMS}  # GRBL's sign: work = machine - offset
+        self._offsets = {name: [0.0, 0.0, 0.0] for name in WORK_SYSTEMS}  # work = machine - offset
         self._system = WORK_SYSTEMS[0]
 
     # ------------------------------------------------------------------ settings
@@ -240,7 +239,7 @@ class SimulatedStage(Stage, Settings, WorkCoordinates, Jogging, FeedHold, Alarms
         return ("Alarm", None) if self._alarm is not None else self._motion.state()
 
     def planner_free(self) -> int:
-        """Free planner blocks (GRBL's ``Bf`` first value)."""
+        """Free planner blocks (a wrapping firmware reports them)."""
         with self._lock:
             self._update()
             return self._motion.free
@@ -299,11 +298,10 @@ class SimulatedStage(Stage, Settings, WorkCoordinates, Jogging, FeedHold, Alarms
         with self._command() as t:
             state, sub = self._state()
             pos, feed = self._motion.positions(t)
-            free = self._motion.free
             work = tuple(float(p) - o for p, o in zip(pos, self._offsets[self._system]))
             return StageStatus(
                 state=state, substate=sub, machine_mm=tuple(pos), work_mm=work,
-                feed_mm_min=feed, buffer=(free, RX_BUFFER_BYTES), overrides=(100, 100, 100), time=t,
+                feed_mm_min=feed, time=t,  # no serial buffer nor overrides: a wrapping firmware reports its own
             )
 
     def true_pose(self) -> TruePose:

@@ -17,7 +17,7 @@ from lps_gui.core.clock import Clock
 from lps_gui.errors import HardwareError
 
 AXES = ("X", "Y", "Z")
-WORK_SYSTEMS = ("G54", "G55", "G56", "G57", "G58", "G59")  # GRBL's work coordinate systems (G10 L2/L20 P1..P6)
+WORK_SYSTEMS = ("G54", "G55", "G56", "G57", "G58", "G59")  # G-code's (RS274/NGC) six work coordinate systems
 
 
 @dataclass(frozen=True)
@@ -111,7 +111,7 @@ class Stage(abc.ABC):
     axes: tuple[str, ...] = AXES  # the axes it can move
     can_home: bool = True  # home() drives to a reference switch; False: home() raises
     travel_mm: tuple[float, float] | None = None  # soft-limit range of ``axis`` when known (the simulated stage);
-    #   None: the controller guards its limits itself (GRBL's $20 alarms at the offending move)
+    #   None: the controller guards its limits itself (an alarm at the offending move)
     axis_travel_mm: list[tuple[float, float]] | None = None  # the range of each of X, Y, Z when known
     clock: Clock | None = None  # the stage's own clock (simulated time); None: real time
     simulated: "Stage | None" = None  # a driver in front of a simulated stage (the GRBL emulator): that stage

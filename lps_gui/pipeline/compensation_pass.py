@@ -2,7 +2,7 @@
 
 From an estimated simulated session (the as-found) the compensation table is
 built, the same rig captures the same plan again with the engine commanding
-every target through the table's inverse (what our GRBL sender does), and the
+every target through the table's inverse (what our capture engine does), and the
 new session is detected and estimated (the as-left). The simulator's truth
 says how far the stage really was from the nominal before and after.
 """

@@ -159,7 +159,7 @@ class SimulatedRigHook:
     and the camera's image noise per frame, from (seed, capture index), so a
     capture killed and resumed yields the same images as one that ran
     straight through. ``stage``: the rig's stage, also when the engine drives
-    the GRBL driver in front of it; None: a stage whose draws are not seeded.
+    the driver in front of it (an emulator serving it); None: a stage whose draws are not seeded.
     """
 
     def __init__(self, plan: Plan, stage: RigStage | None, camera: RigCamera) -> None:
@@ -196,9 +196,9 @@ def simulated_engine(session: Session, stage: Stage, camera: RigCamera, encode: 
     """A :class:`CaptureEngine` that also records the true pose of every frame (the pose the camera renders)
     and seeds the rig's draws (:class:`SimulatedRigHook`).
 
-    ``stage`` is the rig's stage or a driver in front of it (the GRBL emulator).
+    ``stage`` is the rig's stage or a driver in front of it (an emulator serving it).
     """
-    rig_stage = stage if isinstance(stage, RigStage) else getattr(stage, "simulated", None)  # direct, behind the GRBL
+    rig_stage = stage if isinstance(stage, RigStage) else getattr(stage, "simulated", None)  # direct, behind an
     # emulator, or None: another stage the rig follows (sim/follow.py)
     hook = SimulatedRigHook(session.plan(), rig_stage if isinstance(rig_stage, RigStage) else None, camera)
     return CaptureEngine(stage, camera, session, encode=encode, simulator=hook)

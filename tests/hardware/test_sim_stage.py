@@ -231,7 +231,7 @@ def test_full_planner_waits_in_clock_time_and_never_spins_in_a_hold():
     st = make(clock=clock)
     for i in range(16):  # one more than the 15 blocks: the 16th waits for the first to finish
         st.move_to(10.0 + i, 3000.0)
-    assert clock.now() > 0.0 and st.status().buffer[0] == 0
+    assert clock.now() > 0.0 and st.planner_free() == 0
     st.feed_hold()
     clock.advance(1.0)
     with pytest.raises(HardwareError, match="planner full while held"):

@@ -1,6 +1,6 @@
 """The digital readout: work, machine and offset of each axis from one status report, G54-G59, zero and return.
 
-GRBL's model (``$#``): work = machine - offset of the selected system, so the
+the WorkCoordinates capability's model: work = machine - offset of the selected system, so the
 offset shown is machine - work of the same report (G54 -500 reads -500). The
 value labels have a fixed size: a new text repaints them without re-laying
 out the window (at the poll rate that starved the GUI thread during a
@@ -60,7 +60,7 @@ class PositionReadout(QGroupBox):
         head = QLabel("Machine\nOffset")  # one column, the two numbers stacked: the readout fits a 1000 px screen's dock
         head.setAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
         head.setToolTip("Machine: machine coordinates (the homed space), mm.\nOffset: work offset of the selected "
-                        "system in mm, GRBL's sign ($#): work = machine − offset")
+                        "system in mm: work = machine − offset")
         grid.addWidget(head, 0, 2, alignment=Qt.AlignmentFlag.AlignRight)
         for row, ax in enumerate(AXES, start=1):
             self._axis_row(grid, row, ax, big)
@@ -107,7 +107,7 @@ class PositionReadout(QGroupBox):
 
     # ------------------------------------------------------------------ showing
     def show_status(self, st: StageStatus) -> None:
-        """Work, machine and offset (GRBL's WCO = machine - work) of this one report, state and feed."""
+        """Work, machine and offset (machine - work) of this one report, state and feed."""
         for ax, m, w in zip(AXES, st.machine_mm, st.work_mm):
             self.readout[ax].setText(f"{w:10.3f}")
             self.machine[ax].setText(f"{m:.3f}")

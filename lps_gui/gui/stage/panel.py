@@ -6,7 +6,7 @@ Keyboard jog is never a side effect of typing or clicking: the arrow keys
 move the stage only with the "Keyboard jog" box ticked (off at start), while
 the panel has focus, and never while a number, list or text field has focus,
 where they edit. The readout takes work, machine and offset of every axis
-from one status report, with GRBL's offset sign (work = machine - offset).
+from one status report, with the WorkCoordinates capability's sign (work = machine - offset).
 """
 from __future__ import annotations
 
@@ -51,7 +51,7 @@ from lps_gui.hardware.stage import AXES, StageSetting, StageStatus
 
 JOG_STEPS_MM = (0.01, 0.1, 1.0, 10.0, 50.0)
 CONTINUOUS = 0.0  # the "hold" step: jog while the button is pressed
-HOLD_JOG_PERIOD_MS = 100  # GRBL's joystick rule: short jogs of v*dt queued while held, jog cancel on release
+HOLD_JOG_PERIOD_MS = 100  # held jog button: short jogs of v*dt queued while held, jog cancel on release
 PORT_WATCH_MS = 3000  # how often the source list looks for new serial ports and emulator ptys
 AXIS_SETS = (("XYZ", "X Y Z"), ("X", "X only"), ("XY", "X Y"))
 JOG_KEYS = {  # key -> (axis, sign): arrows move X/Y, Page Up/Down move Z
@@ -193,7 +193,7 @@ class StagePanel(QWidget):
         self.unlock_btn = QPushButton("Unlock")
         self.resume_btn = QPushButton("Resume")
         self.reset_btn = QPushButton("Reset")
-        self.reset_btn.setToolTip("Soft reset (Ctrl-X): stops at once; needed after a limit alarm ('Reset to continue')")
+        self.reset_btn.setToolTip("Soft reset: stops at once; needed after a limit alarm")
         self.reset_btn.clicked.connect(self.reset)
         self.stop_btn = QPushButton("Stop (feed hold)")
         self.stop_btn.setStyleSheet("QPushButton { color: #b00020; font-weight: bold; }")
@@ -441,12 +441,12 @@ class StagePanel(QWidget):
             self._lock_asked = False  # a later alarm asks again
 
     def _ask_home_or_unlock(self) -> None:
-        """A stage in Alarm (GRBL powers up so with homing enabled) moves only after $H or $X: ask which."""
+        """A stage in Alarm (a controller with homing enabled may power up so) moves only once homed or unlocked: ask which."""
         hint = getattr(self.controller.stage, "lock_hint", "home it or unlock it")
         box = QMessageBox(QMessageBox.Icon.Question, "Stage locked",
                           "The stage is locked in Alarm (at power-up with homing enabled, and after an alarm).\n"
                           f"Home or unlock it ({hint})? Homing drives to the limit switch; unlocking keeps the "
-                          "position it believes.\nAfter a limit alarm ('Reset to continue') press Reset first.",
+                          "position it believes.\nAfter a limit alarm press Reset first.",
                           parent=self)
         home = box.addButton("Home", QMessageBox.ButtonRole.AcceptRole)
         unlock = box.addButton("Unlock", QMessageBox.ButtonRole.ActionRole)
@@ -525,7 +525,7 @@ class StagePanel(QWidget):
         self.controller.call(f"go to {axis} 0 ({self.work_system.currentData()})", "move_to", 0.0, self.feed.value(), axis)
 
     def reset(self) -> None:
-        """Soft reset (Ctrl-X): what a feed hold cannot do, discard the held move; GRBL may then need unlocking."""
+        """Soft reset: what a feed hold cannot do, discard the held move; the stage may then need unlocking."""
         self.controller.call_now("reset", "soft_reset")
 
     def go_to(self) -> None:

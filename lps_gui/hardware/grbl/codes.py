@@ -208,7 +208,7 @@ def alarm_number(alarm: Alarm | None) -> int | None:
     return None if alarm is None else ALARM_NUMBERS[alarm]
 
 
-def as_grbl(e: StageRefused | StageAlarm) -> "GrblError":
+def as_grbl(e: StageRefused | StageAlarm) -> GrblError:
     """The simulated stage's refusal or alarm as GRBL reports it (``error:N``, ``ALARM:N``)."""
     if isinstance(e, StageAlarm):
         return GrblError("alarm", ALARM_NUMBERS[e.alarm])

@@ -42,7 +42,7 @@ from lps_gui.hardware.grbl.gcode import CodeError, ParserState, check_block, rea
 from lps_gui.hardware.grbl.protocol import MM_PER_INCH, StatusReport, format_axes, format_status
 from lps_gui.hardware.grbl.settings import GrblSettings
 from lps_gui.hardware.refusals import StageAlarm, StageRefused
-from lps_gui.hardware.sim_stage import PLANNER_BLOCKS, RX_BUFFER_BYTES, SimulatedStage
+from lps_gui.hardware.sim_stage import PLANNER_BLOCKS, SimulatedStage
 from lps_gui.hardware.stage import AXES
 
 log = logging.getLogger(__name__)
@@ -53,6 +53,7 @@ HELP = "[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X $H ~ ! ? ctrl-x]"
 RT_STATUS, RT_HOLD, RT_RESUME, RT_RESET, RT_JOG_CANCEL, RT_DOOR = 0x3F, 0x21, 0x7E, 0x18, 0x85, 0x84
 FEED_OVR_RANGE, SPINDLE_OVR_RANGE = (10, 200), (10, 200)  # config.h MIN/MAX_FEED_RATE_OVERRIDE, ..._SPINDLE_SPEED_...
 BUSY = ("Run", "Hold", "Jog", "Home", "Door")
+RX_BUFFER_BYTES = 128  # serial.h RX_BUFFER_SIZE
 ALARM_REPORT_DELAY_S = 0.5  # report.c report_alarm_message(): delay_ms(500) after ALARM:N
 CRITICAL_ALARMS = (1, 2)  # protocol_exec_rt_system(): hard and soft limit
 WCO_BUSY, WCO_IDLE, OVR_BUSY, OVR_IDLE = 30, 10, 20, 10  # config.h refresh counts
@@ -356,7 +357,7 @@ class GrblFirmware:
             mpos=mpos if mask & codes.STATUS_MASK_MPOS else None,
             wpos=None if mask & codes.STATUS_MASK_MPOS else tuple(p - o for p, o in zip(mpos, wco)),
             wco=wco if show_wco else None,
-            buffer=(st.buffer[0], RX_BUFFER_BYTES - len(self._rx)) if mask & codes.STATUS_MASK_BUFFER else None,
+            buffer=(self.stage.planner_free(), RX_BUFFER_BYTES - len(self._rx)) if mask & codes.STATUS_MASK_BUFFER else None,
             feed=st.feed_mm_min,
             spindle=self._spindle_rpm,
             pins=self._pins(),

@@ -354,3 +354,12 @@ def test_dollar_settings_are_the_stage_s_named_ones_and_grbl_s_rules(emu):
     assert port.ask(b"$22=0\n") == ["ok"] and e.stage.machine["homing"] == 0.0 and e.stage.machine["soft_limits"] == 0.0
     assert port.ask(b"$20=1\n") == ["error:10"]  # soft limits need homing
     assert port.ask(b"$H\n") == ["error:5"]  # homing not enabled
+
+
+def test_status_reports_the_stage_s_planner_and_grbl_s_own_rx_buffer(emu):
+    """Bf: the simulated stage's free planner blocks, then GRBL's 128-byte RX buffer (the firmware's, not the stage's)."""
+    e, port = emu
+    assert port.ask(b"$10=3\n") == ["ok"]  # MPos and Bf
+    assert port.ask(b"G1 X50 F300\n") == ["ok"]
+    assert e.stage.planner_free() == 14
+    assert "|Bf:14,128|" in port.ask(b"?", until="<")[-1]

@@ -113,4 +113,4 @@ def console_placeholder(connected: bool, hint: str) -> str:
         return hint
     if connected:
         return "this stage has no G-code console"
-    return "connect a stage that declares a console (a G-code controller) to send it commands"
+    return "connect a stage with a console (a G-code controller) to send it commands"

@@ -12,7 +12,19 @@ import enum
 from lps_gui.errors import HardwareError
 
 
-class Refusal(enum.Enum):
+class _Reason(enum.Enum):
+    """A reason whose value is its one line of text."""
+
+    @property
+    def text(self) -> str:
+        return self.value
+
+
+def _message(context: str, text: str, hint: str) -> str:
+    return f"{context}{': ' if context else ''}{text}{'; ' + hint if hint else ''}"
+
+
+class Refusal(_Reason):
     """A command the stage did not execute (nothing moved, the stage stays as it was)."""
 
     UNKNOWN_AXIS = "no such axis"
@@ -26,12 +38,8 @@ class Refusal(enum.Enum):
     UNKNOWN_SETTING = "no such setting"
     SOFT_LIMITS_NEED_HOMING = "soft limits need homing enabled first"
 
-    @property
-    def text(self) -> str:
-        return self.value
 
-
-class Alarm(enum.Enum):
+class Alarm(_Reason):
     """Why the stage locked itself (state Alarm) until it is unlocked or homed; ``LOCK`` is the silent power-up lock."""
 
     LOCK = "locked until homed or unlocked"
@@ -46,17 +54,13 @@ class Alarm(enum.Enum):
     HOMING_NOT_FOUND = "homing did not find the limit switch within the travel"
     HOMING_DUAL = "homing did not find the second switch of a dual axis"
 
-    @property
-    def text(self) -> str:
-        return self.value
-
 
 class StageRefused(HardwareError):
     """The stage refused a command: ``reason`` says why (nothing moved)."""
 
     def __init__(self, reason: Refusal, context: str = "", hint: str = "") -> None:
         self.reason = reason
-        super().__init__(f"{context}{': ' if context else ''}{reason.text}{'; ' + hint if hint else ''}")
+        super().__init__(_message(context, reason.text, hint))
 
 
 class StageAlarm(HardwareError):
@@ -65,4 +69,4 @@ class StageAlarm(HardwareError):
     def __init__(self, alarm: Alarm, context: str = "", hint: str = "") -> None:
         self.alarm = alarm
         self.reason = alarm
-        super().__init__(f"{context}{': ' if context else ''}alarm: {alarm.text}{'; ' + hint if hint else ''}")
+        super().__init__(_message(context, f"alarm: {alarm.text}", hint))

@@ -53,6 +53,7 @@ def build_emulator(args: argparse.Namespace, kind: str) -> Any:
     """The (not yet started) emulator of stage ``kind`` (a registry name) over the simulated stage the switches describe."""
     from lps_gui.errors import InputError
     from lps_gui.hardware.grbl.emulator import Faults
+    from lps_gui.hardware.line_emulator import LinkFaults
     from lps_gui.hardware.registry import emulated_kinds
     from lps_gui.hardware.sim_stage import SimulatedStage
 
@@ -70,15 +71,16 @@ def build_emulator(args: argparse.Namespace, kind: str) -> Any:
         errors=errors, seed=args.seed, travel_mm=(lo, hi), max_rate_mm_min=args.max_rate,
         accel_mm_s2=args.accel, homing_required=args.homing_required, start_mm=args.start,
     )
-    faults = Faults(
-        drop_after_lines=args.drop_after_lines, alarm_mid_move=args.alarm_mid_move, error_every=args.error_every,
-        error_code=args.error_code, reply_delay_s=args.reply_delay, garbage_every=args.garbage_every,
-        fail_homing=args.fail_homing,
-    )
+    link = {"drop_after_lines": args.drop_after_lines, "reply_delay_s": args.reply_delay, "garbage_every": args.garbage_every}
+    faults: LinkFaults = LinkFaults(**link)
+    options: dict[str, Any] = {}
+    if kind == "grbl":  # GRBL's own fault switches, build option and link races
+        faults = Faults(**link, alarm_mid_move=args.alarm_mid_move, error_every=args.error_every,
+                        error_code=args.error_code, fail_homing=args.fail_homing)
+        options = {"homing_init_lock": not args.no_homing_lock, "line_latency_s": args.line_latency / 1000.0,
+                   "boot_race": args.boot_race}
     emulator = emulated_kinds()[kind].emulator
     assert emulator is not None  # emulated_kinds() lists only kinds with one
-    options = {"homing_init_lock": not args.no_homing_lock,  # GRBL's build option
-               "line_latency_s": args.line_latency / 1000.0, "boot_race": args.boot_race} if kind == "grbl" else {}
     return emulator()(stage, faults=faults, time_scale=args.time_scale, **options)
 
 

@@ -124,6 +124,13 @@ class PtyEndpoint:
     def _step(self) -> None:
         raise NotImplementedError
 
+    def _tick_clock(self) -> None:
+        """Simulated time follows real time, ``time_scale`` times faster (a stage on a real clock runs by itself)."""
+        now = time.monotonic()
+        if isinstance(self.stage.clock, SimClock):
+            self.stage.clock.advance((now - self._last_real) * self.time_scale)
+        self._last_real = now
+
 
 class PtyServer(PtyEndpoint):
     """One controller speaking :class:`PtyProtocol` on a fresh pty; ``start()`` returns the path a client opens."""
@@ -133,18 +140,15 @@ class PtyServer(PtyEndpoint):
         super().__init__(stage, time_scale, name)
         self.protocol = protocol
         self.drop_when: Callable[[bytes], bool] | None = None  # fault: drop the port when it returns True for received bytes
-        # fault shared with the GRBL emulator's switches (``lps emulate KIND --drop-after-lines N``): the cable goes
-        # when the Nth command arrives; the other GRBL faults mean nothing to these controllers
+        # the link's drop fault (``lps emulate KIND --drop-after-lines N``, line_emulator.LinkFaults): the cable goes
+        # when the Nth command arrives; a line firmware's own switches mean nothing to these controllers
         self.drop_after: int | None = getattr(faults, "drop_after_lines", None)
         self._lock = threading.RLock()
 
     def _step(self) -> None:
         r, _, _ = select.select([self._master], [], [], 0.002)
         with self._lock:
-            now = time.monotonic()
-            if isinstance(self.stage.clock, SimClock):
-                self.stage.clock.advance((now - self._last_real) * self.time_scale)
-            self._last_real = now
+            self._tick_clock()
             out = self.protocol.poll()
             if r:
                 data = self._read()

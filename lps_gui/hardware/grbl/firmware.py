@@ -41,6 +41,7 @@ from lps_gui.hardware.grbl import gcode as gc
 from lps_gui.hardware.grbl.gcode import CodeError, ParserState, check_block, read_float
 from lps_gui.hardware.grbl.protocol import MM_PER_INCH, StatusReport, format_axes, format_status
 from lps_gui.hardware.grbl.settings import GrblSettings
+from lps_gui.hardware.line_emulator import LinkFaults
 from lps_gui.hardware.refusals import StageAlarm, StageRefused
 from lps_gui.hardware.sim_stage import PLANNER_BLOCKS, SimulatedStage
 from lps_gui.hardware.stage import AXES
@@ -77,24 +78,19 @@ def _parameter(cmd: str, start: int) -> tuple[float, int]:
 
 
 @dataclass
-class Faults:
-    """Fault-injection switches (read on every step; flip them any time).
+class Faults(LinkFaults):
+    """The link's fault switches (a vanished port, slow replies, garbage: line_emulator.LinkFaults) and GRBL's own
+    (read on every step; flip them any time).
 
-    drop_after_lines : close the port after this many received lines (None: never).
     alarm_mid_move : raise ALARM:<code> half-way through the next move or jog, once (None: never).
     error_every : answer every Nth command line with ``error:<error_code>`` instead of executing it.
-    reply_delay_s : delay everything the emulator sends by this many real seconds.
-    garbage_every : send a line of garbage bytes before every Nth message.
     fail_homing : every ``$H`` fails half-way with ``ALARM:<code>`` (8: pull-off did not clear
         the switch, 9: switch not found), then the ``ok`` of ``$H`` and a self-reset (limits.c).
     """
 
-    drop_after_lines: int | None = None
     alarm_mid_move: int | None = None
     error_every: int = 0
     error_code: int = 20
-    reply_delay_s: float = 0.0
-    garbage_every: int = 0
     fail_homing: int | None = None
 
 
@@ -532,7 +528,7 @@ class GrblFirmware:
         """A line end in protocol_main_loop(): overflow is error:11, the rest is executed and answered."""
         self.lines_received += 1
         f = self.faults
-        if f.drop_after_lines is not None and self.lines_received >= f.drop_after_lines:
+        if f.drops_at(self.lines_received):
             log.info("emulator: dropping the connection (fault injection)")
             self.halted = True
             self._on_drop()

@@ -9,9 +9,10 @@ command: "<cmd>"`` then ``ok``), ``M114`` (``X:.. Y:.. Z:.. E:.. Count X:..``),
 ``M400`` (ok once the planner is empty), ``G28``, ``M92``/``M203``/``M201`` and
 ``M503`` (the settings as ``echo:`` lines). Soft endstops clamp a move
 (``apply_motion_limits``) instead of refusing it. The pty serving loop and the
-fault switches are the GRBL emulator's (:class:`GrblEmulator`); only the
-firmware differs. ``corrupt_every`` turns every Nth received line into line
-noise (a checksum mismatch) so the host's resend is exercised.
+link's faults (a vanished port, slow replies, garbage) are the line emulator's
+(:class:`~lps_gui.hardware.line_emulator.LineEmulator`); Marlin's own switch,
+``corrupt_every``, turns every Nth received line into line noise (a checksum
+mismatch) so the host's resend is exercised.
 """
 from __future__ import annotations
 
@@ -19,8 +20,7 @@ import re
 from dataclasses import dataclass
 from typing import Callable, Iterator
 
-from lps_gui.hardware.grbl.emulator import GrblEmulator
-from lps_gui.hardware.grbl.firmware import Faults
+from lps_gui.hardware.line_emulator import LineEmulator, LinkFaults
 from lps_gui.hardware.sim_stage import SimulatedStage
 
 KEEPALIVE_S = 2.0  # Configuration.h DEFAULT_KEEPALIVE_INTERVAL
@@ -30,8 +30,8 @@ _WORD = re.compile(r"([A-Z])\s*([-+]?[0-9]*\.?[0-9]*)")
 
 
 @dataclass
-class MarlinFaults(Faults):
-    """The GRBL emulator's switches (drop_after_lines, reply_delay_s...) plus ``corrupt_every``."""
+class MarlinFaults(LinkFaults):
+    """The link's switches (drop_after_lines, reply_delay_s, garbage_every) plus Marlin's ``corrupt_every``."""
 
     corrupt_every: int = 0
 
@@ -47,17 +47,16 @@ def checksum(text: str) -> int:
 class MarlinFirmware:
     """Marlin's serial queue and G-code handlers over a :class:`SimulatedStage` (one command at a time).
 
-    Same shape as :class:`~lps_gui.hardware.grbl.firmware.GrblFirmware`: bytes go to
+    A :class:`~lps_gui.hardware.line_emulator.LineFirmware`: bytes go to
     :meth:`receive`, :meth:`poll` runs the executing command, output goes to ``send``.
     """
 
-    def __init__(self, stage: SimulatedStage, faults: Faults, send: Callable[[str], None], on_drop: Callable[[], None],
-                 **_ignored: object) -> None:
+    def __init__(self, stage: SimulatedStage, faults: LinkFaults, send: Callable[[str], None],
+                 on_drop: Callable[[], None]) -> None:
         self.stage = stage
         self.faults = faults
         self._send = send
         self._on_drop = on_drop
-        self.rx_overflow_bytes = 0
         self.lines_received = 0
         self.last_n = 0
         self.halted = False
@@ -70,8 +69,8 @@ class MarlinFirmware:
     def busy(self) -> bool:
         return self._pending is not None or self.stage.next_event_s() is not None
 
-    def power_up(self, boot_race: bool = False) -> None:
-        """The start-up lines Marlin prints (``boot_race`` is GRBL's double banner: Marlin has none)."""
+    def power_up(self) -> None:
+        """The start-up lines Marlin prints."""
         for line in BANNER:
             self._send(line)
 
@@ -99,11 +98,12 @@ class MarlinFirmware:
             return
         self.lines_received += 1
         f = self.faults
-        if f.drop_after_lines is not None and self.lines_received >= f.drop_after_lines:
+        if f.drops_at(self.lines_received):
             self.halted = True
             self._on_drop()
             return
-        corrupt = bool(getattr(f, "corrupt_every", 0)) and self.lines_received % f.corrupt_every == 0  # type: ignore[attr-defined]
+        every = getattr(f, "corrupt_every", 0)  # a link's faults (lps emulate's switches) have none
+        corrupt = bool(every) and self.lines_received % every == 0
         command = self._check_line(raw, corrupt)
         if command is not None:
             self._pending = self._execute(command)
@@ -240,11 +240,12 @@ class MarlinFirmware:
         ]
 
 
-class MarlinEmulator(GrblEmulator):
+class MarlinEmulator(LineEmulator):
     """Marlin 2.1 on a pty: ``start()`` returns the device path ``marlin:PATH`` opens."""
 
-    firmware_class = MarlinFirmware
+    firmware: MarlinFirmware
 
-    def __init__(self, stage: SimulatedStage | None = None, faults: Faults | None = None, time_scale: float = 1.0,
+    def __init__(self, stage: SimulatedStage | None = None, faults: LinkFaults | None = None, time_scale: float = 1.0,
                  stepped: bool = False) -> None:
-        super().__init__(stage, faults=faults or MarlinFaults(), time_scale=time_scale, stepped=stepped)
+        super().__init__(stage, faults or MarlinFaults(), time_scale, stepped, name="marlin-emulator")
+        self.firmware = MarlinFirmware(self.stage, self.faults, send=self._send, on_drop=self._drop_now)

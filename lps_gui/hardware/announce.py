@@ -19,14 +19,14 @@ def announce_dir() -> Path:
     return Path(base) / "lps-calib" / "ports"
 
 
-def announce(port: str, folder: Path | None = None, kind: str = "grbl") -> Callable[[], None]:
-    """Announce ``port`` (served as stage ``kind``, a registry name) for this process; returns the function that
-    withdraws it."""
+def announce(port: str, folder: Path | None = None, kind: str | None = None) -> Callable[[], None]:
+    """Announce ``port`` (served as stage ``kind``, a registry name; None: a bare port, which the registry lists as
+    its default port kind) for this process; returns the function that withdraws it."""
     folder = folder or announce_dir()
     try:
         folder.mkdir(parents=True, exist_ok=True, mode=0o700)
         path = folder / str(os.getpid())
-        path.write_text(f"{port}\n{kind}\n")
+        path.write_text(f"{port}\n{kind}\n" if kind else f"{port}\n")
     except OSError:  # nowhere to write: the port can still be typed
         return lambda: None
 
@@ -45,7 +45,8 @@ def announced_ports(folder: Path | None = None) -> list[str]:
 
 
 def announced(folder: Path | None = None) -> list[tuple[str, str]]:
-    """(port, stage kind) announced by processes still running (sorted); stale announcements are removed."""
+    """(port, stage kind) announced by processes still running (sorted; the kind "" for a bare port, as an
+    announcement without one); stale announcements are removed."""
     folder = folder or announce_dir()
     try:
         files = sorted(folder.iterdir())
@@ -59,7 +60,7 @@ def announced(folder: Path | None = None) -> list[tuple[str, str]]:
         except (OSError, ValueError):
             continue
         if _alive(pid) and port and os.path.exists(port):
-            out.append((port, kind.strip() or "grbl"))
+            out.append((port, kind.strip()))
         else:
             try:
                 f.unlink()

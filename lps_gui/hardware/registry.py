@@ -62,7 +62,7 @@ def _sim():
     return SimulatedStage
 
 
-def _emulator():
+def _grbl_emulated():
     from lps_gui.hardware.grbl.emulator import emulated_grbl_stage
     return emulated_grbl_stage
 
@@ -128,7 +128,10 @@ def _command():
 
 KINDS: tuple[StageKind, ...] = (
     StageKind("sim", "sim", _sim, "sim: simulated stage"),
-    StageKind("emulator", "emulator", _emulator, "emulator: GRBL emulator (pty)", connects=True),
+    # "emulator" is the word users type for the emulated rig (lps capture --stage emulator, the GUI's source list,
+    # open_stage("emulator"); docs/capture.md): GRBL's driver on GRBL's emulator, said here and nowhere else. Another
+    # protocol's emulated rig is `lps emulate KIND` and its KIND:PATH.
+    StageKind("emulator", "emulator", _grbl_emulated, "emulator: GRBL emulator (pty)", connects=True),
     StageKind("grbl:", "grbl", _grbl, "grbl:PORT: GRBL 1.1 (e.g. grbl:/dev/ttyUSB0, grbl:COM3)", serial=True, emulator=_grbl_emulator),
     StageKind("marlin:", "marlin", _marlin, "marlin:PORT: Marlin 2.x G-code (e.g. marlin:/dev/ttyACM0)", serial=True, emulator=_marlin_emulator),
     StageKind("zaber:", "zaber", _zaber, "zaber:PORT[:DEVICE[:AXIS]]: Zaber ASCII through zaber-motion (device 1, axis 1 by default)",
@@ -174,7 +177,8 @@ def source_from_text(text: str) -> str | None:
 def stage_choices(ports: list[str], by_id: list[tuple[str, str]], announced: list[tuple[str, str]]) -> list[tuple[str, str]]:
     """(label, source) of every kind: the bare words, then each serial kind on every port found.
 
-    ``ports``: device names; ``by_id``: (stable link, device); ``announced``: (port, kind name) of running emulators.
+    ``ports``: device names; ``by_id``: (stable link, device); ``announced``: (port, kind name) of running emulators
+    (a port announced without a kind is a bare port: :data:`DEFAULT_PORT_KIND`, as typed).
     """
     out = [(k.help.split(": ", 1)[1][:1].upper() + k.help.split(": ", 1)[1][1:], k.scheme) for k in KINDS if not k.takes_argument]
     serial = [k for k in KINDS if k.serial]
@@ -183,8 +187,9 @@ def stage_choices(ports: list[str], by_id: list[tuple[str, str]], announced: lis
         out += [(f"{link} ({device.rsplit('/', 1)[-1]}, {k.name})", f"{k.scheme}{link}") for link, device in by_id]
     listed = {src for _, src in out}
     names = {k.name: k for k in serial}
+    bare = next(k for k in serial if k.scheme == DEFAULT_PORT_KIND)
     for port, name in announced:
-        k = names.get(name)
+        k = names.get(name) if name else bare
         if k is not None and f"{k.scheme}{port}" not in listed:
             out.append((f"{port} ({k.name} emulator)", f"{k.scheme}{port}"))
     return out

@@ -35,6 +35,8 @@ def test_a_typed_port_is_a_source_and_every_serial_kind_is_offered_on_every_port
     for k in serial:
         assert f"{k.scheme}/dev/ttyUSB0" in sources and f"{k.scheme}/dev/serial/by-id/usb-x" in sources
     assert sources.count("grbl:/dev/pts/9") == 1 and "emulator" in dict((s, l) for l, s in choices)["grbl:/dev/pts/9"]
+    bare = [src for _, src in stage_choices([], [], [("/dev/pts/7", "")])]  # announced without a kind: a bare port
+    assert bare[-1] == source_from_text("/dev/pts/7") == "grbl:/dev/pts/7"
 
 
 def test_grbl_keeps_every_capability_and_the_simple_stages_declare_only_theirs():

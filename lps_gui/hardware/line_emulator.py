@@ -167,7 +167,7 @@ class LineEmulator(PtyEndpoint):
                 data = os.read(self._master, 4096)
             except OSError:  # EAGAIN (nothing left), EINTR, or the pty closing under us
                 return
-            if not data:
+            if not data or self._unplugged_by(data):
                 return
             self.bytes_in += len(data)
             for b in data:  # wire speed: the main loop keeps up with every byte unless a line executes

@@ -1,11 +1,14 @@
 """Serve an emulated controller on a pseudo-terminal, over the simulated stage, in scaled simulated time.
 
-A vendor's library opens the pty's path as it opens a USB serial port; the
-serving thread hands every byte it reads to the protocol object
-(:class:`PtyProtocol`), writes back what that object answers, and lets the
-simulated stage's clock run ``time_scale`` times faster than real time, so a
-test's 50 mm move takes milliseconds and no outcome depends on timing.
-:meth:`PtyServer.drop` closes both ends, as an unplugged USB cable does.
+A vendor's library opens the pty's path as it opens a USB serial port.
+:class:`PtyEndpoint` is what every emulator shares: the pty, the serving
+thread, simulated time running ``time_scale`` times faster than real time
+(a test's 50 mm move takes milliseconds and no outcome depends on timing),
+and the cable that goes (:meth:`PtyEndpoint.drop`, the ``drop_when`` fault).
+Line-based controllers (GRBL, Marlin, Zaber ASCII) are served by
+:class:`~lps_gui.hardware.line_emulator.LineEmulator`; :class:`PtyServer`
+serves a binary message protocol (Thorlabs' APT): every chunk it reads goes
+to the protocol object (:class:`PtyProtocol`) and what that answers goes back.
 """
 from __future__ import annotations
 
@@ -49,6 +52,7 @@ class PtyEndpoint:
         self.name = name
         self.path = ""
         self.dropped = False
+        self.drop_when: Callable[[bytes], bool] | None = None  # fault: drop the port when it returns True for received bytes
         self._master = self._slave = -1
         self._thread: threading.Thread | None = None
         self._running = False
@@ -93,6 +97,13 @@ class PtyEndpoint:
         self.dropped = True
         self._running = False
         self._close()
+
+    def _unplugged_by(self, data: bytes) -> bool:
+        """The ``drop_when`` fault: the cable goes as these received bytes arrive (the controller never sees them)."""
+        if self.drop_when is not None and self.drop_when(data):
+            self._drop_now()
+            return True
+        return False
 
     def __enter__(self):
         self.start()
@@ -139,7 +150,6 @@ class PtyServer(PtyEndpoint):
                  faults: Any = None) -> None:
         super().__init__(stage, time_scale, name)
         self.protocol = protocol
-        self.drop_when: Callable[[bytes], bool] | None = None  # fault: drop the port when it returns True for received bytes
         # the link's drop fault (``lps emulate KIND --drop-after-lines N``, line_emulator.LinkFaults): the cable goes
         # when the Nth command arrives; a line firmware's own switches mean nothing to these controllers
         self.drop_after: int | None = getattr(faults, "drop_after_lines", None)
@@ -153,8 +163,7 @@ class PtyServer(PtyEndpoint):
             if r:
                 data = self._read()
                 if data:
-                    if self.drop_when is not None and self.drop_when(data):
-                        self._drop_now()
+                    if self._unplugged_by(data):
                         return
                     answer = self.protocol.receive(data)
                     if self.drop_after and self.protocol.received >= self.drop_after:

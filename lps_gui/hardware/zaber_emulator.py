@@ -19,14 +19,17 @@ The emulated product has the X-LSM series' 3.048 um full step at the default
 64 microsteps (0.047625 um per microstep). Position 0 is where the simulated
 stage starts at 0 mm until ``home``, which (as the manual says) retracts to
 the home sensor, backs off and resets the position to 0 there; then
-``limit.min`` is 0 and ``limit.max`` the rest of the travel.
+``limit.min`` is 0 and ``limit.max`` the rest of the travel. The device is
+served by the line emulator (:class:`~lps_gui.hardware.line_emulator.LineEmulator`:
+the pty loop, simulated time, the link's faults) like GRBL's and Marlin's firmware.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
-from lps_gui.hardware.pty_device import PtyServer, emulated_stage
+from lps_gui.hardware.line_emulator import LineEmulator, LinkFaults
+from lps_gui.hardware.pty_device import emulated_stage
 from lps_gui.hardware.sim_stage import SimulatedStage
 from lps_gui.hardware.stage import AXES
 
@@ -220,15 +223,59 @@ class ZaberAsciiDevice:
         return "@" + body
 
 
-class ZaberEmulator(PtyServer):
+class ZaberFirmware:
+    """:class:`ZaberAsciiDevice` as the line emulator's firmware: each line the host ends goes to the device, its
+    replies go out line by line; the link's drop fault counts the device's commands."""
+
+    def __init__(self, device: ZaberAsciiDevice, faults: LinkFaults, send: Callable[[str], None],
+                 on_drop: Callable[[], None]) -> None:
+        self.device = device
+        self.faults = faults
+        self._send = send
+        self._on_drop = on_drop
+        self.halted = False
+        self._line = bytearray()
+
+    @property
+    def lines_received(self) -> int:
+        return self.device.received
+
+    @property
+    def busy(self) -> bool:
+        return self.device.homing or self.device.busy()
+
+    def power_up(self) -> None:
+        """A Zaber device says nothing until asked."""
+
+    def receive(self, b: int) -> None:
+        self._line.append(b)
+
+    def drain(self) -> None:
+        if self.halted or self._line[-1:] not in (b"\n", b"\r"):
+            return
+        data, self._line = bytes(self._line), bytearray()
+        out = self.device.receive(data)
+        if self.faults.drops_at(self.device.received):
+            self.halted = True
+            self._on_drop()
+        elif out:
+            self._send(out.decode("ascii"))
+
+    def poll(self) -> None:
+        if not self.halted and (out := self.device.poll()):
+            self._send(out.decode("ascii"))
+
+
+class ZaberEmulator(LineEmulator):
     """A Zaber device on a pty: ``with ZaberEmulator(stage) as emu: ZaberStage(emu.path)``."""
 
-    def __init__(self, stage: SimulatedStage | None = None, faults: Any = None, time_scale: float = 1.0,
-                 **device_options) -> None:
-        stage = stage if stage is not None else SimulatedStage()
-        self.device = ZaberAsciiDevice(stage, **device_options)
-        super().__init__(self.device, stage, time_scale=time_scale, name="zaber-emulator", faults=faults)
+    firmware: ZaberFirmware
 
+    def __init__(self, stage: SimulatedStage | None = None, faults: LinkFaults | None = None, time_scale: float = 1.0,
+                 stepped: bool = False, **device_options) -> None:
+        super().__init__(stage, faults or LinkFaults(), time_scale, stepped, name="zaber-emulator")
+        self.device = ZaberAsciiDevice(self.stage, **device_options)
+        self.firmware = ZaberFirmware(self.device, self.faults, send=self._send, on_drop=self._drop_now)
 
 
 def emulated_zaber_stage(time_scale: float = 1.0, simulated: SimulatedStage | None = None, **stage_options):

@@ -24,6 +24,7 @@ import os
 import select
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -74,6 +75,29 @@ class LineFirmware(Protocol):
 
     def poll(self) -> None:
         """The clock moved: run what executes, print what is due."""
+
+
+class LinkedFirmware:
+    """What every line firmware keeps of its link: the fault switches, where its lines go, and the cable.
+
+    ``send(line)`` queues a line for the host; ``on_drop()`` closes the port (the drop fault); ``halted``
+    is a firmware that answers nothing more (a dropped link, Marlin's kill()).
+    """
+
+    def __init__(self, faults: LinkFaults, send: Callable[[str], None], on_drop: Callable[[], None]) -> None:
+        self.faults = faults
+        self._send = send
+        self._on_drop = on_drop
+        self.halted = False
+
+    def _cable_goes(self, lines_received: int) -> bool:
+        """The link's drop fault: with this received line the port vanishes and the firmware stops (True)."""
+        if not self.faults.drops_at(lines_received):
+            return False
+        log.info("emulator: dropping the connection (fault injection)")
+        self.halted = True
+        self._on_drop()
+        return True
 
 
 class LineEmulator(PtyEndpoint):

@@ -28,7 +28,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from lps_gui.hardware.line_emulator import LineEmulator, LinkFaults
+from lps_gui.hardware.line_emulator import LineEmulator, LinkedFirmware, LinkFaults
 from lps_gui.hardware.pty_device import emulated_stage
 from lps_gui.hardware.sim_stage import SimulatedStage
 from lps_gui.hardware.stage import AXES
@@ -223,17 +223,14 @@ class ZaberAsciiDevice:
         return "@" + body
 
 
-class ZaberFirmware:
+class ZaberFirmware(LinkedFirmware):
     """:class:`ZaberAsciiDevice` as the line emulator's firmware: each line the host ends goes to the device, its
     replies go out line by line; the link's drop fault counts the device's commands."""
 
     def __init__(self, device: ZaberAsciiDevice, faults: LinkFaults, send: Callable[[str], None],
                  on_drop: Callable[[], None]) -> None:
+        super().__init__(faults, send, on_drop)
         self.device = device
-        self.faults = faults
-        self._send = send
-        self._on_drop = on_drop
-        self.halted = False
         self._line = bytearray()
 
     @property
@@ -255,10 +252,7 @@ class ZaberFirmware:
             return
         data, self._line = bytes(self._line), bytearray()
         out = self.device.receive(data)
-        if self.faults.drops_at(self.device.received):
-            self.halted = True
-            self._on_drop()
-        elif out:
+        if not self._cable_goes(self.device.received) and out:
             self._send(out.decode("ascii"))
 
     def poll(self) -> None:

@@ -41,7 +41,7 @@ from lps_gui.hardware.grbl import gcode as gc
 from lps_gui.hardware.grbl.gcode import CodeError, ParserState, check_block, read_float
 from lps_gui.hardware.grbl.protocol import MM_PER_INCH, StatusReport, format_axes, format_status
 from lps_gui.hardware.grbl.settings import GrblSettings
-from lps_gui.hardware.line_emulator import LinkFaults
+from lps_gui.hardware.line_emulator import LinkedFirmware, LinkFaults
 from lps_gui.hardware.refusals import StageAlarm, StageRefused
 from lps_gui.hardware.sim_stage import PLANNER_BLOCKS, SimulatedStage
 from lps_gui.hardware.stage import AXES
@@ -94,7 +94,7 @@ class Faults(LinkFaults):
     fail_homing: int | None = None
 
 
-class GrblFirmware:
+class GrblFirmware(LinkedFirmware):
     """GRBL 1.1h's serial ISR and protocol loop over a :class:`SimulatedStage`.
 
     Feed received bytes to :meth:`receive`, call :meth:`poll` often (it runs
@@ -106,16 +106,14 @@ class GrblFirmware:
 
     def __init__(self, stage: SimulatedStage, faults: Faults, send: Callable[[str], None], on_drop: Callable[[], None],
                  homing_init_lock: bool = False) -> None:
+        super().__init__(faults, send, on_drop)
+        self.faults: Faults = faults
         self.stage = stage
         self.homing_init_lock = homing_init_lock
-        self.faults = faults
-        self._send = send
-        self._on_drop = on_drop
         self.rx_overflow_bytes = 0  # bytes dropped because the host overran the 128-byte RX buffer
         self.lines_received = 0
         self.resets_received = 0  # Ctrl-X bytes, and those an alarm's delay swallowed
         self.resets_lost = 0
-        self.halted = False
         self._booting = False
         self._n_cmd = 0
         self._build_user = ""
@@ -528,10 +526,7 @@ class GrblFirmware:
         """A line end in protocol_main_loop(): overflow is error:11, the rest is executed and answered."""
         self.lines_received += 1
         f = self.faults
-        if f.drops_at(self.lines_received):
-            log.info("emulator: dropping the connection (fault injection)")
-            self.halted = True
-            self._on_drop()
+        if self._cable_goes(self.lines_received):
             return
         if overflow:
             self._send("error:11")

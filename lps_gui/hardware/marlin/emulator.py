@@ -20,7 +20,7 @@ import re
 from dataclasses import dataclass
 from typing import Callable, Iterator
 
-from lps_gui.hardware.line_emulator import LineEmulator, LinkFaults
+from lps_gui.hardware.line_emulator import LineEmulator, LinkedFirmware, LinkFaults
 from lps_gui.hardware.sim_stage import SimulatedStage
 
 KEEPALIVE_S = 2.0  # Configuration.h DEFAULT_KEEPALIVE_INTERVAL
@@ -44,7 +44,7 @@ def checksum(text: str) -> int:
     return cs
 
 
-class MarlinFirmware:
+class MarlinFirmware(LinkedFirmware):
     """Marlin's serial queue and G-code handlers over a :class:`SimulatedStage` (one command at a time).
 
     A :class:`~lps_gui.hardware.line_emulator.LineFirmware`: bytes go to
@@ -53,13 +53,10 @@ class MarlinFirmware:
 
     def __init__(self, stage: SimulatedStage, faults: LinkFaults, send: Callable[[str], None],
                  on_drop: Callable[[], None]) -> None:
+        super().__init__(faults, send, on_drop)
         self.stage = stage
-        self.faults = faults
-        self._send = send
-        self._on_drop = on_drop
         self.lines_received = 0
         self.last_n = 0
-        self.halted = False
         self.steps_per_mm = [80.0, 80.0, 400.0]
         self._rx = bytearray()
         self._pending: Iterator[None] | None = None
@@ -97,12 +94,9 @@ class MarlinFirmware:
         if not raw:
             return
         self.lines_received += 1
-        f = self.faults
-        if f.drops_at(self.lines_received):
-            self.halted = True
-            self._on_drop()
+        if self._cable_goes(self.lines_received):
             return
-        every = getattr(f, "corrupt_every", 0)  # a link's faults (lps emulate's switches) have none
+        every = getattr(self.faults, "corrupt_every", 0)  # a link's faults (lps emulate's switches) have none
         corrupt = bool(every) and self.lines_received % every == 0
         command = self._check_line(raw, corrupt)
         if command is not None:

@@ -77,10 +77,10 @@ def test_the_worst_lines_a_and_r_are_unbiased_where_the_noise_is_near_the_figure
         true, meas = _short_lines(rng, 8.0)
         truth = noise_corrected_worst(true, draws=40)[1]
         got = noise_corrected_worst(meas, draws=80)[1]
-        for key in err:
-            err[key].append(got[key]["corrected"] - truth[key]["corrected"])
+        for key, errors in err.items():
+            errors.append(got[key]["corrected"] - truth[key]["corrected"])
             U[key].append(2.0 * got[key]["u_noise"])
-    for key in err:
-        e, u = np.array(err[key]), np.array(U[key])
+    for key, errors in err.items():
+        e, u = np.array(errors), np.array(U[key])
         assert abs(e.mean()) < 18.0, (key, e.mean(), u.mean())  # the quadratic extrapolant: A +25, R +28 um
         assert np.mean(np.abs(e) <= u) >= 0.9, key

@@ -5,7 +5,11 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from lps_gui.core.estimator.board_plane_positions import POSITION_MODEL_BOARD_PLANE, line_model_rejected
+from lps_gui.core.estimator.board_plane_positions import (
+    POSITION_MODEL_BOARD_PLANE,
+    POSITION_MODEL_POSE_SCALE,
+    line_model_rejected,
+)
 from lps_gui.core.estimator.estimate import estimate
 from lps_gui.core.truth.simulate import board_plane_positions, observations_of, simulate_views, small_spec
 from lps_gui.core.truth.stage_errors import ErrorProfile, StageErrorModel, TruePose
@@ -113,7 +117,7 @@ def test_a_misfit_under_the_noise_still_switches_when_the_line_models_scale_is_r
     """The ASME min-step test on the motions stage (2 places 22 mm apart, pitch 1320 urad between them): the
     line model's misfit (0.016 px) stays under the corners' noise and passes the variance test, but it reads the
     pitch's Abbe shift 0.5 % short: +157 ppm of scale against the board-plane truth, 3.5 sigma (was: line model
-    kept, scale +150 ppm outside U in every seed of the campaign)."""
+    kept, scale +145 ppm outside U in 8 of 10 seeds of the campaign)."""
     from lps_gui.core.planning.plan import Plan
     from lps_gui.core.planning.presets import min_step_plan_fields
 
@@ -125,8 +129,8 @@ def test_a_misfit_under_the_noise_still_switches_when_the_line_models_scale_is_r
     truth = board_plane_positions(spec.rig, TruePose(np.asarray(t["axis_mm"]), np.asarray(t["straightness_um"]),
                                                      np.asarray(t["angles_urad"])))
     est = estimate(obs)
-    assert est.line_model_sigma_px is not None and est.line_model_sigma_px < 2 * est.sigma_px  # not the variance test
-    assert est.position_model == POSITION_MODEL_BOARD_PLANE
+    assert est.line_model_sigma_px is None  # not the variance test: the line model's positions, the poses' scale
+    assert est.position_model == POSITION_MODEL_POSE_SCALE
     target = np.asarray(obs.target_mm)
     far = target > 11.0
     L = np.where(est.used, np.where(far, 1.0 / far[est.used].sum(), -1.0 / (~far)[est.used].sum()), 0.0)[None]

@@ -15,7 +15,7 @@ mean (error / sigma)^2 with sigma = U / 2 (what the report draws), and per
   line-one     one direction, 2 runs, 12 targets        line-both    both directions, 2 runs, 12 targets
   paper-line   the paper's camera (1920 x 1080, 600 mm) over 98 mm, 15 targets both ways (its noise is 10x lower)
   compensated  line-both, then the compensated (as-left) capture, scored
-  planar       a 5 x 3 grid on the simulated XY gantry, both directions
+  planar       a 5 x 3 grid on the simulated XY gantry, both directions, 2 runs (ISO 230-2 per axis)
   row          three targets at 170 mm pitch (small-row), 18 stops
   two-depth    targets at two depths (SPEC 14) over 300 mm
   min-step     ASME B5.64 incremental steps of 2 um on a 3 um dead band
@@ -114,7 +114,7 @@ def build_spec(kind: str, stage: str, realism: str, seed: int, short: bool = Fal
         from lps_gui.core.truth.simulate import small_planar_spec
 
         plan = Plan.xy(start_mm=(0.0, 0.0), stop_mm=(40.0, 20.0), step_mm=(10.0, 10.0), directions="both",
-                       settle_s=0.1, feed_mm_min=3000.0)
+                       runs=2, settle_s=0.1, feed_mm_min=3000.0)  # 2 runs: ISO 230-2 per axis
         spec = small_planar_spec(seed=seed, plan=plan, errors=errors)
     elif kind == "row":
         from lps_gui.core.planning.target_presets import small_row_spec

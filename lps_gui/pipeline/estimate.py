@@ -365,6 +365,8 @@ def estimate_parameters(obs: Observations, est: LpsEstimate) -> dict[str, Any]:
     if est.line_model_sigma_px is not None:  # the line model left more than noise: positions of the per-view fit
         parameters["position_model"] = est.position_model
         parameters["line_model_sigma_px"] = est.line_model_sigma_px
+    elif est.position_model != "line":  # the line model's positions with the per-view poses' scale
+        parameters["position_model"] = est.position_model
     if est.options.self_calibrate:
         parameters["intrinsics_estimated"] = dict(zip(INTRINSIC_NAMES, est.state.intrinsics.vector().tolist()))
     return Parameters.of(**parameters).to_dict()

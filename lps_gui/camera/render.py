@@ -177,6 +177,14 @@ def _blurred_box_square_wave(x: np.ndarray, width: np.ndarray, s: np.ndarray) ->
     return total / width
 
 
+def _nonzero_window(img: np.ndarray) -> tuple[slice, slice] | None:
+    """The rows and columns spanning every non-zero pixel of ``img`` (None: all are 0)."""
+    rows, cols = np.flatnonzero(img.any(axis=1)), np.flatnonzero(img.any(axis=0))
+    if not rows.size:
+        return None
+    return slice(int(rows[0]), int(rows[-1]) + 1), slice(int(cols[0]), int(cols[-1]) + 1)
+
+
 def _box_inside(x: np.ndarray, width: np.ndarray, lo: float, hi: float) -> np.ndarray:
     """Fraction of [x - width/2, x + width/2] inside [lo, hi] (exact)."""
     half = 0.5 * width
@@ -270,10 +278,17 @@ class BoardRenderer:
             img = lt.background + paper * (board_val - lt.background)
             img = np.where(surface.facing, img, lt.background).astype(np.float32)
             return self.optics(img)
-        board_val, paper, depth, checker = self.layers(surface)
+        board_val, paper, depth = self._plain_layers(surface)
         base = np.where(surface.facing, lt.background + paper * (board_val - lt.background), lt.background)
         depth = np.where(surface.facing, depth, 0.0).astype(np.float32)
-        return self.compose(base.astype(np.float32), depth, checker)
+        blurred_depth = self.optics(depth, vignette=False)
+        # the checker counts only where the blurred contrast is not 0: the board's part of the frame, often a
+        # fraction of it (0 * checker elsewhere: the same image, bit for bit, for the dearest step's share)
+        checker = np.zeros(blurred_depth.shape, np.float32)
+        window = _nonzero_window(blurred_depth)
+        if window is not None:
+            checker[window] = self.checker(surface, window)
+        return self.compose(base.astype(np.float32), blurred_depth, checker, depth_blurred=True)
 
     @property
     def analytic_blur(self) -> bool:
@@ -285,19 +300,29 @@ class BoardRenderer:
         """The board without its checker (grey levels), the paper fraction, the checker's half contrast where
         it is printed, and the checker blurred by pixel and lens (+1 black, -1 white): the scene is
         ``background + paper (board - background) - depth checker``."""
+        return (*self._plain_layers(surface), self.checker(surface))
+
+    def _plain_layers(self, surface: Surface) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`layers` without the checker: the board's grey level, the paper fraction, the checker's half contrast."""
         lt = self.lighting
         inside, paper = self._masks(surface)
         mid, half = 0.5 * (lt.white + lt.black), 0.5 * (lt.white - lt.black)
         board_val = lt.white + inside * (mid - lt.white)
-        b = np.float32(lt.blur_px)
-        checker = (_blurred_box_square_wave(surface.bx, surface.wx, b * surface.sx)
-                   * _blurred_box_square_wave(surface.by, surface.wy, b * surface.sy))
-        return board_val, paper, paper * inside * half, checker
+        return board_val, paper, paper * inside * half
 
-    def compose(self, base: np.ndarray, depth: np.ndarray, checker: np.ndarray) -> np.ndarray:
+    def checker(self, surface: Surface, window: tuple[slice, slice] = (slice(None), slice(None))) -> np.ndarray:
+        """The checker blurred by pixel and lens (+1 black, -1 white) on ``window`` (rows, columns) of ``surface``."""
+        b = np.float32(self.lighting.blur_px)
+        return (_blurred_box_square_wave(surface.bx[window], surface.wx[window], b * surface.sx[window])
+                * _blurred_box_square_wave(surface.by[window], surface.wy[window], b * surface.sy[window]))
+
+    def compose(self, base: np.ndarray, depth: np.ndarray, checker: np.ndarray,
+                depth_blurred: bool = False) -> np.ndarray:
         """The lens on a scene in layers (:meth:`layers`): the slowly varying base and the checker's contrast
-        take the discrete blur, the checker itself is already blurred; vignetting dims the whole."""
-        img = self.optics(base, vignette=False) - self.optics(depth, vignette=False) * checker.astype(np.float32)
+        take the discrete blur (``depth_blurred``: the contrast already has it), the checker itself is already
+        blurred; vignetting dims the whole."""
+        blurred = depth if depth_blurred else self.optics(depth, vignette=False)
+        img = self.optics(base, vignette=False) - blurred * checker.astype(np.float32)
         if self._gain is not None:
             img *= self._gain
         return img.astype(np.float32)

@@ -93,9 +93,33 @@ def small_planar_estimated(tmp_path_factory):
     return folder
 
 
+def _asme_demo(tmp_path_factory, test: str):
+    from lps_gui.pipeline.demos.asme import run_asme_demo
+
+    return run_asme_demo(tmp_path_factory.mktemp("asme") / test, test)
+
+
 @pytest.fixture(scope="session")
 def min_step_demo(tmp_path_factory):
     """`lps demo --test min-step` (run_asme_demo, seed 0) once per test run: the report's and the GUI's tests read it."""
-    from lps_gui.pipeline.demos.asme import run_asme_demo
+    return _asme_demo(tmp_path_factory, "min-step")
 
-    return run_asme_demo(tmp_path_factory.mktemp("asme") / "min-step", "min-step")
+
+@pytest.fixture(scope="session")
+def settling_demo(tmp_path_factory):
+    """`lps demo --test settling` (run_asme_demo, seed 0) once per test run: the report's front-page and every-figure
+    tests read it (a test that writes into its session folder, a report, copies it first)."""
+    return _asme_demo(tmp_path_factory, "settling")
+
+
+@pytest.fixture(scope="session")
+def quick_planar_demo(tmp_path_factory):
+    """`lps demo --planar --quick` once per test run (its out folder; the session in out/session), about 10 s.
+
+    Read only: tests/pipeline/test_demo_planar.py reads it; a test that estimates or reports into it copies it first.
+    """
+    from lps_gui.cli import main as lps_main
+
+    out = tmp_path_factory.mktemp("demo-planar") / "out"
+    assert lps_main(["demo", "--planar", "--quick", "--out", str(out)]) == 0
+    return out

@@ -177,6 +177,21 @@ def _blurred_box_square_wave(x: np.ndarray, width: np.ndarray, s: np.ndarray) ->
     return total / width
 
 
+def _nonzero_window(img: np.ndarray) -> tuple[slice, slice] | None:
+    """The rows and columns spanning every non-zero pixel of ``img`` (None: all are 0)."""
+    rows, cols = np.flatnonzero(img.any(axis=1)), np.flatnonzero(img.any(axis=0))
+    if not rows.size:
+        return None
+    return slice(int(rows[0]), int(rows[-1]) + 1), slice(int(cols[0]), int(cols[-1]) + 1)
+
+
+def _reaches_inner_edge(mask: np.ndarray, window: tuple[slice, slice], shape: tuple[int, int]) -> bool:
+    """Whether ``mask`` (``window`` of an image of ``shape``) is set on an edge of the window that is not the image's."""
+    (r, c), (h, w) = window, shape
+    return bool((r.start > 0 and mask[0].any()) or (r.stop < h and mask[-1].any())
+                or (c.start > 0 and mask[:, 0].any()) or (c.stop < w and mask[:, -1].any()))
+
+
 def _box_inside(x: np.ndarray, width: np.ndarray, lo: float, hi: float) -> np.ndarray:
     """Fraction of [x - width/2, x + width/2] inside [lo, hi] (exact)."""
     half = 0.5 * width
@@ -263,17 +278,84 @@ class BoardRenderer:
         and only the slowly varying rest (paper, board outline, background) takes
         the discrete blur.
         """
-        surface = self.surface(R_cam_board, t_cam_board)
         lt = self.lighting
         if not self.analytic_blur:
+            surface = self.surface(R_cam_board, t_cam_board)
             board_val, paper = self.shade(surface)
             img = lt.background + paper * (board_val - lt.background)
             img = np.where(surface.facing, img, lt.background).astype(np.float32)
             return self.optics(img)
-        board_val, paper, depth, checker = self.layers(surface)
-        base = np.where(surface.facing, lt.background + paper * (board_val - lt.background), lt.background)
-        depth = np.where(surface.facing, depth, 0.0).astype(np.float32)
-        return self.compose(base.astype(np.float32), depth, checker)
+        w, h = self.intrinsics.image_size
+        window = self._paper_window(R_cam_board, t_cam_board)
+        img = None if window is None else self._analytic_render(R_cam_board, t_cam_board, window)
+        if img is None:  # no window, or the board reached its edge: the whole frame
+            img = self._analytic_render(R_cam_board, t_cam_board, (slice(0, h), slice(0, w)))
+        return img
+
+    def _analytic_render(self, R_cam_board: np.ndarray, t_cam_board: np.ndarray,
+                         window: tuple[slice, slice]) -> np.ndarray | None:
+        """:meth:`render_float`'s analytic path, the board's surface and checker computed on ``window`` (rows,
+        columns) only: outside it is background, as the whole frame's render has it there. None when the paper or
+        its blurred contrast reaches the window's edge inside the image (the window is too small: the caller
+        renders the whole frame), so the image is the whole frame's, bit for bit, at a fraction of the cost."""
+        lt = self.lighting
+        w, h = self.intrinsics.image_size
+        surface = self.surface(R_cam_board, t_cam_board, window)
+        board_val, paper, depth = self._plain_layers(surface)
+        if _reaches_inner_edge(surface.facing & (paper != 0), window, (h, w)):
+            return None
+        base = np.full((h, w), lt.background, np.float32)
+        base[window] = np.where(surface.facing, lt.background + paper * (board_val - lt.background), lt.background)
+        full_depth = np.zeros((h, w), np.float32)
+        full_depth[window] = np.where(surface.facing, depth, 0.0)
+        blurred_depth = self.optics(full_depth, vignette=False)
+        # the checker counts only where the blurred contrast is not 0 (0 * checker elsewhere)
+        checker = np.zeros((h, w), np.float32)
+        contrast = _nonzero_window(blurred_depth)
+        if contrast is not None:
+            if any(c.start < o.start or c.stop > o.stop for c, o in zip(contrast, window)):
+                return None
+            checker[contrast] = self.checker(surface, tuple(slice(c.start - o.start, c.stop - o.start)
+                                                            for c, o in zip(contrast, window)))
+        return self.compose(base, blurred_depth, checker, depth_blurred=True)
+
+    PAPER_WINDOW_STEP = 8  # px between the rays of the coarse pass that finds the board's part of the frame
+    PAPER_WINDOW_HORIZON = 0.2  # a ray this much nearer the board plane's horizon than another: the whole frame
+
+    def _paper_window(self, R_cam_board: np.ndarray, t_cam_board: np.ndarray) -> tuple[slice, slice] | None:
+        """The rows and columns the board's paper covers, from a coarse pass (every PAPER_WINDOW_STEP-th ray and
+        the frame's edges) on the flat board: the paper widened by twice the largest pixel footprint and two squares,
+        padded by the step and the lens blur's reach. None (render the whole frame) when no ray hits it, or when the
+        board plane's horizon is near the frame (a pixel's footprint grows without bound there: a pixel far from the
+        paper can still cover some of it). A guess: :meth:`_analytic_render` checks the paper ends inside it.
+        """
+        step = self.PAPER_WINDOW_STEP
+        w, h = self.intrinsics.image_size
+        grid = np.ix_(np.r_[0:h:step, h - 1], np.r_[0:w:step, w - 1])
+        s = self.board.square_mm
+        R = np.asarray(R_cam_board, dtype=float).reshape(3, 3)
+        t = np.asarray(t_cam_board, dtype=float).ravel()
+        G = np.linalg.inv(np.column_stack([R[:, 0] * s, R[:, 1] * s, t]))
+        x, y = self._x[grid], self._y[grid]
+        wz = G[2, 0] * x + G[2, 1] * y + G[2, 2]
+        if not wz.min() > self.PAPER_WINDOW_HORIZON * wz.max():
+            return None
+        inv_w = 1.0 / wz
+        bx = (G[0, 0] * x + G[0, 1] * y + G[0, 2]) * inv_w
+        by = (G[1, 0] * x + G[1, 1] * y + G[1, 2]) * inv_w
+        j00, j01, j10, j11 = (j[grid] for j in (self._j00, self._j01, self._j10, self._j11))
+        a00, a01 = (G[0, 0] - bx * G[2, 0]) * inv_w, (G[0, 1] - bx * G[2, 1]) * inv_w
+        a10, a11 = (G[1, 0] - by * G[2, 0]) * inv_w, (G[1, 1] - by * G[2, 1]) * inv_w
+        footprint = max(float(np.max(np.abs(a00 * j00 + a01 * j10) + np.abs(a00 * j01 + a01 * j11))),
+                        float(np.max(np.abs(a10 * j00 + a11 * j10) + np.abs(a10 * j01 + a11 * j11))))
+        m = 1.0 + self.margin_squares + 2.0 + 2.0 * footprint
+        hit = (bx > -m) & (bx < self.board.cols + m) & (by > -m) & (by < self.board.rows + m)
+        rows, cols = grid[0].ravel()[hit.any(axis=1)], grid[1].ravel()[hit.any(axis=0)]
+        if not rows.size:
+            return None
+        pad = step + int(np.ceil(4.0 * max(self.lighting.blur_px, self.lighting.blur_edge_px))) + 2
+        return (slice(max(int(rows.min()) - pad, 0), min(int(rows.max()) + pad + 1, h)),
+                slice(max(int(cols.min()) - pad, 0), min(int(cols.max()) + pad + 1, w)))
 
     @property
     def analytic_blur(self) -> bool:
@@ -285,19 +367,29 @@ class BoardRenderer:
         """The board without its checker (grey levels), the paper fraction, the checker's half contrast where
         it is printed, and the checker blurred by pixel and lens (+1 black, -1 white): the scene is
         ``background + paper (board - background) - depth checker``."""
+        return (*self._plain_layers(surface), self.checker(surface))
+
+    def _plain_layers(self, surface: Surface) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`layers` without the checker: the board's grey level, the paper fraction, the checker's half contrast."""
         lt = self.lighting
         inside, paper = self._masks(surface)
         mid, half = 0.5 * (lt.white + lt.black), 0.5 * (lt.white - lt.black)
         board_val = lt.white + inside * (mid - lt.white)
-        b = np.float32(lt.blur_px)
-        checker = (_blurred_box_square_wave(surface.bx, surface.wx, b * surface.sx)
-                   * _blurred_box_square_wave(surface.by, surface.wy, b * surface.sy))
-        return board_val, paper, paper * inside * half, checker
+        return board_val, paper, paper * inside * half
 
-    def compose(self, base: np.ndarray, depth: np.ndarray, checker: np.ndarray) -> np.ndarray:
+    def checker(self, surface: Surface, window: tuple[slice, slice] = (slice(None), slice(None))) -> np.ndarray:
+        """The checker blurred by pixel and lens (+1 black, -1 white) on ``window`` (rows, columns) of ``surface``."""
+        b = np.float32(self.lighting.blur_px)
+        return (_blurred_box_square_wave(surface.bx[window], surface.wx[window], b * surface.sx[window])
+                * _blurred_box_square_wave(surface.by[window], surface.wy[window], b * surface.sy[window]))
+
+    def compose(self, base: np.ndarray, depth: np.ndarray, checker: np.ndarray,
+                depth_blurred: bool = False) -> np.ndarray:
         """The lens on a scene in layers (:meth:`layers`): the slowly varying base and the checker's contrast
-        take the discrete blur, the checker itself is already blurred; vignetting dims the whole."""
-        img = self.optics(base, vignette=False) - self.optics(depth, vignette=False) * checker.astype(np.float32)
+        take the discrete blur (``depth_blurred``: the contrast already has it), the checker itself is already
+        blurred; vignetting dims the whole."""
+        blurred = depth if depth_blurred else self.optics(depth, vignette=False)
+        img = self.optics(base, vignette=False) - blurred * checker.astype(np.float32)
         if self._gain is not None:
             img *= self._gain
         return img.astype(np.float32)

@@ -129,10 +129,11 @@ def test_a_replaced_section_is_written_as_its_own_object(estimated):
 
 
 @pytest.fixture(scope="module")
-def sections(tmp_path_factory):
-    """Sessions whose results carry the newer sections: a row of targets with a tool point (targets, error_motions
-    and its tool point, truth_comparison.targets), a planar constellation (both axes' error motions, (x, y)
-    stretches), the ASME min-step and settling tests; simulated points, estimated by the one path (seconds)."""
+def sections(tmp_path_factory, min_step_demo, settling_demo):
+    """{kind: folder} of sessions whose results carry the newer sections: a row of targets with a tool point
+    (targets, error_motions and its tool point, truth_comparison.targets), a planar constellation (both axes' error
+    motions, (x, y) stretches), the ASME min-step and settling tests; simulated points, estimated by the one path
+    (seconds). The ASME tests are the run's own `lps demo --test` sessions (tests/conftest.py; read only)."""
     root = tmp_path_factory.mktemp("results-sections")
     assert lps_main(["simulate", str(root / "row"), "--points", "--preset", "small-row", "--seed", "2"]) == 0
     meta_path = root / "row" / "session.json"
@@ -144,22 +145,19 @@ def sections(tmp_path_factory):
 
     plan = Plan.xy(start_mm=(0.0, 0.0), stop_mm=(1524.0, 1016.0), step_mm=(254.0, 254.0))
     simulate_point_session(paper_constellation_spec(seed=0, plan=plan), root / "constellation")
-    assert lps_main(["simulate", str(root / "min-step"), "--points", "--test", "min-step", "--test-steps", "4",
-                     "--dead-band-um", "3", "--spec", "paper,min_step=2"]) == 0
-    assert lps_main(["simulate", str(root / "settling"), "--points", "--test", "settling",
-                     "--spec", "paper,settling=0.5"]) == 0
-    for name in ("row", "constellation", "min-step", "settling"):
+    for name in ("row", "constellation"):
         estimate_session(root / name)
-    return root
+    return {"row": root / "row", "constellation": root / "constellation",
+            "min-step": min_step_demo.session_dir, "settling": settling_demo.session_dir}
 
 
 @pytest.mark.parametrize("kind", ["row", "constellation", "min-step", "settling"])
 def test_the_newer_sections_round_trip_byte_for_byte(sections, kind):
-    path = sections / kind / "results.json"
+    path = sections[kind] / "results.json"
     results = read_results(path)
     assert json_bytes(results.to_dict()) == path.read_bytes()
     assert results.extra == {}  # targets, error_motions, asme_b5_64: typed, not unknown extras
-    d = _document(sections / kind)
+    d = _document(sections[kind])
     if kind in ("row", "constellation"):
         assert [t.id for t in results.targets] == [t["id"] for t in d["targets"]]
         last, first = results.targets[-1], d["targets"][-1]
@@ -198,11 +196,11 @@ def test_the_newer_sections_round_trip_byte_for_byte(sections, kind):
 
 
 def test_a_wrong_value_in_a_newer_section_names_its_field(sections):
-    d = _document(sections / "row")
+    d = _document(sections["row"])
     d["targets"][1]["p_sigma_mm"][2] = "small"
     with pytest.raises(InputError, match=r"'targets\[1\]\.p_sigma_mm\[2\]'"):
         Results.from_dict(d, source="r.json")
-    d = _document(sections / "row")
+    d = _document(sections["row"])
     d["error_motions"]["motions"]["EAX"]["values"] = 3.0
     with pytest.raises(InputError, match=r"'error_motions\.motions\.EAX\.values'"):
         Results.from_dict(d, source="r.json")

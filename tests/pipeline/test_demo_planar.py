@@ -4,9 +4,6 @@ from __future__ import annotations
 
 import json
 
-import pytest
-
-from lps_gui.cli import main as lps_main
 from lps_gui.pipeline.demos.run import demo_spec
 from lps_gui.pipeline.demos.summary import planar_summary_lines
 
@@ -21,15 +18,8 @@ def test_demo_plans_have_lines_along_both_axes():
     assert demo_spec(False, planar=True).plan.n_frames() <= 100  # well under a minute of rendering
 
 
-@pytest.fixture(scope="module")
-def quick_demo(tmp_path_factory):
-    out = tmp_path_factory.mktemp("demo-planar") / "out"
-    assert lps_main(["demo", "--planar", "--quick", "--out", str(out)]) == 0
-    return out
-
-
-def test_quick_planar_demo_runs_end_to_end(quick_demo, capsys):
-    session = quick_demo / "session"
+def test_quick_planar_demo_runs_end_to_end(quick_planar_demo):
+    session = quick_planar_demo / "session"  # made once per test run (tests/conftest.py)
     results = json.loads((session / "results.json").read_text())
     assert results["axes"] == ["X", "Y"] and (session / "report.pdf").stat().st_size > 10_000
     header = (session / "positions.csv").read_text().splitlines()[0]
@@ -41,8 +31,8 @@ def test_quick_planar_demo_runs_end_to_end(quick_demo, capsys):
     assert tc["straightness_x_um"] is not None and tc["straightness_y_um"] is not None
 
 
-def test_summary_lines_print_results_json_beside_its_truth(quick_demo):
-    results = json.loads((quick_demo / "session" / "results.json").read_text())
+def test_summary_lines_print_results_json_beside_its_truth(quick_planar_demo):
+    results = json.loads((quick_planar_demo / "session" / "results.json").read_text())
     lines = planar_summary_lines(results)
     pl, tc = results["figures"]["planar"], results["truth_comparison"]
     square = next(line for line in lines if line.startswith("squareness"))

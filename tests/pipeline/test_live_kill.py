@@ -26,7 +26,8 @@ from lps_gui.pipeline.detect import detect_session
 from tests.capture.helpers import assert_listed_frames_intact, kill_when
 
 ROOT = Path(__file__).resolve().parents[2]
-ARGS = ["--preset", "small", "--seed", "3", "--live"]
+PLAN = ["--preset", "small", "--seed", "3", "--stop", "28"]  # the small preset's first 15 of its 30 stops
+STOPS = 15
 
 CHILD = """
 import sys
@@ -48,7 +49,7 @@ def run_killed(folder: Path, resume: bool, kill_at: int | None, delay_s: float) 
     """One `lps capture --live` child, killed ``delay_s`` after it printed frame ``kill_at`` (None: after the
     capture's end, in the final corners, estimate or exit), or run to its end."""
     env = {**os.environ, "PYTHONPATH": str(ROOT), "OMP_NUM_THREADS": "1"}
-    cmd = [sys.executable, "-c", CHILD, "capture", *(["--resume", str(folder)] if resume else ["--out", str(folder), *ARGS[:4]]),
+    cmd = [sys.executable, "-c", CHILD, "capture", *(["--resume", str(folder)] if resume else ["--out", str(folder), *PLAN]),
            "--live"]
     child = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
 
@@ -68,15 +69,14 @@ def run_killed(folder: Path, resume: bool, kill_at: int | None, delay_s: float) 
 @pytest.fixture(scope="module")
 def uninterrupted(tmp_path_factory):
     folder = tmp_path_factory.mktemp("live") / "ref"
-    assert lps_main(["capture", "--out", str(folder), *ARGS]) == 0
+    assert lps_main(["capture", "--out", str(folder), *PLAN, "--live"]) == 0
     return folder
 
 
 def kill_and_resume(folder: Path, kills: int, seed: int) -> None:
     """``kills`` kills spread over the capture (random frames, random delays after them), the last after its end."""
     rng = random.Random(seed)
-    total = 30  # the small preset: 30 stops
-    targets: list[int | None] = [*sorted(rng.randrange(total) for _ in range(kills - 1)), None]
+    targets: list[int | None] = [*sorted(rng.randrange(STOPS) for _ in range(kills - 1)), None]
     for kill_at in targets:
         run_killed(folder, resume=(folder / "session.json").exists(), kill_at=kill_at,
                    delay_s=rng.uniform(0.0, 0.4 if kill_at is None else 0.08))

@@ -5,16 +5,13 @@ import csv
 import pytest
 from pypdf import PdfReader
 
-from lps_gui.pipeline.demos.asme import run_asme_demo
-
 pytestmark = pytest.mark.gui
 
 
 @pytest.fixture(scope="module", params=["min-step", "settling"])
-def demo(request, tmp_path_factory):
-    if request.param == "min-step":  # the GUI's section tabs read the same demo (tests/conftest.py)
-        return request.param, request.getfixturevalue("min_step_demo")
-    return request.param, run_asme_demo(tmp_path_factory.mktemp("asme") / request.param, request.param)
+def demo(request):
+    # one demo of each test per run (tests/conftest.py): the GUI's section tabs and test_every_figure_once read them too
+    return request.param, request.getfixturevalue({"min-step": "min_step_demo", "settling": "settling_demo"}[request.param])
 
 
 def test_the_test_result_is_one_row_everywhere(demo):

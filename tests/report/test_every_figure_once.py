@@ -11,6 +11,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import shutil
 from pathlib import Path
 
 import pytest
@@ -27,11 +28,11 @@ pytestmark = pytest.mark.gui
 # ----------------------------------------------------------------------------- sessions, one per kind
 
 
-def _planar(tmp: Path) -> Path:
-    from lps_gui.pipeline.demos.run import run_demo
+def _planar(tmp: Path, demo_out: Path) -> Path:
     from lps_gui.pipeline.estimate import estimate_session
 
-    folder = run_demo(tmp / "planar", quick=True, planar=True).session_dir
+    shutil.copytree(demo_out, tmp / "planar")  # the run's one quick planar demo (tests/conftest.py): estimated again here
+    folder = tmp / "planar" / "session"
     _with_spec(folder, {"accuracy_um": 20, "repeatability_um": 5, "straightness_um": 38, "squareness_urad": 50})
     estimate_session(folder)  # the demo gives no specification: the verdict rows need one
     return folder
@@ -61,10 +62,9 @@ def _two_depth(tmp: Path) -> Path:
     return folder
 
 
-def _settling(tmp: Path) -> Path:
-    from lps_gui.pipeline.demos.asme import run_asme_demo
-
-    return run_asme_demo(tmp / "settling", "settling").session_dir
+def _settling(tmp: Path, demo) -> Path:
+    shutil.copytree(demo.session_dir, tmp / "settling")  # the run's one settling demo (tests/conftest.py): reported here
+    return tmp / "settling"
 
 
 def _as_left(tmp: Path) -> Path:
@@ -89,6 +89,7 @@ def _light_field(tmp: Path, lightfield_demo) -> Path:
 
 KINDS = {"planar": _planar, "row of targets": _row, "two depths": _two_depth, "settling": _settling,
          "as left": _as_left, "stitched": _stitched, "light field": _light_field}
+SHARED = {"planar": "quick_planar_demo", "settling": "settling_demo", "light field": "lightfield_demo"}  # tests/conftest.py
 
 
 def _with_spec(folder: Path, spec: dict) -> None:
@@ -100,8 +101,8 @@ def _with_spec(folder: Path, spec: dict) -> None:
 @pytest.fixture(scope="module", params=list(KINDS))
 def session(request, tmp_path_factory):
     tmp = tmp_path_factory.mktemp(request.param.replace(" ", "-"))
-    if request.param == "light field":
-        return request.param, KINDS[request.param](tmp, request.getfixturevalue("lightfield_demo"))
+    if request.param in SHARED:
+        return request.param, KINDS[request.param](tmp, request.getfixturevalue(SHARED[request.param]))
     return request.param, KINDS[request.param](tmp)
 
 
@@ -193,6 +194,6 @@ def _gui(qtbot, folder: Path) -> tuple[list[list[str]], str]:
 
 
 def test_every_figure_is_one_number_with_one_u_in_every_file_and_the_gui(session, qtbot):
-    kind, folder = session
+    _kind, folder = session
     gui_rows, gui_verdict = _gui(qtbot, folder)
     assert_one_figure_everywhere(folder, gui_rows, gui_verdict)

@@ -3,6 +3,10 @@
     python benchmarks/reference_outputs.py run OUT [--code DIR]   # DIR: a checkout whose lps_gui to run (default this one)
     python benchmarks/reference_outputs.py compare BEFORE AFTER   # exit 1 on any difference
 
+Run both at the same OUT and move each away before the next (mv OUT BEFORE): session.json holds its folder, so its
+hash, printed on page 1 in the identification block that is centred on its widest line, differs with the folder,
+and with it that block's place and wrapping.
+
 The reference set: the quick demo (a bidirectional line, its compensated as-left session and the as-found/as-left
 comparison), planar, a row of targets, min-step, settling, two depths (points) and a stitched session. Compared:
 every results.json, positions.csv and summary.csv (times, input hashes and the run's folder masked), and every PDF

@@ -220,9 +220,9 @@ def test_opening_a_folder_that_is_no_session_says_so(qtbot, window, tmp_path):
 
 def test_a_worker_that_outlives_its_panel_is_cancelled_and_silent(qtbot, row_results, monkeypatch):
     """The flaky teardown of test_targets_gui: "format positions" finished after the panel was deleted."""
-    from lps_gui.report import registry
     from lps_gui.gui.results.panel import ResultsPanel
     from lps_gui.gui.workers import running_jobs
+    from lps_gui.report import registry
 
     folder, results = row_results
     release = threading.Event()

@@ -2,8 +2,8 @@
 
 :func:`lps_gui.pipeline.estimate.estimate_session` is the way here for every
 D; this module only assembles the planar parts: ``axes: ["X", "Y"]``, the
-planar positions table, ``figures.planar`` and the summary rows. The
-environment and the uncertainty budget are added by the caller as for a line.
+planar positions table, ``figures.planar`` and the summary rows (:func:`summary_csv_rows`, made by the caller
+from the finished document). The environment and the uncertainty budget are added by the caller as for a line.
 """
 from __future__ import annotations
 
@@ -101,7 +101,7 @@ def build_planar_results(session: SessionInput, obs: Observations, est: LpsEstim
         tc = results["truth_comparison"] = TruthComparison.of(**truth_comparison(obs, est, truth, positions)).to_dict()
         _add_truth_to_nodes(planar["nodes"], obs, positions, valid)
     figures = results["figures"] = Figures.of(planar=planar).to_dict()  # written through the readers' definition
-    results["summary"] = summary_csv_rows(results)
+    results["summary"] = []  # in its place: summary.csv's rows are made from the finished document
     return AxisResults(results, parameters, board, positions, figures, flags, tc)
 
 

@@ -3,11 +3,17 @@
     python benchmarks/reference_outputs.py run OUT [--code DIR]   # DIR: a checkout whose lps_gui to run (default this one)
     python benchmarks/reference_outputs.py compare BEFORE AFTER   # exit 1 on any difference
 
+Run both at the same OUT and move each away before the next (mv OUT BEFORE): session.json holds its folder, so its
+hash, printed on page 1 in the identification block that is centred on its widest line, differs with the folder,
+and with it that block's place and wrapping.
+
 The reference set: the quick demo (a bidirectional line, its compensated as-left session and the as-found/as-left
 comparison), planar, a row of targets, min-step, settling, two depths (points) and a stitched session. Compared:
 every results.json, positions.csv and summary.csv (times, input hashes and the run's folder masked), and every PDF
 page: its text lines and their places (masked alike) and everything else drawn (the content stream without its
-text objects, and the images): what fixes the pixels. The outputs are not committed: keep BEFORE outside the tree.
+text objects, and the images): what fixes the pixels. Every run reads one fixed time of day (a sitecustomize
+beside the outputs): the masked times are then also the same width, so page 1 is laid out alike. The outputs are
+not committed: keep BEFORE outside the tree.
 """
 from __future__ import annotations
 
@@ -35,18 +41,44 @@ stitched_session(__import__('pathlib').Path({out!r}), 0)
 """
 
 
+FIXED_CLOCK = """
+# written by benchmarks/reference_outputs.py: every run's time.strftime reads one fixed time of day
+import time as _time
+
+_FIXED, _strftime = _time.localtime({epoch}), _time.strftime
+_time.strftime = lambda fmt, t=None: _strftime(fmt, _FIXED if t is None else t)
+"""
+CLOCK_EPOCH = 1767268800  # 2026-01-01 12:00 UTC
+
+
+def _clock_dir(out: Path) -> Path:
+    """A folder with a sitecustomize that fixes time.strftime: the reports' times, masked in the comparison, are then
+    also the same width, so a centred block (page 1's identification) is laid out and wrapped alike in every run."""
+    folder = out / ".fixed-clock"
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "sitecustomize.py").write_text(FIXED_CLOCK.format(epoch=CLOCK_EPOCH))
+    return folder
+
+
+def _env(code: Path, out: Path) -> dict[str, str]:
+    """The environment of a run: *code*'s lps_gui first on the path, then the fixed clock, Qt offscreen."""
+    return {**os.environ, "PYTHONPATH": os.pathsep.join([str(code), str(_clock_dir(out))]), "QT_QPA_PLATFORM": "offscreen"}
+
+
 def _lps(code: Path, args: list[str], log: Path) -> None:
     """Run the CLI of the checkout *code* (its lps_gui first on the path), its output into *log*."""
-    env = {**os.environ, "PYTHONPATH": str(code), "QT_QPA_PLATFORM": "offscreen"}
+    env = _env(code, log.parent)
     with log.open("a") as f:
         f.write(f"$ lps {' '.join(args)}\n")
         f.flush()
         subprocess.run([sys.executable, "-c", "import sys; from lps_gui.cli import main; sys.exit(main())", *args],
-                       env=env, stdout=f, stderr=subprocess.STDOUT, check=False, timeout=3600)
+                       env=env, stdout=f, stderr=subprocess.STDOUT, check=False, timeout=3600, cwd=log.parent)
 
 
 def run(out: Path, code: Path) -> None:
-    """Write the reference set into *out* (one folder per run)."""
+    """Write the reference set into *out* (one folder per run; each run's working folder, so that no checkout in the
+    current folder shadows *code*)."""
+    out = out.resolve()
     out.mkdir(parents=True, exist_ok=True)
     log = out / "runs.log"
     for name, extra in DEMOS.items():
@@ -56,9 +88,8 @@ def run(out: Path, code: Path) -> None:
     _lps(code, ["estimate", str(two)], log)
     _lps(code, ["report", str(two)], log)
     stitched = out / "stitched"
-    env = {**os.environ, "PYTHONPATH": str(code)}
-    subprocess.run([sys.executable, "-c", STITCHED.format(tests=str(HERE), out=str(stitched))], env=env, check=True,
-                   timeout=600)
+    subprocess.run([sys.executable, "-c", STITCHED.format(tests=str(HERE), out=str(stitched))], env=_env(code, out),
+                   check=True, timeout=600, cwd=out)
     _lps(code, ["estimate", str(stitched)], log)
     _lps(code, ["report", str(stitched)], log)
 
@@ -101,11 +132,23 @@ def _pdf(path: Path, root: Path) -> list[tuple[Any, ...]]:
         xobjects = resources.get("/XObject") or {}
         for name in sorted(xobjects):
             h.update(name.encode() + xobjects[name].get_object().get_data())
-        # x to the point: a table's columns follow the width of a masked time (its digits), a few tenths of a point
-        lines = [(round(line.x0), round(line.y0, 2), _mask(line.get_text(), root))
+        # x compared by _same_page: a centred block follows the width of its widest line, a masked time's digits
+        lines = [(round(line.y0, 2), _mask(line.get_text(), root), round(line.x0, 1))
                  for box in layout if isinstance(box, LTTextContainer) for line in box if isinstance(line, LTTextLine)]
         pages.append((h.hexdigest(), sorted(lines)))  # pdfminer's grouping order follows the masked widths too
     return pages
+
+
+def _same_page(p: tuple[Any, ...], q: tuple[Any, ...]) -> bool:
+    """The same drawing and the same text lines at the same heights, each in place or all moved across together.
+
+    Why the one shift: page 1's identification block is centred on its widest line, which holds the run's time;
+    two runs of the same code (main against main) move the whole block sideways by up to 5 pt, every line alike.
+    """
+    if p[0] != q[0] or len(p[1]) != len(q[1]) or any(a[:2] != b[:2] for a, b in zip(p[1], q[1])):
+        return False
+    shifts = [b[2] - a[2] for a, b in zip(p[1], q[1]) if abs(b[2] - a[2]) > 0.15]
+    return not shifts or max(shifts) - min(shifts) <= 0.3
 
 
 def _files(root: Path) -> list[Path]:
@@ -129,9 +172,9 @@ def compare(before: Path, after: Path) -> int:
             same = _csv(x, before) == _csv(y, after)
         else:
             px, py = _pdf(x, before), _pdf(y, after)
-            same = px == py
+            same = len(px) == len(py) and all(_same_page(p, q) for p, q in zip(px, py))
             if not same:
-                diff = [i + 1 for i, (p, q) in enumerate(zip(px, py)) if p != q]
+                diff = [i + 1 for i, (p, q) in enumerate(zip(px, py)) if not _same_page(p, q)]
                 print(f"  {rel}: pages {len(px)} / {len(py)}, differing pages {diff}")
         if not same:
             print(f"DIFFERS: {rel}")

@@ -38,19 +38,20 @@ from lps_gui.io.results.document import json_float as _f
 from lps_gui.io.results.history import commit_results
 from lps_gui.io.session import Session
 from lps_gui.io.session_lock import SessionLock
-from lps_gui.pipeline.results.asme import add_asme_results, test_options
+from lps_gui.pipeline.results.asme import asme_results, test_options
 from lps_gui.pipeline.results.board_plane import position_columns, straightness_figures
-from lps_gui.pipeline.results.error_motions import add_error_motions
+from lps_gui.pipeline.results.error_motions import error_motions_outcome
+from lps_gui.pipeline.results.parts import AxisResults
 from lps_gui.pipeline.results.planar import build_planar_results
 from lps_gui.pipeline.results.uncertainty import BudgetSource, environment_and_uncertainty
-from lps_gui.pipeline.results.verdict import add_verdict
+from lps_gui.pipeline.results.verdict import measured, summary_rows, verdict_section
 from lps_gui.pipeline.session_checks import corners_of_records, session_inputs
 from lps_gui.pipeline.session_input import SessionInput, read_session_input
 from lps_gui.pipeline.target_session import add_targets_section, target_observations
 from lps_gui.sim.truth import truth_comparison
-from lps_gui.sim.truth_figures import add_self_check
+from lps_gui.sim.truth_figures import CheckedValues, self_check_section
 from lps_gui.io.results.keys import DEVIATION_UM, MEASURED_MM, SIGMA_TOTAL_UM
-from lps_gui.io.results.sections import Figures, Flag, Parameters, TruthComparison
+from lps_gui.io.results.sections import Figures, Flag, Parameters, Position, TruthComparison
 
 HYBRID_KEYS = {"grid_window_mm": "window_mm", "grid_resolution_mm": "resolution_mm", "grid_points": "grid_points",
                "threshold_px": "threshold_rms_px", "max_rounds": "max_rounds"}
@@ -225,52 +226,77 @@ def _write_keeping_history(session: Session, out_dir: Path | str | None, results
 
 def build_results(session: SessionInput, obs: Observations, est: LpsEstimate, intrinsics_source: str
                   ) -> dict[str, Any]:
-    """The results.json document of an estimate of D axes, with its environment and uncertainty budget."""
-    results = RESULTS_BY_AXES[obs.D](session, obs, est, intrinsics_source)
-    if obs.mounted is not None:
-        add_targets_section(results, obs, est, session)  # SPEC 13: each target's pose, sigma, views, ties
+    """The results.json document of an estimate of D axes, with its environment and uncertainty budget.
+
+    Every section after the axis's own is computed from the values the builders made, passed down here (positions,
+    figures, flags, truth comparison, U, the ASME test), and written into the document once: no builder reads the
+    document it is building back (``tests/pipeline/test_builders_read_no_document.py``).
+    """
+    part = RESULTS_BY_AXES[obs.D](session, obs, est, intrinsics_source)
+    results = part.document  # written below, never read
+    positions, figures, flags, truth = part.positions, part.figures, part.flags, part.truth_comparison
+    targets = None
+    if obs.mounted is not None:  # SPEC 13: each target's pose, sigma, views, ties
+        targets, targets_truth = add_targets_section(results, obs, est, session)
+        if targets_truth is not None:
+            truth = results["truth_comparison"] = {**(truth or {}), "targets": targets_truth}
     if obs.segment is not None:
         from lps_gui.pipeline.stitched_session import add_stitch_ties
 
-        add_stitch_ties(results, obs)  # a stitched session's placements are tied by their repeated stops
-    add_error_motions(results, session, obs, est)  # SPEC 14: the six error motions per axis, where poses allow
-    if isinstance(results.get("board"), dict):  # nominal (20 C); environment.square_mm_used is the size used
-        results["board"]["square_mm"] = session.nominal_board.square_mm
+        add_stitch_ties(targets, obs)  # a stitched session's placements are tied by their repeated stops
+    motions = error_motions_outcome(session, obs, est, positions, figures, flags)  # SPEC 14, where poses allow
+    if motions is not None:
+        positions, figures, flags = motions.positions, motions.figures, motions.flags
+        results["error_motions"] = motions.section
+    board = {**part.board, "square_mm": session.nominal_board.square_mm}  # nominal (20 C); environment.square_mm_used
+    results["board"] = board  # is the size used
+    results["positions"] = positions = [Position.of(**row).to_dict() for row in positions]  # as the readers read them
+    results["figures"] = figures
     budget = BudgetSource(  # the values the builders made, passed on (the budget reads no document)
-        positions=results["positions"], parameters=results.get("parameters") or {}, board=results.get("board") or {},
-        figures=results.get("figures") or {}, axes=("X",) if obs.D == 1 else ("X", "Y"),
-        resolved=(results.get("error_motions") or {}).get("resolved"), targets=results.get("targets"),
-        stage_spec=session.meta.get("stage_spec"), stitched=bool((session.meta.get("plan") or {}).get("segments")))
+        positions=positions, parameters=part.parameters, board=board, figures=figures,
+        axes=("X",) if obs.D == 1 else ("X", "Y"), resolved=None if motions is None else motions.section.get("resolved"),
+        targets=targets, stage_spec=session.meta.get("stage_spec"),
+        stitched=bool((session.meta.get("plan") or {}).get("segments")))
     environment, uncertainty = environment_and_uncertainty(budget, session)  # GUM budget, U (k = 2) per figure
     results["environment"], results["uncertainty"] = environment.to_dict(), uncertainty.to_dict()
-    if obs.D == 1:
-        results = add_asme_results(results, session, obs, est, budget.figures.get("iso230_2"),
-                                   uncertainty.get("figures_k2") or {})  # ASME B5.64 names, TUR, tests
-    results = add_verdict(results)  # the verdict, U (k = 2) and the decision rule, machine-readable (line or plane)
-    return add_self_check(results)  # a simulated session: does its truth contradict a figure or a finding?
+    asme = None
+    if obs.D == 1:  # ASME B5.64 names, TUR, tests
+        asme = asme_results(session, obs, est, figures, uncertainty)
+        results["asme_b5_64"] = asme.to_dict()
+    # the verdict, U (k = 2) and the decision rule, machine-readable (line or plane)
+    results["verdict"] = verdict_section(measured(budget.axes, figures, uncertainty, asme), session.meta.get("stage_spec"))
+    check, flag = self_check_section(CheckedValues(  # a simulated session: does its truth contradict a figure or a finding?
+        positions, figures, results["uncertainty"], truth, None if motions is None else motions.section, obs.D == 2))
+    if check is not None:
+        results["truth_comparison"] = {**truth, "self_check": check}
+    results["flags"] = [*flags, flag] if flag is not None else flags
+    results["summary"] = summary_rows(results)  # summary.csv: a view of the finished document, made last
+    return results
 
 
-def line_results(session: SessionInput, obs: Observations, est: LpsEstimate, intrinsics_source: str) -> dict[str, Any]:
-    """The results.json document of one axis: its parts computed here, assembled by
+def line_results(session: SessionInput, obs: Observations, est: LpsEstimate, intrinsics_source: str) -> AxisResults:
+    """The results.json document of one axis and its values: its parts computed here, assembled by
     :func:`lps_gui.io.results.document.assemble_results`."""
     positions = position_rows(obs, est)
     truth = session.truth
+    board, parameters = board_to_dict(obs.board), estimate_parameters(obs, est)
+    figures, flags = session_figures(obs, est), [Flag.of(**f).to_dict() for f in est.flags]
+    tc = None if truth is None else TruthComparison.of(**truth_comparison(obs, est, truth, positions)).to_dict()
     results = assemble_results(
         method=est.method,
         settings=est.options.to_dict(),
         inputs=session_inputs(session, intrinsics_source, {session.corners_path.name: obs.source_sha256}),
-        board=board_to_dict(obs.board),
+        board=board,
         intrinsics=intrinsics_to_dict(obs.intrinsics),
         session_meta={k: session.meta.get(k) for k in ("camera", "stage", "plan", "stage_spec", "created") if k in session.meta},
-        parameters=estimate_parameters(obs, est),
+        parameters=parameters,
         positions=positions,
-        figures=session_figures(obs, est),
-        flags=[Flag.of(**f).to_dict() for f in est.flags],
+        figures=figures,
+        flags=flags,
         timings_s=dict(est.timings_s),
-        truth_comparison=None if truth is None else TruthComparison.of(
-            **truth_comparison(obs, est, truth, positions)).to_dict(),
+        truth_comparison=tc,
     )
-    return results
+    return AxisResults(results, parameters, board, positions, figures, flags, tc)
 
 
 def position_rows(obs: Observations, est: LpsEstimate) -> list[dict[str, Any]]:

@@ -186,10 +186,11 @@ def make_lightfield(scene_dir: Path | str, out: Path | str, measurement: Path | 
         **({"check": res.check} if res.check else {}),
     }
     res.files.insert(0, write_lightfield_json(out, doc))
-    from lps_gui.report.pdf.lightfield import REPORT_FILE, write_lightfield_report
+    from lps_gui.report.registry import folder_section
 
-    write_lightfield_report(doc, before, after, out / REPORT_FILE)
-    res.files.append(out / REPORT_FILE)
+    section = folder_section("lightfield")  # its PDF, as the registry names it
+    section.write_report(doc, before, after, out / section.report_file)
+    res.files.append(out / section.report_file)
     return res
 
 
@@ -224,8 +225,7 @@ def _write_hci(folder: Path, views: SceneViews, grid: GridCheck, vc: VirtualCame
 
 
 def check_lines(check: dict[str, Any] | None) -> list[str]:
-    """The epipolar check's numbers as printed lines (lps lightfield, lps demo --lightfield, the GUI's tab): the
-    report page's rows (:func:`lps_gui.report.pdf.lightfield.epipolar_rows`), one line each."""
-    from lps_gui.report.pdf.lightfield import epipolar_rows
+    """The epipolar check's numbers as printed lines: :func:`lps_gui.report.pages.lightfield.check_lines`."""
+    from lps_gui.report.pages.lightfield import check_lines as lines
 
-    return [f"{what}: {value}" for what, value in epipolar_rows(check)]
+    return lines(check)

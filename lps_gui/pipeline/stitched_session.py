@@ -52,15 +52,15 @@ def stitched_observations(session: SessionInput, obs: Observations, records: lis
                    repeatability_mm=stage_repeatability_mm(session.meta.get("stage_spec")))
 
 
-def add_stitch_ties(results: dict[str, Any], obs: Observations) -> None:
-    """results.json ``targets`` of a stitched session: each placement is tied by its repeated stops, not by views
-    that see two boards; ``stitch_ties`` counts the pairs tying it to the placement before."""
+def add_stitch_ties(targets: list[dict[str, Any]], obs: Observations) -> None:
+    """results.json ``targets`` of a stitched session (its rows, in place): each placement is tied by its repeated
+    stops, not by views that see two boards; ``stitch_ties`` counts the pairs tying it to the placement before."""
     ties = segment_ties(obs.targets, obs.segment)
-    tied: list[set[int]] = [set() for _ in results["targets"]]
+    tied: list[set[int]] = [set() for _ in targets]
     for b, pairs in enumerate(ties):
         tied[b].update(pairs[:, 0].tolist())
         tied[b + 1].update(pairs[:, 1].tolist())
-    for k, row in enumerate(results["targets"]):
+    for k, row in enumerate(targets):
         views = sorted(tied[k])
         row["ties"], row["tied_by"] = len(views), np.asarray(obs.index)[views].astype(int).tolist()
         row["stitch_ties"] = int(len(ties[k - 1])) if k else 0

@@ -102,9 +102,11 @@ def targets_section(obs: Observations, est: Any, session: SessionInput) -> list[
     return rows
 
 
-def add_targets_section(results: dict[str, Any], obs: Observations, est: Any, session: SessionInput) -> None:
-    """Put ``targets`` into results (after ``board``, in schema order); a simulated session's
-    ``truth_comparison.targets`` compares each pose with the simulator's."""
+def add_targets_section(results: dict[str, Any], obs: Observations, est: Any, session: SessionInput
+                        ) -> tuple[list[dict[str, Any]], dict[str, Any] | None]:
+    """Put ``targets`` into results (after ``board``, in schema order); returns it and, for a simulated session,
+    ``truth_comparison.targets`` (each pose compared with the simulator's; None for a real one), which the caller
+    writes."""
     from lps_gui.sim.truth import target_truth_comparison
 
     section = [TargetRecord.of(**row).to_dict() for row in targets_section(obs, est, session)]  # as readers read it
@@ -116,6 +118,4 @@ def add_targets_section(results: dict[str, Any], obs: Observations, est: Any, se
     ordered.setdefault("targets", section)
     results.clear()
     results.update(ordered)
-    truth = target_truth_comparison(session, section)
-    if truth is not None:
-        results.setdefault("truth_comparison", {})["targets"] = truth
+    return section, target_truth_comparison(session, section)

@@ -1,9 +1,10 @@
 """Every headline figure and every "resolved" finding of a simulated session against the simulator's truth.
 
 A report's figure is only worth its error bar; a simulated session knows the
-truth, so it can say whether each error bar held (issue 35). From results.json
-alone (the truth columns :func:`lps_gui.sim.truth.truth_comparison` put beside
-each position, its ``truth_comparison`` and ``error_motions.truth``):
+truth, so it can say whether each error bar held (issue 35). From results.json's
+sections alone (:class:`CheckedValues`: the builder's values, or a finished
+document's): the truth columns :func:`lps_gui.sim.truth.truth_comparison` put
+beside each position, its ``truth_comparison`` and ``error_motions.truth``:
 
 - :func:`figure_checks`: each headline figure (ISO 230-2 A, E, R, B, M, max
   |deviation|, scale, straightness, angles, error motions; on a gantry squareness,
@@ -21,6 +22,8 @@ each position, its ``truth_comparison`` and ``error_motions.truth``):
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -33,6 +36,31 @@ FALSE_FRACTION = 0.5  # a resolved finding whose truth is under this fraction of
 ISO_KEYS = ("A_um", "E_um", "R_um", "B_um", "M_um")
 ANGLES = ("roll", "pitch", "yaw")
 MOTION_ANGLES = {"EAX": "roll", "EBX": "pitch", "ECX": "yaw"}
+
+
+@dataclass(frozen=True)
+class CheckedValues:
+    """What the self-check compares with truth, as JSON values: the builder's (passed down while the results are
+    built, :func:`self_check_section`) or a finished results.json's (:meth:`of_document`, for readers)."""
+
+    positions: Sequence[Mapping[str, Any]]
+    figures: Mapping[str, Any]
+    uncertainty: Mapping[str, Any]
+    truth_comparison: Mapping[str, Any] | None
+    error_motions: Mapping[str, Any] | None = None
+    planar: bool = False
+
+    @classmethod
+    def of_document(cls, results: Mapping[str, Any]) -> CheckedValues:
+        """The values of a finished results.json document (a reader: benchmarks/honesty.py, tests)."""
+        return cls(results.get("positions") or [], results.get("figures") or {}, results.get("uncertainty") or {},
+                   results.get("truth_comparison"), results.get("error_motions"),
+                   len(results.get("axes") or ["X"]) == 2)
+
+
+def checked(values: CheckedValues | Mapping[str, Any]) -> CheckedValues:
+    """``values`` as :class:`CheckedValues`: a finished document's sections, or the builder's values as they are."""
+    return values if isinstance(values, CheckedValues) else CheckedValues.of_document(values)
 
 
 def _col(rows: list[dict[str, Any]], key: str) -> np.ndarray:
@@ -69,9 +97,10 @@ def _line_truth_dev(pos: list[dict[str, Any]]) -> np.ndarray | None:
     return None
 
 
-def line_figure_checks(results: dict[str, Any]) -> list[dict[str, Any]]:
+def line_figure_checks(values: CheckedValues | Mapping[str, Any]) -> list[dict[str, Any]]:
     """The headline figures of a one-axis session against truth (rows of :func:`_check`)."""
-    pos = results.get("positions") or []
+    v = checked(values)
+    pos = v.positions
     dev = _line_truth_dev(pos)
     if dev is None:
         return []
@@ -80,8 +109,8 @@ def line_figure_checks(results: dict[str, Any]) -> list[dict[str, Any]]:
     run = np.array([r.get("run", 1) for r in pos])
     direction = np.array([r.get("direction", "+") for r in pos])
     true = figures_for_session(target, direction, run, dev, valid=used)
-    figs = results.get("figures") or {}
-    Uk = ((results.get("uncertainty") or {}).get("figures_k2")) or {}
+    figs = v.figures
+    Uk = v.uncertainty.get("figures_k2") or {}
     out = []
     iso, true_iso = figs.get("iso230_2") or {}, true.get("iso230_2") or {}
     for key in ISO_KEYS:
@@ -103,14 +132,15 @@ def line_figure_checks(results: dict[str, Any]) -> list[dict[str, Any]]:
         a = angles.get(name) or {}
         out.append(_check(f"max |{name}|", "urad", a.get("max_abs_urad"), truth, Uk.get(f"max_abs_{name}"),
                           a.get("resolved")))
-    out += motion_checks(results, target, used)
+    out += motion_checks(v, target, used)
     return [c for c in out if c is not None]
 
 
-def motion_checks(results: dict[str, Any], target: np.ndarray, used: np.ndarray) -> list[dict[str, Any]]:
+def motion_checks(values: CheckedValues | Mapping[str, Any], target: np.ndarray, used: np.ndarray
+                  ) -> list[dict[str, Any]]:
     """The angular error motions' spans (EAX, EBX, ECX) against ``error_motions.truth``; U = k sqrt 2 sigma of
     one target's mean, as every p-v the report prints."""
-    em = results.get("error_motions") or {}
+    em = checked(values).error_motions or {}
     out = []
     for iso, m in (em.get("motions") or {}).items():
         t = (em.get("truth") or {}).get(iso) or {}
@@ -124,11 +154,12 @@ def motion_checks(results: dict[str, Any], target: np.ndarray, used: np.ndarray)
     return out
 
 
-def planar_figure_checks(results: dict[str, Any]) -> list[dict[str, Any]]:
+def planar_figure_checks(values: CheckedValues | Mapping[str, Any]) -> list[dict[str, Any]]:
     """A gantry's headline figures against truth: squareness, scale and straightness per axis, ISO 230-2 per axis."""
-    pl = (results.get("figures") or {}).get("planar") or {}
-    tc = results.get("truth_comparison") or {}
-    unc = (results.get("uncertainty") or {}).get("per_axis") or {}
+    v = checked(values)
+    pl = v.figures.get("planar") or {}
+    tc = v.truth_comparison or {}
+    unc = v.uncertainty.get("per_axis") or {}
     out = []
     sq_sigma = pl.get("squareness_sigma_urad")
     if tc.get("squareness_error_urad") is not None and sq_sigma is not None:
@@ -153,11 +184,12 @@ def planar_figure_checks(results: dict[str, Any]) -> list[dict[str, Any]]:
     return [c for c in out if c is not None]
 
 
-def figure_checks(results: dict[str, Any]) -> list[dict[str, Any]]:
+def figure_checks(values: CheckedValues | Mapping[str, Any]) -> list[dict[str, Any]]:
     """Every headline figure of a simulated session beside its truth, U (k = 2) and z."""
-    if not results.get("truth_comparison"):
+    v = checked(values)
+    if not v.truth_comparison:
         return []
-    return planar_figure_checks(results) if len(results.get("axes") or ["X"]) == 2 else line_figure_checks(results)
+    return planar_figure_checks(v) if v.planar else line_figure_checks(v)
 
 
 def _finding(name: str, resolved: Any, truth: float | None, noise: Any) -> dict[str, Any] | None:
@@ -168,15 +200,16 @@ def _finding(name: str, resolved: Any, truth: float | None, noise: Any) -> dict[
             "false": bool(resolved) and truth < FALSE_FRACTION * float(noise)}
 
 
-def finding_checks(results: dict[str, Any]) -> list[dict[str, Any]]:
+def finding_checks(values: CheckedValues | Mapping[str, Any]) -> list[dict[str, Any]]:
     """Every "resolved" call of a simulated session beside the truth's size and the noise threshold."""
-    pos = results.get("positions") or []
-    if not results.get("truth_comparison") or not pos:
+    v = checked(values)
+    pos = v.positions
+    if not v.truth_comparison or not pos:
         return []
-    figs = results.get("figures") or {}
+    figs = v.figures
     out = []
-    if len(results.get("axes") or ["X"]) == 2:
-        tc = results["truth_comparison"]
+    if v.planar:
+        tc = v.truth_comparison
         for axis, a in ((figs.get("planar") or {}).get("per_axis") or {}).items():
             st = a.get("straightness") or {}
             out.append(_finding(f"straightness {axis}", st.get("resolved"), tc.get(f"straightness_{axis.lower()}_um"),
@@ -198,7 +231,7 @@ def finding_checks(results: dict[str, Any]) -> list[dict[str, Any]]:
         t = _col(pos, f"truth_{name}_urad")[used]
         out.append(_finding(f"max |{name}|", a.get("resolved"),
                             float(np.nanmax(np.abs(t))) if np.isfinite(t).any() else None, a.get("noise_max_abs_urad")))
-    em = results.get("error_motions") or {}
+    em = v.error_motions or {}
     for iso, m in (em.get("motions") or {}).items():
         true_values = _motion_truth(iso, em, pos)
         if true_values is None:
@@ -223,10 +256,11 @@ def _motion_truth(iso: str, em: dict[str, Any], pos: list[dict[str, Any]]) -> np
     return v if np.isfinite(v).any() else None
 
 
-def self_check(results: dict[str, Any]) -> dict[str, Any] | None:
+def self_check(values: CheckedValues | Mapping[str, Any]) -> dict[str, Any] | None:
     """Does the truth contradict the report? None for a real session; else ``{"passed", "problems"}``, each
     problem one line naming the figure and by how much."""
-    tc = results.get("truth_comparison")
+    checked_values = checked(values)
+    tc = checked_values.truth_comparison
     if not tc:
         return None
     problems = []
@@ -241,11 +275,11 @@ def self_check(results: dict[str, Any]) -> dict[str, Any] | None:
     targets = tc.get("targets") or {}
     if (v := targets.get("z_mean_square")) is not None and v > Z_MS_LIMIT:
         problems.append(f"target poses: mean (error/sigma)^2 {v:.1f} against truth (above {Z_MS_LIMIT:g})")
-    for c in figure_checks(results):
+    for c in figure_checks(checked_values):
         if abs(c["z"]) > 2 * K:
             problems.append(f"{c['figure']} {c['value']:.4g} {c['unit']}, truth {c['truth']:.4g}: off by "
                             f"{abs(c['error']) / c['U_k2']:.1f} x its U (k = 2) {c['U_k2']:.3g} {c['unit']}")
-    for f in finding_checks(results):
+    for f in finding_checks(checked_values):
         if f["false"]:
             problems.append(f"{f['finding']} called resolved, but the truth is {f['truth']:.3g} (noise threshold "
                             f"{f['noise']:.3g})")
@@ -260,14 +294,9 @@ def truth_check_flag(check: dict[str, Any] | None) -> dict[str, Any] | None:
             "message": "simulated session: the truth contradicts this report: " + "; ".join(check["problems"])}
 
 
-def add_self_check(results: dict[str, Any]) -> dict[str, Any]:
-    """A simulated session's results checked against its truth (issue 35: simulated sessions check themselves):
-    ``truth_comparison.self_check`` and, when it fails, a ``truth_check`` flag; a real session is returned as is."""
-    check = self_check(results)
-    if check is None:
-        return results
-    results["truth_comparison"]["self_check"] = check
-    flag = truth_check_flag(check)
-    if flag is not None:
-        results["flags"] = [*(results.get("flags") or []), flag]
-    return results
+def self_check_section(values: CheckedValues) -> tuple[dict[str, Any] | None, dict[str, Any] | None]:
+    """A simulated session's results checked against its truth (issue 35: simulated sessions check themselves),
+    from the values the builders made: (``truth_comparison.self_check``, the ``truth_check`` flag when it fails);
+    (None, None) for a real session."""
+    check = self_check(values)
+    return check, truth_check_flag(check)

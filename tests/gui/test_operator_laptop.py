@@ -220,19 +220,19 @@ def test_opening_a_folder_that_is_no_session_says_so(qtbot, window, tmp_path):
 
 def test_a_worker_that_outlives_its_panel_is_cancelled_and_silent(qtbot, row_results, monkeypatch):
     """The flaky teardown of test_targets_gui: "format positions" finished after the panel was deleted."""
-    import lps_gui.gui.results.planar as planar_results
     from lps_gui.gui.results.panel import ResultsPanel
     from lps_gui.gui.workers import running_jobs
+    from lps_gui.report import registry
 
     folder, results = row_results
     release = threading.Event()
-    real = planar_results.position_table_for
+    real = registry.position_table
 
     def slow(r):  # the machine under load: the job ends after the panel is gone
         assert release.wait(30)
         return real(r)
 
-    monkeypatch.setattr(planar_results, "position_table_for", slow)
+    monkeypatch.setattr(registry, "position_table", slow)
     panel = ResultsPanel()
     panel.show()
     panel.set_results(results, folder, folder)

@@ -1,5 +1,6 @@
 """The light field tab (issue 38): a light-field folder's epipolar-plane images before and after rectification, and
-the epipolar check's numbers, as the report's light-field page shows them."""
+the epipolar check's numbers, as the report's light-field page shows them. What it shows is the registry's
+(:data:`lps_gui.report.registry.FOLDER_SECTIONS`, plain data); here only how it is drawn."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -8,11 +9,7 @@ from PySide6.QtCore import Qt
 from PySide6.QtGui import QPixmap
 from PySide6.QtWidgets import QLabel, QScrollArea, QVBoxLayout, QWidget
 
-from lps_gui.errors import InputError
-
-LIGHTFIELD_FILE = "lightfield.json"
-EPI_FILES = (("epi_before.png", "Epipolar-plane image before rectification"),
-             ("epi_after.png", "After rectification: every scene point a straight line, rows level"))
+from lps_gui.report.pages.lightfield import EPI_FILES
 
 
 class LightFieldPage(QScrollArea):
@@ -40,22 +37,17 @@ class LightFieldPage(QScrollArea):
         self.folder: Path | None = None
         self._originals: list[QPixmap] = []
 
-    def load(self, folder: Path | str) -> None:
-        """Show ``folder`` (written by `lps lightfield` or `lps demo --lightfield`); a one-line InputError otherwise."""
-        from lps_gui.io.jsonfile import read_json
-        from lps_gui.pipeline.lightfield import check_lines
+    def load(self, folder: Path | str, section: str = "lightfield") -> None:
+        """Show ``folder`` (written by `lps lightfield` or `lps demo --lightfield`): the registry's content of it,
+        a one-line InputError otherwise."""
+        from lps_gui.report.registry import folder_section
 
         folder = Path(folder)
-        if not (folder / LIGHTFIELD_FILE).is_file():
-            raise InputError(f"{folder}: no {LIGHTFIELD_FILE} here; choose a folder written by `lps lightfield`")
-        doc = read_json(folder / LIGHTFIELD_FILE, "light field file")
-        uniform = doc.get("uniform") or {}
-        lines = [f"{len(doc.get('views') or [])} views on {' and '.join(doc.get('axes') or ['X'])}",
-                 *check_lines(doc.get("check")),
-                 "HCI layout written" if uniform.get("hci") else (uniform.get("refusal") or "HCI layout not written")]
-        self.summary.setText("\n".join(lines))
-        self._originals = [QPixmap(str(folder / name)) for name, _ in EPI_FILES]
-        for pix, (caption, picture) in zip(self._originals, self.pictures):
+        content = folder_section(section).content(folder)
+        self.summary.setText("\n".join(content.lines))
+        self._originals = [QPixmap(path) for path, _ in content.pictures]
+        for pix, (caption, picture), (_, title) in zip(self._originals, self.pictures, content.pictures):
+            caption.setText(title)
             for w in (caption, picture):
                 w.setVisible(not pix.isNull())
         self.folder = folder

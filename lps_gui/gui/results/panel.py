@@ -142,15 +142,17 @@ class ResultsPanel(QWidget):
 
     # ------------------------------------------------------------------ showing
     def show_lightfield(self, folder: Path | str) -> None:
-        """A "Light field" tab with the folder's EPIs and epipolar numbers (replacing an earlier one), selected."""
+        """A "Light field" tab with the folder's EPIs and epipolar numbers (replacing an earlier one), selected; its
+        title and content are the registry's (``report/registry.FOLDER_SECTIONS``)."""
         from lps_gui.gui.results.lightfield import LightFieldPage
+        from lps_gui.report.registry import folder_section
 
         page = getattr(self, "lightfield_page", None)
         if page is None:
             page = self.lightfield_page = LightFieldPage()
-        page.load(folder)  # an InputError leaves the tabs as they were
+        page.load(folder, "lightfield")  # an InputError leaves the tabs as they were
         if self.tabs.indexOf(page) < 0:
-            self.tabs.addTab(page, "Light field")
+            self.tabs.addTab(page, folder_section("lightfield").title)
         self.tabs.setCurrentWidget(page)
 
     def set_results(self, results: Results | dict[str, Any], session_dir: Path | None = None,
@@ -368,14 +370,14 @@ class ResultsPanel(QWidget):
         return True
 
     def _fill_tables(self, results: Results) -> None:
-        from lps_gui.gui.results.planar import planar_table_rows
         from lps_gui.report.pages.summary import summary_rows
+        from lps_gui.report.registry import figure_table
 
         self._fill_targets(results)
         self.mounted_targets.set_results(results)
-        planar_rows = planar_table_rows(results)  # None: a single-axis session
-        if planar_rows is not None:
-            self.iso_table.set_rows(planar_rows)
+        own_rows = figure_table(results)  # a section with a report of its own (planar); None: the line's rows
+        if own_rows is not None:
+            self.iso_table.set_rows(own_rows)
             return
         rows = summary_rows(results)
         self.iso_table.set_rows([(r.name, r.text(), r.u_text(), r.unit) for r in rows])
@@ -408,10 +410,10 @@ class ResultsPanel(QWidget):
 
     def _fill_positions(self, results: Results) -> None:
         """Format the per-position table on a worker thread (hundreds of rows), then show it."""
-        from lps_gui.gui.results.planar import position_table_for
+        from lps_gui.report import registry
 
         self._pending_table = True
-        job = owned_by(Job("format positions", lambda: position_table_for(results), pass_progress=False), self)
+        job = owned_by(Job("format positions", lambda: registry.position_table(results), pass_progress=False), self)
         job.succeeded.connect(lambda table, r=results: self._show_positions(table, r))
         job.finished.connect(lambda: setattr(self, "_pending_table", False))
         job.start()

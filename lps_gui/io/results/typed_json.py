@@ -87,8 +87,13 @@ class Section:
         return cls(**values)
 
 
+_PLAIN = frozenset((float, int, str, bool))
+
+
 def _as_json(value: Any) -> Any:
     """A value as JSON data: a section as its object, lists and objects copied (the section keeps its own)."""
+    if value is None or type(value) in _PLAIN:  # most values (a position's columns): no ABC checks
+        return value
     if isinstance(value, Section):
         return value.to_dict()
     if isinstance(value, (list, tuple)):

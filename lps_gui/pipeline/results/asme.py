@@ -12,6 +12,7 @@ covariance; position against each frame's time after its move
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import replace
 from typing import Any
 
@@ -28,7 +29,9 @@ from lps_gui.core.metrology.asme_b5_64 import (
     tur,
 )
 from lps_gui.core.truth.stage_errors import StageErrorModel, Vibration
-from lps_gui.io.results.sections import AsmeB564
+from lps_gui.io.results.model import Results
+from lps_gui.io.results.sections import AsmeB564, Uncertainty
+from lps_gui.pipeline.results.verdict import measured
 from lps_gui.pipeline.session_input import SessionInput
 
 SPEC_TOLERANCES = {"incremental_step": ("min_incremental_motion_um", "\u00b5m"),
@@ -43,11 +46,11 @@ def test_options(session: SessionInput, options: EstimateOptions) -> EstimateOpt
     return options
 
 
-def add_asme_results(results: dict[str, Any], session: SessionInput, obs: Observations, est: LpsEstimate,
-                     iso230_2: dict[str, Any] | None, figures_k2: dict[str, Any]) -> dict[str, Any]:
-    """``results["asme_b5_64"]`` of a line session from its ISO 230-2 figures and their U (k = 2), passed in (after
-    the uncertainty budget: the ratios need U); the ratios are the verdict's rows of the document so far."""
-    section: dict[str, Any] = {"figures": named_figures(iso230_2, figures_k2)}
+def asme_results(session: SessionInput, obs: Observations, est: LpsEstimate, figures: Mapping[str, Any],
+                 uncertainty: Uncertainty) -> AsmeB564:
+    """results.json ``asme_b5_64`` of a line session from its figures and their U (k = 2), as the builders made
+    them (after the uncertainty budget: the ratios need U); the ratios are the verdict's rows of those values."""
+    section: dict[str, Any] = {"figures": named_figures(figures.get("iso230_2"), uncertainty.get("figures_k2") or {})}
     test = session.meta.get("asme_test") or {}
     records = {r.index: r for r in session.records}
     if test.get("test") == "min-step":
@@ -55,19 +58,18 @@ def add_asme_results(results: dict[str, Any], session: SessionInput, obs: Observ
     elif test.get("test") == "settling":
         section["settling"] = settling_section(obs, est, records, session, test)
     spec = session.meta.get("stage_spec") or {}
-    section["test_uncertainty_ratio"] = tur_rows({**results, "asme_b5_64": section}, spec)
-    results["asme_b5_64"] = AsmeB564.of(**section).to_dict()  # as the readers read it
-    return results
+    section["test_uncertainty_ratio"] = tur_rows(measured(("X",), figures, uncertainty, AsmeB564.of(**section)), spec)
+    return AsmeB564.of(**section)  # as the readers read it
 
 
-def tur_rows(results: dict[str, Any], spec: dict[str, Any]) -> list[dict[str, Any]]:
+def tur_rows(values: Results, spec: dict[str, Any]) -> list[dict[str, Any]]:
     """Per specified figure: tolerance, U (k = 2) of the figure compared, and their ratio (None without U); the verdict's
-    rows, the ASME test's own (min-step, settling) among them."""
+    rows of ``values`` (:func:`lps_gui.pipeline.results.verdict.measured`), the ASME test's own (min-step, settling)
+    among them."""
     from lps_gui.core.metrology.verdict import verdicts
-    from lps_gui.io.results.model import as_results
 
     return [{"figure": v.name, "quantity": v.quantity, "tolerance": v.limit, "U": v.u_k2, "unit": v.unit,
-             "tur": tur(v.limit, v.u_k2)} for v in (verdicts(as_results(results), spec) if spec else [])]
+             "tur": tur(v.limit, v.u_k2)} for v in (verdicts(values, spec) if spec else [])]
 
 
 def stop_keys(obs: Observations, records: dict[int, Any]) -> np.ndarray:

@@ -158,11 +158,16 @@ def board_truth_rotations(truth_meta: dict[str, Any] | None, truth: dict[str, An
     return 1e-6 * np.array([by_index[int(i)] for i in index]) @ F.T
 
 
-def add_columns(positions: list[dict[str, Any]], columns: dict[str, list[Any]]) -> None:
-    """Append ``columns`` (K each) to the position rows, in place."""
-    for i, row in enumerate(positions):
-        for key, values in columns.items():
-            row[key] = values[i]
+def with_columns(row: dict[str, Any], columns: dict[str, list[Any]], i: int,
+                 lens_sigma_um: float | None = None) -> dict[str, Any]:
+    """A new position row: ``row`` with view ``i``'s values of ``columns`` and, when the lens misfit has one, its
+    ``sigma_lens_um`` added in quadrature to ``sigma_total_um`` (``row`` itself untouched)."""
+    out = {**row, **{key: values[i] for key, values in columns.items()}}
+    if lens_sigma_um is not None:
+        out["sigma_lens_um"] = json_float(lens_sigma_um)
+        if out.get(SIGMA_TOTAL_UM) is not None:
+            out[SIGMA_TOTAL_UM] = json_float(np.hypot(out[SIGMA_TOTAL_UM], lens_sigma_um))
+    return out
 
 
 def target_pose_solution(obs: Any, est: Any) -> tuple[PoseSolution, Any]:
@@ -263,47 +268,64 @@ def planar_truth_rotations(truth_meta: dict[str, Any] | None, index: np.ndarray)
     return 1e-6 * angles[index] @ np.asarray(truth_meta["rig"]["axes_board"], float).T
 
 
-def add_error_motions(results: dict[str, Any], session: Any, obs: Any, est: Any) -> None:
-    """results.json ``error_motions`` and the positions' SPEC 14 columns, where the poses allow (in place).
+@dataclass(frozen=True)
+class ErrorMotionsOutcome:
+    """What the error motions give the results, as new values (the rows, figures and flags passed in untouched):
+    the section, the position rows with SPEC 14's columns (and the lens misfit's sigma), the figures with the
+    angles' findings as the profiles resolve them, the flags with the lens check's."""
+
+    section: dict[str, Any]  # results.json ``error_motions``, written through its reader (ErrorMotionsSection)
+    positions: list[dict[str, Any]]
+    figures: dict[str, Any]
+    flags: list[dict[str, Any]]
+
+
+def session_motions(session: Any, obs: Any, est: Any) -> ErrorMotionResults | None:
+    """The error motions of a session where the poses allow (None otherwise).
 
     A line: from the targets' joint pose solve or a single board's 6-DOF poses; a plane: from the
     targets' joint pose solve (a single board's planar fit keeps one orientation and has no per-view poses).
     """
     meta, where = session.meta, str(session.folder / "session.json")
     if obs.segment is not None:
-        return  # one board moved between segments: its placements are tied by repeated stops, never seen together
+        return None  # one board moved between segments: its placements are tied by repeated stops, never seen together
     if obs.D == 1:
-        motions = session_error_motions(meta, where, obs, est, session.truth)
-    elif obs.mounted is not None:
-        tool_point(meta, where)  # checked alike, used by one axis only
-        sol, intrinsics = target_pose_solution(obs, est)
-        w = planar_truth_rotations(meta.get("truth"), np.asarray(obs.index))
-        motions = None
-        if int(sol.used.sum()) >= 3:
-            from lps_gui.pipeline.results.lens_model import lens_model_check
+        return session_error_motions(meta, where, obs, est, session.truth)
+    if obs.mounted is None:
+        return None
+    tool_point(meta, where)  # checked alike, used by one axis only
+    sol, intrinsics = target_pose_solution(obs, est)
+    w = planar_truth_rotations(meta.get("truth"), np.asarray(obs.index))
+    if int(sol.used.sum()) < 3:
+        return None
+    from lps_gui.pipeline.results.lens_model import lens_model_check
 
-            check = lens_model_check(sol, obs, intrinsics)
-            motions = planar_error_motion_results(sol, obs.target_mm, w, lens=check.misfit)
-            motions.lens = check
-    else:
-        motions = None
+    check = lens_model_check(sol, obs, intrinsics)
+    motions = planar_error_motion_results(sol, obs.target_mm, w, lens=check.misfit)
+    motions.lens = check
+    return motions
+
+
+def error_motions_outcome(session: Any, obs: Any, est: Any, positions: list[dict[str, Any]], figures: dict[str, Any],
+                          flags: list[dict[str, Any]]) -> ErrorMotionsOutcome | None:
+    """results.json ``error_motions`` and the new positions, figures and flags it makes, where the poses allow
+    (None otherwise: the results keep the values they have)."""
+    motions = session_motions(session, obs, est)
     if motions is None:
-        return
-    add_columns(results["positions"], motions.columns)
-    results["error_motions"] = motions.section
+        return None
+    section = dict(motions.section)
+    lens_um = None
     if motions.lens is not None:
-        motions.section["lens_model"] = motions.lens.section
-        results.setdefault("flags", []).extend(motions.lens.flags)
+        section["lens_model"] = motions.lens.section
+        flags = [*flags, *motions.lens.flags]
         lens_um = motions.lens.position_sigma_um
-        if lens_um is not None and len(results["positions"]) == len(lens_um):  # the positions carry the lens misfit
-            for row, s in zip(results["positions"], lens_um):
-                row["sigma_lens_um"] = json_float(s)
-                if row.get(SIGMA_TOTAL_UM) is not None:
-                    row[SIGMA_TOTAL_UM] = json_float(np.hypot(row[SIGMA_TOTAL_UM], s))
-    results["error_motions"] = ErrorMotionsSection.of(**motions.section).to_dict()  # as the readers read it
-    figures = results.get("figures") or {}
+        if lens_um is not None and len(positions) != len(lens_um):  # the positions carry the lens misfit
+            lens_um = None
+    positions = [with_columns(row, motions.columns, i, None if lens_um is None else lens_um[i])
+                 for i, row in enumerate(positions)]
     if obs.D == 1 and figures.get("angles_resolution"):  # "Max |roll|" is a finding only if EAX's profile is
-        names = iso_names(motions.section.get("axis", "X"))
-        verdicts = motions.section.get("resolved") or {}
-        figures["angles_resolution"] = with_profile_resolution(
-            figures["angles_resolution"], {a: bool(verdicts.get(names[a], True)) for a in ANGULAR})
+        names = iso_names(section.get("axis", "X"))
+        verdicts = section.get("resolved") or {}
+        figures = {**figures, "angles_resolution": with_profile_resolution(
+            figures["angles_resolution"], {a: bool(verdicts.get(names[a], True)) for a in ANGULAR})}
+    return ErrorMotionsOutcome(ErrorMotionsSection.of(**section).to_dict(), positions, figures, list(flags))

@@ -2,8 +2,8 @@
 
 :func:`lps_gui.pipeline.estimate.estimate_session` is the way here for every
 D; this module only assembles the planar parts: ``axes: ["X", "Y"]``, the
-planar positions table, ``figures.planar`` and the summary rows. The
-environment and the uncertainty budget are added by the caller as for a line.
+planar positions table, ``figures.planar`` and the summary rows (:func:`summary_csv_rows`, made by the caller
+from the finished document). The environment and the uncertainty budget are added by the caller as for a line.
 """
 from __future__ import annotations
 
@@ -23,6 +23,7 @@ from lps_gui.io.board_file import board_to_dict
 from lps_gui.io.intrinsics_file import intrinsics_to_dict
 from lps_gui.io.results.document import FORMAT
 from lps_gui.io.results.sections import Figures, Flag, Parameters, TruthComparison
+from lps_gui.pipeline.results.parts import AxisResults
 from lps_gui.pipeline.session_checks import session_inputs
 from lps_gui.pipeline.session_input import SessionInput
 from lps_gui.sim.truth import truth_comparison
@@ -34,8 +35,8 @@ def _f(x: Any) -> float | None:
 
 
 def build_planar_results(session: SessionInput, obs: Observations, est: LpsEstimate, intrinsics_source: str
-                         ) -> dict[str, Any]:
-    """The results.json document of a planar session (SPEC 10; schema in docs/ARCHITECTURE.md)."""
+                         ) -> AxisResults:
+    """The results.json document of a planar session (SPEC 10; schema in docs/ARCHITECTURE.md) and its values."""
     dev = est.deviation_um(obs.target_mm)
     sig = 1e3 * est.sigma_s_mm
     sig_total = 1e3 * est.sigma_total_mm
@@ -84,23 +85,24 @@ def build_planar_results(session: SessionInput, obs: Observations, est: LpsEstim
         parameters["intrinsics_estimated"] = dict(zip(INTRINSIC_NAMES, st.intrinsics.vector().tolist()))
     parameters = Parameters.of(**parameters).to_dict()
     inputs = session_inputs(session, intrinsics_source, {session.corners_path.name: obs.source_sha256})
+    board, flags = board_to_dict(obs.board), [Flag.of(**f).to_dict() for f in est.flags]
     results: dict[str, Any] = {
         "format": FORMAT, "software": {"name": "lps-calib", "version": __version__},
         "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "method": est.method, "axes": ["X", "Y"],
-        "settings": est.options.to_dict(), "inputs": inputs, "board": board_to_dict(obs.board),
+        "settings": est.options.to_dict(), "inputs": inputs, "board": board,
         "intrinsics": intrinsics_to_dict(obs.intrinsics),
         "session_meta": {k: session.meta.get(k) for k in ("camera", "stage", "plan", "stage_spec", "created")
                          if k in session.meta},
         "parameters": parameters, "positions": positions, "figures": {"planar": planar},
-        "flags": [Flag.of(**f).to_dict() for f in est.flags], "timings_s": dict(est.timings_s),
+        "flags": flags, "timings_s": dict(est.timings_s),
     }
-    truth = session.truth
+    truth, tc = session.truth, None
     if truth is not None:
-        results["truth_comparison"] = TruthComparison.of(**truth_comparison(obs, est, truth, positions)).to_dict()
+        tc = results["truth_comparison"] = TruthComparison.of(**truth_comparison(obs, est, truth, positions)).to_dict()
         _add_truth_to_nodes(planar["nodes"], obs, positions, valid)
-    results["figures"] = Figures.of(planar=planar).to_dict()  # written through the readers' definition
-    results["summary"] = summary_csv_rows(results)
-    return results
+    figures = results["figures"] = Figures.of(planar=planar).to_dict()  # written through the readers' definition
+    results["summary"] = []  # in its place: summary.csv's rows are made from the finished document
+    return AxisResults(results, parameters, board, positions, figures, flags, tc)
 
 
 def _add_truth_to_nodes(nodes: list[dict[str, Any]], obs: Observations, positions: list[dict],

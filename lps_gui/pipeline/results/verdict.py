@@ -7,9 +7,17 @@ without a stage specification gets "no specification", never a PASS.
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 from typing import Any
 
-from lps_gui.io.results.document import json_float, summary_csv_rows, verdict_csv_rows
+from lps_gui.io.results.document import (
+    FORMAT,
+    json_float,
+    summary_csv_rows,
+    verdict_csv_rows,
+)
+from lps_gui.io.results.model import Results
+from lps_gui.io.results.sections import AsmeB564, Figures, Uncertainty
 
 DECISION_RULE = ("ISO 14253-1: PASS when the figure plus its expanded uncertainty U (k = 2) is within the limit, "
                  "FAIL when the figure minus U is beyond it, not resolved when the limit lies within +-U")
@@ -20,13 +28,24 @@ def check_key(name: str) -> str:
     return re.sub(r"[^a-z0-9]+", "_", name.lower()).strip("_")
 
 
-def verdict_section(results: dict[str, Any]) -> dict[str, Any]:
-    """results.json ``verdict``: the decision rule, the overall word and line, one row per specified figure."""
+def measured(axes: tuple[str, ...], figures: Mapping[str, Any], uncertainty: Uncertainty | None,
+             asme_b5_64: AsmeB564 | None = None) -> Results:
+    """The typed sections the verdict rows read (figures, their U (k = 2), the ASME test), made from the values
+    the builders computed: no results document is read (:mod:`lps_gui.pipeline.results.parts`)."""
+    return Results(format=FORMAT, axes=tuple(axes), positions=(), source=BUILDER,
+                   figures=Figures.from_dict(figures, "figures", BUILDER), uncertainty=uncertainty, asme_b5_64=asme_b5_64)
+
+
+BUILDER = "results builder"  # the source the messages name when a builder's value does not type
+
+
+def verdict_section(values: Results, spec: Mapping[str, Any] | None) -> dict[str, Any]:
+    """results.json ``verdict``: the decision rule, the overall word and line, one row per specified figure, of
+    the sections :func:`measured` typed against the stage specification (session.json ``stage_spec``)."""
     from lps_gui.core.metrology.verdict import overall, overall_word
     from lps_gui.io.results.verdict_rows import session_verdicts
 
-    spec = (results.get("session_meta") or {}).get("stage_spec") or results.get("stage_spec")
-    rows = session_verdicts(results, spec)  # a plane's per-axis and squareness rows too
+    rows = session_verdicts(values, dict(spec) if spec else None)  # a plane's per-axis and squareness rows too
     return {
         "decision_rule": DECISION_RULE,
         "overall": overall_word([r.verdict for r in rows]),
@@ -39,12 +58,10 @@ def verdict_section(results: dict[str, Any]) -> dict[str, Any]:
     }
 
 
-def add_verdict(results: dict[str, Any]) -> dict[str, Any]:
-    """Add ``verdict`` and rebuild ``summary`` (now with U and the verdict rows); in place, also returned."""
-    results["verdict"] = verdict_section(results)
-    results["summary"] = planar_summary_rows(results) if len(results.get("axes") or ["X"]) == 2 else (
-        summary_csv_rows(results))
-    return results
+def summary_rows(results: dict[str, Any]) -> list[tuple[Any, ...]]:
+    """summary.csv's rows (with U and the verdict rows): a view of the finished document, like positions.csv,
+    made once every section is in it."""
+    return planar_summary_rows(results) if len(results.get("axes") or ["X"]) == 2 else summary_csv_rows(results)
 
 
 CSV_NAMES = {"squareness_urad": "squareness", "scale_x_ppm": "scale_x", "scale_y_ppm": "scale_y"}  # page 1's key

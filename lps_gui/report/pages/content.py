@@ -12,7 +12,7 @@ from lps_gui.report.figures.spec import FigureSpec
 
 @dataclass
 class SectionContent:
-    """What one section tab shows: its figures, a few lines of findings, one table."""
+    """What one section tab shows: its figures, a few lines of findings, one table (or a folder's pictures)."""
 
     title: str
     figures: list[FigureSpec]
@@ -20,3 +20,4 @@ class SectionContent:
     header: list[str] = field(default_factory=list)
     rows: list[list[str]] = field(default_factory=list)
     colors: list[str | None] = field(default_factory=list)
+    pictures: list[tuple[str, str]] = field(default_factory=list)  # (image file, caption): a folder's pictures

@@ -200,3 +200,24 @@ def paint_planar_report(flow: Any, meta: dict[str, Any], results: Results, title
     header, body, widths = planar_position_table(results)
     colors = ["#c00000" if r[-1] else None for r in body]
     flow.table(header, body, widths, size_pt=6.3, row_mm=3.35, align_right_from=0, colors=colors)
+
+
+def has_planar(results: Results) -> bool:
+    """Two axes (SPEC 10): the planar report instead of the line report."""
+    return results.planar
+
+
+def planar_panel_rows(results: Results) -> list[tuple[str, str, str, str]] | None:
+    """The results panel's figures table of a planar session (figure, value, U (k = 2), unit and note): page 1's
+    rows and its truth check; None when the results carry no planar figures (the line's table then)."""
+    if results.figures.planar is None:
+        return None
+    rows = planar_summary_rows(results)
+    if results.truth_comparison and results.truth_comparison.position_rms_error_um is not None:
+        rows += [replace(r, name=f"Truth: {r.name}") for r in planar_truth_rows(results)]
+    return [(r.name, r.text(), r.u_text(), f"{r.unit}  {r.note}".strip()) for r in rows]
+
+
+def planar_positions(results: Results) -> tuple[list[str], list[list[str]]]:
+    """Header and rows of the per-position table the report prints (for the results panel)."""
+    return planar_position_table(results)[:2]

@@ -21,8 +21,7 @@ from lps_gui.report.figures.plots import figure_by_key, figures_from_results, wi
 from lps_gui.report.pages import asme as asme_pages
 from lps_gui.report.pages import sections as R
 from lps_gui.report.pages import summary as S
-from lps_gui.report.pages.planar import paint_planar_report
-from lps_gui.report.registry import AFTER_FIGURES, AFTER_PLOTS, paint_sections
+from lps_gui.report.registry import AFTER_FIGURES, AFTER_PLOTS, own_report, paint_sections
 
 log = logging.getLogger(__name__)
 
@@ -94,9 +93,10 @@ def render_report(session_dir: Path, results: Results | dict | None = None, out:
     steps = ("front pages", "plots", "outliers", "table")
     with pdf_file(out, f"LPS measurement report: {name}",
                   f"lps-calib {__version__} \u00b7 {name} \u00b7 {results.created or ''}") as flow:
-        if results.planar:  # a planar session (SPEC 10)
-            progress(0, len(steps), "planar report")
-            paint_planar_report(flow, meta, results, S.title_rows(meta, results, __version__), FIGURE_HEIGHT_MM)
+        own = own_report(results)  # a planar session's (SPEC 10): the registry's report of its own
+        if own is not None and own.report is not None:
+            progress(0, len(steps), f"{own.name} report")
+            own.report(flow, meta, results, S.title_rows(meta, results, __version__), FIGURE_HEIGHT_MM)
         else:
             _paint_line_report(flow, session_dir, meta, results, __version__, progress, steps)
     progress(len(steps), len(steps), f"wrote {out}")

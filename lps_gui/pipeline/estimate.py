@@ -331,6 +331,10 @@ def session_figures(obs: Observations, est: LpsEstimate) -> dict[str, Any]:
         corr = noise_corrected_iso(obs.target_mm, obs.direction, obs.run, dev_um, valid, independent_sigma_um(sigma_um))
         figures["iso230_2"] = apply_noise_correction(figures["iso230_2"], corr)
     single = figures.get("single_run")
+    if single is not None and single.get("max_abs_deviation_um") is not None:  # a max over noisy deviations too
+        from lps_gui.core.metrology.iso230_noise import noise_corrected_max_abs
+
+        single.update(noise_corrected_max_abs(dev_um, valid, sigma_um))
     if single is not None and valid.sum() >= 3:
         single.update(scale_with_uncertainty(obs, est, valid, sigma_um))
     if valid.any():

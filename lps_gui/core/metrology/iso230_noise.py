@@ -27,7 +27,7 @@ Pure numpy, a fixed seed: the same data give the same figures.
 """
 from __future__ import annotations
 
-from typing import Any, Callable, Sequence
+from typing import Any, Sequence
 
 import numpy as np
 

@@ -27,8 +27,8 @@ Pure numpy, a fixed seed: the same data give the same figures.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np

@@ -2,6 +2,8 @@
 (issue 35: max |roll| over 48 views covered in 50 %, a row's EBX p-v in 20 %: the max picks the noise)."""
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from lps_gui.core.metrology.extreme_noise import corrected_extreme
@@ -17,24 +19,25 @@ def _profile(rng: np.random.Generator, x: np.ndarray, amplitude: float) -> np.nd
     return amplitude * np.sin(2.0 * np.pi * x / rng.uniform(20.0, 60.0) + rng.uniform(0.0, 2.0 * np.pi))
 
 
-def _score(z: list[float]) -> tuple[float, float]:
-    z = np.asarray(z)
+def _coverage(seed: int, x: np.ndarray, amplitude: float, z_of: Callable[..., float]) -> tuple[float, float]:
+    """Coverage of U (k = 2) and mean (error/sigma)^2 over ``TRIALS`` profiles: ``z_of(rng, truth)`` measures one."""
+    rng = np.random.default_rng(seed)
+    z = np.array([z_of(rng, _profile(rng, x, amplitude)) for _ in range(TRIALS)])
     return float(np.mean(np.abs(z) <= 2.0)), float(np.mean(z**2))
 
 
 def test_max_abs_angle_over_noisy_views_is_covered_by_its_u():
     """48 views (12 stops x 4) of a roll profile 5 x the per-view sigma: the max |x| picked the noise (before,
     the raw max and U = k x the median sigma: coverage 80 %, mean z^2 3.0 on these draws); now U holds."""
-    rng = np.random.default_rng(35)
     x = np.repeat(np.linspace(0.0, 22.0, 12), 4)
     sigma = np.full(x.size, 400.0)
-    z = []
-    for _ in range(TRIALS):
-        truth = _profile(rng, x, 2000.0)
+
+    def z_of(rng: np.random.Generator, truth: np.ndarray) -> float:
         r = max_abs_resolution(truth + sigma * rng.standard_normal(x.size), sigma, x, np.ones(x.size, bool))
         U = extreme_uncertainties({"angles_resolution": {"roll": r}}, 2.0, {"roll": 400.0})["max_abs_roll"]
-        z.append((r["max_abs_urad"] - np.max(np.abs(truth))) / (U / 2.0))
-    coverage, z2 = _score(z)
+        return (r["max_abs_urad"] - np.max(np.abs(truth))) / (U / 2.0)
+
+    coverage, z2 = _coverage(35, x, 2000.0, z_of)
     assert coverage >= 0.9 and 0.4 <= z2 <= 2.0, (coverage, z2)
 
 
@@ -42,33 +45,30 @@ def test_span_over_many_targets_is_covered_by_its_u():
     """A p-v over 40 per-target means of a profile 1.5 x their sigma (a row's angles over its stops): the p-v
     of the means picked the noise (before, the raw p-v and U = k sqrt 2 sigma: coverage 40 %, mean z^2 4.2 on
     these draws); the span and its U now hold (a little wide here: mean z^2 0.44)."""
-    rng = np.random.default_rng(36)
     x = np.linspace(0.0, 40.0, 40)
     sigma = np.full(x.size, 10.0)
-    z = []
-    for _ in range(TRIALS):
-        truth = _profile(rng, x, 15.0)
+
+    def z_of(rng: np.random.Generator, truth: np.ndarray) -> float:
         span = profile_span(truth + sigma * rng.standard_normal(x.size), sigma, x, np.ones(x.size, bool))
         U = extreme_uncertainties({"straightness": {"v1": span.to_dict("um")}}, 2.0, {})["straightness_span_1"]
-        z.append((span.span - np.ptp(truth)) / (U / 2.0))
-    coverage, z2 = _score(z)
+        return (span.span - np.ptp(truth)) / (U / 2.0)
+
+    coverage, z2 = _coverage(36, x, 15.0, z_of)
     assert coverage >= 0.9 and 0.3 <= z2 <= 2.0, (coverage, z2)
 
 
 def test_max_abs_deviation_takes_out_the_noise_and_its_reference():
     """Deviations relative to a reference capture (its noise common to all) of a profile 2 x their sigma:
     max |deviation| and its U (before, the raw max and U = k sigma: coverage 77 %, mean z^2 2.9 on these draws)."""
-    rng = np.random.default_rng(37)
     x = np.repeat(np.linspace(0.0, 22.0, 12), 4)
-    sigma = np.full(x.size, 3.0)
-    z = []
-    for _ in range(TRIALS):
-        truth = _profile(rng, x, 6.0)
+
+    def z_of(rng: np.random.Generator, truth: np.ndarray) -> float:
         measured = truth + 2.1 * rng.standard_normal(x.size) + 2.1 * rng.standard_normal()
-        figures = {"single_run": noise_corrected_max_abs(measured, np.ones(x.size, bool), sigma)}
+        figures = {"single_run": noise_corrected_max_abs(measured, np.ones(x.size, bool), np.full(x.size, 3.0))}
         U = iso_noise_uncertainties({"budget": []}, figures, 2.0)["max_abs_deviation_um"]
-        z.append((figures["single_run"]["max_abs_deviation_um"] - np.max(np.abs(truth))) / (U / 2.0))
-    coverage, z2 = _score(z)
+        return (figures["single_run"]["max_abs_deviation_um"] - np.max(np.abs(truth))) / (U / 2.0)
+
+    coverage, z2 = _coverage(37, x, 6.0, z_of)
     assert coverage >= 0.85 and 0.4 <= z2 <= 1.5, (coverage, z2)
 
 

@@ -9,7 +9,10 @@ import numpy as np
 from lps_gui.core.metrology.extreme_noise import corrected_extreme
 from lps_gui.core.metrology.iso230_noise import noise_corrected_max_abs
 from lps_gui.core.metrology.resolution import max_abs_resolution, profile_span
-from lps_gui.core.metrology.uncertainty_budget import extreme_uncertainties, iso_noise_uncertainties
+from lps_gui.core.metrology.uncertainty_budget import (
+    extreme_uncertainties,
+    iso_noise_uncertainties,
+)
 
 TRIALS = 30
 

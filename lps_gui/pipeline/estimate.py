@@ -338,7 +338,7 @@ def session_figures(obs: Observations, est: LpsEstimate) -> dict[str, Any]:
     if single is not None and valid.sum() >= 3:
         single.update(scale_with_uncertainty(obs, est, valid, sigma_um))
     if valid.any():
-        figures.update(straightness_figures(obs.target_mm, est, valid))
+        figures.update(straightness_figures(obs.target_mm, est, valid, obs.corners_px))
     if six is not None and valid.any():
         figures["angles_span_urad"] = dict(zip(("roll", "pitch", "yaw"), (_f(v) for v in np.ptp(six.angles_urad[valid], axis=0))))
     return Figures.of(**figures).to_dict()  # written through the readers' definition

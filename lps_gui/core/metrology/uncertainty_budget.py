@@ -283,7 +283,8 @@ def extreme_uncertainties(figures: dict[str, Any], k: float, angle_sigma_urad: d
 
     A p-v or a max |x| is printed with the noise's selection taken out
     (:mod:`lps_gui.core.metrology.extreme_noise`): k times that correction's standard uncertainty
-    (``u_span_um``, ``u_max_abs_urad``). Without it (a document written before), a p-v of per-target
+    (``u_span_um``, ``u_max_abs_urad``; a straightness's with ``u_model_um``, the constant-orientation
+    model's overstatement of a carriage rotation, in quadrature). Without it (a document written before), a p-v of per-target
     means is the difference of two of them: k sqrt 2 times the sigma of one mean
     (``figures["straightness"]["v1"]["sigma_um"]``), a max |angle| one view's angle: k times the median
     per-view sigma (``angle_sigma_urad``). ``straightness_span_max`` is the U of the larger span, the one
@@ -297,10 +298,11 @@ def extreme_uncertainties(figures: dict[str, Any], k: float, angle_sigma_urad: d
         spans = []
         for j in (1, 2):
             d = st.get(f"v{j}") or {}
+            u_model = float(d.get("u_model_um") or 0.0)  # the model's overstatement of a rotation (board plane)
             if d.get("u_span_um") is not None:
-                out[f"straightness_span_{j}"] = k * float(d["u_span_um"])
+                out[f"straightness_span_{j}"] = k * math.hypot(float(d["u_span_um"]), u_model)
             elif d.get("sigma_um") is not None:
-                out[f"straightness_span_{j}"] = k * math.sqrt(2.0) * float(d["sigma_um"])
+                out[f"straightness_span_{j}"] = k * math.hypot(math.sqrt(2.0) * float(d["sigma_um"]), u_model)
             if f"straightness_span_{j}" in out and d.get("span_um") is not None:
                 spans.append((float(d["span_um"]), out[f"straightness_span_{j}"]))
         if spans:

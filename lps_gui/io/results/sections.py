@@ -154,6 +154,7 @@ class SpanResolution(Section):
     resolved: bool | None = None
     measured_span_um: float | None = None  # before the noise's selection is taken out (span_um: after)
     u_span_um: float | None = None  # span_um's standard uncertainty (core/metrology/extreme_noise.py)
+    u_model_um: float | None = None  # the constant-orientation model's share (pipeline/results/board_plane.py)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -84,3 +84,47 @@ def test_the_correction_is_deterministic_and_takes_correlated_noise():
     common = corrected_extreme(v, np.ones((5, 1)), "span")
     assert abs(common.bias) < 1e-9 and abs(common.corrected - 5.0) < 1e-9
     assert corrected_extreme(np.array([1.0, np.nan]), np.ones(2)) is None
+
+
+def test_a_bow_is_not_read_as_noise_of_its_span():
+    """The honesty campaign's line-both geometry (12 targets over 22 mm, 4 views each, 1.9 um a view) with a
+    ~1.1 mm roll bow (a wave of 40-80 mm): second differences read the bow's curvature as 28 um of noise per
+    mean, U of the span ~116 um on errors of ~1 um (before: mean z^2 ~0.002 on these draws); fourth ones do not
+    (0.26: the extreme's u is 1.5 x its spread by design, core/metrology/extreme_noise.py)."""
+    x = np.repeat(np.linspace(0.0, 22.0, 12), 4)
+    sigma = np.full(x.size, 1.9)
+    rng = np.random.default_rng(38)
+    z = []
+    for _ in range(TRIALS):
+        truth = 560.0 * np.sin(2.0 * np.pi * x / rng.uniform(40.0, 80.0) + rng.uniform(0.0, 2.0 * np.pi))
+        span = profile_span(truth + sigma * rng.standard_normal(x.size), sigma, x, np.ones(x.size, bool),
+                            difference_order=4)
+        U = extreme_uncertainties({"straightness": {"v1": span.to_dict("um")}}, 2.0, {})["straightness_span_1"]
+        z.append((span.span - np.ptp(truth)) / (U / 2.0))
+    z2 = float(np.mean(np.square(z)))
+    assert np.mean(np.abs(z) <= 2.0) >= 0.9 and 0.15 <= z2 <= 2.0, z2
+
+
+def test_a_rotation_read_as_a_displacement_is_overstated_by_the_corners_field_angle():
+    """Exact projection of a 9 x 6 board at 500 mm before and after a camera rotation w about its x axis: the
+    displacement that moves the corners most alike (least squares) is Z w (1 + f), f the corners' mean squared
+    normalized y (:func:`rotation_read_as_shift`, 0.46 % on the campaign's motions stage), not Z w."""
+    from lps_gui.core.geometry.camera_model import CameraIntrinsics
+    from lps_gui.core.models.constant_orientation import rotation_read_as_shift
+
+    K = np.array([[600.0, 0.0, 322.0], [0.0, 600.0, 238.0], [0.0, 0.0, 1.0]])
+    gx, gy = np.meshgrid(np.arange(9) * 20.0 - 40.0, np.arange(6) * 20.0 - 33.0)
+    X = np.c_[gx.ravel(), gy.ravel(), np.full(gx.size, 500.0)]  # camera frame, board centre ~17 mm off axis
+    w = 2e-3
+    Rx = np.array([[1.0, 0.0, 0.0], [0.0, np.cos(w), -np.sin(w)], [0.0, np.sin(w), np.cos(w)]])
+
+    def image(P: np.ndarray) -> np.ndarray:
+        return P[:, :2] / P[:, 2:]
+
+    shift_y = image(X @ Rx.T)[:, 1] - image(X)[:, 1]  # normalized; a displacement t along y moves each by t / Z
+    read = abs(500.0 * float(np.mean(shift_y)))  # least-squares displacement (all corners at Z)
+    f = rotation_read_as_shift((image(X) * 600.0 + K[:2, 2])[None], CameraIntrinsics((640, 480), K, np.zeros(5)),
+                               np.array([[0.0], [1.0], [0.0]]))[0]
+    assert abs(read / (500.0 * np.tan(w)) - 1.0 - f) < 0.05 * f and f > 0.003
+    spans = extreme_uncertainties({"straightness": {"v1": {"u_span_um": 1.0, "u_model_um": f * 1160.0}}}, 2.0, {})
+    assert abs(spans["straightness_span_1"] - 2.0 * np.hypot(1.0, f * 1160.0)) < 1e-9

@@ -143,23 +143,27 @@ def _correlated_noise(mean: np.ndarray, cov: np.ndarray) -> tuple[float, int, fl
     return chi2, int(lam.size), float(spans.mean() + NOISE_K * spans.std(ddof=1))
 
 
-def difference_noise(mean: np.ndarray) -> float:
+def difference_noise(mean: np.ndarray, order: int = 2) -> float:
     """The scatter of equally spaced per-target means that is not the profile: sqrt(mean(d_k^2) / C(2k, k)),
-    d_k their k-th differences, k = min(4, m - 3) (at least three differences).
+    d_k their k-th differences, k = min(``order``, m - 3) (at least three differences).
 
-    Why k up to 4: white noise's k-th differences have variance C(2k, k) sigma^2 at any k, but a profile's own
-    curvature passes second differences (a 1.1 mm roll bow over 12 targets read as 28 um of noise per mean, 30x
-    the corners' 0.9 um, on the honesty campaign's ``motions`` stage) and cancels in the fourth (any cubic).
+    White noise's k-th differences have variance C(2k, k) sigma^2 at any k, but a profile's own curvature
+    passes second differences (a 1.1 mm roll bow over 12 targets read as 28 um of noise per mean, 30x the
+    corners' 0.9 um, on the honesty campaign's ``motions`` stage) and cancels in the fourth (any cubic).
+    Order 2 stays the default: on the error motions (an angle per stop) that floor also stands for errors
+    that are not noise (a stop's tilt-perspective trade-off); order 4 is for a board-plane straightness,
+    whose U names its one systematic term (pipeline/results/board_plane.py).
     """
     m = int(np.asarray(mean).size)
-    k = min(4, m - 3)
+    k = min(int(order), m - 3)
     if k < 2:
         return 0.0
     return float(np.sqrt(np.mean(np.diff(np.asarray(mean, float), k) ** 2) / math.comb(2 * k, k)))
 
 
 def profile_span(values: np.ndarray, sigma: np.ndarray, target: np.ndarray, valid: np.ndarray,
-                 limit: float | None = None, covariance: np.ndarray | None = None) -> ProfileSpan:
+                 limit: float | None = None, covariance: np.ndarray | None = None,
+                 difference_order: int = 2) -> ProfileSpan:
     """P-v of the per-target means of ``values`` (all runs and directions averaged).
 
     Averaging the captures of one target divides their independent noise by
@@ -174,6 +178,7 @@ def profile_span(values: np.ndarray, sigma: np.ndarray, target: np.ndarray, vali
     constellation's stops share the targets' relative poses, which chain along the row), the
     independent test understates what noise alone produces; with it both the chi-square and the
     noise p-v come from the per-target means' full covariance (:func:`_correlated_noise`).
+    ``difference_order``: of the differences the floor is taken from (:func:`difference_noise`).
     """
     v = np.asarray(values, float)
     s = np.asarray(sigma, float)
@@ -186,7 +191,7 @@ def profile_span(values: np.ndarray, sigma: np.ndarray, target: np.ndarray, vali
     mean = np.bincount(inv, weights=v[ok], minlength=m) / count
     sig_mean = np.sqrt(np.bincount(inv, weights=s[ok] ** 2, minlength=m)) / count
     if m >= 5:  # noise seen in the data: differences of neighbouring targets (keys are sorted)
-        sig_mean = np.maximum(sig_mean, difference_noise(mean))
+        sig_mean = np.maximum(sig_mean, difference_noise(mean, difference_order))
     measured = float(np.ptp(mean))
     sig = float(np.median(sig_mean))
     factor: np.ndarray = sig_mean

@@ -66,7 +66,9 @@ def straightness_figures(target_mm: np.ndarray, est: LpsEstimate, valid: np.ndar
     ok = valid & np.all(np.isfinite(values), axis=1)
     if not ok.any():
         return {}
-    spans = [profile_span(values[:, j], sigma[:, j], target_mm, ok).to_dict("um") for j in (0, 1)]
+    order = 4 if bp is not None else 2  # the board plane's U names its systematic term: curvature is no noise
+    spans = [profile_span(values[:, j], sigma[:, j], target_mm, ok, difference_order=order).to_dict("um")
+             for j in (0, 1)]
     R = getattr(est.state, "R", None)
     if bp is not None and corners_px is not None and R is not None:
         share = rotation_read_as_shift(corners_px[ok], est.state.intrinsics, np.asarray(R) @ bp.frame[:, 1:])

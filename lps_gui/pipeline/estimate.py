@@ -357,10 +357,14 @@ def session_figures(obs: Observations, est: LpsEstimate) -> dict[str, Any]:
         corr = noise_corrected_iso(obs.target_mm, obs.direction, obs.run, dev_um, valid, independent_sigma_um(sigma_um))
         figures["iso230_2"] = apply_noise_correction(figures["iso230_2"], corr)
     single = figures.get("single_run")
+    if single is not None and single.get("max_abs_deviation_um") is not None:  # a max over noisy deviations too
+        from lps_gui.core.metrology.iso230_noise import noise_corrected_max_abs
+
+        single.update(noise_corrected_max_abs(dev_um, valid, sigma_um))
     if single is not None and valid.sum() >= 3:
         single.update(scale_with_uncertainty(obs, est, valid, sigma_um))
     if valid.any():
-        figures.update(straightness_figures(obs.target_mm, est, valid))
+        figures.update(straightness_figures(obs.target_mm, est, valid, obs.corners_px))
     if six is not None and valid.any():
         figures["angles_span_urad"] = dict(zip(("roll", "pitch", "yaw"), (_f(v) for v in np.ptp(six.angles_urad[valid], axis=0))))
     return Figures.of(**figures).to_dict()  # written through the readers' definition

@@ -138,20 +138,26 @@ def line_figure_checks(values: CheckedValues | Mapping[str, Any]) -> list[dict[s
 
 def motion_checks(values: CheckedValues | Mapping[str, Any], target: np.ndarray, used: np.ndarray
                   ) -> list[dict[str, Any]]:
-    """The angular error motions' spans (EAX, EBX, ECX) against ``error_motions.truth``; U = k sqrt 2 sigma of
-    one target's mean, as every p-v the report prints."""
+    """The angular error motions' spans (EAX, EBX, ECX) against ``error_motions.truth``; U = k times the span's
+    own standard uncertainty (``u_span``, the noise's selection taken out), else k sqrt 2 sigma of one mean."""
     em = checked(values).error_motions or {}
     out = []
     for iso, m in (em.get("motions") or {}).items():
         t = (em.get("truth") or {}).get(iso) or {}
         true_values = np.array([np.nan if v is None else v for v in t.get("true_values") or []], dtype=float)
         unit = m.get("unit") or "urad"
-        sigma = m.get(f"sigma_{unit}")
-        if true_values.size != target.size or sigma is None:
+        if true_values.size != target.size or (U := _span_U(m, unit)) is None:
             continue
         out.append(_check(f"{iso} p-v", unit, m.get(f"span_{unit}"), _per_target_span(true_values, target, used),
-                          K * math.sqrt(2.0) * float(sigma), m.get("resolved")))
+                          U, m.get("resolved")))
     return out
+
+
+def _span_U(span: dict[str, Any], unit: str) -> float | None:
+    """U (k = 2) of a p-v as the report states it: from ``u_span``, else k sqrt 2 ``sigma`` (older documents)."""
+    if span.get(f"u_span_{unit}") is not None:
+        return K * float(span[f"u_span_{unit}"])
+    return None if span.get(f"sigma_{unit}") is None else K * math.sqrt(2.0) * float(span[f"sigma_{unit}"])
 
 
 def planar_figure_checks(values: CheckedValues | Mapping[str, Any]) -> list[dict[str, Any]]:
@@ -173,10 +179,9 @@ def planar_figure_checks(values: CheckedValues | Mapping[str, Any]) -> list[dict
             U = Uk.get("scale_ppm") or (None if pl.get(f"scale_{ax}_sigma_ppm") is None
                                         else K * pl[f"scale_{ax}_sigma_ppm"])
             out.append(_check(f"scale {axis}", "ppm", pl[f"scale_{ax}_ppm"], pl[f"scale_{ax}_ppm"] - err, U))
-        st_sigma = a.get("straightness_sigma_um")
+        st = a.get("straightness") or {}
         out.append(_check(f"straightness {axis}", "um", a.get("straightness_um_max"), tc.get(f"straightness_{ax}_um"),
-                          None if st_sigma is None else K * math.sqrt(2.0) * st_sigma,
-                          (a.get("straightness") or {}).get("resolved")))
+                          _span_U({**st, "sigma_um": a.get("straightness_sigma_um")}, "um"), st.get("resolved")))
         iso = ((a.get("iso230_2") or {}).get("iso230_2")) or {}
         true_iso = tc.get(f"iso230_2_{ax}") or {}
         for key in ISO_KEYS:

@@ -17,7 +17,7 @@ def test_a_lone_spike_over_the_noise_max_is_no_finding_when_its_profile_is_flat(
     target, values, sigma, valid = _views()
     values[17] = 420.0  # above the noise max of 50 views (~3.7 sigma), but the profile is flat at p = 0.001
     r = max_abs_resolution(values, sigma, target, valid)
-    assert r["max_abs_urad"] == 420.0 and r["max_abs_urad"] > r["noise_max_abs_urad"]
+    assert r["measured_max_abs_urad"] == 420.0 and r["measured_max_abs_urad"] > r["noise_max_abs_urad"]
     assert not profile_span(values, sigma, target, valid).resolved
     assert r["resolved"] is False  # the old rule (max against noise max alone) called it a finding
 

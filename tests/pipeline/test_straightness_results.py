@@ -11,6 +11,7 @@ from lps_gui.pipeline.demos.run import PAPER_SPEC
 from lps_gui.pipeline.estimate import estimate_session
 from lps_gui.report.pages.summary import extremes_rows, spec_checks
 from lps_gui.sim.points import simulate_point_session
+from lps_gui.sim.truth_figures import line_figure_checks
 
 
 def _session(tmp_path, runs: int, directions: str = "both"):
@@ -29,6 +30,12 @@ def test_five_bidirectional_runs_give_all_three_spec_rows_a_verdict(tmp_path):
     st = results["figures"]["straightness"]
     assert st["v1"]["resolved"] and st["v1"]["noise_span_um"] < PAPER_SPEC["straightness_um"]
     assert st["v2"]["noise_span_um"] < PAPER_SPEC["straightness_um"]
+    # U of the span holds the constant-orientation model's overstatement of a carriage rotation (u_model_um)
+    u_model = st["v1"]["u_model_um"]
+    assert u_model > 0 and np.isclose(results["uncertainty"]["figures_k2"]["straightness_span_1"],
+                                      2.0 * np.hypot(st["v1"]["u_span_um"], u_model))
+    [check] = [c for c in line_figure_checks(results) if c["figure"] == "straightness v1"]
+    assert abs(check["z"]) <= 2.0, check  # against the simulator's truth
     tc = results["truth_comparison"]
     # against the simulator's board-plane truth (first-order geometry, no solver)
     assert tc["straightness_rms_error_um_1"] < 5.0

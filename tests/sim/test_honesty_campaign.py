@@ -30,3 +30,22 @@ def test_the_short_campaign_scores_a_rendered_session_with_realism_on(tmp_path):
     text = md.read_text()
     assert "coverage of U (k=2)" in text and "| line-both | flat | on | E | 1 |" in text
     assert not list((tmp_path / "work").iterdir())  # sessions cleared after scoring
+
+
+def test_a_row_declares_the_print_scale_its_prints_are_drawn_from():
+    """The realism draws each print's scale from what the session declares (core/truth/realism.py): a row
+    declared 2 um a square (100 ppm) over prints drawn at 10 ppm (none with realism off), and its U of max
+    |deviation| was 80-95 % print-scale rows no truth could test (mean z^2 0.06-0.45 over 10 seeds)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("honesty", ROOT / "benchmarks" / "honesty.py")
+    honesty = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(honesty)
+    on, off = honesty.build_spec("row", "flat", "on", 0), honesty.build_spec("row", "flat", "off", 0)
+    square = on.layout.targets[0].board.square_mm
+    assert honesty.campaign_environment("row", on)["square_mm_uncertainty_um"] == (
+        1e-3 * on.realism.print_scale_ppm * square)
+    assert honesty.campaign_environment("row", off)["square_mm_uncertainty_um"] <= 0.1  # the line's certificate
+    assert honesty.campaign_environment("row", off)["stage_temperature_c"] == 20.5  # a row's environment otherwise
+    two_depth = honesty.build_spec("two-depth", "flat", "off", 0)  # its print rows also stand for its poses' errors
+    assert honesty.campaign_environment("two-depth", two_depth)["square_mm_uncertainty_um"] == 2.0

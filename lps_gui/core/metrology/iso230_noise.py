@@ -27,24 +27,20 @@ Pure numpy, a fixed seed: the same data give the same figures.
 """
 from __future__ import annotations
 
-from typing import Any, Callable, Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
+from lps_gui.core.metrology.extreme_noise import SIMEX_U_FACTOR, corrected_extreme, simex
 from lps_gui.core.metrology.iso230 import (ApproachPlan, approach_plan, bidirectional_figures, direction_signs,
                                            plan_figures)
 
 __all__ = ["NOISE_KEYS", "apply_noise_correction", "independent_sigma_um", "noise_bound", "noise_corrected_iso",
-           "noise_corrected_worst", "simex"]
+           "noise_corrected_max_abs", "noise_corrected_worst", "simex"]
 
 NOISE_KEYS = ("A_um", "A_up_um", "A_down_um", "E_um", "E_up_um", "E_down_um", "M_um",
               "R_um", "R_up_um", "R_down_um", "B_um", "B_mean_um")
 DRAWS = 400  # Monte Carlo draws: the sd of a figure's noise to ~4 %
-SIMEX_LAMBDA = (0.5, 1.0, 1.5, 2.0)  # added noise variance in units of the views' own
-SEED = 20260535
-# the extrapolated figure scatters more than the measured one: over 60 synthetic sessions (12 targets, 2 runs each
-# way, noise 1-3 um on repeatability 1-3 um) its error's sd was 1.37-1.62 times the sd at lambda = 1
-SIMEX_U_FACTOR = 1.5
 # a planar axis's worst line (noise_corrected_worst): u adds this share of the correction; on 40 synthetic draws each
 # of the campaign's planar plan (3 and 5 lines, 2 runs, noise 1.9 and 7.9 um a view, the stage's A ~10 um) 0 left
 # A covered in 78 % at the lower noise, 0.25 gave coverage 93-100 % and mean (error/sigma)^2 0.41-0.86 in all four
@@ -65,6 +61,25 @@ def independent_sigma_um(sigma_um: np.ndarray) -> np.ndarray:
         return np.zeros_like(s)
     u_ref2 = 0.5 * float(np.median(s[ok] ** 2))
     return np.where(ok, np.sqrt(np.clip(s**2 - u_ref2, u_ref2, None)), 0.0)
+
+
+def noise_corrected_max_abs(deviation_um: np.ndarray, valid: np.ndarray, sigma_um: np.ndarray) -> dict[str, Any]:
+    """``single_run`` entries of max |deviation| with the noise's selection taken out (issue 35).
+
+    The deviations share the reference capture's noise (a common offset, which a max |x| sees, unlike the
+    ISO figures) beside each one's own (:func:`independent_sigma_um`): both are drawn
+    (:func:`~lps_gui.core.metrology.extreme_noise.corrected_extreme`). Returns ``max_abs_deviation_um``
+    (corrected) and ``max_abs_deviation_noise`` (measured, bias, u_noise, corrected); empty without two values.
+    """
+    x = np.asarray(deviation_um, float)
+    ok = np.asarray(valid, bool) & np.isfinite(x)
+    s = np.asarray(sigma_um, float)[ok]
+    own = independent_sigma_um(s)
+    common = np.sqrt(np.clip(s**2 - own**2, 0.0, None).mean()) if s.size else 0.0
+    ext = corrected_extreme(x[ok], np.c_[np.diag(own), np.full(own.size, common)], "max_abs")
+    if ext is None:
+        return {}
+    return {"max_abs_deviation_um": ext.corrected, "max_abs_deviation_noise": ext.to_dict()}
 
 
 def _figure_vector(target_mm: np.ndarray, sign: np.ndarray, run: np.ndarray, dev: np.ndarray,
@@ -163,35 +178,6 @@ def noise_corrected_iso(target_mm: np.ndarray, direction: np.ndarray, run: np.nd
     _corrected(out, measured, bias, sd, scale)
     _bidirectional_at_least_each_way(out)
     return out
-
-
-def simex(figure: Callable[[np.ndarray], np.ndarray], x: np.ndarray, noise: np.ndarray, draws: int = DRAWS,
-          squared: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """SIMEX of a vector of figures of ``x``: (measured, the noise's bias, the figures' sd at lambda = 1).
-
-    ``figure`` maps the deviations (K,) to figures (F,); ``noise`` (K,) is each capture's own noise (1 sigma).
-    The figures' mean as a quadratic in the added noise variance (lambda sigma^2), extrapolated to lambda = -1
-    (no noise at all); lambda = 0 is the measured figure itself. ``squared``: the signed square of each figure
-    is taken as linear in lambda instead and the root of its extrapolation returned (:func:`noise_corrected_worst`).
-    """
-    measured = figure(x)
-    if not np.isfinite(measured).any():
-        return measured, np.full_like(measured, np.nan), np.full_like(measured, np.nan)
-    rng = np.random.default_rng(SEED)
-    per = max(draws // len(SIMEX_LAMBDA), 2)
-    means, sd = [], np.full_like(measured, np.nan)
-    for lam in SIMEX_LAMBDA:
-        sims = np.array([figure(x + np.sqrt(lam) * noise * rng.standard_normal(x.size)) for _ in range(per)])
-        means.append((np.sign(sims) * sims**2 if squared else sims).mean(axis=0))  # NaN where the plan has no figure
-        if lam == 1.0:
-            sd = sims.std(axis=0, ddof=1)
-    lam = np.array((0.0,) + SIMEX_LAMBDA)
-    at0 = np.sign(measured) * measured**2 if squared else measured
-    coef = np.polyfit(lam, np.nan_to_num(np.vstack([at0] + means)), 1 if squared else 2)
-    extrapolated = np.polyval(coef, -1.0)
-    if squared:
-        extrapolated = np.sign(extrapolated) * np.sqrt(np.abs(extrapolated))
-    return measured, measured - extrapolated, sd
 
 
 def noise_corrected_worst(lines: Sequence[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]],

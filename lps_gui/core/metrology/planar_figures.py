@@ -108,8 +108,8 @@ def _lines(target_mm: np.ndarray, valid: np.ndarray, moving: int) -> list[tuple[
 
 
 def _straightness(t_along: np.ndarray, cross_um: np.ndarray, sigma_um: np.ndarray) -> tuple[float, float, dict]:
-    """Peak-to-valley of the cross deviation about its least-squares line (ISO 230-1 reference line),
-    the median 1-sigma, and the resolution of that profile (core.resolution.profile_span)."""
+    """Peak-to-valley of the cross deviation about its least-squares line (ISO 230-1 reference line), the noise's
+    selection taken out as every p-v (core.resolution.profile_span), the median 1-sigma, and that profile."""
     targets, j = target_index(t_along)
     n = np.bincount(j, minlength=targets.size)
     mean = np.bincount(j, cross_um, minlength=targets.size) / n
@@ -118,7 +118,7 @@ def _straightness(t_along: np.ndarray, cross_um: np.ndarray, sigma_um: np.ndarra
     resid = mean - A @ coef
     off_line = cross_um - (coef[0] + coef[1] * (t_along - targets.mean()))  # every capture off the same line
     span = profile_span(off_line, sigma_um, t_along, np.isfinite(off_line))
-    return float(np.ptp(resid)), float(np.median(sigma_um)), span.to_dict("um")
+    return float(np.ptp(resid) if span.span is None else span.span), float(np.median(sigma_um)), span.to_dict("um")
 
 
 def planar_figures(

@@ -254,13 +254,17 @@ def figure_uncertainties(unc: dict[str, Any], figures: dict[str, Any], travel_mm
 
 
 def iso_noise_uncertainties(unc: dict[str, Any], figures: dict[str, Any], k: float) -> dict[str, float]:
-    """U (k) of the noise-corrected ISO 230-2 figures (``iso230_2.noise_correction``), keyed like the figures.
+    """U (k) of the noise-corrected ISO 230-2 figures (``iso230_2.noise_correction``) and max |deviation|
+    (``single_run.max_abs_deviation_noise``), keyed like the figures.
 
     The Monte Carlo's u replaces the budget's noise rows: spans over the travel (A, E, M) add it to the
     budget's other rows (scale, intrinsics, lens, Abbe: common to a target across runs); differences at
     one target (R, B) take it alone (those terms cancel there).
     """
-    corr = (figures.get("iso230_2") or {}).get("noise_correction") or {}
+    corr = dict((figures.get("iso230_2") or {}).get("noise_correction") or {})
+    max_dev = (figures.get("single_run") or {}).get("max_abs_deviation_noise")
+    if isinstance(max_dev, dict):  # a max over the deviations, corrected alike (core/metrology/extreme_noise.py)
+        corr["max_abs_deviation_um"] = max_dev
     rows = [r["contribution_um"] for r in unc.get("budget") or []
             if r.get("contribution_um") is not None and r.get("source") not in NOISE_SOURCES + (ABBE_SOURCE,)]
     u_other2 = float(np.sum(np.square(rows))) if rows else 0.0
@@ -277,11 +281,14 @@ def iso_noise_uncertainties(unc: dict[str, Any], figures: dict[str, Any], k: flo
 def extreme_uncertainties(figures: dict[str, Any], k: float, angle_sigma_urad: dict[str, float]) -> dict[str, float]:
     """U (k) of the peak-to-valley and max |x| figures, keyed like the report's rows (um, urad).
 
-    A p-v of per-target means is the difference of two of them: k sqrt 2 times
-    the sigma of one mean (``figures["straightness"]["v1"]["sigma_um"]``).
-    ``straightness_span_max`` is the U of the larger span, the one the
-    straight-line verdict compares with its limit. A max |angle| is one view's
-    angle: k times the median per-view sigma (``angle_sigma_urad``). Whether
+    A p-v or a max |x| is printed with the noise's selection taken out
+    (:mod:`lps_gui.core.metrology.extreme_noise`): k times that correction's standard uncertainty
+    (``u_span_um``, ``u_max_abs_urad``; a straightness's with ``u_model_um``, the constant-orientation
+    model's overstatement of a carriage rotation, in quadrature). Without it (a document written before), a p-v of per-target
+    means is the difference of two of them: k sqrt 2 times the sigma of one mean
+    (``figures["straightness"]["v1"]["sigma_um"]``), a max |angle| one view's angle: k times the median
+    per-view sigma (``angle_sigma_urad``). ``straightness_span_max`` is the U of the larger span, the one
+    the straight-line verdict compares with its limit. Whether
     noise alone could give the figure is a separate question
     (:mod:`lps_gui.core.metrology.resolution`): an unresolved figure is printed without a value.
     """
@@ -291,16 +298,25 @@ def extreme_uncertainties(figures: dict[str, Any], k: float, angle_sigma_urad: d
         spans = []
         for j in (1, 2):
             d = st.get(f"v{j}") or {}
-            if d.get("sigma_um") is not None:
-                out[f"straightness_span_{j}"] = k * math.sqrt(2.0) * float(d["sigma_um"])
-                if d.get("span_um") is not None:
-                    spans.append((float(d["span_um"]), out[f"straightness_span_{j}"]))
+            u_model = float(d.get("u_model_um") or 0.0)  # the model's overstatement of a rotation (board plane)
+            if d.get("u_span_um") is not None:
+                out[f"straightness_span_{j}"] = k * math.hypot(float(d["u_span_um"]), u_model)
+            elif d.get("sigma_um") is not None:
+                out[f"straightness_span_{j}"] = k * math.hypot(math.sqrt(2.0) * float(d["sigma_um"]), u_model)
+            if f"straightness_span_{j}" in out and d.get("span_um") is not None:
+                spans.append((float(d["span_um"]), out[f"straightness_span_{j}"]))
         if spans:
             out["straightness_span_max"] = max(spans)[1]
     rot = figures.get("image_rotation")
-    if isinstance(rot, dict) and rot.get("sigma_urad") is not None:
+    if isinstance(rot, dict) and rot.get("u_span_urad") is not None:
+        out["image_rotation_span"] = k * float(rot["u_span_urad"])
+    elif isinstance(rot, dict) and rot.get("sigma_urad") is not None:
         out["image_rotation_span"] = k * math.sqrt(2.0) * float(rot["sigma_urad"])
+    angles = figures.get("angles_resolution") or {}
     for name, sigma in angle_sigma_urad.items():
-        if sigma is not None and math.isfinite(sigma):
+        u = (angles.get(name) or {}).get("u_max_abs_urad")
+        if u is not None and math.isfinite(u):
+            out[f"max_abs_{name}"] = k * float(u)
+        elif sigma is not None and math.isfinite(sigma):
             out[f"max_abs_{name}"] = k * float(sigma)
     return out

@@ -119,6 +119,7 @@ class SingleRun(Section):
     mean_step_mm: float | None = None
     step_std_um: float | None = None
     max_abs_deviation_um: float | None = None
+    max_abs_deviation_noise: Mapping[str, Any] | None = None  # measured, bias, u_noise, corrected (extreme_noise)
     deviation_span_um: float | None = None
     scale_ppm: float | None = None
     scale_sigma_ppm: float | None = None
@@ -151,6 +152,9 @@ class SpanResolution(Section):
     noise_span_um: float | None = None
     n_targets: int | None = None
     resolved: bool | None = None
+    measured_span_um: float | None = None  # before the noise's selection is taken out (span_um: after)
+    u_span_um: float | None = None  # span_um's standard uncertainty (core/metrology/extreme_noise.py)
+    u_model_um: float | None = None  # the constant-orientation model's share (pipeline/results/board_plane.py)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -167,11 +171,15 @@ class ImageRotation(Section):
     noise_span_urad: float | None = None
     n_targets: int | None = None
     resolved: bool | None = None
+    measured_span_urad: float | None = None
+    u_span_urad: float | None = None
 
 
 @dataclass(frozen=True, kw_only=True)
 class AngleResolution(Section):
-    max_abs_urad: float | None = None
+    max_abs_urad: float | None = None  # the noise's selection taken out (core/metrology/extreme_noise.py)
+    measured_max_abs_urad: float | None = None
+    u_max_abs_urad: float | None = None
     noise_max_abs_urad: float | None = None
     resolved: bool | None = None
 

@@ -14,6 +14,7 @@ import numpy as np
 
 from lps_gui.core.estimator.estimate_types import LpsEstimate
 from lps_gui.core.metrology.resolution import max_abs_resolution, profile_span
+from lps_gui.core.models.constant_orientation import rotation_read_as_shift
 from lps_gui.io.results.document import json_floats
 
 
@@ -43,12 +44,17 @@ def position_columns(est: LpsEstimate) -> dict[str, list[Any]]:
     return cols
 
 
-def straightness_figures(target_mm: np.ndarray, est: LpsEstimate, valid: np.ndarray) -> dict[str, Any]:
+def straightness_figures(target_mm: np.ndarray, est: LpsEstimate, valid: np.ndarray,
+                         corners_px: np.ndarray | None = None) -> dict[str, Any]:
     """``figures`` entries: p-v of v1, v2 and image rotation over the targets, each with its noise p-v.
 
     The legacy keys (``straightness_um_max``, ``straightness_span_um``,
     ``straightness_sigma_um``) keep their meaning, now from the board-plane
-    figures when the method has them.
+    figures when the method has them. With the views' corners (``corners_px`` (K, N, 2)) a board-plane
+    span also gets ``u_model_um``: the constant-orientation model overstates a carriage rotation's share
+    of it (:func:`~lps_gui.core.models.constant_orientation.rotation_read_as_shift`); which share of the
+    span is rotation is not known, so the whole measured span times that fraction is a standard
+    uncertainty of the span (in its U, :func:`~lps_gui.core.metrology.uncertainty_budget.extreme_uncertainties`).
     """
     bp, six = est.board_plane, est.six_dof
     if bp is not None:
@@ -60,12 +66,19 @@ def straightness_figures(target_mm: np.ndarray, est: LpsEstimate, valid: np.ndar
     ok = valid & np.all(np.isfinite(values), axis=1)
     if not ok.any():
         return {}
-    spans = [profile_span(values[:, j], sigma[:, j], target_mm, ok) for j in (0, 1)]
+    order = 4 if bp is not None else 2  # the board plane's U names its systematic term: curvature is no noise
+    spans = [profile_span(values[:, j], sigma[:, j], target_mm, ok, difference_order=order).to_dict("um")
+             for j in (0, 1)]
+    R = getattr(est.state, "R", None)
+    if bp is not None and corners_px is not None and R is not None:
+        share = rotation_read_as_shift(corners_px[ok], est.state.intrinsics, np.asarray(R) @ bp.frame[:, 1:])
+        for span, f in zip(spans, share):
+            span["u_model_um"] = None if span["measured_span_um"] is None else float(f) * span["measured_span_um"]
     out: dict[str, Any] = {
         "straightness_um_max": _f(np.nanmax(np.ptp(values[ok], axis=0))),
         "straightness_span_um": [_f(v) for v in np.ptp(values[ok], axis=0)],
         "straightness_sigma_um": _f(np.nanmax(np.nanmedian(sigma[ok], axis=0))),
-        "straightness": {"basis": basis, "v1": spans[0].to_dict("um"), "v2": spans[1].to_dict("um")},
+        "straightness": {"basis": basis, "v1": spans[0], "v2": spans[1]},
     }
     if bp is not None:
         rot_ok = valid & np.isfinite(bp.image_rotation_urad)

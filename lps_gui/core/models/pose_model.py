@@ -14,9 +14,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lps_gui.core.geometry.camera_model import CameraIntrinsics
+from lps_gui.core.geometry.camera_model import CameraIntrinsics, intrinsics_rows, project_parts
 from lps_gui.core.geometry.rotation import chordal_mean, exp_so3
-from lps_gui.core.models.target_model import TargetObservations, TargetSolution, origin_in_camera, target_views
+from lps_gui.core.models.target_model import (
+    TargetObservations,
+    TargetSolution,
+    intrinsics_sensitivity,
+    origin_in_camera,
+    target_views,
+    with_intrinsics_term,
+)
 from lps_gui.core.numerics.target_arrowhead import (
     Linearization,
     PositionCovariance,
@@ -106,9 +113,22 @@ def solve_poses(obs: TargetObservations, intrinsics: CameraIntrinsics, max_itera
     target_sigma = np.zeros((T, 6))
     if T > 1:
         target_sigma[1:] = np.sqrt(np.maximum(np.diag(fit.S_inv), 0.0) * sigma2).reshape(T - 1, 6)
+        if intrinsics.covariance is not None:  # held intrinsics move the targets at other depths (issue 35)
+            target_sigma = with_intrinsics_term(target_sigma, _target_intrinsics_gradient(fit, X, tj, view, used,
+                                                                                        intrinsics),
+                                                intrinsics.covariance)
     return PoseSolution(fit.state["R"], fit.state["t"], fit.state["Q"], fit.state["p"], used,
                         float(np.sqrt(sigma2)), view_rms(fit.lin.r, view, K), cov, fit.Avv_inv * sigma2,
                         target_sigma, fit.iterations, fit.converged)
+
+
+def _target_intrinsics_gradient(fit, X: np.ndarray, tj: np.ndarray, view: np.ndarray, used: np.ndarray,
+                                intrinsics: CameraIntrinsics) -> np.ndarray:
+    """d (target poses) / d intrinsics (6 (T - 1), 9) at the pose model's solution."""
+    st = fit.state
+    P = np.einsum("mij,mj->mi", st["R"][view], np.einsum("mij,mj->mi", st["Q"][tj], X) + st["p"][tj]) + st["t"][view]
+    du, dv = intrinsics_rows(project_parts(P[:, 0], P[:, 1], P[:, 2], intrinsics), intrinsics)
+    return intrinsics_sensitivity(fit, np.stack([du.T, dv.T], axis=1), tj, view, used)[0]
 
 
 def pose_solution_from_views(R: np.ndarray, t: np.ndarray, cov_unit: np.ndarray, used: np.ndarray,

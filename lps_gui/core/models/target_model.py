@@ -292,7 +292,8 @@ def solve_targets(
     sigma_s[~used] = sigma_c[~used] = np.nan
     gradient = None
     if intrinsics.covariance is not None and "I" not in state:  # free intrinsics are in the covariance already
-        grad = _intrinsics_gradient(state, fit, X, tj, view, intrinsics, D, free_view)
+        grad, target_grad = _intrinsics_gradient(state, fit, X, tj, view, intrinsics, D, free_view)
+        target_sigma = with_intrinsics_term(target_sigma, target_grad, intrinsics.covariance)
         gradient = np.einsum("de,kdi->kei", turn, grad)  # reported coordinates: v turn
         if D == 2:  # the turn follows the positions: its change enters every position
             gradient += _turn_change(s_solver, obs.targets_mm, used, ref, turn, grad)
@@ -304,27 +305,47 @@ def solve_targets(
 
 
 def _intrinsics_gradient(state: dict, fit, X: np.ndarray, tj: np.ndarray, view: np.ndarray,
-                         intrinsics: CameraIntrinsics, D: int, free_view: np.ndarray) -> np.ndarray:
-    """d s / d intrinsics (K, D, 9) in the solver's coordinates: -H^-1 J^T J_I by the same Schur complement.
-
-    With W_k = A_gv,k A_vv,k^-1: y_g = S^-1 (C_g - sum_k W_k C_v,k), y_v,k = A_vv,k^-1 C_v,k - W_k^T y_g.
-    """
-    lin = fit.lin
+                         intrinsics: CameraIntrinsics, D: int, free_view: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """d s / d intrinsics (K, D, 9) in the solver's coordinates and d (target poses) / d intrinsics
+    (6 (T - 1), 9), from :func:`intrinsics_sensitivity`."""
     P, *_ = _camera_points(state, X, tj, view, D)
     du, dv = intrinsics_rows(project_parts(P[:, 0], P[:, 1], P[:, 2], intrinsics), intrinsics)
-    JI = np.stack([du.T, dv.T], axis=1)  # (M, 2, 9)
-    K, T = len(free_view), len(state["Q"])
-    G = N_COMMON + 6 * (T - 1)
-    C_g = np.zeros((G, JI.shape[2]))
-    C_g[:N_COMMON] = np.einsum("mac,mai->ci", lin.Jc, JI)
+    shared, per_view = intrinsics_sensitivity(fit, np.stack([du.T, dv.T], axis=1), tj, view, free_view)
+    return per_view, shared[N_COMMON:]
+
+
+def intrinsics_sensitivity(fit, JI: np.ndarray, tj: np.ndarray, view: np.ndarray,
+                           free_view: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """d (shared columns) / d intrinsics (G, 9) and d (view columns) / d intrinsics (K, D, 9): -H^-1 J^T J_I
+    by the fit's Schur complement, ``JI`` (M, 2, 9) the corners' d uv / d intrinsics.
+
+    With W_k = A_gv,k A_vv,k^-1: y_g = S^-1 (C_g - sum_k W_k C_v,k), y_v,k = A_vv,k^-1 C_v,k - W_k^T y_g.
+    Why the shared part too: a target's pose at another depth or scale moves with the focal length and
+    the principal point (SPEC 14's two depths), which the corners' noise alone does not show.
+    """
+    lin = fit.lin
+    K, C = len(free_view), lin.Jc.shape[2]
+    T = (fit.S_inv.shape[0] - C) // 6 + 1  # the shared columns: C common, then 6 per target but the first
+    C_g = np.zeros((C + 6 * (T - 1), JI.shape[2]))
+    C_g[:C] = np.einsum("mac,mai->ci", lin.Jc, JI)
     for j in range(1, T):
         on = tj == j
-        C_g[N_COMMON + 6 * (j - 1): N_COMMON + 6 * j] = np.einsum("mac,mai->ci", lin.Jt[on], JI[on])
-    C_v = np.zeros((K, D, JI.shape[2]))
+        C_g[C + 6 * (j - 1): C + 6 * j] = np.einsum("mac,mai->ci", lin.Jt[on], JI[on])
+    C_v = np.zeros((K, lin.Jv.shape[2], JI.shape[2]))
     np.add.at(C_v, view, np.einsum("map,mai->mpi", lin.Jv * free_view[view][:, None, None], JI))
     y_g = fit.S_inv @ (C_g - np.einsum("kgp,kpi->gi", fit.W, C_v))
     y_v = np.einsum("kpq,kqi->kpi", fit.Avv_inv, C_v) - np.einsum("kgp,gi->kpi", fit.W, y_g)
-    return -y_v * free_view[:, None, None]
+    return -y_g, -y_v * free_view[:, None, None]
+
+
+def with_intrinsics_term(target_sigma: np.ndarray, gradient: np.ndarray, covariance: np.ndarray) -> np.ndarray:
+    """(T, 6) target sigmas with the held intrinsics' covariance propagated through ``gradient``
+    (6 (T - 1), 9): the term is common to every stop, so it does not average out (issue 35)."""
+    out = np.asarray(target_sigma, float).copy()
+    if len(out) > 1:
+        var = np.einsum("gi,ij,gj->g", gradient, covariance, gradient).reshape(len(out) - 1, 6)
+        out[1:] = np.sqrt(out[1:] ** 2 + np.maximum(var, 0.0))
+    return out
 
 
 PRIOR_ROWS = 5  # pseudo-corners carrying the nine prior residuals (and one zero)

@@ -47,7 +47,7 @@ from lps_gui.pipeline.results.verdict import add_verdict
 from lps_gui.pipeline.session_checks import corners_of_records, session_inputs
 from lps_gui.pipeline.session_input import SessionInput, read_session_input
 from lps_gui.pipeline.target_session import add_targets_section, target_observations
-from lps_gui.sim.truth import truth_comparison
+from lps_gui.sim.truth import rescore_with_drawn_sigma, truth_comparison
 from lps_gui.sim.truth_figures import add_self_check
 from lps_gui.io.results.keys import DEVIATION_UM, MEASURED_MM, SIGMA_TOTAL_UM
 from lps_gui.io.results.sections import Figures, Flag, Parameters, TruthComparison
@@ -234,6 +234,9 @@ def build_results(session: SessionInput, obs: Observations, est: LpsEstimate, in
 
         add_stitch_ties(results, obs)  # a stitched session's placements are tied by their repeated stops
     add_error_motions(results, session, obs, est)  # SPEC 14: the six error motions per axis, where poses allow
+    if obs.D == 1 and isinstance(results.get("truth_comparison"), dict) and any(
+            r.get("sigma_lens_um") is not None for r in results["positions"]):  # the z test scores the drawn sigma
+        rescore_with_drawn_sigma(results["truth_comparison"], results["positions"], est.reference_view)
     if isinstance(results.get("board"), dict):  # nominal (20 C); environment.square_mm_used is the size used
         results["board"]["square_mm"] = session.nominal_board.square_mm
     budget = BudgetSource(  # the values the builders made, passed on (the budget reads no document)

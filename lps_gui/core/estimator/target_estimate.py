@@ -91,7 +91,7 @@ def estimate_with_targets(obs: Observations, opt: EstimateOptions, progress: Pro
             r.state, _ = stitched_target_solution(tobs, obs.segment, obs.intrinsics, obs.repeatability_mm or 0.0,
                                                   progress)
         else:
-            r.state = solve_targets(tobs, obs.intrinsics, progress=progress, intrinsics_prior=prior)
+            r.state = solve_targets(tobs, obs.intrinsics, progress=progress, intrinsics_prior=prior, bows=True)
         r.ref, r.iterations, r.converged = r.state.reference, r.state.iterations, r.state.converged
         if not r.flags:  # the first solve says which views see a target at all
             r.usable = r.state.used.copy()

@@ -73,3 +73,37 @@ def test_bowed_prints_are_estimated_not_read_as_target_poses(rig_views):
     assert np.max(np.abs(free.bows_mm - bows)) < 0.03
     poses = solve_poses(flat, tr.rig.intrinsics, start=free, bows=True)
     assert np.max(_z(poses.Q, poses.p, poses.target_sigma, tr.layout)) < 3.5
+
+
+def test_board_plane_positions_carry_their_own_intrinsics_sensitivity():
+    """On a stage with angles the positions come from every stop's pose (position_model "board plane"); their
+    intrinsics term must be that model's d position / d intrinsics, not the row model's (which left 35 % of a k1
+    error's 17 um shift unexplained: the total sigma missed it, per-stop z^2 up to 6.5 on the campaign's two-depth
+    motions stage, realism off)."""
+    from lps_gui.core.estimator.board_plane_positions import row_with_board_plane_positions
+    from lps_gui.core.truth.stage_errors import ErrorProfile
+
+    errors = StageErrorModel(roll_urad=ErrorProfile(amplitude=2000.0, period_mm=545.0),
+                             pitch_urad=ErrorProfile(poly=(0.0, 1320.0 / 0.3)),
+                             yaw_urad=ErrorProfile(amplitude=400.0, period_mm=409.0, phase_rad=0.5))
+    tr = two_depth_rig(300.0, errors=errors, seed=0)
+    obs = observe_stops(tr, np.arange(0.0, 301.0, 10.0), noise_px=0.1, seed=0).observations
+    cov = np.diag([1.0, 1.0, 0.25, 0.25, 1e-6, 1e-6, 1e-10, 1e-10, 1e-6])
+    exact = replace(tr.rig.intrinsics, covariance=cov)
+    step = np.zeros(9)
+    step[4] = 1e-3  # k1
+
+    def positions(intr):
+        sol = solve_targets(obs, intr, bows=True)
+        n = int((np.isfinite(obs.corners_px[..., 0]) & sol.used[:, None]).sum())
+        dof = 2 * n - (8 + 2 * len(obs.targets) + 6 * (len(obs.targets) - 1) + int(sol.used.sum()) - 1)
+        out = row_with_board_plane_positions(obs, sol, intr, dof)
+        assert out is not sol  # the line model is rejected: the stage's angles
+        return out
+
+    a, b = positions(exact), positions(exact.with_vector(exact.vector() + step))
+    shift = (b.s[:, 0] - b.s[b.reference, 0]) - (a.s[:, 0] - a.s[a.reference, 0])
+    predicted = a.intrinsics_gradient[:, 0, :] @ step
+    ok = a.used
+    assert np.sqrt(np.mean(shift[ok] ** 2)) > 5e-3  # 17 um: the term matters
+    assert np.sqrt(np.mean((shift - predicted)[ok] ** 2)) < 0.05 * np.sqrt(np.mean(shift[ok] ** 2))

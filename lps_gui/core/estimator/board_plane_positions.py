@@ -180,6 +180,11 @@ def row_with_board_plane_positions(tobs: TargetObservations, sol: TargetSolution
     s = np.where(used, position - position[ref], np.nan)[:, None]
     sigma = np.where(used, sigma, np.nan)[:, None]
     centred = np.where(used, np.sqrt(np.maximum(np.einsum("ka,kab,kb->k", g, poses.single_view, g), 0.0)), np.nan)
+    gradient = sol.intrinsics_gradient
+    if poses.intrinsics_gradient is not None:  # the positions' own sensitivity, through every stop's pose
+        dpos = np.einsum("ka,kai->ki", np.where(used[:, None], g, 0.0), poses.intrinsics_gradient)
+        gradient = np.where(used[:, None], dpos - dpos[ref], 0.0)[:, None, :]
     return replace(sol, s=s, sigma_s=sigma, sigma_centred=centred[:, None], Q=poses.Q, p=poses.p,
+                   intrinsics_gradient=gradient,
                    target_sigma=poses.target_sigma, sigma_px=poses.sigma_px, covariance=cov, used=used,
                    bows_mm=None if sol.bows_mm is None else sol.bows_mm + poses.bows_mm)

@@ -51,6 +51,7 @@ class PoseSolution:
     iterations: int
     converged: bool
     bows_mm: np.ndarray | None = None  # (T, 2): each target's bow beyond its board's warp, when free
+    intrinsics_gradient: np.ndarray | None = None  # (K, 6, 9): d (view pose) / d intrinsics, held with a covariance
 
 
 def _linearize(state: dict, X, tj, view, uv, intrinsics: CameraIntrinsics, want_jacobian: bool = True,
@@ -128,24 +129,27 @@ def solve_poses(obs: TargetObservations, intrinsics: CameraIntrinsics, max_itera
     cov = PositionCovariance(fit.Avv_inv * used[:, None, None], fit.W * used[:, None, None], fit.S_inv, sigma2,
                              np.eye(6))
     target_sigma = np.zeros((T, 6))
+    view_gradient = None
     if T > 1:
         target_sigma[1:] = np.sqrt(np.maximum(np.diag(fit.S_inv)[n_bows:], 0.0) * sigma2).reshape(T - 1, 6)
-        if intrinsics.covariance is not None:  # held intrinsics move the targets at other depths (issue 35)
-            Xb = bowed(X, basis, fit.state["w"], tj) if bows else X
-            grad = _target_intrinsics_gradient(fit, Xb, tj, view, used, intrinsics)[n_bows:]
-            target_sigma = with_intrinsics_term(target_sigma, grad, intrinsics.covariance)
+    if intrinsics.covariance is not None:  # held intrinsics move the targets at other depths (issue 35)
+        Xb = bowed(X, basis, fit.state["w"], tj) if bows else X
+        shared, view_gradient = _intrinsics_gradients(fit, Xb, tj, view, used, intrinsics)
+        if T > 1:
+            target_sigma = with_intrinsics_term(target_sigma, shared[n_bows:], intrinsics.covariance)
     return PoseSolution(fit.state["R"], fit.state["t"], fit.state["Q"], fit.state["p"], used,
                         float(np.sqrt(sigma2)), view_rms(fit.lin.r, view, K), cov, fit.Avv_inv * sigma2,
-                        target_sigma, fit.iterations, fit.converged, fit.state.get("w"))
+                        target_sigma, fit.iterations, fit.converged, fit.state.get("w"), view_gradient)
 
 
-def _target_intrinsics_gradient(fit, X: np.ndarray, tj: np.ndarray, view: np.ndarray, used: np.ndarray,
-                                intrinsics: CameraIntrinsics) -> np.ndarray:
-    """d (target poses) / d intrinsics (6 (T - 1), 9) at the pose model's solution."""
+def _intrinsics_gradients(fit, X: np.ndarray, tj: np.ndarray, view: np.ndarray, used: np.ndarray,
+                          intrinsics: CameraIntrinsics) -> tuple[np.ndarray, np.ndarray]:
+    """d (shared columns: bows, target poses) / d intrinsics (G, 9) and d (view poses) / d intrinsics (K, 6, 9)
+    at the pose model's solution."""
     st = fit.state
     P = np.einsum("mij,mj->mi", st["R"][view], np.einsum("mij,mj->mi", st["Q"][tj], X) + st["p"][tj]) + st["t"][view]
     du, dv = intrinsics_rows(project_parts(P[:, 0], P[:, 1], P[:, 2], intrinsics), intrinsics)
-    return intrinsics_sensitivity(fit, np.stack([du.T, dv.T], axis=1), tj, view, used)[0]
+    return intrinsics_sensitivity(fit, np.stack([du.T, dv.T], axis=1), tj, view, used)
 
 
 def pose_solution_from_views(R: np.ndarray, t: np.ndarray, cov_unit: np.ndarray, used: np.ndarray,

@@ -165,7 +165,8 @@ def row_with_board_plane_positions(tobs: TargetObservations, sol: TargetSolution
     poses = solve_poses(tobs, intrinsics, start=sol, bows=sol.bows_mm is not None)
     used = sol.used & poses.used
     n_corners = int((np.isfinite(tobs.corners_px[..., 0]) & used[:, None]).sum())
-    dof_poses = 2 * n_corners - 6 * (len(tobs.targets) - 1) - 6 * int(used.sum())
+    n_bows = 0 if poses.bows_mm is None else poses.bows_mm.size
+    dof_poses = 2 * n_corners - n_bows - 6 * (len(tobs.targets) - 1) - 6 * int(used.sum())
     if not line_model_rejected(sol.sigma_px**2, dof_row, poses.sigma_px**2, dof_poses):
         return sol
     ref = sol.reference

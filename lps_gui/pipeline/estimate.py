@@ -48,7 +48,7 @@ from lps_gui.pipeline.results.verdict import measured, summary_rows, verdict_sec
 from lps_gui.pipeline.session_checks import corners_of_records, session_inputs
 from lps_gui.pipeline.session_input import SessionInput, read_session_input
 from lps_gui.pipeline.target_session import add_targets_section, target_observations
-from lps_gui.sim.truth import truth_comparison
+from lps_gui.sim.truth import rescored_with_drawn_sigma, truth_comparison
 from lps_gui.sim.truth_figures import CheckedValues, self_check_section
 from lps_gui.io.results.keys import DEVIATION_UM, MEASURED_MM, SIGMA_TOTAL_UM
 from lps_gui.io.results.sections import Figures, Flag, Parameters, Position, TruthComparison
@@ -248,6 +248,9 @@ def build_results(session: SessionInput, obs: Observations, est: LpsEstimate, in
     if motions is not None:
         positions, figures, flags = motions.positions, motions.figures, motions.flags
         results["error_motions"] = motions.section
+    if obs.D == 1 and isinstance(truth, dict) and any(r.get("sigma_lens_um") is not None for r in positions):
+        truth = results["truth_comparison"] = rescored_with_drawn_sigma(  # the z test scores the sigma the bands draw
+            truth, positions, est.reference_view)
     board = {**part.board, "square_mm": session.nominal_board.square_mm}  # nominal (20 C); environment.square_mm_used
     results["board"] = board  # is the size used
     results["positions"] = positions = [Position.of(**row).to_dict() for row in positions]  # as the readers read them

@@ -51,7 +51,7 @@ from lps_gui.pipeline.detect import (
     session_corner_table,
     write_session_corners,
 )
-from lps_gui.io.results.keys import DEVIATION_UM
+from lps_gui.io.results.keys import DEVIATION_UM, SIGMA_TOTAL_UM
 
 log = logging.getLogger(__name__)
 
@@ -276,6 +276,7 @@ class LiveCapture:
         data = {"index": index.tolist(), "target_mm": np.asarray(obs.target_mm, float).tolist(),
                 "direction": [r.direction for r in views.records],
                 DEVIATION_UM: np.where(est.usable, dev, np.nan).tolist(), "sigma_um": (1e3 * est.sigma_s_mm).tolist(),
+                SIGMA_TOTAL_UM: (1e3 * est.sigma_total_mm).tolist(),  # what the band draws (plots.drawn_sigma_um)
                 "outlier": est.outlier.tolist(), "rms_px": est.rms_px.tolist(), "n_views": int(obs.K),
                 "sigma_px": float(est.sigma_px), "seconds": time.perf_counter() - t0}
         self.last_estimate = data

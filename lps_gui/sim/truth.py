@@ -53,6 +53,7 @@ from lps_gui.io.board_file import board_from_dict
 from lps_gui.io.intrinsics_file import intrinsics_from_dict
 from lps_gui.io.results.document import json_float as _f
 from lps_gui.io.results.document import json_floats
+from lps_gui.io.results.keys import DEVIATION_UM, SIGMA_TOTAL_UM
 from lps_gui.io.session import Session
 from lps_gui.io.session_paths import read_session_file
 
@@ -352,9 +353,10 @@ def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any],
         return v
 
     axis = per_view(truth["axis_mm"])
-    pos = reduce_truth(est.state.s, axis, ref, ok, est.sigma_s_mm)
+    drawn = est.sigma_total_mm  # the sigma the bands draw and positions.csv's sigma_total_um (report/figures/plots)
+    pos = reduce_truth(est.state.s, axis, ref, ok, drawn)
     true_dev = true_deviation_um(axis, obs.target_mm, ref)
-    sigma_um = 1e3 * est.sigma_s_mm[ok]
+    sigma_um = 1e3 * drawn[ok]
     out: dict[str, Any] = {
         "position_rms_error_um": pos.rms_um,
         "position_max_abs_error_um": pos.max_abs_um,
@@ -373,7 +375,7 @@ def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any],
     if "plane_mm" in truth:
         # what the constant-orientation model can see: displacement at the board plane (Abbe offset = distance)
         plane = per_view(truth["plane_mm"])
-        at_plane = reduce_truth(est.state.s, plane, ref, ok, est.sigma_s_mm)
+        at_plane = reduce_truth(est.state.s, plane, ref, ok, drawn)
         out["board_plane_rms_error_um"] = at_plane.rms_um
         out["board_plane_max_abs_error_um"] = at_plane.max_abs_um
         out["board_plane_z_mean_square"] = at_plane.z_mean_square
@@ -397,6 +399,25 @@ def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any],
     for k in np.flatnonzero(have).tolist():
         positions[k].update(zip(keys, values[k]))
     return out
+
+
+def rescored_with_drawn_sigma(comparison: dict[str, Any], positions: list[dict[str, Any]], reference: int
+                              ) -> dict[str, Any]:
+    """``comparison`` with the per-stop mean (error/sigma)^2 again, against the rows' ``sigma_total_um`` once the
+    lens misfit is in it (pipeline/results/error_motions folds it in after :func:`truth_comparison`): the z test
+    scores the sigma the bands draw. Errors as :func:`reduce_truth`'s (both deviations are relative to the
+    reference capture). A new dict: the builders' values are passed on, not edited."""
+    comparison = dict(comparison)
+    for key, truth_key in (("z_mean_square", "truth_deviation_um"), ("board_plane_z_mean_square",
+                                                                       "truth_plane_deviation_um")):
+        if comparison.get(key) is None:
+            continue
+        z = [(r["deviation_um"] - r[truth_key]) / r[SIGMA_TOTAL_UM] for k, r in enumerate(positions)
+             if k != reference and r.get("used", True) and r.get(DEVIATION_UM) is not None
+             and r.get(truth_key) is not None and (r.get(SIGMA_TOTAL_UM) or 0.0) > 0.0]
+        if z:
+            comparison[key] = _f(np.mean(np.square(z)))
+    return comparison
 
 
 def truth_errors(est: LpsEstimate, straight_truth: np.ndarray | None, rotation_truth: np.ndarray | None,

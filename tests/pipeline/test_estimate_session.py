@@ -60,7 +60,11 @@ def test_truth_comparison_is_the_positions_table_against_its_truth_column(sessio
     tc = results["truth_comparison"]
     assert tc["position_rms_error_um"] == pytest.approx(np.sqrt(np.mean(err**2)), rel=1e-9)
     assert tc["position_max_abs_error_um"] == pytest.approx(np.max(np.abs(err)), rel=1e-9)
-    assert tc["median_sigma_um"] == pytest.approx(np.median([r["sigma_um"] for r in rows]))
+    # the sigma the bands draw (sigma_total_um: noise and the intrinsics), also the z test's (issue 35)
+    assert tc["median_sigma_um"] == pytest.approx(np.median([r["sigma_total_um"] for r in rows]))
+    others = [r for r in rows if r["index"] != ref]
+    z2 = np.mean([((r["deviation_um"] - r["truth_deviation_um"]) / r["sigma_total_um"]) ** 2 for r in others])
+    assert tc["z_mean_square"] == pytest.approx(z2, rel=1e-6)
 
 
 @pytest.mark.parametrize("method", ["hybrid", "pnp"])

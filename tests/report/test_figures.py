@@ -35,11 +35,13 @@ def test_deviation_band_is_mean_plus_minus_two_std_over_runs_without_outliers():
         assert np.isclose(hi - y, 2 * vals.std(ddof=1)) and np.isclose(y - lo, 2 * vals.std(ddof=1))
 
 
-def test_single_run_band_is_the_measurement_sigma_and_outlier_is_marked():
+def test_single_run_band_is_the_total_sigma_and_outlier_is_marked():
+    """The band draws sigma_total_um (0.8: noise, intrinsics, lens model), not the noise alone (0.5): issue 35."""
     results, truth = make_results(runs=1, directions="+")
     dev = figure_by_key(figures_from_results(results, truth), "deviation")
     s = dev.series[0]
-    assert np.allclose(s.band_high - s.y, 2 * 0.5)
+    assert np.allclose(s.band_high - s.y, 2 * 0.8)
+    assert "intrinsics" in dev.notes
     assert s.marked is not None and s.marked.sum() == 1 and s.marked[5]
     res = figure_by_key(figures_from_results(results), "residuals")
     assert res.series[0].marked[5] and res.series[0].marked.sum() == 1

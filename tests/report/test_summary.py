@@ -93,6 +93,8 @@ def test_position_table_has_one_row_per_position_in_index_order():
     assert rows[5][-1] == "yes" and rows[4][-1] == ""
     dev_col = header.index("deviation\n[\u00b5m]")
     assert float(rows[3][dev_col]) == round(results["positions"][3]["deviation_um"], 2)
+    # the table's sigma is the one the bands draw (sigma_total_um 0.8), not the noise alone (0.5): issue 35
+    assert rows[3][header.index("1\u03c3\n[\u00b5m]")] == "0.80"
 
 
 def test_title_block_and_intrinsics():

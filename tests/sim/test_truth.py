@@ -16,9 +16,11 @@ from lps_gui.sim.truth import (
     prune_truth,
     read_truth,
     reduce_truth,
+    rescored_with_drawn_sigma,
     residual_from_line,
     session_truth,
     true_deviation_um,
+    truth_comparison,
 )
 from tests.capture.helpers import tiny_spec
 
@@ -81,3 +83,25 @@ def test_truth_helpers_share_the_reference():
     values = np.c_[1.0 + 0.5 * target, -target]
     assert np.allclose(residual_from_line(values, target, np.ones(4, bool)), 0.0, atol=1e-12)
     assert np.allclose(centred(np.c_[target], np.array([True, True, False, False])), np.c_[target - 1.0])
+
+
+def test_the_per_stop_z_scores_the_drawn_sigma_not_the_noise_alone():
+    """Issue 35: the truth check's per-stop mean (error/sigma)^2 is against the sigma the bands draw
+    (``sigma_total_um``: noise, intrinsics, lens model), before and after the lens misfit is folded in."""
+    from types import SimpleNamespace
+
+    K = 5
+    target = np.arange(K, dtype=float)
+    err_mm = np.array([0.0, 2e-3, -2e-3, 2e-3, -2e-3])  # 2 um off truth at every stop but the reference
+    est = SimpleNamespace(D=1, reference_view=0, used=np.ones(K, bool), outlier=np.zeros(K, bool),
+                          state=SimpleNamespace(s=target + err_mm), sigma_s_mm=np.full(K, 1e-3),
+                          sigma_total_mm=np.full(K, 2e-3), board_plane=None)
+    obs = SimpleNamespace(index=np.arange(K), target_mm=target)
+    truth = {"index": list(range(K)), "axis_mm": target.tolist(), "plane_mm": target.tolist()}
+    positions = [{"deviation_um": 1e3 * e, "sigma_total_um": 2.0} for e in err_mm]
+    tc = truth_comparison(obs, est, truth, positions)
+    assert tc["z_mean_square"] == pytest.approx(1.0) and tc["board_plane_z_mean_square"] == pytest.approx(1.0)
+    for row in positions:
+        row["sigma_total_um"] = 4.0  # the lens misfit folded in
+    tc = rescored_with_drawn_sigma(tc, positions, reference=0)
+    assert tc["z_mean_square"] == pytest.approx(0.25) and tc["board_plane_z_mean_square"] == pytest.approx(0.25)

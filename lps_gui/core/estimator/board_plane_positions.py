@@ -27,7 +27,7 @@ from lps_gui.core.estimator.estimate_types import LpsEstimate
 from lps_gui.core.geometry.camera_model import CameraIntrinsics
 from lps_gui.core.models.constant_orientation import board_plane_displacements, path_direction
 from lps_gui.core.models.pose_model import solve_poses
-from lps_gui.core.models.target_model import TargetObservations, TargetSolution
+from lps_gui.core.models.target_model import TargetObservations, TargetSolution, with_bows
 from lps_gui.core.numerics.arrowhead import ArrowheadInverse
 from lps_gui.core.numerics.target_arrowhead import PositionCovariance
 from lps_gui.core.numerics.uncertainty import propagated_variance
@@ -211,10 +211,13 @@ def row_with_board_plane_positions(tobs: TargetObservations, sol: TargetSolution
     first target's centre's line of sight (D_i, as one board's) along its least-squares line; the targets'
     poses and their sigmas are the pose model's.
     """
-    poses = solve_poses(tobs, intrinsics, start=sol)
+    if sol.bows_mm is not None:  # the row's bows, refined with the poses (their uncertainty in the poses' sigmas)
+        tobs = TargetObservations(with_bows(tobs.targets, sol.bows_mm), tobs.corners_px, tobs.targets_mm, tobs.names)
+    poses = solve_poses(tobs, intrinsics, start=sol, bows=sol.bows_mm is not None)
     used = sol.used & poses.used
     n_corners = int((np.isfinite(tobs.corners_px[..., 0]) & used[:, None]).sum())
-    dof_poses = 2 * n_corners - 6 * (len(tobs.targets) - 1) - 6 * int(used.sum())
+    n_bows = 0 if poses.bows_mm is None else poses.bows_mm.size
+    dof_poses = 2 * n_corners - n_bows - 6 * (len(tobs.targets) - 1) - 6 * int(used.sum())
     if not line_model_rejected(sol.sigma_px**2, dof_row, poses.sigma_px**2, dof_poses):
         return sol
     ref = sol.reference
@@ -229,5 +232,11 @@ def row_with_board_plane_positions(tobs: TargetObservations, sol: TargetSolution
     s = np.where(used, position - position[ref], np.nan)[:, None]
     sigma = np.where(used, sigma, np.nan)[:, None]
     centred = np.where(used, np.sqrt(np.maximum(np.einsum("ka,kab,kb->k", g, poses.single_view, g), 0.0)), np.nan)
+    gradient = sol.intrinsics_gradient
+    if poses.intrinsics_gradient is not None:  # the positions' own sensitivity, through every stop's pose
+        dpos = np.einsum("ka,kai->ki", np.where(used[:, None], g, 0.0), poses.intrinsics_gradient)
+        gradient = np.where(used[:, None], dpos - dpos[ref], 0.0)[:, None, :]
     return replace(sol, s=s, sigma_s=sigma, sigma_centred=centred[:, None], Q=poses.Q, p=poses.p,
-                   target_sigma=poses.target_sigma, sigma_px=poses.sigma_px, covariance=cov, used=used)
+                   intrinsics_gradient=gradient,
+                   target_sigma=poses.target_sigma, sigma_px=poses.sigma_px, covariance=cov, used=used,
+                   bows_mm=None if sol.bows_mm is None else sol.bows_mm + poses.bows_mm)

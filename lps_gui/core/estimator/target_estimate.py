@@ -91,7 +91,7 @@ def estimate_with_targets(obs: Observations, opt: EstimateOptions, progress: Pro
             r.state, _ = stitched_target_solution(tobs, obs.segment, obs.intrinsics, obs.repeatability_mm or 0.0,
                                                   progress)
         else:
-            r.state = solve_targets(tobs, obs.intrinsics, progress=progress, intrinsics_prior=prior)
+            r.state = solve_targets(tobs, obs.intrinsics, progress=progress, intrinsics_prior=prior, bows=True)
         r.ref, r.iterations, r.converged = r.state.reference, r.state.iterations, r.state.converged
         if not r.flags:  # the first solve says which views see a target at all
             r.usable = r.state.used.copy()
@@ -108,7 +108,8 @@ def estimate_with_targets(obs: Observations, opt: EstimateOptions, progress: Pro
             n_obs = common["n_observations"]
             common.update(sigma_px=poses.sigma_px, used=poses.used.copy(), position_model=POSITION_MODEL_BOARD_PLANE,
                           line_model_sigma_px=sol.sigma_px,
-                          dof=n_obs - 6 * (len(obs.mounted) - 1) - 6 * int(poses.used.sum()))
+                          dof=n_obs - (0 if poses.bows_mm is None else 2 * len(obs.mounted))
+                          - 6 * (len(obs.mounted) - 1) - 6 * int(poses.used.sum()))
             sol = poses
     common.update(usable=rounds.usable.copy(), outlier=rounds.outlier.copy(), outlier_reason=list(rounds.reasons),
                   flags=rounds.flags)
@@ -141,7 +142,7 @@ def _common_fields(obs: Observations, opt: EstimateOptions, sol: TargetSolution,
     seen = np.isfinite(obs.corners_px[..., 0]) & sol.used[:, None]
     n_obs = int(2 * seen.sum())
     T = len(obs.mounted)
-    n_params = N_COMMON + 6 * (T - 1) + obs.D * (int(sol.used.sum()) - 1)
+    n_params = N_COMMON + (0 if sol.bows_mm is None else 2 * T) + 6 * (T - 1) + obs.D * (int(sol.used.sum()) - 1)
     K = obs.K
     return dict(method=opt.method, reference_view=sol.reference, usable=sol.used.copy(), used=sol.used.copy(),
                 outlier=np.zeros(K, bool), outlier_reason=[""] * K, sigma_px=sol.sigma_px,

@@ -14,9 +14,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lps_gui.core.geometry.camera_model import CameraIntrinsics
+from lps_gui.core.geometry.camera_model import CameraIntrinsics, intrinsics_rows, project_parts
 from lps_gui.core.geometry.rotation import chordal_mean, exp_so3
-from lps_gui.core.models.target_model import TargetObservations, TargetSolution, origin_in_camera, target_views
+from lps_gui.core.models.target_model import (
+    TargetObservations,
+    TargetSolution,
+    bow_columns,
+    bowed,
+    intrinsics_sensitivity,
+    origin_in_camera,
+    target_views,
+    with_intrinsics_term,
+)
 from lps_gui.core.numerics.target_arrowhead import (
     Linearization,
     PositionCovariance,
@@ -41,10 +50,15 @@ class PoseSolution:
     target_sigma: np.ndarray  # (T, 6)
     iterations: int
     converged: bool
+    bows_mm: np.ndarray | None = None  # (T, 2): each target's bow beyond its board's warp, when free
+    intrinsics_gradient: np.ndarray | None = None  # (K, 6, 9): d (view pose) / d intrinsics, held with a covariance
 
 
-def _linearize(state: dict, X, tj, view, uv, intrinsics: CameraIntrinsics, want_jacobian: bool = True) -> Linearization:
+def _linearize(state: dict, X, tj, view, uv, intrinsics: CameraIntrinsics, want_jacobian: bool = True,
+               bow_basis: np.ndarray | None = None) -> Linearization:
     R, t, Q, p = state["R"], state["t"], state["Q"], state["p"]
+    if bow_basis is not None:  # the targets' bows: the only shared columns besides the targets' poses
+        X = bowed(X, bow_basis, state["w"], tj)
     QX = np.einsum("mij,mj->mi", Q[tj], X)
     Rv = R[view]
     RXw = np.einsum("mij,mj->mi", Rv, QX + p[tj])
@@ -60,21 +74,29 @@ def _linearize(state: dict, X, tj, view, uv, intrinsics: CameraIntrinsics, want_
     Jt[:, :, 0:3] = -np.cross(dPR, QX[:, None, :])
     Jt[:, :, 3:6] = dPR
     Jt[tj == 0] = 0.0
-    return Linearization(cost, r, np.zeros((len(P), 2, 0)), Jt, Jv)
+    Jc = np.zeros((len(P), 2, 0)) if bow_basis is None else bow_columns(
+        dP, np.einsum("mij,mj->mi", Rv, Q[tj][:, :, 2]), bow_basis, tj, len(Q))
+    return Linearization(cost, r, Jc, Jt, Jv)
 
 
 def _retract(state: dict, dg: np.ndarray, dv: np.ndarray) -> dict:
     new = dict(state)
     new["R"] = np.einsum("kij,kjl->kil", exp_so3(dv[:, 0:3]), state["R"])
     new["t"] = state["t"] + dv[:, 3:6]
-    new["Q"], new["p"] = retract_targets(state["Q"], state["p"], dg)
+    n_bows = 0
+    if "w" in state:
+        n_bows = state["w"].size
+        new["w"] = state["w"] + dg[:n_bows].reshape(-1, 2)
+    new["Q"], new["p"] = retract_targets(state["Q"], state["p"], dg[n_bows:])
     return new
 
 
 def solve_poses(obs: TargetObservations, intrinsics: CameraIntrinsics, max_iterations: int = 50,
                 tolerance: float = 1e-10, progress=None, noise_px: float | None = None,
-                start: TargetSolution | None = None) -> PoseSolution:
+                start: TargetSolution | None = None, bows: bool = False) -> PoseSolution:
     """Every view's pose and the targets' poses, jointly; sigmas from (J^T J)^-1 at the solution.
+
+    ``bows``: every target's bow is free too, from the boards' warp (target_model.bow_columns).
 
     ``start``: the row model's solution of the same views (one orientation, a line), whose target
     poses and per-view translations are a close start: no PnP per view and target, a few iterations.
@@ -95,20 +117,39 @@ def solve_poses(obs: TargetObservations, intrinsics: CameraIntrinsics, max_itera
     seen = np.isfinite(obs.corners_px[..., 0]) & used[:, None]
     view, corner = np.nonzero(seen)
     X, tj, uv = obs.own_points[corner], obs.which[corner], obs.corners_px[view, corner]
+    basis, n_bows = (obs.bow_basis[corner], 2 * T) if bows else (None, 0)
+    if bows:
+        state["w"] = np.zeros((T, 2))
     fit = levenberg_marquardt(
-        state, lambda st, jac=True: _linearize(st, X, tj, view, uv, intrinsics, jac), _retract,
+        state, lambda st, jac=True: _linearize(st, X, tj, view, uv, intrinsics, jac, basis), _retract,
         tj, view, K, T, used.copy(), max_iterations, tolerance, progress, "pose model")
-    n_params = 6 * (T - 1) + 6 * int(used.sum())
+    n_params = n_bows + 6 * (T - 1) + 6 * int(used.sum())
     dof = max(2 * len(view) - n_params, 1)
     sigma2 = fit.lin.cost / dof if noise_px is None else float(noise_px) ** 2
     cov = PositionCovariance(fit.Avv_inv * used[:, None, None], fit.W * used[:, None, None], fit.S_inv, sigma2,
                              np.eye(6))
     target_sigma = np.zeros((T, 6))
+    view_gradient = None
     if T > 1:
-        target_sigma[1:] = np.sqrt(np.maximum(np.diag(fit.S_inv), 0.0) * sigma2).reshape(T - 1, 6)
+        target_sigma[1:] = np.sqrt(np.maximum(np.diag(fit.S_inv)[n_bows:], 0.0) * sigma2).reshape(T - 1, 6)
+    if intrinsics.covariance is not None:  # held intrinsics move the targets at other depths (issue 35)
+        Xb = bowed(X, basis, fit.state["w"], tj) if bows else X
+        shared, view_gradient = _intrinsics_gradients(fit, Xb, tj, view, used, intrinsics)
+        if T > 1:
+            target_sigma = with_intrinsics_term(target_sigma, shared[n_bows:], intrinsics.covariance)
     return PoseSolution(fit.state["R"], fit.state["t"], fit.state["Q"], fit.state["p"], used,
                         float(np.sqrt(sigma2)), view_rms(fit.lin.r, view, K), cov, fit.Avv_inv * sigma2,
-                        target_sigma, fit.iterations, fit.converged)
+                        target_sigma, fit.iterations, fit.converged, fit.state.get("w"), view_gradient)
+
+
+def _intrinsics_gradients(fit, X: np.ndarray, tj: np.ndarray, view: np.ndarray, used: np.ndarray,
+                          intrinsics: CameraIntrinsics) -> tuple[np.ndarray, np.ndarray]:
+    """d (shared columns: bows, target poses) / d intrinsics (G, 9) and d (view poses) / d intrinsics (K, 6, 9)
+    at the pose model's solution."""
+    st = fit.state
+    P = np.einsum("mij,mj->mi", st["R"][view], np.einsum("mij,mj->mi", st["Q"][tj], X) + st["p"][tj]) + st["t"][view]
+    du, dv = intrinsics_rows(project_parts(P[:, 0], P[:, 1], P[:, 2], intrinsics), intrinsics)
+    return intrinsics_sensitivity(fit, np.stack([du.T, dv.T], axis=1), tj, view, used)
 
 
 def pose_solution_from_views(R: np.ndarray, t: np.ndarray, cov_unit: np.ndarray, used: np.ndarray,

@@ -15,7 +15,7 @@ afterwards so that x runs along the fitted X motion (SPEC 10).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -58,6 +58,38 @@ class TargetObservations:
     def which(self) -> np.ndarray:
         return np.repeat(np.arange(len(self.targets)), [t.board.n_corners for t in self.targets])
 
+    @property
+    def bow_basis(self) -> np.ndarray:
+        """(N, 2): d z / d (bow_x, bow_y) of every corner in its own target's frame (Board.warp_basis)."""
+        return np.concatenate([t.board.warp_basis(t.board.flat_points()) for t in self.targets])
+
+
+def with_bows(targets: list[Target], bows: np.ndarray | None) -> list[Target]:
+    """The targets with their estimated bows (T, 2) added to their boards' warp (None: as they are)."""
+    if bows is None:
+        return list(targets)
+    return [replace(t, board=replace(t.board, warp_mm=tuple((np.asarray(t.board.warp_mm or (0.0, 0.0)) + b).tolist())))
+            for t, b in zip(targets, np.asarray(bows, float))]
+
+
+def bowed(X: np.ndarray, basis: np.ndarray, bows: np.ndarray, tj: np.ndarray) -> np.ndarray:
+    """Corners ``X`` (M, 3) in their targets' frames, moved along the target normal by the targets' bows (T, 2)."""
+    out = X.copy()
+    out[:, 2] += np.einsum("mb,mb->m", basis, bows[tj])
+    return out
+
+
+def bow_columns(dP: np.ndarray, R_normal: np.ndarray, basis: np.ndarray, tj: np.ndarray, T: int) -> np.ndarray:
+    """d uv / d (every target's bow_x, bow_y), (M, 2, 2 T): ``R_normal`` (M, 3) each corner's target normal in
+    the camera frame. Why estimated: a print bowed 0.1 mm (as real prints are) shifts a near target's pose by
+    3-10 sigma, and no other parameter can take it (issue 35)."""
+    J = np.zeros((len(dP), 2, 2 * T))
+    d = np.einsum("mai,mi->ma", dP, R_normal)
+    rows = np.arange(len(dP))
+    for b in range(2):
+        J[rows, :, 2 * tj + b] = d * basis[:, b:b + 1]
+    return J
+
 
 @dataclass
 class TargetSolution:
@@ -81,6 +113,7 @@ class TargetSolution:
     intrinsics_gradient: np.ndarray | None = None  # (K, D, 9): d s / d intrinsics (reported coordinates), when
     # the intrinsics have a covariance to propagate
     intrinsics_estimated: CameraIntrinsics | None = None  # self-calibration: the intrinsics at the solution
+    bows_mm: np.ndarray | None = None  # (T, 2): each target's estimated bow (bow_x, bow_y), when free
 
     def planar_axes(self, targets_mm: np.ndarray) -> dict[str, float]:
         """Scales of X and Y (ppm) and the squareness of Y to X (urad), with sigmas (SPEC 10 names).
@@ -187,12 +220,15 @@ def _camera_points(state: dict, X: np.ndarray, tj: np.ndarray, view: np.ndarray,
 
 
 def _linearize(state: dict, X: np.ndarray, tj: np.ndarray, view: np.ndarray, uv: np.ndarray,
-               intrinsics: CameraIntrinsics, D: int, want_jacobian: bool = True) -> Linearization:
+               intrinsics: CameraIntrinsics, D: int, want_jacobian: bool = True,
+               bow_basis: np.ndarray | None = None) -> Linearization:
     R, F = state["R"], state["F"]
     N = F[:, :D]
     free_intrinsics = "I" in state  # self-calibration: the 9 intrinsics are shared columns after the 8
     if free_intrinsics:
         intrinsics = intrinsics.with_vector(state["I"])
+    if bow_basis is not None:  # the targets' bows: 2 shared columns per target after the intrinsics
+        X = bowed(X, bow_basis, state["w"], tj)
     P, QX, RXw, ts = _camera_points(state, X, tj, view, D)
     cost, r, dP = project_residuals(P, uv, intrinsics, want_jacobian)
     if dP is None:
@@ -212,6 +248,9 @@ def _linearize(state: dict, X: np.ndarray, tj: np.ndarray, view: np.ndarray, uv:
     if free_intrinsics:
         du, dv = intrinsics_rows(project_parts(P[:, 0], P[:, 1], P[:, 2], intrinsics), intrinsics)
         Jc = np.concatenate([Jc, np.stack([du.T, dv.T], axis=1)], axis=2)
+    if bow_basis is not None:
+        normal = np.einsum("ij,mj->mi", R, state["Q"][tj][:, :, 2])  # each corner's target normal, camera frame
+        Jc = np.concatenate([Jc, bow_columns(dP, normal, bow_basis, tj, len(state["Q"]))], axis=2)
     return Linearization(cost, r, Jc, Jt, Jv)
 
 
@@ -227,6 +266,9 @@ def _retract(state: dict, dg: np.ndarray, dv: np.ndarray, D: int, T: int) -> dic
     if "I" in state:
         new["I"] = state["I"] + dg[C: C + N_INTRINSICS]
         C += N_INTRINSICS
+    if "w" in state:
+        new["w"] = state["w"] + dg[C: C + 2 * T].reshape(T, 2)
+        C += 2 * T
     new["Q"], new["p"] = retract_targets(state["Q"], state["p"], dg[C:])
     return new
 
@@ -237,8 +279,12 @@ def _retract(state: dict, dg: np.ndarray, dv: np.ndarray, D: int, T: int) -> dic
 def solve_targets(
     obs: TargetObservations, intrinsics: CameraIntrinsics, max_iterations: int = 50, tolerance: float = 1e-10,
     progress=None, noise_px: float | None = None, intrinsics_prior: tuple[np.ndarray, np.ndarray] | None = None,
+    bows: bool = False,
 ) -> TargetSolution:
     """Positions of every stop and the targets' poses, jointly; sigmas from (J^T J)^-1 at the solution.
+
+    ``bows``: every target's bow (Board.warp_mm's two terms) is free too, from the targets' nominal
+    warp (:func:`bow_columns`).
 
     ``noise_px``: the corner noise to scale the sigmas with (a planner's noise-free views); None takes
     the a-posteriori noise of the fit. ``intrinsics_prior`` (I0, Sigma_I): the intrinsics are free with
@@ -255,22 +301,26 @@ def solve_targets(
     free_view = used.copy()
     free_view[ref] = False
     M = len(view)
-    linearize = lambda st, jac=True: _linearize(st, X, tj, view, uv, intrinsics, D, jac)  # noqa: E731
+    basis = obs.bow_basis[corner] if bows else None
+    n_bows = 2 * T if bows else 0
+    if bows:
+        state["w"] = np.zeros((T, 2))
+    linearize = lambda st, jac=True: _linearize(st, X, tj, view, uv, intrinsics, D, jac, basis)  # noqa: E731
     tj_all, view_all = tj, view
     if intrinsics_prior is not None:
         # the prior weighs against corners of the fit's noise (MAP: |r|^2 + sigma^2 dI' Sigma^-1 dI), so the fit
         # with the intrinsics held comes first and gives sigma; the covariance is then the posterior's
         held = levenberg_marquardt(state, linearize, lambda st, dg, dv: _retract(st, dg, dv, D, T), tj, view, K, T,
                                    free_view, max_iterations, tolerance, progress, "target model")
-        dof_held = max(2 * M - (N_COMMON + 6 * (T - 1) + D * int(free_view.sum())), 1)
+        dof_held = max(2 * M - (N_COMMON + n_bows + 6 * (T - 1) + D * int(free_view.sum())), 1)
         state = dict(held.state, I=np.asarray(intrinsics_prior[0], float).copy())
         linearize = _with_prior(linearize, intrinsics_prior, D, np.sqrt(held.lin.cost / dof_held))
         tj_all, view_all = np.r_[tj, np.zeros(PRIOR_ROWS, int)], np.r_[view, np.full(PRIOR_ROWS, ref)]
     fit = levenberg_marquardt(state, linearize, lambda st, dg, dv: _retract(st, dg, dv, D, T), tj_all, view_all, K, T,
                               free_view, max_iterations, tolerance, progress, "target model")
     state, lin, it, converged = fit.state, fit.lin, fit.iterations, fit.converged
-    C = N_COMMON + (N_INTRINSICS if "I" in state else 0)
-    n_params = N_COMMON + 6 * (T - 1) + D * int(free_view.sum())
+    C = N_COMMON + (N_INTRINSICS if "I" in state else 0) + n_bows
+    n_params = N_COMMON + n_bows + 6 * (T - 1) + D * int(free_view.sum())
     dof = max(2 * M - n_params, 1)
     sigma2 = float(np.sum(lin.r[:M] ** 2)) / dof if noise_px is None else float(noise_px) ** 2
     S_inv, W, Avv_inv = fit.S_inv, fit.W, fit.Avv_inv
@@ -292,7 +342,9 @@ def solve_targets(
     sigma_s[~used] = sigma_c[~used] = np.nan
     gradient = None
     if intrinsics.covariance is not None and "I" not in state:  # free intrinsics are in the covariance already
-        grad = _intrinsics_gradient(state, fit, X, tj, view, intrinsics, D, free_view)
+        Xb = bowed(X, basis, state["w"], tj) if bows else X
+        grad, target_grad = _intrinsics_gradient(state, fit, Xb, tj, view, intrinsics, D, free_view, C)
+        target_sigma = with_intrinsics_term(target_sigma, target_grad, intrinsics.covariance)
         gradient = np.einsum("de,kdi->kei", turn, grad)  # reported coordinates: v turn
         if D == 2:  # the turn follows the positions: its change enters every position
             gradient += _turn_change(s_solver, obs.targets_mm, used, ref, turn, grad)
@@ -300,31 +352,52 @@ def solve_targets(
                           float(np.sqrt(sigma2)), rms, used, ref, state["ties"], it, converged,
                           PositionCovariance(Avv_inv * free_view[:, None, None], W * free_view[:, None, None],
                                              S_inv, sigma2, turn), gradient,
-                          intrinsics.with_vector(state["I"]) if "I" in state else None)
+                          intrinsics.with_vector(state["I"]) if "I" in state else None, state.get("w"))
 
 
 def _intrinsics_gradient(state: dict, fit, X: np.ndarray, tj: np.ndarray, view: np.ndarray,
-                         intrinsics: CameraIntrinsics, D: int, free_view: np.ndarray) -> np.ndarray:
-    """d s / d intrinsics (K, D, 9) in the solver's coordinates: -H^-1 J^T J_I by the same Schur complement.
-
-    With W_k = A_gv,k A_vv,k^-1: y_g = S^-1 (C_g - sum_k W_k C_v,k), y_v,k = A_vv,k^-1 C_v,k - W_k^T y_g.
-    """
-    lin = fit.lin
+                         intrinsics: CameraIntrinsics, D: int, free_view: np.ndarray, C: int = N_COMMON
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """d s / d intrinsics (K, D, 9) in the solver's coordinates and d (target poses) / d intrinsics
+    (6 (T - 1), 9), from :func:`intrinsics_sensitivity`."""
     P, *_ = _camera_points(state, X, tj, view, D)
     du, dv = intrinsics_rows(project_parts(P[:, 0], P[:, 1], P[:, 2], intrinsics), intrinsics)
-    JI = np.stack([du.T, dv.T], axis=1)  # (M, 2, 9)
-    K, T = len(free_view), len(state["Q"])
-    G = N_COMMON + 6 * (T - 1)
-    C_g = np.zeros((G, JI.shape[2]))
-    C_g[:N_COMMON] = np.einsum("mac,mai->ci", lin.Jc, JI)
+    shared, per_view = intrinsics_sensitivity(fit, np.stack([du.T, dv.T], axis=1), tj, view, free_view)
+    return per_view, shared[C:]
+
+
+def intrinsics_sensitivity(fit, JI: np.ndarray, tj: np.ndarray, view: np.ndarray,
+                           free_view: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """d (shared columns) / d intrinsics (G, 9) and d (view columns) / d intrinsics (K, D, 9): -H^-1 J^T J_I
+    by the fit's Schur complement, ``JI`` (M, 2, 9) the corners' d uv / d intrinsics.
+
+    With W_k = A_gv,k A_vv,k^-1: y_g = S^-1 (C_g - sum_k W_k C_v,k), y_v,k = A_vv,k^-1 C_v,k - W_k^T y_g.
+    Why the shared part too: a target's pose at another depth or scale moves with the focal length and
+    the principal point (SPEC 14's two depths), which the corners' noise alone does not show.
+    """
+    lin = fit.lin
+    K, C = len(free_view), lin.Jc.shape[2]
+    T = (fit.S_inv.shape[0] - C) // 6 + 1  # the shared columns: C common, then 6 per target but the first
+    C_g = np.zeros((C + 6 * (T - 1), JI.shape[2]))
+    C_g[:C] = np.einsum("mac,mai->ci", lin.Jc, JI)
     for j in range(1, T):
         on = tj == j
-        C_g[N_COMMON + 6 * (j - 1): N_COMMON + 6 * j] = np.einsum("mac,mai->ci", lin.Jt[on], JI[on])
-    C_v = np.zeros((K, D, JI.shape[2]))
+        C_g[C + 6 * (j - 1): C + 6 * j] = np.einsum("mac,mai->ci", lin.Jt[on], JI[on])
+    C_v = np.zeros((K, lin.Jv.shape[2], JI.shape[2]))
     np.add.at(C_v, view, np.einsum("map,mai->mpi", lin.Jv * free_view[view][:, None, None], JI))
     y_g = fit.S_inv @ (C_g - np.einsum("kgp,kpi->gi", fit.W, C_v))
     y_v = np.einsum("kpq,kqi->kpi", fit.Avv_inv, C_v) - np.einsum("kgp,gi->kpi", fit.W, y_g)
-    return -y_v * free_view[:, None, None]
+    return -y_g, -y_v * free_view[:, None, None]
+
+
+def with_intrinsics_term(target_sigma: np.ndarray, gradient: np.ndarray, covariance: np.ndarray) -> np.ndarray:
+    """(T, 6) target sigmas with the held intrinsics' covariance propagated through ``gradient``
+    (6 (T - 1), 9): the term is common to every stop, so it does not average out (issue 35)."""
+    out = np.asarray(target_sigma, float).copy()
+    if len(out) > 1:
+        var = np.einsum("gi,ij,gj->g", gradient, covariance, gradient).reshape(len(out) - 1, 6)
+        out[1:] = np.sqrt(out[1:] ** 2 + np.maximum(var, 0.0))
+    return out
 
 
 PRIOR_ROWS = 5  # pseudo-corners carrying the nine prior residuals (and one zero)
@@ -346,7 +419,8 @@ def _with_prior(linearize, prior: tuple[np.ndarray, np.ndarray], D: int, sigma_p
         cost = lin.cost + float(rp @ rp)
         if lin.Jc is None:
             return Linearization(cost, r, None, None, None)  # type: ignore[arg-type]
-        Jc = np.concatenate([lin.Jc, J_prior.reshape(PRIOR_ROWS, 2, -1)])
+        pad = np.zeros((2 * PRIOR_ROWS, lin.Jc.shape[2] - J_prior.shape[1]))  # the bows' columns after them
+        Jc = np.concatenate([lin.Jc, np.concatenate([J_prior, pad], axis=1).reshape(PRIOR_ROWS, 2, -1)])
         Jt = np.concatenate([lin.Jt, np.zeros((PRIOR_ROWS, 2, 6))])
         Jv = np.concatenate([lin.Jv, np.zeros((PRIOR_ROWS, 2, D))])
         return Linearization(cost, r, Jc, Jt, Jv)

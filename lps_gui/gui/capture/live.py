@@ -21,7 +21,7 @@ from PySide6.QtCore import QObject, Qt, QTimer, Signal
 from PySide6.QtWidgets import QCheckBox, QGroupBox, QLabel, QListWidget, QVBoxLayout, QWidget
 
 from lps_gui.gui.results.plot_adapter import DrawnFigure, figure_steps
-from lps_gui.io.results.keys import DEVIATION_UM
+from lps_gui.io.results.keys import DEVIATION_UM, SIGMA_TOTAL_UM
 
 
 class _Bridge(QObject):
@@ -121,7 +121,8 @@ class LivePanel(QGroupBox):
 
             cols = position_columns(event.data)
             self.status.setText(f"results: {event.message}")
-            self._pending = {key: cols[key] for key in ("target_mm", DEVIATION_UM, "sigma_um", "outlier", "direction")}
+            self._pending = {key: cols[key] for key in ("target_mm", DEVIATION_UM, "sigma_um", SIGMA_TOTAL_UM, "outlier",
+                                                        "direction") if key in cols}
             self._pending["n_views"] = len(cols["target_mm"])
             self._pending["title"] = f"Deviation ({len(cols['target_mm'])} views, final estimate)"
             if not self._steps:
@@ -142,6 +143,8 @@ class LivePanel(QGroupBox):
             cols = {"target_mm": np.asarray(data["target_mm"], float), DEVIATION_UM: np.asarray(data[DEVIATION_UM], float),
                     "sigma_um": np.asarray(data["sigma_um"], float), "outlier": np.asarray(data["outlier"], bool),
                     "direction": np.asarray(data["direction"], dtype=object)}
+            if data.get(SIGMA_TOTAL_UM) is not None:  # the band draws the total sigma (plots.drawn_sigma_um)
+                cols[SIGMA_TOTAL_UM] = np.asarray(data[SIGMA_TOTAL_UM], float)
             fig = deviation_figure(cols, None)
             fig = replace(fig, title=data.get("title") or f"Live deviation ({data['n_views']} views)")
             self.drawn, self._steps = figure_steps(self.plot.getPlotItem(), fig)

@@ -198,12 +198,24 @@ def target_pose_solution(obs: Any, est: Any) -> tuple[PoseSolution, Any]:
     return (other, refined) if other.sigma_px < held.sigma_px else (held, obs.intrinsics)
 
 
+def with_estimated_bows(obs: Any, est: Any) -> Any:
+    """``obs`` with its targets bowed as the estimate found them (core/models/target_model.bow_columns), so the
+    poses and the lens check see the prints as they are: a bow left out shows as a lens misfit and fake tilts."""
+    from dataclasses import replace
+
+    from lps_gui.core.models.target_model import with_bows
+
+    bows = getattr(getattr(est, "fit_targets", None), "bows_mm", None)
+    return obs if bows is None else replace(obs, mounted=with_bows(list(obs.mounted), bows))
+
+
 def session_error_motions(meta: dict[str, Any], where: str, obs: Any, est: Any,
                           truth: dict[str, Any] | None) -> ErrorMotionResults | None:
     """A line session's error motions: from the full poses against its targets, or a single board's
     6-DOF poses (None when the method has none)."""
     tool = tool_point(meta, where)
     if obs.mounted is not None:
+        obs = with_estimated_bows(obs, est)
         (sol, intrinsics), basis = target_pose_solution(obs, est), BASIS_TARGETS
     else:
         sol, intrinsics, basis = board_pose_solution(est), obs.intrinsics, BASIS_BOARD
@@ -294,6 +306,7 @@ def session_motions(session: Any, obs: Any, est: Any) -> ErrorMotionResults | No
     if obs.mounted is None:
         return None
     tool_point(meta, where)  # checked alike, used by one axis only
+    obs = with_estimated_bows(obs, est)
     sol, intrinsics = target_pose_solution(obs, est)
     w = planar_truth_rotations(meta.get("truth"), np.asarray(obs.index))
     if int(sol.used.sum()) < 3:

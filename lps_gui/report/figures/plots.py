@@ -226,15 +226,25 @@ def deviation_figure(cols: dict[str, np.ndarray], tcols: dict[str, np.ndarray] |
                          f"{_dir_label(d)}: band = mean \u00b1 2 s over up to {int(count.max())} captures per target "
                          f"({runs} run{'s' if runs != 1 else ''})")
         else:
-            sig = 2.0 * np.nan_to_num(cols["sigma_um"][sel])
+            sig = 2.0 * np.nan_to_num(drawn_sigma_um(cols)[sel])
             series.append(Series(x, y, f"deviation {_dir_label(d)}", "line+markers", _color(d),
                                  band_low=y - sig, band_high=y + sig, marked=cols["outlier"][sel]))
-            notes.append(f"{_dir_label(d)}: band = \u00b12 sigma (measurement noise)")
+            notes.append(f"{_dir_label(d)}: band = \u00b12 sigma (noise, intrinsics, lens model)")
         if tcols is not None:
             tt, tmean, _, _ = per_target_stats(x, tcols[DEVIATION_UM][sel], np.ones(x.shape, bool))
             series.append(_truth_series(tt, tmean, f"truth {_dir_label(d)}", TRUTH_COLORS[d]))
     return FigureSpec("deviation", "Positioning deviation vs target", "target position [mm]", "deviation [\u00b5m]",
                       series, "; ".join(notes))
+
+
+def drawn_sigma_um(cols: dict[str, np.ndarray]) -> np.ndarray:
+    """The per-stop sigma the bands draw: ``sigma_total_um`` (noise, the intrinsics' covariance, the lens misfit
+    where estimated), ``sigma_um`` where a source has no total. Why: the intrinsics and the lens misfit are common
+    to neighbouring stops and do not average out; a band of the noise alone missed the truth by 3-12 sigma on
+    two-depth constellations (issue 35, docs/validation.md)."""
+    noise = np.asarray(cols["sigma_um"], dtype=float)
+    total = cols.get(SIGMA_TOTAL_UM)
+    return noise if total is None else np.where(np.isfinite(total), total, noise)
 
 
 def _truth_series(x: np.ndarray, y: np.ndarray, label: str, color: str = TRUTH_COLOR) -> Series:

@@ -381,7 +381,7 @@ POSITION_TABLE_COLUMNS = (  # (key, header, decimals or None for text, width in 
     ("index", "#", 0, 9), ("run", "run", 0, 7), ("direction", "dir", None, 6), ("target_mm", "target\n[mm]", 3, 13),
     (MEASURED_MM, "measured\n[mm]", 4, 15), (DEVIATION_UM, "deviation\n[\u00b5m]", 2, 14),
     ("truth_deviation_um", "truth dev.\n[\u00b5m]", 2, 16),
-    ("sigma_um", "1\u03c3 noise\n[\u00b5m]", 2, 13), ("rms_px", "rms\n[px]", 3, 10),
+    (SIGMA_TOTAL_UM, "1\u03c3\n[\u00b5m]", 2, 13), ("rms_px", "rms\n[px]", 3, 10),  # the band's sigma (plots)
     ("straightness_um_1", "str. v1\n[\u00b5m]", 2, 13), ("straightness_um_2", "str. v2\n[\u00b5m]", 2, 13),
     ("roll_urad", "roll\n[\u00b5rad]", 1, 13), ("pitch_urad", "pitch\n[\u00b5rad]", 1, 13),
     ("yaw_urad", "yaw\n[\u00b5rad]", 1, 13), ("outlier", "outlier", None, 11),

@@ -412,7 +412,7 @@ def rescored_with_drawn_sigma(comparison: dict[str, Any], positions: list[dict[s
                                                                        "truth_plane_deviation_um")):
         if comparison.get(key) is None:
             continue
-        z = [(r["deviation_um"] - r[truth_key]) / r[SIGMA_TOTAL_UM] for k, r in enumerate(positions)
+        z = [(r[DEVIATION_UM] - r[truth_key]) / r[SIGMA_TOTAL_UM] for k, r in enumerate(positions)
              if k != reference and r.get("used", True) and r.get(DEVIATION_UM) is not None
              and r.get(truth_key) is not None and (r.get(SIGMA_TOTAL_UM) or 0.0) > 0.0]
         if z:

@@ -7,6 +7,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -47,5 +49,6 @@ def test_a_row_declares_the_print_scale_its_prints_are_drawn_from():
         1e-3 * on.realism.print_scale_ppm * square)
     assert honesty.campaign_environment("row", off)["square_mm_uncertainty_um"] <= 0.1  # the line's certificate
     assert honesty.campaign_environment("row", off)["stage_temperature_c"] == 20.5  # a row's environment otherwise
-    two_depth = honesty.build_spec("two-depth", "flat", "off", 0)  # its print rows also stand for its poses' errors
-    assert honesty.campaign_environment("two-depth", two_depth)["square_mm_uncertainty_um"] == 2.0
+    two_depth = honesty.build_spec("two-depth", "flat", "on", 0)  # two depths alike (its 2 um hid a failing cell)
+    assert honesty.campaign_environment("two-depth", two_depth)["square_mm_uncertainty_um"] == pytest.approx(
+        1e-3 * two_depth.realism.print_scale_ppm * two_depth.rig.board.square_mm)

@@ -281,7 +281,10 @@ def line_results(session: SessionInput, obs: Observations, est: LpsEstimate, int
     truth = session.truth
     board, parameters = board_to_dict(obs.board), estimate_parameters(obs, est)
     figures, flags = session_figures(obs, est), [Flag.of(**f).to_dict() for f in est.flags]
-    tc = None if truth is None else TruthComparison.of(**truth_comparison(obs, est, truth, positions)).to_dict()
+    tc = None
+    if truth is not None:  # the section, and new rows with truth beside each position
+        section, positions = truth_comparison(obs, est, truth, positions)
+        tc = TruthComparison.of(**section).to_dict()
     results = assemble_results(
         method=est.method,
         settings=est.options.to_dict(),

@@ -240,10 +240,10 @@ def build_results(session: SessionInput, obs: Observations, est: LpsEstimate, in
         targets, targets_truth = add_targets_section(results, obs, est, session)
         if targets_truth is not None:
             truth = results["truth_comparison"] = {**(truth or {}), "targets": targets_truth}
-    if obs.segment is not None:
-        from lps_gui.pipeline.stitched_session import add_stitch_ties
+    if obs.segment is not None:  # a stitched session's placements are tied by their repeated stops
+        from lps_gui.pipeline.stitched_session import with_stitch_ties
 
-        add_stitch_ties(targets, obs)  # a stitched session's placements are tied by their repeated stops
+        targets = results["targets"] = with_stitch_ties(targets, obs)
     motions = error_motions_outcome(session, obs, est, positions, figures, flags)  # SPEC 14, where poses allow
     if motions is not None:
         positions, figures, flags = motions.positions, motions.figures, motions.flags

@@ -63,7 +63,7 @@ def with_stitch_ties(targets: list[dict[str, Any]], obs: Observations) -> list[d
         tied[b + 1].update(pairs[:, 1].tolist())
     index = np.asarray(obs.index)
     return [{**row, "ties": len(views), "tied_by": index[views].astype(int).tolist(),
-             "stitch_ties": int(len(ties[k - 1])) if k else 0}
+             "stitch_ties": len(ties[k - 1]) if k else 0}
             for k, (row, views) in enumerate(zip(targets, (sorted(t) for t in tied)))]
 
 

@@ -259,6 +259,6 @@ def test_results_sections_have_one_order_whatever_order_a_builder_writes_them():
     written = {"verdict": 1, "targets": 2, "format": 3, "summary": 4, "board": 5}
     ordered = in_section_order(written)
     assert list(ordered) == ["format", "board", "targets", "summary", "verdict"]
-    assert list(ordered) == [k for k in SECTIONS if k in written] and list(written)[0] == "verdict"
+    assert list(ordered) == [k for k in SECTIONS if k in written] and next(iter(written)) == "verdict"
     with pytest.raises(ValueError, match="lightfield"):
         in_section_order({"format": 1, "lightfield": 2})

@@ -71,15 +71,14 @@ def test_truth_comparison_returns_new_rows_and_leaves_the_builders_rows_as_they_
     here (a write to them raises) and keep exactly their own columns."""
     from types import MappingProxyType
 
-    from lps_gui.pipeline.estimate import (estimate_with_self_calibration, make_options, observations_from_session,
-                                           position_rows)
+    from lps_gui.pipeline import estimate as pipeline
     from lps_gui.pipeline.session_input import read_session_input
     from lps_gui.sim.truth import truth_comparison
 
     inp = read_session_input(session_folder, None)
-    obs = observations_from_session(inp)
-    est = estimate_with_self_calibration(obs, make_options("joint"))
-    rows = position_rows(obs, est)
+    obs = pipeline.observations_from_session(inp)
+    est = pipeline.estimate_with_self_calibration(obs, pipeline.make_options("joint"))
+    rows = pipeline.position_rows(obs, est)
     before = [dict(r) for r in rows]
     section, with_truth = truth_comparison(obs, est, inp.truth, [MappingProxyType(r) for r in rows])
     assert rows == before

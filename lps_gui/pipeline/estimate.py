@@ -33,7 +33,8 @@ from lps_gui.gc_tuning import paused as paused_collections
 from lps_gui.io.board_file import board_to_dict
 from lps_gui.io.corners.vnl import read_corners_vnl
 from lps_gui.io.intrinsics_file import apply_board_warp, intrinsics_to_dict
-from lps_gui.io.results.document import assemble_results, json_floats, rows_from_columns, write_results
+from lps_gui.io.results.document import (assemble_results, in_section_order, json_floats, rows_from_columns,
+                                         write_results)
 from lps_gui.io.results.document import json_float as _f
 from lps_gui.io.results.history import commit_results
 from lps_gui.io.session import Session
@@ -47,7 +48,7 @@ from lps_gui.pipeline.results.uncertainty import BudgetSource, environment_and_u
 from lps_gui.pipeline.results.verdict import measured, summary_rows, verdict_section
 from lps_gui.pipeline.session_checks import corners_of_records, session_inputs
 from lps_gui.pipeline.session_input import SessionInput, read_session_input
-from lps_gui.pipeline.target_session import add_targets_section, target_observations
+from lps_gui.pipeline.target_session import target_observations, targets_with_truth
 from lps_gui.sim.truth import rescored_with_drawn_sigma, truth_comparison
 from lps_gui.sim.truth_figures import CheckedValues, self_check_section
 from lps_gui.io.results.keys import DEVIATION_UM, MEASURED_MM, SIGMA_TOTAL_UM
@@ -237,13 +238,14 @@ def build_results(session: SessionInput, obs: Observations, est: LpsEstimate, in
     positions, figures, flags, truth = part.positions, part.figures, part.flags, part.truth_comparison
     targets = None
     if obs.mounted is not None:  # SPEC 13: each target's pose, sigma, views, ties
-        targets, targets_truth = add_targets_section(results, obs, est, session)
+        targets, targets_truth = targets_with_truth(obs, est, session)
+        if obs.segment is not None:  # a stitched session's placements are tied by their repeated stops
+            from lps_gui.pipeline.stitched_session import with_stitch_ties
+
+            targets = with_stitch_ties(targets, obs)
+        results["targets"] = targets
         if targets_truth is not None:
             truth = results["truth_comparison"] = {**(truth or {}), "targets": targets_truth}
-    if obs.segment is not None:
-        from lps_gui.pipeline.stitched_session import add_stitch_ties
-
-        add_stitch_ties(targets, obs)  # a stitched session's placements are tied by their repeated stops
     motions = error_motions_outcome(session, obs, est, positions, figures, flags)  # SPEC 14, where poses allow
     if motions is not None:
         positions, figures, flags = motions.positions, motions.figures, motions.flags
@@ -261,7 +263,8 @@ def build_results(session: SessionInput, obs: Observations, est: LpsEstimate, in
         targets=targets, stage_spec=session.meta.get("stage_spec"),
         stitched=bool((session.meta.get("plan") or {}).get("segments")))
     environment, uncertainty = environment_and_uncertainty(budget, session)  # GUM budget, U (k = 2) per figure
-    results["environment"], results["uncertainty"] = environment.to_dict(), uncertainty.to_dict()
+    uncertainty_section = uncertainty.to_dict()
+    results["environment"], results["uncertainty"] = environment.to_dict(), uncertainty_section
     asme = None
     if obs.D == 1:  # ASME B5.64 names, TUR, tests
         asme = asme_results(session, obs, est, figures, uncertainty)
@@ -269,10 +272,11 @@ def build_results(session: SessionInput, obs: Observations, est: LpsEstimate, in
     # the verdict, U (k = 2) and the decision rule, machine-readable (line or plane)
     results["verdict"] = verdict_section(measured(budget.axes, figures, uncertainty, asme), session.meta.get("stage_spec"))
     check, flag = self_check_section(CheckedValues(  # a simulated session: does its truth contradict a figure or a finding?
-        positions, figures, results["uncertainty"], truth, None if motions is None else motions.section, obs.D == 2))
+        positions, figures, uncertainty_section, truth, None if motions is None else motions.section, obs.D == 2))
     if check is not None:
         results["truth_comparison"] = {**truth, "self_check": check}
     results["flags"] = [*flags, flag] if flag is not None else flags
+    results = in_section_order(results)  # each section in its place (io.results.document.SECTIONS)
     results["summary"] = summary_rows(results)  # summary.csv: a view of the finished document, made last
     return results
 
@@ -284,7 +288,10 @@ def line_results(session: SessionInput, obs: Observations, est: LpsEstimate, int
     truth = session.truth
     board, parameters = board_to_dict(obs.board), estimate_parameters(obs, est)
     figures, flags = session_figures(obs, est), [Flag.of(**f).to_dict() for f in est.flags]
-    tc = None if truth is None else TruthComparison.of(**truth_comparison(obs, est, truth, positions)).to_dict()
+    tc = None
+    if truth is not None:  # the section, and new rows with truth beside each position
+        section, positions = truth_comparison(obs, est, truth, positions)
+        tc = TruthComparison.of(**section).to_dict()
     results = assemble_results(
         method=est.method,
         settings=est.options.to_dict(),

@@ -52,18 +52,19 @@ def stitched_observations(session: SessionInput, obs: Observations, records: lis
                    repeatability_mm=stage_repeatability_mm(session.meta.get("stage_spec")))
 
 
-def add_stitch_ties(targets: list[dict[str, Any]], obs: Observations) -> None:
-    """results.json ``targets`` of a stitched session (its rows, in place): each placement is tied by its repeated
-    stops, not by views that see two boards; ``stitch_ties`` counts the pairs tying it to the placement before."""
+def with_stitch_ties(targets: list[dict[str, Any]], obs: Observations) -> list[dict[str, Any]]:
+    """results.json ``targets`` of a stitched session, as new rows (``targets`` is left as it was): each placement
+    is tied by its repeated stops, not by views that see two boards; ``stitch_ties`` counts the pairs tying it to
+    the placement before."""
     ties = segment_ties(obs.targets, obs.segment)
     tied: list[set[int]] = [set() for _ in targets]
     for b, pairs in enumerate(ties):
         tied[b].update(pairs[:, 0].tolist())
         tied[b + 1].update(pairs[:, 1].tolist())
-    for k, row in enumerate(targets):
-        views = sorted(tied[k])
-        row["ties"], row["tied_by"] = len(views), np.asarray(obs.index)[views].astype(int).tolist()
-        row["stitch_ties"] = int(len(ties[k - 1])) if k else 0
+    index = np.asarray(obs.index)
+    return [{**row, "ties": len(views), "tied_by": index[views].astype(int).tolist(),
+             "stitch_ties": len(ties[k - 1]) if k else 0}
+            for k, (row, views) in enumerate(zip(targets, (sorted(t) for t in tied)))]
 
 
 def stitch_row(targets: list[dict[str, Any]] | None, stage_spec: dict[str, Any] | None) -> BudgetRow:

@@ -4,7 +4,7 @@
 session.json that names ``targets``: the SPEC 13 corners.vnl is read, checked
 like a board's (stale images, missing views, collinear views) and laid out as
 one set of corners per view with each corner's target
-(``Observations.mounted``). :func:`add_targets_section` adds results.json
+(``Observations.mounted``). :func:`targets_with_truth` makes results.json
 ``targets``: each target's pose in the world frame (target 0's) with its
 sigma, the views that saw it and that tie it, and its share of the travel
 (what its print's scale enters in the budget, :mod:`lps_gui.core.metrology.target_scale`).
@@ -102,20 +102,12 @@ def targets_section(obs: Observations, est: Any, session: SessionInput) -> list[
     return rows
 
 
-def add_targets_section(results: dict[str, Any], obs: Observations, est: Any, session: SessionInput
-                        ) -> tuple[list[dict[str, Any]], dict[str, Any] | None]:
-    """Put ``targets`` into results (after ``board``, in schema order); returns it and, for a simulated session,
-    ``truth_comparison.targets`` (each pose compared with the simulator's; None for a real one), which the caller
-    writes."""
+def targets_with_truth(obs: Observations, est: Any, session: SessionInput
+                       ) -> tuple[list[dict[str, Any]], dict[str, Any] | None]:
+    """results.json ``targets`` and, for a simulated session, ``truth_comparison.targets`` (each pose compared with
+    the simulator's; None for a real one): values, which the caller writes (its place is
+    :data:`lps_gui.io.results.document.SECTIONS`')."""
     from lps_gui.sim.truth import target_truth_comparison
 
     section = [TargetRecord.of(**row).to_dict() for row in targets_section(obs, est, session)]  # as readers read it
-    ordered: dict[str, Any] = {}
-    for key, value in results.items():
-        ordered[key] = value
-        if key == "board":
-            ordered["targets"] = section
-    ordered.setdefault("targets", section)
-    results.clear()
-    results.update(ordered)
     return section, target_truth_comparison(session, section)

@@ -329,8 +329,10 @@ def centred(values: np.ndarray, compared: np.ndarray) -> np.ndarray:
     return values - np.mean(values[compared], axis=0)
 
 
-def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any], positions: list[dict]) -> dict[str, Any]:
-    """results.json ``truth_comparison`` (schema in docs/ARCHITECTURE.md); also puts truth beside each position.
+def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any], positions: list[dict]
+                     ) -> tuple[dict[str, Any], list[dict]]:
+    """results.json ``truth_comparison`` (schema in docs/ARCHITECTURE.md) and the position rows with truth beside
+    each: new rows, ``positions`` is left as it was (a builder returns values, issue 34).
 
     Everything here goes through :func:`reduce_truth` with the estimate's
     reference capture, so the numbers are the ones the report, the GUI and
@@ -343,7 +345,7 @@ def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any],
     have = rows >= 0
     ref = est.reference_view
     if not have[ref]:
-        return {"note": "truth does not cover the reference capture"}
+        return {"note": "truth does not cover the reference capture"}, list(positions)
     take = np.maximum(rows, 0)
     ok = est.used & have
 
@@ -396,9 +398,7 @@ def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any],
             columns[f"truth_{key}_urad"] = angles[:, j]
     keys = list(columns)
     values = list(zip(*(json_floats(v) for v in columns.values())))
-    for k in np.flatnonzero(have).tolist():
-        positions[k].update(zip(keys, values[k]))
-    return out
+    return out, [{**row, **(dict(zip(keys, values[k])) if have[k] else {})} for k, row in enumerate(positions)]
 
 
 def rescored_with_drawn_sigma(comparison: dict[str, Any], positions: list[dict[str, Any]], reference: int
@@ -506,8 +506,8 @@ def _board_plane_normal_um(meta: dict[str, Any], plane_mm: np.ndarray, K: int) -
 
 
 def _plane_truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any], positions: list[dict]
-                            ) -> dict[str, Any]:
-    """results.json ``truth_comparison`` of a planar session; also puts truth beside each position.
+                            ) -> tuple[dict[str, Any], list[dict]]:
+    """results.json ``truth_comparison`` of a planar session and new position rows with truth beside each.
 
     Truth is put in the estimate's frame convention first (SPEC 10: origin at the reference capture, +x along
     the fitted +X motion), by the rule the estimator applies to its own positions
@@ -518,7 +518,7 @@ def _plane_truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str
     have = rows >= 0
     ref = est.reference_view
     if not have[ref] or not have.all():
-        return {"note": "truth does not cover every capture"}
+        return {"note": "truth does not cover every capture"}, list(positions)
     ok = est.used & have
     key = "board_plane_mm" if "board_plane_mm" in truth else "plane_mm"
     true_xy = planar_truth_in_stage_frame(truth[key][rows], obs.target_mm, obs.approach, ok, ref)
@@ -556,32 +556,33 @@ def _plane_truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str
         iso = ((true_axis.get("iso230_2") or {}).get("iso230_2")) or {}
         if iso:  # the ISO 230-2 figures of the true deviations, by the estimate's per-line rule
             out[f"iso230_2_{axis.lower()}"] = {k: _f(iso.get(k)) for k in ("A_um", "E_um", "R_um", "B_um", "M_um")}
-    for k, row in enumerate(positions):
-        row["truth_deviation_x_um"] = _f(true_dev[k, 0])
-        row["truth_deviation_y_um"] = _f(true_dev[k, 1])
-    out.update(_out_of_plane_errors(obs, truth, rows, ok, positions))
-    return out
+    new_rows = [{**row, "truth_deviation_x_um": _f(true_dev[k, 0]), "truth_deviation_y_um": _f(true_dev[k, 1])}
+                for k, row in enumerate(positions)]
+    errors, true_oop = _out_of_plane_errors(obs, truth, rows, ok, positions)
+    out.update(errors)
+    if true_oop is not None:
+        new_rows = [{**row, "truth_out_of_plane_um": _f(v)} for row, v in zip(new_rows, true_oop)]
+    return out, new_rows
 
 
 def _out_of_plane_errors(obs: Observations, truth: dict[str, Any], rows: np.ndarray, ok: np.ndarray,
-                         positions: list[dict]) -> dict[str, Any]:
-    """The estimate's out-of-plane displacement against truth, both off their least-squares plane over ``ok``."""
+                         positions: list[dict]) -> tuple[dict[str, Any], np.ndarray | None]:
+    """The estimate's out-of-plane displacement against truth, both off their least-squares plane over ``ok``:
+    the error figures and the true displacement per position (None where not compared)."""
     if "board_plane_normal_um" not in truth:
-        return {}
+        return {}, None
     est_v = np.array([np.nan if r.get("out_of_plane_um") is None else r["out_of_plane_um"] for r in positions])
     est_s = np.array([np.nan if r.get("out_of_plane_sigma_um") is None else r["out_of_plane_sigma_um"]
                       for r in positions])
     keep = ok & np.isfinite(est_v) & np.isfinite(est_s)
     if keep.sum() < 4:
-        return {}
+        return {}, None
     design = np.column_stack([np.ones(obs.K), obs.target_mm])
     true_v = truth["board_plane_normal_um"][rows]
     true_v = true_v - design @ np.linalg.lstsq(design[keep], true_v[keep], rcond=None)[0]
     err = est_v[keep] - true_v[keep]
-    for k, row in enumerate(positions):
-        row["truth_out_of_plane_um"] = _f(true_v[k])
     return {"out_of_plane_rms_error_um": _f(np.sqrt(np.mean(err**2))),
-            "out_of_plane_z_mean_square": _f(np.mean((err / est_s[keep]) ** 2))}
+            "out_of_plane_z_mean_square": _f(np.mean((err / est_s[keep]) ** 2))}, true_v
 
 
 def target_truth_comparison(session: Session, section: list[dict[str, Any]]) -> dict[str, Any] | None:

@@ -247,3 +247,16 @@ def test_a_builder_cannot_write_a_field_the_readers_do_not_know():
     assert Iso230.of(A_um=3.0).get("A_um") == 3.0  # E/M/B/R/A by name: an open set
     nested = Uncertainty.of(per_axis={"X": Uncertainty.of(expanded_k2_um=2.0)})
     assert nested.per_axis["X"].expanded_k2_um == 2.0 and nested.to_dict() == {"per_axis": {"X": {"expanded_k2_um": 2.0}}}
+
+
+def test_results_sections_have_one_order_whatever_order_a_builder_writes_them():
+    """Issue 34: a builder writes a section where it is made; its place in results.json is SECTIONS' (no builder
+    reads the document's keys back to keep an order); a section not named there is refused, not placed anywhere."""
+    from lps_gui.io.results.document import SECTIONS, in_section_order
+
+    written = {"verdict": 1, "targets": 2, "format": 3, "summary": 4, "board": 5}
+    ordered = in_section_order(written)
+    assert list(ordered) == ["format", "board", "targets", "summary", "verdict"]
+    assert list(ordered) == [k for k in SECTIONS if k in written] and next(iter(written)) == "verdict"
+    with pytest.raises(ValueError, match="lightfield"):
+        in_section_order({"format": 1, "lightfield": 2})

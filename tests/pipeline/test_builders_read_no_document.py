@@ -64,3 +64,24 @@ def test_the_values_give_what_a_reader_of_the_finished_document_gives(session_fo
     rows = session_verdicts(results, SPEC)
     assert [(c["name"], c["verdict"], c["u_k2"]) for c in results["verdict"]["checks"]] == [
         (r.name, r.verdict, pytest.approx(r.u_k2)) for r in rows]
+
+
+def test_truth_comparison_returns_new_rows_and_leaves_the_builders_rows_as_they_were(session_folder):
+    """Issue 34, builders return values: the truth columns come back on new rows; the rows handed in are read-only
+    here (a write to them raises) and keep exactly their own columns."""
+    from types import MappingProxyType
+
+    from lps_gui.pipeline import estimate as pipeline
+    from lps_gui.pipeline.session_input import read_session_input
+    from lps_gui.sim.truth import truth_comparison
+
+    inp = read_session_input(session_folder, None)
+    obs = pipeline.observations_from_session(inp)
+    est = pipeline.estimate_with_self_calibration(obs, pipeline.make_options("joint"))
+    rows = pipeline.position_rows(obs, est)
+    before = [dict(r) for r in rows]
+    section, with_truth = truth_comparison(obs, est, inp.truth, [MappingProxyType(r) for r in rows])
+    assert rows == before
+    assert section["position_rms_error_um"] is not None
+    assert all(set(n) - set(r) >= {"truth_deviation_um"} for n, r in zip(with_truth, rows))
+    assert [{k: n[k] for k in r} for n, r in zip(with_truth, rows)] == before  # the estimate's columns unchanged

@@ -28,6 +28,11 @@ from lps_gui.io.results.keys import PLANAR_POSITION_COLUMNS, POSITION_COLUMNS
 from lps_gui.io.results.typed_json import finite_number
 
 FORMAT = "lps-results/1"
+SECTIONS = (  # results.json's sections in schema order: the one definition (builders write in any order)
+    "format", "software", "created", "method", "axes", "settings", "inputs", "board", "targets", "intrinsics",
+    "session_meta", "parameters", "positions", "figures", "flags", "timings_s", "truth_comparison", "summary",
+    "error_motions", "environment", "uncertainty", "asme_b5_64", "verdict",
+)
 RESULTS_FILE = "results.json"
 POSITIONS_FILE = "positions.csv"
 SUMMARY_FILE = "summary.csv"
@@ -54,6 +59,15 @@ def json_floats(values: Any) -> list[float | None]:
     for i in np.flatnonzero(~np.isfinite(a)).tolist():
         out[i] = None
     return out
+
+
+def in_section_order(sections: dict[str, Any]) -> dict[str, Any]:
+    """A new results document with ``sections`` in :data:`SECTIONS`' order; a section not named there is a
+    builder's error (its place would be wherever it happened to be written)."""
+    unknown = [k for k in sections if k not in SECTIONS]
+    if unknown:
+        raise ValueError(f"results.json section(s) {unknown} not in io.results.document.SECTIONS; add them there")
+    return {k: sections[k] for k in SECTIONS if k in sections}
 
 
 def rows_from_columns(columns: dict[str, list[Any]]) -> list[dict[str, Any]]:

@@ -98,7 +98,9 @@ def build_planar_results(session: SessionInput, obs: Observations, est: LpsEstim
     }
     truth, tc = session.truth, None
     if truth is not None:
-        tc = results["truth_comparison"] = TruthComparison.of(**truth_comparison(obs, est, truth, positions)).to_dict()
+        section, positions = truth_comparison(obs, est, truth, positions)  # new rows, truth beside each position
+        results["positions"] = positions
+        tc = results["truth_comparison"] = TruthComparison.of(**section).to_dict()
         _add_truth_to_nodes(planar["nodes"], obs, positions, valid)
     figures = results["figures"] = Figures.of(planar=planar).to_dict()  # written through the readers' definition
     results["summary"] = []  # in its place: summary.csv's rows are made from the finished document

@@ -99,9 +99,8 @@ def test_the_per_stop_z_scores_the_drawn_sigma_not_the_noise_alone():
     obs = SimpleNamespace(index=np.arange(K), target_mm=target)
     truth = {"index": list(range(K)), "axis_mm": target.tolist(), "plane_mm": target.tolist()}
     positions = [{"deviation_um": 1e3 * e, "sigma_total_um": 2.0} for e in err_mm]
-    tc = truth_comparison(obs, est, truth, positions)
+    tc, rows = truth_comparison(obs, est, truth, positions)
     assert tc["z_mean_square"] == pytest.approx(1.0) and tc["board_plane_z_mean_square"] == pytest.approx(1.0)
-    for row in positions:
-        row["sigma_total_um"] = 4.0  # the lens misfit folded in
-    tc = rescored_with_drawn_sigma(tc, positions, reference=0)
+    rows = [{**row, "sigma_total_um": 4.0} for row in rows]  # the lens misfit folded in
+    tc = rescored_with_drawn_sigma(tc, rows, reference=0)
     assert tc["z_mean_square"] == pytest.approx(0.25) and tc["board_plane_z_mean_square"] == pytest.approx(0.25)

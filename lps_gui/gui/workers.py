@@ -173,6 +173,7 @@ class Job(QObject):
         self.error: str | None = None
         self.expected_error = True  # False: the failure was a bug, its traceback belongs in the log
         self.started_at = 0.0
+        self._work_ended = False  # set in the worker before its result is emitted
 
     # ------------------------------------------------------------------ control (GUI thread)
     def start(self) -> "Job":
@@ -191,8 +192,10 @@ class Job(QObject):
 
     @property
     def running(self) -> bool:
-        """Its thread is still working (False once it ended, even before ``finished`` is delivered)."""
-        return self._thread.isRunning()
+        """Its work is still running: False once the work returned or raised (before its result is delivered, while
+        the thread takes its last steps), so a slot of ``succeeded`` already sees the job as ended (a window closed
+        right after a capture's ``session_done`` must not ask whether to stop a capture that is over)."""
+        return self._thread.isRunning() and not self._work_ended
 
     def wait(self, timeout_ms: int = 30000) -> bool:
         return self._thread.wait(timeout_ms)
@@ -216,14 +219,17 @@ class Job(QObject):
                     kwargs["cancel"] = self.token
             result = self._fn(*self._args, **kwargs)
         except Cancelled as exc:
+            self._work_ended = True
             self.error = one_line(exc)
             self.cancelled.emit(self.error)
         except Exception as exc:  # every failure reaches the user as one line, the log gets the rest
+            self._work_ended = True
             self.error = one_line(exc)
             self.expected_error = expected(exc)
             tb = traceback.format_exc()
             self.failed.emit(self.error, tb)
         else:
+            self._work_ended = True
             self.result = result
             self.succeeded.emit(result)
 

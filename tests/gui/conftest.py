@@ -9,6 +9,18 @@ from PySide6.QtCore import QSettings, QTimer
 from lps_gui.core.clock import RealClock
 
 
+@pytest.fixture(autouse=True)
+def no_modal_question(monkeypatch):
+    """A modal question nobody answers waits forever (offscreen, no one clicks): fail instead of hanging. A test that
+    expects a question answers it with its own monkeypatch (tests/gui/test_operator_laptop.py)."""
+    from PySide6.QtWidgets import QMessageBox
+
+    def unanswered(_parent, title, text, *_args, **_kwargs):
+        raise AssertionError(f"a modal question no test answers: {title!r}: {text!r}")
+
+    monkeypatch.setattr(QMessageBox, "question", staticmethod(unanswered))
+
+
 @pytest.fixture
 def settings(tmp_path):
     """QSettings in a temporary INI file: tests never touch the user's settings."""

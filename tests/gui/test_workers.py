@@ -36,6 +36,20 @@ def test_job_runs_off_the_gui_thread_and_reports_progress(qtbot):
     assert len(seen) < 200  # throttled
 
 
+def test_a_job_whose_work_returned_is_not_running_while_its_thread_ends(qtbot):
+    """A window closed right after a capture's ``session_done`` asked "A capture is running. Quit?" (a modal nobody
+    answered in CI: the whole run hung): the result was delivered while the thread took its last steps. Seen from a
+    slot run inside the worker thread (so the thread is surely still running), the job has ended."""
+    from PySide6.QtCore import Qt
+
+    job = Job("count", counting, 3)
+    seen = []
+    job.succeeded.connect(lambda _r: seen.append((job._thread.isRunning(), job.running)), Qt.ConnectionType.DirectConnection)
+    with qtbot.waitSignal(job.finished, timeout=5000):
+        job.start()
+    assert seen == [(True, False)]
+
+
 def test_cancel_stops_the_work(qtbot):
     gate = threading.Event()
     job = Job("count", counting, 10**9, gate=gate)

@@ -484,6 +484,30 @@ def _board_plane_normal_um(meta: dict[str, Any], plane_mm: np.ndarray, K: int) -
     return 1e3 * (board_plane_offsets(C, w, X0) - C0[None, :]) @ E[:, 2]
 
 
+def _plane_true_xy(obs: Observations, est: LpsEstimate, truth: dict[str, Any]
+                   ) -> tuple[np.ndarray, np.ndarray, str, np.ndarray] | None:
+    """The true planar positions in the estimate's frame (SPEC 10) with the truth rows of the captures, the views
+    compared and the truth key used; None when truth does not cover every capture."""
+    by_index = {int(i): k for k, i in enumerate(truth["index"])}
+    rows = np.array([by_index.get(int(i), -1) for i in obs.index])
+    have = rows >= 0
+    if not have.all():
+        return None
+    ok = est.used & have
+    key = "board_plane_mm" if "board_plane_mm" in truth else "plane_mm"
+    true_xy = planar_truth_in_stage_frame(truth[key][rows], obs.target_mm, obs.approach, ok, est.reference_view)
+    return rows, ok, key, true_xy
+
+
+def plane_true_deviation_um(obs: Observations, est: LpsEstimate, truth: dict[str, Any]) -> np.ndarray:
+    """(K, 2) true deviation of every capture of a planar session, NaN where not compared: the value the
+    builder's error map puts beside the measured one (the truth columns of the position rows hold the same)."""
+    plane = _plane_true_xy(obs, est, truth)
+    if plane is None:
+        return np.full((obs.K, 2), np.nan)
+    return true_deviation_um(plane[3], obs.target_mm, est.reference_view)
+
+
 def _plane_truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any], positions: list[dict]
                             ) -> tuple[dict[str, Any], list[dict]]:
     """results.json ``truth_comparison`` of a planar session and new position rows with truth beside each.
@@ -492,15 +516,11 @@ def _plane_truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str
     the fitted +X motion), by the rule the estimator applies to its own positions
     (:func:`lps_gui.core.models.planar_model.planar_truth_in_stage_frame`).
     """
-    by_index = {int(i): k for k, i in enumerate(truth["index"])}
-    rows = np.array([by_index.get(int(i), -1) for i in obs.index])
-    have = rows >= 0
-    ref = est.reference_view
-    if not have[ref] or not have.all():
+    plane = _plane_true_xy(obs, est, truth)
+    if plane is None:
         return {"note": "truth does not cover every capture"}, list(positions)
-    ok = est.used & have
-    key = "board_plane_mm" if "board_plane_mm" in truth else "plane_mm"
-    true_xy = planar_truth_in_stage_frame(truth[key][rows], obs.target_mm, obs.approach, ok, ref)
+    rows, ok, key, true_xy = plane
+    ref = est.reference_view
     pos = reduce_truth(est.state.xy, true_xy, ref, ok, est.sigma_s_mm)
     sig = 1e3 * est.sigma_s_mm[ok]
     true_geo = axis_geometry(affine_motion(true_xy, obs.target_mm, obs.approach, ok), np.zeros((4, 4)))

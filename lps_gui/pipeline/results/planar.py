@@ -71,7 +71,8 @@ def build_planar_results(session: SessionInput, obs: Observations, est: LpsEstim
                           None if oop is None else oop.sigma_um)
     truth, tc, nodes = session.truth, None, figs.nodes
     if truth is not None:
-        section, positions = truth_comparison(obs, est, truth, positions)  # new rows, truth beside each position
+        section, positions = truth_comparison(  # new rows, truth beside each position
+            obs, est, truth, positions, None if oop is None else (oop.normal_um, oop.sigma_um))
         tc = TruthComparison.of(**section).to_dict()
         nodes = _nodes_with_truth(nodes, obs, plane_true_deviation_um(obs, est, truth), valid)
     planar = {**figs.geometry.to_dict(), "per_axis": figs.per_axis, "lines": [ln.to_dict() for ln in figs.lines],

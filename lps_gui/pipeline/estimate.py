@@ -206,7 +206,7 @@ def estimate_session(
     est = estimate_with_self_calibration(obs, opt, progress, cancel)  # a row refines its intrinsics (see there)
     with paused_collections():  # results are trees of dicts and lists: nothing for the cyclic collector
         results = build_results(inp, obs, est, intrinsics_source=str(intrinsics_path or "session.json"))
-        results["timings_s"]["pipeline_total"] = time.perf_counter() - t0
+        results["timings_s"] = {**results["timings_s"], "pipeline_total": time.perf_counter() - t0}  # a new dict: the builders' left as they were
         if cancel is not None:
             cancel.check("estimation")
         with SessionLock(inp.folder) if not out_dir else nullcontext():  # one writer per session
@@ -234,7 +234,7 @@ def build_results(session: SessionInput, obs: Observations, est: LpsEstimate, in
     document it is building back (``tests/pipeline/test_builders_read_no_document.py``).
     """
     part = RESULTS_BY_AXES[obs.D](session, obs, est, intrinsics_source)
-    results = part.document  # written below, never read
+    results = dict(part.document)  # a new document, written below, never read: the axis builder's is left as it was
     positions, figures, flags, truth = part.positions, part.figures, part.flags, part.truth_comparison
     targets = None
     if obs.mounted is not None:  # SPEC 13: each target's pose, sigma, views, ties

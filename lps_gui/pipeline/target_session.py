@@ -89,17 +89,15 @@ def targets_section(obs: Observations, est: Any, session: SessionInput) -> list[
     several = seen.sum(axis=1) >= 2
     share = covered_fractions(seen)
     nominal = {t.id: t for t in session.targets or []}
-    for j, (row, t) in enumerate(zip(rows, obs.mounted)):
-        printed = nominal.get(t.id, t)
-        row["square_mm"] = printed.board.square_mm
-        if printed.square_mm_uncertainty_um is not None:
-            row["square_mm_uncertainty_um"] = printed.square_mm_uncertainty_um
-        if printed.scale_ppm is not None:
-            row["scale_ppm"] = printed.scale_ppm
-        row["covered_fraction"] = float(share[j])
-        row["seen_by"] = obs.index[seen[:, j]].astype(int).tolist()  # capture indices
-        row["tied_by"] = obs.index[seen[:, j] & several].astype(int).tolist()
-    return rows
+    printed = [nominal.get(t.id, t) for t in obs.mounted]
+    return [{  # new rows: target_rows' rows are left as they were (a builder returns values, issue 34)
+        **row, "square_mm": pr.board.square_mm,
+        **({} if pr.square_mm_uncertainty_um is None else {"square_mm_uncertainty_um": pr.square_mm_uncertainty_um}),
+        **({} if pr.scale_ppm is None else {"scale_ppm": pr.scale_ppm}),
+        "covered_fraction": float(share[j]),
+        "seen_by": obs.index[seen[:, j]].astype(int).tolist(),  # capture indices
+        "tied_by": obs.index[seen[:, j] & several].astype(int).tolist(),
+    } for j, (row, pr) in enumerate(zip(rows, printed))]
 
 
 def targets_with_truth(obs: Observations, est: Any, session: SessionInput

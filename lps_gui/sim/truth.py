@@ -329,17 +329,18 @@ def centred(values: np.ndarray, compared: np.ndarray) -> np.ndarray:
     return values - np.mean(values[compared], axis=0)
 
 
-def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any], positions: list[dict]
-                     ) -> tuple[dict[str, Any], list[dict]]:
+def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any], positions: list[dict],
+                     out_of_plane: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[dict[str, Any], list[dict]]:
     """results.json ``truth_comparison`` (schema in docs/ARCHITECTURE.md) and the position rows with truth beside
     each: new rows, ``positions`` is left as it was (a builder returns values, issue 34).
 
     Everything here goes through :func:`reduce_truth` with the estimate's
     reference capture, so the numbers are the ones the report, the GUI and
-    ``lps demo`` show. A planar estimate (D = 2) is compared by :func:`_plane_truth_comparison`.
+    ``lps demo`` show. A planar estimate (D = 2) is compared by :func:`_plane_truth_comparison`, its out-of-plane
+    displacement and sigma per capture (um) given as ``out_of_plane`` (values, not read back from the rows).
     """
     if est.D == 2:
-        return _plane_truth_comparison(obs, est, truth, positions)
+        return _plane_truth_comparison(obs, est, truth, positions, out_of_plane)
     by_index = {int(i): k for k, i in enumerate(truth["index"])}
     rows = np.array([by_index.get(int(i), -1) for i in obs.index])
     have = rows >= 0
@@ -505,23 +506,43 @@ def _board_plane_normal_um(meta: dict[str, Any], plane_mm: np.ndarray, K: int) -
     return 1e3 * (board_plane_offsets(C, w, X0) - C0[None, :]) @ E[:, 2]
 
 
-def _plane_truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any], positions: list[dict]
-                            ) -> tuple[dict[str, Any], list[dict]]:
+def _plane_true_xy(obs: Observations, est: LpsEstimate, truth: dict[str, Any]
+                   ) -> tuple[np.ndarray, np.ndarray, str, np.ndarray] | None:
+    """The true planar positions in the estimate's frame (SPEC 10) with the truth rows of the captures, the views
+    compared and the truth key used; None when truth does not cover every capture."""
+    by_index = {int(i): k for k, i in enumerate(truth["index"])}
+    rows = np.array([by_index.get(int(i), -1) for i in obs.index])
+    have = rows >= 0
+    if not have.all():
+        return None
+    ok = est.used & have
+    key = "board_plane_mm" if "board_plane_mm" in truth else "plane_mm"
+    true_xy = planar_truth_in_stage_frame(truth[key][rows], obs.target_mm, obs.approach, ok, est.reference_view)
+    return rows, ok, key, true_xy
+
+
+def plane_true_deviation_um(obs: Observations, est: LpsEstimate, truth: dict[str, Any]) -> np.ndarray:
+    """(K, 2) true deviation of every capture of a planar session, NaN where not compared: the value the
+    builder's error map puts beside the measured one (the truth columns of the position rows hold the same)."""
+    plane = _plane_true_xy(obs, est, truth)
+    if plane is None:
+        return np.full((obs.K, 2), np.nan)
+    return true_deviation_um(plane[3], obs.target_mm, est.reference_view)
+
+
+def _plane_truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any], positions: list[dict],
+                            out_of_plane: tuple[np.ndarray, np.ndarray] | None) -> tuple[dict[str, Any], list[dict]]:
     """results.json ``truth_comparison`` of a planar session and new position rows with truth beside each.
 
     Truth is put in the estimate's frame convention first (SPEC 10: origin at the reference capture, +x along
     the fitted +X motion), by the rule the estimator applies to its own positions
     (:func:`lps_gui.core.models.planar_model.planar_truth_in_stage_frame`).
     """
-    by_index = {int(i): k for k, i in enumerate(truth["index"])}
-    rows = np.array([by_index.get(int(i), -1) for i in obs.index])
-    have = rows >= 0
-    ref = est.reference_view
-    if not have[ref] or not have.all():
+    plane = _plane_true_xy(obs, est, truth)
+    if plane is None:
         return {"note": "truth does not cover every capture"}, list(positions)
-    ok = est.used & have
-    key = "board_plane_mm" if "board_plane_mm" in truth else "plane_mm"
-    true_xy = planar_truth_in_stage_frame(truth[key][rows], obs.target_mm, obs.approach, ok, ref)
+    rows, ok, key, true_xy = plane
+    ref = est.reference_view
     pos = reduce_truth(est.state.xy, true_xy, ref, ok, est.sigma_s_mm)
     sig = 1e3 * est.sigma_s_mm[ok]
     true_geo = axis_geometry(affine_motion(true_xy, obs.target_mm, obs.approach, ok), np.zeros((4, 4)))
@@ -558,7 +579,7 @@ def _plane_truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str
             out[f"iso230_2_{axis.lower()}"] = {k: _f(iso.get(k)) for k in ("A_um", "E_um", "R_um", "B_um", "M_um")}
     new_rows = [{**row, "truth_deviation_x_um": _f(true_dev[k, 0]), "truth_deviation_y_um": _f(true_dev[k, 1])}
                 for k, row in enumerate(positions)]
-    errors, true_oop = _out_of_plane_errors(obs, truth, rows, ok, positions)
+    errors, true_oop = _out_of_plane_errors(obs, truth, rows, ok, out_of_plane)
     out.update(errors)
     if true_oop is not None:
         new_rows = [{**row, "truth_out_of_plane_um": _f(v)} for row, v in zip(new_rows, true_oop)]
@@ -566,14 +587,13 @@ def _plane_truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str
 
 
 def _out_of_plane_errors(obs: Observations, truth: dict[str, Any], rows: np.ndarray, ok: np.ndarray,
-                         positions: list[dict]) -> tuple[dict[str, Any], np.ndarray | None]:
-    """The estimate's out-of-plane displacement against truth, both off their least-squares plane over ``ok``:
-    the error figures and the true displacement per position (None where not compared)."""
-    if "board_plane_normal_um" not in truth:
+                         out_of_plane: tuple[np.ndarray, np.ndarray] | None) -> tuple[dict[str, Any], np.ndarray | None]:
+    """The estimate's out-of-plane displacement (``out_of_plane``: value and sigma per capture, um) against truth,
+    both off their least-squares plane over ``ok``: the error figures and the true displacement per position (None
+    where not compared)."""
+    if "board_plane_normal_um" not in truth or out_of_plane is None:
         return {}, None
-    est_v = np.array([np.nan if r.get("out_of_plane_um") is None else r["out_of_plane_um"] for r in positions])
-    est_s = np.array([np.nan if r.get("out_of_plane_sigma_um") is None else r["out_of_plane_sigma_um"]
-                      for r in positions])
+    est_v, est_s = (np.asarray(v, dtype=float) for v in out_of_plane)
     keep = ok & np.isfinite(est_v) & np.isfinite(est_s)
     if keep.sum() < 4:
         return {}, None

@@ -109,9 +109,8 @@ def incremental_step_section(obs: Observations, est: LpsEstimate, records: dict[
     commanded = 1e3 * (stops.target_mm[j] - stops.target_mm[i])
     achieved = 1e3 * (stops.position_mm[j] - stops.position_mm[i])
     out = incremental_step_figures(commanded, achieved, np.array(sigma), float(test.get("tolerance", 0.5)))
-    for row, a, b in zip(out["steps"], i, j):
-        row.update(from_mm=float(stops.target_mm[a]), to_mm=float(stops.target_mm[b]),
-                   direction="+" if stops.direction[b] > 0 else "-")
+    out["steps"] = [{**row, "from_mm": float(stops.target_mm[a]), "to_mm": float(stops.target_mm[b]),  # new rows
+                     "direction": "+" if stops.direction[b] > 0 else "-"} for row, a, b in zip(out["steps"], i, j)]
     out["frames_per_stop"] = int(np.median(stops.n_frames)) if stops.n_frames.size else 0
     out["planned_step_um"] = test.get("step_um")
     truth = _truth_errors(session)
@@ -139,9 +138,8 @@ def settling_section(obs: Observations, est: LpsEstimate, records: dict[int, Any
         fig = settling_figures(since[v], x, band)
         if fig is None:
             continue
-        fig.update(target_mm=float(obs.target_mm[v[0]]), direction="+" if sign > 0 else "-",
-                   since_move_s=since[v].tolist(), position_um=(x - fig["rest_um"]).tolist())
-        per_stop.append(fig)
+        per_stop.append({**fig, "target_mm": float(obs.target_mm[v[0]]), "direction": "+" if sign > 0 else "-",
+                         "since_move_s": since[v].tolist(), "position_um": (x - fig["rest_um"]).tolist()})
     out: dict[str, Any] = {"band_um": band, "n_stops": len(per_stop), "stops": per_stop}
     if per_stop:
         worst = max(per_stop, key=lambda f: f["settling_time_s"])

@@ -26,7 +26,7 @@ from lps_gui.io.results.sections import Figures, Flag, Parameters, TruthComparis
 from lps_gui.pipeline.results.parts import AxisResults
 from lps_gui.pipeline.session_checks import session_inputs
 from lps_gui.pipeline.session_input import SessionInput
-from lps_gui.sim.truth import truth_comparison
+from lps_gui.sim.truth import plane_true_deviation_um, truth_comparison
 
 
 def _f(x: Any) -> float | None:
@@ -41,6 +41,11 @@ def build_planar_results(session: SessionInput, obs: Observations, est: LpsEstim
     sig = 1e3 * est.sigma_s_mm
     sig_total = 1e3 * est.sigma_total_mm
     ref_target = obs.target_mm[est.reference_view]
+    oop = None
+    if est.method == "joint" and obs.mounted is None:  # the displacement along the plane normal at the board plane
+        # (core/metrology/planar_flatness; of one board: a constellation has no one board plane)
+        oop = out_of_plane(est.state, obs.board.object_points(), obs.corners_px, obs.mask() & est.usable[:, None],
+                           obs.target_mm, est.used)
     positions = []
     for i in range(obs.K):
         ok = bool(est.usable[i])
@@ -56,21 +61,23 @@ def build_planar_results(session: SessionInput, obs: Observations, est: LpsEstim
             "rms_px": _f(est.rms_px[i]), "n_corners": int(est.n_corners[i]), "outlier": bool(est.outlier[i]),
             "outlier_reason": est.outlier_reason[i] or ("board not found" if not ok else ""),
             "used": bool(est.used[i]), "approach": [int(v) for v in obs.approach[i]], "file": obs.names[i],
+            **({} if oop is None else {"out_of_plane_um": _f(oop.normal_um[i]),
+                                       "out_of_plane_sigma_um": _f(oop.sigma_um[i])}),
         })
     valid = est.used & np.all(np.isfinite(dev), axis=1)
     sig_fig = np.where(sig > 0, sig, np.nanmedian(sig[valid & (sig[:, 0] > 0)], axis=0) if valid.any() else 1.0)
-    oop = None
-    if est.method == "joint" and obs.mounted is None:  # the displacement along the plane normal at the board plane
-        # (core/metrology/planar_flatness; of one board: a constellation has no one board plane)
-        oop = out_of_plane(est.state, obs.board.object_points(), obs.corners_px, obs.mask() & est.usable[:, None],
-                           obs.target_mm, est.used)
-        for row, v, sv in zip(positions, oop.normal_um, oop.sigma_um):
-            row["out_of_plane_um"], row["out_of_plane_sigma_um"] = _f(v), _f(sv)
     figs = planar_figures(obs.target_mm, obs.approach, obs.run, obs.direction, dev, sig_fig, valid,
                           est.fit.G, est.fit.cov_G, None if oop is None else oop.normal_um,
                           None if oop is None else oop.sigma_um)
+    truth, tc, nodes = session.truth, None, figs.nodes
+    if truth is not None:
+        section, positions = truth_comparison(  # new rows, truth beside each position
+            obs, est, truth, positions, None if oop is None else (oop.normal_um, oop.sigma_um))
+        tc = TruthComparison.of(**section).to_dict()
+        nodes = _nodes_with_truth(nodes, obs, plane_true_deviation_um(obs, est, truth), valid)
     planar = {**figs.geometry.to_dict(), "per_axis": figs.per_axis, "lines": [ln.to_dict() for ln in figs.lines],
-              "nodes": figs.nodes, "notes": figs.notes, "motion_matrix": est.fit.G.tolist()}
+              "nodes": nodes, "notes": figs.notes, "motion_matrix": est.fit.G.tolist()}
+    figures = Figures.of(planar=planar).to_dict()  # written through the readers' definition
     st = est.state
     parameters = {
         "R_cam_board": st.R.tolist(), "rvec_rad": log_so3(st.R).tolist(), "l0_cam_mm": st.l0.tolist(),
@@ -93,31 +100,20 @@ def build_planar_results(session: SessionInput, obs: Observations, est: LpsEstim
         "intrinsics": intrinsics_to_dict(obs.intrinsics),
         "session_meta": {k: session.meta.get(k) for k in ("camera", "stage", "plan", "stage_spec", "created")
                          if k in session.meta},
-        "parameters": parameters, "positions": positions, "figures": {"planar": planar},
-        "flags": flags, "timings_s": dict(est.timings_s),
+        "parameters": parameters, "positions": positions, "figures": figures,
+        "flags": flags, "timings_s": dict(est.timings_s), **({} if tc is None else {"truth_comparison": tc}),
+        "summary": [],  # in its place: summary.csv's rows are made from the finished document
     }
-    truth, tc = session.truth, None
-    if truth is not None:
-        section, positions = truth_comparison(obs, est, truth, positions)  # new rows, truth beside each position
-        results["positions"] = positions
-        tc = results["truth_comparison"] = TruthComparison.of(**section).to_dict()
-        _add_truth_to_nodes(planar["nodes"], obs, positions, valid)
-    figures = results["figures"] = Figures.of(planar=planar).to_dict()  # written through the readers' definition
-    results["summary"] = []  # in its place: summary.csv's rows are made from the finished document
     return AxisResults(results, parameters, board, positions, figures, flags, tc)
 
 
-def _add_truth_to_nodes(nodes: list[dict[str, Any]], obs: Observations, positions: list[dict],
-                        valid: np.ndarray) -> None:
-    """The simulator's mean error vector at every node, beside the measured one (for the error map)."""
-    true_dev = np.array([[_num(r.get("truth_deviation_x_um")), _num(r.get("truth_deviation_y_um"))] for r in positions])
+def _nodes_with_truth(nodes: list[dict[str, Any]], obs: Observations, true_dev: np.ndarray,
+                      valid: np.ndarray) -> list[dict[str, Any]]:
+    """New nodes with the simulator's mean error vector at each, beside the measured one (for the error map);
+    ``true_dev`` (K, 2) is the true deviation of every capture, NaN where not compared."""
     ok = valid & np.all(np.isfinite(true_dev), axis=1)
-    for node, t in zip(nodes, node_errors(obs.target_mm, obs.direction, true_dev, np.ones_like(true_dev), ok)):
-        node["truth_error_um"] = t.get("error_um")
-
-
-def _num(v: Any) -> float:
-    return float("nan") if v is None else float(v)
+    truth_nodes = node_errors(obs.target_mm, obs.direction, true_dev, np.ones_like(true_dev), ok)
+    return [{**node, "truth_error_um": t.get("error_um")} for node, t in zip(nodes, truth_nodes)]
 
 
 def summary_csv_rows(results: dict[str, Any]) -> list[tuple[str, Any, str]]:

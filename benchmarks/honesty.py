@@ -136,7 +136,7 @@ def build_spec(kind: str, stage: str, realism: str, seed: int, short: bool = Fal
     return replace(spec, realism=realism_named(realism))
 
 
-def campaign_environment(kind: str, spec: Any) -> dict[str, Any]:
+def campaign_environment(spec: Any) -> dict[str, Any]:
     """session.json ``environment`` of a campaign session; a row's: its temperatures, a line's print certificate.
 
     Why one certificate: the realism's prints are drawn from what the session declares (core/truth/realism.py)
@@ -150,11 +150,8 @@ def campaign_environment(kind: str, spec: Any) -> dict[str, Any]:
     from lps_gui.pipeline.demos.run import DEMO_ENVIRONMENT, declared_environment
     from lps_gui.pipeline.demos.targets import ROW_ENVIRONMENT
 
-    base = DEMO_ENVIRONMENT
-    if spec.layout is not None:
-        base = ROW_ENVIRONMENT
-    if kind in ("row", "two-depth"):
-        base = {**ROW_ENVIRONMENT, "square_mm_uncertainty_um": DEMO_ENVIRONMENT["square_mm_uncertainty_um"]}
+    base = DEMO_ENVIRONMENT if spec.layout is None else {  # rows and two depths: a row's, with the line's certificate
+        **ROW_ENVIRONMENT, "square_mm_uncertainty_um": DEMO_ENVIRONMENT["square_mm_uncertainty_um"]}
     return declared_environment(spec, base)
 
 
@@ -169,7 +166,7 @@ def capture(kind: str, spec: Any, folder: Path, intrinsics: Any) -> Path:
         session = capture_step(folder, spec, intrinsics, lambda *a: None, None)[0]
     else:
         session = simulate_image_session(spec, folder, intrinsics=intrinsics, workers=1)
-    session.meta["environment"] = campaign_environment(kind, spec)
+    session.meta["environment"] = campaign_environment(spec)
     if kind in ("min-step", "settling"):
         session.meta["asme_test"] = asme_test_record(kind)
     session.save_meta()

@@ -45,10 +45,10 @@ def test_a_row_declares_the_print_scale_its_prints_are_drawn_from():
     spec.loader.exec_module(honesty)
     on, off = honesty.build_spec("row", "flat", "on", 0), honesty.build_spec("row", "flat", "off", 0)
     square = on.layout.targets[0].board.square_mm
-    assert honesty.campaign_environment("row", on)["square_mm_uncertainty_um"] == (
+    assert honesty.campaign_environment(on)["square_mm_uncertainty_um"] == (
         1e-3 * on.realism.print_scale_ppm * square)
-    assert honesty.campaign_environment("row", off)["square_mm_uncertainty_um"] <= 0.1  # the line's certificate
-    assert honesty.campaign_environment("row", off)["stage_temperature_c"] == 20.5  # a row's environment otherwise
+    assert honesty.campaign_environment(off)["square_mm_uncertainty_um"] <= 0.1  # the line's certificate
+    assert honesty.campaign_environment(off)["stage_temperature_c"] == 20.5  # a row's environment otherwise
     two_depth = honesty.build_spec("two-depth", "flat", "on", 0)  # two depths alike (its 2 um hid a failing cell)
-    assert honesty.campaign_environment("two-depth", two_depth)["square_mm_uncertainty_um"] == pytest.approx(
+    assert honesty.campaign_environment(two_depth)["square_mm_uncertainty_um"] == pytest.approx(
         1e-3 * two_depth.realism.print_scale_ppm * two_depth.rig.board.square_mm)

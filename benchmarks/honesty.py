@@ -180,7 +180,6 @@ def run_session(kind: str, stage: str, realism: str, seed: int, root: Path, shor
     from lps_gui.pipeline.demos.targets import calibration_board
     from lps_gui.pipeline.detect import detect_session
     from lps_gui.pipeline.estimate import estimate_session
-    from lps_gui.sim.truth_figures import figure_checks, finding_checks
 
     t0 = time.monotonic()
     spec = build_spec(kind, stage, realism, seed, short)
@@ -198,19 +197,40 @@ def run_session(kind: str, stage: str, realism: str, seed: int, root: Path, shor
 
         after = compensation_pass(session, folder / "session-compensated").after_dir
         results = json.loads((Path(after) / "results.json").read_text())
-    tc = results.get("truth_comparison") or {}
-    row = {"kind": kind, "stage": stage, "realism": realism, "seed": seed,
-           "seconds": round(time.monotonic() - t0, 1),
-           "rms_px": (results.get("parameters") or {}).get("rms_px"),
-           "position_z_ms": tc.get("board_plane_z_mean_square", tc.get("z_mean_square")),
-           "straightness_z_ms": [tc.get(f"straightness_z_mean_square_{j}") for j in (1, 2)],
-           "targets_z_ms": (tc.get("targets") or {}).get("z_mean_square"),
-           "excluded_views": len(tc.get("flagged_outliers") or []),
-           "figures": figure_checks(results), "findings": finding_checks(results),
-           "self_check": tc.get("self_check")}
+    row = scores(kind, stage, realism, seed, results, time.monotonic() - t0)
     if not keep:
         shutil.rmtree(folder, ignore_errors=True)
     return row
+
+
+def scores(kind: str, stage: str, realism: str, seed: int, results: dict[str, Any], seconds: float) -> dict[str, Any]:
+    """One session's row of the campaign: its figure and finding checks against the truth, per-stop z^2, self-check."""
+    from lps_gui.sim.truth_figures import figure_checks, finding_checks
+
+    tc = results.get("truth_comparison") or {}
+    return {"kind": kind, "stage": stage, "realism": realism, "seed": seed, "seconds": round(seconds, 1),
+            "rms_px": (results.get("parameters") or {}).get("rms_px"),
+            "position_z_ms": tc.get("board_plane_z_mean_square", tc.get("z_mean_square")),
+            "straightness_z_ms": [tc.get(f"straightness_z_mean_square_{j}") for j in (1, 2)],
+            "targets_z_ms": (tc.get("targets") or {}).get("z_mean_square"),
+            "excluded_views": len(tc.get("flagged_outliers") or []),
+            "figures": figure_checks(results), "findings": finding_checks(results),
+            "self_check": tc.get("self_check")}
+
+
+def rescore(folder: Path) -> dict[str, Any]:
+    """Re-estimate a session kept by ``--keep`` (its folder named ``<kind>-<stage>-<realism>-<seed>``) with the code
+    as it is now: the renders and detections do not depend on the estimate, so a change to the estimate is scored
+    over many seeds in seconds instead of re-rendering. A compensated session scores its as-left capture."""
+    from lps_gui.pipeline.estimate import estimate_session
+
+    kind, stage, realism, seed = folder.name.rsplit("-", 3)
+    t0 = time.monotonic()
+    session = folder / "session"
+    if kind == "compensated":
+        session = folder / "session-compensated"
+        estimate_session(folder / "session")
+    return scores(kind, stage, realism, int(seed), estimate_session(session), time.monotonic() - t0)
 
 
 # ----------------------------------------------------------------------------- pooling
@@ -337,6 +357,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--short", action="store_true", help="1 seed, line-both, flat stage, realism on, 8 targets x 1 run")
     ap.add_argument("--lens-misfit", action="store_true", help="print what the realism lens leaves beyond a Brown fit")
     ap.add_argument("--tables", action="store_true", help="only pool the sessions in --json into the tables (no runs)")
+    ap.add_argument("--rescore", type=Path, nargs="+", metavar="FOLDER",
+                    help="re-estimate sessions kept by --keep (folders <kind>-<stage>-<realism>-<seed>), no rendering")
     a = ap.parse_args(argv)
     if a.tables:
         doc = json.loads(a.json.read_text())
@@ -355,12 +377,20 @@ def main(argv: list[str] | None = None) -> int:
     seeds = range(a.first_seed, a.first_seed + a.seeds)
     if a.short:
         kinds, stages, realisms, seeds = ["line-both"], ["flat"], ["on"], range(a.first_seed, a.first_seed + 1)
+    header = f"Honesty campaign, {machine()}"
+    say: Callable[[str], None] = lambda line: print(line, flush=True)  # noqa: E731
     sessions: list[dict[str, Any]] = []
+    if a.rescore:
+        seeds, a.resume = range(0), False
+        for folder in sorted(a.rescore):
+            try:
+                sessions.append(rescore(folder))
+            except Exception as exc:  # noqa: BLE001 - a failed session is a finding, not the end of the run
+                sessions.append({"kind": folder.name, "stage": "", "realism": "", "seed": -1, "error": repr(exc)})
+            say(f"{folder.name}: " + sessions[-1].get("error", f"per-stop z^2 {_num(sessions[-1]['position_z_ms'])}"))
     if a.resume and a.json and a.json.exists():
         sessions = json.loads(a.json.read_text())["sessions"]
     done = {(s["kind"], s["stage"], s["realism"], s["seed"]) for s in sessions}
-    header = f"Honesty campaign, {machine()}"
-    say: Callable[[str], None] = lambda line: print(line, flush=True)  # noqa: E731
     for seed in seeds:  # seeds outermost: a cut-short campaign still covers every kind
         for kind in kinds:
             for stage in stages:

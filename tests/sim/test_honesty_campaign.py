@@ -54,7 +54,7 @@ def test_a_row_declares_the_print_scale_its_prints_are_drawn_from():
         1e-3 * two_depth.realism.print_scale_ppm * two_depth.rig.board.square_mm)
 
 
-def test_the_campaign_declares_no_temperature_error_the_simulator_does_not_render():
+def test_rows_and_two_depths_declare_no_temperature_error_the_simulator_does_not_render():
     """The simulator has no temperature (board and stage at 20 C exactly, no thermometer error drawn): a declared
     0.5 K thermometer and an uncorrected 20.5 C stage were budget rows no truth could test, 31-90 % of the U of a
     row's or a two-depth constellation's scale and max |deviation| (docs/validation.md, hon-rows)."""
@@ -70,7 +70,7 @@ def test_the_campaign_declares_no_temperature_error_the_simulator_does_not_rende
     spec.loader.exec_module(honesty)
     x = BudgetInputs(travel_mm=300.0, square_mm=30.0, sigma_px=0.02, sigma_um=np.full(12, 1.0),
                      sigma_total_um=np.full(12, 1.0))
-    for kind in ("line-both", "row", "two-depth"):
+    for kind in ("row", "two-depth"):
         env = Environment.from_dict(honesty.campaign_environment(honesty.build_spec(kind, "motions", "on", 0)))
         temperature = {r.source: r.contribution_um for r in budget_rows(x, env) if "temperature" in r.source}
         assert set(temperature) == {"board temperature", "stage temperature"}, temperature

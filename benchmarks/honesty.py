@@ -137,7 +137,8 @@ def build_spec(kind: str, stage: str, realism: str, seed: int, short: bool = Fal
 
 
 def campaign_environment(spec: Any) -> dict[str, Any]:
-    """session.json ``environment`` of a campaign session; a row's: its temperatures, a line's print certificate.
+    """session.json ``environment`` of a campaign session; a row's: the simulator's temperatures, a line's print
+    certificate.
 
     Why one certificate: the realism's prints are drawn from what the session declares (core/truth/realism.py)
     and a line declares exactly that (``declared_environment``); a row declared the demo's steel rule, 2 um a
@@ -161,7 +162,7 @@ def campaign_environment(spec: Any) -> dict[str, Any]:
 # lab values (a thermometer of 0.5 K, the stage at 20.5 C uncorrected) put rows no truth can test into every U: 11.5
 # and 3.3 ppm, on rows and two depths (300-340 mm of travel) 31-90 % of the U of scale and max |deviation|
 # (docs/validation.md, hon-rows). The campaign declares the world it renders there, as it does the prints. Not yet
-# for one board (lines, planar: the same rows, a smaller share; the planar scales' lane, numbers in the same section).
+# for one board (lines, planar: the same ppm, up to half a planar scale's U; the planar scales' lane, measured there).
 SIMULATED_TEMPERATURES = {"board_temperature_c": 20.0, "stage_temperature_c": 20.0, "temperature_uncertainty_k": 0.0}
 LAYOUT_KINDS = ("row", "two-depth")  # the kinds whose sessions declare them (``campaign_environment``)
 

@@ -348,14 +348,12 @@ def position_rows(obs: Observations, est: LpsEstimate) -> list[dict[str, Any]]:
 def session_figures(obs: Observations, est: LpsEstimate) -> dict[str, Any]:
     """results.json ``figures``: SPEC 5 figures of the deviations, straightness and angle spans."""
     from lps_gui.core.metrology.iso230 import figures_for_session
+    from lps_gui.core.metrology.iso230_run import fit_weights_sigma_um
 
     dev_um = est.deviation_um(obs.target_mm)
     six = est.six_dof
     valid = est.used & np.isfinite(dev_um)
-    # the reference capture has sigma 0 by definition of the gauge; weight it like a typical one
-    sigma_um = 1e3 * est.sigma_s_mm
-    positive = valid & (sigma_um > 0)
-    sigma_um = np.where(valid & ~(sigma_um > 0), np.median(sigma_um[positive]) if positive.any() else 1.0, sigma_um)
+    sigma_um = fit_weights_sigma_um(1e3 * est.sigma_s_mm, valid)  # the reference's 0 (the gauge) as a typical one
     figures = figures_for_session(obs.target_mm, obs.direction, obs.run, dev_um, valid=valid, sigma_um=sigma_um)
     if figures.get("iso230_2"):  # the camera's noise inflates s_j and the extremes: take it out (issue 35)
         from lps_gui.core.metrology.iso230_noise import (

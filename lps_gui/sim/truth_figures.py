@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from lps_gui.core.metrology.iso230 import figures_for_session
+from lps_gui.core.metrology.iso230_run import fit_weights_sigma_um
 
 K = 2.0  # the coverage factor of every U the report prints
 Z_MS_LIMIT = 3.0  # mean (error/sigma)^2 above this: the sigmas do not hold
@@ -108,7 +109,9 @@ def line_figure_checks(values: CheckedValues | Mapping[str, Any]) -> list[dict[s
     target = _col(pos, "target_mm")
     run = np.array([r.get("run", 1) for r in pos])
     direction = np.array([r.get("direction", "+") for r in pos])
-    true = figures_for_session(target, direction, run, dev, valid=used)
+    noise = _col(pos, "sigma_um")  # the same reduction as the estimate's: its scale is a slope weighted by 1/sigma^2
+    weights = fit_weights_sigma_um(noise, used) if np.isfinite(noise[used]).all() else None
+    true = figures_for_session(target, direction, run, dev, valid=used, sigma_um=weights)
     figs = v.figures
     Uk = v.uncertainty.get("figures_k2") or {}
     out = []

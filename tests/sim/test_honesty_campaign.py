@@ -48,7 +48,30 @@ def test_a_row_declares_the_print_scale_its_prints_are_drawn_from():
     assert honesty.campaign_environment(on)["square_mm_uncertainty_um"] == (
         1e-3 * on.realism.print_scale_ppm * square)
     assert honesty.campaign_environment(off)["square_mm_uncertainty_um"] <= 0.1  # the line's certificate
-    assert honesty.campaign_environment(off)["stage_temperature_c"] == 20.5  # a row's environment otherwise
+    assert honesty.campaign_environment(off)["board_cte_ppm_per_k"] == 23.0  # a row's environment otherwise
     two_depth = honesty.build_spec("two-depth", "flat", "on", 0)  # two depths alike (its 2 um hid a failing cell)
     assert honesty.campaign_environment(two_depth)["square_mm_uncertainty_um"] == pytest.approx(
         1e-3 * two_depth.realism.print_scale_ppm * two_depth.rig.board.square_mm)
+
+
+def test_rows_and_two_depths_declare_no_temperature_error_the_simulator_does_not_render():
+    """The simulator has no temperature (board and stage at 20 C exactly, no thermometer error drawn): a declared
+    0.5 K thermometer and an uncorrected 20.5 C stage were budget rows no truth could test, 31-90 % of the U of a
+    row's or a two-depth constellation's scale and max |deviation| (docs/validation.md, hon-rows)."""
+    import importlib.util
+
+    import numpy as np
+
+    from lps_gui.core.metrology.environment import Environment
+    from lps_gui.core.metrology.uncertainty_budget import BudgetInputs, budget_rows
+
+    spec = importlib.util.spec_from_file_location("honesty", ROOT / "benchmarks" / "honesty.py")
+    honesty = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(honesty)
+    x = BudgetInputs(travel_mm=300.0, square_mm=30.0, sigma_px=0.02, sigma_um=np.full(12, 1.0),
+                     sigma_total_um=np.full(12, 1.0))
+    for kind in ("row", "two-depth"):
+        env = Environment.from_dict(honesty.campaign_environment(honesty.build_spec(kind, "motions", "on", 0)))
+        temperature = {r.source: r.contribution_um for r in budget_rows(x, env) if "temperature" in r.source}
+        assert set(temperature) == {"board temperature", "stage temperature"}, temperature
+        assert all(c == 0.0 for c in temperature.values()), (kind, temperature)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import shutil
 
+import numpy as np
 import pytest
 
 from lps_gui.core.truth.simulate import small_spec
@@ -92,3 +93,23 @@ def test_a_resolved_motion_the_truth_does_not_have_fails_the_check():
 
 def test_a_real_session_is_not_checked():
     assert self_check({"positions": [], "truth_comparison": None}) is None
+
+
+def test_the_scales_truth_is_the_same_weighted_slope_the_estimate_takes():
+    """The scale is a slope weighted by 1/sigma^2 (SPEC 5); on a profile that is not a line (a periodic error) the
+    unweighted slope of the same truth differs (here 6 ppm, the two-depth flat stage's -7 ppm bias of every seed).
+    An exact measurement must score zero error: its truth is reduced by the same weighted fit."""
+    t = np.arange(13) * 25.0
+    dev = 0.1 * t + 5.0 * np.sin(2 * np.pi * t / 8.0 + 0.3)  # 100 ppm and the flat stage's 5 um periodic error
+    sigma = np.linspace(0.5, 1.1, t.size)
+    sigma[0] = 0.0  # the reference capture (the gauge)
+    w = 1.0 / np.where(sigma > 0, sigma, np.median(sigma[1:])) ** 2
+    weighted = 1e3 * np.polyfit(t, dev, 1, w=np.sqrt(w))[0]  # polyfit weights multiply the residuals
+    assert abs(weighted - 1e3 * np.polyfit(t, dev, 1)[0]) > 3.0  # the two slopes differ: the test has teeth
+    positions = [{"used": True, "target_mm": float(x), "run": 1, "direction": "+", "truth_deviation_um": float(d),
+                  "sigma_um": float(s)} for x, d, s in zip(t, dev, sigma)]
+    results = {"positions": positions, "truth_comparison": {"z_mean_square": 1.0},
+               "figures": {"single_run": {"scale_ppm": weighted, "max_abs_deviation_um": float(np.abs(dev).max())}},
+               "uncertainty": {"figures_k2": {"scale_ppm": 2.0, "max_abs_deviation_um": 2.0}}}
+    scale = next(c for c in figure_checks(results) if c["figure"] == "scale")
+    assert abs(scale["error"]) < 1e-6, scale

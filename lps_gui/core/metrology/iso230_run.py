@@ -195,6 +195,19 @@ def _scale_fit(t: np.ndarray, x: np.ndarray, w: np.ndarray | None, group: np.nda
     return resid, b, float(np.sqrt(var))
 
 
+def fit_weights_sigma_um(sigma_um: np.ndarray, valid: np.ndarray) -> np.ndarray:
+    """The per-capture sigma the scale fit weights by (1/sigma^2): the positions' noise sigma, the reference
+    capture's (0 by the gauge) and any other non-positive one replaced by the median positive one.
+
+    One rule for the estimate and for its truth (sim/truth_figures.py): the scale is a weighted slope, and on
+    a profile that is not a line (periodic error, backlash) the weighted and the unweighted slope differ
+    (-7 ppm on the two-depth flat stage, where the sigma doubles along the travel)."""
+    s = np.asarray(sigma_um, dtype=float)
+    ok = np.asarray(valid, dtype=bool)
+    positive = ok & (s > 0)
+    return np.where(ok & ~(s > 0), np.median(s[positive]) if positive.any() else 1.0, s)
+
+
 def single_run_figures(target_mm: np.ndarray, deviation_um: np.ndarray, valid: np.ndarray | None = None,
                        sigma_um: np.ndarray | None = None, *, group: np.ndarray | None = None) -> RunFigures:
     """Single-run figures of SPEC section 5 from deviations x = measured - target.

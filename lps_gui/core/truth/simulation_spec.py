@@ -50,7 +50,7 @@ class SimulationSpec:
         if self.realism is None:
             return scene
         rng = printed_rng(self.seed)
-        return self.realism.printed_board(scene, rng) if self.layout is None else self.realism.printed_layout(scene, rng)
+        return self.realism.printed_board(scene, rng) if isinstance(scene, Board) else self.realism.printed_layout(scene, rng)
 
     def camera_realism(self) -> dict[str, Any]:
         """What the simulated camera and renderers take for the realism: ``lens``, ``printed`` and Lighting fields."""

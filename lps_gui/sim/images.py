@@ -26,7 +26,12 @@ from lps_gui.core.geometry.camera_model import CameraIntrinsics, project_board
 from lps_gui.core.geometry.rotation import exp_so3
 from lps_gui.core.geometry.target_rig import TargetLayout
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
-from lps_gui.core.truth.simulate import SimulationSpec, frame_since_move_s, placement_poses, true_views
+from lps_gui.core.truth.simulate import (
+    SimulationSpec,
+    frame_since_move_s,
+    placement_poses,
+    true_views,
+)
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_bytes_atomic
 from lps_gui.io.board_file import write_board

@@ -37,3 +37,15 @@ def test_a_rendered_stitched_session_shows_each_placement_and_is_estimated_withi
     assert tc["targets"]["max_abs_z"] < 4.0
     budget = {b["source"]: b for b in results["uncertainty"]["budget"]}
     assert budget["stage repeatability at the segment ties"]["value"] == pytest.approx(1.0)
+
+
+def test_a_row_of_distinct_targets_on_a_segmented_plan_stays_a_row():
+    """Only one board's placements (same board, same markers, one per segment) are rendered one at a time."""
+    from dataclasses import replace
+
+    from lps_gui.core.planning.segments import stitched_segments
+    from lps_gui.core.planning.target_presets import small_row_spec
+
+    row = small_row_spec()
+    segmented = replace(row, plan=replace(row.plan, segments=stitched_segments(row.plan.targets(), 8, 3)))
+    assert len(segmented.plan.segments) == 3 and not segmented.stitched and small_stitched_spec().stitched

@@ -39,9 +39,13 @@ class SimulationSpec:
 
     @property
     def stitched(self) -> bool:
-        """One board moved between the plan's segments (SPEC 13): the layout holds its placements, one seen at a
-        time (segment k's views see target k only)."""
-        return self.layout is not None and self.plan.segments is not None
+        """One board moved between the plan's segments (SPEC 13): the layout holds its placements (one board, the
+        same markers), one seen at a time (segment k's views see target k only). A row of distinct targets
+        captured with a segmented plan stays a row."""
+        if self.layout is None or self.plan.segments is None:
+            return False
+        one_board = len({(t.board, t.first_marker) for t in self.layout.targets}) == 1
+        return one_board and len(self.layout.targets) == len(self.plan.segments)
 
     def printed(self) -> Board | TargetLayout:
         """The board (or layout) as the camera sees it: as printed with realism on, else the nominal one; a stitched

@@ -17,6 +17,7 @@ mean (error / sigma)^2 with sigma = U / 2 (what the report draws), and per
   compensated  line-both, then the compensated (as-left) capture, scored
   planar       a 5 x 3 grid on the simulated XY gantry, both directions, 2 runs (ISO 230-2 per axis)
   row          three targets at 170 mm pitch (small-row), 18 stops
+  stitched     one board moved along 220 mm between 3 overlapping segments (small-stitched), 18 stops
   two-depth    targets at two depths (SPEC 14) over 300 mm
   min-step     ASME B5.64 incremental steps of 2 um on a 3 um dead band
   settling     ASME B5.64 settling of a stage ringing after each move
@@ -49,7 +50,8 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-KINDS = ("line-one", "line-both", "paper-line", "compensated", "planar", "row", "two-depth", "min-step", "settling")
+KINDS = ("line-one", "line-both", "paper-line", "compensated", "planar", "row", "stitched", "two-depth", "min-step",
+         "settling")
 STAGES = ("flat", "motions")
 REALISM = ("off", "on")
 
@@ -94,7 +96,7 @@ def build_spec(kind: str, stage: str, realism: str, seed: int, short: bool = Fal
     from lps_gui.core.truth.simulate import small_spec
     from lps_gui.core.truth.stage_errors import Vibration
 
-    travel = {"row": 340.0, "two-depth": 300.0}.get(kind, 22.0)
+    travel = {"row": 340.0, "stitched": 220.0, "two-depth": 300.0}.get(kind, 22.0)
     errors = planar_errors(stage) if kind == "planar" else line_errors(stage, travel)
     if kind == "paper-line":
         from lps_gui.core.truth.simulate import paper_rig_spec, paper_stage_errors
@@ -120,6 +122,10 @@ def build_spec(kind: str, stage: str, realism: str, seed: int, short: bool = Fal
         from lps_gui.core.planning.target_presets import small_row_spec
 
         spec = small_row_spec(seed=seed, errors=errors)
+    elif kind == "stitched":
+        from lps_gui.core.planning.target_presets import small_stitched_spec
+
+        spec = small_stitched_spec(seed=seed, errors=errors)
     elif kind == "two-depth":
         from lps_gui.core.truth.two_depth import two_depth_spec
 
@@ -181,7 +187,8 @@ def declare_simulated_temperatures(session_folder: Path) -> None:
 
 def capture(kind: str, spec: Any, folder: Path, intrinsics: Any) -> Path:
     """Render the session: through the capture engine on the simulated rig (lines, a gantry: the compensated
-    pass needs it), else by the image simulator (rows, two depths, the ASME tests). Returns its folder."""
+    pass needs it), else by the image simulator (rows, stitched segments, two depths, the ASME tests). Returns its
+    folder."""
     from lps_gui.core.planning.presets import asme_test_record
     from lps_gui.pipeline.demos.run import capture_step
     from lps_gui.sim.images import simulate_image_session

@@ -26,7 +26,12 @@ from lps_gui.core.geometry.camera_model import CameraIntrinsics, project_board
 from lps_gui.core.geometry.rotation import exp_so3
 from lps_gui.core.geometry.target_rig import TargetLayout
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
-from lps_gui.core.truth.simulate import SimulationSpec, frame_since_move_s, true_views
+from lps_gui.core.truth.simulate import (
+    SimulationSpec,
+    frame_since_move_s,
+    placement_poses,
+    true_views,
+)
 from lps_gui.errors import InputError
 from lps_gui.io.atomic import write_bytes_atomic
 from lps_gui.io.board_file import write_board
@@ -171,11 +176,14 @@ def simulate_image_session(
         stage={"driver": "SimulatedStage", "errors": rig.errors.to_dict()},
         truth=truth,
     )
+    R, t = placement_poses(spec, stops, R, t)  # a stitched session: the board where it lay for the segment
     poses = [(R[j], t[j], spec.seed * 100003 + i) for i, j in enumerate(src)]
     workers = max(1, int(workers or os.cpu_count() or 1))
     progress(0, K, "rendering")
     t0 = time.time()
-    scene = scene or (rig.board if spec.layout is None else spec.layout)
+    scene = scene or (rig.board if spec.layout is None or spec.stitched else spec.layout)
+    if spec.stitched:  # one board (its markers too: the targets renderer) seen from each placement's pose
+        scene = TargetLayout((replace(spec.layout.targets[0], board=scene),), np.eye(3)[None], np.zeros((1, 3)))
     frames = _render_stream(scene, rig.intrinsics, lighting, noise_grey, poses, image_ext, workers if K > 16 else 1,
                             lens=lens)
     for stop, data in zip(stops, frames):
@@ -183,7 +191,8 @@ def simulate_image_session(
             cancel.check("image simulation")
         rel, sha = session.write_image(f"{stop.index:06d}{image_ext}", data)
         session.append(CaptureRecord(stop.index, stop.run, stop.direction, stop.target_mm, stop.target_mm, rel, sha,
-                                     t0 + stop.index, stop.frame, since_move_s=frame_since_move_s(spec, stop.frame)))
+                                     t0 + stop.index, stop.frame, since_move_s=frame_since_move_s(spec, stop.frame),
+                                     segment=stop.segment))
         progress(stop.index + 1, K, rel)
     return session
 

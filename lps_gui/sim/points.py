@@ -73,7 +73,7 @@ def write_point_session(out: Path | str, spec: Any, stops: Sequence[Any], corner
         camera={"driver": "simulated (points)", "image_size": list(true.image_size)},
         stage=stage, truth=truth, noise_px=spec.noise_px,
     )
-    layout = getattr(spec, "layout", None)
+    layout = None if getattr(spec, "stitched", False) else getattr(spec, "layout", None)  # stitched: one board
     if layout is None:
         write_board(out / "board.json", spec.rig.board)
     write_intrinsics(out / "intrinsics.json", intr)
@@ -81,7 +81,8 @@ def write_point_session(out: Path | str, spec: Any, stops: Sequence[Any], corner
     now = time.time()
     for stop, name in zip(stops, names):
         session.append(CaptureRecord(stop.index, stop.run, stop.direction, stop.target_mm, stop.target_mm, name, None,
-                                     now, stop.frame, since_move_s=frame_since_move_s(spec, stop.frame)))
+                                     now, stop.frame, since_move_s=frame_since_move_s(spec, stop.frame),
+                                     segment=stop.segment))
     meta = {"source": "simulated points"}
     if layout is None:
         write_corners_vnl(session.corners_path, CornerTable(names, corners_px, meta=meta))

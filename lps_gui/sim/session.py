@@ -44,17 +44,22 @@ def write_simulated_session(
 
     ``level`` says how it was made (``"points"``, ``"images"``, ``"capture"``);
     ``simulation`` adds fields to session.json's ``simulation`` record. A spec
-    with a layout of targets (SPEC 13) names its ``targets`` instead of a board.
+    with a layout of targets (SPEC 13) names its ``targets`` instead of a board; a stitched one (one board moved
+    between segments) its board, and the stage's repeatability R = 4 sigma (ISO 230-2) in ``stage_spec``: the
+    ties between segments rest on it (:mod:`lps_gui.pipeline.stitched_session`).
     """
+    extra: dict[str, Any] = {}
+    if spec.stitched:
+        extra["stage_spec"] = {"repeatability_um": 4.0 * spec.rig.errors.repeatability_um}
     return Session.create(
         folder,
-        board=spec.rig.board if spec.layout is None else list(spec.layout.targets),
+        board=spec.rig.board if spec.layout is None or spec.stitched else list(spec.layout.targets),
         plan=spec.plan,
         intrinsics=intrinsics if intrinsics is not None else spec.rig.intrinsics,
         camera=camera,
         stage=stage,
         truth=truth,
-        extra={"simulation": {"preset": spec.name, "seed": spec.seed, "level": level, **simulation}},
+        extra={**extra, "simulation": {"preset": spec.name, "seed": spec.seed, "level": level, **simulation}},
     )
 
 

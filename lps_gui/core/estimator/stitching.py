@@ -25,7 +25,8 @@ import numpy as np
 
 from lps_gui.core.geometry.camera_model import CameraIntrinsics
 from lps_gui.core.metrology.uncertainty_budget import BudgetRow
-from lps_gui.core.models.target_model import TargetObservations, TargetSolution, solve_targets
+from lps_gui.core.estimator.board_plane_positions import row_with_board_plane_positions
+from lps_gui.core.models.target_model import N_COMMON, TargetObservations, TargetSolution, solve_targets
 from lps_gui.core.numerics.target_arrowhead import PositionCovariance
 from lps_gui.errors import DegenerateGeometryError, InputError
 
@@ -94,6 +95,13 @@ def merged_observations(obs: TargetObservations, ties: list[np.ndarray]) -> tupl
     return TargetObservations(obs.targets, corners, obs.targets_mm[keep], names), view_of
 
 
+def row_dof(obs: TargetObservations, sol: TargetSolution) -> int:
+    """Degrees of freedom of the row model's fit of ``obs`` (one axis; the estimate's count)."""
+    n_obs = 2 * int((np.isfinite(obs.corners_px[..., 0]) & sol.used[:, None]).sum())
+    T = len(obs.targets)
+    return n_obs - N_COMMON - (0 if sol.bows_mm is None else 2 * T) - 6 * (T - 1) - (int(sol.used.sum()) - 1)
+
+
 def stitch_variance_mm2(ties: list[np.ndarray], repeatability_mm: float) -> np.ndarray:
     """Variance each boundary's offset carries (n_b ties of two visits each): 2 sigma_r^2 / n_b, shape (B,)."""
     return np.array([2.0 * repeatability_mm ** 2 / len(p) for p in ties])
@@ -114,6 +122,8 @@ def solve_stitched(obs: TargetObservations, segment: np.ndarray, intrinsics: Cam
         sol = solve_targets(merged, intrinsics, noise_px=noise_px, **solver)
     except DegenerateGeometryError as exc:
         raise DegenerateGeometryError(f"{exc} (a stitched capture: the tied stops must see both boards)") from None
+    if sol.s.shape[1] == 1 and noise_px is None:  # a carriage the row model cannot follow: every stop's own pose
+        sol = row_with_board_plane_positions(merged, sol, intrinsics, row_dof(merged, sol))
     var_b = stitch_variance_mm2(ties, repeatability_mm)
     ref_segment = segment[np.flatnonzero(view_of == sol.reference)[0]]
     b = np.arange(len(ties))
@@ -154,7 +164,7 @@ class StitchedCovariance:
     def _merge(self, g: np.ndarray) -> np.ndarray:
         """Weights (..., K, P) on the original views as weights on the merged views (a tie's two visits add)."""
         by_view = np.moveaxis(np.asarray(g, float), -2, 0)
-        out = np.zeros((len(self.merged.A_inv),) + by_view.shape[1:])
+        out = np.zeros((int(self.view_of.max()) + 1,) + by_view.shape[1:])  # every merged view is some view's
         np.add.at(out, self.view_of, by_view)
         return np.moveaxis(out, 0, -2)
 
@@ -182,7 +192,9 @@ class StitchedCovariance:
 def stitched_target_solution(obs: TargetObservations, segment: np.ndarray, intrinsics: CameraIntrinsics,
                              repeatability_mm: float, progress=None) -> tuple[TargetSolution, StitchedSolution]:
     """The row model's answer for every original view of a stitched capture (what the one estimator takes)."""
-    st = solve_stitched(obs, segment, intrinsics, repeatability_mm, progress=progress)
+    # each placement's bow free, as a row's targets': a bow held flat reads as scale along the chain (0.3 mm:
+    # -120 ppm), and the rendered realism-on sessions' scale was covered 70 % of the time (docs/validation.md)
+    st = solve_stitched(obs, segment, intrinsics, repeatability_mm, progress=progress, bows=True)
     m, v = st.solution, st.view_of
     ref = int(np.flatnonzero(v == m.reference)[0])
     centred = np.sqrt(m.sigma_centred[v] ** 2 + st.sigma_stitch[:, None] ** 2)

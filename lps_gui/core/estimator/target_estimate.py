@@ -18,7 +18,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lps_gui.core.estimator.board_plane_positions import POSITION_MODEL_BOARD_PLANE, row_with_board_plane_positions
+from lps_gui.core.estimator.board_plane_positions import (
+    POSITION_MODEL_BOARD_PLANE,
+    PosePositionCovariance,
+    row_with_board_plane_positions,
+)
 from lps_gui.core.estimator.estimate_types import (
     EstimateOptions,
     LpsEstimate,
@@ -111,6 +115,11 @@ def estimate_with_targets(obs: Observations, opt: EstimateOptions, progress: Pro
                           dof=n_obs - (0 if poses.bows_mm is None else 2 * len(obs.mounted))
                           - 6 * (len(obs.mounted) - 1) - 6 * int(poses.used.sum()))
             sol = poses
+    merged = getattr(sol.covariance, "merged", None)  # a stitched solution: its merged views' covariance
+    if isinstance(merged, PosePositionCovariance):  # ... of every stop's own pose (core/estimator/stitching.py)
+        n_poses = np.unique(sol.covariance.view_of[sol.used]).size
+        common.update(position_model=POSITION_MODEL_BOARD_PLANE,
+                      dof=common["n_observations"] - 6 * (len(obs.mounted) - 1) - 6 * n_poses)
     common.update(usable=rounds.usable.copy(), outlier=rounds.outlier.copy(), outlier_reason=list(rounds.reasons),
                   flags=rounds.flags)
     est = _line_estimate(obs, sol, common) if obs.D == 1 else _plane_estimate(obs, sol, common)

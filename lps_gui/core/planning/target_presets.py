@@ -3,7 +3,8 @@
 ``paper-row``: the paper's X axis, 1524 mm in 121 stops of 12.7 mm, six 10x7
 ChArUco targets of 30 mm squares at 340 mm pitch, 800 mm from the paper's
 camera (8 mm lens on 3.45 um pixels, 1920 x 1080), 0.1 px. ``small-row``: a
-fast row for tests (640 x 480, three 7x5 targets, 18 stops).
+fast row for tests (640 x 480, three 7x5 targets, 18 stops). ``small-stitched``: one such
+board moved along 220 mm in three overlapping segments (18 stops).
 ``paper-constellation`` (planar): a 1524 x 1016 mm grid of 13 x 9 stops
 against a 6 x 4 constellation. Every target but the first is mounted with
 random errors (10 mrad, 2 mm); the stage has positioning errors (scale,
@@ -25,9 +26,10 @@ from lps_gui.core.geometry.board import Board
 from lps_gui.core.geometry.camera_model import CameraIntrinsics
 from lps_gui.core.geometry.rotation import exp_so3
 from lps_gui.core.geometry.target_rig import TargetLayout, row_layout
-from lps_gui.core.geometry.targets import pack_targets
+from lps_gui.core.geometry.targets import Target, pack_targets
 from lps_gui.core.models.lps_model import unit
 from lps_gui.core.planning.plan import Plan
+from lps_gui.core.planning.segments import stitched_segments
 from lps_gui.core.truth.rig import Rig
 from lps_gui.core.truth.simulation_spec import SimulationSpec
 from lps_gui.core.truth.stage_errors import PlanarErrorModel, StageErrorModel
@@ -86,6 +88,22 @@ def small_row_spec(seed: int = 0, noise_px: float = 0.1, errors: StageErrorModel
     """A fast row for tests: three 7x5 targets of 20 mm at 170 mm pitch, 300 mm away, 18 stops over 340 mm."""
     plan = plan or Plan(start_mm=0.0, stop_mm=340.0, step_mm=20.0)
     return row_spec("small-row", SMALL_BOARD, SMALL_CAMERA, 3, 170.0, 300.0, plan, seed, noise_px, errors)
+
+
+def small_stitched_spec(seed: int = 0, noise_px: float = 0.1, errors: StageErrorModel | None = None,
+                        segments: int = 3, segment_stops: int = 6, overlap_stops: int = 3) -> SimulationSpec:
+    """One board moved along the travel (SPEC 13 stitching), the small row's camera and board 300 mm away: stops
+    20 mm apart in ``segments`` segments of ``segment_stops``, each repeating the last ``overlap_stops`` of the one
+    before. Placement k of the board is target ``S{k}`` (the estimate's names) moved by hand (10 mrad, 2 mm off)
+    to face the middle of its segment, which then spans 100 mm: the whole board stays in the 640 x 480 view."""
+    step = 20.0
+    n = segment_stops + (segments - 1) * (segment_stops - overlap_stops)
+    base = Plan(start_mm=0.0, stop_mm=step * (n - 1), step_mm=step)
+    plan = replace(base, segments=stitched_segments(base.targets(), segment_stops, overlap_stops))
+    placements = [Target(f"S{k}", SMALL_BOARD, 0) for k in range(segments)]  # one board: the same markers
+    layout = row_layout(placements, step * (segment_stops - overlap_stops), MOUNT_TILT_RAD, MOUNT_OFFSET_MM, seed=seed)
+    rig = row_rig(layout, SMALL_CAMERA, 300.0, (0.0, step * (n - 1)), errors or row_errors())
+    return SimulationSpec("small-stitched", rig, plan, noise_px=noise_px, seed=seed, layout=layout)
 
 
 def constellation_errors(squareness_urad: float = 150.0) -> PlanarErrorModel:

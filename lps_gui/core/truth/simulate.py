@@ -41,10 +41,24 @@ def layout_truth(layout: TargetLayout) -> list[dict[str, Any]]:
             for j, t in enumerate(layout.targets)]
 
 
-def project_scene(spec: SimulationSpec, R: np.ndarray, t: np.ndarray) -> np.ndarray:
+def placement_poses(spec: SimulationSpec, stops: list[PlannedStop], R: np.ndarray, t: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """The camera's pose on the board each view sees: a stitched session's board where it was placed for the view's
+    segment (X_w = Q_k X + p_k, so X_c = R Q_k X + R p_k + t); any other session's poses as they are."""
+    if not spec.stitched:
+        return R, t
+    seg = np.array([s.segment for s in stops], int)
+    return R @ spec.layout.Q[seg], np.einsum("kij,kj->ki", R, spec.layout.p[seg]) + t
+
+
+def project_scene(spec: SimulationSpec, R: np.ndarray, t: np.ndarray, stops: list[PlannedStop] | None = None
+                  ) -> np.ndarray:
     """Noise-free corners (K, N, 2) of the board, or of every target laid end to end (NaN where a target's
-    corner is outside the image or behind another target)."""
-    if spec.layout is None:
+    corner is outside the image or behind another target); a stitched session's (``stops`` given) board where
+    it lay during each view's segment."""
+    if spec.stitched and stops is not None:
+        R, t = placement_poses(spec, stops, R, t)
+    if spec.layout is None or spec.stitched:
         return project_board(R, t, spec.rig.board.object_points(), spec.rig.intrinsics)
     return observe(spec.layout, spec.rig.intrinsics, R, t, border_px=0.0)
 
@@ -171,7 +185,7 @@ def simulate_views(spec: SimulationSpec) -> SimulatedViews:
     else:
         stops, R, t, truth = true_views(spec, rng)
     X = spec.rig.board.object_points()
-    uv = project_scene(spec, R, t)  # shape (K, N, 2)
+    uv = project_scene(spec, R, t, stops)  # shape (K, N, 2)
     if pose is not None and spec.layout is not None:  # a constellation: no one board's plane; the stage plane
         truth = {**planar_truth(spec, pose, pose.plane_mm), "targets": layout_truth(spec.layout)}
     elif pose is not None:

@@ -37,13 +37,24 @@ class SimulationSpec:
     layout: TargetLayout | None = None  # a row or constellation of targets (SPEC 13); the rig's board is its first
     realism: Realism | None = None  # lens misfit, prints off scale and bowed, blur and noise over the image (issue 35)
 
+    @property
+    def stitched(self) -> bool:
+        """One board moved between the plan's segments (SPEC 13): the layout holds its placements (one board, the
+        same markers), one seen at a time (segment k's views see target k only). A row of distinct targets
+        captured with a segmented plan stays a row."""
+        if self.layout is None or self.plan.segments is None:
+            return False
+        one_board = len({(t.board, t.first_marker) for t in self.layout.targets}) == 1
+        return one_board and len(self.layout.targets) == len(self.plan.segments)
+
     def printed(self) -> Board | TargetLayout:
-        """The board (or layout) as the camera sees it: as printed with realism on, else the nominal one."""
-        scene = self.rig.board if self.layout is None else self.layout
+        """The board (or layout) as the camera sees it: as printed with realism on, else the nominal one; a stitched
+        session's one board is one print, whatever its placement."""
+        scene = self.rig.board if self.layout is None or self.stitched else self.layout
         if self.realism is None:
             return scene
         rng = printed_rng(self.seed)
-        return self.realism.printed_board(scene, rng) if self.layout is None else self.realism.printed_layout(scene, rng)
+        return self.realism.printed_board(scene, rng) if isinstance(scene, Board) else self.realism.printed_layout(scene, rng)
 
     def camera_realism(self) -> dict[str, Any]:
         """What the simulated camera and renderers take for the realism: ``lens``, ``printed`` and Lighting fields."""
@@ -56,7 +67,7 @@ class SimulationSpec:
         if self.realism is None:
             return {}
         scene = self.printed()
-        boards = [scene] if self.layout is None else [t.board for t in scene.targets]
+        boards = [scene] if isinstance(scene, Board) else [t.board for t in scene.targets]
         return {"realism": {**self.realism.to_dict(), "lens": self.realism.lens(self.rig.intrinsics).to_dict(),
                             "printed": [{"square_mm": b.square_mm, "warp_mm": list(b.warp_mm or (0.0, 0.0))}
                                         for b in boards]}}

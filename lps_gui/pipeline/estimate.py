@@ -49,7 +49,7 @@ from lps_gui.pipeline.results.verdict import measured, summary_rows, verdict_sec
 from lps_gui.pipeline.session_checks import corners_of_records, session_inputs
 from lps_gui.pipeline.session_input import SessionInput, read_session_input
 from lps_gui.pipeline.target_session import target_observations, targets_with_truth
-from lps_gui.sim.truth import rescored_with_drawn_sigma, truth_comparison
+from lps_gui.sim.truth import truth_comparison
 from lps_gui.sim.truth_figures import CheckedValues, self_check_section
 from lps_gui.io.results.keys import DEVIATION_UM, MEASURED_MM, SIGMA_TOTAL_UM
 from lps_gui.io.results.sections import Figures, Flag, Parameters, Position, TruthComparison
@@ -236,7 +236,7 @@ def build_results(session: SessionInput, obs: Observations, est: LpsEstimate, in
     part = RESULTS_BY_AXES[obs.D](session, obs, est, intrinsics_source)
     results = dict(part.document)  # a new document, written below, never read: the axis builder's is left as it was
     positions, figures, flags, truth = part.positions, part.figures, part.flags, part.truth_comparison
-    targets = None
+    targets = targets_truth = None
     if obs.mounted is not None:  # SPEC 13: each target's pose, sigma, views, ties
         targets, targets_truth = targets_with_truth(obs, est, session)
         if obs.segment is not None:  # a stitched session's placements are tied by their repeated stops
@@ -244,15 +244,16 @@ def build_results(session: SessionInput, obs: Observations, est: LpsEstimate, in
 
             targets = with_stitch_ties(targets, obs)
         results["targets"] = targets
-        if targets_truth is not None:
-            truth = results["truth_comparison"] = {**(truth or {}), "targets": targets_truth}
     motions = error_motions_outcome(session, obs, est, positions, figures, flags)  # SPEC 14, where poses allow
     if motions is not None:
         positions, figures, flags = motions.positions, motions.figures, motions.flags
         results["error_motions"] = motions.section
-    if obs.D == 1 and isinstance(truth, dict) and any(r.get("sigma_lens_um") is not None for r in positions):
-        truth = results["truth_comparison"] = rescored_with_drawn_sigma(  # the z test scores the sigma the bands draw
-            truth, positions, est.reference_view)
+    if obs.D == 1 and session.truth is not None:  # a line's, once, after the error motions: its z test scores the
+        drawn = np.asarray([r.get(SIGMA_TOTAL_UM) for r in positions], dtype=float)  # sigma the bands draw (lens in)
+        section, positions = truth_comparison(obs, est, session.truth, positions, drawn_sigma_um=drawn)
+        truth = results["truth_comparison"] = TruthComparison.of(**section).to_dict()
+    if targets_truth is not None:
+        truth = results["truth_comparison"] = {**(truth or {}), "targets": targets_truth}
     board = {**part.board, "square_mm": session.nominal_board.square_mm}  # nominal (20 C); environment.square_mm_used
     results["board"] = board  # is the size used
     results["positions"] = positions = [Position.of(**row).to_dict() for row in positions]  # as the readers read them
@@ -285,13 +286,8 @@ def line_results(session: SessionInput, obs: Observations, est: LpsEstimate, int
     """The results.json document of one axis and its values: its parts computed here, assembled by
     :func:`lps_gui.io.results.document.assemble_results`."""
     positions = position_rows(obs, est)
-    truth = session.truth
     board, parameters = board_to_dict(obs.board), estimate_parameters(obs, est)
     figures, flags = session_figures(obs, est), [Flag.of(**f).to_dict() for f in est.flags]
-    tc = None
-    if truth is not None:  # the section, and new rows with truth beside each position
-        section, positions = truth_comparison(obs, est, truth, positions)
-        tc = TruthComparison.of(**section).to_dict()
     results = assemble_results(
         method=est.method,
         settings=est.options.to_dict(),
@@ -304,9 +300,8 @@ def line_results(session: SessionInput, obs: Observations, est: LpsEstimate, int
         figures=figures,
         flags=flags,
         timings_s=dict(est.timings_s),
-        truth_comparison=tc,
     )
-    return AxisResults(results, parameters, board, positions, figures, flags, tc)
+    return AxisResults(results, parameters, board, positions, figures, flags, None)  # truth: after the error motions
 
 
 def position_rows(obs: Observations, est: LpsEstimate) -> list[dict[str, Any]]:

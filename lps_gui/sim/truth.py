@@ -53,7 +53,6 @@ from lps_gui.io.board_file import board_from_dict
 from lps_gui.io.intrinsics_file import intrinsics_from_dict
 from lps_gui.io.results.document import json_float as _f
 from lps_gui.io.results.document import json_floats
-from lps_gui.io.results.keys import DEVIATION_UM, SIGMA_TOTAL_UM
 from lps_gui.io.session import Session
 from lps_gui.io.session_paths import read_session_file
 
@@ -279,7 +278,7 @@ def reduce_truth(
     true_mm: np.ndarray,
     reference: int,
     compared: np.ndarray,
-    sigma_mm: np.ndarray | None = None,
+    sigma_um: np.ndarray | None = None,
 ) -> TruthReduction:
     """The one comparison of a measurement with the simulator's truth.
 
@@ -289,16 +288,17 @@ def reduce_truth(
         origin (each is taken relative to its own row ``reference``).
     reference : the reference capture's view (the estimate's gauge view).
     compared : (K,) bool, the views to take figures over (used and with truth).
-    sigma_mm : (K,) or (K, D) 1-sigma of the measured coordinates, for the z test.
+    sigma_um : (K,) or (K, D) 1-sigma of the measured coordinates in um (the unit of the position rows), for the
+        z test.
     """
     m, t = _as_kd(measured_mm), _as_kd(true_mm)
     err = 1e3 * ((m - m[reference]) - (t - t[reference]))
     ok = np.asarray(compared, dtype=bool)
     lengths = np.sqrt(np.sum(err[ok] ** 2, axis=1))
     z_ms = None
-    if sigma_mm is not None:
+    if sigma_um is not None:
         others = ok & (np.arange(err.shape[0]) != reference)
-        z = err[others] / np.maximum(1e3 * _as_kd(sigma_mm)[others], 1e-12)
+        z = err[others] / np.maximum(_as_kd(sigma_um)[others], 1e-12)
         z = z[np.isfinite(z)]
         z_ms = float(np.mean(z**2)) if z.size else None
     return TruthReduction(
@@ -330,7 +330,8 @@ def centred(values: np.ndarray, compared: np.ndarray) -> np.ndarray:
 
 
 def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any], positions: list[dict],
-                     out_of_plane: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[dict[str, Any], list[dict]]:
+                     out_of_plane: tuple[np.ndarray, np.ndarray] | None = None,
+                     drawn_sigma_um: np.ndarray | None = None) -> tuple[dict[str, Any], list[dict]]:
     """results.json ``truth_comparison`` (schema in docs/ARCHITECTURE.md) and the position rows with truth beside
     each: new rows, ``positions`` is left as it was (a builder returns values, issue 34).
 
@@ -338,6 +339,9 @@ def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any],
     reference capture, so the numbers are the ones the report, the GUI and
     ``lps demo`` show. A planar estimate (D = 2) is compared by :func:`_plane_truth_comparison`, its out-of-plane
     displacement and sigma per capture (um) given as ``out_of_plane`` (values, not read back from the rows).
+    On a line the per-stop z test scores ``drawn_sigma_um`` (K,): the sigma the bands draw, positions.csv's
+    ``sigma_total_um`` once the error motions have folded the lens misfit in (the caller compares after them,
+    pipeline/estimate.build_results); without it, the estimate's own sigma_total.
     """
     if est.D == 2:
         return _plane_truth_comparison(obs, est, truth, positions, out_of_plane)
@@ -356,10 +360,10 @@ def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any],
         return v
 
     axis = per_view(truth["axis_mm"])
-    drawn = est.sigma_total_mm  # the sigma the bands draw and positions.csv's sigma_total_um (report/figures/plots)
+    drawn = 1e3 * est.sigma_total_mm if drawn_sigma_um is None else np.asarray(drawn_sigma_um, dtype=float)
     pos = reduce_truth(est.state.s, axis, ref, ok, drawn)
     true_dev = true_deviation_um(axis, obs.target_mm, ref)
-    sigma_um = 1e3 * drawn[ok]
+    sigma_um = 1e3 * est.sigma_total_mm[ok]  # the estimate's own (the lens misfit's share is in the z test only)
     out: dict[str, Any] = {
         "position_rms_error_um": pos.rms_um,
         "position_max_abs_error_um": pos.max_abs_um,
@@ -400,25 +404,6 @@ def truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str, Any],
     keys = list(columns)
     values = list(zip(*(json_floats(v) for v in columns.values())))
     return out, [{**row, **(dict(zip(keys, values[k])) if have[k] else {})} for k, row in enumerate(positions)]
-
-
-def rescored_with_drawn_sigma(comparison: dict[str, Any], positions: list[dict[str, Any]], reference: int
-                              ) -> dict[str, Any]:
-    """``comparison`` with the per-stop mean (error/sigma)^2 again, against the rows' ``sigma_total_um`` once the
-    lens misfit is in it (pipeline/results/error_motions folds it in after :func:`truth_comparison`): the z test
-    scores the sigma the bands draw. Errors as :func:`reduce_truth`'s (both deviations are relative to the
-    reference capture). A new dict: the builders' values are passed on, not edited."""
-    comparison = dict(comparison)
-    for key, truth_key in (("z_mean_square", "truth_deviation_um"), ("board_plane_z_mean_square",
-                                                                       "truth_plane_deviation_um")):
-        if comparison.get(key) is None:
-            continue
-        z = [(r[DEVIATION_UM] - r[truth_key]) / r[SIGMA_TOTAL_UM] for k, r in enumerate(positions)
-             if k != reference and r.get("used", True) and r.get(DEVIATION_UM) is not None
-             and r.get(truth_key) is not None and (r.get(SIGMA_TOTAL_UM) or 0.0) > 0.0]
-        if z:
-            comparison[key] = _f(np.mean(np.square(z)))
-    return comparison
 
 
 def truth_errors(est: LpsEstimate, straight_truth: np.ndarray | None, rotation_truth: np.ndarray | None,
@@ -543,7 +528,7 @@ def _plane_truth_comparison(obs: Observations, est: LpsEstimate, truth: dict[str
         return {"note": "truth does not cover every capture"}, list(positions)
     rows, ok, key, true_xy = plane
     ref = est.reference_view
-    pos = reduce_truth(est.state.xy, true_xy, ref, ok, est.sigma_s_mm)
+    pos = reduce_truth(est.state.xy, true_xy, ref, ok, 1e3 * est.sigma_s_mm)
     sig = 1e3 * est.sigma_s_mm[ok]
     true_geo = axis_geometry(affine_motion(true_xy, obs.target_mm, obs.approach, ok), np.zeros((4, 4)))
     geo = axis_geometry(est.fit.G, est.fit.cov_G)

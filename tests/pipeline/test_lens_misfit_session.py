@@ -8,6 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from lps_gui.core.geometry.camera_model import project_board
 from lps_gui.core.intrinsics.calibration import calibrate_intrinsics
@@ -51,3 +52,9 @@ def test_lens_misfit_resolves_no_angle_keeps_u_and_is_flagged(tmp_path):
     assert lens["carried_by_poses"] and lens["misfit_px"] > lens["calibration"]["noise_px"]
     abbe = next(r for r in misfit["uncertainty"]["budget"] if r["source"] == "Abbe offset")
     assert "not resolved: no term" in abbe["note"]
+    # the truth comparison is made after the error motions: its z test scores the sigma the bands draw, lens in
+    ref = misfit["parameters"]["reference_index"]
+    rows = [r for r in misfit["positions"] if r["used"] and r["index"] != ref]
+    assert any(r.get("sigma_lens_um") for r in rows)  # the lens misfit is in sigma_total_um
+    z2 = np.mean([((r["deviation_um"] - r["truth_deviation_um"]) / r["sigma_total_um"]) ** 2 for r in rows])
+    assert misfit["truth_comparison"]["z_mean_square"] == pytest.approx(z2, rel=1e-9)

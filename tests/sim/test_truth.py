@@ -16,7 +16,6 @@ from lps_gui.sim.truth import (
     prune_truth,
     read_truth,
     reduce_truth,
-    rescored_with_drawn_sigma,
     residual_from_line,
     session_truth,
     true_deviation_um,
@@ -63,7 +62,7 @@ def test_reduce_truth_is_relative_to_the_reference_capture_in_any_dimension():
     err_um = rng.normal(0, 2.0, size=(6, 2))
     measured = true + 1e-3 * err_um + np.array([5.0, -3.0])  # any origin
     compared = np.array([True, True, True, False, True, True])
-    red = reduce_truth(measured, true, 1, compared, sigma_mm=np.full((6, 2), 2e-3))
+    red = reduce_truth(measured, true, 1, compared, sigma_um=np.full((6, 2), 2.0))
     expected = err_um - err_um[1]
     assert np.allclose(red.error_um, expected) and np.all(red.error_um[1] == 0)
     lengths = np.linalg.norm(expected[compared], axis=1)
@@ -87,7 +86,8 @@ def test_truth_helpers_share_the_reference():
 
 def test_the_per_stop_z_scores_the_drawn_sigma_not_the_noise_alone():
     """Issue 35: the truth check's per-stop mean (error/sigma)^2 is against the sigma the bands draw
-    (``sigma_total_um``: noise, intrinsics, lens model), before and after the lens misfit is folded in."""
+    (``sigma_total_um``: noise, intrinsics, lens model), computed once: the estimate's own, or the one the error
+    motions drew with the lens misfit folded in, given (the estimate's mean sigma stays its own)."""
     from types import SimpleNamespace
 
     K = 5
@@ -101,6 +101,9 @@ def test_the_per_stop_z_scores_the_drawn_sigma_not_the_noise_alone():
     positions = [{"deviation_um": 1e3 * e, "sigma_total_um": 2.0} for e in err_mm]
     tc, rows = truth_comparison(obs, est, truth, positions)
     assert tc["z_mean_square"] == pytest.approx(1.0) and tc["board_plane_z_mean_square"] == pytest.approx(1.0)
-    rows = [{**row, "sigma_total_um": 4.0} for row in rows]  # the lens misfit folded in
-    tc = rescored_with_drawn_sigma(tc, rows, reference=0)
-    assert tc["z_mean_square"] == pytest.approx(0.25) and tc["board_plane_z_mean_square"] == pytest.approx(0.25)
+    drawn = np.full(K, 4.0)  # the lens misfit folded in
+    folded, folded_rows = truth_comparison(obs, est, truth, [{**r, "sigma_total_um": 4.0} for r in positions],
+                                           drawn_sigma_um=drawn)
+    assert folded["z_mean_square"] == pytest.approx(0.25) and folded["board_plane_z_mean_square"] == pytest.approx(0.25)
+    assert folded["mean_sigma_um"] == tc["mean_sigma_um"] == pytest.approx(2.0)
+    assert [r["truth_deviation_um"] for r in folded_rows] == [r["truth_deviation_um"] for r in rows]

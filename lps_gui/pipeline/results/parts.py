@@ -21,4 +21,4 @@ class AxisResults:
     positions: list[dict[str, Any]]
     figures: dict[str, Any]
     flags: list[dict[str, Any]]
-    truth_comparison: dict[str, Any] | None
+    truth_comparison: dict[str, Any] | None  # a plane's; a line's is made after the error motions (build_results)

@@ -180,7 +180,7 @@ def planar_fit(est: LpsEstimate, target_mm: np.ndarray, approach: np.ndarray) ->
 
     The intrinsics' covariance is in it (a line's scale sigma is the total one too): fx, fy and the principal point
     scale and shear the whole grid alike, so unlike the noise they do not average out over the stops (issue 35: on
-    the campaign's planar cell they are 10-15 % of scale Y's sigma)."""
+    the campaign's planar cell they raise scale Y's sigma by 9-15 %)."""
     used = est.used
     Phi, coef = affine_coefficients(est.state.xy, target_mm, approach, used)
     G = coef[1:3].T  # shape (2, 2): G[:, 0] is +X motion, G[:, 1] is +Y motion

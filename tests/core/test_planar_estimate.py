@@ -113,6 +113,28 @@ def test_square_error_model_without_straightness_gives_its_parameters():
         assert abs(value - truth) < 3.5 * sigma, (value, truth, sigma)
 
 
+def test_planar_scales_carry_the_intrinsics_they_were_measured_with():
+    """fx and fy scale the whole grid: an error of one stated sd of fy (500 ppm) moves scale Y by -400 ppm and
+    scale X by +160 ppm (the pose's depth follows the mean focal length), far beyond the corners' noise (38 ppm).
+    The scales' U (k = 2) must cover it, as a line's total scale sigma does (issue 35)."""
+    from dataclasses import replace
+
+    spec = small_planar_spec(seed=2, noise_px=0.01)
+    views = simulate_views(spec)
+    obs = observations(spec, views)
+    sd = np.r_[0.3, 0.3, 0.3, 0.3, 1e-4, 1e-4, 1e-6, 1e-6, 1e-4]  # px for fx, fy, cx, cy
+    true_intrinsics = obs.intrinsics
+    obs.intrinsics = replace(true_intrinsics.with_vector(true_intrinsics.vector() + np.r_[0.0, sd[1], np.zeros(7)]),
+                             covariance=np.diag(sd**2))
+    est = estimate(obs)
+    geo = axis_geometry(est.fit.G, est.fit.cov_G)
+    truth = planar_truth_geometry(est, obs, true_stage_xy(est, obs, views))
+    assert abs(geo.scale_y_ppm - truth.scale_y_ppm) > 200.0  # the intrinsics' error is there, not the noise's
+    for value, true, sigma in ((geo.scale_x_ppm, truth.scale_x_ppm, geo.scale_x_sigma_ppm),
+                               (geo.scale_y_ppm, truth.scale_y_ppm, geo.scale_y_sigma_ppm)):
+        assert abs(value - true) < 2.0 * sigma, (value, true, sigma)
+
+
 def test_planar_sigmas_are_honest_over_monte_carlo_repetitions():
     z2 = []
     sq = []

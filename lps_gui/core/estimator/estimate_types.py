@@ -83,7 +83,7 @@ class PlanarFit:
     """Affine fit measured = offset + G target (+ backlash offsets) of a plane's positions, stage frame."""
 
     G: np.ndarray  # shape (2, 2): columns are the measured +X and +Y motion per commanded mm
-    cov_G: np.ndarray  # shape (4, 4): covariance of G.ravel() (row-major), from noise
+    cov_G: np.ndarray  # shape (4, 4): covariance of G.ravel() (row-major), from noise and the intrinsics
     residual_um: np.ndarray  # shape (K, 2): measured - fit (NaN for unused views)
 
 
@@ -176,7 +176,11 @@ def sigmas_of(cov: np.ndarray) -> np.ndarray:
 
 
 def planar_fit(est: LpsEstimate, target_mm: np.ndarray, approach: np.ndarray) -> PlanarFit:
-    """Affine fit of a plane's measured positions with the covariance of G from the full position covariance."""
+    """Affine fit of a plane's measured positions with the covariance of G from the full position covariance.
+
+    The intrinsics' covariance is in it (a line's scale sigma is the total one too): fx, fy and the principal point
+    scale and shear the whole grid alike, so unlike the noise they do not average out over the stops (issue 35: on
+    the campaign's planar cell they raise scale Y's sigma by 9-15 %)."""
     used = est.used
     Phi, coef = affine_coefficients(est.state.xy, target_mm, approach, used)
     G = coef[1:3].T  # shape (2, 2): G[:, 0] is +X motion, G[:, 1] is +Y motion
@@ -187,7 +191,7 @@ def planar_fit(est: LpsEstimate, target_mm: np.ndarray, approach: np.ndarray) ->
     for a in range(2):
         for b in range(2):
             L[2 * a + b, :, a] = pinv[1 + b]
-    cov_G = est.functional_covariance(L)
+    cov_G = est.functional_covariance(L, with_intrinsics=True)
     resid = 1e3 * (est.state.xy - Phi @ coef)
     resid[~used] = np.nan
     return PlanarFit(G, cov_G, resid)

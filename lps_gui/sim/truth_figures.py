@@ -31,6 +31,8 @@ import numpy as np
 from lps_gui.core.metrology.iso230 import figures_for_session
 from lps_gui.core.metrology.iso230_run import fit_weights_sigma_um
 
+from lps_gui.core.metrology.resolution import centred_target_means
+
 K = 2.0  # the coverage factor of every U the report prints
 Z_MS_LIMIT = 3.0  # mean (error/sigma)^2 above this: the sigmas do not hold
 FALSE_FRACTION = 0.5  # a resolved finding whose truth is under this fraction of the noise threshold is false
@@ -89,6 +91,16 @@ def _per_target_span(values: np.ndarray, target: np.ndarray, ok: np.ndarray) -> 
     return float(np.ptp(means)) if means.size >= 2 else None
 
 
+def _max_abs_about_mean(values: np.ndarray, target: np.ndarray, ok: np.ndarray) -> float | None:
+    """max |x| of the per-target means of ``values`` over ``ok`` about their mean (how the report's max |angle|
+    is taken: :func:`~lps_gui.core.metrology.resolution.centred_target_means`)."""
+    keep = ok & np.isfinite(values)
+    if not keep.any():
+        return None
+    centred, _ = centred_target_means(values[keep], np.zeros(int(keep.sum())), target[keep])
+    return float(np.max(np.abs(centred)))
+
+
 def _line_truth_dev(pos: list[dict[str, Any]]) -> np.ndarray | None:
     """The true deviation per position the estimate measures: at the board plane when the truth has it."""
     for key in ("truth_plane_deviation_um", "truth_deviation_um"):
@@ -130,8 +142,7 @@ def line_figure_checks(values: CheckedValues | Mapping[str, Any]) -> list[dict[s
                           st.get("resolved")))
     angles = figs.get("angles_resolution") or {}
     for name in ANGLES:
-        t = _col(pos, f"truth_{name}_urad")
-        truth = float(np.nanmax(np.abs(t[used]))) if np.isfinite(t[used]).any() else None
+        truth = _max_abs_about_mean(_col(pos, f"truth_{name}_urad"), target, used)
         a = angles.get(name) or {}
         out.append(_check(f"max |{name}|", "urad", a.get("max_abs_urad"), truth, Uk.get(f"max_abs_{name}"),
                           a.get("resolved")))
@@ -236,9 +247,9 @@ def finding_checks(values: CheckedValues | Mapping[str, Any]) -> list[dict[str, 
                         rot.get("noise_span_urad")))
     for name in ANGLES:
         a = (figs.get("angles_resolution") or {}).get(name) or {}
-        t = _col(pos, f"truth_{name}_urad")[used]
         out.append(_finding(f"max |{name}|", a.get("resolved"),
-                            float(np.nanmax(np.abs(t))) if np.isfinite(t).any() else None, a.get("noise_max_abs_urad")))
+                            _max_abs_about_mean(_col(pos, f"truth_{name}_urad"), target, used),
+                            a.get("noise_max_abs_urad")))
     em = v.error_motions or {}
     for iso, m in (em.get("motions") or {}).items():
         true_values = _motion_truth(iso, em, pos)

@@ -137,3 +137,20 @@ def test_a_misfit_under_the_noise_still_switches_when_the_line_models_scale_is_r
     sigma = float(np.sqrt(est.functional_covariance(L)[0, 0]))
     err = float(L[0] @ (est.state.s - truth))  # the far place's mean position minus the near one's, against truth
     assert abs(err) < 3 * sigma, (err, sigma)
+
+
+def test_a_kept_line_models_positions_take_the_corners_noise_not_its_misfit():
+    """The same min-step session: the line model is kept (misfit under the noise), but its a-posteriori sigma
+    is noise plus misfit (0.0257 px where the simulator drew 0.020). The misfit is what the model cannot
+    follow, not scatter of the positions: sized with it, the campaign's min-step motions cell had per-stop
+    (error/sigma)^2 0.52 and E, M 0.38, 0.16. The positions' noise is the per-view fit's, the drawn noise."""
+    from lps_gui.core.planning.plan import Plan
+    from lps_gui.core.planning.presets import min_step_plan_fields
+
+    noise_px = 0.02
+    spec = replace(small_spec(seed=0, noise_px=noise_px, errors=replace(MOTIONS, dead_band_um=3.0,
+                                                                        repeatability_um=0.1)),
+                   plan=Plan(**min_step_plan_fields(0.0, 22.0, steps=5, locations=2, frames=2)))
+    est = estimate(observations_of(spec, simulate_views(spec)))
+    assert est.position_model == POSITION_MODEL_POSE_SCALE  # the line model's positions, kept
+    assert abs(est.sigma_px / noise_px - 1.0) < 0.05, est.sigma_px

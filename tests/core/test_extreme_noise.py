@@ -38,10 +38,29 @@ def test_max_abs_angle_over_noisy_views_is_covered_by_its_u():
     def z_of(rng: np.random.Generator, truth: np.ndarray) -> float:
         r = max_abs_resolution(truth + sigma * rng.standard_normal(x.size), sigma, x, np.ones(x.size, bool))
         U = extreme_uncertainties({"angles_resolution": {"roll": r}}, 2.0, {"roll": 400.0})["max_abs_roll"]
-        return (r["max_abs_urad"] - np.max(np.abs(truth))) / (U / 2.0)
+        return (r["max_abs_urad"] - np.max(np.abs(truth - truth.mean()))) / (U / 2.0)  # about the mean attitude
 
     coverage, z2 = _coverage(35, x, 2000.0, z_of)
     assert coverage >= 0.9 and 0.4 <= z2 <= 2.0, (coverage, z2)
+
+
+def test_max_abs_angle_near_the_noise_is_the_max_of_the_stops_means():
+    """The campaign's pitch on the motions stage: a ramp of +-660 urad over 12 stops x 4 views, 300 urad a view.
+    The max over single views is mostly the noise's own max (measured 1.1-1.7 mrad): resolved in 16 of these 30
+    draws on main, and 6 of 10 line-both sessions (83 % covered). Of the stops' means (noise / 2, 12 draws not
+    48) it is a finding in most draws, and still honest."""
+    x = np.repeat(np.linspace(0.0, 22.0, 12), 4)
+    sigma = np.full(x.size, 300.0)
+    truth = np.repeat(np.linspace(-660.0, 660.0, 12), 4)
+    rng = np.random.default_rng(37)
+    z = []
+    for _ in range(TRIALS):
+        r = max_abs_resolution(truth + sigma * rng.standard_normal(x.size), sigma, x, np.ones(x.size, bool))
+        U = extreme_uncertainties({"angles_resolution": {"pitch": r}}, 2.0, {"pitch": 300.0})["max_abs_pitch"]
+        if r["resolved"]:
+            z.append((r["max_abs_urad"] - 660.0) / (U / 2.0))
+    z2 = float(np.mean(np.square(z)))
+    assert len(z) >= 0.8 * TRIALS and np.mean(np.abs(z) <= 2.0) >= 0.9 and 0.5 <= z2 <= 2.0, (len(z), z2)
 
 
 def test_span_over_many_targets_is_covered_by_its_u():

@@ -24,8 +24,8 @@ WHY = {"page 2": "The constant-orientation fit determines the displacement at th
                  "view, while a stop's full pose carries the tilt-translation ambiguity of one plane, hence its "
                  "larger noise",
        "error motions": "The profile of stop-averaged angles is tested against zero as a whole (chi-square), the "
-                        "single views' largest angle against the largest noise gives: near the noise floor the "
-                        "profile resolves a smooth motion the largest single view does not"}
+                        "largest stop-averaged angle (about their mean) against the largest noise gives: near the "
+                        "noise floor the profile resolves a smooth motion the largest stop does not"}
 PAGE2_NOTE = ("Roll, pitch and yaw are reported on the error motions page (ISO 230-1, stage frame); the max |angle| "
               "rows here are a cross-check, reconciled there. Straightness is reported here (at the board plane).")
 

@@ -273,7 +273,8 @@ def build_results(session: SessionInput, obs: Observations, est: LpsEstimate, in
     # the verdict, U (k = 2) and the decision rule, machine-readable (line or plane)
     results["verdict"] = verdict_section(measured(budget.axes, figures, uncertainty, asme), session.meta.get("stage_spec"))
     check, flag = self_check_section(CheckedValues(  # a simulated session: does its truth contradict a figure or a finding?
-        positions, figures, uncertainty_section, truth, None if motions is None else motions.section, obs.D == 2))
+        positions, figures, uncertainty_section, truth, None if motions is None else motions.section, obs.D == 2,
+        results.get("asme_b5_64")))
     if check is not None:
         results["truth_comparison"] = {**truth, "self_check": check}
     results["flags"] = [*flags, flag] if flag is not None else flags

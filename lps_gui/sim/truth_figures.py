@@ -52,13 +52,14 @@ class CheckedValues:
     truth_comparison: Mapping[str, Any] | None
     error_motions: Mapping[str, Any] | None = None
     planar: bool = False
+    asme: Mapping[str, Any] | None = None  # results.json ``asme_b5_64`` (a settling test's time has a truth)
 
     @classmethod
     def of_document(cls, results: Mapping[str, Any]) -> CheckedValues:
         """The values of a finished results.json document (a reader: benchmarks/honesty.py, tests)."""
         return cls(results.get("positions") or [], results.get("figures") or {}, results.get("uncertainty") or {},
                    results.get("truth_comparison"), results.get("error_motions"),
-                   len(results.get("axes") or ["X"]) == 2)
+                   len(results.get("axes") or ["X"]) == 2, results.get("asme_b5_64"))
 
 
 def checked(values: CheckedValues | Mapping[str, Any]) -> CheckedValues:
@@ -147,7 +148,16 @@ def line_figure_checks(values: CheckedValues | Mapping[str, Any]) -> list[dict[s
         out.append(_check(f"max |{name}|", "urad", a.get("max_abs_urad"), truth, Uk.get(f"max_abs_{name}"),
                           a.get("resolved")))
     out += motion_checks(v, target, used)
+    out.append(settling_check(v.asme))
     return [c for c in out if c is not None]
+
+
+def settling_check(asme: Mapping[str, Any] | None) -> dict[str, Any] | None:
+    """A settling test's headline figure, the settling time (the longest over its moves, s), against the simulated
+    stage's ringing (``asme_b5_64.settling.truth``: every move rings alike); None without a settling test."""
+    st = (asme or {}).get("settling") or {}
+    return _check("settling time", "s", st.get("settling_time_s"), (st.get("truth") or {}).get("settling_time_s"),
+                  st.get("settling_time_U_s"))
 
 
 def motion_checks(values: CheckedValues | Mapping[str, Any], target: np.ndarray, used: np.ndarray

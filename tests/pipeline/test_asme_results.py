@@ -6,6 +6,7 @@ settling time of a ringing stage within 20 % of its true settling time.
 """
 from __future__ import annotations
 
+import json
 from dataclasses import replace
 
 import numpy as np
@@ -89,6 +90,14 @@ def test_settling_time_within_20_percent_of_the_truth(tmp_path):
     assert results["parameters"]["n_outliers"] == 0  # ringing frames are not outliers in a settling test
     row = results["asme_b5_64"]["test_uncertainty_ratio"][0]
     assert row["figure"] == "Settling time" and row["tur"] == pytest.approx(1.0 / settle["settling_time_U_s"])
+    assert results["truth_comparison"]["self_check"]["passed"]  # the settling time is checked and holds
+
+    # the estimate's own self-check scores the settling time: a stage that truly rang twice as long contradicts it
+    meta = json.loads((session.folder / "session.json").read_text())
+    meta["truth"]["vibration"]["decay_s"] = 0.5
+    (session.folder / "session.json").write_text(json.dumps(meta))
+    problems = estimate_session(session.folder)["truth_comparison"]["self_check"]["problems"]
+    assert [p for p in problems if p.startswith("settling time ")], problems
 
 
 def test_a_min_step_session_has_no_periodic_figure_and_steps_without_the_jumps(tmp_path):

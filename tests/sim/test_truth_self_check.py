@@ -113,3 +113,23 @@ def test_the_scales_truth_is_the_same_weighted_slope_the_estimate_takes():
                "uncertainty": {"figures_k2": {"scale_ppm": 2.0, "max_abs_deviation_um": 2.0}}}
     scale = next(c for c in figure_checks(results) if c["figure"] == "scale")
     assert abs(scale["error"]) < 1e-6, scale
+
+
+def _settling_results(settling_time_s: float) -> dict:
+    """A hand-made results.json of a settling test on a stage ringing 50 um at 8 Hz (true settling time 0.5675 s)."""
+    pos = [{"index": i, "run": 1, "direction": "+", "target_mm": 0.0, "used": True, "truth_deviation_um": 0.0}
+           for i in range(4)]
+    return {"positions": pos, "truth_comparison": {"z_mean_square": 1.0},
+            "asme_b5_64": {"settling": {"band_um": 5.0, "settling_time_s": settling_time_s, "settling_time_U_s": 0.08,
+                                        "truth": {"settling_time_s": 0.5675}}}}
+
+
+def test_a_settling_time_is_checked_against_the_stage_s_true_ringing():
+    """The settling test's headline figure is scored like every other (the campaign's settling cells had none)."""
+    [row] = [c for c in figure_checks(_settling_results(0.5275)) if c["figure"] == "settling time"]
+    assert row["unit"] == "s" and row["truth"] == 0.5675 and row["U_k2"] == 0.08
+    assert abs(row["z"] - (-1.0)) < 1e-9
+    assert self_check(_settling_results(0.5275))["passed"]
+    off = self_check(_settling_results(0.5675 + 0.2))  # 2.5 U late: the truth contradicts the report
+    assert not off["passed"] and off["problems"][0].startswith("settling time 0.7675 s, truth 0.5675")
+    assert not [c for c in figure_checks({**_settling_results(0.5), "asme_b5_64": {}}) if c["figure"] == "settling time"]

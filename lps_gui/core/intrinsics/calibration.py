@@ -204,9 +204,9 @@ def calibrate_intrinsics(
     intr = seed.with_vector(ref.intrinsics_vector)
     covariance, extra = ref.covariance, {}
     if model_error:
-        jk = jackknife_intrinsics(size_mm, args[1], args[2], ids, used, replace(intr, covariance=ref.covariance),
+        jk, jk_cov = jackknife_intrinsics(size_mm, args[1], args[2], ids, used, replace(intr, covariance=ref.covariance),
                                   ref.rvecs, ref.tvecs, args[8], ref.warp_mm is not None)
-        found = excess_covariance(jk, ref.covariance)
+        found = excess_covariance(jk, jk_cov, ref.covariance)
         covariance, extra = ref.covariance + found.covariance, {"model_error": found.to_dict()}
         if found.significant:
             warnings.append("the intrinsics move with the view set far beyond the corner noise (a lens the model "

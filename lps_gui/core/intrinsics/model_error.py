@@ -39,38 +39,49 @@ class ModelError:
                 "significant_above": EIG_SIGNIFICANT}
 
 
-def excess_covariance(jackknife: np.ndarray, noise: np.ndarray, threshold: float = EIG_SIGNIFICANT) -> ModelError:
-    """Model-error covariance from delete-one estimates ``jackknife`` (n, 9) and the fit's noise covariance (9, 9).
+def excess_covariance(jackknife: np.ndarray, covariances: np.ndarray, noise: np.ndarray,
+                      threshold: float = EIG_SIGNIFICANT) -> ModelError:
+    """Model-error covariance from delete-one estimates ``jackknife`` (n, 9), their covariances (n, 9, 9) and the
+    full fit's noise covariance (9, 9).
 
-    The jackknife covariance (n-1)/n sum (v_j - mean)(v_j - mean)^T is whitened by the noise covariance; each
-    eigen-direction above ``threshold`` contributes its excess (eigenvalue - 1) over the noise. Held (zero-variance)
-    parameters stay out.
+    The jackknife covariance D = (n-1)/n sum (v_j - mean)(v_j - mean)^T is compared with what the noise alone
+    would give it, E = (n-1)/n sum (C_j - C) (dropping a view adds its information's worth of noise: a view with
+    much leverage moves the fit much, and that is no misfit). D is whitened by E; each eigen-direction above
+    ``threshold`` contributes its excess (eigenvalue - 1) of E. Held (zero-variance) parameters stay out.
     """
     v = np.asarray(jackknife, float)
     n = len(v)
-    d = v - v.mean(axis=0)
-    C_jk = (n - 1) / n * d.T @ d
     free = np.diag(noise) > 0
     out = np.zeros_like(noise)
     if n < MIN_JACKKNIFE_VIEWS or not free.any():
         return ModelError(out, np.zeros(0))
-    L = np.linalg.cholesky(noise[np.ix_(free, free)])
-    W = np.linalg.solve(L, np.linalg.solve(L, C_jk[np.ix_(free, free)]).T)  # L^-1 C L^-T
+    d = (v - v.mean(axis=0))[:, free]
+    D = (n - 1) / n * d.T @ d
+    sub = np.ix_(free, free)
+    E = (n - 1) / n * np.sum([np.asarray(c, float)[sub] - noise[sub] for c in covariances], axis=0)
+    E = (E + E.T) / 2 + 1e-9 * np.diag(np.diag(noise[sub]))  # never singular where a view adds nothing
+    lam_e, U = np.linalg.eigh(E)
+    if lam_e[0] <= 0:  # not a noise covariance: rebuild it from its positive part
+        lam_e = np.maximum(lam_e, 1e-12 * lam_e[-1])
+    L = U * np.sqrt(lam_e)  # E = L L^T
+    W = np.linalg.solve(L, np.linalg.solve(L, D).T)  # L^-1 D L^-T
     lam, V = np.linalg.eigh((W + W.T) / 2)
     excess = np.where(lam > threshold, lam - 1.0, 0.0)
-    out[np.ix_(free, free)] = L @ (V * excess) @ V.T @ L.T
+    out[sub] = L @ (V * excess) @ V.T @ L.T
     return ModelError((out + out.T) / 2, lam[::-1])
 
 
 def jackknife_intrinsics(size_mm: tuple[float, float], X_views: list[np.ndarray], uv_views: list[np.ndarray],
                          corner_ids: list[np.ndarray], view_ids: list[int], intrinsics, rvecs: list[np.ndarray],
-                         tvecs: list[np.ndarray], free: np.ndarray, estimate_warp: bool) -> np.ndarray:
-    """The 9 intrinsics refitted without each view in turn, (n, 9); started from the full fit (a few LM steps)."""
-    out = []
+                         tvecs: list[np.ndarray], free: np.ndarray, estimate_warp: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The 9 intrinsics refitted without each view in turn, (n, 9), and their covariances (n, 9, 9); started
+    from the full fit (a few LM steps)."""
+    out, covs = [], []
     for j in range(len(X_views)):
         keep = [i for i in range(len(X_views)) if i != j]
         ref = refine_intrinsics(size_mm, [X_views[i] for i in keep], [uv_views[i] for i in keep],
                                 [corner_ids[i] for i in keep], [view_ids[i] for i in keep], intrinsics,
                                 [rvecs[i] for i in keep], [tvecs[i] for i in keep], free, estimate_warp=estimate_warp)
         out.append(np.asarray(ref.intrinsics_vector, float)[:9])
-    return np.array(out)
+        covs.append(np.asarray(ref.covariance, float)[:9, :9])
+    return np.array(out), np.array(covs)

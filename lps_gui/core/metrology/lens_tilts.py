@@ -108,7 +108,7 @@ class HeldIntrinsicsError:
 class LensTerms:
     """Independent lens-model terms together: their factors side by side."""
 
-    terms: tuple
+    terms: tuple  # of LensMisfit / HeldIntrinsicsError
 
     def functional(self, grad: np.ndarray, weights: np.ndarray, unit: float) -> np.ndarray:
         return np.concatenate([t.functional(grad, weights, unit) for t in self.terms], axis=1)
@@ -123,7 +123,10 @@ def held_intrinsics_error(sensitivity: np.ndarray | None, covariance: np.ndarray
     return HeldIntrinsicsError(np.asarray(sensitivity, float), V[:, keep] * np.sqrt(lam[keep]))
 
 
-def combined(*terms):
+LensTerm = LensMisfit | HeldIntrinsicsError | LensTerms  # anything with ``functional(grad, weights, unit)``
+
+
+def combined(*terms: LensTerm | None) -> LensTerm | None:
     """The lens terms that are not None, as one (None when none is)."""
     present = tuple(t for t in terms if t is not None)
     return None if not present else present[0] if len(present) == 1 else LensTerms(present)

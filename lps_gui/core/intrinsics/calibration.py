@@ -204,8 +204,12 @@ def calibrate_intrinsics(
     intr = seed.with_vector(ref.intrinsics_vector)
     covariance, extra = ref.covariance, {}
     if model_error:
-        jk, jk_cov = jackknife_intrinsics(size_mm, args[1], args[2], ids, used, replace(intr, covariance=ref.covariance),
-                                  ref.rvecs, ref.tvecs, args[8], ref.warp_mm is not None)
+        live = [k for k, kk in enumerate(ref.kept) if kk.sum() >= MIN_CORNERS_PER_VIEW]  # the fit's corners only
+        jk, jk_cov = jackknife_intrinsics(size_mm, [args[1][k][ref.kept[k]] for k in live],
+                                          [args[2][k][ref.kept[k]] for k in live], [ids[k][ref.kept[k]] for k in live],
+                                          [used[k] for k in live], replace(intr, covariance=ref.covariance),
+                                          [ref.rvecs[k] for k in live], [ref.tvecs[k] for k in live], args[8],
+                                          ref.warp_mm is not None)
         found = excess_covariance(jk, jk_cov, ref.covariance)
         covariance, extra = ref.covariance + found.covariance, {"model_error": found.to_dict()}
         if found.significant:

@@ -75,13 +75,14 @@ def jackknife_intrinsics(size_mm: tuple[float, float], X_views: list[np.ndarray]
                          corner_ids: list[np.ndarray], view_ids: list[int], intrinsics, rvecs: list[np.ndarray],
                          tvecs: list[np.ndarray], free: np.ndarray, estimate_warp: bool) -> tuple[np.ndarray, np.ndarray]:
     """The 9 intrinsics refitted without each view in turn, (n, 9), and their covariances (n, 9, 9); started
-    from the full fit (a few LM steps)."""
+    from the full fit (a few LM steps), on the corners it kept."""
     out, covs = [], []
     for j in range(len(X_views)):
         keep = [i for i in range(len(X_views)) if i != j]
         ref = refine_intrinsics(size_mm, [X_views[i] for i in keep], [uv_views[i] for i in keep],
                                 [corner_ids[i] for i in keep], [view_ids[i] for i in keep], intrinsics,
-                                [rvecs[i] for i in keep], [tvecs[i] for i in keep], free, estimate_warp=estimate_warp)
+                                [rvecs[i] for i in keep], [tvecs[i] for i in keep], free, estimate_warp=estimate_warp,
+                                reject_outliers=False)  # the full fit's outliers are gone already
         out.append(np.asarray(ref.intrinsics_vector, float)[:9])
         covs.append(np.asarray(ref.covariance, float)[:9, :9])
     return np.array(out), np.array(covs)

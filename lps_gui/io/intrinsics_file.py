@@ -86,6 +86,21 @@ def intrinsics_to_dict(intr: CameraIntrinsics) -> dict[str, Any]:
     return d
 
 
+def model_error_covariance(intr: CameraIntrinsics | None) -> np.ndarray | None:
+    """The lens-model part of ``covariance`` (``model_error.covariance``, 9x9 in INTRINSIC_NAMES order, written by a
+    calibration that measured it: :mod:`lps_gui.core.intrinsics.model_error`), None when the file has none."""
+    rec = None if intr is None else intr.extra.get("model_error")
+    if not isinstance(rec, dict) or rec.get("covariance") is None:
+        return None
+    try:
+        cov = np.asarray(rec["covariance"], dtype=float).reshape(9, 9)
+    except (TypeError, ValueError):
+        raise InputError("intrinsics: model_error.covariance must be a 9x9 matrix of numbers; recalibrate") from None
+    if not np.isfinite(cov).all() or (np.diag(cov) < 0).any():
+        raise InputError("intrinsics: model_error.covariance must be finite with no negative variance; recalibrate")
+    return cov
+
+
 def apply_board_warp(board: Board, intr: CameraIntrinsics | None) -> Board:
     """The board as the intrinsics calibration found it: bowed by ``board_warp_mm`` when that is known."""
     from dataclasses import replace

@@ -73,12 +73,16 @@ def calibrate_images(
     flags: int = 0,
     warp: str = "auto",
     model: str = "opencv5",
+    model_error: bool = True,
 ) -> IntrinsicsCalibration:
     """Detect the board in every image and calibrate; failed images are listed in the warnings.
 
     ``model``: "opencv5" (k1 k2 p1 p2 k3), "rational" (with OpenCV's rational and thin-prism terms, 12
     coefficients) or "auto" (the one two-fold cross-validation prefers,
     :func:`lps_gui.core.intrinsics.crossval.choose_lens_model`; recorded in ``extra["lens_model_choice"]``).
+    ``model_error``: add the lens-model error the delete-one-view refits show to the covariance
+    (:mod:`lps_gui.core.intrinsics.model_error`): without it a lens the model cannot follow biases every figure
+    far beyond its bar (issue 35).
 
     The returned intrinsics carry per-view RMS, coverage, flagged views and
     warnings in ``extra`` so intrinsics.json keeps them.
@@ -96,7 +100,7 @@ def calibrate_images(
     if model not in LENS_MODELS:
         raise InputError(f"intrinsics: lens model must be opencv5, rational or auto, not {model!r}")
     cal = calibrate_intrinsics(board.flat_points(), list(table.corners_px), size, flags=flags | LENS_MODELS[model],
-                               warp=warp)
+                               warp=warp, model_error=model_error)
     if choice is not None:
         cal.intrinsics = replace(cal.intrinsics, extra={**cal.intrinsics.extra, "lens_model_choice": {
             "model": choice.model, "heldout_rms_px": choice.heldout_rms_px}})

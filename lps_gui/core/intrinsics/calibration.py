@@ -17,6 +17,7 @@ import cv2
 import numpy as np
 
 from lps_gui.core.geometry.camera_model import HIGHER_NAMES, INTRINSIC_NAMES, CameraIntrinsics
+from lps_gui.core.intrinsics.model_error import excess_covariance, jackknife_intrinsics
 from lps_gui.core.intrinsics.refine import RejectedCorner, WarpNotSeparableError, refine_intrinsics
 from lps_gui.errors import DegenerateGeometryError, InputError
 
@@ -130,6 +131,7 @@ def calibrate_intrinsics(
     flag_k: float = 5.0,
     warp: str = "auto",
     reject_outliers: bool = True,
+    model_error: bool = False,
 ) -> IntrinsicsCalibration:
     """Calibrate a camera from board views.
 
@@ -148,6 +150,8 @@ def calibrate_intrinsics(
         it; "on" raises :class:`WarpNotSeparableError` then; "off" = flat.
     reject_outliers : drop single corners far beyond the noise (listed in
         ``rejected_corners``).
+    model_error : refit without each view in turn and add the lens-model error that spread shows beyond the noise
+        to the covariance (:mod:`lps_gui.core.intrinsics.model_error`; recorded in ``extra["model_error"]``).
 
     OpenCV's calibration (flat board) is the starting point; the joint
     refinement of :func:`refine_intrinsics` gives the final values, the
@@ -198,7 +202,21 @@ def calibrate_intrinsics(
         warnings.append(f"board bow not estimated: {str(exc).split('; ')[0].removeprefix('intrinsics: ')}")
         ref = refine_intrinsics(*args, estimate_warp=False, reject_outliers=reject_outliers)
     intr = seed.with_vector(ref.intrinsics_vector)
-    std = np.sqrt(np.clip(np.diag(ref.covariance), 0.0, None))
+    covariance, extra = ref.covariance, {}
+    if model_error:
+        live = [k for k, kk in enumerate(ref.kept) if kk.sum() >= MIN_CORNERS_PER_VIEW]  # the fit's corners only
+        jk, jk_cov = jackknife_intrinsics(size_mm, [args[1][k][ref.kept[k]] for k in live],
+                                          [args[2][k][ref.kept[k]] for k in live], [ids[k][ref.kept[k]] for k in live],
+                                          [used[k] for k in live], replace(intr, covariance=ref.covariance),
+                                          [ref.rvecs[k] for k in live], [ref.tvecs[k] for k in live], args[8],
+                                          ref.warp_mm is not None)
+        found = excess_covariance(jk, jk_cov, ref.covariance)
+        covariance, extra = ref.covariance + found.covariance, {"model_error": found.to_dict()}
+        if found.significant:
+            warnings.append("the intrinsics move with the view set far beyond the corner noise (a lens the model "
+                            "does not follow): that spread is added to their covariance; a richer lens model "
+                            "(--model auto) or more varied views would narrow it")
+    std = np.sqrt(np.clip(np.diag(covariance), 0.0, None))
     residuals = [np.full((X.shape[0], 2), np.nan) for _ in range(V)]
     for k, i, r in zip(used, ids, ref.residuals_px):
         residuals[k][i] = r
@@ -213,9 +231,10 @@ def calibrate_intrinsics(
         camera_matrix=intr.camera_matrix,
         dist=intr.dist,
         higher=intr.higher,
-        covariance=ref.covariance,
+        covariance=covariance,
         rms_px=rms,
         n_views=len(used),
+        extra=extra,
     )
     warp_sigma = None if ref.warp_cov is None else np.sqrt(np.diag(ref.warp_cov))
     cal = IntrinsicsCalibration(intr, std, rms, per_view_rms, coverage, flagged, warnings, used, r_all, t_all,

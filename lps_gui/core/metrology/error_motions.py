@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lps_gui.core.geometry.rotation import log_so3, skew
-from lps_gui.core.metrology.lens_tilts import LensMisfit
+from lps_gui.core.metrology.lens_tilts import LensTerm
 from lps_gui.core.metrology.resolution import ProfileSpan, profile_span
 from lps_gui.core.models.pose_model import PoseSolution
 
@@ -84,7 +84,7 @@ def _tool_grad(A: np.ndarray, dC: np.ndarray, tool_cam_mm: np.ndarray) -> np.nda
     return dC + np.concatenate([np.einsum("kij,kjl->kil", skew(Ao), A), np.zeros_like(A)], axis=2)
 
 
-def _with_lens(sol: PoseSolution, lens: LensMisfit | None, grad: np.ndarray, w: np.ndarray, wc: np.ndarray,
+def _with_lens(sol: PoseSolution, lens: LensTerm | None, grad: np.ndarray, w: np.ndarray, wc: np.ndarray,
                unit: float, sigmas: tuple[np.ndarray, np.ndarray, np.ndarray | None]
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """:func:`_functional_sigmas`' sigmas and covariance with the lens-model term added (correlated over the stops)."""
@@ -99,7 +99,7 @@ def _with_lens(sol: PoseSolution, lens: LensMisfit | None, grad: np.ndarray, w: 
 
 def error_motions(sol: PoseSolution, targets_mm: np.ndarray, axis: str = "X",
                   tool_cam_mm: np.ndarray | None = None, tool_stage_mm: np.ndarray | None = None,
-                  lens: LensMisfit | None = None) -> ErrorMotions:
+                  lens: LensTerm | None = None) -> ErrorMotions:
     """EXX ... ECX of a line axis at every stop, with sigmas, from the poses of :func:`solve_poses`.
 
     The tool point is an offset from the camera centre fixed to the carriage: in
@@ -254,7 +254,7 @@ def _additive(xy: np.ndarray, rows: np.ndarray, ref: int) -> tuple[list[np.ndarr
     return keys, W
 
 
-def planar_error_motions(sol: PoseSolution, targets_mm: np.ndarray, lens: LensMisfit | None = None
+def planar_error_motions(sol: PoseSolution, targets_mm: np.ndarray, lens: LensTerm | None = None
                           ) -> PlanarErrorMotions:
     """The 12 error motions of an XY stage and the per-stop angles, with sigmas, from :func:`solve_poses`;
     ``lens`` as in :func:`error_motions`."""

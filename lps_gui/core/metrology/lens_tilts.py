@@ -87,3 +87,46 @@ def lens_misfit(R: np.ndarray, t: np.ndarray, world_points: np.ndarray, seen: np
         E = (_higher_jacobian(x, intr) - proj.d_uv_d_intrinsics @ L).reshape(-1, N_HIGHER)
         G[k] = np.linalg.lstsq(Jv, E, rcond=None)[0]
     return LensMisfit(float(misfit_px), G, float(misfit_px) / np.maximum(per_unit, 1e-300))
+
+
+@dataclass(frozen=True)
+class HeldIntrinsicsError:
+    """The poses' sensitivity to the held intrinsics (K, 6, 9) and a factor F (9, r) of a covariance F F^T of
+    theirs: the lens-model error the calibration measured (:mod:`lps_gui.core.intrinsics.model_error`), a common
+    error of every stop's pose that tilts the angle profiles like the misfit above."""
+
+    sensitivity: np.ndarray
+    factor: np.ndarray
+
+    def functional(self, grad: np.ndarray, weights: np.ndarray, unit: float) -> np.ndarray:
+        """(m, r) factor of the covariance of the figures ``weights @ (grad . v)``, as :meth:`LensMisfit.functional`."""
+        g = np.einsum("kp,kpi->ki", np.nan_to_num(grad), np.nan_to_num(self.sensitivity)) @ self.factor
+        return unit * (np.asarray(weights, float) @ g)
+
+
+@dataclass(frozen=True)
+class LensTerms:
+    """Independent lens-model terms together: their factors side by side."""
+
+    terms: tuple  # of LensMisfit / HeldIntrinsicsError
+
+    def functional(self, grad: np.ndarray, weights: np.ndarray, unit: float) -> np.ndarray:
+        return np.concatenate([t.functional(grad, weights, unit) for t in self.terms], axis=1)
+
+
+def held_intrinsics_error(sensitivity: np.ndarray | None, covariance: np.ndarray | None) -> HeldIntrinsicsError | None:
+    """The term for a model-error covariance (9, 9) of the held intrinsics, None when either is missing or zero."""
+    if sensitivity is None or covariance is None or not np.any(covariance):
+        return None
+    lam, V = np.linalg.eigh((np.asarray(covariance, float) + np.asarray(covariance, float).T) / 2)
+    keep = lam > 0
+    return HeldIntrinsicsError(np.asarray(sensitivity, float), V[:, keep] * np.sqrt(lam[keep]))
+
+
+LensTerm = LensMisfit | HeldIntrinsicsError | LensTerms  # anything with ``functional(grad, weights, unit)``
+
+
+def combined(*terms: LensTerm | None) -> LensTerm | None:
+    """The lens terms that are not None, as one (None when none is)."""
+    present = tuple(t for t in terms if t is not None)
+    return None if not present else present[0] if len(present) == 1 else LensTerms(present)

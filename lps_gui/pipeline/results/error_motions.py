@@ -221,11 +221,11 @@ def session_error_motions(meta: dict[str, Any], where: str, obs: Any, est: Any,
         sol, intrinsics, basis = board_pose_solution(est), obs.intrinsics, BASIS_BOARD
     if sol is None or int(np.asarray(sol.used).sum()) < 3:
         return None
-    from lps_gui.pipeline.results.lens_model import lens_model_check, position_lens_sigma_um
+    from lps_gui.pipeline.results.lens_model import lens_model_check, lens_terms, position_lens_sigma_um
 
     w = board_truth_rotations(meta.get("truth"), truth, np.asarray(obs.index))
     check = lens_model_check(sol, obs, intrinsics)
-    out = error_motion_results(sol, obs.target_mm, basis, tool, w, lens=check.misfit)
+    out = error_motion_results(sol, obs.target_mm, basis, tool, w, lens=lens_terms(check, sol, obs.intrinsics))
     if check.misfit is not None:
         check.position_sigma_um = position_lens_sigma_um(sol, obs, check.misfit, out.motions.frame,
                                                          out.motions.reference)
@@ -311,10 +311,10 @@ def session_motions(session: Any, obs: Any, est: Any) -> ErrorMotionResults | No
     w = planar_truth_rotations(meta.get("truth"), np.asarray(obs.index))
     if int(sol.used.sum()) < 3:
         return None
-    from lps_gui.pipeline.results.lens_model import lens_model_check
+    from lps_gui.pipeline.results.lens_model import lens_model_check, lens_terms
 
     check = lens_model_check(sol, obs, intrinsics)
-    motions = planar_error_motion_results(sol, obs.target_mm, w, lens=check.misfit)
+    motions = planar_error_motion_results(sol, obs.target_mm, w, lens=lens_terms(check, sol, obs.intrinsics))
     motions.lens = check
     return motions
 

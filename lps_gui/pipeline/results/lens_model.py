@@ -18,8 +18,9 @@ import numpy as np
 
 from lps_gui.core.geometry.camera_model import CameraIntrinsics, project
 from lps_gui.core.intrinsics.residual_structure import RECALIBRATE, ResidualStructure, residual_structure
-from lps_gui.core.metrology.lens_tilts import LensMisfit, lens_misfit
+from lps_gui.core.metrology.lens_tilts import LensMisfit, combined, held_intrinsics_error, lens_misfit
 from lps_gui.core.models.pose_model import PoseSolution
+from lps_gui.io.intrinsics_file import model_error_covariance
 from lps_gui.io.results.sections import Flag
 
 
@@ -115,3 +116,9 @@ def position_lens_sigma_um(sol: PoseSolution, obs: Any, misfit: LensMisfit, fram
     rel[:, reference] -= 1.0
     rel[reference, reference] = 0.0
     return np.sqrt(np.sum(misfit.functional(grad, rel, 1e3) ** 2, axis=1))
+
+
+def lens_terms(check: LensModelCheck, sol: PoseSolution, intrinsics: CameraIntrinsics) -> Any:
+    """What the error motions' sigmas carry of the lens model: the misfit the poses carry and the model error the
+    intrinsics calibration measured (``model_error`` in intrinsics.json) through the poses' sensitivity to them."""
+    return combined(check.misfit, held_intrinsics_error(sol.intrinsics_gradient, model_error_covariance(intrinsics)))

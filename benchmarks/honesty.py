@@ -170,7 +170,7 @@ def campaign_environment(spec: Any) -> dict[str, Any]:
 # (docs/validation.md, hon-rows). The campaign declares the world it renders there, as it does the prints. Not yet
 # for one board (lines, planar: the same ppm, up to half a planar scale's U; the planar scales' lane, measured there).
 SIMULATED_TEMPERATURES = {"board_temperature_c": 20.0, "stage_temperature_c": 20.0, "temperature_uncertainty_k": 0.0}
-LAYOUT_KINDS = ("row", "two-depth")  # the kinds whose sessions declare them (``campaign_environment``)
+LAYOUT_KINDS = ("row", "stitched", "two-depth")  # the kinds whose sessions declare them (``campaign_environment``)
 
 
 def declare_simulated_temperatures(session_folder: Path) -> None:

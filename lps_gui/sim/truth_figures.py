@@ -30,7 +30,6 @@ import numpy as np
 
 from lps_gui.core.metrology.iso230 import figures_for_session
 from lps_gui.core.metrology.iso230_run import fit_weights_sigma_um
-
 from lps_gui.core.metrology.resolution import centred_target_means
 
 K = 2.0  # the coverage factor of every U the report prints

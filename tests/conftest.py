@@ -4,6 +4,7 @@ The report paints with a QGuiApplication when none exists; widgets need a
 QApplication. Creating the QApplication first, once, lets PDF tests and GUI
 tests share one process in any order.
 """
+import atexit
 import gc
 import os
 import shutil
@@ -33,7 +34,20 @@ def _temp_in_ram() -> None:
     tempfile.tempdir = None  # tempfile caches its choice: the next call reads TMPDIR
 
 
+def _own_runtime_dir() -> None:
+    """Emulator announcements (hardware/announce.py) in a folder of this test process alone.
+
+    Why: the GUI's stage list shows every pty announced under $XDG_RUNTIME_DIR; an `lps emulate-grbl` that a test
+    starts in the other pytest-xdist worker (or one the developer runs) would appear in this worker's windows
+    mid-test. Each worker imports this file itself and so gets its own folder; the processes a test starts inherit it.
+    """
+    folder = tempfile.mkdtemp(prefix="lps-tests-runtime-")  # mode 0700, as the XDG spec asks
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
+    os.environ["XDG_RUNTIME_DIR"] = folder
+
+
 _temp_in_ram()
+_own_runtime_dir()
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 os.environ.setdefault("PYLON_CAMEMU", "2")  # pylon offers two emulated cameras (read when pylon first loads)
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # what the entry points do (lps_gui/blas_threads.py), before numpy loads

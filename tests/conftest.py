@@ -4,7 +4,6 @@ The report paints with a QGuiApplication when none exists; widgets need a
 QApplication. Creating the QApplication first, once, lets PDF tests and GUI
 tests share one process in any order.
 """
-import atexit
 import gc
 import os
 import shutil
@@ -34,6 +33,9 @@ def _temp_in_ram() -> None:
     tempfile.tempdir = None  # tempfile caches its choice: the next call reads TMPDIR
 
 
+_RUNTIME_DIR = ""
+
+
 def _own_runtime_dir() -> None:
     """Emulator announcements (hardware/announce.py) in a folder of this test process alone.
 
@@ -41,9 +43,8 @@ def _own_runtime_dir() -> None:
     starts in the other pytest-xdist worker (or one the developer runs) would appear in this worker's windows
     mid-test. Each worker imports this file itself and so gets its own folder; the processes a test starts inherit it.
     """
-    folder = tempfile.mkdtemp(prefix="lps-tests-runtime-")  # mode 0700, as the XDG spec asks
-    atexit.register(shutil.rmtree, folder, ignore_errors=True)
-    os.environ["XDG_RUNTIME_DIR"] = folder
+    global _RUNTIME_DIR
+    _RUNTIME_DIR = os.environ["XDG_RUNTIME_DIR"] = tempfile.mkdtemp(prefix="lps-tests-runtime-")  # 0700, as XDG asks
 
 
 _temp_in_ram()
@@ -51,6 +52,10 @@ _own_runtime_dir()
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 os.environ.setdefault("PYLON_CAMEMU", "2")  # pylon offers two emulated cameras (read when pylon first loads)
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # what the entry points do (lps_gui/blas_threads.py), before numpy loads
+
+
+def pytest_unconfigure(config):
+    shutil.rmtree(_RUNTIME_DIR, ignore_errors=True)  # _own_runtime_dir's, in each process (master and workers)
 
 
 def pytest_configure(config):

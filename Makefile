@@ -28,9 +28,12 @@ XVFB := { command -v Xvfb && ldconfig -p | grep -q libxcb-cursor.so.0 && ldconfi
 	|| { timeout 300 apt-get update -q >/dev/null 2>&1 </dev/null && timeout 300 apt-get install -y -q $(XCB_PKGS) \
 	>/dev/null </dev/null; }; }; } || echo "make: Xvfb or Qt's xcb libraries missing and not installable (see README, Install)"
 
+# the CI set on two pytest-xdist workers (CI has 2 cores), a whole test file to a worker: a module-scoped fixture
+# (a rendered session) is built once, largest files first; `make test XDIST=` runs it in one process
+XDIST ?= -n 2 --dist loadfile
 test: $(STAMP)
 	@$(XVFB)
-	$(PY) -m pytest -m "not slow"
+	$(PY) -m pytest -m "not slow" $(XDIST)
 
 test-all: $(STAMP)
 	@$(XVFB)

@@ -33,10 +33,29 @@ def _temp_in_ram() -> None:
     tempfile.tempdir = None  # tempfile caches its choice: the next call reads TMPDIR
 
 
+_RUNTIME_DIR = ""
+
+
+def _own_runtime_dir() -> None:
+    """Emulator announcements (hardware/announce.py) in a folder of this test process alone.
+
+    Why: the GUI's stage list shows every pty announced under $XDG_RUNTIME_DIR; an `lps emulate-grbl` that a test
+    starts in the other pytest-xdist worker (or one the developer runs) would appear in this worker's windows
+    mid-test. Each worker imports this file itself and so gets its own folder; the processes a test starts inherit it.
+    """
+    global _RUNTIME_DIR
+    _RUNTIME_DIR = os.environ["XDG_RUNTIME_DIR"] = tempfile.mkdtemp(prefix="lps-tests-runtime-")  # 0700, as XDG asks
+
+
 _temp_in_ram()
+_own_runtime_dir()
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 os.environ.setdefault("PYLON_CAMEMU", "2")  # pylon offers two emulated cameras (read when pylon first loads)
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # what the entry points do (lps_gui/blas_threads.py), before numpy loads
+
+
+def pytest_unconfigure(config):
+    shutil.rmtree(_RUNTIME_DIR, ignore_errors=True)  # _own_runtime_dir's, in each process (master and workers)
 
 
 def pytest_configure(config):

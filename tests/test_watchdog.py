@@ -60,13 +60,16 @@ def test_never_reached():
 '''
 
 
-def run_inner(tmp_path: Path, source: str) -> subprocess.CompletedProcess:
+def run_inner(tmp_path: Path, source: str, *options: str, **more: str) -> subprocess.CompletedProcess:
+    """``source`` as test_inner.py (and each of ``more`` as test_NAME.py) run by pytest with a 1 s timeout."""
     (tmp_path / "pytest.ini").write_text("[pytest]\n")
     (tmp_path / "test_inner.py").write_text(textwrap.dedent(source))
+    for name, text in more.items():
+        (tmp_path / f"test_{name}.py").write_text(textwrap.dedent(text))
     env = dict(os.environ, PYTHONPATH=str(ROOT), QT_QPA_PLATFORM="offscreen")
     cmd = [sys.executable, "-m", "pytest", "-p", "tests.watchdog", "-p", "no:cacheprovider", "-q",
-           "-o", "timeout=1", "-o", "watchdog_grace_s=4", str(tmp_path / "test_inner.py")]
-    return subprocess.run(cmd, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=180)
+           "-o", "timeout=1", "-o", "watchdog_grace_s=4", *options, str(tmp_path)]
+    return subprocess.run(cmd, check=False, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=180)
 
 
 def test_hung_tests_fail_with_every_threads_stack_and_the_run_goes_on(tmp_path):
@@ -87,3 +90,18 @@ def test_a_deadlock_that_holds_the_gil_ends_the_run_with_every_threads_stack(tmp
     assert out.returncode == 1, text
     assert "Timeout (" in text and "test_deadlock_holding_the_gil" in text, text  # faulthandler's dump
     assert "passed" not in text, text  # the run ended there
+
+
+def test_under_xdist_a_hung_test_fails_with_the_stacks_and_a_deadlock_ends_only_its_worker(tmp_path):
+    """`make test` runs on two pytest-xdist workers: each runs its tests on its main thread, so the watchdog works
+    there as in one process; the hard step ends the stuck worker, xdist fails that test as crashed and the other
+    worker (or a new one) runs the rest. Every dump reaches the terminal (stderr)."""
+    out = run_inner(tmp_path, HUNG_TESTS, "-n", "2", gil=GIL_HELD)
+    text = out.stdout + out.stderr
+    assert out.returncode == 1, text
+    assert "3 failed, 2 passed" in text, text
+    for name in ("test_waits_for_deadlocked_threads", "test_qt_event_loop_waits_for_a_deadlocked_thread"):
+        assert f"watchdog: test_inner.py::{name} still running after 1 s" in text, text
+    assert "--- thread holder-0" in text and "with second:" in text, text
+    assert "crashed while running 'test_gil.py::test_deadlock_holding_the_gil'" in text, text
+    assert "Timeout (" in text and "in test_deadlock_holding_the_gil" in out.stderr, text  # faulthandler's dump

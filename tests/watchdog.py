@@ -15,6 +15,10 @@ and does three things when a test runs past its timeout:
 3. ``watchdog_grace_s`` later, if the test has still not ended (the GIL or the
    main thread is held in C), faulthandler's C thread, which needs no GIL,
    dumps every thread's stack and ends the run with exit status 1.
+
+Under pytest-xdist (``make test``) each worker runs its tests on its main
+thread, so all of this holds per worker; step 3 ends only the stuck worker's
+process: xdist fails that test as crashed and the run goes on without it.
 """
 from __future__ import annotations
 

@@ -2,6 +2,8 @@
 the capture ends in the report, and the window stays responsive throughout."""
 from __future__ import annotations
 
+import threading
+
 import pytest
 
 from lps_gui.core.planning.plan import Plan
@@ -35,10 +37,31 @@ def test_live_plot_grows_flags_a_fault_and_ends_in_the_report(qtbot, make_window
     qtbot.waitUntil(lambda: cap.start_btn.isEnabled(), timeout=5000)
 
 
+class FaultsThatWaitForTheFlag(InjectedFaults):
+    """Injected faults, and a capture that takes frames past ``after`` only once the live check has flagged one.
+
+    On simulated time the capture thread runs as fast as it can: on a loaded machine (the other xdist worker busy)
+    it took all 12 frames in 0.9 s, before the live detection had flagged frame 5, and ended without pausing. A
+    real capture waits for its stage and settling; this waits (at most 60 s, never a hang) for the flag instead.
+    """
+
+    def __init__(self, faults, after: int) -> None:
+        super().__init__(faults)
+        self.after = after
+        self.flagged = threading.Event()
+
+    def at(self, index: int) -> None:
+        super().at(index)
+        if index > self.after:
+            self.flagged.wait(timeout=60.0)
+
+
 def test_pause_at_a_flag_then_resume_completes(qtbot, make_window, tmp_path):
     folder = tmp_path / "paused"
     window, cap = capture_window(qtbot, make_window, LIVE_PLAN, folder)
-    window.camera_panel.sim_camera.faults = InjectedFaults([Fault("board_leaves_view", 5, 400.0)])
+    faults = FaultsThatWaitForTheFlag([Fault("board_leaves_view", 5, 400.0)], after=5)
+    window.camera_panel.sim_camera.faults = faults
+    cap.live_panel.flagged.connect(lambda _flag: faults.flagged.set())
     cap.live_panel.pause_on_flag.setChecked(True)
     cap.start_btn.click()
     qtbot.waitUntil(lambda: cap.engine is not None and cap.engine.state == "paused", timeout=60000)

@@ -59,7 +59,9 @@ def test_on_a_stage_the_line_model_fits_nothing_changes():
 
 def test_the_variance_ratio_test():
     assert not line_model_rejected(1.002, 5129, 1.0, 4896)  # noise: F 1.04 on (233, 4896) dof
-    assert line_model_rejected(1.05, 5129, 1.0, 4896)  # a misfit 5 % of the noise's variance: F 2.1
+    assert line_model_rejected(1.05, 5129, 1.0, 4896, material=1.0)  # a misfit 5 % of the noise's variance: F 2.1
+    assert not line_model_rejected(1.05, 5129, 1.0, 4896)  # ... significant, not material (the paper close-up)
+    assert line_model_rejected(1.9, 5129, 1.0, 4896)  # min-step, settling on the motions stage
     assert not line_model_rejected(2.5, 20, 1.0, 15)  # a misfit as large as the noise, not significant on 20 dof
     assert not line_model_rejected(400.0, 0, 1.0, 5000)  # no redundancy: no judgement
     assert not line_model_rejected(2.5, 5000, 1.0, 5000)  # not nested: no judgement
@@ -84,16 +86,17 @@ def _nested_fits(misfit: float, draws: int, rng: np.random.Generator) -> tuple[n
 def test_the_misfit_switch_rejects_at_its_stated_rate():
     """The switch is an F-test at a stated false-switch rate: where the line model holds, the share of draws
     it switches is alpha (the two fits' variances share the noise: tested as independent, it would switch
-    in ~0 % at alpha 5 %); slopes that spread by the noise's sd switch every draw."""
+    in ~0 % at alpha 5 %); slopes that spread by twice the noise's sd (a material misfit, ratio ~2.4) switch every draw."""
     rng = np.random.default_rng(0)
     draws = 4000
     s2_line, s2_groups, dof_line, dof_groups = _nested_fits(0.0, draws, rng)
     for alpha in (0.05, 0.2):
-        rate = np.mean([line_model_rejected(a, dof_line, b, dof_groups, alpha) for a, b in zip(s2_line, s2_groups)])
+        rate = np.mean([line_model_rejected(a, dof_line, b, dof_groups, alpha, material=1.0)
+                        for a, b in zip(s2_line, s2_groups)])
         assert abs(rate - alpha) < 4 * np.sqrt(alpha * (1 - alpha) / draws), (alpha, rate)
-    kept = sum(line_model_rejected(a, dof_line, b, dof_groups) for a, b in zip(s2_line, s2_groups))
+    kept = sum(line_model_rejected(a, dof_line, b, dof_groups, material=1.0) for a, b in zip(s2_line, s2_groups))
     assert kept <= 12  # MISFIT_ALPHA 0.1 %: 4 expected of 4000
-    s2_line, s2_groups, dof_line, dof_groups = _nested_fits(1.0, 200, rng)
+    s2_line, s2_groups, dof_line, dof_groups = _nested_fits(2.0, 200, rng)
     assert all(line_model_rejected(a, dof_line, b, dof_groups) for a, b in zip(s2_line, s2_groups))
 
 

@@ -52,7 +52,7 @@ def line_model_rejected(sigma2_line: float, dof_line: int, sigma2_views: float, 
     independent variances would (ln F sd 0.028): a misfit shows in the sum of squares the per-view fit removes,
     RSS_line - RSS_views, on dof_line - dof_views (five a view), against the per-view noise.
     Why ``material`` (a variance ratio, 1.5): with 10^5 residuals a misfit of 0.4 % of the noise's variance is
-    significant (the paper close-up's small angles, ratio 1.004), and there each stop's own pose is less precise
+    significant (the paper close-up's small angles: 0.1005 px against 0.1001 px), and there each stop's own pose is less precise
     than the line model across a short step (its 2 um ASME steps: sigma 1.13 um against the must-show's 1 um).
     The campaign has no session between 1.07 (min-step, settling: motions, realism on) and 1.92 (the same, realism
     off, which the former constant 2 switched by coin flip); 1.5 sits between.

@@ -183,10 +183,9 @@ def test_a_kept_line_models_positions_take_the_corners_noise_not_its_misfit(monk
     is noise plus misfit (0.0257 px where the simulator drew 0.020). The misfit is what the model cannot
     follow, not scatter of the positions: sized with it, the campaign's min-step motions cell had per-stop
     (error/sigma)^2 0.52 and E, M 0.38, 0.16. The positions' noise is the per-view fit's, the drawn noise."""
+    from lps_gui.core.estimator import board_plane_positions as bpp
     from lps_gui.core.planning.plan import Plan
     from lps_gui.core.planning.presets import min_step_plan_fields
-
-    from lps_gui.core.estimator import board_plane_positions as bpp
 
     monkeypatch.setattr(bpp, "line_model_rejected", lambda *a, **k: False)
     noise_px = 0.02

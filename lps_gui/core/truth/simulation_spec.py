@@ -67,7 +67,7 @@ class SimulationSpec:
         rng = printed_rng(self.seed if self.print_seed is None else self.print_seed)
         return self.realism.printed_board(scene, rng) if isinstance(scene, Board) else self.realism.printed_layout(scene, rng)
 
-    def recaptured(self) -> "SimulationSpec":
+    def recaptured(self) -> SimulationSpec:
         """The same rig captured again (the compensated as-left pass): the same stage, board and prints, its own
         image noise and repeatability draws, a stream of this seed independent of every other seed's (seed + 1
         would replay the next seed's session draw for draw)."""

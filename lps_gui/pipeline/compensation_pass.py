@@ -8,12 +8,13 @@ says how far the stage really was from the nominal before and after.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
+from lps_gui.core.truth.simulation_spec import SimulationSpec
 from lps_gui.errors import InputError
 from lps_gui.io.results.iso_e import session_E_um, true_E_um
 from lps_gui.io.session import Session
@@ -57,6 +58,16 @@ class PassResult:
         ]
 
 
+def as_left_spec(before: Session) -> SimulationSpec:
+    """The as-left capture's rig: ``before``'s stage and board, its prints (the same board stays on the stage), and
+    image noise and repeatability draws of its own, independent of every other seed's session."""
+    from lps_gui.sim.session import spec_of_session
+
+    if not (before.truth or {}).get("simulated"):
+        raise InputError(f"{before.folder}: not captured on the simulated rig; re-capture a real stage with `lps capture --compensation`")
+    return spec_of_session(before).recaptured()
+
+
 def compensation_pass(
     before_dir: Path | str,
     after_dir: Path | str,
@@ -69,20 +80,13 @@ def compensation_pass(
     from lps_gui.pipeline.compensate import session_results, table_from_results
     from lps_gui.pipeline.detect import detect_session
     from lps_gui.pipeline.estimate import estimate_session
-    from lps_gui.sim.session import (
-        create_simulated_session,
-        simulated_engine,
-        spec_of_session,
-    )
+    from lps_gui.sim.session import create_simulated_session, simulated_engine
 
     before = Session.open(before_dir)
-    truth = before.truth or {}
-    if not truth.get("simulated"):
-        raise InputError(f"{before.folder}: not captured on the simulated rig; re-capture a real stage with `lps capture --compensation`")
+    spec = as_left_spec(before)
     results_before = session_results(before.folder)
     table = table_from_results(results_before)
-    spec = replace(spec_of_session(before), seed=spec_of_session(before).seed + 1)  # a new capture: its own image noise and repeatability draws
-    cam = truth.get("camera") or {}
+    cam = (before.truth or {}).get("camera") or {}
     session, stage, camera = create_simulated_session(after_dir, spec, noise_grey=float(cam.get("noise_grey", 2.0)),
                                                       intrinsics=before.meta.get("intrinsics"))
     carried = {k: before.meta[k] for k in CARRIED_META if k in before.meta}  # the same stage, board and room

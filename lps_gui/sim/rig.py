@@ -172,7 +172,7 @@ def rig_truth(spec: SimulationSpec, camera: SimulatedCamera) -> dict[str, Any]:
             "board": board_to_dict(spec.rig.board), "intrinsics": intrinsics_to_dict(spec.rig.intrinsics),
             "camera": {"noise_grey": camera.noise_grey, "blur_px": camera.lighting.blur_px}, "per_capture": TRUTH_FILE,
             "noise_px": None, **({} if spec.layout is None else {"targets": layout_truth(spec.layout)}),
-            **spec.realism_truth(),
+            **spec.realism_truth(), **_print_seed(spec),
         }
     return {
         "simulated": True,
@@ -187,8 +187,13 @@ def rig_truth(spec: SimulationSpec, camera: SimulatedCamera) -> dict[str, Any]:
         "camera": {"noise_grey": camera.noise_grey, "blur_px": camera.lighting.blur_px},
         "per_capture": TRUTH_FILE,
         **({} if spec.layout is None else {"targets": layout_truth(spec.layout)}),
-        **spec.realism_truth(),
+        **spec.realism_truth(), **_print_seed(spec),
     }
+
+
+def _print_seed(spec: SimulationSpec) -> dict[str, Any]:
+    """truth ``print_seed``: a re-capture's prints are its first capture's (``--resume`` redraws them alike)."""
+    return {} if spec.print_seed is None else {"print_seed": spec.print_seed}
 
 
 def spec_from_truth(truth: dict[str, Any], plan: Plan, source: str = "session.json") -> SimulationSpec:
@@ -210,7 +215,8 @@ def spec_from_truth(truth: dict[str, Any], plan: Plan, source: str = "session.js
                 errors=StageErrorModel.from_dict(truth["stage_errors"]),
             )
         return SimulationSpec(str(truth.get("preset", "sim")), rig, plan, seed=int(truth.get("seed", 0)),
-                              realism=Realism.from_dict(_switches(truth.get("realism"))))
+                              realism=Realism.from_dict(_switches(truth.get("realism"))),
+                              print_seed=None if truth.get("print_seed") is None else int(truth["print_seed"]))
     except (KeyError, TypeError, ValueError) as exc:
         raise InputError(f"{source}: the simulated {what}'s truth is incomplete ({exc}); start a new session") from exc
 

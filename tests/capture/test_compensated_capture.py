@@ -104,3 +104,34 @@ def test_grbl_sender_corrects_through_the_emulator(tmp_path):
     want = [r.target_mm - (0.004 if r.direction == "+" else 0.002) for r in recs]
     assert [r.commanded_mm for r in recs] == pytest.approx(want, abs=1e-6)
     assert [r.reported_mm for r in recs] == pytest.approx(want, abs=2e-3)  # GRBL reports where it was sent (3 decimals)
+
+
+def test_the_as_left_draws_its_own_noise_on_the_same_print(tmp_path):
+    """Must show: the as-left capture replays no other seed's image noise or repeatability (seed + 1 did: the
+    campaign's compensated seed k was line-both seed k + 1's draws), and with realism on it measures the print the
+    table was made with, also when its rig is rebuilt from its session.json (``--resume``)."""
+    from lps_gui.core.truth.realism import realism_named
+    from lps_gui.io.session import Session
+    from lps_gui.pipeline.compensation_pass import as_left_spec
+    from lps_gui.sim.rig import make_simulated_rig
+    from lps_gui.sim.session import spec_of_session
+    from tests.capture.helpers import tiny_spec
+
+    spec = replace(tiny_spec(seed=3), realism=realism_named("on"))
+    before = create_simulated_session(tmp_path / "before", spec)[0]
+    after_spec = as_left_spec(Session.open(before.folder))
+    after = create_simulated_session(tmp_path / "after", after_spec)[0]
+
+    def draws(s, key: int = 4) -> np.ndarray:  # the stage's repeatability and the camera's noise draws of capture key
+        stage, camera = make_simulated_rig(s)
+        stage.seed_capture(key)
+        camera.seed_capture(key)
+        return np.r_[stage._rng.standard_normal(3), camera._rng.standard_normal(3)]
+
+    mine = draws(after_spec)
+    for seed in range(12):  # the campaign's seeds and the next ones
+        assert not np.allclose(mine, draws(replace(spec, seed=seed))), f"the as-left replays seed {seed}'s draws"
+    printed = [(b.square_mm, b.warp_mm) for b in (spec.printed(), after_spec.printed(),
+                                                   spec_of_session(Session.open(after.folder)).printed())]
+    assert printed[1] == printed[0] and printed[2] == printed[0]
+    assert after.truth["realism"]["printed"] == before.truth["realism"]["printed"]

@@ -6,8 +6,10 @@ importing each other; :mod:`lps_gui.core.truth.simulate` re-exports it.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
+
+import numpy as np
 
 from lps_gui.core.geometry.board import Board
 from lps_gui.core.geometry.target_rig import TargetLayout
@@ -15,6 +17,14 @@ from lps_gui.core.planning.plan import Plan
 from lps_gui.core.truth.realism import Realism, printed_rng
 from lps_gui.core.truth.rig import Rig
 from lps_gui.core.truth.stage_errors import Vibration
+
+RECAPTURE_STREAM = 36  # printed_rng's 35's neighbour: one seed's streams are told apart by such a tag
+
+
+def recapture_seed(seed: int) -> int:
+    """The seed of a re-capture of the session of ``seed``: a 32-bit word of ``seed``'s own stream, so it replays
+    no other session's draws (seed + 1 would be the next seed's)."""
+    return int(np.random.SeedSequence([int(seed), RECAPTURE_STREAM]).generate_state(1)[0])
 
 
 @dataclass(frozen=True)
@@ -36,6 +46,7 @@ class SimulationSpec:
     frame_interval_s: float = 0.01  # time between the frames of a stop (the camera's exposure), s
     layout: TargetLayout | None = None  # a row or constellation of targets (SPEC 13); the rig's board is its first
     realism: Realism | None = None  # lens misfit, prints off scale and bowed, blur and noise over the image (issue 35)
+    print_seed: int | None = None  # whose prints the board is (a re-capture keeps the board it was made with); None: seed
 
     @property
     def stitched(self) -> bool:
@@ -53,8 +64,15 @@ class SimulationSpec:
         scene = self.rig.board if self.layout is None or self.stitched else self.layout
         if self.realism is None:
             return scene
-        rng = printed_rng(self.seed)
+        rng = printed_rng(self.seed if self.print_seed is None else self.print_seed)
         return self.realism.printed_board(scene, rng) if isinstance(scene, Board) else self.realism.printed_layout(scene, rng)
+
+    def recaptured(self) -> SimulationSpec:
+        """The same rig captured again (the compensated as-left pass): the same stage, board and prints, its own
+        image noise and repeatability draws, a stream of this seed independent of every other seed's (seed + 1
+        would replay the next seed's session draw for draw)."""
+        return replace(self, seed=recapture_seed(self.seed),
+                       print_seed=self.seed if self.print_seed is None else self.print_seed)
 
     def camera_realism(self) -> dict[str, Any]:
         """What the simulated camera and renderers take for the realism: ``lens``, ``printed`` and Lighting fields."""

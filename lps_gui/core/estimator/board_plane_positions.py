@@ -22,7 +22,7 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy import stats
+from scipy.special import fdtrc  # the F distribution's survival function (scipy.stats stays out of `lps estimate`)
 
 from lps_gui.core.estimator.estimate_types import LpsEstimate
 from lps_gui.core.geometry.camera_model import CameraIntrinsics
@@ -64,7 +64,7 @@ def line_model_rejected(sigma2_line: float, dof_line: int, sigma2_views: float, 
         return False
     dfn = dof_line - dof_views
     f = (dof_line * sigma2_line - dof_views * sigma2_views) / (dfn * sigma2_views)
-    return bool(stats.f.sf(f, dfn, dof_views) < alpha)
+    return bool(fdtrc(dfn, dof_views, f) < alpha)
 
 
 def gauge_inverse(var_unit: np.ndarray, ref: int, free: np.ndarray) -> ArrowheadInverse:

@@ -310,6 +310,17 @@ def pool(sessions: list[dict[str, Any]]) -> dict[str, list[dict[str, Any]]]:
     return {"figures": figures, "findings": findings}
 
 
+def pooled_runs(files: list[Path]) -> list[dict[str, Any]]:
+    """The sessions of several saved runs, a later file's (kind, stage, realism) cells replacing an earlier's: a
+    cell re-scored by newer code (or re-rendered) supersedes the old scores of that cell, the other cells stay."""
+    sessions: list[dict[str, Any]] = []
+    for f in files:
+        new = [x for x in json.loads(Path(f).read_text())["sessions"] if "error" not in x]
+        cells = {(x["kind"], x["stage"], x["realism"]) for x in new}
+        sessions = [x for x in sessions if (x["kind"], x["stage"], x["realism"]) not in cells] + new
+    return sessions
+
+
 def _cell(text: str) -> str:
     return text.replace("|", "\\|")  # "max |roll|" inside a markdown table
 
@@ -390,9 +401,20 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--short", action="store_true", help="1 seed, line-both, flat stage, realism on, 8 targets x 1 run")
     ap.add_argument("--lens-misfit", action="store_true", help="print what the realism lens leaves beyond a Brown fit")
     ap.add_argument("--tables", action="store_true", help="only pool the sessions in --json into the tables (no runs)")
+    ap.add_argument("--pool", type=Path, nargs="+", metavar="JSON",
+                    help="pool saved runs into one table (--json, --md): a later file's cells replace an earlier's")
     ap.add_argument("--rescore", type=Path, nargs="+", metavar="FOLDER",
                     help="re-estimate sessions kept by --keep (folders <kind>-<stage>-<realism>-<seed>), no rendering")
     a = ap.parse_args(argv)
+    if a.pool:
+        sessions = pooled_runs(a.pool)
+        text = markdown(pool(sessions), "pooled: " + ", ".join(map(str, a.pool)))
+        print(text)
+        if a.md:
+            a.md.write_text(text)
+        if a.json:
+            a.json.write_text(json.dumps({"machine": "pooled", "sessions": sessions, **pool(sessions)}, indent=1))
+        return 0
     if a.tables:
         doc = json.loads(a.json.read_text())
         text = markdown(pool([x for x in doc["sessions"] if "error" not in x]), doc["machine"])

@@ -75,3 +75,22 @@ def test_rows_and_two_depths_declare_no_temperature_error_the_simulator_does_not
         temperature = {r.source: r.contribution_um for r in budget_rows(x, env) if "temperature" in r.source}
         assert set(temperature) == {"board temperature", "stage temperature"}, temperature
         assert all(c == 0.0 for c in temperature.values()), (kind, temperature)
+
+
+def test_pooled_runs_let_a_later_runs_cells_replace_an_earlier_runs(tmp_path):
+    """`--pool`: a cell re-scored by newer code supersedes that cell's old scores; the other cells stay as they were."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("honesty", ROOT / "benchmarks" / "honesty.py")
+    honesty = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(honesty)
+
+    def row(kind, seed, z):
+        return {"kind": kind, "stage": "flat", "realism": "off", "seed": seed, "position_z_ms": z}
+
+    old, new = tmp_path / "old.json", tmp_path / "new.json"
+    old.write_text(json.dumps({"sessions": [row("row", 0, 5.0), row("row", 1, 5.0), row("planar", 0, 1.0),
+                                            {"kind": "x", "stage": "", "realism": "", "seed": -1, "error": "boom"}]}))
+    new.write_text(json.dumps({"sessions": [row("row", 0, 1.1)]}))
+    pooled = honesty.pooled_runs([old, new])
+    assert sorted((s["kind"], s["seed"], s["position_z_ms"]) for s in pooled) == [("planar", 0, 1.0), ("row", 0, 1.1)]

@@ -30,7 +30,7 @@ import numpy as np
 
 from lps_gui.core.metrology.iso230 import figures_for_session
 from lps_gui.core.metrology.iso230_run import fit_weights_sigma_um
-from lps_gui.core.metrology.resolution import centred_target_means
+from lps_gui.core.metrology.resolution import per_target_means
 
 K = 2.0  # the coverage factor of every U the report prints
 Z_MS_LIMIT = 3.0  # mean (error/sigma)^2 above this: the sigmas do not hold
@@ -81,24 +81,26 @@ def _check(name: str, unit: str, value: Any, truth: Any, U: Any, shown: Any = Tr
             "U_k2": float(U), "z": err / sigma if sigma > 0 else math.inf}
 
 
+def _target_means(values: np.ndarray, target: np.ndarray, ok: np.ndarray) -> np.ndarray | None:
+    """The per-target means of ``values`` over ``ok``, targets sorted, as the report takes them
+    (:func:`~lps_gui.core.metrology.resolution.per_target_means`); None without a finite value."""
+    keep = ok & np.isfinite(values)
+    if not keep.any():
+        return None
+    return per_target_means(values[keep], np.zeros(int(keep.sum())), target[keep], difference_order=0)[2]
+
+
 def _per_target_span(values: np.ndarray, target: np.ndarray, ok: np.ndarray) -> float | None:
     """p-v of the per-target means of ``values`` over ``ok`` (how the report's spans are taken)."""
-    keep = ok & np.isfinite(values)
-    if keep.sum() < 2:
-        return None
-    t = np.round(target[keep], 6)
-    means = np.array([values[keep][t == u].mean() for u in np.unique(t)])
-    return float(np.ptp(means)) if means.size >= 2 else None
+    means = _target_means(values, target, ok)
+    return float(np.ptp(means)) if means is not None and means.size >= 2 else None
 
 
 def _max_abs_about_mean(values: np.ndarray, target: np.ndarray, ok: np.ndarray) -> float | None:
     """max |x| of the per-target means of ``values`` over ``ok`` about their mean (how the report's max |angle|
     is taken: :func:`~lps_gui.core.metrology.resolution.centred_target_means`)."""
-    keep = ok & np.isfinite(values)
-    if not keep.any():
-        return None
-    centred, _ = centred_target_means(values[keep], np.zeros(int(keep.sum())), target[keep])
-    return float(np.max(np.abs(centred)))
+    means = _target_means(values, target, ok)
+    return None if means is None else float(np.max(np.abs(means - means.mean())))
 
 
 def _line_truth_dev(pos: list[dict[str, Any]]) -> np.ndarray | None:

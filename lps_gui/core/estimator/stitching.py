@@ -26,7 +26,12 @@ import numpy as np
 from lps_gui.core.geometry.camera_model import CameraIntrinsics
 from lps_gui.core.metrology.uncertainty_budget import BudgetRow
 from lps_gui.core.estimator.board_plane_positions import row_with_board_plane_positions
-from lps_gui.core.models.target_model import N_COMMON, TargetObservations, TargetSolution, solve_targets
+from lps_gui.core.models.target_model import (
+    TargetObservations,
+    TargetSolution,
+    row_parameter_count,
+    solve_targets,
+)
 from lps_gui.core.numerics.target_arrowhead import PositionCovariance
 from lps_gui.errors import DegenerateGeometryError, InputError
 
@@ -98,8 +103,7 @@ def merged_observations(obs: TargetObservations, ties: list[np.ndarray]) -> tupl
 def row_dof(obs: TargetObservations, sol: TargetSolution) -> int:
     """Degrees of freedom of the row model's fit of ``obs`` (one axis; the estimate's count)."""
     n_obs = 2 * int((np.isfinite(obs.corners_px[..., 0]) & sol.used[:, None]).sum())
-    T = len(obs.targets)
-    return n_obs - N_COMMON - (0 if sol.bows_mm is None else 2 * T) - 6 * (T - 1) - (int(sol.used.sum()) - 1)
+    return n_obs - row_parameter_count(len(obs.targets), sol.bows_mm is not None, int(sol.used.sum()))
 
 
 def stitch_variance_mm2(ties: list[np.ndarray], repeatability_mm: float) -> np.ndarray:

@@ -35,7 +35,13 @@ from lps_gui.core.estimator.observations import Observations
 from lps_gui.core.estimator.outlier_round import Solution, judge_views, solve_with_outliers
 from lps_gui.core.models.joint_lm import LpsState
 from lps_gui.core.models.planar_model import PlanarState
-from lps_gui.core.models.target_model import N_COMMON, TargetObservations, TargetSolution, solve_targets
+from lps_gui.core.models.target_model import (
+    N_COMMON,
+    TargetObservations,
+    TargetSolution,
+    row_parameter_count,
+    solve_targets,
+)
 from lps_gui.core.numerics.outliers import position_outliers
 from lps_gui.core.progress import CancelToken, ProgressFn, no_progress
 from lps_gui.errors import InputError
@@ -151,7 +157,7 @@ def _common_fields(obs: Observations, opt: EstimateOptions, sol: TargetSolution,
     seen = np.isfinite(obs.corners_px[..., 0]) & sol.used[:, None]
     n_obs = int(2 * seen.sum())
     T = len(obs.mounted)
-    n_params = N_COMMON + (0 if sol.bows_mm is None else 2 * T) + 6 * (T - 1) + obs.D * (int(sol.used.sum()) - 1)
+    n_params = row_parameter_count(T, sol.bows_mm is not None, int(sol.used.sum()), obs.D)
     K = obs.K
     return dict(method=opt.method, reference_view=sol.reference, usable=sol.used.copy(), used=sol.used.copy(),
                 outlier=np.zeros(K, bool), outlier_reason=[""] * K, sigma_px=sol.sigma_px,

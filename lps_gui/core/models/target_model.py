@@ -41,6 +41,12 @@ N_INTRINSICS = 9  # after them when self-calibrating (SPEC 4.6)
 MIN_CORNERS = 6
 
 
+def row_parameter_count(n_targets: int, bows: bool, n_used_views: int, D: int = 1) -> int:
+    """Unknowns of the row model: the common frame (N_COMMON), each target's bow (2) when estimated, every
+    target's pose but the first's (6), each used view's position but the reference's (D): its dof's count."""
+    return N_COMMON + (2 * n_targets if bows else 0) + 6 * (n_targets - 1) + D * (n_used_views - 1)
+
+
 @dataclass
 class TargetObservations:
     """Corners of K views of T targets, laid end to end (see io/corners/target_vnl)."""

@@ -181,7 +181,7 @@ def simulate_image_session(
     workers = max(1, int(workers or os.cpu_count() or 1))
     progress(0, K, "rendering")
     t0 = time.time()
-    scene = scene or (rig.board if spec.layout is None or spec.stitched else spec.layout)
+    scene = scene or (rig.board if spec.one_board else spec.layout)
     if spec.stitched:  # one board (its markers too: the targets renderer) seen from each placement's pose
         scene = TargetLayout((replace(spec.layout.targets[0], board=scene),), np.eye(3)[None], np.zeros((1, 3)))
     frames = _render_stream(scene, rig.intrinsics, lighting, noise_grey, poses, image_ext, workers if K > 16 else 1,

@@ -53,7 +53,7 @@ def write_simulated_session(
         extra["stage_spec"] = {"repeatability_um": 4.0 * spec.rig.errors.repeatability_um}
     return Session.create(
         folder,
-        board=spec.rig.board if spec.layout is None or spec.stitched else list(spec.layout.targets),
+        board=spec.rig.board if spec.one_board else list(spec.layout.targets),
         plan=spec.plan,
         intrinsics=intrinsics if intrinsics is not None else spec.rig.intrinsics,
         camera=camera,

@@ -58,7 +58,7 @@ def project_scene(spec: SimulationSpec, R: np.ndarray, t: np.ndarray, stops: lis
     it lay during each view's segment."""
     if spec.stitched and stops is not None:
         R, t = placement_poses(spec, stops, R, t)
-    if spec.layout is None or spec.stitched:
+    if spec.one_board:
         return project_board(R, t, spec.rig.board.object_points(), spec.rig.intrinsics)
     return observe(spec.layout, spec.rig.intrinsics, R, t, border_px=0.0)
 

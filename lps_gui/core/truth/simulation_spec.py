@@ -55,13 +55,18 @@ class SimulationSpec:
         captured with a segmented plan stays a row."""
         if self.layout is None or self.plan.segments is None:
             return False
-        one_board = len({(t.board, t.first_marker) for t in self.layout.targets}) == 1
-        return one_board and len(self.layout.targets) == len(self.plan.segments)
+        same_board = len({(t.board, t.first_marker) for t in self.layout.targets}) == 1
+        return same_board and len(self.layout.targets) == len(self.plan.segments)
+
+    @property
+    def one_board(self) -> bool:
+        """The camera sees one board: no layout, or a stitched session's placements of the one board."""
+        return self.layout is None or self.stitched
 
     def printed(self) -> Board | TargetLayout:
         """The board (or layout) as the camera sees it: as printed with realism on, else the nominal one; a stitched
         session's one board is one print, whatever its placement."""
-        scene = self.rig.board if self.layout is None or self.stitched else self.layout
+        scene = self.rig.board if self.one_board else self.layout
         if self.realism is None:
             return scene
         rng = printed_rng(self.seed if self.print_seed is None else self.print_seed)
